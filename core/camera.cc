@@ -1,0 +1,255 @@
+#include "core/camera.h"
+
+#include <Eigen/Dense>
+#include <cmath>
+#include <sstream>
+
+namespace photopose {
+namespace {
+
+constexpr double kMillimetresPerMicron = 1e-3;
+
+// Pixel -> film for PixelSize + FilmCoordinateSystem, column/row relative to the image centre.
+Eigen::Vector2d FilmFromCentredPixel(FilmCoordinateSystem fcs, double dc, double dr, double ps) {
+  switch (fcs) {
+    case FilmCoordinateSystem::kXRightYUp:
+      return {dc * ps, -dr * ps};
+    case FilmCoordinateSystem::kXUpYLeft:
+      return {-dr * ps, -dc * ps};
+    case FilmCoordinateSystem::kXLeftYDown:
+      return {-dc * ps, dr * ps};
+    case FilmCoordinateSystem::kXDownYRight:
+      return {dr * ps, dc * ps};
+  }
+  return {0.0, 0.0};
+}
+
+Eigen::Vector2d CentredPixelFromFilm(FilmCoordinateSystem fcs, const Eigen::Vector2d& f, double ps) {
+  switch (fcs) {
+    case FilmCoordinateSystem::kXRightYUp:
+      return {f.x() / ps, -f.y() / ps};
+    case FilmCoordinateSystem::kXUpYLeft:
+      return {-f.y() / ps, -f.x() / ps};
+    case FilmCoordinateSystem::kXLeftYDown:
+      return {-f.x() / ps, f.y() / ps};
+    case FilmCoordinateSystem::kXDownYRight:
+      return {f.y() / ps, f.x() / ps};
+  }
+  return {0.0, 0.0};
+}
+
+double PixelOriginShift(PixelOrigin origin) { return origin == PixelOrigin::kCenter ? 0.5 : 0.0; }
+
+// Linear interpolation in the distortion table; d(0) = 0 is implied when the table starts later.
+double TableDistortion(const std::vector<double>& r, const std::vector<double>& d, double radius) {
+  if (r.empty()) return 0.0;
+  double r0 = 0.0, d0 = 0.0;
+  size_t i = 0;
+  if (r[0] <= 0.0) {
+    r0 = r[0];
+    d0 = d[0];
+    i = 1;
+  }
+  for (; i < r.size(); ++i) {
+    if (radius <= r[i] || i + 1 == r.size()) {
+      const double t = (r[i] - r0) > 0.0 ? (radius - r0) / (r[i] - r0) : 0.0;
+      return d0 + t * (d[i] - d0);  // extrapolates linearly past the last entry
+    }
+    r0 = r[i];
+    d0 = d[i];
+  }
+  return d0;
+}
+
+}  // namespace
+
+Status FrameCamera::IsValid() const {
+  std::ostringstream why;
+  if (camera_id.empty()) return Status::Error("CameraID is empty");
+  if (!(focal_length_um > 0.0) || !std::isfinite(focal_length_um))
+    return Status::Error("FocalLength must be a positive number of micrometres");
+  if (!has_affine) {
+    if (!(pixel_size_um > 0.0))
+      return Status::Error("PixelSize must be positive when A0-A2/B0-B2 are not given");
+    if (n_rows <= 0 || n_columns <= 0)
+      return Status::Error("NRows and NColumns are needed to place the fiducial centre when A0-A2/B0-B2 are not given");
+  } else {
+    const double det = affine_a[1] * affine_b[2] - affine_a[2] * affine_b[1];
+    if (!(std::abs(det) > 0.0)) return Status::Error("affine A1 B2 - A2 B1 is zero: not invertible");
+  }
+  if (angle_direction != 1 && angle_direction != -1) return Status::Error("AngleDirection must be -1 or +1");
+  if (polarity != 1 && polarity != -1) return Status::Error("Polarity must be -1 or +1");
+  if (affine_direction != 1 && affine_direction != -1) return Status::Error("AffineDirection must be -1 or +1");
+  if (!(earth_radius_m > 0.0)) return Status::Error("EarthRadius must be positive");
+  if (distortion_type == DistortionType::kDistortionTable) {
+    if (radial_distances_um.size() != radial_distortions_um.size())
+      return Status::Error("RadialDistances and RadialDistortions differ in length");
+    for (size_t i = 1; i < radial_distances_um.size(); ++i)
+      if (!(radial_distances_um[i] > radial_distances_um[i - 1]))
+        return Status::Error("RadialDistances must be strictly increasing");
+  }
+  return Status::Ok();
+}
+
+double FrameCamera::MeanPixelSizeUm() const {
+  if (pixel_size_um > 0.0) return pixel_size_um;
+  if (has_affine) {
+    const double det = std::abs(affine_a[1] * affine_b[2] - affine_a[2] * affine_b[1]);
+    const double scale = std::sqrt(det);
+    return affine_direction > 0 ? scale : 1.0 / scale;
+  }
+  return 1.0;
+}
+
+Status FilmFromPixel(const FrameCamera& camera, const Eigen::Vector2d& column_row, PixelOrigin origin,
+                     Eigen::Vector2d* film_um) {
+  const double col = column_row.x() + PixelOriginShift(origin);
+  const double row = column_row.y() + PixelOriginShift(origin);
+  if (camera.has_affine) {
+    const auto& a = camera.affine_a;
+    const auto& b = camera.affine_b;
+    if (camera.affine_direction > 0) {
+      *film_um = {a[0] + a[1] * col + a[2] * row, b[0] + b[1] * col + b[2] * row};
+    } else {
+      // col = A0 + A1 x + A2 y, row = B0 + B1 x + B2 y: solve for (x, y).
+      Eigen::Matrix2d M;
+      M << a[1], a[2], b[1], b[2];
+      *film_um = M.inverse() * Eigen::Vector2d(col - a[0], row - b[0]);
+    }
+    return Status::Ok();
+  }
+  if (!(camera.pixel_size_um > 0.0) || camera.n_columns <= 0 || camera.n_rows <= 0)
+    return Status::Error("camera '" + camera.camera_id +
+                         "' has neither PixelSize with NRows/NColumns nor A0-A2/B0-B2");
+  *film_um = FilmFromCentredPixel(camera.film_coordinate_system, col - 0.5 * camera.n_columns,
+                                  row - 0.5 * camera.n_rows, camera.pixel_size_um);
+  return Status::Ok();
+}
+
+Status PixelFromFilm(const FrameCamera& camera, const Eigen::Vector2d& film_um, PixelOrigin origin,
+                     Eigen::Vector2d* column_row) {
+  Eigen::Vector2d cr;
+  if (camera.has_affine) {
+    const auto& a = camera.affine_a;
+    const auto& b = camera.affine_b;
+    if (camera.affine_direction < 0) {
+      cr = {a[0] + a[1] * film_um.x() + a[2] * film_um.y(),
+            b[0] + b[1] * film_um.x() + b[2] * film_um.y()};
+    } else {
+      Eigen::Matrix2d M;
+      M << a[1], a[2], b[1], b[2];
+      cr = M.inverse() * Eigen::Vector2d(film_um.x() - a[0], film_um.y() - b[0]);
+    }
+  } else {
+    if (!(camera.pixel_size_um > 0.0) || camera.n_columns <= 0 || camera.n_rows <= 0)
+      return Status::Error("camera '" + camera.camera_id +
+                           "' has neither PixelSize with NRows/NColumns nor A0-A2/B0-B2");
+    cr = CentredPixelFromFilm(camera.film_coordinate_system, film_um, camera.pixel_size_um) +
+         Eigen::Vector2d(0.5 * camera.n_columns, 0.5 * camera.n_rows);
+  }
+  *column_row = cr - Eigen::Vector2d::Constant(PixelOriginShift(origin));
+  return Status::Ok();
+}
+
+Eigen::Vector2d DistortionInMicrons(const FrameCamera& camera, const Eigen::Vector2d& xy_um) {
+  if (camera.distortion_type == DistortionType::kDistortionTable) {
+    const double r = xy_um.norm();
+    if (r <= 0.0) return Eigen::Vector2d::Zero();
+    const double d = TableDistortion(camera.radial_distances_um, camera.radial_distortions_um, r);
+    return xy_um * (d / r);
+  }
+  const double x = xy_um.x() * kMillimetresPerMicron;
+  const double y = xy_um.y() * kMillimetresPerMicron;
+  const double r2 = x * x + y * y;
+  const auto& k = camera.radial_k;
+  const auto& p = camera.tangential_p;
+  const double radial = k[0] + r2 * (k[1] + r2 * (k[2] + r2 * k[3]));
+  const double dx = x * radial + p[0] * (r2 + 2.0 * x * x) + 2.0 * p[1] * x * y;
+  const double dy = y * radial + 2.0 * p[0] * x * y + p[1] * (r2 + 2.0 * y * y);
+  return Eigen::Vector2d(dx, dy) / kMillimetresPerMicron;
+}
+
+Eigen::Vector2d ImagePlaneFromFilm(const FrameCamera& camera, const Eigen::Vector2d& film_um) {
+  const Eigen::Vector2d measured = film_um - Eigen::Vector2d(camera.principal_x_um, camera.principal_y_um);
+  return camera.polarity_sign() * (measured - DistortionInMicrons(camera, measured));
+}
+
+Status FilmFromImagePlane(const FrameCamera& camera, const Eigen::Vector2d& image_plane_um,
+                          Eigen::Vector2d* film_um) {
+  // Solve m - D(m) = ideal for the measured point m (relative to the principal point) by Newton's
+  // method with a central-difference Jacobian of D.
+  const Eigen::Vector2d ideal = camera.polarity_sign() * image_plane_um;
+  const double tolerance_um = 1e-7 * camera.MeanPixelSizeUm();
+  constexpr double kStepUm = 1e-3;
+  Eigen::Vector2d m = ideal;
+  for (int iteration = 0; iteration < 50; ++iteration) {
+    const Eigen::Vector2d f = m - DistortionInMicrons(camera, m) - ideal;
+    if (f.norm() < tolerance_um) {
+      *film_um = m + Eigen::Vector2d(camera.principal_x_um, camera.principal_y_um);
+      return Status::Ok();
+    }
+    Eigen::Matrix2d J = Eigen::Matrix2d::Identity();
+    for (int j = 0; j < 2; ++j) {
+      Eigen::Vector2d h = Eigen::Vector2d::Zero();
+      h[j] = kStepUm;
+      J.col(j) -= (DistortionInMicrons(camera, m + h) - DistortionInMicrons(camera, m - h)) / (2 * kStepUm);
+    }
+    if (!(std::abs(J.determinant()) > 1e-12))
+      return Status::Error("distortion is not invertible at this image point");
+    m -= J.inverse() * f;
+    if (!m.allFinite()) break;
+  }
+  return Status::Error("inverse distortion did not converge (point far outside the calibrated field?)");
+}
+
+Status ImagePlaneFromPixel(const FrameCamera& camera, const Eigen::Vector2d& column_row,
+                           PixelOrigin origin, Eigen::Vector2d* image_plane_um) {
+  Eigen::Vector2d film;
+  const Status status = FilmFromPixel(camera, column_row, origin, &film);
+  if (!status.ok()) return status;
+  *image_plane_um = ImagePlaneFromFilm(camera, film);
+  return Status::Ok();
+}
+
+Status PixelFromImagePlane(const FrameCamera& camera, const Eigen::Vector2d& image_plane_um,
+                           PixelOrigin origin, Eigen::Vector2d* column_row) {
+  Eigen::Vector2d film;
+  Status status = FilmFromImagePlane(camera, image_plane_um, &film);
+  if (!status.ok()) return status;
+  return PixelFromFilm(camera, film, origin, column_row);
+}
+
+void DistortionFromComputerVision(double k1, double k2, double k3, double p1, double p2, double f_mm,
+                                  std::array<double, 4>* radial_k, std::array<double, 2>* tangential_p) {
+  const double f2 = f_mm * f_mm;
+  *radial_k = {0.0, k1 / f2, k2 / (f2 * f2), k3 / (f2 * f2 * f2)};
+  *tangential_p = {-p1 / f_mm, -p2 / f_mm};
+}
+
+Status FitAffineFromFiducials(const FrameCamera& camera,
+                              const std::vector<Eigen::Vector2d>& fiducials_column_row,
+                              PixelOrigin origin, FrameCamera* calibrated) {
+  const size_t n = fiducials_column_row.size();
+  if (n != camera.film_fiducials_um.size())
+    return Status::Error("measured fiducials and FilmFiducials differ in number");
+  if (n < 3) return Status::Error("an affine transformation needs at least three fiducials");
+  Eigen::MatrixXd A(n, 3);
+  Eigen::VectorXd bx(n), by(n);
+  for (size_t i = 0; i < n; ++i) {
+    const double s = PixelOriginShift(origin);
+    A.row(i) << 1.0, fiducials_column_row[i].x() + s, fiducials_column_row[i].y() + s;
+    bx[i] = camera.film_fiducials_um[i].x();
+    by[i] = camera.film_fiducials_um[i].y();
+  }
+  Eigen::ColPivHouseholderQR<Eigen::MatrixXd> qr(A);
+  if (qr.rank() < 3) return Status::Error("fiducials are collinear: affine undetermined");
+  const Eigen::Vector3d a = qr.solve(bx), b = qr.solve(by);
+  *calibrated = camera;
+  calibrated->has_affine = true;
+  calibrated->affine_direction = +1;
+  calibrated->affine_a = {a[0], a[1], a[2]};
+  calibrated->affine_b = {b[0], b[1], b[2]};
+  return Status::Ok();
+}
+
+}  // namespace photopose

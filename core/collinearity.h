@@ -1,0 +1,95 @@
+#pragma once
+// The collinearity model: the seed's equations 4-5, the single source of truth for every solver.
+//
+//   (u, v, w) = R_camera_from_ground * (X - X0),   R = Rx(omega) Ry(phi) Rz(kappa)
+//   x = -c u / w,   y = -c v / w                    (image plane, same unit as c: micrometres)
+//
+// A point is visible when w < 0 (in front of the negative plane at w = -c). The templated functions
+// serve Ceres autodiff; ProjectWithJacobians is the double-only twin with closed-form partials used by
+// the analytic cost functions and the Taylor Gauss-Newton solver.
+
+#include <Eigen/Core>
+#include <cmath>
+
+#include "core/camera.h"
+#include "core/rotation.h"
+#include "core/status.h"
+#include "core/types.h"
+
+namespace photopose {
+
+// Seed equations 4-5. eo = [X0, Y0, Z0, omega, phi, kappa] (m, rad), point = [X, Y, Z] (m),
+// focal = c (um). Writes xy (um). Returns false when the point is not in front of the camera.
+template <typename T>
+bool ProjectToImagePlane(const T* eo, const T* point, const T& focal, T* xy) {
+  T R[9];
+  SeedRotationMatrix(eo[3], eo[4], eo[5], R);
+  const T dx = point[0] - eo[0];
+  const T dy = point[1] - eo[1];
+  const T dz = point[2] - eo[2];
+  const T u = R[0] * dx + R[1] * dy + R[2] * dz;
+  const T v = R[3] * dx + R[4] * dy + R[5] * dz;
+  const T w = R[6] * dx + R[7] * dy + R[8] * dz;
+  if (!(w < T(0))) return false;
+  xy[0] = -focal * u / w;
+  xy[1] = -focal * v / w;
+  return true;
+}
+
+// Removes lens distortion from a measured film point for the self-calibration model:
+// intrinsics = [c, xp, yp (um), K0, K1, K2, K3 (mm based), P1, P2 (mm^-1)], film (um). Writes the
+// ideal image-plane point relative to the principal point, before Polarity (um). Same model as
+// DistortionInMicrons(kDistortionModel).
+template <typename T>
+void CorrectFilmPoint(const T* intrinsics, const double* film_um, T* ideal_um) {
+  const T x = (T(film_um[0]) - intrinsics[kPrincipalX]) * 1e-3;  // mm
+  const T y = (T(film_um[1]) - intrinsics[kPrincipalY]) * 1e-3;
+  const T r2 = x * x + y * y;
+  const T radial = intrinsics[kK0] +
+                   r2 * (intrinsics[kK1] + r2 * (intrinsics[kK2] + r2 * intrinsics[kK3]));
+  const T dx = x * radial + intrinsics[kP1] * (r2 + 2.0 * x * x) + 2.0 * intrinsics[kP2] * x * y;
+  const T dy = y * radial + 2.0 * intrinsics[kP1] * x * y + intrinsics[kP2] * (r2 + 2.0 * y * y);
+  ideal_um[0] = (x - dx) * 1e3;
+  ideal_um[1] = (y - dy) * 1e3;
+}
+
+// The self-calibrating collinearity residual (um on the image plane): the corrected observation minus
+// the projection. polarity_sign as FrameCamera::polarity_sign().
+template <typename T>
+bool SelfCalibratingResidual(const T* eo, const T* point, const T* intrinsics, const double* film_um,
+                             double polarity_sign, T* residual) {
+  T projected[2];
+  if (!ProjectToImagePlane(eo, point, intrinsics[kFocalLength], projected)) return false;
+  T ideal[2];
+  CorrectFilmPoint(intrinsics, film_um, ideal);
+  residual[0] = polarity_sign * ideal[0] - projected[0];
+  residual[1] = polarity_sign * ideal[1] - projected[1];
+  return true;
+}
+
+// Double-only projection with closed-form partial derivatives (the corrected equations 17-28 of the
+// seed, see docs/taylor_derivatives.md). Each Jacobian pointer may be null; all are row-major:
+// d_eo 2x6 (um per m, um per rad), d_point 2x3 (um per m), d_focal 2x1 (unitless).
+bool ProjectWithJacobians(const double* eo, const double* point, double focal, double* xy,
+                          double* d_eo, double* d_point, double* d_focal);
+
+// Ground point -> pixel through the whole camera: collinearity, Polarity, distortion, film, pixel.
+// With camera.apply_ecc the earth-curvature drop D^2 / (2 R) is subtracted from Z (D: horizontal
+// distance from the projection centre).
+Status ProjectGroundPoint(const FrameCamera& camera, const ExteriorOrientation& eo,
+                          const Eigen::Vector3d& point_in_ground, PixelOrigin origin,
+                          Eigen::Vector2d* column_row);
+
+// Pixel -> ground: the ray of an image point intersected with the horizontal plane Z = height (m),
+// with the earth-curvature correction when camera.apply_ecc (iterated). Fails when the ray does not
+// meet the plane in front of the camera.
+Status IntersectRayWithPlane(const FrameCamera& camera, const ExteriorOrientation& eo,
+                             const Eigen::Vector2d& column_row, PixelOrigin origin, double height_m,
+                             Eigen::Vector3d* point_in_ground);
+
+// Same, at the camera's AverageZ (0 when the table leaves it unset).
+Status IntersectRayWithAverageZ(const FrameCamera& camera, const ExteriorOrientation& eo,
+                                const Eigen::Vector2d& column_row, PixelOrigin origin,
+                                Eigen::Vector3d* point_in_ground);
+
+}  // namespace photopose

@@ -1,0 +1,127 @@
+#include "core/rotation.h"
+
+#include <Eigen/Dense>
+#include <algorithm>
+#include <cctype>
+#include <cmath>
+#include <sstream>
+
+namespace photopose {
+namespace {
+
+// Angles of the seed's matrix R = Rx(omega) Ry(phi) Rz(kappa): R(0,2) = sin(phi),
+// R(1,2) = -sin(omega) cos(phi), R(2,2) = cos(omega) cos(phi), R(0,1) = -cos(phi) sin(kappa),
+// R(0,0) = cos(phi) cos(kappa).
+Eigen::Vector3d SeedAnglesFromMatrix(const Eigen::Matrix3d& R) {
+  const double s_phi = std::clamp(R(0, 2), -1.0, 1.0);
+  const double phi = std::asin(s_phi);
+  double omega, kappa;
+  if (std::abs(s_phi) < 1.0 - 1e-12) {
+    omega = std::atan2(-R(1, 2), R(2, 2));
+    kappa = std::atan2(-R(0, 1), R(0, 0));
+  } else {
+    // Gimbal lock: only omega +- kappa is defined; put it all into kappa.
+    omega = 0.0;
+    kappa = std::atan2(R(1, 0), R(1, 1));
+  }
+  return Eigen::Vector3d(omega, phi, kappa);
+}
+
+}  // namespace
+
+std::optional<RotationConvention> ParseRotationConvention(const std::string& name) {
+  std::string lower(name);
+  std::transform(lower.begin(), lower.end(), lower.begin(),
+                 [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
+  if (lower == "seed") return RotationConvention::kSeed;
+  if (lower == "opk") return RotationConvention::kOpk;
+  if (lower == "pok") return RotationConvention::kPok;
+  return std::nullopt;
+}
+
+const char* RotationConventionName(RotationConvention convention) {
+  switch (convention) {
+    case RotationConvention::kSeed:
+      return "seed";
+    case RotationConvention::kOpk:
+      return "opk";
+    case RotationConvention::kPok:
+      return "pok";
+  }
+  return "?";
+}
+
+Eigen::Matrix3d RotationFromAngles(RotationConvention convention, const Eigen::Vector3d& angles) {
+  const double omega = angles[0], phi = angles[1], kappa = angles[2];
+  switch (convention) {
+    case RotationConvention::kSeed: {
+      Eigen::Matrix<double, 3, 3, Eigen::RowMajor> R;
+      SeedRotationMatrix(omega, phi, kappa, R.data());
+      return R;
+    }
+    case RotationConvention::kOpk:
+      // M = M_kappa M_phi M_omega with the passive elementary matrices M_a = R(-a).
+      return RotationZ(-kappa) * RotationY(-phi) * RotationX(-omega);
+    case RotationConvention::kPok:
+      // R_ground_from_camera = R_phi R_omega R_kappa with R_phi = Ry(-phi) (a3 = -sin phi cos omega).
+      return (RotationY(-phi) * RotationX(omega) * RotationZ(kappa)).transpose();
+  }
+  return Eigen::Matrix3d::Identity();
+}
+
+Eigen::Vector3d AnglesFromRotation(RotationConvention convention, const Eigen::Matrix3d& R) {
+  switch (convention) {
+    case RotationConvention::kSeed:
+      return SeedAnglesFromMatrix(R);
+    case RotationConvention::kOpk:
+      // M(omega, phi, kappa) = seed(omega, phi, kappa)^T.
+      return SeedAnglesFromMatrix(R.transpose());
+    case RotationConvention::kPok: {
+      const Eigen::Matrix3d G = R.transpose();  // R_ground_from_camera: [a1 a2 a3; b1 b2 b3; c1 c2 c3]
+      const double s_omega = std::clamp(-G(1, 2), -1.0, 1.0);
+      const double omega = std::asin(s_omega);
+      double phi, kappa;
+      if (std::abs(s_omega) < 1.0 - 1e-12) {
+        phi = std::atan2(-G(0, 2), G(2, 2));
+        kappa = std::atan2(G(1, 0), G(1, 1));
+      } else {
+        phi = 0.0;
+        kappa = std::atan2(-G(0, 1), G(0, 0));
+      }
+      return Eigen::Vector3d(omega, phi, kappa);
+    }
+  }
+  return Eigen::Vector3d::Zero();
+}
+
+Eigen::Matrix3d RotationFromRollPitchYaw(double roll, double pitch, double yaw) {
+  return RotationFromAngles(RotationConvention::kSeed, Eigen::Vector3d(roll, pitch, yaw));
+}
+
+Eigen::Vector3d RollPitchYawFromRotation(const Eigen::Matrix3d& R_platform_from_ground) {
+  return SeedAnglesFromMatrix(R_platform_from_ground);
+}
+
+Eigen::Vector3d ApplyAngleDirection(const AngleFlags& flags, const Eigen::Vector3d& angles) {
+  return flags.angle_direction > 0 ? Eigen::Vector3d(-angles) : angles;
+}
+
+Status CheckRotationMatrix(const Eigen::Matrix3d& R, double tolerance) {
+  if (!R.allFinite()) return Status::Error("rotation matrix has a non-finite element");
+  const double orthogonality = (R * R.transpose() - Eigen::Matrix3d::Identity()).cwiseAbs().maxCoeff();
+  if (orthogonality > tolerance) {
+    std::ostringstream os;
+    os << "rotation matrix is not orthonormal (max |R R^T - I| = " << orthogonality << ")";
+    return Status::Error(os.str());
+  }
+  if (R.determinant() < 0.0) return Status::Error("rotation matrix has determinant -1 (a reflection)");
+  return Status::Ok();
+}
+
+double WrapAngle(double a) {
+  a = std::remainder(a, 2.0 * M_PI);  // [-pi, pi]
+  if (a <= -M_PI) a += 2.0 * M_PI;
+  return a;
+}
+
+}  // namespace photopose

@@ -1,0 +1,129 @@
+#pragma once
+// Rotation conventions. Internally photopose uses the seed's matrix (lecture notes, equation 1):
+//
+//   R_camera_from_ground = Rx(omega) * Ry(phi) * Rz(kappa)
+//   Rx(a) = [1 0 0; 0 cos a -sin a; 0 sin a cos a], Ry(a) = [cos a 0 sin a; 0 1 0; -sin a 0 cos a],
+//   Rz(a) = [cos a -sin a 0; sin a cos a 0; 0 0 1],
+//
+// which maps a ground vector (X - X0) to camera coordinates (u, v, w). Other conventions are converted
+// to and from this matrix at the boundaries (tables, CLI). docs/conventions.md has a worked example
+// of each. All angles are radians unless a name says otherwise.
+
+#include <Eigen/Core>
+#include <optional>
+#include <string>
+
+#include "core/status.h"
+
+namespace photopose {
+
+enum class RotationConvention {
+  // The seed: R_camera_from_ground = Rx(omega) Ry(phi) Rz(kappa).
+  kSeed,
+  // Wolf & Dewitt / PATB omega-phi-kappa: M = M_kappa M_phi M_omega maps ground to image, with
+  // M_omega = [1 0 0; 0 cos sin; 0 -sin cos] etc. For the same three numbers M is the transpose of
+  // the seed's matrix.
+  kOpk,
+  // Y-primary phi-omega-kappa of Chinese textbooks: R_ground_from_camera = R_phi R_omega R_kappa
+  // with a3 = -sin(phi) cos(omega), b3 = -sin(omega), c3 = cos(phi) cos(omega); the collinearity
+  // uses its transpose.
+  kPok,
+};
+
+// "seed", "opk", "pok" (case-insensitive) -> convention; nullopt otherwise.
+std::optional<RotationConvention> ParseRotationConvention(const std::string& name);
+const char* RotationConventionName(RotationConvention convention);
+
+// Elementary rotations (active, right-handed), templated for Ceres Jets.
+template <typename T>
+Eigen::Matrix<T, 3, 3> RotationX(const T& a);
+template <typename T>
+Eigen::Matrix<T, 3, 3> RotationY(const T& a);
+template <typename T>
+Eigen::Matrix<T, 3, 3> RotationZ(const T& a);
+
+// The seed's matrix, row-major into R[9], templated for Ceres Jets. R = Rx(omega) Ry(phi) Rz(kappa).
+template <typename T>
+void SeedRotationMatrix(const T omega, const T phi, const T kappa, T* R);
+
+// R_camera_from_ground for three angles (rad) in the named convention.
+Eigen::Matrix3d RotationFromAngles(RotationConvention convention, const Eigen::Vector3d& angles_rad);
+
+// Inverse of RotationFromAngles. The middle angle is returned in [-pi/2, pi/2], the others in
+// (-pi, pi]. At the gimbal lock of a convention (middle angle at +-90 deg) the first angle is set
+// to zero and the third carries the combined rotation.
+Eigen::Vector3d AnglesFromRotation(RotationConvention convention,
+                                   const Eigen::Matrix3d& R_camera_from_ground);
+
+// Platform attitude of the seed's section 1: roll about the forward axis, pitch about the lateral
+// axis, yaw about the vertical axis, composed as equation 1: R_platform_from_ground =
+// Rx(roll) Ry(pitch) Rz(yaw) (it is the seed's matrix with (omega, phi, kappa) = (roll, pitch, yaw)).
+Eigen::Matrix3d RotationFromRollPitchYaw(double roll_rad, double pitch_rad, double yaw_rad);
+Eigen::Vector3d RollPitchYawFromRotation(const Eigen::Matrix3d& R_platform_from_ground);
+
+// The ArcGIS camera-table flags that change the meaning of the angles in a frames table.
+struct AngleFlags {
+  // AngleDirection: -1 (schema default, "clockwise"): the angles are used as the convention defines
+  // them; +1 ("counterclockwise"): the three angles are of the opposite sense and are negated on
+  // reading and writing.
+  int angle_direction = -1;
+};
+
+// Applies AngleDirection to angles read from or written to a table (an involution).
+Eigen::Vector3d ApplyAngleDirection(const AngleFlags& flags, const Eigen::Vector3d& angles_rad);
+
+// Checks that a 3x3 matrix is a proper rotation (orthonormal to `tolerance`, determinant +1).
+Status CheckRotationMatrix(const Eigen::Matrix3d& R, double tolerance = 1e-6);
+
+// Wraps an angle to (-pi, pi].
+double WrapAngle(double angle_rad);
+
+// ------------------------------------------------------------------ template definitions
+
+template <typename T>
+Eigen::Matrix<T, 3, 3> RotationX(const T& a) {
+  using std::cos;
+  using std::sin;
+  Eigen::Matrix<T, 3, 3> R;
+  R << T(1), T(0), T(0), T(0), cos(a), -sin(a), T(0), sin(a), cos(a);
+  return R;
+}
+
+template <typename T>
+Eigen::Matrix<T, 3, 3> RotationY(const T& a) {
+  using std::cos;
+  using std::sin;
+  Eigen::Matrix<T, 3, 3> R;
+  R << cos(a), T(0), sin(a), T(0), T(1), T(0), -sin(a), T(0), cos(a);
+  return R;
+}
+
+template <typename T>
+Eigen::Matrix<T, 3, 3> RotationZ(const T& a) {
+  using std::cos;
+  using std::sin;
+  Eigen::Matrix<T, 3, 3> R;
+  R << cos(a), -sin(a), T(0), sin(a), cos(a), T(0), T(0), T(0), T(1);
+  return R;
+}
+
+template <typename T>
+void SeedRotationMatrix(const T omega, const T phi, const T kappa, T* R) {
+  using std::cos;
+  using std::sin;
+  const T so = sin(omega), co = cos(omega);
+  const T sp = sin(phi), cp = cos(phi);
+  const T sk = sin(kappa), ck = cos(kappa);
+  // Rx(omega) * Ry(phi) * Rz(kappa), expanded.
+  R[0] = cp * ck;
+  R[1] = -cp * sk;
+  R[2] = sp;
+  R[3] = co * sk + so * sp * ck;
+  R[4] = co * ck - so * sp * sk;
+  R[5] = -so * cp;
+  R[6] = so * sk - co * sp * ck;
+  R[7] = so * ck + co * sp * sk;
+  R[8] = co * cp;
+}
+
+}  // namespace photopose

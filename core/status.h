@@ -1,0 +1,25 @@
+#pragma once
+// A data-dependent outcome: success, or failure with a one-line reason. The library returns a Status
+// wherever input data can be wrong; CHECK is reserved for programmer errors.
+
+#include <string>
+#include <utility>
+
+namespace photopose {
+
+class Status {
+ public:
+  Status() = default;
+  static Status Ok() { return Status(); }
+  static Status Error(std::string message) { return Status(std::move(message)); }
+
+  bool ok() const { return !failed_; }
+  const std::string& message() const { return message_; }
+
+ private:
+  explicit Status(std::string message) : failed_(true), message_(std::move(message)) {}
+  bool failed_ = false;
+  std::string message_;
+};
+
+}  // namespace photopose

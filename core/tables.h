@@ -1,0 +1,112 @@
+#pragma once
+// Reading and writing photopose's tables (docs/formats.md):
+//  - the ArcGIS frame-camera camera table (CSV),
+//  - the frames table (exterior orientation per raster: PerspectiveX/Y/Z, Omega/Phi/Kappa in decimal
+//    degrees or Matrix),
+//  - ground points (PointID, X, Y, Z, AccuracyX/Y/Z, Role),
+//  - image marks (Raster, PointID, Column/Row in pixels or FilmX/FilmY in um, Accuracy, CameraID),
+//  - OpenDroneMap's gcp_list.txt.
+// CSV header names are case-insensitive. Every reader reports a problem as a Status whose message is
+// "file:line: column: what is wrong" and never crashes on bad input. Writers write to a temporary file
+// in the destination folder and rename it over the target, so a failed run leaves nothing half written.
+
+#include <Eigen/Core>
+#include <map>
+#include <optional>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "core/camera.h"
+#include "core/rotation.h"
+#include "core/status.h"
+#include "core/types.h"
+
+namespace photopose {
+
+// ------------------------------------------------------------------ camera table
+Status ReadCameraTable(const std::string& path, std::vector<FrameCamera>* cameras);
+Status WriteCameraTable(const std::string& path, const std::vector<FrameCamera>& cameras);
+
+// ------------------------------------------------------------------ frames table
+struct FrameRecord {
+  std::string raster;     // Raster: image name (key)
+  std::string camera_id;  // CameraID
+  ExteriorOrientation eo; // internal seed convention, converted on reading / writing
+  std::string srs;        // SRS, kept as written
+  // Optional 6x6 covariance of eo.parameters (X0, Y0, Z0 in m; seed omega, phi, kappa in rad),
+  // already scaled by sigma0^2. The writer propagates it to the angles of the convention written
+  // and writes the standard deviations.
+  std::optional<Matrix6d> covariance;
+  std::optional<double> sigma0;  // a posteriori sigma0 (unitless)
+  // Further numeric/text columns written after the standard ones (e.g. NumObservations).
+  std::vector<std::pair<std::string, std::string>> extra_columns;
+};
+
+struct FramesTableOptions {
+  // Convention of Omega/Phi/Kappa in the file. Angles are decimal degrees.
+  RotationConvention convention = RotationConvention::kSeed;
+  // Camera table flags (AngleDirection) are looked up by CameraID when the cameras are given.
+  const std::vector<FrameCamera>* cameras = nullptr;
+};
+
+// Reads Raster, CameraID, PerspectiveX, PerspectiveY, PerspectiveZ and either Omega, Phi, Kappa
+// (degrees) or Matrix (nine numbers, row-major, R_camera_from_ground in the file's convention: for
+// opk the matrix M, for seed R, for pok R^T). Unknown columns land in extra_columns.
+Status ReadFramesTable(const std::string& path, const FramesTableOptions& options,
+                       std::vector<FrameRecord>* frames);
+// Writes the same columns (angles in options.convention, degrees), then SigmaX, SigmaY, SigmaZ (m),
+// SigmaOmega, SigmaPhi, SigmaKappa (degrees), Sigma0 where present, then extra columns.
+Status WriteFramesTable(const std::string& path, const FramesTableOptions& options,
+                        const std::vector<FrameRecord>& frames);
+
+// ------------------------------------------------------------------ ground points
+enum class PointRole { kControl, kCheck };
+
+struct GroundPoint {
+  std::string point_id;
+  Eigen::Vector3d position = Eigen::Vector3d::Zero();  // X, Y, Z (m)
+  std::optional<Eigen::Vector3d> accuracy_m;            // AccuracyX/Y/Z, one sigma (m)
+  PointRole role = PointRole::kControl;                 // Role: control (default) | check
+  int line = 0;                                         // source line, for messages
+};
+
+Status ReadGroundPoints(const std::string& path, std::vector<GroundPoint>* points);
+Status WriteGroundPoints(const std::string& path, const std::vector<GroundPoint>& points);
+
+// ------------------------------------------------------------------ image marks
+struct ImageMark {
+  std::string raster;
+  std::string point_id;
+  // Exactly one of the two is set: Column/Row (pixels, PixelOrigin of the reader) or FilmX/FilmY (um).
+  std::optional<Eigen::Vector2d> column_row;
+  std::optional<Eigen::Vector2d> film_um;
+  std::optional<double> accuracy_px;  // Accuracy, one sigma (pixels)
+  std::string camera_id;              // CameraID, optional
+  int line = 0;                       // source line, for messages
+};
+
+Status ReadImageMarks(const std::string& path, std::vector<ImageMark>* marks);
+Status WriteImageMarks(const std::string& path, const std::vector<ImageMark>& marks);
+
+// ------------------------------------------------------------------ OpenDroneMap gcp_list.txt
+// First line: the CRS (EPSG:xxxx, WGS84 UTM ..., or a proj string); then "X Y Z px py image [name]"
+// per line (pixels, origin at the top-left corner, row down). Points without a name are named after
+// their coordinates; the same X Y Z under one name is one ground point.
+struct GcpList {
+  std::string crs;
+  std::vector<GroundPoint> points;
+  std::vector<ImageMark> marks;
+};
+Status ReadGcpList(const std::string& path, GcpList* gcp_list);
+
+// ------------------------------------------------------------------ consistency
+// Checks that every mark names a known point and (when cameras/frames are known) a known raster and
+// camera. Messages name the file and line of the mark.
+Status CheckMarks(const std::string& marks_path, const std::vector<ImageMark>& marks,
+                  const std::vector<GroundPoint>& points);
+
+// Writes `contents` to `path` atomically (temporary file in the same folder, then rename).
+Status WriteFileAtomically(const std::string& path, const std::string& contents);
+
+}  // namespace photopose

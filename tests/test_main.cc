@@ -1,0 +1,10 @@
+#include <glog/logging.h>
+#include <gtest/gtest.h>
+
+int main(int argc, char** argv) {
+  ::testing::InitGoogleTest(&argc, argv);
+  google::InitGoogleLogging(argv[0]);
+  FLAGS_logtostderr = true;
+  FLAGS_minloglevel = 2;  // quiet: tests check results, not logs
+  return RUN_ALL_TESTS();
+}
