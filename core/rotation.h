@@ -49,9 +49,10 @@ void SeedRotationMatrix(const T omega, const T phi, const T kappa, T* R);
 // R_camera_from_ground for three angles (rad) in the named convention.
 Eigen::Matrix3d RotationFromAngles(RotationConvention convention, const Eigen::Vector3d& angles_rad);
 
-// Inverse of RotationFromAngles. The middle angle is returned in [-pi/2, pi/2], the others in
-// (-pi, pi]. At the gimbal lock of a convention (middle angle at +-90 deg) the first angle is set
-// to zero and the third carries the combined rotation.
+// Inverse of RotationFromAngles, returning (omega, phi, kappa). The angle of the middle rotation
+// is returned in [-pi/2, pi/2] (phi for seed and opk, omega for the Y-primary pok), the others in
+// (-pi, pi]. At the gimbal lock (middle rotation at +-90 deg) the primary angle is set to zero and
+// kappa carries the combined rotation.
 Eigen::Vector3d AnglesFromRotation(RotationConvention convention,
                                    const Eigen::Matrix3d& R_camera_from_ground);
 

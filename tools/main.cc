@@ -1,1 +1,39 @@
-int main() { return 0; }
+// photopose: space resection and its tools on the photogrammetric collinearity equations.
+#include <gflags/gflags.h>
+#include <glog/logging.h>
+
+#include <cstring>
+#include <iostream>
+#include <string>
+
+#include "tools/cli_common.h"
+#include "tools/commands.h"
+
+namespace {
+
+constexpr char kUsage[] =
+    "photopose: camera poses from the photogrammetric collinearity equations.\n\n"
+    "Usage: photopose <command> [--flag=value ...]\n\n"
+    "Commands:\n"
+    "  resect    resect every image that has marks (robust: RANSAC + Ceres, or the Taylor\n"
+    "            linearisation of the seed lecture)\n"
+    "  simulate  write a synthetic dataset (camera table, frames, points, marks) with its truth\n\n"
+    "Run 'photopose <command> --help' for the flags of a command.\n";
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  google::InitGoogleLogging(argv[0]);
+  FLAGS_logtostderr = true;
+  FLAGS_minloglevel = 1;  // warnings and errors only
+  if (argc < 2 || std::strcmp(argv[1], "--help") == 0 || std::strcmp(argv[1], "-h") == 0 ||
+      std::strcmp(argv[1], "help") == 0) {
+    std::cout << kUsage;
+    return argc < 2 ? photopose::cli::kExitBadInput : photopose::cli::kExitSuccess;
+  }
+  const std::string command = argv[1];
+  if (command == "resect") return photopose::cli::RunResect(argc - 2, argv + 2);
+  if (command == "simulate") return photopose::cli::RunSimulate(argc - 2, argv + 2);
+  std::cerr << "photopose: unknown command '" << command << "'\n" << kUsage;
+  return photopose::cli::kExitBadInput;
+}

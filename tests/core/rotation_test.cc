@@ -1,0 +1,161 @@
+#include "core/rotation.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <random>
+
+#include "core/types.h"
+
+namespace photopose {
+namespace {
+
+// Elementwise formulas and products are evaluated in double; they agree to a few ulps.
+constexpr double kElementTolerance = 1e-14;
+// Angles recovered from a matrix: asin/atan2 near the limits lose a few digits.
+constexpr double kAngleTolerance = 1e-11;
+
+Eigen::Vector3d RandomAngles(std::mt19937_64* rng) {
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  return Eigen::Vector3d(kPi * u(*rng), 0.5 * kPi * 0.999 * u(*rng), kPi * u(*rng));
+}
+
+TEST(Rotation, SeedMatrixIsEquationOneElementByElement) {
+  // Equation 1 of the lecture, as printed: [1 0 0; 0 cos w -sin w; 0 sin w cos w] times
+  // [cos p 0 sin p; 0 1 0; -sin p 0 cos p] times [cos k -sin k 0; sin k cos k 0; 0 0 1].
+  const double w = 0.3, p = -0.2, k = 1.1;
+  Eigen::Matrix3d A, B, C;
+  A << 1, 0, 0, 0, std::cos(w), -std::sin(w), 0, std::sin(w), std::cos(w);
+  B << std::cos(p), 0, std::sin(p), 0, 1, 0, -std::sin(p), 0, std::cos(p);
+  C << std::cos(k), -std::sin(k), 0, std::sin(k), std::cos(k), 0, 0, 0, 1;
+  const Eigen::Matrix3d expected = A * B * C;
+  const Eigen::Matrix3d R = RotationFromAngles(RotationConvention::kSeed, {w, p, k});
+  for (int i = 0; i < 3; ++i)
+    for (int j = 0; j < 3; ++j) EXPECT_NEAR(R(i, j), expected(i, j), kElementTolerance) << i << j;
+  // The expanded template (used by the cost functions) is the same matrix.
+  double flat[9];
+  SeedRotationMatrix(w, p, k, flat);
+  for (int i = 0; i < 9; ++i) EXPECT_NEAR(flat[i], expected(i / 3, i % 3), kElementTolerance);
+}
+
+TEST(Rotation, OpkMatchesWolfDewittElements) {
+  // Wolf & Dewitt, Elements of Photogrammetry, the rotation matrix M (ground -> photo):
+  // m11 = cos p cos k, m12 = sin w sin p cos k + cos w sin k, m13 = -cos w sin p cos k + sin w sin k
+  // m21 = -cos p sin k, m22 = -sin w sin p sin k + cos w cos k, m23 = cos w sin p sin k + sin w cos k
+  // m31 = sin p, m32 = -sin w cos p, m33 = cos w cos p.
+  const double w = DegreesToRadians(-0.4109), p = DegreesToRadians(1.2101), k = DegreesToRadians(102.8003);
+  const double sw = std::sin(w), cw = std::cos(w), sp = std::sin(p), cp = std::cos(p);
+  const double sk = std::sin(k), ck = std::cos(k);
+  Eigen::Matrix3d M;
+  M << cp * ck, sw * sp * ck + cw * sk, -cw * sp * ck + sw * sk,  //
+      -cp * sk, -sw * sp * sk + cw * ck, cw * sp * sk + sw * ck,  //
+      sp, -sw * cp, cw * cp;
+  const Eigen::Matrix3d R = RotationFromAngles(RotationConvention::kOpk, {w, p, k});
+  EXPECT_LE((R - M).cwiseAbs().maxCoeff(), kElementTolerance);
+  // And it is the transpose of the seed's matrix for the same three numbers.
+  const Eigen::Matrix3d seed = RotationFromAngles(RotationConvention::kSeed, {w, p, k});
+  EXPECT_LE((R - seed.transpose()).cwiseAbs().maxCoeff(), kElementTolerance);
+}
+
+TEST(Rotation, PokMatchesChineseTextbookElements) {
+  // Y-primary system (e.g. Wang Zhizhuo, Principles of Photogrammetry): R = R_phi R_omega R_kappa
+  // (photo -> ground) with
+  // a1 = cos p cos k - sin p sin w sin k, a2 = -cos p sin k - sin p sin w cos k, a3 = -sin p cos w
+  // b1 = cos w sin k, b2 = cos w cos k, b3 = -sin w
+  // c1 = sin p cos k + cos p sin w sin k, c2 = -sin p sin k + cos p sin w cos k, c3 = cos p cos w
+  // and x = -f (a1 dX + b1 dY + c1 dZ) / (a3 dX + b3 dY + c3 dZ): ground -> camera is R^T.
+  const double w = 0.07, p = -0.12, k = 2.5;  // (omega, phi, kappa) in photopose's order
+  const double sw = std::sin(w), cw = std::cos(w), sp = std::sin(p), cp = std::cos(p);
+  const double sk = std::sin(k), ck = std::cos(k);
+  Eigen::Matrix3d G;
+  G << cp * ck - sp * sw * sk, -cp * sk - sp * sw * ck, -sp * cw,  //
+      cw * sk, cw * ck, -sw,                                        //
+      sp * ck + cp * sw * sk, -sp * sk + cp * sw * ck, cp * cw;
+  const Eigen::Matrix3d R = RotationFromAngles(RotationConvention::kPok, {w, p, k});
+  EXPECT_LE((R - G.transpose()).cwiseAbs().maxCoeff(), kElementTolerance);
+}
+
+TEST(Rotation, RoundTripsForEveryConvention) {
+  std::mt19937_64 rng(11);
+  for (RotationConvention convention :
+       {RotationConvention::kSeed, RotationConvention::kOpk, RotationConvention::kPok}) {
+    for (int i = 0; i < 2000; ++i) {
+      Eigen::Vector3d angles = RandomAngles(&rng);
+      // pok is Y-primary: its middle (limited) angle is omega, the first component.
+      if (convention == RotationConvention::kPok) std::swap(angles[0], angles[1]);
+      const Eigen::Matrix3d R = RotationFromAngles(convention, angles);
+      EXPECT_TRUE(CheckRotationMatrix(R).ok());
+      const Eigen::Vector3d back = AnglesFromRotation(convention, R);
+      EXPECT_LE((back - angles).cwiseAbs().maxCoeff(), kAngleTolerance)
+          << RotationConventionName(convention);
+      // Through the internal seed angles and back, as the tables do.
+      const Eigen::Vector3d seed = AnglesFromRotation(RotationConvention::kSeed, R);
+      const Eigen::Matrix3d again = RotationFromAngles(RotationConvention::kSeed, seed);
+      EXPECT_LE((again - R).cwiseAbs().maxCoeff(), 1e-13);  // a few ulps of the trig functions
+    }
+  }
+}
+
+TEST(Rotation, GimbalLockGivesTheSameMatrix) {
+  for (RotationConvention convention :
+       {RotationConvention::kSeed, RotationConvention::kOpk, RotationConvention::kPok}) {
+    for (double middle : {kPi / 2, -kPi / 2}) {
+      Eigen::Vector3d angles(0.4, middle, -0.3);
+      if (convention == RotationConvention::kPok) angles = Eigen::Vector3d(middle, 0.4, -0.3);
+      const Eigen::Matrix3d R = RotationFromAngles(convention, angles);
+      const Eigen::Matrix3d back = RotationFromAngles(convention, AnglesFromRotation(convention, R));
+      EXPECT_LE((back - R).cwiseAbs().maxCoeff(), 1e-12) << RotationConventionName(convention);
+    }
+  }
+}
+
+TEST(Rotation, ConventionsGiveDifferentPosesForTheSameNumbers) {
+  const Eigen::Vector3d angles(0.1, 0.2, 0.3);
+  const Eigen::Matrix3d seed = RotationFromAngles(RotationConvention::kSeed, angles);
+  const Eigen::Matrix3d opk = RotationFromAngles(RotationConvention::kOpk, angles);
+  const Eigen::Matrix3d pok = RotationFromAngles(RotationConvention::kPok, angles);
+  EXPECT_GT((seed - opk).norm(), 0.1);
+  EXPECT_GT((seed - pok).norm(), 0.1);
+  EXPECT_GT((opk - pok).norm(), 0.05);
+}
+
+TEST(Rotation, RollPitchYawIsEquationOne) {
+  const Eigen::Matrix3d R = RotationFromRollPitchYaw(0.05, -0.02, 1.3);
+  EXPECT_LE((R - RotationFromAngles(RotationConvention::kSeed, {0.05, -0.02, 1.3})).norm(), 1e-15);
+  const Eigen::Vector3d rpy = RollPitchYawFromRotation(R);
+  EXPECT_NEAR(rpy[0], 0.05, kAngleTolerance);
+  EXPECT_NEAR(rpy[1], -0.02, kAngleTolerance);
+  EXPECT_NEAR(rpy[2], 1.3, kAngleTolerance);
+}
+
+TEST(Rotation, AngleDirectionNegatesOnlyForCounterclockwise) {
+  const Eigen::Vector3d angles(0.1, -0.2, 0.3);
+  EXPECT_EQ(ApplyAngleDirection(AngleFlags{-1}, angles), angles);
+  EXPECT_EQ(ApplyAngleDirection(AngleFlags{+1}, angles), Eigen::Vector3d(-angles));
+  EXPECT_EQ(ApplyAngleDirection(AngleFlags{+1}, ApplyAngleDirection(AngleFlags{+1}, angles)), angles);
+}
+
+TEST(Rotation, ParsesNamesAndRejectsOthers) {
+  EXPECT_EQ(ParseRotationConvention("OPK"), RotationConvention::kOpk);
+  EXPECT_EQ(ParseRotationConvention("seed"), RotationConvention::kSeed);
+  EXPECT_EQ(ParseRotationConvention("pok"), RotationConvention::kPok);
+  EXPECT_FALSE(ParseRotationConvention("kpo").has_value());
+}
+
+TEST(Rotation, CheckRotationMatrixRejectsReflectionsAndScaling) {
+  EXPECT_TRUE(CheckRotationMatrix(Eigen::Matrix3d::Identity()).ok());
+  EXPECT_FALSE(CheckRotationMatrix(-Eigen::Matrix3d::Identity()).ok());
+  EXPECT_FALSE(CheckRotationMatrix(1.01 * Eigen::Matrix3d::Identity()).ok());
+  Eigen::Matrix3d nan = Eigen::Matrix3d::Identity();
+  nan(0, 0) = std::nan("");
+  EXPECT_FALSE(CheckRotationMatrix(nan).ok());
+}
+
+TEST(Rotation, WrapAngleStaysInHalfOpenInterval) {
+  EXPECT_NEAR(WrapAngle(3 * kPi), kPi, 1e-12);
+  EXPECT_NEAR(WrapAngle(-kPi), kPi, 1e-12);
+  EXPECT_NEAR(WrapAngle(0.5 + 4 * kPi), 0.5, 1e-12);
+}
+
+}  // namespace
+}  // namespace photopose

@@ -1,0 +1,89 @@
+#include "tools/cli_common.h"
+
+#include <gflags/gflags.h>
+
+#include <iostream>
+#include <vector>
+
+namespace photopose::cli {
+
+const char kConventionsHelp[] =
+    "Conventions: pixel coordinates are Column/Row with (0,0) at the top-left corner of the image\n"
+    "and Row down (the centre of the first pixel is 0.5,0.5). Film coordinates are micrometres from\n"
+    "the fiducial centre, x right and y up (FilmCoordinateSystem 1) unless the camera table says\n"
+    "otherwise. Angles in tables are decimal degrees; --rotation names their convention: seed\n"
+    "(R = Rx(omega) Ry(phi) Rz(kappa) maps ground to camera), opk (Wolf & Dewitt / PATB, the\n"
+    "transpose of seed for the same numbers) or pok (Y-primary phi-omega-kappa). Ground units are\n"
+    "metres. See docs/conventions.md and docs/formats.md.\n";
+
+bool ParseFlags(int argc, char** argv, const std::string& subcommand, bool* help_requested) {
+  *help_requested = false;
+  for (int i = 0; i < argc; ++i) {
+    std::string arg = argv[i];
+    if (arg == "--help" || arg == "-h" || arg == "--helpfull" || arg == "-help") {
+      *help_requested = true;
+      continue;
+    }
+    if (arg.rfind("--", 0) != 0 && arg.rfind("-", 0) != 0) {
+      std::cerr << "photopose " << subcommand << ": unexpected argument '" << arg
+                << "' (flags are --name=value)\n";
+      return false;
+    }
+    arg = arg.substr(arg[1] == '-' ? 2 : 1);
+    std::string name = arg, value;
+    bool has_value = false;
+    const size_t equals = arg.find('=');
+    if (equals != std::string::npos) {
+      name = arg.substr(0, equals);
+      value = arg.substr(equals + 1);
+      has_value = true;
+    }
+    gflags::CommandLineFlagInfo info;
+    if (!gflags::GetCommandLineFlagInfo(name.c_str(), &info)) {
+      // --noflag for booleans.
+      if (name.rfind("no", 0) == 0 && gflags::GetCommandLineFlagInfo(name.substr(2).c_str(), &info) &&
+          info.type == "bool" && !has_value) {
+        gflags::SetCommandLineOption(name.substr(2).c_str(), "false");
+        continue;
+      }
+      std::cerr << "photopose " << subcommand << ": unknown flag --" << name
+                << " (see photopose " << subcommand << " --help)\n";
+      return false;
+    }
+    if (!has_value) {
+      if (info.type == "bool") {
+        value = "true";
+      } else if (i + 1 < argc) {
+        value = argv[++i];
+      } else {
+        std::cerr << "photopose " << subcommand << ": flag --" << name << " needs a value\n";
+        return false;
+      }
+    }
+    if (gflags::SetCommandLineOption(name.c_str(), value.c_str()).empty()) {
+      std::cerr << "photopose " << subcommand << ": invalid value '" << value << "' for --" << name
+                << " (" << info.type << " expected)\n";
+      return false;
+    }
+  }
+  return true;
+}
+
+void PrintHelp(const std::string& usage, const std::string& flags_file) {
+  std::cout << usage << "\n" << kConventionsHelp << "\nFlags:\n";
+  std::vector<gflags::CommandLineFlagInfo> flags;
+  gflags::GetAllFlags(&flags);
+  for (const auto& flag : flags) {
+    if (flag.filename.find(flags_file) == std::string::npos) continue;
+    std::cout << "  --" << flag.name << " (" << flag.type << ", default: \""
+              << flag.default_value << "\")\n      " << flag.description << "\n";
+  }
+  std::cout << "  --flagfile=F\n      Reads further flags, one per line, from the file F.\n";
+}
+
+int BadInput(const std::string& subcommand, const std::string& message) {
+  std::cerr << "photopose " << subcommand << ": " << message << "\n";
+  return kExitBadInput;
+}
+
+}  // namespace photopose::cli

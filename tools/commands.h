@@ -1,0 +1,10 @@
+#pragma once
+// The photopose subcommands. Each parses its own flags (argv without the program and command
+// names) and returns the process exit status (tools/cli_common.h).
+
+namespace photopose::cli {
+
+int RunResect(int argc, char** argv);
+int RunSimulate(int argc, char** argv);
+
+}  // namespace photopose::cli
