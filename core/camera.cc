@@ -64,7 +64,6 @@ double TableDistortion(const std::vector<double>& r, const std::vector<double>& 
 }  // namespace
 
 Status FrameCamera::IsValid() const {
-  std::ostringstream why;
   if (camera_id.empty()) return Status::Error("CameraID is empty");
   if (!(focal_length_um > 0.0) || !std::isfinite(focal_length_um))
     return Status::Error("FocalLength must be a positive number of micrometres");

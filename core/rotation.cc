@@ -1,5 +1,7 @@
 #include "core/rotation.h"
 
+#include "core/types.h"
+
 #include <Eigen/Dense>
 #include <algorithm>
 #include <cctype>
@@ -119,8 +121,8 @@ Status CheckRotationMatrix(const Eigen::Matrix3d& R, double tolerance) {
 }
 
 double WrapAngle(double a) {
-  a = std::remainder(a, 2.0 * M_PI);  // [-pi, pi]
-  if (a <= -M_PI) a += 2.0 * M_PI;
+  a = std::remainder(a, 2.0 * kPi);  // [-pi, pi]
+  if (a <= -kPi) a += 2.0 * kPi;
   return a;
 }
 

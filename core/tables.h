@@ -78,7 +78,8 @@ Status WriteGroundPoints(const std::string& path, const std::vector<GroundPoint>
 struct ImageMark {
   std::string raster;
   std::string point_id;
-  // Exactly one of the two is set: Column/Row (pixels, PixelOrigin of the reader) or FilmX/FilmY (um).
+  // Exactly one of the two is set: Column/Row (pixels; the PixelOrigin is chosen by the consumer,
+  // top-left corner by default) or FilmX/FilmY (um).
   std::optional<Eigen::Vector2d> column_row;
   std::optional<Eigen::Vector2d> film_um;
   std::optional<double> accuracy_px;  // Accuracy, one sigma (pixels)
@@ -101,8 +102,8 @@ struct GcpList {
 Status ReadGcpList(const std::string& path, GcpList* gcp_list);
 
 // ------------------------------------------------------------------ consistency
-// Checks that every mark names a known point and (when cameras/frames are known) a known raster and
-// camera. Messages name the file and line of the mark.
+// Checks that every mark names a known point. Messages name the file and line of the mark. (Cameras
+// and rasters are resolved, with the same kind of message, when the resection inputs are built.)
 Status CheckMarks(const std::string& marks_path, const std::vector<ImageMark>& marks,
                   const std::vector<GroundPoint>& points);
 

@@ -231,6 +231,14 @@ ResectionResult ResectImage(const ResectionOptions& options, const ResectionInpu
     eo = *input.approximate;
     summary.used_approximate = true;
     if (!eo.parameters.allFinite()) return fail("the approximate pose is not finite");
+    for (size_t i = 0; i < n; ++i) {
+      double xy[2];
+      if (!ProjectToImagePlane(eo.data(), input.points_in_ground[i].data(), input.focal_length_um, xy)) {
+        const std::string name = i < input.point_ids.size() ? "'" + input.point_ids[i] + "'"
+                                                            : "#" + std::to_string(i + 1);
+        return fail("control point " + name + " is behind the camera at the approximate pose");
+      }
+    }
   } else {
     const Clock::time_point ransac_start = Clock::now();
     AbsolutePoseRansacOptions ransac_options;

@@ -75,6 +75,7 @@ struct ResectionInput {
   std::vector<Eigen::Vector2d> image_plane_um; // ideal (distortion-free) observations, um
   std::vector<Eigen::Vector3d> points_in_ground;
   std::vector<double> sigma_px;                // one sigma per observation (pixels)
+  std::vector<std::string> point_ids;          // optional, names points in messages
   std::optional<ExteriorOrientation> approximate;
 };
 

@@ -25,7 +25,9 @@ constexpr char kUsage[] =
 int main(int argc, char** argv) {
   google::InitGoogleLogging(argv[0]);
   FLAGS_logtostderr = true;
-  FLAGS_minloglevel = 1;  // warnings and errors only
+  // The subcommands report every problem themselves, one line each; Ceres' own log lines would
+  // only repeat them.
+  FLAGS_minloglevel = 3;
   if (argc < 2 || std::strcmp(argv[1], "--help") == 0 || std::strcmp(argv[1], "-h") == 0 ||
       std::strcmp(argv[1], "help") == 0) {
     std::cout << kUsage;

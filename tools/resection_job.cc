@@ -109,6 +109,7 @@ Status PrepareResectionJob(const ResectionJobOptions& options, ResectionJob* job
     input.image_plane_um.push_back(image_plane);
     input.points_in_ground.push_back(point->second->position);
     input.sigma_px.push_back(mark.accuracy_px.value_or(options.default_accuracy_px));
+    input.point_ids.push_back(mark.point_id);
     job->input_marks[index].push_back(m);
   }
   return Status::Ok();

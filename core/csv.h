@@ -1,0 +1,136 @@
+#pragma once
+// A small CSV reader and writer helpers for photopose's tables (docs/formats.md).
+//
+// Reading: comma separator; a field may be enclosed in double quotes, inside which commas and line
+// breaks are literal and "" stands for one quote; spaces and tabs around a field are trimmed (kept
+// inside quotes); empty lines and lines whose first non-blank character is '#' are skipped; the
+// first remaining line is the header. Header names are matched case-insensitively and, with
+// CsvOptions::tolerant_header, also with spaces and underscores removed ("Point ID", "point_id" and
+// "POINTID" all name PointID). Every problem is a Status whose message reads
+// "file:line: column: what is wrong", with 1-based physical line numbers of the file.
+
+#include <optional>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include "core/status.h"
+
+namespace photopose {
+
+struct CsvOptions {
+  // Also match header names with spaces and underscores removed.
+  bool tolerant_header = false;
+};
+
+// One data row: its fields, one per header column, trimmed and unquoted.
+struct CsvRow {
+  int line = 0;  // 1-based line of the file where the row starts
+  std::vector<std::string> fields;
+};
+
+class CsvTable {
+ public:
+  // Reads and parses the file at `path`; `path` names the file in messages. A file that cannot be
+  // opened gives "path: cannot open: <system reason>".
+  static Status Read(const std::string& path, const CsvOptions& options, CsvTable* table);
+  // Parses CSV text; `file_name` names it in messages.
+  static Status Parse(std::string_view text, const std::string& file_name,
+                      const CsvOptions& options, CsvTable* table);
+
+  const std::string& file_name() const { return file_name_; }
+  int header_line() const { return header_line_; }
+  const std::vector<std::string>& header() const { return header_; }
+  const std::vector<CsvRow>& rows() const { return rows_; }
+
+  // Index of the column called `name` (matched as described above), or nullopt.
+  std::optional<size_t> ColumnIndex(std::string_view name) const;
+  bool HasColumn(std::string_view name) const { return ColumnIndex(name).has_value(); }
+  // Whether two header names name the same column under this table's matching rules.
+  bool SameName(std::string_view a, std::string_view b) const;
+  // "file:header_line: <name>: required column is missing" for the first name not in the header.
+  Status RequireColumns(const std::vector<std::string_view>& names) const;
+  // Indices of the header columns that are none of `known`, in header order.
+  std::vector<size_t> ColumnsOtherThan(const std::vector<std::string_view>& known) const;
+  // Status::Error("file:line: column: what"); the column part is left out when `column` is empty.
+  Status Error(int line, std::string_view column, std::string_view what) const;
+
+ private:
+  std::string Normalized(std::string_view name) const;
+
+  std::string file_name_;
+  CsvOptions options_;
+  int header_line_ = 0;
+  std::vector<std::string> header_;
+  std::vector<std::string> normalized_header_;
+  std::vector<CsvRow> rows_;
+};
+
+// Typed, checked access to the fields of one row. `column` is the schema's name of a column; a
+// column absent from the header reads as an empty field. Every error reads
+// "file:line: column: what is wrong".
+class CsvRowReader {
+ public:
+  CsvRowReader(const CsvTable& table, const CsvRow& row) : table_(table), row_(row) {}
+
+  int line() const { return row_.line; }
+  // The field's text; empty when the column is absent.
+  std::string_view Text(std::string_view column) const;
+  // Whether the column is present and its field is not empty.
+  bool Has(std::string_view column) const { return !Text(column).empty(); }
+
+  // A non-empty field ("column: is empty" otherwise).
+  Status RequiredText(std::string_view column, std::string* value) const;
+  // A finite number; an empty field gives nullopt.
+  Status Number(std::string_view column, std::optional<double>* value) const;
+  // A finite number; an empty field is an error.
+  Status RequiredNumber(std::string_view column, double* value) const;
+  // A whole number; an empty field gives nullopt.
+  Status Integer(std::string_view column, std::optional<long long>* value) const;
+  // Finite numbers separated by spaces and/or semicolons; an empty field gives an empty list.
+  Status NumberList(std::string_view column, std::vector<double>* values) const;
+  // Groups separated by semicolons, each of `group_size` finite numbers separated by spaces
+  // ("x y;x y;..."), flattened into `values`; an empty field gives an empty list.
+  Status NumberGroups(std::string_view column, int group_size, std::vector<double>* values) const;
+
+  // Status::Error("file:line: column: what").
+  Status Error(std::string_view column, std::string_view what) const {
+    return table_.Error(row_.line, column, what);
+  }
+
+ private:
+  const CsvTable& table_;
+  const CsvRow& row_;
+};
+
+// Reads a whole file into *text. Errors: "path: cannot open: <system reason>" and
+// "path: cannot read: <system reason>".
+Status ReadTextFile(const std::string& path, std::string* text);
+
+// Parses a whole field as a finite decimal number (C locale, a leading '+' allowed). On failure
+// returns false and sets *why to a phrase about the text ("'abc' is not a number",
+// "'nan' is not a finite number", "'1e999' is out of range").
+bool ParseFiniteNumber(std::string_view text, double* value, std::string* why);
+// Parses a whole field as a whole number ("12", "+1", also "12.0"). Same failure contract.
+bool ParseWholeNumber(std::string_view text, long long* value, std::string* why);
+// Splits text at runs of white space (spaces, tabs, line ends), dropping empty words.
+std::vector<std::string_view> SplitWords(std::string_view text);
+// Lower case with spaces and underscores removed: how the tables compare header names (tolerant)
+// and enumerated values ("Distortion Model" = "DistortionModel", "x_right_y_up" = "X_RIGHT_Y_UP").
+std::string FoldedName(std::string_view text);
+
+// Splits a list field at semicolons and runs of spaces/tabs; an empty item between two semicolons
+// is returned as an empty string so that callers can report it.
+std::vector<std::string_view> SplitListItems(std::string_view text);
+
+// The shortest decimal text that reads back as exactly the same double.
+std::string FormatNumber(double value);
+// Numbers joined by semicolons, each as FormatNumber.
+std::string FormatNumberList(const std::vector<double>& values);
+// A field as it must appear in a CSV line: quoted when it holds a comma, a quote, a line break,
+// leading or trailing blanks, or starts with '#'.
+std::string CsvQuote(std::string_view field);
+// Fields quoted and joined by commas, with a trailing '\n'.
+std::string CsvLine(const std::vector<std::string>& fields);
+
+}  // namespace photopose

@@ -1,0 +1,365 @@
+#include "solvers/absolute_pose.h"
+
+#include <Eigen/Dense>
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <cstdint>
+#include <cstring>
+#include <limits>
+#include <utility>
+
+#include "core/rotation.h"
+
+namespace photopose {
+namespace {
+
+// Ground points whose second RMS extent is below this fraction of the first lie on one line: every
+// pose rotated about that line fits them equally well.
+constexpr double kCollinearExtent = 1e-9;
+// Points scored between early-exit checks in ScoreModel: long enough for the compiler to keep the
+// loop tight, short enough that a bad model stops soon after it is rejected.
+constexpr int kScoreBlock = 8;
+// Sequential test of ScoreModel: the inlier ratio assumed for a wrong pose (a wrong pose puts a
+// point within a few pixels of its mark by chance only; a larger true value merely slows the
+// rejection) and the likelihood ratio A at which a model is rejected (a model that could beat
+// the best is lost with probability <= 1 / A).
+constexpr double kSprtBadInlierRatio = 0.05;
+constexpr double kSprtThreshold = 1e6;
+// Seed of the fixed scoring order.
+constexpr uint64_t kScoringOrderSeed = 0x9e3779b97f4a7c15ull;
+
+// splitmix64 (S. Vigna): a full-period 64-bit mixer, used as a tiny portable generator and hash.
+inline uint64_t SplitMix64(uint64_t x) {
+  x += 0x9e3779b97f4a7c15ull;
+  x = (x ^ (x >> 30)) * 0xbf58476d1ce4e5b9ull;
+  x = (x ^ (x >> 27)) * 0x94d049bb133111ebull;
+  return x ^ (x >> 31);
+}
+
+// A deterministic pseudo-random number from a model's translation bits (the scoring start offset).
+inline uint64_t ModelHash(const Eigen::Vector3d& t) {
+  uint64_t h = 0;
+  for (int k = 0; k < 3; ++k) {
+    uint64_t bits;
+    std::memcpy(&bits, &t[k], sizeof(bits));
+    h = SplitMix64(h ^ bits);
+  }
+  return h;
+}
+// Gauss-Newton stops when a step moves the projections by an RMS below this fraction of the inlier
+// threshold: the next step would be far below the marking noise.
+constexpr double kConvergedImageMotion = 1e-4;
+
+}  // namespace
+
+namespace internal {
+
+bool AddGaussNewtonTerms(const Eigen::Vector3d& camera_point, double observed_x_over_c,
+                         double observed_y_over_c, double* normal, double* gradient) {
+  const double w = camera_point.z();
+  if (!(w < 0.0)) return false;
+  // With q = 1 / w and the normalised projection X = x / c = -u / w, Y = -v / w, the rows of
+  // ProjectWithJacobians at the identity pose divided by c are (sin 0 = 0, cos 0 = 1 in the seed's
+  // equations 17-28):
+  //   jx = [q, 0, X q, X Y, -(1 + X^2), -Y],   jy = [0, q, Y q, 1 + Y^2, -X Y, X].
+  // J^T J and J^T r are written out with their zeros and common factors folded.
+  const double q = 1.0 / w;
+  const double X = -camera_point.x() * q;
+  const double Y = -camera_point.y() * q;
+  const double ex = observed_x_over_c - X;
+  const double ey = observed_y_over_c - Y;
+  const double XX = X * X, YY = Y * Y, XY = X * Y;
+  const double qq = q * q;
+  const double one_xx = 1.0 + XX, one_yy = 1.0 + YY, rho = 1.0 + XX + YY;
+  normal[0] += qq;                         // (0, 0)
+  /* (0, 1) is zero */                     // normal[1]
+  normal[2] += X * qq;                     // (0, 2)
+  normal[3] += q * XY;                     // (0, 3)
+  normal[4] -= q * one_xx;                 // (0, 4)
+  normal[5] -= q * Y;                      // (0, 5)
+  normal[6] += qq;                         // (1, 1)
+  normal[7] += Y * qq;                     // (1, 2)
+  normal[8] += q * one_yy;                 // (1, 3)
+  normal[9] -= q * XY;                     // (1, 4)
+  normal[10] += q * X;                     // (1, 5)
+  normal[11] += qq * (XX + YY);            // (2, 2)
+  normal[12] += q * Y * rho;               // (2, 3)
+  normal[13] -= q * X * rho;               // (2, 4)
+  /* (2, 5) is zero */                     // normal[14]
+  normal[15] += XY * XY + one_yy * one_yy;  // (3, 3)
+  normal[16] -= XY * (rho + 1.0);          // (3, 4)
+  normal[17] += X;                         // (3, 5)
+  normal[18] += one_xx * one_xx + XY * XY;  // (4, 4)
+  normal[19] += Y;                         // (4, 5)
+  normal[20] += XX + YY;                   // (5, 5)
+  gradient[0] += q * ex;
+  gradient[1] += q * ey;
+  gradient[2] += q * (X * ex + Y * ey);
+  gradient[3] += XY * ex + one_yy * ey;
+  gradient[4] -= one_xx * ex + XY * ey;
+  gradient[5] += X * ey - Y * ex;
+  return true;
+}
+
+}  // namespace internal
+
+bool AbsolutePoseRansacOptions::IsValid(std::string* why) const {
+  if (!ransac.IsValid(why)) return false;
+  if (!(inlier_threshold_um > 0.0) || !std::isfinite(inlier_threshold_um)) {
+    if (why != nullptr) *why = "inlier_threshold_um must be positive and finite";
+    return false;
+  }
+  if (lo_gauss_newton_iterations < 1) {
+    if (why != nullptr) *why = "lo_gauss_newton_iterations must be >= 1";
+    return false;
+  }
+  return true;
+}
+
+AbsolutePoseEstimator::AbsolutePoseEstimator(const std::vector<Eigen::Vector2d>& image_plane_um,
+                                             const std::vector<Eigen::Vector3d>& points_in_ground,
+                                             double focal_um, double inlier_threshold_um,
+                                             int gauss_newton_iterations)
+    : num_data_(static_cast<int>(points_in_ground.size())),
+      focal_um_(focal_um),
+      threshold_sq_um2_(inlier_threshold_um * inlier_threshold_um),
+      gauss_newton_iterations_(gauss_newton_iterations) {
+  const int n = num_data_;
+  for (const Eigen::Vector3d& X : points_in_ground) origin_in_ground_ += X;
+  if (n > 0) origin_in_ground_ /= n;
+  bearings_.resize(n);
+  centred_points_.resize(n);
+  observed_over_c_.resize(n);
+  x_.resize(n);
+  y_.resize(n);
+  z_.resize(n);
+  ox_.resize(n);
+  oy_.resize(n);
+  for (int i = 0; i < n; ++i) {
+    const Eigen::Vector2d& xy = image_plane_um[i];
+    bearings_[i] = Eigen::Vector3d(xy.x(), xy.y(), -focal_um).normalized();
+    centred_points_[i] = points_in_ground[i] - origin_in_ground_;
+    observed_over_c_[i] = xy / focal_um;
+  }
+  // The scoring copy is in a fixed pseudo-random order (a Fisher-Yates shuffle driven by
+  // splitmix64 from a constant seed), so the scores are reproducible and the sequential test in
+  // ScoreModel sees the points as random draws.
+  std::vector<int> order(n);
+  for (int i = 0; i < n; ++i) order[i] = i;
+  uint64_t state = kScoringOrderSeed;
+  for (int i = n - 1; i > 0; --i) {
+    state = SplitMix64(state);
+    std::swap(order[i], order[static_cast<int>(state % static_cast<uint64_t>(i + 1))]);
+  }
+  for (int k = 0; k < n; ++k) {
+    const int i = order[k];
+    x_[k] = centred_points_[i].x();
+    y_[k] = centred_points_[i].y();
+    z_[k] = centred_points_[i].z();
+    ox_[k] = observed_over_c_[i].x();
+    oy_[k] = observed_over_c_[i].y();
+  }
+}
+
+void AbsolutePoseEstimator::GenerateModels(const int* sample, std::vector<Model>* models) const {
+  const std::array<Eigen::Vector3d, 3> bearings = {bearings_[sample[0]], bearings_[sample[1]],
+                                                   bearings_[sample[2]]};
+  const std::array<Eigen::Vector3d, 3> points = {
+      centred_points_[sample[0]], centred_points_[sample[1]], centred_points_[sample[2]]};
+  const size_t first = models->size();
+  SolveP3P(bearings, points, models);
+  for (size_t k = first; k < models->size(); ++k)
+    (*models)[k].center_in_ground += origin_in_ground_;
+}
+
+double AbsolutePoseEstimator::ScoreModel(const Model& model, double best_score_so_far) const {
+  // Work in image-plane units divided by c: x / c = -u / w, so the residual over c is
+  // x_obs / c + u / w, and one reciprocal of w serves both coordinates.
+  const Eigen::Matrix3d& R = model.R_camera_from_ground;
+  const Eigen::Vector3d t = -R * (model.center_in_ground - origin_in_ground_);
+  const double r00 = R(0, 0), r01 = R(0, 1), r02 = R(0, 2);
+  const double r10 = R(1, 0), r11 = R(1, 1), r12 = R(1, 2);
+  const double r20 = R(2, 0), r21 = R(2, 1), r22 = R(2, 2);
+  const double t0 = t[0], t1 = t[1], t2 = t[2];
+  const double c2 = focal_um_ * focal_um_;
+  const double cap = threshold_sq_um2_ / c2;
+  const double limit = best_score_so_far / c2;
+
+  // Sequential probability ratio test (J. Matas and O. Chum, "Randomized RANSAC with sequential
+  // probability ratio test", ICCV 2005). A model that beats the best has fewer than
+  // best / threshold^2 outliers, so an inlier ratio of at least eps = 1 - best / (n threshold^2).
+  // Against a bad model (inlier ratio kSprtBadInlierRatio) the log likelihood ratio gains
+  // log((1 - delta) / (1 - eps)) per outlier and log(delta / eps) per inlier; past log(A) the model is
+  // rejected, which by Wald's bound happens to a model with inlier ratio >= eps with probability
+  // <= 1 / A. A bad model is thus dropped after a dozen or so points instead of the ~n (1 - eps)
+  // that the exact bound (sum >= best) needs.
+  const double eps = 1.0 - best_score_so_far / (num_data_ * threshold_sq_um2_);
+  const bool sprt = eps > 2.0 * kSprtBadInlierRatio && eps < 1.0;
+  const double log_per_inlier = sprt ? std::log(kSprtBadInlierRatio / eps) : 0.0;
+  const double log_per_outlier = sprt ? std::log((1.0 - kSprtBadInlierRatio) / (1.0 - eps)) : 0.0;
+  const double log_threshold = std::log(kSprtThreshold);
+
+  const double* x = x_.data();
+  const double* y = y_.data();
+  const double* z = z_.data();
+  const double* ox = ox_.data();
+  const double* oy = oy_.data();
+  double sum = 0.0;
+  double log_ratio = 0.0;
+  // Points are stored in a pseudo-random order (the test needs random draws, whatever the
+  // caller's order), and each model starts at its own pseudo-random offset so that one unlucky
+  // run of the order cannot reject every good model.
+  const int start = static_cast<int>(ModelHash(t) % static_cast<uint64_t>(num_data_));
+  for (int pass = 0; pass < 2; ++pass) {
+    const int first = pass == 0 ? start : 0;
+    const int last = pass == 0 ? num_data_ : start;
+    for (int begin = first; begin < last; begin += kScoreBlock) {
+      const int end = std::min(begin + kScoreBlock, last);
+      int outliers = 0;
+      for (int i = begin; i < end; ++i) {
+        const double u = r00 * x[i] + r01 * y[i] + r02 * z[i] + t0;
+        const double v = r10 * x[i] + r11 * y[i] + r12 * z[i] + t1;
+        const double w = r20 * x[i] + r21 * y[i] + r22 * z[i] + t2;
+        const double inv_w = 1.0 / w;
+        const double dx = ox[i] + u * inv_w;
+        const double dy = oy[i] + v * inv_w;
+        const double r2 = dx * dx + dy * dy;
+        const bool inlier = w < 0.0 && r2 < cap;
+        sum += inlier ? r2 : cap;
+        outliers += inlier ? 0 : 1;
+      }
+      if (sum >= limit) return std::max(sum * c2, best_score_so_far);
+      log_ratio += outliers * log_per_outlier + (end - begin - outliers) * log_per_inlier;
+      if (log_ratio > log_threshold) return std::numeric_limits<double>::infinity();
+    }
+  }
+  return sum * c2;
+}
+
+int AbsolutePoseEstimator::Inliers(const Model& model, std::vector<char>* mask) const {
+  const Eigen::Matrix3d& R = model.R_camera_from_ground;
+  const Eigen::Vector3d t = -R * (model.center_in_ground - origin_in_ground_);
+  const double cap = threshold_sq_um2_ / (focal_um_ * focal_um_);
+  mask->resize(num_data_);
+  int count = 0;
+  for (int i = 0; i < num_data_; ++i) {
+    const Eigen::Vector3d p = R * centred_points_[i] + t;
+    const double inv_w = 1.0 / p.z();
+    const double dx = observed_over_c_[i].x() + p.x() * inv_w;
+    const double dy = observed_over_c_[i].y() + p.y() * inv_w;
+    const bool inlier = p.z() < 0.0 && dx * dx + dy * dy <= cap;
+    (*mask)[i] = inlier ? 1 : 0;
+    count += inlier ? 1 : 0;
+  }
+  return count;
+}
+
+void AbsolutePoseEstimator::RefineModel(const std::vector<int>& inliers, Model* model) const {
+  if (static_cast<int>(inliers.size()) < kMinimalSampleSize) return;
+  Eigen::Matrix3d R = model->R_camera_from_ground;
+  Eigen::Vector3d center = model->center_in_ground - origin_in_ground_;
+  // In the normalised units of AddGaussNewtonTerms (image plane / c).
+  const double converged_motion_sq =
+      kConvergedImageMotion * kConvergedImageMotion * threshold_sq_um2_ / (focal_um_ * focal_um_);
+  // Each iteration linearises about the current pose in a local ground frame X' = R (X - centre),
+  // where the pose is the zero vector: the increments (dX0', d_omega, d_phi, d_kappa) are then the
+  // eo partials of the collinearity equations at zero angles (AddGaussNewtonTerms, no
+  // trigonometry per point), with no Euler-angle singularity, and
+  // R <- R_seed(d_angles) R, centre <- centre + R^T dX0'.
+  for (int iteration = 0; iteration < gauss_newton_iterations_; ++iteration) {
+    double normal[21] = {};
+    double gradient[6] = {};
+    int used = 0;
+    for (const int i : inliers) {
+      const Eigen::Vector3d local = R * (centred_points_[i] - center);
+      if (internal::AddGaussNewtonTerms(local, observed_over_c_[i].x(), observed_over_c_[i].y(),
+                                        normal, gradient))
+        ++used;
+    }
+    if (used < kMinimalSampleSize) return;
+    Matrix6d N;
+    for (int r = 0, k = 0; r < 6; ++r)
+      for (int c = r; c < 6; ++c, ++k) N(r, c) = N(c, r) = normal[k];
+    const Vector6d g = Eigen::Map<const Vector6d>(gradient);
+    const Vector6d step = N.ldlt().solve(g);
+    if (!step.allFinite()) return;
+    center += R.transpose() * step.head<3>();
+    double R_step[9];
+    SeedRotationMatrix(step[3], step[4], step[5], R_step);
+    R = Eigen::Map<const Eigen::Matrix<double, 3, 3, Eigen::RowMajor>>(R_step) * R;
+    // step^T J^T J step is the summed squared motion of the projections; once its RMS is
+    // negligible the next step would be smaller still.
+    if (step.dot(N * step) <= converged_motion_sq * used) break;
+  }
+  model->R_camera_from_ground = R;
+  model->center_in_ground = center + origin_in_ground_;
+}
+
+Status EstimateAbsolutePoseRansac(const AbsolutePoseRansacOptions& options,
+                                  const std::vector<Eigen::Vector2d>& image_plane_um,
+                                  const std::vector<Eigen::Vector3d>& points_in_ground,
+                                  double focal_um, ExteriorOrientation* eo,
+                                  std::vector<char>* inlier_mask, RansacSummary* summary) {
+  RansacSummary local_summary;
+  RansacSummary& out = summary != nullptr ? *summary : local_summary;
+  out = RansacSummary();
+  auto fail = [&out](const std::string& message) {
+    out.success = false;
+    out.message = message;
+    return Status::Error("absolute pose RANSAC: " + message);
+  };
+
+  std::string why;
+  if (!options.IsValid(&why)) return fail("invalid options: " + why);
+  const int n = static_cast<int>(points_in_ground.size());
+  if (image_plane_um.size() != points_in_ground.size())
+    return fail(std::to_string(image_plane_um.size()) + " image points for " + std::to_string(n) +
+                " ground points");
+  if (!(focal_um > 0.0) || !std::isfinite(focal_um))
+    return fail("the principal distance must be positive and finite");
+  if (n < AbsolutePoseEstimator::kMinimalSampleSize)
+    return fail("needs at least 3 points, got " + std::to_string(n));
+  for (int i = 0; i < n; ++i) {
+    if (!image_plane_um[i].allFinite() || !points_in_ground[i].allFinite())
+      return fail("correspondence " + std::to_string(i) + " is not finite");
+  }
+
+  // All points on one line (or one point): the pose is not determined, so fail before sampling.
+  Eigen::Vector3d centroid = Eigen::Vector3d::Zero();
+  for (const Eigen::Vector3d& X : points_in_ground) centroid += X;
+  centroid /= n;
+  Eigen::Matrix3d scatter = Eigen::Matrix3d::Zero();
+  for (const Eigen::Vector3d& X : points_in_ground) scatter += (X - centroid) * (X - centroid).transpose();
+  const Eigen::Vector3d extent = Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d>(
+                                     scatter, Eigen::EigenvaluesOnly)
+                                     .eigenvalues()
+                                     .cwiseMax(0.0)
+                                     .cwiseSqrt();
+  if (!(extent[1] > kCollinearExtent * extent[2]))
+    return fail("all ground points are collinear (or coincide); the pose is not determined");
+
+  const AbsolutePoseEstimator estimator(image_plane_um, points_in_ground, focal_um,
+                                        options.inlier_threshold_um,
+                                        options.lo_gauss_newton_iterations);
+  PoseCandidate pose;
+  std::vector<char> mask;
+  out = Ransac(options.ransac, estimator, &pose, &mask);
+  if (!out.success) return fail(out.message);
+
+  int in_front = 0;
+  for (int i = 0; i < n; ++i) {
+    const double w = pose.R_camera_from_ground.row(2).dot(points_in_ground[i] - pose.center_in_ground);
+    if (w < 0.0) ++in_front;
+  }
+  if (in_front < AbsolutePoseEstimator::kMinimalSampleSize)
+    return fail("all points are behind the camera of the best pose (" + std::to_string(in_front) +
+                " in front)");
+
+  eo->set_center_in_ground(pose.center_in_ground);
+  eo->set_angles_seed_rad(AnglesFromRotation(RotationConvention::kSeed, pose.R_camera_from_ground));
+  if (inlier_mask != nullptr) *inlier_mask = std::move(mask);
+  return Status::Ok();
+}
+
+}  // namespace photopose

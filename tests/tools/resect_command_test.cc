@@ -1,0 +1,318 @@
+// End-to-end tests of `photopose resect` and `photopose simulate`: the executable as a user runs it.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <filesystem>
+#include <map>
+#include <nlohmann/json.hpp>
+
+#include "core/rotation.h"
+#include "core/tables.h"
+#include "tests/tools/cli_test_util.h"
+
+namespace photopose {
+namespace {
+
+using testing::CliRun;
+using testing::CountLines;
+using testing::ReadFile;
+using testing::RunCli;
+using testing::ScratchDir;
+using testing::SharedDataPath;
+using testing::SourcePath;
+using testing::WriteFile;
+
+std::string ExampleArgs() {
+  return "--cameras=" + SourcePath("examples/cameras.csv") + " --points=" +
+         SourcePath("examples/points.csv") + " --marks=" + SourcePath("examples/marks.csv");
+}
+
+std::map<std::string, FrameRecord> ReadFrames(const std::string& path,
+                                              RotationConvention convention = RotationConvention::kSeed) {
+  std::vector<FrameRecord> frames;
+  FramesTableOptions options;
+  options.convention = convention;
+  const Status status = ReadFramesTable(path, options, &frames);
+  EXPECT_TRUE(status.ok()) << status.message();
+  std::map<std::string, FrameRecord> by_raster;
+  for (auto& frame : frames) by_raster[frame.raster] = frame;
+  return by_raster;
+}
+
+TEST(ResectCommand, ResectsTheBundledExampleToItsTruth) {
+  const std::string dir = ScratchDir();
+  const CliRun run = RunCli("resect " + ExampleArgs() + " --out=" + dir + "/frames.csv --report=" +
+                                dir + "/report.json",
+                            dir);
+  ASSERT_EQ(run.exit_code, 0) << run.err;
+  const auto solved = ReadFrames(dir + "/frames.csv");
+  const auto truth = ReadFrames(SourcePath("examples/truth/frames.csv"));
+  ASSERT_EQ(solved.size(), truth.size());
+  for (const auto& [raster, frame] : solved) {
+    // 0.5 px noise: each pose is within 5 of its own standard deviations of the truth.
+    const Vector6d error = frame.eo.parameters - truth.at(raster).eo.parameters;
+    const std::string text = ReadFile(dir + "/frames.csv");
+    for (int k = 0; k < 3; ++k) EXPECT_LT(std::abs(error[k]), 0.05) << raster;
+    for (int k = 3; k < 6; ++k) EXPECT_LT(std::abs(error[k]), DegreesToRadians(0.02)) << raster;
+  }
+  // One line per image on stdout, and the report has every mark's residual and flag.
+  EXPECT_EQ(CountLines(run.out), static_cast<int>(truth.size()));
+  const auto report = nlohmann::json::parse(ReadFile(dir + "/report.json"));
+  ASSERT_EQ(report["images"].size(), truth.size());
+  EXPECT_EQ(report["options"]["solver"], "ceres");
+  for (const auto& image : report["images"]) {
+    EXPECT_TRUE(image["success"].get<bool>());
+    EXPECT_GT(image["marks"].size(), 10u);
+    EXPECT_NEAR(image["sigma0"].get<double>(), 1.0, 0.35);  // marks carry Accuracy = noise
+  }
+}
+
+TEST(ResectCommand, OutlierFlagsMatchTheSimulatedTruth) {
+  const std::string dir = ScratchDir();
+  const CliRun run = RunCli("resect " + ExampleArgs() + " --out=" + dir + "/frames.csv --report=" +
+                                dir + "/report.json",
+                            dir);
+  ASSERT_EQ(run.exit_code, 0) << run.err;
+  // truth/outliers.csv: Raster,PointID,Outlier.
+  std::map<std::pair<std::string, std::string>, bool> outlier;
+  std::istringstream truth(ReadFile(SourcePath("examples/truth/outliers.csv")));
+  std::string line;
+  std::getline(truth, line);
+  while (std::getline(truth, line)) {
+    const size_t a = line.find(','), b = line.rfind(',');
+    outlier[{line.substr(0, a), line.substr(a + 1, b - a - 1)}] = line.substr(b + 1) == "1";
+  }
+  const auto report = nlohmann::json::parse(ReadFile(dir + "/report.json"));
+  int agree = 0, total = 0, missed_outliers = 0;
+  for (const auto& image : report["images"]) {
+    for (const auto& mark : image["marks"]) {
+      const bool is_outlier = outlier.at({image["raster"], mark["point_id"]});
+      const bool flagged = !mark["inlier"].get<bool>();
+      agree += is_outlier == flagged;
+      missed_outliers += is_outlier && !flagged;
+      ++total;
+    }
+  }
+  EXPECT_EQ(missed_outliers, 0);
+  EXPECT_GE(agree, total - 2);  // a 20 px "gross" error may hide along the image edge, rarely
+}
+
+TEST(ResectCommand, EverySolverAndJacobianAgreesFromApproximateFrames) {
+  const std::string dir = ScratchDir();
+  std::map<std::string, std::map<std::string, FrameRecord>> results;
+  for (const std::string variant : {"--solver=ceres --jacobian=analytic --loss=none",
+                                    "--solver=ceres --jacobian=autodiff --loss=none",
+                                    "--solver=taylor", "--solver=taylor_as_printed"}) {
+    // Without gross errors in the data: plain least squares everywhere.
+    const CliRun run = RunCli("simulate --scenario=oblique --seed=3 --noise_px=0.3 --out_dir=" + dir, dir);
+    ASSERT_EQ(run.exit_code, 0) << run.err;
+    const CliRun resect = RunCli("resect --cameras=" + dir + "/cameras.csv --points=" + dir +
+                                     "/points.csv --marks=" + dir + "/marks.csv --frames=" + dir +
+                                     "/frames_approx.csv --out=" + dir + "/out.csv " + variant,
+                                 dir);
+    ASSERT_EQ(resect.exit_code, 0) << variant << ": " << resect.err;
+    EXPECT_NE(resect.out.find("(from --frames)"), std::string::npos);
+    results[variant] = ReadFrames(dir + "/out.csv");
+  }
+  const auto& reference = results.begin()->second.begin()->second.eo.parameters;
+  for (const auto& [variant, frames] : results) {
+    const Vector6d difference = frames.begin()->second.eo.parameters - reference;
+    if (variant == "--solver=taylor_as_printed") {
+      // The printed eq. 21 biases the solution on noisy data; it must still converge nearby.
+      EXPECT_LT(difference.head<3>().norm(), 5.0) << variant;
+    } else {
+      EXPECT_LT(difference.head<3>().norm(), 1e-6) << variant;
+      EXPECT_LT(difference.tail<3>().norm(), 1e-9) << variant;
+    }
+  }
+}
+
+TEST(ResectCommand, DroneSprMatchesTheReferenceFromPixelsWithoutApproximateValues) {
+  const std::string dir = ScratchDir();
+  // The camera of ../shared/data/drone_spr/README.txt: 7952 x 5304 px, 4.4 um, c = 32.784 mm,
+  // xp = -0.094217 mm, yp = -0.033517 mm, no distortion; picks are Column/Row from the top-left.
+  WriteFile(dir + "/cameras.csv",
+            "CameraID,FocalLength,PrincipalX,PrincipalY,PixelSize,NColumns,NRows\n"
+            "DSC,32784,-94.217,-33.517,4.4,7952,5304\n");
+  std::istringstream gcps(ReadFile(SharedDataPath("drone_spr/spr_gcp_inputs.csv")));
+  std::string line, points = "PointID,X,Y,Z\n", marks = "Raster,PointID,Column,Row\n";
+  std::getline(gcps, line);
+  while (std::getline(gcps, line)) {
+    std::vector<std::string> f;
+    std::stringstream s(line);
+    for (std::string cell; std::getline(s, cell, ',');) f.push_back(cell);
+    ASSERT_EQ(f.size(), 7u);
+    points += f[0] + "," + f[1] + "," + f[2] + "," + f[3] + "\n";
+    marks += f[4] + "," + f[0] + "," + f[5] + "," + f[6] + "\n";
+  }
+  WriteFile(dir + "/points.csv", points);
+  WriteFile(dir + "/marks.csv", marks);
+  // sigma0 is ~32 px (integer picks, no distortion model): plain least squares with a threshold that
+  // keeps every pick, as the reference solution did.
+  const CliRun run = RunCli("resect --cameras=" + dir + "/cameras.csv --points=" + dir +
+                                "/points.csv --marks=" + dir + "/marks.csv --out=" + dir +
+                                "/frames.csv --rotation=opk --loss=none --ransac_threshold=500",
+                            dir);
+  ASSERT_EQ(run.exit_code, 0) << run.err;
+  const auto frames = ReadFrames(dir + "/frames.csv", RotationConvention::kOpk);
+  ASSERT_EQ(frames.count("DSC00371"), 1u);
+  const ExteriorOrientation& eo = frames.at("DSC00371").eo;
+  const Eigen::Vector3d opk = AnglesFromRotation(
+      RotationConvention::kOpk, RotationFromAngles(RotationConvention::kSeed, eo.angles_seed_rad()));
+  // final_eop.csv of the source repository (opk convention).
+  EXPECT_NEAR(eo.parameters[0], 318034.9733757887, 0.01);
+  EXPECT_NEAR(eo.parameters[1], 4159882.531985079, 0.01);
+  EXPECT_NEAR(eo.parameters[2], 198.38109474065996, 0.01);
+  EXPECT_NEAR(RadiansToDegrees(opk[0]), 2.130102727226471, 1e-5);
+  EXPECT_NEAR(RadiansToDegrees(opk[1]), -2.2006723326227857, 1e-5);
+  EXPECT_NEAR(RadiansToDegrees(opk[2]), 14.234848004461039, 1e-5);
+  EXPECT_NEAR(frames.at("DSC00371").sigma0.value(), 32.4, 0.5);  // the README's ~32 px
+}
+
+TEST(ResectCommand, OpenDroneMapGcpListResectsEveryImageWithThreePoints) {
+  const std::string dir = ScratchDir();
+  // The camera of ../shared/data/odm_br/README: 4000 x 3000 px, 4.5 mm, f ~ 2904 px.
+  WriteFile(dir + "/cameras.csv",
+            "CameraID,FocalLength,PixelSize,NColumns,NRows\nSX260HS,4500,1.5495867768595042,4000,3000\n");
+  const CliRun run = RunCli("resect --cameras=" + dir + "/cameras.csv --gcp_list=" +
+                                SharedDataPath("odm_br/odm_gcp_br_gcp_list_floatxy_raw.txt") +
+                                " --out=" + dir + "/frames.csv --report=" + dir + "/report.json",
+                            dir);
+  // IMG_5349 and IMG_5354 carry two targets each: they cannot be resected, and say so.
+  EXPECT_EQ(run.exit_code, 1);
+  EXPECT_NE(run.err.find("IMG_5349.JPG: not resected: needs at least three control points"),
+            std::string::npos);
+  EXPECT_NE(run.err.find("IMG_5354.JPG"), std::string::npos);
+  const auto frames = ReadFrames(dir + "/frames.csv");
+  EXPECT_EQ(frames.size(), 8u);
+  for (const auto& [raster, frame] : frames) {
+    // 75 m above the targets (~890 m ellipsoidal), near nadir.
+    EXPECT_NEAR(frame.eo.parameters[2] - 890.0, 73.0, 5.0) << raster;
+    EXPECT_LT(frame.sigma0.value(), 3.0) << raster;  // 1 px assumed, uncalibrated lens
+  }
+}
+
+// ------------------------------------------------------------------ bad input
+
+struct BadInputCase {
+  const char* name;
+  const char* file;      // which input is replaced
+  const char* contents;  // its contents
+  int expected_exit;
+  const char* expected_message;  // a part of the one-line error
+};
+
+// Names the case in test listings instead of a byte dump.
+void PrintTo(const BadInputCase& c, std::ostream* os) { *os << c.name; }
+
+class ResectBadInput : public ::testing::TestWithParam<BadInputCase> {};
+
+TEST_P(ResectBadInput, FailsWithOneLineAndLeavesNoOutput) {
+  const BadInputCase& c = GetParam();
+  const std::string dir = ScratchDir();
+  WriteFile(dir + "/cameras.csv",
+            "CameraID,FocalLength,PixelSize,NColumns,NRows\ncam,35000,4.4,6000,4000\n");
+  WriteFile(dir + "/points.csv",
+            "PointID,X,Y,Z\nA,100,100,0\nB,300,120,5\nC,180,300,2\nD,260,260,8\nE,120,240,1\n");
+  // Marks of an exact nadir view from (200, 200, 500): x = -c u / w.
+  WriteFile(dir + "/marks.csv",
+            "Raster,PointID,Column,Row\nimg,A,1409.1,3590.9\nimg,B,4607.0,3285.6\nimg,C,2680.5,402.7\n"
+            "img,D,3970.1,1029.9\nimg,E,1724.7,1362.4\n");
+  WriteFile(dir + "/frames.csv",
+            "Raster,CameraID,PerspectiveX,PerspectiveY,PerspectiveZ,Omega,Phi,Kappa\nimg,cam,200,200,500,0,0,0\n");
+  if (std::string(c.file) != "none") WriteFile(dir + "/" + c.file, c.contents);
+  // An existing output must survive a failed run untouched.
+  WriteFile(dir + "/out.csv", "previous contents\n");
+  const std::string frames_flag = std::string(c.name).find("behind") != std::string::npos ||
+                                          std::string(c.file) == "frames.csv"
+                                      ? " --frames=" + dir + "/frames.csv"
+                                      : "";
+  const CliRun run = RunCli("resect --cameras=" + dir + "/cameras.csv --points=" + dir +
+                                "/points.csv --marks=" + dir + "/marks.csv --out=" + dir +
+                                "/out.csv" + frames_flag,
+                            dir);
+  EXPECT_EQ(run.exit_code, c.expected_exit) << run.err;
+  EXPECT_NE(run.err.find(c.expected_message), std::string::npos) << run.err;
+  EXPECT_EQ(CountLines(run.err), 1) << run.err;
+  if (c.expected_exit == 2) EXPECT_EQ(ReadFile(dir + "/out.csv"), "previous contents\n");
+  // No temporary file is left beside the output.
+  int files = 0;
+  for (const auto& entry : std::filesystem::directory_iterator(dir)) files += entry.is_regular_file();
+  EXPECT_EQ(files, 7) << "a temporary file was left behind";
+}
+
+INSTANTIATE_TEST_SUITE_P(
+    Cases, ResectBadInput,
+    ::testing::Values(
+        BadInputCase{"missing_column", "points.csv", "PointID,X,Y\nA,1,2\n", 2, "points.csv:1: Z"},
+        BadInputCase{"non_numeric", "points.csv", "PointID,X,Y,Z\nA,100,abc,0\n", 2, "points.csv:2: Y"},
+        BadInputCase{"nan", "points.csv", "PointID,X,Y,Z\nA,100,100,nan\n", 2, "points.csv:2: Z"},
+        BadInputCase{"inf", "marks.csv", "Raster,PointID,Column,Row\nimg,A,inf,1\n", 2, "marks.csv:2: Column"},
+        BadInputCase{"duplicate_point", "points.csv", "PointID,X,Y,Z\nA,1,2,3\nA,1,2,3\n", 2, "points.csv:3"},
+        BadInputCase{"unknown_point", "marks.csv", "Raster,PointID,Column,Row\nimg,Z9,1,1\n", 2, "marks.csv:2: PointID"},
+        BadInputCase{"unknown_camera", "marks.csv", "Raster,PointID,Column,Row,CameraID\nimg,A,1,1,nocam\n", 2,
+                     "marks.csv:2: CameraID"},
+        BadInputCase{"bad_camera", "cameras.csv", "CameraID,FocalLength,PixelSize\ncam,-5,4.4\n", 2, "cameras.csv"},
+        BadInputCase{"bad_frames_angle", "frames.csv",
+                     "Raster,CameraID,PerspectiveX,PerspectiveY,PerspectiveZ,Omega,Phi,Kappa\nimg,cam,200,200,500,x,0,0\n",
+                     2, "frames.csv:2: Omega"},
+        BadInputCase{"two_points", "marks.csv", "Raster,PointID,Column,Row\nimg,A,1409.1,3590.9\nimg,B,4607.0,3285.6\n",
+                     1, "needs at least three control points"},
+        BadInputCase{"collinear", "points.csv",
+                     "PointID,X,Y,Z\nA,100,100,0\nB,200,200,0\nC,300,300,0\nD,400,400,0\nE,150,150,0\n", 1,
+                     "all control points lie on one line"},
+        BadInputCase{"point_behind_camera", "frames.csv",
+                     "Raster,CameraID,PerspectiveX,PerspectiveY,PerspectiveZ,Omega,Phi,Kappa\nimg,cam,200,200,-500,0,0,0\n",
+                     1, "control point 'A' is behind the camera at the approximate pose"}),
+    [](const ::testing::TestParamInfo<BadInputCase>& info) { return std::string(info.param.name); });
+
+TEST(ResectCommand, MissingFileAndUsageErrors) {
+  const std::string dir = ScratchDir();
+  CliRun run = RunCli("resect " + ExampleArgs() + " --cameras=" + dir + "/nope.csv --out=" + dir + "/o.csv", dir);
+  EXPECT_EQ(run.exit_code, 2);
+  EXPECT_NE(run.err.find("nope.csv"), std::string::npos);
+  EXPECT_FALSE(std::filesystem::exists(dir + "/o.csv"));
+  run = RunCli("resect " + ExampleArgs() + " --out=" + dir + "/o.csv --no_such_flag=1", dir);
+  EXPECT_EQ(run.exit_code, 2);
+  EXPECT_NE(run.err.find("unknown flag --no_such_flag"), std::string::npos);
+  run = RunCli("resect " + ExampleArgs() + " --out=" + dir + "/o.csv --loss=L2", dir);
+  EXPECT_EQ(run.exit_code, 2);
+  run = RunCli("resect " + ExampleArgs() + " --out=" + dir + "/o.csv --threads=abc", dir);
+  EXPECT_EQ(run.exit_code, 2);
+  run = RunCli("resect " + ExampleArgs(), dir);
+  EXPECT_EQ(run.exit_code, 2);
+  EXPECT_NE(run.err.find("--out is required"), std::string::npos);
+  run = RunCli("resect --help", dir);
+  EXPECT_EQ(run.exit_code, 0);
+  EXPECT_NE(run.out.find("top-left corner"), std::string::npos);
+  EXPECT_NE(run.out.find("--ransac_threshold"), std::string::npos);
+  run = RunCli("frobnicate", dir);
+  EXPECT_EQ(run.exit_code, 2);
+}
+
+TEST(ResectCommand, AcceptsAFlagfile) {
+  const std::string dir = ScratchDir();
+  WriteFile(dir + "/flags", "--cameras=" + SourcePath("examples/cameras.csv") + "\n--points=" +
+                                SourcePath("examples/points.csv") + "\n--marks=" +
+                                SourcePath("examples/marks.csv") + "\n--out=" + dir + "/o.csv\n");
+  const CliRun run = RunCli("resect --flagfile=" + dir + "/flags", dir);
+  EXPECT_EQ(run.exit_code, 0) << run.err;
+  EXPECT_TRUE(std::filesystem::exists(dir + "/o.csv"));
+}
+
+TEST(SimulateCommand, SameSeedSameDatasetAndTruthKeptApart) {
+  const std::string dir = ScratchDir();
+  ASSERT_EQ(RunCli("simulate --scenario=nadir --seed=5 --out_dir=" + dir + "/a", dir).exit_code, 0);
+  ASSERT_EQ(RunCli("simulate --scenario=nadir --seed=5 --out_dir=" + dir + "/b", dir).exit_code, 0);
+  ASSERT_EQ(RunCli("simulate --scenario=nadir --seed=6 --out_dir=" + dir + "/c", dir).exit_code, 0);
+  EXPECT_EQ(ReadFile(dir + "/a/marks.csv"), ReadFile(dir + "/b/marks.csv"));
+  EXPECT_NE(ReadFile(dir + "/a/marks.csv"), ReadFile(dir + "/c/marks.csv"));
+  for (const char* file : {"cameras.csv", "points.csv", "marks.csv", "frames_approx.csv",
+                           "truth/frames.csv", "truth/outliers.csv"})
+    EXPECT_TRUE(std::filesystem::exists(dir + "/a/" + file)) << file;
+  EXPECT_EQ(RunCli("simulate --scenario=mars --out_dir=" + dir, dir).exit_code, 2);
+  EXPECT_EQ(RunCli("simulate --outlier_fraction=1.5 --out_dir=" + dir, dir).exit_code, 2);
+}
+
+}  // namespace
+}  // namespace photopose
