@@ -1,16 +1,58 @@
 #include "core/collinearity.h"
 
 #include <Eigen/Dense>
+#include <algorithm>
 #include <cmath>
 
 namespace photopose {
 
-bool ProjectWithJacobians(const double* eo, const double* point, double focal, double* xy,
-                          double* d_eo, double* d_point, double* d_focal) {
+namespace {
+
+// The rotation part of a SeedProjector for one set of angles.
+struct SeedTrig {
+  double angles[3];
   double R[9];
-  const double so = std::sin(eo[3]), co = std::cos(eo[3]);
-  SeedRotationMatrix(eo[3], eo[4], eo[5], R);
-  const double d[3] = {point[0] - eo[0], point[1] - eo[1], point[2] - eo[2]};
+  double sin_omega, cos_omega;
+};
+
+void ComputeSeedTrig(const double* angles, SeedTrig* trig) {
+  // One sincos per angle (the trigonometry dominates the kernel), then the seed's matrix.
+  double so, co, sp, cp, sk, ck;
+  sincos(angles[0], &so, &co);
+  sincos(angles[1], &sp, &cp);
+  sincos(angles[2], &sk, &ck);
+  const double R[9] = {cp * ck,                -cp * sk,                sp,
+                       co * sk + so * sp * ck, co * ck - so * sp * sk, -so * cp,
+                       so * sk - co * sp * ck, so * ck + co * sp * sk, co * cp};
+  std::copy(angles, angles + 3, trig->angles);
+  std::copy(R, R + 9, trig->R);
+  trig->sin_omega = so;
+  trig->cos_omega = co;
+}
+
+// The last pose's trigonometry of this thread (ProjectWithJacobians).
+const SeedTrig& MemoisedSeedTrig(const double* angles) {
+  thread_local SeedTrig memo = {{std::nan(""), 0.0, 0.0}, {}, 0.0, 0.0};
+  if (!(angles[0] == memo.angles[0] && angles[1] == memo.angles[1] && angles[2] == memo.angles[2]))
+    ComputeSeedTrig(angles, &memo);
+  return memo;
+}
+
+}  // namespace
+
+SeedProjector::SeedProjector(const double* eo, double focal) : focal_(focal) {
+  std::copy(eo, eo + 3, center_);
+  const SeedTrig& trig = MemoisedSeedTrig(eo + 3);
+  std::copy(trig.R, trig.R + 9, R_);
+  sin_omega_ = trig.sin_omega;
+  cos_omega_ = trig.cos_omega;
+}
+
+bool SeedProjector::Project(const double* point, double* xy, double* d_eo, double* d_point,
+                            double* d_focal) const {
+  const double* R = R_;
+  const double focal = focal_;
+  const double d[3] = {point[0] - center_[0], point[1] - center_[1], point[2] - center_[2]};
   const double u = R[0] * d[0] + R[1] * d[1] + R[2] * d[2];
   const double v = R[3] * d[0] + R[4] * d[1] + R[5] * d[2];
   const double w = R[6] * d[0] + R[7] * d[1] + R[8] * d[2];
@@ -50,6 +92,7 @@ bool ProjectWithJacobians(const double* eo, const double* point, double focal, d
     //   dx/domega = x y / c, dy/domega = c + y^2 / c                               (eqs 20, 26)
     //   dx/dphi = -c cos w - y sin w - x^2 cos w / c, dy/dphi = x sin w - x y cos w / c (eqs 21, 27)
     //   d/dkappa = d/dX0 (Y - Y0) - d/dY0 (X - X0)                                    (eqs 22, 28)
+    const double so = sin_omega_, co = cos_omega_;
     const double inv_c = 1.0 / focal;
     d_eo[3] = x * y * inv_c;
     d_eo[9] = focal + y * y * inv_c;
@@ -60,6 +103,12 @@ bool ProjectWithJacobians(const double* eo, const double* point, double focal, d
   }
   return true;
 }
+
+bool ProjectWithJacobians(const double* eo, const double* point, double focal, double* xy,
+                          double* d_eo, double* d_point, double* d_focal) {
+  return SeedProjector(eo, focal).Project(point, xy, d_eo, d_point, d_focal);
+}
+
 
 namespace {
 

@@ -67,9 +67,28 @@ bool SelfCalibratingResidual(const T* eo, const T* point, const T* intrinsics, c
   return true;
 }
 
-// Double-only projection with closed-form partial derivatives (the corrected equations 17-28 of the
-// seed, see docs/taylor_derivatives.md). Each Jacobian pointer may be null; all are row-major:
-// d_eo 2x6 (um per m, um per rad), d_point 2x3 (um per m), d_focal 2x1 (unitless).
+// The double-only projection of one pose: R and the trigonometry computed once, then any number of
+// points projected with closed-form partial derivatives (the corrected equations 17-28 of the seed,
+// see docs/taylor_derivatives.md).
+class SeedProjector {
+ public:
+  // eo = [X0, Y0, Z0, omega, phi, kappa] (m, rad), focal = c (um).
+  SeedProjector(const double* eo, double focal);
+
+  // Writes xy (um). Each Jacobian pointer may be null; all are row-major: d_eo 2x6 (um per m, um per
+  // rad), d_point 2x3 (um per m), d_focal 2x1 (unitless). False when the point is not in front.
+  bool Project(const double* point, double* xy, double* d_eo, double* d_point, double* d_focal) const;
+
+ private:
+  double center_[3];
+  double focal_;
+  double R_[9];
+  double sin_omega_, cos_omega_;
+};
+
+// One point through a SeedProjector. The trigonometry of the last pose seen by the calling thread is
+// memoised: a cost function evaluated for every observation of an image at the same pose (as Ceres
+// does) computes it once. Results are bit-identical with or without the memo.
 bool ProjectWithJacobians(const double* eo, const double* point, double focal, double* xy,
                           double* d_eo, double* d_point, double* d_focal);
 

@@ -26,6 +26,10 @@ constexpr int kScoreBlock = 8;
 // the best is lost with probability <= 1 / A).
 constexpr double kSprtBadInlierRatio = 0.05;
 constexpr double kSprtThreshold = 1e6;
+// Local optimisation fits at most this many inliers, evenly spread over the list: beyond ~100 the
+// pose is already far better than the inlier threshold needs, and the cost grows with the count.
+// EstimateAbsolutePoseRansac polishes the final pose on all inliers.
+constexpr int kMaxLocalOptimizationPoints = 96;
 // Seed of the fixed scoring order.
 constexpr uint64_t kScoringOrderSeed = 0x9e3779b97f4a7c15ull;
 
@@ -51,12 +55,11 @@ inline uint64_t ModelHash(const Eigen::Vector3d& t) {
 // threshold: the next step would be far below the marking noise.
 constexpr double kConvergedImageMotion = 1e-4;
 
-}  // namespace
 
-namespace internal {
-
-bool AddGaussNewtonTerms(const Eigen::Vector3d& camera_point, double observed_x_over_c,
-                         double observed_y_over_c, double* normal, double* gradient) {
+// The body of internal::AddGaussNewtonTerms, inline so that in RefineModel's loop the sums stay in
+// registers.
+inline bool AddGaussNewtonTermsInline(const Eigen::Vector3d& camera_point, double observed_x_over_c,
+                                      double observed_y_over_c, double* normal, double* gradient) {
   const double w = camera_point.z();
   if (!(w < 0.0)) return false;
   // With q = 1 / w and the normalised projection X = x / c = -u / w, Y = -v / w, the rows of
@@ -102,6 +105,16 @@ bool AddGaussNewtonTerms(const Eigen::Vector3d& camera_point, double observed_x_
   return true;
 }
 
+}  // namespace
+
+namespace internal {
+
+bool AddGaussNewtonTerms(const Eigen::Vector3d& camera_point, double observed_x_over_c,
+                         double observed_y_over_c, double* normal, double* gradient) {
+  return AddGaussNewtonTermsInline(camera_point, observed_x_over_c, observed_y_over_c, normal,
+                                   gradient);
+}
+
 }  // namespace internal
 
 bool AbsolutePoseRansacOptions::IsValid(std::string* why) const {
@@ -112,6 +125,10 @@ bool AbsolutePoseRansacOptions::IsValid(std::string* why) const {
   }
   if (lo_gauss_newton_iterations < 1) {
     if (why != nullptr) *why = "lo_gauss_newton_iterations must be >= 1";
+    return false;
+  }
+  if (final_gauss_newton_iterations < 0) {
+    if (why != nullptr) *why = "final_gauss_newton_iterations must be >= 0";
     return false;
   }
   return true;
@@ -256,7 +273,19 @@ int AbsolutePoseEstimator::Inliers(const Model& model, std::vector<char>* mask) 
 }
 
 void AbsolutePoseEstimator::RefineModel(const std::vector<int>& inliers, Model* model) const {
-  if (static_cast<int>(inliers.size()) < kMinimalSampleSize) return;
+  GaussNewton(inliers, kMaxLocalOptimizationPoints, gauss_newton_iterations_, model);
+}
+
+void AbsolutePoseEstimator::Polish(const std::vector<int>& inliers, int iterations,
+                                   Model* model) const {
+  GaussNewton(inliers, static_cast<int>(inliers.size()), iterations, model);
+}
+
+void AbsolutePoseEstimator::GaussNewton(const std::vector<int>& indices, int max_points,
+                                        int iterations, Model* model) const {
+  const int size = static_cast<int>(indices.size());
+  const int count = std::min(size, max_points);
+  if (count < kMinimalSampleSize) return;
   Eigen::Matrix3d R = model->R_camera_from_ground;
   Eigen::Vector3d center = model->center_in_ground - origin_in_ground_;
   // In the normalised units of AddGaussNewtonTerms (image plane / c).
@@ -267,14 +296,17 @@ void AbsolutePoseEstimator::RefineModel(const std::vector<int>& inliers, Model* 
   // eo partials of the collinearity equations at zero angles (AddGaussNewtonTerms, no
   // trigonometry per point), with no Euler-angle singularity, and
   // R <- R_seed(d_angles) R, centre <- centre + R^T dX0'.
-  for (int iteration = 0; iteration < gauss_newton_iterations_; ++iteration) {
+  for (int iteration = 0; iteration < iterations; ++iteration) {
     double normal[21] = {};
     double gradient[6] = {};
     int used = 0;
-    for (const int i : inliers) {
+    for (int k = 0; k < count; ++k) {
+      // An even spread over the list when it is subsampled (the inliers come in data order).
+      const int i = count == size ? indices[k]
+                                  : indices[static_cast<int>(static_cast<int64_t>(k) * size / count)];
       const Eigen::Vector3d local = R * (centred_points_[i] - center);
-      if (internal::AddGaussNewtonTerms(local, observed_over_c_[i].x(), observed_over_c_[i].y(),
-                                        normal, gradient))
+      if (AddGaussNewtonTermsInline(local, observed_over_c_[i].x(), observed_over_c_[i].y(), normal,
+                                    gradient))
         ++used;
     }
     if (used < kMinimalSampleSize) return;
@@ -346,6 +378,23 @@ Status EstimateAbsolutePoseRansac(const AbsolutePoseRansacOptions& options,
   std::vector<char> mask;
   out = Ransac(options.ransac, estimator, &pose, &mask);
   if (!out.success) return fail(out.message);
+
+  // Polish on all inliers; kept only if it does not worsen the MSAC score, and then the inliers
+  // are those of the polished pose.
+  if (options.final_gauss_newton_iterations > 0) {
+    std::vector<int> inliers;
+    inliers.reserve(out.num_inliers);
+    for (int i = 0; i < n; ++i)
+      if (mask[i]) inliers.push_back(i);
+    PoseCandidate polished = pose;
+    estimator.Polish(inliers, options.final_gauss_newton_iterations, &polished);
+    const double score = estimator.ScoreModel(polished, std::numeric_limits<double>::infinity());
+    if (score <= out.score) {
+      pose = polished;
+      out.score = score;
+      out.num_inliers = estimator.Inliers(pose, &mask);
+    }
+  }
 
   int in_front = 0;
   for (int i = 0; i < n; ++i) {

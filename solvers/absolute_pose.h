@@ -25,6 +25,9 @@ struct AbsolutePoseRansacOptions {
   double inlier_threshold_um = 12.0;
   // Gauss-Newton iterations of each local-optimisation step, >= 1.
   int lo_gauss_newton_iterations = 2;
+  // Gauss-Newton iterations on all inliers of the RANSAC pose before it is returned, >= 0 (the
+  // local optimisation fits at most 96 inliers). 0 when a least-squares adjustment follows anyway.
+  int final_gauss_newton_iterations = 2;
 
   bool IsValid(std::string* why) const;
 };
@@ -55,16 +58,21 @@ class AbsolutePoseEstimator {
   double ScoreModel(const Model& model, double best_score_so_far) const;
   // Inliers: in front of the camera and |r_i| <= threshold.
   int Inliers(const Model& model, std::vector<char>* mask) const;
-  // Gauss-Newton on the collinearity equations of the given points, the rotation updated as
-  // R <- Rx(d_omega) Ry(d_phi) Rz(d_kappa) R (no gimbal lock), the centre additively. Stops after
-  // the configured iterations or a negligible step; a pose that is already converged on these
-  // points is returned (numerically) unchanged.
+  // Gauss-Newton on the collinearity equations of the given points (at most 96 of them, evenly
+  // spread over the list), the rotation updated as R <- Rx(d_omega) Ry(d_phi) Rz(d_kappa) R (no
+  // gimbal lock), the centre additively. Stops after the configured iterations or a step that
+  // moves the projections by an RMS below 1e-4 of the threshold.
   void RefineModel(const std::vector<int>& inliers, Model* model) const;
+  // The same on every listed point, for up to `iterations` iterations.
+  void Polish(const std::vector<int>& inliers, int iterations, Model* model) const;
 
   // Unit bearing of datum i in the camera frame, normalize(x, y, -c).
   const Eigen::Vector3d& bearing(int i) const { return bearings_[i]; }
 
  private:
+  void GaussNewton(const std::vector<int>& indices, int max_points, int iterations,
+                   Model* model) const;
+
   int num_data_ = 0;
   double focal_um_ = 0.0;
   double threshold_sq_um2_ = 0.0;

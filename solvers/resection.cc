@@ -1,6 +1,7 @@
 #include "solvers/resection.h"
 
 #include <ceres/ceres.h>
+#include <ceres/tiny_solver.h>
 
 #include <Eigen/Dense>
 #include <algorithm>
@@ -52,9 +53,10 @@ struct Evaluation {
 Evaluation EvaluateResiduals(const ResectionInput& input, const ExteriorOrientation& eo) {
   Evaluation evaluation;
   evaluation.residuals_px.resize(input.image_plane_um.size());
+  const SeedProjector projector(eo.data(), input.focal_length_um);
   for (size_t i = 0; i < input.image_plane_um.size(); ++i) {
     double xy[2];
-    if (!ProjectToImagePlane(eo.data(), input.points_in_ground[i].data(), input.focal_length_um, xy)) {
+    if (!projector.Project(input.points_in_ground[i].data(), xy, nullptr, nullptr, nullptr)) {
       evaluation.all_in_front = false;
       evaluation.residuals_px[i].setConstant(std::numeric_limits<double>::infinity());
       continue;
@@ -68,25 +70,178 @@ Evaluation EvaluateResiduals(const ResectionInput& input, const ExteriorOrientat
 struct CeresOutcome {
   bool usable = false;
   int iterations = 0;
+  int rounds = 1;  // IRLS rounds (TinySolver with a robust loss)
   double initial_cost = 0.0, final_cost = 0.0;
   std::string message;
 };
 
-CeresOutcome RefineWithCeres(const ResectionOptions& options, const ResectionInput& input,
-                             const std::vector<char>& use, ExteriorOrientation* eo) {
+// One image's observations in a frame centred on the control points: large projected coordinates
+// would otherwise cost digits and make relative step tolerances meaningless.
+struct CentredProblem {
+  Eigen::Vector3d origin = Eigen::Vector3d::Zero();
+  std::vector<std::unique_ptr<ceres::CostFunction>> costs;  // one per used observation
+  std::vector<double> sigma_px;                              // of each cost
+};
+
+CentredProblem MakeCentredProblem(const ResectionOptions& options, const ResectionInput& input,
+                                  const std::vector<char>& use) {
+  CentredProblem problem;
+  int count = 0;
+  for (size_t i = 0; i < input.points_in_ground.size(); ++i) {
+    if (!use[i]) continue;
+    problem.origin += input.points_in_ground[i];
+    ++count;
+  }
+  problem.origin /= std::max(1, count);
+  for (size_t i = 0; i < input.image_plane_um.size(); ++i) {
+    if (!use[i]) continue;
+    const PoseCostFunctor data(input.image_plane_um[i], input.points_in_ground[i] - problem.origin,
+                               input.focal_length_um, 1.0 / (input.pixel_size_um * input.sigma_px[i]));
+    problem.costs.emplace_back(CreatePoseCost(options.jacobian, data));
+    problem.sigma_px.push_back(input.sigma_px[i]);
+  }
+  return problem;
+}
+
+// The stacked, weighted residuals of all observations for ceres::TinySolver. Weight i multiplies
+// residual block i (IRLS); the Jacobian is column-major (2n x 6), as TinySolver expects.
+class StackedPoseFunction {
+ public:
+  using Scalar = double;
+  enum { NUM_RESIDUALS = Eigen::Dynamic, NUM_PARAMETERS = kExteriorOrientationSize };
+
+  StackedPoseFunction(const CentredProblem& problem, const std::vector<double>& sqrt_weights)
+      : problem_(problem), sqrt_weights_(sqrt_weights) {}
+
+  int NumResiduals() const { return 2 * static_cast<int>(problem_.costs.size()); }
+
+  bool operator()(const double* eo, double* residuals, double* jacobian) const {
+    const double* parameters[] = {eo};
+    double block[2 * kExteriorOrientationSize];
+    double* jacobians[] = {block};
+    const int rows = NumResiduals();
+    for (size_t i = 0; i < problem_.costs.size(); ++i) {
+      if (!problem_.costs[i]->Evaluate(parameters, residuals + 2 * i, jacobian ? jacobians : nullptr)) {
+        // Behind the camera: a huge residual makes TinySolver reject the step that led here.
+        residuals[2 * i] = residuals[2 * i + 1] = 1e10;
+        if (jacobian != nullptr) return false;
+        continue;
+      }
+      const double w = sqrt_weights_[i];
+      residuals[2 * i] *= w;
+      residuals[2 * i + 1] *= w;
+      if (jacobian != nullptr) {
+        for (int k = 0; k < kExteriorOrientationSize; ++k) {
+          jacobian[k * rows + 2 * i] = w * block[k];
+          jacobian[k * rows + 2 * i + 1] = w * block[kExteriorOrientationSize + k];
+        }
+      }
+    }
+    return true;
+  }
+
+ private:
+  const CentredProblem& problem_;
+  const std::vector<double>& sqrt_weights_;
+};
+
+// Squared whitened residual norms of every cost at eo (centred); false if a point is behind.
+bool SquaredNorms(const CentredProblem& problem, const double* eo, std::vector<double>* s) {
+  const double* parameters[] = {eo};
+  s->resize(problem.costs.size());
+  for (size_t i = 0; i < problem.costs.size(); ++i) {
+    double r[2];
+    if (!problem.costs[i]->Evaluate(parameters, r, nullptr)) return false;
+    (*s)[i] = r[0] * r[0] + r[1] * r[1];
+  }
+  return true;
+}
+
+// IRLS stops when a round moves the pose by less than this, relative (1e-9 of a 100 m flying
+// height is 0.1 um: far below any pose uncertainty).
+constexpr double kReweightingTolerance = 1e-9;
+
+CeresOutcome RefineWithTinySolver(const ResectionOptions& options, const CentredProblem& problem,
+                                  Vector6d* eo_centred) {
+  CeresOutcome outcome;
+  std::vector<std::unique_ptr<ceres::LossFunction>> losses;
+  std::map<double, ceres::LossFunction*> loss_by_sigma;
+  std::vector<ceres::LossFunction*> loss_of(problem.costs.size(), nullptr);
+  for (size_t i = 0; i < problem.costs.size(); ++i) {
+    ceres::LossFunction*& loss = loss_by_sigma[problem.sigma_px[i]];
+    if (loss == nullptr && options.loss != LossType::kNone) {
+      losses.emplace_back(MakeLoss(options.loss, options.loss_scale_px / problem.sigma_px[i]));
+      loss = losses.back().get();
+    }
+    loss_of[i] = loss;
+  }
+  auto robust_cost = [&](const std::vector<double>& s) {
+    double cost = 0.0;
+    for (size_t i = 0; i < s.size(); ++i) {
+      double rho[3] = {s[i], 1.0, 0.0};
+      if (loss_of[i] != nullptr) loss_of[i]->Evaluate(s[i], rho);
+      cost += 0.5 * rho[0];
+    }
+    return cost;
+  };
+  std::vector<double> s;
+  if (!SquaredNorms(problem, eo_centred->data(), &s)) {
+    outcome.message = "Ceres: a control point is behind the camera at the initial pose";
+    return outcome;
+  }
+  outcome.initial_cost = robust_cost(s);
+  std::vector<double> sqrt_weights(problem.costs.size(), 1.0);
+  const int rounds = options.loss == LossType::kNone ? 1 : options.max_reweighting_rounds;
+  bool converged = false;
+  for (int round = 0; round < rounds && !converged; ++round) {
+    for (size_t i = 0; i < s.size(); ++i) {
+      double rho[3] = {s[i], 1.0, 0.0};
+      if (loss_of[i] != nullptr) loss_of[i]->Evaluate(s[i], rho);
+      sqrt_weights[i] = std::sqrt(std::max(rho[1], 0.0));
+    }
+    StackedPoseFunction function(problem, sqrt_weights);
+    ceres::TinySolver<StackedPoseFunction> solver;
+    solver.options.max_num_iterations = options.max_iterations;
+    solver.options.parameter_tolerance = options.parameter_tolerance;
+    solver.options.gradient_tolerance = 1e-14;
+    solver.options.function_tolerance = options.function_tolerance * std::max(1.0, outcome.initial_cost);
+    const Vector6d before = *eo_centred;
+    const auto& summary = solver.Solve(function, eo_centred);
+    outcome.iterations += summary.iterations;
+    if (!eo_centred->allFinite() || !SquaredNorms(problem, eo_centred->data(), &s)) {
+      outcome.message = "Ceres TinySolver: the pose left the valid region (a point behind the camera)";
+      return outcome;
+    }
+    if (summary.status == ceres::TinySolver<StackedPoseFunction>::HIT_MAX_ITERATIONS) {
+      outcome.message = "Ceres TinySolver: no convergence in " + std::to_string(options.max_iterations) + " iterations";
+      return outcome;
+    }
+    // Without a loss one round is the whole solve; with one, reweighting has converged when a
+    // round no longer moves the pose (beyond 1e3 x TinySolver's own step tolerance).
+    const double step = (*eo_centred - before).norm();
+    converged = options.loss == LossType::kNone ||
+                step <= kReweightingTolerance * (eo_centred->norm() + 1.0);
+    outcome.rounds = round + 1;
+  }
+  outcome.final_cost = robust_cost(s);
+  outcome.usable = converged;
+  if (!converged) outcome.message = "Ceres TinySolver: reweighting did not converge";
+  return outcome;
+}
+
+CeresOutcome RefineWithCeresProblem(const ResectionOptions& options, CentredProblem* problem_data,
+                                    Vector6d* eo_centred) {
   ceres::Problem::Options problem_options;
   problem_options.enable_fast_removal = false;
   problem_options.disable_all_safety_checks = true;
+  problem_options.cost_function_ownership = ceres::DO_NOT_TAKE_OWNERSHIP;
   ceres::Problem problem(problem_options);
   std::map<double, ceres::LossFunction*> loss_by_sigma;  // one loss object per distinct sigma
-  for (size_t i = 0; i < input.image_plane_um.size(); ++i) {
-    if (!use[i]) continue;
-    const double sigma_px = input.sigma_px[i];
-    const PoseCostFunctor data(input.image_plane_um[i], input.points_in_ground[i],
-                               input.focal_length_um, 1.0 / (input.pixel_size_um * sigma_px));
+  for (size_t i = 0; i < problem_data->costs.size(); ++i) {
+    const double sigma_px = problem_data->sigma_px[i];
     ceres::LossFunction*& loss = loss_by_sigma[sigma_px];
     if (loss == nullptr) loss = MakeLoss(options.loss, options.loss_scale_px / sigma_px);
-    problem.AddResidualBlock(CreatePoseCost(options.jacobian, data), loss, eo->data());
+    problem.AddResidualBlock(problem_data->costs[i].get(), loss, eo_centred->data());
   }
   ceres::Solver::Options solver_options;
   solver_options.linear_solver_type = ceres::DENSE_QR;
@@ -105,6 +260,31 @@ CeresOutcome RefineWithCeres(const ResectionOptions& options, const ResectionInp
   outcome.final_cost = summary.final_cost;
   outcome.usable = summary.IsSolutionUsable() && summary.termination_type == ceres::CONVERGENCE;
   if (!outcome.usable) outcome.message = "Ceres: " + summary.message;
+  return outcome;
+}
+
+CeresOutcome RefineWithCeres(const ResectionOptions& options, const ResectionInput& input,
+                             const std::vector<char>& use, ExteriorOrientation* eo) {
+  CentredProblem problem = MakeCentredProblem(options, input, use);
+  Vector6d eo_centred = eo->parameters;
+  eo_centred.head<3>() -= problem.origin;
+  CeresOutcome outcome;
+  if (options.minimizer == CeresMinimizer::kTinySolver) {
+    const Vector6d start = eo_centred;
+    outcome = RefineWithTinySolver(options, problem, &eo_centred);
+    if (!outcome.usable && outcome.rounds >= options.max_reweighting_rounds) {
+      // Reweighting still creeping (a loss with many points near its scale): let ceres::Solve
+      // finish from where it got, with the loss applied exactly.
+      const int iterations = outcome.iterations;
+      outcome = RefineWithCeresProblem(options, &problem, &eo_centred);
+      outcome.iterations += iterations;
+      if (!outcome.usable) eo_centred = start;
+    }
+  } else {
+    outcome = RefineWithCeresProblem(options, &problem, &eo_centred);
+  }
+  eo->parameters = eo_centred;
+  eo->parameters.head<3>() += problem.origin;
   return outcome;
 }
 
@@ -156,6 +336,16 @@ const char* LossTypeName(LossType loss) {
   return "?";
 }
 
+std::optional<CeresMinimizer> ParseCeresMinimizer(const std::string& name) {
+  if (name == "tiny_solver") return CeresMinimizer::kTinySolver;
+  if (name == "problem") return CeresMinimizer::kProblem;
+  return std::nullopt;
+}
+
+const char* CeresMinimizerName(CeresMinimizer minimizer) {
+  return minimizer == CeresMinimizer::kTinySolver ? "tiny_solver" : "problem";
+}
+
 bool ResectionOptions::IsValid(std::string* why) const {
   auto fail = [why](const char* text) {
     if (why != nullptr) *why = text;
@@ -164,6 +354,7 @@ bool ResectionOptions::IsValid(std::string* why) const {
   if (!(loss_scale_px > 0.0)) return fail("loss_scale_px must be positive");
   if (!(ransac_threshold_px > 0.0)) return fail("ransac_threshold_px must be positive");
   if (max_iterations < 1) return fail("max_iterations must be at least 1");
+  if (max_reweighting_rounds < 1) return fail("max_reweighting_rounds must be at least 1");
   if (!(function_tolerance > 0.0) || !(parameter_tolerance > 0.0))
     return fail("tolerances must be positive");
   return ransac.IsValid(why);
@@ -231,9 +422,10 @@ ResectionResult ResectImage(const ResectionOptions& options, const ResectionInpu
     eo = *input.approximate;
     summary.used_approximate = true;
     if (!eo.parameters.allFinite()) return fail("the approximate pose is not finite");
+    const SeedProjector projector(eo.data(), input.focal_length_um);
     for (size_t i = 0; i < n; ++i) {
       double xy[2];
-      if (!ProjectToImagePlane(eo.data(), input.points_in_ground[i].data(), input.focal_length_um, xy)) {
+      if (!projector.Project(input.points_in_ground[i].data(), xy, nullptr, nullptr, nullptr)) {
         const std::string name = i < input.point_ids.size() ? "'" + input.point_ids[i] + "'"
                                                             : "#" + std::to_string(i + 1);
         return fail("control point " + name + " is behind the camera at the approximate pose");
@@ -297,6 +489,7 @@ ResectionResult ResectImage(const ResectionOptions& options, const ResectionInpu
   Eigen::Matrix<double, 6, 6> normal = Eigen::Matrix<double, 6, 6>::Zero();
   double weighted_ssq = 0.0;
   int num_inliers = 0;
+  const SeedProjector projector(eo.data(), input.focal_length_um);
   for (size_t i = 0; i < n; ++i) {
     const Eigen::Vector2d& r = evaluation.residuals_px[i];
     if (!r.allFinite() || r.norm() > options.ransac_threshold_px) continue;
@@ -304,8 +497,7 @@ ResectionResult ResectImage(const ResectionOptions& options, const ResectionInpu
     ++num_inliers;
     double xy[2];
     Eigen::Matrix<double, 2, 6, Eigen::RowMajor> J;
-    ProjectWithJacobians(eo.data(), input.points_in_ground[i].data(), input.focal_length_um, xy,
-                         J.data(), nullptr, nullptr);
+    projector.Project(input.points_in_ground[i].data(), xy, J.data(), nullptr, nullptr);
     const double inverse_sigma_um = 1.0 / (input.sigma_px[i] * input.pixel_size_um);
     J *= inverse_sigma_um;
     normal += J.transpose() * J;

@@ -33,6 +33,20 @@ std::optional<PoseSolver> ParsePoseSolver(const std::string& name);  // ceres|ta
 const char* PoseSolverName(PoseSolver solver);
 
 enum class LossType { kNone, kHuber, kSoftL1, kCauchy, kArctan, kTukey };
+
+// How Ceres minimises one image's robust least-squares problem. Both use the same cost functions
+// (cost_functions/collinearity_cost.h) and Ceres loss functions, on coordinates centred on the
+// control points.
+enum class CeresMinimizer {
+  // ceres::TinySolver (dense Levenberg-Marquardt for small problems, no Problem set-up), wrapped in
+  // iteratively reweighted least squares for the robust loss: weights rho'(s_i) are held fixed per
+  // round; the fixed point is the M-estimator's stationarity condition, the same as (2). Default.
+  kTinySolver,
+  // (2) ceres::Problem + ceres::Solve: trust-region LM, DENSE_QR, loss applied by Ceres.
+  kProblem,
+};
+std::optional<CeresMinimizer> ParseCeresMinimizer(const std::string& name);  // tiny_solver|problem
+const char* CeresMinimizerName(CeresMinimizer minimizer);
 std::optional<LossType> ParseLossType(const std::string& name);  // none|huber|softl1|cauchy|arctan|tukey
 const char* LossTypeName(LossType loss);
 
@@ -40,10 +54,13 @@ struct ResectionOptions {
   PoseSolver solver = PoseSolver::kCeres;
   JacobianType jacobian = JacobianType::kAnalytic;
   LossType loss = LossType::kHuber;
+  CeresMinimizer minimizer = CeresMinimizer::kTinySolver;
   double loss_scale_px = 2.0;          // robust-loss scale (pixels); whitened by each mark's sigma
   double ransac_threshold_px = 6.0;    // inlier threshold for RANSAC and the final flags (pixels)
   RansacOptions ransac;                // trials, confidence, seed
-  int max_iterations = 50;             // Ceres / Taylor iterations
+  int max_iterations = 50;             // Ceres / Taylor iterations (per reweighting round)
+  int max_reweighting_rounds = 30;     // kTinySolver with a robust loss: IRLS rounds before the
+                                       // remaining descent is left to ceres::Solve
   double function_tolerance = 1e-12;   // Ceres relative cost change to stop (unitless)
   double parameter_tolerance = 1e-12;  // Ceres relative step size to stop (unitless)
   bool IsValid(std::string* why) const;

@@ -1,5 +1,7 @@
 #include "solvers/taylor_resection.h"
 
+#include <glog/logging.h>
+
 #include <Eigen/Eigenvalues>
 #include <algorithm>
 #include <cctype>
@@ -327,14 +329,14 @@ bool TaylorResectionOptions::IsValid(std::string* why) const {
 }
 
 std::string TaylorResectionSummary::BriefReport() const {
-  char buffer[384];
+  char buffer[256];
   std::snprintf(buffer, sizeof(buffer),
                 "Taylor resection (%s partials), %s: %d points, %d iterations, cost %.6e -> %.6e, "
-                "sigma0 %.6g, dof %d, time %.1f us. %s",
+                "sigma0 %.6g, dof %d, time %.1f us. ",
                 TaylorPartialsName(partials), TaylorTerminationTypeName(termination_type),
                 num_points, iterations, initial_cost, final_cost, sigma0, degrees_of_freedom,
-                time_seconds * 1e6, message.c_str());
-  return buffer;
+                time_seconds * 1e6);
+  return buffer + message;
 }
 
 bool TaylorResectionSummary::IsSolutionUsable() const {
@@ -381,6 +383,7 @@ Status TaylorResection(const TaylorResectionOptions& options,
                        const std::vector<Eigen::Vector3d>& points_in_ground,
                        const std::vector<double>& sigmas_um, double focal_um,
                        const ExteriorOrientation& initial, TaylorResectionResult* result) {
+  CHECK(result != nullptr);
   const auto start = std::chrono::steady_clock::now();
   TaylorResectionSummary& summary = result->summary;
   summary = TaylorResectionSummary();
@@ -589,6 +592,7 @@ Status ApproximateVerticalOrientation(const std::vector<Eigen::Vector2d>& image_
   image_mean /= n;
   ground_mean /= n;
   // lambda = sum (z_i - mean) conj(g_i - mean) / sum |g_i - mean|^2.
+  CHECK(eo != nullptr);
   double re = 0.0, im = 0.0, norm2 = 0.0;
   for (int i = 0; i < n; ++i) {
     const double x = image_plane_um[i][0] - image_mean[0];

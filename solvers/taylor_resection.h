@@ -35,12 +35,14 @@ namespace photopose {
 
 // Which set of partial derivatives (seed eqs. 17-28) builds the Gauss-Newton matrix A.
 enum class TaylorPartials {
-  // Eqs. 17-28 with eq. 21 corrected to dFu/dphi = -(u^2/c) cos(omega) - v sin(omega) - c
-  // cos(omega).
+  // Eqs. 17-28 with eq. 21 corrected to
+  //   dFu/dphi = -(u^2 / c) cos(omega) - v sin(omega) - c cos(omega).
   // Equals ProjectWithJacobians' d_eo. The default.
   kCorrected,
-  // Eqs. 17-28 exactly as printed, eq. 21 = -(u^2/c) cos(omega) - u sin(omega) - c cos(omega). Kept
-  // so that the comparison tool can show what the misprint does. Wrong whenever omega != 0.
+  // Eqs. 17-28 exactly as printed, eq. 21 = -(u^2 / c) cos(omega) - u sin(omega) - c cos(omega),
+  // off by (v - u) sin(omega). Kept so that the comparison tool can show what the misprint does:
+  // linear instead of quadratic convergence, a solution that is not the least-squares one on noisy
+  // data, and for some strongly tilted poses no convergence or a spurious fixed point.
   kAsPrinted,
 };
 
@@ -123,12 +125,13 @@ struct TaylorResectionSummary {
 struct TaylorResectionResult {
   // The estimate; all NaN unless the solver converged. Angles wrapped to (-pi, pi].
   ExteriorOrientation eo;
-  // sigma0^2 (A^T P A)^-1 at the estimate, order X0, Y0, Z0 (m), omega, phi, kappa (rad); built
-  // with the selected partials (so the as-printed variant reports its own, wrong, covariance). With
-  // zero redundancy the factor sigma0^2 is replaced by 1. All NaN unless the solver converged.
+  // sigma0^2 (A^T P A)^-1, order X0, Y0, Z0 (m), omega, phi, kappa (rad), with A from the last
+  // linearisation (within the tolerances of the estimate) and the selected partials (so the
+  // as-printed variant reports its own, wrong, covariance). With zero redundancy the factor
+  // sigma0^2 is replaced by 1. All NaN unless the solver converged.
   Matrix6d covariance = Matrix6d::Zero();
-  // Observed minus computed image-plane coordinates at the estimate (um), one per point (= -(Fu,
-  // Fv)). Empty unless the solver converged.
+  // Observed minus computed image-plane coordinates at the estimate (um), one per point, i.e.
+  // -(Fu, Fv). Empty unless the solver converged.
   std::vector<Eigen::Vector2d> residuals_um;
   TaylorResectionSummary summary;
 };

@@ -30,6 +30,7 @@ DEFINE_string(rotation, "seed", "Angle convention of the frames tables read and 
 DEFINE_string(solver, "ceres", "Pose solver: ceres (Levenberg-Marquardt with a robust loss), taylor (the seed's Taylor linearisation with corrected partials) or taylor_as_printed (with the partials as printed in the seed).");
 DEFINE_string(jacobian, "analytic", "Derivative path of the Ceres cost: analytic (closed-form partials) or autodiff (Ceres Jets).");
 DEFINE_string(loss, "huber", "Robust loss of the Ceres solver: none, huber, softl1, cauchy, arctan or tukey.");
+DEFINE_string(ceres_minimizer, "tiny_solver", "How Ceres minimises each image: tiny_solver (ceres::TinySolver with iteratively reweighted robust loss, fast for one image) or problem (ceres::Problem and ceres::Solve).");
 DEFINE_double(loss_scale, 2.0, "Scale of the robust loss in pixels: residuals beyond it are down-weighted.");
 DEFINE_double(ransac_threshold, 6.0, "Inlier threshold in pixels for RANSAC and for the final inlier flags.");
 DEFINE_double(default_accuracy, 1.0, "Accuracy in pixels (one sigma) of marks that have no Accuracy column value.");
@@ -83,6 +84,8 @@ int RunResect(int argc, char** argv) {
   if (!jacobian) return BadInput("resect", "--jacobian must be analytic or autodiff, not '" + FLAGS_jacobian + "'");
   const auto loss = ParseLossType(FLAGS_loss);
   if (!loss) return BadInput("resect", "--loss must be none, huber, softl1, cauchy, arctan or tukey, not '" + FLAGS_loss + "'");
+  const auto minimizer = ParseCeresMinimizer(FLAGS_ceres_minimizer);
+  if (!minimizer) return BadInput("resect", "--ceres_minimizer must be tiny_solver or problem, not '" + FLAGS_ceres_minimizer + "'");
   if (!(FLAGS_default_accuracy > 0.0)) return BadInput("resect", "--default_accuracy must be positive");
   if (FLAGS_threads < 0) return BadInput("resect", "--threads must be >= 0");
 
@@ -90,6 +93,7 @@ int RunResect(int argc, char** argv) {
   options.solver = *solver;
   options.jacobian = *jacobian;
   options.loss = *loss;
+  options.minimizer = *minimizer;
   options.loss_scale_px = FLAGS_loss_scale;
   options.ransac_threshold_px = FLAGS_ransac_threshold;
   options.ransac.seed = FLAGS_seed;

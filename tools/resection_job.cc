@@ -170,6 +170,7 @@ Status WriteResectionReport(const std::string& path, const ResectionJobOptions& 
   report["options"] = {{"solver", PoseSolverName(o.solver)},
                        {"jacobian", JacobianTypeName(o.jacobian)},
                        {"loss", LossTypeName(o.loss)},
+                       {"ceres_minimizer", CeresMinimizerName(o.minimizer)},
                        {"loss_scale_px", o.loss_scale_px},
                        {"ransac_threshold_px", o.ransac_threshold_px},
                        {"ransac_seed", o.ransac.seed},

@@ -645,11 +645,11 @@ TEST(TaylorResectionSynthetic, NoiseFreePoseRecovered) {
         EXPECT_LE(AngleError(printed.eo, scene.truth), kAsPrintedNoiseFreeAngleTolerance);
         const double rate = AsPrintedRate(scene);
         if (oblique) {
-          // omega = 45 deg: measured rate 0.30-0.37, 22-28 corrections instead of 5.
+          // omega = 45 deg: measured rate 0.35-0.40, 25-29 corrections instead of 5.
           EXPECT_GT(rate, 0.2);
           EXPECT_GE(printed.summary.iterations, 3 * corrected.summary.iterations);
         } else {
-          // omega = 0.7 deg: rate <= 0.03, one or two corrections more.
+          // omega = 0.7 deg: rate <= 0.01, one to three corrections more.
           EXPECT_LT(rate, 0.05);
           EXPECT_GE(printed.summary.iterations, corrected.summary.iterations);
           EXPECT_LE(printed.summary.iterations, corrected.summary.iterations + 4);
@@ -763,7 +763,7 @@ TEST(TaylorResectionSynthetic, NoisyDataAsPrintedIsNotLeastSquares) {
       // No bias: the mean difference is within 4 standard errors of zero.
       EXPECT_LT(std::abs(mean_diff[k]), 4.0 * rms_diff[k] / std::sqrt(double(kTrials))) << k;
       // The covariance sigma0^2 (A^T P A)^-1 predicts the scatter; 500 trials estimate an RMS to
-      // ~3 %, the remainder is non-linearity (measured ratios 0.93-1.07).
+      // ~3 %, the remainder is non-linearity (measured ratios 0.95-1.04).
       EXPECT_GT(rms_err[k] / predicted[k], 0.85) << k;
       EXPECT_LT(rms_err[k] / predicted[k], 1.18) << k;
     }
@@ -1085,32 +1085,6 @@ TEST_F(TaylorResectionFailureTest, SingularNormalMatrixOnDangerCylinder) {
 
 // Not a benchmark; prints the time of a clean 50-point resection (docs quote it) and guards only
 // against a gross regression in optimised builds.
-TEST(TaylorResectionTiming, FiftyPoints) {
-  for (const bool noisy : {false, true}) {
-    std::mt19937_64 rng(5);
-    const Scene scene = NadirScene(&rng, 50);
-    const std::vector<Eigen::Vector2d> image =
-        noisy ? AddNoise(&rng, scene.image_um, kPixelUm) : scene.image_um;
-    const ExteriorOrientation initial = Perturb(scene.truth, 5.0, 3.0);
-    TaylorResectionResult result;
-    std::vector<double> times;
-    for (int repetition = 0; repetition < 2000; ++repetition) {
-      const auto start = std::chrono::steady_clock::now();
-      const Status status = TaylorResection(TaylorResectionOptions(), image, scene.ground_m, {},
-                                            kFocalUm, initial, &result);
-      times.push_back(
-          std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count());
-      ASSERT_TRUE(status.ok());
-    }
-    std::sort(times.begin(), times.end());
-    std::printf("  50 points, %s, %d iterations: median %.2f us, fastest %.2f us\n",
-                noisy ? "1 px noise" : "noise-free", result.summary.iterations,
-                times[times.size() / 2] * 1e6, times.front() * 1e6);
-#ifdef NDEBUG
-    EXPECT_LT(times[times.size() / 2], 200e-6);  // 10x the target, for loaded machines
-#endif
-  }
-}
 
 }  // namespace
 }  // namespace photopose
