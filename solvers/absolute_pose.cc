@@ -162,15 +162,15 @@ AbsolutePoseEstimator::AbsolutePoseEstimator(const std::vector<Eigen::Vector2d>&
   // The scoring copy is in a fixed pseudo-random order (a Fisher-Yates shuffle driven by
   // splitmix64 from a constant seed), so the scores are reproducible and the sequential test in
   // ScoreModel sees the points as random draws.
-  std::vector<int> order(n);
-  for (int i = 0; i < n; ++i) order[i] = i;
+  order_.resize(n);
+  for (int i = 0; i < n; ++i) order_[i] = i;
   uint64_t state = kScoringOrderSeed;
   for (int i = n - 1; i > 0; --i) {
     state = SplitMix64(state);
-    std::swap(order[i], order[static_cast<int>(state % static_cast<uint64_t>(i + 1))]);
+    std::swap(order_[i], order_[static_cast<int>(state % static_cast<uint64_t>(i + 1))]);
   }
   for (int k = 0; k < n; ++k) {
-    const int i = order[k];
+    const int i = order_[k];
     x_[k] = centred_points_[i].x();
     y_[k] = centred_points_[i].y();
     z_[k] = centred_points_[i].z();
@@ -255,18 +255,26 @@ double AbsolutePoseEstimator::ScoreModel(const Model& model, double best_score_s
 }
 
 int AbsolutePoseEstimator::Inliers(const Model& model, std::vector<char>* mask) const {
+  // The same arithmetic as ScoreModel, over the scoring layout.
   const Eigen::Matrix3d& R = model.R_camera_from_ground;
   const Eigen::Vector3d t = -R * (model.center_in_ground - origin_in_ground_);
+  const double r00 = R(0, 0), r01 = R(0, 1), r02 = R(0, 2);
+  const double r10 = R(1, 0), r11 = R(1, 1), r12 = R(1, 2);
+  const double r20 = R(2, 0), r21 = R(2, 1), r22 = R(2, 2);
+  const double t0 = t[0], t1 = t[1], t2 = t[2];
   const double cap = threshold_sq_um2_ / (focal_um_ * focal_um_);
   mask->resize(num_data_);
+  char* flags = mask->data();
   int count = 0;
-  for (int i = 0; i < num_data_; ++i) {
-    const Eigen::Vector3d p = R * centred_points_[i] + t;
-    const double inv_w = 1.0 / p.z();
-    const double dx = observed_over_c_[i].x() + p.x() * inv_w;
-    const double dy = observed_over_c_[i].y() + p.y() * inv_w;
-    const bool inlier = p.z() < 0.0 && dx * dx + dy * dy <= cap;
-    (*mask)[i] = inlier ? 1 : 0;
+  for (int k = 0; k < num_data_; ++k) {
+    const double u = r00 * x_[k] + r01 * y_[k] + r02 * z_[k] + t0;
+    const double v = r10 * x_[k] + r11 * y_[k] + r12 * z_[k] + t1;
+    const double w = r20 * x_[k] + r21 * y_[k] + r22 * z_[k] + t2;
+    const double inv_w = 1.0 / w;
+    const double dx = ox_[k] + u * inv_w;
+    const double dy = oy_[k] + v * inv_w;
+    const bool inlier = w < 0.0 && dx * dx + dy * dy <= cap;
+    flags[order_[k]] = inlier ? 1 : 0;
     count += inlier ? 1 : 0;
   }
   return count;

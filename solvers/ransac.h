@@ -7,8 +7,8 @@
 //
 // The loop, for trial = 1, 2, ...: draw kMinimalSampleSize distinct indices uniformly, generate
 // the models of that minimal sample, score each; a model that beats the best so far becomes the best
-// and, with local optimisation, is refined on its inliers and re-scored, repeatedly while that
-// lowers the score. The trial budget is then lowered to the number of samples that, at the best
+// and, with local optimisation and more inliers than a minimal sample, is refined on its inliers
+// and re-scored, repeatedly while that lowers the score and changes the inlier set. The trial budget is then lowered to the number of samples that, at the best
 // model's inlier ratio w, contain at least one all-inlier sample with the requested confidence:
 // log(1 - confidence) / log(1 - w^kMinimalSampleSize). The loop stops when the budget is reached.
 //
@@ -230,7 +230,10 @@ RansacSummary Ransac(const RansacOptions& options, const Estimator& estimator,
     if (!improved) continue;
 
     best_num_inliers = collect_inliers(best);
-    if (options.local_optimization) {
+    // A model supported by no more than its own minimal sample has nothing to be refined on (and
+    // in practice is a wrong model found before any good one): local optimisation would only
+    // spend a full scoring pass on it.
+    if (options.local_optimization && best_num_inliers > kSampleSize) {
       for (int round = 0; round < options.max_lo_iterations; ++round) {
         if (best_num_inliers < kSampleSize) break;
         Model refined = best;

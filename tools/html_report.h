@@ -3,6 +3,7 @@
 // no external resource) that opens in any browser without a server. Tables are those of
 // tools/comparison.h; the plots are drawn here as SVG.
 
+#include <limits>
 #include <string>
 #include <vector>
 

@@ -17,7 +17,8 @@ constexpr char kUsage[] =
     "Commands:\n"
     "  resect    resect every image that has marks (robust: RANSAC + Ceres, or the Taylor\n"
     "            linearisation of the seed lecture)\n"
-    "  simulate  write a synthetic dataset (camera table, frames, points, marks) with its truth\n\n"
+    "  simulate  write a synthetic dataset (camera table, frames, points, marks) with its truth\n"
+    "  compare   the solvers side by side: Monte-Carlo sweeps against truth, or a dataset\n\n"
     "Run 'photopose <command> --help' for the flags of a command.\n";
 
 }  // namespace
@@ -36,6 +37,7 @@ int main(int argc, char** argv) {
   const std::string command = argv[1];
   if (command == "resect") return photopose::cli::RunResect(argc - 2, argv + 2);
   if (command == "simulate") return photopose::cli::RunSimulate(argc - 2, argv + 2);
+  if (command == "compare") return photopose::cli::RunCompare(argc - 2, argv + 2);
   std::cerr << "photopose: unknown command '" << command << "'\n" << kUsage;
   return photopose::cli::kExitBadInput;
 }
