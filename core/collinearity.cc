@@ -21,11 +21,8 @@ void ComputeSeedTrig(const double* angles, SeedTrig* trig) {
   sincos(angles[0], &so, &co);
   sincos(angles[1], &sp, &cp);
   sincos(angles[2], &sk, &ck);
-  const double R[9] = {cp * ck,                -cp * sk,                sp,
-                       co * sk + so * sp * ck, co * ck - so * sp * sk, -so * cp,
-                       so * sk - co * sp * ck, so * ck + co * sp * sk, co * cp};
+  SeedRotationFromSinCos(so, co, sp, cp, sk, ck, trig->R);
   std::copy(angles, angles + 3, trig->angles);
-  std::copy(R, R + 9, trig->R);
   trig->sin_omega = so;
   trig->cos_omega = co;
 }

@@ -8,12 +8,6 @@
 #include <cstring>
 #include <memory>
 
-#define PHOTOPOSE_RETURN_IF_ERROR(expr) \
-  do {                                  \
-    Status status_ = (expr);            \
-    if (!status_.ok()) return status_;  \
-  } while (false)
-
 namespace photopose {
 namespace {
 

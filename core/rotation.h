@@ -45,6 +45,10 @@ Eigen::Matrix<T, 3, 3> RotationZ(const T& a);
 // The seed's matrix, row-major into R[9], templated for Ceres Jets. R = Rx(omega) Ry(phi) Rz(kappa).
 template <typename T>
 void SeedRotationMatrix(const T omega, const T phi, const T kappa, T* R);
+// The same from the sines and cosines of omega, phi, kappa (for callers that compute them once).
+template <typename T>
+void SeedRotationFromSinCos(const T& so, const T& co, const T& sp, const T& cp, const T& sk,
+                            const T& ck, T* R);
 
 // R_camera_from_ground for three angles (rad) in the named convention.
 Eigen::Matrix3d RotationFromAngles(RotationConvention convention, const Eigen::Vector3d& angles_rad);
@@ -112,9 +116,12 @@ template <typename T>
 void SeedRotationMatrix(const T omega, const T phi, const T kappa, T* R) {
   using std::cos;
   using std::sin;
-  const T so = sin(omega), co = cos(omega);
-  const T sp = sin(phi), cp = cos(phi);
-  const T sk = sin(kappa), ck = cos(kappa);
+  SeedRotationFromSinCos(sin(omega), cos(omega), sin(phi), cos(phi), sin(kappa), cos(kappa), R);
+}
+
+template <typename T>
+void SeedRotationFromSinCos(const T& so, const T& co, const T& sp, const T& cp, const T& sk,
+                            const T& ck, T* R) {
   // Rx(omega) * Ry(phi) * Rz(kappa), expanded.
   R[0] = cp * ck;
   R[1] = -cp * sk;

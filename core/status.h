@@ -23,3 +23,10 @@ class Status {
 };
 
 }  // namespace photopose
+
+// Returns the Status of `expr` from the enclosing function when it is an error.
+#define PHOTOPOSE_RETURN_IF_ERROR(expr) \
+  do {                                  \
+    ::photopose::Status status_ = (expr); \
+    if (!status_.ok()) return status_;  \
+  } while (false)

@@ -16,12 +16,6 @@
 
 #include "core/csv.h"
 
-#define PHOTOPOSE_RETURN_IF_ERROR(expr) \
-  do {                                  \
-    Status status_ = (expr);            \
-    if (!status_.ok()) return status_;  \
-  } while (false)
-
 namespace photopose {
 namespace {
 

@@ -1,5 +1,7 @@
 #include "solvers/absolute_pose.h"
 
+#include "solvers/dlt.h"
+
 #include <Eigen/Dense>
 #include <algorithm>
 #include <array>
@@ -11,12 +13,17 @@
 
 #include "core/rotation.h"
 
+#if defined(__SSE2__)
+#include <emmintrin.h>
+#endif
+
 namespace photopose {
 namespace {
 
-// Ground points whose second RMS extent is below this fraction of the first lie on one line: every
-// pose rotated about that line fits them equally well.
-constexpr double kCollinearExtent = 1e-9;
+// Ground points whose second RMS extent is below about this fraction of the first lie on one line:
+// every pose rotated about that line fits them equally well. (Well above the rounding of the test,
+// ~1e-8 in these units.)
+constexpr double kCollinearExtent = 1e-6;
 // Points scored between early-exit checks in ScoreModel: long enough for the compiler to keep the
 // loop tight, short enough that a bad model stops soon after it is rejected.
 constexpr int kScoreBlock = 8;
@@ -30,6 +37,11 @@ constexpr double kSprtThreshold = 1e6;
 // pose is already far better than the inlier threshold needs, and the cost grows with the count.
 // EstimateAbsolutePoseRansac polishes the final pose on all inliers.
 constexpr int kMaxLocalOptimizationPoints = 96;
+// The DLT of the local optimisation uses at most this many inliers (a 2n x 12 SVD).
+constexpr int kMaxDltPoints = 24;
+// Gauss-Newton stops when a step moves the projections by an RMS below this fraction of the inlier
+// threshold: the next step would be far below the marking noise.
+constexpr double kConvergedImageMotion = 1e-4;
 // Seed of the fixed scoring order.
 constexpr uint64_t kScoringOrderSeed = 0x9e3779b97f4a7c15ull;
 
@@ -42,19 +54,15 @@ inline uint64_t SplitMix64(uint64_t x) {
 }
 
 // A deterministic pseudo-random number from a model's translation bits (the scoring start offset).
-inline uint64_t ModelHash(const Eigen::Vector3d& t) {
+inline uint64_t ModelHash(double t0, double t1, double t2) {
   uint64_t h = 0;
-  for (int k = 0; k < 3; ++k) {
+  for (const double value : {t0, t1, t2}) {
     uint64_t bits;
-    std::memcpy(&bits, &t[k], sizeof(bits));
+    std::memcpy(&bits, &value, sizeof(bits));
     h = SplitMix64(h ^ bits);
   }
   return h;
 }
-// Gauss-Newton stops when a step moves the projections by an RMS below this fraction of the inlier
-// threshold: the next step would be far below the marking noise.
-constexpr double kConvergedImageMotion = 1e-4;
-
 
 // The body of internal::AddGaussNewtonTerms, inline so that in RefineModel's loop the sums stay in
 // registers.
@@ -75,27 +83,27 @@ inline bool AddGaussNewtonTermsInline(const Eigen::Vector3d& camera_point, doubl
   const double XX = X * X, YY = Y * Y, XY = X * Y;
   const double qq = q * q;
   const double one_xx = 1.0 + XX, one_yy = 1.0 + YY, rho = 1.0 + XX + YY;
-  normal[0] += qq;                         // (0, 0)
-  /* (0, 1) is zero */                     // normal[1]
-  normal[2] += X * qq;                     // (0, 2)
-  normal[3] += q * XY;                     // (0, 3)
-  normal[4] -= q * one_xx;                 // (0, 4)
-  normal[5] -= q * Y;                      // (0, 5)
-  normal[6] += qq;                         // (1, 1)
-  normal[7] += Y * qq;                     // (1, 2)
-  normal[8] += q * one_yy;                 // (1, 3)
-  normal[9] -= q * XY;                     // (1, 4)
-  normal[10] += q * X;                     // (1, 5)
-  normal[11] += qq * (XX + YY);            // (2, 2)
-  normal[12] += q * Y * rho;               // (2, 3)
-  normal[13] -= q * X * rho;               // (2, 4)
-  /* (2, 5) is zero */                     // normal[14]
+  normal[0] += qq;                          // (0, 0)
+  /* (0, 1) is zero */                      // normal[1]
+  normal[2] += X * qq;                      // (0, 2)
+  normal[3] += q * XY;                      // (0, 3)
+  normal[4] -= q * one_xx;                  // (0, 4)
+  normal[5] -= q * Y;                       // (0, 5)
+  normal[6] += qq;                          // (1, 1)
+  normal[7] += Y * qq;                      // (1, 2)
+  normal[8] += q * one_yy;                  // (1, 3)
+  normal[9] -= q * XY;                      // (1, 4)
+  normal[10] += q * X;                      // (1, 5)
+  normal[11] += qq * (XX + YY);             // (2, 2)
+  normal[12] += q * Y * rho;                // (2, 3)
+  normal[13] -= q * X * rho;                // (2, 4)
+  /* (2, 5) is zero */                      // normal[14]
   normal[15] += XY * XY + one_yy * one_yy;  // (3, 3)
-  normal[16] -= XY * (rho + 1.0);          // (3, 4)
-  normal[17] += X;                         // (3, 5)
+  normal[16] -= XY * (rho + 1.0);           // (3, 4)
+  normal[17] += X;                          // (3, 5)
   normal[18] += one_xx * one_xx + XY * XY;  // (4, 4)
-  normal[19] += Y;                         // (4, 5)
-  normal[20] += XX + YY;                   // (5, 5)
+  normal[19] += Y;                          // (4, 5)
+  normal[20] += XX + YY;                    // (5, 5)
   gradient[0] += q * ex;
   gradient[1] += q * ey;
   gradient[2] += q * (X * ex + Y * ey);
@@ -105,6 +113,83 @@ inline bool AddGaussNewtonTermsInline(const Eigen::Vector3d& camera_point, doubl
   return true;
 }
 
+// A pose prepared for scoring: (u, v, w) = R X + t for the centred X, and the squared inlier
+// threshold in image-plane units divided by c.
+struct ScoringPose {
+  double r00, r01, r02, r10, r11, r12, r20, r21, r22;
+  double t0, t1, t2;
+  double cap;
+};
+
+// (u, v, w) = R (X - centre) = R X_centred + t with t = -R (centre - origin).
+ScoringPose PrepareScoring(const PoseCandidate& model, const Eigen::Vector3d& origin, double cap) {
+  const Eigen::Matrix3d& R = model.R_camera_from_ground;
+  const Eigen::Vector3d t = -R * (model.center_in_ground - origin);
+  return ScoringPose{R(0, 0), R(0, 1), R(0, 2), R(1, 0), R(1, 1), R(1, 2), R(2, 0),
+                     R(2, 1), R(2, 2), t[0],    t[1],    t[2],    cap};
+}
+
+// For the points [begin, end) of the scoring layout: adds min(r^2, cap) to *sum (cap for a point on
+// or behind the camera plane) and the number of outliers (r^2 > cap or w >= 0) to *outliers, with
+// r = (x_obs / c + u / w, y_obs / c + v / w), and writes the inlier flags to flags[order[i]] when
+// flags is not null. The SSE2 path (baseline on x86-64) takes two points per step with the
+// arithmetic of the scalar loop in the same order; this loop is most of the time of RANSAC.
+inline void ScoreRange(const ScoringPose& p, const double* x, const double* y, const double* z,
+                       const double* ox, const double* oy, int begin, int end, double* sum,
+                       int* outliers, const int* order, char* flags) {
+  int i = begin;
+  double partial = 0.0;
+  int count = 0;
+#if defined(__SSE2__)
+  if (end - begin >= 2) {
+    const __m128d r00 = _mm_set1_pd(p.r00), r01 = _mm_set1_pd(p.r01), r02 = _mm_set1_pd(p.r02);
+    const __m128d r10 = _mm_set1_pd(p.r10), r11 = _mm_set1_pd(p.r11), r12 = _mm_set1_pd(p.r12);
+    const __m128d r20 = _mm_set1_pd(p.r20), r21 = _mm_set1_pd(p.r21), r22 = _mm_set1_pd(p.r22);
+    const __m128d t0 = _mm_set1_pd(p.t0), t1 = _mm_set1_pd(p.t1), t2 = _mm_set1_pd(p.t2);
+    const __m128d cap = _mm_set1_pd(p.cap), zero = _mm_setzero_pd(), one = _mm_set1_pd(1.0);
+    __m128d sums = _mm_setzero_pd();
+    for (; i + 1 < end; i += 2) {
+      const __m128d X = _mm_loadu_pd(x + i), Y = _mm_loadu_pd(y + i), Z = _mm_loadu_pd(z + i);
+      const __m128d u = _mm_add_pd(
+          _mm_add_pd(_mm_add_pd(_mm_mul_pd(r00, X), _mm_mul_pd(r01, Y)), _mm_mul_pd(r02, Z)), t0);
+      const __m128d v = _mm_add_pd(
+          _mm_add_pd(_mm_add_pd(_mm_mul_pd(r10, X), _mm_mul_pd(r11, Y)), _mm_mul_pd(r12, Z)), t1);
+      const __m128d w = _mm_add_pd(
+          _mm_add_pd(_mm_add_pd(_mm_mul_pd(r20, X), _mm_mul_pd(r21, Y)), _mm_mul_pd(r22, Z)), t2);
+      const __m128d inv_w = _mm_div_pd(one, w);
+      const __m128d dx = _mm_add_pd(_mm_loadu_pd(ox + i), _mm_mul_pd(u, inv_w));
+      const __m128d dy = _mm_add_pd(_mm_loadu_pd(oy + i), _mm_mul_pd(v, inv_w));
+      const __m128d r2 = _mm_add_pd(_mm_mul_pd(dx, dx), _mm_mul_pd(dy, dy));
+      const __m128d inlier = _mm_and_pd(_mm_cmplt_pd(w, zero), _mm_cmple_pd(r2, cap));
+      sums = _mm_add_pd(sums, _mm_or_pd(_mm_and_pd(inlier, r2), _mm_andnot_pd(inlier, cap)));
+      const int bits = _mm_movemask_pd(inlier);
+      count += 2 - (bits & 1) - (bits >> 1);
+      if (flags != nullptr) {
+        flags[order[i]] = static_cast<char>(bits & 1);
+        flags[order[i + 1]] = static_cast<char>(bits >> 1);
+      }
+    }
+    double lanes[2];
+    _mm_storeu_pd(lanes, sums);
+    partial = lanes[0] + lanes[1];
+  }
+#endif
+  for (; i < end; ++i) {
+    const double u = p.r00 * x[i] + p.r01 * y[i] + p.r02 * z[i] + p.t0;
+    const double v = p.r10 * x[i] + p.r11 * y[i] + p.r12 * z[i] + p.t1;
+    const double w = p.r20 * x[i] + p.r21 * y[i] + p.r22 * z[i] + p.t2;
+    const double inv_w = 1.0 / w;
+    const double dx = ox[i] + u * inv_w;
+    const double dy = oy[i] + v * inv_w;
+    const double r2 = dx * dx + dy * dy;
+    const bool inlier = w < 0.0 && r2 <= p.cap;
+    partial += inlier ? r2 : p.cap;
+    count += inlier ? 0 : 1;
+    if (flags != nullptr) flags[order[i]] = inlier ? 1 : 0;
+  }
+  *sum += partial;
+  *outliers += count;
+}
 }  // namespace
 
 namespace internal {
@@ -145,7 +230,6 @@ AbsolutePoseEstimator::AbsolutePoseEstimator(const std::vector<Eigen::Vector2d>&
   const int n = num_data_;
   for (const Eigen::Vector3d& X : points_in_ground) origin_in_ground_ += X;
   if (n > 0) origin_in_ground_ /= n;
-  bearings_.resize(n);
   centred_points_.resize(n);
   observed_over_c_.resize(n);
   x_.resize(n);
@@ -155,7 +239,6 @@ AbsolutePoseEstimator::AbsolutePoseEstimator(const std::vector<Eigen::Vector2d>&
   oy_.resize(n);
   for (int i = 0; i < n; ++i) {
     const Eigen::Vector2d& xy = image_plane_um[i];
-    bearings_[i] = Eigen::Vector3d(xy.x(), xy.y(), -focal_um).normalized();
     centred_points_[i] = points_in_ground[i] - origin_in_ground_;
     observed_over_c_[i] = xy / focal_um;
   }
@@ -180,8 +263,11 @@ AbsolutePoseEstimator::AbsolutePoseEstimator(const std::vector<Eigen::Vector2d>&
 }
 
 void AbsolutePoseEstimator::GenerateModels(const int* sample, std::vector<Model>* models) const {
-  const std::array<Eigen::Vector3d, 3> bearings = {bearings_[sample[0]], bearings_[sample[1]],
-                                                   bearings_[sample[2]]};
+  // (x / c, y / c, -1) is along the bearing; SolveP3P normalises.
+  const std::array<Eigen::Vector3d, 3> bearings = {
+      Eigen::Vector3d(observed_over_c_[sample[0]].x(), observed_over_c_[sample[0]].y(), -1.0),
+      Eigen::Vector3d(observed_over_c_[sample[1]].x(), observed_over_c_[sample[1]].y(), -1.0),
+      Eigen::Vector3d(observed_over_c_[sample[2]].x(), observed_over_c_[sample[2]].y(), -1.0)};
   const std::array<Eigen::Vector3d, 3> points = {
       centred_points_[sample[0]], centred_points_[sample[1]], centred_points_[sample[2]]};
   const size_t first = models->size();
@@ -193,22 +279,16 @@ void AbsolutePoseEstimator::GenerateModels(const int* sample, std::vector<Model>
 double AbsolutePoseEstimator::ScoreModel(const Model& model, double best_score_so_far) const {
   // Work in image-plane units divided by c: x / c = -u / w, so the residual over c is
   // x_obs / c + u / w, and one reciprocal of w serves both coordinates.
-  const Eigen::Matrix3d& R = model.R_camera_from_ground;
-  const Eigen::Vector3d t = -R * (model.center_in_ground - origin_in_ground_);
-  const double r00 = R(0, 0), r01 = R(0, 1), r02 = R(0, 2);
-  const double r10 = R(1, 0), r11 = R(1, 1), r12 = R(1, 2);
-  const double r20 = R(2, 0), r21 = R(2, 1), r22 = R(2, 2);
-  const double t0 = t[0], t1 = t[1], t2 = t[2];
   const double c2 = focal_um_ * focal_um_;
-  const double cap = threshold_sq_um2_ / c2;
+  const ScoringPose pose = PrepareScoring(model, origin_in_ground_, threshold_sq_um2_ / c2);
   const double limit = best_score_so_far / c2;
 
   // Sequential probability ratio test (J. Matas and O. Chum, "Randomized RANSAC with sequential
   // probability ratio test", ICCV 2005). A model that beats the best has fewer than
   // best / threshold^2 outliers, so an inlier ratio of at least eps = 1 - best / (n threshold^2).
   // Against a bad model (inlier ratio kSprtBadInlierRatio) the log likelihood ratio gains
-  // log((1 - delta) / (1 - eps)) per outlier and log(delta / eps) per inlier; past log(A) the model is
-  // rejected, which by Wald's bound happens to a model with inlier ratio >= eps with probability
+  // log((1 - delta) / (1 - eps)) per outlier and log(delta / eps) per inlier; past log(A) the model
+  // is rejected, which by Wald's bound happens to a model with inlier ratio >= eps with probability
   // <= 1 / A. A bad model is thus dropped after a dozen or so points instead of the ~n (1 - eps)
   // that the exact bound (sum >= best) needs.
   const double eps = 1.0 - best_score_so_far / (num_data_ * threshold_sq_um2_);
@@ -217,35 +297,21 @@ double AbsolutePoseEstimator::ScoreModel(const Model& model, double best_score_s
   const double log_per_outlier = sprt ? std::log((1.0 - kSprtBadInlierRatio) / (1.0 - eps)) : 0.0;
   const double log_threshold = std::log(kSprtThreshold);
 
-  const double* x = x_.data();
-  const double* y = y_.data();
-  const double* z = z_.data();
-  const double* ox = ox_.data();
-  const double* oy = oy_.data();
   double sum = 0.0;
   double log_ratio = 0.0;
   // Points are stored in a pseudo-random order (the test needs random draws, whatever the
   // caller's order), and each model starts at its own pseudo-random offset so that one unlucky
   // run of the order cannot reject every good model.
-  const int start = static_cast<int>(ModelHash(t) % static_cast<uint64_t>(num_data_));
+  const int start =
+      static_cast<int>(ModelHash(pose.t0, pose.t1, pose.t2) % static_cast<uint64_t>(num_data_));
   for (int pass = 0; pass < 2; ++pass) {
     const int first = pass == 0 ? start : 0;
     const int last = pass == 0 ? num_data_ : start;
     for (int begin = first; begin < last; begin += kScoreBlock) {
       const int end = std::min(begin + kScoreBlock, last);
       int outliers = 0;
-      for (int i = begin; i < end; ++i) {
-        const double u = r00 * x[i] + r01 * y[i] + r02 * z[i] + t0;
-        const double v = r10 * x[i] + r11 * y[i] + r12 * z[i] + t1;
-        const double w = r20 * x[i] + r21 * y[i] + r22 * z[i] + t2;
-        const double inv_w = 1.0 / w;
-        const double dx = ox[i] + u * inv_w;
-        const double dy = oy[i] + v * inv_w;
-        const double r2 = dx * dx + dy * dy;
-        const bool inlier = w < 0.0 && r2 < cap;
-        sum += inlier ? r2 : cap;
-        outliers += inlier ? 0 : 1;
-      }
+      ScoreRange(pose, x_.data(), y_.data(), z_.data(), ox_.data(), oy_.data(), begin, end, &sum,
+                 &outliers, nullptr, nullptr);
       if (sum >= limit) return std::max(sum * c2, best_score_so_far);
       log_ratio += outliers * log_per_outlier + (end - begin - outliers) * log_per_inlier;
       if (log_ratio > log_threshold) return std::numeric_limits<double>::infinity();
@@ -255,33 +321,41 @@ double AbsolutePoseEstimator::ScoreModel(const Model& model, double best_score_s
 }
 
 int AbsolutePoseEstimator::Inliers(const Model& model, std::vector<char>* mask) const {
-  // The same arithmetic as ScoreModel, over the scoring layout.
-  const Eigen::Matrix3d& R = model.R_camera_from_ground;
-  const Eigen::Vector3d t = -R * (model.center_in_ground - origin_in_ground_);
-  const double r00 = R(0, 0), r01 = R(0, 1), r02 = R(0, 2);
-  const double r10 = R(1, 0), r11 = R(1, 1), r12 = R(1, 2);
-  const double r20 = R(2, 0), r21 = R(2, 1), r22 = R(2, 2);
-  const double t0 = t[0], t1 = t[1], t2 = t[2];
-  const double cap = threshold_sq_um2_ / (focal_um_ * focal_um_);
   mask->resize(num_data_);
-  char* flags = mask->data();
-  int count = 0;
-  for (int k = 0; k < num_data_; ++k) {
-    const double u = r00 * x_[k] + r01 * y_[k] + r02 * z_[k] + t0;
-    const double v = r10 * x_[k] + r11 * y_[k] + r12 * z_[k] + t1;
-    const double w = r20 * x_[k] + r21 * y_[k] + r22 * z_[k] + t2;
-    const double inv_w = 1.0 / w;
-    const double dx = ox_[k] + u * inv_w;
-    const double dy = oy_[k] + v * inv_w;
-    const bool inlier = w < 0.0 && dx * dx + dy * dy <= cap;
-    flags[order_[k]] = inlier ? 1 : 0;
-    count += inlier ? 1 : 0;
-  }
-  return count;
+  double sum = 0.0;
+  int outliers = 0;
+  const ScoringPose pose =
+      PrepareScoring(model, origin_in_ground_, threshold_sq_um2_ / (focal_um_ * focal_um_));
+  ScoreRange(pose, x_.data(), y_.data(), z_.data(), ox_.data(), oy_.data(), 0, num_data_, &sum,
+             &outliers, order_.data(), mask->data());
+  return num_data_ - outliers;
 }
 
 void AbsolutePoseEstimator::RefineModel(const std::vector<int>& inliers, Model* model) const {
-  GaussNewton(inliers, kMaxLocalOptimizationPoints, gauss_newton_iterations_, model);
+  // The non-minimal solver of the local optimisation (Lebeda et al. 2012): with six or more inliers
+  // the DLT (solvers/dlt.h) on an evenly spread subset of them proposes a second start; both starts
+  // are polished by Gauss-Newton and the better-scoring one is kept. Coplanar inliers (flat
+  // terrain) make the DLT decline, and the Gauss-Newton refinement of the sample's model remains.
+  Model refined = *model;
+  GaussNewton(inliers, kMaxLocalOptimizationPoints, gauss_newton_iterations_, &refined);
+  const int size = static_cast<int>(inliers.size());
+  if (size >= kDltMinimumPoints) {
+    const int count = std::min(size, kMaxDltPoints);
+    std::vector<Eigen::Vector3d> bearings(count), points(count);
+    for (int k = 0; k < count; ++k) {
+      const int i = inliers[static_cast<size_t>(k) * size / count];
+      bearings[k] = Eigen::Vector3d(observed_over_c_[i].x(), observed_over_c_[i].y(), -1.0).normalized();
+      points[k] = centred_points_[i];
+    }
+    Model linear;
+    if (SolveDlt(bearings, points, &linear).ok()) {
+      linear.center_in_ground += origin_in_ground_;
+      GaussNewton(inliers, kMaxLocalOptimizationPoints, gauss_newton_iterations_, &linear);
+      const double infinity = std::numeric_limits<double>::infinity();
+      if (ScoreModel(linear, infinity) < ScoreModel(refined, infinity)) refined = linear;
+    }
+  }
+  *model = refined;
 }
 
 void AbsolutePoseEstimator::Polish(const std::vector<int>& inliers, int iterations,
@@ -310,8 +384,9 @@ void AbsolutePoseEstimator::GaussNewton(const std::vector<int>& indices, int max
     int used = 0;
     for (int k = 0; k < count; ++k) {
       // An even spread over the list when it is subsampled (the inliers come in data order).
-      const int i = count == size ? indices[k]
-                                  : indices[static_cast<int>(static_cast<int64_t>(k) * size / count)];
+      const int i = count == size
+                        ? indices[k]
+                        : indices[static_cast<int>(static_cast<int64_t>(k) * size / count)];
       const Eigen::Vector3d local = R * (centred_points_[i] - center);
       if (AddGaussNewtonTermsInline(local, observed_over_c_[i].x(), observed_over_c_[i].y(), normal,
                                     gradient))
@@ -360,23 +435,31 @@ Status EstimateAbsolutePoseRansac(const AbsolutePoseRansacOptions& options,
     return fail("the principal distance must be positive and finite");
   if (n < AbsolutePoseEstimator::kMinimalSampleSize)
     return fail("needs at least 3 points, got " + std::to_string(n));
+  Eigen::Vector3d centroid = Eigen::Vector3d::Zero();
   for (int i = 0; i < n; ++i) {
     if (!image_plane_um[i].allFinite() || !points_in_ground[i].allFinite())
       return fail("correspondence " + std::to_string(i) + " is not finite");
+    centroid += points_in_ground[i];
   }
+  centroid /= n;
 
   // All points on one line (or one point): the pose is not determined, so fail before sampling.
-  Eigen::Vector3d centroid = Eigen::Vector3d::Zero();
-  for (const Eigen::Vector3d& X : points_in_ground) centroid += X;
-  centroid /= n;
-  Eigen::Matrix3d scatter = Eigen::Matrix3d::Zero();
-  for (const Eigen::Vector3d& X : points_in_ground) scatter += (X - centroid) * (X - centroid).transpose();
-  const Eigen::Vector3d extent = Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d>(
-                                     scatter, Eigen::EigenvaluesOnly)
-                                     .eigenvalues()
-                                     .cwiseMax(0.0)
-                                     .cwiseSqrt();
-  if (!(extent[1] > kCollinearExtent * extent[2]))
+  // With the scatter matrix's eigenvalues l1 >= l2 >= l3, its trace is ~l1 and the sum of its
+  // principal 2x2 minors ~l1 l2 (both within small factors), so minors / trace^2 ~ l2 / l1, the
+  // squared ratio of the second RMS extent to the first; no eigen-decomposition needed.
+  double sxx = 0.0, syy = 0.0, szz = 0.0, sxy = 0.0, sxz = 0.0, syz = 0.0;
+  for (const Eigen::Vector3d& X : points_in_ground) {
+    const double dx = X.x() - centroid.x(), dy = X.y() - centroid.y(), dz = X.z() - centroid.z();
+    sxx += dx * dx;
+    syy += dy * dy;
+    szz += dz * dz;
+    sxy += dx * dy;
+    sxz += dx * dz;
+    syz += dy * dz;
+  }
+  const double trace = sxx + syy + szz;
+  const double minors = (sxx * syy - sxy * sxy) + (sxx * szz - sxz * sxz) + (syy * szz - syz * syz);
+  if (!(minors > kCollinearExtent * kCollinearExtent * trace * trace))
     return fail("all ground points are collinear (or coincide); the pose is not determined");
 
   const AbsolutePoseEstimator estimator(image_plane_um, points_in_ground, focal_um,
@@ -404,14 +487,10 @@ Status EstimateAbsolutePoseRansac(const AbsolutePoseRansacOptions& options,
     }
   }
 
-  int in_front = 0;
-  for (int i = 0; i < n; ++i) {
-    const double w = pose.R_camera_from_ground.row(2).dot(points_in_ground[i] - pose.center_in_ground);
-    if (w < 0.0) ++in_front;
-  }
-  if (in_front < AbsolutePoseEstimator::kMinimalSampleSize)
-    return fail("all points are behind the camera of the best pose (" + std::to_string(in_front) +
-                " in front)");
+  // Inliers are in front of the camera by definition, so a pose with at least three of them has
+  // three points in front; anything less is the all-behind failure.
+  if (out.num_inliers < AbsolutePoseEstimator::kMinimalSampleSize)
+    return fail("fewer than 3 points are in front of the camera of the best pose");
 
   eo->set_center_in_ground(pose.center_in_ground);
   eo->set_angles_seed_rad(AnglesFromRotation(RotationConvention::kSeed, pose.R_camera_from_ground));

@@ -1,5 +1,6 @@
 #pragma once
-// Robust single-image resection: LO-RANSAC (solvers/ransac.h) over Lambda Twist P3P
+// Robust single-image resection: LO-RANSAC (solvers/ransac.h) over Lambda Twist P3P, with the DLT
+// (solvers/dlt.h) as the non-minimal solver of the local optimisation
 // (solvers/p3p.h), MSAC-scored by image-plane residuals in micrometres, with a few Gauss-Newton
 // iterations of the collinearity equations (core/collinearity.h) as the local optimisation. The
 // result is an initial exterior orientation and an inlier set for the least-squares resection.
@@ -21,7 +22,8 @@ namespace photopose {
 struct AbsolutePoseRansacOptions {
   RansacOptions ransac;
   // Largest image-plane residual of an inlier and the MSAC truncation (um, the Euclidean norm of
-  // the (x, y) residual). About 3.5 sigma of the marking noise: 12 um is 2 px of 6 um pixels.
+  // the (x, y) residual). Set it to 3.5-4 sigma of the marking noise (a fraction exp(-k^2 / 2) of
+  // the inliers lies beyond k sigma): the default is 4 sigma of 0.5 px marks with 6 um pixels.
   double inlier_threshold_um = 12.0;
   // Gauss-Newton iterations of each local-optimisation step, >= 1.
   int lo_gauss_newton_iterations = 2;
@@ -36,10 +38,11 @@ struct AbsolutePoseRansacOptions {
 
 // The RANSAC estimator of resection (the concept of solvers/ransac.h). Models are poses in the
 // caller's ground frame; internally the points are centred on their centroid so large projected
-// coordinates do not cost precision. The constructor copies and precomputes everything (bearings,
-// structure-of-arrays for scoring); the per-model work involves no trigonometry and no allocation.
-// Inputs must be valid (equal sizes, finite, focal_um > 0, threshold > 0): EstimateAbsolutePoseRansac
-// checks them.
+// coordinates do not cost precision. The constructor copies and precomputes everything (centred
+// points, observations over c, a structure-of-arrays copy for scoring); the per-model work involves
+// no trigonometry and no allocation.
+// Inputs must be valid (equal sizes, finite, focal_um > 0, threshold > 0):
+// EstimateAbsolutePoseRansac checks them.
 class AbsolutePoseEstimator {
  public:
   using Model = PoseCandidate;
@@ -69,7 +72,9 @@ class AbsolutePoseEstimator {
   void Polish(const std::vector<int>& inliers, int iterations, Model* model) const;
 
   // Unit bearing of datum i in the camera frame, normalize(x, y, -c).
-  const Eigen::Vector3d& bearing(int i) const { return bearings_[i]; }
+  Eigen::Vector3d bearing(int i) const {
+    return Eigen::Vector3d(observed_over_c_[i].x(), observed_over_c_[i].y(), -1.0).normalized();
+  }
 
  private:
   void GaussNewton(const std::vector<int>& indices, int max_points, int iterations,
@@ -80,9 +85,8 @@ class AbsolutePoseEstimator {
   double threshold_sq_um2_ = 0.0;
   int gauss_newton_iterations_ = 2;
   Eigen::Vector3d origin_in_ground_ = Eigen::Vector3d::Zero();  // centroid of the points (m)
-  std::vector<Eigen::Vector3d> bearings_;
-  std::vector<Eigen::Vector3d> centred_points_;  // X - origin (m)
-  std::vector<Eigen::Vector2d> observed_over_c_;  // image-plane point / c (unitless)
+  std::vector<Eigen::Vector3d> centred_points_;                 // X - origin (m)
+  std::vector<Eigen::Vector2d> observed_over_c_;                // image-plane point / c (unitless)
   // Scoring layout, in a fixed pseudo-random order of the data (datum order_[k] at position k):
   // centred X, Y, Z (m) and the observations divided by c (x / c, y / c).
   std::vector<int> order_;
@@ -104,11 +108,11 @@ bool AddGaussNewtonTerms(const Eigen::Vector3d& camera_point, double observed_x_
 }  // namespace internal
 
 // Robust resection of one image. image_plane_um[i] (ideal image-plane point, um) observes
-// points_in_ground[i] (m); focal_um is the principal distance c. On success writes *eo (seed angles),
-// *inlier_mask (one entry per point, 1 for inliers; may be null) and *summary (may be null).
-// Errors (summary->success = false, *eo untouched): invalid options, unequal sizes, non-finite
-// input, focal_um <= 0, fewer than 3 points, all ground points collinear, no pose with at least 3
-// inliers, or fewer than 3 points in front of the best pose.
+// points_in_ground[i] (m); focal_um is the principal distance c. On success writes *eo (seed
+// angles), *inlier_mask (one entry per point, 1 for inliers; may be null) and *summary (may be
+// null). Errors (summary->success = false, *eo untouched): invalid options, unequal sizes,
+// non-finite input, focal_um <= 0, fewer than 3 points, all ground points collinear, no pose with
+// at least 3 inliers, or fewer than 3 points in front of the best pose.
 Status EstimateAbsolutePoseRansac(const AbsolutePoseRansacOptions& options,
                                   const std::vector<Eigen::Vector2d>& image_plane_um,
                                   const std::vector<Eigen::Vector3d>& points_in_ground,

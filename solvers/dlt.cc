@@ -13,7 +13,7 @@ namespace {
 constexpr double kMinRelativeExtent = 1e-6;
 // The second-smallest singular value of the normalised design matrix relative to the largest:
 // below it the null space is not one-dimensional and the solution is not unique.
-constexpr double kMinSingularValueRatio = 1e-10;
+constexpr double kMinSingularValueRatio = 1e-6;  // eigenvalues of A^T A resolve ~1e-8 of sigma_max
 
 }  // namespace
 
@@ -60,25 +60,34 @@ Status SolveDlt(const std::vector<Eigen::Vector3d>& bearings,
   // Hartley normalisation of the ground side: centroid at the origin, mean distance sqrt(3). The
   // bearing side needs none: unit vectors with an orthonormal tangent basis are already isotropic.
   const double scale = std::sqrt(3.0) / mean_distance;
-  Eigen::MatrixXd A(2 * n, 12);
+  // The 12 x 12 normal matrix A^T A of the 2n x 12 design matrix, accumulated row by row: its
+  // eigenvectors are A's right singular vectors and its eigenvalues the squared singular values.
+  // After the normalisation A is well conditioned, so squaring costs no useful digits, and the
+  // fixed-size eigensolver is far cheaper than an SVD of A (the DLT runs inside LO-RANSAC).
+  Eigen::Matrix<double, 12, 12> AtA = Eigen::Matrix<double, 12, 12>::Zero();
   for (int i = 0; i < n; ++i) {
     const Eigen::Vector3d& b = unit_bearings[i];
     Eigen::Vector4d X;
     X << scale * (points_in_ground[i] - centroid), 1.0;
     const Eigen::Vector3d e1 = b.unitOrthogonal();
     const Eigen::Vector3d e2 = b.cross(e1);
+    Eigen::Matrix<double, 12, 1> row1, row2;
     for (int r = 0; r < 3; ++r) {
-      A.block<1, 4>(2 * i, 4 * r) = e1[r] * X.transpose();
-      A.block<1, 4>(2 * i + 1, 4 * r) = e2[r] * X.transpose();
+      row1.segment<4>(4 * r) = e1[r] * X;
+      row2.segment<4>(4 * r) = e2[r] * X;
     }
+    AtA.selfadjointView<Eigen::Lower>().rankUpdate(row1);
+    AtA.selfadjointView<Eigen::Lower>().rankUpdate(row2);
   }
-  const Eigen::JacobiSVD<Eigen::MatrixXd> svd(A, Eigen::ComputeFullV);
-  const Eigen::VectorXd& sv = svd.singularValues();
+  const Eigen::SelfAdjointEigenSolver<Eigen::Matrix<double, 12, 12>> eigen(
+      AtA.selfadjointView<Eigen::Lower>());
+  // Singular values of A, descending as an SVD would give them.
+  const Eigen::Matrix<double, 12, 1> sv = eigen.eigenvalues().cwiseMax(0.0).cwiseSqrt().reverse();
   if (!(sv[10] > kMinSingularValueRatio * sv[0]))
     return Status::Error("DLT: the linear system is rank deficient");
   // P_normalised, row-major in the null vector; P acting on centred, scaled points.
   Eigen::Matrix<double, 3, 4> P;
-  for (int r = 0; r < 3; ++r) P.row(r) = svd.matrixV().col(11).segment<4>(4 * r).transpose();
+  for (int r = 0; r < 3; ++r) P.row(r) = eigen.eigenvectors().col(0).segment<4>(4 * r).transpose();
   Eigen::Matrix3d M = scale * P.leftCols<3>();  // ~ R, acting on X - centroid
   Eigen::Vector3d m = P.col(3);                 // ~ t + R centroid
 

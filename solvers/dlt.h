@@ -24,10 +24,11 @@ namespace photopose {
 // Minimum number of correspondences of SolveDlt (11 unknowns of P up to scale, two rows each).
 constexpr int kDltMinimumPoints = 6;
 
-// bearings[i] (any positive multiple of the direction) looks at points_in_ground[i]. Writes *pose on
-// success. Errors: fewer than kDltMinimumPoints, unequal sizes, non-finite or zero input, collinear
-// or coplanar ground points (their thinnest RMS extent below 1e-6 of the widest), a linear system
-// without a one-dimensional null space, a reflection, or most points behind the camera.
+// bearings[i] (any positive multiple of the direction) looks at points_in_ground[i]. Writes *pose
+// on success. Errors: fewer than kDltMinimumPoints, unequal sizes, non-finite or zero input,
+// collinear or coplanar ground points (their thinnest RMS extent below 1e-6 of the widest), a
+// linear system without a one-dimensional null space, a reflection, or most points behind the
+// camera.
 Status SolveDlt(const std::vector<Eigen::Vector3d>& bearings,
                 const std::vector<Eigen::Vector3d>& points_in_ground, PoseCandidate* pose);
 

@@ -4,6 +4,8 @@
 #include <algorithm>
 #include <cmath>
 
+#include "core/types.h"
+
 namespace photopose {
 namespace {
 
@@ -54,7 +56,7 @@ int RealRootsOfMonicCubic(double a, double b, double c, double roots[3]) {
   if (r * r < q3) {
     const double sqrt_q = std::sqrt(q);
     const double theta = std::acos(std::clamp(r / (sqrt_q * q), -1.0, 1.0));
-    const double two_pi = 2.0 * 3.14159265358979323846;
+    const double two_pi = 2.0 * kPi;
     roots[0] = -2.0 * sqrt_q * std::cos(theta / 3.0) - a_third;
     roots[1] = -2.0 * sqrt_q * std::cos((theta + two_pi) / 3.0) - a_third;
     roots[2] = -2.0 * sqrt_q * std::cos((theta - two_pi) / 3.0) - a_third;
@@ -124,11 +126,11 @@ int SolveP3P(const std::array<Eigen::Vector3d, 3>& bearings,
   const double a_mean = (a12 + a13 + a23) / 3.0;
   const double n12 = a12 / a_mean, n13 = a13 / a_mean, n23 = a23 / a_mean;
   Eigen::Matrix3d D1, D2;
-  D1 << n23, 0.5 * n23 * b12, 0.0,                         //
-      0.5 * n23 * b12, n23 - n12, -0.5 * n12 * b23,        //
+  D1 << n23, 0.5 * n23 * b12, 0.0,                   //
+      0.5 * n23 * b12, n23 - n12, -0.5 * n12 * b23,  //
       0.0, -0.5 * n12 * b23, -n12;
-  D2 << n23, 0.0, 0.5 * n23 * b13,                         //
-      0.0, -n13, -0.5 * n13 * b23,                         //
+  D2 << n23, 0.0, 0.5 * n23 * b13,  //
+      0.0, -n13, -0.5 * n13 * b23,  //
       0.5 * n23 * b13, -0.5 * n13 * b23, n23 - n13;
 
   // det(D1 + g D2) = c3 g^3 + c2 g^2 + c1 g + c0. A real root gives a degenerate member D0 of the
@@ -172,8 +174,9 @@ int SolveP3P(const std::array<Eigen::Vector3d, 3>& bearings,
   }
   if (!(best_quality > -kDiscriminantSlack)) return 0;
 
-  // D0 = sigma1 e1 e1^T + sigma2 e2 e2^T with null vector n0. sigma1 + sigma2 = trace, sigma1 sigma2
-  // = minor sum; sigma1 is taken as the larger in magnitude, whose eigenvector is better defined.
+  // D0 = sigma1 e1 e1^T + sigma2 e2 e2^T with null vector n0. sigma1 + sigma2 = trace, sigma1
+  // sigma2 = minor sum; sigma1 is taken as the larger in magnitude, whose eigenvector is better
+  // defined.
   Eigen::Vector3d n0;
   if (!NullVector(D0, &n0)) return 0;
   const double half_trace = 0.5 * D0.trace();
@@ -191,8 +194,8 @@ int SolveP3P(const std::array<Eigen::Vector3d, 3>& bearings,
   const int num_before = static_cast<int>(solutions->size());
   const int num_planes = s > 0.0 ? 2 : 1;
   for (int plane = 0; plane < num_planes; ++plane) {
-    const Eigen::Vector3d normal = plane == 0 ? Eigen::Vector3d(e1 - s * e2)
-                                              : Eigen::Vector3d(e1 + s * e2);
+    const Eigen::Vector3d normal =
+        plane == 0 ? Eigen::Vector3d(e1 - s * e2) : Eigen::Vector3d(e1 + s * e2);
     // The plane is spanned by n0 and q; on it D1 and D2 are proportional, so either quadric cuts
     // out the same rays. The one with the larger restriction is better conditioned.
     const Eigen::Vector3d q = n0.cross(normal).normalized();
@@ -227,7 +230,8 @@ int SolveP3P(const std::array<Eigen::Vector3d, 3>& bearings,
       if (lambda.sum() < 0.0) lambda = -lambda;
       // Scale so the constraints hold: every Lambda^T M_ij Lambda / a_ij is the same on the ray.
       const double l1 = lambda[0], l2 = lambda[1], l3 = lambda[2];
-      const double m_sum = (l1 * l1 + l2 * l2 + b12 * l1 * l2) + (l1 * l1 + l3 * l3 + b13 * l1 * l3) +
+      const double m_sum = (l1 * l1 + l2 * l2 + b12 * l1 * l2) +
+                           (l1 * l1 + l3 * l3 + b13 * l1 * l3) +
                            (l2 * l2 + l3 * l3 + b23 * l2 * l3);
       if (!(m_sum > 0.0)) continue;
       lambda *= std::sqrt(a_sum / m_sum);
@@ -244,7 +248,7 @@ int SolveP3P(const std::array<Eigen::Vector3d, 3>& bearings,
       for (int iteration = 0; iteration < kMaxNewtonIterations && error > 0.0; ++iteration) {
         Eigen::Matrix3d J;
         J << 2.0 * lambda[0] + b12 * lambda[1], 2.0 * lambda[1] + b12 * lambda[0], 0.0,  //
-            2.0 * lambda[0] + b13 * lambda[2], 0.0, 2.0 * lambda[2] + b13 * lambda[0],    //
+            2.0 * lambda[0] + b13 * lambda[2], 0.0, 2.0 * lambda[2] + b13 * lambda[0],   //
             0.0, 2.0 * lambda[1] + b23 * lambda[2], 2.0 * lambda[2] + b23 * lambda[1];
         const double det = J.determinant();
         if (!(std::abs(det) > 0.0) || !std::isfinite(det)) break;

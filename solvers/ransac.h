@@ -6,30 +6,34 @@
 // Bolles (CACM 1981).
 //
 // The loop, for trial = 1, 2, ...: draw kMinimalSampleSize distinct indices uniformly, generate
-// the models of that minimal sample, score each; a model that beats the best so far becomes the best
-// and, with local optimisation and more inliers than a minimal sample, is refined on its inliers
-// and re-scored, repeatedly while that lowers the score and changes the inlier set. The trial budget is then lowered to the number of samples that, at the best
-// model's inlier ratio w, contain at least one all-inlier sample with the requested confidence:
-// log(1 - confidence) / log(1 - w^kMinimalSampleSize). The loop stops when the budget is reached.
+// the models of that minimal sample, score each; a model that beats the best so far becomes the
+// best and, with local optimisation and more inliers than a minimal sample, is refined on its
+// inliers and re-scored, repeatedly while that lowers the score and changes the inlier set. The
+// trial budget is then lowered to the number of samples that, at the best model's inlier ratio w,
+// contain at least one all-inlier sample with the requested confidence:
+//   log(1 - confidence) / log(1 - w^kMinimalSampleSize).
+// The loop stops when the budget is reached.
 //
 // The Estimator concept (duck-typed; solvers/absolute_pose.h has the resection one):
 //
 //   struct Estimator {
-//     using Model = ...;                           // copyable
+//     using Model = ...;                           // default-constructible, copyable
 //     static constexpr int kMinimalSampleSize = m;  // data per minimal sample
 //     int num_data() const;                         // data are indexed 0 .. num_data() - 1
-//     // Appends the models of the m distinct data sample[0..m-1] to *models (cleared by the caller;
-//     // its capacity is reused, so no allocation in the loop). A degenerate sample appends none.
+//     // Appends the models of the m distinct data sample[0..m-1] to *models (cleared by the
+//     // caller; its capacity is reused, so no allocation in the loop). A degenerate sample
+//     // appends none.
 //     void GenerateModels(const int* sample, std::vector<Model>* models) const;
-//     // MSAC cost, lower is better: sum over all data of min(r_i^2, threshold^2). It may stop early
-//     // and return any value >= best_score_so_far once the partial sum reaches it.
+//     // MSAC cost, lower is better: sum over all data of min(r_i^2, threshold^2). It may stop
+//     // early and return any value >= best_score_so_far once it cannot beat it.
 //     double ScoreModel(const Model& model, double best_score_so_far) const;
-//     // Resizes *mask to num_data(), sets mask[i] = 1 for inliers (r_i <= threshold), else 0, and
-//     // returns the inlier count.
+//     // Resizes *mask to num_data(), sets mask[i] = 1 for inliers (r_i <= threshold), else 0,
+//     // and returns the inlier count.
 //     int Inliers(const Model& model, std::vector<char>* mask) const;
-//     // The local-optimisation step: improves *model from the given inlier indices (a non-minimal
-//     // fit, e.g. a few Gauss-Newton iterations), as close to convergence as it can afford, since
-//     // local optimisation stops once the inlier set repeats. Leaves it unchanged when it cannot.
+//     // The local-optimisation step: improves *model from the given inlier indices (a
+//     // non-minimal fit, e.g. a few Gauss-Newton iterations), as close to convergence as it can
+//     // afford, since local optimisation stops once the inlier set repeats. Leaves it unchanged
+//     // when it cannot.
 //     void RefineModel(const std::vector<int>& inliers, Model* model) const;
 //   };
 //
@@ -79,11 +83,11 @@ struct RansacOptions {
 };
 
 struct RansacSummary {
-  int num_trials = 0;    // minimal samples drawn
-  int num_models = 0;    // models generated from them (and scored)
-  int num_inliers = 0;   // inliers of the returned model
+  int num_trials = 0;   // minimal samples drawn
+  int num_models = 0;   // models generated from them (and scored)
+  int num_inliers = 0;  // inliers of the returned model
   double score = std::numeric_limits<double>::infinity();  // its MSAC cost (data units squared)
-  int num_lo_steps = 0;  // RefineModel calls
+  int num_lo_steps = 0;                                    // RefineModel calls
   bool success = false;  // a model with >= kMinimalSampleSize inliers was found
   std::string message;   // why it failed, or a note on success
 
@@ -145,15 +149,12 @@ class UniformSampler {
   }
 
  private:
-  // Uniform in [0, bound): the high 64 bits of a 64 x 64-bit product (Lemire's reduction without
-  // the rejection step; the bias, below bound / 2^64, is immaterial for sampling).
+  // Uniform in [0, bound) for 0 < bound < 2^31: the high half of (top 32 random bits) x bound, a
+  // multiply-shift reduction (D. Lemire, "Fast random integer generation in an interval", 2019)
+  // without its rejection step; the bias, below bound / 2^32, is immaterial for sampling.
   int UniformBelow(int bound) {
-    const uint64_t x = rng_();
-#if defined(__SIZEOF_INT128__)
-    return static_cast<int>((static_cast<unsigned __int128>(x) * static_cast<uint64_t>(bound)) >> 64);
-#else
-    return static_cast<int>(x % static_cast<uint64_t>(bound));
-#endif
+    const uint64_t high = rng_() >> 32;
+    return static_cast<int>((high * static_cast<uint64_t>(bound)) >> 32);
   }
 
   std::mt19937_64 rng_;
@@ -166,8 +167,8 @@ class UniformSampler {
 
 // Robustly fits estimator's model. On success writes *best_model and *inlier_mask (num_data()
 // entries, 1 for inliers) and returns success = true. On failure (invalid options, fewer data than
-// a minimal sample, no model with at least kMinimalSampleSize inliers) leaves both outputs untouched
-// and returns success = false with a message.
+// a minimal sample, no model with at least kMinimalSampleSize inliers) leaves both outputs
+// untouched and returns success = false with a message.
 template <typename Estimator>
 RansacSummary Ransac(const RansacOptions& options, const Estimator& estimator,
                      typename Estimator::Model* best_model, std::vector<char>* inlier_mask) {
@@ -183,8 +184,8 @@ RansacSummary Ransac(const RansacOptions& options, const Estimator& estimator,
   }
   const int n = estimator.num_data();
   if (n < kSampleSize) {
-    summary.message = "needs at least " + std::to_string(kSampleSize) + " data, got " +
-                      std::to_string(n);
+    summary.message =
+        "needs at least " + std::to_string(kSampleSize) + " data, got " + std::to_string(n);
     return summary;
   }
 
@@ -264,7 +265,7 @@ RansacSummary Ransac(const RansacOptions& options, const Estimator& estimator,
     return summary;
   }
   summary.success = true;
-  estimator.Inliers(best, &mask);
+  // `mask` was filled for `best` whenever best changed.
   *best_model = best;
   *inlier_mask = std::move(mask);
   return summary;

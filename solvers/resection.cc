@@ -44,29 +44,6 @@ ceres::LossFunction* MakeLoss(LossType type, double scale) {
   return nullptr;
 }
 
-// Whitened residuals, optional whitened Jacobian rows, for the statistics after any solver.
-struct Evaluation {
-  std::vector<Eigen::Vector2d> residuals_px;
-  bool all_in_front = true;
-};
-
-Evaluation EvaluateResiduals(const ResectionInput& input, const ExteriorOrientation& eo) {
-  Evaluation evaluation;
-  evaluation.residuals_px.resize(input.image_plane_um.size());
-  const SeedProjector projector(eo.data(), input.focal_length_um);
-  for (size_t i = 0; i < input.image_plane_um.size(); ++i) {
-    double xy[2];
-    if (!projector.Project(input.points_in_ground[i].data(), xy, nullptr, nullptr, nullptr)) {
-      evaluation.all_in_front = false;
-      evaluation.residuals_px[i].setConstant(std::numeric_limits<double>::infinity());
-      continue;
-    }
-    evaluation.residuals_px[i] =
-        (input.image_plane_um[i] - Eigen::Vector2d(xy[0], xy[1])) / input.pixel_size_um;
-  }
-  return evaluation;
-}
-
 struct CeresOutcome {
   bool usable = false;
   int iterations = 0;
@@ -194,10 +171,19 @@ CeresOutcome RefineWithTinySolver(const ResectionOptions& options, const Centred
   const int rounds = options.loss == LossType::kNone ? 1 : options.max_reweighting_rounds;
   bool converged = false;
   for (int round = 0; round < rounds && !converged; ++round) {
+    bool weights_changed = round == 0;
     for (size_t i = 0; i < s.size(); ++i) {
       double rho[3] = {s[i], 1.0, 0.0};
       if (loss_of[i] != nullptr) loss_of[i]->Evaluate(s[i], rho);
-      sqrt_weights[i] = std::sqrt(std::max(rho[1], 0.0));
+      const double w = std::sqrt(std::max(rho[1], 0.0));
+      weights_changed |= w != sqrt_weights[i];
+      sqrt_weights[i] = w;
+    }
+    // The same weights as the round that produced this pose: it is the fixed point already (e.g.
+    // Huber with every residual inside its quadratic zone).
+    if (!weights_changed) {
+      converged = true;
+      break;
     }
     StackedPoseFunction function(problem, sqrt_weights);
     ceres::TinySolver<StackedPoseFunction> solver;
@@ -422,8 +408,9 @@ ResectionResult ResectImage(const ResectionOptions& options, const ResectionInpu
     eo = *input.approximate;
     summary.used_approximate = true;
     if (!eo.parameters.allFinite()) return fail("the approximate pose is not finite");
+    // (The Taylor solver checks this itself, as the seed's equations are evaluated.)
     const SeedProjector projector(eo.data(), input.focal_length_um);
-    for (size_t i = 0; i < n; ++i) {
+    for (size_t i = 0; i < n && options.solver == PoseSolver::kCeres; ++i) {
       double xy[2];
       if (!projector.Project(input.points_in_ground[i].data(), xy, nullptr, nullptr, nullptr)) {
         const std::string name = i < input.point_ids.size() ? "'" + input.point_ids[i] + "'"
@@ -482,22 +469,25 @@ ResectionResult ResectImage(const ResectionOptions& options, const ResectionInpu
   eo.parameters[4] = WrapAngle(eo.parameters[4]);
   eo.parameters[5] = WrapAngle(eo.parameters[5]);
 
-  // 3. Residuals, inlier flags and statistics over the inliers.
-  const Evaluation evaluation = EvaluateResiduals(input, eo);
-  result.residuals_px = evaluation.residuals_px;
+  // 3. Residuals, inlier flags and statistics over the inliers, in one pass.
+  result.residuals_px.resize(n);
   result.inliers.assign(n, 0);
   Eigen::Matrix<double, 6, 6> normal = Eigen::Matrix<double, 6, 6>::Zero();
   double weighted_ssq = 0.0;
   int num_inliers = 0;
   const SeedProjector projector(eo.data(), input.focal_length_um);
   for (size_t i = 0; i < n; ++i) {
-    const Eigen::Vector2d& r = evaluation.residuals_px[i];
-    if (!r.allFinite() || r.norm() > options.ransac_threshold_px) continue;
-    result.inliers[i] = 1;
-    ++num_inliers;
     double xy[2];
     Eigen::Matrix<double, 2, 6, Eigen::RowMajor> J;
-    projector.Project(input.points_in_ground[i].data(), xy, J.data(), nullptr, nullptr);
+    Eigen::Vector2d& r = result.residuals_px[i];
+    if (!projector.Project(input.points_in_ground[i].data(), xy, J.data(), nullptr, nullptr)) {
+      r.setConstant(std::numeric_limits<double>::infinity());
+      continue;
+    }
+    r = (input.image_plane_um[i] - Eigen::Vector2d(xy[0], xy[1])) / input.pixel_size_um;
+    if (r.norm() > options.ransac_threshold_px) continue;
+    result.inliers[i] = 1;
+    ++num_inliers;
     const double inverse_sigma_um = 1.0 / (input.sigma_px[i] * input.pixel_size_um);
     J *= inverse_sigma_um;
     normal += J.transpose() * J;

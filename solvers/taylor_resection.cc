@@ -41,16 +41,7 @@ inline void ComputeTrig(const double* eo, PoseTrig* trig) {
   const double so = std::sin(eo[3]), co = std::cos(eo[3]);
   const double sp = std::sin(eo[4]), cp = std::cos(eo[4]);
   const double sk = std::sin(eo[5]), ck = std::cos(eo[5]);
-  double* R = trig->R;
-  R[0] = cp * ck;
-  R[1] = -cp * sk;
-  R[2] = sp;
-  R[3] = co * sk + so * sp * ck;
-  R[4] = co * ck - so * sp * sk;
-  R[5] = -so * cp;
-  R[6] = so * sk - co * sp * ck;
-  R[7] = so * ck + co * sp * sk;
-  R[8] = co * cp;
+  SeedRotationFromSinCos(so, co, sp, cp, sk, ck, trig->R);
   trig->sin_omega = so;
   trig->cos_omega = co;
 }

@@ -1,8 +1,8 @@
 // photopose compare: the pose solvers side by side, on Monte-Carlo scenes or on a dataset.
 //
 // Every flag of this command is registered as compare_<name> so that it can never collide with a
-// flag of another subcommand linked into the same executable; the user writes --<name>, which is
-// renamed before parsing, and --help prints the user's names.
+// flag of another subcommand linked into the same executable (--cameras, --seed, --noise_px ... are
+// taken); the user writes --<name>, and the parsing, the messages and --help use the user's names.
 #include <gflags/gflags.h>
 
 #include <cmath>
@@ -27,6 +27,7 @@ DEFINE_string(compare_solvers, "taylor_as_printed,taylor,ceres_analytic,ceres_au
               "Comma-separated solvers to compare: taylor_as_printed (the seed's Taylor linearisation with the partial derivatives as printed), taylor (corrected partials), ceres_analytic and ceres_autodiff (Ceres Levenberg-Marquardt with the closed-form or the automatic Jacobian), or all.");
 DEFINE_string(compare_losses, "none,huber",
               "Comma-separated robust losses; every Ceres solver is run with each: none, huber, softl1, cauchy, arctan, tukey, or all. The Taylor solvers are always plain least squares.");
+DEFINE_string(compare_ceres_minimizer, "tiny_solver", "How the Ceres solvers minimise each image: tiny_solver (ceres::TinySolver, the robust loss by iterative reweighting; the library default) or problem (ceres::Problem and ceres::Solve).");
 DEFINE_double(compare_loss_scale, 2.0, "Scale of the robust losses in pixels: residuals beyond it are down-weighted.");
 DEFINE_double(compare_ransac_threshold, 6.0, "Inlier threshold in pixels for RANSAC and for the final inlier flags (the covariance and sigma0 use the observations within it).");
 DEFINE_int32(compare_max_iterations, 50, "Largest number of iterations of every solver.");
@@ -109,53 +110,79 @@ void PrintCompareHelp() {
   std::cout << "  --flagfile=F\n      Reads further flags, one per line, from the file F.\n";
 }
 
-// Expands --flagfile=F (one flag per line, '#' comments) and renames --name to --compare_name.
-// Returns false after printing one line for an unknown flag or an unreadable flag file.
-bool RewriteArguments(int argc, char** argv, std::vector<std::string>* out, int depth = 0) {
-  for (int i = 0; i < argc; ++i) {
-    const std::string arg = argv[i];
-    if (arg == "--help" || arg == "-h" || arg == "--helpfull" || arg == "-help" ||
-        arg.rfind("-", 0) != 0) {
-      out->push_back(arg);  // ParseFlags handles help and reports stray arguments
+bool IsHelp(const std::string& arg) {
+  return arg == "--help" || arg == "-h" || arg == "--helpfull" || arg == "-help";
+}
+
+// Parses --name=value, --name value, --bool_flag, --nobool_flag and --flagfile=F (one flag per line,
+// "--name value" allowed, '#' comments) into the compare_<name> flags, like ParseFlags does for the
+// other subcommands but with the user's flag names in every message. Prints one line and returns
+// false on an unknown flag, a bad value, a stray argument or an unreadable flag file.
+bool ParseCompareFlags(const std::vector<std::string>& args, bool* help, int depth = 0) {
+  for (size_t i = 0; i < args.size(); ++i) {
+    const std::string& arg = args[i];
+    if (IsHelp(arg)) {
+      *help = true;
       continue;
+    }
+    if (arg.size() < 2 || arg[0] != '-') {
+      BadInput(kCommand, "unexpected argument '" + arg + "' (flags are --name=value)");
+      return false;
     }
     const std::string body = arg.substr(arg.rfind("--", 0) == 0 ? 2 : 1);
     const size_t equals = body.find('=');
-    const std::string name = body.substr(0, equals);
-    const std::string rest = equals == std::string::npos ? "" : body.substr(equals);
+    std::string name = body.substr(0, equals);
+    const bool has_value = equals != std::string::npos;
+    std::string value = has_value ? body.substr(equals + 1) : "";
     if (name == "flagfile") {
-      std::string path = rest.empty() ? "" : rest.substr(1);
-      if (rest.empty() && i + 1 < argc) path = argv[++i];
-      std::ifstream file(path);
-      if (path.empty() || !file || depth > 8) {
-        BadInput(kCommand, "cannot read the flag file '" + path + "'");
+      if (!has_value && i + 1 < args.size()) value = args[++i];
+      std::ifstream file(value);
+      if (value.empty() || !file || depth > 8) {
+        BadInput(kCommand, "cannot read the flag file '" + value + "'");
         return false;
       }
       std::vector<std::string> lines;
       for (std::string line; std::getline(file, line);) {
         const size_t begin = line.find_first_not_of(" \t\r");
         if (begin == std::string::npos || line[begin] == '#') continue;
-        const size_t end = line.find_last_not_of(" \t\r");
-        lines.push_back(line.substr(begin, end - begin + 1));
+        line = line.substr(begin, line.find_last_not_of(" \t\r") - begin + 1);
+        const size_t space = line.find_first_of(" \t");
+        if (space != std::string::npos && line.find('=') > space) {
+          // "--name value"
+          lines.push_back(line.substr(0, space));
+          lines.push_back(line.substr(line.find_first_not_of(" \t", space)));
+        } else {
+          lines.push_back(line);
+        }
       }
-      std::vector<char*> pointers;
-      for (auto& line : lines) pointers.push_back(line.data());
-      if (!RewriteArguments(static_cast<int>(pointers.size()), pointers.data(), out, depth + 1))
-        return false;
+      if (!ParseCompareFlags(lines, help, depth + 1)) return false;
       continue;
     }
     gflags::CommandLineFlagInfo info;
-    if (IsOurFlag(name, &info)) {
-      out->push_back("--" + std::string(kPrefix) + name + rest);
-    } else if (name.rfind("no", 0) == 0 && rest.empty() && IsOurFlag(name.substr(2), &info) &&
-               info.type == "bool") {
-      out->push_back("--" + std::string(kPrefix) + name.substr(2) + "=false");
-    } else {
-      BadInput(kCommand, "unknown flag --" + name + " (see photopose compare --help)");
+    if (!IsOurFlag(name, &info)) {
+      if (name.rfind("no", 0) == 0 && !has_value && IsOurFlag(name.substr(2), &info) &&
+          info.type == "bool") {
+        name = name.substr(2);
+        value = "false";
+      } else {
+        BadInput(kCommand, "unknown flag --" + name + " (see photopose compare --help)");
+        return false;
+      }
+    } else if (!has_value) {
+      if (info.type == "bool") {
+        value = "true";
+      } else if (i + 1 < args.size()) {
+        value = args[++i];
+      } else {
+        BadInput(kCommand, "flag --" + name + " needs a value");
+        return false;
+      }
+    }
+    if (gflags::SetCommandLineOption((kPrefix + name).c_str(), value.c_str()).empty()) {
+      BadInput(kCommand, "invalid value '" + value + "' for --" + name + " (" + info.type +
+                             " expected)");
       return false;
     }
-    // A value in the next argument ("--trials 20") stays as it is.
-    if (rest.empty() && info.type != "bool" && i + 1 < argc) out->push_back(argv[++i]);
   }
   return true;
 }
@@ -192,7 +219,7 @@ std::string QuoteForShell(const std::string& arg) {
 }
 
 Status WriteOutputs(const std::string& csv, const std::string& html,
-                    const std::vector<TextTable>& tables) {
+                    const std::vector<TextTable>& tables, const std::vector<std::string>& notes) {
   if (!FLAGS_compare_csv.empty()) {
     const Status status = WriteFileAtomically(FLAGS_compare_csv, csv);
     if (!status.ok()) return status;
@@ -204,6 +231,7 @@ Status WriteOutputs(const std::string& csv, const std::string& html,
   if (!FLAGS_compare_markdown.empty()) {
     std::string markdown;
     for (const TextTable& table : tables) markdown += RenderMarkdown(table) + "\n";
+    for (const std::string& note : notes) markdown += "- " + note + "\n";
     const Status status = WriteFileAtomically(FLAGS_compare_markdown, markdown);
     if (!status.ok()) return status;
   }
@@ -263,11 +291,13 @@ int RunMonteCarloMode(const std::vector<SolverVariant>& solvers, const Resection
   if (!status.ok()) return BadInput(kCommand, status.message());
   const std::vector<TextTable> tables = MonteCarloTables(options, result);
   for (const TextTable& table : tables) std::cout << RenderText(table) << "\n";
+  const std::vector<std::string> notes = MonteCarloNotes(options);
+  for (const std::string& note : notes) std::cout << note << "\n";
   std::cout << "compare: " << result.settings.size() << " settings x " << options.trials
             << " trials x " << result.solver_names.size() << " solvers in " << result.wall_seconds
             << " s\n";
   const Status written = WriteOutputs(MonteCarloCsv(result),
-                                      MonteCarloHtml(options, result, command_line), tables);
+                                      MonteCarloHtml(options, result, command_line), tables, notes);
   if (!written.ok()) return BadInput(kCommand, written.message());
   return kExitSuccess;
 }
@@ -306,7 +336,8 @@ int RunDatasetMode(const std::vector<SolverVariant>& solvers, const ResectionOpt
   if (!status.ok()) return BadInput(kCommand, status.message());
   const std::vector<TextTable> tables = DatasetTables(result);
   for (const TextTable& table : tables) std::cout << RenderText(table) << "\n";
-  const Status written = WriteOutputs(DatasetCsv(result), DatasetHtml(result, command_line), tables);
+  const Status written =
+      WriteOutputs(DatasetCsv(result), DatasetHtml(result, command_line), tables, {});
   if (!written.ok()) return BadInput(kCommand, written.message());
   return kExitSuccess;
 }
@@ -314,12 +345,8 @@ int RunDatasetMode(const std::vector<SolverVariant>& solvers, const ResectionOpt
 }  // namespace
 
 int RunCompare(int argc, char** argv) {
-  std::vector<std::string> rewritten;
-  if (!RewriteArguments(argc, argv, &rewritten)) return kExitBadInput;
-  std::vector<char*> args;
-  for (auto& arg : rewritten) args.push_back(arg.data());
   bool help = false;
-  if (!ParseFlags(static_cast<int>(args.size()), args.data(), kCommand, &help)) return kExitBadInput;
+  if (!ParseCompareFlags(std::vector<std::string>(argv, argv + argc), &help)) return kExitBadInput;
   if (help) {
     PrintCompareHelp();
     return kExitSuccess;
@@ -343,6 +370,11 @@ int RunCompare(int argc, char** argv) {
   const Status parsed = ParseSolverVariants(FLAGS_compare_solvers, FLAGS_compare_losses, &solvers);
   if (!parsed.ok()) return BadInput(kCommand, "--solvers/--losses: " + parsed.message());
   ResectionOptions resection;
+  const auto minimizer = ParseCeresMinimizer(FLAGS_compare_ceres_minimizer);
+  if (!minimizer)
+    return BadInput(kCommand, "--ceres_minimizer must be tiny_solver or problem, not '" +
+                                  FLAGS_compare_ceres_minimizer + "'");
+  resection.minimizer = *minimizer;
   resection.loss_scale_px = FLAGS_compare_loss_scale;
   resection.ransac_threshold_px = FLAGS_compare_ransac_threshold;
   resection.max_iterations = FLAGS_compare_max_iterations;

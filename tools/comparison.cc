@@ -3,6 +3,7 @@
 #include <Eigen/Dense>
 #include <algorithm>
 #include <atomic>
+#include <cctype>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
@@ -204,21 +205,52 @@ Status RunTrial(const MonteCarloOptions& options, const SweepSetting& setting, i
   return Status::Ok();
 }
 
+// A failure message with the particulars (numbers, quoted names) masked, to count kinds.
+std::string FailureKind(const std::string& message) {
+  std::string kind;
+  bool in_quote = false;
+  for (size_t k = 0; k < message.size(); ++k) {
+    const char c = message[k];
+    if (c == '\'') {
+      if (!in_quote) kind += "'...'";
+      in_quote = !in_quote;
+      continue;
+    }
+    if (in_quote) continue;
+    if (std::isdigit(static_cast<unsigned char>(c))) {
+      while (k + 1 < message.size() &&
+             (std::isdigit(static_cast<unsigned char>(message[k + 1])) || message[k + 1] == '.' ||
+              message[k + 1] == 'e' || message[k + 1] == '-'))
+        ++k;
+      kind += '#';
+      continue;
+    }
+    kind += c;
+  }
+  return kind.empty() ? "no message" : kind;
+}
+
 SolverStatistics Aggregate(const std::string& name, const std::vector<const SolveOutcome*>& samples) {
   SolverStatistics stats;
   stats.solver = name;
   stats.samples = static_cast<int>(samples.size());
   std::vector<double> position, rotation, iterations, thresholds, seconds, refinement, nees,
-      nees_apriori, expected;
+      nees_apriori, expected, all_seconds, all_refinement;
   double check_ssq = 0.0, reprojection_ssq = 0.0;
   int check_count = 0, reprojection_count = 0;
+  std::map<std::string, int> failures;
   for (const SolveOutcome* o : samples) {
-    seconds.push_back(o->total_seconds);
-    refinement.push_back(o->refinement_seconds);
+    all_seconds.push_back(o->total_seconds);
+    all_refinement.push_back(o->refinement_seconds);
     if (std::isfinite(o->success_threshold_m)) thresholds.push_back(o->success_threshold_m);
-    if (!o->solved) continue;
+    if (!o->solved) {
+      ++failures[FailureKind(o->message)];
+      continue;
+    }
     ++stats.solved;
     stats.successes += o->success;
+    seconds.push_back(o->total_seconds);
+    refinement.push_back(o->refinement_seconds);
     position.push_back(o->position_error_m);
     rotation.push_back(o->rotation_error_arcsec);
     iterations.push_back(o->iterations);
@@ -234,7 +266,7 @@ SolverStatistics Aggregate(const std::string& name, const std::vector<const Solv
       nees.push_back(o->nees);
       nees_apriori.push_back(o->nees_apriori);
       const double r = o->degrees_of_freedom;
-      expected.push_back(r > 2.0 ? 6.0 * r / (r - 2.0) : kNaN);
+      if (r > 2.0) expected.push_back(6.0 * r / (r - 2.0));
     }
   }
   stats.success_rate = stats.samples > 0 ? static_cast<double>(stats.successes) / stats.samples : kNaN;
@@ -245,8 +277,8 @@ SolverStatistics Aggregate(const std::string& name, const std::vector<const Solv
       reprojection_count > 0 ? std::sqrt(reprojection_ssq / reprojection_count) : kNaN;
   stats.mean_iterations = Mean(iterations);
   stats.mean_success_threshold_m = Mean(thresholds);
-  stats.median_seconds = Median(seconds);
-  stats.median_refinement_seconds = Median(refinement);
+  stats.median_seconds = Median(seconds.empty() ? all_seconds : seconds);
+  stats.median_refinement_seconds = Median(refinement.empty() ? all_refinement : refinement);
   stats.nees_count = static_cast<int>(nees.size());
   stats.mean_nees = Mean(nees);
   stats.mean_nees_apriori = Mean(nees_apriori);
@@ -257,6 +289,9 @@ SolverStatistics Aggregate(const std::string& name, const std::vector<const Solv
   } else {
     stats.nees_interval_95 = stats.nees_interval_99 = NeesInterval{kNaN, kNaN};
   }
+  stats.failure_reasons.assign(failures.begin(), failures.end());
+  std::stable_sort(stats.failure_reasons.begin(), stats.failure_reasons.end(),
+                   [](const auto& a, const auto& b) { return a.second > b.second; });
   return stats;
 }
 
@@ -285,11 +320,11 @@ std::string Percent(double fraction) { return Format("%.0f%%", 100.0 * fraction)
 std::string Full(double value) {
   if (std::isnan(value)) return "";
   char buffer[64];
-  std::snprintf(buffer, sizeof(buffer), "%.10g", value);
+  std::snprintf(buffer, sizeof(buffer), "%.12g", value);
   return buffer;
 }
 
-std::string Milliseconds(double seconds) { return Sig(seconds * 1e3); }
+std::string Microseconds(double seconds) { return Sig(seconds * 1e6); }
 
 std::string SettingTitle(const SweepSetting& s, int trials, int images) {
   char buffer[256];
@@ -428,10 +463,27 @@ double RotationErrorArcSeconds(const Eigen::Vector3d& angles_a_rad,
 
 double NormalizedEstimationErrorSquared(const ExteriorOrientation& estimate,
                                         const ExteriorOrientation& truth, const Matrix6d& covariance) {
+  if (!covariance.allFinite() || !estimate.parameters.allFinite()) return kNaN;
+  // The seed angles (omega, phi, kappa) and (omega + pi, pi - phi, kappa + pi) are the same rotation;
+  // a solver may converge to either. The error is taken in the one closer to the truth, with the
+  // covariance carried over (d phi' / d phi = -1).
   Vector6d error = estimate.parameters - truth.parameters;
-  for (int k = 3; k < 6; ++k) error[k] = WrapAngle(error[k]);
-  if (!covariance.allFinite() || !error.allFinite()) return kNaN;
-  const Eigen::LDLT<Matrix6d> ldlt(covariance);
+  Vector6d alternate_error = error;
+  alternate_error[3] += kPi;
+  alternate_error[4] = kPi - estimate.parameters[4] - truth.parameters[4];
+  alternate_error[5] += kPi;
+  for (int k = 3; k < 6; ++k) {
+    error[k] = WrapAngle(error[k]);
+    alternate_error[k] = WrapAngle(alternate_error[k]);
+  }
+  Matrix6d C = covariance;
+  if (alternate_error.tail<3>().norm() < error.tail<3>().norm()) {
+    error = alternate_error;
+    Vector6d flip = Vector6d::Ones();
+    flip[4] = -1.0;
+    C = flip.asDiagonal() * covariance * flip.asDiagonal();
+  }
+  const Eigen::LDLT<Matrix6d> ldlt(C);
   if (ldlt.info() != Eigen::Success || !(ldlt.vectorD().minCoeff() > 0.0)) return kNaN;
   return error.dot(ldlt.solve(error));
 }
@@ -631,7 +683,8 @@ Status MakeSceneJob(const SyntheticScene& scene, SceneJob* scene_job) {
     }
     const size_t index = it->second;
     if (point->second->role == PointRole::kCheck) {
-      job.input_check_marks[index].push_back(m);
+      // A check mark with a simulated gross error would measure the blunder, not the pose.
+      if (!scene.mark_is_outlier[m]) job.input_check_marks[index].push_back(m);
       continue;
     }
     Eigen::Vector2d image_plane;
@@ -742,7 +795,8 @@ Status RunDatasetComparison(const DatasetComparisonOptions& options,
   }
   result->rotation = options.job.rotation;
   for (const SolverVariant& v : options.solvers) result->solver_names.push_back(v.Name());
-  result->reference_solver = result->solver_names.front();
+  const size_t reference_index = TimeReference(result->solver_names);
+  result->reference_solver = result->solver_names[reference_index];
 
   // ResectImages gives image i the RANSAC seed seed + constant * (i + 1) whatever the solver, so
   // every solver starts from the same initial values.
@@ -751,12 +805,14 @@ Status RunDatasetComparison(const DatasetComparisonOptions& options,
     results.push_back(ResectImages(v.ApplyTo(options.job.resection), job.inputs, options.num_threads));
 
   const size_t num_solvers = options.solvers.size();
-  std::vector<std::vector<double>> sigma0(num_solvers), seconds(num_solvers), iterations(num_solvers),
+  std::vector<int> check_beyond(num_solvers, 0);
+  std::vector<std::vector<double>> sigma0(num_solvers), seconds(num_solvers),
+      refinement(num_solvers), iterations(num_solvers),
       difference_position(num_solvers), difference_rotation(num_solvers),
       reference_position(num_solvers), reference_rotation(num_solvers);
   std::vector<std::vector<Eigen::Vector2d>> residuals(num_solvers), checks(num_solvers);
   for (size_t i = 0; i < job.inputs.size(); ++i) {
-    const ResectionResult& first = results[0][i];
+    const ResectionResult& first = results[reference_index][i];
     const auto ref = reference.find(job.inputs[i].raster);
     for (size_t s = 0; s < num_solvers; ++s) {
       const ResectionResult& r = results[s][i];
@@ -767,8 +823,10 @@ Status RunDatasetComparison(const DatasetComparisonOptions& options,
       solve.message = r.summary.message;
       solve.iterations = r.summary.iterations;
       solve.seconds = r.summary.total_seconds;
+      solve.refinement_seconds = r.summary.refinement_seconds;
       solve.num_observations = static_cast<int>(job.inputs[i].image_plane_um.size());
       seconds[s].push_back(r.summary.total_seconds);
+      refinement[s].push_back(r.summary.refinement_seconds);
       if (r.success) {
         solve.eo = r.eo;
         solve.standard_deviations = r.standard_deviations;
@@ -782,13 +840,21 @@ Status RunDatasetComparison(const DatasetComparisonOptions& options,
         }
         solve.rms_px = RmsNorm(inlier_residuals);
         residuals[s].insert(residuals[s].end(), inlier_residuals.begin(), inlier_residuals.end());
-        const std::vector<Eigen::Vector2d> check = CheckPointResidualsPx(job, i, r.eo);
+        std::vector<Eigen::Vector2d> check;
+        for (const Eigen::Vector2d& c : CheckPointResidualsPx(job, i, r.eo)) {
+          if (c.norm() <= options.job.resection.ransac_threshold_px) {
+            check.push_back(c);
+          } else {
+            ++solve.num_check_beyond;
+          }
+        }
         solve.check_rmse_px = RmsNorm(check);
         solve.num_check = static_cast<int>(check.size());
         checks[s].insert(checks[s].end(), check.begin(), check.end());
+        check_beyond[s] += solve.num_check_beyond;
         sigma0[s].push_back(r.sigma0);
         iterations[s].push_back(r.summary.iterations);
-        if (s > 0 && first.success) {
+        if (s != reference_index && first.success) {
           solve.has_difference = true;
           solve.difference_position_m = (r.eo.center_in_ground() - first.eo.center_in_ground()).norm();
           solve.difference_rotation_arcsec =
@@ -816,7 +882,9 @@ Status RunDatasetComparison(const DatasetComparisonOptions& options,
     summary.rms_sigma0 = Rms(sigma0[s]);
     summary.rms_px = RmsNorm(residuals[s]);
     summary.check_rmse_px = RmsNorm(checks[s]);
+    summary.check_beyond = check_beyond[s];
     summary.median_seconds = Median(seconds[s]);
+    summary.median_refinement_seconds = Median(refinement[s]);
     summary.mean_iterations = Mean(iterations[s]);
     summary.compared = static_cast<int>(difference_position[s].size());
     summary.difference_position_m = Rms(difference_position[s]);
@@ -835,21 +903,24 @@ std::vector<std::string> MonteCarloNotes(const MonteCarloOptions& options) {
   char success[256];
   std::snprintf(success, sizeof(success),
                 "success: a pose was returned and |X0 - X0_true| <= %g design sigmas, sigma = "
-                "sqrt(trace C_pos), C = (J^T P J)^-1 at the true pose (thr_m: its mean, metres).",
+                "sqrt(trace C_pos), C = (J^T P J)^-1 at the true pose; its mean (m) is in each table title.",
                 options.success_sigmas);
   return {
       "solved: a pose was returned; success as below. pos/rot/check/reproj RMSE are over the solved "
       "samples (rotation: angle of R_true^T R_est; check and reproj: RMS of the 2-D residual norm, "
       "reproj over uncontaminated control marks).",
       success,
-      "t_ms: median wall time of one ResectImage call (statistics included); refine_ms: its "
-      "refinement part; t/ref: t_ms over the reference solver's (taylor when compared).",
-      "nees: mean e^T C^-1 e, e = pose error (X0 m, seed angles rad), C = the solver's covariance "
-      "sigma0^2 (J^T P J)^-1; nees_ap: the same with sigma0 = 1. Honest: nees_ap ~ 6 (chi-square "
-      "6), nees ~ E = 6 r/(r-2) (sigma0 from r = 2n - 6 redundant observations).",
+      "t_us: median wall time of one ResectImage call (statistics included) over the solved "
+      "samples, microseconds; refine_us: its refinement part; t/ref: t_us over the reference "
+      "solver's (taylor when compared).",
+      "nees: mean of e^T C^-1 e over the solved samples, e = pose error (X0 in m, seed angles in "
+      "rad, wrapped), C = the solver's covariance sigma0^2 (J^T P J)^-1; its expectation with "
+      "sigma0 estimated from r = 2n - 6 redundant observations is E[nees] = 6 r/(r-2). nees_ap: "
+      "the same with sigma0 = 1, chi-square(6) when the covariance is honest.",
       "99% int: interval of the mean of N chi-square(6) variables, [q(0.005), q(0.995)] of "
-      "chi-square(6N) / N, quantiles by numerical inversion of the regularized gamma function; '!' "
-      "marks a mean outside it. Not computed for noise 0.",
+      "chi-square(6N) / N, quantiles by numerical inversion of the regularized gamma function. "
+      "cov: ok when nees_ap is inside it, HIGH (covariance too optimistic) or low. Not computed "
+      "for noise 0.",
       std::string("initial values: ") +
           (options.initial == InitialValues::kApproximateFrames
                ? "the scene's approximate frames (the same for every solver)"
@@ -868,16 +939,18 @@ std::vector<TextTable> MonteCarloTables(const MonteCarloOptions& options,
     double threshold = kNaN;
     if (!setting.solvers.empty()) threshold = setting.solvers.front().mean_success_threshold_m;
     table.title += ", success threshold " + Sig(threshold) + " m";
-    table.header = {"solver",      "solved",   "success",  "pos_rmse_m", "rot_rmse_as",
-                    "check_px",    "reproj_px", "iter",    "t_ms",       "refine_ms",
-                    "t/ref",       "nees",     "nees_ap",  "E[nees]",    "99% int"};
+    table.header = {"solver",    "solved",    "success", "pos_rmse_m", "rot_rmse_as", "check_px",
+                    "reproj_px", "iter",      "t_us",    "refine_us",  "t/ref",       "nees",
+                    "E[nees]",   "nees_ap",   "99% int", "cov"};
     const double reference_seconds = setting.solvers[reference].median_seconds;
     for (const SolverStatistics& s : setting.solvers) {
       const bool has_nees = s.nees_count > 0;
-      auto marked = [&](double mean) {
-        if (!std::isfinite(mean)) return std::string("-");
-        return Sig(mean) + (s.nees_interval_99.Contains(mean) ? "" : "!");
-      };
+      std::string verdict = "-";
+      if (has_nees && std::isfinite(s.mean_nees_apriori)) {
+        verdict = s.nees_interval_99.Contains(s.mean_nees_apriori)     ? "ok"
+                  : s.mean_nees_apriori > s.nees_interval_99.upper ? "HIGH"
+                                                                   : "low";
+      }
       table.rows.push_back({
           s.solver,
           Percent(static_cast<double>(s.solved) / std::max(1, s.samples)),
@@ -887,19 +960,28 @@ std::vector<TextTable> MonteCarloTables(const MonteCarloOptions& options,
           Sig(s.check_rmse_px),
           Sig(s.reprojection_rmse_px),
           Format("%.1f", s.mean_iterations),
-          Milliseconds(s.median_seconds),
-          Milliseconds(s.median_refinement_seconds),
+          Microseconds(s.median_seconds),
+          Microseconds(s.median_refinement_seconds),
           Format("%.2f", s.median_seconds / reference_seconds),
-          has_nees ? marked(s.mean_nees) : "-",
-          has_nees ? marked(s.mean_nees_apriori) : "-",
+          has_nees ? Sig(s.mean_nees) : "-",
           has_nees ? Sig(s.expected_nees) : "-",
+          has_nees ? Sig(s.mean_nees_apriori) : "-",
           has_nees ? "[" + Sig(s.nees_interval_99.lower) + ", " + Sig(s.nees_interval_99.upper) + "]"
                    : "-",
+          verdict,
       });
+    }
+    for (const SolverStatistics& s : setting.solvers) {
+      std::string reasons;
+      for (size_t k = 0; k < s.failure_reasons.size() && k < 2; ++k)
+        reasons += (k ? "; " : "") + std::to_string(s.failure_reasons[k].second) + " x " +
+                   s.failure_reasons[k].first;
+      if (s.failure_reasons.size() > 2) reasons += "; ...";
+      if (!reasons.empty()) table.notes.push_back("not solved, " + s.solver + ": " + reasons);
     }
     tables.push_back(table);
   }
-  if (!tables.empty()) tables.back().notes = MonteCarloNotes(options);
+
   return tables;
 }
 
@@ -908,7 +990,7 @@ std::string MonteCarloCsv(const MonteCarloResult& result) {
   csv << "scenario,axis,noise_px,outlier_fraction,control_points,initial_position_error_m,"
          "initial_angle_error_deg,images_per_trial,solver,samples,solved,successes,success_rate,"
          "success_threshold_m,position_rmse_m,rotation_rmse_arcsec,check_rmse_px,"
-         "reprojection_rmse_px,mean_iterations,median_time_ms,median_refinement_time_ms,"
+         "reprojection_rmse_px,mean_iterations,median_time_us,median_refinement_time_us,"
          "time_ratio,mean_nees,mean_nees_apriori,expected_nees,nees_count,nees95_lower,"
          "nees95_upper,nees99_lower,nees99_upper\n";
   const size_t reference = TimeReference(result.solver_names);
@@ -923,7 +1005,7 @@ std::string MonteCarloCsv(const MonteCarloResult& result) {
           << Full(s.mean_success_threshold_m) << "," << Full(s.position_rmse_m) << ","
           << Full(s.rotation_rmse_arcsec) << "," << Full(s.check_rmse_px) << ","
           << Full(s.reprojection_rmse_px) << "," << Full(s.mean_iterations) << ","
-          << Full(s.median_seconds * 1e3) << "," << Full(s.median_refinement_seconds * 1e3) << ","
+          << Full(s.median_seconds * 1e6) << "," << Full(s.median_refinement_seconds * 1e6) << ","
           << Full(s.median_seconds / setting.solvers[reference].median_seconds) << ","
           << Full(s.mean_nees) << "," << Full(s.mean_nees_apriori) << ","
           << Full(s.expected_nees) << "," << s.nees_count << ","
@@ -940,8 +1022,8 @@ std::vector<TextTable> DatasetTables(const DatasetComparisonResult& result) {
   const double reference_seconds = result.summaries[reference].median_seconds;
   TextTable summary;
   summary.title = "Solvers (differences to " + result.reference_solver + ")";
-  summary.header = {"solver",   "solved", "sigma0",  "rms_px",  "check_px", "iter",
-                    "t_ms",     "t/ref",  "d_pos_m", "d_rot_as"};
+  summary.header = {"solver",    "solved", "sigma0",    "rms_px",  "check_px", "chk_out", "iter",
+                    "t_us",      "t/ref",  "refine_us", "d_pos_m", "d_rot_as"};
   if (result.has_reference) {
     summary.header.push_back("ref_pos_m");
     summary.header.push_back("ref_rot_as");
@@ -953,9 +1035,11 @@ std::vector<TextTable> DatasetTables(const DatasetComparisonResult& result) {
         Sig(s.rms_sigma0),
         Sig(s.rms_px),
         Sig(s.check_rmse_px),
+        std::to_string(s.check_beyond),
         Format("%.1f", s.mean_iterations),
-        Milliseconds(s.median_seconds),
+        Microseconds(s.median_seconds),
         Format("%.2f", s.median_seconds / reference_seconds),
+        Microseconds(s.median_refinement_seconds),
         s.compared > 0 ? Sig(s.difference_position_m) : "-",
         s.compared > 0 ? Sig(s.difference_rotation_arcsec) : "-"};
     if (result.has_reference) {
@@ -966,7 +1050,9 @@ std::vector<TextTable> DatasetTables(const DatasetComparisonResult& result) {
   }
   summary.notes = {
       "sigma0: RMS over images of the a-posteriori sigma0; rms_px: RMS of the inlier residual norms "
-      "(pixels); check_px: RMS of the check-point residual norms; t_ms: median time per image.",
+      "(pixels); check_px: RMS of the check-point residual norms within the inlier threshold, "
+      "chk_out: check marks beyond it; t_us: median time per image (microseconds, RANSAC "
+      "included when it ran), refine_us: its refinement part.",
       "d_pos_m, d_rot_as: RMS over images of |X0 - X0_" + result.reference_solver +
           "| (m) and of the rotation angle between the two (arc-seconds)." +
           (result.has_reference ? " ref_pos_m, ref_rot_as: the same to the reference frames." : "")};
@@ -975,9 +1061,9 @@ std::vector<TextTable> DatasetTables(const DatasetComparisonResult& result) {
   TextTable images;
   images.title = std::string("Per image (angles in degrees, ") +
                  RotationConventionName(result.rotation) + " convention)";
-  images.header = {"image", "solver", "status", "X_m", "Y_m", "Z_m", "omega", "phi", "kappa",
-                   "sigma0", "inliers", "rms_px", "check_px", "iter", "t_ms", "d_pos_m",
-                   "d_rot_as"};
+  images.header = {"image",    "solver",  "status", "X_m",  "Y_m",     "Z_m",
+                   "omega",    "phi",     "kappa",  "sigma0", "inliers", "rms_px",
+                   "check_px", "chk_out", "iter",   "t_us", "d_pos_m", "d_rot_as"};
   if (result.has_reference) {
     images.header.push_back("ref_pos_m");
     images.header.push_back("ref_rot_as");
@@ -994,11 +1080,12 @@ std::vector<TextTable> DatasetTables(const DatasetComparisonResult& result) {
       row.push_back(std::to_string(s.num_inliers) + "/" + std::to_string(s.num_observations));
       row.push_back(Sig(s.rms_px));
       row.push_back(Sig(s.check_rmse_px));
+      row.push_back(std::to_string(s.num_check_beyond));
     } else {
-      for (int k = 0; k < 10; ++k) row.push_back("-");
+      for (int k = 0; k < 11; ++k) row.push_back("-");
     }
     row.push_back(std::to_string(s.iterations));
-    row.push_back(Milliseconds(s.seconds));
+    row.push_back(Microseconds(s.seconds));
     row.push_back(s.has_difference ? Sig(s.difference_position_m) : "-");
     row.push_back(s.has_difference ? Sig(s.difference_rotation_arcsec) : "-");
     if (result.has_reference) {
@@ -1018,7 +1105,8 @@ std::string DatasetCsv(const DatasetComparisonResult& result) {
   std::ostringstream csv;
   csv << "Raster,Solver,Success,Message,X,Y,Z,Omega,Phi,Kappa,Convention,SigmaX,SigmaY,SigmaZ,"
          "SigmaOmegaSeed,SigmaPhiSeed,SigmaKappaSeed,Sigma0,NumObservations,NumInliers,RmsPx,"
-         "MaxPx,CheckRmsePx,NumCheck,Iterations,TimeMs,DiffPositionM,DiffRotationArcsec,"
+         "MaxPx,CheckRmsePx,NumCheck,NumCheckBeyond,Iterations,TimeUs,RefinementTimeUs,"
+         "DiffPositionM,DiffRotationArcsec,"
          "RefPositionM,RefRotationArcsec\n";
   for (const DatasetSolve& s : result.solves) {
     csv << CsvField(s.raster) << "," << CsvField(result.solver_names[s.solver]) << ","
@@ -1033,11 +1121,12 @@ std::string DatasetCsv(const DatasetComparisonResult& result) {
       for (int k = 3; k < 6; ++k) csv << Full(RadiansToDegrees(s.standard_deviations[k])) << ",";
       csv << Full(s.sigma0) << "," << s.num_observations << "," << s.num_inliers << ","
           << Full(s.rms_px) << "," << Full(s.max_px) << "," << Full(s.check_rmse_px) << ","
-          << s.num_check << ",";
+          << s.num_check << "," << s.num_check_beyond << ",";
     } else {
-      csv << ",,,,,,,,,,,,,," << s.num_observations << ",,,,,,";
+      csv << ",,,,,,,,,,,,,," << s.num_observations << ",,,,,,,";
     }
-    csv << s.iterations << "," << Full(s.seconds * 1e3) << ","
+    csv << s.iterations << "," << Full(s.seconds * 1e6) << "," << Full(s.refinement_seconds * 1e6)
+        << ","
         << (s.has_difference ? Full(s.difference_position_m) : "") << ","
         << (s.has_difference ? Full(s.difference_rotation_arcsec) : "") << ","
         << (s.has_reference ? Full(s.reference_position_m) : "") << ","

@@ -30,6 +30,7 @@
 #include <cstdint>
 #include <optional>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "core/status.h"
@@ -83,8 +84,10 @@ NeesInterval MeanNeesInterval(int count, double confidence);
 double RotationErrorArcSeconds(const Eigen::Vector3d& angles_a_rad,
                                const Eigen::Vector3d& angles_b_rad);
 
-// e^T C^-1 e for the 6-vector e = (estimate - truth) with the angles wrapped to (-pi, pi]. NaN when
-// C is not positive definite.
+// e^T C^-1 e for the 6-vector e = (estimate - truth) with the angles wrapped to (-pi, pi]. The seed
+// angles (omega + pi, pi - phi, kappa + pi) are the same rotation as (omega, phi, kappa): when the
+// estimate is nearer the truth in that form, e and C are taken in it. NaN when C is not positive
+// definite.
 double NormalizedEstimationErrorSquared(const ExteriorOrientation& estimate,
                                         const ExteriorOrientation& truth, const Matrix6d& covariance);
 
@@ -193,7 +196,8 @@ struct SolverStatistics {
   double reprojection_rmse_px = 0.0;
   double mean_iterations = 0.0;
   double mean_success_threshold_m = 0.0;
-  // Median wall time per solve over all samples (s): whole ResectImage call and refinement only.
+  // Median wall time per solve over the solved samples (over all when none was solved) (s): whole
+  // ResectImage call and refinement only.
   double median_seconds = 0.0;
   double median_refinement_seconds = 0.0;
   // Mean NEES over the solved samples with a finite value (NaN when there is none, e.g. noise 0),
@@ -203,9 +207,12 @@ struct SolverStatistics {
   int nees_count = 0;
   NeesInterval nees_interval_95;
   NeesInterval nees_interval_99;
-  // The expected mean NEES with sigma0 estimated, 6 r / (r - 2), r the mean redundancy (NaN for
-  // r <= 2).
+  // The expected mean NEES with sigma0 estimated: the mean of 6 r / (r - 2) over the samples, r
+  // the redundancy 2 n - 6 (samples with r <= 2 left out).
   double expected_nees = 0.0;
+  // Why samples were not solved: the solver's message with numbers and quoted names replaced by
+  // '#' and '...', most frequent first, with their counts.
+  std::vector<std::pair<std::string, int>> failure_reasons;
 };
 
 struct SettingResult {
@@ -269,12 +276,16 @@ struct DatasetSolve {
   int num_inliers = 0;
   double rms_px = 0.0;        // inlier control residuals (pixels)
   double max_px = 0.0;        // largest inlier residual (pixels)
-  double check_rmse_px = 0.0; // check points (pixels)
+  // Check points (pixels): RMS of the residual norms within the inlier threshold, how many, and how
+  // many lie beyond it (blunders of the check marks, or a wrong pose).
+  double check_rmse_px = 0.0;
   int num_check = 0;
+  int num_check_beyond = 0;
   int iterations = 0;
-  double seconds = 0.0;
-  // To the first solver of the list, when both solved this image (not for the first solver
-  // itself): |dX0| (m), rotation angle between the two (arc-seconds).
+  double seconds = 0.0;             // ResectImage wall time (s), RANSAC included when it ran
+  double refinement_seconds = 0.0;  // its refinement part (s)
+  // To the reference solver (reference_solver of the result), when both solved this image (not
+  // for the reference itself): |dX0| (m), rotation angle between the two (arc-seconds).
   bool has_difference = false;
   double difference_position_m = 0.0;
   double difference_rotation_arcsec = 0.0;
@@ -290,10 +301,12 @@ struct DatasetSolverSummary {
   int solved = 0;
   double rms_sigma0 = 0.0;     // RMS of sigma0 over solved images
   double rms_px = 0.0;         // RMS of the inlier residuals over all solved images (pixels)
-  double check_rmse_px = 0.0;  // over all check marks of solved images (pixels)
+  double check_rmse_px = 0.0;  // over the check marks within the inlier threshold (pixels)
+  int check_beyond = 0;        // check marks beyond it
   double median_seconds = 0.0;
+  double median_refinement_seconds = 0.0;
   double mean_iterations = 0.0;
-  // RMS over images of the differences to the first solver (m, arcsec); count of compared images.
+  // RMS over images of the differences to the reference solver (m, arcsec); compared images.
   int compared = 0;
   double difference_position_m = 0.0;
   double difference_rotation_arcsec = 0.0;
@@ -305,7 +318,8 @@ struct DatasetSolverSummary {
 
 struct DatasetComparisonResult {
   std::vector<std::string> solver_names;
-  std::string reference_solver;       // the first solver, the base of the differences
+  // The base of the differences and time ratios: "taylor" when compared, otherwise the first.
+  std::string reference_solver;
   bool has_reference = false;
   std::vector<DatasetSolve> solves;   // image-major: for each image, every solver in order
   std::vector<DatasetSolverSummary> summaries;
@@ -325,6 +339,8 @@ struct TextTable {
   std::vector<std::string> notes;  // lines printed under the table
 };
 
+// One table per setting; its notes say why samples were not solved. The definitions of the columns
+// are MonteCarloNotes.
 std::vector<TextTable> MonteCarloTables(const MonteCarloOptions& options,
                                         const MonteCarloResult& result);
 std::vector<TextTable> DatasetTables(const DatasetComparisonResult& result);
@@ -338,7 +354,7 @@ std::string MonteCarloCsv(const MonteCarloResult& result);
 // One row per (image, solver).
 std::string DatasetCsv(const DatasetComparisonResult& result);
 
-// Short description of the success and NEES definitions, printed under the tables.
+// The definitions of the Monte-Carlo columns (success, RMSEs, times, NEES), one line each.
 std::vector<std::string> MonteCarloNotes(const MonteCarloOptions& options);
 
 const char* SweepTypeName(SweepType type);

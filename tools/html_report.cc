@@ -61,8 +61,12 @@ struct Axis {
     std::vector<double> ticks;
     if (log) {
       const int step = std::max(1, static_cast<int>(std::ceil((hi - lo) / 8.0)));
-      for (int e = static_cast<int>(lo); e <= static_cast<int>(hi); e += step)
+      for (int e = static_cast<int>(lo); e <= static_cast<int>(hi); e += step) {
         ticks.push_back(std::pow(10.0, e));
+        // Few decades: 2 and 5 times each power of ten as well.
+        if (hi - lo <= 2.0 && e < static_cast<int>(hi))
+          for (double f : {2.0, 5.0}) ticks.push_back(f * std::pow(10.0, e));
+      }
       return ticks;
     }
     const double step = NiceStep(hi - lo, 5);
@@ -96,6 +100,31 @@ std::string Text(double x, double y, const std::string& text, const char* anchor
   out << "<text x=\"" << Number(x, "%.1f") << "\" y=\"" << Number(y, "%.1f")
       << "\" text-anchor=\"" << anchor << "\"" << extra << ">" << HtmlEscape(text) << "</text>";
   return out.str();
+}
+
+// An open <path> element drawing marker shape `index` (circle, square, triangle, diamond, cycled)
+// of half-size r at (x, y); the caller closes it (so a <title> can go inside).
+std::string Marker(size_t index, double x, double y, double r, const char* color) {
+  std::ostringstream d;
+  auto p = [](double v) { return Number(v, "%.1f"); };
+  switch (index % 4) {
+    case 0:  // circle, as two arcs
+      d << "M" << p(x - r) << "," << p(y) << "a" << p(r) << "," << p(r) << " 0 1,0 " << p(2 * r)
+        << ",0a" << p(r) << "," << p(r) << " 0 1,0 " << p(-2 * r) << ",0Z";
+      break;
+    case 1:  // square
+      d << "M" << p(x - r) << "," << p(y - r) << "h" << p(2 * r) << "v" << p(2 * r) << "h"
+        << p(-2 * r) << "Z";
+      break;
+    case 2:  // triangle
+      d << "M" << p(x) << "," << p(y - 1.2 * r) << "L" << p(x + 1.1 * r) << "," << p(y + r) << "L"
+        << p(x - 1.1 * r) << "," << p(y + r) << "Z";
+      break;
+    default:  // diamond
+      d << "M" << p(x) << "," << p(y - 1.3 * r) << "L" << p(x + 1.3 * r) << "," << p(y) << "L"
+        << p(x) << "," << p(y + 1.3 * r) << "L" << p(x - 1.3 * r) << "," << p(y) << "Z";
+  }
+  return "<path d=\"" + d.str() + "\" fill=\"" + color + "\" stroke=\"#ffffff\" stroke-width=\"0.5\">";
 }
 
 std::string SvgOpen(double width, double height, const std::string& title) {
@@ -234,14 +263,20 @@ std::string RenderLinePlotSvg(const LinePlot& plot) {
   }
   if (empty) svg << Text(kLeft + plot_w / 2, kTop + plot_h / 2, "no data");
   // Series, then the legend.
-  for (size_t s = 0; s < plot.series.size(); ++s) {
+  const size_t num_series = plot.series.size();
+  for (size_t s = 0; s < num_series; ++s) {
     const PlotSeries& series = plot.series[s];
     const char* color = kColors[s % kNumColors];
     const char* dash = (s / kNumColors) % 2 == 1 ? " stroke-dasharray=\"4 3\"" : "";
+    // Earlier series are drawn wider, so that series with equal values still show underneath.
+    const double line_width =
+        1.5 + 3.5 * static_cast<double>(num_series - 1 - s) / std::max<size_t>(1, num_series - 1);
+    const std::string stroke_width = Number(line_width, "%.2f");
     std::string points;
     auto flush = [&]() {
       if (!points.empty())
-        svg << "<polyline fill=\"none\" stroke=\"" << color << "\" stroke-width=\"2\"" << dash
+        svg << "<polyline fill=\"none\" stroke=\"" << color << "\" stroke-width=\"" << stroke_width
+            << "\"" << dash
             << " points=\"" << points << "\"/>";
       points.clear();
     };
@@ -255,15 +290,15 @@ std::string RenderLinePlotSvg(const LinePlot& plot) {
     flush();
     for (size_t k = 0; k < series.x.size() && k < series.y.size(); ++k) {
       if (!std::isfinite(series.x[k]) || !std::isfinite(series.y[k])) continue;
-      svg << "<circle cx=\"" << Number(px(series.x[k]), "%.1f") << "\" cy=\""
-          << Number(py(series.y[k]), "%.1f") << "\" r=\"3.5\" fill=\"" << color << "\"><title>"
+      svg << Marker(s, px(series.x[k]), py(series.y[k]), 1.0 + line_width, color) << "<title>"
           << HtmlEscape(series.label) << ": " << Number(series.x[k]) << ", "
-          << Number(series.y[k], "%.4g") << "</title></circle>";
+          << Number(series.y[k], "%.4g") << "</title></path>";
     }
     const double ly = kTop + 8 + 18.0 * s;
     const double lx = kWidth - kRight + 14;
     svg << "<line x1=\"" << lx << "\" x2=\"" << lx + 22 << "\" y1=\"" << ly << "\" y2=\"" << ly
         << "\" stroke=\"" << color << "\" stroke-width=\"2\"" << dash << "/>";
+    svg << Marker(s, lx + 11, ly, 3.5, color) << "</path>";
     svg << Text(lx + 28, ly + 4, series.label, "start");
   }
   svg << "</svg>";
@@ -394,6 +429,15 @@ std::string MonteCarloHtml(const MonteCarloOptions& options, const MonteCarloRes
           plot.reference_y = 6.0;
           plot.reference_label = "6 (honest)";
         }
+        // Logarithmic only when the values span more than a factor of 30.
+        double lo = std::numeric_limits<double>::infinity(), hi = 0.0;
+        for (size_t k : along)
+          for (const SolverStatistics& s : result.settings[k].solvers) {
+            const double v = metric.get(s);
+            if (std::isfinite(v) && v > 0.0) lo = std::min(lo, v), hi = std::max(hi, v);
+          }
+        if (plot.log_y && std::isfinite(lo) && hi < 30.0 * lo && lo > 0.0 && !(hi < 1e-3))
+          plot.log_y = false;
         for (size_t s = 0; s < result.solver_names.size(); ++s) {
           PlotSeries series;
           series.label = result.solver_names[s];
@@ -412,10 +456,10 @@ std::string MonteCarloHtml(const MonteCarloOptions& options, const MonteCarloRes
       BarPlot bars;
       bars.title = std::string(ScenarioName(scenario)) + ": median time per solve (" +
                    setting.setting.axis + " setting)";
-      bars.value_label = "milliseconds per image (ResectImage wall time)";
+      bars.value_label = "microseconds per image (ResectImage wall time)";
       for (const SolverStatistics& s : setting.solvers) {
         bars.labels.push_back(s.solver);
-        bars.values.push_back(s.median_seconds * 1e3);
+        bars.values.push_back(s.median_seconds * 1e6);
       }
       html << RenderBarPlotSvg(bars) << "\n";
       break;
@@ -423,9 +467,7 @@ std::string MonteCarloHtml(const MonteCarloOptions& options, const MonteCarloRes
     html << "</div>\n";
     for (size_t k = 0; k < result.settings.size(); ++k)
       if (result.settings[k].setting.scenario == scenario) {
-        TextTable table = tables[k];
-        table.notes.clear();
-        html << RenderHtmlTable(table);
+        html << RenderHtmlTable(tables[k]);
       }
   }
   html << "</body>\n</html>\n";
@@ -440,14 +482,14 @@ std::string DatasetHtml(const DatasetComparisonResult& result, const std::string
   html << "<div class=\"plots\">\n";
   BarPlot time;
   time.title = "median time per image";
-  time.value_label = "milliseconds (ResectImage wall time)";
+  time.value_label = "microseconds per image (ResectImage wall time)";
   BarPlot difference;
   difference.title = "RMS position difference to " +
                      (result.has_reference ? std::string("the reference") : result.reference_solver);
   difference.value_label = "metres";
   for (const DatasetSolverSummary& s : result.summaries) {
     time.labels.push_back(s.solver);
-    time.values.push_back(s.median_seconds * 1e3);
+    time.values.push_back(s.median_seconds * 1e6);
     difference.labels.push_back(s.solver);
     if (result.has_reference) {
       difference.values.push_back(s.referenced > 0 ? s.reference_position_m : kNaN);

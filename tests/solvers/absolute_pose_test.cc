@@ -32,7 +32,8 @@ constexpr double kSigmas = 5.0;
 // Fraction of correspondences whose inlier flag must equal the truth (the brief's 99 %). Outliers
 // are >= 20 px off, far beyond the threshold; only inliers beyond ~3.5 sigma can be misclassified.
 constexpr double kMinMaskAgreement = 0.99;
-// Inlier threshold for 0.5 px (3 um) noise: 4 sigma of a 2-D residual norm keeps 99.97 % of inliers.
+// Inlier threshold for 0.5 px (3 um) noise: 4 sigma of a 2-D residual norm keeps 99.97 % of
+// inliers.
 constexpr double kThresholdUm = 12.0;
 // Noise-free data: the solution is exact to rounding; 1e-9 (relative to the flying height for the
 // centre, rad for the angles) leaves orders of margin.
@@ -98,15 +99,16 @@ Correspondences SimpleScene(uint64_t seed, int n, const Eigen::Vector3d& angles,
   c.truth.set_angles_seed_rad(angles);
   const Eigen::Matrix3d R = RotationFromAngles(RotationConvention::kSeed, angles);
   for (int i = 0; i < n; ++i) {
-    const Eigen::Vector3d ray = R.transpose() * Eigen::Vector3d(45000.0 * unit(rng),
-                                                                30000.0 * unit(rng), -c.focal_um);
+    const Eigen::Vector3d ray =
+        R.transpose() * Eigen::Vector3d(45000.0 * unit(rng), 30000.0 * unit(rng), -c.focal_um);
     const double height = 50.0 + 15.0 * unit(rng);
     const Eigen::Vector3d X =
         c.truth.center_in_ground() + (height - c.truth.center_in_ground().z()) / ray.z() * ray;
     double xy[2];
     EXPECT_TRUE(ProjectToImagePlane(c.truth.data(), X.data(), c.focal_um, xy));
     c.points_in_ground.push_back(X);
-    c.image_plane_um.emplace_back(xy[0] + noise_um * gaussian(rng), xy[1] + noise_um * gaussian(rng));
+    c.image_plane_um.emplace_back(xy[0] + noise_um * gaussian(rng),
+                                  xy[1] + noise_um * gaussian(rng));
     c.is_outlier.push_back(0);
   }
   return c;
@@ -120,8 +122,8 @@ Vector6d PredictedSigmas(const Correspondences& c) {
     if (c.is_outlier[i]) continue;
     double xy[2];
     Eigen::Matrix<double, 2, 6, Eigen::RowMajor> J;
-    if (!ProjectWithJacobians(c.truth.data(), c.points_in_ground[i].data(), c.focal_um, xy, J.data(),
-                              nullptr, nullptr))
+    if (!ProjectWithJacobians(c.truth.data(), c.points_in_ground[i].data(), c.focal_um, xy,
+                              J.data(), nullptr, nullptr))
       continue;
     normal += J.transpose() * J;
   }
@@ -161,10 +163,11 @@ TEST(AbsolutePoseEstimatorTest, NormalEquationsMatchProjectWithJacobians) {
       const double observed[2] = {focal * 0.4 * unit(rng), focal * 0.4 * unit(rng)};
       double xy[2];
       Eigen::Matrix<double, 2, 6, Eigen::RowMajor> J;
-      ASSERT_TRUE(ProjectWithJacobians(zero_eo, point.data(), focal, xy, J.data(), nullptr, nullptr));
+      ASSERT_TRUE(
+          ProjectWithJacobians(zero_eo, point.data(), focal, xy, J.data(), nullptr, nullptr));
       const Eigen::Matrix<double, 2, 6> Jn = J / focal;
-      const Eigen::Vector2d rn = (Eigen::Vector2d(observed[0], observed[1]) -
-                                  Eigen::Vector2d(xy[0], xy[1])) / focal;
+      const Eigen::Vector2d rn =
+          (Eigen::Vector2d(observed[0], observed[1]) - Eigen::Vector2d(xy[0], xy[1])) / focal;
       const Matrix6d expected_normal = Jn.transpose() * Jn;
       const Vector6d expected_gradient = Jn.transpose() * rn;
 
@@ -179,7 +182,8 @@ TEST(AbsolutePoseEstimatorTest, NormalEquationsMatchProjectWithJacobians) {
               << "(" << r << ", " << col << ")";
       const double gradient_scale = expected_gradient.cwiseAbs().maxCoeff();
       for (int r = 0; r < 6; ++r)
-        EXPECT_NEAR(gradient[r], expected_gradient[r], kSameFormulaRelativeTolerance * gradient_scale)
+        EXPECT_NEAR(gradient[r], expected_gradient[r],
+                    kSameFormulaRelativeTolerance * gradient_scale)
             << r;
     }
   }
@@ -237,8 +241,8 @@ TEST(AbsolutePoseEstimatorTest, GaussNewtonConvergesEvenAtGimbalLock) {
     for (int i = 0; i < 60; ++i) {
       const Eigen::Vector2d xy(45000.0 * unit(rng), 30000.0 * unit(rng));
       const double depth = 800.0 + 400.0 * unit(rng);
-      ground.push_back(center +
-                       R_true.transpose() * (depth * Eigen::Vector3d(xy.x(), xy.y(), -focal).normalized()));
+      ground.push_back(center + R_true.transpose() *
+                                    (depth * Eigen::Vector3d(xy.x(), xy.y(), -focal).normalized()));
       image.push_back(xy);
     }
     const AbsolutePoseEstimator estimator(image, ground, focal, kThresholdUm);
@@ -255,8 +259,7 @@ TEST(AbsolutePoseEstimatorTest, GaussNewtonConvergesEvenAtGimbalLock) {
 
 // ------------------------------------------------------------------ robust resection
 
-class AbsolutePoseRansacTest
-    : public ::testing::TestWithParam<std::tuple<Scenario, double>> {};
+class AbsolutePoseRansacTest : public ::testing::TestWithParam<std::tuple<Scenario, double>> {};
 
 TEST_P(AbsolutePoseRansacTest, RecoversPoseAndOutliers) {
   const Scenario scenario = std::get<0>(GetParam());
@@ -276,29 +279,31 @@ TEST_P(AbsolutePoseRansacTest, RecoversPoseAndOutliers) {
 
   const Vector6d sigma = PredictedSigmas(c);
   const Vector6d error = PoseError(eo, c.truth);
-  for (int k = 0; k < 6; ++k) EXPECT_LE(std::abs(error[k]), kSigmas * sigma[k]) << "parameter " << k;
+  for (int k = 0; k < 6; ++k)
+    EXPECT_LE(std::abs(error[k]), kSigmas * sigma[k]) << "parameter " << k;
   std::printf("[ RANSAC ] %s, %.0f %% outliers: %s\n", ScenarioName(scenario),
               100 * outlier_fraction, summary.BriefReport().c_str());
-  std::printf("[ RANSAC ] centre error %.3f m (sigma %.3f), angle errors %.2f %.2f %.2f arcsec "
-              "(sigma %.2f %.2f %.2f)\n",
-              error.head<3>().norm(), sigma.head<3>().norm(), error[3] * kArcSecondsPerRadian,
-              error[4] * kArcSecondsPerRadian, error[5] * kArcSecondsPerRadian,
-              sigma[3] * kArcSecondsPerRadian, sigma[4] * kArcSecondsPerRadian,
-              sigma[5] * kArcSecondsPerRadian);
+  std::printf(
+      "[ RANSAC ] centre error %.3f m (sigma %.3f), angle errors %.2f %.2f %.2f arcsec "
+      "(sigma %.2f %.2f %.2f)\n",
+      error.head<3>().norm(), sigma.head<3>().norm(), error[3] * kArcSecondsPerRadian,
+      error[4] * kArcSecondsPerRadian, error[5] * kArcSecondsPerRadian,
+      sigma[3] * kArcSecondsPerRadian, sigma[4] * kArcSecondsPerRadian,
+      sigma[5] * kArcSecondsPerRadian);
   // The adaptive stop: at inlier ratio w the budget is log(1e-4) / log(1 - w^3), 22 trials at 70 %
   // and 140 at 40 % inliers; the estimated ratio is a little lower than the true one.
   EXPECT_LE(summary.num_trials, outlier_fraction < 0.5 ? 40 : 250);
 }
 
-INSTANTIATE_TEST_SUITE_P(
-    Scenes, AbsolutePoseRansacTest,
-    ::testing::Combine(::testing::Values(Scenario::kNadir, Scenario::kOblique),
-                       ::testing::Values(0.3, 0.6)),
-    [](const ::testing::TestParamInfo<std::tuple<Scenario, double>>& info) {
-      return std::string(ScenarioName(std::get<0>(info.param))) + "_" +
-             std::to_string(static_cast<int>(std::lround(100 * std::get<1>(info.param)))) +
-             "pct_outliers";
-    });
+INSTANTIATE_TEST_SUITE_P(Scenes, AbsolutePoseRansacTest,
+                         ::testing::Combine(::testing::Values(Scenario::kNadir, Scenario::kOblique),
+                                            ::testing::Values(0.3, 0.6)),
+                         [](const ::testing::TestParamInfo<std::tuple<Scenario, double>>& info) {
+                           return std::string(ScenarioName(std::get<0>(info.param))) + "_" +
+                                  std::to_string(static_cast<int>(
+                                      std::lround(100 * std::get<1>(info.param)))) +
+                                  "pct_outliers";
+                         });
 
 TEST(AbsolutePoseRansacTest, SameSeedIdenticalDifferentSeedsBothSucceed) {
   const Correspondences c = FromSyntheticScene(Scenario::kNadir, 0.4, /*seed=*/21);
@@ -322,7 +327,8 @@ TEST(AbsolutePoseRansacTest, SameSeedIdenticalDifferentSeedsBothSucceed) {
                   .ok());
   const Vector6d sigma = PredictedSigmas(c);
   const Vector6d error = PoseError(third, c.truth);
-  for (int k = 0; k < 6; ++k) EXPECT_LE(std::abs(error[k]), kSigmas * sigma[k]) << "parameter " << k;
+  for (int k = 0; k < 6; ++k)
+    EXPECT_LE(std::abs(error[k]), kSigmas * sigma[k]) << "parameter " << k;
   EXPECT_GE(MaskAgreement(third_mask, c.is_outlier), kMinMaskAgreement);
 }
 
@@ -391,16 +397,17 @@ TEST(AbsolutePoseRansacTest, FailsCleanly) {
   const std::vector<Eigen::Vector2d> two_xy(c.image_plane_um.begin(), c.image_plane_um.begin() + 2);
   const std::vector<Eigen::Vector3d> two_X(c.points_in_ground.begin(),
                                            c.points_in_ground.begin() + 2);
-  expect_failure(EstimateAbsolutePoseRansac(Options(1), two_xy, two_X, c.focal_um, &eo, &mask,
-                                            &summary),
-                 "at least 3");
+  expect_failure(
+      EstimateAbsolutePoseRansac(Options(1), two_xy, two_X, c.focal_um, &eo, &mask, &summary),
+      "at least 3");
 
   // All ground points on one line (a road centre line, say), seen consistently.
   Correspondences line = c;
   for (size_t i = 0; i < line.points_in_ground.size(); ++i) {
     line.points_in_ground[i] = Eigen::Vector3d(4800.0 + 8.0 * i, 5900.0 + 3.0 * i, 50.0);
     double xy[2];
-    ASSERT_TRUE(ProjectToImagePlane(c.truth.data(), line.points_in_ground[i].data(), c.focal_um, xy));
+    ASSERT_TRUE(
+        ProjectToImagePlane(c.truth.data(), line.points_in_ground[i].data(), c.focal_um, xy));
     line.image_plane_um[i] = Eigen::Vector2d(xy[0], xy[1]);
   }
   expect_failure(EstimateAbsolutePoseRansac(Options(1), line.image_plane_um, line.points_in_ground,

@@ -106,7 +106,8 @@ TEST(DltTest, NoisyBearingsGiveAnInitialValue) {
   std::mt19937_64 rng(44);
   std::normal_distribution<double> noise(0.0, 3.0 / 100500.0);  // 0.5 px of 6 um at c = 100.5 mm
   Scene s = RandomScene(&rng, 100);
-  for (Eigen::Vector3d& b : s.bearings) b = (b + Eigen::Vector3d(noise(rng), noise(rng), 0)).normalized();
+  for (Eigen::Vector3d& b : s.bearings)
+    b = (b + Eigen::Vector3d(noise(rng), noise(rng), 0)).normalized();
   PoseCandidate pose;
   ASSERT_TRUE(SolveDlt(s.bearings, s.points, &pose).ok());
   ExpectPose(s, pose, kNoisyTolerance);

@@ -47,8 +47,8 @@ Case RandomCase(std::mt19937_64* rng) {
   std::uniform_real_distribution<double> unit(0.0, 1.0);
   auto uniform = [&](double lo, double hi) { return lo + (hi - lo) * unit(*rng); };
   Case c;
-  const Eigen::Vector3d angles(DegreesToRadians(uniform(-60, 60)), DegreesToRadians(uniform(-60, 60)),
-                               uniform(-kPi, kPi));
+  const Eigen::Vector3d angles(DegreesToRadians(uniform(-60, 60)),
+                               DegreesToRadians(uniform(-60, 60)), uniform(-kPi, kPi));
   c.R = RotationFromAngles(RotationConvention::kSeed, angles);
   const double height = uniform(300, 1500);
   c.center = Eigen::Vector3d(uniform(-1000, 1000), uniform(-1000, 1000), height);
@@ -56,7 +56,8 @@ Case RandomCase(std::mt19937_64* rng) {
   const double tan_cone = std::tan(DegreesToRadians(40.0));
   for (int i = 0; i < 3; ++i) {
     const Eigen::Vector3d direction =
-        Eigen::Vector3d(uniform(-tan_cone, tan_cone), uniform(-tan_cone, tan_cone), -1.0).normalized();
+        Eigen::Vector3d(uniform(-tan_cone, tan_cone), uniform(-tan_cone, tan_cone), -1.0)
+            .normalized();
     const double depth = height * uniform(0.5, 1.5);
     c.bearings[i] = direction;
     c.points[i] = c.center + c.R.transpose() * (depth * direction);

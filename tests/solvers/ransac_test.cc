@@ -15,7 +15,8 @@ namespace {
 
 // ------------------------------------------------------------------ a toy estimator
 // Lines y = a x + b in the plane from two points: the smallest estimator that exercises every part
-// of the concept (several data per sample, degenerate samples, MSAC early exit, LO by least squares).
+// of the concept (several data per sample, degenerate samples, MSAC early exit, LO by least
+// squares).
 
 struct Line {
   double a = 0.0;
@@ -279,8 +280,8 @@ TEST(RansacTest, FailsCleanly) {
   EXPECT_FALSE(summary.success);
   EXPECT_NE(summary.message.find("at least 2"), std::string::npos) << summary.message;
   // Every sample degenerate (all points on a vertical line): no model at all.
-  const LineEstimator vertical({Eigen::Vector2d(1, 0), Eigen::Vector2d(1, 1), Eigen::Vector2d(1, 2)},
-                               kThreshold);
+  const LineEstimator vertical(
+      {Eigen::Vector2d(1, 0), Eigen::Vector2d(1, 1), Eigen::Vector2d(1, 2)}, kThreshold);
   RansacOptions options;
   options.max_trials = 100;
   summary = Ransac(options, vertical, &line, &mask);
