@@ -408,9 +408,8 @@ ResectionResult ResectImage(const ResectionOptions& options, const ResectionInpu
     eo = *input.approximate;
     summary.used_approximate = true;
     if (!eo.parameters.allFinite()) return fail("the approximate pose is not finite");
-    // (The Taylor solver checks this itself, as the seed's equations are evaluated.)
     const SeedProjector projector(eo.data(), input.focal_length_um);
-    for (size_t i = 0; i < n && options.solver == PoseSolver::kCeres; ++i) {
+    for (size_t i = 0; i < n; ++i) {
       double xy[2];
       if (!projector.Project(input.points_in_ground[i].data(), xy, nullptr, nullptr, nullptr)) {
         const std::string name = i < input.point_ids.size() ? "'" + input.point_ids[i] + "'"
