@@ -203,7 +203,7 @@ CeresOutcome RefineWithTinySolver(const ResectionOptions& options, const Centred
       return outcome;
     }
     // Without a loss one round is the whole solve; with one, reweighting has converged when a
-    // round no longer moves the pose (beyond 1e3 x TinySolver's own step tolerance).
+    // round no longer moves the pose (kReweightingTolerance).
     const double step = (*eo_centred - before).norm();
     converged = options.loss == LossType::kNone ||
                 step <= kReweightingTolerance * (eo_centred->norm() + 1.0);
