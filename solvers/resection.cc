@@ -37,7 +37,8 @@ ceres::LossFunction* MakeLoss(LossType type, double scale) {
     case LossType::kCauchy:
       return new ceres::CauchyLoss(scale);
     case LossType::kArctan:
-      return new ceres::ArctanLoss(scale);
+      // Ceres' ArctanLoss(a) is rho(s) = a atan(s / a): a is on the squared scale.
+      return new ceres::ArctanLoss(scale * scale);
     case LossType::kTukey:
       return new ceres::TukeyLoss(scale);
   }
@@ -179,6 +180,12 @@ CeresOutcome RefineWithTinySolver(const ResectionOptions& options, const Centred
       weights_changed |= w != sqrt_weights[i];
       sqrt_weights[i] = w;
     }
+    if (round == 0 && *std::max_element(sqrt_weights.begin(), sqrt_weights.end()) == 0.0) {
+      outcome.message = std::string("Ceres: every residual is beyond the ") + LossTypeName(options.loss) +
+                        " loss at the initial pose, so nothing pulls the pose; give a larger "
+                        "--loss_scale or better initial values";
+      return outcome;
+    }
     // The same weights as the round that produced this pose: it is the fixed point already (e.g.
     // Huber with every residual inside its quadratic zone).
     if (!weights_changed) {
@@ -190,7 +197,9 @@ CeresOutcome RefineWithTinySolver(const ResectionOptions& options, const Centred
     solver.options.max_num_iterations = options.max_iterations;
     solver.options.parameter_tolerance = options.parameter_tolerance;
     solver.options.gradient_tolerance = 1e-14;
-    solver.options.function_tolerance = options.function_tolerance * std::max(1.0, outcome.initial_cost);
+    // TinySolver's function tolerance is absolute; the final cost of whitened residuals is about
+    // half their number, so this is options.function_tolerance relative to it.
+    solver.options.function_tolerance = options.function_tolerance * function.NumResiduals();
     const Vector6d before = *eo_centred;
     const auto& summary = solver.Solve(function, eo_centred);
     outcome.iterations += summary.iterations;
@@ -464,9 +473,10 @@ ResectionResult ResectImage(const ResectionOptions& options, const ResectionInpu
     eo = taylor.eo;
   }
   summary.refinement_seconds = SecondsSince(refine_start);
-  eo.parameters[3] = WrapAngle(eo.parameters[3]);
-  eo.parameters[4] = WrapAngle(eo.parameters[4]);
-  eo.parameters[5] = WrapAngle(eo.parameters[5]);
+  // The canonical triple of the rotation (|phi| <= 90 deg, the others in (-180, 180]): a solver may
+  // end on the equivalent (omega + 180, 180 - phi, kappa + 180).
+  eo.set_angles_seed_rad(AnglesFromRotation(
+      RotationConvention::kSeed, RotationFromAngles(RotationConvention::kSeed, eo.angles_seed_rad())));
 
   // 3. Residuals, inlier flags and statistics over the inliers, in one pass.
   result.residuals_px.resize(n);

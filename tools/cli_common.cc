@@ -38,11 +38,18 @@ bool ParseFlags(int argc, char** argv, const std::string& subcommand, bool* help
       value = arg.substr(equals + 1);
       has_value = true;
     }
+    // A flag of another subcommand is as unknown here as a misspelt one; glog's own flags (--v,
+    // --logtostderr, ...) and --flagfile are accepted everywhere.
+    auto own_flag = [&subcommand](const std::string& flag, gflags::CommandLineFlagInfo* info) {
+      return gflags::GetCommandLineFlagInfo(flag.c_str(), info) &&
+             (info->filename.find(subcommand + "_command") != std::string::npos ||
+              info->filename.find("logging") != std::string::npos || flag == "flagfile");
+    };
     gflags::CommandLineFlagInfo info;
-    if (!gflags::GetCommandLineFlagInfo(name.c_str(), &info)) {
+    if (!own_flag(name, &info)) {
       // --noflag for booleans.
-      if (name.rfind("no", 0) == 0 && gflags::GetCommandLineFlagInfo(name.substr(2).c_str(), &info) &&
-          info.type == "bool" && !has_value) {
+      if (name.rfind("no", 0) == 0 && !has_value && own_flag(name.substr(2), &info) &&
+          info.type == "bool") {
         gflags::SetCommandLineOption(name.substr(2).c_str(), "false");
         continue;
       }

@@ -8,8 +8,8 @@
 #include <cmath>
 #include <cstdlib>
 #include <fstream>
-#include <iterator>
 #include <iostream>
+#include <iterator>
 #include <sstream>
 #include <string>
 #include <vector>
@@ -24,39 +24,95 @@
 
 // Both modes.
 DEFINE_string(compare_solvers, "taylor_as_printed,taylor,ceres_analytic,ceres_autodiff",
-              "Comma-separated solvers to compare: taylor_as_printed (the seed's Taylor linearisation with the partial derivatives as printed), taylor (corrected partials), ceres_analytic and ceres_autodiff (Ceres Levenberg-Marquardt with the closed-form or the automatic Jacobian), or all.");
-DEFINE_string(compare_losses, "none,huber",
-              "Comma-separated robust losses; every Ceres solver is run with each: none, huber, softl1, cauchy, arctan, tukey, or all. The Taylor solvers are always plain least squares.");
-DEFINE_string(compare_ceres_minimizer, "tiny_solver", "How the Ceres solvers minimise each image: tiny_solver (ceres::TinySolver, the robust loss by iterative reweighting; the library default) or problem (ceres::Problem and ceres::Solve).");
-DEFINE_double(compare_loss_scale, 2.0, "Scale of the robust losses in pixels: residuals beyond it are down-weighted.");
-DEFINE_double(compare_ransac_threshold, 6.0, "Inlier threshold in pixels for RANSAC and for the final inlier flags (the covariance and sigma0 use the observations within it).");
+              "Comma-separated solvers to compare: taylor_as_printed (the seed's Taylor "
+              "linearisation with the partial derivatives as printed), taylor (corrected "
+              "partials), ceres_analytic and ceres_autodiff (Ceres Levenberg-Marquardt with the "
+              "closed-form or the automatic Jacobian), or all.");
+DEFINE_string(
+    compare_losses, "none,huber",
+    "Comma-separated robust losses; every Ceres solver is run with each: none, huber, softl1, "
+    "cauchy, arctan, tukey, or all. The Taylor solvers are always plain least squares.");
+DEFINE_string(
+    compare_ceres_minimizer, "tiny_solver",
+    "How the Ceres solvers minimise each image: tiny_solver (ceres::TinySolver, the robust loss by "
+    "iterative reweighting; the library default) or problem (ceres::Problem and ceres::Solve).");
+DEFINE_double(compare_loss_scale, 2.0,
+              "Scale of the robust losses in pixels: residuals beyond it are down-weighted.");
+DEFINE_double(compare_ransac_threshold, 6.0,
+              "Inlier threshold in pixels for RANSAC and for the final inlier flags (the "
+              "covariance and sigma0 use the observations within it).");
 DEFINE_int32(compare_max_iterations, 50, "Largest number of iterations of every solver.");
-DEFINE_uint64(compare_seed, 1, "Monte-Carlo: trial t of every setting uses the scene seed seed + t (photopose simulate --seed makes the same scene). Dataset: the RANSAC seed.");
-DEFINE_int32(compare_threads, 1, "Threads: Monte-Carlo trials or dataset images run in parallel; 0 uses all cores. One thread gives the steadiest timings.");
-DEFINE_string(compare_csv, "", "Write the results as CSV to this file: one row per setting and solver (Monte-Carlo) or per image and solver (dataset).");
-DEFINE_string(compare_html, "", "Write a self-contained HTML report (tables and SVG plots, no script, no network) to this file.");
+DEFINE_uint64(compare_seed, 1,
+              "Monte-Carlo: trial t of every setting uses the scene seed seed + t (photopose "
+              "simulate --seed makes the same scene). Dataset: the RANSAC seed.");
+DEFINE_int32(compare_threads, 1,
+             "Threads: Monte-Carlo trials or dataset images run in parallel; 0 uses all cores. One "
+             "thread gives the steadiest timings.");
+DEFINE_string(compare_csv, "",
+              "Write the results as CSV to this file: one row per setting and solver (Monte-Carlo) "
+              "or per image and solver (dataset).");
+DEFINE_string(compare_html, "",
+              "Write a self-contained HTML report (tables and SVG plots, no script, no network) to "
+              "this file.");
 DEFINE_string(compare_markdown, "", "Write the tables as Markdown to this file.");
 // Monte-Carlo mode.
-DEFINE_string(compare_scenarios, "nadir,oblique", "Monte-Carlo: comma-separated scenarios of photopose simulate: nadir, oblique, uav_block.");
-DEFINE_string(compare_noise_px, "0.5,0,1,2", "Monte-Carlo: comma-separated image noise levels, one sigma in pixels; the first is the baseline.");
-DEFINE_string(compare_outlier_fractions, "0,0.1,0.2", "Monte-Carlo: comma-separated fractions of marks with gross errors of 20 to 200 pixels, each in [0, 1); the first is the baseline.");
-DEFINE_string(compare_control_points, "20,6", "Monte-Carlo: comma-separated numbers of control points per image (at least 3); the first is the baseline.");
-DEFINE_int32(compare_check_points, 5, "Monte-Carlo: check points per image (not used to solve; their residuals are reported).");
-DEFINE_string(compare_initial_errors, "5:2,50:10,100:20", "Monte-Carlo: comma-separated errors of the approximate frames as POSITION_M:ANGLE_DEG, uniform in plus or minus that much per axis and per angle; the first is the baseline.");
+DEFINE_string(
+    compare_scenarios, "nadir,oblique",
+    "Monte-Carlo: comma-separated scenarios of photopose simulate: nadir, oblique, uav_block.");
+DEFINE_string(compare_noise_px, "0.5,0,1,2",
+              "Monte-Carlo: comma-separated image noise levels, one sigma in pixels; the first is "
+              "the baseline.");
+DEFINE_string(compare_outlier_fractions, "0,0.1,0.2",
+              "Monte-Carlo: comma-separated fractions of marks with gross errors of 20 to 200 "
+              "pixels, each in [0, 1); the first is the baseline.");
+DEFINE_string(compare_control_points, "20,6",
+              "Monte-Carlo: comma-separated numbers of control points per image (at least 3); the "
+              "first is the baseline.");
+DEFINE_int32(
+    compare_check_points, 5,
+    "Monte-Carlo: check points per image (not used to solve; their residuals are reported).");
+DEFINE_string(
+    compare_initial_errors, "5:2,50:10,100:20",
+    "Monte-Carlo: comma-separated errors of the approximate frames as POSITION_M:ANGLE_DEG, "
+    "uniform in plus or minus that much per axis and per angle; the first is the baseline.");
 DEFINE_int32(compare_trials, 50, "Monte-Carlo: trials per setting, each a new seeded scene.");
-DEFINE_string(compare_sweep, "axes", "Monte-Carlo: axes (vary one list at a time, the others at their first value) or grid (every combination).");
-DEFINE_string(compare_initial, "frames", "Monte-Carlo: initial values of every solver: frames (the scene's approximate frames, the initial-error sweep) or ransac (LO-RANSAC per image, the same for every solver).");
-DEFINE_double(compare_success_sigmas, 10.0, "Monte-Carlo: a solve succeeds when its position error is at most this many design standard deviations (sqrt of the trace of the position block of (J^T P J)^-1 at the true pose).");
+DEFINE_string(compare_sweep, "axes",
+              "Monte-Carlo: axes (vary one list at a time, the others at their first value) or "
+              "grid (every combination).");
+DEFINE_string(
+    compare_initial, "frames",
+    "Monte-Carlo: initial values of every solver: frames (the scene's approximate frames, the "
+    "initial-error sweep) or ransac (LO-RANSAC per image, the same for every solver).");
+DEFINE_double(
+    compare_success_sigmas, 10.0,
+    "Monte-Carlo: a solve succeeds when its position error is at most this many design standard "
+    "deviations (sqrt of the trace of the position block of (J^T P J)^-1 at the true pose).");
 // Dataset mode.
-DEFINE_string(compare_cameras, "", "Dataset: camera table (CSV, ArcGIS frame-camera schema). Giving it selects the dataset mode.");
-DEFINE_string(compare_points, "", "Dataset: ground points (CSV: PointID, X, Y, Z in metres, optional Role control|check).");
-DEFINE_string(compare_marks, "", "Dataset: image marks (CSV: Raster, PointID, Column and Row in pixels or FilmX and FilmY in micrometres, optional Accuracy in pixels).");
-DEFINE_string(compare_gcp_list, "", "Dataset: OpenDroneMap gcp_list.txt instead of --points and --marks.");
-DEFINE_string(compare_frames, "", "Dataset: optional frames table of approximate exterior orientations, the initial values of every solver (otherwise RANSAC, the same for every solver).");
-DEFINE_string(compare_reference, "", "Dataset: optional frames table of a reference orientation; every solver's difference to it is reported.");
-DEFINE_string(compare_rotation, "seed", "Dataset: angle convention of the frames tables read and of the angles printed: seed, opk or pok.");
-DEFINE_double(compare_default_accuracy, 1.0, "Dataset: accuracy in pixels (one sigma) of marks without an Accuracy value.");
-DEFINE_bool(compare_pixel_center_origin, false, "Dataset: read Column/Row with (0,0) at the centre of the first pixel instead of the top-left corner.");
+DEFINE_string(
+    compare_cameras, "",
+    "Dataset: camera table (CSV, ArcGIS frame-camera schema). Giving it selects the dataset mode.");
+DEFINE_string(
+    compare_points, "",
+    "Dataset: ground points (CSV: PointID, X, Y, Z in metres, optional Role control|check).");
+DEFINE_string(compare_marks, "",
+              "Dataset: image marks (CSV: Raster, PointID, Column and Row in pixels or FilmX and "
+              "FilmY in micrometres, optional Accuracy in pixels).");
+DEFINE_string(compare_gcp_list, "",
+              "Dataset: OpenDroneMap gcp_list.txt instead of --points and --marks.");
+DEFINE_string(compare_frames, "",
+              "Dataset: optional frames table of approximate exterior orientations, the initial "
+              "values of every solver (otherwise RANSAC, the same for every solver).");
+DEFINE_string(compare_reference, "",
+              "Dataset: optional frames table of a reference orientation; every solver's "
+              "difference to it is reported.");
+DEFINE_string(compare_rotation, "seed",
+              "Dataset: angle convention of the frames tables read and of the angles printed: "
+              "seed, opk or pok.");
+DEFINE_double(compare_default_accuracy, 1.0,
+              "Dataset: accuracy in pixels (one sigma) of marks without an Accuracy value.");
+DEFINE_bool(compare_pixel_center_origin, false,
+            "Dataset: read Column/Row with (0,0) at the centre of the first pixel instead of the "
+            "top-left corner.");
 
 namespace photopose::cli {
 namespace {
@@ -68,7 +124,8 @@ constexpr char kUsage[] =
     "photopose compare: the pose solvers side by side (Taylor as printed, Taylor corrected, Ceres\n"
     "analytic and autodiff, each Ceres solver with the requested robust losses).\n\n"
     "Monte-Carlo mode (no --cameras): synthetic scenes swept over noise, outliers, control points\n"
-    "and initial error, every solver on the same data from the same initial values, against truth:\n"
+    "and initial error, every solver on the same data from the same initial values, against "
+    "truth:\n"
     "  photopose compare [--scenarios=nadir,oblique,uav_block] [--noise_px=0.5,0,1] [--trials=N]\n"
     "      [--outlier_fractions=0,0.2] [--control_points=20,6] [--initial_errors=5:2,100:20]\n"
     "      [--solvers=...] [--losses=none,huber,cauchy] [--csv=F] [--html=F] [--markdown=F]\n"
@@ -80,9 +137,10 @@ constexpr char kUsage[] =
     "input or usage. docs/comparison.md explains every column.\n";
 
 // The user's flag names that belong to one mode only.
-const char* const kMonteCarloFlags[] = {"scenarios", "noise_px", "outlier_fractions",
+const char* const kMonteCarloFlags[] = {"scenarios",      "noise_px",     "outlier_fractions",
                                         "control_points", "check_points", "initial_errors",
-                                        "trials", "sweep", "initial", "success_sigmas"};
+                                        "trials",         "sweep",        "initial",
+                                        "success_sigmas"};
 const char* const kDatasetFlags[] = {"frames", "reference", "rotation", "default_accuracy",
                                      "pixel_center_origin"};
 
@@ -104,8 +162,7 @@ void PrintCompareHelp() {
     if (flag.filename.find("compare_command") == std::string::npos) continue;
     if (flag.name.rfind(kPrefix, 0) != 0) continue;
     std::cout << "  --" << flag.name.substr(sizeof(kPrefix) - 1) << " (" << flag.type
-              << ", default: \"" << flag.default_value << "\")\n      " << flag.description
-              << "\n";
+              << ", default: \"" << flag.default_value << "\")\n      " << flag.description << "\n";
   }
   std::cout << "  --flagfile=F\n      Reads further flags, one per line, from the file F.\n";
 }
@@ -114,7 +171,8 @@ bool IsHelp(const std::string& arg) {
   return arg == "--help" || arg == "-h" || arg == "--helpfull" || arg == "-help";
 }
 
-// Parses --name=value, --name value, --bool_flag, --nobool_flag and --flagfile=F (one flag per line,
+// Parses --name=value, --name value, --bool_flag, --nobool_flag and --flagfile=F (one flag per
+// line,
 // "--name value" allowed, '#' comments) into the compare_<name> flags, like ParseFlags does for the
 // other subcommands but with the user's flag names in every message. Prints one line and returns
 // false on an unknown flag, a bad value, a stray argument or an unreadable flag file.
@@ -179,8 +237,8 @@ bool ParseCompareFlags(const std::vector<std::string>& args, bool* help, int dep
       }
     }
     if (gflags::SetCommandLineOption((kPrefix + name).c_str(), value.c_str()).empty()) {
-      BadInput(kCommand, "invalid value '" + value + "' for --" + name + " (" + info.type +
-                             " expected)");
+      BadInput(kCommand,
+               "invalid value '" + value + "' for --" + name + " (" + info.type + " expected)");
       return false;
     }
   }
@@ -248,8 +306,8 @@ int RunMonteCarloMode(const std::vector<SolverVariant>& solvers, const Resection
   for (std::string name; std::getline(names, name, ',');) {
     const auto scenario = ParseScenario(name);
     if (!scenario)
-      return BadInput(kCommand, "--scenarios: unknown scenario '" + name +
-                                    "' (nadir, oblique or uav_block)");
+      return BadInput(kCommand,
+                      "--scenarios: unknown scenario '" + name + "' (nadir, oblique or uav_block)");
     options.scenarios.push_back(*scenario);
   }
   if (options.scenarios.empty()) return BadInput(kCommand, "--scenarios is empty");
@@ -276,7 +334,8 @@ int RunMonteCarloMode(const std::vector<SolverVariant>& solvers, const Resection
   } else if (FLAGS_compare_initial == "ransac") {
     options.initial = InitialValues::kRansac;
   } else {
-    return BadInput(kCommand, "--initial must be frames or ransac, not '" + FLAGS_compare_initial + "'");
+    return BadInput(kCommand,
+                    "--initial must be frames or ransac, not '" + FLAGS_compare_initial + "'");
   }
   options.check_points = FLAGS_compare_check_points;
   options.trials = FLAGS_compare_trials;
@@ -315,16 +374,22 @@ int RunDatasetMode(const std::vector<SolverVariant>& solvers, const ResectionOpt
   job.gcp_list_path = FLAGS_compare_gcp_list;
   job.frames_path = FLAGS_compare_frames;
   job.default_accuracy_px = FLAGS_compare_default_accuracy;
-  job.pixel_origin = FLAGS_compare_pixel_center_origin ? PixelOrigin::kCenter : PixelOrigin::kCorner;
+  job.pixel_origin =
+      FLAGS_compare_pixel_center_origin ? PixelOrigin::kCenter : PixelOrigin::kCorner;
   job.resection = resection;
-  if (FLAGS_compare_cameras.empty()) return BadInput(kCommand, "--cameras is required in the dataset mode");
-  if (FLAGS_compare_gcp_list.empty() && (FLAGS_compare_points.empty() || FLAGS_compare_marks.empty()))
-    return BadInput(kCommand, "--points and --marks (or --gcp_list) are required in the dataset mode");
-  if (!FLAGS_compare_gcp_list.empty() && (!FLAGS_compare_points.empty() || !FLAGS_compare_marks.empty()))
+  if (FLAGS_compare_cameras.empty())
+    return BadInput(kCommand, "--cameras is required in the dataset mode");
+  if (FLAGS_compare_gcp_list.empty() &&
+      (FLAGS_compare_points.empty() || FLAGS_compare_marks.empty()))
+    return BadInput(kCommand,
+                    "--points and --marks (or --gcp_list) are required in the dataset mode");
+  if (!FLAGS_compare_gcp_list.empty() &&
+      (!FLAGS_compare_points.empty() || !FLAGS_compare_marks.empty()))
     return BadInput(kCommand, "--gcp_list replaces --points and --marks; give one or the other");
   const auto rotation = ParseRotationConvention(FLAGS_compare_rotation);
   if (!rotation)
-    return BadInput(kCommand, "--rotation must be seed, opk or pok, not '" + FLAGS_compare_rotation + "'");
+    return BadInput(kCommand,
+                    "--rotation must be seed, opk or pok, not '" + FLAGS_compare_rotation + "'");
   job.rotation = *rotation;
   if (!(FLAGS_compare_default_accuracy > 0.0))
     return BadInput(kCommand, "--default_accuracy must be positive");

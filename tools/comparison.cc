@@ -9,7 +9,6 @@
 #include <cstdio>
 #include <limits>
 #include <map>
-#include <mutex>
 #include <sstream>
 #include <thread>
 
@@ -83,8 +82,8 @@ double RegularizedLowerGamma(double a, double x) {
     }
     return std::min(1.0, sum * std::exp(log_prefactor));
   }
-  // Q = x^a e^-x / Gamma(a) * 1 / (x + 1 - a - 1 (1 - a) / (x + 3 - a - 2 (2 - a) / (x + 5 - a ...))),
-  // evaluated by the modified Lentz method.
+  // Q = x^a e^-x / Gamma(a) * 1 / (x + 1 - a - 1 (1 - a) / (x + 3 - a - 2 (2 - a) / (x + 5 - a
+  // ...))), evaluated by the modified Lentz method.
   constexpr double kTiny = 1e-300;
   double b = x + 1.0 - a;
   double c = 1.0 / kTiny;
@@ -140,6 +139,14 @@ double SuccessThreshold(const ResectionInput& input, const std::vector<char>& is
   return success_sigmas * std::sqrt(covariance.topLeftCorner<3, 3>().trace());
 }
 
+// Index of the solver the differences and time ratios refer to: "taylor" when present, otherwise
+// the first.
+size_t TimeReference(const std::vector<std::string>& names) {
+  for (size_t s = 0; s < names.size(); ++s)
+    if (names[s] == "taylor") return s;
+  return 0;
+}
+
 // Runs every solver on every image of one trial.
 Status RunTrial(const MonteCarloOptions& options, const SweepSetting& setting, int trial,
                 std::vector<SolveOutcome>* outcomes, int* images) {
@@ -154,6 +161,9 @@ Status RunTrial(const MonteCarloOptions& options, const SweepSetting& setting, i
   std::map<std::string, const FrameRecord*> truth_by_raster;
   for (const FrameRecord& frame : scene.true_frames) truth_by_raster[frame.raster] = &frame;
   *images = static_cast<int>(job.inputs.size());
+  std::vector<std::string> names;
+  for (const SolverVariant& v : options.solvers) names.push_back(v.Name());
+  const size_t reference = TimeReference(names);
 
   for (size_t i = 0; i < job.inputs.size(); ++i) {
     ResectionInput input = job.inputs[i];
@@ -161,11 +171,14 @@ Status RunTrial(const MonteCarloOptions& options, const SweepSetting& setting, i
     const ExteriorOrientation& truth = truth_by_raster.at(input.raster)->eo;
     const std::vector<char>& is_outlier = scene_job.control_is_outlier[i];
     const double threshold = SuccessThreshold(input, is_outlier, truth, options.success_sigmas);
+    std::vector<ResectionResult> results(options.solvers.size());
+    const size_t first = outcomes->size();
     for (size_t s = 0; s < options.solvers.size(); ++s) {
       ResectionOptions resection = options.solvers[s].ApplyTo(options.resection);
       // One RANSAC stream per image and trial, the same for every solver.
       resection.ransac.seed = scene_options.seed * 1000003ull + i;
-      const ResectionResult result = ResectImage(resection, input);
+      results[s] = ResectImage(resection, input);
+      const ResectionResult& result = results[s];
       SolveOutcome outcome;
       outcome.trial = trial;
       outcome.image = static_cast<int>(i);
@@ -201,6 +214,16 @@ Status RunTrial(const MonteCarloOptions& options, const SweepSetting& setting, i
       }
       outcomes->push_back(outcome);
     }
+    // Paired differences to the reference solver on the same data and start.
+    const ResectionResult& base = results[reference];
+    for (size_t s = 0; s < options.solvers.size(); ++s) {
+      if (s == reference || !base.success || !results[s].success) continue;
+      SolveOutcome& outcome = (*outcomes)[first + s];
+      outcome.difference_position_m =
+          (results[s].eo.center_in_ground() - base.eo.center_in_ground()).norm();
+      outcome.difference_rotation_arcsec =
+          RotationErrorArcSeconds(base.eo.angles_seed_rad(), results[s].eo.angles_seed_rad());
+    }
   }
   return Status::Ok();
 }
@@ -230,12 +253,13 @@ std::string FailureKind(const std::string& message) {
   return kind.empty() ? "no message" : kind;
 }
 
-SolverStatistics Aggregate(const std::string& name, const std::vector<const SolveOutcome*>& samples) {
+SolverStatistics Aggregate(const std::string& name,
+                           const std::vector<const SolveOutcome*>& samples) {
   SolverStatistics stats;
   stats.solver = name;
   stats.samples = static_cast<int>(samples.size());
   std::vector<double> position, rotation, iterations, thresholds, seconds, refinement, nees,
-      nees_apriori, expected, all_seconds, all_refinement;
+      nees_apriori, expected, all_seconds, all_refinement, difference_position, difference_rotation;
   double check_ssq = 0.0, reprojection_ssq = 0.0;
   int check_count = 0, reprojection_count = 0;
   std::map<std::string, int> failures;
@@ -253,6 +277,10 @@ SolverStatistics Aggregate(const std::string& name, const std::vector<const Solv
     refinement.push_back(o->refinement_seconds);
     position.push_back(o->position_error_m);
     rotation.push_back(o->rotation_error_arcsec);
+    if (std::isfinite(o->difference_position_m)) {
+      difference_position.push_back(o->difference_position_m);
+      difference_rotation.push_back(o->difference_rotation_arcsec);
+    }
     iterations.push_back(o->iterations);
     if (o->num_check > 0) {
       check_ssq += o->check_rmse_px * o->check_rmse_px * o->num_check;
@@ -269,9 +297,12 @@ SolverStatistics Aggregate(const std::string& name, const std::vector<const Solv
       if (r > 2.0) expected.push_back(6.0 * r / (r - 2.0));
     }
   }
-  stats.success_rate = stats.samples > 0 ? static_cast<double>(stats.successes) / stats.samples : kNaN;
+  stats.success_rate =
+      stats.samples > 0 ? static_cast<double>(stats.successes) / stats.samples : kNaN;
   stats.position_rmse_m = Rms(position);
   stats.rotation_rmse_arcsec = Rms(rotation);
+  stats.difference_position_rmse_m = Rms(difference_position);
+  stats.difference_rotation_rmse_arcsec = Rms(difference_rotation);
   stats.check_rmse_px = check_count > 0 ? std::sqrt(check_ssq / check_count) : kNaN;
   stats.reprojection_rmse_px =
       reprojection_count > 0 ? std::sqrt(reprojection_ssq / reprojection_count) : kNaN;
@@ -335,13 +366,6 @@ std::string SettingTitle(const SweepSetting& s, int trials, int images) {
                 s.initial_error.position_m, s.initial_error.angle_deg, s.axis.c_str(), trials,
                 images, images == 1 ? "" : "s");
   return buffer;
-}
-
-// Index of the solver the time ratios refer to: "taylor" when present, otherwise the first.
-size_t TimeReference(const std::vector<std::string>& names) {
-  for (size_t s = 0; s < names.size(); ++s)
-    if (names[s] == "taylor") return s;
-  return 0;
 }
 
 std::string CsvField(const std::string& text) {
@@ -417,8 +441,9 @@ Status ParseSolverVariants(const std::string& solvers, const std::string& losses
                            "' (taylor_as_printed, taylor, ceres_analytic, ceres_autodiff or all)");
     }
     for (const SolverVariant& v : add) {
-      const bool duplicate = std::any_of(variants->begin(), variants->end(),
-                                         [&](const SolverVariant& w) { return w.Name() == v.Name(); });
+      const bool duplicate =
+          std::any_of(variants->begin(), variants->end(),
+                      [&](const SolverVariant& w) { return w.Name() == v.Name(); });
       if (!duplicate) variants->push_back(v);
     }
   }
@@ -453,8 +478,9 @@ NeesInterval MeanNeesInterval(int count, double confidence) {
 
 double RotationErrorArcSeconds(const Eigen::Vector3d& angles_a_rad,
                                const Eigen::Vector3d& angles_b_rad) {
-  const Eigen::Matrix3d R = RotationFromAngles(RotationConvention::kSeed, angles_a_rad).transpose() *
-                            RotationFromAngles(RotationConvention::kSeed, angles_b_rad);
+  const Eigen::Matrix3d R =
+      RotationFromAngles(RotationConvention::kSeed, angles_a_rad).transpose() *
+      RotationFromAngles(RotationConvention::kSeed, angles_b_rad);
   // atan2 of the sine and cosine parts: accurate for small angles, unlike acos of the trace.
   const Eigen::Vector3d axis(R(2, 1) - R(1, 2), R(0, 2) - R(2, 0), R(1, 0) - R(0, 1));
   const double angle = std::atan2(0.5 * axis.norm(), 0.5 * (R.trace() - 1.0));
@@ -462,11 +488,12 @@ double RotationErrorArcSeconds(const Eigen::Vector3d& angles_a_rad,
 }
 
 double NormalizedEstimationErrorSquared(const ExteriorOrientation& estimate,
-                                        const ExteriorOrientation& truth, const Matrix6d& covariance) {
+                                        const ExteriorOrientation& truth,
+                                        const Matrix6d& covariance) {
   if (!covariance.allFinite() || !estimate.parameters.allFinite()) return kNaN;
-  // The seed angles (omega, phi, kappa) and (omega + pi, pi - phi, kappa + pi) are the same rotation;
-  // a solver may converge to either. The error is taken in the one closer to the truth, with the
-  // covariance carried over (d phi' / d phi = -1).
+  // The seed angles (omega, phi, kappa) and (omega + pi, pi - phi, kappa + pi) are the same
+  // rotation; a solver may converge to either. The error is taken in the one closer to the truth,
+  // with the covariance carried over (d phi' / d phi = -1).
   Vector6d error = estimate.parameters - truth.parameters;
   Vector6d alternate_error = error;
   alternate_error[3] += kPi;
@@ -627,7 +654,8 @@ std::vector<size_t> SettingsAlongAxis(const MonteCarloOptions& options,
   }
   if (indices.size() < 2) return {};
   std::stable_sort(indices.begin(), indices.end(), [&](size_t a, size_t b) {
-    return AxisValue(result.settings[a].setting, axis) < AxisValue(result.settings[b].setting, axis);
+    return AxisValue(result.settings[a].setting, axis) <
+           AxisValue(result.settings[b].setting, axis);
   });
   return indices;
 }
@@ -724,7 +752,8 @@ Status RunMonteCarlo(const MonteCarloOptions& options, MonteCarloResult* result)
     }
   };
   int num_threads = options.num_threads;
-  if (num_threads == 0) num_threads = static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
+  if (num_threads == 0)
+    num_threads = static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
   num_threads = static_cast<int>(std::min<size_t>(num_threads, std::max<size_t>(1, num_tasks)));
   std::vector<std::thread> threads;
   for (int t = 1; t < num_threads; ++t) threads.emplace_back(worker);
@@ -745,7 +774,8 @@ Status RunMonteCarlo(const MonteCarloOptions& options, MonteCarloResult* result)
     setting_result.images_per_trial = images[k * options.trials];
     std::vector<std::vector<const SolveOutcome*>> by_solver(options.solvers.size());
     for (int t = 0; t < options.trials; ++t)
-      for (const SolveOutcome& o : outcomes[k * options.trials + t]) by_solver[o.solver].push_back(&o);
+      for (const SolveOutcome& o : outcomes[k * options.trials + t])
+        by_solver[o.solver].push_back(&o);
     for (size_t s = 0; s < options.solvers.size(); ++s)
       setting_result.solvers.push_back(Aggregate(result->solver_names[s], by_solver[s]));
     if (options.keep_samples) {
@@ -802,14 +832,15 @@ Status RunDatasetComparison(const DatasetComparisonOptions& options,
   // every solver starts from the same initial values.
   std::vector<std::vector<ResectionResult>> results;
   for (const SolverVariant& v : options.solvers)
-    results.push_back(ResectImages(v.ApplyTo(options.job.resection), job.inputs, options.num_threads));
+    results.push_back(
+        ResectImages(v.ApplyTo(options.job.resection), job.inputs, options.num_threads));
 
   const size_t num_solvers = options.solvers.size();
   std::vector<int> check_beyond(num_solvers, 0);
   std::vector<std::vector<double>> sigma0(num_solvers), seconds(num_solvers),
-      refinement(num_solvers), iterations(num_solvers),
-      difference_position(num_solvers), difference_rotation(num_solvers),
-      reference_position(num_solvers), reference_rotation(num_solvers);
+      refinement(num_solvers), iterations(num_solvers), difference_position(num_solvers),
+      difference_rotation(num_solvers), reference_position(num_solvers),
+      reference_rotation(num_solvers);
   std::vector<std::vector<Eigen::Vector2d>> residuals(num_solvers), checks(num_solvers);
   for (size_t i = 0; i < job.inputs.size(); ++i) {
     const ResectionResult& first = results[reference_index][i];
@@ -856,7 +887,8 @@ Status RunDatasetComparison(const DatasetComparisonOptions& options,
         iterations[s].push_back(r.summary.iterations);
         if (s != reference_index && first.success) {
           solve.has_difference = true;
-          solve.difference_position_m = (r.eo.center_in_ground() - first.eo.center_in_ground()).norm();
+          solve.difference_position_m =
+              (r.eo.center_in_ground() - first.eo.center_in_ground()).norm();
           solve.difference_rotation_arcsec =
               RotationErrorArcSeconds(first.eo.angles_seed_rad(), r.eo.angles_seed_rad());
           difference_position[s].push_back(solve.difference_position_m);
@@ -864,7 +896,8 @@ Status RunDatasetComparison(const DatasetComparisonOptions& options,
         }
         if (ref != reference.end()) {
           solve.has_reference = true;
-          solve.reference_position_m = (r.eo.center_in_ground() - ref->second.center_in_ground()).norm();
+          solve.reference_position_m =
+              (r.eo.center_in_ground() - ref->second.center_in_ground()).norm();
           solve.reference_rotation_arcsec =
               RotationErrorArcSeconds(ref->second.angles_seed_rad(), r.eo.angles_seed_rad());
           reference_position[s].push_back(solve.reference_position_m);
@@ -901,14 +934,17 @@ Status RunDatasetComparison(const DatasetComparisonOptions& options,
 
 std::vector<std::string> MonteCarloNotes(const MonteCarloOptions& options) {
   char success[256];
-  std::snprintf(success, sizeof(success),
-                "success: a pose was returned and |X0 - X0_true| <= %g design sigmas, sigma = "
-                "sqrt(trace C_pos), C = (J^T P J)^-1 at the true pose; its mean (m) is in each table title.",
-                options.success_sigmas);
+  std::snprintf(
+      success, sizeof(success),
+      "success: a pose was returned and |X0 - X0_true| <= %g design sigmas, sigma = "
+      "sqrt(trace C_pos), C = (J^T P J)^-1 at the true pose; its mean (m) is in each table title.",
+      options.success_sigmas);
   return {
-      "solved: a pose was returned; success as below. pos/rot/check/reproj RMSE are over the solved "
+      "solved: a pose was returned; success as below. pos/rot/check/reproj RMSE are over the "
+      "solved "
       "samples (rotation: angle of R_true^T R_est; check and reproj: RMS of the 2-D residual norm, "
-      "reproj over uncontaminated control marks).",
+      "reproj over uncontaminated control marks). d_ref_m, d_ref_as: RMS of the paired "
+      "differences to the reference solver (taylor when compared) on the same data and start.",
       success,
       "t_us: median wall time of one ResectImage call (statistics included) over the solved "
       "samples, microseconds; refine_us: its refinement part; t/ref: t_us over the reference "
@@ -939,15 +975,15 @@ std::vector<TextTable> MonteCarloTables(const MonteCarloOptions& options,
     double threshold = kNaN;
     if (!setting.solvers.empty()) threshold = setting.solvers.front().mean_success_threshold_m;
     table.title += ", success threshold " + Sig(threshold) + " m";
-    table.header = {"solver",    "solved",    "success", "pos_rmse_m", "rot_rmse_as", "check_px",
-                    "reproj_px", "iter",      "t_us",    "refine_us",  "t/ref",       "nees",
-                    "E[nees]",   "nees_ap",   "99% int", "cov"};
+    table.header = {"solver",   "solved",   "success",   "pos_rmse_m", "rot_rmse_as", "d_ref_m",
+                    "d_ref_as", "check_px", "reproj_px", "iter",       "t_us",        "refine_us",
+                    "t/ref",    "nees",     "E[nees]",   "nees_ap",    "99% int",     "cov"};
     const double reference_seconds = setting.solvers[reference].median_seconds;
     for (const SolverStatistics& s : setting.solvers) {
       const bool has_nees = s.nees_count > 0;
       std::string verdict = "-";
       if (has_nees && std::isfinite(s.mean_nees_apriori)) {
-        verdict = s.nees_interval_99.Contains(s.mean_nees_apriori)     ? "ok"
+        verdict = s.nees_interval_99.Contains(s.mean_nees_apriori) ? "ok"
                   : s.mean_nees_apriori > s.nees_interval_99.upper ? "HIGH"
                                                                    : "low";
       }
@@ -957,6 +993,8 @@ std::vector<TextTable> MonteCarloTables(const MonteCarloOptions& options,
           Percent(s.success_rate),
           Sig(s.position_rmse_m),
           Sig(s.rotation_rmse_arcsec),
+          Sig(s.difference_position_rmse_m),
+          Sig(s.difference_rotation_rmse_arcsec),
           Sig(s.check_rmse_px),
           Sig(s.reprojection_rmse_px),
           Format("%.1f", s.mean_iterations),
@@ -966,8 +1004,9 @@ std::vector<TextTable> MonteCarloTables(const MonteCarloOptions& options,
           has_nees ? Sig(s.mean_nees) : "-",
           has_nees ? Sig(s.expected_nees) : "-",
           has_nees ? Sig(s.mean_nees_apriori) : "-",
-          has_nees ? "[" + Sig(s.nees_interval_99.lower) + ", " + Sig(s.nees_interval_99.upper) + "]"
-                   : "-",
+          has_nees
+              ? "[" + Sig(s.nees_interval_99.lower) + ", " + Sig(s.nees_interval_99.upper) + "]"
+              : "-",
           verdict,
       });
     }
@@ -989,7 +1028,8 @@ std::string MonteCarloCsv(const MonteCarloResult& result) {
   std::ostringstream csv;
   csv << "scenario,axis,noise_px,outlier_fraction,control_points,initial_position_error_m,"
          "initial_angle_error_deg,images_per_trial,solver,samples,solved,successes,success_rate,"
-         "success_threshold_m,position_rmse_m,rotation_rmse_arcsec,check_rmse_px,"
+         "success_threshold_m,position_rmse_m,rotation_rmse_arcsec,difference_rmse_m,"
+         "difference_rmse_arcsec,check_rmse_px,"
          "reprojection_rmse_px,mean_iterations,median_time_us,median_refinement_time_us,"
          "time_ratio,mean_nees,mean_nees_apriori,expected_nees,nees_count,nees95_lower,"
          "nees95_upper,nees99_lower,nees99_upper\n";
@@ -1003,14 +1043,15 @@ std::string MonteCarloCsv(const MonteCarloResult& result) {
           << setting.images_per_trial << "," << CsvField(s.solver) << "," << s.samples << ","
           << s.solved << "," << s.successes << "," << Full(s.success_rate) << ","
           << Full(s.mean_success_threshold_m) << "," << Full(s.position_rmse_m) << ","
-          << Full(s.rotation_rmse_arcsec) << "," << Full(s.check_rmse_px) << ","
+          << Full(s.rotation_rmse_arcsec) << "," << Full(s.difference_position_rmse_m) << ","
+          << Full(s.difference_rotation_rmse_arcsec) << "," << Full(s.check_rmse_px) << ","
           << Full(s.reprojection_rmse_px) << "," << Full(s.mean_iterations) << ","
           << Full(s.median_seconds * 1e6) << "," << Full(s.median_refinement_seconds * 1e6) << ","
           << Full(s.median_seconds / setting.solvers[reference].median_seconds) << ","
-          << Full(s.mean_nees) << "," << Full(s.mean_nees_apriori) << ","
-          << Full(s.expected_nees) << "," << s.nees_count << ","
-          << Full(s.nees_interval_95.lower) << "," << Full(s.nees_interval_95.upper) << ","
-          << Full(s.nees_interval_99.lower) << "," << Full(s.nees_interval_99.upper) << "\n";
+          << Full(s.mean_nees) << "," << Full(s.mean_nees_apriori) << "," << Full(s.expected_nees)
+          << "," << s.nees_count << "," << Full(s.nees_interval_95.lower) << ","
+          << Full(s.nees_interval_95.upper) << "," << Full(s.nees_interval_99.lower) << ","
+          << Full(s.nees_interval_99.upper) << "\n";
     }
   }
   return csv.str();
@@ -1022,26 +1063,25 @@ std::vector<TextTable> DatasetTables(const DatasetComparisonResult& result) {
   const double reference_seconds = result.summaries[reference].median_seconds;
   TextTable summary;
   summary.title = "Solvers (differences to " + result.reference_solver + ")";
-  summary.header = {"solver",    "solved", "sigma0",    "rms_px",  "check_px", "chk_out", "iter",
-                    "t_us",      "t/ref",  "refine_us", "d_pos_m", "d_rot_as"};
+  summary.header = {"solver", "solved", "sigma0", "rms_px",    "check_px", "chk_out",
+                    "iter",   "t_us",   "t/ref",  "refine_us", "d_pos_m",  "d_rot_as"};
   if (result.has_reference) {
     summary.header.push_back("ref_pos_m");
     summary.header.push_back("ref_rot_as");
   }
   for (const DatasetSolverSummary& s : result.summaries) {
-    std::vector<std::string> row = {
-        s.solver,
-        std::to_string(s.solved) + "/" + std::to_string(s.images),
-        Sig(s.rms_sigma0),
-        Sig(s.rms_px),
-        Sig(s.check_rmse_px),
-        std::to_string(s.check_beyond),
-        Format("%.1f", s.mean_iterations),
-        Microseconds(s.median_seconds),
-        Format("%.2f", s.median_seconds / reference_seconds),
-        Microseconds(s.median_refinement_seconds),
-        s.compared > 0 ? Sig(s.difference_position_m) : "-",
-        s.compared > 0 ? Sig(s.difference_rotation_arcsec) : "-"};
+    std::vector<std::string> row = {s.solver,
+                                    std::to_string(s.solved) + "/" + std::to_string(s.images),
+                                    Sig(s.rms_sigma0),
+                                    Sig(s.rms_px),
+                                    Sig(s.check_rmse_px),
+                                    std::to_string(s.check_beyond),
+                                    Format("%.1f", s.mean_iterations),
+                                    Microseconds(s.median_seconds),
+                                    Format("%.2f", s.median_seconds / reference_seconds),
+                                    Microseconds(s.median_refinement_seconds),
+                                    s.compared > 0 ? Sig(s.difference_position_m) : "-",
+                                    s.compared > 0 ? Sig(s.difference_rotation_arcsec) : "-"};
     if (result.has_reference) {
       row.push_back(s.referenced > 0 ? Sig(s.reference_position_m) : "-");
       row.push_back(s.referenced > 0 ? Sig(s.reference_rotation_arcsec) : "-");
@@ -1049,21 +1089,23 @@ std::vector<TextTable> DatasetTables(const DatasetComparisonResult& result) {
     summary.rows.push_back(row);
   }
   summary.notes = {
-      "sigma0: RMS over images of the a-posteriori sigma0; rms_px: RMS of the inlier residual norms "
+      "sigma0: RMS over images of the a-posteriori sigma0; rms_px: RMS of the inlier residual "
+      "norms "
       "(pixels); check_px: RMS of the check-point residual norms within the inlier threshold, "
       "chk_out: check marks beyond it; t_us: median time per image (microseconds, RANSAC "
       "included when it ran), refine_us: its refinement part.",
       "d_pos_m, d_rot_as: RMS over images of |X0 - X0_" + result.reference_solver +
           "| (m) and of the rotation angle between the two (arc-seconds)." +
-          (result.has_reference ? " ref_pos_m, ref_rot_as: the same to the reference frames." : "")};
+          (result.has_reference ? " ref_pos_m, ref_rot_as: the same to the reference frames."
+                                : "")};
   tables.push_back(summary);
 
   TextTable images;
   images.title = std::string("Per image (angles in degrees, ") +
                  RotationConventionName(result.rotation) + " convention)";
-  images.header = {"image",    "solver",  "status", "X_m",  "Y_m",     "Z_m",
+  images.header = {"image",    "solver",  "status", "X_m",    "Y_m",     "Z_m",
                    "omega",    "phi",     "kappa",  "sigma0", "inliers", "rms_px",
-                   "check_px", "chk_out", "iter",   "t_us", "d_pos_m", "d_rot_as"};
+                   "check_px", "chk_out", "iter",   "t_us",   "d_pos_m", "d_rot_as"};
   if (result.has_reference) {
     images.header.push_back("ref_pos_m");
     images.header.push_back("ref_rot_as");
@@ -1126,8 +1168,7 @@ std::string DatasetCsv(const DatasetComparisonResult& result) {
       csv << ",,,,,,,,,,,,,," << s.num_observations << ",,,,,,,";
     }
     csv << s.iterations << "," << Full(s.seconds * 1e6) << "," << Full(s.refinement_seconds * 1e6)
-        << ","
-        << (s.has_difference ? Full(s.difference_position_m) : "") << ","
+        << "," << (s.has_difference ? Full(s.difference_position_m) : "") << ","
         << (s.has_difference ? Full(s.difference_rotation_arcsec) : "") << ","
         << (s.has_reference ? Full(s.reference_position_m) : "") << ","
         << (s.has_reference ? Full(s.reference_rotation_arcsec) : "") << "\n";

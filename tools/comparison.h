@@ -6,14 +6,16 @@
 //    setting. Every solver of one trial gets the same scene and the same initial values (the
 //    scene's approximate frames, or one seeded RANSAC run per image), so the differences are the
 //    solvers' alone. Each solve is compared with the truth.
-//  - Dataset mode (RunDatasetComparison): real tables with no truth; every solver's pose, sigma0 and
+//  - Dataset mode (RunDatasetComparison): real tables with no truth; every solver's pose, sigma0
+//  and
 //    residuals, the differences between solvers and, when given, to a reference orientation.
 //
 // Both return plain structs; tables, CSV and Markdown are rendered here, the HTML report in
 // tools/html_report.h, and the command (tools/compare_command.cc) only parses flags and writes.
 //
 // Definitions used throughout (docs/comparison.md explains them):
-//  - position error: |X0_est - X0_true| (m); rotation error: the angle of R_true^T R_est (arc-seconds).
+//  - position error: |X0_est - X0_true| (m); rotation error: the angle of R_true^T R_est
+//  (arc-seconds).
 //  - success: the solver returned a pose and its position error is at most success_sigmas times
 //    the design standard deviation sqrt(trace C_pos), C = (J^T P J)^-1 at the true pose over the
 //    image's uncontaminated control observations weighted by their stated accuracy (m). The
@@ -28,6 +30,7 @@
 //    value is 6 r / (r - 2) instead of 6.
 
 #include <cstdint>
+#include <limits>
 #include <optional>
 #include <string>
 #include <utility>
@@ -89,7 +92,8 @@ double RotationErrorArcSeconds(const Eigen::Vector3d& angles_a_rad,
 // estimate is nearer the truth in that form, e and C are taken in it. NaN when C is not positive
 // definite.
 double NormalizedEstimationErrorSquared(const ExteriorOrientation& estimate,
-                                        const ExteriorOrientation& truth, const Matrix6d& covariance);
+                                        const ExteriorOrientation& truth,
+                                        const Matrix6d& covariance);
 
 // ------------------------------------------------------------------ Monte-Carlo mode
 
@@ -118,13 +122,13 @@ Status ParseInitialErrors(const std::string& text, std::vector<InitialError>* er
 
 struct MonteCarloOptions {
   std::vector<Scenario> scenarios = {Scenario::kNadir};
-  std::vector<double> noise_px = {0.5};             // image noise, one sigma (pixels)
-  std::vector<double> outlier_fractions = {0.0};    // fraction of marks with gross errors, [0, 1)
-  std::vector<int> control_points = {20};           // control points per image footprint (count)
+  std::vector<double> noise_px = {0.5};           // image noise, one sigma (pixels)
+  std::vector<double> outlier_fractions = {0.0};  // fraction of marks with gross errors, [0, 1)
+  std::vector<int> control_points = {20};         // control points per image footprint (count)
   std::vector<InitialError> initial_errors = {InitialError()};
-  int check_points = 5;        // check points per image footprint (count)
-  int trials = 50;             // trials per setting (count)
-  uint64_t seed = 1;           // trial t of every setting uses scene seed `seed + t`
+  int check_points = 5;  // check points per image footprint (count)
+  int trials = 50;       // trials per setting (count)
+  uint64_t seed = 1;     // trial t of every setting uses scene seed `seed + t`
   SweepType sweep = SweepType::kAxes;
   InitialValues initial = InitialValues::kApproximateFrames;
   std::vector<SolverVariant> solvers;
@@ -160,38 +164,45 @@ SyntheticSceneOptions SceneOptionsFor(const MonteCarloOptions& options, const Sw
 // One solve of one image of one trial, against the truth.
 struct SolveOutcome {
   int trial = 0;
-  int image = 0;       // index of the image in the scene
-  int solver = 0;      // index into MonteCarloOptions::solvers
-  bool solved = false; // the solver returned a pose
+  int image = 0;        // index of the image in the scene
+  int solver = 0;       // index into MonteCarloOptions::solvers
+  bool solved = false;  // the solver returned a pose
   bool success = false;
-  std::string message; // why it was not solved
+  std::string message;  // why it was not solved
   double position_error_m = 0.0;
   double rotation_error_arcsec = 0.0;
+  // To the reference solver ("taylor" when compared, otherwise the first) on the same image, when
+  // both solved (NaN otherwise and for the reference itself): |dX0| (m), rotation angle (arcsec).
+  double difference_position_m = std::numeric_limits<double>::quiet_NaN();
+  double difference_rotation_arcsec = std::numeric_limits<double>::quiet_NaN();
   double success_threshold_m = 0.0;  // success_sigmas * design sigma of this image (m)
   double nees = 0.0;                 // with the solver's covariance (NaN when not available)
   double nees_apriori = 0.0;         // with the covariance / sigma0^2
   double check_rmse_px = 0.0;        // check points, observed - projected (pixels)
   int num_check = 0;
-  double reprojection_rmse_px = 0.0; // uncontaminated control observations (pixels)
+  double reprojection_rmse_px = 0.0;  // uncontaminated control observations (pixels)
   int num_reprojection = 0;
-  int degrees_of_freedom = 0;        // of the solver's sigma0: 2 inliers - 6
+  int degrees_of_freedom = 0;  // of the solver's sigma0: 2 inliers - 6
   double sigma0 = 0.0;
   int iterations = 0;
-  double total_seconds = 0.0;        // ResectImage wall time (s)
-  double refinement_seconds = 0.0;   // its refinement part (s)
+  double total_seconds = 0.0;       // ResectImage wall time (s)
+  double refinement_seconds = 0.0;  // its refinement part (s)
 };
 
 // One solver over all samples (trials x images) of one setting.
 struct SolverStatistics {
   std::string solver;
-  int samples = 0;     // trials x images attempted
-  int solved = 0;      // a pose was returned
-  int successes = 0;   // solved and within the success threshold
+  int samples = 0;    // trials x images attempted
+  int solved = 0;     // a pose was returned
+  int successes = 0;  // solved and within the success threshold
   double success_rate = 0.0;
   // Over the solved samples: RMS of the position error (m), rotation error (arc-seconds), of the
   // check-point and reprojection residuals (pixels); mean iterations.
   double position_rmse_m = 0.0;
   double rotation_rmse_arcsec = 0.0;
+  // RMS of the paired differences to the reference solver (m, arc-seconds).
+  double difference_position_rmse_m = 0.0;
+  double difference_rotation_rmse_arcsec = 0.0;
   double check_rmse_px = 0.0;
   double reprojection_rmse_px = 0.0;
   double mean_iterations = 0.0;
@@ -233,7 +244,8 @@ Status RunMonteCarlo(const MonteCarloOptions& options, MonteCarloResult* result)
 
 // The baseline value of every axis is the first of its list. Indices of the settings of `scenario`
 // that vary `axis` ("noise", "outliers", "control", "initial") with every other axis at its
-// baseline, the baseline included, sorted by the value of `axis`; empty when the axis has one value.
+// baseline, the baseline included, sorted by the value of `axis`; empty when the axis has one
+// value.
 std::vector<size_t> SettingsAlongAxis(const MonteCarloOptions& options,
                                       const MonteCarloResult& result, Scenario scenario,
                                       const std::string& axis);
@@ -274,8 +286,8 @@ struct DatasetSolve {
   double sigma0 = 0.0;
   int num_observations = 0;
   int num_inliers = 0;
-  double rms_px = 0.0;        // inlier control residuals (pixels)
-  double max_px = 0.0;        // largest inlier residual (pixels)
+  double rms_px = 0.0;  // inlier control residuals (pixels)
+  double max_px = 0.0;  // largest inlier residual (pixels)
   // Check points (pixels): RMS of the residual norms within the inlier threshold, how many, and how
   // many lie beyond it (blunders of the check marks, or a wrong pose).
   double check_rmse_px = 0.0;
@@ -321,13 +333,14 @@ struct DatasetComparisonResult {
   // The base of the differences and time ratios: "taylor" when compared, otherwise the first.
   std::string reference_solver;
   bool has_reference = false;
-  std::vector<DatasetSolve> solves;   // image-major: for each image, every solver in order
+  std::vector<DatasetSolve> solves;  // image-major: for each image, every solver in order
   std::vector<DatasetSolverSummary> summaries;
   RotationConvention rotation = RotationConvention::kSeed;  // of the printed angles
 };
 
 // Reads the tables and runs every solver on every image. Errors: unreadable or inconsistent input.
-Status RunDatasetComparison(const DatasetComparisonOptions& options, DatasetComparisonResult* result);
+Status RunDatasetComparison(const DatasetComparisonOptions& options,
+                            DatasetComparisonResult* result);
 
 // ------------------------------------------------------------------ rendering
 

@@ -97,8 +97,8 @@ Axis LinearAxis(double lo, double hi, bool from_zero) {
 std::string Text(double x, double y, const std::string& text, const char* anchor = "middle",
                  const std::string& extra = "") {
   std::ostringstream out;
-  out << "<text x=\"" << Number(x, "%.1f") << "\" y=\"" << Number(y, "%.1f")
-      << "\" text-anchor=\"" << anchor << "\"" << extra << ">" << HtmlEscape(text) << "</text>";
+  out << "<text x=\"" << Number(x, "%.1f") << "\" y=\"" << Number(y, "%.1f") << "\" text-anchor=\""
+      << anchor << "\"" << extra << ">" << HtmlEscape(text) << "</text>";
   return out.str();
 }
 
@@ -124,7 +124,8 @@ std::string Marker(size_t index, double x, double y, double r, const char* color
       d << "M" << p(x) << "," << p(y - 1.3 * r) << "L" << p(x + 1.3 * r) << "," << p(y) << "L"
         << p(x) << "," << p(y + 1.3 * r) << "L" << p(x - 1.3 * r) << "," << p(y) << "Z";
   }
-  return "<path d=\"" + d.str() + "\" fill=\"" + color + "\" stroke=\"#ffffff\" stroke-width=\"0.5\">";
+  return "<path d=\"" + d.str() + "\" fill=\"" + color +
+         "\" stroke=\"#ffffff\" stroke-width=\"0.5\">";
 }
 
 std::string SvgOpen(double width, double height, const std::string& title) {
@@ -236,7 +237,8 @@ std::string RenderLinePlotSvg(const LinePlot& plot) {
 
   std::ostringstream svg;
   svg << SvgOpen(kWidth, kHeight, plot.title);
-  svg << Text(kLeft + plot_w / 2, 20, plot.title, "middle", " font-size=\"14\" font-weight=\"bold\"");
+  svg << Text(kLeft + plot_w / 2, 20, plot.title, "middle",
+              " font-size=\"14\" font-weight=\"bold\"");
   // Grid and ticks.
   for (double t : y_axis.Ticks()) {
     const double y = py(t);
@@ -259,7 +261,7 @@ std::string RenderLinePlotSvg(const LinePlot& plot) {
     const double y = py(plot.reference_y);
     svg << "<line x1=\"" << kLeft << "\" x2=\"" << kLeft + plot_w << "\" y1=\"" << Number(y, "%.1f")
         << "\" y2=\"" << Number(y, "%.1f") << "\" stroke=\"#555\" stroke-dasharray=\"6 4\"/>";
-    svg << Text(kLeft + plot_w - 4, y - 4, plot.reference_label, "end", " fill=\"#555\"");
+    svg << Text(kLeft + 4, y - 4, plot.reference_label, "start", " fill=\"#555\"");
   }
   if (empty) svg << Text(kLeft + plot_w / 2, kTop + plot_h / 2, "no data");
   // Series, then the legend.
@@ -276,8 +278,7 @@ std::string RenderLinePlotSvg(const LinePlot& plot) {
     auto flush = [&]() {
       if (!points.empty())
         svg << "<polyline fill=\"none\" stroke=\"" << color << "\" stroke-width=\"" << stroke_width
-            << "\"" << dash
-            << " points=\"" << points << "\"/>";
+            << "\"" << dash << " points=\"" << points << "\"/>";
       points.clear();
     };
     for (size_t k = 0; k < series.x.size() && k < series.y.size(); ++k) {
@@ -393,14 +394,23 @@ std::string MonteCarloHtml(const MonteCarloOptions& options, const MonteCarloRes
       bool nees_reference;  // draw the dashed line at 6
       double (*get)(const SolverStatistics&);
     };
-    const Metric position{"position RMSE", "position RMSE (m)", true, false, false,
-                          [](const SolverStatistics& s) { return s.position_rmse_m; }};
-    const Metric success{"success rate", "success rate", false, true, false,
-                         [](const SolverStatistics& s) { return s.success_rate; }};
-    const Metric nees{"mean NEES (solver covariance)", "mean NEES", true, false, true,
-                      [](const SolverStatistics& s) { return s.mean_nees; }};
-    const Metric iterations{"mean iterations", "iterations", false, false, false,
-                            [](const SolverStatistics& s) { return s.mean_iterations; }};
+    const Metric position{
+        "position RMSE", "position RMSE (m)", true, false, false, [](const SolverStatistics& s) {
+          return s.position_rmse_m;
+        }};
+    const Metric success{"success rate", "success rate",
+                         false,          true,
+                         false,          [](const SolverStatistics& s) { return s.success_rate; }};
+    const Metric nees{"mean NEES (sigma0 = 1)",
+                      "mean NEES, a-priori covariance",
+                      true,
+                      false,
+                      true,
+                      [](const SolverStatistics& s) { return s.mean_nees_apriori; }};
+    const Metric iterations{
+        "mean iterations", "iterations", false, false, false, [](const SolverStatistics& s) {
+          return s.mean_iterations;
+        }};
     const std::vector<std::pair<std::string, std::vector<Metric>>> plots = {
         {"noise", {position, nees}},
         {"outliers", {position, success}},
@@ -418,8 +428,8 @@ std::string MonteCarloHtml(const MonteCarloOptions& options, const MonteCarloRes
         if (axis == "initial") {
           plot.x_label += "; position +-";
           for (size_t k = 0; k < along.size(); ++k)
-            plot.x_label += (k ? "/" : "") +
-                            Number(result.settings[along[k]].setting.initial_error.position_m);
+            plot.x_label +=
+                (k ? "/" : "") + Number(result.settings[along[k]].setting.initial_error.position_m);
           plot.x_label += " m";
         }
         plot.y_label = metric.unit_label;
@@ -457,11 +467,17 @@ std::string MonteCarloHtml(const MonteCarloOptions& options, const MonteCarloRes
       bars.title = std::string(ScenarioName(scenario)) + ": median time per solve (" +
                    setting.setting.axis + " setting)";
       bars.value_label = "microseconds per image (ResectImage wall time)";
+      BarPlot refinement = bars;
+      refinement.title = std::string(ScenarioName(scenario)) + ": median refinement time (" +
+                         setting.setting.axis + " setting)";
+      refinement.value_label = "microseconds per image (the solver's own iterations)";
       for (const SolverStatistics& s : setting.solvers) {
         bars.labels.push_back(s.solver);
         bars.values.push_back(s.median_seconds * 1e6);
+        refinement.labels.push_back(s.solver);
+        refinement.values.push_back(s.median_refinement_seconds * 1e6);
       }
-      html << RenderBarPlotSvg(bars) << "\n";
+      html << RenderBarPlotSvg(bars) << "\n" << RenderBarPlotSvg(refinement) << "\n";
       break;
     }
     html << "</div>\n";
@@ -484,20 +500,22 @@ std::string DatasetHtml(const DatasetComparisonResult& result, const std::string
   time.title = "median time per image";
   time.value_label = "microseconds per image (ResectImage wall time)";
   BarPlot difference;
-  difference.title = "RMS position difference to " +
-                     (result.has_reference ? std::string("the reference") : result.reference_solver);
-  difference.value_label = "metres";
+  difference.title = "RMS position difference to " + result.reference_solver;
+  difference.value_label = "metres (n/a: the solver itself or none solved)";
+  BarPlot reference = difference;
+  reference.title = "RMS position difference to the reference frames";
+  reference.value_label = "metres";
   for (const DatasetSolverSummary& s : result.summaries) {
     time.labels.push_back(s.solver);
     time.values.push_back(s.median_seconds * 1e6);
     difference.labels.push_back(s.solver);
-    if (result.has_reference) {
-      difference.values.push_back(s.referenced > 0 ? s.reference_position_m : kNaN);
-    } else {
-      difference.values.push_back(s.compared > 0 ? s.difference_position_m : kNaN);
-    }
+    difference.values.push_back(s.compared > 0 ? s.difference_position_m : kNaN);
+    reference.labels.push_back(s.solver);
+    reference.values.push_back(s.referenced > 0 ? s.reference_position_m : kNaN);
   }
-  html << RenderBarPlotSvg(time) << "\n" << RenderBarPlotSvg(difference) << "\n</div>\n";
+  html << RenderBarPlotSvg(time) << "\n" << RenderBarPlotSvg(difference) << "\n";
+  if (result.has_reference) html << RenderBarPlotSvg(reference) << "\n";
+  html << "</div>\n";
   for (const TextTable& table : tables) html << RenderHtmlTable(table);
   html << "</body>\n</html>\n";
   return html.str();

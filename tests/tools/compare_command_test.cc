@@ -47,8 +47,7 @@ size_t Column(const std::vector<std::string>& header, const std::string& name) {
 int RowsStartingWith(const std::string& out, const std::string& name) {
   int rows = 0;
   std::istringstream lines(out);
-  for (std::string line; std::getline(lines, line);)
-    rows += line.rfind(name + " ", 0) == 0;
+  for (std::string line; std::getline(lines, line);) rows += line.rfind(name + " ", 0) == 0;
   return rows;
 }
 
@@ -64,10 +63,11 @@ TEST(CompareCommand, MonteCarloRunsWritesEveryOutputAndAgreesWithTheEngine) {
   ASSERT_EQ(run.exit_code, 0) << run.err;
   EXPECT_EQ(run.err, "");
   // Two settings, each with a row per solver.
-  const std::vector<std::string> solvers = {"taylor_as_printed",    "taylor",
-                                            "ceres_analytic/none",  "ceres_analytic/cauchy",
-                                            "ceres_autodiff/none",  "ceres_autodiff/cauchy"};
-  for (const std::string& solver : solvers) EXPECT_EQ(RowsStartingWith(run.out, solver), 2) << solver;
+  const std::vector<std::string> solvers = {"taylor_as_printed",   "taylor",
+                                            "ceres_analytic/none", "ceres_analytic/cauchy",
+                                            "ceres_autodiff/none", "ceres_autodiff/cauchy"};
+  for (const std::string& solver : solvers)
+    EXPECT_EQ(RowsStartingWith(run.out, solver), 2) << solver;
   const std::string html = ReadFile(dir + "/r.html");
   EXPECT_EQ(html.rfind("<!DOCTYPE html>", 0), 0u);
   EXPECT_NE(html.find("<svg"), std::string::npos);
@@ -112,13 +112,14 @@ TEST(CompareCommand, MonteCarloRunsWritesEveryOutputAndAgreesWithTheEngine) {
 
 TEST(CompareCommand, DatasetModeComparesEverySolverToTheReference) {
   const std::string dir = ScratchDir();
-  const CliRun run = RunCli(
-      "compare --cameras=" + SourcePath("examples/cameras.csv") + " --points=" +
-          SourcePath("examples/points.csv") + " --marks=" + SourcePath("examples/marks.csv") +
-          " --reference=" + SourcePath("examples/truth/frames.csv") +
-          " --solvers=taylor_as_printed,taylor,ceres_analytic --losses=huber --csv=" + dir +
-          "/d.csv --html=" + dir + "/d.html",
-      dir);
+  const CliRun run =
+      RunCli("compare --cameras=" + SourcePath("examples/cameras.csv") +
+                 " --points=" + SourcePath("examples/points.csv") +
+                 " --marks=" + SourcePath("examples/marks.csv") +
+                 " --reference=" + SourcePath("examples/truth/frames.csv") +
+                 " --solvers=taylor_as_printed,taylor,ceres_analytic --losses=huber --csv=" + dir +
+                 "/d.csv --html=" + dir + "/d.html",
+             dir);
   ASSERT_EQ(run.exit_code, 0) << run.err;
   for (const char* solver : {"taylor_as_printed", "taylor", "ceres_analytic/huber"})
     EXPECT_EQ(RowsStartingWith(run.out, solver), 1) << solver;  // the summary table
@@ -167,7 +168,8 @@ TEST_P(CompareBadUsage, ExitsWithTwoAndOneLine) {
   const std::string dir = ScratchDir();
   std::string arguments = c.arguments;
   const std::string examples = SourcePath("examples");
-  for (size_t at; (at = arguments.find("EX")) != std::string::npos;) arguments.replace(at, 2, examples);
+  for (size_t at; (at = arguments.find("EX")) != std::string::npos;)
+    arguments.replace(at, 2, examples);
   const CliRun run = RunCli("compare " + arguments, dir);
   EXPECT_EQ(run.exit_code, 2) << run.err;
   EXPECT_EQ(CountLines(run.err), 1) << run.err;
@@ -193,20 +195,21 @@ INSTANTIATE_TEST_SUITE_P(
         UsageCase{"bad_number", "--threads=many", "invalid value 'many' for --threads"},
         UsageCase{"missing_value", "--trials", "--trials needs a value"},
         UsageCase{"stray_argument", "nadir", "unexpected argument 'nadir'"},
-        UsageCase{"dataset_flag_without_cameras", "--reference=EX/truth/frames.csv", "dataset mode only"},
+        UsageCase{"dataset_flag_without_cameras", "--reference=EX/truth/frames.csv",
+                  "dataset mode only"},
         UsageCase{"monte_carlo_flag_with_cameras",
                   "--cameras=EX/cameras.csv --points=EX/points.csv --marks=EX/marks.csv --trials=2",
                   "--trials applies to the Monte-Carlo mode only"},
         UsageCase{"sweep_flag_in_dataset_mode",
-                  "--cameras=EX/cameras.csv --points=EX/points.csv --sweep=axes", "--sweep applies"}),
+                  "--cameras=EX/cameras.csv --points=EX/points.csv --sweep=axes",
+                  "--sweep applies"}),
     [](const ::testing::TestParamInfo<UsageCase>& info) { return std::string(info.param.name); });
 
 TEST(CompareCommand, DatasetInputErrorsExitWithTwo) {
   const std::string dir = ScratchDir();
   const std::string examples = SourcePath("examples");
-  CliRun run = RunCli("compare --cameras=" + examples + "/cameras.csv --points=" + examples +
-                          "/points.csv",
-                      dir);
+  CliRun run = RunCli(
+      "compare --cameras=" + examples + "/cameras.csv --points=" + examples + "/points.csv", dir);
   EXPECT_EQ(run.exit_code, 2);
   EXPECT_NE(run.err.find("--points and --marks"), std::string::npos) << run.err;
   run = RunCli("compare --cameras=" + dir + "/none.csv --points=" + examples +

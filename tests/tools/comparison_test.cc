@@ -72,7 +72,8 @@ TEST(ComparisonStatistics, RotationErrorIsTheAngleBetweenTheRotations) {
   EXPECT_NEAR(RotationErrorArcSeconds(a, b), 10.0, 1e-6);
   // Accurate far below acos' resolution: 1e-9 rad.
   const Eigen::Vector3d c = a + Eigen::Vector3d(1e-9, 0, 0);
-  EXPECT_NEAR(RotationErrorArcSeconds(a, c), 1e-9 * kArcSecondsPerRadian, 1e-12 * kArcSecondsPerRadian);
+  EXPECT_NEAR(RotationErrorArcSeconds(a, c), 1e-9 * kArcSecondsPerRadian,
+              1e-12 * kArcSecondsPerRadian);
   EXPECT_NEAR(RotationErrorArcSeconds(a, a), 0.0, 1e-9);
 }
 
@@ -107,7 +108,7 @@ TEST(ComparisonOptions, ParsesSolversLossesAndInitialErrors) {
                                              "ceres_autodiff/huber"}));
   EXPECT_EQ(variants[3].ApplyTo(ResectionOptions()).loss, LossType::kHuber);
   EXPECT_EQ(variants[1].ApplyTo(ResectionOptions()).loss, LossType::kNone);  // Taylor: plain LSQ
-  EXPECT_EQ(Variants("taylor,taylor,ceres_analytic", "all").size(), 7u);  // duplicates dropped
+  EXPECT_EQ(Variants("taylor,taylor,ceres_analytic", "all").size(), 7u);     // duplicates dropped
   Status status = ParseSolverVariants("taylor,newton", "none", &variants);
   EXPECT_FALSE(status.ok());
   EXPECT_NE(status.message().find("'newton'"), std::string::npos);
@@ -178,7 +179,8 @@ TEST(ComparisonMonteCarlo, OneTrialAgreesWithADirectCallOfTheSolver) {
     const GroundPoint& point = *points.at(mark.point_id);
     if (point.role != PointRole::kControl) continue;
     Eigen::Vector2d image_plane;
-    ASSERT_TRUE(ImagePlaneFromPixel(camera, *mark.column_row, PixelOrigin::kCorner, &image_plane).ok());
+    ASSERT_TRUE(
+        ImagePlaneFromPixel(camera, *mark.column_row, PixelOrigin::kCorner, &image_plane).ok());
     input.image_plane_um.push_back(image_plane);
     input.points_in_ground.push_back(point.position);
     input.sigma_px.push_back(*mark.accuracy_px);
@@ -186,20 +188,24 @@ TEST(ComparisonMonteCarlo, OneTrialAgreesWithADirectCallOfTheSolver) {
   const ExteriorOrientation& truth = scene.true_frames[0].eo;
   int compared = 0;
   for (size_t s = 0; s < options.solvers.size(); ++s) {
-    const ResectionResult direct = ResectImage(options.solvers[s].ApplyTo(options.resection), input);
+    const ResectionResult direct =
+        ResectImage(options.solvers[s].ApplyTo(options.resection), input);
     for (const SolveOutcome& sample : setting.samples) {
       if (sample.trial != trial || sample.solver != static_cast<int>(s)) continue;
       ++compared;
       ASSERT_EQ(sample.solved, direct.success) << result.solver_names[s];
       EXPECT_EQ(sample.iterations, direct.summary.iterations) << result.solver_names[s];
       if (!direct.success) continue;
-      const double position_error = (direct.eo.center_in_ground() - truth.center_in_ground()).norm();
+      const double position_error =
+          (direct.eo.center_in_ground() - truth.center_in_ground()).norm();
       EXPECT_NEAR(sample.position_error_m, position_error, kSameComputationTolerance)
           << result.solver_names[s];
-      const Eigen::Matrix3d R_true = RotationFromAngles(RotationConvention::kSeed, truth.angles_seed_rad());
+      const Eigen::Matrix3d R_true =
+          RotationFromAngles(RotationConvention::kSeed, truth.angles_seed_rad());
       const Eigen::Matrix3d R_est =
           RotationFromAngles(RotationConvention::kSeed, direct.eo.angles_seed_rad());
-      const double angle = Eigen::AngleAxisd(R_true.transpose() * R_est).angle() * kArcSecondsPerRadian;
+      const double angle =
+          Eigen::AngleAxisd(R_true.transpose() * R_est).angle() * kArcSecondsPerRadian;
       EXPECT_NEAR(sample.rotation_error_arcsec, angle, 1e-3) << result.solver_names[s];
       EXPECT_NEAR(sample.sigma0, direct.sigma0, kSameComputationTolerance);
     }
@@ -317,7 +323,7 @@ TEST(ComparisonDataset, EverySolverOnTheExampleWithItsTruthAsReference) {
     EXPECT_EQ(s.solved, images) << s.solver;
     EXPECT_EQ(s.referenced, images) << s.solver;
     EXPECT_LT(s.reference_position_m, 0.05) << s.solver;  // 0.5 px noise at 100 m
-    EXPECT_NEAR(s.rms_sigma0, 1.0, 0.35) << s.solver;    // marks carry Accuracy = noise
+    EXPECT_NEAR(s.rms_sigma0, 1.0, 0.35) << s.solver;     // marks carry Accuracy = noise
   }
   // From the same RANSAC start and inliers, the corrected Taylor and plain Ceres agree; the
   // printed partials stop elsewhere (near nadir, by well under a millimetre).

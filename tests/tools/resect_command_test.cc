@@ -275,6 +275,10 @@ TEST(ResectCommand, MissingFileAndUsageErrors) {
   run = RunCli("resect " + ExampleArgs() + " --out=" + dir + "/o.csv --no_such_flag=1", dir);
   EXPECT_EQ(run.exit_code, 2);
   EXPECT_NE(run.err.find("unknown flag --no_such_flag"), std::string::npos);
+  // A flag of another subcommand is unknown here too.
+  run = RunCli("resect " + ExampleArgs() + " --out=" + dir + "/o.csv --noise_px=7", dir);
+  EXPECT_EQ(run.exit_code, 2);
+  EXPECT_NE(run.err.find("unknown flag --noise_px"), std::string::npos);
   run = RunCli("resect " + ExampleArgs() + " --out=" + dir + "/o.csv --loss=L2", dir);
   EXPECT_EQ(run.exit_code, 2);
   run = RunCli("resect " + ExampleArgs() + " --out=" + dir + "/o.csv --threads=abc", dir);
