@@ -17,7 +17,10 @@
 //   (A^T P A) d = A^T P F(approx),   A = dF/dp (eqs. 17-28),   p_new = p_approx - d.
 //
 // This is plain Gauss-Newton (the usual step is -d). The iteration stops when every correction is
-// below its tolerance. Only Eigen is used; no Ceres.
+// below its tolerance. Only Eigen is used; no Ceres. It deliberately evaluates Fu, Fv and the
+// partials from the seed's printed formulas rather than through core/collinearity.h: it is the
+// hand-written baseline the Ceres solvers are compared with, and its tests check it against
+// ProjectWithJacobians and central differences.
 //
 // Equation 21 as printed is wrong: its middle term reads -u sin(omega) but the derivative has
 // -v sin(omega) (u, v the computed image coordinates). TaylorPartials selects the corrected set or

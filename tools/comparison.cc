@@ -597,30 +597,22 @@ std::vector<SweepSetting> MakeSweepSettings(const MonteCarloOptions& options) {
       continue;
     }
     settings.push_back(baseline);
-    for (size_t k = 1; k < options.noise_px.size(); ++k) {
-      SweepSetting s = baseline;
-      s.noise_px = options.noise_px[k];
-      s.axis = "noise";
-      settings.push_back(s);
-    }
-    for (size_t k = 1; k < options.outlier_fractions.size(); ++k) {
-      SweepSetting s = baseline;
-      s.outlier_fraction = options.outlier_fractions[k];
-      s.axis = "outliers";
-      settings.push_back(s);
-    }
-    for (size_t k = 1; k < options.control_points.size(); ++k) {
-      SweepSetting s = baseline;
-      s.control_points = options.control_points[k];
-      s.axis = "control";
-      settings.push_back(s);
-    }
-    for (size_t k = 1; k < options.initial_errors.size(); ++k) {
-      SweepSetting s = baseline;
-      s.initial_error = options.initial_errors[k];
-      s.axis = "initial";
-      settings.push_back(s);
-    }
+    // One axis at a time: the baseline with the k-th value (k >= 1) of one swept quantity.
+    auto sweep_axis = [&](const auto& values, const char* axis, auto set) {
+      for (size_t k = 1; k < values.size(); ++k) {
+        SweepSetting s = baseline;
+        set(&s, values[k]);
+        s.axis = axis;
+        settings.push_back(s);
+      }
+    };
+    sweep_axis(options.noise_px, "noise", [](SweepSetting* s, double v) { s->noise_px = v; });
+    sweep_axis(options.outlier_fractions, "outliers",
+               [](SweepSetting* s, double v) { s->outlier_fraction = v; });
+    sweep_axis(options.control_points, "control",
+               [](SweepSetting* s, int v) { s->control_points = v; });
+    sweep_axis(options.initial_errors, "initial",
+               [](SweepSetting* s, const InitialError& v) { s->initial_error = v; });
   }
   return settings;
 }
