@@ -379,7 +379,9 @@ Status CheckControlConfiguration(const std::vector<Eigen::Vector3d>& points) {
   mean /= static_cast<double>(points.size());
   Eigen::Matrix3d scatter = Eigen::Matrix3d::Zero();
   for (const auto& p : points) scatter += (p - mean) * (p - mean).transpose();
-  const Eigen::Vector3d s = Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d>(scatter).eigenvalues();
+  Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eigen;
+  eigen.computeDirect(scatter, Eigen::EigenvaluesOnly);  // closed form for 3 x 3
+  const Eigen::Vector3d s = eigen.eigenvalues();
   // Eigenvalues ascending: collinear when the second largest spread is negligible.
   if (!(s[1] > 1e-12 * s[2])) return Status::Error("all control points lie on one line");
   return Status::Ok();
@@ -453,18 +455,22 @@ ResectionResult ResectImage(const ResectionOptions& options, const ResectionInpu
     taylor_options.partials = options.solver == PoseSolver::kTaylor ? TaylorPartials::kCorrected
                                                                     : TaylorPartials::kAsPrinted;
     taylor_options.max_iterations = options.max_iterations;
+    // The observations RANSAC kept (all of them when it did not run: no copies then).
+    const bool all_used = std::all_of(use.begin(), use.end(), [](char u) { return u != 0; });
     std::vector<Eigen::Vector2d> observations;
     std::vector<Eigen::Vector3d> points;
     std::vector<double> sigmas_um;
     for (size_t i = 0; i < n; ++i) {
       if (!use[i]) continue;
+      sigmas_um.push_back(input.sigma_px[i] * input.pixel_size_um);
+      if (all_used) continue;
       observations.push_back(input.image_plane_um[i]);
       points.push_back(input.points_in_ground[i]);
-      sigmas_um.push_back(input.sigma_px[i] * input.pixel_size_um);
     }
     TaylorResectionResult taylor;
-    const Status status = TaylorResection(taylor_options, observations, points, sigmas_um,
-                                          input.focal_length_um, eo, &taylor);
+    const Status status = TaylorResection(
+        taylor_options, all_used ? input.image_plane_um : observations,
+        all_used ? input.points_in_ground : points, sigmas_um, input.focal_length_um, eo, &taylor);
     summary.iterations = taylor.summary.iterations;
     summary.initial_cost = taylor.summary.initial_cost;
     summary.final_cost = taylor.summary.final_cost;
