@@ -379,9 +379,9 @@ Status CheckControlConfiguration(const std::vector<Eigen::Vector3d>& points) {
   mean /= static_cast<double>(points.size());
   Eigen::Matrix3d scatter = Eigen::Matrix3d::Zero();
   for (const auto& p : points) scatter += (p - mean) * (p - mean).transpose();
-  Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eigen;
-  eigen.computeDirect(scatter, Eigen::EigenvaluesOnly);  // closed form for 3 x 3
-  const Eigen::Vector3d s = eigen.eigenvalues();
+  // The iterative solver: the closed form (computeDirect) loses the small eigenvalue's digits.
+  const Eigen::Vector3d s =
+      Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d>(scatter, Eigen::EigenvaluesOnly).eigenvalues();
   // Eigenvalues ascending: collinear when the second largest spread is negligible.
   if (!(s[1] > 1e-12 * s[2])) return Status::Error("all control points lie on one line");
   return Status::Ok();
