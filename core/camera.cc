@@ -2,7 +2,6 @@
 
 #include <Eigen/Dense>
 #include <cmath>
-#include <sstream>
 
 namespace photopose {
 namespace {

@@ -1,8 +1,8 @@
 #pragma once
-// Robust single-image resection: LO-RANSAC (solvers/ransac.h) over Lambda Twist P3P, with the DLT
-// (solvers/dlt.h) as the non-minimal solver of the local optimisation
-// (solvers/p3p.h), MSAC-scored by image-plane residuals in micrometres, with a few Gauss-Newton
-// iterations of the collinearity equations (core/collinearity.h) as the local optimisation. The
+// Robust single-image resection: LO-RANSAC (solvers/ransac.h) over Lambda Twist P3P
+// (solvers/p3p.h), MSAC-scored by image-plane residuals in micrometres. The local optimisation is a
+// few Gauss-Newton iterations of the collinearity equations (core/collinearity.h), started also
+// from the DLT (solvers/dlt.h) of the inliers, the non-minimal solver, when they allow one. The
 // result is an initial exterior orientation and an inlier set for the least-squares resection.
 //
 // Inputs are ideal image-plane points: micrometres from the principal point, distortion removed,

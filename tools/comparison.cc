@@ -704,7 +704,7 @@ Status MakeSceneJob(const SyntheticScene& scene, SceneJob* scene_job) {
     const size_t index = it->second;
     if (point->second->role == PointRole::kCheck) {
       // A check mark with a simulated gross error would measure the blunder, not the pose.
-      if (!scene.mark_is_outlier[m]) job.input_check_marks[index].push_back(m);
+      if (!scene.mark_is_outlier[m]) job.input_check_marks[index].push_back({m, point->second->position});
       continue;
     }
     Eigen::Vector2d image_plane;

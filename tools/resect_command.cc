@@ -1,19 +1,11 @@
 // photopose resect: space resection of every image that has marks.
 #include <gflags/gflags.h>
-#include <glog/logging.h>
 
-#include <cmath>
 #include <cstdio>
 #include <iostream>
-#include <map>
-#include <nlohmann/json.hpp>
-#include <set>
-#include <thread>
 
 #include "core/camera.h"
-#include "core/collinearity.h"
 #include "core/rotation.h"
-#include "core/tables.h"
 #include "solvers/resection.h"
 #include "tools/cli_common.h"
 #include "tools/commands.h"

@@ -17,6 +17,7 @@ std::string Where(const std::string& file, int line, const std::string& column) 
 
 Status PrepareResectionJob(const ResectionJobOptions& options, ResectionJob* job) {
   *job = ResectionJob();
+  job->pixel_origin = options.pixel_origin;
   Status status = ReadCameraTable(options.cameras_path, &job->cameras);
   if (!status.ok()) return status;
   if (job->cameras.empty()) return Status::Error(options.cameras_path + ": the camera table has no rows");
@@ -94,7 +95,7 @@ Status PrepareResectionJob(const ResectionJobOptions& options, ResectionJob* job
       return Status::Error(Where(job->marks_label, mark.line, "CameraID") + "image '" + mark.raster +
                            "' has marks of two cameras");
     if (point->second->role == PointRole::kCheck) {
-      job->input_check_marks[index].push_back(m);
+      job->input_check_marks[index].push_back({m, point->second->position});
       continue;
     }
     const FrameCamera& camera = *job->input_cameras[index];
@@ -119,20 +120,16 @@ std::vector<Eigen::Vector2d> CheckPointResidualsPx(const ResectionJob& job, size
                                                    const ExteriorOrientation& eo) {
   std::vector<Eigen::Vector2d> residuals;
   const FrameCamera& camera = *job.input_cameras[index];
-  std::map<std::string, const GroundPoint*> point_by_id;
-  for (const GroundPoint& point : job.points) point_by_id[point.point_id] = &point;
-  for (size_t m : job.input_check_marks[index]) {
-    const ImageMark& mark = job.marks[m];
+  for (const ResectionJob::CheckMark& check : job.input_check_marks[index]) {
+    const ImageMark& mark = job.marks[check.mark];
     Eigen::Vector2d observed;
     if (mark.column_row.has_value()) {
       observed = *mark.column_row;
-    } else if (!PixelFromFilm(camera, *mark.film_um, PixelOrigin::kCorner, &observed).ok()) {
+    } else if (!PixelFromFilm(camera, *mark.film_um, job.pixel_origin, &observed).ok()) {
       continue;
     }
     Eigen::Vector2d projected;
-    if (!ProjectGroundPoint(camera, eo, point_by_id.at(mark.point_id)->position, PixelOrigin::kCorner,
-                            &projected)
-             .ok())
+    if (!ProjectGroundPoint(camera, eo, check.point_in_ground, job.pixel_origin, &projected).ok())
       continue;
     residuals.push_back(observed - projected);
   }

@@ -33,7 +33,13 @@ struct ResectionJob {
   std::vector<ResectionInput> inputs;
   std::vector<const FrameCamera*> input_cameras;          // camera of each input
   std::vector<std::vector<size_t>> input_marks;           // control marks of each input (into marks)
-  std::vector<std::vector<size_t>> input_check_marks;     // check-point marks of each input
+  // A check-point mark (index into marks) with its ground point.
+  struct CheckMark {
+    size_t mark;
+    Eigen::Vector3d point_in_ground;
+  };
+  std::vector<std::vector<CheckMark>> input_check_marks;  // check-point marks of each input
+  PixelOrigin pixel_origin = PixelOrigin::kCorner;        // of the marks' Column/Row
   std::string marks_label;                                 // file named in messages
 };
 
