@@ -28,6 +28,7 @@
 // behind a camera, no convergence) are reported in the summary; nothing aborts.
 
 #include <Eigen/Core>
+#include <cmath>
 #include <functional>
 #include <optional>
 #include <set>
@@ -88,9 +89,11 @@ struct BundleAdjustmentOptions {
   // Control marks and priors are never robustified.
   enum class TieLoss { kNone, kHuber, kCauchy, kSoftL1 } tie_loss = TieLoss::kNone;
   double tie_loss_scale_sigmas = 3.0;
-  // After convergence, marks whose whitened residual |v| / (sigma sigma0) exceeds this (unitless,
-  // a 2-D chi-square quantile: 4.5 ~ 99.996 %) are rejected and the block adjusted again, at most
-  // max_rejection_rounds times. 0 disables rejection. Control marks are tested like tie marks.
+  // After convergence, marks whose normalized residual exceeds this are rejected and the block
+  // adjusted again, at most max_rejection_rounds times (0 disables rejection). The normalized
+  // residual of a mark is the larger of |w_x|, |w_y| (see observation_diagnostics) when the
+  // diagnostics are computed, otherwise |v| / (max(1, s0) sigma) (the whitened residual, 2-D).
+  // Control marks are tested like tie marks; every mark above the threshold goes at once.
   double rejection_threshold = 4.5;
   int max_rejection_rounds = 3;
   // Levenberg-Marquardt.
@@ -111,6 +114,34 @@ struct BundleAdjustmentOptions {
   double overfit_ratio = 0.5;
   // Camera-model parameters whose |correlation| exceeds this are named (unitless, DBAT's 0.95).
   double high_correlation = 0.95;
+
+  // Variance component estimation (Helmert / Foerstner): after the adjustment, every group's
+  // variance factor s_g^2 = (its whitened residuals' sum of squares) / (its redundancy, the sum of
+  // its redundancy numbers) rescales the group's accuracies, and the block is adjusted again, until
+  // every estimated factor is 1 within variance_tolerance or max_variance_iterations is reached.
+  // Needs the covariance (max_covariance_parameters). A group whose redundancy is below
+  // min_variance_redundancy is not estimated (its accuracy stays as stated, and says why).
+  bool estimate_accuracies = false;
+  int max_variance_iterations = 20;     // count
+  double variance_tolerance = 0.01;     // |s_g^2 - 1| (unitless)
+  double min_variance_redundancy = 5.0; // summed redundancy numbers (unitless)
+
+  // Per-observation diagnostics (Baarda, Foerstner), computed with the covariance: redundancy
+  // number r_i, normalized residual w_i = v_i / (s sigma_i sqrt(r_i)) with s = max(1, sigma0) (the
+  // stated accuracy, or Pope's tau-test with the a-posteriori sigma0 when that is larger: never more
+  // sensitive than the stated accuracies allow), the smallest detectable error (internal reliability)
+  // nabla_i = delta0 sigma_i / sqrt(r_i) with delta0 = k(alpha) + k(beta), and its largest effect on
+  // a camera centre (external reliability). Marks per coordinate, priors per axis.
+  bool observation_diagnostics = true;
+  double snooping_alpha = 0.001;  // two-sided significance of the w-test (unitless)
+  double snooping_power = 0.8;    // power of the test behind the smallest detectable error
+  // Observations with r_i below this are listed as uncontrolled (a blunder there cannot be seen).
+  double uncontrolled_redundancy = 0.1;
+  // Data snooping: while the largest |w_i| exceeds k(alpha), remove that observation (a mark, or
+  // the whole prior of a control point, camera position or attitude) and adjust again, one at a
+  // time, at most max_snooping_removals times. Replaces the rejection rounds above.
+  bool snoop = false;
+  int max_snooping_removals = 200;
   // Progress callback after every iteration (may be empty).
   std::function<void(const BundleIterationInfo&)> progress;
 
@@ -156,6 +187,35 @@ struct BundleGroupStatistics {
   double redundancy_share = 0.0;
   bool overfit = false;  // a prior group with ratio or redundancy share < overfit_ratio
   std::string message;   // the warning, or empty
+  // Variance component estimation (estimate_accuracies): the group's accuracy estimated from the
+  // data (mean per axis, unit above; NaN when not estimated) and its standard error
+  // s / sqrt(2 r_g); why it was not estimated otherwise.
+  Eigen::Vector3d estimated_accuracy = Eigen::Vector3d::Constant(std::nan(""));
+  double estimated_accuracy_standard_error = std::nan("");  // relative (unitless)
+  std::string estimation_message;
+};
+
+// The diagnostics of one scalar observation (observation_diagnostics).
+struct BundleObservationDiagnostics {
+  std::string group;       // as BundleGroupStatistics::name
+  int item = -1;           // mark (marks), point (control_points) or image (priors) index
+  int axis = 0;            // marks: 0 x, 1 y; priors: 0..2 (X, Y, Z or omega, phi, kappa)
+  double residual = 0.0;   // observed - computed (marks: px or um; points, cameras: m; deg)
+  double sigma = 0.0;      // its accuracy, same unit
+  double redundancy = 0.0; // r_i in [0, 1]
+  double normalized = 0.0; // w_i (unitless); NaN when r_i is below 1e-6
+  double mdb = 0.0;        // smallest detectable error, same unit as residual; inf when r_i ~ 0
+  double external_m = 0.0; // largest shift of a camera centre caused by an error of size mdb (m)
+  bool rejected = false;   // |w_i| > k(alpha)
+};
+
+// One step of data snooping.
+struct BundleSnoopingStep {
+  std::string group;
+  int item = -1;
+  int axis = 0;
+  double normalized = 0.0;  // |w| of the removed observation
+  double residual = 0.0;    // its residual (unit of its group)
 };
 
 struct BundleImageResult {
@@ -172,7 +232,10 @@ struct BundleImageResult {
 
 struct BundlePointResult {
   int num_observations = 0;  // marks used in the final round
-  Eigen::Matrix3d covariance = Eigen::Matrix3d::Zero();  // sigma0^2-scaled (m^2); control/check
+  // sigma0^2-scaled (m^2). Control points: from the adjustment. Check points: of the
+  // intersection, with the uncertainty of the adjusted images and cameras carried into it (when
+  // the covariance was computed; the measurements' part alone otherwise).
+  Eigen::Matrix3d covariance = Eigen::Matrix3d::Zero();
   bool has_covariance = false;
   // Control points: adjusted - surveyed; check points: intersected - surveyed (m).
   std::optional<Eigen::Vector3d> error_m;
@@ -231,9 +294,20 @@ struct BundleAdjustmentResult {
   int num_control_points = 0;
   Eigen::Vector3d control_rmse_m = Eigen::Vector3d::Zero();
   double control_rmse_total_m = 0.0;
-  // Whitened residual per mark used in the final round (observed - computed, in the mark's own
-  // unit); NaN for marks not used (check marks, rejected marks, marks of images not adjusted).
+  // Residual per mark used in the final round (observed - computed, in the mark's own unit); NaN
+  // for marks not used (check marks, rejected marks, marks of images not adjusted).
   std::vector<Eigen::Vector2d> mark_residuals;
+
+  // Variance component estimation: iterations run (0 when not asked).
+  int variance_iterations = 0;
+  // Per-observation diagnostics, in the order marks (x, y), control points (X, Y, Z), camera
+  // positions, attitudes; empty when not computed. critical_value is k(alpha) of the w-test and
+  // delta0 the non-centrality behind the smallest detectable errors.
+  std::vector<BundleObservationDiagnostics> observations;
+  double critical_value = 0.0;
+  double delta0 = 0.0;
+  int num_uncontrolled = 0;  // observations with r_i below uncontrolled_redundancy
+  std::vector<BundleSnoopingStep> snooping;  // removals in order (snoop)
 
   // A multi-line report: summary, groups with their verdicts, images, points, calibration.
   std::string FullReport(const Block& block) const;
@@ -248,5 +322,37 @@ struct BundleAdjustmentResult {
 // result->summary with the block left at its input values.
 Status BundleAdjust(const BundleAdjustmentOptions& options, const BundleAdjustmentConfig& config,
                     Block* block, BundleAdjustmentResult* result);
+
+// ------------------------------------------------------------------ leave-one-out cross-validation
+
+struct BundleCrossValidationPoint {
+  int point = -1;           // index into Block::points (a control point of the full adjustment)
+  bool ok = false;          // adjusted and intersected without it
+  std::string message;      // why not
+  Eigen::Vector3d error_m = Eigen::Vector3d::Zero();  // intersected - surveyed, left out (m)
+  int num_images = 0;       // rays of its intersection
+  // e^T (C_intersection + C_surveyed)^-1 e: chi-square with 3 degrees of freedom for a point
+  // that agrees with the rest of the block within the stated accuracies.
+  double normalized = 0.0;
+  bool stands_out = false;  // normalized above the chi-square(3) quantile at 1 - snooping_alpha
+};
+
+struct BundleCrossValidationResult {
+  std::vector<BundleCrossValidationPoint> points;
+  int count = 0;  // points cross-validated
+  Eigen::Vector3d rmse_m = Eigen::Vector3d::Zero();  // per axis over those (m)
+  double rmse_total_m = 0.0;
+  double threshold = 0.0;  // of `normalized` for stands_out
+  double time_seconds = 0.0;
+};
+
+// Each control point of the adjusted block in turn becomes a check point; the block is adjusted
+// again without it (warm-started from `adjusted`, the marks rejected by `full` left out) and its
+// error recorded. Runs num_threads adjustments in parallel (0: all cores). A point whose removal
+// leaves no datum is reported as not cross-validated.
+Status CrossValidateControlPoints(const BundleAdjustmentOptions& options,
+                                  const BundleAdjustmentConfig& config, const Block& adjusted,
+                                  const BundleAdjustmentResult& full, int num_threads,
+                                  BundleCrossValidationResult* result);
 
 }  // namespace photopose

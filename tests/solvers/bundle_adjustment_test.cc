@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include <random>
+#include <set>
 
 #include "core/collinearity.h"
 #include "core/rotation.h"
@@ -28,6 +29,14 @@ struct SmallBlockOptions {
   double start_position_error_m = 2.0;
   double start_angle_error_deg = 1.0;
   double start_point_error_m = 1.0;
+  // Stated accuracies written into the block (0: the true noise).
+  double stated_mark_px = 0.0;
+  double stated_gnss_m = 0.0;
+  // Blunders: this many tie marks moved by 10-30 px, one control point moved by
+  // control_blunder_m, one GNSS position moved by gnss_blunder_m (0: none).
+  int tie_blunders = 0;
+  double control_blunder_m = 0.0;
+  double gnss_blunder_m = 0.0;
   uint64_t seed = 1;
 };
 
@@ -35,6 +44,9 @@ struct SmallBlock {
   Block block;
   std::vector<ExteriorOrientation> true_eo;
   std::vector<Eigen::Vector3d> true_points;
+  std::vector<int> blunder_marks;  // tie marks with a gross error
+  int blunder_control = -1;        // point index of the control point moved
+  int blunder_image = -1;          // image whose GNSS position was moved
 };
 
 SmallBlock MakeSmallBlock(const SmallBlockOptions& o) {
@@ -76,7 +88,8 @@ SmallBlock MakeSmallBlock(const SmallBlockOptions& o) {
       if (o.gnss) {
         image.measured_center_m = eo.center_in_ground() +
                                   o.gnss_noise_m * Eigen::Vector3d(gauss(rng), gauss(rng), gauss(rng));
-        image.center_accuracy_m = Eigen::Vector3d::Constant(o.gnss_noise_m);
+        image.center_accuracy_m =
+            Eigen::Vector3d::Constant(o.stated_gnss_m > 0.0 ? o.stated_gnss_m : o.gnss_noise_m);
       }
       block.images.push_back(image);
     }
@@ -128,13 +141,38 @@ SmallBlock MakeSmallBlock(const SmallBlockOptions& o) {
       mark.point = static_cast<int>(p);
       mark.unit = MarkUnit::kPixel;
       mark.measured = pixel;
-      mark.accuracy = o.noise_px > 0.0 ? o.noise_px : 0.5;
+      mark.accuracy = o.stated_mark_px > 0.0 ? o.stated_mark_px : o.noise_px > 0.0 ? o.noise_px : 0.5;
       EXPECT_TRUE(FilmFromPixel(cam.table, pixel, PixelOrigin::kCorner, &mark.observation).ok());
       mark.observation_units_per_unit = cam.table.pixel_size_um;
       block.marks.push_back(mark);
     }
   }
   block.BuildIndex();
+  // Blunders, on marks of tie points seen at least four times (so that the point stays determined).
+  for (size_t m = 0; m < block.marks.size() && static_cast<int>(out.blunder_marks.size()) < o.tie_blunders; m += 7) {
+    const BlockMark& mark = block.marks[m];
+    if (block.points[mark.point].role != PointRole::kTie) continue;
+    if (block.marks_of_point[mark.point].size() < 4) continue;
+    const double size = 10.0 + 20.0 * (0.5 + 0.5 * uniform(rng));
+    const double angle = kPi * uniform(rng);
+    const Eigen::Vector2d shift = size * Eigen::Vector2d(std::cos(angle), std::sin(angle));
+    block.marks[m].measured += shift;
+    block.marks[m].observation += shift.cwiseProduct(Eigen::Vector2d(1.0, -1.0)) * cam.table.pixel_size_um;
+    out.blunder_marks.push_back(static_cast<int>(m));
+  }
+  if (o.control_blunder_m > 0.0) {
+    for (size_t p = 0; p < block.points.size(); ++p) {
+      if (block.points[p].role != PointRole::kControl) continue;
+      *block.points[p].surveyed_m += Eigen::Vector3d(o.control_blunder_m, 0.0, 0.0);
+      out.blunder_control = static_cast<int>(p);
+      break;
+    }
+  }
+  if (o.gnss_blunder_m > 0.0) {
+    const int i = static_cast<int>(block.images.size()) / 2;
+    *block.images[i].measured_center_m += Eigen::Vector3d(0.0, 0.0, o.gnss_blunder_m);
+    out.blunder_image = i;
+  }
   return out;
 }
 
@@ -294,6 +332,136 @@ TEST(BundleAdjustment, RefusesBlocksItCannotAdjust) {
     BundleAdjustmentResult result;
     EXPECT_FALSE(BundleAdjust(QuietOptions(), BundleAdjustmentConfig(), &data.block, &result).ok());
   }
+}
+
+// ------------------------------------------------------------------ block diagnostics
+
+SmallBlockOptions Block48() {
+  // 6 x 8 images, a dense tie grid, 12 control points around and inside the block.
+  SmallBlockOptions o;
+  o.rows = 6;
+  o.cols = 8;
+  o.tie_grid = 24;
+  o.control_xy.clear();
+  for (const double x : {-10.0, 45.0, 100.0, 155.0})
+    for (const double y : {-10.0, 75.0, 160.0}) o.control_xy.push_back({x, y});
+  o.check_xy = {{30, 30}, {120, 120}, {70, 100}};
+  return o;
+}
+
+TEST(BundleDiagnostics, VarianceComponentsRecoverTheTrueAccuracies) {
+  // Tie noise 0.5 px stated as 2 px, GNSS noise 3 cm stated as 10 cm (the case).
+  constexpr int kSeeds = 8;
+  double tie_sum = 0.0, camera_sum = 0.0, tie_se = 0.0, camera_se = 0.0;
+  for (uint64_t seed = 1; seed <= kSeeds; ++seed) {
+    SmallBlockOptions o = Block48();
+    o.seed = seed;
+    o.noise_px = 0.5;
+    o.stated_mark_px = 2.0;
+    o.gnss_noise_m = 0.03;
+    o.stated_gnss_m = 0.10;
+    SmallBlock data = MakeSmallBlock(o);
+    BundleAdjustmentOptions options = QuietOptions();
+    options.estimate_accuracies = true;
+    BundleAdjustmentResult result;
+    ASSERT_TRUE(BundleAdjust(options, BundleAdjustmentConfig(), &data.block, &result).ok());
+    ASSERT_TRUE(result.summary.IsSolutionUsable()) << result.summary.BriefReport();
+    const BundleGroupStatistics* tie = FindGroup(result, "tie_marks");
+    const BundleGroupStatistics* cameras = FindGroup(result, "camera_positions");
+    ASSERT_TRUE(tie != nullptr && cameras != nullptr);
+    ASSERT_TRUE(std::isfinite(tie->estimated_accuracy.x())) << tie->estimation_message;
+    ASSERT_TRUE(std::isfinite(cameras->estimated_accuracy.x())) << cameras->estimation_message;
+    // The stated accuracy is reported as stated.
+    EXPECT_NEAR(tie->stated_accuracy.x(), 2.0, 1e-9);
+    EXPECT_NEAR(cameras->stated_accuracy.x(), 0.10, 1e-9);
+    // One block: tie within 5 %, cameras within 15 % (the figures).
+    EXPECT_NEAR(tie->estimated_accuracy.x(), 0.5, 0.05 * 0.5) << result.FullReport(data.block);
+    EXPECT_NEAR(cameras->estimated_accuracy.x(), 0.03, 0.15 * 0.03) << result.FullReport(data.block);
+    EXPECT_NEAR(result.summary.sigma0, 1.0, 0.02);
+    EXPECT_GT(result.variance_iterations, 1);
+    tie_sum += tie->estimated_accuracy.x();
+    camera_sum += cameras->estimated_accuracy.x();
+    tie_se += tie->estimated_accuracy_standard_error;
+    camera_se += cameras->estimated_accuracy_standard_error;
+  }
+  // Unbiased over seeds: the mean within three standard errors of a mean of kSeeds estimates.
+  EXPECT_NEAR(tie_sum / kSeeds, 0.5, 3.0 * 0.5 * (tie_se / kSeeds) / std::sqrt(kSeeds));
+  EXPECT_NEAR(camera_sum / kSeeds, 0.03, 3.0 * 0.03 * (camera_se / kSeeds) / std::sqrt(kSeeds));
+}
+
+TEST(BundleDiagnostics, DataSnoopingFindsEveryInjectedBlunder) {
+  SmallBlockOptions o = Block48();
+  o.tie_blunders = 8;
+  o.control_blunder_m = 0.5;
+  o.gnss_blunder_m = 1.0;
+  SmallBlock data = MakeSmallBlock(o);
+  BundleAdjustmentOptions options = QuietOptions();
+  options.snoop = true;
+  BundleAdjustmentResult result;
+  ASSERT_TRUE(BundleAdjust(options, BundleAdjustmentConfig(), &data.block, &result).ok());
+  ASSERT_TRUE(result.summary.IsSolutionUsable()) << result.summary.BriefReport();
+  std::set<int> found_marks;
+  bool found_control = false, found_gnss = false;
+  for (const BundleSnoopingStep& step : result.snooping) {
+    if (step.group == "tie_marks" || step.group == "control_marks") found_marks.insert(step.item);
+    if (step.group == "control_points" && step.item == data.blunder_control) found_control = true;
+    if (step.group == "camera_positions" && step.item == data.blunder_image) found_gnss = true;
+  }
+  for (const int m : data.blunder_marks) EXPECT_TRUE(found_marks.count(m)) << "mark " << m;
+  EXPECT_TRUE(found_control);
+  EXPECT_TRUE(found_gnss);
+  const int injected = static_cast<int>(data.blunder_marks.size()) + 2;
+  // At alpha = 0.1 % per test over ~9000 scalar observations about 9 false alarms are expected
+  // (the test is per observation, not corrected for their number): a handful, not dozens.
+  EXPECT_LE(static_cast<int>(result.snooping.size()), injected + 15) << result.FullReport(data.block);
+  // After snooping nothing is rejected any more, and sigma0 is back near 1.
+  for (const BundleObservationDiagnostics& d : result.observations) EXPECT_FALSE(d.rejected);
+  EXPECT_NEAR(result.summary.sigma0, 1.0, 0.1);
+  EXPECT_GT(result.delta0, result.critical_value);
+}
+
+TEST(BundleDiagnostics, ReliabilityIsReportedForEveryObservation) {
+  SmallBlock data = MakeSmallBlock(SmallBlockOptions());
+  BundleAdjustmentResult result;
+  ASSERT_TRUE(BundleAdjust(QuietOptions(), BundleAdjustmentConfig(), &data.block, &result).ok());
+  ASSERT_FALSE(result.observations.empty());
+  double redundancy = 0.0;
+  for (const BundleObservationDiagnostics& d : result.observations) {
+    EXPECT_GE(d.redundancy, 0.0);
+    EXPECT_LE(d.redundancy, 1.0);
+    redundancy += d.redundancy;
+    if (d.redundancy > 0.01) {
+      EXPECT_NEAR(d.mdb, result.delta0 * d.sigma / std::sqrt(d.redundancy), 1e-9 * d.mdb);
+      EXPECT_GT(d.external_m, 0.0);
+    }
+  }
+  // The redundancy numbers sum to the redundancy of the adjustment.
+  EXPECT_NEAR(redundancy, result.summary.redundancy, 1e-6 * result.summary.redundancy);
+  EXPECT_NEAR(result.critical_value, 3.2905, 1e-4);  // alpha = 0.1 %, two-sided
+}
+
+TEST(BundleDiagnostics, CrossValidationNamesTheWrongControlPoint) {
+  SmallBlockOptions o = Block48();
+  o.control_blunder_m = 0.3;
+  o.gnss = false;
+  SmallBlock data = MakeSmallBlock(o);
+  BundleAdjustmentOptions options = QuietOptions();
+  BundleAdjustmentResult full;
+  ASSERT_TRUE(BundleAdjust(options, BundleAdjustmentConfig(), &data.block, &full).ok());
+  ASSERT_TRUE(full.summary.IsSolutionUsable()) << full.summary.BriefReport();
+  BundleCrossValidationResult cv;
+  ASSERT_TRUE(CrossValidateControlPoints(options, BundleAdjustmentConfig(), data.block, full, 2, &cv).ok());
+  EXPECT_EQ(cv.count, 12);
+  EXPECT_LT(cv.time_seconds, 30.0);
+  int standing_out = 0;
+  for (const BundleCrossValidationPoint& point : cv.points) {
+    ASSERT_TRUE(point.ok) << point.message;
+    if (point.stands_out) {
+      ++standing_out;
+      EXPECT_EQ(point.point, data.blunder_control);
+    }
+  }
+  EXPECT_EQ(standing_out, 1);
 }
 
 }  // namespace
