@@ -1,0 +1,76 @@
+#pragma once
+// Fast reading and writing of the whitespace-separated text formats of other tools (COLMAP text
+// models, BAL problems, Bundler .out files, DBAT lists): the whole file is read once, lines and
+// tokens are views into it (no string per row), numbers are parsed and printed with
+// std::from_chars / std::to_chars (shortest text that reads back as the same double). Every parse
+// error is a Status whose message reads "file:line: field: what is wrong".
+
+#include <cstdint>
+#include <string>
+#include <string_view>
+
+#include "core/status.h"
+
+namespace photopose {
+
+// The physical lines of a text, numbered from 1, without their line end ("\n" or "\r\n").
+class TextLines {
+ public:
+  explicit TextLines(std::string_view text) : text_(text) {}
+  // The next line and its 1-based number; false at the end of the text.
+  bool Next(std::string_view* line, int* line_number);
+
+ private:
+  std::string_view text_;
+  size_t position_ = 0;
+  int line_number_ = 0;
+};
+
+// Tokens separated by blanks (spaces, tabs, carriage returns, line ends; optionally commas) of a
+// piece of text: one line of a line-based format, or a whole file for a token-stream format (BAL),
+// in which case line() follows the line ends crossed.
+class TokenScanner {
+ public:
+  // `file` names the text in messages and must outlive the scanner; `first_line` is the line
+  // number of the first character of `text`.
+  TokenScanner(std::string_view text, const std::string& file, int first_line,
+               bool comma_separates = false)
+      : text_(text), file_(file), line_(first_line), comma_separates_(comma_separates) {}
+
+  // The line of the next token (after skipping blanks), or of the end of the text.
+  int line();
+  // True when only blanks are left.
+  bool AtEnd();
+  // The rest of the text with the blanks around it removed (e.g. a name with spaces).
+  std::string_view Rest();
+
+  // The next token; "field: is missing" at the end of the text.
+  Status Word(std::string_view field, std::string_view* word);
+  // The next token as a finite number / a whole number.
+  Status Number(std::string_view field, double* value);
+  Status Integer(std::string_view field, long long* value);
+  // A whole number in [min, max].
+  Status IntegerIn(std::string_view field, long long min, long long max, long long* value);
+
+  // "file:line: field: what" at the current line (field left out when empty).
+  Status Error(std::string_view field, std::string_view what);
+
+ private:
+  void SkipBlanks();
+  bool IsSeparator(char c) const;
+
+  std::string_view text_;
+  const std::string& file_;
+  size_t position_ = 0;
+  int line_;
+  bool comma_separates_;
+};
+
+// "file:line: field: what" (field left out when empty; line left out when 0).
+Status TextError(const std::string& file, int line, std::string_view field, std::string_view what);
+
+// Appends the shortest decimal text that reads back as exactly `value` (std::to_chars).
+void AppendNumber(double value, std::string* text);
+void AppendInteger(long long value, std::string* text);
+
+}  // namespace photopose
