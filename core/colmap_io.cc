@@ -1,6 +1,7 @@
 #include "core/colmap_io.h"
 
 #include <Eigen/Geometry>
+#include <algorithm>
 #include <cmath>
 #include <filesystem>
 #include <limits>
@@ -65,8 +66,45 @@ std::string Path(const std::string& directory, const char* name) {
 
 // ------------------------------------------------------------------ reading
 
+// The index of each COLMAP id (>= 0): a hash map while reading, then a plain table when the ids
+// are dense enough (COLMAP numbers from 1), so that the million lookups of the observations are
+// array reads.
+class IdIndex {
+ public:
+  // False when the id is there already.
+  bool Insert(long long id, int index) {
+    if (!map_.emplace(id, index).second) return false;
+    max_id_ = std::max(max_id_, id);
+    return true;
+  }
+  void Freeze() {
+    if (max_id_ >= 4 * static_cast<long long>(map_.size()) + 1024) return;
+    dense_.assign(static_cast<size_t>(max_id_ + 1), -1);
+    for (const auto& [id, index] : map_) dense_[static_cast<size_t>(id)] = index;
+    map_.clear();
+    is_dense_ = true;
+  }
+  // The index, or -1.
+  int Find(long long id) const {
+    if (is_dense_) return id >= 0 && id <= max_id_ ? dense_[static_cast<size_t>(id)] : -1;
+    const auto found = map_.find(id);
+    return found == map_.end() ? -1 : found->second;
+  }
+
+ private:
+  std::unordered_map<long long, int> map_;
+  std::vector<int> dense_;
+  long long max_id_ = -1;
+  bool is_dense_ = false;
+};
+
+// Lines of a text (an upper bound of its records, to reserve).
+size_t CountLines(std::string_view text) {
+  return static_cast<size_t>(std::count(text.begin(), text.end(), '\n')) + 1;
+}
+
 Status ReadCameras(const std::string& path, Block* block,
-                   std::unordered_map<long long, int>* camera_of_id) {
+                   IdIndex* camera_of_id) {
   std::string text;
   PHOTOPOSE_RETURN_IF_ERROR(ReadTextFile(path, &text));
   TextLines lines(text);
@@ -103,25 +141,27 @@ Status ReadCameras(const std::string& path, Block* block,
       return scanner.Error("PARAMS", "more than the " + std::to_string(num_params) +
                                          " parameters of the " + std::string(model_name) + " model");
     }
-    if (!camera_of_id->emplace(id, static_cast<int>(block->cameras.size())).second)
+    if (!camera_of_id->Insert(id, static_cast<int>(block->cameras.size())))
       return scanner.Error("CAMERA_ID", "camera " + std::to_string(id) + " is listed twice");
     block->cameras.push_back(std::move(camera));
   }
   return Status::Ok();
 }
 
-// A points3D.txt TRACK entry, checked once the images are read.
+// A points3D.txt TRACK entry, checked once the images are read (12 bytes: a model has millions;
+// the line is the point's).
 struct TrackEntry {
-  long long image_id;
-  long long keypoint;
+  uint32_t image_id;  // COLMAP's image_t is 32-bit
+  int keypoint;
   int point;
-  int line;
 };
+constexpr long long kMaxImageId = 0xffffffffLL;
 
 Status ReadPoints(const std::string& path, Block* block, ColmapModelExtras* extras,
-                  std::unordered_map<long long, int>* point_of_id, std::vector<TrackEntry>* tracks) {
+                  IdIndex* point_of_id, std::vector<TrackEntry>* tracks) {
   std::string text;
   PHOTOPOSE_RETURN_IF_ERROR(ReadTextFile(path, &text));
+  block->points.reserve(CountLines(text));
   TextLines lines(text);
   std::string_view line;
   int line_number = 0;
@@ -144,14 +184,15 @@ Status ReadPoints(const std::string& path, Block* block, ColmapModelExtras* extr
     double error = 0.0;
     PHOTOPOSE_RETURN_IF_ERROR(scanner.Number("ERROR", &error));
     const int index = static_cast<int>(block->points.size());
-    if (!point_of_id->emplace(id, index).second)
+    if (!point_of_id->Insert(id, index))
       return scanner.Error("POINT3D_ID", "point " + std::to_string(id) + " is listed twice");
     while (!scanner.AtEnd()) {
-      TrackEntry entry{0, 0, index, line_number};
-      PHOTOPOSE_RETURN_IF_ERROR(scanner.IntegerIn("TRACK IMAGE_ID", 0, kMaxColmapId, &entry.image_id));
-      PHOTOPOSE_RETURN_IF_ERROR(scanner.IntegerIn("TRACK POINT2D_IDX", 0,
-                                                  std::numeric_limits<int>::max(), &entry.keypoint));
-      tracks->push_back(entry);
+      long long image_id = 0, keypoint = 0;
+      PHOTOPOSE_RETURN_IF_ERROR(scanner.IntegerIn("TRACK IMAGE_ID", 0, kMaxImageId, &image_id));
+      PHOTOPOSE_RETURN_IF_ERROR(
+          scanner.IntegerIn("TRACK POINT2D_IDX", 0, std::numeric_limits<int>::max(), &keypoint));
+      tracks->push_back(
+          {static_cast<uint32_t>(image_id), static_cast<int>(keypoint), index});
     }
     BlockPoint point;
     point.id = std::to_string(id);
@@ -167,9 +208,8 @@ Status ReadPoints(const std::string& path, Block* block, ColmapModelExtras* extr
   return Status::Ok();
 }
 
-Status ReadImages(const std::string& path, const std::unordered_map<long long, int>& camera_of_id,
-                  const std::unordered_map<long long, int>& point_of_id, Block* block,
-                  ColmapModelExtras* extras, std::unordered_map<long long, int>* image_of_id,
+Status ReadImages(const std::string& path, const IdIndex& camera_of_id, const IdIndex& point_of_id,
+                  Block* block, ColmapModelExtras* extras, IdIndex* image_of_id,
                   std::vector<long long>* keypoint_offset, std::vector<int>* mark_of_keypoint) {
   std::string text;
   PHOTOPOSE_RETURN_IF_ERROR(ReadTextFile(path, &text));
@@ -183,7 +223,7 @@ Status ReadImages(const std::string& path, const std::unordered_map<long long, i
     long long id = 0, camera_id = 0;
     double qw, qx, qy, qz;
     Eigen::Vector3d t;
-    PHOTOPOSE_RETURN_IF_ERROR(scanner.IntegerIn("IMAGE_ID", 0, kMaxColmapId, &id));
+    PHOTOPOSE_RETURN_IF_ERROR(scanner.IntegerIn("IMAGE_ID", 0, kMaxImageId, &id));
     PHOTOPOSE_RETURN_IF_ERROR(scanner.Number("QW", &qw));
     PHOTOPOSE_RETURN_IF_ERROR(scanner.Number("QX", &qx));
     PHOTOPOSE_RETURN_IF_ERROR(scanner.Number("QY", &qy));
@@ -198,17 +238,17 @@ Status ReadImages(const std::string& path, const std::unordered_map<long long, i
     if (!(q.norm() > kMinQuaternionNorm))
       return scanner.Error("QW", "the quaternion (QW, QX, QY, QZ) is zero");
     q.normalize();
-    const auto camera = camera_of_id.find(camera_id);
-    if (camera == camera_of_id.end()) {
+    const int camera = camera_of_id.Find(camera_id);
+    if (camera < 0) {
       return scanner.Error("CAMERA_ID", "camera " + std::to_string(camera_id) +
                                             " is not in cameras.txt");
     }
     const int image_index = static_cast<int>(block->images.size());
-    if (!image_of_id->emplace(id, image_index).second)
+    if (!image_of_id->Insert(id, image_index))
       return scanner.Error("IMAGE_ID", "image " + std::to_string(id) + " is listed twice");
     BlockImage image;
     image.name = std::string(name);
-    image.camera = camera->second;
+    image.camera = camera;
     image.eo = EoFromColmapPose(q, t);
     image.line = line_number;
     block->images.push_back(std::move(image));
@@ -229,15 +269,15 @@ Status ReadImages(const std::string& path, const std::unordered_map<long long, i
         mark_of_keypoint->push_back(-1);
         if (extras != nullptr) extras->unmatched.push_back({image_index, keypoint, xy});
       } else {
-        const auto point = point_of_id.find(point_id);
-        if (point == point_of_id.end()) {
+        const int point = point_of_id.Find(point_id);
+        if (point < 0) {
           return points.Error("POINTS2D POINT3D_ID", "point " + std::to_string(point_id) +
                                                          " is not in points3D.txt");
         }
         mark_of_keypoint->push_back(static_cast<int>(block->marks.size()));
         BlockMark mark;
         mark.image = image_index;
-        mark.point = point->second;
+        mark.point = point;
         mark.unit = MarkUnit::kPixel;
         mark.measured = xy;
         mark.observation = xy;
@@ -260,33 +300,35 @@ Status ReadImages(const std::string& path, const std::unordered_map<long long, i
 
 // Every TRACK entry names a POINTS2D entry of its point, and every mark is in exactly one track.
 Status CheckTracks(const std::string& points_path, const std::vector<TrackEntry>& tracks,
-                   const std::unordered_map<long long, int>& image_of_id,
+                   const IdIndex& image_of_id,
                    const std::vector<long long>& keypoint_offset,
                    const std::vector<int>& mark_of_keypoint, const Block& block) {
   std::vector<char> seen(block.marks.size(), 0);
   for (const TrackEntry& entry : tracks) {
-    const std::string where = "(" + std::to_string(entry.image_id) + ", " +
-                              std::to_string(entry.keypoint) + ")";
-    const auto image = image_of_id.find(entry.image_id);
-    if (image == image_of_id.end()) {
-      return TextError(points_path, entry.line, "TRACK",
-                       "entry " + where + ": image " + std::to_string(entry.image_id) +
+    // Built only for a message: no string per entry on the way.
+    const auto where = [&entry] {
+      return "(" + std::to_string(entry.image_id) + ", " + std::to_string(entry.keypoint) + ")";
+    };
+    const int image = image_of_id.Find(entry.image_id);
+    if (image < 0) {
+      return TextError(points_path, block.points[entry.point].line, "TRACK",
+                       "entry " + where() + ": image " + std::to_string(entry.image_id) +
                            " is not in images.txt");
     }
-    const long long begin = keypoint_offset[image->second];
-    const long long count = keypoint_offset[image->second + 1] - begin;
+    const long long begin = keypoint_offset[image];
+    const long long count = keypoint_offset[image + 1] - begin;
     if (entry.keypoint >= count) {
-      return TextError(points_path, entry.line, "TRACK",
-                       "entry " + where + ": the image has " + std::to_string(count) +
+      return TextError(points_path, block.points[entry.point].line, "TRACK",
+                       "entry " + where() + ": the image has " + std::to_string(count) +
                            " POINTS2D entries");
     }
     const int mark = mark_of_keypoint[begin + entry.keypoint];
     if (mark < 0 || block.marks[mark].point != entry.point) {
-      return TextError(points_path, entry.line, "TRACK",
-                       "entry " + where + ": that POINTS2D entry does not name this point");
+      return TextError(points_path, block.points[entry.point].line, "TRACK",
+                       "entry " + where() + ": that POINTS2D entry does not name this point");
     }
     if (seen[mark]) {
-      return TextError(points_path, entry.line, "TRACK", "entry " + where + " is listed twice");
+      return TextError(points_path, block.points[entry.point].line, "TRACK", "entry " + where() + " is listed twice");
     }
     seen[mark] = 1;
   }
@@ -354,16 +396,23 @@ Status ReadColmapModel(const std::string& directory, Block* block, ColmapModelEx
   Block result;
   ColmapModelExtras result_extras;
   ColmapModelExtras* kept = extras != nullptr ? &result_extras : nullptr;
-  std::unordered_map<long long, int> camera_of_id, point_of_id, image_of_id;
+  IdIndex camera_of_id, point_of_id, image_of_id;
   std::vector<TrackEntry> tracks;
   std::vector<long long> keypoint_offset;
   std::vector<int> mark_of_keypoint;
   const std::string points_path = Path(directory, "points3D.txt");
   PHOTOPOSE_RETURN_IF_ERROR(ReadCameras(Path(directory, "cameras.txt"), &result, &camera_of_id));
+  camera_of_id.Freeze();
   PHOTOPOSE_RETURN_IF_ERROR(ReadPoints(points_path, &result, kept, &point_of_id, &tracks));
+  point_of_id.Freeze();
+  // A consistent model has one mark per track entry.
+  result.marks.reserve(tracks.size());
+  mark_of_keypoint.reserve(tracks.size());
+  if (kept != nullptr) kept->mark_keypoint_index.reserve(tracks.size());
   const std::string images_path = Path(directory, "images.txt");
   PHOTOPOSE_RETURN_IF_ERROR(ReadImages(images_path, camera_of_id, point_of_id, &result, kept,
                                        &image_of_id, &keypoint_offset, &mark_of_keypoint));
+  image_of_id.Freeze();
   PHOTOPOSE_RETURN_IF_ERROR(
       CheckTracks(points_path, tracks, image_of_id, keypoint_offset, mark_of_keypoint, result));
   result.pixel_origin = PixelOrigin::kCorner;

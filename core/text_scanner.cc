@@ -18,18 +18,6 @@ bool TextLines::Next(std::string_view* line, int* line_number) {
   return true;
 }
 
-bool TokenScanner::IsSeparator(char c) const {
-  return c == ' ' || c == '\t' || c == '\r' || c == '\n' || c == '\v' || c == '\f' ||
-         (comma_separates_ && c == ',');
-}
-
-void TokenScanner::SkipBlanks() {
-  while (position_ < text_.size() && IsSeparator(text_[position_])) {
-    if (text_[position_] == '\n') ++line_;
-    ++position_;
-  }
-}
-
 int TokenScanner::line() {
   SkipBlanks();
   return line_;
@@ -45,15 +33,6 @@ std::string_view TokenScanner::Rest() {
   std::string_view rest = text_.substr(position_);
   while (!rest.empty() && IsSeparator(rest.back())) rest.remove_suffix(1);
   return rest;
-}
-
-Status TokenScanner::Word(std::string_view field, std::string_view* word) {
-  SkipBlanks();
-  if (position_ >= text_.size()) return Error(field, "is missing");
-  const size_t start = position_;
-  while (position_ < text_.size() && !IsSeparator(text_[position_])) ++position_;
-  *word = text_.substr(start, position_ - start);
-  return Status::Ok();
 }
 
 Status TokenScanner::Number(std::string_view field, double* value) {

@@ -13,6 +13,9 @@
 
 namespace photopose {
 
+// "file:line: field: what" (field left out when empty; line left out when 0).
+Status TextError(const std::string& file, int line, std::string_view field, std::string_view what);
+
 // The physical lines of a text, numbered from 1, without their line end ("\n" or "\r\n").
 class TextLines {
  public:
@@ -45,7 +48,17 @@ class TokenScanner {
   std::string_view Rest();
 
   // The next token; "field: is missing" at the end of the text.
-  Status Word(std::string_view field, std::string_view* word);
+  Status Word(std::string_view field, std::string_view* word) {
+    SkipBlanks();
+    // At the end of a text, the line of the last token is where something is missing.
+    if (position_ >= text_.size())
+      return TextError(file_, last_token_line_ > 0 ? last_token_line_ : line_, field, "is missing");
+    const size_t start = position_;
+    while (position_ < text_.size() && !IsSeparator(text_[position_])) ++position_;
+    *word = text_.substr(start, position_ - start);
+    last_token_line_ = line_;
+    return Status::Ok();
+  }
   // The next token as a finite number / a whole number.
   Status Number(std::string_view field, double* value);
   Status Integer(std::string_view field, long long* value);
@@ -56,18 +69,25 @@ class TokenScanner {
   Status Error(std::string_view field, std::string_view what);
 
  private:
-  void SkipBlanks();
-  bool IsSeparator(char c) const;
+  bool IsSeparator(char c) const {
+    return c == ' ' || c == '\t' || c == '\r' || c == '\n' || c == '\v' || c == '\f' ||
+           (comma_separates_ && c == ',');
+  }
+  void SkipBlanks() {
+    while (position_ < text_.size() && IsSeparator(text_[position_])) {
+      if (text_[position_] == '\n') ++line_;
+      ++position_;
+    }
+  }
 
   std::string_view text_;
   const std::string& file_;
   size_t position_ = 0;
   int line_;
+  int last_token_line_ = 0;
   bool comma_separates_;
 };
 
-// "file:line: field: what" (field left out when empty; line left out when 0).
-Status TextError(const std::string& file, int line, std::string_view field, std::string_view what);
 
 // Appends the shortest decimal text that reads back as exactly `value` (std::to_chars).
 void AppendNumber(double value, std::string* text);
