@@ -36,12 +36,6 @@ constexpr double kSquarePixelTolerance = 1e-15;
 
 constexpr long long kMaxColmapId = std::numeric_limits<long long>::max();
 
-bool IsCommentOrEmpty(std::string_view line) {
-  size_t i = 0;
-  while (i < line.size() && (line[i] == ' ' || line[i] == '\t')) ++i;
-  return i == line.size() || line[i] == '#';
-}
-
 ExteriorOrientation EoFromColmapPose(const Eigen::Quaterniond& q, const Eigen::Vector3d& t) {
   const Eigen::Matrix3d R_colmap = q.toRotationMatrix();
   ExteriorOrientation eo;
@@ -98,34 +92,21 @@ class IdIndex {
   bool is_dense_ = false;
 };
 
-// Lines of a text (an upper bound of its records, to reserve).
-size_t CountLines(std::string_view text) {
-  return static_cast<size_t>(std::count(text.begin(), text.end(), '\n')) + 1;
-}
-
-Status ReadCameras(const std::string& path, Block* block,
-                   IdIndex* camera_of_id) {
-  std::string text;
-  PHOTOPOSE_RETURN_IF_ERROR(ReadTextFile(path, &text));
-  TextLines lines(text);
-  std::string_view line;
-  int line_number = 0;
-  while (lines.Next(&line, &line_number)) {
-    if (IsCommentOrEmpty(line)) continue;
-    TokenScanner scanner(line, path, line_number);
+Status ReadCameras(const std::string& path, Block* block, IdIndex* camera_of_id) {
+  return ForEachRecordLine(path, /*comma_separates=*/false, [&](TokenScanner* scanner) {
     long long id = 0, width = 0, height = 0;
     std::string_view model_name;
-    PHOTOPOSE_RETURN_IF_ERROR(scanner.IntegerIn("CAMERA_ID", 0, kMaxColmapId, &id));
-    PHOTOPOSE_RETURN_IF_ERROR(scanner.Word("MODEL", &model_name));
+    PHOTOPOSE_RETURN_IF_ERROR(scanner->IntegerIn("CAMERA_ID", 0, kMaxColmapId, &id));
+    PHOTOPOSE_RETURN_IF_ERROR(scanner->Word("MODEL", &model_name));
     const std::optional<CameraModelType> model = ParseCameraModelType(std::string(model_name));
     if (!model || *model == CameraModelType::kFrame) {
-      return scanner.Error("MODEL", "camera model '" + std::string(model_name) +
-                                        "' is not supported (supported: SIMPLE_PINHOLE, PINHOLE, "
-                                        "SIMPLE_RADIAL, RADIAL, OPENCV)");
+      return scanner->Error("MODEL", "camera model '" + std::string(model_name) +
+                                         "' is not supported (supported: SIMPLE_PINHOLE, PINHOLE, "
+                                         "SIMPLE_RADIAL, RADIAL, OPENCV)");
     }
-    PHOTOPOSE_RETURN_IF_ERROR(scanner.IntegerIn("WIDTH", 1, std::numeric_limits<int>::max(), &width));
-    PHOTOPOSE_RETURN_IF_ERROR(
-        scanner.IntegerIn("HEIGHT", 1, std::numeric_limits<int>::max(), &height));
+    constexpr long long kMaxSize = std::numeric_limits<int>::max();
+    PHOTOPOSE_RETURN_IF_ERROR(scanner->IntegerIn("WIDTH", 1, kMaxSize, &width));
+    PHOTOPOSE_RETURN_IF_ERROR(scanner->IntegerIn("HEIGHT", 1, kMaxSize, &height));
     BlockCamera camera;
     camera.camera_id = std::to_string(id);
     camera.model = *model;
@@ -136,16 +117,17 @@ Status ReadCameras(const std::string& path, Block* block,
     camera.params.resize(num_params);
     const std::vector<std::string> names = CameraModelParamNames(*model);
     for (int k = 0; k < num_params; ++k)
-      PHOTOPOSE_RETURN_IF_ERROR(scanner.Number("PARAMS " + names[k], &camera.params[k]));
-    if (!scanner.AtEnd()) {
-      return scanner.Error("PARAMS", "more than the " + std::to_string(num_params) +
-                                         " parameters of the " + std::string(model_name) + " model");
+      PHOTOPOSE_RETURN_IF_ERROR(scanner->Number("PARAMS " + names[k], &camera.params[k]));
+    if (!scanner->AtEnd()) {
+      return scanner->Error("PARAMS", "more than the " + std::to_string(num_params) +
+                                          " parameters of the " + std::string(model_name) +
+                                          " model");
     }
     if (!camera_of_id->Insert(id, static_cast<int>(block->cameras.size())))
-      return scanner.Error("CAMERA_ID", "camera " + std::to_string(id) + " is listed twice");
+      return scanner->Error("CAMERA_ID", "camera " + std::to_string(id) + " is listed twice");
     block->cameras.push_back(std::move(camera));
-  }
-  return Status::Ok();
+    return Status::Ok();
+  });
 }
 
 // A points3D.txt TRACK entry, checked once the images are read (12 bytes: a model has millions;
@@ -159,53 +141,44 @@ constexpr long long kMaxImageId = 0xffffffffLL;
 
 Status ReadPoints(const std::string& path, Block* block, ColmapModelExtras* extras,
                   IdIndex* point_of_id, std::vector<TrackEntry>* tracks) {
-  std::string text;
-  PHOTOPOSE_RETURN_IF_ERROR(ReadTextFile(path, &text));
-  block->points.reserve(CountLines(text));
-  TextLines lines(text);
-  std::string_view line;
-  int line_number = 0;
-  while (lines.Next(&line, &line_number)) {
-    if (IsCommentOrEmpty(line)) continue;
-    TokenScanner scanner(line, path, line_number);
+  return ForEachRecordLine(path, /*comma_separates=*/false, [&](TokenScanner* scanner) {
     long long id = 0;
-    PHOTOPOSE_RETURN_IF_ERROR(scanner.IntegerIn("POINT3D_ID", 0, kMaxColmapId, &id));
+    PHOTOPOSE_RETURN_IF_ERROR(scanner->IntegerIn("POINT3D_ID", 0, kMaxColmapId, &id));
     Eigen::Vector3d position;
-    PHOTOPOSE_RETURN_IF_ERROR(scanner.Number("X", &position.x()));
-    PHOTOPOSE_RETURN_IF_ERROR(scanner.Number("Y", &position.y()));
-    PHOTOPOSE_RETURN_IF_ERROR(scanner.Number("Z", &position.z()));
+    PHOTOPOSE_RETURN_IF_ERROR(scanner->Number("X", &position.x()));
+    PHOTOPOSE_RETURN_IF_ERROR(scanner->Number("Y", &position.y()));
+    PHOTOPOSE_RETURN_IF_ERROR(scanner->Number("Z", &position.z()));
     std::array<unsigned char, 3> rgb;
     const char* const kColour[] = {"R", "G", "B"};
     for (int k = 0; k < 3; ++k) {
       long long value = 0;
-      PHOTOPOSE_RETURN_IF_ERROR(scanner.IntegerIn(kColour[k], 0, 255, &value));
+      PHOTOPOSE_RETURN_IF_ERROR(scanner->IntegerIn(kColour[k], 0, 255, &value));
       rgb[k] = static_cast<unsigned char>(value);
     }
     double error = 0.0;
-    PHOTOPOSE_RETURN_IF_ERROR(scanner.Number("ERROR", &error));
+    PHOTOPOSE_RETURN_IF_ERROR(scanner->Number("ERROR", &error));
     const int index = static_cast<int>(block->points.size());
     if (!point_of_id->Insert(id, index))
-      return scanner.Error("POINT3D_ID", "point " + std::to_string(id) + " is listed twice");
-    while (!scanner.AtEnd()) {
+      return scanner->Error("POINT3D_ID", "point " + std::to_string(id) + " is listed twice");
+    while (!scanner->AtEnd()) {
       long long image_id = 0, keypoint = 0;
-      PHOTOPOSE_RETURN_IF_ERROR(scanner.IntegerIn("TRACK IMAGE_ID", 0, kMaxImageId, &image_id));
+      PHOTOPOSE_RETURN_IF_ERROR(scanner->IntegerIn("TRACK IMAGE_ID", 0, kMaxImageId, &image_id));
       PHOTOPOSE_RETURN_IF_ERROR(
-          scanner.IntegerIn("TRACK POINT2D_IDX", 0, std::numeric_limits<int>::max(), &keypoint));
-      tracks->push_back(
-          {static_cast<uint32_t>(image_id), static_cast<int>(keypoint), index});
+          scanner->IntegerIn("TRACK POINT2D_IDX", 0, std::numeric_limits<int>::max(), &keypoint));
+      tracks->push_back({static_cast<uint32_t>(image_id), static_cast<int>(keypoint), index});
     }
     BlockPoint point;
     point.id = std::to_string(id);
     point.role = PointRole::kTie;
     point.position_m = position;
-    point.line = line_number;
+    point.line = scanner->line();
     block->points.push_back(std::move(point));
     if (extras != nullptr) {
       extras->point_rgb.push_back(rgb);
       extras->point_error_px.push_back(error);
     }
-  }
-  return Status::Ok();
+    return Status::Ok();
+  });
 }
 
 Status ReadImages(const std::string& path, const IdIndex& camera_of_id, const IdIndex& point_of_id,
@@ -218,7 +191,7 @@ Status ReadImages(const std::string& path, const IdIndex& camera_of_id, const Id
   int line_number = 0;
   keypoint_offset->assign(1, 0);
   while (lines.Next(&line, &line_number)) {
-    if (IsCommentOrEmpty(line)) continue;
+    if (IsBlankOrComment(line)) continue;
     TokenScanner scanner(line, path, line_number);
     long long id = 0, camera_id = 0;
     double qw, qx, qy, qz;

@@ -274,6 +274,18 @@ std::optional<double> Stated(double accuracy, double sigma) {
 
 }  // namespace
 
+SyntheticBlockOptions BenchmarkBlockOptions() {
+  SyntheticBlockOptions options;
+  options.num_lines = 25;
+  options.images_per_line = 40;
+  options.forward_spacing_m = 13.0;
+  options.side_spacing_m = 30.0;
+  options.num_tie_points = 120000;
+  options.num_control_points = 12;
+  options.num_check_points = 10;
+  return options;
+}
+
 Status SyntheticBlockOptions::IsValid() const {
   if (num_lines < 1) return Invalid("num_lines must be >= 1");
   if (images_per_line < 1) return Invalid("images_per_line must be >= 1");

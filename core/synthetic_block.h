@@ -106,6 +106,11 @@ struct SyntheticBlockOptions {
   Status IsValid() const;
 };
 
+// Issue 10's benchmark block: 25 lines x 40 images of the default camera (24 mm / 4 um /
+// 6000 x 4000) at 100 m, 13 m forward and 30 m side spacing (80% / 70% overlap), 120 000 tie
+// points, 12 control and 10 check points: about 1.7 million marks (docs/performance.md).
+SyntheticBlockOptions BenchmarkBlockOptions();
+
 // The truth of a synthetic block, parallel to the block's vectors.
 struct SyntheticBlockTruth {
   std::vector<ExteriorOrientation> eo;       // per image: the true orientation

@@ -77,6 +77,12 @@ Status TextError(const std::string& file, int line, std::string_view field, std:
   return Status::Error(std::move(message));
 }
 
+bool IsBlankOrComment(std::string_view line) {
+  size_t i = 0;
+  while (i < line.size() && (line[i] == ' ' || line[i] == '\t' || line[i] == '\r')) ++i;
+  return i == line.size() || line[i] == '#';
+}
+
 void AppendNumber(double value, std::string* text) {
   char buffer[32];
   const std::to_chars_result result = std::to_chars(buffer, buffer + sizeof(buffer), value);

@@ -89,8 +89,35 @@ class TokenScanner {
 };
 
 
+// Whether a line holds nothing but blanks, or a comment ('#' as its first non-blank character).
+bool IsBlankOrComment(std::string_view line);
+
+// Reads the file at `path` and calls `row(TokenScanner*)` for every line that is neither blank nor
+// a comment, with a scanner of that line (commas separate too when `comma_separates`); stops at
+// the first error `row` returns.
+template <typename Row>
+Status ForEachRecordLine(const std::string& path, bool comma_separates, Row row);
+
 // Appends the shortest decimal text that reads back as exactly `value` (std::to_chars).
 void AppendNumber(double value, std::string* text);
 void AppendInteger(long long value, std::string* text);
+
+// Reads a whole file (core/csv.h's ReadTextFile, declared here to keep this header light).
+Status ReadTextFile(const std::string& path, std::string* text);
+
+template <typename Row>
+Status ForEachRecordLine(const std::string& path, bool comma_separates, Row row) {
+  std::string text;
+  PHOTOPOSE_RETURN_IF_ERROR(ReadTextFile(path, &text));
+  TextLines lines(text);
+  std::string_view line;
+  int line_number = 0;
+  while (lines.Next(&line, &line_number)) {
+    if (IsBlankOrComment(line)) continue;
+    TokenScanner scanner(line, path, line_number, comma_separates);
+    PHOTOPOSE_RETURN_IF_ERROR(row(&scanner));
+  }
+  return Status::Ok();
+}
 
 }  // namespace photopose

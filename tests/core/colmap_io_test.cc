@@ -12,6 +12,7 @@
 #include "core/collinearity.h"
 #include "core/csv.h"
 #include "core/rotation.h"
+#include "tests/support/block_expect.h"
 #include "tests/support/temp_dir.h"
 #include "tests/test_data.h"
 
@@ -186,17 +187,7 @@ void ExpectSameBlock(const Block& a, const Block& b) {
     EXPECT_LT((ca - b.images[i].eo->center_in_ground()).norm(),
               kPoseRoundTrip * std::max(1.0, ca.norm()));
   }
-  ASSERT_EQ(a.points.size(), b.points.size());
-  for (size_t p = 0; p < a.points.size(); ++p) {
-    EXPECT_EQ(a.points[p].id, b.points[p].id);
-    EXPECT_EQ(*a.points[p].position_m, *b.points[p].position_m);
-  }
-  ASSERT_EQ(a.marks.size(), b.marks.size());
-  for (size_t m = 0; m < a.marks.size(); ++m) {
-    EXPECT_EQ(a.marks[m].image, b.marks[m].image);
-    EXPECT_EQ(a.marks[m].point, b.marks[m].point);
-    EXPECT_EQ(a.marks[m].observation, b.marks[m].observation);
-  }
+  EXPECT_TRUE(testing::SamePointsAndMarks(a, b));
 }
 
 TEST(ColmapIo, Ar7WritesBackAndReadsIdentically) {

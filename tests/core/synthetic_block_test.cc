@@ -13,6 +13,7 @@
 #include "core/portable_random.h"
 #include "core/csv.h"
 #include "core/tables.h"
+#include "tests/support/block_expect.h"
 #include "tests/support/temp_dir.h"
 
 namespace photopose {
@@ -143,17 +144,7 @@ void ExpectSameBlock(const Block& a, const Block& b) {
     EXPECT_EQ(a.images[i].eo->parameters, b.images[i].eo->parameters);
     EXPECT_EQ(*a.images[i].measured_center_m, *b.images[i].measured_center_m);
   }
-  ASSERT_EQ(a.points.size(), b.points.size());
-  for (size_t p = 0; p < a.points.size(); ++p) {
-    EXPECT_EQ(a.points[p].id, b.points[p].id);
-    EXPECT_EQ(a.points[p].position_m, b.points[p].position_m);
-  }
-  ASSERT_EQ(a.marks.size(), b.marks.size());
-  for (size_t m = 0; m < a.marks.size(); ++m) {
-    ASSERT_EQ(a.marks[m].image, b.marks[m].image);
-    ASSERT_EQ(a.marks[m].point, b.marks[m].point);
-    ASSERT_EQ(a.marks[m].observation, b.marks[m].observation);
-  }
+  EXPECT_TRUE(testing::SamePointsAndMarks(a, b));
 }
 
 TEST(SyntheticBlock, SameSeedSameBlockOtherSeedOtherBlock) {
@@ -289,15 +280,13 @@ TEST(SyntheticBlock, PerturbedStartAndStatedAccuracies) {
 }
 
 TEST(SyntheticBlock, IssueTenGeometryGivesItsSizes) {
-  // The block of issue 10 with a tenth of its lines: 2.5 x 40 images is not a grid, so 3 lines
-  // of 40 at 13 m / 30 m spacing; a point sees about (100 / 30) x (66.7 / 13) = 17 images away
-  // from the edges.
-  SyntheticBlockOptions o;
+  // The benchmark block of issue 10 with 3 of its 25 lines of 40 images at 13 m / 30 m
+  // spacing: across three lines a point sees at most 3 x (66.7 / 13 + 1) = 18 images.
+  SyntheticBlockOptions o = BenchmarkBlockOptions();
   o.num_lines = 3;
-  o.images_per_line = 40;
-  o.forward_spacing_m = 13.0;
-  o.side_spacing_m = 30.0;
   o.num_tie_points = 5000;
+  o.num_control_points = 8;
+  o.num_check_points = 6;
   Block block;
   SyntheticBlockTruth truth;
   ASSERT_TRUE(MakeSyntheticBlock(o, &block, &truth).ok());

@@ -63,23 +63,6 @@ Status Numbers(const std::string& path, std::string_view xml, const std::string&
   return Status::Ok();
 }
 
-// Calls `row` with a comma/blank scanner for every line that is neither empty nor a comment.
-template <typename Row>
-Status ForEachRow(const std::string& path, Row row) {
-  std::string text;
-  PHOTOPOSE_RETURN_IF_ERROR(ReadTextFile(path, &text));
-  TextLines lines(text);
-  std::string_view line;
-  int number = 0;
-  while (lines.Next(&line, &number)) {
-    const std::string_view trimmed = Trim(line);
-    if (trimmed.empty() || trimmed.front() == '#') continue;
-    TokenScanner scanner(line, path, number, /*comma_separates=*/true);
-    PHOTOPOSE_RETURN_IF_ERROR(row(&scanner));
-  }
-  return Status::Ok();
-}
-
 // The first number of "label:   value unit" lines.
 bool FirstNumber(std::string_view text, double* value) {
   const std::vector<std::string_view> words = SplitWords(text);
@@ -207,7 +190,7 @@ Status DbatFromBlockCamera(const BlockCamera& camera, const DbatCamera& like, Db
 
 Status ReadDbatCameraStations(const std::string& path, std::vector<DbatStation>* stations) {
   std::vector<DbatStation> result;
-  PHOTOPOSE_RETURN_IF_ERROR(ForEachRow(path, [&](TokenScanner* s) {
+  PHOTOPOSE_RETURN_IF_ERROR(ForEachRecordLine(path, /*comma_separates=*/true, [&](TokenScanner* s) {
     DbatStation station;
     long long number = 0, id = 0;
     PHOTOPOSE_RETURN_IF_ERROR(s->Integer("EO number", &number));
@@ -320,7 +303,7 @@ Status ReadDbatBlock(const DbatDataset& files, const DbatCamera& camera, Block* 
   const FrameCamera& table = result.cameras[0].table;
 
   std::map<long long, int> image_of_id;
-  PHOTOPOSE_RETURN_IF_ERROR(ForEachRow(files.images, [&](TokenScanner* s) {
+  PHOTOPOSE_RETURN_IF_ERROR(ForEachRecordLine(files.images, /*comma_separates=*/true, [&](TokenScanner* s) {
     long long id = 0;
     PHOTOPOSE_RETURN_IF_ERROR(s->Integer("id", &id));
     const std::string path(s->Rest());
@@ -336,7 +319,7 @@ Status ReadDbatBlock(const DbatDataset& files, const DbatCamera& camera, Block* 
   }));
 
   std::map<std::string, int> point_of_id;
-  PHOTOPOSE_RETURN_IF_ERROR(ForEachRow(files.control, [&](TokenScanner* s) {
+  PHOTOPOSE_RETURN_IF_ERROR(ForEachRecordLine(files.control, /*comma_separates=*/true, [&](TokenScanner* s) {
     std::string_view id, label;
     PHOTOPOSE_RETURN_IF_ERROR(s->Word("id", &id));
     PHOTOPOSE_RETURN_IF_ERROR(s->Word("label", &label));
@@ -361,7 +344,7 @@ Status ReadDbatBlock(const DbatDataset& files, const DbatCamera& camera, Block* 
   }));
 
   const double pixel_um = table.pixel_size_um;
-  PHOTOPOSE_RETURN_IF_ERROR(ForEachRow(files.marks, [&](TokenScanner* s) {
+  PHOTOPOSE_RETURN_IF_ERROR(ForEachRecordLine(files.marks, /*comma_separates=*/true, [&](TokenScanner* s) {
     long long image_id = 0;
     std::string_view point_id;
     Eigen::Vector2d xy;

@@ -76,14 +76,7 @@ bool Flag(const std::string& arg, const char* name, std::string* value) {
 }
 
 int Run(int argc, char** argv) {
-  SyntheticBlockOptions options;
-  options.num_lines = 25;
-  options.images_per_line = 40;
-  options.forward_spacing_m = 13.0;
-  options.side_spacing_m = 30.0;
-  options.num_tie_points = 120000;
-  options.num_control_points = 12;
-  options.num_check_points = 10;
+  SyntheticBlockOptions options = BenchmarkBlockOptions();
   std::string out_dir;
   bool peer = true;
   for (int i = 1; i < argc; ++i) {
