@@ -2,6 +2,7 @@
 
 #include <Eigen/Dense>
 #include <Eigen/Geometry>
+#include <algorithm>
 #include <limits>
 
 #include "core/collinearity.h"
@@ -72,8 +73,9 @@ Status Vector3(TokenScanner* scanner, const char* field, Eigen::Vector3d* v) {
 }  // namespace
 
 Status ReadBalProblem(const std::string& path, Block* block) {
-  std::string text;
-  PHOTOPOSE_RETURN_IF_ERROR(ReadTextFile(path, &text));
+  TextFile file;
+  PHOTOPOSE_RETURN_IF_ERROR(file.Open(path));
+  const std::string_view text = file.text();
   TokenScanner scanner(text, path, 1);
   long long num_cameras = 0, num_points = 0, num_observations = 0;
   PHOTOPOSE_RETURN_IF_ERROR(scanner.IntegerIn("num_cameras", 1, kMaxCount, &num_cameras));
@@ -123,15 +125,16 @@ Status ReadBalProblem(const std::string& path, Block* block) {
 }
 
 Status ReadBundlerFile(const std::string& path, Block* block, int* num_unregistered) {
-  std::string text;
-  PHOTOPOSE_RETURN_IF_ERROR(ReadTextFile(path, &text));
+  TextFile file;
+  PHOTOPOSE_RETURN_IF_ERROR(file.Open(path));
+  const std::string_view text = file.text();
   // The header line, then a token stream.
   const size_t first_end = text.find('\n');
   const std::string_view header =
-      std::string_view(text).substr(0, first_end == std::string::npos ? text.size() : first_end);
+      text.substr(0, first_end == std::string_view::npos ? text.size() : first_end);
   if (header.rfind("# Bundle file v0.3", 0) != 0)
     return TextError(path, 1, "", "not a Bundler v0.3 file (the first line is not '# Bundle file v0.3')");
-  TokenScanner scanner(std::string_view(text).substr(header.size()), path, 1);
+  TokenScanner scanner(text.substr(header.size()), path, 1);
   long long num_cameras = 0, num_points = 0;
   PHOTOPOSE_RETURN_IF_ERROR(scanner.IntegerIn("num_cameras", 1, kMaxCount, &num_cameras));
   PHOTOPOSE_RETURN_IF_ERROR(scanner.IntegerIn("num_points", 0, kMaxCount, &num_points));

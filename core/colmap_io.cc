@@ -93,7 +93,7 @@ class IdIndex {
 };
 
 Status ReadCameras(const std::string& path, Block* block, IdIndex* camera_of_id) {
-  return ForEachRecordLine(path, /*comma_separates=*/false, [&](TokenScanner* scanner) {
+  return ForEachRecordLineOfFile(path, /*comma_separates=*/false, [&](TokenScanner* scanner) {
     long long id = 0, width = 0, height = 0;
     std::string_view model_name;
     PHOTOPOSE_RETURN_IF_ERROR(scanner->IntegerIn("CAMERA_ID", 0, kMaxColmapId, &id));
@@ -141,7 +141,14 @@ constexpr long long kMaxImageId = 0xffffffffLL;
 
 Status ReadPoints(const std::string& path, Block* block, ColmapModelExtras* extras,
                   IdIndex* point_of_id, std::vector<TrackEntry>* tracks) {
-  return ForEachRecordLine(path, /*comma_separates=*/false, [&](TokenScanner* scanner) {
+  TextFile file;
+  PHOTOPOSE_RETURN_IF_ERROR(file.Open(path));
+  const std::string_view text = file.text();
+  // A point per line at most; about a track entry per 12 characters (an estimate: the vector
+  // grows past it when needed).
+  block->points.reserve(static_cast<size_t>(std::count(text.begin(), text.end(), '\n')) + 1);
+  tracks->reserve(text.size() / 12);
+  return ForEachRecordLine(text, path, /*comma_separates=*/false, [&](TokenScanner* scanner) {
     long long id = 0;
     PHOTOPOSE_RETURN_IF_ERROR(scanner->IntegerIn("POINT3D_ID", 0, kMaxColmapId, &id));
     Eigen::Vector3d position;
@@ -184,9 +191,9 @@ Status ReadPoints(const std::string& path, Block* block, ColmapModelExtras* extr
 Status ReadImages(const std::string& path, const IdIndex& camera_of_id, const IdIndex& point_of_id,
                   Block* block, ColmapModelExtras* extras, IdIndex* image_of_id,
                   std::vector<long long>* keypoint_offset, std::vector<int>* mark_of_keypoint) {
-  std::string text;
-  PHOTOPOSE_RETURN_IF_ERROR(ReadTextFile(path, &text));
-  TextLines lines(text);
+  TextFile file;
+  PHOTOPOSE_RETURN_IF_ERROR(file.Open(path));
+  TextLines lines(file.text());
   std::string_view line;
   int line_number = 0;
   keypoint_offset->assign(1, 0);

@@ -1,6 +1,13 @@
 #include "core/text_scanner.h"
 
+#include <fcntl.h>
+#include <sys/mman.h>
+#include <sys/stat.h>
+#include <unistd.h>
+
+#include <cerrno>
 #include <charconv>
+#include <cstring>
 
 #include "core/csv.h"
 
@@ -75,6 +82,39 @@ Status TextError(const std::string& file, int line, std::string_view field, std:
   }
   message += what;
   return Status::Error(std::move(message));
+}
+
+TextFile::~TextFile() { Close(); }
+
+void TextFile::Close() {
+  if (map_ != nullptr) munmap(map_, map_size_);
+  map_ = nullptr;
+  map_size_ = 0;
+  read_.clear();
+  text_ = std::string_view();
+}
+
+Status TextFile::Open(const std::string& path) {
+  Close();
+  const int fd = open(path.c_str(), O_RDONLY | O_CLOEXEC);
+  if (fd < 0) return Status::Error(path + ": cannot open: " + std::strerror(errno));
+  struct stat info;
+  if (fstat(fd, &info) == 0 && S_ISREG(info.st_mode) && info.st_size > 0) {
+    void* map = mmap(nullptr, static_cast<size_t>(info.st_size), PROT_READ, MAP_PRIVATE, fd, 0);
+    if (map != MAP_FAILED) {
+      close(fd);
+      madvise(map, static_cast<size_t>(info.st_size), MADV_SEQUENTIAL);
+      map_ = map;
+      map_size_ = static_cast<size_t>(info.st_size);
+      text_ = std::string_view(static_cast<const char*>(map_), map_size_);
+      return Status::Ok();
+    }
+  }
+  close(fd);
+  // Not a regular file, empty, or not mappable: read it (with ReadTextFile's messages).
+  PHOTOPOSE_RETURN_IF_ERROR(ReadTextFile(path, &read_));
+  text_ = read_;
+  return Status::Ok();
 }
 
 bool IsBlankOrComment(std::string_view line) {

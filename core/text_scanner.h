@@ -92,23 +92,48 @@ class TokenScanner {
 // Whether a line holds nothing but blanks, or a comment ('#' as its first non-blank character).
 bool IsBlankOrComment(std::string_view line);
 
-// Reads the file at `path` and calls `row(TokenScanner*)` for every line that is neither blank nor
-// a comment, with a scanner of that line (commas separate too when `comma_separates`); stops at
-// the first error `row` returns.
+// The contents of a file, memory-mapped read-only when it is a regular file (no copy, no fresh
+// memory: a 100 MB model is parsed straight from the page cache), else read into memory. Errors
+// as core/csv.h's ReadTextFile: "path: cannot open: <reason>", "path: cannot read: <reason>".
+class TextFile {
+ public:
+  TextFile() = default;
+  ~TextFile();
+  TextFile(const TextFile&) = delete;
+  TextFile& operator=(const TextFile&) = delete;
+
+  Status Open(const std::string& path);
+  std::string_view text() const { return text_; }
+
+ private:
+  void Close();
+  void* map_ = nullptr;
+  size_t map_size_ = 0;
+  std::string read_;
+  std::string_view text_;
+};
+
+// Calls `row(TokenScanner*)` for every line of `text` that is neither blank nor a comment, with a
+// scanner of that line (commas separate too when `comma_separates`); `path` names the text in
+// messages. Stops at the first error `row` returns.
 template <typename Row>
-Status ForEachRecordLine(const std::string& path, bool comma_separates, Row row);
+Status ForEachRecordLine(std::string_view text, const std::string& path, bool comma_separates,
+                         Row row);
+// The same for the file at `path`.
+template <typename Row>
+Status ForEachRecordLineOfFile(const std::string& path, bool comma_separates, Row row) {
+  TextFile file;
+  PHOTOPOSE_RETURN_IF_ERROR(file.Open(path));
+  return ForEachRecordLine(file.text(), path, comma_separates, row);
+}
 
 // Appends the shortest decimal text that reads back as exactly `value` (std::to_chars).
 void AppendNumber(double value, std::string* text);
 void AppendInteger(long long value, std::string* text);
 
-// Reads a whole file (core/csv.h's ReadTextFile, declared here to keep this header light).
-Status ReadTextFile(const std::string& path, std::string* text);
-
 template <typename Row>
-Status ForEachRecordLine(const std::string& path, bool comma_separates, Row row) {
-  std::string text;
-  PHOTOPOSE_RETURN_IF_ERROR(ReadTextFile(path, &text));
+Status ForEachRecordLine(std::string_view text, const std::string& path, bool comma_separates,
+                         Row row) {
   TextLines lines(text);
   std::string_view line;
   int line_number = 0;

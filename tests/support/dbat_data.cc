@@ -190,7 +190,7 @@ Status DbatFromBlockCamera(const BlockCamera& camera, const DbatCamera& like, Db
 
 Status ReadDbatCameraStations(const std::string& path, std::vector<DbatStation>* stations) {
   std::vector<DbatStation> result;
-  PHOTOPOSE_RETURN_IF_ERROR(ForEachRecordLine(path, /*comma_separates=*/true, [&](TokenScanner* s) {
+  PHOTOPOSE_RETURN_IF_ERROR(ForEachRecordLineOfFile(path, /*comma_separates=*/true, [&](TokenScanner* s) {
     DbatStation station;
     long long number = 0, id = 0;
     PHOTOPOSE_RETURN_IF_ERROR(s->Integer("EO number", &number));
@@ -303,7 +303,7 @@ Status ReadDbatBlock(const DbatDataset& files, const DbatCamera& camera, Block* 
   const FrameCamera& table = result.cameras[0].table;
 
   std::map<long long, int> image_of_id;
-  PHOTOPOSE_RETURN_IF_ERROR(ForEachRecordLine(files.images, /*comma_separates=*/true, [&](TokenScanner* s) {
+  PHOTOPOSE_RETURN_IF_ERROR(ForEachRecordLineOfFile(files.images, /*comma_separates=*/true, [&](TokenScanner* s) {
     long long id = 0;
     PHOTOPOSE_RETURN_IF_ERROR(s->Integer("id", &id));
     const std::string path(s->Rest());
@@ -319,7 +319,7 @@ Status ReadDbatBlock(const DbatDataset& files, const DbatCamera& camera, Block* 
   }));
 
   std::map<std::string, int> point_of_id;
-  PHOTOPOSE_RETURN_IF_ERROR(ForEachRecordLine(files.control, /*comma_separates=*/true, [&](TokenScanner* s) {
+  PHOTOPOSE_RETURN_IF_ERROR(ForEachRecordLineOfFile(files.control, /*comma_separates=*/true, [&](TokenScanner* s) {
     std::string_view id, label;
     PHOTOPOSE_RETURN_IF_ERROR(s->Word("id", &id));
     PHOTOPOSE_RETURN_IF_ERROR(s->Word("label", &label));
@@ -344,7 +344,7 @@ Status ReadDbatBlock(const DbatDataset& files, const DbatCamera& camera, Block* 
   }));
 
   const double pixel_um = table.pixel_size_um;
-  PHOTOPOSE_RETURN_IF_ERROR(ForEachRecordLine(files.marks, /*comma_separates=*/true, [&](TokenScanner* s) {
+  PHOTOPOSE_RETURN_IF_ERROR(ForEachRecordLineOfFile(files.marks, /*comma_separates=*/true, [&](TokenScanner* s) {
     long long image_id = 0;
     std::string_view point_id;
     Eigen::Vector2d xy;
