@@ -24,8 +24,7 @@ const Eigen::Matrix3d& SeedFromColmapCamera() {
   return kFlip;
 }
 
-// A quaternion whose norm is this far from 1 is normalised like COLMAP does; a norm below this is
-// no rotation at all.
+// Quaternions are normalised as COLMAP does; one whose norm is below this is no rotation at all.
 constexpr double kMinQuaternionNorm = 1e-12;
 // A kFrame camera is a pinhole in COLMAP's pixels when its film -> pixel mapping has no rotation
 // or shear: off-diagonal terms below this fraction of the diagonal ones (pixel sizes are given

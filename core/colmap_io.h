@@ -50,8 +50,8 @@ struct ColmapKeypoint {
 };
 
 // What a COLMAP model holds beyond the block, parallel to the block's vectors. Optional on
-// writing: without it, images are numbered 1..n, points keep their ids when all are whole numbers
-// >= 1 (else 1..n), and each image's marks become its POINTS2D list in block order.
+// writing: without it, images are numbered 1..n, cameras and points keep their ids when all are
+// plain whole numbers (else 1..n), and each image's marks become its POINTS2D list in block order.
 struct ColmapModelExtras {
   std::vector<long long> image_ids;         // per Block::images: IMAGE_ID
   std::vector<int> mark_keypoint_index;     // per Block::marks: its POINT2D_IDX in its image
