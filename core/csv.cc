@@ -1,5 +1,7 @@
 #include "core/csv.h"
 
+#include <sys/stat.h>
+
 #include <cctype>
 #include <cerrno>
 #include <charconv>
@@ -318,6 +320,10 @@ Status ReadTextFile(const std::string& path, std::string* text) {
   std::unique_ptr<FILE, int (*)(FILE*)> file(std::fopen(path.c_str(), "rb"), &std::fclose);
   if (!file) return Status::Error(path + ": cannot open: " + std::strerror(errno));
   text->clear();
+  // One allocation for a regular file (a large table is read without regrowing the buffer).
+  struct stat info;
+  if (fstat(fileno(file.get()), &info) == 0 && S_ISREG(info.st_mode) && info.st_size > 0)
+    text->reserve(static_cast<size_t>(info.st_size));
   char buffer[1 << 16];
   size_t n;
   while ((n = std::fread(buffer, 1, sizeof(buffer), file.get())) > 0) text->append(buffer, n);

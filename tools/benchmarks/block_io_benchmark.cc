@@ -1,0 +1,192 @@
+// Block I/O at scale (docs/performance.md, issue 10 section 2): generates issue 10's synthetic
+// block (25 lines x 40 images of a 24 mm / 4 um / 6000 x 4000 camera at 100 m, 13 m forward and
+// 30 m side spacing, 120 000 tie points: about 1.8 million marks), writes it as the project's
+// tables and as a COLMAP text model, reads both back, and times every step (wall clock, one run
+// each) with the peak resident memory after it. When `colmap` is on the PATH, its own text reader
+// runs on the same model in the same run (`colmap model_converter` text -> binary, and binary ->
+// text for its writer) as the peer. The dataset stays in --out_dir for the bundle-adjustment
+// benchmark:
+//   cameras.csv points.csv marks.csv frames.csv     the block's tables (perturbed start, GNSS)
+//   truth/frames.csv truth/points.csv truth/blunders.csv
+//   colmap/{cameras,images,points3D}.txt             the same block as a COLMAP model
+//
+// Usage: photopose_block_io_benchmark --out_dir=DIR [--lines=25] [--images_per_line=40]
+//            [--forward_spacing_m=13] [--side_spacing_m=30] [--tie_points=120000] [--seed=1]
+//            [--no_peer]
+#include <sys/resource.h>
+
+#include <chrono>
+#include <cstdio>
+#include <cstdlib>
+#include <filesystem>
+#include <functional>
+#include <string>
+#include <vector>
+
+#include "core/block_tables.h"
+#include "core/colmap_io.h"
+#include "core/synthetic_block.h"
+#include "core/tables.h"
+
+namespace photopose {
+namespace {
+
+double PeakRssMb() {
+  rusage usage;
+  getrusage(RUSAGE_SELF, &usage);
+  return usage.ru_maxrss / 1024.0;  // ru_maxrss is in KiB on Linux
+}
+
+double FileMb(const std::string& path) {
+  std::error_code error;
+  const auto size = std::filesystem::file_size(path, error);
+  return error ? 0.0 : static_cast<double>(size) / (1024.0 * 1024.0);
+}
+
+// Runs `step`, prints its wall time and the peak memory so far; false (and the reason) on failure.
+bool Timed(const char* name, const std::function<Status()>& step, double* seconds) {
+  const auto start = std::chrono::steady_clock::now();
+  const Status status = step();
+  *seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  if (!status.ok()) {
+    std::fprintf(stderr, "%s failed: %s\n", name, status.message().c_str());
+    return false;
+  }
+  std::printf("%-44s %8.3f s   peak RSS %7.1f MB\n", name, *seconds, PeakRssMb());
+  std::fflush(stdout);
+  return true;
+}
+
+bool TimedCommand(const char* name, const std::string& command, double* seconds) {
+  return Timed(
+      name,
+      [&] {
+        return std::system((command + " > /dev/null 2>&1").c_str()) == 0
+                   ? Status::Ok()
+                   : Status::Error("'" + command + "' failed");
+      },
+      seconds);
+}
+
+bool Flag(const std::string& arg, const char* name, std::string* value) {
+  const std::string prefix = std::string("--") + name + "=";
+  if (arg.compare(0, prefix.size(), prefix) != 0) return false;
+  *value = arg.substr(prefix.size());
+  return true;
+}
+
+int Run(int argc, char** argv) {
+  SyntheticBlockOptions options = BenchmarkBlockOptions();
+  std::string out_dir;
+  bool peer = true;
+  for (int i = 1; i < argc; ++i) {
+    const std::string arg = argv[i];
+    std::string v;
+    if (Flag(arg, "out_dir", &v)) {
+      out_dir = v;
+    } else if (Flag(arg, "lines", &v)) {
+      options.num_lines = std::stoi(v);
+    } else if (Flag(arg, "images_per_line", &v)) {
+      options.images_per_line = std::stoi(v);
+    } else if (Flag(arg, "forward_spacing_m", &v)) {
+      options.forward_spacing_m = std::stod(v);
+    } else if (Flag(arg, "side_spacing_m", &v)) {
+      options.side_spacing_m = std::stod(v);
+    } else if (Flag(arg, "tie_points", &v)) {
+      options.num_tie_points = std::stoll(v);
+    } else if (Flag(arg, "seed", &v)) {
+      options.seed = std::stoull(v);
+    } else if (arg == "--no_peer") {
+      peer = false;
+    } else {
+      std::fprintf(stderr, "unknown argument '%s' (see the comment at the top of %s)\n",
+                   arg.c_str(), __FILE__);
+      return 2;
+    }
+  }
+  if (out_dir.empty()) {
+    std::fprintf(stderr, "--out_dir=DIR is required\n");
+    return 2;
+  }
+  std::filesystem::create_directories(out_dir + "/truth");
+  const std::string colmap_dir = out_dir + "/colmap";
+  const BlockTableFiles files{out_dir + "/cameras.csv", out_dir + "/points.csv",
+                              out_dir + "/marks.csv", out_dir + "/frames.csv"};
+
+  Block block;
+  SyntheticBlockTruth truth;
+  double t = 0.0, colmap_read = 0.0, colmap_write = 0.0;
+  if (!Timed("generate (MakeSyntheticBlock)", [&] { return MakeSyntheticBlock(options, &block, &truth); },
+             &t))
+    return 1;
+  std::printf("  %zu images, %zu points, %zu marks\n", block.images.size(), block.points.size(),
+              block.marks.size());
+  if (!Timed("write tables (WriteBlockTables)", [&] { return WriteBlockTables(block, files); }, &t))
+    return 1;
+  if (!Timed("write truth (WriteSyntheticBlockTruth)",
+             [&] {
+               return WriteSyntheticBlockTruth(
+                   block, truth, options,
+                   {out_dir + "/truth/frames.csv", out_dir + "/truth/points.csv",
+                    out_dir + "/truth/blunders.csv"});
+             },
+             &t))
+    return 1;
+  if (!Timed("write COLMAP text (WriteColmapModel)",
+             [&] { return WriteColmapModel(colmap_dir, block); }, &colmap_write))
+    return 1;
+  std::printf("  sizes: marks.csv %.1f MB, images.txt %.1f MB, points3D.txt %.1f MB\n",
+              FileMb(files.marks), FileMb(colmap_dir + "/images.txt"),
+              FileMb(colmap_dir + "/points3D.txt"));
+  const size_t num_marks = block.marks.size();
+  block = Block();
+  truth = SyntheticBlockTruth();
+
+  Block again;
+  if (!Timed("read COLMAP text (ReadColmapModel)", [&] { return ReadColmapModel(colmap_dir, &again); },
+             &colmap_read))
+    return 1;
+  if (again.marks.size() != num_marks) {
+    std::fprintf(stderr, "read %zu marks, wrote %zu\n", again.marks.size(), num_marks);
+    return 1;
+  }
+  again = Block();
+  std::vector<ImageMark> marks;
+  if (!Timed("read marks table (ReadImageMarks)", [&] { return ReadImageMarks(files.marks, &marks); },
+             &t))
+    return 1;
+  marks.clear();
+  marks.shrink_to_fit();
+  std::vector<GroundPoint> points;
+  if (!Timed("read points table (ReadGroundPoints)",
+             [&] { return ReadGroundPoints(files.points, &points); }, &t))
+    return 1;
+
+  if (peer && std::system("command -v colmap > /dev/null 2>&1") == 0) {
+    const std::string bin_dir = out_dir + "/colmap_bin", txt_dir = out_dir + "/colmap_txt";
+    std::filesystem::create_directories(bin_dir);
+    std::filesystem::create_directories(txt_dir);
+    double peer_read = 0.0, peer_write = 0.0;
+    if (!TimedCommand("peer: colmap model_converter TXT -> BIN",
+                      "colmap model_converter --input_path " + colmap_dir + " --output_path " +
+                          bin_dir + " --output_type BIN",
+                      &peer_read))
+      return 1;
+    if (!TimedCommand("peer: colmap model_converter BIN -> TXT",
+                      "colmap model_converter --input_path " + bin_dir + " --output_path " +
+                          txt_dir + " --output_type TXT",
+                      &peer_write))
+      return 1;
+    std::printf("  photopose reads the text model in %.2fx, writes it in %.2fx the time COLMAP\n"
+                "  takes to read it and write binary / read binary and write it (whole processes)\n",
+                colmap_read / peer_read, colmap_write / peer_write);
+  } else {
+    std::printf("  (colmap not on the PATH: no peer)\n");
+  }
+  return 0;
+}
+
+}  // namespace
+}  // namespace photopose
+
+int main(int argc, char** argv) { return photopose::Run(argc, argv); }
