@@ -3,10 +3,10 @@
 #include <Eigen/Dense>
 #include <cmath>
 
+#include "core/camera_models.h"
+
 namespace photopose {
 namespace {
-
-constexpr double kMillimetresPerMicron = 1e-3;
 
 // Pixel -> film for PixelSize + FilmCoordinateSystem, column/row relative to the image centre.
 Eigen::Vector2d FilmFromCentredPixel(FilmCoordinateSystem fcs, double dc, double dr, double ps) {
@@ -38,27 +38,6 @@ Eigen::Vector2d CentredPixelFromFilm(FilmCoordinateSystem fcs, const Eigen::Vect
 }
 
 double PixelOriginShift(PixelOrigin origin) { return origin == PixelOrigin::kCenter ? 0.5 : 0.0; }
-
-// Linear interpolation in the distortion table; d(0) = 0 is implied when the table starts later.
-double TableDistortion(const std::vector<double>& r, const std::vector<double>& d, double radius) {
-  if (r.empty()) return 0.0;
-  double r0 = 0.0, d0 = 0.0;
-  size_t i = 0;
-  if (r[0] <= 0.0) {
-    r0 = r[0];
-    d0 = d[0];
-    i = 1;
-  }
-  for (; i < r.size(); ++i) {
-    if (radius <= r[i] || i + 1 == r.size()) {
-      const double t = (r[i] - r0) > 0.0 ? (radius - r0) / (r[i] - r0) : 0.0;
-      return d0 + t * (d[i] - d0);  // extrapolates linearly past the last entry
-    }
-    r0 = r[i];
-    d0 = d[i];
-  }
-  return d0;
-}
 
 }  // namespace
 
@@ -150,54 +129,30 @@ Status PixelFromFilm(const FrameCamera& camera, const Eigen::Vector2d& film_um, 
 }
 
 Eigen::Vector2d DistortionInMicrons(const FrameCamera& camera, const Eigen::Vector2d& xy_um) {
-  if (camera.distortion_type == DistortionType::kDistortionTable) {
-    const double r = xy_um.norm();
-    if (r <= 0.0) return Eigen::Vector2d::Zero();
-    const double d = TableDistortion(camera.radial_distances_um, camera.radial_distortions_um, r);
-    return xy_um * (d / r);
-  }
-  const double x = xy_um.x() * kMillimetresPerMicron;
-  const double y = xy_um.y() * kMillimetresPerMicron;
-  const double r2 = x * x + y * y;
-  const auto& k = camera.radial_k;
-  const auto& p = camera.tangential_p;
-  const double radial = k[0] + r2 * (k[1] + r2 * (k[2] + r2 * k[3]));
-  const double dx = x * radial + p[0] * (r2 + 2.0 * x * x) + 2.0 * p[1] * x * y;
-  const double dy = y * radial + 2.0 * p[0] * x * y + p[1] * (r2 + 2.0 * y * y);
-  return Eigen::Vector2d(dx, dy) / kMillimetresPerMicron;
+  // The kFrame model of core/camera_models.h with the principal point at the origin: its ideal
+  // point is polarity (xy - distortion).
+  std::array<double, kFrameNumParams> params = FrameModelParams(camera);
+  params[kFramePrincipalX] = params[kFramePrincipalY] = 0.0;
+  const CameraModelData data = FrameModelData(camera);
+  double ideal[2];
+  FrameCorrectFilmPoint(params.data(), xy_um.data(), data, ideal);
+  return xy_um - data.polarity_sign * Eigen::Vector2d(ideal[0], ideal[1]);
 }
 
 Eigen::Vector2d ImagePlaneFromFilm(const FrameCamera& camera, const Eigen::Vector2d& film_um) {
-  const Eigen::Vector2d measured = film_um - Eigen::Vector2d(camera.principal_x_um, camera.principal_y_um);
-  return camera.polarity_sign() * (measured - DistortionInMicrons(camera, measured));
+  const std::array<double, kFrameNumParams> params = FrameModelParams(camera);
+  double ideal[2];
+  FrameCorrectFilmPoint(params.data(), film_um.data(), FrameModelData(camera), ideal);
+  return {ideal[0], ideal[1]};
 }
 
 Status FilmFromImagePlane(const FrameCamera& camera, const Eigen::Vector2d& image_plane_um,
                           Eigen::Vector2d* film_um) {
-  // Solve m - D(m) = ideal for the measured point m (relative to the principal point) by Newton's
-  // method with a central-difference Jacobian of D.
-  const Eigen::Vector2d ideal = camera.polarity_sign() * image_plane_um;
-  const double tolerance_um = 1e-7 * camera.MeanPixelSizeUm();
-  constexpr double kStepUm = 1e-3;
-  Eigen::Vector2d m = ideal;
-  for (int iteration = 0; iteration < 50; ++iteration) {
-    const Eigen::Vector2d f = m - DistortionInMicrons(camera, m) - ideal;
-    if (f.norm() < tolerance_um) {
-      *film_um = m + Eigen::Vector2d(camera.principal_x_um, camera.principal_y_um);
-      return Status::Ok();
-    }
-    Eigen::Matrix2d J = Eigen::Matrix2d::Identity();
-    for (int j = 0; j < 2; ++j) {
-      Eigen::Vector2d h = Eigen::Vector2d::Zero();
-      h[j] = kStepUm;
-      J.col(j) -= (DistortionInMicrons(camera, m + h) - DistortionInMicrons(camera, m - h)) / (2 * kStepUm);
-    }
-    if (!(std::abs(J.determinant()) > 1e-12))
-      return Status::Error("distortion is not invertible at this image point");
-    m -= J.inverse() * f;
-    if (!m.allFinite()) break;
-  }
-  return Status::Error("inverse distortion did not converge (point far outside the calibrated field?)");
+  // The kFrame model's inverse at c = 1: its "normalised" point is then the image-plane point.
+  std::array<double, kFrameNumParams> params = FrameModelParams(camera);
+  params[kFrameFocal] = 1.0;
+  return ObservationFromNormalized(CameraModelType::kFrame, params.data(), FrameModelData(camera),
+                                   image_plane_um, film_um);
 }
 
 Status ImagePlaneFromPixel(const FrameCamera& camera, const Eigen::Vector2d& column_row,

@@ -18,52 +18,41 @@
 
 namespace photopose {
 
-// Seed equations 4-5. eo = [X0, Y0, Z0, omega, phi, kappa] (m, rad), point = [X, Y, Z] (m),
-// focal = c (um). Writes xy (um). Returns false when the point is not in front of the camera.
+// (u, v, w) = R_camera_from_ground (X - X0): a ground point in the seed's camera frame.
+// eo = [X0, Y0, Z0, omega, phi, kappa] (m, rad), point = [X, Y, Z] (m).
 template <typename T>
-bool ProjectToImagePlane(const T* eo, const T* point, const T& focal, T* xy) {
+void CameraFromGround(const T* eo, const T* point, T* uvw) {
   T R[9];
   SeedRotationMatrix(eo[3], eo[4], eo[5], R);
   const T dx = point[0] - eo[0];
   const T dy = point[1] - eo[1];
   const T dz = point[2] - eo[2];
-  const T u = R[0] * dx + R[1] * dy + R[2] * dz;
-  const T v = R[3] * dx + R[4] * dy + R[5] * dz;
-  const T w = R[6] * dx + R[7] * dy + R[8] * dz;
-  if (!(w < T(0))) return false;
-  xy[0] = -focal * u / w;
-  xy[1] = -focal * v / w;
+  uvw[0] = R[0] * dx + R[1] * dy + R[2] * dz;
+  uvw[1] = R[3] * dx + R[4] * dy + R[5] * dz;
+  uvw[2] = R[6] * dx + R[7] * dy + R[8] * dz;
+}
+
+// Seed equations 4-5. eo = [X0, Y0, Z0, omega, phi, kappa] (m, rad), point = [X, Y, Z] (m),
+// focal = c (um). Writes xy (um). Returns false when the point is not in front of the camera.
+template <typename T>
+bool ProjectToImagePlane(const T* eo, const T* point, const T& focal, T* xy) {
+  T uvw[3];
+  CameraFromGround(eo, point, uvw);
+  if (!(uvw[2] < T(0))) return false;
+  xy[0] = -focal * uvw[0] / uvw[2];
+  xy[1] = -focal * uvw[1] / uvw[2];
   return true;
 }
 
-// Removes lens distortion from a measured film point for the self-calibration model:
-// intrinsics = [c, xp, yp (um), K0, K1, K2, K3 (mm based), P1, P2 (mm^-1)], film (um). Writes the
-// ideal image-plane point relative to the principal point, before Polarity (um). Same model as
-// DistortionInMicrons(kDistortionModel).
+// The same at c = 1: the normalised image coordinates (a, b) = (-u / w, -v / w) that the camera
+// models of core/camera_models.h take. Returns false when the point is not in front (w >= 0).
 template <typename T>
-void CorrectFilmPoint(const T* intrinsics, const double* film_um, T* ideal_um) {
-  const T x = (T(film_um[0]) - intrinsics[kPrincipalX]) * 1e-3;  // mm
-  const T y = (T(film_um[1]) - intrinsics[kPrincipalY]) * 1e-3;
-  const T r2 = x * x + y * y;
-  const T radial = intrinsics[kK0] +
-                   r2 * (intrinsics[kK1] + r2 * (intrinsics[kK2] + r2 * intrinsics[kK3]));
-  const T dx = x * radial + intrinsics[kP1] * (r2 + 2.0 * x * x) + 2.0 * intrinsics[kP2] * x * y;
-  const T dy = y * radial + 2.0 * intrinsics[kP1] * x * y + intrinsics[kP2] * (r2 + 2.0 * y * y);
-  ideal_um[0] = (x - dx) * 1e3;
-  ideal_um[1] = (y - dy) * 1e3;
-}
-
-// The self-calibrating collinearity residual (um on the image plane): the corrected observation minus
-// the projection. polarity_sign as FrameCamera::polarity_sign().
-template <typename T>
-bool SelfCalibratingResidual(const T* eo, const T* point, const T* intrinsics, const double* film_um,
-                             double polarity_sign, T* residual) {
-  T projected[2];
-  if (!ProjectToImagePlane(eo, point, intrinsics[kFocalLength], projected)) return false;
-  T ideal[2];
-  CorrectFilmPoint(intrinsics, film_um, ideal);
-  residual[0] = polarity_sign * ideal[0] - projected[0];
-  residual[1] = polarity_sign * ideal[1] - projected[1];
+bool ProjectToNormalized(const T* eo, const T* point, T* ab) {
+  T uvw[3];
+  CameraFromGround(eo, point, uvw);
+  if (!(uvw[2] < T(0))) return false;
+  ab[0] = -uvw[0] / uvw[2];
+  ab[1] = -uvw[1] / uvw[2];
   return true;
 }
 

@@ -789,7 +789,7 @@ Status ReadFrameRow(const CsvTable& table, const CsvRow& csv_row, const FramesTa
 
 const std::vector<Spelling<PointRole>>& RoleSpellings() {
   static const auto* const kSpellings = new std::vector<Spelling<PointRole>>{
-      {"control", PointRole::kControl}, {"check", PointRole::kCheck}};
+      {"control", PointRole::kControl}, {"check", PointRole::kCheck}, {"tie", PointRole::kTie}};
   return *kSpellings;
 }
 
@@ -814,7 +814,7 @@ Status ReadPointRow(const CsvTable& table, const CsvRow& csv_row, GroundPoint* p
     }
     p.accuracy_m = accuracy;
   }
-  PHOTOPOSE_RETURN_IF_ERROR(ReadEnum(row, "Role", RoleSpellings(), 2, &p.role));
+  PHOTOPOSE_RETURN_IF_ERROR(ReadEnum(row, "Role", RoleSpellings(), 3, &p.role));
   *point = std::move(p);
   return Status::Ok();
 }
@@ -1111,7 +1111,7 @@ Status FormatGroundPoints(const std::vector<GroundPoint>& points, const std::str
       row.OptionalNumber(kAccuracyColumns[i],
                          p.accuracy_m ? std::optional<double>((*p.accuracy_m)[i]) : std::nullopt);
     }
-    row.Text(p.role == PointRole::kCheck ? "check" : "control");
+    row.Text(p.role == PointRole::kCheck ? "check" : p.role == PointRole::kTie ? "tie" : "control");
     PHOTOPOSE_RETURN_IF_ERROR(row.status(path));
     contents += CsvLine(*row.fields());
   }

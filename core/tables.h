@@ -97,13 +97,16 @@ Status FormatFramesTable(const FramesTableOptions& options, const std::vector<Fr
                          const std::string& path, std::string* text);
 
 // ------------------------------------------------------------------ ground points
-enum class PointRole { kControl, kCheck };
+// control: used to orient the images (resection) or as a weighted constraint (bundle adjustment);
+// check: only compared with the result; tie: coordinates unknown (a points-table row gives
+// approximate values only).
+enum class PointRole { kControl, kCheck, kTie };
 
 struct GroundPoint {
   std::string point_id;
   Eigen::Vector3d position = Eigen::Vector3d::Zero();  // X, Y, Z (m)
   std::optional<Eigen::Vector3d> accuracy_m;            // AccuracyX/Y/Z, one sigma (m)
-  PointRole role = PointRole::kControl;                 // Role: control (default) | check
+  PointRole role = PointRole::kControl;                 // Role: control (default) | check | tie
   int line = 0;                                         // source line, for messages
 };
 

@@ -17,20 +17,6 @@ constexpr int kExteriorOrientationSize = 6;  // X0, Y0, Z0 (m), omega, phi, kapp
 constexpr int kPointSize = 3;                // X, Y, Z (m)
 constexpr int kResidualSize = 2;             // x, y
 
-// Self-calibration block: c, xp, yp (um), K0, K1, K2, K3, P1, P2 (camera-table units, mm based).
-constexpr int kIntrinsicsSize = 9;
-enum IntrinsicsIndex : int {
-  kFocalLength = 0,
-  kPrincipalX = 1,
-  kPrincipalY = 2,
-  kK0 = 3,
-  kK1 = 4,
-  kK2 = 5,
-  kK3 = 6,
-  kP1 = 7,
-  kP2 = 8,
-};
-
 constexpr double kPi = 3.14159265358979323846;
 constexpr double kDegreesPerRadian = 180.0 / kPi;
 constexpr double kArcSecondsPerRadian = 3600.0 * kDegreesPerRadian;

@@ -8,9 +8,9 @@
 //  - PoseCost*:     resection. Parameter block: exterior orientation [X0, Y0, Z0, omega, phi, kappa]
 //                   (m, rad, seed). The ground point, focal length and the distortion-free ideal
 //                   image-plane observation (um) are data.
-//  - BundleCost*:   bundle adjustment and self-calibration. Parameter blocks: exterior orientation
-//                   (6), ground point (3), intrinsics (kIntrinsicsSize: c, xp, yp (um), K0..K3,
-//                   P1, P2 in camera-table units). The measured film point (um) is data.
+//  - Collinearity*: bundle adjustment and self-calibration. Parameter blocks: exterior orientation
+//                   (6), ground point (3), the camera model's parameters (core/camera_models.h).
+//                   The measurement, in the model's observation unit, is data.
 // A point behind the camera makes every cost return false (never a silent zero).
 
 #include <ceres/ceres.h>
@@ -20,7 +20,9 @@
 #include <optional>
 #include <string>
 
+#include "core/camera_models.h"
 #include "core/collinearity.h"
+#include "cost_functions/camera_model_jacobians.h"
 #include "core/types.h"
 
 namespace photopose {
@@ -91,47 +93,92 @@ inline ceres::CostFunction* CreatePoseCost(JacobianType type, const PoseCostFunc
   return new PoseCostAnalytic(data);
 }
 
-// ------------------------------------------------------------------ bundle (pose, point, intrinsics)
+// ------------------------------------------------------------------ bundle (pose, point, camera)
 
-struct BundleCostFunctor {
-  BundleCostFunctor(const Eigen::Vector2d& film_um, double polarity_sign, double inverse_sigma_um)
-      : film_um(film_um), polarity_sign(polarity_sign), inverse_sigma_um(inverse_sigma_um) {}
+// The templated residual of one measurement for bundle adjustment and self-calibration: the
+// seed's collinearity ray (ProjectToNormalized) through a camera model (core/camera_models.h),
+// whitened by the measurement's standard deviation in the model's observation unit.
+struct CollinearityFunctor {
+  CollinearityFunctor(CameraModelType model, const Eigen::Vector2d& observation,
+                      const CameraModelData& data, double inverse_sigma)
+      : model(model), observation(observation), data(data), inverse_sigma(inverse_sigma) {}
 
   template <typename T>
-  bool operator()(const T* eo, const T* point, const T* intrinsics, T* residual) const {
-    const double film[2] = {film_um[0], film_um[1]};
-    if (!SelfCalibratingResidual(eo, point, intrinsics, film, polarity_sign, residual)) return false;
-    residual[0] *= inverse_sigma_um;
-    residual[1] *= inverse_sigma_um;
+  bool operator()(const T* eo, const T* point, const T* camera, T* residual) const {
+    T ab[2];
+    if (!ProjectToNormalized(eo, point, ab)) return false;
+    CameraModelResidual(model, camera, ab, observation.data(), data, residual);
+    residual[0] *= inverse_sigma;
+    residual[1] *= inverse_sigma;
     return true;
   }
 
-  Eigen::Vector2d film_um;   // measured film coordinates (um), FilmCoordinateSystem of the camera
-  double polarity_sign;      // FrameCamera::polarity_sign()
-  double inverse_sigma_um;   // 1 / (pixel_size_um * sigma_px)
+  CameraModelType model;
+  Eigen::Vector2d observation;  // film um (kFrame) or pixels (COLMAP models)
+  CameraModelData data;         // fixed data of the model (points into the camera it came from)
+  double inverse_sigma;         // 1 / sigma of the measurement, in the observation unit
 };
 
-class BundleCostAnalytic final
+// The analytic path: the closed-form collinearity partials (core/collinearity.h, c = 1) chained
+// with the camera model's derivatives (cost_functions/camera_model_jacobians.h).
+template <int kNumParams>
+class CollinearityCostAnalytic final
     : public ceres::SizedCostFunction<kResidualSize, kExteriorOrientationSize, kPointSize,
-                                      kIntrinsicsSize> {
+                                      kNumParams> {
  public:
-  explicit BundleCostAnalytic(const BundleCostFunctor& data) : data_(data) {}
+  explicit CollinearityCostAnalytic(const CollinearityFunctor& data) : data_(data) {}
 
   bool Evaluate(double const* const* parameters, double* residuals,
-                double** jacobians) const override;
+                double** jacobians) const override {
+    const double* camera = parameters[2];
+    double* d_eo = jacobians != nullptr ? jacobians[0] : nullptr;
+    double* d_point = jacobians != nullptr ? jacobians[1] : nullptr;
+    double* d_camera = jacobians != nullptr ? jacobians[2] : nullptr;
+    double ab[2];
+    double ab_eo[2 * kExteriorOrientationSize], ab_point[2 * kPointSize];
+    if (!ProjectWithJacobians(parameters[0], parameters[1], 1.0, ab, d_eo ? ab_eo : nullptr,
+                              d_point ? ab_point : nullptr, nullptr)) {
+      return false;
+    }
+    const double s = data_.inverse_sigma;
+    double r_ab[4];
+    if (jacobians == nullptr) {
+      // The residual alone needs no derivatives.
+      CameraModelResidual(data_.model, camera, ab, data_.observation.data(), data_.data, residuals);
+    } else {
+      EvaluateCameraModel<kNumParams>(data_.model, camera, ab, data_.observation.data(),
+                                      data_.data, residuals, r_ab, d_camera);
+    }
+    residuals[0] *= s;
+    residuals[1] *= s;
+    if (jacobians == nullptr) return true;
+    if (d_eo != nullptr) {
+      for (int k = 0; k < kExteriorOrientationSize; ++k) {
+        const double x = ab_eo[k], y = ab_eo[kExteriorOrientationSize + k];
+        d_eo[k] = s * (r_ab[0] * x + r_ab[1] * y);
+        d_eo[kExteriorOrientationSize + k] = s * (r_ab[2] * x + r_ab[3] * y);
+      }
+    }
+    if (d_point != nullptr) {
+      for (int k = 0; k < kPointSize; ++k) {
+        const double x = ab_point[k], y = ab_point[kPointSize + k];
+        d_point[k] = s * (r_ab[0] * x + r_ab[1] * y);
+        d_point[kPointSize + k] = s * (r_ab[2] * x + r_ab[3] * y);
+      }
+    }
+    if (d_camera != nullptr)
+      for (int k = 0; k < 2 * kNumParams; ++k) d_camera[k] *= s;
+    return true;
+  }
 
  private:
-  BundleCostFunctor data_;
+  CollinearityFunctor data_;
 };
 
-using BundleCostAutoDiff = ceres::AutoDiffCostFunction<BundleCostFunctor, kResidualSize,
-                                                       kExteriorOrientationSize, kPointSize,
-                                                       kIntrinsicsSize>;
-
-inline ceres::CostFunction* CreateBundleCost(JacobianType type, const BundleCostFunctor& data) {
-  if (type == JacobianType::kAutodiff) return new BundleCostAutoDiff(new BundleCostFunctor(data));
-  return new BundleCostAnalytic(data);
-}
+// Creates the collinearity cost of a measurement with the requested derivative path (owned by the
+// caller or the problem). Parameter blocks: exterior orientation (6), ground point (3), camera
+// parameters (CameraModelNumParams(data.model)).
+ceres::CostFunction* CreateCollinearityCost(JacobianType type, const CollinearityFunctor& data);
 
 // ------------------------------------------------------------------ inline definitions
 
@@ -145,67 +192,32 @@ inline const char* JacobianTypeName(JacobianType type) {
   return type == JacobianType::kAnalytic ? "analytic" : "autodiff";
 }
 
-inline bool BundleCostAnalytic::Evaluate(double const* const* parameters, double* residuals,
-                                         double** jacobians) const {
-  const double* eo = parameters[0];
-  const double* point = parameters[1];
-  const double* in = parameters[2];
-  const double s = data_.inverse_sigma_um;
-  const double pol = data_.polarity_sign;
-
-  double xy[2];
-  double* d_eo = jacobians != nullptr ? jacobians[0] : nullptr;
-  double* d_point = jacobians != nullptr ? jacobians[1] : nullptr;
-  double d_focal[2];
-  if (!ProjectWithJacobians(eo, point, in[kFocalLength], xy, d_eo, d_point, d_focal)) return false;
-
-  // The corrected observation, exactly as CorrectFilmPoint (mm inside, um outside).
-  const double xb = (data_.film_um[0] - in[kPrincipalX]) * 1e-3;
-  const double yb = (data_.film_um[1] - in[kPrincipalY]) * 1e-3;
-  const double r2 = xb * xb + yb * yb;
-  const double radial = in[kK0] + r2 * (in[kK1] + r2 * (in[kK2] + r2 * in[kK3]));
-  const double dx = xb * radial + in[kP1] * (r2 + 2.0 * xb * xb) + 2.0 * in[kP2] * xb * yb;
-  const double dy = yb * radial + 2.0 * in[kP1] * xb * yb + in[kP2] * (r2 + 2.0 * yb * yb);
-  residuals[0] = (pol * (xb - dx) * 1e3 - xy[0]) * s;
-  residuals[1] = (pol * (yb - dy) * 1e3 - xy[1]) * s;
-  if (jacobians == nullptr) return true;
-
-  if (d_eo != nullptr)
-    for (int k = 0; k < 2 * kExteriorOrientationSize; ++k) d_eo[k] *= -s;
-  if (d_point != nullptr)
-    for (int k = 0; k < 2 * kPointSize; ++k) d_point[k] *= -s;
-  double* d_in = jacobians[2];
-  if (d_in != nullptr) {
-    // Rows x (0..8) and y (9..17) of the 2 x 9 row-major block.
-    double* jx = d_in;
-    double* jy = d_in + kIntrinsicsSize;
-    const double ps = pol * s;
-    jx[kFocalLength] = -d_focal[0] * s;
-    jy[kFocalLength] = -d_focal[1] * s;
-    // d radial / d r^2 and the partials of the distortion with respect to xb, yb.
-    const double radial_prime = in[kK1] + r2 * (2.0 * in[kK2] + 3.0 * r2 * in[kK3]);
-    const double ddx_dxb = radial + 2.0 * xb * xb * radial_prime + 6.0 * in[kP1] * xb + 2.0 * in[kP2] * yb;
-    const double ddx_dyb = 2.0 * xb * yb * radial_prime + 2.0 * in[kP1] * yb + 2.0 * in[kP2] * xb;
-    const double ddy_dxb = 2.0 * xb * yb * radial_prime + 2.0 * in[kP1] * yb + 2.0 * in[kP2] * xb;
-    const double ddy_dyb = radial + 2.0 * yb * yb * radial_prime + 2.0 * in[kP1] * xb + 6.0 * in[kP2] * yb;
-    // xb = (film - xp) / 1000, ideal = 1000 (xb - dx): d ideal / d xp = -(1 - ddx_dxb), etc.
-    jx[kPrincipalX] = -(1.0 - ddx_dxb) * ps;
-    jx[kPrincipalY] = ddx_dyb * ps;
-    jy[kPrincipalX] = ddy_dxb * ps;
-    jy[kPrincipalY] = -(1.0 - ddy_dyb) * ps;
-    double power = 1e3;  // ideal is in um: d ideal / d K_i = -1000 xb r^(2i)
-    const int k_index[4] = {kK0, kK1, kK2, kK3};
-    for (int i = 0; i < 4; ++i) {
-      jx[k_index[i]] = -xb * power * ps;
-      jy[k_index[i]] = -yb * power * ps;
-      power *= r2;
-    }
-    jx[kP1] = -(r2 + 2.0 * xb * xb) * 1e3 * ps;
-    jy[kP1] = -2.0 * xb * yb * 1e3 * ps;
-    jx[kP2] = -2.0 * xb * yb * 1e3 * ps;
-    jy[kP2] = -(r2 + 2.0 * yb * yb) * 1e3 * ps;
+namespace internal {
+template <int kNumParams>
+ceres::CostFunction* MakeCollinearityCost(JacobianType type, const CollinearityFunctor& data) {
+  if (type == JacobianType::kAutodiff) {
+    return new ceres::AutoDiffCostFunction<CollinearityFunctor, kResidualSize,
+                                           kExteriorOrientationSize, kPointSize, kNumParams>(
+        new CollinearityFunctor(data));
   }
-  return true;
+  return new CollinearityCostAnalytic<kNumParams>(data);
+}
+}  // namespace internal
+
+inline ceres::CostFunction* CreateCollinearityCost(JacobianType type,
+                                                   const CollinearityFunctor& data) {
+  switch (CameraModelNumParams(data.model)) {
+    case 3:
+      return internal::MakeCollinearityCost<3>(type, data);
+    case 4:
+      return internal::MakeCollinearityCost<4>(type, data);
+    case 5:
+      return internal::MakeCollinearityCost<5>(type, data);
+    case 8:
+      return internal::MakeCollinearityCost<8>(type, data);
+    default:
+      return internal::MakeCollinearityCost<kFrameNumParams>(type, data);
+  }
 }
 
 }  // namespace photopose

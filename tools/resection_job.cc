@@ -101,6 +101,7 @@ Status PrepareResectionJob(const ResectionJobOptions& options, ResectionJob* job
       job->input_check_marks[index].push_back({m, point->second->position});
       continue;
     }
+    if (point->second->role == PointRole::kTie) continue;  // unknown coordinates: not for resection
     const FrameCamera& camera = *job->input_cameras[index];
     Eigen::Vector2d image_plane;
     if (mark.column_row.has_value()) {

@@ -831,7 +831,7 @@ TEST_F(TablesTest, GroundPointsErrors) {
        "2: AccuracyY: is empty; AccuracyX, AccuracyY, AccuracyZ are given together"},
       {full, "P1,1,2,3,0.1,0,0.1,\n", "2: AccuracyY: '0' is outside (0, 100000000] m"},
       {full, "P1,1,2,3,0.1,0.1,-1,\n", "2: AccuracyZ: '-1' is outside (0, 100000000] m"},
-      {full, "P1,1,2,3,,,,tie\n", "2: Role: 'tie' is not control or check"},
+      {full, "P1,1,2,3,,,,tied\n", "2: Role: 'tied' is not control, check or tie"},
       {full, "P1,1,2,3,,,,\nP1,4,5,6,,,,\n", "3: PointID: duplicate point 'P1' (first on line 2)"},
       {full, ",1,2,3,,,,\n", "2: PointID: is empty"},
   };

@@ -19,7 +19,8 @@ constexpr int kNumRandomPoses = 1000;
 struct RandomView {
   double eo[6];
   double point[3];
-  double intrinsics[kIntrinsicsSize];
+  double focal_um;
+  double frame_params[kFrameNumParams];
   Eigen::Vector2d film_um;
   Eigen::Vector2d observed_um;
 };
@@ -44,15 +45,19 @@ RandomView MakeRandomView(std::mt19937_64* rng) {
   view.eo[4] = phi;
   view.eo[5] = kappa;
   for (int i = 0; i < 3; ++i) view.point[i] = point[i];
-  view.intrinsics[kFocalLength] = 8800.0 * (1.0 + 0.2 * u(*rng));
-  view.intrinsics[kPrincipalX] = 30.0 * u(*rng);
-  view.intrinsics[kPrincipalY] = 30.0 * u(*rng);
-  view.intrinsics[kK0] = 1e-4 * u(*rng);
-  view.intrinsics[kK1] = 1e-4 * u(*rng);
-  view.intrinsics[kK2] = 1e-7 * u(*rng);
-  view.intrinsics[kK3] = 1e-10 * u(*rng);
-  view.intrinsics[kP1] = 1e-5 * u(*rng);
-  view.intrinsics[kP2] = 1e-5 * u(*rng);
+  view.focal_um = 8800.0 * (1.0 + 0.2 * u(*rng));
+  double* p = view.frame_params;
+  p[kFrameFocal] = view.focal_um;
+  p[kFramePrincipalX] = 30.0 * u(*rng);
+  p[kFramePrincipalY] = 30.0 * u(*rng);
+  p[kFrameK0] = 1e-4 * u(*rng);
+  p[kFrameK1] = 1e-4 * u(*rng);
+  p[kFrameK2] = 1e-7 * u(*rng);
+  p[kFrameK3] = 1e-10 * u(*rng);
+  p[kFrameP1] = 1e-5 * u(*rng);
+  p[kFrameP2] = 1e-5 * u(*rng);
+  p[kFrameAffinity] = 1e-3 * u(*rng);
+  p[kFrameSkew] = 1e-3 * u(*rng);
   view.film_um = Eigen::Vector2d(6000.0 * u(*rng), 4000.0 * u(*rng));
   view.observed_um = Eigen::Vector2d(6000.0 * u(*rng), 4000.0 * u(*rng));
   return view;
@@ -102,21 +107,68 @@ TEST(PoseCost, AnalyticMatchesAutodiffOverRandomPoses) {
   for (int i = 0; i < kNumRandomPoses; ++i) {
     const RandomView view = MakeRandomView(&rng);
     const PoseCostFunctor data(view.observed_um, Eigen::Map<const Eigen::Vector3d>(view.point),
-                               view.intrinsics[kFocalLength], 1.0 / 2.4);
+                               view.focal_um, 1.0 / 2.4);
     std::unique_ptr<ceres::CostFunction> analytic(CreatePoseCost(JacobianType::kAnalytic, data));
     std::unique_ptr<ceres::CostFunction> autodiff(CreatePoseCost(JacobianType::kAutodiff, data));
     ExpectAgreement(*analytic, *autodiff, {view.eo});
   }
 }
 
-TEST(BundleCost, AnalyticMatchesAutodiffOverRandomPoses) {
+// Parameters of each camera model around a 4000 x 3000 px camera with f = 3000 px (COLMAP models)
+// or the random frame camera of the view; observations in the model's unit near the projection.
+struct ModelCase {
+  CameraModelType type;
+  std::vector<double> params;
+  CameraModelData data;
+  Eigen::Vector2d observation;
+};
+
+std::vector<ModelCase> ModelCases(const RandomView& view, std::mt19937_64* rng,
+                                  const std::vector<double>* table_r = nullptr,
+                                  const std::vector<double>* table_d = nullptr) {
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  std::vector<ModelCase> cases;
+  const double f = 3000.0 * (1.0 + 0.1 * u(*rng));
+  const double cx = 2000.0 + 20.0 * u(*rng), cy = 1500.0 + 20.0 * u(*rng);
+  const Eigen::Vector2d pixel(2000.0 + 1500.0 * u(*rng), 1500.0 + 1000.0 * u(*rng));
+  cases.push_back({CameraModelType::kSimplePinhole, {f, cx, cy}, {}, pixel});
+  cases.push_back({CameraModelType::kPinhole, {f, f * 1.01, cx, cy}, {}, pixel});
+  cases.push_back({CameraModelType::kSimpleRadial, {f, cx, cy, 0.05 * u(*rng)}, {}, pixel});
+  cases.push_back({CameraModelType::kRadial, {f, cx, cy, 0.05 * u(*rng), 0.01 * u(*rng)}, {}, pixel});
+  cases.push_back({CameraModelType::kOpenCv,
+                   {f, f * 0.99, cx, cy, 0.05 * u(*rng), 0.01 * u(*rng), 1e-3 * u(*rng),
+                    1e-3 * u(*rng)},
+                   {},
+                   pixel});
+  CameraModelData frame_data;
+  frame_data.polarity_sign = u(*rng) > 0.0 ? 1.0 : -1.0;
+  cases.push_back({CameraModelType::kFrame,
+                   std::vector<double>(view.frame_params, view.frame_params + kFrameNumParams),
+                   frame_data, view.film_um});
+  if (table_r != nullptr) {
+    CameraModelData table_data = frame_data;
+    table_data.table_radius_um = table_r->data();
+    table_data.table_distortion_um = table_d->data();
+    table_data.table_size = static_cast<int>(table_r->size());
+    cases.push_back({CameraModelType::kFrame, cases.back().params, table_data, view.film_um});
+  }
+  return cases;
+}
+
+TEST(CollinearityCost, AnalyticMatchesAutodiffForEveryCameraModel) {
   std::mt19937_64 rng(7);
-  for (int i = 0; i < kNumRandomPoses; ++i) {
-    const RandomView view = MakeRandomView(&rng);
-    const BundleCostFunctor data(view.film_um, i % 2 ? 1.0 : -1.0, 1.0 / 2.4);
-    std::unique_ptr<ceres::CostFunction> analytic(CreateBundleCost(JacobianType::kAnalytic, data));
-    std::unique_ptr<ceres::CostFunction> autodiff(CreateBundleCost(JacobianType::kAutodiff, data));
-    ExpectAgreement(*analytic, *autodiff, {view.eo, view.point, view.intrinsics});
+  const std::vector<double> table_r = {1000.0, 3000.0, 6000.0}, table_d = {1.5, -2.0, 4.0};
+  for (int i = 0; i < kNumRandomPoses / 4; ++i) {
+    RandomView view = MakeRandomView(&rng);
+    for (ModelCase& model : ModelCases(view, &rng, &table_r, &table_d)) {
+      const CollinearityFunctor data(model.type, model.observation, model.data, 1.0 / 2.4);
+      std::unique_ptr<ceres::CostFunction> analytic(
+          CreateCollinearityCost(JacobianType::kAnalytic, data));
+      std::unique_ptr<ceres::CostFunction> autodiff(
+          CreateCollinearityCost(JacobianType::kAutodiff, data));
+      SCOPED_TRACE(CameraModelTypeName(model.type));
+      ExpectAgreement(*analytic, *autodiff, {view.eo, view.point, model.params.data()});
+    }
   }
 }
 
@@ -139,7 +191,7 @@ TEST(PoseCost, PassesCeresGradientChecker) {
   for (int i = 0; i < 50; ++i) {
     RandomView view = MakeLocalView(&rng);
     PoseCostAnalytic cost(PoseCostFunctor(view.observed_um, Eigen::Map<Eigen::Vector3d>(view.point),
-                                          view.intrinsics[kFocalLength], 1.0));
+                                          view.focal_um, 1.0));
     ceres::NumericDiffOptions numeric_options;
     // Ridders' first step is relative to the value: 1e-2 of a UTM easting would move the camera by
     // kilometres and behind its points. 1e-6 is 0.5 m there and 1e-6 rad for angles.
@@ -152,29 +204,33 @@ TEST(PoseCost, PassesCeresGradientChecker) {
   }
 }
 
-TEST(BundleCost, PassesCeresGradientChecker) {
+TEST(CollinearityCost, PassesCeresGradientCheckerForEveryCameraModel) {
   std::mt19937_64 rng(5);
-  for (int i = 0; i < 50; ++i) {
+  for (int i = 0; i < 30; ++i) {
     RandomView view = MakeLocalView(&rng);
-    BundleCostAnalytic cost(BundleCostFunctor(view.film_um, -1.0, 1.0));
-    ceres::NumericDiffOptions numeric_options;
-    // Ridders' first step is relative to the value: 1e-2 of a UTM easting would move the camera by
-    // kilometres and behind its points. 1e-6 is 0.5 m there and 1e-6 rad for angles.
-    numeric_options.ridders_relative_initial_step_size = 1e-6;
-    const std::vector<const ceres::Manifold*>* no_manifolds = nullptr;
-    ceres::GradientChecker checker(&cost, no_manifolds, numeric_options);
-    ceres::GradientChecker::ProbeResults results;
-    const double* parameters[] = {view.eo, view.point, view.intrinsics};
-    checker.Probe(parameters, 1e-5, &results);
-    ASSERT_TRUE(results.return_value);
-    // The element-wise relative test of Probe() trips over cross terms of ~1e-6 next to elements of
-    // ~1e7 in the intrinsics block (pure rounding in the numeric side); compare each block relative
-    // to its largest element instead.
-    for (size_t b = 0; b < results.jacobians.size(); ++b) {
-      const double scale = results.numeric_jacobians[b].cwiseAbs().maxCoeff();
-      EXPECT_LE((results.jacobians[b] - results.numeric_jacobians[b]).cwiseAbs().maxCoeff(),
-                1e-7 * scale)
-          << "block " << b;
+    for (ModelCase& model : ModelCases(view, &rng)) {
+      std::unique_ptr<ceres::CostFunction> cost(CreateCollinearityCost(
+          JacobianType::kAnalytic,
+          CollinearityFunctor(model.type, model.observation, model.data, 1.0)));
+      ceres::NumericDiffOptions numeric_options;
+      // Ridders' first step is relative to the value: 1e-2 of a UTM easting would move the camera
+      // by kilometres and behind its points. 1e-6 is 0.5 m there and 1e-6 rad for angles.
+      numeric_options.ridders_relative_initial_step_size = 1e-6;
+      const std::vector<const ceres::Manifold*>* no_manifolds = nullptr;
+      ceres::GradientChecker checker(cost.get(), no_manifolds, numeric_options);
+      ceres::GradientChecker::ProbeResults results;
+      const double* parameters[] = {view.eo, view.point, model.params.data()};
+      checker.Probe(parameters, 1e-5, &results);
+      ASSERT_TRUE(results.return_value);
+      // The element-wise relative test of Probe() trips over cross terms of ~1e-6 next to elements
+      // of ~1e7 in the camera block (pure rounding in the numeric side); compare each block
+      // relative to its largest element instead.
+      for (size_t b = 0; b < results.jacobians.size(); ++b) {
+        const double scale = results.numeric_jacobians[b].cwiseAbs().maxCoeff();
+        EXPECT_LE((results.jacobians[b] - results.numeric_jacobians[b]).cwiseAbs().maxCoeff(),
+                  1e-7 * scale)
+            << CameraModelTypeName(model.type) << " block " << b;
+      }
     }
   }
 }
@@ -190,13 +246,14 @@ TEST(PoseCost, PointBehindCameraFailsInBothPaths) {
     EXPECT_FALSE(Evaluate(*cost, {eo}, &residual, &jacobians)) << JacobianTypeName(type);
   }
   const double point[3] = {10.0, 10.0, 1000.0};  // on the camera plane: w = 0
-  double intrinsics[kIntrinsicsSize] = {1e5};
-  const BundleCostFunctor bundle(Eigen::Vector2d::Zero(), -1.0, 1.0);
+  double frame_params[kFrameNumParams] = {1e5};
+  const CollinearityFunctor bundle(CameraModelType::kFrame, Eigen::Vector2d::Zero(),
+                                   CameraModelData(), 1.0);
   for (JacobianType type : {JacobianType::kAnalytic, JacobianType::kAutodiff}) {
-    std::unique_ptr<ceres::CostFunction> cost(CreateBundleCost(type, bundle));
+    std::unique_ptr<ceres::CostFunction> cost(CreateCollinearityCost(type, bundle));
     Eigen::Vector2d residual;
     std::vector<Eigen::VectorXd> jacobians;
-    EXPECT_FALSE(Evaluate(*cost, {eo, point, intrinsics}, &residual, &jacobians));
+    EXPECT_FALSE(Evaluate(*cost, {eo, point, frame_params}, &residual, &jacobians));
   }
 }
 

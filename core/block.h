@@ -1,0 +1,160 @@
+#pragma once
+// A photogrammetric block: the cameras, images, ground points and image marks that resection and
+// bundle adjustment work on, in one model. It is assembled once from the tables (ReadBlock /
+// AssembleBlock below), from a COLMAP model or a BAL / Bundler problem (core/colmap_io.h,
+// core/bal_io.h), or built in memory (the synthetic scenes); every consumer (resect, bundle,
+// compare, the benchmarks, the tests) starts from it instead of pairing marks with points itself.
+//
+// Frames and units: the ground frame of the points (metres, Z up); exterior orientations in the
+// seed convention (core/types.h); each camera's measurements in the observation unit of its camera
+// model (core/camera_models.h: film micrometres for kFrame, pixels for the COLMAP models), while
+// every mark also keeps what was read, in its own unit (pixels for Column/Row, micrometres for
+// FilmX/FilmY), for reports.
+//
+// Roles of the ground points: control (surveyed, used as observations), check (surveyed, kept out
+// of the adjustment and compared with it afterwards), tie (unknown coordinates: a point that has
+// marks but no row in the points table, or a row with Role tie, whose coordinates are then only
+// approximate values).
+
+#include <Eigen/Core>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "core/camera.h"
+#include "core/camera_models.h"
+#include "core/rotation.h"
+#include "core/status.h"
+#include "core/tables.h"
+#include "core/types.h"
+
+namespace photopose {
+
+// The interior orientation of one camera of a block.
+struct BlockCamera {
+  std::string camera_id;
+  CameraModelType model = CameraModelType::kFrame;
+  // CameraModelNumParams(model) values in the order of core/camera_models.h (units there).
+  std::vector<double> params;
+  // kFrame: the camera-table row (pixel <-> film, flags, fiducials, distortion table, extra
+  // columns); params start from it (FrameModelParams) and are written back into it on output
+  // (SetFrameModelParams). Other models: only camera_id, n_columns and n_rows are meaningful.
+  FrameCamera table;
+  // The model's fixed data (Polarity, distortion table), pointing into `table`.
+  CameraModelData data() const;
+};
+
+// One image: its camera, its exterior orientation when known, and measured position / attitude.
+struct BlockImage {
+  std::string name;  // Raster
+  int camera = -1;   // index into Block::cameras
+  // Exterior orientation (seed): approximate values from a frames table or a model, or the result
+  // of an adjustment; unset when nothing is known yet.
+  std::optional<ExteriorOrientation> eo;
+  // Measured projection centre (GNSS, m, ground frame) and its per-image accuracy (m, one sigma
+  // per axis). A frames table's PerspectiveX/Y/Z are the measured centre; the accuracy columns
+  // AccuracyX/Y/Z, when given, make it a prior of the bundle adjustment (otherwise the adjustment's
+  // default accuracy decides whether it is one).
+  std::optional<Eigen::Vector3d> measured_center_m;
+  std::optional<Eigen::Vector3d> center_accuracy_m;
+  // Measured attitude (seed angles, rad) and its per-image accuracy (rad, one sigma per angle).
+  std::optional<Eigen::Vector3d> measured_angles_rad;
+  std::optional<Eigen::Vector3d> attitude_accuracy_rad;
+  int line = 0;  // line of the frames table it came from (0: none), for messages
+};
+
+// One ground point.
+struct BlockPoint {
+  std::string id;
+  PointRole role = PointRole::kTie;
+  // Control and check points: the surveyed coordinates (m) and their per-point accuracy (m, one
+  // sigma per axis; unset: the adjustment's default marker accuracy).
+  std::optional<Eigen::Vector3d> surveyed_m;
+  std::optional<Eigen::Vector3d> accuracy_m;
+  // The current estimate (m): an initial value (a points-table row of a tie point, a COLMAP
+  // point, a triangulation) or the result of an adjustment; unset when not known yet.
+  std::optional<Eigen::Vector3d> position_m;
+  int line = 0;  // line of the points table it came from (0: none), for messages
+};
+
+// The unit of a mark as it was measured.
+enum class MarkUnit {
+  kPixel,  // Column/Row, pixels ((0, 0) the top-left corner of the image unless stated otherwise)
+  kFilm,   // FilmX/FilmY, micrometres in the camera's FilmCoordinateSystem
+};
+
+// One measurement of a point in an image.
+struct BlockMark {
+  int image = -1;  // index into Block::images
+  int point = -1;  // index into Block::points
+  MarkUnit unit = MarkUnit::kPixel;
+  Eigen::Vector2d measured = Eigen::Vector2d::Zero();  // as read, in `unit`
+  std::optional<double> accuracy;                       // as read, in `unit`, one sigma
+  // The measurement in the camera model's observation unit (film um for kFrame, pixels for the
+  // COLMAP models) and that unit per mark unit (um per pixel for pixel marks of a kFrame camera,
+  // 1 otherwise): residuals and sigmas convert with it.
+  Eigen::Vector2d observation = Eigen::Vector2d::Zero();
+  double observation_units_per_unit = 1.0;
+  int line = 0;  // line of the marks file it came from (0: none), for messages
+};
+
+struct Block {
+  std::vector<BlockCamera> cameras;
+  std::vector<BlockImage> images;
+  std::vector<BlockPoint> points;
+  std::vector<BlockMark> marks;
+  // Pixel origin of the pixel marks as read (corner: (0, 0) the top-left corner of the image).
+  PixelOrigin pixel_origin = PixelOrigin::kCorner;
+  // Coordinate reference system of the ground frame as given (gcp_list header, SRS), or empty.
+  std::string crs;
+  // The file the marks came from, named in messages about marks.
+  std::string marks_source;
+
+  // Marks of every image and of every point (indices into marks), in marks order. Filled by
+  // BuildIndex(); every function that changes the marks calls it again.
+  std::vector<std::vector<int>> marks_of_image;
+  std::vector<std::vector<int>> marks_of_point;
+  void BuildIndex();
+
+  // Index by name, or -1.
+  int FindCamera(const std::string& camera_id) const;
+  int FindImage(const std::string& name) const;
+  int FindPoint(const std::string& id) const;
+};
+
+// Structural checks: every index in range, parameter counts match the models, every number
+// finite. Names the first offence.
+Status CheckBlock(const Block& block);
+
+// ------------------------------------------------------------------ from the tables
+
+// The tables of a block, as read by core/tables.h, and how to combine them.
+struct BlockTables {
+  std::vector<FrameCamera> cameras;
+  std::vector<GroundPoint> points;
+  std::vector<ImageMark> marks;
+  std::vector<FrameRecord> frames;  // may be empty
+  std::string crs;                  // e.g. the gcp_list header
+  // File names for messages ("file:line: column: what").
+  std::string cameras_file, points_file, marks_file, frames_file;
+  PixelOrigin pixel_origin = PixelOrigin::kCorner;
+};
+
+// Pairs marks with points, images with cameras and frames, converts every mark into its camera
+// model's observation unit, and gives every point a role (marks of points without a row are tie
+// points). Errors read "file:line: column: what is wrong".
+Status AssembleBlock(const BlockTables& tables, Block* block);
+
+// The files of a block and how to read them; ReadBlock reads them (core/tables.h) and assembles.
+struct BlockFiles {
+  std::string cameras;   // camera table (required)
+  std::string points;    // ground points (or gcp_list)
+  std::string marks;     // image marks (or gcp_list)
+  std::string gcp_list;  // OpenDroneMap gcp_list.txt instead of points + marks
+  std::string frames;    // optional frames table
+  RotationConvention rotation = RotationConvention::kSeed;  // of the frames table
+  PixelOrigin pixel_origin = PixelOrigin::kCorner;          // of the marks' Column/Row
+};
+Status ReadBlock(const BlockFiles& files, Block* block);
+
+}  // namespace photopose

@@ -1,0 +1,252 @@
+#pragma once
+// Bundle adjustment of a block (core/block.h): the weighted objective of the bundle-objective seed
+// note (001_ad717511fdc5a198.txt), as Metashape's reference settings weight it,
+//
+//   sum over tie marks       |v|^2 / sigma_tie^2                 (image residuals)
+// + sum over control marks   |v|^2 / sigma_marker_projection^2    (image residuals)
+// + sum over control points  |X - X_surveyed|^2 / sigma_marker^2  (per axis, m)
+// + sum over camera centres  |X0 + R^T l - X_gnss|^2 / sigma_camera^2   (per axis, m; l the GNSS
+//                                                                      lever arm, camera frame)
+// + sum over attitudes       |angles - measured|^2 / sigma_attitude^2    (per angle, only if asked)
+//
+// minimised by Ceres over one 6-parameter exterior orientation block per image (seed angles, with
+// a rotation manifold so that no attitude is singular), one 3-parameter block per point and one
+// block of camera-model parameters per camera (core/camera_models.h), held constant except the
+// parameters named for self-calibration. Points are eliminated first (Schur complement); control
+// point priors are written as 2-row residual blocks so that every eliminated row has the same size
+// and Ceres' fixed-size Schur specialisation (2, 3, 6) applies.
+//
+// Check points stay out of the adjustment: afterwards each is intersected from the adjusted images
+// (solvers/triangulation.h) and compared with its surveyed coordinates.
+//
+// The note's warning is part of the result: when tie points are too few or too weak the solution
+// bends to the priors, whose residual RMS then falls well below the stated accuracy and whose
+// redundancy share (how much of each prior the rest of the block checks) is small. Each prior group
+// is flagged `overfit` when either falls below BundleAdjustmentOptions::overfit_ratio.
+//
+// Data-dependent failures (no datum, disconnected block, an image with too few marks, a point
+// behind a camera, no convergence) are reported in the summary; nothing aborts.
+
+#include <Eigen/Core>
+#include <functional>
+#include <optional>
+#include <set>
+#include <string>
+#include <vector>
+
+#include "core/block.h"
+#include "core/status.h"
+#include "core/types.h"
+#include "cost_functions/collinearity_cost.h"
+
+namespace photopose {
+
+// The stated accuracies of the objective's groups (one sigma). Defaults: Metashape's reference
+// settings. A per-row accuracy in the tables (mark Accuracy, point AccuracyX/Y/Z, frames
+// AccuracyX/Y/Z, AccuracyOmega/Phi/Kappa) overrides the default of its row.
+struct BundleAccuracies {
+  double tie_px = 1.0;                // tie marks measured in pixels (px)
+  double marker_projection_px = 0.5;  // control and check marks measured in pixels (px)
+  // Marks measured in film coordinates (um) of a camera without a pixel size: the defaults above
+  // need a pixel size to become micrometres, so these apply instead (um).
+  double tie_film_um = 5.0;
+  double marker_projection_film_um = 2.5;
+  double marker_m = 0.005;                                // control point coordinates (m, per axis)
+  Eigen::Vector3d camera_m = Eigen::Vector3d::Constant(10.0);  // camera centres (m, X, Y, Z)
+  // Camera centres are priors: always when an image has per-row accuracies; for the others when
+  // this is true (a frames table with measured centres and --camera_accuracy given, or the
+  // default on). false: measured centres without per-row accuracy are initial values only.
+  bool camera_positions_are_priors = true;
+  // Attitude prior (deg per angle, seed angles); none unless set.
+  std::optional<double> attitude_deg;
+};
+
+// The linear solver of each Levenberg-Marquardt step.
+enum class BundleLinearSolver {
+  kSparseSchur,                  // SPARSE_SCHUR with SuiteSparse (default)
+  kDenseSchur,                   // DENSE_SCHUR (small blocks)
+  kIterativeSchurJacobi,         // ITERATIVE_SCHUR with SCHUR_JACOBI
+  kIterativeSchurClusterJacobi,  // ITERATIVE_SCHUR with CLUSTER_JACOBI
+};
+std::optional<BundleLinearSolver> ParseBundleLinearSolver(const std::string& name);
+const char* BundleLinearSolverName(BundleLinearSolver solver);
+
+// One line of progress, after every iteration (the CLI prints it on stderr).
+struct BundleIterationInfo {
+  int round = 0;           // adjustment round (1, then one more after each outlier rejection)
+  int iteration = 0;       // Ceres iteration within the round
+  double cost = 0.0;       // 1/2 sum of squared whitened residuals
+  double sigma0 = 0.0;     // sqrt(2 cost / redundancy)
+  double step_norm = 0.0;  // |step| of the iteration (parameter units)
+  double elapsed_seconds = 0.0;
+};
+
+struct BundleAdjustmentOptions {
+  BundleAccuracies accuracies;
+  JacobianType jacobian = JacobianType::kAnalytic;  // derivative path of the collinearity costs
+  // Robust loss on tie marks (kNone: plain least squares), scale in sigmas of the mark.
+  // Control marks and priors are never robustified.
+  enum class TieLoss { kNone, kHuber, kCauchy, kSoftL1 } tie_loss = TieLoss::kNone;
+  double tie_loss_scale_sigmas = 3.0;
+  // After convergence, marks whose whitened residual |v| / (sigma sigma0) exceeds this (unitless,
+  // a 2-D chi-square quantile: 4.5 ~ 99.996 %) are rejected and the block adjusted again, at most
+  // max_rejection_rounds times. 0 disables rejection. Control marks are tested like tie marks.
+  double rejection_threshold = 4.5;
+  int max_rejection_rounds = 3;
+  // Levenberg-Marquardt.
+  int max_iterations = 100;             // per round (count)
+  double function_tolerance = 1e-10;    // relative cost change (unitless)
+  double parameter_tolerance = 1e-10;   // relative step (unitless)
+  double gradient_tolerance = 1e-12;    // max-norm of the projected gradient (unitless)
+  BundleLinearSolver linear_solver = BundleLinearSolver::kSparseSchur;
+  int num_threads = 0;                  // 0: all cores
+  // GNSS lever arm: antenna offset from the projection centre in the camera frame (u, v, w; m).
+  std::optional<Eigen::Vector3d> lever_arm_m;
+  bool estimate_lever_arm = false;  // estimate it (starting from lever_arm_m or zero)
+  // Posterior covariances and redundancy shares (the normal matrix reduced to the cameras,
+  // inverted densely): skipped for blocks with more parameters than this after point elimination.
+  int max_covariance_parameters = 12000;
+  // A prior group is flagged `overfit` when its RMS / stated accuracy or its redundancy share is
+  // below this (unitless, the note's "well below").
+  double overfit_ratio = 0.5;
+  // Camera-model parameters whose |correlation| exceeds this are named (unitless, DBAT's 0.95).
+  double high_correlation = 0.95;
+  // Progress callback after every iteration (may be empty).
+  std::function<void(const BundleIterationInfo&)> progress;
+
+  bool IsValid(std::string* why) const;
+};
+
+// What the adjustment holds constant (in the manner of COLMAP's BundleAdjustmentConfig).
+struct BundleAdjustmentConfig {
+  // Per camera (index into Block::cameras): the parameter indices to estimate (self-calibration).
+  // Cameras not listed are held constant.
+  std::vector<std::vector<int>> calibrated_params;
+  std::set<int> constant_images;  // exterior orientations held fixed
+  std::set<int> constant_points;  // points held fixed (e.g. control points taken as error-free)
+  // Parses `photopose bundle --calibrate` names (core/camera_models.h) for every camera of the
+  // block; an error names a parameter a camera's model lacks.
+  static Status FromCalibrationNames(const Block& block, const std::vector<std::string>& names,
+                                     BundleAdjustmentConfig* config);
+};
+
+enum class BundleTermination { kConverged, kNoConvergence, kFailure };
+const char* BundleTerminationName(BundleTermination termination);
+
+// How the adjustment is tied to the ground.
+enum class BundleDatum {
+  kControl,   // control points and/or camera positions fix all seven similarity parameters
+  kRelative,  // neither: COLMAP's convention (first image fixed, one coordinate of the second)
+};
+
+// The statistics of one group of the objective.
+struct BundleGroupStatistics {
+  std::string name;  // tie_marks | control_marks | control_points | camera_positions | attitudes
+  int count = 0;     // observations (marks, points, cameras)
+  std::string unit;  // px, um, m or deg
+  // Stated accuracy: mean over the group per axis (unit above).
+  Eigen::Vector3d stated_accuracy = Eigen::Vector3d::Zero();
+  int num_axes = 2;  // 2 for marks, 3 otherwise
+  Eigen::Vector3d rms = Eigen::Vector3d::Zero();  // residual RMS per axis (unit above)
+  double rms_total = 0.0;                         // sqrt(mean over axes of rms^2)
+  // rms / stated accuracy (unitless): the whitened RMS, 1 when the accuracy was right.
+  double ratio = 0.0;
+  // The group's summed redundancy numbers over its number of scalar observations (unitless,
+  // 0..1): how much of it the rest of the block checks. NaN when not computed.
+  double redundancy_share = 0.0;
+  bool overfit = false;  // a prior group with ratio or redundancy share < overfit_ratio
+  std::string message;   // the warning, or empty
+};
+
+struct BundleImageResult {
+  bool adjusted = false;
+  std::string message;  // why not, or empty
+  // Posterior covariance sigma0^2 (J^T P J)^-1 of the exterior orientation (m, rad, seed); zero
+  // when not computed.
+  Matrix6d covariance = Matrix6d::Zero();
+  bool has_covariance = false;
+  int num_marks = 0;         // marks used in the final round
+  double rms_residual = 0.0; // of those, RMS of the residual vector length in the marks' unit
+  std::string unit;          // "px" or "um"
+};
+
+struct BundlePointResult {
+  int num_observations = 0;  // marks used in the final round
+  Eigen::Matrix3d covariance = Eigen::Matrix3d::Zero();  // sigma0^2-scaled (m^2); control/check
+  bool has_covariance = false;
+  // Control points: adjusted - surveyed; check points: intersected - surveyed (m).
+  std::optional<Eigen::Vector3d> error_m;
+  std::string message;  // e.g. why a check point could not be intersected
+};
+
+struct BundleCalibrationResult {
+  int camera = -1;
+  std::vector<std::string> names;    // estimated parameters
+  std::vector<int> indices;          // their indices in the camera's params
+  std::vector<double> values;        // adjusted values (units of core/camera_models.h)
+  std::vector<double> sigmas;        // sigma0-scaled standard deviations; empty without covariance
+  Eigen::MatrixXd correlation;       // of the estimated parameters (empty without covariance)
+  std::vector<std::string> high_correlations;  // "K2~K3: -0.979"
+};
+
+struct BundleRejectedMark {
+  int mark = -1;               // index into Block::marks
+  int round = 0;               // the round after which it was rejected
+  double whitened_residual = 0.0;  // |v| / (sigma sigma0) when rejected
+};
+
+struct BundleAdjustmentSummary {
+  BundleTermination termination = BundleTermination::kFailure;
+  std::string message;
+  BundleDatum datum = BundleDatum::kControl;
+  std::string datum_description;  // in words, for the report
+  int rounds = 0;                 // adjustment rounds (rejections re-adjust)
+  int iterations = 0;             // over all rounds
+  double initial_cost = 0.0;      // 1/2 sum of squared whitened residuals, first round start
+  double final_cost = 0.0;        // at the end of the last round
+  double sigma0 = 0.0;            // sqrt(2 final_cost / redundancy) (unitless)
+  int redundancy = 0;             // scalar observations - free parameters
+  int num_images = 0, num_points = 0, num_marks = 0;  // in the final round
+  int num_rejected_marks = 0;
+  double time_seconds = 0.0;
+  double statistics_seconds = 0.0;  // covariances and redundancy shares
+
+  bool IsSolutionUsable() const { return termination == BundleTermination::kConverged; }
+  std::string BriefReport() const;
+};
+
+struct BundleAdjustmentResult {
+  BundleAdjustmentSummary summary;
+  std::vector<BundleImageResult> images;  // per Block::images
+  std::vector<BundlePointResult> points;  // per Block::points
+  std::vector<BundleGroupStatistics> groups;
+  std::vector<BundleCalibrationResult> calibration;
+  std::vector<BundleRejectedMark> rejected_marks;
+  std::optional<Eigen::Vector3d> lever_arm_m;  // estimated (or applied) lever arm
+  // Check points intersected and compared: RMSE per axis and total (m); count.
+  int num_check_points = 0;
+  Eigen::Vector3d check_rmse_m = Eigen::Vector3d::Zero();
+  double check_rmse_total_m = 0.0;
+  // Control points: RMSE of adjusted - surveyed per axis and total (m).
+  int num_control_points = 0;
+  Eigen::Vector3d control_rmse_m = Eigen::Vector3d::Zero();
+  double control_rmse_total_m = 0.0;
+  // Whitened residual per mark used in the final round (observed - computed, in the mark's own
+  // unit); NaN for marks not used (check marks, rejected marks, marks of images not adjusted).
+  std::vector<Eigen::Vector2d> mark_residuals;
+
+  // A multi-line report: summary, groups with their verdicts, images, points, calibration.
+  std::string FullReport(const Block& block) const;
+};
+
+// Adjusts the block in place: on success the images' eo, the points' position_m and the cameras'
+// params hold the adjusted values. Every image needs an initial eo and every tie point an initial
+// position (see solvers/block_initialization.h); control and check points start at their surveyed
+// coordinates. Returns an error (nothing changed) for invalid options or a block the adjustment
+// cannot use (no datum for the asked output, disconnected, an image with fewer than 3 marks, a
+// parameter to calibrate that the model lacks); a failed or unconverged adjustment is reported in
+// result->summary with the block left at its input values.
+Status BundleAdjust(const BundleAdjustmentOptions& options, const BundleAdjustmentConfig& config,
+                    Block* block, BundleAdjustmentResult* result);
+
+}  // namespace photopose
