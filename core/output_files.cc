@@ -189,9 +189,18 @@ OutputFiles::~OutputFiles() {
   if (!committed_) Abort();
 }
 
-void OutputFiles::AddInput(const std::string& label, const std::string& path) {
-  if (path.empty() || path == "-") return;
+Status OutputFiles::AddInput(const std::string& label, const std::string& path) {
+  if (path.empty()) return Status::Ok();
+  if (path == "-") {
+    if (!standard_input_label_.empty()) {
+      return Status::Error(Named(label, path) + ": standard input is already read as " +
+                           Named(standard_input_label_, path) + "; only one input can be '-'");
+    }
+    standard_input_label_ = label.empty() ? "-" : label;
+    return Status::Ok();
+  }
   inputs_.push_back({label, path});
+  return Status::Ok();
 }
 
 OutputFiles::Output* OutputFiles::Find(const std::string& path) {

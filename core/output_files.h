@@ -41,9 +41,9 @@ class OutputFiles {
   OutputFiles& operator=(const OutputFiles&) = delete;
   ~OutputFiles();
 
-  // An input of the run. `label` names it in messages ("--marks"; empty: the path alone). "-"
-  // (standard input) and empty paths are ignored.
-  void AddInput(const std::string& label, const std::string& path);
+  // An input of the run. `label` names it in messages ("--marks"; empty: the path alone). Empty
+  // paths are ignored; "-" (standard input) may be given once, a second one is an error.
+  Status AddInput(const std::string& label, const std::string& path);
   // Declares an output and checks it (see above). Outputs must be added before they are staged.
   Status AddOutput(const std::string& label, const std::string& path);
 
@@ -85,6 +85,7 @@ class OutputFiles {
   Status StageFailed(Status status);  // Abort(), then `status`
 
   std::vector<Input> inputs_;
+  std::string standard_input_label_;  // the input read from "-", if any
   std::vector<Output> outputs_;
   bool committed_ = false;
 };

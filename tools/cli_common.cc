@@ -208,9 +208,18 @@ const char kConventionsHelp[] =
     "transpose of seed for the same numbers) or pok (Y-primary phi-omega-kappa). Ground units are\n"
     "metres. See docs/conventions.md and docs/formats.md.\n";
 
+namespace {
+
+// An end of a range as written in help and messages; the uint64 seeds end at 2^64 - 1, which a
+// double cannot hold.
+std::string RangeEnd(double value) {
+  return value >= 18446744073709551615.0 ? "18446744073709551615" : FormatPlainNumber(value);
+}
+
+}  // namespace
+
 std::string FlagRange::Text() const {
-  return std::string(open_min ? "(" : "[") + FormatPlainNumber(min) + ", " +
-         FormatPlainNumber(max) +
+  return std::string(open_min ? "(" : "[") + RangeEnd(min) + ", " + RangeEnd(max) +
          (open_max ? ")" : "]") + (unit.empty() ? "" : " " + unit);
 }
 

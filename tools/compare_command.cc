@@ -243,7 +243,7 @@ std::string QuoteForShell(const std::string& arg) {
 // The outputs of the run (--csv, --html, --markdown), declared before any work.
 Status DeclareOutputs(const std::vector<std::pair<std::string, std::string>>& inputs,
                       OutputFiles* outputs) {
-  for (const auto& [label, path] : inputs) outputs->AddInput(label, path);
+  for (const auto& [label, path] : inputs) PHOTOPOSE_RETURN_IF_ERROR(outputs->AddInput(label, path));
   for (const auto& [label, path] : {std::pair<std::string, std::string>{"--csv", FLAGS_compare_csv},
                                     {"--html", FLAGS_compare_html},
                                     {"--markdown", FLAGS_compare_markdown}}) {

@@ -112,8 +112,10 @@ int RunResect(int argc, char** argv) {
   OutputFiles outputs;
   for (const auto& [label, path] : {std::pair<const char*, const std::string&>{"--cameras", FLAGS_cameras},
                                     {"--points", FLAGS_points}, {"--marks", FLAGS_marks},
-                                    {"--gcp_list", FLAGS_gcp_list}, {"--frames", FLAGS_frames}})
-    outputs.AddInput(label, path);
+                                    {"--gcp_list", FLAGS_gcp_list}, {"--frames", FLAGS_frames}}) {
+    const Status input = outputs.AddInput(label, path);
+    if (!input.ok()) return BadInput("resect", input.message());
+  }
   for (const std::string& flag_file : parsed.flag_files) outputs.AddInput("--flagfile", flag_file);
   for (const auto& [label, path] : {std::pair<const char*, const std::string&>{"--out", FLAGS_out},
                                     {"--report", FLAGS_report}}) {

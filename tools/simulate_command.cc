@@ -11,7 +11,7 @@
 #include "tools/commands.h"
 
 DEFINE_string(scenario, "nadir", "Scene to simulate: nadir (one vertical aerial frame), oblique (one frame tilted 45 degrees) or uav_block (3 x 4 UAV images with lens distortion).");
-DEFINE_uint64(sim_seed, 1, "Seed of the random generator; the same seed and flags give the same dataset. (--seed is accepted as an alias.)");
+DEFINE_uint64(sim_seed, 1, "Seed of the random generator; the same seed and flags give the same dataset.");
 DEFINE_double(noise_px, 0.5, "Gaussian noise added to every mark, one sigma in pixels.");
 DEFINE_double(outlier_fraction, 0.0, "Fraction of the marks replaced by gross errors of 20 to 200 pixels, from 0 up to (not including) 1.");
 DEFINE_int32(control_points, 20, "Control points generated per image footprint.");

@@ -190,16 +190,23 @@ TEST_F(OutputFilesTest, AnOutputThatIsAnInputIsRefusedAfterSymlinksAndByInode) {
   for (const std::string& output : {input, Path("alias.csv"), Path("hard.csv"),
                                     (dir_ / "." / "marks.csv").string()}) {
     OutputFiles outputs;
-    outputs.AddInput("--marks", input);
+    ASSERT_TRUE(outputs.AddInput("--marks", input).ok());
     EXPECT_EQ(outputs.AddOutput("--out", output).message(),
               "--out=" + output + " is the input --marks=" + input +
                   "; photopose never writes over an input: choose another output file");
   }
   // An input given through a symlink is the file it names.
   OutputFiles outputs;
-  outputs.AddInput("--marks", Path("alias.csv"));
+  ASSERT_TRUE(outputs.AddInput("--marks", Path("alias.csv")).ok());
   EXPECT_FALSE(outputs.AddOutput("--out", input).ok());
   EXPECT_EQ(Read(input), "data\n");
+}
+
+TEST_F(OutputFilesTest, StandardInputIsOneInputOnly) {
+  OutputFiles outputs;
+  EXPECT_TRUE(outputs.AddInput("--points", "-").ok());
+  EXPECT_EQ(outputs.AddInput("--marks", "-").message(),
+            "--marks=-: standard input is already read as --points=-; only one input can be '-'");
 }
 
 TEST_F(OutputFilesTest, TwoOutputsInOneFileAreRefused) {
