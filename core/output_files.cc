@@ -469,10 +469,11 @@ const char* KindOf(mode_t mode) {
   return "a special file";
 }
 
-// Checks that every entry of `folder` (relative path `relative`) can be carried over into a new
-// folder: regular files and symlinks anywhere, subfolders only where the layout has one.
-Status CheckCarriable(const std::string& name, const std::string& folder,
-                      const std::string& relative, const FolderLayout& layout) {
+// Calls visit(path, relative path, lstat of it) for every entry of `folder` (whose own relative
+// path is `relative`), stopping at the first error.
+template <typename Visit>
+Status ForEachEntry(const std::string& name, const std::string& folder,
+                    const std::string& relative, Visit visit) {
   DIR* dir = opendir(folder.c_str());
   if (dir == nullptr) return Status::Error(name + ": cannot read the folder: " + SystemError(errno));
   Status status;
@@ -480,30 +481,38 @@ Status CheckCarriable(const std::string& name, const std::string& folder,
     const std::string entry_name = entry->d_name;
     if (entry_name == "." || entry_name == "..") continue;
     const std::string path = folder + "/" + entry_name;
-    const std::string entry_relative = relative.empty() ? entry_name : relative + "/" + entry_name;
     struct stat info;
     if (lstat(path.c_str(), &info) != 0) continue;
-    const std::string quoted = "'" + EscapeForMessage(entry_relative) + "'";
-    if (S_ISDIR(info.st_mode)) {
-      if (layout.folders.count(entry_relative) == 0) {
-        status = Status::Error(name + ": holds the folder " + quoted +
-                               "; photopose replaces the output folder as a whole and carries "
-                               "over files only: give a folder of its own to the dataset");
-        break;
-      }
-      status = CheckCarriable(name, path, entry_relative, layout);
-      if (!status.ok()) break;
-    } else if (layout.files.count(entry_relative) != 0 && !S_ISREG(info.st_mode)) {
-      status = Status::Error(name + ": " + quoted + " is not a regular file");
-      break;
-    } else if (!S_ISREG(info.st_mode) && !S_ISLNK(info.st_mode)) {
-      status = Status::Error(name + ": holds " + quoted + ", " + KindOf(info.st_mode) +
-                             ", which cannot be carried over into the new folder");
-      break;
-    }
+    status = visit(path, relative.empty() ? entry_name : relative + "/" + entry_name, info);
+    if (!status.ok()) break;
   }
   closedir(dir);
   return status;
+}
+
+// Checks that every entry of `folder` (relative path `relative`) can be carried over into a new
+// folder: regular files and symlinks anywhere, subfolders only where the layout has one.
+Status CheckCarriable(const std::string& name, const std::string& folder,
+                      const std::string& relative, const FolderLayout& layout) {
+  return ForEachEntry(name, folder, relative, [&](const std::string& path,
+                                                  const std::string& entry, const struct stat& info) {
+    const std::string quoted = "'" + EscapeForMessage(entry) + "'";
+    if (S_ISDIR(info.st_mode)) {
+      if (layout.folders.count(entry) == 0) {
+        return Status::Error(name + ": holds the folder " + quoted +
+                             "; photopose replaces the output folder as a whole and carries over "
+                             "files only: give a folder of its own to the dataset");
+      }
+      return CheckCarriable(name, path, entry, layout);
+    }
+    if (layout.files.count(entry) != 0 && !S_ISREG(info.st_mode))
+      return Status::Error(name + ": " + quoted + " is not a regular file");
+    if (!S_ISREG(info.st_mode) && !S_ISLNK(info.st_mode)) {
+      return Status::Error(name + ": holds " + quoted + ", " + KindOf(info.st_mode) +
+                           ", which cannot be carried over into the new folder");
+    }
+    return Status::Ok();
+  });
 }
 
 // Copies a regular file (the fall-back when it cannot be hard-linked).
@@ -516,21 +525,17 @@ bool CopyFile(const std::string& from, const std::string& to, mode_t mode) {
 // recreated), leaving out the files of the layout, which are written new.
 Status MirrorFolder(const std::string& name, const std::string& from, const std::string& to,
                     const std::string& relative, const FolderLayout& layout) {
-  DIR* dir = opendir(from.c_str());
-  if (dir == nullptr) return Status::Error(name + ": cannot read the folder: " + SystemError(errno));
-  Status status;
-  while (const dirent* entry = readdir(dir)) {
-    const std::string entry_name = entry->d_name;
-    if (entry_name == "." || entry_name == "..") continue;
-    const std::string entry_relative = relative.empty() ? entry_name : relative + "/" + entry_name;
-    if (layout.files.count(entry_relative) != 0) continue;
-    const std::string source = from + "/" + entry_name, copy = to + "/" + entry_name;
-    struct stat info;
-    if (lstat(source.c_str(), &info) != 0) continue;
+  return ForEachEntry(name, from, relative, [&](const std::string& source,
+                                                const std::string& entry, const struct stat& info) {
+    if (layout.files.count(entry) != 0) return Status::Ok();
+    const std::string copy = to + "/" + NameOf(source);
     bool ok = true;
     if (S_ISDIR(info.st_mode)) {
-      ok = mkdir(copy.c_str(), info.st_mode & 07777) == 0 || errno == EEXIST;
-      if (ok) status = MirrorFolder(name, source, copy, entry_relative, layout);
+      if (mkdir(copy.c_str(), info.st_mode & 07777) != 0 && errno != EEXIST) {
+        ok = false;
+      } else {
+        PHOTOPOSE_RETURN_IF_ERROR(MirrorFolder(name, source, copy, entry, layout));
+      }
     } else if (S_ISLNK(info.st_mode)) {
       std::string target(PATH_MAX, '\0');
       const ssize_t length = readlink(source.c_str(), target.data(), target.size());
@@ -543,14 +548,10 @@ Status MirrorFolder(const std::string& name, const std::string& from, const std:
       ok = link(source.c_str(), copy.c_str()) == 0 ||
            CopyFile(source, copy, info.st_mode & 07777);
     }
-    if (!ok && status.ok()) {
-      status = Status::Error(name + ": cannot carry '" + EscapeForMessage(entry_relative) +
-                             "' over into the new folder: " + SystemError(errno));
-    }
-    if (!status.ok()) break;
-  }
-  closedir(dir);
-  return status;
+    if (ok) return Status::Ok();
+    return Status::Error(name + ": cannot carry '" + EscapeForMessage(entry) +
+                         "' over into the new folder: " + SystemError(errno));
+  });
 }
 
 // Where a folder output goes: the folder it names after symlinks, whether it exists.

@@ -21,60 +21,75 @@ void Require(bool condition) {
   if (!condition) std::abort();
 }
 
-void FuzzCameras(std::string_view text) {
-  std::vector<photopose::FrameCamera> cameras;
-  const Status status = photopose::ParseCameraTable(text, "cameras.csv", &cameras);
+// Parses `text`; every record accepted must pass `check`, and the records must be written and
+// read back, as many as before.
+template <typename Record, typename Parse, typename Format, typename Check>
+void RoundTrip(std::string_view text, Parse parse, Format format, Check check) {
+  std::vector<Record> records;
+  const Status status = parse(text, &records);
   CheckMessage(status);
   if (!status.ok()) return;
-  for (const photopose::FrameCamera& camera : cameras) {
-    Require(camera.IsValid().ok());
-    Require(camera.focal_length_um > 0.0 && camera.focal_length_um <= photopose::kMaxCoordinate);
-  }
+  for (const Record& record : records) Require(check(record));
   std::string written;
-  Require(photopose::FormatCameraTable(cameras, "cameras.csv", &written).ok());
-  std::vector<photopose::FrameCamera> again;
-  Require(photopose::ParseCameraTable(written, "cameras.csv", &again).ok());
-  Require(again.size() == cameras.size());
+  Require(format(records, &written).ok());
+  std::vector<Record> again;
+  Require(parse(written, &again).ok());
+  Require(again.size() == records.size());
+}
+
+void FuzzCameras(std::string_view text) {
+  RoundTrip<photopose::FrameCamera>(
+      text,
+      [](std::string_view t, auto* cameras) {
+        return photopose::ParseCameraTable(t, "cameras.csv", cameras);
+      },
+      [](const auto& cameras, std::string* out) {
+        return photopose::FormatCameraTable(cameras, "cameras.csv", out);
+      },
+      [](const photopose::FrameCamera& camera) {
+        return camera.IsValid().ok() && camera.focal_length_um > 0.0 &&
+               camera.focal_length_um <= photopose::kMaxCoordinate;
+      });
 }
 
 void FuzzFrames(std::string_view text) {
-  std::vector<photopose::FrameRecord> frames;
-  const Status status = photopose::ParseFramesTable(text, "frames.csv", {}, &frames);
-  CheckMessage(status);
-  if (!status.ok()) return;
-  for (const photopose::FrameRecord& frame : frames) Require(frame.eo.parameters.allFinite());
-  std::string written;
-  Require(photopose::FormatFramesTable({}, frames, "frames.csv", &written).ok());
-  std::vector<photopose::FrameRecord> again;
-  Require(photopose::ParseFramesTable(written, "frames.csv", {}, &again).ok());
-  Require(again.size() == frames.size());
+  RoundTrip<photopose::FrameRecord>(
+      text,
+      [](std::string_view t, auto* frames) {
+        return photopose::ParseFramesTable(t, "frames.csv", {}, frames);
+      },
+      [](const auto& frames, std::string* out) {
+        return photopose::FormatFramesTable({}, frames, "frames.csv", out);
+      },
+      [](const photopose::FrameRecord& frame) { return frame.eo.parameters.allFinite(); });
 }
 
 void FuzzPoints(std::string_view text) {
-  std::vector<photopose::GroundPoint> points;
-  const Status status = photopose::ParseGroundPoints(text, "points.csv", &points);
-  CheckMessage(status);
-  if (!status.ok()) return;
-  for (const photopose::GroundPoint& point : points)
-    Require(point.position.cwiseAbs().maxCoeff() <= photopose::kMaxCoordinate);
-  std::string written;
-  Require(photopose::FormatGroundPoints(points, "points.csv", &written).ok());
-  std::vector<photopose::GroundPoint> again;
-  Require(photopose::ParseGroundPoints(written, "points.csv", &again).ok());
-  Require(again.size() == points.size());
+  RoundTrip<photopose::GroundPoint>(
+      text,
+      [](std::string_view t, auto* points) {
+        return photopose::ParseGroundPoints(t, "points.csv", points);
+      },
+      [](const auto& points, std::string* out) {
+        return photopose::FormatGroundPoints(points, "points.csv", out);
+      },
+      [](const photopose::GroundPoint& point) {
+        return point.position.cwiseAbs().maxCoeff() <= photopose::kMaxCoordinate;
+      });
 }
 
 void FuzzMarks(std::string_view text) {
-  std::vector<photopose::ImageMark> marks;
-  const Status status = photopose::ParseImageMarks(text, "marks.csv", &marks);
-  CheckMessage(status);
-  if (!status.ok()) return;
-  for (const photopose::ImageMark& mark : marks) Require(mark.column_row.has_value() != mark.film_um.has_value());
-  std::string written;
-  Require(photopose::FormatImageMarks(marks, "marks.csv", &written).ok());
-  std::vector<photopose::ImageMark> again;
-  Require(photopose::ParseImageMarks(written, "marks.csv", &again).ok());
-  Require(again.size() == marks.size());
+  RoundTrip<photopose::ImageMark>(
+      text,
+      [](std::string_view t, auto* marks) {
+        return photopose::ParseImageMarks(t, "marks.csv", marks);
+      },
+      [](const auto& marks, std::string* out) {
+        return photopose::FormatImageMarks(marks, "marks.csv", out);
+      },
+      [](const photopose::ImageMark& mark) {
+        return mark.column_row.has_value() != mark.film_um.has_value();
+      });
 }
 
 void FuzzGcpList(std::string_view text) {
