@@ -76,7 +76,8 @@ int DescriptorOf(const std::string& path) {
   if (path == "/dev/stdout") return 1;
   if (path == "/dev/stderr") return 2;
   for (const std::string prefix : {"/dev/fd/", "/proc/self/fd/"}) {
-    if (path.rfind(prefix, 0) != 0 || path.size() == prefix.size() || path.size() > prefix.size() + 6)
+    if (path.rfind(prefix, 0) != 0 || path.size() == prefix.size() ||
+        path.size() > prefix.size() + 6)
       continue;
     int fd = 0;
     for (size_t i = prefix.size(); i < path.size(); ++i) {
@@ -252,10 +253,10 @@ Status OutputFiles::AddOutput(const std::string& label, const std::string& path)
       output.kind = Kind::kReplace;
       output.target = (folder == "/" ? "" : folder) + "/" + file_name;
     }
-    if (output.kind == Kind::kReplace && access(FolderOf(output.target).c_str(), W_OK | X_OK) != 0) {
+    if (output.kind == Kind::kReplace &&
+        access(FolderOf(output.target).c_str(), W_OK | X_OK) != 0) {
       return Status::Error(name + ": cannot write in the folder '" +
-                           EscapeForMessage(FolderOf(output.target)) + "': " +
-                           SystemError(errno));
+                           EscapeForMessage(FolderOf(output.target)) + "': " + SystemError(errno));
     }
   }
 
@@ -299,8 +300,8 @@ Status OutputFiles::Stage(const std::string& path, std::string_view contents) {
   std::string temporary = TemporaryPattern(output->target);
   const int fd = mkstemp(temporary.data());
   if (fd < 0) {
-    return StageFailed(Status::Error(name + ": cannot create a temporary file: " +
-                                             SystemError(errno)));
+    return StageFailed(
+        Status::Error(name + ": cannot create a temporary file: " + SystemError(errno)));
   }
   output->temporary = temporary;
   int error_number = 0;
@@ -319,15 +320,15 @@ Status OutputFiles::Stage(const std::string& path, std::string_view contents) {
     error_number = errno;
   }
   if (failed != nullptr) {
-    return StageFailed(
-                       Status::Error(name + ": " + failed + ": " + SystemError(error_number)));
+    return StageFailed(Status::Error(name + ": " + failed + ": " + SystemError(error_number)));
   }
   output->staged = true;
   return Status::Ok();
 }
 
 Status OutputFiles::StageWith(
-    const std::string& path, const std::function<Status(const std::string& temporary_path)>& write) {
+    const std::string& path,
+    const std::function<Status(const std::string& temporary_path)>& write) {
   if (Find(path) == nullptr) PHOTOPOSE_RETURN_IF_ERROR(AddOutput("", path));
   Output* output = Find(path);
   const std::string name = Named(output->label, output->path);
@@ -337,8 +338,8 @@ Status OutputFiles::StageWith(
                               : (fs::temp_directory_path() / ".photopose-XXXXXX").string();
   const int fd = mkstemp(temporary.data());
   if (fd < 0) {
-    return StageFailed(Status::Error(name + ": cannot create a temporary file: " +
-                                             SystemError(errno)));
+    return StageFailed(
+        Status::Error(name + ": cannot create a temporary file: " + SystemError(errno)));
   }
   close(fd);
   Status written = write(temporary);
@@ -356,8 +357,7 @@ Status OutputFiles::StageWith(
   if (output->kind == Kind::kReplace) {
     output->temporary = temporary;
     if (chmod(temporary.c_str(), ModeFor(output->target, 0666)) != 0) {
-      return StageFailed(Status::Error(name + ": cannot set permissions: " +
-                                               SystemError(errno)));
+      return StageFailed(Status::Error(name + ": cannot set permissions: " + SystemError(errno)));
     }
   } else {
     std::string contents;
@@ -395,8 +395,7 @@ Status OutputFiles::Commit() {
     if (fd < 0) {
       error_number = errno;
       Abort();
-      if (error_number == ENXIO)
-        return Status::Error(name + ": no process is reading the FIFO");
+      if (error_number == ENXIO) return Status::Error(name + ": no process is reading the FIFO");
       return Status::Error(name + ": cannot open: " + SystemError(error_number));
     }
     fcntl(fd, F_SETFL, fcntl(fd, F_GETFL) & ~O_NONBLOCK);
@@ -472,10 +471,11 @@ const char* KindOf(mode_t mode) {
 // Calls visit(path, relative path, lstat of it) for every entry of `folder` (whose own relative
 // path is `relative`), stopping at the first error.
 template <typename Visit>
-Status ForEachEntry(const std::string& name, const std::string& folder,
-                    const std::string& relative, Visit visit) {
+Status ForEachEntry(const std::string& name, const std::string& folder, const std::string& relative,
+                    Visit visit) {
   DIR* dir = opendir(folder.c_str());
-  if (dir == nullptr) return Status::Error(name + ": cannot read the folder: " + SystemError(errno));
+  if (dir == nullptr)
+    return Status::Error(name + ": cannot read the folder: " + SystemError(errno));
   Status status;
   while (const dirent* entry = readdir(dir)) {
     const std::string entry_name = entry->d_name;
@@ -494,25 +494,27 @@ Status ForEachEntry(const std::string& name, const std::string& folder,
 // folder: regular files and symlinks anywhere, subfolders only where the layout has one.
 Status CheckCarriable(const std::string& name, const std::string& folder,
                       const std::string& relative, const FolderLayout& layout) {
-  return ForEachEntry(name, folder, relative, [&](const std::string& path,
-                                                  const std::string& entry, const struct stat& info) {
-    const std::string quoted = "'" + EscapeForMessage(entry) + "'";
-    if (S_ISDIR(info.st_mode)) {
-      if (layout.folders.count(entry) == 0) {
-        return Status::Error(name + ": holds the folder " + quoted +
-                             "; photopose replaces the output folder as a whole and carries over "
-                             "files only: give a folder of its own to the dataset");
-      }
-      return CheckCarriable(name, path, entry, layout);
-    }
-    if (layout.files.count(entry) != 0 && !S_ISREG(info.st_mode))
-      return Status::Error(name + ": " + quoted + " is not a regular file");
-    if (!S_ISREG(info.st_mode) && !S_ISLNK(info.st_mode)) {
-      return Status::Error(name + ": holds " + quoted + ", " + KindOf(info.st_mode) +
-                           ", which cannot be carried over into the new folder");
-    }
-    return Status::Ok();
-  });
+  return ForEachEntry(
+      name, folder, relative,
+      [&](const std::string& path, const std::string& entry, const struct stat& info) {
+        const std::string quoted = "'" + EscapeForMessage(entry) + "'";
+        if (S_ISDIR(info.st_mode)) {
+          if (layout.folders.count(entry) == 0) {
+            return Status::Error(
+                name + ": holds the folder " + quoted +
+                "; photopose replaces the output folder as a whole and carries over "
+                "files only: give a folder of its own to the dataset");
+          }
+          return CheckCarriable(name, path, entry, layout);
+        }
+        if (layout.files.count(entry) != 0 && !S_ISREG(info.st_mode))
+          return Status::Error(name + ": " + quoted + " is not a regular file");
+        if (!S_ISREG(info.st_mode) && !S_ISLNK(info.st_mode)) {
+          return Status::Error(name + ": holds " + quoted + ", " + KindOf(info.st_mode) +
+                               ", which cannot be carried over into the new folder");
+        }
+        return Status::Ok();
+      });
 }
 
 // Copies a regular file (the fall-back when it cannot be hard-linked).
@@ -525,33 +527,34 @@ bool CopyFile(const std::string& from, const std::string& to, mode_t mode) {
 // recreated), leaving out the files of the layout, which are written new.
 Status MirrorFolder(const std::string& name, const std::string& from, const std::string& to,
                     const std::string& relative, const FolderLayout& layout) {
-  return ForEachEntry(name, from, relative, [&](const std::string& source,
-                                                const std::string& entry, const struct stat& info) {
-    if (layout.files.count(entry) != 0) return Status::Ok();
-    const std::string copy = to + "/" + NameOf(source);
-    bool ok = true;
-    if (S_ISDIR(info.st_mode)) {
-      if (mkdir(copy.c_str(), info.st_mode & 07777) != 0 && errno != EEXIST) {
-        ok = false;
-      } else {
-        PHOTOPOSE_RETURN_IF_ERROR(MirrorFolder(name, source, copy, entry, layout));
-      }
-    } else if (S_ISLNK(info.st_mode)) {
-      std::string target(PATH_MAX, '\0');
-      const ssize_t length = readlink(source.c_str(), target.data(), target.size());
-      ok = length >= 0;
-      if (ok) {
-        target.resize(static_cast<size_t>(length));
-        ok = symlink(target.c_str(), copy.c_str()) == 0;
-      }
-    } else {
-      ok = link(source.c_str(), copy.c_str()) == 0 ||
-           CopyFile(source, copy, info.st_mode & 07777);
-    }
-    if (ok) return Status::Ok();
-    return Status::Error(name + ": cannot carry '" + EscapeForMessage(entry) +
-                         "' over into the new folder: " + SystemError(errno));
-  });
+  return ForEachEntry(
+      name, from, relative,
+      [&](const std::string& source, const std::string& entry, const struct stat& info) {
+        if (layout.files.count(entry) != 0) return Status::Ok();
+        const std::string copy = to + "/" + NameOf(source);
+        bool ok = true;
+        if (S_ISDIR(info.st_mode)) {
+          if (mkdir(copy.c_str(), info.st_mode & 07777) != 0 && errno != EEXIST) {
+            ok = false;
+          } else {
+            PHOTOPOSE_RETURN_IF_ERROR(MirrorFolder(name, source, copy, entry, layout));
+          }
+        } else if (S_ISLNK(info.st_mode)) {
+          std::string target(PATH_MAX, '\0');
+          const ssize_t length = readlink(source.c_str(), target.data(), target.size());
+          ok = length >= 0;
+          if (ok) {
+            target.resize(static_cast<size_t>(length));
+            ok = symlink(target.c_str(), copy.c_str()) == 0;
+          }
+        } else {
+          ok = link(source.c_str(), copy.c_str()) == 0 ||
+               CopyFile(source, copy, info.st_mode & 07777);
+        }
+        if (ok) return Status::Ok();
+        return Status::Error(name + ": cannot carry '" + EscapeForMessage(entry) +
+                             "' over into the new folder: " + SystemError(errno));
+      });
 }
 
 // Where a folder output goes: the folder it names after symlinks, whether it exists.
@@ -565,7 +568,8 @@ Status ResolveFolder(const std::string& name, const std::string& folder, std::st
   *exists = stat(final_path.c_str(), &info) == 0;
   if (*exists && !S_ISDIR(info.st_mode))
     return Status::Error(name + ": exists and is not a folder");
-  if (!*exists && errno != ENOENT) return Status::Error(name + ": cannot check: " + SystemError(errno));
+  if (!*exists && errno != ENOENT)
+    return Status::Error(name + ": cannot check: " + SystemError(errno));
   if (*exists) {
     RealPath(final_path, target);
   } else {
@@ -586,9 +590,10 @@ Status CheckOutputFolder(const std::string& label, const std::string& folder,
   PHOTOPOSE_RETURN_IF_ERROR(ResolveFolder(name, folder, &target, &exists));
   if (!exists) return Status::Ok();
   std::string current;
-  if (target == "/" || (RealPath(".", &current) &&
-                        (current == target || current.rfind(target + "/", 0) == 0))) {
-    return Status::Error(name + ": is the current folder or contains it; photopose replaces the "
+  if (target == "/" ||
+      (RealPath(".", &current) && (current == target || current.rfind(target + "/", 0) == 0))) {
+    return Status::Error(name +
+                         ": is the current folder or contains it; photopose replaces the "
                          "output folder as a whole: give another folder");
   }
   return CheckCarriable(name, target, "", LayoutOf(files));
@@ -612,8 +617,8 @@ Status WriteFolderAtomically(const std::string& label, const std::string& folder
 
   std::string staging = TemporaryPattern(target);
   if (mkdtemp(staging.data()) == nullptr) {
-    return Status::Error(name + ": cannot create a temporary folder beside it: " +
-                         SystemError(errno));
+    return Status::Error(name +
+                         ": cannot create a temporary folder beside it: " + SystemError(errno));
   }
   const auto fail = [&staging](Status status) {
     std::error_code ignored;

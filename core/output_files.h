@@ -68,12 +68,12 @@ class OutputFiles {
   };
   struct Output {
     std::string label;
-    std::string path;            // as given
+    std::string path;  // as given
     Kind kind = Kind::kReplace;
-    std::string target;          // kReplace: the file to replace, after symlinks; kInPlace: the node
-    int descriptor = -1;         // kDescriptor
-    std::string temporary;       // kReplace, once staged
-    std::string contents;        // kInPlace, kDescriptor, once staged
+    std::string target;     // kReplace: the file to replace, after symlinks; kInPlace: the node
+    int descriptor = -1;    // kDescriptor
+    std::string temporary;  // kReplace, once staged
+    std::string contents;   // kInPlace, kDescriptor, once staged
     bool staged = false;
   };
   struct Input {
@@ -82,7 +82,7 @@ class OutputFiles {
   };
 
   Output* Find(const std::string& path);  // the first output added as `path` not yet staged
-  Status StageFailed(Status status);  // Abort(), then `status`
+  Status StageFailed(Status status);      // Abort(), then `status`
 
   std::vector<Input> inputs_;
   std::string standard_input_label_;  // the input read from "-", if any

@@ -427,11 +427,10 @@ Status CheckAffine(const FrameCamera& camera, std::string* column) {
   const double pixel_um =
       camera.affine_direction > 0 ? std::sqrt(std::abs(det)) : 1.0 / std::sqrt(std::abs(det));
   if (!(pixel_um > kMinPixelSizeUm && pixel_um < kMaxPixelSizeUm)) {
-    return Status::Error("the affine gives pixels of " + FormatNumber(pixel_um) +
-                         " um (sqrt |A1 B2 - A2 B1|" +
-                         (camera.affine_direction > 0 ? "" : ", inverted for AffineDirection -1") +
-                         "), outside (" + FormatNumber(kMinPixelSizeUm) + ", " +
-                         FormatNumber(kMaxPixelSizeUm) + ") um");
+    return Status::Error(
+        "the affine gives pixels of " + FormatNumber(pixel_um) + " um (sqrt |A1 B2 - A2 B1|" +
+        (camera.affine_direction > 0 ? "" : ", inverted for AffineDirection -1") + "), outside (" +
+        FormatNumber(kMinPixelSizeUm) + ", " + FormatNumber(kMaxPixelSizeUm) + ") um");
   }
   column->clear();
   return Status::Ok();
@@ -470,8 +469,8 @@ Status CheckDistortionDoesNotFold(const FrameCamera& camera, std::string* column
   const double field_um = FieldRadiusUm(camera);
   if (!(field_um > 0.0) || !std::isfinite(field_um)) return Status::Ok();
   *column = camera.distortion_type == DistortionType::kDistortionTable ? "RadialDistortions"
-            : (camera.radial_k == std::array<double, 4>{}) ? "Tangential"
-                                                            : "Radial";
+            : (camera.radial_k == std::array<double, 4>{})             ? "Tangential"
+                                                                       : "Radial";
   constexpr int kDirections = 16;
   constexpr int kSteps = 256;
   const auto mm = [](double um) { return FormatNumber(std::round(um) / 1000.0) + " mm"; };
@@ -484,9 +483,13 @@ Status CheckDistortionDoesNotFold(const FrameCamera& camera, std::string* column
       const Eigen::Vector2d m = r * u;
       const double corrected = u.dot(m - DistortionInMicrons(camera, m));
       if (!(corrected > previous)) {
-        return Status::Error("the distortion folds the image: the corrected radius stops "
-                             "increasing at " + mm(r) + " from the principal point, inside the "
-                             "image (" + mm(field_um) + " to its farthest corner)");
+        return Status::Error(
+            "the distortion folds the image: the corrected radius stops "
+            "increasing at " +
+            mm(r) +
+            " from the principal point, inside the "
+            "image (" +
+            mm(field_um) + " to its farthest corner)");
       }
       const double scale = corrected / r;
       if (!(scale <= kMaxDistortionScale && scale >= 1.0 / kMaxDistortionScale)) {
@@ -772,7 +775,8 @@ Status ReadFrameRow(const CsvTable& table, const CsvRow& csv_row, const FramesTa
   PHOTOPOSE_RETURN_IF_ERROR(ReadRequiredNumber(row, "PerspectiveY", &center[1]));
   PHOTOPOSE_RETURN_IF_ERROR(ReadRequiredNumber(row, "PerspectiveZ", &center[2]));
   f.eo.set_center_in_ground(center);
-  Eigen::Vector3d seed_angles = Eigen::Vector3d::Zero();  // set below; zero quiets -Wmaybe-uninitialized
+  Eigen::Vector3d seed_angles =
+      Eigen::Vector3d::Zero();  // set below; zero quiets -Wmaybe-uninitialized
   PHOTOPOSE_RETURN_IF_ERROR(ReadFrameRotation(row, options, camera, &seed_angles));
   f.eo.set_angles_seed_rad(seed_angles);
   f.srs = std::string(row.Text("SRS"));
@@ -876,7 +880,8 @@ bool IsGcpCrs(std::string_view crs) {
 
 // ------------------------------------------------------------------ camera table
 
-Status ParseCameraTable(std::string_view text, const std::string& file_name, std::vector<FrameCamera>* cameras) {
+Status ParseCameraTable(std::string_view text, const std::string& file_name,
+                        std::vector<FrameCamera>* cameras) {
   CsvTable table;
   PHOTOPOSE_RETURN_IF_ERROR(CsvTable::Parse(text, file_name, kTableCsvOptions, &table));
   PHOTOPOSE_RETURN_IF_ERROR(table.RequireColumns({"CameraID", "FocalLength"}));
@@ -899,7 +904,7 @@ Status ParseCameraTable(std::string_view text, const std::string& file_name, std
 }
 
 Status FormatCameraTable(const std::vector<FrameCamera>& cameras, const std::string& path,
-                    std::string* text) {
+                         std::string* text) {
   std::vector<std::string> extra_names;
   PHOTOPOSE_RETURN_IF_ERROR(CollectExtraColumnNames(path, cameras, CameraColumns(), &extra_names));
   std::vector<std::string> header = HeaderFields(CameraColumns());
@@ -966,7 +971,8 @@ Status FormatCameraTable(const std::vector<FrameCamera>& cameras, const std::str
 
 // ------------------------------------------------------------------ frames table
 
-Status ParseFramesTable(std::string_view text, const std::string& file_name, const FramesTableOptions& options, std::vector<FrameRecord>* frames) {
+Status ParseFramesTable(std::string_view text, const std::string& file_name,
+                        const FramesTableOptions& options, std::vector<FrameRecord>* frames) {
   CsvTable table;
   PHOTOPOSE_RETURN_IF_ERROR(CsvTable::Parse(text, file_name, kTableCsvOptions, &table));
   PHOTOPOSE_RETURN_IF_ERROR(
@@ -997,8 +1003,8 @@ Status ParseFramesTable(std::string_view text, const std::string& file_name, con
   return Status::Ok();
 }
 
-Status FormatFramesTable(const FramesTableOptions& options, const std::vector<FrameRecord>& frames, const std::string& path,
-                    std::string* text) {
+Status FormatFramesTable(const FramesTableOptions& options, const std::vector<FrameRecord>& frames,
+                         const std::string& path, std::string* text) {
   // The camera of every frame first: it decides the AngleDirection and whether Matrix is written.
   std::vector<const FrameCamera*> cameras(frames.size(), nullptr);
   bool any_matrix = false, any_covariance = false, any_sigma0 = false;
@@ -1075,7 +1081,8 @@ Status FormatFramesTable(const FramesTableOptions& options, const std::vector<Fr
 
 // ------------------------------------------------------------------ ground points
 
-Status ParseGroundPoints(std::string_view text, const std::string& file_name, std::vector<GroundPoint>* points) {
+Status ParseGroundPoints(std::string_view text, const std::string& file_name,
+                         std::vector<GroundPoint>* points) {
   CsvTable table;
   PHOTOPOSE_RETURN_IF_ERROR(CsvTable::Parse(text, file_name, kTableCsvOptions, &table));
   PHOTOPOSE_RETURN_IF_ERROR(table.RequireColumns({"PointID", "X", "Y", "Z"}));
@@ -1096,7 +1103,7 @@ Status ParseGroundPoints(std::string_view text, const std::string& file_name, st
 }
 
 Status FormatGroundPoints(const std::vector<GroundPoint>& points, const std::string& path,
-                    std::string* text) {
+                          std::string* text) {
   std::string contents = CsvLine(HeaderFields(PointColumns()));
   for (const GroundPoint& p : points) {
     RowFields row("point " + Quoted(p.point_id));
@@ -1121,7 +1128,8 @@ Status FormatGroundPoints(const std::vector<GroundPoint>& points, const std::str
 
 // ------------------------------------------------------------------ image marks
 
-Status ParseImageMarks(std::string_view text, const std::string& file_name, std::vector<ImageMark>* marks) {
+Status ParseImageMarks(std::string_view text, const std::string& file_name,
+                       std::vector<ImageMark>* marks) {
   CsvTable table;
   PHOTOPOSE_RETURN_IF_ERROR(CsvTable::Parse(text, file_name, kTableCsvOptions, &table));
   PHOTOPOSE_RETURN_IF_ERROR(table.RequireColumns({"Raster", "PointID"}));
@@ -1147,7 +1155,7 @@ Status ParseImageMarks(std::string_view text, const std::string& file_name, std:
 }
 
 Status FormatImageMarks(const std::vector<ImageMark>& marks, const std::string& path,
-                    std::string* text) {
+                        std::string* text) {
   std::string contents = CsvLine(HeaderFields(MarkColumns()));
   std::map<std::string, int>
       first_lines;  // the reader rejects a second mark of a point in an image
@@ -1186,9 +1194,8 @@ Status FormatImageMarks(const std::vector<ImageMark>& marks, const std::string& 
 Status ParseGcpList(std::string_view text, const std::string& file_name, GcpList* gcp_list) {
   PHOTOPOSE_RETURN_IF_ERROR(CheckTextInput(text, file_name));
   const auto error = [&file_name](int line, std::string_view column, const std::string& what) {
-    return Status::Error(EscapeForMessage(Where(file_name, line) +
-                                          (column.empty() ? "" : std::string(column) + ": ") +
-                                          what));
+    return Status::Error(EscapeForMessage(
+        Where(file_name, line) + (column.empty() ? "" : std::string(column) + ": ") + what));
   };
 
   GcpList result;
@@ -1229,8 +1236,7 @@ Status ParseGcpList(std::string_view text, const std::string& file_name, GcpList
       if (!ParseFiniteNumber(words[i], &numbers[i], &why)) return error(line, kNumberNames[i], why);
       const ValueRange& range = *RangeOf(kRangeColumns[i]);
       if (!InRange(numbers[i], range)) {
-        return error(line, kNumberNames[i],
-                     Quoted(words[i]) + " is outside " + RangeText(range));
+        return error(line, kNumberNames[i], Quoted(words[i]) + " is outside " + RangeText(range));
       }
     }
     const Eigen::Vector3d position(numbers[0], numbers[1], numbers[2]);
@@ -1297,15 +1303,14 @@ Status CheckMarkInsideImage(const std::string& marks_path, const ImageMark& mark
     const double value = column_row[k] + shift;
     const double outside = value < 0.0 ? -value : value - size[k];
     if (!(outside <= margin[k])) {
-      const char* column = mark.column_row ? (k == 0 ? "Column" : "Row")
-                                           : (k == 0 ? "FilmX" : "FilmY");
+      const char* column =
+          mark.column_row ? (k == 0 ? "Column" : "Row") : (k == 0 ? "FilmX" : "FilmY");
       return Status::Error(EscapeForMessage(
           Where(marks_path, mark.line) + column + ": the mark of point '" + mark.point_id +
           "' in image '" + mark.raster + "' lies " + FormatNumber(std::round(outside)) +
           " pixels outside the " + std::to_string(camera.n_columns) + " x " +
-          std::to_string(camera.n_rows) + " image of camera '" + camera.camera_id +
-          "' (at most " + FormatNumber(kMarkOutsideImageFraction * 100.0) +
-          "% of the image size is allowed)"));
+          std::to_string(camera.n_rows) + " image of camera '" + camera.camera_id + "' (at most " +
+          FormatNumber(kMarkOutsideImageFraction * 100.0) + "% of the image size is allowed)"));
     }
   }
   return Status::Ok();

@@ -165,7 +165,8 @@ class FlagParser {
     for (int line = 1; start < text.size(); ++line) {
       size_t end = text.find('\n', start);
       if (end == std::string::npos) end = text.size();
-      const std::string_view content = TrimBlanks(std::string_view(text).substr(start, end - start));
+      const std::string_view content =
+          TrimBlanks(std::string_view(text).substr(start, end - start));
       start = end + 1;
       if (content.empty() || content.front() == '#') continue;
       const std::string here = path + ":" + std::to_string(line) + ": ";
@@ -201,7 +202,8 @@ class FlagParser {
 
 const char kConventionsHelp[] =
     "Conventions: pixel coordinates are Column/Row with (0,0) at the top-left corner of the image\n"
-    "and Row down (the centre of the first pixel is 0.5,0.5). Film coordinates are micrometres from\n"
+    "and Row down (the centre of the first pixel is 0.5,0.5). Film coordinates are micrometres "
+    "from\n"
     "the fiducial centre, x right and y up (FilmCoordinateSystem 1) unless the camera table says\n"
     "otherwise. Angles in tables are decimal degrees; --rotation names their convention: seed\n"
     "(R = Rx(omega) Ry(phi) Rz(kappa) maps ground to camera), opk (Wolf & Dewitt / PATB, the\n"
@@ -232,8 +234,8 @@ std::string FlagRange::Refusal(const std::string& text) const {
   double value = 0.0;
   std::string why;
   const bool finite = ParseFiniteNumber(text, &value, &why);
-  return "--" + name + "=" + text + (finite ? " is outside " + Text()
-                                            : " is not a finite number; the range is " + Text());
+  return "--" + name + "=" + text +
+         (finite ? " is outside " + Text() : " is not a finite number; the range is " + Text());
 }
 
 const FlagRange* CommandFlags::RangeOf(const std::string& name) const {
@@ -263,7 +265,8 @@ void PrintHelp(const std::string& usage, const CommandFlags& flags) {
     const std::string name = UserName(flags, info.name);
     std::cout << "  --" << name << " (" << info.type << ", default: \"" << info.default_value
               << "\")\n      " << info.description;
-    if (const FlagRange* range = flags.RangeOf(name)) std::cout << " Range: " << range->Text() << ".";
+    if (const FlagRange* range = flags.RangeOf(name))
+      std::cout << " Range: " << range->Text() << ".";
     std::cout << "\n";
   }
   std::cout << "  --flagfile=F\n      Reads further flags from the file F, one per line "

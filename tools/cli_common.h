@@ -12,9 +12,9 @@
 namespace photopose::cli {
 
 // Exit status of every subcommand.
-constexpr int kExitSuccess = 0;        // every image solved
-constexpr int kExitSomeFailed = 1;     // some image could not be solved (each says why)
-constexpr int kExitBadInput = 2;       // bad input or usage
+constexpr int kExitSuccess = 0;     // every image solved
+constexpr int kExitSomeFailed = 1;  // some image could not be solved (each says why)
+constexpr int kExitBadInput = 2;    // bad input or usage
 
 // Flag files may include further flag files down to this depth (the command line is depth 0).
 constexpr int kMaxFlagFileDepth = 4;
@@ -25,9 +25,13 @@ extern const char kConventionsHelp[];
 // The values a numeric flag may take: [min, max], each end excluded when open. Every numeric flag
 // of a command has one; a value outside (or not finite) is refused before any work.
 struct FlagRange {
-  FlagRange(std::string name, double min, double max, bool open_min = false,
-            bool open_max = false, std::string unit = "")
-      : name(std::move(name)), min(min), max(max), open_min(open_min), open_max(open_max),
+  FlagRange(std::string name, double min, double max, bool open_min = false, bool open_max = false,
+            std::string unit = "")
+      : name(std::move(name)),
+        min(min),
+        max(max),
+        open_min(open_min),
+        open_max(open_max),
         unit(std::move(unit)) {}
 
   std::string name;  // the user's flag name, without dashes

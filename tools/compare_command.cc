@@ -62,20 +62,21 @@ DEFINE_string(
     "Monte-Carlo: comma-separated scenarios of photopose simulate: nadir, oblique, uav_block.");
 DEFINE_string(compare_noise_px, "0.5,0,1,2",
               "Monte-Carlo: comma-separated image noise levels, one sigma in pixels; the first is "
-              "the baseline.");
+              "the baseline. Each in [0, 1000] px, at most 100 items.");
 DEFINE_string(compare_outlier_fractions, "0,0.1,0.2",
               "Monte-Carlo: comma-separated fractions of marks with gross errors of 20 to 200 "
-              "pixels, each in [0, 1); the first is the baseline.");
+              "pixels, each in [0, 1); the first is the baseline. At most 100 items.");
 DEFINE_string(compare_control_points, "20,6",
-              "Monte-Carlo: comma-separated numbers of control points per image (at least 3); the "
-              "first is the baseline.");
+              "Monte-Carlo: comma-separated numbers of control points per image; the first is the "
+              "baseline. Each in [3, 10000], at most 100 items.");
 DEFINE_int32(
     compare_check_points, 5,
     "Monte-Carlo: check points per image (not used to solve; their residuals are reported).");
 DEFINE_string(
     compare_initial_errors, "5:2,50:10,100:20",
     "Monte-Carlo: comma-separated errors of the approximate frames as POSITION_M:ANGLE_DEG, "
-    "uniform in plus or minus that much per axis and per angle; the first is the baseline.");
+    "uniform in plus or minus that much per axis and per angle; the first is the baseline. "
+    "Positions in [0, 1000000] m, angles in [0, 180] degrees, at most 100 items.");
 DEFINE_int32(compare_trials, 50, "Monte-Carlo: trials per setting, each a new seeded scene.");
 DEFINE_string(compare_sweep, "axes",
               "Monte-Carlo: axes (vary one list at a time, the others at their first value) or "
@@ -148,20 +149,20 @@ const char* const kDatasetFlags[] = {"frames", "reference", "rotation", "default
 // Every numeric flag's range; the comma-separated lists are checked item by item against the
 // ranges of their items (kListItemRanges).
 const CommandFlags& CompareFlags() {
-  static const CommandFlags* const kFlags = new CommandFlags{
-      kCommand,
-      "compare_command",
-      kPrefix,
-      {},
-      {{"loss_scale", 0.0, 1000.0, true, false, "px"},
-       {"ransac_threshold", 0.0, 1000.0, true, false, "px"},
-       {"max_iterations", 1.0, 10000.0},
-       {"seed", 0.0, 18446744073709551615.0},
-       {"threads", 0.0, 1024.0},
-       {"check_points", 0.0, 10000.0},
-       {"trials", 1.0, 100000.0},
-       {"success_sigmas", 0.0, 1e6, true, false},
-       {"default_accuracy", 0.0, 1000.0, true, false, "px"}}};
+  static const CommandFlags* const kFlags =
+      new CommandFlags{kCommand,
+                       "compare_command",
+                       kPrefix,
+                       {},
+                       {{"loss_scale", 0.0, 1000.0, true, false, "px"},
+                        {"ransac_threshold", 0.0, 1000.0, true, false, "px"},
+                        {"max_iterations", 1.0, 10000.0},
+                        {"seed", 0.0, 18446744073709551615.0},
+                        {"threads", 0.0, 1024.0},
+                        {"check_points", 0.0, 10000.0},
+                        {"trials", 1.0, 100000.0},
+                        {"success_sigmas", 0.0, 1e6, true, false},
+                        {"default_accuracy", 0.0, 1000.0, true, false, "px"}}};
   return *kFlags;
 }
 
@@ -243,7 +244,8 @@ std::string QuoteForShell(const std::string& arg) {
 // The outputs of the run (--csv, --html, --markdown), declared before any work.
 Status DeclareOutputs(const std::vector<std::pair<std::string, std::string>>& inputs,
                       OutputFiles* outputs) {
-  for (const auto& [label, path] : inputs) PHOTOPOSE_RETURN_IF_ERROR(outputs->AddInput(label, path));
+  for (const auto& [label, path] : inputs)
+    PHOTOPOSE_RETURN_IF_ERROR(outputs->AddInput(label, path));
   for (const auto& [label, path] : {std::pair<std::string, std::string>{"--csv", FLAGS_compare_csv},
                                     {"--html", FLAGS_compare_html},
                                     {"--markdown", FLAGS_compare_markdown}}) {
@@ -259,10 +261,10 @@ Status WriteOutputs(const std::string& csv, const std::string& html,
   std::string markdown;
   for (const TextTable& table : tables) markdown += RenderMarkdown(table) + "\n";
   for (const std::string& note : notes) markdown += "- " + note + "\n";
-  for (const auto& [path, contents] : {std::pair<const std::string&, const std::string&>{
-                                           FLAGS_compare_csv, csv},
-                                       {FLAGS_compare_html, html},
-                                       {FLAGS_compare_markdown, markdown}}) {
+  for (const auto& [path, contents] :
+       {std::pair<const std::string&, const std::string&>{FLAGS_compare_csv, csv},
+        {FLAGS_compare_html, html},
+        {FLAGS_compare_markdown, markdown}}) {
     if (!path.empty()) PHOTOPOSE_RETURN_IF_ERROR(outputs->Stage(path, contents));
   }
   return outputs->Commit();
@@ -284,7 +286,8 @@ int RunMonteCarloMode(const std::vector<SolverVariant>& solvers, const Resection
   }
   if (options.scenarios.empty()) return BadInput(kCommand, "--scenarios is empty");
   if (options.scenarios.size() > kMaxListItems)
-    return BadInput(kCommand, "--scenarios has more than " + std::to_string(kMaxListItems) + " items");
+    return BadInput(kCommand,
+                    "--scenarios has more than " + std::to_string(kMaxListItems) + " items");
   std::string why;
   std::vector<double> control_points;
   if (!ParseList(FLAGS_compare_noise_px, kNoiseItem, false, &options.noise_px, &why) ||
@@ -296,7 +299,8 @@ int RunMonteCarloMode(const std::vector<SolverVariant>& solvers, const Resection
   const Status initial = ParseInitialErrors(FLAGS_compare_initial_errors, &options.initial_errors);
   if (!initial.ok()) return BadInput(kCommand, "--initial_errors: " + initial.message());
   if (options.initial_errors.size() > kMaxListItems)
-    return BadInput(kCommand, "--initial_errors has more than " + std::to_string(kMaxListItems) + " items");
+    return BadInput(kCommand,
+                    "--initial_errors has more than " + std::to_string(kMaxListItems) + " items");
   for (const InitialError& error : options.initial_errors) {
     if (!kPositionErrorItem.Contains(error.position_m))
       return BadInput(kCommand, kPositionErrorItem.Refusal(FormatNumber(error.position_m)));
@@ -326,20 +330,21 @@ int RunMonteCarloMode(const std::vector<SolverVariant>& solvers, const Resection
   if (!options.IsValid(&why)) return BadInput(kCommand, why);
   // Sizes in 64 bits: a grid of long lists times many trials must be refused, not allocated.
   const int64_t settings = CountSweepSettings(options);
-  const int64_t solves = SaturatedProduct(
-      SaturatedProduct(settings, options.trials), static_cast<int64_t>(solvers.size()));
+  const int64_t solves = SaturatedProduct(SaturatedProduct(settings, options.trials),
+                                          static_cast<int64_t>(solvers.size()));
   if (solves > kMaxSolves) {
-    return BadInput(kCommand, "the sweep asks for " +
-                                  (solves == INT64_MAX ? std::string("more than 9e18")
-                                                       : std::to_string(solves)) +
-                                  " solves (" + std::to_string(settings) + " settings x " +
-                                  std::to_string(options.trials) + " trials x " +
-                                  std::to_string(solvers.size()) + " solvers); at most " +
-                                  std::to_string(kMaxSolves) + " per run");
+    return BadInput(
+        kCommand,
+        "the sweep asks for " +
+            (solves == INT64_MAX ? std::string("more than 9e18") : std::to_string(solves)) +
+            " solves (" + std::to_string(settings) + " settings x " +
+            std::to_string(options.trials) + " trials x " + std::to_string(solvers.size()) +
+            " solvers); at most " + std::to_string(kMaxSolves) + " per run");
   }
   OutputFiles outputs;
   std::vector<std::pair<std::string, std::string>> inputs;
-  for (const std::string& flag_file : parsed.flag_files) inputs.emplace_back("--flagfile", flag_file);
+  for (const std::string& flag_file : parsed.flag_files)
+    inputs.emplace_back("--flagfile", flag_file);
   const Status declared = DeclareOutputs(inputs, &outputs);
   if (!declared.ok()) return BadInput(kCommand, declared.message());
 
@@ -357,9 +362,9 @@ int RunMonteCarloMode(const std::vector<SolverVariant>& solvers, const Resection
   std::cout << "compare: " << result.settings.size() << " settings x " << options.trials
             << " trials x " << result.solver_names.size() << " solvers in " << result.wall_seconds
             << " s\n";
-  const Status written = WriteOutputs(MonteCarloCsv(result),
-                                      MonteCarloHtml(options, result, command_line), tables, notes,
-                                      &outputs);
+  const Status written =
+      WriteOutputs(MonteCarloCsv(result), MonteCarloHtml(options, result, command_line), tables,
+                   notes, &outputs);
   if (!written.ok()) return BadInput(kCommand, written.message());
   return kExitSuccess;
 }
@@ -401,7 +406,8 @@ int RunDatasetMode(const std::vector<SolverVariant>& solvers, const ResectionOpt
       {"--cameras", job.cameras_path}, {"--points", job.points_path},
       {"--marks", job.marks_path},     {"--gcp_list", job.gcp_list_path},
       {"--frames", job.frames_path},   {"--reference", options.reference_path}};
-  for (const std::string& flag_file : parsed.flag_files) inputs.emplace_back("--flagfile", flag_file);
+  for (const std::string& flag_file : parsed.flag_files)
+    inputs.emplace_back("--flagfile", flag_file);
   const Status declared = DeclareOutputs(inputs, &outputs);
   if (!declared.ok()) return BadInput(kCommand, declared.message());
 

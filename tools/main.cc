@@ -58,7 +58,9 @@ void OnTerminate() {
 
 // A failed CHECK in a library: glog has printed it on the line above.
 // glog wants the function type itself to carry the noreturn attribute.
-__attribute__((noreturn)) void OnFatalCheck() { Die("internal error: a consistency check failed (see the line above)"); }
+__attribute__((noreturn)) void OnFatalCheck() {
+  Die("internal error: a consistency check failed (see the line above)");
+}
 
 int Run(int argc, char** argv) {
   if (argc < 2 || std::strcmp(argv[1], "--help") == 0 || std::strcmp(argv[1], "-h") == 0 ||

@@ -47,16 +47,16 @@ constexpr char kUsage[] =
 
 // Every numeric flag's range (docs/formats.md, "Limits and refusals").
 const CommandFlags& ResectFlags() {
-  static const CommandFlags* const kFlags = new CommandFlags{
-      "resect",
-      "resect_command",
-      "",
-      {},
-      {{"loss_scale", 0.0, 1000.0, true, false, "px"},
-       {"ransac_threshold", 0.0, 1000.0, true, false, "px"},
-       {"default_accuracy", 0.0, 1000.0, true, false, "px"},
-       {"seed", 0.0, 18446744073709551615.0},
-       {"threads", 0.0, 1024.0}}};
+  static const CommandFlags* const kFlags =
+      new CommandFlags{"resect",
+                       "resect_command",
+                       "",
+                       {},
+                       {{"loss_scale", 0.0, 1000.0, true, false, "px"},
+                        {"ransac_threshold", 0.0, 1000.0, true, false, "px"},
+                        {"default_accuracy", 0.0, 1000.0, true, false, "px"},
+                        {"seed", 0.0, 18446744073709551615.0},
+                        {"threads", 0.0, 1024.0}}};
   return *kFlags;
 }
 
@@ -110,9 +110,12 @@ int RunResect(int argc, char** argv) {
 
   // Outputs: checked before any work (never an input, never each other), written all or nothing.
   OutputFiles outputs;
-  for (const auto& [label, path] : {std::pair<const char*, const std::string&>{"--cameras", FLAGS_cameras},
-                                    {"--points", FLAGS_points}, {"--marks", FLAGS_marks},
-                                    {"--gcp_list", FLAGS_gcp_list}, {"--frames", FLAGS_frames}}) {
+  for (const auto& [label, path] :
+       {std::pair<const char*, const std::string&>{"--cameras", FLAGS_cameras},
+        {"--points", FLAGS_points},
+        {"--marks", FLAGS_marks},
+        {"--gcp_list", FLAGS_gcp_list},
+        {"--frames", FLAGS_frames}}) {
     const Status input = outputs.AddInput(label, path);
     if (!input.ok()) return BadInput("resect", input.message());
   }

@@ -34,19 +34,19 @@ constexpr char kUsage[] =
     "--marks=D/marks.csv --out=frames.csv\n";
 
 const CommandFlags& SimulateFlags() {
-  static const CommandFlags* const kFlags = new CommandFlags{
-      "simulate",
-      "simulate_command",
-      "",
-      // --seed and --rotation are the names the other commands use.
-      {{"seed", "sim_seed"}, {"rotation", "sim_rotation"}},
-      {{"seed", 0.0, 18446744073709551615.0},
-       {"noise_px", 0.0, 1000.0, false, false, "px"},
-       {"outlier_fraction", 0.0, 1.0, false, true},
-       {"control_points", 0.0, 10000.0},
-       {"check_points", 0.0, 10000.0},
-       {"initial_position_error", 0.0, 1e6, false, false, "m"},
-       {"initial_angle_error", 0.0, 180.0, false, false, "degrees"}}};
+  static const CommandFlags* const kFlags =
+      new CommandFlags{"simulate",
+                       "simulate_command",
+                       "",
+                       // --seed and --rotation are the names the other commands use.
+                       {{"seed", "sim_seed"}, {"rotation", "sim_rotation"}},
+                       {{"seed", 0.0, 18446744073709551615.0},
+                        {"noise_px", 0.0, 1000.0, false, false, "px"},
+                        {"outlier_fraction", 0.0, 1.0, false, true},
+                        {"control_points", 0.0, 10000.0},
+                        {"check_points", 0.0, 10000.0},
+                        {"initial_position_error", 0.0, 1e6, false, false, "m"},
+                        {"initial_angle_error", 0.0, 180.0, false, false, "degrees"}}};
   return *kFlags;
 }
 
@@ -60,22 +60,28 @@ int RunSimulate(int argc, char** argv) {
     return kExitSuccess;
   }
   const auto scenario = ParseScenario(FLAGS_scenario);
-  if (!scenario) return BadInput("simulate", "--scenario must be nadir, oblique or uav_block, not '" + FLAGS_scenario + "'");
+  if (!scenario)
+    return BadInput("simulate",
+                    "--scenario must be nadir, oblique or uav_block, not '" + FLAGS_scenario + "'");
   const auto rotation = ParseRotationConvention(FLAGS_sim_rotation);
   if (!rotation) return BadInput("simulate", "--rotation must be seed, opk or pok");
   if (FLAGS_out_dir.empty()) return BadInput("simulate", "--out_dir is required");
   // The dataset's files, for the pre-flight check of the folder before any work.
-  std::vector<FolderFile> files = {{"cameras.csv", ""},         {"points.csv", ""},
-                                   {"marks.csv", ""},           {"frames_approx.csv", ""},
-                                   {"truth/frames.csv", ""},    {"truth/outliers.csv", ""}};
+  std::vector<FolderFile> files = {{"cameras.csv", ""},      {"points.csv", ""},
+                                   {"marks.csv", ""},        {"frames_approx.csv", ""},
+                                   {"truth/frames.csv", ""}, {"truth/outliers.csv", ""}};
   const Status folder = CheckOutputFolder("--out_dir", FLAGS_out_dir, files);
   if (!folder.ok()) return BadInput("simulate", folder.message());
   // A flag file that is one of the dataset's files would be overwritten by it.
   for (const std::string& flag_file : parsed.flag_files) {
     for (const FolderFile& file : files) {
       std::error_code error;
-      if (std::filesystem::equivalent(flag_file, std::filesystem::path(FLAGS_out_dir) / file.relative_path, error))
-        return BadInput("simulate", "--out_dir=" + FLAGS_out_dir + " would overwrite the flag file " + flag_file + " with " + file.relative_path + "; photopose never writes over an input");
+      if (std::filesystem::equivalent(
+              flag_file, std::filesystem::path(FLAGS_out_dir) / file.relative_path, error))
+        return BadInput("simulate", "--out_dir=" + FLAGS_out_dir +
+                                        " would overwrite the flag file " + flag_file + " with " +
+                                        file.relative_path +
+                                        "; photopose never writes over an input");
     }
   }
 
@@ -101,14 +107,13 @@ int RunSimulate(int argc, char** argv) {
                 (scene.mark_is_outlier[i] ? "1" : "0") + "\n";
   // Every file is checked and formatted first; then the folder is written all or nothing.
   const auto path = [](const std::string& relative) { return FLAGS_out_dir + "/" + relative; };
-  for (const Status& s :
-       {FormatCameraTable(scene.cameras, path("cameras.csv"), &files[0].contents),
-        FormatGroundPoints(scene.points, path("points.csv"), &files[1].contents),
-        FormatImageMarks(scene.marks, path("marks.csv"), &files[2].contents),
-        FormatFramesTable(frames_options, scene.approximate_frames, path("frames_approx.csv"),
-                          &files[3].contents),
-        FormatFramesTable(frames_options, scene.true_frames, path("truth/frames.csv"),
-                          &files[4].contents)}) {
+  for (const Status& s : {FormatCameraTable(scene.cameras, path("cameras.csv"), &files[0].contents),
+                          FormatGroundPoints(scene.points, path("points.csv"), &files[1].contents),
+                          FormatImageMarks(scene.marks, path("marks.csv"), &files[2].contents),
+                          FormatFramesTable(frames_options, scene.approximate_frames,
+                                            path("frames_approx.csv"), &files[3].contents),
+                          FormatFramesTable(frames_options, scene.true_frames,
+                                            path("truth/frames.csv"), &files[4].contents)}) {
     if (!s.ok()) return BadInput("simulate", s.message());
   }
   files[5].contents = std::move(outliers);

@@ -316,8 +316,8 @@ TEST(CsvInputTest, LinesAndColumnsAreBounded) {
   EXPECT_EQ(ParseError(header.substr(0, last_comma) + "\n" + row + "\n"),
             "t.csv:2: the row has more than 1000 fields; photopose reads at most 1000 columns");
   // The widest table that is allowed reads, and a duplicate far to the right is found.
-  const CsvTable wide = ParseOrDie(header.substr(0, last_comma) + "\n" +
-                                   row.substr(0, row.rfind(',')) + "\n");
+  const CsvTable wide =
+      ParseOrDie(header.substr(0, last_comma) + "\n" + row.substr(0, row.rfind(',')) + "\n");
   EXPECT_EQ(wide.ColumnIndex("C999"), std::optional<size_t>(999));
   EXPECT_EQ(ParseError(header.substr(0, last_comma - 5) + ",C7\n"),
             "t.csv:1: C7: column appears twice in the header (also as 'C7')");
@@ -331,14 +331,16 @@ TEST(CsvInputTest, OnlyRegularFilesAreRead) {
   EXPECT_TRUE(text.empty());
   const std::string folder = ::testing::TempDir();
   EXPECT_EQ(ReadTextFile(folder, &text).message(),
-            folder + ": is a folder, not a regular file; photopose reads regular files, or "
-                     "standard input for '-'");
+            folder +
+                ": is a folder, not a regular file; photopose reads regular files, or "
+                "standard input for '-'");
   // A FIFO is refused at once, without waiting for a writer.
   const std::string fifo = ::testing::TempDir() + "/photopose_csv_fifo_" + std::to_string(getpid());
   ASSERT_EQ(mkfifo(fifo.c_str(), 0644), 0);
   EXPECT_EQ(ReadTextFile(fifo, &text).message(),
-            fifo + ": is a FIFO (named pipe), not a regular file; photopose reads regular files, "
-                   "or standard input for '-'");
+            fifo +
+                ": is a FIFO (named pipe), not a regular file; photopose reads regular files, "
+                "or standard input for '-'");
   unlink(fifo.c_str());
 }
 

@@ -199,8 +199,8 @@ TEST_F(OutputFilesTest, AnOutputThatIsAnInputIsRefusedAfterSymlinksAndByInode) {
   const std::string input = Write("marks.csv", "data\n");
   fs::create_symlink("marks.csv", Path("alias.csv"));
   ASSERT_EQ(link(input.c_str(), Path("hard.csv").c_str()), 0);
-  for (const std::string& output : {input, Path("alias.csv"), Path("hard.csv"),
-                                    (dir_ / "." / "marks.csv").string()}) {
+  for (const std::string& output :
+       {input, Path("alias.csv"), Path("hard.csv"), (dir_ / "." / "marks.csv").string()}) {
     OutputFiles outputs;
     ASSERT_TRUE(outputs.AddInput("--marks", input).ok());
     EXPECT_EQ(outputs.AddOutput("--out", output).message(),
@@ -282,11 +282,11 @@ TEST_F(OutputFilesTest, StageWithHandsOutATemporaryAndNamesTheTargetInMessages) 
   EXPECT_EQ(failed.message(), path + ": raster 'a': X: value is not finite");
   EXPECT_EQ(fs::path(temporary).parent_path(), dir_);
   EXPECT_FALSE(fs::exists(temporary));
-  ASSERT_TRUE(outputs
-                  .StageWith(path, [](const std::string& temp) {
-                    return WriteFileAtomically(temp, "new\n");
-                  })
-                  .ok());
+  ASSERT_TRUE(
+      outputs
+          .StageWith(path,
+                     [](const std::string& temp) { return WriteFileAtomically(temp, "new\n"); })
+          .ok());
   ASSERT_TRUE(outputs.Commit().ok());
   EXPECT_EQ(Read(path), "new\n");
   EXPECT_EQ(Entries(), std::set<std::string>{"frames.csv"});
@@ -301,8 +301,9 @@ TEST_F(OutputFilesTest, TemporariesOfKilledRunsAreRemovedLiveOnesKept) {
   Write(".frames.csv.photopose-" + alive + "-a1b2c3", "another run\n");
   Write(".other.csv.photopose-" + dead + "-a1b2c3", "another target\n");
   ASSERT_TRUE(WriteFileAtomically(path, "new\n").ok());
-  EXPECT_EQ(Entries(), (std::set<std::string>{"frames.csv", ".frames.csv.photopose-" + alive + "-a1b2c3",
-                                              ".other.csv.photopose-" + dead + "-a1b2c3"}));
+  EXPECT_EQ(Entries(),
+            (std::set<std::string>{"frames.csv", ".frames.csv.photopose-" + alive + "-a1b2c3",
+                                   ".other.csv.photopose-" + dead + "-a1b2c3"}));
 }
 
 // ------------------------------------------------------------------ folders
@@ -316,9 +317,9 @@ TEST_F(OutputFilesTest, AFolderIsCreatedWithItsParents) {
   ASSERT_TRUE(WriteFolderAtomically("--out_dir", folder, Dataset("1")).ok());
   EXPECT_EQ(Read(folder + "/a.csv"), "a 1\n");
   EXPECT_EQ(Read(folder + "/truth/b.csv"), "b 1\n");
-  EXPECT_EQ(Entries(), (std::set<std::string>{"deep", "deep/er", "deep/er/data",
-                                              "deep/er/data/a.csv", "deep/er/data/truth",
-                                              "deep/er/data/truth/b.csv"}));
+  EXPECT_EQ(Entries(),
+            (std::set<std::string>{"deep", "deep/er", "deep/er/data", "deep/er/data/a.csv",
+                                   "deep/er/data/truth", "deep/er/data/truth/b.csv"}));
 }
 
 TEST_F(OutputFilesTest, AFolderIsReplacedAsAWholeKeepingTheOtherFiles) {
@@ -335,9 +336,9 @@ TEST_F(OutputFilesTest, AFolderIsReplacedAsAWholeKeepingTheOtherFiles) {
   EXPECT_EQ(Inode(folder + "/README.md"), readme);  // carried over as a hard link
   EXPECT_EQ(Read(folder + "/truth/notes.txt"), "also mine\n");
   EXPECT_EQ(fs::read_symlink(folder + "/link"), "README.md");
-  EXPECT_EQ(Entries(), (std::set<std::string>{"data", "data/a.csv", "data/truth", "data/truth/b.csv",
-                                              "data/README.md", "data/truth/notes.txt",
-                                              "data/link"}));
+  EXPECT_EQ(Entries(),
+            (std::set<std::string>{"data", "data/a.csv", "data/truth", "data/truth/b.csv",
+                                   "data/README.md", "data/truth/notes.txt", "data/link"}));
 }
 
 TEST_F(OutputFilesTest, AFolderReachedThroughASymlinkIsReplacedTheSymlinkKept) {

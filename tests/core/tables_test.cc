@@ -354,7 +354,8 @@ TEST_F(TablesTest, CameraTableErrorsNameFileLineAndColumn) {
        "2: RadialDistances: must increase: item 3 (2) is not larger than item 2 (3)"},
       {base + ",FilmFiducials", "C,100,6,10,10,1 2;3",
        "2: FilmFiducials: item 2 '3' has 1 numbers, expected 2 separated by spaces"},
-      {base + ",EarthRadius", "C,100,6,10,10,-1", "2: EarthRadius: '-1' is outside (0, 100000000] m"},
+      {base + ",EarthRadius", "C,100,6,10,10,-1",
+       "2: EarthRadius: '-1' is outside (0, 100000000] m"},
   };
   for (const CameraErrorCase& c : cases) {
     const std::string path = Write("cameras.csv", c.header + "\n" + c.row + "\n");
@@ -1027,8 +1028,7 @@ TEST_F(TablesTest, GcpListErrors) {
       {"EPSG:32722\n1 2 3 4 nan a\n", "2: py: 'nan' is not a finite number"},
       {"EPSG:32722\n1 2 3 4 5 a P\n1 2 4 4 5 b P\n",
        "3: name: point 'P' has other coordinates on line 2 (1 2 3)"},
-      {"EPSG:32722\n1 -1e308 3 4 5 a\n",
-       "2: Y: '-1e308' is outside [-100000000, 100000000] m"},
+      {"EPSG:32722\n1 -1e308 3 4 5 a\n", "2: Y: '-1e308' is outside [-100000000, 100000000] m"},
       {"EPSG:32722\n1 2 3 4 2e8 a\n", "2: py: '2e8' is outside [-100000000, 100000000] px"},
       {std::string("EPSG:32722\n1 2 3 4 5 a\0b\n", 25),
        "2: character 12: NUL byte: photopose reads UTF-8 text (is this a binary file, or UTF-16 "
@@ -1054,8 +1054,10 @@ TEST_F(TablesTest, CameraTableValuesOutsideTheirPhysicalRangeAreRefusedAtTheirLi
       {base, "C,8800,2.41,1,1", "2: NRows: 1 is outside [2, 1000000] pixels"},
       {base, "C,8800,2.41,3648,1", "2: NColumns: 1 is outside [2, 1000000] pixels"},
       {base, "C,8800,2.41,3648,2000000", "2: NColumns: 2000000 is outside [2, 1000000] pixels"},
-      {base + ",PrincipalX", uav + ",-2e8", "2: PrincipalX: '-2e8' is outside [-100000000, 100000000] um"},
-      {base + ",AverageZ", uav + ",1e308", "2: AverageZ: '1e308' is outside [-100000000, 100000000] m"},
+      {base + ",PrincipalX", uav + ",-2e8",
+       "2: PrincipalX: '-2e8' is outside [-100000000, 100000000] um"},
+      {base + ",AverageZ", uav + ",1e308",
+       "2: AverageZ: '1e308' is outside [-100000000, 100000000] m"},
       {base + ",FilmFiducials", uav + ",1 2;3 1e9",
        "2: FilmFiducials: item 2: '1000000000' is outside [-100000000, 100000000] um"},
       // The seed's example K1 = -1 mm^-2: the corner of a 1-inch sensor would move 500 mm.
@@ -1098,14 +1100,15 @@ TEST_F(TablesTest, CameraTableValuesOutsideTheirPhysicalRangeAreRefusedAtTheirLi
   const std::string path = Write("cameras.csv", base + ",Radial\n" + uav + ",0;-1.2e-4;2e-7;0\n");
   std::vector<FrameCamera> cameras;
   EXPECT_TRUE(ReadCameraTable(path, &cameras).ok());
-  const std::string film = Write(
-      "film.csv",
-      "CameraID,FocalLength,A0,A1,A2,B0,B1,B2,FilmFiducials,Radial\n"
-      "RMK,152000,-115000,12,0,115000,0,-12,\"-106000 106000;106000 -106000\",0;1e-4;0;0\n");
+  const std::string film =
+      Write("film.csv",
+            "CameraID,FocalLength,A0,A1,A2,B0,B1,B2,FilmFiducials,Radial\n"
+            "RMK,152000,-115000,12,0,115000,0,-12,\"-106000 106000;106000 -106000\",0;1e-4;0;0\n");
   EXPECT_EQ(ReadCameraTable(film, &cameras).message(),
-            film + ":2: Radial: the distortion folds the image: the corrected radius stops "
-                   "increasing at 58.557 mm from the principal point, inside the image (149.907 "
-                   "mm to its farthest corner)");
+            film +
+                ":2: Radial: the distortion folds the image: the corrected radius stops "
+                "increasing at 58.557 mm from the principal point, inside the image (149.907 "
+                "mm to its farthest corner)");
 }
 
 TEST_F(TablesTest, CoordinatesBeyondTheRangeAreRefusedInEveryTable) {
@@ -1155,8 +1158,8 @@ TEST_F(TablesTest, MarksFarOutsideTheirImageAreRefusedWithTheirLine) {
   mark.point_id = "P3";
   mark.line = 7;
   // Inside, on the border and within 5% of the size outside are fine.
-  for (const Eigen::Vector2d& pixel : {Eigen::Vector2d(2736, 1824), Eigen::Vector2d(0, 3648),
-                                       Eigen::Vector2d(-273, 3648 + 182)}) {
+  for (const Eigen::Vector2d& pixel :
+       {Eigen::Vector2d(2736, 1824), Eigen::Vector2d(0, 3648), Eigen::Vector2d(-273, 3648 + 182)}) {
     mark.column_row = pixel;
     EXPECT_TRUE(CheckMarkInsideImage("marks.csv", mark, camera, PixelOrigin::kCorner).ok());
   }

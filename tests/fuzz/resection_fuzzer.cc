@@ -45,8 +45,8 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   ResectionInput input;
   input.raster = "fuzz";
   input.focal_length_um = in.ConsumeFloatingPointInRange<double>(1.0, kMaxCoordinate);
-  input.pixel_size_um = in.ConsumeFloatingPointInRange<double>(kMinPixelSizeUm * 1.001,
-                                                               kMaxPixelSizeUm * 0.999);
+  input.pixel_size_um =
+      in.ConsumeFloatingPointInRange<double>(kMinPixelSizeUm * 1.001, kMaxPixelSizeUm * 0.999);
   const int n = in.ConsumeIntegralInRange<int>(0, 16);
   for (int i = 0; i < n; ++i) {
     input.image_plane_um.emplace_back(Number(&in, kMaxCoordinate), Number(&in, kMaxCoordinate));
@@ -57,8 +57,8 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   }
   if (in.ConsumeBool()) {
     ExteriorOrientation eo;
-    eo.set_center_in_ground({Number(&in, kMaxCoordinate), Number(&in, kMaxCoordinate),
-                             Number(&in, kMaxCoordinate)});
+    eo.set_center_in_ground(
+        {Number(&in, kMaxCoordinate), Number(&in, kMaxCoordinate), Number(&in, kMaxCoordinate)});
     eo.set_angles_seed_rad({Number(&in, 7.0), Number(&in, 7.0), Number(&in, 7.0)});
     input.approximate = eo;
   }

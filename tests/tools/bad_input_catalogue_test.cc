@@ -147,11 +147,12 @@ TEST_F(BadInputCatalogue, AnOutputThatIsAnInputIsRefusedBeforeAnyWork) {
   ExpectRefused(Resect("--out=alias.csv"), 2,
                 "photopose resect: --out=alias.csv is the input --marks=marks.csv; photopose "
                 "never writes over an input: choose another output file");
-  ExpectRefused("compare --cameras=cameras.csv --points=points.csv --marks=marks.csv "
-                "--csv=points.csv",
-                2,
-                "photopose compare: --csv=points.csv is the input --points=points.csv; photopose "
-                "never writes over an input: choose another output file");
+  ExpectRefused(
+      "compare --cameras=cameras.csv --points=points.csv --marks=marks.csv "
+      "--csv=points.csv",
+      2,
+      "photopose compare: --csv=points.csv is the input --points=points.csv; photopose "
+      "never writes over an input: choose another output file");
 }
 
 TEST_F(BadInputCatalogue, TwoOutputsInOneFileAreRefused) {
@@ -337,8 +338,8 @@ TEST_F(BadInputCatalogue, KillDuringSimulateLeavesTheOldOrTheNewDatasetNeverAMix
   ASSERT_EQ(Run(common + "--seed=1 --out_dir=../seed1").exit_code, 0);
   const auto started = std::chrono::steady_clock::now();
   ASSERT_EQ(Run(common + "--seed=2 --out_dir=../seed2").exit_code, 0);
-  const double run_ms = std::chrono::duration<double, std::milli>(
-                            std::chrono::steady_clock::now() - started).count();
+  const double run_ms =
+      std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - started).count();
   const Snapshot datasets[2] = {Take(root_ + "/seed1"), Take(root_ + "/seed2")};
   ASSERT_NE(datasets[0], datasets[1]);
   fs::copy(root_ + "/seed1", work_ + "/data", fs::copy_options::recursive);
@@ -361,7 +362,8 @@ TEST_F(BadInputCatalogue, KillDuringSimulateLeavesTheOldOrTheNewDatasetNeverAMix
       _exit(98);
     }
     // Kill at a different moment of the run each time, from the start to its end.
-    std::this_thread::sleep_for(std::chrono::microseconds(static_cast<int64_t>(run_ms * 1000.0 * k / 11.0)));
+    std::this_thread::sleep_for(
+        std::chrono::microseconds(static_cast<int64_t>(run_ms * 1000.0 * k / 11.0)));
     kill(child, SIGKILL);
     int status = 0;
     waitpid(child, &status, 0);
@@ -458,7 +460,8 @@ TEST_F(BadInputCatalogue, Utf16FilesAreRecognisedAndNamed) {
 
 TEST_F(BadInputCatalogue, AbsurdCamerasAndMarksAreRefusedWithTheirLine) {
   const std::string camera = FirstLine(ReadFile(SourcePath("examples/cameras.csv")));
-  const std::string row = FirstLine(ReadFile(SourcePath("examples/cameras.csv")).substr(camera.size() + 1));
+  const std::string row =
+      FirstLine(ReadFile(SourcePath("examples/cameras.csv")).substr(camera.size() + 1));
   const auto with = [&](const std::string& from, const std::string& to) {
     std::string changed = row;
     changed.replace(changed.find(from), from.size(), to);
@@ -496,8 +499,8 @@ TEST_F(BadInputCatalogue, RunningOutOfMemoryIsOneLineNotAnAbort) {
   const Snapshot before = Take(work_);
   const std::string command = "cd '" + work_ + "' && ulimit -v 200000 && " + testing::CliPath() +
                               " simulate --scenario=uav_block --control_points=10000 "
-                              "--check_points=10000 --out_dir=sim >'" + root_ + "/out' 2>'" +
-                              root_ + "/err'";
+                              "--check_points=10000 --out_dir=sim >'" +
+                              root_ + "/out' 2>'" + root_ + "/err'";
   const int status = std::system(command.c_str());
   ASSERT_TRUE(WIFEXITED(status));
   EXPECT_EQ(WEXITSTATUS(status), 2);

@@ -62,7 +62,8 @@ TEST(CliCommonTest, EveryNumericFlagOfEveryCommandHasARange) {
 
 TEST(CliCommonTest, FlagFilesTakeBothFormsCommentsAndNestedFiles) {
   const std::string dir = ScratchDir();
-  WriteFile(dir + "/inputs.flags", "# the example\n--cameras " + SourcePath("examples/cameras.csv") +
+  WriteFile(dir + "/inputs.flags", "# the example\n--cameras " +
+                                       SourcePath("examples/cameras.csv") +
                                        "\n\n   --points=" + SourcePath("examples/points.csv") +
                                        "  \r\n--marks=" + SourcePath("examples/marks.csv") + "\n");
   WriteFile(dir + "/run.flags", "--flagfile=" + dir + "/inputs.flags\n--out " + dir +
@@ -84,9 +85,10 @@ TEST(CliCommonTest, FlagFilesTakeBothFormsCommentsAndNestedFiles) {
   // A flag file is an input: no output may overwrite it.
   run = RunCli("resect --flagfile=" + dir + "/inputs.flags --out=" + dir + "/inputs.flags", dir);
   EXPECT_EQ(run.exit_code, 2);
-  EXPECT_EQ(run.err, "photopose resect: --out=" + dir + "/inputs.flags is the input --flagfile=" +
-                         dir + "/inputs.flags; photopose never writes over an input: choose "
-                               "another output file\n");
+  EXPECT_EQ(run.err, "photopose resect: --out=" + dir +
+                         "/inputs.flags is the input --flagfile=" + dir +
+                         "/inputs.flags; photopose never writes over an input: choose "
+                         "another output file\n");
 }
 
 TEST(CliCommonTest, LoggingFlagsOfTheLibrariesAreNotTheCommandsFlags) {

@@ -33,9 +33,9 @@ inline void WriteFile(const std::string& path, const std::string& text) {
 
 // How RunCliWith runs the executable.
 struct CliOptions {
-  std::string working_dir;                // where it runs (empty: the test's own)
+  std::string working_dir;  // where it runs (empty: the test's own)
   std::string standard_input = "/dev/null";
-  int timeout_seconds = 240;              // a hang is killed and reported as exit code -1
+  int timeout_seconds = 240;  // a hang is killed and reported as exit code -1
 };
 
 // Runs `photopose <arguments>` through the shell; stdout and stderr go to files in `dir`. A run
