@@ -1,6 +1,9 @@
 #include "core/csv.h"
 
+#include <fcntl.h>
+#include <poll.h>
 #include <sys/stat.h>
+#include <unistd.h>
 
 #include <cctype>
 #include <cerrno>
@@ -8,7 +11,6 @@
 #include <cmath>
 #include <cstdio>
 #include <cstring>
-#include <memory>
 
 namespace photopose {
 namespace {
@@ -36,7 +38,74 @@ std::vector<std::string_view> SplitOn(std::string_view text, char separator) {
   }
 }
 
-std::string Quoted(std::string_view text) { return "'" + std::string(text) + "'"; }
+std::string Quoted(std::string_view text) { return "'" + EscapeForMessage(text) + "'"; }
+
+// Length of the UTF-8 sequence that starts at text[i] (1 to 4), or 0 when the bytes there are not
+// well-formed UTF-8 (RFC 3629: no overlong forms, no surrogates, nothing above U+10FFFF).
+size_t Utf8SequenceLength(std::string_view text, size_t i) {
+  const auto byte = [&](size_t k) { return static_cast<unsigned char>(text[k]); };
+  const unsigned char c = byte(i);
+  if (c < 0x80) return 1;
+  size_t length;
+  unsigned char low = 0x80, high = 0xBF;  // range of the second byte
+  if (c >= 0xC2 && c <= 0xDF) {
+    length = 2;
+  } else if (c >= 0xE0 && c <= 0xEF) {
+    length = 3;
+    if (c == 0xE0) low = 0xA0;   // overlong
+    if (c == 0xED) high = 0x9F;  // surrogates
+  } else if (c >= 0xF0 && c <= 0xF4) {
+    length = 4;
+    if (c == 0xF0) low = 0x90;   // overlong
+    if (c == 0xF4) high = 0x8F;  // above U+10FFFF
+  } else {
+    return 0;
+  }
+  if (i + length > text.size()) return 0;
+  if (byte(i + 1) < low || byte(i + 1) > high) return 0;
+  for (size_t k = 2; k < length; ++k)
+    if ((byte(i + k) & 0xC0) != 0x80) return 0;
+  return length;
+}
+
+std::string HexByte(unsigned char c) {
+  static const char kDigits[] = "0123456789ABCDEF";
+  return std::string("0x") + kDigits[c >> 4] + kDigits[c & 15];
+}
+
+// What a file-system node that is not a regular file is, for messages.
+const char* NodeKind(mode_t mode) {
+  if (S_ISDIR(mode)) return "a folder";
+  if (S_ISCHR(mode)) return "a character device";
+  if (S_ISBLK(mode)) return "a block device";
+  if (S_ISFIFO(mode)) return "a FIFO (named pipe)";
+  if (S_ISSOCK(mode)) return "a socket";
+  return "not a regular file";
+}
+
+// Reads everything from `fd` up to limit + 1 bytes (one more than allowed shows the excess).
+// Waits on a non-blocking descriptor instead of spinning.
+bool ReadAtMost(int fd, size_t limit, std::string* text, int* error_number) {
+  char buffer[1 << 16];
+  while (text->size() <= limit) {
+    const size_t want = std::min(sizeof(buffer), limit + 1 - text->size());
+    const ssize_t n = read(fd, buffer, want);
+    if (n > 0) {
+      text->append(buffer, static_cast<size_t>(n));
+    } else if (n == 0) {
+      return true;
+    } else if (errno == EINTR) {
+      continue;
+    } else if (errno == EAGAIN || errno == EWOULDBLOCK) {
+      pollfd wait{fd, POLLIN, 0};
+      poll(&wait, 1, -1);
+    } else {
+      *error_number = errno;
+      return false;
+    }
+  }
+  return true;
+}
 
 // The record parser: walks the text once, keeping the physical line number.
 class CsvParser {
@@ -73,6 +142,13 @@ class CsvParser {
       PHOTOPOSE_RETURN_IF_ERROR(ParseField(header, row->fields.size(), &field));
       row->fields.push_back(std::move(field));
       if (pos_ < text_.size() && text_[pos_] == ',') {
+        if (row->fields.size() >= kMaxColumns) {
+          return Status::Error(EscapeForMessage(file_name_) + ":" + std::to_string(row->line) +
+                               ": the " + (header == nullptr ? "header" : "row") +
+                               " has more than " + std::to_string(kMaxColumns) +
+                               " fields; photopose reads at most " + std::to_string(kMaxColumns) +
+                               " columns");
+        }
         ++pos_;
         continue;
       }
@@ -97,8 +173,9 @@ class CsvParser {
       ++pos_;
       while (true) {
         if (pos_ >= text_.size()) {
-          return Status::Error(file_name_ + ":" + std::to_string(quote_line) + ": " +
-                               ColumnName(header, index) + ": quoted field is not closed");
+          return Status::Error(EscapeForMessage(file_name_ + ":" + std::to_string(quote_line) +
+                                                ": " + ColumnName(header, index) +
+                                                ": quoted field is not closed"));
         }
         const char c = text_[pos_++];
         if (c == '"') {
@@ -117,8 +194,9 @@ class CsvParser {
       }
       while (pos_ < text_.size() && (IsBlank(text_[pos_]) || text_[pos_] == '\r')) ++pos_;
       if (pos_ < text_.size() && text_[pos_] != ',' && text_[pos_] != '\n') {
-        return Status::Error(file_name_ + ":" + std::to_string(line_) + ": " +
-                             ColumnName(header, index) + ": text after the closing quote");
+        return Status::Error(EscapeForMessage(file_name_ + ":" + std::to_string(line_) + ": " +
+                                              ColumnName(header, index) +
+                                              ": text after the closing quote"));
       }
       return Status::Ok();
     }
@@ -141,16 +219,18 @@ class CsvParser {
 Status CsvTable::Read(const std::string& path, const CsvOptions& options, CsvTable* table) {
   std::string text;
   PHOTOPOSE_RETURN_IF_ERROR(ReadTextFile(path, &text));
-  return Parse(text, path, options, table);
+  return Parse(text, InputName(path), options, table);
 }
 
 Status CsvTable::Parse(std::string_view text, const std::string& file_name,
                        const CsvOptions& options, CsvTable* table) {
+  PHOTOPOSE_RETURN_IF_ERROR(CheckTextInput(text, file_name));
   CsvTable result;
   result.file_name_ = file_name;
   result.options_ = options;
   CsvParser parser(text, file_name);
-  if (!parser.NextRecordStart()) return Status::Error(file_name + ": no header line");
+  if (!parser.NextRecordStart())
+    return Status::Error(EscapeForMessage(file_name) + ": no header line");
 
   CsvRow header_row;
   PHOTOPOSE_RETURN_IF_ERROR(parser.ParseRecord(nullptr, &header_row));
@@ -162,15 +242,12 @@ Status CsvTable::Parse(std::string_view text, const std::string& file_name,
       return result.Error(result.header_line_, "column " + std::to_string(i + 1),
                           "the header names no column here");
     }
-    std::string normalized = result.Normalized(name);
-    for (size_t j = 0; j < i; ++j) {
-      if (result.normalized_header_[j] == normalized) {
-        return result.Error(
-            result.header_line_, name,
-            "column appears twice in the header (also as '" + result.header_[j] + "')");
-      }
+    const auto [first, inserted] = result.column_by_name_.emplace(result.Normalized(name), i);
+    if (!inserted) {
+      return result.Error(result.header_line_, name,
+                          "column appears twice in the header (also as " +
+                              Quoted(result.header_[first->second]) + ")");
     }
-    result.normalized_header_.push_back(std::move(normalized));
   }
 
   while (parser.NextRecordStart()) {
@@ -200,11 +277,9 @@ bool CsvTable::SameName(std::string_view a, std::string_view b) const {
 }
 
 std::optional<size_t> CsvTable::ColumnIndex(std::string_view name) const {
-  const std::string normalized = Normalized(name);
-  for (size_t i = 0; i < normalized_header_.size(); ++i) {
-    if (normalized_header_[i] == normalized) return i;
-  }
-  return std::nullopt;
+  const auto found = column_by_name_.find(Normalized(name));
+  if (found == column_by_name_.end()) return std::nullopt;
+  return found->second;
 }
 
 Status CsvTable::RequireColumns(const std::vector<std::string_view>& names) const {
@@ -228,7 +303,7 @@ Status CsvTable::Error(int line, std::string_view column, std::string_view what)
   std::string message = file_name_ + ":" + std::to_string(line) + ": ";
   if (!column.empty()) message += std::string(column) + ": ";
   message += what;
-  return Status::Error(std::move(message));
+  return Status::Error(EscapeForMessage(message));
 }
 
 // ------------------------------------------------------------------ CsvRowReader
@@ -316,21 +391,116 @@ Status CsvRowReader::NumberGroups(std::string_view column, int group_size,
 
 // ------------------------------------------------------------------ free functions
 
+std::string InputName(const std::string& path) { return path == "-" ? "<stdin>" : path; }
+
 Status ReadTextFile(const std::string& path, std::string* text) {
-  std::unique_ptr<FILE, int (*)(FILE*)> file(std::fopen(path.c_str(), "rb"), &std::fclose);
-  if (!file) return Status::Error(path + ": cannot open: " + std::strerror(errno));
+  const std::string name = EscapeForMessage(InputName(path));
   text->clear();
-  // One allocation for a regular file (a large table is read without regrowing the buffer).
+  const bool standard_input = path == "-";
+  // O_NONBLOCK: opening a FIFO must not wait for a writer; it is refused below anyway.
+  const int fd = standard_input ? STDIN_FILENO
+                                : open(path.c_str(), O_RDONLY | O_NONBLOCK | O_NOCTTY | O_CLOEXEC);
+  if (fd < 0) return Status::Error(name + ": cannot open: " + std::strerror(errno));
+  const auto finish = [&](Status status) {
+    if (!standard_input) close(fd);
+    if (!status.ok()) text->clear();
+    return status;
+  };
   struct stat info;
-  if (fstat(fileno(file.get()), &info) == 0 && S_ISREG(info.st_mode) && info.st_size > 0)
-    text->reserve(static_cast<size_t>(info.st_size));
-  char buffer[1 << 16];
-  size_t n;
-  while ((n = std::fread(buffer, 1, sizeof(buffer), file.get())) > 0) text->append(buffer, n);
-  // fopen succeeds on a folder; the read then fails with EISDIR.
-  if (std::ferror(file.get()))
-    return Status::Error(path + ": cannot read: " + std::strerror(errno));
+  if (fstat(fd, &info) != 0)
+    return finish(Status::Error(name + ": cannot read: " + std::strerror(errno)));
+  if (!standard_input && !S_ISREG(info.st_mode)) {
+    return finish(Status::Error(name + ": is " + NodeKind(info.st_mode) +
+                                ", not a regular file; photopose reads regular files, or standard "
+                                "input for '-'"));
+  }
+  const std::string too_large = name + ": is larger than " + std::to_string(kMaxInputBytes) +
+                                " bytes, the largest input photopose reads";
+  if (S_ISREG(info.st_mode) && static_cast<uint64_t>(info.st_size) > kMaxInputBytes)
+    return finish(Status::Error(too_large));
+  // One allocation for a regular file (a large table is read without regrowing the buffer).
+  if (S_ISREG(info.st_mode) && info.st_size > 0) text->reserve(static_cast<size_t>(info.st_size) + 1);
+  int error_number = 0;
+  if (!ReadAtMost(fd, kMaxInputBytes, text, &error_number))
+    return finish(Status::Error(name + ": cannot read: " + std::strerror(error_number)));
+  if (text->size() > kMaxInputBytes) return finish(Status::Error(too_large));
+  return finish(Status::Ok());
+}
+
+Status CheckTextInput(std::string_view text, const std::string& file_name) {
+  const std::string name = EscapeForMessage(file_name);
+  using namespace std::string_view_literals;
+  static constexpr std::pair<std::string_view, const char*> kByteOrderMarks[] = {
+      {"\xFF\xFE\0\0"sv, "UTF-32 (little-endian byte order mark)"},
+      {"\0\0\xFE\xFF"sv, "UTF-32 (big-endian byte order mark)"},
+      {"\xFF\xFE"sv, "UTF-16 (little-endian byte order mark)"},
+      {"\xFE\xFF"sv, "UTF-16 (big-endian byte order mark)"}};
+  for (const auto& [mark, encoding] : kByteOrderMarks) {
+    if (text.substr(0, mark.size()) == mark) {
+      return Status::Error(name + ": is " + encoding +
+                           "; photopose reads UTF-8 text: save the file as UTF-8");
+    }
+  }
+  size_t i = text.substr(0, 3) == "\xEF\xBB\xBF" ? 3 : 0;
+  int line = 1;
+  size_t line_start = 0, character = 0;
+  const auto error = [&](const std::string& what) {
+    return Status::Error(name + ":" + std::to_string(line) + ": character " +
+                         std::to_string(character) + ": " + what);
+  };
+  while (i < text.size()) {
+    const unsigned char c = static_cast<unsigned char>(text[i]);
+    if (c == '\n') {
+      ++line;
+      line_start = ++i;
+      character = 0;
+      continue;
+    }
+    ++character;
+    if (i - line_start >= kMaxLineBytes) {
+      return Status::Error(name + ":" + std::to_string(line) + ": the line is longer than " +
+                           std::to_string(kMaxLineBytes) +
+                           " bytes, the longest line photopose reads");
+    }
+    if (c == 0) {
+      return error(
+          "NUL byte: photopose reads UTF-8 text (is this a binary file, or UTF-16 without a "
+          "byte order mark?)");
+    }
+    if ((c < 0x20 && c != '\t' && c != '\r') || c == 0x7F)
+      return error("control character " + HexByte(c) + ": photopose reads plain UTF-8 text");
+    const size_t length = Utf8SequenceLength(text, i);
+    if (length == 0)
+      return error("byte " + HexByte(c) + " is not UTF-8; photopose reads UTF-8 text");
+    i += length;
+  }
   return Status::Ok();
+}
+
+std::string EscapeForMessage(std::string_view text) {
+  std::string escaped;
+  escaped.reserve(text.size());
+  size_t i = 0;
+  while (i < text.size()) {
+    const unsigned char c = static_cast<unsigned char>(text[i]);
+    if (c == '\t' || c == '\n' || c == '\r') {
+      escaped += c == '\t' ? "\\t" : c == '\n' ? "\\n" : "\\r";
+      ++i;
+    } else if (c < 0x20 || c == 0x7F) {
+      escaped += "\\x" + HexByte(c).substr(2);
+      ++i;
+    } else {
+      const size_t length = Utf8SequenceLength(text, i);
+      if (length == 0) {
+        escaped += "\\x" + HexByte(c).substr(2);
+        ++i;
+      } else {
+        escaped.append(text.substr(i, length));
+        i += length;
+      }
+    }
+  }
+  return escaped;
 }
 
 bool ParseFiniteNumber(std::string_view text, double* value, std::string* why) {
@@ -425,6 +595,15 @@ std::string FormatNumber(double value) {
   char buffer[64];
   const std::to_chars_result result = std::to_chars(buffer, buffer + sizeof(buffer), value);
   return std::string(buffer, result.ptr);
+}
+
+std::string FormatPlainNumber(double value) {
+  if (value == std::floor(value) && std::abs(value) < 1e15) {
+    char buffer[32];
+    std::snprintf(buffer, sizeof(buffer), "%.0f", value);
+    return buffer;
+  }
+  return FormatNumber(value);
 }
 
 std::string FormatNumberList(const std::vector<double>& values) {

@@ -8,15 +8,28 @@
 // CsvOptions::tolerant_header, also with spaces and underscores removed ("Point ID", "point_id" and
 // "POINTID" all name PointID). Every problem is a Status whose message reads
 // "file:line: column: what is wrong", with 1-based physical line numbers of the file.
+//
+// Input is bounded (docs/formats.md, "Limits and refusals"): only regular files or "-" (standard
+// input) are read, at most kMaxInputBytes of UTF-8 text without NUL or other control characters,
+// lines of at most kMaxLineBytes, rows of at most kMaxColumns fields. Messages escape every byte
+// that is not printable UTF-8 (EscapeForMessage), so a message is always one clean line.
 
 #include <optional>
 #include <string>
 #include <string_view>
+#include <unordered_map>
 #include <vector>
 
 #include "core/status.h"
 
 namespace photopose {
+
+// Largest input file (bytes): a marks table of a million marks is about 60 MB.
+constexpr size_t kMaxInputBytes = size_t{256} << 20;
+// Longest physical line (bytes) of any text input.
+constexpr size_t kMaxLineBytes = size_t{64} << 10;
+// Most fields of a CSV header or row: the camera table, the widest, has 32 standard columns.
+constexpr size_t kMaxColumns = 1000;
 
 struct CsvOptions {
   // Also match header names with spaces and underscores removed.
@@ -62,7 +75,9 @@ class CsvTable {
   CsvOptions options_;
   int header_line_ = 0;
   std::vector<std::string> header_;
-  std::vector<std::string> normalized_header_;
+  // Normalized header name -> column index: lookups and the duplicate check stay linear in the
+  // number of columns.
+  std::unordered_map<std::string, size_t> column_by_name_;
   std::vector<CsvRow> rows_;
 };
 
@@ -103,9 +118,25 @@ class CsvRowReader {
   const CsvRow& row_;
 };
 
-// Reads a whole file into *text. Errors: "path: cannot open: <system reason>" and
-// "path: cannot read: <system reason>".
+// Reads a whole input into *text: a regular file, or standard input for "-". Anything else (a
+// folder, a device such as /dev/zero, a FIFO, a socket) is refused without reading, and so is an
+// input of more than kMaxInputBytes. Errors: "path: cannot open: <system reason>",
+// "path: cannot read: <system reason>", "path: is a character device, not a regular file ...",
+// "path: is larger than 268435456 bytes ...". Messages name standard input "<stdin>".
 Status ReadTextFile(const std::string& path, std::string* text);
+// The name of an input in messages: the path as given, "<stdin>" for "-".
+std::string InputName(const std::string& path);
+
+// Checks that `text` is text photopose reads: UTF-8 (a UTF-8 byte order mark is allowed; UTF-16
+// and UTF-32 byte order marks are recognised and named), no NUL or other control character but
+// tab, line feed and carriage return, no line longer than kMaxLineBytes. Errors are located:
+// "file:line: character N: byte 0xFF is not UTF-8; photopose reads UTF-8 text".
+Status CheckTextInput(std::string_view text, const std::string& file_name);
+
+// `text` fit for a one-line message: control characters, DEL and bytes that are not UTF-8 are
+// written as \xHH (tab, line feed and carriage return as \t, \n, \r); everything else is kept.
+// Escaping an escaped text changes nothing.
+std::string EscapeForMessage(std::string_view text);
 
 // Parses a whole field as a finite decimal number (C locale, a leading '+' allowed). On failure
 // returns false and sets *why to a phrase about the text ("'abc' is not a number",
@@ -125,6 +156,9 @@ std::vector<std::string_view> SplitListItems(std::string_view text);
 
 // The shortest decimal text that reads back as exactly the same double.
 std::string FormatNumber(double value);
+// For messages: whole numbers below 1e15 in plain digits ("100000000", not "1e+08"), anything
+// else as FormatNumber.
+std::string FormatPlainNumber(double value);
 // Numbers joined by semicolons, each as FormatNumber.
 std::string FormatNumberList(const std::vector<double>& values);
 // A field as it must appear in a CSV line: quoted when it holds a comma, a quote, a line break,

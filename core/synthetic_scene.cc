@@ -85,7 +85,14 @@ Status SyntheticSceneOptions::IsValid() const {
     return Status::Error("outlier range must satisfy 0 <= min <= max");
   if (num_control_points < 0 || num_check_points < 0)
     return Status::Error("point counts must be >= 0");
-  if (num_control_points + num_check_points < 1) return Status::Error("the scene needs points");
+  // In 64 bits: two int counts can overflow an int sum. The scene holds every point and mark in
+  // memory, so a million points per footprint is the most it generates.
+  constexpr int64_t kMaxPointsPerImage = 1000000;
+  const int64_t points_per_image = int64_t{num_control_points} + int64_t{num_check_points};
+  if (points_per_image < 1) return Status::Error("the scene needs points");
+  if (points_per_image > kMaxPointsPerImage)
+    return Status::Error("control plus check points must be at most " +
+                         std::to_string(kMaxPointsPerImage) + " per image");
   if (!(terrain_relief_m >= 0.0)) return Status::Error("terrain_relief_m must be >= 0");
   if (!(initial_position_error_m >= 0.0) || !(initial_angle_error_deg >= 0.0))
     return Status::Error("initial errors must be >= 0");

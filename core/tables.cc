@@ -78,7 +78,113 @@ const Names& MarkColumns() {
 
 // ------------------------------------------------------------------ small helpers
 
-std::string Quoted(std::string_view text) { return "'" + std::string(text) + "'"; }
+std::string Quoted(std::string_view text) { return "'" + EscapeForMessage(text) + "'"; }
+
+// ------------------------------------------------------------------ physical ranges
+
+// The values a numeric column may hold (docs/formats.md, "Limits and refusals"): readers refuse a
+// value outside at the line that carries it, writers refuse to write one.
+struct ValueRange {
+  double min;
+  double max;
+  bool open_min;     // min itself excluded
+  bool open_max;     // max itself excluded
+  const char* unit;  // for messages
+};
+
+bool InRange(double value, const ValueRange& range) {
+  const bool above_min = range.open_min ? value > range.min : value >= range.min;
+  const bool below_max = range.open_max ? value < range.max : value <= range.max;
+  return above_min && below_max;  // false for NaN
+}
+
+std::string RangeText(const ValueRange& range) {
+  return std::string(range.open_min ? "(" : "[") + FormatPlainNumber(range.min) + ", " +
+         FormatPlainNumber(range.max) + (range.open_max ? ")" : "]") +
+         (range.unit[0] != '\0' ? " " : "") + range.unit;
+}
+
+// The range of a column by its schema name (the same name means the same quantity in every
+// table), or nullptr for a column without one.
+const ValueRange* RangeOf(std::string_view column) {
+  constexpr ValueRange kGroundCoordinate{-kMaxCoordinate, kMaxCoordinate, false, false, "m"};
+  constexpr ValueRange kPixelCoordinate{-kMaxCoordinate, kMaxCoordinate, false, false, "px"};
+  constexpr ValueRange kFilmCoordinate{-kMaxCoordinate, kMaxCoordinate, false, false, "um"};
+  constexpr ValueRange kPositiveMetres{0.0, kMaxCoordinate, true, false, "m"};
+  constexpr ValueRange kPositivePixels{0.0, kMaxCoordinate, true, false, "px"};
+  constexpr ValueRange kAngle{-360.0, 360.0, false, false, "degrees"};
+  constexpr ValueRange kAffine{-kMaxCoordinate, kMaxCoordinate, false, false, ""};
+  static const auto* const kRanges = new std::map<std::string, ValueRange, std::less<>>{
+      {"X", kGroundCoordinate},
+      {"Y", kGroundCoordinate},
+      {"Z", kGroundCoordinate},
+      {"PerspectiveX", kGroundCoordinate},
+      {"PerspectiveY", kGroundCoordinate},
+      {"PerspectiveZ", kGroundCoordinate},
+      {"AverageZ", kGroundCoordinate},
+      {"AccuracyX", kPositiveMetres},
+      {"AccuracyY", kPositiveMetres},
+      {"AccuracyZ", kPositiveMetres},
+      {"EarthRadius", kPositiveMetres},
+      {"Omega", kAngle},
+      {"Phi", kAngle},
+      {"Kappa", kAngle},
+      {"Column", kPixelCoordinate},
+      {"Row", kPixelCoordinate},
+      {"Accuracy", kPositivePixels},
+      {"FilmX", kFilmCoordinate},
+      {"FilmY", kFilmCoordinate},
+      {"PrincipalX", kFilmCoordinate},
+      {"PrincipalY", kFilmCoordinate},
+      {"FilmFiducials", kFilmCoordinate},
+      {"RadialDistortions", kFilmCoordinate},
+      {"RadialDistances", {0.0, kMaxCoordinate, false, false, "um"}},
+      {"FocalLength", {0.0, kMaxCoordinate, true, false, "um"}},
+      {"PixelSize", {kMinPixelSizeUm, kMaxPixelSizeUm, true, true, "um"}},
+      {"A0", kAffine},
+      {"A1", kAffine},
+      {"A2", kAffine},
+      {"B0", kAffine},
+      {"B1", kAffine},
+      {"B2", kAffine}};
+  const auto found = kRanges->find(column);
+  return found == kRanges->end() ? nullptr : &found->second;
+}
+
+// "column: '<text>' is outside [min, max] unit" for a value outside its column's range.
+Status CheckRange(const CsvRowReader& row, std::string_view column, std::string_view label,
+                  std::string_view text, double value) {
+  const ValueRange* range = RangeOf(column);
+  if (range == nullptr || InRange(value, *range)) return Status::Ok();
+  return row.Error(column, std::string(label) + Quoted(text) + " is outside " + RangeText(*range));
+}
+
+// A number within its column's range; an empty field gives nullopt.
+Status ReadNumber(const CsvRowReader& row, std::string_view column, std::optional<double>* value) {
+  PHOTOPOSE_RETURN_IF_ERROR(row.Number(column, value));
+  if (*value) PHOTOPOSE_RETURN_IF_ERROR(CheckRange(row, column, "", row.Text(column), **value));
+  return Status::Ok();
+}
+
+// A number within its column's range; an empty field is an error.
+Status ReadRequiredNumber(const CsvRowReader& row, std::string_view column, double* value) {
+  std::optional<double> number;
+  PHOTOPOSE_RETURN_IF_ERROR(ReadNumber(row, column, &number));
+  if (!number) return row.Error(column, "is empty");
+  *value = *number;
+  return Status::Ok();
+}
+
+// A list of numbers, each within its column's range.
+Status ReadNumberList(const CsvRowReader& row, std::string_view column,
+                      std::vector<double>* values) {
+  PHOTOPOSE_RETURN_IF_ERROR(row.NumberList(column, values));
+  for (size_t i = 0; i < values->size(); ++i) {
+    PHOTOPOSE_RETURN_IF_ERROR(CheckRange(row, column, "item " + std::to_string(i + 1) + ": ",
+                                         FormatPlainNumber((*values)[i]), (*values)[i]));
+  }
+  return Status::Ok();
+}
 
 // "path:line: " for a known line, else "path: ".
 std::string Where(const std::string& path, int line) {
@@ -116,17 +222,8 @@ Status ReadEnum(const CsvRowReader& row, std::string_view column,
 Status ReadNumberOr(const CsvRowReader& row, std::string_view column, double default_value,
                     double* value) {
   std::optional<double> number;
-  PHOTOPOSE_RETURN_IF_ERROR(row.Number(column, &number));
+  PHOTOPOSE_RETURN_IF_ERROR(ReadNumber(row, column, &number));
   *value = number.value_or(default_value);
-  return Status::Ok();
-}
-
-// An optional number that must be positive when given.
-Status ReadPositive(const CsvRowReader& row, std::string_view column,
-                    std::optional<double>* value) {
-  PHOTOPOSE_RETURN_IF_ERROR(row.Number(column, value));
-  if (*value && !(**value > 0.0))
-    return row.Error(column, Quoted(row.Text(column)) + " must be positive");
   return Status::Ok();
 }
 
@@ -221,7 +318,12 @@ class RowFields {
 
   void Text(std::string_view text) { fields_.emplace_back(text); }
   void Number(std::string_view column, double value) {
-    if (!std::isfinite(value)) Fail(column, "value is not finite");
+    const ValueRange* range = RangeOf(column);
+    if (!std::isfinite(value)) {
+      Fail(column, "value is not finite");
+    } else if (range != nullptr && !InRange(value, *range)) {
+      Fail(column, FormatPlainNumber(value) + " is outside " + RangeText(*range));
+    }
     fields_.push_back(FormatNumber(value));
   }
   void OptionalNumber(std::string_view column, const std::optional<double>& value) {
@@ -232,8 +334,14 @@ class RowFields {
     }
   }
   void NumberList(std::string_view column, const std::vector<double>& values) {
-    for (const double value : values)
-      if (!std::isfinite(value)) Fail(column, "a value is not finite");
+    const ValueRange* range = RangeOf(column);
+    for (const double value : values) {
+      if (!std::isfinite(value)) {
+        Fail(column, "a value is not finite");
+      } else if (range != nullptr && !InRange(value, *range)) {
+        Fail(column, FormatPlainNumber(value) + " is outside " + RangeText(*range));
+      }
+    }
     fields_.push_back(FormatNumberList(values));
   }
   void Fail(std::string_view column, std::string_view what) {
@@ -242,7 +350,8 @@ class RowFields {
 
   std::vector<std::string>* fields() { return &fields_; }
   Status status(const std::string& path) const {
-    return error_.empty() ? Status::Ok() : Status::Error(path + ": " + record_ + ": " + error_);
+    if (error_.empty()) return Status::Ok();
+    return Status::Error(EscapeForMessage(path + ": " + record_ + ": " + error_));
   }
 
  private:
@@ -286,8 +395,120 @@ const std::vector<Spelling<bool>>& BooleanSpellings() {
   return *kSpellings;
 }
 
-// Checks of a camera beyond FrameCamera::IsValid that keep the table readable: a distortion
-// table that is given, of equal lengths and increasing. On failure *column names the culprit.
+// NRows and NColumns, when given, describe an image: kMinImageSidePx to kMaxImageSidePx.
+Status CheckImageSize(const FrameCamera& camera, std::string* column) {
+  for (const auto& [name, value] : {std::pair<const char*, int>{"NRows", camera.n_rows},
+                                    std::pair<const char*, int>{"NColumns", camera.n_columns}}) {
+    if (value != 0 && (value < kMinImageSidePx || value > kMaxImageSidePx)) {
+      *column = name;
+      return Status::Error(std::to_string(value) + " is outside [" +
+                           std::to_string(kMinImageSidePx) + ", " +
+                           std::to_string(kMaxImageSidePx) + "] pixels");
+    }
+  }
+  return Status::Ok();
+}
+
+// An affine, when given, must be invertible in a meaningful way: its determinant not negligible
+// against its coefficients, and a pixel size (sqrt of |det|, or its inverse for AffineDirection
+// -1) within the PixelSize range.
+Status CheckAffine(const FrameCamera& camera, std::string* column) {
+  if (!camera.has_affine) return Status::Ok();
+  const auto& a = camera.affine_a;
+  const auto& b = camera.affine_b;
+  const double scale = std::max({std::abs(a[1]), std::abs(a[2]), std::abs(b[1]), std::abs(b[2])});
+  const double det = a[1] * b[2] - a[2] * b[1];
+  *column = "A1";
+  if (!(std::abs(det) >= kMinAffineDeterminantRatio * scale * scale) || !(scale > 0.0)) {
+    return Status::Error("the affine is singular: A1 B2 - A2 B1 = " + FormatNumber(det) +
+                         " is negligible against its coefficients (up to " + FormatNumber(scale) +
+                         "); the rows of A and B must not be parallel");
+  }
+  const double pixel_um =
+      camera.affine_direction > 0 ? std::sqrt(std::abs(det)) : 1.0 / std::sqrt(std::abs(det));
+  if (!(pixel_um > kMinPixelSizeUm && pixel_um < kMaxPixelSizeUm)) {
+    return Status::Error(
+        "the affine gives pixels of " + FormatNumber(pixel_um) + " um (sqrt |A1 B2 - A2 B1|" +
+        (camera.affine_direction > 0 ? "" : ", inverted for AffineDirection -1") + "), outside (" +
+        FormatNumber(kMinPixelSizeUm) + ", " + FormatNumber(kMaxPixelSizeUm) + ") um");
+  }
+  column->clear();
+  return Status::Ok();
+}
+
+// The largest distance (um) from the principal point to the edge of the image in film
+// coordinates: the image's corners when its size is known, else the fiducials, else the end of
+// the distortion table; 0 when none of these is given.
+double FieldRadiusUm(const FrameCamera& camera) {
+  const Eigen::Vector2d principal(camera.principal_x_um, camera.principal_y_um);
+  double radius = 0.0;
+  if (camera.n_columns > 0 && camera.n_rows > 0) {
+    for (const double col : {0.0, static_cast<double>(camera.n_columns)}) {
+      for (const double row : {0.0, static_cast<double>(camera.n_rows)}) {
+        Eigen::Vector2d film;
+        if (FilmFromPixel(camera, {col, row}, PixelOrigin::kCorner, &film).ok())
+          radius = std::max(radius, (film - principal).norm());
+      }
+    }
+    if (radius > 0.0) return radius;
+  }
+  for (const Eigen::Vector2d& fiducial : camera.film_fiducials_um)
+    radius = std::max(radius, (fiducial - principal).norm());
+  if (radius > 0.0) return radius;
+  if (camera.distortion_type == DistortionType::kDistortionTable &&
+      !camera.radial_distances_um.empty())
+    return camera.radial_distances_um.back();
+  return 0.0;
+}
+
+// The distortion correction must map the image onto itself without folding it: along every
+// direction from the principal point, the corrected radius u . (m - D(m)) of a measured point m at
+// radius r increases strictly with r up to the field radius, and stays within a factor
+// kMaxDistortionScale of r.
+Status CheckDistortionDoesNotFold(const FrameCamera& camera, std::string* column) {
+  const double field_um = FieldRadiusUm(camera);
+  if (!(field_um > 0.0) || !std::isfinite(field_um)) return Status::Ok();
+  *column = camera.distortion_type == DistortionType::kDistortionTable ? "RadialDistortions"
+            : (camera.radial_k == std::array<double, 4>{})             ? "Tangential"
+                                                                       : "Radial";
+  constexpr int kDirections = 16;
+  constexpr int kSteps = 256;
+  const auto mm = [](double um) { return FormatNumber(std::round(um) / 1000.0) + " mm"; };
+  for (int d = 0; d < kDirections; ++d) {
+    const double angle = 2.0 * kPi * d / kDirections;
+    const Eigen::Vector2d u(std::cos(angle), std::sin(angle));
+    double previous = 0.0;
+    for (int k = 1; k <= kSteps; ++k) {
+      const double r = field_um * k / kSteps;
+      const Eigen::Vector2d m = r * u;
+      const double corrected = u.dot(m - DistortionInMicrons(camera, m));
+      if (!(corrected > previous)) {
+        return Status::Error(
+            "the distortion folds the image: the corrected radius stops "
+            "increasing at " +
+            mm(r) +
+            " from the principal point, inside the "
+            "image (" +
+            mm(field_um) + " to its farthest corner)");
+      }
+      const double scale = corrected / r;
+      if (!(scale <= kMaxDistortionScale && scale >= 1.0 / kMaxDistortionScale)) {
+        return Status::Error("the distortion correction scales the radius by " +
+                             FormatNumber(std::round(scale * 1000.0) / 1000.0) + " at " + mm(r) +
+                             " from the principal point; inside the image (" + mm(field_um) +
+                             " to its farthest corner) it may change it by a factor of " +
+                             FormatNumber(kMaxDistortionScale) + " at most");
+      }
+      previous = corrected;
+    }
+  }
+  column->clear();
+  return Status::Ok();
+}
+
+// Checks of a camera beyond FrameCamera::IsValid that keep the table readable and physical: a
+// distortion table that is given, of equal lengths and increasing; a sane image size and affine;
+// a distortion that does not fold the image. On failure *column names the culprit.
 Status CheckCameraTableFields(const FrameCamera& camera, std::string* column) {
   const auto& r = camera.radial_distances_um;
   const auto& d = camera.radial_distortions_um;
@@ -308,8 +529,11 @@ Status CheckCameraTableFields(const FrameCamera& camera, std::string* column) {
                            " (" + FormatNumber(r[i - 1]) + ")");
     }
   }
+  if (const Status size = CheckImageSize(camera, column); !size.ok()) return size;
+  if (const Status affine = CheckAffine(camera, column); !affine.ok()) return affine;
   column->clear();
-  return camera.IsValid();
+  PHOTOPOSE_RETURN_IF_ERROR(camera.IsValid());
+  return CheckDistortionDoesNotFold(camera, column);
 }
 
 Status ReadAffine(const CsvRowReader& row, FrameCamera* camera) {
@@ -321,7 +545,7 @@ Status ReadAffine(const CsvRowReader& row, FrameCamera* camera) {
   for (size_t i = 0; i < names.size(); ++i) {
     if (!row.Has(names[i]))
       return row.Error(names[i], "is empty; A0, A1, A2, B0, B1, B2 are given together");
-    PHOTOPOSE_RETURN_IF_ERROR(row.RequiredNumber(names[i], &values[i]));
+    PHOTOPOSE_RETURN_IF_ERROR(ReadRequiredNumber(row, names[i], &values[i]));
   }
   camera->has_affine = true;
   camera->affine_a = {values[0], values[1], values[2]};
@@ -333,7 +557,7 @@ Status ReadDistortion(const CsvRowReader& row, FrameCamera* camera) {
   PHOTOPOSE_RETURN_IF_ERROR(
       ReadEnum(row, "DistortionType", DistortionTypeSpellings(), 2, &camera->distortion_type));
   std::vector<double> values;
-  PHOTOPOSE_RETURN_IF_ERROR(row.NumberList("Radial", &values));
+  PHOTOPOSE_RETURN_IF_ERROR(ReadNumberList(row, "Radial", &values));
   if (values.size() == 4) {
     camera->radial_k = {values[0], values[1], values[2], values[3]};
   } else if (values.size() == 3) {
@@ -342,15 +566,16 @@ Status ReadDistortion(const CsvRowReader& row, FrameCamera* camera) {
     return row.Error("Radial", "has " + std::to_string(values.size()) +
                                    " numbers, expected K0;K1;K2;K3 (4) or K1;K2;K3 (3)");
   }
-  PHOTOPOSE_RETURN_IF_ERROR(row.NumberList("Tangential", &values));
+  PHOTOPOSE_RETURN_IF_ERROR(ReadNumberList(row, "Tangential", &values));
   if (values.size() == 2) {
     camera->tangential_p = {values[0], values[1]};
   } else if (!values.empty()) {
     return row.Error("Tangential",
                      "has " + std::to_string(values.size()) + " numbers, expected P1;P2 (2)");
   }
-  PHOTOPOSE_RETURN_IF_ERROR(row.NumberList("RadialDistances", &camera->radial_distances_um));
-  PHOTOPOSE_RETURN_IF_ERROR(row.NumberList("RadialDistortions", &camera->radial_distortions_um));
+  PHOTOPOSE_RETURN_IF_ERROR(ReadNumberList(row, "RadialDistances", &camera->radial_distances_um));
+  PHOTOPOSE_RETURN_IF_ERROR(
+      ReadNumberList(row, "RadialDistortions", &camera->radial_distortions_um));
   return Status::Ok();
 }
 
@@ -359,7 +584,7 @@ Status ReadCameraRow(const CsvTable& table, const CsvRow& csv_row, FrameCamera* 
   FrameCamera c;
   PHOTOPOSE_RETURN_IF_ERROR(row.Integer("ObjectID", &c.object_id));
   PHOTOPOSE_RETURN_IF_ERROR(row.RequiredText("CameraID", &c.camera_id));
-  PHOTOPOSE_RETURN_IF_ERROR(row.RequiredNumber("FocalLength", &c.focal_length_um));
+  PHOTOPOSE_RETURN_IF_ERROR(ReadRequiredNumber(row, "FocalLength", &c.focal_length_um));
   PHOTOPOSE_RETURN_IF_ERROR(ReadNumberOr(row, "PrincipalX", 0.0, &c.principal_x_um));
   PHOTOPOSE_RETURN_IF_ERROR(ReadNumberOr(row, "PrincipalY", 0.0, &c.principal_y_um));
   PHOTOPOSE_RETURN_IF_ERROR(ReadNumberOr(row, "PixelSize", 0.0, &c.pixel_size_um));
@@ -375,13 +600,18 @@ Status ReadCameraRow(const CsvTable& table, const CsvRow& csv_row, FrameCamera* 
   PHOTOPOSE_RETURN_IF_ERROR(ReadDistortion(row, &c));
   std::vector<double> fiducials;
   PHOTOPOSE_RETURN_IF_ERROR(row.NumberGroups("FilmFiducials", 2, &fiducials));
+  for (size_t i = 0; i < fiducials.size(); ++i) {
+    PHOTOPOSE_RETURN_IF_ERROR(CheckRange(row, "FilmFiducials",
+                                         "item " + std::to_string(i / 2 + 1) + ": ",
+                                         FormatPlainNumber(fiducials[i]), fiducials[i]));
+  }
   for (size_t i = 0; i + 1 < fiducials.size(); i += 2)
     c.film_fiducials_um.emplace_back(fiducials[i], fiducials[i + 1]);
   PHOTOPOSE_RETURN_IF_ERROR(
       ReadEnum(row, "OrientationType", OrientationTypeSpellings(), 2, &c.orientation_type));
   PHOTOPOSE_RETURN_IF_ERROR(ReadSign(row, "AngleDirection", &c.angle_direction));
   PHOTOPOSE_RETURN_IF_ERROR(ReadSign(row, "Polarity", &c.polarity));
-  PHOTOPOSE_RETURN_IF_ERROR(row.Number("AverageZ", &c.average_z_m));
+  PHOTOPOSE_RETURN_IF_ERROR(ReadNumber(row, "AverageZ", &c.average_z_m));
   PHOTOPOSE_RETURN_IF_ERROR(ReadEnum(row, "ApplyECC", BooleanSpellings(), 6, &c.apply_ecc));
   PHOTOPOSE_RETURN_IF_ERROR(ReadNumberOr(row, "EarthRadius", c.earth_radius_m, &c.earth_radius_m));
   c.srs = std::string(row.Text("SRS"));
@@ -476,7 +706,7 @@ Status ReadFrameRotation(const CsvRowReader& row, const FramesTableOptions& opti
   }
   if (use_matrix) {
     std::vector<double> values;
-    PHOTOPOSE_RETURN_IF_ERROR(row.NumberList("Matrix", &values));
+    PHOTOPOSE_RETURN_IF_ERROR(ReadNumberList(row, "Matrix", &values));
     if (values.empty()) return row.Error("Matrix", "is empty");
     if (values.size() != 9) {
       return row.Error("Matrix", "has " + std::to_string(values.size()) +
@@ -490,9 +720,9 @@ Status ReadFrameRotation(const CsvRowReader& row, const FramesTableOptions& opti
     return Status::Ok();
   }
   Eigen::Vector3d angles_deg;
-  PHOTOPOSE_RETURN_IF_ERROR(row.RequiredNumber("Omega", &angles_deg[0]));
-  PHOTOPOSE_RETURN_IF_ERROR(row.RequiredNumber("Phi", &angles_deg[1]));
-  PHOTOPOSE_RETURN_IF_ERROR(row.RequiredNumber("Kappa", &angles_deg[2]));
+  PHOTOPOSE_RETURN_IF_ERROR(ReadRequiredNumber(row, "Omega", &angles_deg[0]));
+  PHOTOPOSE_RETURN_IF_ERROR(ReadRequiredNumber(row, "Phi", &angles_deg[1]));
+  PHOTOPOSE_RETURN_IF_ERROR(ReadRequiredNumber(row, "Kappa", &angles_deg[2]));
   *seed_angles_rad =
       SeedAnglesFromFile(options.convention, FlagsOf(camera), angles_deg / kDegreesPerRadian);
   return Status::Ok();
@@ -514,7 +744,7 @@ Status ReadFrameSigmas(const CsvRowReader& row, const FramesTableOptions& option
                        "given together");
     }
     double sigma = 0.0;
-    PHOTOPOSE_RETURN_IF_ERROR(row.RequiredNumber(names[i], &sigma));
+    PHOTOPOSE_RETURN_IF_ERROR(ReadRequiredNumber(row, names[i], &sigma));
     if (sigma < 0.0) return row.Error(names[i], Quoted(row.Text(names[i])) + " is negative");
     if (i >= 3) sigma /= kDegreesPerRadian;
     variances[i] = sigma * sigma;
@@ -541,16 +771,17 @@ Status ReadFrameRow(const CsvTable& table, const CsvRow& csv_row, const FramesTa
   const Status found = FindCamera(options, f.camera_id, &camera);
   if (!found.ok()) return row.Error("CameraID", found.message());
   Eigen::Vector3d center;
-  PHOTOPOSE_RETURN_IF_ERROR(row.RequiredNumber("PerspectiveX", &center[0]));
-  PHOTOPOSE_RETURN_IF_ERROR(row.RequiredNumber("PerspectiveY", &center[1]));
-  PHOTOPOSE_RETURN_IF_ERROR(row.RequiredNumber("PerspectiveZ", &center[2]));
+  PHOTOPOSE_RETURN_IF_ERROR(ReadRequiredNumber(row, "PerspectiveX", &center[0]));
+  PHOTOPOSE_RETURN_IF_ERROR(ReadRequiredNumber(row, "PerspectiveY", &center[1]));
+  PHOTOPOSE_RETURN_IF_ERROR(ReadRequiredNumber(row, "PerspectiveZ", &center[2]));
   f.eo.set_center_in_ground(center);
-  Eigen::Vector3d seed_angles;
+  Eigen::Vector3d seed_angles =
+      Eigen::Vector3d::Zero();  // set below; zero quiets -Wmaybe-uninitialized
   PHOTOPOSE_RETURN_IF_ERROR(ReadFrameRotation(row, options, camera, &seed_angles));
   f.eo.set_angles_seed_rad(seed_angles);
   f.srs = std::string(row.Text("SRS"));
   PHOTOPOSE_RETURN_IF_ERROR(ReadFrameSigmas(row, options, camera, &f));
-  PHOTOPOSE_RETURN_IF_ERROR(row.Number("Sigma0", &f.sigma0));
+  PHOTOPOSE_RETURN_IF_ERROR(ReadNumber(row, "Sigma0", &f.sigma0));
   if (f.sigma0 && *f.sigma0 < 0.0)
     return row.Error("Sigma0", Quoted(row.Text("Sigma0")) + " is negative");
   f.extra_columns = ReadExtraColumns(table, csv_row, FrameColumns());
@@ -571,14 +802,14 @@ Status ReadPointRow(const CsvTable& table, const CsvRow& csv_row, GroundPoint* p
   GroundPoint p;
   p.line = csv_row.line;
   PHOTOPOSE_RETURN_IF_ERROR(row.RequiredText("PointID", &p.point_id));
-  PHOTOPOSE_RETURN_IF_ERROR(row.RequiredNumber("X", &p.position[0]));
-  PHOTOPOSE_RETURN_IF_ERROR(row.RequiredNumber("Y", &p.position[1]));
-  PHOTOPOSE_RETURN_IF_ERROR(row.RequiredNumber("Z", &p.position[2]));
+  PHOTOPOSE_RETURN_IF_ERROR(ReadRequiredNumber(row, "X", &p.position[0]));
+  PHOTOPOSE_RETURN_IF_ERROR(ReadRequiredNumber(row, "Y", &p.position[1]));
+  PHOTOPOSE_RETURN_IF_ERROR(ReadRequiredNumber(row, "Z", &p.position[2]));
   if (row.Has("AccuracyX") || row.Has("AccuracyY") || row.Has("AccuracyZ")) {
     Eigen::Vector3d accuracy;
     for (int i = 0; i < 3; ++i) {
       std::optional<double> sigma;
-      PHOTOPOSE_RETURN_IF_ERROR(ReadPositive(row, kAccuracyColumns[i], &sigma));
+      PHOTOPOSE_RETURN_IF_ERROR(ReadNumber(row, kAccuracyColumns[i], &sigma));
       if (!sigma) {
         return row.Error(kAccuracyColumns[i],
                          "is empty; AccuracyX, AccuracyY, AccuracyZ are given together");
@@ -602,8 +833,8 @@ Status ReadMarkPosition(const CsvRowReader& row, ImageMark* mark) {
   const char* x_name = pixels ? "Column" : "FilmX";
   const char* y_name = pixels ? "Row" : "FilmY";
   Eigen::Vector2d xy;
-  PHOTOPOSE_RETURN_IF_ERROR(row.RequiredNumber(x_name, &xy[0]));
-  PHOTOPOSE_RETURN_IF_ERROR(row.RequiredNumber(y_name, &xy[1]));
+  PHOTOPOSE_RETURN_IF_ERROR(ReadRequiredNumber(row, x_name, &xy[0]));
+  PHOTOPOSE_RETURN_IF_ERROR(ReadRequiredNumber(row, y_name, &xy[1]));
   if (pixels) {
     mark->column_row = xy;
   } else {
@@ -619,7 +850,7 @@ Status ReadMarkRow(const CsvTable& table, const CsvRow& csv_row, ImageMark* mark
   PHOTOPOSE_RETURN_IF_ERROR(row.RequiredText("Raster", &m.raster));
   PHOTOPOSE_RETURN_IF_ERROR(row.RequiredText("PointID", &m.point_id));
   PHOTOPOSE_RETURN_IF_ERROR(ReadMarkPosition(row, &m));
-  PHOTOPOSE_RETURN_IF_ERROR(ReadPositive(row, "Accuracy", &m.accuracy_px));
+  PHOTOPOSE_RETURN_IF_ERROR(ReadNumber(row, "Accuracy", &m.accuracy_px));
   m.camera_id = std::string(row.Text("CameraID"));
   *mark = std::move(m);
   return Status::Ok();
@@ -649,9 +880,10 @@ bool IsGcpCrs(std::string_view crs) {
 
 // ------------------------------------------------------------------ camera table
 
-Status ReadCameraTable(const std::string& path, std::vector<FrameCamera>* cameras) {
+Status ParseCameraTable(std::string_view text, const std::string& file_name,
+                        std::vector<FrameCamera>* cameras) {
   CsvTable table;
-  PHOTOPOSE_RETURN_IF_ERROR(CsvTable::Read(path, kTableCsvOptions, &table));
+  PHOTOPOSE_RETURN_IF_ERROR(CsvTable::Parse(text, file_name, kTableCsvOptions, &table));
   PHOTOPOSE_RETURN_IF_ERROR(table.RequireColumns({"CameraID", "FocalLength"}));
   const Names& affine = AffineColumns();
   const bool has_affine_columns = std::all_of(
@@ -671,7 +903,8 @@ Status ReadCameraTable(const std::string& path, std::vector<FrameCamera>* camera
   return Status::Ok();
 }
 
-Status WriteCameraTable(const std::string& path, const std::vector<FrameCamera>& cameras) {
+Status FormatCameraTable(const std::vector<FrameCamera>& cameras, const std::string& path,
+                         std::string* text) {
   std::vector<std::string> extra_names;
   PHOTOPOSE_RETURN_IF_ERROR(CollectExtraColumnNames(path, cameras, CameraColumns(), &extra_names));
   std::vector<std::string> header = HeaderFields(CameraColumns());
@@ -716,6 +949,8 @@ Status WriteCameraTable(const std::string& path, const std::vector<FrameCamera>&
     for (size_t i = 0; i < c.film_fiducials_um.size(); ++i) {
       const Eigen::Vector2d& f = c.film_fiducials_um[i];
       if (!f.allFinite()) row.Fail("FilmFiducials", "a value is not finite");
+      if (!(f.cwiseAbs().maxCoeff() <= kMaxCoordinate))
+        row.Fail("FilmFiducials", "a value is outside " + RangeText(*RangeOf("FilmFiducials")));
       fiducials += (i == 0 ? "" : ";") + FormatNumber(f.x()) + " " + FormatNumber(f.y());
     }
     row.Text(fiducials);
@@ -730,15 +965,16 @@ Status WriteCameraTable(const std::string& path, const std::vector<FrameCamera>&
     PHOTOPOSE_RETURN_IF_ERROR(row.status(path));
     contents += CsvLine(*row.fields());
   }
-  return WriteFileAtomically(path, contents);
+  *text = std::move(contents);
+  return Status::Ok();
 }
 
 // ------------------------------------------------------------------ frames table
 
-Status ReadFramesTable(const std::string& path, const FramesTableOptions& options,
-                       std::vector<FrameRecord>* frames) {
+Status ParseFramesTable(std::string_view text, const std::string& file_name,
+                        const FramesTableOptions& options, std::vector<FrameRecord>* frames) {
   CsvTable table;
-  PHOTOPOSE_RETURN_IF_ERROR(CsvTable::Read(path, kTableCsvOptions, &table));
+  PHOTOPOSE_RETURN_IF_ERROR(CsvTable::Parse(text, file_name, kTableCsvOptions, &table));
   PHOTOPOSE_RETURN_IF_ERROR(
       table.RequireColumns({"Raster", "CameraID", "PerspectiveX", "PerspectiveY", "PerspectiveZ"}));
   const bool any_angle_column =
@@ -767,8 +1003,8 @@ Status ReadFramesTable(const std::string& path, const FramesTableOptions& option
   return Status::Ok();
 }
 
-Status WriteFramesTable(const std::string& path, const FramesTableOptions& options,
-                        const std::vector<FrameRecord>& frames) {
+Status FormatFramesTable(const FramesTableOptions& options, const std::vector<FrameRecord>& frames,
+                         const std::string& path, std::string* text) {
   // The camera of every frame first: it decides the AngleDirection and whether Matrix is written.
   std::vector<const FrameCamera*> cameras(frames.size(), nullptr);
   bool any_matrix = false, any_covariance = false, any_sigma0 = false;
@@ -839,14 +1075,16 @@ Status WriteFramesTable(const std::string& path, const FramesTableOptions& optio
     PHOTOPOSE_RETURN_IF_ERROR(row.status(path));
     contents += CsvLine(*row.fields());
   }
-  return WriteFileAtomically(path, contents);
+  *text = std::move(contents);
+  return Status::Ok();
 }
 
 // ------------------------------------------------------------------ ground points
 
-Status ReadGroundPoints(const std::string& path, std::vector<GroundPoint>* points) {
+Status ParseGroundPoints(std::string_view text, const std::string& file_name,
+                         std::vector<GroundPoint>* points) {
   CsvTable table;
-  PHOTOPOSE_RETURN_IF_ERROR(CsvTable::Read(path, kTableCsvOptions, &table));
+  PHOTOPOSE_RETURN_IF_ERROR(CsvTable::Parse(text, file_name, kTableCsvOptions, &table));
   PHOTOPOSE_RETURN_IF_ERROR(table.RequireColumns({"PointID", "X", "Y", "Z"}));
   if (table.HasColumn("AccuracyX") || table.HasColumn("AccuracyY") || table.HasColumn("AccuracyZ"))
     PHOTOPOSE_RETURN_IF_ERROR(table.RequireColumns({"AccuracyX", "AccuracyY", "AccuracyZ"}));
@@ -864,7 +1102,8 @@ Status ReadGroundPoints(const std::string& path, std::vector<GroundPoint>* point
   return Status::Ok();
 }
 
-Status WriteGroundPoints(const std::string& path, const std::vector<GroundPoint>& points) {
+Status FormatGroundPoints(const std::vector<GroundPoint>& points, const std::string& path,
+                          std::string* text) {
   std::string contents = CsvLine(HeaderFields(PointColumns()));
   for (const GroundPoint& p : points) {
     RowFields row("point " + Quoted(p.point_id));
@@ -883,14 +1122,16 @@ Status WriteGroundPoints(const std::string& path, const std::vector<GroundPoint>
     PHOTOPOSE_RETURN_IF_ERROR(row.status(path));
     contents += CsvLine(*row.fields());
   }
-  return WriteFileAtomically(path, contents);
+  *text = std::move(contents);
+  return Status::Ok();
 }
 
 // ------------------------------------------------------------------ image marks
 
-Status ReadImageMarks(const std::string& path, std::vector<ImageMark>* marks) {
+Status ParseImageMarks(std::string_view text, const std::string& file_name,
+                       std::vector<ImageMark>* marks) {
   CsvTable table;
-  PHOTOPOSE_RETURN_IF_ERROR(CsvTable::Read(path, kTableCsvOptions, &table));
+  PHOTOPOSE_RETURN_IF_ERROR(CsvTable::Parse(text, file_name, kTableCsvOptions, &table));
   PHOTOPOSE_RETURN_IF_ERROR(table.RequireColumns({"Raster", "PointID"}));
   PHOTOPOSE_RETURN_IF_ERROR(RequirePairedColumns(table, "Column", "Row"));
   PHOTOPOSE_RETURN_IF_ERROR(RequirePairedColumns(table, "FilmX", "FilmY"));
@@ -913,7 +1154,8 @@ Status ReadImageMarks(const std::string& path, std::vector<ImageMark>* marks) {
   return Status::Ok();
 }
 
-Status WriteImageMarks(const std::string& path, const std::vector<ImageMark>& marks) {
+Status FormatImageMarks(const std::vector<ImageMark>& marks, const std::string& path,
+                        std::string* text) {
   std::string contents = CsvLine(HeaderFields(MarkColumns()));
   std::map<std::string, int>
       first_lines;  // the reader rejects a second mark of a point in an image
@@ -943,17 +1185,17 @@ Status WriteImageMarks(const std::string& path, const std::vector<ImageMark>& ma
     PHOTOPOSE_RETURN_IF_ERROR(row.status(path));
     contents += CsvLine(*row.fields());
   }
-  return WriteFileAtomically(path, contents);
+  *text = std::move(contents);
+  return Status::Ok();
 }
 
 // ------------------------------------------------------------------ gcp_list.txt
 
-Status ReadGcpList(const std::string& path, GcpList* gcp_list) {
-  std::string text;
-  PHOTOPOSE_RETURN_IF_ERROR(ReadTextFile(path, &text));
-  const auto error = [&path](int line, std::string_view column, const std::string& what) {
-    return Status::Error(Where(path, line) + (column.empty() ? "" : std::string(column) + ": ") +
-                         what);
+Status ParseGcpList(std::string_view text, const std::string& file_name, GcpList* gcp_list) {
+  PHOTOPOSE_RETURN_IF_ERROR(CheckTextInput(text, file_name));
+  const auto error = [&file_name](int line, std::string_view column, const std::string& what) {
+    return Status::Error(EscapeForMessage(
+        Where(file_name, line) + (column.empty() ? "" : std::string(column) + ": ") + what));
   };
 
   GcpList result;
@@ -963,7 +1205,7 @@ Status ReadGcpList(const std::string& path, GcpList* gcp_list) {
   size_t start = 0;
   for (int line = 1; start < text.size() || line == 1; ++line) {
     size_t end = text.find('\n', start);
-    if (end == std::string::npos) end = text.size();
+    if (end == std::string_view::npos) end = text.size();
     std::string_view content(text.data() + start, end - start);
     start = end + 1;
     const std::vector<std::string_view> words = SplitWords(content);
@@ -986,10 +1228,16 @@ Status ReadGcpList(const std::string& path, GcpList* gcp_list) {
           "expected 'X Y Z px py image [name]', got " + std::to_string(words.size()) + " fields");
     }
     static const char* const kNumberNames[5] = {"X", "Y", "Z", "px", "py"};
+    // px, py are the marks table's Column, Row and share their range.
+    static const char* const kRangeColumns[5] = {"X", "Y", "Z", "Column", "Row"};
     double numbers[5];
     for (int i = 0; i < 5; ++i) {
       std::string why;
       if (!ParseFiniteNumber(words[i], &numbers[i], &why)) return error(line, kNumberNames[i], why);
+      const ValueRange& range = *RangeOf(kRangeColumns[i]);
+      if (!InRange(numbers[i], range)) {
+        return error(line, kNumberNames[i], Quoted(words[i]) + " is outside " + RangeText(range));
+      }
     }
     const Eigen::Vector3d position(numbers[0], numbers[1], numbers[2]);
     const std::string image(words[5]);
@@ -1037,40 +1285,98 @@ Status CheckMarks(const std::string& marks_path, const std::vector<ImageMark>& m
   return Status::Ok();
 }
 
-// ------------------------------------------------------------------ atomic writes
+// ------------------------------------------------------------------ marks inside their image
 
-Status WriteFileAtomically(const std::string& path, const std::string& contents) {
-  // The temporary file sits beside the target so that rename() stays within one file system.
-  std::string temp_name = path + ".tmp.XXXXXX";
-  const int fd = mkstemp(temp_name.data());
-  if (fd < 0)
-    return Status::Error(path + ": cannot create a temporary file: " + std::strerror(errno));
-  const auto fail = [&](const char* what, int error_number, bool is_open) {
-    if (is_open) close(fd);
-    unlink(temp_name.c_str());
-    return Status::Error(path + ": " + what + ": " + std::strerror(error_number));
-  };
-
-  // mkstemp creates the file rw-------; keep the mode of the file replaced, else rw-r--r--.
-  struct stat target;
-  const mode_t mode = stat(path.c_str(), &target) == 0 ? (target.st_mode & 07777) : 0644;
-  if (fchmod(fd, mode) != 0) return fail("cannot set permissions", errno, true);
-
-  const char* data = contents.data();
-  size_t left = contents.size();
-  while (left > 0) {
-    const ssize_t written = write(fd, data, left);
-    if (written < 0) {
-      if (errno == EINTR) continue;
-      return fail("cannot write", errno, true);
-    }
-    data += written;
-    left -= static_cast<size_t>(written);
+Status CheckMarkInsideImage(const std::string& marks_path, const ImageMark& mark,
+                            const FrameCamera& camera, PixelOrigin origin) {
+  if (camera.n_columns <= 0 || camera.n_rows <= 0) return Status::Ok();
+  Eigen::Vector2d column_row;
+  if (mark.column_row) {
+    column_row = *mark.column_row;
+  } else if (!mark.film_um || !PixelFromFilm(camera, *mark.film_um, origin, &column_row).ok()) {
+    return Status::Ok();  // no way to pixels: other checks say why
   }
-  if (fsync(fd) != 0) return fail("cannot write", errno, true);
-  if (close(fd) != 0) return fail("cannot write", errno, false);
-  if (rename(temp_name.c_str(), path.c_str()) != 0) return fail("cannot replace", errno, false);
+  const Eigen::Vector2d size(camera.n_columns, camera.n_rows);
+  const Eigen::Vector2d margin = kMarkOutsideImageFraction * size;
+  const double shift = origin == PixelOrigin::kCenter ? 0.5 : 0.0;  // corner-based from here on
+  for (int k = 0; k < 2; ++k) {
+    const double value = column_row[k] + shift;
+    const double outside = value < 0.0 ? -value : value - size[k];
+    if (!(outside <= margin[k])) {
+      const char* column =
+          mark.column_row ? (k == 0 ? "Column" : "Row") : (k == 0 ? "FilmX" : "FilmY");
+      return Status::Error(EscapeForMessage(
+          Where(marks_path, mark.line) + column + ": the mark of point '" + mark.point_id +
+          "' in image '" + mark.raster + "' lies " + FormatNumber(std::round(outside)) +
+          " pixels outside the " + std::to_string(camera.n_columns) + " x " +
+          std::to_string(camera.n_rows) + " image of camera '" + camera.camera_id + "' (at most " +
+          FormatNumber(kMarkOutsideImageFraction * 100.0) + "% of the image size is allowed)"));
+    }
+  }
   return Status::Ok();
+}
+
+// ------------------------------------------------------------------ files
+
+namespace {
+
+// Reads the file at `path` and hands its text and its name for messages to `parse`.
+template <typename Parse>
+Status ReadAndParse(const std::string& path, Parse parse) {
+  std::string text;
+  PHOTOPOSE_RETURN_IF_ERROR(ReadTextFile(path, &text));
+  return parse(std::string_view(text), InputName(path));
+}
+
+}  // namespace
+
+Status ReadCameraTable(const std::string& path, std::vector<FrameCamera>* cameras) {
+  return ReadAndParse(path, [&](std::string_view text, const std::string& name) {
+    return ParseCameraTable(text, name, cameras);
+  });
+}
+Status ReadFramesTable(const std::string& path, const FramesTableOptions& options,
+                       std::vector<FrameRecord>* frames) {
+  return ReadAndParse(path, [&](std::string_view text, const std::string& name) {
+    return ParseFramesTable(text, name, options, frames);
+  });
+}
+Status ReadGroundPoints(const std::string& path, std::vector<GroundPoint>* points) {
+  return ReadAndParse(path, [&](std::string_view text, const std::string& name) {
+    return ParseGroundPoints(text, name, points);
+  });
+}
+Status ReadImageMarks(const std::string& path, std::vector<ImageMark>* marks) {
+  return ReadAndParse(path, [&](std::string_view text, const std::string& name) {
+    return ParseImageMarks(text, name, marks);
+  });
+}
+Status ReadGcpList(const std::string& path, GcpList* gcp_list) {
+  return ReadAndParse(path, [&](std::string_view text, const std::string& name) {
+    return ParseGcpList(text, name, gcp_list);
+  });
+}
+
+Status WriteCameraTable(const std::string& path, const std::vector<FrameCamera>& cameras) {
+  std::string text;
+  PHOTOPOSE_RETURN_IF_ERROR(FormatCameraTable(cameras, path, &text));
+  return WriteFileAtomically(path, text);
+}
+Status WriteFramesTable(const std::string& path, const FramesTableOptions& options,
+                        const std::vector<FrameRecord>& frames) {
+  std::string text;
+  PHOTOPOSE_RETURN_IF_ERROR(FormatFramesTable(options, frames, path, &text));
+  return WriteFileAtomically(path, text);
+}
+Status WriteGroundPoints(const std::string& path, const std::vector<GroundPoint>& points) {
+  std::string text;
+  PHOTOPOSE_RETURN_IF_ERROR(FormatGroundPoints(points, path, &text));
+  return WriteFileAtomically(path, text);
+}
+Status WriteImageMarks(const std::string& path, const std::vector<ImageMark>& marks) {
+  std::string text;
+  PHOTOPOSE_RETURN_IF_ERROR(FormatImageMarks(marks, path, &text));
+  return WriteFileAtomically(path, text);
 }
 
 }  // namespace photopose

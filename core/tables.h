@@ -7,26 +7,58 @@
 //  - image marks (Raster, PointID, Column/Row in pixels or FilmX/FilmY in um, Accuracy, CameraID),
 //  - OpenDroneMap's gcp_list.txt.
 // CSV header names are case-insensitive. Every reader reports a problem as a Status whose message is
-// "file:line: column: what is wrong" and never crashes on bad input. Writers write to a temporary file
-// in the destination folder and rename it over the target, so a failed run leaves nothing half written.
+// "file:line: column: what is wrong" and never crashes on bad input: inputs are bounded (core/csv.h)
+// and every number must lie in its column's physical range (the limits below). Each Read* reads a
+// file ("-" for standard input) and hands its text to the matching Parse*, which takes the name to
+// use in messages. Each Format* checks every row and returns the text Write* writes; Write* writes
+// it atomically (core/output_files.h), so a failed run leaves nothing half written.
 
 #include <Eigen/Core>
 #include <map>
 #include <optional>
 #include <string>
+#include <string_view>
 #include <utility>
 #include <vector>
 
 #include "core/camera.h"
+#include "core/output_files.h"
 #include "core/rotation.h"
 #include "core/status.h"
 #include "core/types.h"
 
 namespace photopose {
 
+// ------------------------------------------------------------------ physical limits
+// (docs/formats.md, "Limits and refusals"; a value outside is refused at the line carrying it.)
+
+// Largest magnitude of a ground coordinate (m), a pixel coordinate (px) and a film coordinate or
+// camera length (um): far beyond any survey, sensor or lens, still exact in a double to 1e-8.
+constexpr double kMaxCoordinate = 1e8;
+// PixelSize (um) lies strictly between these; so does the pixel size an affine implies.
+constexpr double kMinPixelSizeUm = 1e-3;
+constexpr double kMaxPixelSizeUm = 1e3;
+// NRows and NColumns, when given (pixels).
+constexpr int kMinImageSidePx = 2;
+constexpr int kMaxImageSidePx = 1000000;
+// An affine is singular when |A1 B2 - A2 B1| < this * max(|A1|, |A2|, |B1|, |B2|)^2: its rows are
+// parallel to about a micro-radian.
+constexpr double kMinAffineDeterminantRatio = 1e-6;
+// Inside the image the distortion correction must keep the corrected radius increasing and within
+// this factor of the measured radius (real lenses described by these models stay below 2).
+constexpr double kMaxDistortionScale = 3.0;
+// A mark may lie outside its image by at most this fraction of the image's width (Column) or
+// height (Row), when the camera's image size is known.
+constexpr double kMarkOutsideImageFraction = 0.05;
+
 // ------------------------------------------------------------------ camera table
 Status ReadCameraTable(const std::string& path, std::vector<FrameCamera>* cameras);
+Status ParseCameraTable(std::string_view text, const std::string& file_name,
+                        std::vector<FrameCamera>* cameras);
 Status WriteCameraTable(const std::string& path, const std::vector<FrameCamera>& cameras);
+// The text WriteCameraTable writes; `path` names the file in messages.
+Status FormatCameraTable(const std::vector<FrameCamera>& cameras, const std::string& path,
+                         std::string* text);
 
 // ------------------------------------------------------------------ frames table
 struct FrameRecord {
@@ -55,10 +87,14 @@ struct FramesTableOptions {
 // opk the matrix M, for seed R, for pok R^T). Unknown columns land in extra_columns.
 Status ReadFramesTable(const std::string& path, const FramesTableOptions& options,
                        std::vector<FrameRecord>* frames);
+Status ParseFramesTable(std::string_view text, const std::string& file_name,
+                        const FramesTableOptions& options, std::vector<FrameRecord>* frames);
 // Writes the same columns (angles in options.convention, degrees), then SigmaX, SigmaY, SigmaZ (m),
 // SigmaOmega, SigmaPhi, SigmaKappa (degrees), Sigma0 where present, then extra columns.
 Status WriteFramesTable(const std::string& path, const FramesTableOptions& options,
                         const std::vector<FrameRecord>& frames);
+Status FormatFramesTable(const FramesTableOptions& options, const std::vector<FrameRecord>& frames,
+                         const std::string& path, std::string* text);
 
 // ------------------------------------------------------------------ ground points
 // control: used to orient the images (resection) or as a weighted constraint (bundle adjustment);
@@ -75,7 +111,11 @@ struct GroundPoint {
 };
 
 Status ReadGroundPoints(const std::string& path, std::vector<GroundPoint>* points);
+Status ParseGroundPoints(std::string_view text, const std::string& file_name,
+                         std::vector<GroundPoint>* points);
 Status WriteGroundPoints(const std::string& path, const std::vector<GroundPoint>& points);
+Status FormatGroundPoints(const std::vector<GroundPoint>& points, const std::string& path,
+                          std::string* text);
 
 // ------------------------------------------------------------------ image marks
 struct ImageMark {
@@ -91,7 +131,11 @@ struct ImageMark {
 };
 
 Status ReadImageMarks(const std::string& path, std::vector<ImageMark>* marks);
+Status ParseImageMarks(std::string_view text, const std::string& file_name,
+                       std::vector<ImageMark>* marks);
 Status WriteImageMarks(const std::string& path, const std::vector<ImageMark>& marks);
+Status FormatImageMarks(const std::vector<ImageMark>& marks, const std::string& path,
+                        std::string* text);
 
 // ------------------------------------------------------------------ OpenDroneMap gcp_list.txt
 // First line: the CRS (EPSG:xxxx, WGS84 UTM ..., or a proj string); then "X Y Z px py image [name]"
@@ -103,6 +147,7 @@ struct GcpList {
   std::vector<ImageMark> marks;
 };
 Status ReadGcpList(const std::string& path, GcpList* gcp_list);
+Status ParseGcpList(std::string_view text, const std::string& file_name, GcpList* gcp_list);
 
 // ------------------------------------------------------------------ consistency
 // Checks that every mark names a known point. Messages name the file and line of the mark. (Cameras
@@ -110,7 +155,12 @@ Status ReadGcpList(const std::string& path, GcpList* gcp_list);
 Status CheckMarks(const std::string& marks_path, const std::vector<ImageMark>& marks,
                   const std::vector<GroundPoint>& points);
 
-// Writes `contents` to `path` atomically (temporary file in the same folder, then rename).
-Status WriteFileAtomically(const std::string& path, const std::string& contents);
+// Checks that a mark lies in its image, give or take kMarkOutsideImageFraction of the image size,
+// when the camera gives the image size (NColumns, NRows); film marks are converted to pixels
+// first. `origin` is the PixelOrigin of the marks' Column/Row. The error is located:
+// "marks.csv:7: Column: the mark of point 'P3' in image 'a.jpg' lies 20000 pixels outside the
+// 5472 x 3648 image of camera 'UAV' (at most 5% of the image size is allowed)".
+Status CheckMarkInsideImage(const std::string& marks_path, const ImageMark& mark,
+                            const FrameCamera& camera, PixelOrigin origin);
 
 }  // namespace photopose

@@ -6,14 +6,15 @@
 #include <gflags/gflags.h>
 
 #include <cmath>
-#include <cstdlib>
-#include <fstream>
+#include <cstdint>
 #include <iostream>
 #include <iterator>
 #include <sstream>
 #include <string>
 #include <vector>
 
+#include "core/csv.h"
+#include "core/output_files.h"
 #include "core/rotation.h"
 #include "core/synthetic_scene.h"
 #include "core/tables.h"
@@ -61,20 +62,21 @@ DEFINE_string(
     "Monte-Carlo: comma-separated scenarios of photopose simulate: nadir, oblique, uav_block.");
 DEFINE_string(compare_noise_px, "0.5,0,1,2",
               "Monte-Carlo: comma-separated image noise levels, one sigma in pixels; the first is "
-              "the baseline.");
+              "the baseline. Each in [0, 1000] px, at most 100 items.");
 DEFINE_string(compare_outlier_fractions, "0,0.1,0.2",
               "Monte-Carlo: comma-separated fractions of marks with gross errors of 20 to 200 "
-              "pixels, each in [0, 1); the first is the baseline.");
+              "pixels, each in [0, 1); the first is the baseline. At most 100 items.");
 DEFINE_string(compare_control_points, "20,6",
-              "Monte-Carlo: comma-separated numbers of control points per image (at least 3); the "
-              "first is the baseline.");
+              "Monte-Carlo: comma-separated numbers of control points per image; the first is the "
+              "baseline. Each in [3, 10000], at most 100 items.");
 DEFINE_int32(
     compare_check_points, 5,
     "Monte-Carlo: check points per image (not used to solve; their residuals are reported).");
 DEFINE_string(
     compare_initial_errors, "5:2,50:10,100:20",
     "Monte-Carlo: comma-separated errors of the approximate frames as POSITION_M:ANGLE_DEG, "
-    "uniform in plus or minus that much per axis and per angle; the first is the baseline.");
+    "uniform in plus or minus that much per axis and per angle; the first is the baseline. "
+    "Positions in [0, 1000000] m, angles in [0, 180] degrees, at most 100 items.");
 DEFINE_int32(compare_trials, 50, "Monte-Carlo: trials per setting, each a new seeded scene.");
 DEFINE_string(compare_sweep, "axes",
               "Monte-Carlo: axes (vary one list at a time, the others at their first value) or "
@@ -144,129 +146,92 @@ const char* const kMonteCarloFlags[] = {"scenarios",      "noise_px",     "outli
 const char* const kDatasetFlags[] = {"frames", "reference", "rotation", "default_accuracy",
                                      "pixel_center_origin"};
 
-bool IsOurFlag(const std::string& name, gflags::CommandLineFlagInfo* info) {
-  return gflags::GetCommandLineFlagInfo((kPrefix + name).c_str(), info) &&
-         info->filename.find("compare_command") != std::string::npos;
+// Every numeric flag's range; the comma-separated lists are checked item by item against the
+// ranges of their items (kListItemRanges).
+const CommandFlags& CompareFlags() {
+  static const CommandFlags* const kFlags =
+      new CommandFlags{kCommand,
+                       "compare_command",
+                       kPrefix,
+                       {},
+                       {{"loss_scale", 0.0, 1000.0, true, false, "px"},
+                        {"ransac_threshold", 0.0, 1000.0, true, false, "px"},
+                        {"max_iterations", 1.0, 10000.0},
+                        {"seed", 0.0, 18446744073709551615.0},
+                        {"threads", 0.0, 1024.0},
+                        {"check_points", 0.0, 10000.0},
+                        {"trials", 1.0, 100000.0},
+                        {"success_sigmas", 0.0, 1e6, true, false},
+                        {"default_accuracy", 0.0, 1000.0, true, false, "px"}}};
+  return *kFlags;
 }
+
+// Ranges of the items of the list flags (Monte-Carlo mode).
+const FlagRange kNoiseItem{"noise_px", 0.0, 1000.0, false, false, "px"};
+const FlagRange kOutlierItem{"outlier_fractions", 0.0, 1.0, false, true};
+const FlagRange kControlItem{"control_points", 3.0, 10000.0};
+const FlagRange kPositionErrorItem{"initial_errors", 0.0, 1e6, false, false, "m (position)"};
+const FlagRange kAngleErrorItem{"initial_errors", 0.0, 180.0, false, false, "degrees (angle)"};
+// Items of one list flag, at most.
+constexpr size_t kMaxListItems = 100;
+// Solves of one Monte-Carlo run, at most (settings x trials x solver variants): about an hour.
+constexpr int64_t kMaxSolves = 10000000;
 
 bool WasGiven(const std::string& name) {
   gflags::CommandLineFlagInfo info;
-  return IsOurFlag(name, &info) && !info.is_default;
+  return gflags::GetCommandLineFlagInfo((kPrefix + name).c_str(), &info) && !info.is_default;
 }
 
-void PrintCompareHelp() {
-  std::cout << kUsage << "\n" << kConventionsHelp << "\nFlags:\n";
-  std::vector<gflags::CommandLineFlagInfo> flags;
-  gflags::GetAllFlags(&flags);
-  for (const auto& flag : flags) {
-    if (flag.filename.find("compare_command") == std::string::npos) continue;
-    if (flag.name.rfind(kPrefix, 0) != 0) continue;
-    std::cout << "  --" << flag.name.substr(sizeof(kPrefix) - 1) << " (" << flag.type
-              << ", default: \"" << flag.default_value << "\")\n      " << flag.description << "\n";
+// A comma-separated list of numbers, each within `range` (and whole when `whole`); false with a
+// one-line reason naming the flag and the item.
+bool ParseList(const std::string& text, const FlagRange& range, bool whole,
+               std::vector<double>* values, std::string* why) {
+  values->clear();
+  std::stringstream stream(text);
+  for (std::string item; std::getline(stream, item, ',');) {
+    double value = 0.0;
+    std::string reason;
+    if (!ParseFiniteNumber(item, &value, &reason) || (whole && value != std::floor(value))) {
+      *why = "--" + range.name + ": '" + item + "' is not a" + (whole ? " whole" : "") +
+             " number (comma-separated " + (whole ? "whole " : "") + "numbers expected)";
+      return false;
+    }
+    if (!range.Contains(value)) {
+      *why = range.Refusal(item);
+      return false;
+    }
+    values->push_back(value);
   }
-  std::cout << "  --flagfile=F\n      Reads further flags, one per line, from the file F.\n";
-}
-
-bool IsHelp(const std::string& arg) {
-  return arg == "--help" || arg == "-h" || arg == "--helpfull" || arg == "-help";
-}
-
-// Parses --name=value, --name value, --bool_flag, --nobool_flag and --flagfile=F (one flag per
-// line,
-// "--name value" allowed, '#' comments) into the compare_<name> flags, like ParseFlags does for the
-// other subcommands but with the user's flag names in every message. Prints one line and returns
-// false on an unknown flag, a bad value, a stray argument or an unreadable flag file.
-bool ParseCompareFlags(const std::vector<std::string>& args, bool* help, int depth = 0) {
-  for (size_t i = 0; i < args.size(); ++i) {
-    const std::string& arg = args[i];
-    if (IsHelp(arg)) {
-      *help = true;
-      continue;
-    }
-    if (arg.size() < 2 || arg[0] != '-') {
-      BadInput(kCommand, "unexpected argument '" + arg + "' (flags are --name=value)");
-      return false;
-    }
-    const std::string body = arg.substr(arg.rfind("--", 0) == 0 ? 2 : 1);
-    const size_t equals = body.find('=');
-    std::string name = body.substr(0, equals);
-    const bool has_value = equals != std::string::npos;
-    std::string value = has_value ? body.substr(equals + 1) : "";
-    if (name == "flagfile") {
-      if (!has_value && i + 1 < args.size()) value = args[++i];
-      std::ifstream file(value);
-      if (value.empty() || !file || depth > 8) {
-        BadInput(kCommand, "cannot read the flag file '" + value + "'");
-        return false;
-      }
-      std::vector<std::string> lines;
-      for (std::string line; std::getline(file, line);) {
-        const size_t begin = line.find_first_not_of(" \t\r");
-        if (begin == std::string::npos || line[begin] == '#') continue;
-        line = line.substr(begin, line.find_last_not_of(" \t\r") - begin + 1);
-        const size_t space = line.find_first_of(" \t");
-        if (space != std::string::npos && line.find('=') > space) {
-          // "--name value"
-          lines.push_back(line.substr(0, space));
-          lines.push_back(line.substr(line.find_first_not_of(" \t", space)));
-        } else {
-          lines.push_back(line);
-        }
-      }
-      if (!ParseCompareFlags(lines, help, depth + 1)) return false;
-      continue;
-    }
-    gflags::CommandLineFlagInfo info;
-    if (!IsOurFlag(name, &info)) {
-      if (name.rfind("no", 0) == 0 && !has_value && IsOurFlag(name.substr(2), &info) &&
-          info.type == "bool") {
-        name = name.substr(2);
-        value = "false";
-      } else {
-        BadInput(kCommand, "unknown flag --" + name + " (see photopose compare --help)");
-        return false;
-      }
-    } else if (!has_value) {
-      if (info.type == "bool") {
-        value = "true";
-      } else if (i + 1 < args.size()) {
-        value = args[++i];
-      } else {
-        BadInput(kCommand, "flag --" + name + " needs a value");
-        return false;
-      }
-    }
-    if (gflags::SetCommandLineOption((kPrefix + name).c_str(), value.c_str()).empty()) {
-      BadInput(kCommand,
-               "invalid value '" + value + "' for --" + name + " (" + info.type + " expected)");
-      return false;
-    }
+  if (values->empty()) {
+    *why = "--" + range.name + " is empty";
+    return false;
+  }
+  if (values->size() > kMaxListItems) {
+    *why = "--" + range.name + " has " + std::to_string(values->size()) + " items; at most " +
+           std::to_string(kMaxListItems);
+    return false;
   }
   return true;
 }
 
-bool ParseDoubles(const std::string& text, std::vector<double>* values) {
-  values->clear();
-  std::stringstream stream(text);
-  for (std::string item; std::getline(stream, item, ',');) {
-    char* end = nullptr;
-    const double value = std::strtod(item.c_str(), &end);
-    if (item.empty() || *end != '\0' || !std::isfinite(value)) return false;
-    values->push_back(value);
-  }
-  return !values->empty();
+// a * b, saturated at INT64_MAX (both non-negative).
+int64_t SaturatedProduct(int64_t a, int64_t b) {
+  int64_t product = 0;
+  return __builtin_mul_overflow(a, b, &product) ? INT64_MAX : product;
 }
 
-bool ParseInts(const std::string& text, std::vector<int>* values) {
-  values->clear();
-  std::stringstream stream(text);
-  for (std::string item; std::getline(stream, item, ',');) {
-    char* end = nullptr;
-    const long value = std::strtol(item.c_str(), &end, 10);
-    if (item.empty() || *end != '\0' || value < -1000000 || value > 1000000) return false;
-    values->push_back(static_cast<int>(value));
+// The number of sweep settings MakeSweepSettings would make, computed without making them.
+int64_t CountSweepSettings(const MonteCarloOptions& options) {
+  const int64_t lists[4] = {static_cast<int64_t>(options.noise_px.size()),
+                            static_cast<int64_t>(options.outlier_fractions.size()),
+                            static_cast<int64_t>(options.control_points.size()),
+                            static_cast<int64_t>(options.initial_errors.size())};
+  int64_t per_scenario = 1;  // grid: every combination; axes: the baseline ...
+  for (const int64_t n : lists) {
+    per_scenario = options.sweep == SweepType::kGrid ? SaturatedProduct(per_scenario, n)
+                                                     : per_scenario + (n - 1);  // ... + the others
   }
-  return !values->empty();
+  return SaturatedProduct(static_cast<int64_t>(options.scenarios.size()), per_scenario);
 }
 
 std::string QuoteForShell(const std::string& arg) {
@@ -276,28 +241,37 @@ std::string QuoteForShell(const std::string& arg) {
   return quoted + "'";
 }
 
-Status WriteOutputs(const std::string& csv, const std::string& html,
-                    const std::vector<TextTable>& tables, const std::vector<std::string>& notes) {
-  if (!FLAGS_compare_csv.empty()) {
-    const Status status = WriteFileAtomically(FLAGS_compare_csv, csv);
-    if (!status.ok()) return status;
-  }
-  if (!FLAGS_compare_html.empty()) {
-    const Status status = WriteFileAtomically(FLAGS_compare_html, html);
-    if (!status.ok()) return status;
-  }
-  if (!FLAGS_compare_markdown.empty()) {
-    std::string markdown;
-    for (const TextTable& table : tables) markdown += RenderMarkdown(table) + "\n";
-    for (const std::string& note : notes) markdown += "- " + note + "\n";
-    const Status status = WriteFileAtomically(FLAGS_compare_markdown, markdown);
-    if (!status.ok()) return status;
+// The outputs of the run (--csv, --html, --markdown), declared before any work.
+Status DeclareOutputs(const std::vector<std::pair<std::string, std::string>>& inputs,
+                      OutputFiles* outputs) {
+  for (const auto& [label, path] : inputs)
+    PHOTOPOSE_RETURN_IF_ERROR(outputs->AddInput(label, path));
+  for (const auto& [label, path] : {std::pair<std::string, std::string>{"--csv", FLAGS_compare_csv},
+                                    {"--html", FLAGS_compare_html},
+                                    {"--markdown", FLAGS_compare_markdown}}) {
+    if (!path.empty()) PHOTOPOSE_RETURN_IF_ERROR(outputs->AddOutput(label, path));
   }
   return Status::Ok();
 }
 
+// Writes every requested output, all or nothing.
+Status WriteOutputs(const std::string& csv, const std::string& html,
+                    const std::vector<TextTable>& tables, const std::vector<std::string>& notes,
+                    OutputFiles* outputs) {
+  std::string markdown;
+  for (const TextTable& table : tables) markdown += RenderMarkdown(table) + "\n";
+  for (const std::string& note : notes) markdown += "- " + note + "\n";
+  for (const auto& [path, contents] :
+       {std::pair<const std::string&, const std::string&>{FLAGS_compare_csv, csv},
+        {FLAGS_compare_html, html},
+        {FLAGS_compare_markdown, markdown}}) {
+    if (!path.empty()) PHOTOPOSE_RETURN_IF_ERROR(outputs->Stage(path, contents));
+  }
+  return outputs->Commit();
+}
+
 int RunMonteCarloMode(const std::vector<SolverVariant>& solvers, const ResectionOptions& resection,
-                      const std::string& command_line) {
+                      const std::string& command_line, const ParsedFlags& parsed) {
   MonteCarloOptions options;
   options.solvers = solvers;
   options.resection = resection;
@@ -311,17 +285,28 @@ int RunMonteCarloMode(const std::vector<SolverVariant>& solvers, const Resection
     options.scenarios.push_back(*scenario);
   }
   if (options.scenarios.empty()) return BadInput(kCommand, "--scenarios is empty");
-  if (!ParseDoubles(FLAGS_compare_noise_px, &options.noise_px))
-    return BadInput(kCommand, "--noise_px must be comma-separated numbers, not '" +
-                                  FLAGS_compare_noise_px + "'");
-  if (!ParseDoubles(FLAGS_compare_outlier_fractions, &options.outlier_fractions))
-    return BadInput(kCommand, "--outlier_fractions must be comma-separated numbers, not '" +
-                                  FLAGS_compare_outlier_fractions + "'");
-  if (!ParseInts(FLAGS_compare_control_points, &options.control_points))
-    return BadInput(kCommand, "--control_points must be comma-separated integers, not '" +
-                                  FLAGS_compare_control_points + "'");
+  if (options.scenarios.size() > kMaxListItems)
+    return BadInput(kCommand,
+                    "--scenarios has more than " + std::to_string(kMaxListItems) + " items");
+  std::string why;
+  std::vector<double> control_points;
+  if (!ParseList(FLAGS_compare_noise_px, kNoiseItem, false, &options.noise_px, &why) ||
+      !ParseList(FLAGS_compare_outlier_fractions, kOutlierItem, false, &options.outlier_fractions,
+                 &why) ||
+      !ParseList(FLAGS_compare_control_points, kControlItem, true, &control_points, &why))
+    return BadInput(kCommand, why);
+  options.control_points.assign(control_points.begin(), control_points.end());
   const Status initial = ParseInitialErrors(FLAGS_compare_initial_errors, &options.initial_errors);
   if (!initial.ok()) return BadInput(kCommand, "--initial_errors: " + initial.message());
+  if (options.initial_errors.size() > kMaxListItems)
+    return BadInput(kCommand,
+                    "--initial_errors has more than " + std::to_string(kMaxListItems) + " items");
+  for (const InitialError& error : options.initial_errors) {
+    if (!kPositionErrorItem.Contains(error.position_m))
+      return BadInput(kCommand, kPositionErrorItem.Refusal(FormatNumber(error.position_m)));
+    if (!kAngleErrorItem.Contains(error.angle_deg))
+      return BadInput(kCommand, kAngleErrorItem.Refusal(FormatNumber(error.angle_deg)));
+  }
   if (FLAGS_compare_sweep == "axes") {
     options.sweep = SweepType::kAxes;
   } else if (FLAGS_compare_sweep == "grid") {
@@ -342,11 +327,33 @@ int RunMonteCarloMode(const std::vector<SolverVariant>& solvers, const Resection
   options.seed = FLAGS_compare_seed;
   options.success_sigmas = FLAGS_compare_success_sigmas;
   options.num_threads = FLAGS_compare_threads;
-  std::string why;
   if (!options.IsValid(&why)) return BadInput(kCommand, why);
+  // Sizes in 64 bits: a grid of long lists times many trials must be refused, not allocated.
+  const int64_t settings = CountSweepSettings(options);
+  const int64_t solves = SaturatedProduct(SaturatedProduct(settings, options.trials),
+                                          static_cast<int64_t>(solvers.size()));
+  if (solves > kMaxSolves) {
+    return BadInput(
+        kCommand,
+        "the sweep asks for " +
+            (solves == INT64_MAX ? std::string("more than 9e18") : std::to_string(solves)) +
+            " solves (" + std::to_string(settings) + " settings x " +
+            std::to_string(options.trials) + " trials x " + std::to_string(solvers.size()) +
+            " solvers); at most " + std::to_string(kMaxSolves) + " per run");
+  }
+  OutputFiles outputs;
+  std::vector<std::pair<std::string, std::string>> inputs;
+  for (const std::string& flag_file : parsed.flag_files)
+    inputs.emplace_back("--flagfile", flag_file);
+  const Status declared = DeclareOutputs(inputs, &outputs);
+  if (!declared.ok()) return BadInput(kCommand, declared.message());
 
   MonteCarloResult result;
-  const Status status = RunMonteCarlo(options, &result);
+  Status status;
+  {
+    const ScopedSolving solving;
+    status = RunMonteCarlo(options, &result);
+  }
   if (!status.ok()) return BadInput(kCommand, status.message());
   const std::vector<TextTable> tables = MonteCarloTables(options, result);
   for (const TextTable& table : tables) std::cout << RenderText(table) << "\n";
@@ -355,14 +362,15 @@ int RunMonteCarloMode(const std::vector<SolverVariant>& solvers, const Resection
   std::cout << "compare: " << result.settings.size() << " settings x " << options.trials
             << " trials x " << result.solver_names.size() << " solvers in " << result.wall_seconds
             << " s\n";
-  const Status written = WriteOutputs(MonteCarloCsv(result),
-                                      MonteCarloHtml(options, result, command_line), tables, notes);
+  const Status written =
+      WriteOutputs(MonteCarloCsv(result), MonteCarloHtml(options, result, command_line), tables,
+                   notes, &outputs);
   if (!written.ok()) return BadInput(kCommand, written.message());
   return kExitSuccess;
 }
 
 int RunDatasetMode(const std::vector<SolverVariant>& solvers, const ResectionOptions& resection,
-                   const std::string& command_line) {
+                   const std::string& command_line, const ParsedFlags& parsed) {
   DatasetComparisonOptions options;
   options.solvers = solvers;
   options.reference_path = FLAGS_compare_reference;
@@ -391,18 +399,29 @@ int RunDatasetMode(const std::vector<SolverVariant>& solvers, const ResectionOpt
     return BadInput(kCommand,
                     "--rotation must be seed, opk or pok, not '" + FLAGS_compare_rotation + "'");
   job.rotation = *rotation;
-  if (!(FLAGS_compare_default_accuracy > 0.0))
-    return BadInput(kCommand, "--default_accuracy must be positive");
   std::string why;
   if (!options.IsValid(&why)) return BadInput(kCommand, why);
+  OutputFiles outputs;
+  std::vector<std::pair<std::string, std::string>> inputs = {
+      {"--cameras", job.cameras_path}, {"--points", job.points_path},
+      {"--marks", job.marks_path},     {"--gcp_list", job.gcp_list_path},
+      {"--frames", job.frames_path},   {"--reference", options.reference_path}};
+  for (const std::string& flag_file : parsed.flag_files)
+    inputs.emplace_back("--flagfile", flag_file);
+  const Status declared = DeclareOutputs(inputs, &outputs);
+  if (!declared.ok()) return BadInput(kCommand, declared.message());
 
   DatasetComparisonResult result;
-  const Status status = RunDatasetComparison(options, &result);
+  Status status;
+  {
+    const ScopedSolving solving;
+    status = RunDatasetComparison(options, &result);
+  }
   if (!status.ok()) return BadInput(kCommand, status.message());
   const std::vector<TextTable> tables = DatasetTables(result);
   for (const TextTable& table : tables) std::cout << RenderText(table) << "\n";
   const Status written =
-      WriteOutputs(DatasetCsv(result), DatasetHtml(result, command_line), tables, {});
+      WriteOutputs(DatasetCsv(result), DatasetHtml(result, command_line), tables, {}, &outputs);
   if (!written.ok()) return BadInput(kCommand, written.message());
   return kExitSuccess;
 }
@@ -410,10 +429,10 @@ int RunDatasetMode(const std::vector<SolverVariant>& solvers, const ResectionOpt
 }  // namespace
 
 int RunCompare(int argc, char** argv) {
-  bool help = false;
-  if (!ParseCompareFlags(std::vector<std::string>(argv, argv + argc), &help)) return kExitBadInput;
-  if (help) {
-    PrintCompareHelp();
+  ParsedFlags parsed;
+  if (!ParseFlags(argc, argv, CompareFlags(), &parsed)) return kExitBadInput;
+  if (parsed.help) {
+    PrintHelp(kUsage, CompareFlags());
     return kExitSuccess;
   }
   std::string command_line = "photopose compare";
@@ -432,8 +451,9 @@ int RunCompare(int argc, char** argv) {
                                              : "dataset mode only (give --cameras and the marks)"));
   }
   std::vector<SolverVariant> solvers;
-  const Status parsed = ParseSolverVariants(FLAGS_compare_solvers, FLAGS_compare_losses, &solvers);
-  if (!parsed.ok()) return BadInput(kCommand, "--solvers/--losses: " + parsed.message());
+  const Status variants =
+      ParseSolverVariants(FLAGS_compare_solvers, FLAGS_compare_losses, &solvers);
+  if (!variants.ok()) return BadInput(kCommand, "--solvers/--losses: " + variants.message());
   ResectionOptions resection;
   const auto minimizer = ParseCeresMinimizer(FLAGS_compare_ceres_minimizer);
   if (!minimizer)
@@ -444,11 +464,10 @@ int RunCompare(int argc, char** argv) {
   resection.ransac_threshold_px = FLAGS_compare_ransac_threshold;
   resection.max_iterations = FLAGS_compare_max_iterations;
   resection.ransac.seed = FLAGS_compare_seed;
-  if (FLAGS_compare_threads < 0) return BadInput(kCommand, "--threads must be >= 0");
   std::string why;
   if (!resection.IsValid(&why)) return BadInput(kCommand, why);
-  return dataset ? RunDatasetMode(solvers, resection, command_line)
-                 : RunMonteCarloMode(solvers, resection, command_line);
+  return dataset ? RunDatasetMode(solvers, resection, command_line, parsed)
+                 : RunMonteCarloMode(solvers, resection, command_line, parsed);
 }
 
 }  // namespace photopose::cli

@@ -5,6 +5,7 @@
 #include <iostream>
 
 #include "core/camera.h"
+#include "core/output_files.h"
 #include "core/rotation.h"
 #include "solvers/resection.h"
 #include "tools/cli_common.h"
@@ -44,13 +45,28 @@ constexpr char kUsage[] =
     "Taylor linearisation) refines every pose. Exit status: 0 every image resected, 1 some image\n"
     "could not be (each says why), 2 bad input or usage.\n";
 
+// Every numeric flag's range (docs/formats.md, "Limits and refusals").
+const CommandFlags& ResectFlags() {
+  static const CommandFlags* const kFlags =
+      new CommandFlags{"resect",
+                       "resect_command",
+                       "",
+                       {},
+                       {{"loss_scale", 0.0, 1000.0, true, false, "px"},
+                        {"ransac_threshold", 0.0, 1000.0, true, false, "px"},
+                        {"default_accuracy", 0.0, 1000.0, true, false, "px"},
+                        {"seed", 0.0, 18446744073709551615.0},
+                        {"threads", 0.0, 1024.0}}};
+  return *kFlags;
+}
+
 }  // namespace
 
 int RunResect(int argc, char** argv) {
-  bool help = false;
-  if (!ParseFlags(argc, argv, "resect", &help)) return kExitBadInput;
-  if (help) {
-    PrintHelp(kUsage, "resect_command");
+  ParsedFlags parsed;
+  if (!ParseFlags(argc, argv, ResectFlags(), &parsed)) return kExitBadInput;
+  if (parsed.help) {
+    PrintHelp(kUsage, ResectFlags());
     return kExitSuccess;
   }
   ResectionJobOptions job;
@@ -92,14 +108,36 @@ int RunResect(int argc, char** argv) {
   std::string why;
   if (!options.IsValid(&why)) return BadInput("resect", why);
 
+  // Outputs: checked before any work (never an input, never each other), written all or nothing.
+  OutputFiles outputs;
+  for (const auto& [label, path] :
+       {std::pair<const char*, const std::string&>{"--cameras", FLAGS_cameras},
+        {"--points", FLAGS_points},
+        {"--marks", FLAGS_marks},
+        {"--gcp_list", FLAGS_gcp_list},
+        {"--frames", FLAGS_frames}}) {
+    const Status input = outputs.AddInput(label, path);
+    if (!input.ok()) return BadInput("resect", input.message());
+  }
+  for (const std::string& flag_file : parsed.flag_files) outputs.AddInput("--flagfile", flag_file);
+  for (const auto& [label, path] : {std::pair<const char*, const std::string&>{"--out", FLAGS_out},
+                                    {"--report", FLAGS_report}}) {
+    if (path.empty()) continue;
+    const Status declared = outputs.AddOutput(label, path);
+    if (!declared.ok()) return BadInput("resect", declared.message());
+  }
+
   // Read and check every input before any output is written.
   ResectionJob prepared;
   const Status read = PrepareResectionJob(job, &prepared);
   if (!read.ok()) return BadInput("resect", read.message());
   if (prepared.inputs.empty()) return BadInput("resect", "no image has marks of control points");
 
-  const std::vector<ResectionResult> results =
-      ResectImages(options, prepared.inputs, FLAGS_threads);
+  std::vector<ResectionResult> results;
+  {
+    const ScopedSolving solving;
+    results = ResectImages(options, prepared.inputs, FLAGS_threads);
+  }
 
   int failures = 0;
   for (size_t i = 0; i < results.size(); ++i) {
@@ -120,12 +158,16 @@ int RunResect(int argc, char** argv) {
                 r.inliers.size(), r.summary.used_approximate ? "(from --frames)" : "(RANSAC)");
   }
 
-  Status written = WriteResectionFrames(FLAGS_out, job, prepared, results);
-  if (!written.ok()) return BadInput("resect", written.message());
-  if (!FLAGS_report.empty()) {
-    written = WriteResectionReport(FLAGS_report, job, prepared, results);
-    if (!written.ok()) return BadInput("resect", written.message());
+  Status written = outputs.StageWith(FLAGS_out, [&](const std::string& path) {
+    return WriteResectionFrames(path, job, prepared, results);
+  });
+  if (written.ok() && !FLAGS_report.empty()) {
+    written = outputs.StageWith(FLAGS_report, [&](const std::string& path) {
+      return WriteResectionReport(path, job, prepared, results);
+    });
   }
+  if (written.ok()) written = outputs.Commit();
+  if (!written.ok()) return BadInput("resect", written.message());
   return failures == 0 ? kExitSuccess : kExitSomeFailed;
 }
 

@@ -94,6 +94,9 @@ Status PrepareResectionJob(const ResectionJobOptions& options, ResectionJob* job
     if (!mark.camera_id.empty() && mark.camera_id != job->input_cameras[index]->camera_id)
       return Status::Error(Where(job->marks_label, mark.line, "CameraID") + "image '" + mark.raster +
                            "' has marks of two cameras");
+    status = CheckMarkInsideImage(job->marks_label, mark, *job->input_cameras[index],
+                                  options.pixel_origin);
+    if (!status.ok()) return status;
     if (point->second->role == PointRole::kCheck) {
       job->input_check_marks[index].push_back({m, point->second->position});
       continue;

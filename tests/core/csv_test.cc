@@ -1,8 +1,13 @@
 #include "core/csv.h"
 
+#include <fcntl.h>
 #include <gtest/gtest.h>
+#include <sys/stat.h>
+#include <unistd.h>
 
 #include <cmath>
+#include <filesystem>
+#include <fstream>
 #include <limits>
 #include <optional>
 #include <string>
@@ -257,6 +262,130 @@ TEST(CsvWriteTest, WrittenLinesReadBack) {
   const CsvTable table = ParseOrDie(text);
   ASSERT_EQ(table.rows().size(), 1u);
   EXPECT_EQ(table.rows()[0].fields, fields);
+}
+
+// ------------------------------------------------------------------ bounded input
+
+TEST(CsvInputTest, ByteOrderMarksOtherThanUtf8AreNamed) {
+  const std::string text = "A\n1\n";
+  EXPECT_EQ(ParseError(std::string("\xFF\xFE", 2) + "A\0\n\0", kStrict),
+            "t.csv: is UTF-16 (little-endian byte order mark); photopose reads UTF-8 text: save "
+            "the file as UTF-8");
+  EXPECT_EQ(ParseError(std::string("\xFE\xFF\0A", 4)),
+            "t.csv: is UTF-16 (big-endian byte order mark); photopose reads UTF-8 text: save the "
+            "file as UTF-8");
+  EXPECT_EQ(ParseError(std::string("\xFF\xFE\0\0A\0\0\0", 8)),
+            "t.csv: is UTF-32 (little-endian byte order mark); photopose reads UTF-8 text: save "
+            "the file as UTF-8");
+  EXPECT_EQ(ParseError(std::string("\0\0\xFE\xFF", 4)),
+            "t.csv: is UTF-32 (big-endian byte order mark); photopose reads UTF-8 text: save the "
+            "file as UTF-8");
+  EXPECT_EQ(ParseOrDie("\xEF\xBB\xBF" + text).header()[0], "A");  // UTF-8's is fine
+}
+
+TEST(CsvInputTest, BinaryAndNonUtf8BytesAreLocatedAndEscaped) {
+  EXPECT_EQ(ParseError(std::string("A,B\n1,x\0y\n", 10)),
+            "t.csv:2: character 4: NUL byte: photopose reads UTF-8 text (is this a binary file, "
+            "or UTF-16 without a byte order mark?)");
+  EXPECT_EQ(ParseError("A,B\n1,\x1b[31m\n"),
+            "t.csv:2: character 3: control character 0x1B: photopose reads plain UTF-8 text");
+  EXPECT_EQ(ParseError("A,B\nx,\xFF\n"),
+            "t.csv:2: character 3: byte 0xFF is not UTF-8; photopose reads UTF-8 text");
+  // Overlong form, surrogate, beyond U+10FFFF, a sequence cut short.
+  for (const std::string bad : {"\xC0\xAF", "\xED\xA0\x80", "\xF4\x90\x80\x80", "\xE2\x82"}) {
+    EXPECT_EQ(ParseError("A\n" + bad + "\n").rfind("t.csv:2: character 1: byte 0x", 0), 0u);
+  }
+  // Valid UTF-8 of every length, tabs and CR LF are text.
+  const CsvTable table = ParseOrDie("Name,Note\r\nK\xC3\xB6ln,\xE2\x82\xAC\t\xF0\x9F\x93\xB7\r\n");
+  EXPECT_EQ(table.rows()[0].fields[0], "K\xC3\xB6ln");
+}
+
+TEST(CsvInputTest, LinesAndColumnsAreBounded) {
+  const std::string long_line(kMaxLineBytes + 1, 'x');
+  EXPECT_EQ(ParseError("A\n" + long_line + "\n"),
+            "t.csv:2: the line is longer than 65536 bytes, the longest line photopose reads");
+  EXPECT_TRUE(CheckTextInput("A\n" + long_line.substr(1) + "\n", "t.csv").ok());
+  std::string header, row;
+  for (size_t i = 0; i <= kMaxColumns; ++i) {
+    header += (i ? ",C" : "C") + std::to_string(i);
+    row += i ? ",1" : "1";
+  }
+  EXPECT_EQ(ParseError(header + "\n"),
+            "t.csv:1: the header has more than 1000 fields; photopose reads at most 1000 columns");
+  const size_t last_comma = header.rfind(',');
+  EXPECT_EQ(ParseError(header.substr(0, last_comma) + "\n" + row + "\n"),
+            "t.csv:2: the row has more than 1000 fields; photopose reads at most 1000 columns");
+  // The widest table that is allowed reads, and a duplicate far to the right is found.
+  const CsvTable wide =
+      ParseOrDie(header.substr(0, last_comma) + "\n" + row.substr(0, row.rfind(',')) + "\n");
+  EXPECT_EQ(wide.ColumnIndex("C999"), std::optional<size_t>(999));
+  EXPECT_EQ(ParseError(header.substr(0, last_comma - 5) + ",C7\n"),
+            "t.csv:1: C7: column appears twice in the header (also as 'C7')");
+}
+
+TEST(CsvInputTest, OnlyRegularFilesAreRead) {
+  std::string text = "unchanged";
+  EXPECT_EQ(ReadTextFile("/dev/zero", &text).message(),
+            "/dev/zero: is a character device, not a regular file; photopose reads regular files, "
+            "or standard input for '-'");
+  EXPECT_TRUE(text.empty());
+  const std::string folder = ::testing::TempDir();
+  EXPECT_EQ(ReadTextFile(folder, &text).message(),
+            folder +
+                ": is a folder, not a regular file; photopose reads regular files, or "
+                "standard input for '-'");
+  // A FIFO is refused at once, without waiting for a writer.
+  const std::string fifo = ::testing::TempDir() + "/photopose_csv_fifo_" + std::to_string(getpid());
+  ASSERT_EQ(mkfifo(fifo.c_str(), 0644), 0);
+  EXPECT_EQ(ReadTextFile(fifo, &text).message(),
+            fifo +
+                ": is a FIFO (named pipe), not a regular file; photopose reads regular files, "
+                "or standard input for '-'");
+  unlink(fifo.c_str());
+}
+
+TEST(CsvInputTest, FilesLargerThanTheLimitAreRefusedWithoutReading) {
+  const std::string path = ::testing::TempDir() + "/photopose_csv_big_" + std::to_string(getpid());
+  std::ofstream(path) << "A\n";
+  std::filesystem::resize_file(path, kMaxInputBytes + 1);  // sparse: costs no disk space
+  std::string text;
+  EXPECT_EQ(ReadTextFile(path, &text).message(),
+            path + ": is larger than 268435456 bytes, the largest input photopose reads");
+  std::filesystem::remove(path);
+}
+
+TEST(CsvInputTest, StandardInputIsReadForADashAndNamedInMessages) {
+  int pipe_fds[2];
+  ASSERT_EQ(pipe(pipe_fds), 0);
+  const std::string text = "PointID,X\nP1,abc\n";
+  ASSERT_EQ(write(pipe_fds[1], text.data(), text.size()), static_cast<ssize_t>(text.size()));
+  close(pipe_fds[1]);
+  const int saved = dup(STDIN_FILENO);
+  dup2(pipe_fds[0], STDIN_FILENO);
+  close(pipe_fds[0]);
+  CsvTable table;
+  const Status status = CsvTable::Read("-", kStrict, &table);
+  dup2(saved, STDIN_FILENO);
+  close(saved);
+  ASSERT_TRUE(status.ok()) << status.message();
+  EXPECT_EQ(table.file_name(), "<stdin>");
+  EXPECT_EQ(table.rows()[0].fields[1], "abc");
+  double value = 0.0;
+  EXPECT_EQ(CsvRowReader(table, table.rows()[0]).RequiredNumber("X", &value).message(),
+            "<stdin>:2: X: 'abc' is not a number");
+}
+
+TEST(EscapeForMessageTest, EscapesControlsAndNonUtf8OnlyAndIsIdempotent) {
+  using namespace std::string_literals;
+  const std::string raw = "a\0b\x1b[1m\t\n\r\x7f\xff K\xC3\xB6ln \\x41"s;
+  const std::string escaped = EscapeForMessage(raw);
+  EXPECT_EQ(escaped, "a\\x00b\\x1B[1m\\t\\n\\r\\x7F\\xFF K\xC3\xB6ln \\x41");
+  EXPECT_EQ(EscapeForMessage(escaped), escaped);
+  // Field text echoed in a message is escaped too.
+  const CsvTable table = ParseOrDie("A\n\"two\nlines\"\n");
+  double value = 0.0;
+  EXPECT_EQ(CsvRowReader(table, table.rows()[0]).RequiredNumber("A", &value).message(),
+            "t.csv:2: A: 'two\\nlines' is not a number");
 }
 
 }  // namespace

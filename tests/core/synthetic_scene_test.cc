@@ -2,6 +2,7 @@
 
 #include <gtest/gtest.h>
 
+#include <limits>
 #include <map>
 
 #include "core/collinearity.h"
@@ -102,6 +103,18 @@ TEST(SyntheticScene, RejectsInvalidOptions) {
   EXPECT_FALSE(MakeSyntheticScene(options, &scene).ok());
   EXPECT_EQ(ParseScenario("uav_block"), Scenario::kUavBlock);
   EXPECT_FALSE(ParseScenario("satellite").has_value());
+}
+
+TEST(SyntheticScene, HugePointCountsAreRefusedWithoutOverflow) {
+  // INT_MAX + INT_MAX overflowed an int sum (undefined behaviour; the UBSan build checks it).
+  SyntheticSceneOptions options;
+  options.num_control_points = std::numeric_limits<int>::max();
+  options.num_check_points = std::numeric_limits<int>::max();
+  EXPECT_EQ(options.IsValid().message(), "control plus check points must be at most 1000000 per image");
+  options.num_check_points = 0;
+  EXPECT_FALSE(options.IsValid().ok());
+  options.num_control_points = 1000000;
+  EXPECT_TRUE(options.IsValid().ok());
 }
 
 }  // namespace

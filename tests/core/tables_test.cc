@@ -1,9 +1,6 @@
 #include "core/tables.h"
 
 #include <gtest/gtest.h>
-#include <signal.h>
-#include <sys/resource.h>
-#include <sys/stat.h>
 #include <unistd.h>
 
 #include <Eigen/Cholesky>
@@ -125,7 +122,7 @@ TEST_F(TablesTest, CameraTableFullDistortionModelRow) {
       "PixelType,BlockName,FilmCoordinateSystem,DistortionType,Radial,Tangential,OrientationType,"
       "AngleDirection,Polarity,AverageZ,ApplyECC,EarthRadius,SRS,FilmFiducials\n"
       "7,DMC,120000,12.5,-8.25,12,13824,7680,4,8_BIT_UNSIGNED,Block A,X_UP_Y_LEFT,"
-      "\"Distortion Model\",0.0001;-3e-05;2e-08;-1e-11,1e-06 -2e-06,matrix,+1,1,250.5,YES,6371000,"
+      "\"Distortion Model\",0.0001;-3e-06;2e-10;-1e-14,1e-06 -2e-06,matrix,+1,1,250.5,YES,6371000,"
       "EPSG:32633,\"-82944 46080;82944 46080;82944 -46080;-82944 -46080\"\n");
   std::vector<FrameCamera> cameras;
   const Status status = ReadCameraTable(path, &cameras);
@@ -145,7 +142,7 @@ TEST_F(TablesTest, CameraTableFullDistortionModelRow) {
   EXPECT_EQ(c.block_name, "Block A");
   EXPECT_EQ(c.film_coordinate_system, FilmCoordinateSystem::kXUpYLeft);
   EXPECT_EQ(c.distortion_type, DistortionType::kDistortionModel);
-  EXPECT_EQ(c.radial_k, (std::array<double, 4>{1e-4, -3e-5, 2e-8, -1e-11}));
+  EXPECT_EQ(c.radial_k, (std::array<double, 4>{1e-4, -3e-6, 2e-10, -1e-14}));
   EXPECT_EQ(c.tangential_p, (std::array<double, 2>{1e-6, -2e-6}));
   EXPECT_EQ(c.orientation_type, OrientationType::kMatrix);
   EXPECT_EQ(c.angle_direction, 1);
@@ -326,7 +323,7 @@ TEST_F(TablesTest, CameraTableErrorsNameFileLineAndColumn) {
       {base, "C,100,inf,10,10", "2: PixelSize: 'inf' is not a finite number"},
       {base, ",100,6,10,10", "2: CameraID: is empty"},
       {base, "C,,6,10,10", "2: FocalLength: is empty"},
-      {base, "C,-100,6,10,10", "2: FocalLength must be a positive number of micrometres"},
+      {base, "C,-100,6,10,10", "2: FocalLength: '-100' is outside (0, 100000000] um"},
       {base, "C,100,6,10.5,10", "2: NRows: '10.5' is not a whole number"},
       {base, "C,100,6,-10,10", "2: NRows: '-10' must be a positive whole number"},
       {base + ",Radial", "C,100,6,10,10,1;2",
@@ -357,7 +354,8 @@ TEST_F(TablesTest, CameraTableErrorsNameFileLineAndColumn) {
        "2: RadialDistances: must increase: item 3 (2) is not larger than item 2 (3)"},
       {base + ",FilmFiducials", "C,100,6,10,10,1 2;3",
        "2: FilmFiducials: item 2 '3' has 1 numbers, expected 2 separated by spaces"},
-      {base + ",EarthRadius", "C,100,6,10,10,-1", "2: EarthRadius must be positive"},
+      {base + ",EarthRadius", "C,100,6,10,10,-1",
+       "2: EarthRadius: '-1' is outside (0, 100000000] m"},
   };
   for (const CameraErrorCase& c : cases) {
     const std::string path = Write("cameras.csv", c.header + "\n" + c.row + "\n");
@@ -832,8 +830,8 @@ TEST_F(TablesTest, GroundPointsErrors) {
        "7: Z: 'abc' is not a number"},
       {full, "P1,1,2,3,0.1,,0.1,\n",
        "2: AccuracyY: is empty; AccuracyX, AccuracyY, AccuracyZ are given together"},
-      {full, "P1,1,2,3,0.1,0,0.1,\n", "2: AccuracyY: '0' must be positive"},
-      {full, "P1,1,2,3,0.1,0.1,-1,\n", "2: AccuracyZ: '-1' must be positive"},
+      {full, "P1,1,2,3,0.1,0,0.1,\n", "2: AccuracyY: '0' is outside (0, 100000000] m"},
+      {full, "P1,1,2,3,0.1,0.1,-1,\n", "2: AccuracyZ: '-1' is outside (0, 100000000] m"},
       {full, "P1,1,2,3,,,,tied\n", "2: Role: 'tied' is not control, check or tie"},
       {full, "P1,1,2,3,,,,\nP1,4,5,6,,,,\n", "3: PointID: duplicate point 'P1' (first on line 2)"},
       {full, ",1,2,3,,,,\n", "2: PointID: is empty"},
@@ -905,7 +903,7 @@ TEST_F(TablesTest, ImageMarksErrors) {
        "2: Column: is empty; give Column and Row (pixels) or FilmX and FilmY (um)"},
       {full, "I,P,1,,,,\n", "2: Row: is empty"},
       {full, "I,P,1,x,,,\n", "2: Row: 'x' is not a number"},
-      {full, "I,P,1,2,,,0\n", "2: Accuracy: '0' must be positive"},
+      {full, "I,P,1,2,,,0\n", "2: Accuracy: '0' is outside (0, 100000000] px"},
       {full, "I,P,1,2,,,\nI,Q,1,2,,,\n\nI,P,3,4,,,\n",
        "5: PointID: duplicate mark of point 'P' in image 'I' (first on line 2)"},
   };
@@ -1030,12 +1028,159 @@ TEST_F(TablesTest, GcpListErrors) {
       {"EPSG:32722\n1 2 3 4 nan a\n", "2: py: 'nan' is not a finite number"},
       {"EPSG:32722\n1 2 3 4 5 a P\n1 2 4 4 5 b P\n",
        "3: name: point 'P' has other coordinates on line 2 (1 2 3)"},
+      {"EPSG:32722\n1 -1e308 3 4 5 a\n", "2: Y: '-1e308' is outside [-100000000, 100000000] m"},
+      {"EPSG:32722\n1 2 3 4 2e8 a\n", "2: py: '2e8' is outside [-100000000, 100000000] px"},
+      {std::string("EPSG:32722\n1 2 3 4 5 a\0b\n", 25),
+       "2: character 12: NUL byte: photopose reads UTF-8 text (is this a binary file, or UTF-16 "
+       "without a byte order mark?)"},
   };
   for (const Case& c : cases) {
     const std::string path = Write("gcp_list.txt", c.text);
     GcpList gcp;
     EXPECT_EQ(ReadGcpList(path, &gcp).message(), path + ":" + c.expected) << c.text;
   }
+}
+
+// ------------------------------------------------------------------ physical ranges
+
+TEST_F(TablesTest, CameraTableValuesOutsideTheirPhysicalRangeAreRefusedAtTheirLine) {
+  const std::string base = "CameraID,FocalLength,PixelSize,NRows,NColumns";
+  const std::string uav = "C,8800,2.41,3648,5472";
+  const std::vector<CameraErrorCase> cases = {
+      {base, "C,8800,0.0001,3648,5472", "2: PixelSize: '0.0001' is outside (0.001, 1000) um"},
+      {base, "C,8800,1000,3648,5472", "2: PixelSize: '1000' is outside (0.001, 1000) um"},
+      {base, "C,8800,0,3648,5472", "2: PixelSize: '0' is outside (0.001, 1000) um"},
+      {base, "C,1e9,2.41,3648,5472", "2: FocalLength: '1e9' is outside (0, 100000000] um"},
+      {base, "C,8800,2.41,1,1", "2: NRows: 1 is outside [2, 1000000] pixels"},
+      {base, "C,8800,2.41,3648,1", "2: NColumns: 1 is outside [2, 1000000] pixels"},
+      {base, "C,8800,2.41,3648,2000000", "2: NColumns: 2000000 is outside [2, 1000000] pixels"},
+      {base + ",PrincipalX", uav + ",-2e8",
+       "2: PrincipalX: '-2e8' is outside [-100000000, 100000000] um"},
+      {base + ",AverageZ", uav + ",1e308",
+       "2: AverageZ: '1e308' is outside [-100000000, 100000000] m"},
+      {base + ",FilmFiducials", uav + ",1 2;3 1e9",
+       "2: FilmFiducials: item 2: '1000000000' is outside [-100000000, 100000000] um"},
+      // The seed's example K1 = -1 mm^-2: the corner of a 1-inch sensor would move 500 mm.
+      {base + ",Radial", uav + ",0;-1;0;0",
+       "2: Radial: the distortion correction scales the radius by 3.028 at 1.424 mm from the "
+       "principal point; inside the image (7.925 mm to its farthest corner) it may change it by a "
+       "factor of 3 at most"},
+      {base + ",Radial", uav + ",0;1;0;0",
+       "2: Radial: the distortion folds the image: the corrected radius stops increasing at 0.619 "
+       "mm from the principal point, inside the image (7.925 mm to its farthest corner)"},
+      {base + ",Tangential", uav + ",0.5;0",
+       "2: Tangential: the distortion folds the image: the corrected radius stops increasing at "
+       "0.371 mm from the principal point, inside the image (7.925 mm to its farthest corner)"},
+      {base + ",DistortionType,RadialDistances,RadialDistortions",
+       uav + ",DistortionTable,1000;2000,0;1500",
+       "2: RadialDistortions: the distortion folds the image: the corrected radius stops "
+       "increasing at 1.022 mm from the principal point, inside the image (7.925 mm to its "
+       "farthest corner)"},
+      // Affine: a denormal A1 makes the rows parallel; the pixel size must be physical too.
+      {"CameraID,FocalLength,A0,A1,A2,B0,B1,B2", "C,152000,0,4.9e-324,0,0,0,-12",
+       "2: A1: the affine is singular: A1 B2 - A2 B1 = -6e-323 is negligible against its "
+       "coefficients (up to 12); the rows of A and B must not be parallel"},
+      {"CameraID,FocalLength,A0,A1,A2,B0,B1,B2", "C,152000,0,12,24,0,6,12",
+       "2: A1: the affine is singular: A1 B2 - A2 B1 = 0 is negligible against its coefficients "
+       "(up to 24); the rows of A and B must not be parallel"},
+      {"CameraID,FocalLength,A0,A1,A2,B0,B1,B2", "C,152000,0,12000,0,0,0,-12000",
+       "2: A1: the affine gives pixels of 12000 um (sqrt |A1 B2 - A2 B1|), outside (0.001, 1000) "
+       "um"},
+      {"CameraID,FocalLength,A0,A1,A2,B0,B1,B2,AffineDirection", "C,152000,0,12000,0,0,0,-12000,-1",
+       "2: A1: the affine gives pixels of 8.333333333333333e-05 um (sqrt |A1 B2 - A2 B1|, "
+       "inverted for AffineDirection -1), outside (0.001, 1000) um"},
+  };
+  for (const CameraErrorCase& c : cases) {
+    const std::string path = Write("cameras.csv", c.header + "\n" + c.row + "\n");
+    std::vector<FrameCamera> cameras;
+    EXPECT_EQ(ReadCameraTable(path, &cameras).message(), path + ":" + c.expected) << c.row;
+  }
+  // The same camera with a real lens reads, and a film camera without image size is checked
+  // over its fiducials.
+  const std::string path = Write("cameras.csv", base + ",Radial\n" + uav + ",0;-1.2e-4;2e-7;0\n");
+  std::vector<FrameCamera> cameras;
+  EXPECT_TRUE(ReadCameraTable(path, &cameras).ok());
+  const std::string film =
+      Write("film.csv",
+            "CameraID,FocalLength,A0,A1,A2,B0,B1,B2,FilmFiducials,Radial\n"
+            "RMK,152000,-115000,12,0,115000,0,-12,\"-106000 106000;106000 -106000\",0;1e-4;0;0\n");
+  EXPECT_EQ(ReadCameraTable(film, &cameras).message(),
+            film +
+                ":2: Radial: the distortion folds the image: the corrected radius stops "
+                "increasing at 58.557 mm from the principal point, inside the image (149.907 "
+                "mm to its farthest corner)");
+}
+
+TEST_F(TablesTest, CoordinatesBeyondTheRangeAreRefusedInEveryTable) {
+  std::vector<GroundPoint> points;
+  std::string path = Write("points.csv", "PointID,X,Y,Z\nP1,1,2,3\nP2,1e308,2,3\n");
+  EXPECT_EQ(ReadGroundPoints(path, &points).message(),
+            path + ":3: X: '1e308' is outside [-100000000, 100000000] m");
+  path = Write("points.csv", "PointID,X,Y,Z,AccuracyX,AccuracyY,AccuracyZ\nP1,1,2,3,1,1,1e9\n");
+  EXPECT_EQ(ReadGroundPoints(path, &points).message(),
+            path + ":2: AccuracyZ: '1e9' is outside (0, 100000000] m");
+  std::vector<FrameRecord> frames;
+  path = Write("frames.csv",
+               "Raster,CameraID,PerspectiveX,PerspectiveY,PerspectiveZ,Omega,Phi,Kappa\n"
+               "a,C,1,2,-1e300,0,0,0\n");
+  EXPECT_EQ(ReadFramesTable(path, {}, &frames).message(),
+            path + ":2: PerspectiveZ: '-1e300' is outside [-100000000, 100000000] m");
+  path = Write("frames.csv",
+               "Raster,CameraID,PerspectiveX,PerspectiveY,PerspectiveZ,Omega,Phi,Kappa\n"
+               "a,C,1,2,3,0,0,1e6\n");
+  EXPECT_EQ(ReadFramesTable(path, {}, &frames).message(),
+            path + ":2: Kappa: '1e6' is outside [-360, 360] degrees");
+  std::vector<ImageMark> marks;
+  path = Write("marks.csv", "Raster,PointID,Column,Row\na,P,1,-1e300\n");
+  EXPECT_EQ(ReadImageMarks(path, &marks).message(),
+            path + ":2: Row: '-1e300' is outside [-100000000, 100000000] px");
+  path = Write("marks.csv", "Raster,PointID,FilmX,FilmY,Accuracy\na,P,1e9,1,1\n");
+  EXPECT_EQ(ReadImageMarks(path, &marks).message(),
+            path + ":2: FilmX: '1e9' is outside [-100000000, 100000000] um");
+  // Writers refuse what the readers would.
+  GroundPoint far;
+  far.point_id = "P";
+  far.position.x() = 1e9;
+  EXPECT_EQ(WriteGroundPoints(Path("out.csv"), {far}).message(),
+            Path("out.csv") + ": point 'P': X: 1000000000 is outside [-100000000, 100000000] m");
+  EXPECT_FALSE(fs::exists(Path("out.csv")));
+}
+
+TEST_F(TablesTest, MarksFarOutsideTheirImageAreRefusedWithTheirLine) {
+  FrameCamera camera;
+  camera.camera_id = "UAV";
+  camera.focal_length_um = 8800.0;
+  camera.pixel_size_um = 2.41;
+  camera.n_columns = 5472;
+  camera.n_rows = 3648;
+  ImageMark mark;
+  mark.raster = "a.jpg";
+  mark.point_id = "P3";
+  mark.line = 7;
+  // Inside, on the border and within 5% of the size outside are fine.
+  for (const Eigen::Vector2d& pixel :
+       {Eigen::Vector2d(2736, 1824), Eigen::Vector2d(0, 3648), Eigen::Vector2d(-273, 3648 + 182)}) {
+    mark.column_row = pixel;
+    EXPECT_TRUE(CheckMarkInsideImage("marks.csv", mark, camera, PixelOrigin::kCorner).ok());
+  }
+  mark.column_row = Eigen::Vector2d(5472 + 20000, 100);
+  EXPECT_EQ(CheckMarkInsideImage("marks.csv", mark, camera, PixelOrigin::kCorner).message(),
+            "marks.csv:7: Column: the mark of point 'P3' in image 'a.jpg' lies 20000 pixels "
+            "outside the 5472 x 3648 image of camera 'UAV' (at most 5% of the image size is "
+            "allowed)");
+  mark.column_row = Eigen::Vector2d(100, -500);
+  EXPECT_EQ(CheckMarkInsideImage("marks.csv", mark, camera, PixelOrigin::kCenter).message(),
+            "marks.csv:7: Row: the mark of point 'P3' in image 'a.jpg' lies 500 pixels outside "
+            "the 5472 x 3648 image of camera 'UAV' (at most 5% of the image size is allowed)");
+  // Film marks are converted to pixels: 2.41 um per pixel, FilmCoordinateSystem 1 (y up).
+  mark.column_row.reset();
+  mark.film_um = Eigen::Vector2d(0.0, 2.41 * (1824 + 1000));
+  EXPECT_EQ(CheckMarkInsideImage("marks.csv", mark, camera, PixelOrigin::kCorner).message(),
+            "marks.csv:7: FilmY: the mark of point 'P3' in image 'a.jpg' lies 1000 pixels outside "
+            "the 5472 x 3648 image of camera 'UAV' (at most 5% of the image size is allowed)");
+  // Without an image size there is nothing to check against.
+  camera.n_columns = camera.n_rows = 0;
+  EXPECT_TRUE(CheckMarkInsideImage("marks.csv", mark, camera, PixelOrigin::kCorner).ok());
 }
 
 // ------------------------------------------------------------------ documentation
@@ -1077,59 +1222,6 @@ TEST_F(TablesTest, EveryExampleOfTheFormatsPageReads) {
     EXPECT_TRUE(status.ok()) << status.message() << "\n" << body;
   }
   EXPECT_EQ(examples, 7);
-}
-
-// ------------------------------------------------------------------ atomic writes
-
-TEST_F(TablesTest, WriteFileAtomicallyCreatesAndReplaces) {
-  const std::string path = Path("table.csv");
-  ASSERT_TRUE(WriteFileAtomically(path, "old\n").ok());
-  EXPECT_EQ(Read(path), "old\n");
-  struct stat info;
-  ASSERT_EQ(stat(path.c_str(), &info), 0);
-  EXPECT_EQ(info.st_mode & 0777, 0644u);
-  ASSERT_EQ(chmod(path.c_str(), 0640), 0);
-  ASSERT_TRUE(WriteFileAtomically(path, "new\n").ok());
-  EXPECT_EQ(Read(path), "new\n");
-  ASSERT_EQ(stat(path.c_str(), &info), 0);
-  EXPECT_EQ(info.st_mode & 0777, 0640u);  // the replaced file's mode is kept
-  EXPECT_EQ(FilesInDir(), std::set<std::string>{"table.csv"});
-}
-
-TEST_F(TablesTest, WriteFileAtomicallyIntoMissingFolderLeavesNothing) {
-  const std::string path = Path("no_such_folder/table.csv");
-  const Status status = WriteFileAtomically(path, "data\n");
-  EXPECT_EQ(status.message(), path + ": cannot create a temporary file: No such file or directory");
-  EXPECT_TRUE(FilesInDir().empty());
-}
-
-TEST_F(TablesTest, WriteFileAtomicallyOverAFolderRemovesTheTemporaryFile) {
-  const std::string path = Path("folder");
-  fs::create_directory(path);
-  const Status status = WriteFileAtomically(path, "data\n");
-  EXPECT_FALSE(status.ok());
-  EXPECT_EQ(status.message().rfind(path + ": cannot replace: ", 0), 0u) << status.message();
-  EXPECT_EQ(FilesInDir(), std::set<std::string>{"folder"});
-  EXPECT_TRUE(fs::is_directory(path));
-}
-
-TEST_F(TablesTest, WriteFileAtomicallyKeepsTheOldFileWhenTheWriteFails) {
-  const std::string path = Path("table.csv");
-  ASSERT_TRUE(WriteFileAtomically(path, "old\n").ok());
-  // A file size limit makes write() fail part way, like a full disk (SIGXFSZ ignored so that the
-  // call returns EFBIG instead of killing the process).
-  rlimit saved;
-  ASSERT_EQ(getrlimit(RLIMIT_FSIZE, &saved), 0);
-  const auto old_handler = signal(SIGXFSZ, SIG_IGN);
-  rlimit small = saved;
-  small.rlim_cur = 4096;
-  ASSERT_EQ(setrlimit(RLIMIT_FSIZE, &small), 0);
-  const Status status = WriteFileAtomically(path, std::string(100000, 'x'));
-  setrlimit(RLIMIT_FSIZE, &saved);
-  signal(SIGXFSZ, old_handler);
-  EXPECT_EQ(status.message(), path + ": cannot write: File too large");
-  EXPECT_EQ(Read(path), "old\n");
-  EXPECT_EQ(FilesInDir(), std::set<std::string>{"table.csv"});
 }
 
 TEST_F(TablesTest, FailedTableWriteLeavesNoFile) {

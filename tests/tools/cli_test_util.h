@@ -31,17 +31,37 @@ inline void WriteFile(const std::string& path, const std::string& text) {
   std::ofstream(path) << text;
 }
 
-// Runs `photopose <arguments>` through the shell; stdout and stderr go to files in `dir`.
-inline CliRun RunCli(const std::string& arguments, const std::string& dir) {
+// How RunCliWith runs the executable.
+struct CliOptions {
+  std::string working_dir;  // where it runs (empty: the test's own)
+  std::string standard_input = "/dev/null";
+  int timeout_seconds = 240;  // a hang is killed and reported as exit code -1
+};
+
+// Runs `photopose <arguments>` through the shell; stdout and stderr go to files in `dir`. A run
+// that ends on a signal (a crash, or killed by the timeout) has exit_code -1.
+inline CliRun RunCliWith(const std::string& arguments, const std::string& dir,
+                         const CliOptions& options) {
   const std::string out = dir + "/cli_stdout.txt", err = dir + "/cli_stderr.txt";
-  const std::string command = CliPath() + " " + arguments + " >" + out + " 2>" + err + " </dev/null";
+  std::string command = "timeout -s KILL " + std::to_string(options.timeout_seconds) + " " +
+                        CliPath() + " " + arguments + " >'" + out + "' 2>'" + err + "' <'" +
+                        options.standard_input + "'";
+  if (!options.working_dir.empty()) command = "cd '" + options.working_dir + "' && " + command;
   const int status = std::system(command.c_str());
   CliRun run;
-  run.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+  // timeout reports a killed child as 128 + 9; the shell reports a signal as 128 + n.
+  run.exit_code = WIFEXITED(status) && WEXITSTATUS(status) < 128 ? WEXITSTATUS(status) : -1;
   run.out = ReadFile(out);
   run.err = ReadFile(err);
   return run;
 }
+
+inline CliRun RunCli(const std::string& arguments, const std::string& dir) {
+  return RunCliWith(arguments, dir, CliOptions());
+}
+
+// The first line of a text (without its line end).
+inline std::string FirstLine(const std::string& text) { return text.substr(0, text.find('\n')); }
 
 // A fresh, empty folder for one test.
 inline std::string ScratchDir() {

@@ -1,0 +1,18 @@
+#pragma once
+// Shared checks of the libFuzzer harnesses: what every error message must satisfy.
+#include <cstdlib>
+#include <string>
+
+#include "core/csv.h"
+#include "core/status.h"
+
+namespace photopose::fuzz {
+
+// An error message is one line of printable UTF-8: EscapeForMessage leaves it as it is.
+inline void CheckMessage(const Status& status) {
+  if (status.ok()) return;
+  const std::string& message = status.message();
+  if (message.empty() || EscapeForMessage(message) != message) std::abort();
+}
+
+}  // namespace photopose::fuzz
