@@ -25,6 +25,10 @@ bool ParseFlags(int argc, char** argv, const std::string& subcommand, bool* help
 // "resect_command") with their help texts.
 void PrintHelp(const std::string& usage, const std::string& flags_file);
 
+// Refuses, before any work, an output path whose folder does not exist or is not a folder:
+// "<flag>: folder '<dir>' does not exist". An empty path is fine (the output is not asked for).
+Status CheckOutputFolder(const std::string& flag, const std::string& path);
+
 // Prints "photopose <subcommand>: <message>" on stderr and returns kExitBadInput.
 int BadInput(const std::string& subcommand, const std::string& message);
 
