@@ -1,6 +1,7 @@
 #include "solvers/data_snooping.h"
 
 #include <Eigen/Dense>
+#include <array>
 #include <cmath>
 #include <limits>
 
@@ -14,8 +15,16 @@ namespace {
 // the mark is not checked there by the others (redundancy ~0), so there is nothing to test.
 constexpr double kMinCofactorEigenvalue = 1e-9;
 
-// e^T M^+ e for a symmetric 2 x 2 M, its eigenvalues below kMinCofactorEigenvalue dropped.
+// e^T M^+ e for a symmetric 2 x 2 M, its eigenvalues below kMinCofactorEigenvalue dropped: the
+// closed-form inverse when both are above (the usual case), the eigen-decomposition otherwise.
 double PseudoInverseQuadraticForm(const Eigen::Matrix2d& M, const Eigen::Vector2d& e) {
+  const double a = M(0, 0), b = 0.5 * (M(0, 1) + M(1, 0)), c = M(1, 1);
+  const double half_trace = 0.5 * (a + c);
+  const double root = std::sqrt(0.25 * (a - c) * (a - c) + b * b);
+  if (half_trace - root > kMinCofactorEigenvalue) {
+    const double det = a * c - b * b;
+    return (c * e.x() * e.x() - 2.0 * b * e.x() * e.y() + a * e.y() * e.y()) / det;
+  }
   const Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d> eigen(M);
   double value = 0.0;
   for (int k = 0; k < 2; ++k) {
@@ -55,7 +64,29 @@ double PredictedCriticalValue(double confidence, int redundancy) {
 }
 
 double GlobalTestCriticalValue(double confidence, int redundancy) {
-  return ChiSquaredQuantile(confidence, redundancy);
+  if (redundancy == 2) return SnoopingCriticalValue(confidence);  // closed form
+  // The quantile takes a few hundred evaluations of the incomplete gamma function; resection asks
+  // for the same few (confidence, r) over and over, so each thread keeps the last ones.
+  struct Entry {
+    double confidence;
+    int redundancy;
+    double value;
+  };
+  thread_local std::array<Entry, 8> cache{};
+  thread_local size_t next = 0;
+  for (const Entry& entry : cache)
+    if (entry.redundancy == redundancy && entry.confidence == confidence) return entry.value;
+  const double value = ChiSquaredQuantile(confidence, redundancy);
+  cache[next] = Entry{confidence, redundancy, value};
+  next = (next + 1) % cache.size();
+  return value;
+}
+
+bool FailsGlobalTest(double omega, double confidence, int redundancy) {
+  // A quantile above the median is above r - 2/3 (> r - 1); the exact quantile (a few hundred
+  // evaluations of the incomplete gamma function) is needed only beyond that.
+  if (!(omega > redundancy - 1.0)) return false;
+  return omega > GlobalTestCriticalValue(confidence, redundancy);
 }
 
 Status ComputePoseAdjustmentStatistics(const std::vector<Eigen::Vector2d>& image_plane,
@@ -69,7 +100,7 @@ Status ComputePoseAdjustmentStatistics(const std::vector<Eigen::Vector2d>& image
   s.redundancy_numbers.assign(n, 0.0);
   s.test_statistics.assign(n, 0.0);
   s.in_front.assign(n, 0);
-  std::vector<Eigen::Matrix<double, 2, 6>> jacobians(n);
+  std::vector<Eigen::Matrix<double, 2, 6, Eigen::RowMajor>> jacobians(n);
   const SeedProjector projector(eo.data(), focal);
   for (size_t i = 0; i < n; ++i) {
     double xy[2];
@@ -101,9 +132,8 @@ Status ComputePoseAdjustmentStatistics(const std::vector<Eigen::Vector2d>& image
         s.redundancy_numbers[i] = 0.5 * Qvv.trace();
         s.test_statistics[i] = PseudoInverseQuadraticForm(Qvv, s.whitened_residuals[i]);
       } else {
-        const Eigen::Matrix2d predicted = Eigen::Matrix2d::Identity() + H;
-        s.test_statistics[i] =
-            s.whitened_residuals[i].dot(predicted.inverse() * s.whitened_residuals[i]);
+        s.test_statistics[i] = PseudoInverseQuadraticForm(Eigen::Matrix2d::Identity() + H,
+                                                          s.whitened_residuals[i]);
       }
     }
   }

@@ -50,6 +50,9 @@ double TauCriticalValue(double confidence, int redundancy);
 double PredictedCriticalValue(double confidence, int redundancy);
 // Critical value of Omega with known sigma: the chi-square(r) quantile at `confidence`.
 double GlobalTestCriticalValue(double confidence, int redundancy);
+// Omega > GlobalTestCriticalValue, without computing the quantile when Omega is below r - 1 (a
+// quantile at confidence >= 0.5 never is).
+bool FailsGlobalTest(double omega, double confidence, int redundancy);
 
 struct PoseAdjustmentStatistics {
   int num_used = 0;

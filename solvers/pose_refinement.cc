@@ -241,6 +241,9 @@ class StepInSigmasCallback : public ceres::IterationCallback {
       : problem_(problem), loss_(loss), eo_(eo), tolerance_(tolerance) {}
   ceres::CallbackReturnType operator()(const ceres::IterationSummary& summary) override {
     if (summary.iteration == 0 || !summary.step_is_successful) return ceres::SOLVER_CONTINUE;
+    // Far from the minimum a step lowers the cost by much more than a tiny one could: the
+    // certificate (a pass over every residual) is only worth computing near convergence.
+    if (summary.cost_change > 1e-6 * summary.cost) return ceres::SOLVER_CONTINUE;
     return RemainingStepSigmas(problem_, *eo_, loss_) <= tolerance_
                ? ceres::SOLVER_TERMINATE_SUCCESSFULLY
                : ceres::SOLVER_CONTINUE;

@@ -45,7 +45,11 @@ struct Marks {
   std::vector<double> weights;  // standard deviation in the image-plane unit (stated or 1 unit)
   std::vector<double> per_unit; // image-plane units per unit of the mark
   std::vector<MarkUnit> units;
-  std::vector<std::string> names;  // 'P7' or #3
+  const std::vector<std::string>* ids = nullptr;  // point ids, for messages
+  // 'P7', or #3 when the input names no points.
+  std::string name(size_t i) const {
+    return ids != nullptr && i < ids->size() ? "'" + (*ids)[i] + "'" : "#" + std::to_string(i + 1);
+  }
 };
 
 Marks MarksOf(const ResectionInput& input) {
@@ -60,9 +64,8 @@ Marks MarksOf(const ResectionInput& input) {
     marks.per_unit.push_back(per_unit);
     marks.weights.push_back((sigma > 0.0 ? sigma : 1.0) * per_unit);
     marks.units.push_back(input.units.empty() ? MarkUnit::kPixel : input.units[i]);
-    marks.names.push_back(i < input.point_ids.size() ? "'" + input.point_ids[i] + "'"
-                                                     : "#" + std::to_string(i + 1));
   }
+  marks.ids = &input.point_ids;
   return marks;
 }
 
@@ -212,7 +215,7 @@ ResectionResult ResectImage(const ResectionOptions& options, const ResectionInpu
   result.accuracy_stated = marks.stated;
   const double confidence = options.test.confidence;
   const double threshold = MarkThresholdSigmas(confidence);  // sigmas
-  const std::string percent = Number(100.0 * confidence) + "%";
+  const auto percent = [confidence]() { return Number(100.0 * confidence) + "%"; };
 
   // 1. Initial values and the candidate marks.
   ExteriorOrientation eo;
@@ -226,7 +229,7 @@ ResectionResult ResectImage(const ResectionOptions& options, const ResectionInpu
     for (size_t i = 0; i < n; ++i) {
       double xy[2];
       if (!projector.Project(points[i].data(), xy, nullptr, nullptr, nullptr))
-        return fail("control point " + marks.names[i] +
+        return fail("control point " + marks.name(i) +
                     " is behind the camera at the approximate pose");
     }
   } else {
@@ -310,7 +313,7 @@ ResectionResult ResectImage(const ResectionOptions& options, const ResectionInpu
     for (size_t i = 0; i < n; ++i) {
       if (candidate[i]) continue;
       const double residual = stats.whitened_residuals[i].norm() * marks.weights[i] / marks.per_unit[i];
-      text += std::string(text.empty() ? "" : ", ") + marks.names[i] + " (" +
+      text += std::string(text.empty() ? "" : ", ") + marks.name(i) + " (" +
               (stats.in_front[i] ? Number(residual) + " " + UnitName(marks.units[i]) : "behind") +
               ")";
     }
@@ -318,7 +321,7 @@ ResectionResult ResectImage(const ResectionOptions& options, const ResectionInpu
   };
   for (size_t i = 0; i < n; ++i) {
     if (!stats.in_front[i])
-      return fail("control point " + marks.names[i] +
+      return fail("control point " + marks.name(i) +
                   " lies behind the camera at the solution: the pose cannot have seen it");
   }
   if (accepted == 3) {
@@ -340,10 +343,10 @@ ResectionResult ResectImage(const ResectionOptions& options, const ResectionInpu
   }
   if (accepted == 4 && marks.stated) {
     const double critical = GlobalTestCriticalValue(confidence, 2);
-    if (stats.omega > critical)
+    if (FailsGlobalTest(stats.omega, confidence, 2))
       return fail("the 4 accepted marks do not fit their stated accuracy (sum of squared "
                   "normalized residuals " + Number(stats.omega) + " > " + Number(critical) +
-                  ", chi-square(2) at " + percent + "): one of them is a blunder, and four marks "
+                  ", chi-square(2) at " + percent() + "): one of them is a blunder, and four marks "
                   "cannot show which" + (n > 4 ? " (left out: " + left_out() + ")" : ""));
   }
   if (accepted == 4 && !marks.stated) {
@@ -351,13 +354,11 @@ ResectionResult ResectImage(const ResectionOptions& options, const ResectionInpu
         "4 marks without a stated accuracy: a blunder among them cannot be detected (redundancy "
         "2); state their Accuracy to test them");
   }
-  if (accepted >= 5 && marks.stated) {
-    const double critical = GlobalTestCriticalValue(confidence, stats.redundancy);
-    if (stats.omega > critical)
-      result.warnings.push_back(
-          "sigma0 = " + Number(std::sqrt(s0_squared)) +
-          ": the accepted marks fit worse than their stated accuracy (global test at " + percent +
-          "); the Accuracy values may be too optimistic");
+  if (accepted >= 5 && marks.stated && FailsGlobalTest(stats.omega, confidence, stats.redundancy)) {
+    result.warnings.push_back(
+        "sigma0 = " + Number(std::sqrt(s0_squared)) +
+        ": the accepted marks fit worse than their stated accuracy (global test at " + percent() +
+        "); the Accuracy values may be too optimistic");
   }
 
   // 4. Statistics.
