@@ -23,6 +23,7 @@
 
 #include "core/camera.h"
 #include "core/camera_models.h"
+#include "core/fiducials.h"
 #include "core/rotation.h"
 #include "core/status.h"
 #include "core/tables.h"
@@ -61,6 +62,10 @@ struct BlockImage {
   std::optional<Eigen::Vector3d> measured_angles_rad;
   std::optional<Eigen::Vector3d> attitude_accuracy_rad;
   int line = 0;  // line of the frames table it came from (0: none), for messages
+  // Scanned film: the image's own pixel -> film affine, fitted to its measured fiducials
+  // (core/fiducials.h); it replaces the camera table's pixel -> film map for this image's pixel
+  // marks (PixelToFilmCamera).
+  std::optional<FiducialFit> fiducial_fit;
 };
 
 // One ground point.
@@ -122,6 +127,10 @@ struct Block {
   int FindPoint(const std::string& id) const;
 };
 
+// The camera-table row that turns this image's pixels into film: its camera's row, with the image's
+// fiducial affine when it has one. kFrame cameras only.
+FrameCamera PixelToFilmCamera(const Block& block, int image);
+
 // Structural checks: every index in range, parameter counts match the models, every number
 // finite. Names the first offence.
 Status CheckBlock(const Block& block);
@@ -134,15 +143,35 @@ struct BlockTables {
   std::vector<GroundPoint> points;
   std::vector<ImageMark> marks;
   std::vector<FrameRecord> frames;  // may be empty
+  std::vector<MeasuredFiducial> fiducials;  // scanned film, may be empty
   std::string crs;                  // e.g. the gcp_list header
+  RotationConvention frames_rotation = RotationConvention::kSeed;  // of the frames' accuracy angles
   // File names for messages ("file:line: column: what").
-  std::string cameras_file, points_file, marks_file, frames_file;
+  std::string cameras_file, points_file, marks_file, frames_file, fiducials_file;
   PixelOrigin pixel_origin = PixelOrigin::kCorner;
+  // A pixel mark farther outside its image than this fraction of the image size (per axis) is
+  // refused (when the camera gives the size): it cannot be a measurement in that image.
+  double max_outside_fraction = 0.1;
+  // Largest residual of a measured fiducial after the affine fit (um).
+  double max_fiducial_residual_um = 30.0;
 };
 
 // Pairs marks with points, images with cameras and frames, converts every mark into its camera
 // model's observation unit, and gives every point a role (marks of points without a row are tie
 // points). Errors read "file:line: column: what is wrong".
+//  - Images: in the order they first appear in the marks, then the frames-table images without
+//    marks. The camera of an image is its marks' CameraID, else its frames row's, else the only
+//    camera of the table. A frames row gives the initial eo and the measured centre (and angles)
+//    with its AccuracyX/Y/Z (m) and AccuracyOmega/Phi/Kappa (degrees in the file's convention,
+//    turned into seed-angle sigmas through the convention's Jacobian, correlations dropped).
+//  - Points: the points-table rows in file order (control, check or tie as their Role says), then
+//    the tie points that only marks name, in the order of their first mark.
+//  - Marks: film marks are the observation as they are; pixel marks go through FilmFromPixel of
+//    PixelToFilmCamera (their image's fiducial affine, or the camera table's map), and
+//    observation_units_per_unit is the local um per pixel of that map (FilmUmPerPixel). A pixel mark
+//    of a camera without PixelSize/NRows/NColumns (or A0-B2) is refused at its own line, as is one
+//    farther than max_outside_fraction outside its image.
+// Outputs are written only on success.
 Status AssembleBlock(const BlockTables& tables, Block* block);
 
 // The files of a block and how to read them; ReadBlock reads them (core/tables.h) and assembles.
@@ -152,8 +181,10 @@ struct BlockFiles {
   std::string marks;     // image marks (or gcp_list)
   std::string gcp_list;  // OpenDroneMap gcp_list.txt instead of points + marks
   std::string frames;    // optional frames table
+  std::string fiducials;  // optional measured fiducials of scanned film (core/fiducials.h)
   RotationConvention rotation = RotationConvention::kSeed;  // of the frames table
   PixelOrigin pixel_origin = PixelOrigin::kCorner;          // of the marks' Column/Row
+  double max_fiducial_residual_um = 30.0;                   // see BlockTables
 };
 Status ReadBlock(const BlockFiles& files, Block* block);
 

@@ -4,6 +4,7 @@
 #include <cmath>
 
 #include "core/camera_models.h"
+#include "core/fiducials.h"
 
 namespace photopose {
 namespace {
@@ -45,12 +46,10 @@ Status FrameCamera::IsValid() const {
   if (camera_id.empty()) return Status::Error("CameraID is empty");
   if (!(focal_length_um > 0.0) || !std::isfinite(focal_length_um))
     return Status::Error("FocalLength must be a positive number of micrometres");
-  if (!has_affine) {
-    if (!(pixel_size_um > 0.0))
-      return Status::Error("PixelSize must be positive when A0-A2/B0-B2 are not given");
-    if (n_rows <= 0 || n_columns <= 0)
-      return Status::Error("NRows and NColumns are needed to place the fiducial centre when A0-A2/B0-B2 are not given");
-  } else {
+  if (pixel_size_um < 0.0 || !std::isfinite(pixel_size_um))
+    return Status::Error("PixelSize must be a positive number of micrometres");
+  if (n_rows < 0 || n_columns < 0) return Status::Error("NRows and NColumns must be positive");
+  if (has_affine) {
     const double det = affine_a[1] * affine_b[2] - affine_a[2] * affine_b[1];
     if (!(std::abs(det) > 0.0)) return Status::Error("affine A1 B2 - A2 B1 is zero: not invertible");
   }
@@ -66,6 +65,20 @@ Status FrameCamera::IsValid() const {
         return Status::Error("RadialDistances must be strictly increasing");
   }
   return Status::Ok();
+}
+
+bool FrameCamera::HasPixelToFilm() const {
+  return has_affine || (pixel_size_um > 0.0 && n_rows > 0 && n_columns > 0);
+}
+
+Status FrameCamera::PixelToFilmStatus() const {
+  if (HasPixelToFilm()) return Status::Ok();
+  std::string missing;
+  if (!(pixel_size_um > 0.0)) missing = "PixelSize";
+  if (n_rows <= 0 || n_columns <= 0)
+    missing += std::string(missing.empty() ? "" : ", ") + "NRows and NColumns";
+  return Status::Error("camera '" + camera_id + "' has no " + missing +
+                       " (nor A0-A2/B0-B2): pixel marks cannot be turned into film coordinates");
 }
 
 double FrameCamera::MeanPixelSizeUm() const {
@@ -95,9 +108,7 @@ Status FilmFromPixel(const FrameCamera& camera, const Eigen::Vector2d& column_ro
     }
     return Status::Ok();
   }
-  if (!(camera.pixel_size_um > 0.0) || camera.n_columns <= 0 || camera.n_rows <= 0)
-    return Status::Error("camera '" + camera.camera_id +
-                         "' has neither PixelSize with NRows/NColumns nor A0-A2/B0-B2");
+  PHOTOPOSE_RETURN_IF_ERROR(camera.PixelToFilmStatus());
   *film_um = FilmFromCentredPixel(camera.film_coordinate_system, col - 0.5 * camera.n_columns,
                                   row - 0.5 * camera.n_rows, camera.pixel_size_um);
   return Status::Ok();
@@ -118,13 +129,24 @@ Status PixelFromFilm(const FrameCamera& camera, const Eigen::Vector2d& film_um, 
       cr = M.inverse() * Eigen::Vector2d(film_um.x() - a[0], film_um.y() - b[0]);
     }
   } else {
-    if (!(camera.pixel_size_um > 0.0) || camera.n_columns <= 0 || camera.n_rows <= 0)
-      return Status::Error("camera '" + camera.camera_id +
-                           "' has neither PixelSize with NRows/NColumns nor A0-A2/B0-B2");
+    PHOTOPOSE_RETURN_IF_ERROR(camera.PixelToFilmStatus());
     cr = CentredPixelFromFilm(camera.film_coordinate_system, film_um, camera.pixel_size_um) +
          Eigen::Vector2d(0.5 * camera.n_columns, 0.5 * camera.n_rows);
   }
   *column_row = cr - Eigen::Vector2d::Constant(PixelOriginShift(origin));
+  return Status::Ok();
+}
+
+Status FilmUmPerPixel(const FrameCamera& camera, const Eigen::Vector2d& column_row,
+                      PixelOrigin origin, double* um_per_pixel) {
+  Eigen::Vector2d at, right, down;
+  PHOTOPOSE_RETURN_IF_ERROR(FilmFromPixel(camera, column_row, origin, &at));
+  PHOTOPOSE_RETURN_IF_ERROR(FilmFromPixel(camera, column_row + Eigen::Vector2d(1, 0), origin, &right));
+  PHOTOPOSE_RETURN_IF_ERROR(FilmFromPixel(camera, column_row + Eigen::Vector2d(0, 1), origin, &down));
+  Eigen::Matrix2d J;
+  J.col(0) = right - at;
+  J.col(1) = down - at;
+  *um_per_pixel = std::sqrt(std::abs(J.determinant()));
   return Status::Ok();
 }
 
@@ -182,26 +204,12 @@ void DistortionFromComputerVision(double k1, double k2, double k3, double p1, do
 Status FitAffineFromFiducials(const FrameCamera& camera,
                               const std::vector<Eigen::Vector2d>& fiducials_column_row,
                               PixelOrigin origin, FrameCamera* calibrated) {
-  const size_t n = fiducials_column_row.size();
-  if (n != camera.film_fiducials_um.size())
+  if (fiducials_column_row.size() != camera.film_fiducials_um.size())
     return Status::Error("measured fiducials and FilmFiducials differ in number");
-  if (n < 3) return Status::Error("an affine transformation needs at least three fiducials");
-  Eigen::MatrixXd A(n, 3);
-  Eigen::VectorXd bx(n), by(n);
-  for (size_t i = 0; i < n; ++i) {
-    const double s = PixelOriginShift(origin);
-    A.row(i) << 1.0, fiducials_column_row[i].x() + s, fiducials_column_row[i].y() + s;
-    bx[i] = camera.film_fiducials_um[i].x();
-    by[i] = camera.film_fiducials_um[i].y();
-  }
-  Eigen::ColPivHouseholderQR<Eigen::MatrixXd> qr(A);
-  if (qr.rank() < 3) return Status::Error("fiducials are collinear: affine undetermined");
-  const Eigen::Vector3d a = qr.solve(bx), b = qr.solve(by);
-  *calibrated = camera;
-  calibrated->has_affine = true;
-  calibrated->affine_direction = +1;
-  calibrated->affine_a = {a[0], a[1], a[2]};
-  calibrated->affine_b = {b[0], b[1], b[2]};
+  FiducialFit fit;
+  PHOTOPOSE_RETURN_IF_ERROR(FitPixelToFilmAffine(fiducials_column_row, camera.film_fiducials_um,
+                                                 origin, &fit.affine));
+  *calibrated = WithFiducialAffine(camera, fit);
   return Status::Ok();
 }
 

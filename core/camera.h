@@ -42,9 +42,11 @@ struct FrameCamera {
   double focal_length_um = 0.0;        // FocalLength (required), micrometres
   double principal_x_um = 0.0;         // PrincipalX: PPA offset from the fiducial centre, um
   double principal_y_um = 0.0;         // PrincipalY, um
-  double pixel_size_um = 0.0;          // PixelSize, um (0: not given, then A0-B2 are required)
+  double pixel_size_um = 0.0;          // PixelSize, um (0: not given)
   int n_rows = 0;                      // NRows (0: not given)
   int n_columns = 0;                   // NColumns (0: not given)
+  // Pixel marks need a way from pixels to film: A0-B2, or PixelSize with NRows and NColumns (the
+  // fiducial centre is the image centre). Film marks need neither (HasPixelToFilm).
   int n_bands = 0;                     // NBands (0: not given)
   std::string pixel_type;              // PixelType, kept as written
   std::string block_name;              // BlockName
@@ -77,8 +79,16 @@ struct FrameCamera {
   // Columns the schema does not know, in table order (header name, value), kept for output.
   std::vector<std::pair<std::string, std::string>> extra_columns;
 
-  // Consistency of the fields (positive focal length, a way from pixels to film, ...).
+  // Consistency of the fields (positive focal length, PixelSize not negative, a non-singular
+  // affine, ...). A camera without any way from pixels to film is valid: it serves film marks, and
+  // a pixel mark that needs the way is refused where it is read (PixelToFilmStatus).
   Status IsValid() const;
+  // Whether pixels can be turned into film: A0-B2 given, or PixelSize with NRows and NColumns.
+  bool HasPixelToFilm() const;
+  // Ok when HasPixelToFilm(); otherwise the error naming what is missing.
+  Status PixelToFilmStatus() const;
+  // The camera's AngleDirection as core/rotation.h takes it.
+  AngleFlags angle_flags() const { return AngleFlags{angle_direction}; }
   // Sign applied to ideal film coordinates to get negative-plane coordinates: +1 for Polarity -1.
   double polarity_sign() const { return polarity > 0 ? -1.0 : 1.0; }
   // Film micrometres per pixel for residual scaling: PixelSize, else the mean affine scale.
@@ -86,11 +96,17 @@ struct FrameCamera {
 };
 
 // Pixel (Column, Row) -> film (um) and back. Status errors when the camera has no way from pixels to
-// film (no PixelSize with NRows/NColumns, no affine).
+// film (no PixelSize with NRows/NColumns, no affine): PixelToFilmStatus().
 Status FilmFromPixel(const FrameCamera& camera, const Eigen::Vector2d& column_row,
                      PixelOrigin origin, Eigen::Vector2d* film_um);
 Status PixelFromFilm(const FrameCamera& camera, const Eigen::Vector2d& film_um, PixelOrigin origin,
                      Eigen::Vector2d* column_row);
+
+// Film micrometres per pixel at a pixel position: the local scale sqrt|det J| of the pixel -> film
+// map (J its 2 x 2 Jacobian, by differences over one pixel; exact for the affine maps of the camera
+// table). Errors as FilmFromPixel.
+Status FilmUmPerPixel(const FrameCamera& camera, const Eigen::Vector2d& column_row,
+                      PixelOrigin origin, double* um_per_pixel);
 
 // The lens distortion present at a measured point, in um: measured = ideal + distortion.
 // DistortionModel (xb, yb the film coordinates relative to the principal point, in mm, r^2 = xb^2+yb^2):

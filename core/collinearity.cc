@@ -107,13 +107,16 @@ bool ProjectWithJacobians(const double* eo, const double* point, double focal, d
 }
 
 
+double EarthCurvatureDrop(const Eigen::Vector3d& center, const Eigen::Vector3d& point,
+                          double earth_radius_m) {
+  return (point.head<2>() - center.head<2>()).squaredNorm() / (2.0 * earth_radius_m);
+}
+
 namespace {
 
-double EarthCurvatureDrop(const FrameCamera& camera, const Eigen::Vector3d& center,
-                          const Eigen::Vector3d& point) {
-  if (!camera.apply_ecc) return 0.0;
-  const double d2 = (point.head<2>() - center.head<2>()).squaredNorm();
-  return d2 / (2.0 * camera.earth_radius_m);
+double CameraEarthCurvatureDrop(const FrameCamera& camera, const Eigen::Vector3d& center,
+                                const Eigen::Vector3d& point) {
+  return camera.apply_ecc ? EarthCurvatureDrop(center, point, camera.earth_radius_m) : 0.0;
 }
 
 }  // namespace
@@ -122,7 +125,7 @@ Status ProjectGroundPoint(const FrameCamera& camera, const ExteriorOrientation& 
                           const Eigen::Vector3d& point_in_ground, PixelOrigin origin,
                           Eigen::Vector2d* column_row) {
   Eigen::Vector3d p = point_in_ground;
-  p.z() -= EarthCurvatureDrop(camera, eo.center_in_ground(), point_in_ground);
+  p.z() -= CameraEarthCurvatureDrop(camera, eo.center_in_ground(), point_in_ground);
   double xy[2];
   if (!ProjectToImagePlane(eo.data(), p.data(), camera.focal_length_um, xy))
     return Status::Error("point is behind the camera");
@@ -148,7 +151,7 @@ Status IntersectRayWithPlane(const FrameCamera& camera, const ExteriorOrientatio
     if (!(t > 0.0)) return Status::Error("plane is behind the camera along this ray");
     p = center + t * ray;
     // With ECC the curved surface at height h lies at h - D^2/(2R) in the tangent-plane frame.
-    const double next_z = height_m - EarthCurvatureDrop(camera, center, p);
+    const double next_z = height_m - CameraEarthCurvatureDrop(camera, center, p);
     if (std::abs(next_z - plane_z) < 1e-9) break;
     plane_z = next_z;
   }

@@ -81,6 +81,12 @@ class SeedProjector {
 bool ProjectWithJacobians(const double* eo, const double* point, double focal, double* xy,
                           double* d_eo, double* d_point, double* d_focal);
 
+// The earth-curvature drop D^2 / (2 R) (m) of a ground point at horizontal distance D from the
+// projection centre (ApplyECC of the camera table): the ground surface lies that much below the
+// tangent plane of the ground frame.
+double EarthCurvatureDrop(const Eigen::Vector3d& center_in_ground,
+                          const Eigen::Vector3d& point_in_ground, double earth_radius_m);
+
 // Ground point -> pixel through the whole camera: collinearity, Polarity, distortion, film, pixel.
 // With camera.apply_ecc the earth-curvature drop D^2 / (2 R) is subtracted from Z (D: horizontal
 // distance from the projection centre).

@@ -35,7 +35,7 @@ std::optional<RotationConvention> ParseRotationConvention(const std::string& nam
   std::string lower(name);
   std::transform(lower.begin(), lower.end(), lower.begin(),
                  [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
-  if (lower == "seed") return RotationConvention::kSeed;
+  if (lower == "rxryrz" || lower == "seed") return RotationConvention::kSeed;
   if (lower == "opk") return RotationConvention::kOpk;
   if (lower == "pok") return RotationConvention::kPok;
   return std::nullopt;
@@ -44,7 +44,7 @@ std::optional<RotationConvention> ParseRotationConvention(const std::string& nam
 const char* RotationConventionName(RotationConvention convention) {
   switch (convention) {
     case RotationConvention::kSeed:
-      return "seed";
+      return "rxryrz";
     case RotationConvention::kOpk:
       return "opk";
     case RotationConvention::kPok:
@@ -52,6 +52,8 @@ const char* RotationConventionName(RotationConvention convention) {
   }
   return "?";
 }
+
+const char* RotationConventionChoices() { return "rxryrz (alias seed), opk or pok"; }
 
 Eigen::Matrix3d RotationFromAngles(RotationConvention convention, const Eigen::Vector3d& angles) {
   const double omega = angles[0], phi = angles[1], kappa = angles[2];
@@ -106,6 +108,35 @@ Eigen::Vector3d RollPitchYawFromRotation(const Eigen::Matrix3d& R_platform_from_
 
 Eigen::Vector3d ApplyAngleDirection(const AngleFlags& flags, const Eigen::Vector3d& angles) {
   return flags.angle_direction > 0 ? Eigen::Vector3d(-angles) : angles;
+}
+
+Eigen::Vector3d ConventionAnglesFromSeed(RotationConvention convention, const AngleFlags& flags,
+                                         const Eigen::Vector3d& seed_angles_rad) {
+  return ApplyAngleDirection(
+      flags, AnglesFromRotation(convention,
+                                RotationFromAngles(RotationConvention::kSeed, seed_angles_rad)));
+}
+
+Eigen::Vector3d SeedAnglesFromConvention(RotationConvention convention, const AngleFlags& flags,
+                                         const Eigen::Vector3d& convention_angles_rad) {
+  return AnglesFromRotation(
+      RotationConvention::kSeed,
+      RotationFromAngles(convention, ApplyAngleDirection(flags, convention_angles_rad)));
+}
+
+Eigen::Matrix3d ConventionFromSeedJacobian(RotationConvention convention, const AngleFlags& flags,
+                                           const Eigen::Vector3d& seed_angles_rad) {
+  // Truncation (~h^2) and rounding (~1e-16 / h) errors are both below 1e-10 at this step.
+  constexpr double kStepRad = 1e-6;
+  Eigen::Matrix3d J;
+  for (int j = 0; j < 3; ++j) {
+    Eigen::Vector3d step = Eigen::Vector3d::Zero();
+    step[j] = kStepRad;
+    const Eigen::Vector3d plus = ConventionAnglesFromSeed(convention, flags, seed_angles_rad + step);
+    const Eigen::Vector3d minus = ConventionAnglesFromSeed(convention, flags, seed_angles_rad - step);
+    for (int i = 0; i < 3; ++i) J(i, j) = WrapAngle(plus[i] - minus[i]) / (2.0 * kStepRad);
+  }
+  return J;
 }
 
 Status CheckRotationMatrix(const Eigen::Matrix3d& R, double tolerance) {

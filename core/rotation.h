@@ -18,7 +18,8 @@
 namespace photopose {
 
 enum class RotationConvention {
-  // The seed: R_camera_from_ground = Rx(omega) Ry(phi) Rz(kappa).
+  // R_camera_from_ground = Rx(omega) Ry(phi) Rz(kappa): the seed lecture's equation 1, photopose's
+  // internal convention. Named "rxryrz" at the boundaries ("seed" is accepted as an alias).
   kSeed,
   // Wolf & Dewitt / PATB omega-phi-kappa: M = M_kappa M_phi M_omega maps ground to image, with
   // M_omega = [1 0 0; 0 cos sin; 0 -sin cos] etc. For the same three numbers M is the transpose of
@@ -30,9 +31,12 @@ enum class RotationConvention {
   kPok,
 };
 
-// "seed", "opk", "pok" (case-insensitive) -> convention; nullopt otherwise.
+// "rxryrz" (alias "seed"), "opk", "pok" (case-insensitive) -> convention; nullopt otherwise.
 std::optional<RotationConvention> ParseRotationConvention(const std::string& name);
+// "rxryrz", "opk", "pok": the names every output prints.
 const char* RotationConventionName(RotationConvention convention);
+// The accepted names for messages and --help: "rxryrz (alias seed), opk or pok".
+const char* RotationConventionChoices();
 
 // Elementary rotations (active, right-handed), templated for Ceres Jets.
 template <typename T>
@@ -76,6 +80,24 @@ struct AngleFlags {
 
 // Applies AngleDirection to angles read from or written to a table (an involution).
 Eigen::Vector3d ApplyAngleDirection(const AngleFlags& flags, const Eigen::Vector3d& angles_rad);
+
+// ------------------------------------------------------------------ the one boundary conversion
+// Every output that shows angles (frames table, JSON report, console line, comparison tool) and
+// every input that reads them goes through these two functions, so that all agree.
+//
+// ConventionAnglesFromSeed: photopose's internal angles (seed convention, rad) -> the three angles
+// (rad) of `convention` with the camera's AngleDirection applied: the rotation matrix of the seed
+// angles, decomposed in `convention`, negated for AngleDirection +1. SeedAnglesFromConvention is
+// its inverse. Polarity does not enter: photopose applies it in the camera model as the mirror
+// (x, y) -> (-x, -y) of the image plane (core/camera_models.h), so the rotation needs no share of it.
+Eigen::Vector3d ConventionAnglesFromSeed(RotationConvention convention, const AngleFlags& flags,
+                                         const Eigen::Vector3d& seed_angles_rad);
+Eigen::Vector3d SeedAnglesFromConvention(RotationConvention convention, const AngleFlags& flags,
+                                         const Eigen::Vector3d& convention_angles_rad);
+// d(ConventionAnglesFromSeed) / d(seed angles) (3 x 3, unitless) by central differences (step
+// 1e-6 rad, differences wrapped to (-pi, pi]): propagates covariances to the angles written.
+Eigen::Matrix3d ConventionFromSeedJacobian(RotationConvention convention, const AngleFlags& flags,
+                                           const Eigen::Vector3d& seed_angles_rad);
 
 // Checks that a 3x3 matrix is a proper rotation (orthonormal to `tolerance`, determinant +1).
 Status CheckRotationMatrix(const Eigen::Matrix3d& R, double tolerance = 1e-6);

@@ -225,4 +225,15 @@ Status MakeSyntheticScene(const SyntheticSceneOptions& options, SyntheticScene* 
   return Status::Ok();
 }
 
+BlockTables SceneBlockTables(const SyntheticScene& scene) {
+  BlockTables tables;
+  tables.cameras = scene.cameras;
+  tables.points = scene.points;
+  tables.marks = scene.marks;
+  tables.frames = scene.approximate_frames;
+  tables.cameras_file = tables.points_file = tables.marks_file = tables.frames_file =
+      "synthetic scene";
+  return tables;
+}
+
 }  // namespace photopose

@@ -8,6 +8,7 @@
 #include <string>
 #include <vector>
 
+#include "core/block.h"
 #include "core/camera.h"
 #include "core/status.h"
 #include "core/tables.h"
@@ -50,5 +51,9 @@ struct SyntheticScene {
 };
 
 Status MakeSyntheticScene(const SyntheticSceneOptions& options, SyntheticScene* scene);
+
+// The scene as the tables of a block (core/block.h): its cameras, points, marks (corner pixel
+// origin) and approximate frames, for AssembleBlock. Block mark m is scene mark m.
+BlockTables SceneBlockTables(const SyntheticScene& scene);
 
 }  // namespace photopose

@@ -29,13 +29,11 @@ constexpr CsvOptions kTableCsvOptions{/*tolerant_header=*/true};
 // written with six decimals are orthonormal to about 3e-6 only.
 constexpr double kMatrixOrthonormalityTolerance = 1e-5;
 
-// Step of the central differences that propagate covariances to the written angles (rad): the
-// truncation error (~h^2) and the rounding error (~1e-16 / h) are both below 1e-10.
-constexpr double kAngleStepRad = 1e-6;
-
 // ------------------------------------------------------------------ column names, in output order
 
 constexpr std::string_view kAccuracyColumns[3] = {"AccuracyX", "AccuracyY", "AccuracyZ"};
+constexpr std::string_view kAttitudeAccuracyColumns[3] = {"AccuracyOmega", "AccuracyPhi",
+                                                          "AccuracyKappa"};
 
 // clang-format off
 const Names& CameraColumns() {
@@ -62,7 +60,9 @@ const Names& FrameColumns() {
   static const Names* const kColumns =
       new Names{"Raster", "CameraID",   "PerspectiveX", "PerspectiveY", "PerspectiveZ", "Omega",
                 "Phi",    "Kappa",      "Matrix",       "SRS",          "SigmaX",       "SigmaY",
-                "SigmaZ", "SigmaOmega", "SigmaPhi",     "SigmaKappa",   "Sigma0"};
+                "SigmaZ", "SigmaOmega", "SigmaPhi",     "SigmaKappa",   "Sigma0",
+                "AccuracyX", "AccuracyY", "AccuracyZ", "AccuracyOmega", "AccuracyPhi",
+                "AccuracyKappa"};
   return *kColumns;
 }
 const Names& PointColumns() {
@@ -224,6 +224,34 @@ Status ReadNumberOr(const CsvRowReader& row, std::string_view column, double def
   std::optional<double> number;
   PHOTOPOSE_RETURN_IF_ERROR(ReadNumber(row, column, &number));
   *value = number.value_or(default_value);
+  return Status::Ok();
+}
+
+// An optional number that must be positive when given.
+Status ReadPositive(const CsvRowReader& row, std::string_view column,
+                    std::optional<double>* value) {
+  PHOTOPOSE_RETURN_IF_ERROR(ReadNumber(row, column, value));
+  if (*value && !(**value > 0.0))
+    return row.Error(column, Quoted(row.Text(column)) + " must be positive");
+  return Status::Ok();
+}
+
+// Three positive accuracies given together (e.g. AccuracyX, AccuracyY, AccuracyZ) or none.
+Status ReadAccuracyTriple(const CsvRowReader& row, const std::string_view (&columns)[3],
+                          std::optional<Eigen::Vector3d>* accuracy) {
+  if (!row.Has(columns[0]) && !row.Has(columns[1]) && !row.Has(columns[2])) return Status::Ok();
+  Eigen::Vector3d values;
+  for (int i = 0; i < 3; ++i) {
+    std::optional<double> sigma;
+    PHOTOPOSE_RETURN_IF_ERROR(ReadPositive(row, columns[i], &sigma));
+    if (!sigma) {
+      return row.Error(columns[i], "is empty; " + std::string(columns[0]) + ", " +
+                                       std::string(columns[1]) + ", " + std::string(columns[2]) +
+                                       " are given together");
+    }
+    values[i] = *sigma;
+  }
+  *accuracy = values;
   return Status::Ok();
 }
 
@@ -643,35 +671,12 @@ std::string SignText(int sign) { return sign > 0 ? "1" : "-1"; }
 
 // ------------------------------------------------------------------ frames table
 
-// The angles a frames table holds for a seed rotation: convention `convention`, AngleDirection
-// applied (rad).
-Eigen::Vector3d FileAnglesFromSeed(RotationConvention convention, const AngleFlags& flags,
-                                   const Eigen::Vector3d& seed_angles_rad) {
-  return ApplyAngleDirection(
-      flags, AnglesFromRotation(convention,
-                                RotationFromAngles(RotationConvention::kSeed, seed_angles_rad)));
-}
-
-Eigen::Vector3d SeedAnglesFromFile(RotationConvention convention, const AngleFlags& flags,
-                                   const Eigen::Vector3d& file_angles_rad) {
-  return AnglesFromRotation(
-      RotationConvention::kSeed,
-      RotationFromAngles(convention, ApplyAngleDirection(flags, file_angles_rad)));
-}
-
-// d(file parameters) / d(eo.parameters): identity for X0, Y0, Z0, and the central-difference
-// Jacobian of FileAnglesFromSeed for the angles (differences wrapped to (-pi, pi]).
+// d(file parameters) / d(eo.parameters): identity for X0, Y0, Z0, and the angle Jacobian of the
+// one boundary conversion (core/rotation.h).
 Matrix6d FileFromSeedJacobian(RotationConvention convention, const AngleFlags& flags,
                               const Eigen::Vector3d& seed_angles_rad) {
   Matrix6d J = Matrix6d::Identity();
-  for (int j = 0; j < 3; ++j) {
-    Eigen::Vector3d step = Eigen::Vector3d::Zero();
-    step[j] = kAngleStepRad;
-    const Eigen::Vector3d plus = FileAnglesFromSeed(convention, flags, seed_angles_rad + step);
-    const Eigen::Vector3d minus = FileAnglesFromSeed(convention, flags, seed_angles_rad - step);
-    for (int i = 0; i < 3; ++i)
-      J(3 + i, 3 + j) = WrapAngle(plus[i] - minus[i]) / (2.0 * kAngleStepRad);
-  }
+  J.bottomRightCorner<3, 3>() = ConventionFromSeedJacobian(convention, flags, seed_angles_rad);
   return J;
 }
 
@@ -724,7 +729,7 @@ Status ReadFrameRotation(const CsvRowReader& row, const FramesTableOptions& opti
   PHOTOPOSE_RETURN_IF_ERROR(ReadRequiredNumber(row, "Phi", &angles_deg[1]));
   PHOTOPOSE_RETURN_IF_ERROR(ReadRequiredNumber(row, "Kappa", &angles_deg[2]));
   *seed_angles_rad =
-      SeedAnglesFromFile(options.convention, FlagsOf(camera), angles_deg / kDegreesPerRadian);
+      SeedAnglesFromConvention(options.convention, FlagsOf(camera), angles_deg / kDegreesPerRadian);
   return Status::Ok();
 }
 
@@ -765,6 +770,7 @@ Status ReadFrameRow(const CsvTable& table, const CsvRow& csv_row, const FramesTa
                     FrameRecord* frame) {
   const CsvRowReader row(table, csv_row);
   FrameRecord f;
+  f.line = csv_row.line;
   PHOTOPOSE_RETURN_IF_ERROR(row.RequiredText("Raster", &f.raster));
   PHOTOPOSE_RETURN_IF_ERROR(row.RequiredText("CameraID", &f.camera_id));
   const FrameCamera* camera = nullptr;
@@ -784,6 +790,9 @@ Status ReadFrameRow(const CsvTable& table, const CsvRow& csv_row, const FramesTa
   PHOTOPOSE_RETURN_IF_ERROR(ReadNumber(row, "Sigma0", &f.sigma0));
   if (f.sigma0 && *f.sigma0 < 0.0)
     return row.Error("Sigma0", Quoted(row.Text("Sigma0")) + " is negative");
+  PHOTOPOSE_RETURN_IF_ERROR(ReadAccuracyTriple(row, kAccuracyColumns, &f.center_accuracy_m));
+  PHOTOPOSE_RETURN_IF_ERROR(
+      ReadAccuracyTriple(row, kAttitudeAccuracyColumns, &f.attitude_accuracy_deg));
   f.extra_columns = ReadExtraColumns(table, csv_row, FrameColumns());
   *frame = std::move(f);
   return Status::Ok();
@@ -1008,6 +1017,7 @@ Status FormatFramesTable(const FramesTableOptions& options, const std::vector<Fr
   // The camera of every frame first: it decides the AngleDirection and whether Matrix is written.
   std::vector<const FrameCamera*> cameras(frames.size(), nullptr);
   bool any_matrix = false, any_covariance = false, any_sigma0 = false;
+  bool any_center_accuracy = false, any_attitude_accuracy = false;
   for (size_t i = 0; i < frames.size(); ++i) {
     const Status found = FindCamera(options, frames[i].camera_id, &cameras[i]);
     if (!found.ok())
@@ -1017,6 +1027,8 @@ Status FormatFramesTable(const FramesTableOptions& options, const std::vector<Fr
                                 cameras[i]->orientation_type == OrientationType::kMatrix);
     any_covariance = any_covariance || frames[i].covariance.has_value();
     any_sigma0 = any_sigma0 || frames[i].sigma0.has_value();
+    any_center_accuracy = any_center_accuracy || frames[i].center_accuracy_m.has_value();
+    any_attitude_accuracy = any_attitude_accuracy || frames[i].attitude_accuracy_deg.has_value();
   }
   std::vector<std::string> extra_names;
   PHOTOPOSE_RETURN_IF_ERROR(CollectExtraColumnNames(path, frames, FrameColumns(), &extra_names));
@@ -1026,6 +1038,11 @@ Status FormatFramesTable(const FramesTableOptions& options, const std::vector<Fr
   header.push_back("SRS");
   if (any_covariance) header.insert(header.end(), SigmaColumns().begin(), SigmaColumns().end());
   if (any_sigma0) header.push_back("Sigma0");
+  if (any_center_accuracy)
+    header.insert(header.end(), std::begin(kAccuracyColumns), std::end(kAccuracyColumns));
+  if (any_attitude_accuracy)
+    header.insert(header.end(), std::begin(kAttitudeAccuracyColumns),
+                  std::end(kAttitudeAccuracyColumns));
   header.insert(header.end(), extra_names.begin(), extra_names.end());
   std::string contents = CsvLine(header);
 
@@ -1041,7 +1058,7 @@ Status FormatFramesTable(const FramesTableOptions& options, const std::vector<Fr
     row.Number("PerspectiveY", f.eo.parameters[1]);
     row.Number("PerspectiveZ", f.eo.parameters[2]);
     const Eigen::Vector3d angles_deg =
-        FileAnglesFromSeed(options.convention, flags, seed_angles) * kDegreesPerRadian;
+        ConventionAnglesFromSeed(options.convention, flags, seed_angles) * kDegreesPerRadian;
     row.Number("Omega", angles_deg[0]);
     row.Number("Phi", angles_deg[1]);
     row.Number("Kappa", angles_deg[2]);
@@ -1071,6 +1088,15 @@ Status FormatFramesTable(const FramesTableOptions& options, const std::vector<Fr
       }
     }
     if (any_sigma0) row.OptionalNumber("Sigma0", f.sigma0);
+    const auto accuracies = [&row](const std::string_view(&columns)[3],
+                                   const std::optional<Eigen::Vector3d>& values) {
+      for (int k = 0; k < 3; ++k) {
+        if (values && !((*values)[k] > 0.0)) row.Fail(columns[k], "must be positive");
+        row.OptionalNumber(columns[k], values ? std::optional<double>((*values)[k]) : std::nullopt);
+      }
+    };
+    if (any_center_accuracy) accuracies(kAccuracyColumns, f.center_accuracy_m);
+    if (any_attitude_accuracy) accuracies(kAttitudeAccuracyColumns, f.attitude_accuracy_deg);
     AppendExtraColumns(f, extra_names, row.fields());
     PHOTOPOSE_RETURN_IF_ERROR(row.status(path));
     contents += CsvLine(*row.fields());

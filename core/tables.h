@@ -71,8 +71,15 @@ struct FrameRecord {
   // and writes the standard deviations.
   std::optional<Matrix6d> covariance;
   std::optional<double> sigma0;  // a posteriori sigma0 (unitless)
+  // Accuracy of the exterior orientation as measured (GNSS / IMU), one sigma per component, all
+  // three or none: AccuracyX/Y/Z (m) of PerspectiveX/Y/Z and AccuracyOmega/Phi/Kappa (degrees, of
+  // the angles as the file gives them: its convention, AngleDirection applied). Kept as read and
+  // written back; the block (core/block.h) turns them into prior accuracies.
+  std::optional<Eigen::Vector3d> center_accuracy_m;
+  std::optional<Eigen::Vector3d> attitude_accuracy_deg;
   // Further numeric/text columns written after the standard ones (e.g. NumObservations).
   std::vector<std::pair<std::string, std::string>> extra_columns;
+  int line = 0;  // source line when read, for messages
 };
 
 struct FramesTableOptions {
@@ -125,7 +132,9 @@ struct ImageMark {
   // top-left corner by default) or FilmX/FilmY (um).
   std::optional<Eigen::Vector2d> column_row;
   std::optional<Eigen::Vector2d> film_um;
-  std::optional<double> accuracy_px;  // Accuracy, one sigma (pixels)
+  // Accuracy, one sigma, in the mark's own unit: pixels for Column/Row, um for FilmX/FilmY (the
+  // name predates film marks).
+  std::optional<double> accuracy_px;
   std::string camera_id;              // CameraID, optional
   int line = 0;                       // source line, for messages
 };

@@ -1,6 +1,7 @@
 #include "solvers/absolute_pose.h"
 
 #include "solvers/dlt.h"
+#include "solvers/point_configuration.h"
 
 #include <Eigen/Dense>
 #include <algorithm>
@@ -20,10 +21,6 @@
 namespace photopose {
 namespace {
 
-// Ground points whose second RMS extent is below about this fraction of the first lie on one line:
-// every pose rotated about that line fits them equally well. (Well above the rounding of the test,
-// ~1e-8 in these units.)
-constexpr double kCollinearExtent = 1e-6;
 // Points scored between early-exit checks in ScoreModel: long enough for the compiler to keep the
 // loop tight, short enough that a bad model stops soon after it is rejected.
 constexpr int kScoreBlock = 8;
@@ -114,7 +111,7 @@ inline bool AddGaussNewtonTermsInline(const Eigen::Vector3d& camera_point, doubl
 }
 
 // A pose prepared for scoring: (u, v, w) = R X + t for the centred X, and the squared inlier
-// threshold in image-plane units divided by c.
+// threshold in whitened units.
 struct ScoringPose {
   double r00, r01, r02, r10, r11, r12, r20, r21, r22;
   double t0, t1, t2;
@@ -129,14 +126,15 @@ ScoringPose PrepareScoring(const PoseCandidate& model, const Eigen::Vector3d& or
                      R(2, 1), R(2, 2), t[0],    t[1],    t[2],    cap};
 }
 
-// For the points [begin, end) of the scoring layout: adds min(r^2, cap) to *sum (cap for a point on
-// or behind the camera plane) and the number of outliers (r^2 > cap or w >= 0) to *outliers, with
-// r = (x_obs / c + u / w, y_obs / c + v / w), and writes the inlier flags to flags[order[i]] when
-// flags is not null. The SSE2 path (baseline on x86-64) takes two points per step with the
-// arithmetic of the scalar loop in the same order; this loop is most of the time of RANSAC.
+// For the points [begin, end) of the scoring layout: adds min(w2 r^2, cap) to *sum (cap for a point
+// on or behind the camera plane) and the number of outliers (w2 r^2 > cap or w >= 0) to *outliers,
+// with r = (x_obs / c + u / w, y_obs / c + v / w) and w2 the datum's squared weight, and writes the
+// inlier flags to flags[order[i]] when flags is not null. The SSE2 path (baseline on x86-64) takes
+// two points per step with the arithmetic of the scalar loop in the same order; this loop is most
+// of the time of RANSAC.
 inline void ScoreRange(const ScoringPose& p, const double* x, const double* y, const double* z,
-                       const double* ox, const double* oy, int begin, int end, double* sum,
-                       int* outliers, const int* order, char* flags) {
+                       const double* ox, const double* oy, const double* w2, int begin, int end,
+                       double* sum, int* outliers, const int* order, char* flags) {
   int i = begin;
   double partial = 0.0;
   int count = 0;
@@ -159,7 +157,8 @@ inline void ScoreRange(const ScoringPose& p, const double* x, const double* y, c
       const __m128d inv_w = _mm_div_pd(one, w);
       const __m128d dx = _mm_add_pd(_mm_loadu_pd(ox + i), _mm_mul_pd(u, inv_w));
       const __m128d dy = _mm_add_pd(_mm_loadu_pd(oy + i), _mm_mul_pd(v, inv_w));
-      const __m128d r2 = _mm_add_pd(_mm_mul_pd(dx, dx), _mm_mul_pd(dy, dy));
+      const __m128d r2 =
+          _mm_mul_pd(_mm_add_pd(_mm_mul_pd(dx, dx), _mm_mul_pd(dy, dy)), _mm_loadu_pd(w2 + i));
       const __m128d inlier = _mm_and_pd(_mm_cmplt_pd(w, zero), _mm_cmple_pd(r2, cap));
       sums = _mm_add_pd(sums, _mm_or_pd(_mm_and_pd(inlier, r2), _mm_andnot_pd(inlier, cap)));
       const int bits = _mm_movemask_pd(inlier);
@@ -181,7 +180,7 @@ inline void ScoreRange(const ScoringPose& p, const double* x, const double* y, c
     const double inv_w = 1.0 / w;
     const double dx = ox[i] + u * inv_w;
     const double dy = oy[i] + v * inv_w;
-    const double r2 = dx * dx + dy * dy;
+    const double r2 = (dx * dx + dy * dy) * w2[i];
     const bool inlier = w < 0.0 && r2 <= p.cap;
     partial += inlier ? r2 : p.cap;
     count += inlier ? 0 : 1;
@@ -204,8 +203,8 @@ bool AddGaussNewtonTerms(const Eigen::Vector3d& camera_point, double observed_x_
 
 bool AbsolutePoseRansacOptions::IsValid(std::string* why) const {
   if (!ransac.IsValid(why)) return false;
-  if (!(inlier_threshold_um > 0.0) || !std::isfinite(inlier_threshold_um)) {
-    if (why != nullptr) *why = "inlier_threshold_um must be positive and finite";
+  if (!(inlier_threshold > 0.0) || !std::isfinite(inlier_threshold)) {
+    if (why != nullptr) *why = "inlier_threshold must be positive and finite";
     return false;
   }
   if (lo_gauss_newton_iterations < 1) {
@@ -221,13 +220,21 @@ bool AbsolutePoseRansacOptions::IsValid(std::string* why) const {
 
 AbsolutePoseEstimator::AbsolutePoseEstimator(const std::vector<Eigen::Vector2d>& image_plane_um,
                                              const std::vector<Eigen::Vector3d>& points_in_ground,
-                                             double focal_um, double inlier_threshold_um,
-                                             int gauss_newton_iterations)
+                                             double focal_um, double inlier_threshold,
+                                             int gauss_newton_iterations,
+                                             const std::vector<double>& sigmas,
+                                             ConsensusScore score)
     : num_data_(static_cast<int>(points_in_ground.size())),
       focal_um_(focal_um),
-      threshold_sq_um2_(inlier_threshold_um * inlier_threshold_um),
-      gauss_newton_iterations_(gauss_newton_iterations) {
+      threshold_sq_(inlier_threshold * inlier_threshold),
+      gauss_newton_iterations_(gauss_newton_iterations),
+      score_(score),
+      median_rank_(std::max(0, (num_data_ + 4) / 2 - 1)) {
   const int n = num_data_;
+  double mean_sigma_sq = 0.0;
+  for (int i = 0; i < n; ++i) mean_sigma_sq += sigmas.empty() ? 1.0 : sigmas[i] * sigmas[i];
+  if (n > 0) mean_sigma_sq /= n;
+  typical_threshold_sq_over_c2_ = threshold_sq_ * mean_sigma_sq / (focal_um * focal_um);
   for (const Eigen::Vector3d& X : points_in_ground) origin_in_ground_ += X;
   if (n > 0) origin_in_ground_ /= n;
   centred_points_.resize(n);
@@ -237,6 +244,7 @@ AbsolutePoseEstimator::AbsolutePoseEstimator(const std::vector<Eigen::Vector2d>&
   z_.resize(n);
   ox_.resize(n);
   oy_.resize(n);
+  w2_.resize(n);
   for (int i = 0; i < n; ++i) {
     const Eigen::Vector2d& xy = image_plane_um[i];
     centred_points_[i] = points_in_ground[i] - origin_in_ground_;
@@ -259,6 +267,8 @@ AbsolutePoseEstimator::AbsolutePoseEstimator(const std::vector<Eigen::Vector2d>&
     z_[k] = centred_points_[i].z();
     ox_[k] = observed_over_c_[i].x();
     oy_[k] = observed_over_c_[i].y();
+    const double sigma = sigmas.empty() ? 1.0 : sigmas[i];
+    w2_[k] = focal_um * focal_um / (sigma * sigma);
   }
 }
 
@@ -276,12 +286,44 @@ void AbsolutePoseEstimator::GenerateModels(const int* sample, std::vector<Model>
     (*models)[k].center_in_ground += origin_in_ground_;
 }
 
+void AbsolutePoseEstimator::WhitenedSquares(const Model& model,
+                                            std::vector<double>* squares) const {
+  squares->assign(num_data_, std::numeric_limits<double>::infinity());
+  const ScoringPose pose = PrepareScoring(model, origin_in_ground_, 0.0);
+  for (int k = 0; k < num_data_; ++k) {
+    const double u = pose.r00 * x_[k] + pose.r01 * y_[k] + pose.r02 * z_[k] + pose.t0;
+    const double v = pose.r10 * x_[k] + pose.r11 * y_[k] + pose.r12 * z_[k] + pose.t1;
+    const double w = pose.r20 * x_[k] + pose.r21 * y_[k] + pose.r22 * z_[k] + pose.t2;
+    if (!(w < 0.0)) continue;
+    const double dx = ox_[k] + u / w, dy = oy_[k] + v / w;
+    (*squares)[order_[k]] = (dx * dx + dy * dy) * w2_[k];
+  }
+}
+
+double AbsolutePoseEstimator::RobustSigma(const Model& model) const {
+  std::vector<double> squares;
+  WhitenedSquares(model, &squares);
+  std::nth_element(squares.begin(), squares.begin() + median_rank_, squares.end());
+  const double h = median_rank_ + 1.0;
+  // |r|^2 / sigma^2 of a 2-D Gaussian residual is chi-square(2): its p-quantile is -2 ln(1 - p).
+  const double quantile = -2.0 * std::log(1.0 - h / (num_data_ + 1.0));
+  const double correction = 1.0 + 5.0 / std::max(1, num_data_ - kMinimalSampleSize);
+  // Noise-free data would give 0; a scale of 1e-9 of c (in whitened units) stands for rounding.
+  const double floor = 1e-9 * std::sqrt(*std::min_element(w2_.begin(), w2_.end()));
+  return std::max(correction * std::sqrt(squares[median_rank_] / quantile), floor);
+}
+
 double AbsolutePoseEstimator::ScoreModel(const Model& model, double best_score_so_far) const {
+  if (score_ == ConsensusScore::kLeastMedian) {
+    std::vector<double> squares;
+    WhitenedSquares(model, &squares);
+    std::nth_element(squares.begin(), squares.begin() + median_rank_, squares.end());
+    return squares[median_rank_];
+  }
   // Work in image-plane units divided by c: x / c = -u / w, so the residual over c is
-  // x_obs / c + u / w, and one reciprocal of w serves both coordinates.
-  const double c2 = focal_um_ * focal_um_;
-  const ScoringPose pose = PrepareScoring(model, origin_in_ground_, threshold_sq_um2_ / c2);
-  const double limit = best_score_so_far / c2;
+  // x_obs / c + u / w, and one reciprocal of w serves both coordinates; the squared weights whiten.
+  const ScoringPose pose = PrepareScoring(model, origin_in_ground_, threshold_sq_);
+  const double limit = best_score_so_far;
 
   // Sequential probability ratio test (J. Matas and O. Chum, "Randomized RANSAC with sequential
   // probability ratio test", ICCV 2005). A model that beats the best has fewer than
@@ -291,7 +333,7 @@ double AbsolutePoseEstimator::ScoreModel(const Model& model, double best_score_s
   // is rejected, which by Wald's bound happens to a model with inlier ratio >= eps with probability
   // <= 1 / A. A bad model is thus dropped after a dozen or so points instead of the ~n (1 - eps)
   // that the exact bound (sum >= best) needs.
-  const double eps = 1.0 - best_score_so_far / (num_data_ * threshold_sq_um2_);
+  const double eps = 1.0 - best_score_so_far / (num_data_ * threshold_sq_);
   const bool sprt = eps > 2.0 * kSprtBadInlierRatio && eps < 1.0;
   const double log_per_inlier = sprt ? std::log(kSprtBadInlierRatio / eps) : 0.0;
   const double log_per_outlier = sprt ? std::log((1.0 - kSprtBadInlierRatio) / (1.0 - eps)) : 0.0;
@@ -310,24 +352,34 @@ double AbsolutePoseEstimator::ScoreModel(const Model& model, double best_score_s
     for (int begin = first; begin < last; begin += kScoreBlock) {
       const int end = std::min(begin + kScoreBlock, last);
       int outliers = 0;
-      ScoreRange(pose, x_.data(), y_.data(), z_.data(), ox_.data(), oy_.data(), begin, end, &sum,
-                 &outliers, nullptr, nullptr);
-      if (sum >= limit) return std::max(sum * c2, best_score_so_far);
+      ScoreRange(pose, x_.data(), y_.data(), z_.data(), ox_.data(), oy_.data(), w2_.data(), begin,
+                 end, &sum, &outliers, nullptr, nullptr);
+      if (sum >= limit) return std::max(sum, best_score_so_far);
       log_ratio += outliers * log_per_outlier + (end - begin - outliers) * log_per_inlier;
       if (log_ratio > log_threshold) return std::numeric_limits<double>::infinity();
     }
   }
-  return sum * c2;
+  return sum;
 }
 
 int AbsolutePoseEstimator::Inliers(const Model& model, std::vector<char>* mask) const {
   mask->resize(num_data_);
+  if (score_ == ConsensusScore::kLeastMedian) {
+    const double sigma = RobustSigma(model);
+    std::vector<double> squares;
+    WhitenedSquares(model, &squares);
+    int count = 0;
+    for (int i = 0; i < num_data_; ++i) {
+      (*mask)[i] = squares[i] <= threshold_sq_ * sigma * sigma ? 1 : 0;
+      count += (*mask)[i];
+    }
+    return count;
+  }
   double sum = 0.0;
   int outliers = 0;
-  const ScoringPose pose =
-      PrepareScoring(model, origin_in_ground_, threshold_sq_um2_ / (focal_um_ * focal_um_));
-  ScoreRange(pose, x_.data(), y_.data(), z_.data(), ox_.data(), oy_.data(), 0, num_data_, &sum,
-             &outliers, order_.data(), mask->data());
+  const ScoringPose pose = PrepareScoring(model, origin_in_ground_, threshold_sq_);
+  ScoreRange(pose, x_.data(), y_.data(), z_.data(), ox_.data(), oy_.data(), w2_.data(), 0,
+             num_data_, &sum, &outliers, order_.data(), mask->data());
   return num_data_ - outliers;
 }
 
@@ -372,7 +424,7 @@ void AbsolutePoseEstimator::GaussNewton(const std::vector<int>& indices, int max
   Eigen::Vector3d center = model->center_in_ground - origin_in_ground_;
   // In the normalised units of AddGaussNewtonTerms (image plane / c).
   const double converged_motion_sq =
-      kConvergedImageMotion * kConvergedImageMotion * threshold_sq_um2_ / (focal_um_ * focal_um_);
+      kConvergedImageMotion * kConvergedImageMotion * typical_threshold_sq_over_c2_;
   // Each iteration linearises about the current pose in a local ground frame X' = R (X - centre),
   // where the pose is the zero vector: the increments (dX0', d_omega, d_phi, d_kappa) are then the
   // eo partials of the collinearity equations at zero angles (AddGaussNewtonTerms, no
@@ -416,6 +468,16 @@ Status EstimateAbsolutePoseRansac(const AbsolutePoseRansacOptions& options,
                                   const std::vector<Eigen::Vector3d>& points_in_ground,
                                   double focal_um, ExteriorOrientation* eo,
                                   std::vector<char>* inlier_mask, RansacSummary* summary) {
+  return EstimateAbsolutePoseRansac(options, image_plane_um, points_in_ground, {}, focal_um, eo,
+                                    inlier_mask, summary);
+}
+
+Status EstimateAbsolutePoseRansac(const AbsolutePoseRansacOptions& options,
+                                  const std::vector<Eigen::Vector2d>& image_plane_um,
+                                  const std::vector<Eigen::Vector3d>& points_in_ground,
+                                  const std::vector<double>& sigmas, double focal_um,
+                                  ExteriorOrientation* eo, std::vector<char>* inlier_mask,
+                                  RansacSummary* summary) {
   RansacSummary local_summary;
   RansacSummary& out = summary != nullptr ? *summary : local_summary;
   out = RansacSummary();
@@ -435,36 +497,24 @@ Status EstimateAbsolutePoseRansac(const AbsolutePoseRansacOptions& options,
     return fail("the principal distance must be positive and finite");
   if (n < AbsolutePoseEstimator::kMinimalSampleSize)
     return fail("needs at least 3 points, got " + std::to_string(n));
-  Eigen::Vector3d centroid = Eigen::Vector3d::Zero();
+  if (!sigmas.empty() && static_cast<int>(sigmas.size()) != n)
+    return fail(std::to_string(sigmas.size()) + " standard deviations for " + std::to_string(n) +
+                " points");
   for (int i = 0; i < n; ++i) {
     if (!image_plane_um[i].allFinite() || !points_in_ground[i].allFinite())
       return fail("correspondence " + std::to_string(i) + " is not finite");
-    centroid += points_in_ground[i];
+    if (!sigmas.empty() && !(sigmas[i] > 0.0 && std::isfinite(sigmas[i])))
+      return fail("the standard deviation of correspondence " + std::to_string(i) +
+                  " is not positive and finite");
   }
-  centroid /= n;
 
   // All points on one line (or one point): the pose is not determined, so fail before sampling.
-  // With the scatter matrix's eigenvalues l1 >= l2 >= l3, its trace is ~l1 and the sum of its
-  // principal 2x2 minors ~l1 l2 (both within small factors), so minors / trace^2 ~ l2 / l1, the
-  // squared ratio of the second RMS extent to the first; no eigen-decomposition needed.
-  double sxx = 0.0, syy = 0.0, szz = 0.0, sxy = 0.0, sxz = 0.0, syz = 0.0;
-  for (const Eigen::Vector3d& X : points_in_ground) {
-    const double dx = X.x() - centroid.x(), dy = X.y() - centroid.y(), dz = X.z() - centroid.z();
-    sxx += dx * dx;
-    syy += dy * dy;
-    szz += dz * dz;
-    sxy += dx * dy;
-    sxz += dx * dz;
-    syz += dy * dz;
-  }
-  const double trace = sxx + syy + szz;
-  const double minors = (sxx * syy - sxy * sxy) + (sxx * szz - sxz * sxz) + (syy * szz - syz * syz);
-  if (!(minors > kCollinearExtent * kCollinearExtent * trace * trace))
+  if (ComputePointSpread(points_in_ground).collinear())
     return fail("all ground points are collinear (or coincide); the pose is not determined");
 
   const AbsolutePoseEstimator estimator(image_plane_um, points_in_ground, focal_um,
-                                        options.inlier_threshold_um,
-                                        options.lo_gauss_newton_iterations);
+                                        options.inlier_threshold,
+                                        options.lo_gauss_newton_iterations, sigmas, options.score);
   PoseCandidate pose;
   std::vector<char> mask;
   out = Ransac(options.ransac, estimator, &pose, &mask);

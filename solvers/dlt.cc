@@ -1,5 +1,7 @@
 #include "solvers/dlt.h"
 
+#include "solvers/point_configuration.h"
+
 #include <Eigen/Dense>
 #include <cmath>
 #include <string>
@@ -7,10 +9,6 @@
 namespace photopose {
 namespace {
 
-// Ground points whose second RMS extent is below this fraction of the first are collinear, whose
-// third is below it are coplanar: the 12 entries of P are then not all determined (a plane leaves
-// a three-dimensional null space), and near it the solution is set by rounding.
-constexpr double kMinRelativeExtent = 1e-6;
 // The second-smallest singular value of the normalised design matrix relative to the largest:
 // below it the null space is not one-dimensional and the solution is not unique.
 constexpr double kMinSingularValueRatio = 1e-6;  // eigenvalues of A^T A resolve ~1e-8 of sigma_max
@@ -40,22 +38,17 @@ Status SolveDlt(const std::vector<Eigen::Vector3d>& bearings,
   }
   centroid /= n;
 
-  // Geometry of the ground points: the principal RMS extents of the centred cloud.
-  Eigen::Matrix3d scatter = Eigen::Matrix3d::Zero();
-  double mean_distance = 0.0;
-  for (const Eigen::Vector3d& X : points_in_ground) {
-    const Eigen::Vector3d d = X - centroid;
-    scatter += d * d.transpose();
-    mean_distance += d.norm();
-  }
-  mean_distance /= n;
-  const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> principal(scatter, Eigen::EigenvaluesOnly);
-  const Eigen::Vector3d extent = principal.eigenvalues().cwiseMax(0.0).cwiseSqrt();  // ascending
-  if (!(extent[2] > 0.0)) return Status::Error("DLT: all points coincide");
-  if (!(extent[1] > kMinRelativeExtent * extent[2]))
-    return Status::Error("DLT: the points are collinear");
-  if (!(extent[0] > kMinRelativeExtent * extent[2]))
+  // Geometry of the ground points (solvers/point_configuration.h): collinear or coplanar points
+  // leave the 12 entries of P undetermined (a plane leaves a three-dimensional null space), and
+  // near it the solution is set by rounding.
+  const PointSpread spread = ComputePointSpread(points_in_ground);
+  if (!(spread.extents_m[2] > 0.0)) return Status::Error("DLT: all points coincide");
+  if (spread.collinear()) return Status::Error("DLT: the points are collinear");
+  if (spread.coplanar())
     return Status::Error("DLT: the points are coplanar; the DLT needs a three-dimensional spread");
+  double mean_distance = 0.0;
+  for (const Eigen::Vector3d& X : points_in_ground) mean_distance += (X - centroid).norm();
+  mean_distance /= n;
 
   // Hartley normalisation of the ground side: centroid at the origin, mean distance sqrt(3). The
   // bearing side needs none: unit vectors with an orthonormal tangent basis are already isotropic.

@@ -14,6 +14,11 @@
 //   log(1 - confidence) / log(1 - w^kMinimalSampleSize).
 // The loop stops when the budget is reached.
 //
+// Small data sets are not sampled but enumerated: when the number of distinct minimal samples
+// C(n, m) is at most RansacOptions::max_exhaustive_samples, every sample is tried once, in
+// lexicographic order, and the adaptive rule is not used. The result is then the same for every
+// seed (a surveyor's four to fifteen control points: C(15, 3) = 455).
+//
 // The Estimator concept (duck-typed; solvers/absolute_pose.h has the resection one):
 //
 //   struct Estimator {
@@ -67,6 +72,9 @@ struct RansacOptions {
   // Refine -> re-score rounds per new best model, >= 0; a round that does not lower the score, or
   // after which the inlier set is unchanged, ends the local optimisation early.
   int max_lo_iterations = 4;
+  // Enumerate every minimal sample, instead of drawing, when there are at most this many (>= 0;
+  // 0 never enumerates). Enumeration ignores max_trials, min_trials and the seed.
+  int max_exhaustive_samples = 1000;
 
   bool IsValid(std::string* why) const {
     auto fail = [why](const char* message) {
@@ -78,6 +86,7 @@ struct RansacOptions {
       return fail("min_trials must be in [0, max_trials]");
     if (!(confidence > 0.0 && confidence < 1.0)) return fail("confidence must be in (0, 1)");
     if (max_lo_iterations < 0) return fail("max_lo_iterations must be >= 0");
+    if (max_exhaustive_samples < 0) return fail("max_exhaustive_samples must be >= 0");
     return true;
   }
 };
@@ -88,6 +97,7 @@ struct RansacSummary {
   int num_inliers = 0;  // inliers of the returned model
   double score = std::numeric_limits<double>::infinity();  // its MSAC cost (data units squared)
   int num_lo_steps = 0;                                    // RefineModel calls
+  bool exhaustive = false;  // every minimal sample was tried (no random draws)
   bool success = false;  // a model with >= kMinimalSampleSize inliers was found
   std::string message;   // why it failed, or a note on success
 
@@ -95,7 +105,7 @@ struct RansacSummary {
     std::ostringstream out;
     out << "RANSAC " << (success ? "succeeded" : "failed") << ": " << num_inliers << " inliers, "
         << num_trials << " trials, " << num_models << " models, " << num_lo_steps
-        << " LO steps, score " << score;
+        << " LO steps, score " << score << (exhaustive ? ", exhaustive" : "");
     if (!message.empty()) out << " (" << message << ")";
     return out.str();
   }
@@ -115,6 +125,44 @@ inline int RequiredTrials(double inlier_ratio, int m, double confidence, int cap
   if (!(trials < static_cast<double>(cap))) return cap;
   return trials < 1.0 ? 1 : static_cast<int>(trials);
 }
+
+// C(n, m), or cap + 1 when it exceeds cap (no overflow).
+inline long long CappedBinomial(int n, int m, long long cap) {
+  if (m < 0 || m > n) return 0;
+  long long value = 1;
+  for (int k = 1; k <= m; ++k) {
+    value = value * (n - m + k) / k;  // exact: C(n - m + k, k) at every step
+    if (value > cap) return cap + 1;
+  }
+  return value;
+}
+
+// Every m-subset of [0, n) once, in lexicographic order.
+class CombinationSampler {
+ public:
+  CombinationSampler(int n, int m) : n_(n), m_(m), current_(m) {
+    for (int k = 0; k < m_; ++k) current_[k] = k;
+  }
+  // Writes the next subset; false (nothing written) after the last one.
+  bool Sample(int* sample) {
+    if (done_) return false;
+    for (int k = 0; k < m_; ++k) sample[k] = current_[k];
+    int k = m_ - 1;
+    while (k >= 0 && current_[k] == n_ - m_ + k) --k;
+    if (k < 0) {
+      done_ = true;
+    } else {
+      ++current_[k];
+      for (int j = k + 1; j < m_; ++j) current_[j] = current_[j - 1] + 1;
+    }
+    return true;
+  }
+
+ private:
+  int n_, m_;
+  std::vector<int> current_;
+  bool done_ = false;
+};
 
 // Draws m distinct indices in [0, n), uniformly over subsets, from a seeded mt19937_64.
 class UniformSampler {
@@ -189,7 +237,11 @@ RansacSummary Ransac(const RansacOptions& options, const Estimator& estimator,
     return summary;
   }
 
+  const long long num_subsets =
+      internal::CappedBinomial(n, kSampleSize, options.max_exhaustive_samples);
+  summary.exhaustive = num_subsets <= options.max_exhaustive_samples;
   internal::UniformSampler sampler(options.seed, n, kSampleSize);
+  internal::CombinationSampler combinations(n, kSampleSize);
   int sample[kSampleSize];
   std::vector<Model> models;
   models.reserve(16);
@@ -213,9 +265,13 @@ RansacSummary Ransac(const RansacOptions& options, const Estimator& estimator,
     return count;
   };
 
-  while (summary.num_trials < std::max(options.min_trials, trial_budget)) {
+  while (summary.exhaustive || summary.num_trials < std::max(options.min_trials, trial_budget)) {
+    if (summary.exhaustive) {
+      if (!combinations.Sample(sample)) break;
+    } else {
+      sampler.Sample(sample);
+    }
     ++summary.num_trials;
-    sampler.Sample(sample);
     models.clear();
     estimator.GenerateModels(sample, &models);
     summary.num_models += static_cast<int>(models.size());

@@ -1,81 +1,82 @@
 #pragma once
-// Space resection of one or many images: the robust path of photopose.
+// Space resection of one or many images: the robust path of photopose, built for the surveyor's
+// four to ten control points per image as much as for hundreds.
 //
-//   1. Initial values: the approximate pose when given; otherwise LO-RANSAC over P3P (Lambda Twist)
-//      and, with six or more non-coplanar points, the DLT (solvers/absolute_pose.h).
-//   2. Refinement: Ceres with the analytic or autodiff collinearity cost and a robust loss, or the
-//      seed's Taylor linearisation (corrected or as printed), on the observations RANSAC kept.
-//   3. Statistics: residual per observation (pixels), inlier flag, sigma0, the 6x6 covariance
-//      sigma0^2 (J^T P J)^-1 over the inliers and the standard deviations.
-// Data-dependent failures (too few points, collinear points, all behind the camera, no consensus,
-// no convergence) return success = false with a reason, never a pose.
+//   1. Initial values: the approximate pose when given (every mark a candidate); otherwise a
+//      consensus over minimal samples (LO-RANSAC over P3P and the DLT, solvers/absolute_pose.h),
+//      which tries every sample when there are few (C(n, 3) <= max_exhaustive_samples), so the
+//      result does not depend on the seed. Its threshold comes from the marks' stated accuracy:
+//      sqrt of the chi-square(2) quantile at the test confidence (3.72 sigma at 0.999). With no
+//      accuracy stated the consensus is by least median of squares, which needs no threshold.
+//   2. Decisions, repeated until nothing changes: least squares over the candidates
+//      (solvers/pose_refinement.h); every mark left out that fits within the threshold at that
+//      solution is taken back (so when all marks fit the least-squares solution of all, all are
+//      kept); then, with five or more candidates, the test statistics of the marks with their
+//      redundancy numbers (solvers/data_snooping.h: Baarda's data snooping with the stated
+//      accuracy, Pope's tau test with sigma0 from the data when none is stated) reject the worst
+//      mark if the test rejects it, one at a time, each followed by a new adjustment.
+//   3. Verdict: three marks left (no redundancy) is not a solution (unless allow_no_redundancy,
+//      and never when P3P leaves several poses); four marks with stated accuracy must pass the
+//      global test (a blunder among four can be detected but not localised); every marked control
+//      point, kept or not, must lie in front of the camera at the solution.
+//   4. Statistics: per mark its residual (in its own unit), normalized residual, redundancy number
+//      and status; sigma0 and the covariance sigma0^2 N^-1 over the accepted marks.
+// The final estimate is least squares over the accepted marks by default; a robust loss is an
+// option of the refinement. Data-dependent failures return success = false with a reason (numbers
+// included), never a pose.
+//
+// Units: every mark keeps its own unit (pixels for Column/Row, um for film marks); its standard
+// deviation and residuals are in that unit, and observation_units_per_unit takes it to the unit of
+// the image plane (the camera model's observation unit: um for film cameras).
 
 #include <Eigen/Core>
 #include <optional>
 #include <string>
 #include <vector>
 
-#include "core/camera.h"
+#include "core/block.h"
 #include "core/status.h"
 #include "core/types.h"
 #include "cost_functions/collinearity_cost.h"
+#include "solvers/absolute_pose.h"
+#include "solvers/data_snooping.h"
+#include "solvers/pose_refinement.h"
 #include "solvers/ransac.h"
 
 namespace photopose {
 
-// The one selector of the pose solver, shared by the library, the CLI and the comparison tool.
-enum class PoseSolver {
-  kCeres,            // Ceres Levenberg-Marquardt, derivative path from ResectionOptions::jacobian
-  kTaylor,           // the seed's Taylor linearisation, corrected partials (solvers/taylor_resection.h)
-  kTaylorAsPrinted,  // the same with the partial derivatives exactly as printed in the seed
-};
-std::optional<PoseSolver> ParsePoseSolver(const std::string& name);  // ceres|taylor|taylor_as_printed
-const char* PoseSolverName(PoseSolver solver);
-
-enum class LossType { kNone, kHuber, kSoftL1, kCauchy, kArctan, kTukey };
-
-// How Ceres minimises one image's robust least-squares problem. Both use the same cost functions
-// (cost_functions/collinearity_cost.h) and Ceres loss functions, on coordinates centred on the
-// control points.
-enum class CeresMinimizer {
-  // ceres::TinySolver (dense Levenberg-Marquardt for small problems, no Problem set-up), wrapped in
-  // iteratively reweighted least squares for the robust loss: weights rho'(s_i) are held fixed per
-  // round; the fixed point is the M-estimator's stationarity condition, the same as (2). Default.
-  kTinySolver,
-  // (2) ceres::Problem + ceres::Solve: trust-region LM, DENSE_QR, loss applied by Ceres.
-  kProblem,
-};
-std::optional<CeresMinimizer> ParseCeresMinimizer(const std::string& name);  // tiny_solver|problem
-const char* CeresMinimizerName(CeresMinimizer minimizer);
-std::optional<LossType> ParseLossType(const std::string& name);  // none|huber|softl1|cauchy|arctan|tukey
-const char* LossTypeName(LossType loss);
-
+// Composed as PoseLib composes its options: every knob of every stage is reachable.
 struct ResectionOptions {
-  PoseSolver solver = PoseSolver::kCeres;
-  JacobianType jacobian = JacobianType::kAnalytic;
-  LossType loss = LossType::kHuber;
-  CeresMinimizer minimizer = CeresMinimizer::kTinySolver;
-  double loss_scale_px = 2.0;          // robust-loss scale (pixels); whitened by each mark's sigma
-  double ransac_threshold_px = 6.0;    // inlier threshold for RANSAC and the final flags (pixels)
-  RansacOptions ransac;                // trials, confidence, seed
-  int max_iterations = 50;             // Ceres / Taylor iterations (per reweighting round)
-  int max_reweighting_rounds = 30;     // kTinySolver with a robust loss: IRLS rounds before the
-                                       // remaining descent is left to ceres::Solve
-  double function_tolerance = 1e-12;   // Ceres relative cost change to stop (unitless)
-  double parameter_tolerance = 1e-12;  // Ceres relative step size to stop (unitless)
+  // The consensus when no approximate pose is given: RANSAC (seed, trials, exhaustive limit, local
+  // optimisation) and its Gauss-Newton iterations. Its inlier_threshold and score are set per image
+  // from the tests below and the marks' accuracy.
+  AbsolutePoseRansacOptions consensus;
+  // The confidence of the consensus threshold and of every test.
+  OutlierTestOptions test;
+  // The least-squares refinement: solver, Jacobian, loss (none by default), Ceres and Taylor
+  // options.
+  PoseRefinementOptions refinement;
+  // Report a pose whose accepted marks leave no redundancy (three points), without covariance.
+  // Off: nothing checks such a pose, and P3P may fit three points with up to four poses.
+  bool allow_no_redundancy = false;
+
   bool IsValid(std::string* why) const;
 };
 
 enum class ResectionTermination { kConverged, kNoConvergence, kFailure };
+// "converged", "no_convergence", "failure".
+const char* ResectionTerminationName(ResectionTermination termination);
 
 struct ResectionSummary {
   ResectionTermination termination = ResectionTermination::kFailure;
-  std::string message;            // why it failed, or a short note
-  bool used_approximate = false;  // initial pose from the caller, not RANSAC
-  int ransac_trials = 0;          // RANSAC hypotheses drawn
-  int iterations = 0;             // refinement iterations
-  double initial_cost = 0.0;      // 1/2 sum of squared whitened residuals before refinement
-  double final_cost = 0.0;        // same after refinement
+  std::string message;            // why it failed (with its numbers), empty on success
+  bool used_approximate = false;  // initial pose from the caller, not the consensus
+  int ransac_trials = 0;          // minimal samples tried
+  bool ransac_exhaustive = false;  // every minimal sample was tried
+  int adjustments = 0;            // least-squares adjustments (each rejection or readmission adds one)
+  int iterations = 0;             // refinement iterations over all adjustments
+  double initial_cost = 0.0;      // 1/2 sum of squared whitened residuals, first adjustment start
+  double final_cost = 0.0;        // the same at the solution
   double ransac_seconds = 0.0;
   double refinement_seconds = 0.0;
   double total_seconds = 0.0;
@@ -83,41 +84,100 @@ struct ResectionSummary {
   bool IsSolutionUsable() const { return termination == ResectionTermination::kConverged; }
 };
 
-// One image: ideal image-plane observations and their ground points, as prepared by
-// PrepareResectionInput from the tables.
+// One image: its marks as ideal image-plane points with their control points (MakeResectionInput
+// builds it from a block).
 struct ResectionInput {
   std::string raster;
-  double focal_length_um = 0.0;                // c
-  double pixel_size_um = 1.0;                  // film micrometres per pixel, to report pixels
-  std::vector<Eigen::Vector2d> image_plane_um; // ideal (distortion-free) observations, um
+  // Principal distance in the unit of image_plane (um for film cameras, pixels for the COLMAP
+  // models).
+  double focal_length = 0.0;
+  // Per mark, parallel vectors: the ideal image-plane point (distortion removed, principal point at
+  // the origin, x right and y up: the seed's x, y), its ground point (m).
+  std::vector<Eigen::Vector2d> image_plane;
   std::vector<Eigen::Vector3d> points_in_ground;
-  std::vector<double> sigma_px;                // one sigma per observation (pixels)
-  std::vector<std::string> point_ids;          // optional, names points in messages
+  // Per mark: its standard deviation in its own unit (0: not stated), the image-plane units per
+  // unit of the mark (um per pixel for a pixel mark of a film camera, 1 otherwise) and that unit.
+  // Empty vectors mean: nothing stated, 1, pixels. When every mark states its accuracy the tests
+  // use it; otherwise sigma0 is estimated from the data (unstated marks weighted as 1 unit).
+  std::vector<double> sigma;
+  std::vector<double> observation_units_per_unit;
+  std::vector<MarkUnit> units;
+  std::vector<std::string> point_ids;  // optional, names points in messages
   std::optional<ExteriorOrientation> approximate;
+  // Earth-curvature correction (camera table ApplyECC): earth radius (m); 0 for none. Control
+  // points are lowered by D^2 / (2 R) at horizontal distance D from the projection centre, as in
+  // projection (core/collinearity.h), iterated with the centre.
+  double earth_radius_m = 0.0;
 };
+
+// Why a mark is, or is not, in the final adjustment.
+enum class MarkStatus {
+  kAccepted,          // in the adjustment
+  kConsensusOutlier,  // beyond the threshold of the consensus and of every adjustment
+  kRejected,          // rejected by data snooping / the tau test
+};
+const char* MarkStatusName(MarkStatus status);  // "accepted", "outlier", "rejected"
 
 struct ResectionResult {
   bool success = false;
   ExteriorOrientation eo;
-  Matrix6d covariance = Matrix6d::Zero();        // sigma0^2 (J^T P J)^-1, m and rad
+  // sigma0^2 N^-1 over the accepted marks (m, rad; seed angles). Not given (has_covariance false)
+  // for a pose without redundancy.
+  bool has_covariance = false;
+  Matrix6d covariance = Matrix6d::Zero();
   Vector6d standard_deviations = Vector6d::Zero();
-  double sigma0 = 0.0;                           // a posteriori, unitless (1 = as weighted)
-  int degrees_of_freedom = 0;                    // 2 n_inliers - 6
-  int num_inliers = 0;
-  std::vector<Eigen::Vector2d> residuals_px;     // observed - projected, pixels, per observation
-  std::vector<char> inliers;                     // per observation
+  // The marks' accuracy was stated (tests with known sigma) or estimated from the data.
+  bool accuracy_stated = false;
+  // A-posteriori sigma0 = sqrt(Omega / r): unitless with stated accuracies (1 = as stated), in the
+  // marks' own unit when none was stated (then it estimates their accuracy). 0 without redundancy.
+  double sigma0 = 0.0;
+  int degrees_of_freedom = 0;  // 2 accepted - 6
+  int num_inliers = 0;         // accepted marks
+  // Per mark (input order): observed minus computed on the ideal image plane (x right, y up) in the
+  // mark's own unit; normalized residual, the square root of its test statistic in standard
+  // deviations (known sigma) or in units of sigma0 (estimated), NaN where it cannot be tested;
+  // redundancy number (0 for marks left out); status; accepted flag.
+  std::vector<Eigen::Vector2d> residuals;
+  std::vector<double> normalized_residuals;
+  std::vector<double> redundancy_numbers;
+  std::vector<MarkStatus> mark_status;
+  std::vector<char> inliers;
+  // The normalized residual beyond which the test rejects (NaN with four marks or fewer).
+  double critical_normalized_residual = 0.0;
+  // Findings that do not stop the solution, one sentence each (stated accuracy too optimistic,
+  // four marks that cannot be tested, no redundancy allowed).
+  std::vector<std::string> warnings;
   ResectionSummary summary;
 };
 
 ResectionResult ResectImage(const ResectionOptions& options, const ResectionInput& input);
 
 // Many images, resected in parallel on num_threads threads (0: all cores); results in input order.
+// Image i gets its own reproducible RANSAC seed, whatever the thread schedule.
 std::vector<ResectionResult> ResectImages(const ResectionOptions& options,
                                           const std::vector<ResectionInput>& inputs,
                                           int num_threads);
 
-// Checks the control configuration of one image: at least three points, finite values, not all on
-// one line. Returns the reason when it is not.
-Status CheckControlConfiguration(const std::vector<Eigen::Vector3d>& points_in_ground);
+// ------------------------------------------------------------------ from a block
+
+struct ResectionInputOptions {
+  // Standard deviation of marks without an Accuracy, in their own unit (pixels for pixel marks, um
+  // for film marks); 0: not stated, so the tests estimate it from the data.
+  double default_accuracy = 0.0;
+};
+
+// The control marks of block image `image` as a resection input: each mark's observation through
+// its camera model (NormalizedFromObservation) times the model's focal length, its control point's
+// surveyed coordinates, its accuracy (own unit), observation_units_per_unit and unit; the image's
+// exterior orientation as approximate values; the camera table's ApplyECC. Check and tie marks are
+// left out. *marks (may be null) receives the block index of each mark of the input.
+Status MakeResectionInput(const Block& block, int image, const ResectionInputOptions& options,
+                          ResectionInput* input, std::vector<int>* marks);
+
+// Observed minus computed of one mark of a surveyed point at a pose, on the ideal image plane
+// (x right, y up) in the mark's own unit, with the camera table's earth-curvature correction: the
+// check-point residuals of reports.
+Status MarkResidual(const Block& block, int mark, const ExteriorOrientation& eo,
+                    Eigen::Vector2d* residual);
 
 }  // namespace photopose

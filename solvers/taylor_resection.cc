@@ -1,5 +1,7 @@
 #include "solvers/taylor_resection.h"
 
+#include "solvers/point_configuration.h"
+
 #include <glog/logging.h>
 
 #include <Eigen/Eigenvalues>
@@ -429,21 +431,16 @@ Status TaylorResection(const TaylorResectionOptions& options,
   centroid /= n;
   Problem problem;
   problem.centred_points.resize(n);
-  Eigen::Matrix3d scatter = Eigen::Matrix3d::Zero();
-  for (int i = 0; i < n; ++i) {
-    problem.centred_points[i] = points_in_ground[i] - centroid;
-    scatter.noalias() += problem.centred_points[i] * problem.centred_points[i].transpose();
-  }
-  // Singular values of the centred n x 3 point matrix are the square roots of the eigenvalues of
-  // its scatter matrix. Collinear (or coincident) points have at most one non-zero.
-  const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eigen(scatter, Eigen::EigenvaluesOnly);
-  const Eigen::Vector3d lambda = eigen.eigenvalues().cwiseMax(0.0);  // ascending
-  if (!(std::sqrt(lambda[1]) > options.collinearity_tolerance * std::sqrt(lambda[2]))) {
+  for (int i = 0; i < n; ++i) problem.centred_points[i] = points_in_ground[i] - centroid;
+  // Collinear (or coincident) points leave the rotation about their line undetermined
+  // (solvers/point_configuration.h).
+  const PointSpread spread = ComputePointSpread(points_in_ground);
+  if (spread.collinear(options.collinearity_tolerance)) {
     return fail(
         "the control points are collinear (or coincide): the rotation about their line is "
         "undetermined");
   }
-  const double extent_m = std::sqrt(lambda.sum() / n);  // RMS distance from the centroid
+  const double extent_m = spread.extents_m.norm();  // RMS distance from the centroid
 
   problem.observed = &image_plane_um;
   problem.focal = focal_um;

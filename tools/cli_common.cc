@@ -205,10 +205,12 @@ const char kConventionsHelp[] =
     "and Row down (the centre of the first pixel is 0.5,0.5). Film coordinates are micrometres "
     "from\n"
     "the fiducial centre, x right and y up (FilmCoordinateSystem 1) unless the camera table says\n"
-    "otherwise. Angles in tables are decimal degrees; --rotation names their convention: seed\n"
-    "(R = Rx(omega) Ry(phi) Rz(kappa) maps ground to camera), opk (Wolf & Dewitt / PATB, the\n"
-    "transpose of seed for the same numbers) or pok (Y-primary phi-omega-kappa). Ground units are\n"
-    "metres. See docs/conventions.md and docs/formats.md.\n";
+    "otherwise. Angles in tables are decimal degrees; --rotation names their convention: rxryrz\n"
+    "(R = Rx(omega) Ry(phi) Rz(kappa) maps ground to camera, the seed lecture's equation 1; 'seed'\n"
+    "is accepted as an alias), opk (Wolf & Dewitt / PATB, the transpose of rxryrz for the same\n"
+    "numbers) or pok (Y-primary phi-omega-kappa); the camera's AngleDirection applies. A mark's\n"
+    "Accuracy is in its own unit: pixels for Column/Row, micrometres for FilmX/FilmY. Ground units\n"
+    "are metres. See docs/conventions.md and docs/formats.md.\n";
 
 namespace {
 
@@ -273,6 +275,17 @@ void PrintHelp(const std::string& usage, const CommandFlags& flags) {
                "(--name=value or --name value; '#' starts a comment line); a flag file may "
                "include others, "
             << kMaxFlagFileDepth << " levels deep at most.\n";
+}
+
+Status CheckOutputFolder(const std::string& flag, const std::string& path) {
+  if (path.empty()) return Status::Ok();
+  const size_t slash = path.find_last_of('/');
+  const std::string folder = slash == std::string::npos ? "." : slash == 0 ? "/" : path.substr(0, slash);
+  struct stat info;
+  if (stat(folder.c_str(), &info) != 0)
+    return Status::Error(flag + ": folder '" + folder + "' does not exist");
+  if (!S_ISDIR(info.st_mode)) return Status::Error(flag + ": '" + folder + "' is not a folder");
+  return Status::Ok();
 }
 
 int BadInput(const std::string& subcommand, const std::string& message) {

@@ -5,10 +5,15 @@
 // taken); the user writes --<name>, and the parsing, the messages and --help use the user's names.
 #include <gflags/gflags.h>
 
+#include <chrono>
 #include <cmath>
 #include <cstdint>
+#include <cstdio>
+#include <cstdlib>
+#include <fstream>
 #include <iostream>
 #include <iterator>
+#include <mutex>
 #include <sstream>
 #include <string>
 #include <vector>
@@ -38,14 +43,17 @@ DEFINE_string(
     "How the Ceres solvers minimise each image: tiny_solver (ceres::TinySolver, the robust loss by "
     "iterative reweighting; the library default) or problem (ceres::Problem and ceres::Solve).");
 DEFINE_double(compare_loss_scale, 2.0,
-              "Scale of the robust losses in pixels: residuals beyond it are down-weighted.");
-DEFINE_double(compare_ransac_threshold, 6.0,
-              "Inlier threshold in pixels for RANSAC and for the final inlier flags (the "
-              "covariance and sigma0 use the observations within it).");
+              "Scale of the robust losses in standard deviations of the marks: residuals beyond "
+              "it are down-weighted.");
+DEFINE_double(compare_confidence, 0.999,
+              "Confidence of the outlier decisions of every solver, between 0 and 1: the "
+              "consensus threshold (the square root of the chi-square(2) quantile, 3.72 standard "
+              "deviations at 0.999) and the data-snooping test.");
 DEFINE_int32(compare_max_iterations, 50, "Largest number of iterations of every solver.");
 DEFINE_uint64(compare_seed, 1,
               "Monte-Carlo: trial t of every setting uses the scene seed seed + t (photopose "
-              "simulate --seed makes the same scene). Dataset: the RANSAC seed.");
+              "simulate --seed makes the same scene). Dataset: the seed of the consensus "
+              "sampling (images with few marks try every minimal sample and ignore it).");
 DEFINE_int32(compare_threads, 1,
              "Threads: Monte-Carlo trials or dataset images run in parallel; 0 uses all cores. One "
              "thread gives the steadiest timings.");
@@ -107,11 +115,13 @@ DEFINE_string(compare_frames, "",
 DEFINE_string(compare_reference, "",
               "Dataset: optional frames table of a reference orientation; every solver's "
               "difference to it is reported.");
-DEFINE_string(compare_rotation, "seed",
+DEFINE_string(compare_rotation, "rxryrz",
               "Dataset: angle convention of the frames tables read and of the angles printed: "
-              "seed, opk or pok.");
-DEFINE_double(compare_default_accuracy, 1.0,
-              "Dataset: accuracy in pixels (one sigma) of marks without an Accuracy value.");
+              "rxryrz (alias seed), opk or pok; the camera's AngleDirection applies.");
+DEFINE_double(compare_default_accuracy, 0.0,
+              "Dataset: accuracy (one sigma) of marks without an Accuracy value, in the mark's "
+              "own unit (pixels, or micrometres for film marks); 0 leaves it unstated and sigma0 "
+              "comes from the data.");
 DEFINE_bool(compare_pixel_center_origin, false,
             "Dataset: read Column/Row with (0,0) at the centre of the first pixel instead of the "
             "top-left corner.");
@@ -133,7 +143,7 @@ constexpr char kUsage[] =
     "      [--solvers=...] [--losses=none,huber,cauchy] [--csv=F] [--html=F] [--markdown=F]\n"
     "Dataset mode: every solver on real tables, their differences and, optionally, a reference:\n"
     "  photopose compare --cameras=C.csv --points=P.csv --marks=M.csv [--frames=approx.csv]\n"
-    "      [--reference=frames.csv] [--rotation=seed|opk|pok] [--csv=F] [--html=F]\n"
+    "      [--reference=frames.csv] [--rotation=rxryrz|opk|pok] [--csv=F] [--html=F]\n"
     "  photopose compare --cameras=C.csv --gcp_list=gcp_list.txt ...\n\n"
     "Exit status: 0 the comparison ran (solver failures are results, shown in the tables), 2 bad\n"
     "input or usage. docs/comparison.md explains every column.\n";
@@ -154,15 +164,15 @@ const CommandFlags& CompareFlags() {
                        "compare_command",
                        kPrefix,
                        {},
-                       {{"loss_scale", 0.0, 1000.0, true, false, "px"},
-                        {"ransac_threshold", 0.0, 1000.0, true, false, "px"},
+                       {{"loss_scale", 0.0, 1000.0, true, false, "standard deviations"},
+                        {"confidence", 0.5, 1.0, false, true},
                         {"max_iterations", 1.0, 10000.0},
                         {"seed", 0.0, 18446744073709551615.0},
                         {"threads", 0.0, 1024.0},
                         {"check_points", 0.0, 10000.0},
                         {"trials", 1.0, 100000.0},
                         {"success_sigmas", 0.0, 1e6, true, false},
-                        {"default_accuracy", 0.0, 1000.0, true, false, "px"}}};
+                        {"default_accuracy", 0.0, 1e6, false, false, "px or um (the mark's unit)"}}};
   return *kFlags;
 }
 
@@ -239,6 +249,47 @@ std::string QuoteForShell(const std::string& arg) {
   std::string quoted = "'";
   for (char c : arg) quoted += c == '\'' ? std::string("'\\''") : std::string(1, c);
   return quoted + "'";
+}
+
+// A progress line on stderr for runs longer than a couple of seconds: the first after
+// kFirstSeconds, then every kEverySeconds, and the last when the run is done (if any was printed).
+// Thread-safe: the Monte-Carlo workers call it.
+class ProgressLine {
+ public:
+  explicit ProgressLine(std::string items) : items_(std::move(items)) {}
+  void operator()(size_t done, size_t total) {
+    constexpr double kFirstSeconds = 2.0, kEverySeconds = 5.0;
+    const std::lock_guard<std::mutex> lock(mutex_);
+    const double elapsed =
+        std::chrono::duration<double>(std::chrono::steady_clock::now() - start_).count();
+    const bool last = done == total;
+    if (last ? !printed_ : elapsed < next_seconds_) return;
+    next_seconds_ = std::max(elapsed, kFirstSeconds) + kEverySeconds;
+    printed_ = true;
+    char line[160];
+    std::snprintf(line, sizeof(line), "photopose compare: %zu of %zu %s (%.0f%%), %.0f s", done,
+                  total, items_.c_str(), 100.0 * done / std::max<size_t>(total, 1), elapsed);
+    std::cerr << line;
+    if (!last && done > 0)
+      std::cerr << ", about " << static_cast<long>(elapsed * (total - done) / done + 0.5)
+                << " s left";
+    std::cerr << "\n";
+  }
+
+ private:
+  std::string items_;
+  std::mutex mutex_;
+  std::chrono::steady_clock::time_point start_ = std::chrono::steady_clock::now();
+  double next_seconds_ = 2.0;
+  bool printed_ = false;
+};
+
+// The files the outputs go to, for the closing summary.
+std::string WrittenFiles() {
+  std::string files;
+  for (const std::string& path : {FLAGS_compare_csv, FLAGS_compare_html, FLAGS_compare_markdown})
+    if (!path.empty()) files += (files.empty() ? "" : ", ") + path;
+  return files.empty() ? "no file written (see --csv, --html, --markdown)" : "wrote " + files;
 }
 
 // The outputs of the run (--csv, --html, --markdown), declared before any work.
@@ -348,6 +399,8 @@ int RunMonteCarloMode(const std::vector<SolverVariant>& solvers, const Resection
   const Status declared = DeclareOutputs(inputs, &outputs);
   if (!declared.ok()) return BadInput(kCommand, declared.message());
 
+  ProgressLine progress("trials");
+  options.progress = [&progress](size_t done, size_t total) { progress(done, total); };
   MonteCarloResult result;
   Status status;
   {
@@ -359,13 +412,13 @@ int RunMonteCarloMode(const std::vector<SolverVariant>& solvers, const Resection
   for (const TextTable& table : tables) std::cout << RenderText(table) << "\n";
   const std::vector<std::string> notes = MonteCarloNotes(options);
   for (const std::string& note : notes) std::cout << note << "\n";
+  const Status written = WriteOutputs(MonteCarloCsv(result),
+                                      MonteCarloHtml(options, result, command_line), tables, notes,
+                                      &outputs);
+  if (!written.ok()) return BadInput(kCommand, written.message());
   std::cout << "compare: " << result.settings.size() << " settings x " << options.trials
             << " trials x " << result.solver_names.size() << " solvers in " << result.wall_seconds
-            << " s\n";
-  const Status written =
-      WriteOutputs(MonteCarloCsv(result), MonteCarloHtml(options, result, command_line), tables,
-                   notes, &outputs);
-  if (!written.ok()) return BadInput(kCommand, written.message());
+            << " s; " << WrittenFiles() << "\n";
   return kExitSuccess;
 }
 
@@ -376,13 +429,13 @@ int RunDatasetMode(const std::vector<SolverVariant>& solvers, const ResectionOpt
   options.reference_path = FLAGS_compare_reference;
   options.num_threads = FLAGS_compare_threads;
   ResectionJobOptions& job = options.job;
-  job.cameras_path = FLAGS_compare_cameras;
-  job.points_path = FLAGS_compare_points;
-  job.marks_path = FLAGS_compare_marks;
-  job.gcp_list_path = FLAGS_compare_gcp_list;
-  job.frames_path = FLAGS_compare_frames;
-  job.default_accuracy_px = FLAGS_compare_default_accuracy;
-  job.pixel_origin =
+  job.files.cameras = FLAGS_compare_cameras;
+  job.files.points = FLAGS_compare_points;
+  job.files.marks = FLAGS_compare_marks;
+  job.files.gcp_list = FLAGS_compare_gcp_list;
+  job.files.frames = FLAGS_compare_frames;
+  job.input.default_accuracy = FLAGS_compare_default_accuracy;
+  job.files.pixel_origin =
       FLAGS_compare_pixel_center_origin ? PixelOrigin::kCenter : PixelOrigin::kCorner;
   job.resection = resection;
   if (FLAGS_compare_cameras.empty())
@@ -396,21 +449,26 @@ int RunDatasetMode(const std::vector<SolverVariant>& solvers, const ResectionOpt
     return BadInput(kCommand, "--gcp_list replaces --points and --marks; give one or the other");
   const auto rotation = ParseRotationConvention(FLAGS_compare_rotation);
   if (!rotation)
-    return BadInput(kCommand,
-                    "--rotation must be seed, opk or pok, not '" + FLAGS_compare_rotation + "'");
-  job.rotation = *rotation;
+    return BadInput(kCommand, std::string("--rotation must be ") + RotationConventionChoices() +
+                                  ", not '" + FLAGS_compare_rotation + "'");
+  job.files.rotation = *rotation;
+  if (!(FLAGS_compare_default_accuracy >= 0.0) || !std::isfinite(FLAGS_compare_default_accuracy))
+    return BadInput(kCommand, "--default_accuracy must be positive (or 0 for none)");
   std::string why;
   if (!options.IsValid(&why)) return BadInput(kCommand, why);
   OutputFiles outputs;
   std::vector<std::pair<std::string, std::string>> inputs = {
-      {"--cameras", job.cameras_path}, {"--points", job.points_path},
-      {"--marks", job.marks_path},     {"--gcp_list", job.gcp_list_path},
-      {"--frames", job.frames_path},   {"--reference", options.reference_path}};
+      {"--cameras", job.files.cameras}, {"--points", job.files.points},
+      {"--marks", job.files.marks},     {"--gcp_list", job.files.gcp_list},
+      {"--frames", job.files.frames},   {"--fiducials", job.files.fiducials},
+      {"--reference", options.reference_path}};
   for (const std::string& flag_file : parsed.flag_files)
     inputs.emplace_back("--flagfile", flag_file);
   const Status declared = DeclareOutputs(inputs, &outputs);
   if (!declared.ok()) return BadInput(kCommand, declared.message());
 
+  ProgressLine progress("solvers");
+  options.progress = [&progress](size_t done, size_t total) { progress(done, total); };
   DatasetComparisonResult result;
   Status status;
   {
@@ -423,6 +481,9 @@ int RunDatasetMode(const std::vector<SolverVariant>& solvers, const ResectionOpt
   const Status written =
       WriteOutputs(DatasetCsv(result), DatasetHtml(result, command_line), tables, {}, &outputs);
   if (!written.ok()) return BadInput(kCommand, written.message());
+  const size_t images = result.summaries.empty() ? 0 : result.summaries.front().images;
+  std::cout << "compare: " << images << " images x " << result.solver_names.size()
+            << " solvers; " << WrittenFiles() << "\n";
   return kExitSuccess;
 }
 
@@ -459,13 +520,22 @@ int RunCompare(int argc, char** argv) {
   if (!minimizer)
     return BadInput(kCommand, "--ceres_minimizer must be tiny_solver or problem, not '" +
                                   FLAGS_compare_ceres_minimizer + "'");
-  resection.minimizer = *minimizer;
-  resection.loss_scale_px = FLAGS_compare_loss_scale;
-  resection.ransac_threshold_px = FLAGS_compare_ransac_threshold;
-  resection.max_iterations = FLAGS_compare_max_iterations;
-  resection.ransac.seed = FLAGS_compare_seed;
+  resection.refinement.ceres.minimizer = *minimizer;
+  resection.refinement.loss_scale = FLAGS_compare_loss_scale;
+  resection.test.confidence = FLAGS_compare_confidence;
+  resection.refinement.ceres.max_iterations = FLAGS_compare_max_iterations;
+  resection.refinement.taylor.max_iterations = FLAGS_compare_max_iterations;
+  resection.consensus.ransac.seed = FLAGS_compare_seed;
+  if (FLAGS_compare_threads < 0) return BadInput(kCommand, "--threads must be >= 0");
   std::string why;
   if (!resection.IsValid(&why)) return BadInput(kCommand, why);
+  for (const auto& [flag, path] :
+       {std::pair<std::string, std::string>{"--csv", FLAGS_compare_csv},
+        {"--html", FLAGS_compare_html},
+        {"--markdown", FLAGS_compare_markdown}}) {
+    const Status folder = CheckOutputFolder(flag, path);
+    if (!folder.ok()) return BadInput(kCommand, folder.message());
+  }
   return dataset ? RunDatasetMode(solvers, resection, command_line, parsed)
                  : RunMonteCarloMode(solvers, resection, command_line, parsed);
 }

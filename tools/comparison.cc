@@ -13,7 +13,9 @@
 #include <thread>
 
 #include "core/collinearity.h"
+#include "core/parallel.h"
 #include "core/rotation.h"
+#include "core/statistics.h"
 #include "core/tables.h"
 
 namespace photopose::cli {
@@ -66,44 +68,6 @@ double RmsNorm(const std::vector<Eigen::Vector2d>& residuals) {
   return std::sqrt(sum / static_cast<double>(residuals.size()));
 }
 
-// Regularized lower incomplete gamma function P(a, x), a > 0, x >= 0.
-double RegularizedLowerGamma(double a, double x) {
-  if (x <= 0.0) return 0.0;
-  const double log_prefactor = -x + a * std::log(x) - std::lgamma(a);
-  constexpr double kEpsilon = 1e-16;
-  constexpr int kMaxTerms = 100000;
-  if (x < a + 1.0) {
-    // P = x^a e^-x / Gamma(a) * sum_n x^n / (a (a + 1) ... (a + n)).
-    double term = 1.0 / a, sum = term;
-    for (int n = 1; n < kMaxTerms; ++n) {
-      term *= x / (a + n);
-      sum += term;
-      if (std::abs(term) < std::abs(sum) * kEpsilon) break;
-    }
-    return std::min(1.0, sum * std::exp(log_prefactor));
-  }
-  // Q = x^a e^-x / Gamma(a) * 1 / (x + 1 - a - 1 (1 - a) / (x + 3 - a - 2 (2 - a) / (x + 5 - a
-  // ...))), evaluated by the modified Lentz method.
-  constexpr double kTiny = 1e-300;
-  double b = x + 1.0 - a;
-  double c = 1.0 / kTiny;
-  double d = 1.0 / b;
-  double h = d;
-  for (int i = 1; i < kMaxTerms; ++i) {
-    const double an = -i * (i - a);
-    b += 2.0;
-    d = an * d + b;
-    if (std::abs(d) < kTiny) d = kTiny;
-    c = b + an / c;
-    if (std::abs(c) < kTiny) c = kTiny;
-    d = 1.0 / d;
-    const double delta = d * c;
-    h *= delta;
-    if (std::abs(delta - 1.0) < kEpsilon) break;
-  }
-  return std::max(0.0, 1.0 - std::exp(log_prefactor) * h);
-}
-
 bool SameExceptAxis(const SweepSetting& a, const SweepSetting& b, const std::string& axis) {
   if (a.scenario != b.scenario) return false;
   if (axis != "noise" && a.noise_px != b.noise_px) return false;
@@ -125,10 +89,12 @@ double SuccessThreshold(const ResectionInput& input, const std::vector<char>& is
     if (is_outlier[k]) continue;
     double xy[2];
     Eigen::Matrix<double, 2, 6, Eigen::RowMajor> J;
-    if (!ProjectWithJacobians(truth.data(), input.points_in_ground[k].data(), input.focal_length_um,
+    if (!ProjectWithJacobians(truth.data(), input.points_in_ground[k].data(), input.focal_length,
                               xy, J.data(), nullptr, nullptr))
       continue;
-    J /= input.sigma_px[k] * input.pixel_size_um;
+    const double sigma = input.sigma.empty() || !(input.sigma[k] > 0.0) ? 1.0 : input.sigma[k];
+    J /= sigma * (input.observation_units_per_unit.empty() ? 1.0
+                                                           : input.observation_units_per_unit[k]);
     normal += J.transpose() * J;
     ++used;
   }
@@ -176,7 +142,7 @@ Status RunTrial(const MonteCarloOptions& options, const SweepSetting& setting, i
     for (size_t s = 0; s < options.solvers.size(); ++s) {
       ResectionOptions resection = options.solvers[s].ApplyTo(options.resection);
       // One RANSAC stream per image and trial, the same for every solver.
-      resection.ransac.seed = scene_options.seed * 1000003ull + i;
+      resection.consensus.ransac.seed = scene_options.seed * 1000003ull + i;
       results[s] = ResectImage(resection, input);
       const ResectionResult& result = results[s];
       SolveOutcome outcome;
@@ -196,7 +162,7 @@ Status RunTrial(const MonteCarloOptions& options, const SweepSetting& setting, i
         outcome.success = outcome.position_error_m <= threshold;
         outcome.sigma0 = result.sigma0;
         outcome.degrees_of_freedom = result.degrees_of_freedom;
-        if (setting.noise_px > 0.0) {
+        if (setting.noise_px > 0.0 && result.has_covariance) {
           outcome.nees = NormalizedEstimationErrorSquared(result.eo, truth, result.covariance);
           const double factor = result.degrees_of_freedom > 0 ? result.sigma0 * result.sigma0 : 1.0;
           outcome.nees_apriori = outcome.nees * factor;
@@ -204,11 +170,12 @@ Status RunTrial(const MonteCarloOptions& options, const SweepSetting& setting, i
           outcome.nees = outcome.nees_apriori = kNaN;
         }
         std::vector<Eigen::Vector2d> clean;
-        for (size_t k = 0; k < result.residuals_px.size(); ++k)
-          if (!is_outlier[k]) clean.push_back(result.residuals_px[k]);
+        for (size_t k = 0; k < result.residuals.size(); ++k)
+          if (!is_outlier[k]) clean.push_back(result.residuals[k]);
         outcome.reprojection_rmse_px = RmsNorm(clean);
         outcome.num_reprojection = static_cast<int>(clean.size());
-        const std::vector<Eigen::Vector2d> check = CheckPointResidualsPx(job, i, result.eo);
+        std::vector<Eigen::Vector2d> check;
+        for (const CheckResidual& c : CheckResiduals(job, i, result.eo)) check.push_back(c.residual);
         outcome.check_rmse_px = RmsNorm(check);
         outcome.num_check = static_cast<int>(check.size());
       }
@@ -228,29 +195,11 @@ Status RunTrial(const MonteCarloOptions& options, const SweepSetting& setting, i
   return Status::Ok();
 }
 
-// A failure message with the particulars (numbers, quoted names) masked, to count kinds.
+// The kind of a failure message: its text up to the first ':' (photopose's messages read
+// "kind: particulars"), to count failures of one kind whatever their numbers.
 std::string FailureKind(const std::string& message) {
-  std::string kind;
-  bool in_quote = false;
-  for (size_t k = 0; k < message.size(); ++k) {
-    const char c = message[k];
-    if (c == '\'') {
-      if (!in_quote) kind += "'...'";
-      in_quote = !in_quote;
-      continue;
-    }
-    if (in_quote) continue;
-    if (std::isdigit(static_cast<unsigned char>(c))) {
-      while (k + 1 < message.size() &&
-             (std::isdigit(static_cast<unsigned char>(message[k + 1])) || message[k + 1] == '.' ||
-              message[k + 1] == 'e' || message[k + 1] == '-'))
-        ++k;
-      kind += '#';
-      continue;
-    }
-    kind += c;
-  }
-  return kind.empty() ? "no message" : kind;
+  if (message.empty()) return "no message";
+  return message.substr(0, message.find(':'));
 }
 
 SolverStatistics Aggregate(const std::string& name,
@@ -262,13 +211,21 @@ SolverStatistics Aggregate(const std::string& name,
       nees_apriori, expected, all_seconds, all_refinement, difference_position, difference_rotation;
   double check_ssq = 0.0, reprojection_ssq = 0.0;
   int check_count = 0, reprojection_count = 0;
-  std::map<std::string, int> failures;
+  // Per kind of failure: how many, the first message, and whether all messages were the same.
+  struct Failures {
+    int count = 0;
+    std::string first;
+    bool same = true;
+  };
+  std::map<std::string, Failures> failures;
   for (const SolveOutcome* o : samples) {
     all_seconds.push_back(o->total_seconds);
     all_refinement.push_back(o->refinement_seconds);
     if (std::isfinite(o->success_threshold_m)) thresholds.push_back(o->success_threshold_m);
     if (!o->solved) {
-      ++failures[FailureKind(o->message)];
+      Failures& kind = failures[FailureKind(o->message)];
+      if (kind.count++ == 0) kind.first = o->message;
+      kind.same = kind.same && o->message == kind.first;
       continue;
     }
     ++stats.solved;
@@ -320,7 +277,8 @@ SolverStatistics Aggregate(const std::string& name,
   } else {
     stats.nees_interval_95 = stats.nees_interval_99 = NeesInterval{kNaN, kNaN};
   }
-  stats.failure_reasons.assign(failures.begin(), failures.end());
+  for (const auto& [kind, f] : failures)
+    stats.failure_reasons.emplace_back(f.same ? f.first : kind + ", e.g. " + f.first, f.count);
   std::stable_sort(stats.failure_reasons.begin(), stats.failure_reasons.end(),
                    [](const auto& a, const auto& b) { return a.second > b.second; });
   return stats;
@@ -389,9 +347,9 @@ std::string SolverVariant::Name() const {
 
 ResectionOptions SolverVariant::ApplyTo(const ResectionOptions& base) const {
   ResectionOptions options = base;
-  options.solver = solver;
-  options.jacobian = jacobian;
-  options.loss = solver == PoseSolver::kCeres ? loss : LossType::kNone;
+  options.refinement.solver = solver;
+  options.refinement.jacobian = jacobian;
+  options.refinement.loss = solver == PoseSolver::kCeres ? loss : LossType::kNone;
   return options;
 }
 
@@ -452,22 +410,6 @@ Status ParseSolverVariants(const std::string& solvers, const std::string& losses
 }
 
 // ------------------------------------------------------------------ statistics helpers
-
-double ChiSquaredQuantile(double p, double dof) {
-  if (!(p > 0.0 && p < 1.0) || !(dof > 0.0)) return kNaN;
-  const double a = 0.5 * dof;
-  double low = 0.0, high = dof + 10.0 * std::sqrt(2.0 * dof) + 10.0;
-  while (RegularizedLowerGamma(a, 0.5 * high) < p) high *= 2.0;
-  for (int i = 0; i < 300 && high - low > 1e-12 * high; ++i) {
-    const double middle = 0.5 * (low + high);
-    if (RegularizedLowerGamma(a, 0.5 * middle) < p) {
-      low = middle;
-    } else {
-      high = middle;
-    }
-  }
-  return 0.5 * (low + high);
-}
 
 NeesInterval MeanNeesInterval(int count, double confidence) {
   const double alpha = 1.0 - confidence;
@@ -668,56 +610,22 @@ SyntheticSceneOptions SceneOptionsFor(const MonteCarloOptions& options, const Sw
 
 Status MakeSceneJob(const SyntheticScene& scene, SceneJob* scene_job) {
   *scene_job = SceneJob();
+  Block block;
+  Status status = AssembleBlock(SceneBlockTables(scene), &block);
+  if (!status.ok()) return Status::Error("synthetic scene: " + status.message());
   ResectionJob& job = scene_job->job;
-  job.cameras = scene.cameras;
-  job.points = scene.points;
-  job.marks = scene.marks;
-  job.approximate_frames = scene.approximate_frames;
-  job.marks_label = "synthetic scene";
-  std::map<std::string, const FrameCamera*> camera_by_id;
-  for (const FrameCamera& camera : job.cameras) camera_by_id[camera.camera_id] = &camera;
-  std::map<std::string, const GroundPoint*> point_by_id;
-  for (const GroundPoint& point : job.points) point_by_id[point.point_id] = &point;
-  std::map<std::string, const FrameRecord*> frame_by_raster;
-  for (const FrameRecord& frame : job.approximate_frames) frame_by_raster[frame.raster] = &frame;
-  std::map<std::string, size_t> input_by_raster;
-  for (size_t m = 0; m < job.marks.size(); ++m) {
-    const ImageMark& mark = job.marks[m];
-    const auto point = point_by_id.find(mark.point_id);
-    const auto camera = camera_by_id.find(mark.camera_id);
-    if (point == point_by_id.end() || camera == camera_by_id.end() || !mark.column_row)
-      return Status::Error("synthetic scene: mark of an unknown point or camera");
-    auto [it, inserted] = input_by_raster.emplace(mark.raster, job.inputs.size());
-    if (inserted) {
-      ResectionInput input;
-      input.raster = mark.raster;
-      input.focal_length_um = camera->second->focal_length_um;
-      input.pixel_size_um = camera->second->MeanPixelSizeUm();
-      const auto frame = frame_by_raster.find(mark.raster);
-      if (frame != frame_by_raster.end()) input.approximate = frame->second->eo;
-      job.inputs.push_back(std::move(input));
-      job.input_cameras.push_back(camera->second);
-      job.input_marks.emplace_back();
-      job.input_check_marks.emplace_back();
-      scene_job->control_is_outlier.emplace_back();
-    }
-    const size_t index = it->second;
-    if (point->second->role == PointRole::kCheck) {
-      // A check mark with a simulated gross error would measure the blunder, not the pose.
-      if (!scene.mark_is_outlier[m]) job.input_check_marks[index].push_back({m, point->second->position});
-      continue;
-    }
-    Eigen::Vector2d image_plane;
-    const Status status =
-        ImagePlaneFromPixel(*camera->second, *mark.column_row, PixelOrigin::kCorner, &image_plane);
-    if (!status.ok()) return Status::Error("synthetic scene: " + status.message());
-    ResectionInput& input = job.inputs[index];
-    input.image_plane_um.push_back(image_plane);
-    input.points_in_ground.push_back(point->second->position);
-    input.sigma_px.push_back(mark.accuracy_px.value_or(1.0));
-    input.point_ids.push_back(mark.point_id);
-    job.input_marks[index].push_back(m);
-    scene_job->control_is_outlier[index].push_back(scene.mark_is_outlier[m] ? 1 : 0);
+  status = PrepareResectionJob(std::move(block), ResectionInputOptions(), &job);
+  if (!status.ok()) return Status::Error("synthetic scene: " + status.message());
+  // Block mark m is scene mark m (SceneBlockTables).
+  for (size_t i = 0; i < job.inputs.size(); ++i) {
+    std::vector<char> is_outlier;
+    for (const int m : job.input_marks[i]) is_outlier.push_back(scene.mark_is_outlier[m] ? 1 : 0);
+    scene_job->control_is_outlier.push_back(std::move(is_outlier));
+    // A check mark with a simulated gross error would measure the blunder, not the pose.
+    std::vector<int>& checks = job.check_marks[i];
+    checks.erase(std::remove_if(checks.begin(), checks.end(),
+                                [&](int m) { return scene.mark_is_outlier[m]; }),
+                 checks.end());
   }
   return Status::Ok();
 }
@@ -735,22 +643,13 @@ Status RunMonteCarlo(const MonteCarloOptions& options, MonteCarloResult* result)
   std::vector<std::vector<SolveOutcome>> outcomes(num_tasks);
   std::vector<int> images(num_tasks, 0);
   std::vector<Status> statuses(num_tasks);
-  std::atomic<size_t> next{0};
-  auto worker = [&]() {
-    for (size_t task = next++; task < num_tasks; task = next++) {
-      const size_t setting = task / options.trials;
-      const int trial = static_cast<int>(task % options.trials);
-      statuses[task] = RunTrial(options, settings[setting], trial, &outcomes[task], &images[task]);
-    }
-  };
-  int num_threads = options.num_threads;
-  if (num_threads == 0)
-    num_threads = static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
-  num_threads = static_cast<int>(std::min<size_t>(num_threads, std::max<size_t>(1, num_tasks)));
-  std::vector<std::thread> threads;
-  for (int t = 1; t < num_threads; ++t) threads.emplace_back(worker);
-  worker();
-  for (auto& thread : threads) thread.join();
+  std::atomic<size_t> done{0};
+  ParallelFor(num_tasks, options.num_threads, [&](size_t task) {
+    const size_t setting = task / options.trials;
+    const int trial = static_cast<int>(task % options.trials);
+    statuses[task] = RunTrial(options, settings[setting], trial, &outcomes[task], &images[task]);
+    if (options.progress) options.progress(++done, num_tasks);
+  });
   for (size_t task = 0; task < num_tasks; ++task) {
     if (!statuses[task].ok()) {
       const size_t setting = task / options.trials;
@@ -803,19 +702,21 @@ Status RunDatasetComparison(const DatasetComparisonOptions& options,
   ResectionJob job;
   Status status = PrepareResectionJob(options.job, &job);
   if (!status.ok()) return status;
-  if (job.inputs.empty()) return Status::Error("no image has marks of control points");
+  if (job.inputs.empty()) return Status::Error("no image has marks");
   std::map<std::string, ExteriorOrientation> reference;
   if (!options.reference_path.empty()) {
+    std::vector<FrameCamera> cameras;
+    for (const BlockCamera& camera : job.block.cameras) cameras.push_back(camera.table);
     FramesTableOptions frames_options;
-    frames_options.convention = options.job.rotation;
-    frames_options.cameras = &job.cameras;
+    frames_options.convention = options.job.files.rotation;
+    frames_options.cameras = &cameras;
     std::vector<FrameRecord> frames;
     status = ReadFramesTable(options.reference_path, frames_options, &frames);
     if (!status.ok()) return status;
     for (const FrameRecord& frame : frames) reference[frame.raster] = frame.eo;
     result->has_reference = true;
   }
-  result->rotation = options.job.rotation;
+  result->rotation = options.job.files.rotation;
   for (const SolverVariant& v : options.solvers) result->solver_names.push_back(v.Name());
   const size_t reference_index = TimeReference(result->solver_names);
   result->reference_solver = result->solver_names[reference_index];
@@ -823,9 +724,12 @@ Status RunDatasetComparison(const DatasetComparisonOptions& options,
   // ResectImages gives image i the RANSAC seed seed + constant * (i + 1) whatever the solver, so
   // every solver starts from the same initial values.
   std::vector<std::vector<ResectionResult>> results;
-  for (const SolverVariant& v : options.solvers)
+  for (const SolverVariant& v : options.solvers) {
     results.push_back(
         ResectImages(v.ApplyTo(options.job.resection), job.inputs, options.num_threads));
+    if (options.progress) options.progress(results.size(), options.solvers.size());
+  }
+  const double threshold = MarkThresholdSigmas(options.job.resection.test.confidence);
 
   const size_t num_solvers = options.solvers.size();
   std::vector<int> check_beyond(num_solvers, 0);
@@ -847,26 +751,34 @@ Status RunDatasetComparison(const DatasetComparisonOptions& options,
       solve.iterations = r.summary.iterations;
       solve.seconds = r.summary.total_seconds;
       solve.refinement_seconds = r.summary.refinement_seconds;
-      solve.num_observations = static_cast<int>(job.inputs[i].image_plane_um.size());
+      solve.num_observations = static_cast<int>(job.inputs[i].image_plane.size());
       seconds[s].push_back(r.summary.total_seconds);
       refinement[s].push_back(r.summary.refinement_seconds);
       if (r.success) {
         solve.eo = r.eo;
+        solve.angles_deg = OutputAnglesDeg(job, i, result->rotation, r.eo);
         solve.standard_deviations = r.standard_deviations;
         solve.sigma0 = r.sigma0;
         solve.num_inliers = r.num_inliers;
         std::vector<Eigen::Vector2d> inlier_residuals;
-        for (size_t k = 0; k < r.residuals_px.size(); ++k) {
+        for (size_t k = 0; k < r.residuals.size(); ++k) {
           if (!r.inliers[k]) continue;
-          inlier_residuals.push_back(r.residuals_px[k]);
-          solve.max_px = std::max(solve.max_px, r.residuals_px[k].norm());
+          inlier_residuals.push_back(r.residuals[k]);
+          solve.max_px = std::max(solve.max_px, r.residuals[k].norm());
         }
         solve.rms_px = RmsNorm(inlier_residuals);
         residuals[s].insert(residuals[s].end(), inlier_residuals.begin(), inlier_residuals.end());
         std::vector<Eigen::Vector2d> check;
-        for (const Eigen::Vector2d& c : CheckPointResidualsPx(job, i, r.eo)) {
-          if (c.norm() <= options.job.resection.ransac_threshold_px) {
-            check.push_back(c);
+        for (const CheckResidual& c : CheckResiduals(job, i, r.eo)) {
+          // Beyond the consensus threshold: the mark's stated accuracy, else sigma0 (mark unit).
+          const std::optional<double> accuracy = job.block.marks[c.mark].accuracy;
+          const double sigma =
+              accuracy ? *accuracy
+                       : options.job.input.default_accuracy > 0.0 ? options.job.input.default_accuracy
+                       : r.accuracy_stated || !(r.sigma0 > 0.0) ? 1.0
+                                                                : r.sigma0;
+          if (c.residual.norm() <= threshold * sigma) {
+            check.push_back(c.residual);
           } else {
             ++solve.num_check_beyond;
           }
@@ -1106,10 +1018,8 @@ std::vector<TextTable> DatasetTables(const DatasetComparisonResult& result) {
     std::vector<std::string> row = {s.raster, result.solver_names[s.solver],
                                     s.success ? "ok" : "failed"};
     if (s.success) {
-      const Eigen::Vector3d angles = AnglesFromRotation(
-          result.rotation, RotationFromAngles(RotationConvention::kSeed, s.eo.angles_seed_rad()));
       for (int k = 0; k < 3; ++k) row.push_back(Format("%.4f", s.eo.parameters[k]));
-      for (int k = 0; k < 3; ++k) row.push_back(Format("%.6f", RadiansToDegrees(angles[k])));
+      for (int k = 0; k < 3; ++k) row.push_back(Format("%.6f", s.angles_deg[k]));
       row.push_back(Sig(s.sigma0));
       row.push_back(std::to_string(s.num_inliers) + "/" + std::to_string(s.num_observations));
       row.push_back(Sig(s.rms_px));
@@ -1146,10 +1056,8 @@ std::string DatasetCsv(const DatasetComparisonResult& result) {
     csv << CsvField(s.raster) << "," << CsvField(result.solver_names[s.solver]) << ","
         << (s.success ? 1 : 0) << "," << CsvField(s.message) << ",";
     if (s.success) {
-      const Eigen::Vector3d angles = AnglesFromRotation(
-          result.rotation, RotationFromAngles(RotationConvention::kSeed, s.eo.angles_seed_rad()));
       for (int k = 0; k < 3; ++k) csv << Full(s.eo.parameters[k]) << ",";
-      for (int k = 0; k < 3; ++k) csv << Full(RadiansToDegrees(angles[k])) << ",";
+      for (int k = 0; k < 3; ++k) csv << Full(s.angles_deg[k]) << ",";
       csv << RotationConventionName(result.rotation) << ",";
       for (int k = 0; k < 3; ++k) csv << Full(s.standard_deviations[k]) << ",";
       for (int k = 3; k < 6; ++k) csv << Full(RadiansToDegrees(s.standard_deviations[k])) << ",";

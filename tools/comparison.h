@@ -30,6 +30,7 @@
 //    value is 6 r / (r - 2) instead of 6.
 
 #include <cstdint>
+#include <functional>
 #include <limits>
 #include <optional>
 #include <string>
@@ -68,11 +69,6 @@ Status ParseSolverVariants(const std::string& solvers, const std::string& losses
                            std::vector<SolverVariant>* variants);
 
 // ------------------------------------------------------------------ statistics helpers
-
-// The p-quantile of the chi-square distribution with `dof` degrees of freedom (p in (0, 1),
-// dof > 0), by bisection on the regularized lower incomplete gamma function P(dof / 2, x / 2)
-// (series below a + 1, Lentz continued fraction above), to a relative 1e-12.
-double ChiSquaredQuantile(double p, double dof);
 
 // Interval of the mean of `count` chi-square(6) variables: [q(a/2), q(1 - a/2)] / count with q the
 // quantiles of chi-square(6 count), a = 1 - confidence.
@@ -138,6 +134,9 @@ struct MonteCarloOptions {
   double success_sigmas = 10.0;  // success: position error <= this many design sigmas (unitless)
   int num_threads = 1;           // trials run in parallel (0: all cores)
   bool keep_samples = false;     // keep every solve's outcome in MonteCarloResult (tests, CSV)
+  // Called after every trial with (trials done, trials in all), from the worker threads (so it
+  // must be thread-safe); may be empty. The command prints a progress line from it.
+  std::function<void(size_t, size_t)> progress;
 
   bool IsValid(std::string* why) const;
 };
@@ -272,6 +271,8 @@ struct DatasetComparisonOptions {
   // Optional frames table with a reference orientation (same --rotation convention).
   std::string reference_path;
   int num_threads = 1;  // images in parallel (0: all cores)
+  // Called after each solver with (solvers done, solvers in all); may be empty.
+  std::function<void(size_t, size_t)> progress;
 
   bool IsValid(std::string* why) const;
 };
@@ -282,6 +283,8 @@ struct DatasetSolve {
   bool success = false;
   std::string message;
   ExteriorOrientation eo;
+  // The angles as every output shows them: the result's convention, AngleDirection applied (deg).
+  Eigen::Vector3d angles_deg = Eigen::Vector3d::Zero();
   Vector6d standard_deviations = Vector6d::Zero();  // m, rad
   double sigma0 = 0.0;
   int num_observations = 0;

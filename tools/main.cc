@@ -25,7 +25,8 @@ constexpr char kUsage[] =
     "            linearisation of the seed lecture)\n"
     "  simulate  write a synthetic dataset (camera table, frames, points, marks) with its truth\n"
     "  compare   the solvers side by side: Monte-Carlo sweeps against truth, or a dataset\n\n"
-    "Run 'photopose <command> --help' for the flags of a command.\n";
+    "Run 'photopose <command> --help' for the flags of a command, 'photopose --version' for the\n"
+    "version.\n";
 
 // The running command, for the guard's messages ("photopose resect: ..."); a fixed buffer so that
 // reporting needs no memory.
@@ -63,6 +64,13 @@ __attribute__((noreturn)) void OnFatalCheck() {
 }
 
 int Run(int argc, char** argv) {
+  // --version anywhere on the command line (of the tool or of a command) prints the version.
+  for (int i = 1; i < argc; ++i) {
+    if (std::strcmp(argv[i], "--version") == 0) {
+      std::cout << "photopose " << PHOTOPOSE_VERSION << "\n";
+      return photopose::cli::kExitSuccess;
+    }
+  }
   if (argc < 2 || std::strcmp(argv[1], "--help") == 0 || std::strcmp(argv[1], "-h") == 0 ||
       std::strcmp(argv[1], "help") == 0) {
     std::cout << kUsage;

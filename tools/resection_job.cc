@@ -1,234 +1,246 @@
 #include "tools/resection_job.h"
 
 #include <cmath>
-#include <map>
 #include <nlohmann/json.hpp>
 
-#include "core/collinearity.h"
+#include "core/tables.h"
 
 namespace photopose::cli {
 namespace {
 
-std::string Where(const std::string& file, int line, const std::string& column) {
-  return file + ":" + std::to_string(line) + ": " + column + ": ";
+const char* UnitName(MarkUnit unit) { return unit == MarkUnit::kFilm ? "um" : "px"; }
+
+const BlockCamera& CameraOf(const ResectionJob& job, size_t input) {
+  return job.block.cameras[job.block.images[job.images[input]].camera];
 }
 
 }  // namespace
 
 Status PrepareResectionJob(const ResectionJobOptions& options, ResectionJob* job) {
-  *job = ResectionJob();
-  job->pixel_origin = options.pixel_origin;
-  Status status = ReadCameraTable(options.cameras_path, &job->cameras);
-  if (!status.ok()) return status;
-  if (job->cameras.empty()) return Status::Error(options.cameras_path + ": the camera table has no rows");
-  for (const FrameCamera& camera : job->cameras) {
-    status = camera.IsValid();
-    if (!status.ok()) return Status::Error(options.cameras_path + ": camera '" + camera.camera_id + "': " + status.message());
-  }
-  if (!options.gcp_list_path.empty()) {
-    GcpList gcp;
-    status = ReadGcpList(options.gcp_list_path, &gcp);
-    if (!status.ok()) return status;
-    job->points = std::move(gcp.points);
-    job->marks = std::move(gcp.marks);
-    job->marks_label = options.gcp_list_path;
-  } else {
-    status = ReadGroundPoints(options.points_path, &job->points);
-    if (!status.ok()) return status;
-    status = ReadImageMarks(options.marks_path, &job->marks);
-    if (!status.ok()) return status;
-    job->marks_label = options.marks_path;
-    status = CheckMarks(options.marks_path, job->marks, job->points);
-    if (!status.ok()) return status;
-  }
-  if (!options.frames_path.empty()) {
-    FramesTableOptions frames_options;
-    frames_options.convention = options.rotation;
-    frames_options.cameras = &job->cameras;
-    status = ReadFramesTable(options.frames_path, frames_options, &job->approximate_frames);
-    if (!status.ok()) return status;
-  }
+  Block block;
+  PHOTOPOSE_RETURN_IF_ERROR(ReadBlock(options.files, &block));
+  return PrepareResectionJob(std::move(block), options.input, job);
+}
 
-  std::map<std::string, const FrameCamera*> camera_by_id;
-  for (const FrameCamera& camera : job->cameras) camera_by_id[camera.camera_id] = &camera;
-  std::map<std::string, const GroundPoint*> point_by_id;
-  for (const GroundPoint& point : job->points) point_by_id[point.point_id] = &point;
-  std::map<std::string, const FrameRecord*> frame_by_raster;
-  for (const FrameRecord& frame : job->approximate_frames) frame_by_raster[frame.raster] = &frame;
-
-  std::map<std::string, size_t> input_by_raster;
-  for (size_t m = 0; m < job->marks.size(); ++m) {
-    const ImageMark& mark = job->marks[m];
-    const auto point = point_by_id.find(mark.point_id);
-    if (point == point_by_id.end())
-      return Status::Error(Where(job->marks_label, mark.line, "PointID") + "unknown point '" + mark.point_id + "'");
-    auto [it, inserted] = input_by_raster.emplace(mark.raster, job->inputs.size());
-    if (inserted) {
-      // The camera of this image: the mark's CameraID, the approximate frame's, or the only one.
-      const FrameCamera* camera = nullptr;
-      const auto frame = frame_by_raster.find(mark.raster);
-      std::string camera_id = mark.camera_id;
-      if (camera_id.empty() && frame != frame_by_raster.end()) camera_id = frame->second->camera_id;
-      if (!camera_id.empty()) {
-        const auto found = camera_by_id.find(camera_id);
-        if (found == camera_by_id.end())
-          return Status::Error(Where(job->marks_label, mark.line, "CameraID") + "unknown camera '" + camera_id + "'");
-        camera = found->second;
-      } else if (job->cameras.size() == 1) {
-        camera = &job->cameras.front();
-      } else {
-        return Status::Error(Where(job->marks_label, mark.line, "CameraID") + "image '" + mark.raster +
-                             "' names no camera and the camera table has several");
-      }
-      ResectionInput input;
-      input.raster = mark.raster;
-      input.focal_length_um = camera->focal_length_um;
-      input.pixel_size_um = camera->MeanPixelSizeUm();
-      if (frame != frame_by_raster.end()) input.approximate = frame->second->eo;
-      job->inputs.push_back(std::move(input));
-      job->input_cameras.push_back(camera);
-      job->input_marks.emplace_back();
-      job->input_check_marks.emplace_back();
+Status PrepareResectionJob(Block block, const ResectionInputOptions& options, ResectionJob* job) {
+  ResectionJob result;
+  result.block = std::move(block);
+  const Block& b = result.block;
+  for (size_t i = 0; i < b.images.size(); ++i) {
+    if (b.marks_of_image[i].empty()) continue;  // a frames row only: nothing to resect
+    ResectionInput input;
+    std::vector<int> marks;
+    PHOTOPOSE_RETURN_IF_ERROR(MakeResectionInput(b, static_cast<int>(i), options, &input, &marks));
+    std::vector<int> checks;
+    for (const int m : b.marks_of_image[i]) {
+      const BlockPoint& point = b.points[b.marks[m].point];
+      if (point.role == PointRole::kCheck) checks.push_back(m);
+      if (point.role == PointRole::kTie) ++result.num_tie_marks;
     }
-    const size_t index = it->second;
-    if (!mark.camera_id.empty() && mark.camera_id != job->input_cameras[index]->camera_id)
-      return Status::Error(Where(job->marks_label, mark.line, "CameraID") + "image '" + mark.raster +
-                           "' has marks of two cameras");
-    status = CheckMarkInsideImage(job->marks_label, mark, *job->input_cameras[index],
-                                  options.pixel_origin);
-    if (!status.ok()) return status;
-    if (point->second->role == PointRole::kCheck) {
-      job->input_check_marks[index].push_back({m, point->second->position});
-      continue;
-    }
-    if (point->second->role == PointRole::kTie) continue;  // unknown coordinates: not for resection
-    const FrameCamera& camera = *job->input_cameras[index];
-    Eigen::Vector2d image_plane;
-    if (mark.column_row.has_value()) {
-      status = ImagePlaneFromPixel(camera, *mark.column_row, options.pixel_origin, &image_plane);
-      if (!status.ok()) return Status::Error(Where(job->marks_label, mark.line, "Column") + status.message());
-    } else {
-      image_plane = ImagePlaneFromFilm(camera, *mark.film_um);
-    }
-    ResectionInput& input = job->inputs[index];
-    input.image_plane_um.push_back(image_plane);
-    input.points_in_ground.push_back(point->second->position);
-    input.sigma_px.push_back(mark.accuracy_px.value_or(options.default_accuracy_px));
-    input.point_ids.push_back(mark.point_id);
-    job->input_marks[index].push_back(m);
+    result.images.push_back(static_cast<int>(i));
+    result.inputs.push_back(std::move(input));
+    result.input_marks.push_back(std::move(marks));
+    result.check_marks.push_back(std::move(checks));
   }
+  *job = std::move(result);
   return Status::Ok();
 }
 
-std::vector<Eigen::Vector2d> CheckPointResidualsPx(const ResectionJob& job, size_t index,
-                                                   const ExteriorOrientation& eo) {
-  std::vector<Eigen::Vector2d> residuals;
-  const FrameCamera& camera = *job.input_cameras[index];
-  for (const ResectionJob::CheckMark& check : job.input_check_marks[index]) {
-    const ImageMark& mark = job.marks[check.mark];
-    Eigen::Vector2d observed;
-    if (mark.column_row.has_value()) {
-      observed = *mark.column_row;
-    } else if (!PixelFromFilm(camera, *mark.film_um, job.pixel_origin, &observed).ok()) {
-      continue;
-    }
-    Eigen::Vector2d projected;
-    if (!ProjectGroundPoint(camera, eo, check.point_in_ground, job.pixel_origin, &projected).ok())
-      continue;
-    residuals.push_back(observed - projected);
+std::vector<CheckResidual> CheckResiduals(const ResectionJob& job, size_t input,
+                                          const ExteriorOrientation& eo) {
+  std::vector<CheckResidual> residuals;
+  for (const int m : job.check_marks[input]) {
+    CheckResidual check;
+    check.mark = m;
+    if (MarkResidual(job.block, m, eo, &check.residual).ok()) residuals.push_back(check);
   }
   return residuals;
+}
+
+Eigen::Vector3d OutputAnglesDeg(const ResectionJob& job, size_t input, RotationConvention rotation,
+                                const ExteriorOrientation& eo) {
+  return ConventionAnglesFromSeed(rotation, CameraOf(job, input).table.angle_flags(),
+                                  eo.angles_seed_rad()) *
+         kDegreesPerRadian;
+}
+
+std::optional<Eigen::Vector3d> OutputAngleSigmasDeg(const ResectionJob& job, size_t input,
+                                                    RotationConvention rotation,
+                                                    const ResectionResult& result) {
+  if (!result.has_covariance) return std::nullopt;
+  const Eigen::Matrix3d J = ConventionFromSeedJacobian(
+      rotation, CameraOf(job, input).table.angle_flags(), result.eo.angles_seed_rad());
+  const Eigen::Matrix3d covariance =
+      J * result.covariance.bottomRightCorner<3, 3>() * J.transpose();
+  return Eigen::Vector3d(covariance.diagonal().cwiseMax(0.0).cwiseSqrt() * kDegreesPerRadian);
+}
+
+std::string Sigma0Unit(const ResectionJob& job, size_t input, const ResectionResult& result) {
+  if (result.accuracy_stated) return "";
+  const std::vector<MarkUnit>& units = job.inputs[input].units;
+  if (units.empty()) return "px";
+  for (const MarkUnit unit : units)
+    if (unit != units.front()) return "mark units";
+  return UnitName(units.front());
 }
 
 Status WriteResectionFrames(const std::string& path, const ResectionJobOptions& options,
                             const ResectionJob& job, const std::vector<ResectionResult>& results) {
   std::vector<FrameRecord> frames;
+  std::vector<FrameCamera> cameras;
+  for (const BlockCamera& camera : job.block.cameras) cameras.push_back(camera.table);
   for (size_t i = 0; i < results.size(); ++i) {
     const ResectionResult& r = results[i];
     if (!r.success) continue;
+    const BlockCamera& camera = CameraOf(job, i);
     FrameRecord frame;
     frame.raster = job.inputs[i].raster;
-    frame.camera_id = job.input_cameras[i]->camera_id;
-    frame.srs = job.input_cameras[i]->srs;
+    frame.camera_id = camera.camera_id;
+    // The camera's SRS, else the ground system the marks came with (a gcp_list's first line).
+    frame.srs = camera.table.srs.empty() ? job.block.crs : camera.table.srs;
     frame.eo = r.eo;
-    frame.covariance = r.covariance;
-    frame.sigma0 = r.sigma0;
+    if (r.has_covariance) {
+      frame.covariance = r.covariance;
+      frame.sigma0 = r.sigma0;
+    }
     frame.extra_columns = {{"NumObservations", std::to_string(r.inliers.size())},
                            {"NumInliers", std::to_string(r.num_inliers)}};
     frames.push_back(std::move(frame));
   }
   FramesTableOptions frames_options;
-  frames_options.convention = options.rotation;
-  frames_options.cameras = &job.cameras;
+  frames_options.convention = options.files.rotation;
+  frames_options.cameras = &cameras;
   return WriteFramesTable(path, frames_options, frames);
 }
 
 Status WriteResectionReport(const std::string& path, const ResectionJobOptions& options,
-                            const ResectionJob& job, const std::vector<ResectionResult>& results) {
+                            const ResectionJob& job, const std::vector<ResectionResult>& results,
+                            const std::vector<std::string>& written) {
   using nlohmann::json;
   const ResectionOptions& o = options.resection;
+  const RotationConvention rotation = options.files.rotation;
+  const Block& block = job.block;
   json report;
-  report["options"] = {{"solver", PoseSolverName(o.solver)},
-                       {"jacobian", JacobianTypeName(o.jacobian)},
-                       {"loss", LossTypeName(o.loss)},
-                       {"ceres_minimizer", CeresMinimizerName(o.minimizer)},
-                       {"loss_scale_px", o.loss_scale_px},
-                       {"ransac_threshold_px", o.ransac_threshold_px},
-                       {"ransac_seed", o.ransac.seed},
-                       {"rotation", RotationConventionName(options.rotation)},
-                       {"default_accuracy_px", options.default_accuracy_px},
-                       {"pixel_origin", options.pixel_origin == PixelOrigin::kCorner ? "corner" : "center"}};
+  report["options"] = {
+      {"solver", PoseSolverName(o.refinement.solver)},
+      {"jacobian", JacobianTypeName(o.refinement.jacobian)},
+      {"loss", LossTypeName(o.refinement.loss)},
+      {"loss_scale_sigmas", o.refinement.loss_scale},
+      {"ceres_minimizer", CeresMinimizerName(o.refinement.ceres.minimizer)},
+      {"confidence", o.test.confidence},
+      {"consensus_threshold_sigmas", MarkThresholdSigmas(o.test.confidence)},
+      {"ransac_seed", o.consensus.ransac.seed},
+      {"max_exhaustive_samples", o.consensus.ransac.max_exhaustive_samples},
+      {"allow_no_redundancy", o.allow_no_redundancy},
+      {"rotation", RotationConventionName(rotation)},
+      {"default_accuracy", options.input.default_accuracy > 0.0 ? json(options.input.default_accuracy)
+                                                                : json(nullptr)},
+      {"pixel_origin", options.files.pixel_origin == PixelOrigin::kCorner ? "corner" : "center"}};
   json images = json::array();
+  int solved = 0;
   for (size_t i = 0; i < results.size(); ++i) {
     const ResectionResult& r = results[i];
     const ResectionSummary& s = r.summary;
+    const BlockImage& block_image = block.images[job.images[i]];
     json image = {{"raster", job.inputs[i].raster},
-                  {"camera_id", job.input_cameras[i]->camera_id},
+                  {"camera_id", CameraOf(job, i).camera_id},
                   {"success", r.success},
                   {"message", s.message},
-                  {"termination", s.IsSolutionUsable() ? "converged" : "failure"},
-                  {"initial_values", s.used_approximate ? "frames" : "ransac"},
-                  {"ransac_trials", s.ransac_trials},
+                  {"termination", ResectionTerminationName(s.termination)},
+                  {"initial_values", s.used_approximate ? "frames" : "consensus"},
+                  {"consensus", {{"trials", s.ransac_trials}, {"exhaustive", s.ransac_exhaustive}}},
+                  {"adjustments", s.adjustments},
                   {"iterations", s.iterations},
                   {"initial_cost", s.initial_cost},
                   {"final_cost", s.final_cost},
-                  {"time_seconds", s.total_seconds}};
+                  {"time_seconds", s.total_seconds},
+                  {"accuracy", r.accuracy_stated ? "stated" : "estimated"},
+                  {"warnings", r.warnings}};
+    if (block_image.fiducial_fit) {
+      const FiducialFit& fit = *block_image.fiducial_fit;
+      json residuals = json::array();
+      for (const FiducialResidual& f : fit.residuals)
+        residuals.push_back({{"fiducial_id", f.fiducial_id},
+                             {"line", f.line},
+                             {"residual_x_um", f.residual_um.x()},
+                             {"residual_y_um", f.residual_um.y()}});
+      image["fiducials"] = {{"count", fit.residuals.size()},
+                            {"rms_um", fit.rms_um},
+                            {"max_um", fit.max_um},
+                            {"redundancy", fit.redundancy},
+                            {"affine", fit.affine},
+                            {"residuals", residuals}};
+    }
     if (r.success) {
-      const Eigen::Vector3d angles = AnglesFromRotation(
-          options.rotation, RotationFromAngles(RotationConvention::kSeed, r.eo.angles_seed_rad()));
+      ++solved;
+      const Eigen::Vector3d angles = OutputAnglesDeg(job, i, rotation, r.eo);
       image["pose"] = {{"X", r.eo.parameters[0]},
                        {"Y", r.eo.parameters[1]},
                        {"Z", r.eo.parameters[2]},
-                       {"omega_deg", RadiansToDegrees(angles[0])},
-                       {"phi_deg", RadiansToDegrees(angles[1])},
-                       {"kappa_deg", RadiansToDegrees(angles[2])},
-                       {"convention", RotationConventionName(options.rotation)}};
+                       {"omega_deg", angles[0]},
+                       {"phi_deg", angles[1]},
+                       {"kappa_deg", angles[2]},
+                       {"convention", RotationConventionName(rotation)},
+                       {"angle_direction", CameraOf(job, i).table.angle_direction}};
       image["seed_angles_rad"] = {r.eo.parameters[3], r.eo.parameters[4], r.eo.parameters[5]};
-      json covariance = json::array();
-      for (int row = 0; row < 6; ++row)
-        for (int col = 0; col < 6; ++col) covariance.push_back(r.covariance(row, col));
-      image["covariance_seed"] = covariance;  // row-major, X0 Y0 Z0 (m) omega phi kappa (rad, seed)
+      const std::optional<Eigen::Vector3d> angle_sigmas = OutputAngleSigmasDeg(job, i, rotation, r);
+      if (r.has_covariance) {
+        json covariance = json::array();
+        for (int row = 0; row < 6; ++row)
+          for (int col = 0; col < 6; ++col) covariance.push_back(r.covariance(row, col));
+        image["covariance_seed"] = covariance;  // row-major, X0 Y0 Z0 (m) omega phi kappa (rad)
+        image["standard_deviations"] = {{"X", r.standard_deviations[0]},
+                                        {"Y", r.standard_deviations[1]},
+                                        {"Z", r.standard_deviations[2]},
+                                        {"omega_deg", (*angle_sigmas)[0]},
+                                        {"phi_deg", (*angle_sigmas)[1]},
+                                        {"kappa_deg", (*angle_sigmas)[2]}};
+      } else {
+        image["covariance_seed"] = nullptr;
+        image["standard_deviations"] = nullptr;
+      }
       image["sigma0"] = r.sigma0;
+      image["sigma0_unit"] = Sigma0Unit(job, i, r);
       image["degrees_of_freedom"] = r.degrees_of_freedom;
       image["num_inliers"] = r.num_inliers;
+      image["critical_normalized_residual"] =
+          std::isfinite(r.critical_normalized_residual) ? json(r.critical_normalized_residual)
+                                                        : json(nullptr);
       json marks = json::array();
       for (size_t k = 0; k < job.input_marks[i].size(); ++k) {
-        const ImageMark& mark = job.marks[job.input_marks[i][k]];
-        marks.push_back({{"point_id", mark.point_id},
-                         {"residual_x_px", r.residuals_px[k].x()},
-                         {"residual_y_px", r.residuals_px[k].y()},
-                         {"inlier", static_cast<bool>(r.inliers[k])}});
+        const BlockMark& mark = block.marks[job.input_marks[i][k]];
+        const double w = r.normalized_residuals[k];
+        marks.push_back({{"point_id", block.points[mark.point].id},
+                         {"line", mark.line},
+                         {"status", MarkStatusName(r.mark_status[k])},
+                         {"inlier", static_cast<bool>(r.inliers[k])},
+                         {"residual_x", r.residuals[k].x()},
+                         {"residual_y", r.residuals[k].y()},
+                         {"unit", UnitName(mark.unit)},
+                         {"normalized_residual", std::isfinite(w) ? json(w) : json(nullptr)},
+                         {"redundancy", r.redundancy_numbers[k]}});
       }
       image["marks"] = marks;
-      const std::vector<Eigen::Vector2d> check = CheckPointResidualsPx(job, i, r.eo);
-      double ssq = 0.0;
-      for (const auto& c : check) ssq += c.squaredNorm();
-      image["check_points"] = {{"count", check.size()},
-                               {"rmse_px", check.empty() ? 0.0 : std::sqrt(ssq / check.size())}};
+      json checks = json::array();
+      for (const CheckResidual& c : CheckResiduals(job, i, r.eo)) {
+        const BlockMark& mark = block.marks[c.mark];
+        checks.push_back({{"point_id", block.points[mark.point].id},
+                          {"line", mark.line},
+                          {"residual_x", c.residual.x()},
+                          {"residual_y", c.residual.y()},
+                          {"residual", c.residual.norm()},
+                          {"unit", UnitName(mark.unit)}});
+      }
+      image["check_points"] = checks;
     }
     images.push_back(image);
   }
   report["images"] = images;
+  report["summary"] = {{"images", results.size()},
+                       {"solved", solved},
+                       {"not_solved", static_cast<int>(results.size()) - solved},
+                       {"tie_marks_left_out", job.num_tie_marks},
+                       {"files_written", written}};
   return WriteFileAtomically(path, report.dump(2) + "\n");
 }
 

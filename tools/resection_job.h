@@ -1,57 +1,65 @@
 #pragma once
-// From tables to resection inputs and back: used by `photopose resect` and `photopose compare`.
+// From a block to resection inputs and back to tables and reports: used by `photopose resect` and
+// `photopose compare`. The block (core/block.h) is the one assembly of the tables; every image with
+// marks becomes one resection input (MakeResectionInput, solvers/resection.h).
 
 #include <string>
 #include <vector>
 
-#include "core/camera.h"
+#include "core/block.h"
 #include "core/rotation.h"
 #include "core/status.h"
-#include "core/tables.h"
 #include "solvers/resection.h"
 
 namespace photopose::cli {
 
 struct ResectionJobOptions {
-  std::string cameras_path;    // camera table (required)
-  std::string points_path;     // ground points (or gcp_list_path)
-  std::string marks_path;      // image marks (or gcp_list_path)
-  std::string gcp_list_path;   // OpenDroneMap gcp_list.txt
-  std::string frames_path;     // optional approximate frames
-  RotationConvention rotation = RotationConvention::kSeed;  // of the frames tables
-  double default_accuracy_px = 1.0;  // marks without Accuracy (pixels, one sigma)
-  PixelOrigin pixel_origin = PixelOrigin::kCorner;
+  BlockFiles files;              // the tables, their rotation convention and pixel origin
+  ResectionInputOptions input;   // accuracy of marks without one
   ResectionOptions resection;
 };
 
-// Everything read, and the per-image inputs in order of first appearance in the marks.
+// The block and, per image that has marks (block order), its resection input.
 struct ResectionJob {
-  std::vector<FrameCamera> cameras;
-  std::vector<GroundPoint> points;
-  std::vector<ImageMark> marks;
-  std::vector<FrameRecord> approximate_frames;
+  Block block;
+  std::vector<int> images;                 // block image of each input
   std::vector<ResectionInput> inputs;
-  std::vector<const FrameCamera*> input_cameras;          // camera of each input
-  std::vector<std::vector<size_t>> input_marks;           // control marks of each input (into marks)
-  // A check-point mark (index into marks) with its ground point.
-  struct CheckMark {
-    size_t mark;
-    Eigen::Vector3d point_in_ground;
-  };
-  std::vector<std::vector<CheckMark>> input_check_marks;  // check-point marks of each input
-  PixelOrigin pixel_origin = PixelOrigin::kCorner;        // of the marks' Column/Row
-  std::string marks_label;                                 // file named in messages
+  std::vector<std::vector<int>> input_marks;  // block mark of each observation of each input
+  std::vector<std::vector<int>> check_marks;  // block marks of the check points of each input
+  int num_tie_marks = 0;                      // marks of tie points, left out of resection
 };
 
+// Reads the tables (ReadBlock) and prepares the inputs.
 Status PrepareResectionJob(const ResectionJobOptions& options, ResectionJob* job);
+// The same from an assembled block.
+Status PrepareResectionJob(Block block, const ResectionInputOptions& options, ResectionJob* job);
 
-// Check-point residuals (pixels) of one solved image: observed minus projected check marks.
-std::vector<Eigen::Vector2d> CheckPointResidualsPx(const ResectionJob& job, size_t input_index,
-                                                   const ExteriorOrientation& eo);
+// The residual of one check mark (own unit, image-plane axes).
+struct CheckResidual {
+  int mark = -1;  // block mark
+  Eigen::Vector2d residual = Eigen::Vector2d::Zero();
+};
+// Check-point residuals of a solved input (marks behind the camera are left out).
+std::vector<CheckResidual> CheckResiduals(const ResectionJob& job, size_t input,
+                                          const ExteriorOrientation& eo);
+
+// The angles every output of a solved image shows: the convention asked for, the camera's
+// AngleDirection applied (ConventionAnglesFromSeed), degrees.
+Eigen::Vector3d OutputAnglesDeg(const ResectionJob& job, size_t input, RotationConvention rotation,
+                                const ExteriorOrientation& eo);
+// Their standard deviations (degrees) as the frames table writes them (empty without covariance).
+std::optional<Eigen::Vector3d> OutputAngleSigmasDeg(const ResectionJob& job, size_t input,
+                                                    RotationConvention rotation,
+                                                    const ResectionResult& result);
+
+// The unit of sigma0 of a result: "" when the accuracy was stated (unitless), else the marks'.
+std::string Sigma0Unit(const ResectionJob& job, size_t input, const ResectionResult& result);
 
 Status WriteResectionFrames(const std::string& path, const ResectionJobOptions& options,
                             const ResectionJob& job, const std::vector<ResectionResult>& results);
+// `written` names the files of the run for the report's summary.
 Status WriteResectionReport(const std::string& path, const ResectionJobOptions& options,
-                            const ResectionJob& job, const std::vector<ResectionResult>& results);
+                            const ResectionJob& job, const std::vector<ResectionResult>& results,
+                            const std::vector<std::string>& written);
 
 }  // namespace photopose::cli

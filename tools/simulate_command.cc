@@ -19,7 +19,7 @@ DEFINE_int32(check_points, 5, "Check points generated per image footprint (Role 
 DEFINE_double(initial_position_error, 5.0, "Error of the approximate frames: uniform in plus or minus this many metres per axis.");
 DEFINE_double(initial_angle_error, 2.0, "Error of the approximate frames: uniform in plus or minus this many degrees per angle.");
 DEFINE_string(out_dir, "", "Folder to write the dataset into (created when missing): cameras.csv, points.csv, marks.csv, frames_approx.csv, and truth/frames.csv with truth/outliers.csv. The folder is replaced as a whole, all or nothing: other files in it are carried over, subfolders other than truth are refused.");
-DEFINE_string(sim_rotation, "seed", "Angle convention of the frames tables written: seed, opk or pok.");
+DEFINE_string(sim_rotation, "rxryrz", "Angle convention of the frames tables written: rxryrz (alias seed), opk or pok.");
 
 namespace photopose::cli {
 namespace {
@@ -64,7 +64,8 @@ int RunSimulate(int argc, char** argv) {
     return BadInput("simulate",
                     "--scenario must be nadir, oblique or uav_block, not '" + FLAGS_scenario + "'");
   const auto rotation = ParseRotationConvention(FLAGS_sim_rotation);
-  if (!rotation) return BadInput("simulate", "--rotation must be seed, opk or pok");
+  if (!rotation)
+    return BadInput("simulate", std::string("--rotation must be ") + RotationConventionChoices());
   if (FLAGS_out_dir.empty()) return BadInput("simulate", "--out_dir is required");
   // The dataset's files, for the pre-flight check of the folder before any work.
   std::vector<FolderFile> files = {{"cameras.csv", ""},      {"points.csv", ""},

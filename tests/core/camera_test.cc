@@ -174,9 +174,17 @@ TEST(Camera, IsValidNamesTheProblem) {
   EXPECT_TRUE(camera.IsValid().ok());
   camera.focal_length_um = -1.0;
   EXPECT_NE(camera.IsValid().message().find("FocalLength"), std::string::npos);
+  // Without the image size the camera still serves film marks (the schema makes NRows and
+  // NColumns optional); pixel marks are refused where they need it, naming what is missing.
   camera = TestCamera(FilmCoordinateSystem::kXRightYUp);
   camera.n_rows = 0;
-  EXPECT_NE(camera.IsValid().message().find("NRows"), std::string::npos);
+  EXPECT_TRUE(camera.IsValid().ok());
+  EXPECT_FALSE(camera.HasPixelToFilm());
+  EXPECT_NE(camera.PixelToFilmStatus().message().find("NRows and NColumns"), std::string::npos);
+  Eigen::Vector2d film;
+  EXPECT_FALSE(FilmFromPixel(camera, {10, 10}, PixelOrigin::kCorner, &film).ok());
+  camera.pixel_size_um = -1.0;
+  EXPECT_NE(camera.IsValid().message().find("PixelSize"), std::string::npos);
   camera = TestCamera(FilmCoordinateSystem::kXRightYUp);
   camera.polarity = 0;
   EXPECT_FALSE(camera.IsValid().ok());

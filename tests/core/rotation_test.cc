@@ -137,9 +137,54 @@ TEST(Rotation, AngleDirectionNegatesOnlyForCounterclockwise) {
 
 TEST(Rotation, ParsesNamesAndRejectsOthers) {
   EXPECT_EQ(ParseRotationConvention("OPK"), RotationConvention::kOpk);
-  EXPECT_EQ(ParseRotationConvention("seed"), RotationConvention::kSeed);
+  EXPECT_EQ(ParseRotationConvention("rxryrz"), RotationConvention::kSeed);
+  EXPECT_EQ(ParseRotationConvention("seed"), RotationConvention::kSeed);  // the alias
+  EXPECT_STREQ(RotationConventionName(RotationConvention::kSeed), "rxryrz");
   EXPECT_EQ(ParseRotationConvention("pok"), RotationConvention::kPok);
   EXPECT_FALSE(ParseRotationConvention("kpo").has_value());
+}
+
+// The one boundary conversion: the angles of the convention, AngleDirection applied; its inverse;
+// and the Jacobian the covariances are propagated with.
+TEST(Rotation, BoundaryConversionRoundTripsForEveryConventionAndAngleDirection) {
+  std::mt19937_64 rng(5);
+  for (RotationConvention convention :
+       {RotationConvention::kSeed, RotationConvention::kOpk, RotationConvention::kPok}) {
+    for (int direction : {-1, +1}) {
+      const AngleFlags flags{direction};
+      for (int i = 0; i < 200; ++i) {
+        const Eigen::Vector3d seed = RandomAngles(&rng);
+        const Eigen::Vector3d out = ConventionAnglesFromSeed(convention, flags, seed);
+        // The same rotation, written in the convention (negated for AngleDirection +1).
+        const Eigen::Matrix3d R = RotationFromAngles(convention, ApplyAngleDirection(flags, out));
+        EXPECT_LE((R - RotationFromAngles(RotationConvention::kSeed, seed)).cwiseAbs().maxCoeff(),
+                  1e-13);
+        const Eigen::Vector3d back = SeedAnglesFromConvention(convention, flags, out);
+        EXPECT_LE((RotationFromAngles(RotationConvention::kSeed, back) -
+                   RotationFromAngles(RotationConvention::kSeed, seed))
+                      .cwiseAbs()
+                      .maxCoeff(),
+                  1e-13);
+        // The Jacobian against a wider central difference.
+        const Eigen::Matrix3d J = ConventionFromSeedJacobian(convention, flags, seed);
+        for (int j = 0; j < 3; ++j) {
+          Eigen::Vector3d h = Eigen::Vector3d::Zero();
+          h[j] = 1e-5;
+          Eigen::Vector3d d = ConventionAnglesFromSeed(convention, flags, seed + h) -
+                              ConventionAnglesFromSeed(convention, flags, seed - h);
+          for (int k = 0; k < 3; ++k) d[k] = WrapAngle(d[k]) / 2e-5;
+          if (std::abs(std::cos(out[convention == RotationConvention::kPok ? 0 : 1])) > 0.05)
+            EXPECT_LE((J.col(j) - d).cwiseAbs().maxCoeff(), 1e-5);
+        }
+      }
+    }
+  }
+  // AngleDirection +1 negates exactly.
+  const Eigen::Vector3d seed(0.1, -0.2, 0.3);
+  EXPECT_LE((ConventionAnglesFromSeed(RotationConvention::kSeed, AngleFlags{+1}, seed) + seed)
+                .cwiseAbs()
+                .maxCoeff(),
+            1e-15);
 }
 
 TEST(Rotation, CheckRotationMatrixRejectsReflectionsAndScaling) {

@@ -104,15 +104,53 @@ TEST_F(TablesTest, CameraTableSchemaExampleRows) {
   EXPECT_EQ(ms.n_rows, 3770);
 }
 
-TEST_F(TablesTest, CameraTableExampleWithoutImageSizeIsRejectedWithLine) {
+// The schema makes NRows and NColumns optional: a table without them is valid (film marks need
+// neither); a pixel mark that needs them is refused at its own line (tests/core/block_test.cc).
+TEST_F(TablesTest, CameraTableExampleWithoutImageSizeIsAccepted) {
   const std::string path = Write("cameras.csv",
                                  "ObjectID,CameraID,FocalLength,PrincipalX,PrincipalY,PixelSize\n"
                                  "1,UltraCamXp_Pan,100500,-120,0,6\n");
   std::vector<FrameCamera> cameras;
-  EXPECT_EQ(ReadCameraTable(path, &cameras).message(),
-            path +
-                ":2: NRows and NColumns are needed to place the fiducial centre when A0-A2/B0-B2 "
-                "are not given");
+  ASSERT_TRUE(ReadCameraTable(path, &cameras).ok());
+  ASSERT_EQ(cameras.size(), 1u);
+  EXPECT_EQ(cameras[0].n_rows, 0);
+  EXPECT_FALSE(cameras[0].HasPixelToFilm());
+}
+
+TEST_F(TablesTest, FramesTableAccuracyColumnsRoundTrip) {
+  const std::string path = Write("frames.csv",
+                                 "Raster,CameraID,PerspectiveX,PerspectiveY,PerspectiveZ,Omega,Phi,"
+                                 "Kappa,AccuracyX,AccuracyY,AccuracyZ,AccuracyOmega,AccuracyPhi,"
+                                 "AccuracyKappa\n"
+                                 "a,c,1,2,3,0.1,0.2,0.3,0.05,0.05,0.1,0.01,0.01,0.05\n"
+                                 "b,c,1,2,3,0.1,0.2,0.3,,,,,,\n");
+  std::vector<FrameRecord> frames;
+  ASSERT_TRUE(ReadFramesTable(path, FramesTableOptions(), &frames).ok());
+  ASSERT_EQ(frames.size(), 2u);
+  EXPECT_EQ(frames[0].center_accuracy_m, Eigen::Vector3d(0.05, 0.05, 0.1));
+  EXPECT_EQ(frames[0].attitude_accuracy_deg, Eigen::Vector3d(0.01, 0.01, 0.05));
+  EXPECT_EQ(frames[0].line, 2);
+  EXPECT_FALSE(frames[1].center_accuracy_m.has_value());
+  EXPECT_TRUE(frames[0].extra_columns.empty());
+  const std::string out = Write("out.csv", "");
+  ASSERT_TRUE(WriteFramesTable(out, FramesTableOptions(), frames).ok());
+  std::vector<FrameRecord> back;
+  ASSERT_TRUE(ReadFramesTable(out, FramesTableOptions(), &back).ok());
+  EXPECT_EQ(back[0].center_accuracy_m, frames[0].center_accuracy_m);
+  EXPECT_EQ(back[0].attitude_accuracy_deg, frames[0].attitude_accuracy_deg);
+  // All three or none, each positive.
+  const std::string partial = Write("partial.csv",
+                                    "Raster,CameraID,PerspectiveX,PerspectiveY,PerspectiveZ,Omega,"
+                                    "Phi,Kappa,AccuracyX,AccuracyY,AccuracyZ\n"
+                                    "a,c,1,2,3,0,0,0,0.05,,0.1\n");
+  EXPECT_EQ(ReadFramesTable(partial, FramesTableOptions(), &frames).message(),
+            partial + ":2: AccuracyY: is empty; AccuracyX, AccuracyY, AccuracyZ are given together");
+  const std::string negative = Write("negative.csv",
+                                     "Raster,CameraID,PerspectiveX,PerspectiveY,PerspectiveZ,Omega,"
+                                     "Phi,Kappa,AccuracyOmega,AccuracyPhi,AccuracyKappa\n"
+                                     "a,c,1,2,3,0,0,0,0.1,-0.1,0.1\n");
+  EXPECT_EQ(ReadFramesTable(negative, FramesTableOptions(), &frames).message(),
+            negative + ":2: AccuracyPhi: '-0.1' must be positive");
 }
 
 TEST_F(TablesTest, CameraTableFullDistortionModelRow) {

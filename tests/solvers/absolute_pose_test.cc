@@ -17,6 +17,7 @@
 #include "core/rotation.h"
 #include "core/synthetic_scene.h"
 #include "core/types.h"
+#include "solvers/resection.h"
 
 namespace photopose {
 namespace {
@@ -68,18 +69,17 @@ Correspondences FromSyntheticScene(Scenario scenario, double outlier_fraction, u
   EXPECT_TRUE(status.ok()) << status.message();
   Correspondences c;
   if (!status.ok()) return c;
+  // The library's one assembly: the scene's tables into a block, its image into a resection input.
+  Block block;
+  ResectionInput input;
+  std::vector<int> marks;
+  const Status assembled = AssembleBlock(SceneBlockTables(scene), &block);
+  EXPECT_TRUE(assembled.ok()) << assembled.message();
+  EXPECT_TRUE(MakeResectionInput(block, 0, ResectionInputOptions(), &input, &marks).ok());
+  c.image_plane_um = input.image_plane;
+  c.points_in_ground = input.points_in_ground;
+  for (const int m : marks) c.is_outlier.push_back(scene.mark_is_outlier[m] ? 1 : 0);
   const FrameCamera& camera = scene.cameras.front();
-  std::map<std::string, Eigen::Vector3d> position;
-  for (const GroundPoint& p : scene.points) position[p.point_id] = p.position;
-  for (size_t k = 0; k < scene.marks.size(); ++k) {
-    Eigen::Vector2d xy;
-    const Status converted =
-        ImagePlaneFromPixel(camera, *scene.marks[k].column_row, PixelOrigin::kCorner, &xy);
-    EXPECT_TRUE(converted.ok()) << converted.message();
-    c.image_plane_um.push_back(xy);
-    c.points_in_ground.push_back(position.at(scene.marks[k].point_id));
-    c.is_outlier.push_back(scene.mark_is_outlier[k] ? 1 : 0);
-  }
   c.truth = scene.true_frames.front().eo;
   c.focal_um = camera.focal_length_um;
   c.noise_um = options.noise_px * camera.pixel_size_um;
@@ -145,7 +145,7 @@ double MaskAgreement(const std::vector<char>& mask, const std::vector<char>& is_
 AbsolutePoseRansacOptions Options(uint64_t seed) {
   AbsolutePoseRansacOptions options;
   options.ransac.seed = seed;
-  options.inlier_threshold_um = kThresholdUm;
+  options.inlier_threshold = kThresholdUm;
   return options;
 }
 
@@ -427,10 +427,10 @@ TEST(AbsolutePoseRansacTest, FailsCleanly) {
                                             c.focal_um, &eo, &mask, &summary),
                  "not finite");
   AbsolutePoseRansacOptions bad = Options(1);
-  bad.inlier_threshold_um = 0.0;
+  bad.inlier_threshold = 0.0;
   expect_failure(EstimateAbsolutePoseRansac(bad, c.image_plane_um, c.points_in_ground, c.focal_um,
                                             &eo, &mask, &summary),
-                 "inlier_threshold_um");
+                 "inlier_threshold");
   bad = Options(1);
   bad.ransac.confidence = 1.5;
   expect_failure(EstimateAbsolutePoseRansac(bad, c.image_plane_um, c.points_in_ground, c.focal_um,

@@ -233,6 +233,38 @@ TEST(RansacTest, SameSeedSameResultDifferentSeedsBothSucceed) {
   EXPECT_NEAR(other.b, -0.2, kLineTolerance);
 }
 
+TEST(RansacTest, FewDataAreEnumeratedAndDoNotDependOnTheSeed) {
+  EXPECT_EQ(internal::CappedBinomial(15, 3, 1000), 455);
+  EXPECT_EQ(internal::CappedBinomial(4, 3, 1000), 4);
+  EXPECT_EQ(internal::CappedBinomial(100, 3, 1000), 1001);  // capped, no overflow
+  EXPECT_EQ(internal::CappedBinomial(2, 3, 1000), 0);
+  internal::CombinationSampler combinations(4, 2);
+  std::vector<std::pair<int, int>> pairs;
+  int sample[2];
+  while (combinations.Sample(sample)) pairs.emplace_back(sample[0], sample[1]);
+  EXPECT_EQ(pairs, (std::vector<std::pair<int, int>>{{0, 1}, {0, 2}, {0, 3}, {1, 2}, {1, 3}, {2, 3}}));
+  // 30 points, 40 % of them outliers: C(30, 2) = 435 pairs, every one tried, whatever the seed.
+  const LineData data = MakeLineData(3, 30, 0.4);
+  const LineEstimator estimator(data.points, kThreshold);
+  RansacOptions options;
+  Line first;
+  std::vector<char> first_mask;
+  const RansacSummary a = Ransac(options, estimator, &first, &first_mask);
+  ASSERT_TRUE(a.success);
+  EXPECT_TRUE(a.exhaustive);
+  EXPECT_EQ(a.num_trials, 435);
+  for (uint64_t seed : {1, 99, 12345}) {
+    options.seed = seed;
+    Line other;
+    std::vector<char> other_mask;
+    const RansacSummary b = Ransac(options, estimator, &other, &other_mask);
+    EXPECT_EQ(other.a, first.a);
+    EXPECT_EQ(other.b, first.b);
+    EXPECT_EQ(other_mask, first_mask);
+    EXPECT_EQ(b.score, a.score);
+  }
+}
+
 TEST(RansacTest, TrialBounds) {
   const LineData clean = MakeLineData(3, 200, 0.0);
   const LineEstimator estimator(clean.points, kThreshold);
@@ -282,10 +314,19 @@ TEST(RansacTest, FailsCleanly) {
   // Every sample degenerate (all points on a vertical line): no model at all.
   const LineEstimator vertical(
       {Eigen::Vector2d(1, 0), Eigen::Vector2d(1, 1), Eigen::Vector2d(1, 2)}, kThreshold);
+  // Three data have three pairs: each is tried once.
   RansacOptions options;
-  options.max_trials = 100;
   summary = Ransac(options, vertical, &line, &mask);
   EXPECT_FALSE(summary.success);
+  EXPECT_TRUE(summary.exhaustive);
+  EXPECT_EQ(summary.num_trials, 3);
+  EXPECT_EQ(summary.num_models, 0);
+  // Drawn instead: the trial budget.
+  options.max_trials = 100;
+  options.max_exhaustive_samples = 0;
+  summary = Ransac(options, vertical, &line, &mask);
+  EXPECT_FALSE(summary.success);
+  EXPECT_FALSE(summary.exhaustive);
   EXPECT_EQ(summary.num_trials, 100);
   EXPECT_EQ(summary.num_models, 0);
   EXPECT_FALSE(summary.message.empty());

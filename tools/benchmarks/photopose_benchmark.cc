@@ -3,7 +3,7 @@
 //   - clean resection from approximate values, 10 / 50 / 500 points: Ceres analytic, Ceres autodiff,
 //     the Taylor linearisation, and (with OpenCV) solvePnP SQPNP and ITERATIVE;
 //   - robust resection of 500 correspondences with 30% / 60% gross errors and no approximate values:
-//     photopose (LO-RANSAC + Ceres) and OpenCV's solvePnPRansac.
+//     photopose (LO-RANSAC + least squares + data snooping) and OpenCV's solvePnPRansac.
 // Accuracy and success over the same scenes are reported as counters next to the times, so speed is
 // never bought with quality unseen.
 #include <benchmark/benchmark.h>
@@ -47,25 +47,19 @@ BenchScene MakeBenchScene(int num_points, double outlier_fraction, uint64_t seed
   options.num_control_points = num_points;
   options.num_check_points = 0;
   SyntheticScene scene;
-  const Status status = MakeSyntheticScene(options, &scene);
-  if (!status.ok()) std::abort();
+  Block block;
+  std::vector<int> marks;
   BenchScene bench;
+  // The library's one assembly: the scene's tables into a block, its image into a resection input.
+  if (!MakeSyntheticScene(options, &scene).ok() ||
+      !AssembleBlock(SceneBlockTables(scene), &block).ok() ||
+      !MakeResectionInput(block, 0, ResectionInputOptions(), &bench.input, &marks).ok())
+    std::abort();
   bench.camera = scene.cameras.front();
   bench.truth = scene.true_frames.front().eo;
-  bench.input.raster = "bench";
-  bench.input.focal_length_um = bench.camera.focal_length_um;
-  bench.input.pixel_size_um = bench.camera.pixel_size_um;
-  bench.input.approximate = scene.approximate_frames.front().eo;
-  std::map<std::string, Eigen::Vector3d> points;
-  for (const auto& p : scene.points) points[p.point_id] = p.position;
-  for (size_t i = 0; i < scene.marks.size(); ++i) {
-    Eigen::Vector2d image_plane;
-    ImagePlaneFromPixel(bench.camera, *scene.marks[i].column_row, PixelOrigin::kCorner, &image_plane);
-    bench.input.image_plane_um.push_back(image_plane);
-    bench.input.points_in_ground.push_back(points.at(scene.marks[i].point_id));
-    bench.input.sigma_px.push_back(0.5);
-    bench.pixels.push_back(*scene.marks[i].column_row);
-    bench.is_outlier.push_back(scene.mark_is_outlier[i]);
+  for (const int m : marks) {
+    bench.pixels.push_back(block.marks[m].measured);
+    bench.is_outlier.push_back(scene.mark_is_outlier[m]);
   }
   return bench;
 }
@@ -119,10 +113,10 @@ struct Quality {
 void BM_PoseCostEvaluation(benchmark::State& state, JacobianType type) {
   const BenchScene& scene = Scenes(50, 0.0).front();
   std::vector<std::unique_ptr<ceres::CostFunction>> costs;
-  for (size_t i = 0; i < scene.input.image_plane_um.size(); ++i)
-    costs.emplace_back(CreatePoseCost(type, PoseCostFunctor(scene.input.image_plane_um[i],
+  for (size_t i = 0; i < scene.input.image_plane.size(); ++i)
+    costs.emplace_back(CreatePoseCost(type, PoseCostFunctor(scene.input.image_plane[i],
                                                             scene.input.points_in_ground[i],
-                                                            scene.input.focal_length_um, 1.0)));
+                                                            scene.input.focal_length, 1.0)));
   const double* parameters[] = {scene.truth.data()};
   double residual[2], jacobian[12];
   double* jacobians[] = {jacobian};
@@ -142,8 +136,8 @@ BENCHMARK_CAPTURE(BM_PoseCostEvaluation, autodiff, JacobianType::kAutodiff);
 void BM_PoseCostEvaluationNewPoseEveryCall(benchmark::State& state, JacobianType type) {
   const BenchScene& scene = Scenes(50, 0.0).front();
   std::unique_ptr<ceres::CostFunction> cost(CreatePoseCost(
-      type, PoseCostFunctor(scene.input.image_plane_um[0], scene.input.points_in_ground[0],
-                            scene.input.focal_length_um, 1.0)));
+      type, PoseCostFunctor(scene.input.image_plane[0], scene.input.points_in_ground[0],
+                            scene.input.focal_length, 1.0)));
   ExteriorOrientation poses[2] = {scene.truth, scene.truth};
   poses[1].parameters[5] += 1e-6;
   double residual[2], jacobian[12];
@@ -163,8 +157,7 @@ BENCHMARK_CAPTURE(BM_PoseCostEvaluationNewPoseEveryCall, autodiff, JacobianType:
 void BM_ResectionCeresProblem(benchmark::State& state) {
   const auto& scenes = Scenes(static_cast<int>(state.range(0)), 0.0);
   ResectionOptions options;
-  options.loss = LossType::kNone;
-  options.minimizer = CeresMinimizer::kProblem;
+  options.refinement.ceres.minimizer = CeresMinimizer::kProblem;
   size_t i = 0;
   for (auto _ : state) {
     benchmark::DoNotOptimize(ResectImage(options, scenes[i].input));
@@ -178,9 +171,8 @@ BENCHMARK(BM_ResectionCeresProblem)->Arg(10)->Arg(50)->Arg(500)->Unit(benchmark:
 void BM_Resection(benchmark::State& state, PoseSolver solver, JacobianType jacobian) {
   const auto& scenes = Scenes(static_cast<int>(state.range(0)), 0.0);
   ResectionOptions options;
-  options.solver = solver;
-  options.jacobian = jacobian;
-  options.loss = LossType::kNone;
+  options.refinement.solver = solver;
+  options.refinement.jacobian = jacobian;
   Quality quality;
   for (const auto& scene : scenes) {
     const ResectionResult r = ResectImage(options, scene.input);
@@ -206,13 +198,13 @@ void BM_TaylorKernel(benchmark::State& state) {
   const auto& scenes = Scenes(static_cast<int>(state.range(0)), 0.0);
   TaylorResectionOptions options;
   std::vector<std::vector<double>> sigmas;
-  for (const auto& scene : scenes) sigmas.emplace_back(scene.input.image_plane_um.size(), 3.0);
+  for (const auto& scene : scenes) sigmas.emplace_back(scene.input.image_plane.size(), 3.0);
   size_t i = 0;
   TaylorResectionResult result;
   for (auto _ : state) {
     const auto& in = scenes[i].input;
-    benchmark::DoNotOptimize(TaylorResection(options, in.image_plane_um, in.points_in_ground,
-                                             sigmas[i], in.focal_length_um, *in.approximate, &result));
+    benchmark::DoNotOptimize(TaylorResection(options, in.image_plane, in.points_in_ground,
+                                             sigmas[i], in.focal_length, *in.approximate, &result));
     if (++i == scenes.size()) i = 0;
   }
 }
@@ -223,7 +215,9 @@ BENCHMARK(BM_TaylorKernel)->Arg(10)->Arg(50)->Arg(500)->Unit(benchmark::kMicrose
 void BM_RobustResection(benchmark::State& state) {
   const double outliers = state.range(0) / 100.0;
   const auto& scenes = Scenes(500, outliers);
-  ResectionOptions options;  // defaults: Ceres analytic, Huber, RANSAC threshold 6 px
+  // Defaults: consensus threshold 3.72 sigma of the marks' 0.5 px accuracy (1.86 px), least squares
+  // with data snooping, Ceres analytic.
+  ResectionOptions options;
   std::vector<ResectionInput> inputs;
   for (const auto& scene : scenes) {
     inputs.push_back(scene.input);
@@ -334,11 +328,13 @@ void BM_OpenCvSolvePnPRansac(benchmark::State& state) {
   const auto& scenes = Scenes(500, outliers);
   std::vector<OpenCvScene> cv_scenes;
   for (const auto& s : scenes) cv_scenes.push_back(ToOpenCv(s));
-  // Same threshold (6 px) and confidence (0.9999) as photopose; enough iterations for 60% outliers.
+  // Same threshold (3.72 sigma of 0.5 px marks) and confidence (0.9999) as photopose; enough
+  // iterations for 60% outliers.
   const ResectionOptions ours;
-  const float threshold = static_cast<float>(ours.ransac_threshold_px);
-  const double confidence = ours.ransac.confidence;
-  const int iterations = ours.ransac.max_trials;
+  const float threshold =
+      static_cast<float>(MarkThresholdSigmas(ours.test.confidence) * scenes.front().input.sigma[0]);
+  const double confidence = ours.consensus.ransac.confidence;
+  const int iterations = ours.consensus.ransac.max_trials;
   Quality quality;
   for (size_t s = 0; s < scenes.size(); ++s) {
     cv::Mat rvec, tvec;

@@ -1,0 +1,83 @@
+#pragma once
+// The statistics of a weighted least-squares pose and the tests that decide which marks it may
+// keep: the global test, Baarda's data snooping (W. Baarda, "A testing procedure for use in
+// geodetic networks", 1968) when the marks' accuracy is known, and Pope's tau test (A. J. Pope,
+// "The statistics of residuals and the detection of outliers", NOAA 1976) when sigma0 has to be
+// estimated from the same residuals.
+//
+// A mark is a two-dimensional observation, so each test is of its two coordinates together. With
+// e_i = (observed - computed) / sigma_i the whitened residual of mark i (2-vector), A_i its whitened
+// 2 x 6 Jacobian, N = sum A_i^T A_i over the marks used, Q = N^-1:
+//   - redundancy number of a mark: r_i = trace(Qvv_i) / 2, Qvv_i = I - A_i Q A_i^T (how much of its
+//     own error the other marks check; they sum to the redundancy 2n - 6 over 2);
+//   - test statistic of a used mark: T_i = e_i^T Qvv_i^-1 e_i, the drop of the weighted sum of
+//     squares Omega = sum |e_i|^2 when the mark is left out. Known sigma: T_i ~ chi-square(2), and
+//     the mark is rejected when T_i > -2 ln(alpha). Estimated sigma (s0^2 = Omega / r): T_i / Omega
+//     ~ Beta(1, (r - 2) / 2) (the two-dimensional tau distribution), rejected when
+//     T_i / s0^2 > r (1 - alpha^(2 / (r - 2))), r = 2n - 6 > 2;
+//   - test statistic of a mark left out: the predicted residual's T_i = e_i^T (I + A_i Q A_i^T)^-1
+//     e_i, chi-square(2) with known sigma; with s0 of the marks used, T_i / s0^2 is 2 F(2, r);
+//   - global test (known sigma): Omega ~ chi-square(r).
+// With four marks (r = 2) every T_i equals Omega: a blunder can be detected but not localised.
+
+#include <Eigen/Core>
+#include <string>
+#include <vector>
+
+#include "core/status.h"
+#include "core/types.h"
+
+namespace photopose {
+
+struct OutlierTestOptions {
+  // 1 - alpha of every test (consensus threshold, data snooping, tau test, global test), in
+  // (0, 1). 0.999: a good mark is rejected once in a thousand tests.
+  double confidence = 0.999;
+
+  bool IsValid(std::string* why) const;
+};
+
+// The consensus threshold: the largest |e_i| (standard deviations) of a mark that fits, the
+// chi-square(2) quantile's square root sqrt(-2 ln(1 - confidence)) (3.72 at 0.999).
+double MarkThresholdSigmas(double confidence);
+// Critical value of T_i with known sigma: -2 ln(1 - confidence).
+double SnoopingCriticalValue(double confidence);
+// Critical value of T_i / s0^2 with sigma estimated from redundancy r > 2: r (1 - alpha^(2/(r-2))).
+// NaN for r <= 2 (nothing can be localised).
+double TauCriticalValue(double confidence, int redundancy);
+// Critical value of a left-out mark's T_i / s0^2 with sigma estimated from redundancy r > 0: twice
+// the F(2, r) quantile, r (alpha^(-2/r) - 1) (it tends to -2 ln alpha as r grows). NaN for r <= 0.
+double PredictedCriticalValue(double confidence, int redundancy);
+// Critical value of Omega with known sigma: the chi-square(r) quantile at `confidence`.
+double GlobalTestCriticalValue(double confidence, int redundancy);
+// Omega > GlobalTestCriticalValue, without computing the quantile when Omega is below r - 1 (a
+// quantile at confidence >= 0.5 never is).
+bool FailsGlobalTest(double omega, double confidence, int redundancy);
+
+struct PoseAdjustmentStatistics {
+  int num_used = 0;
+  int redundancy = 0;   // 2 num_used - 6
+  double omega = 0.0;   // sum over the used marks of |e_i|^2 (unitless)
+  Matrix6d normal = Matrix6d::Zero();    // N (whitened), m^-2 and rad^-2 units
+  Matrix6d cofactor = Matrix6d::Zero();  // N^-1
+  bool determined = false;               // N is positive definite
+  // Per mark (one entry per observation): whitened residual, redundancy number (0 for marks not
+  // used), T_i (squared whitened units; for marks not used, of the predicted residual), and
+  // whether the mark is in front of the camera (a mark behind has no residual).
+  std::vector<Eigen::Vector2d> whitened_residuals;
+  std::vector<double> redundancy_numbers;
+  std::vector<double> test_statistics;
+  std::vector<char> in_front;
+};
+
+// The statistics of the pose `eo` for observations image_plane[i] of points_in_ground[i] with
+// standard deviations sigmas[i] (unit of image_plane and focal), the marks with used[i] != 0
+// forming the adjustment. Errors: fewer than three used marks, a used mark behind the camera.
+// A singular N leaves determined = false and the test statistics at zero.
+Status ComputePoseAdjustmentStatistics(const std::vector<Eigen::Vector2d>& image_plane,
+                                       const std::vector<Eigen::Vector3d>& points_in_ground,
+                                       const std::vector<double>& sigmas, double focal,
+                                       const ExteriorOrientation& eo, const std::vector<char>& used,
+                                       PoseAdjustmentStatistics* statistics);
+
+}  // namespace photopose
