@@ -1284,6 +1284,13 @@ Status TaylorBundleAdjust(const TaylorBundleOptions& options, const BundleAdjust
     BuildLayout(*block, plan, &layout);
     summary.rounds = round;
     summary.redundancy = layout.num_observations - layout.num_unknowns;
+    summary.num_images = static_cast<int>(block->images.size());
+    summary.num_marks = static_cast<int>(layout.marks.size());
+    summary.num_points = static_cast<int>(
+        std::count(plan.point_in_problem.begin(), plan.point_in_problem.end(), 1));
+    summary.num_camera_unknowns =
+        layout.num_unknowns - 3 * static_cast<int>(layout.free_points.size());
+    summary.reduced_nonzeros = static_cast<int>(layout.S.nonZeros());
     reduction = std::make_unique<Reduction>();
     std::string message;
     const TaylorTerminationType type =
@@ -1328,12 +1335,6 @@ Status TaylorBundleAdjust(const TaylorBundleOptions& options, const BundleAdjust
   out.images.assign(num_images, BundleImageResult());
   out.points.assign(block->points.size(), BundlePointResult());
   out.mark_residuals.assign(block->marks.size(), Eigen::Vector2d::Constant(kNaN));
-  summary.num_images = static_cast<int>(num_images);
-  summary.num_points = 0;
-  for (size_t p = 0; p < block->points.size(); ++p) summary.num_points += plan.point_in_problem[p];
-  summary.num_marks = static_cast<int>(layout.marks.size());
-  summary.num_camera_unknowns = layout.num_unknowns - 3 * static_cast<int>(layout.free_points.size());
-  summary.reduced_nonzeros = static_cast<int>(layout.S.nonZeros());
 
   // Marks: observed - computed = -F, in the mark's own unit.
   std::vector<double> image_ssq(num_images, 0.0);
