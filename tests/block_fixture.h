@@ -36,9 +36,11 @@ struct FixtureBlockOptions {
   int tie_grid = 12;              // tie points per side of the grid over the footprints
   double relief_m = 10.0;         // tie-point heights uniform in +- relief / 2 (m)
   // Control and check points at these fractions of the camera-centre rectangle (0..1 in X and Y),
-  // heights uniform in +- 1 m.
+  // or of the union of the footprints (surveyed_in_footprints: for oblique blocks, whose images
+  // look away from their centres), heights uniform in +- 1 m.
   std::vector<Eigen::Vector2d> control_at = {{0, 0}, {1, 0}, {0, 1}, {1, 1}};
   std::vector<Eigen::Vector2d> check_at = {{0.5, 0.5}, {0.25, 0.75}};
+  bool surveyed_in_footprints = false;
   double noise_px = 0.5;          // image noise, one sigma (px)
   double mark_accuracy_px = 0.5;  // the marks' stated accuracy (px)
   bool gnss = true;
@@ -143,9 +145,11 @@ inline FixtureBlock MakeFixtureBlock(const FixtureBlockOptions& o) {
                 "T" + std::to_string(i) + "_" + std::to_string(j));
     }
   }
+  const Eigen::Vector2d surveyed_low = o.surveyed_in_footprints ? low : centres_low;
+  const Eigen::Vector2d surveyed_span = o.surveyed_in_footprints ? Eigen::Vector2d(high - low) : centres_span;
   auto add_surveyed = [&](const std::vector<Eigen::Vector2d>& at, PointRole role, const char* prefix) {
     for (size_t k = 0; k < at.size(); ++k) {
-      const Eigen::Vector2d xy = centres_low + at[k].cwiseProduct(centres_span);
+      const Eigen::Vector2d xy = surveyed_low + at[k].cwiseProduct(surveyed_span);
       add_point({xy.x(), xy.y(), o.offset_m.z() + uniform(rng)}, role, prefix + std::to_string(k));
     }
   };
