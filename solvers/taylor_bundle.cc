@@ -3,6 +3,7 @@
 #include <glog/logging.h>
 
 #include <Eigen/Dense>
+#include <Eigen/OrderingMethods>
 #include <Eigen/SparseCholesky>
 #include <Eigen/SparseCore>
 #include <algorithm>
@@ -345,6 +346,39 @@ struct Layout {
 
 int TriangleIndex(int a, int c, int n) { return a * n - a * (a - 1) / 2 + (c - a); }
 
+// Renumbers the camera blocks in a fill-reducing order: approximate minimum degree on the image
+// graph (images joined when they see a common point that is an unknown). Each image's 6 x 6 block
+// of S is dense, so ordering images rather than scalars loses nothing (Ceres orders its Schur
+// complement the same way), and the sparse LDL^T then runs in the natural order: the scalar AMD
+// of a dense-ish S would cost more than a whole Gauss-Newton iteration.
+void OrderImagesToReduceFill(const Block& block, const Plan& plan, Layout* layout) {
+  const int num_blocks = static_cast<int>(layout->free_images.size());
+  if (num_blocks < 3) return;
+  std::vector<Eigen::Triplet<double, int>> entries;
+  std::vector<int> seen;
+  for (size_t p = 0; p < block.points.size(); ++p) {
+    if (!plan.point_in_problem[p] || plan.point_constant[p]) continue;
+    seen.clear();
+    for (const int m : block.marks_of_point[p]) {
+      const int b = layout->image_block[block.marks[m].image];
+      if (plan.mark_used[m] && b >= 0) seen.push_back(b);
+    }
+    for (const int b1 : seen)
+      for (const int b2 : seen) entries.emplace_back(b1, b2, 1.0);
+  }
+  for (int b = 0; b < num_blocks; ++b) entries.emplace_back(b, b, 1.0);
+  SparseMatrix graph(num_blocks, num_blocks);
+  graph.setFromTriplets(entries.begin(), entries.end());
+  Eigen::PermutationMatrix<Eigen::Dynamic, Eigen::Dynamic, int> order;
+  Eigen::AMDOrdering<int>()(graph, order);  // order.indices()[new] = old
+  std::vector<int> images(num_blocks);
+  for (int k = 0; k < num_blocks; ++k) {
+    images[k] = layout->free_images[order.indices()[k]];
+    layout->image_block[images[k]] = k;
+  }
+  layout->free_images = std::move(images);
+}
+
 void BuildLayout(const Block& block, const Plan& plan, Layout* layout) {
   *layout = Layout();
   layout->image_block.assign(block.images.size(), -1);
@@ -356,6 +390,7 @@ void BuildLayout(const Block& block, const Plan& plan, Layout* layout) {
     layout->num_unknowns += 6;
     for (const bool fixed : plan.image_fixed[i]) layout->num_unknowns -= fixed;
   }
+  OrderImagesToReduceFill(block, plan, layout);
   for (size_t p = 0; p < block.points.size(); ++p) {
     if (!plan.point_in_problem[p] || plan.point_constant[p]) continue;
     layout->point_block[p] = static_cast<int>(layout->free_points.size());
@@ -614,11 +649,12 @@ bool Linearize(TaylorPartials partials, const Block& block, const Plan& plan,
 // The points eliminated, the reduced camera system factorised.
 struct Reduction {
   std::vector<Eigen::Matrix3d> V_inverse;  // per free point
-  std::vector<Matrix63> Y;                 // per mark of the round in a free image: W V^-1
+  std::vector<Matrix63> Y;                 // scratch: W V^-1 of the marks of one point
   std::vector<Matrix6d> blocks;            // per pair: the reduced matrix S (unscaled)
   Eigen::VectorXd r;                       // reduced right-hand side (unscaled)
   Eigen::VectorXd scale;                   // Jacobi scale 1 / sqrt(diag S); 1 where fixed
-  Eigen::SimplicialLDLT<SparseMatrix, Eigen::Upper> ldlt;
+  // Natural order: the camera blocks are already in a fill-reducing order (BuildLayout).
+  Eigen::SimplicialLDLT<SparseMatrix, Eigen::Upper, Eigen::NaturalOrdering<int>> ldlt;
   bool analysed = false;
   double pivot_ratio = 0.0;  // smallest / largest pivot of the scaled LDL^T
 };
@@ -639,7 +675,6 @@ int Reduce(const Normal& normal, const Layout& layout, Reduction* reduction) {
     reduction->r.segment<6>(6 * b) = normal.ge[b];
   }
   reduction->V_inverse.resize(layout.free_points.size());
-  reduction->Y.resize(layout.marks.size());
   for (size_t q = 0; q < layout.free_points.size(); ++q) {
     const Eigen::LDLT<Eigen::Matrix3d> ldlt(normal.V[q]);
     const Eigen::Vector3d d = ldlt.vectorD();
@@ -650,9 +685,11 @@ int Reduce(const Normal& normal, const Layout& layout, Reduction* reduction) {
     const std::vector<int>& marks = layout.point_marks[q];
     const std::vector<int>& ids = layout.point_pairs[q];
     const int n = static_cast<int>(marks.size());
-    for (const int k : marks) {
-      reduction->Y[k].noalias() = normal.W[k] * V_inverse;
-      reduction->r.segment<6>(6 * layout.mark_block[k]).noalias() -= reduction->Y[k] * normal.gp[q];
+    std::vector<Matrix63>& Y = reduction->Y;
+    Y.resize(n);
+    for (int a = 0; a < n; ++a) {
+      Y[a].noalias() = normal.W[marks[a]] * V_inverse;
+      reduction->r.segment<6>(6 * layout.mark_block[marks[a]]).noalias() -= Y[a] * normal.gp[q];
     }
     for (int a = 0; a < n; ++a) {
       const int ka = marks[a];
@@ -661,7 +698,7 @@ int Reduce(const Normal& normal, const Layout& layout, Reduction* reduction) {
         const int kc = marks[c];
         const int bc = layout.mark_block[kc];
         Matrix6d& block = reduction->blocks[ids[TriangleIndex(a, c, n)]];
-        const Matrix6d M = reduction->Y[ka] * normal.W[kc].transpose();  // W_a V^-1 W_c^T
+        const Matrix6d M = Y[a] * normal.W[kc].transpose();  // W_a V^-1 W_c^T
         if (a == c || ba < bc) {
           block -= M;
         } else if (ba > bc) {
@@ -977,7 +1014,7 @@ TaylorTerminationType RunRound(const Context& ctx, int round, Layout* layout, St
 // V^-1 + sum_a sum_c Y_a^T C(a, c) Y_c (a, c over its marks in free images). Column block by
 // column block through the sparse factorisation, so memory stays O(n).
 void Covariances(const Block& block, const Plan& plan, const Layout& layout,
-                 const Reduction& reduction,
+                 const Normal& normal, const Reduction& reduction,
                  std::vector<Matrix6d>* cameras, std::vector<Eigen::Matrix3d>* points,
                  std::vector<char>* has_point) {
   const int num_blocks = static_cast<int>(layout.free_images.size());
@@ -1007,10 +1044,12 @@ void Covariances(const Block& block, const Plan& plan, const Layout& layout,
     (*cameras)[b] = X.middleRows<6>(6 * b);
     for (const auto& [q, c] : control_of_block[b]) {
       const std::vector<int>& marks = layout.point_marks[q];
-      const int kc = marks[c];
+      const Eigen::Matrix3d& V_inverse = reduction.V_inverse[q];
+      const Matrix63 Y_c = normal.W[marks[c]] * V_inverse;
       for (const int ka : marks) {
         const Matrix6d C_ac = X.middleRows<6>(6 * layout.mark_block[ka]);
-        (*points)[q].noalias() += reduction.Y[ka].transpose() * C_ac * reduction.Y[kc];
+        const Matrix63 Y_a = normal.W[ka] * V_inverse;
+        (*points)[q].noalias() += Y_a.transpose() * C_ac * Y_c;
       }
     }
   }
@@ -1371,7 +1410,7 @@ Status TaylorBundleAdjust(const TaylorBundleOptions& options, const BundleAdjust
     std::vector<Matrix6d> cameras;
     std::vector<Eigen::Matrix3d> points;
     std::vector<char> has_point;
-    Covariances(*block, plan, layout, *reduction, &cameras, &points, &has_point);
+    Covariances(*block, plan, layout, normal, *reduction, &cameras, &points, &has_point);
     for (int b = 0; b < num_blocks; ++b) {
       BundleImageResult& image = out.images[layout.free_images[b]];
       image.covariance = variance_factor * cameras[b];
