@@ -21,6 +21,7 @@
 
 #include "core/camera_models.h"
 #include "core/rotation.h"
+#include "solvers/check_points.h"
 #include "solvers/triangulation.h"
 
 namespace photopose {
@@ -82,13 +83,6 @@ struct Plan {
   BundleDatum datum = BundleDatum::kControl;
   std::string datum_description;
 };
-
-// The default sigma (um) of a film mark of this camera: the pixel default through the pixel size
-// when the camera has one, the film default otherwise (BundleAdjust's rule).
-double DefaultFilmSigmaUm(const BlockCamera& camera, double sigma_px, double sigma_film_um) {
-  return camera.table.pixel_size_um > 0.0 ? sigma_px * camera.table.pixel_size_um
-                                          : sigma_film_um;
-}
 
 int CountUsedMarks(const std::vector<int>& marks, const std::vector<char>& used) {
   int count = 0;
@@ -211,7 +205,7 @@ Status MakePlan(const TaylorBundleOptions& options, const BundleAdjustmentConfig
     const BlockCamera& camera = block.cameras[block.images[mark.image].camera];
     const bool control = role == PointRole::kControl;
     const double sigma_px = control ? acc.marker_projection_px : acc.tie_px;
-    const double sigma_film_um = DefaultFilmSigmaUm(
+    const double sigma_film_um = DefaultFilmMarkSigmaUm(
         camera, sigma_px, control ? acc.marker_projection_film_um : acc.tie_film_um);
     plan->mark_sigma[m] = MarkSigma(mark, sigma_px, sigma_film_um);
     plan->mark_control[m] = control;
@@ -1435,52 +1429,12 @@ Status TaylorBundleAdjust(const TaylorBundleOptions& options, const BundleAdjust
   for (size_t p = 0; p < block->points.size(); ++p)
     if (plan.point_in_problem[p]) block->points[p].position_m = state.points[p] + frame.centroid;
 
-  // Control points: adjusted - surveyed. Check points: intersected from the adjusted images with
-  // the same TriangulatePoint as BundleAdjust, so both solvers are measured with one yardstick.
-  const BundleAccuracies& acc = options.accuracies;
-  Eigen::Vector3d control_ssq = Eigen::Vector3d::Zero(), check_ssq = Eigen::Vector3d::Zero();
-  for (size_t p = 0; p < block->points.size(); ++p) {
-    const BlockPoint& point = block->points[p];
-    BundlePointResult& point_out = out.points[p];
-    if (point.role == PointRole::kControl && plan.point_in_problem[p]) {
-      point_out.error_m = *point.position_m - *point.surveyed_m;
-      ++out.num_control_points;
-      control_ssq += point_out.error_m->cwiseAbs2();
-    }
-    if (point.role != PointRole::kCheck) continue;
-    std::vector<RayObservation> rays;
-    for (const int m : block->marks_of_point[p]) {
-      const BlockMark& mark = block->marks[m];
-      RayObservation ray;
-      ray.camera = &block->cameras[block->images[mark.image].camera];
-      ray.eo = *block->images[mark.image].eo;
-      ray.observation = mark.observation;
-      ray.sigma = MarkSigma(mark, acc.marker_projection_px,
-                            DefaultFilmSigmaUm(*ray.camera, acc.marker_projection_px,
-                                               acc.marker_projection_film_um));
-      rays.push_back(ray);
-    }
-    point_out.num_observations = static_cast<int>(rays.size());
-    TriangulationResult intersected;
-    const Status status = TriangulatePoint(TriangulationOptions(), rays, &intersected);
-    if (!status.ok()) {
-      point_out.message = "not intersected: " + status.message();
-      continue;
-    }
-    point_out.error_m = intersected.point_m - *point.surveyed_m;
-    point_out.covariance = variance_factor * intersected.covariance;
-    point_out.has_covariance = true;
-    ++out.num_check_points;
-    check_ssq += point_out.error_m->cwiseAbs2();
-  }
-  if (out.num_control_points > 0) {
-    out.control_rmse_m = (control_ssq / out.num_control_points).cwiseSqrt();
-    out.control_rmse_total_m = std::sqrt(control_ssq.sum() / out.num_control_points);
-  }
-  if (out.num_check_points > 0) {
-    out.check_rmse_m = (check_ssq / out.num_check_points).cwiseSqrt();
-    out.check_rmse_total_m = std::sqrt(check_ssq.sum() / out.num_check_points);
-  }
+  // Control points: adjusted - surveyed. Check points: intersected from the adjusted images as
+  // BundleAdjust does, so both solvers are measured with one yardstick.
+  for (size_t p = 0; p < block->points.size(); ++p)
+    if (block->points[p].role == PointRole::kControl && plan.point_in_problem[p])
+      out.points[p].error_m = *block->points[p].position_m - *block->points[p].surveyed_m;
+  TabulateControlAndCheckPoints(*block, options.accuracies, variance_factor, &out);
   if (frame.use_lever) out.lever_arm_m = frame.lever;
   summary.statistics_seconds = SecondsSince(statistics_start);
   return finish(TaylorTerminationType::kConvergence, summary.message);
