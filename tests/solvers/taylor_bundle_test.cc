@@ -512,8 +512,13 @@ TEST(TaylorBundle, RejectionRoundsMatchCeresOnTheCleanedBlock) {
     if (residual_px.allFinite() && residual_px.norm() / *data.block.marks[m].accuracy > limit)
       expected.push_back(static_cast<int>(m));
   }
-  for (const BundleRejectedMark& rejected : taylor.adjustment.rejected_marks)
+  for (const BundleRejectedMark& rejected : taylor.adjustment.rejected_marks) {
     if (rejected.round == 1) first_round.push_back(rejected.mark);
+    const BlockMark& m = data.block.marks[rejected.mark];
+    std::printf("  rejected after round %d: point %s in %s, %.1f sigma0%s\n", rejected.round,
+                data.block.points[m.point].id.c_str(), data.block.images[m.image].name.c_str(),
+                rejected.whitened_residual, rejected.mark == blunder ? " (the blunder)" : "");
+  }
   std::sort(first_round.begin(), first_round.end());
   EXPECT_EQ(first_round, expected);
   EXPECT_NE(std::find(first_round.begin(), first_round.end(), blunder), first_round.end());
