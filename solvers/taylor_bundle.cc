@@ -851,10 +851,6 @@ std::string Format(const char* format, double a, double b = 0.0) {
   return buffer;
 }
 
-}  // namespace
-
-namespace {
-
 // What one round needs besides its own structures.
 struct Context {
   const TaylorBundleOptions& options;
@@ -1049,6 +1045,39 @@ void Covariances(const Block& block, const Plan& plan, const Layout& layout,
   }
 }
 
+BundleTermination ToBundleTermination(TaylorTerminationType type) {
+  switch (type) {
+    case TaylorTerminationType::kConvergence:
+      return BundleTermination::kConverged;
+    case TaylorTerminationType::kNoConvergence:
+      return BundleTermination::kNoConvergence;
+    case TaylorTerminationType::kFailure:
+      return BundleTermination::kFailure;
+  }
+  return BundleTermination::kFailure;
+}
+
+// BundleAdjust's summary, from the Taylor one (the single source of these numbers).
+void FillBundleSummary(const TaylorBundleSummary& taylor, BundleAdjustmentSummary* out) {
+  out->termination = ToBundleTermination(taylor.termination_type);
+  out->message = taylor.message;
+  out->datum = taylor.datum;
+  out->datum_description = taylor.datum_description;
+  out->rounds = taylor.rounds;
+  out->iterations = taylor.iterations;
+  out->initial_cost = taylor.initial_cost;
+  out->final_cost = taylor.final_cost;
+  out->sigma0 = taylor.sigma0;
+  out->redundancy = taylor.redundancy;
+  out->num_images = taylor.num_images;
+  out->num_points = taylor.num_points;
+  out->num_marks = taylor.num_marks;
+  out->num_rejected_marks = taylor.num_rejected_marks;
+  out->time_seconds = taylor.time_seconds;
+  out->statistics_seconds = taylor.statistics_seconds;
+}
+
+
 }  // namespace
 
 bool TaylorBundleOptions::IsValid(std::string* why) const {
@@ -1235,41 +1264,6 @@ Status LinearizeTaylorBundle(const TaylorBundleOptions& options,
   return Status::Ok();
 }
 
-namespace {
-
-BundleTermination ToBundleTermination(TaylorTerminationType type) {
-  switch (type) {
-    case TaylorTerminationType::kConvergence:
-      return BundleTermination::kConverged;
-    case TaylorTerminationType::kNoConvergence:
-      return BundleTermination::kNoConvergence;
-    case TaylorTerminationType::kFailure:
-      return BundleTermination::kFailure;
-  }
-  return BundleTermination::kFailure;
-}
-
-// BundleAdjust's summary, from the Taylor one (the single source of these numbers).
-void FillBundleSummary(const TaylorBundleSummary& taylor, BundleAdjustmentSummary* out) {
-  out->termination = ToBundleTermination(taylor.termination_type);
-  out->message = taylor.message;
-  out->datum = taylor.datum;
-  out->datum_description = taylor.datum_description;
-  out->rounds = taylor.rounds;
-  out->iterations = taylor.iterations;
-  out->initial_cost = taylor.initial_cost;
-  out->final_cost = taylor.final_cost;
-  out->sigma0 = taylor.sigma0;
-  out->redundancy = taylor.redundancy;
-  out->num_images = taylor.num_images;
-  out->num_points = taylor.num_points;
-  out->num_marks = taylor.num_marks;
-  out->num_rejected_marks = taylor.num_rejected_marks;
-  out->time_seconds = taylor.time_seconds;
-  out->statistics_seconds = taylor.statistics_seconds;
-}
-
-}  // namespace
 
 Status TaylorBundleAdjust(const TaylorBundleOptions& options, const BundleAdjustmentConfig& config,
                           Block* block, TaylorBundleResult* result) {
@@ -1438,6 +1432,23 @@ Status TaylorBundleAdjust(const TaylorBundleOptions& options, const BundleAdjust
   if (frame.use_lever) out.lever_arm_m = frame.lever;
   summary.statistics_seconds = SecondsSince(statistics_start);
   return finish(TaylorTerminationType::kConvergence, summary.message);
+}
+
+
+Status BundleAdjustWithSolver(PoseSolver solver, const BundleAdjustmentOptions& options,
+                              const BundleAdjustmentConfig& config, Block* block,
+                              BundleAdjustmentResult* result, TaylorBundleResult* taylor_result) {
+  CHECK(result != nullptr);
+  if (solver == PoseSolver::kCeres) return BundleAdjust(options, config, block, result);
+  TaylorBundleOptions taylor_options;
+  const TaylorPartials partials =
+      solver == PoseSolver::kTaylorAsPrinted ? TaylorPartials::kAsPrinted : TaylorPartials::kCorrected;
+  PHOTOPOSE_RETURN_IF_ERROR(TaylorBundleOptionsFromBundleOptions(options, partials, &taylor_options));
+  TaylorBundleResult local;
+  TaylorBundleResult& taylor = taylor_result != nullptr ? *taylor_result : local;
+  const Status status = TaylorBundleAdjust(taylor_options, config, block, &taylor);
+  *result = taylor.adjustment;
+  return status;
 }
 
 }  // namespace photopose

@@ -57,6 +57,7 @@
 #include "core/status.h"
 #include "core/types.h"
 #include "solvers/bundle_adjustment.h"
+#include "solvers/resection.h"
 #include "solvers/taylor_resection.h"
 
 namespace photopose {
@@ -136,7 +137,7 @@ struct TaylorBundleSummary {
   int redundancy = 0;   // scalar observations - unknowns (count)
   int num_images = 0, num_points = 0, num_marks = 0;  // in the final round
   int num_rejected_marks = 0;
-  int num_camera_unknowns = 0;  // size of the reduced normal matrix (count)
+  int num_camera_unknowns = 0;  // exterior-orientation unknowns, i.e. of the reduced system (count)
   int reduced_nonzeros = 0;     // stored (upper) entries of the reduced normal matrix (count)
   // Largest components of the last correction (m, rad).
   double last_position_correction_m = 0.0;
@@ -153,15 +154,17 @@ struct TaylorBundleSummary {
 
 struct TaylorBundleResult {
   TaylorBundleSummary summary;
-  // The result in BundleAdjust's shape, for the same report writers. adjustment.summary is filled
-  // from `summary` (termination kConverged / kNoConvergence / kFailure, the same costs, sigma0,
-  // redundancy, counts, times). Per image: adjusted, covariance sigma0^2 S^-1 (its 6 x 6 block, in
-  // X0, Y0, Z0, omega, phi, kappa), num_marks, rms_residual, unit. Per point: num_observations, the
-  // control points' covariance and error (adjusted - surveyed), the check points' intersection
-  // error (TriangulatePoint from the adjusted images, as BundleAdjust). mark_residuals, the
-  // control and check RMSE, rejected_marks and lever_arm_m as BundleAdjust. Not filled: groups
-  // (the per-group RMS, redundancy shares and over-fitting verdicts are BundleAdjust's) and
-  // calibration (no self-calibration here).
+  // The result in BundleAdjust's shape, for the same report writers:
+  //  - summary: filled from `summary` (termination kConverged / kNoConvergence / kFailure, the same
+  //    costs, sigma0, redundancy, counts and times);
+  //  - per image: adjusted, num_marks, rms_residual, unit, and the covariance, the 6 x 6 block of
+  //    sigma0^2 S^-1 in X0, Y0, Z0, omega, phi, kappa (with the as-printed partials S is built
+  //    from them, so this is that variant's own, wrong, covariance, as in TaylorResection);
+  //  - per point: num_observations; control points their covariance and error (adjusted -
+  //    surveyed); check points their intersection error (solvers/check_points.h, as BundleAdjust);
+  //  - mark_residuals, the control and check RMSE, rejected_marks and lever_arm_m as BundleAdjust.
+  // Not filled: groups (the per-group RMS, redundancy shares and over-fitting verdicts are
+  // BundleAdjust's) and calibration (no self-calibration here).
   BundleAdjustmentResult adjustment;
   // Every correction of every round, in order.
   std::vector<TaylorBundleIteration> history;
@@ -175,6 +178,18 @@ struct TaylorBundleResult {
 // block left at its input values and no image marked adjusted.
 Status TaylorBundleAdjust(const TaylorBundleOptions& options, const BundleAdjustmentConfig& config,
                           Block* block, TaylorBundleResult* result);
+
+// The block adjustment that `photopose bundle --solver=ceres|taylor|taylor_as_printed` and the
+// block mode of `photopose compare` run, selected by the same PoseSolver switch as resection:
+// kCeres calls BundleAdjust(options, ...) (its derivative path from options.jacobian); kTaylor and
+// kTaylorAsPrinted call TaylorBundleAdjust with TaylorBundleOptionsFromBundleOptions(options) and
+// return its result in BundleAdjust's shape (taylor_result, when not null, receives the whole
+// Taylor result: its summary and iteration history). Errors as the solver called returns them,
+// plus the options the Taylor path refuses.
+Status BundleAdjustWithSolver(PoseSolver solver, const BundleAdjustmentOptions& options,
+                              const BundleAdjustmentConfig& config, Block* block,
+                              BundleAdjustmentResult* result,
+                              TaylorBundleResult* taylor_result = nullptr);
 
 // ------------------------------------------------------------------ the linearisation, exposed
 

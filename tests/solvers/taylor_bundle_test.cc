@@ -670,11 +670,6 @@ TEST(TaylorBundle, RefusesWhatItDoesNotDo) {
   }
 }
 
-}  // namespace
-}  // namespace photopose
-
-namespace photopose {
-namespace {
 
 // ------------------------------------------------------------------ what the printed eq. 21 costs
 
@@ -867,6 +862,44 @@ TEST(TaylorBundleAsPrinted, OneObliqueImagePropagatesThroughTiePoints) {
     if (shared[i] == 0) unshared_max = std::max(unshared_max, m.per_image_shift_rms_m[i]);
   }
   EXPECT_LT(unshared_max, 0.25 * m.per_image_shift_rms_m[tilted]);
+}
+
+
+// The --solver switch: each PoseSolver gives what the solver called directly gives.
+TEST(TaylorBundle, BundleAdjustWithSolverDispatches) {
+  const FixtureBlock data = MakeFixtureBlock(FixtureBlockOptions());
+  const BundleAdjustmentOptions options = CeresOptions();
+  for (const PoseSolver solver : {PoseSolver::kCeres, PoseSolver::kTaylor, PoseSolver::kTaylorAsPrinted}) {
+    SCOPED_TRACE(PoseSolverName(solver));
+    Block via_switch = data.block, direct = data.block;
+    BundleAdjustmentResult result;
+    TaylorBundleResult taylor;
+    ASSERT_TRUE(BundleAdjustWithSolver(solver, options, BundleAdjustmentConfig(), &via_switch,
+                                       &result, &taylor).ok());
+    ASSERT_TRUE(result.summary.IsSolutionUsable()) << result.summary.BriefReport();
+    if (solver == PoseSolver::kCeres) {
+      BundleAdjustmentResult expected;
+      ASSERT_TRUE(BundleAdjust(options, BundleAdjustmentConfig(), &direct, &expected).ok());
+      EXPECT_EQ(result.summary.iterations, expected.summary.iterations);
+    } else {
+      TaylorBundleOptions taylor_options = TaylorOptions(
+          solver == PoseSolver::kTaylor ? TaylorPartials::kCorrected : TaylorPartials::kAsPrinted);
+      TaylorBundleResult expected;
+      ASSERT_TRUE(TaylorBundleAdjust(taylor_options, BundleAdjustmentConfig(), &direct, &expected).ok());
+      EXPECT_EQ(taylor.summary.partials, taylor_options.partials);
+      EXPECT_EQ(result.summary.iterations, expected.summary.iterations);
+      EXPECT_EQ(result.summary.sigma0, taylor.summary.sigma0);
+      EXPECT_EQ(result.images.size(), data.block.images.size());
+    }
+    for (size_t i = 0; i < data.block.images.size(); ++i)
+      EXPECT_EQ(via_switch.images[i].eo->parameters, direct.images[i].eo->parameters);
+  }
+  BundleAdjustmentOptions huber = options;
+  huber.tie_loss = BundleAdjustmentOptions::TieLoss::kHuber;
+  Block block = data.block;
+  BundleAdjustmentResult result;
+  EXPECT_FALSE(BundleAdjustWithSolver(PoseSolver::kTaylor, huber, BundleAdjustmentConfig(), &block,
+                                      &result).ok());
 }
 
 }  // namespace
