@@ -35,8 +35,9 @@ void TabulateControlAndCheckPoints(const Block& adjusted, const BundleAccuracies
       ray.camera = &adjusted.cameras[image.camera];
       ray.eo = *image.eo;
       ray.observation = mark.observation;
-      ray.sigma = MarkSigma(mark, sigma_px, DefaultFilmMarkSigmaUm(*ray.camera, sigma_px,
-                                                                   accuracies.marker_projection_film_um));
+      ray.sigma = MarkSigma(
+          mark, sigma_px,
+          DefaultFilmMarkSigmaUm(*ray.camera, sigma_px, accuracies.marker_projection_film_um));
       rays.push_back(ray);
     }
     table.num_observations = static_cast<int>(rays.size());

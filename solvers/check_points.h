@@ -22,7 +22,8 @@ double DefaultFilmMarkSigmaUm(const BlockCamera& camera, double sigma_px, double
 //    surveyed (m), covariance = variance_factor times the intersection's a-priori covariance
 //    (m^2), num_observations; or a message when it cannot be intersected;
 //  - num_control_points and the control RMSE from the control points whose error_m the adjustment
-//    has set (adjusted - surveyed), and num_check_points and the check RMSE (m, per axis and total).
+//    has set (adjusted - surveyed), and num_check_points and the check RMSE (m, per axis and
+//    total).
 // result->points must have one entry per point of the block.
 void TabulateControlAndCheckPoints(const Block& adjusted, const BundleAccuracies& accuracies,
                                    double variance_factor, BundleAdjustmentResult* result);

@@ -67,9 +67,9 @@ inline void PointPartialsFromCentrePartials(const double* row_u, const double* r
 // sigmas, and how the block is tied to the ground. They follow BundleAdjust's rules (see the
 // report of issue 12 for the shared function proposed in their place).
 struct Plan {
-  std::vector<char> mark_used;       // per mark
-  std::vector<double> mark_sigma;    // per mark, observation unit
-  std::vector<char> mark_control;    // per mark: a control mark (else tie)
+  std::vector<char> mark_used;            // per mark
+  std::vector<double> mark_sigma;         // per mark, observation unit
+  std::vector<char> mark_control;         // per mark: a control mark (else tie)
   std::vector<Eigen::Vector2d> ideal_um;  // per mark: the corrected (ideal) image-plane point
   std::vector<char> point_in_problem;
   std::vector<Eigen::Vector3d> point_sigma;  // control points (m)
@@ -224,7 +224,8 @@ Status MakePlan(const TaylorBundleOptions& options, const BundleAdjustmentConfig
       continue;
     }
     if (point.role == PointRole::kTie && !point.position_m) missing.push_back(point.id);
-    if (point.role == PointRole::kControl && point.accuracy_m) plan->point_sigma[p] = *point.accuracy_m;
+    if (point.role == PointRole::kControl && point.accuracy_m)
+      plan->point_sigma[p] = *point.accuracy_m;
   }
   if (!missing.empty()) {
     return Status::Error("tie points without initial coordinates: " + ListNames(missing, 5) +
@@ -287,7 +288,8 @@ Status MakePlan(const TaylorBundleOptions& options, const BundleAdjustmentConfig
     std::ostringstream os;
     os << "absolute: " << num_control << " control point" << (num_control == 1 ? "" : "s") << ", "
        << num_positions << " camera position" << (num_positions == 1 ? "" : "s");
-    if (num_attitudes > 0) os << ", " << num_attitudes << " attitude" << (num_attitudes == 1 ? "" : "s");
+    if (num_attitudes > 0)
+      os << ", " << num_attitudes << " attitude" << (num_attitudes == 1 ? "" : "s");
     if (num_constant_images > 0) os << ", " << num_constant_images << " image(s) held constant";
     os << " weighted as stated (a datum defect shows as a singular reduced normal matrix)";
     plan->datum_description = os.str();
@@ -324,13 +326,13 @@ struct Layout {
   std::vector<int> point_block;  // per point: free point or -1
   std::vector<int> free_images;
   std::vector<int> free_points;
-  std::vector<int> marks;                      // the marks of the round (indices into Block::marks)
-  std::vector<int> mark_block;                 // per mark of the round: camera block or -1
-  std::vector<int> mark_point;                 // per mark of the round: free point or -1
-  std::vector<std::vector<int>> point_marks;   // per free point: positions in `marks` of its
-                                               // marks in free images
-  std::vector<std::vector<int>> point_pairs;   // per free point: pair of each (a <= c) of those
-  std::vector<int> diagonal_pair;              // per camera block
+  std::vector<int> marks;                     // the marks of the round (indices into Block::marks)
+  std::vector<int> mark_block;                // per mark of the round: camera block or -1
+  std::vector<int> mark_point;                // per mark of the round: free point or -1
+  std::vector<std::vector<int>> point_marks;  // per free point: positions in `marks` of its
+                                              // marks in free images
+  std::vector<std::vector<int>> point_pairs;  // per free point: pair of each (a <= c) of those
+  std::vector<int> diagonal_pair;             // per camera block
   std::vector<std::pair<int, int>> pairs;
   std::vector<std::array<int, 6>> value_start;
   SparseMatrix S;
@@ -417,7 +419,8 @@ void BuildLayout(const Block& block, const Plan& plan, Layout* layout) {
     if (inserted) layout->pairs.emplace_back(b1, b2);
     return it->second;
   };
-  for (int b = 0; b < static_cast<int>(num_blocks); ++b) layout->diagonal_pair.push_back(pair_of(b, b));
+  for (int b = 0; b < static_cast<int>(num_blocks); ++b)
+    layout->diagonal_pair.push_back(pair_of(b, b));
   layout->point_pairs.assign(layout->free_points.size(), {});
   for (size_t q = 0; q < layout->free_points.size(); ++q) {
     const std::vector<int>& marks = layout->point_marks[q];
@@ -435,7 +438,8 @@ void BuildLayout(const Block& block, const Plan& plan, Layout* layout) {
   std::vector<Eigen::Triplet<double, int>> entries;
   for (const auto& [b1, b2] : layout->pairs)
     for (int c = 0; c < 6; ++c)
-      for (int r = 0; r < (b1 == b2 ? c + 1 : 6); ++r) entries.emplace_back(6 * b1 + r, 6 * b2 + c, 1.0);
+      for (int r = 0; r < (b1 == b2 ? c + 1 : 6); ++r)
+        entries.emplace_back(6 * b1 + r, 6 * b2 + c, 1.0);
   layout->S.resize(size, size);
   layout->S.setFromTriplets(entries.begin(), entries.end());
   layout->S.makeCompressed();
@@ -457,31 +461,31 @@ void BuildLayout(const Block& block, const Plan& plan, Layout* layout) {
 
 // The values being adjusted, relative to the block's centroid.
 struct State {
-  std::vector<Vector6d> eo;              // per image
-  std::vector<Eigen::Vector3d> points;   // per point
+  std::vector<Vector6d> eo;             // per image
+  std::vector<Eigen::Vector3d> points;  // per point
 };
 
 // The block's fixed data in the centred frame.
 struct Frame {
   Eigen::Vector3d centroid = Eigen::Vector3d::Zero();
-  double extent_m = 1.0;  // RMS distance of cameras and points from the centroid
-  std::vector<Eigen::Vector3d> surveyed;   // per point (control points), centred
-  std::vector<Eigen::Vector3d> measured;   // per image (camera positions), centred
-  std::vector<double> focal_um;            // per image
+  double extent_m = 1.0;                  // RMS distance of cameras and points from the centroid
+  std::vector<Eigen::Vector3d> surveyed;  // per point (control points), centred
+  std::vector<Eigen::Vector3d> measured;  // per image (camera positions), centred
+  std::vector<double> focal_um;           // per image
   Eigen::Vector3d lever = Eigen::Vector3d::Zero();
   bool use_lever = false;
 };
 
 // The normal equations of one linearisation (seed sign: N d = A^T P F, p = p0 - d).
 struct Normal {
-  std::vector<Matrix6d> U;           // per camera block
+  std::vector<Matrix6d> U;  // per camera block
   std::vector<Vector6d> ge;
-  std::vector<Eigen::Matrix3d> V;    // per free point
+  std::vector<Eigen::Matrix3d> V;  // per free point
   std::vector<Eigen::Vector3d> gp;
-  std::vector<Matrix63> W;           // per mark of the round (zero unless image and point free)
-  std::vector<Eigen::Vector2d> f;    // per mark of the round: F (um)
-  double weighted_ssr = 0.0;         // F^T P F over every observation
-  int behind_mark = -1;              // a mark whose point is not in front of its camera
+  std::vector<Matrix63> W;         // per mark of the round (zero unless image and point free)
+  std::vector<Eigen::Vector2d> f;  // per mark of the round: F (um)
+  double weighted_ssr = 0.0;       // F^T P F over every observation
+  int behind_mark = -1;            // a mark whose point is not in front of its camera
   double behind_w = 0.0;
 };
 
@@ -510,9 +514,8 @@ struct DenseRows {
 // Linearises every observation equation at `state` and accumulates the normal equations. False
 // when a point is not in front of its camera (normal->behind_mark says which) or the residuals
 // are not finite.
-bool Linearize(TaylorPartials partials, const Block& block, const Plan& plan,
-               const Layout& layout, const Frame& frame, const State& state, Normal* normal,
-               DenseRows* dense) {
+bool Linearize(TaylorPartials partials, const Block& block, const Plan& plan, const Layout& layout,
+               const Frame& frame, const State& state, Normal* normal, DenseRows* dense) {
   const size_t num_blocks = layout.free_images.size();
   const size_t num_points = layout.free_points.size();
   normal->U.assign(num_blocks, Matrix6d::Zero());
@@ -615,7 +618,8 @@ bool Linearize(TaylorPartials partials, const Block& block, const Plan& plan,
       if (dense != nullptr) {
         for (int axis = 0; axis < 3; ++axis) {
           const Vector6d row = A.row(axis).transpose();
-          dense->Add(static_cast<int>(i), row.data(), -1, nullptr, std::sqrt(weight[axis]), F[axis]);
+          dense->Add(static_cast<int>(i), row.data(), -1, nullptr, std::sqrt(weight[axis]),
+                     F[axis]);
         }
       }
     }
@@ -630,7 +634,8 @@ bool Linearize(TaylorPartials partials, const Block& block, const Plan& plan,
       if (dense != nullptr) {
         for (int axis = 0; axis < 3; ++axis) {
           const Vector6d row = Vector6d::Unit(3 + axis);
-          dense->Add(static_cast<int>(i), row.data(), -1, nullptr, std::sqrt(weight[axis]), F[axis]);
+          dense->Add(static_cast<int>(i), row.data(), -1, nullptr, std::sqrt(weight[axis]),
+                     F[axis]);
         }
       }
     }
@@ -799,7 +804,7 @@ Frame MakeFrame(const TaylorBundleOptions& options, const Block& block, const Pl
   }
   for (size_t p = 0; p < block.points.size(); ++p) {
     const BlockPoint& point = block.points[p];
-    state->points[p] = point.position_m ? *point.position_m
+    state->points[p] = point.position_m   ? *point.position_m
                        : point.surveyed_m ? *point.surveyed_m
                                           : Eigen::Vector3d::Zero();
     if (plan.point_in_problem[p]) positions.push_back(state->points[p]);
@@ -814,7 +819,8 @@ Frame MakeFrame(const TaylorBundleOptions& options, const Block& block, const Pl
   for (Eigen::Vector3d& x : state->points) x -= frame.centroid;
   frame.surveyed.assign(block.points.size(), Eigen::Vector3d::Zero());
   for (size_t p = 0; p < block.points.size(); ++p)
-    if (block.points[p].surveyed_m) frame.surveyed[p] = *block.points[p].surveyed_m - frame.centroid;
+    if (block.points[p].surveyed_m)
+      frame.surveyed[p] = *block.points[p].surveyed_m - frame.centroid;
   frame.measured.assign(block.images.size(), Eigen::Vector3d::Zero());
   frame.focal_um.assign(block.images.size(), 0.0);
   for (size_t i = 0; i < block.images.size(); ++i) {
@@ -878,7 +884,8 @@ TaylorTerminationType RunRound(const Context& ctx, int round, Layout* layout, St
   TaylorBundleSummary& summary = result->summary;
   const int redundancy = layout->num_observations - layout->num_unknowns;
   double max_norm = 0.0;
-  for (const int i : layout->free_images) max_norm = std::max(max_norm, state->eo[i].head<3>().norm());
+  for (const int i : layout->free_images)
+    max_norm = std::max(max_norm, state->eo[i].head<3>().norm());
   for (const int p : layout->free_points) max_norm = std::max(max_norm, state->points[p].norm());
   const double position_tolerance_m =
       std::max(options.position_tolerance_m,
@@ -888,10 +895,10 @@ TaylorTerminationType RunRound(const Context& ctx, int round, Layout* layout, St
 
   if (!Linearize(options.partials, ctx.block, ctx.plan, *layout, ctx.frame, *state, normal,
                  nullptr)) {
-    *message = normal->behind_mark >= 0
-                   ? BehindMessage(ctx.block, *normal,
-                                   "at the start of round " + std::to_string(round))
-                   : "the residuals at the start are not finite";
+    *message =
+        normal->behind_mark >= 0
+            ? BehindMessage(ctx.block, *normal, "at the start of round " + std::to_string(round))
+            : "the residuals at the start are not finite";
     return TaylorTerminationType::kFailure;
   }
   if (round == 1) summary.initial_cost = 0.5 * normal->weighted_ssr;
@@ -966,9 +973,8 @@ TaylorTerminationType RunRound(const Context& ctx, int round, Layout* layout, St
     if (!Linearize(options.partials, ctx.block, ctx.plan, *layout, ctx.frame, *state, normal,
                    nullptr)) {
       *message = normal->behind_mark >= 0
-                     ? BehindMessage(ctx.block, *normal, "after iteration " +
-                                                             std::to_string(iteration) +
-                                                             " (diverged)")
+                     ? BehindMessage(ctx.block, *normal,
+                                     "after iteration " + std::to_string(iteration) + " (diverged)")
                      : "the residuals are not finite after iteration " + std::to_string(iteration);
       return TaylorTerminationType::kFailure;
     }
@@ -1003,10 +1009,9 @@ TaylorTerminationType RunRound(const Context& ctx, int round, Layout* layout, St
 // block its 6 x 6 diagonal block, and per free control point its 3 x 3 covariance
 // V^-1 + sum_a sum_c Y_a^T C(a, c) Y_c (a, c over its marks in free images). Column block by
 // column block through the sparse factorisation, so memory stays O(n).
-void Covariances(const Block& block, const Plan& plan, const Layout& layout,
-                 const Normal& normal, const Reduction& reduction,
-                 std::vector<Matrix6d>* cameras, std::vector<Eigen::Matrix3d>* points,
-                 std::vector<char>* has_point) {
+void Covariances(const Block& block, const Plan& plan, const Layout& layout, const Normal& normal,
+                 const Reduction& reduction, std::vector<Matrix6d>* cameras,
+                 std::vector<Eigen::Matrix3d>* points, std::vector<char>* has_point) {
   const int num_blocks = static_cast<int>(layout.free_images.size());
   const int n = 6 * num_blocks;
   cameras->assign(num_blocks, Matrix6d::Zero());
@@ -1019,7 +1024,8 @@ void Covariances(const Block& block, const Plan& plan, const Layout& layout,
     (*has_point)[q] = 1;
     const std::vector<int>& marks = layout.point_marks[q];
     for (size_t c = 0; c < marks.size(); ++c)
-      control_of_block[layout.mark_block[marks[c]]].emplace_back(static_cast<int>(q), static_cast<int>(c));
+      control_of_block[layout.mark_block[marks[c]]].emplace_back(static_cast<int>(q),
+                                                                 static_cast<int>(c));
   }
   const Eigen::VectorXd& s = reduction.scale;
   Eigen::MatrixXd rhs(n, 6);
@@ -1077,7 +1083,6 @@ void FillBundleSummary(const TaylorBundleSummary& taylor, BundleAdjustmentSummar
   out->statistics_seconds = taylor.statistics_seconds;
 }
 
-
 }  // namespace
 
 bool TaylorBundleOptions::IsValid(std::string* why) const {
@@ -1098,8 +1103,10 @@ bool TaylorBundleOptions::IsValid(std::string* why) const {
     return fail("the rejection threshold must be >= 0 (0: no rejection)");
   if (max_rejection_rounds < 0) return fail("max_rejection_rounds must be >= 0");
   if (max_iterations < 1) return fail("max_iterations must be at least 1");
-  if (!positive(position_tolerance_m)) return fail("position_tolerance_m must be positive and finite");
-  if (!positive(angle_tolerance_rad)) return fail("angle_tolerance_rad must be positive and finite");
+  if (!positive(position_tolerance_m))
+    return fail("position_tolerance_m must be positive and finite");
+  if (!positive(angle_tolerance_rad))
+    return fail("angle_tolerance_rad must be positive and finite");
   if (!(divergence_distance_factor > 1.0) || !std::isfinite(divergence_distance_factor))
     return fail("divergence_distance_factor must be finite and greater than 1");
   if (!(min_pivot_ratio >= 0.0 && min_pivot_ratio < 1.0))
@@ -1251,19 +1258,19 @@ Status LinearizeTaylorBundle(const TaylorBundleOptions& options,
     }
   }
   if (!Factorize(options.min_pivot_ratio, layout, &reduction))
-    return Status::Error(Format("the reduced normal matrix is singular (pivot ratio %.3g)",
-                                reduction.pivot_ratio));
+    return Status::Error(
+        Format("the reduced normal matrix is singular (pivot ratio %.3g)", reduction.pivot_ratio));
   Eigen::VectorXd d_e;
   std::vector<Eigen::Vector3d> d_p;
   SolveCorrections(plan, layout, normal, reduction, &d_e, &d_p);
   system->correction.resize(dense.num_columns);
   for (size_t b = 0; b < layout.free_images.size(); ++b)
-    system->correction.segment<6>(dense.image_columns[layout.free_images[b]]) = d_e.segment<6>(6 * b);
+    system->correction.segment<6>(dense.image_columns[layout.free_images[b]]) =
+        d_e.segment<6>(6 * b);
   for (size_t q = 0; q < layout.free_points.size(); ++q)
     system->correction.segment<3>(dense.point_columns[layout.free_points[q]]) = d_p[q];
   return Status::Ok();
 }
-
 
 Status TaylorBundleAdjust(const TaylorBundleOptions& options, const BundleAdjustmentConfig& config,
                           Block* block, TaylorBundleResult* result) {
@@ -1313,8 +1320,8 @@ Status TaylorBundleAdjust(const TaylorBundleOptions& options, const BundleAdjust
     summary.redundancy = layout.num_observations - layout.num_unknowns;
     summary.num_images = static_cast<int>(block->images.size());
     summary.num_marks = static_cast<int>(layout.marks.size());
-    summary.num_points = static_cast<int>(
-        std::count(plan.point_in_problem.begin(), plan.point_in_problem.end(), 1));
+    summary.num_points =
+        static_cast<int>(std::count(plan.point_in_problem.begin(), plan.point_in_problem.end(), 1));
     summary.num_camera_unknowns =
         layout.num_unknowns - 3 * static_cast<int>(layout.free_points.size());
     summary.reduced_nonzeros = static_cast<int>(layout.S.nonZeros());
@@ -1327,8 +1334,8 @@ Status TaylorBundleAdjust(const TaylorBundleOptions& options, const BundleAdjust
       return finish(type, "round " + std::to_string(round) + ": " + message);
     }
     summary.message = message;
-    summary.sigma0 = summary.redundancy > 0 ? std::sqrt(normal.weighted_ssr / summary.redundancy)
-                                            : kNaN;
+    summary.sigma0 =
+        summary.redundancy > 0 ? std::sqrt(normal.weighted_ssr / summary.redundancy) : kNaN;
     if (round == max_rounds) break;
     // Reject the marks beyond the threshold (in units of sigma0, never below the stated sigma).
     const double limit = options.rejection_threshold * std::max(1.0, summary.sigma0);
@@ -1388,11 +1395,11 @@ Status TaylorBundleAdjust(const TaylorBundleOptions& options, const BundleAdjust
     covariance = Reduce(normal, layout, reduction.get()) < 0 &&
                  WriteScaled(plan, &layout, reduction.get()) < 0 &&
                  Factorize(options.min_pivot_ratio, layout, reduction.get());
-    if (!covariance) summary.message += "; the normal matrix at the solution is singular: no covariances";
+    if (!covariance)
+      summary.message += "; the normal matrix at the solution is singular: no covariances";
   } else {
     summary.message += "; covariances skipped (more than " +
-                       std::to_string(options.max_covariance_parameters) +
-                       " camera unknowns)";
+                       std::to_string(options.max_covariance_parameters) + " camera unknowns)";
   }
   if (covariance) {
     std::vector<Matrix6d> cameras;
@@ -1434,16 +1441,17 @@ Status TaylorBundleAdjust(const TaylorBundleOptions& options, const BundleAdjust
   return finish(TaylorTerminationType::kConvergence, summary.message);
 }
 
-
 Status BundleAdjustWithSolver(PoseSolver solver, const BundleAdjustmentOptions& options,
                               const BundleAdjustmentConfig& config, Block* block,
                               BundleAdjustmentResult* result, TaylorBundleResult* taylor_result) {
   CHECK(result != nullptr);
   if (solver == PoseSolver::kCeres) return BundleAdjust(options, config, block, result);
   TaylorBundleOptions taylor_options;
-  const TaylorPartials partials =
-      solver == PoseSolver::kTaylorAsPrinted ? TaylorPartials::kAsPrinted : TaylorPartials::kCorrected;
-  PHOTOPOSE_RETURN_IF_ERROR(TaylorBundleOptionsFromBundleOptions(options, partials, &taylor_options));
+  const TaylorPartials partials = solver == PoseSolver::kTaylorAsPrinted
+                                      ? TaylorPartials::kAsPrinted
+                                      : TaylorPartials::kCorrected;
+  PHOTOPOSE_RETURN_IF_ERROR(
+      TaylorBundleOptionsFromBundleOptions(options, partials, &taylor_options));
   TaylorBundleResult local;
   TaylorBundleResult& taylor = taylor_result != nullptr ? *taylor_result : local;
   const Status status = TaylorBundleAdjust(taylor_options, config, block, &taylor);

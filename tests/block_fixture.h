@@ -18,11 +18,11 @@
 namespace photopose::testing {
 
 struct FixtureBlockOptions {
-  int strips = 3;                 // flight lines (along Y)
-  int images_per_strip = 4;       // images per line (along X)
-  double forward_m = 20.0;        // base between images of a line (m)
-  double side_m = 30.0;           // distance between lines (m)
-  double height_m = 100.0;        // flying height above Z = 0 (m)
+  int strips = 3;            // flight lines (along Y)
+  int images_per_strip = 4;  // images per line (along X)
+  double forward_m = 20.0;   // base between images of a line (m)
+  double side_m = 30.0;      // distance between lines (m)
+  double height_m = 100.0;   // flying height above Z = 0 (m)
   // Camera: a frame camera, 24 mm lens, 6000 x 4000 pixels of 4 um, a little radial distortion.
   double focal_um = 24000.0;
   double pixel_um = 4.0;
@@ -33,8 +33,8 @@ struct FixtureBlockOptions {
   Eigen::Vector3d base_angles_deg = Eigen::Vector3d::Zero();
   double attitude_jitter_deg = 2.0;
   std::vector<std::pair<int, Eigen::Vector3d>> tilted;
-  int tie_grid = 12;              // tie points per side of the grid over the footprints
-  double relief_m = 10.0;         // tie-point heights uniform in +- relief / 2 (m)
+  int tie_grid = 12;       // tie points per side of the grid over the footprints
+  double relief_m = 10.0;  // tie-point heights uniform in +- relief / 2 (m)
   // Control and check points at these fractions of the camera-centre rectangle (0..1 in X and Y),
   // or of the union of the footprints (surveyed_in_footprints: for oblique blocks, whose images
   // look away from their centres), heights uniform in +- 1 m.
@@ -44,10 +44,10 @@ struct FixtureBlockOptions {
   double noise_px = 0.5;          // image noise, one sigma (px)
   double mark_accuracy_px = 0.5;  // the marks' stated accuracy (px)
   bool gnss = true;
-  double gnss_noise_m = 0.03;     // GNSS error, one sigma (m)
-  double gnss_accuracy_m = 0.03;  // its stated accuracy (m)
-  double control_noise_m = 0.005; // survey error of control and check points, one sigma (m)
-  double control_accuracy_m = 0.005;  // its stated accuracy (m)
+  double gnss_noise_m = 0.03;           // GNSS error, one sigma (m)
+  double gnss_accuracy_m = 0.03;        // its stated accuracy (m)
+  double control_noise_m = 0.005;       // survey error of control and check points, one sigma (m)
+  double control_accuracy_m = 0.005;    // its stated accuracy (m)
   double start_position_error_m = 2.0;  // approximate values: uniform +- per axis (m)
   double start_angle_error_deg = 1.0;   // uniform +- per angle (deg)
   double start_point_error_m = 1.0;     // tie points: uniform +- per axis (m)
@@ -57,8 +57,8 @@ struct FixtureBlockOptions {
 
 struct FixtureBlock {
   Block block;
-  std::vector<ExteriorOrientation> true_eo;    // per image
-  std::vector<Eigen::Vector3d> true_points;    // per point
+  std::vector<ExteriorOrientation> true_eo;  // per image
+  std::vector<Eigen::Vector3d> true_points;  // per point
   double size_m = 0.0;  // diagonal of the camera-centre rectangle plus the flying height (m)
 };
 
@@ -92,7 +92,8 @@ inline FixtureBlock MakeFixtureBlock(const FixtureBlockOptions& o) {
       for (const auto& [image, extra] : o.tilted)
         if (image == index) angles_deg += extra;
       ExteriorOrientation eo;
-      eo.set_center_in_ground(Eigen::Vector3d(k * o.forward_m, s * o.side_m, o.height_m) + o.offset_m);
+      eo.set_center_in_ground(Eigen::Vector3d(k * o.forward_m, s * o.side_m, o.height_m) +
+                              o.offset_m);
       eo.set_angles_seed_rad(angles_deg / kDegreesPerRadian);
       out.true_eo.push_back(eo);
       for (const Eigen::Vector2d corner :
@@ -100,7 +101,8 @@ inline FixtureBlock MakeFixtureBlock(const FixtureBlockOptions& o) {
             Eigen::Vector2d(o.columns, o.rows)}) {
         Eigen::Vector3d ground;
         if (!IntersectRayWithPlane(cam.table, eo, corner, PixelOrigin::kCorner, o.offset_m.z(),
-                                   &ground).ok())
+                                   &ground)
+                 .ok())
           continue;
         low = low.cwiseMin(ground.head<2>());
         high = high.cwiseMax(ground.head<2>());
@@ -120,7 +122,8 @@ inline FixtureBlock MakeFixtureBlock(const FixtureBlockOptions& o) {
     }
   }
   const Eigen::Vector2d centres_low = o.offset_m.head<2>();
-  const Eigen::Vector2d centres_span((o.images_per_strip - 1) * o.forward_m, (o.strips - 1) * o.side_m);
+  const Eigen::Vector2d centres_span((o.images_per_strip - 1) * o.forward_m,
+                                     (o.strips - 1) * o.side_m);
   out.size_m = std::hypot(centres_span.norm(), o.height_m);
 
   auto add_point = [&](const Eigen::Vector3d& X, PointRole role, const std::string& id) {
@@ -146,8 +149,10 @@ inline FixtureBlock MakeFixtureBlock(const FixtureBlockOptions& o) {
     }
   }
   const Eigen::Vector2d surveyed_low = o.surveyed_in_footprints ? low : centres_low;
-  const Eigen::Vector2d surveyed_span = o.surveyed_in_footprints ? Eigen::Vector2d(high - low) : centres_span;
-  auto add_surveyed = [&](const std::vector<Eigen::Vector2d>& at, PointRole role, const char* prefix) {
+  const Eigen::Vector2d surveyed_span =
+      o.surveyed_in_footprints ? Eigen::Vector2d(high - low) : centres_span;
+  auto add_surveyed = [&](const std::vector<Eigen::Vector2d>& at, PointRole role,
+                          const char* prefix) {
     for (size_t k = 0; k < at.size(); ++k) {
       const Eigen::Vector2d xy = surveyed_low + at[k].cwiseProduct(surveyed_span);
       add_point({xy.x(), xy.y(), o.offset_m.z() + uniform(rng)}, role, prefix + std::to_string(k));
@@ -162,9 +167,11 @@ inline FixtureBlock MakeFixtureBlock(const FixtureBlockOptions& o) {
       double ab[2];
       Eigen::Vector2d film, pixel;
       if (!ProjectToNormalized(out.true_eo[i].data(), out.true_points[p].data(), ab) ||
-          !ObservationFromNormalized(cam.model, cam.params.data(), cam.data(), {ab[0], ab[1]}, &film).ok() ||
-          !PixelFromFilm(cam.table, film, PixelOrigin::kCorner, &pixel).ok() ||
-          pixel.x() < 0 || pixel.y() < 0 || pixel.x() > o.columns || pixel.y() > o.rows)
+          !ObservationFromNormalized(cam.model, cam.params.data(), cam.data(), {ab[0], ab[1]},
+                                     &film)
+               .ok() ||
+          !PixelFromFilm(cam.table, film, PixelOrigin::kCorner, &pixel).ok() || pixel.x() < 0 ||
+          pixel.y() < 0 || pixel.x() > o.columns || pixel.y() > o.rows)
         continue;
       BlockMark mark;
       mark.image = static_cast<int>(i);

@@ -117,7 +117,8 @@ TEST(TaylorBundlePartials, PointPartialsMatchCentralDifferences) {
       const Eigen::Vector3d ray(0.6 * unit(rng), 0.6 * unit(rng), -1.0);
       const Eigen::Vector3d point = eo.center_in_ground() + R.transpose() * (D * ray.normalized());
       const Eigen::Vector2d observed(100.0 * unit(rng), 100.0 * unit(rng));
-      for (const TaylorPartials partials : {TaylorPartials::kCorrected, TaylorPartials::kAsPrinted}) {
+      for (const TaylorPartials partials :
+           {TaylorPartials::kCorrected, TaylorPartials::kAsPrinted}) {
         Eigen::Matrix<double, 2, 6> d_eo;
         Eigen::Matrix<double, 2, 3> d_point;
         Eigen::Vector2d f;
@@ -133,15 +134,16 @@ TEST(TaylorBundlePartials, PointPartialsMatchCentralDifferences) {
           const Eigen::Vector2d numeric((fu_p - fu_m) / (2 * h), (fv_p - fv_m) / (2 * h));
           // Floor c / D: partials near zero are not divided by ~0.
           for (int r = 0; r < 2; ++r) {
-            const double error = std::abs(d_point(r, axis) - numeric[r]) /
-                                 std::max(std::abs(numeric[r]), c / D);
+            const double error =
+                std::abs(d_point(r, axis) - numeric[r]) / std::max(std::abs(numeric[r]), c / D);
             worst = std::max(worst, error);
             EXPECT_LT(error, kPartialRelativeTolerance);
           }
         }
         // The pose-at-a-time linearisation is the point-by-point one, to the bit.
         double row_u[6], row_v[6], fu, fv;
-        ASSERT_TRUE(TaylorPartialsForPoint(partials, eo, point, c, observed, row_u, row_v, &fu, &fv));
+        ASSERT_TRUE(
+            TaylorPartialsForPoint(partials, eo, point, c, observed, row_u, row_v, &fu, &fv));
         for (int col = 0; col < 6; ++col) {
           EXPECT_EQ(d_eo(0, col), row_u[col]);
           EXPECT_EQ(d_eo(1, col), row_v[col]);
@@ -174,7 +176,8 @@ TEST(TaylorBundlePartials, AntennaPartialsMatchCentralDifferences) {
       plus.parameters[3 + k] += h;
       minus.parameters[3 + k] -= h;
       const Eigen::Vector3d numeric = (TaylorAntennaPosition(plus, lever, nullptr) -
-                                       TaylorAntennaPosition(minus, lever, nullptr)) / (2 * h);
+                                       TaylorAntennaPosition(minus, lever, nullptr)) /
+                                      (2 * h);
       const double error = (d_angles.col(k) - numeric).norm() / lever.norm();
       worst = std::max(worst, error);
       EXPECT_LT(error, kPartialRelativeTolerance);
@@ -190,7 +193,8 @@ TEST(TaylorBundlePartials, AntennaPartialsMatchCentralDifferences) {
 // Jacobian, on a small block with every kind of observation equation.
 void CheckReductionAgainstFullSystem(const FixtureBlock& data, const TaylorBundleOptions& options) {
   TaylorBundleLinearSystem system;
-  const Status status = LinearizeTaylorBundle(options, BundleAdjustmentConfig(), data.block, &system);
+  const Status status =
+      LinearizeTaylorBundle(options, BundleAdjustmentConfig(), data.block, &system);
   ASSERT_TRUE(status.ok()) << status.message();
   const Eigen::MatrixXd& A = system.jacobian;
   const Eigen::MatrixXd N = A.transpose() * A;
@@ -219,7 +223,8 @@ void CheckReductionAgainstFullSystem(const FixtureBlock& data, const TaylorBundl
   const Eigen::VectorXd d = N_fixed.ldlt().solve(g);
   const double d_error = (d - system.correction).cwiseAbs().maxCoeff() / d.cwiseAbs().maxCoeff();
   std::printf("  %d observations, %d unknowns (%d camera): S %.2e, r %.2e, correction %.2e\n",
-              static_cast<int>(A.rows()), static_cast<int>(A.cols()), ne, s_error, r_error, d_error);
+              static_cast<int>(A.rows()), static_cast<int>(A.cols()), ne, s_error, r_error,
+              d_error);
   EXPECT_LT(s_error, kReductionRelativeTolerance);
   EXPECT_LT(r_error, kReductionRelativeTolerance);
   EXPECT_LT(d_error, kReductionRelativeTolerance);
@@ -266,7 +271,8 @@ Agreement CompareWithCeres(const FixtureBlock& data, const BundleAdjustmentOptio
   Block ceres_block = data.block, taylor_block = data.block;
   BundleAdjustmentResult ceres;
   TaylorBundleResult taylor;
-  const Status ceres_status = BundleAdjust(ceres_options, BundleAdjustmentConfig(), &ceres_block, &ceres);
+  const Status ceres_status =
+      BundleAdjust(ceres_options, BundleAdjustmentConfig(), &ceres_block, &ceres);
   const Status taylor_status =
       TaylorBundleAdjust(taylor_options, BundleAdjustmentConfig(), &taylor_block, &taylor);
   EXPECT_TRUE(ceres_status.ok()) << ceres_status.message();
@@ -283,7 +289,8 @@ Agreement CompareWithCeres(const FixtureBlock& data, const BundleAdjustmentOptio
   for (size_t i = 0; i < data.block.images.size(); ++i) {
     const ExteriorOrientation& a = *ceres_block.images[i].eo;
     const ExteriorOrientation& b = *taylor_block.images[i].eo;
-    agreement.centre_m = std::max(agreement.centre_m, (a.center_in_ground() - b.center_in_ground()).norm());
+    agreement.centre_m =
+        std::max(agreement.centre_m, (a.center_in_ground() - b.center_in_ground()).norm());
     agreement.angle_rad = std::max(agreement.angle_rad, RotationDifferenceRad(a, b));
     EXPECT_EQ(taylor.adjustment.images[i].num_marks, ceres.images[i].num_marks);
     EXPECT_EQ(taylor.adjustment.images[i].has_covariance, ceres.images[i].has_covariance);
@@ -297,8 +304,9 @@ Agreement CompareWithCeres(const FixtureBlock& data, const BundleAdjustmentOptio
   }
   for (size_t p = 0; p < data.block.points.size(); ++p) {
     if (ceres_block.points[p].position_m && taylor_block.points[p].position_m)
-      agreement.point_m = std::max(
-          agreement.point_m, (*ceres_block.points[p].position_m - *taylor_block.points[p].position_m).norm());
+      agreement.point_m =
+          std::max(agreement.point_m,
+                   (*ceres_block.points[p].position_m - *taylor_block.points[p].position_m).norm());
     const auto& ce = ceres.points[p].error_m;
     const auto& te = taylor.adjustment.points[p].error_m;
     EXPECT_EQ(ce.has_value(), te.has_value());
@@ -317,8 +325,8 @@ Agreement CompareWithCeres(const FixtureBlock& data, const BundleAdjustmentOptio
 struct Scenario {
   const char* name;
   FixtureBlockOptions block;
-  bool attitudes = false;       // attitude priors (0.01 deg) on every image
-  bool lever_arm = false;       // a GNSS lever arm
+  bool attitudes = false;  // attitude priors (0.01 deg) on every image
+  bool lever_arm = false;  // a GNSS lever arm
   bool noise_free = false;
 };
 
@@ -381,7 +389,8 @@ TEST(TaylorBundleVsCeres, SameMinimumOnSimulatedBlocks) {
               "points m", "check m", "sigma0 rel", "cov rel", "iter T/C");
   for (const Scenario& scenario : AgreementScenarios()) {
     SCOPED_TRACE(scenario.name);
-    FixtureBlock data = MakeFixtureBlock(scenario.noise_free ? NoiseFree(scenario.block) : scenario.block);
+    FixtureBlock data =
+        MakeFixtureBlock(scenario.noise_free ? NoiseFree(scenario.block) : scenario.block);
     BundleAdjustmentOptions ceres = CeresOptions();
     TaylorBundleOptions taylor = TaylorOptions();
     if (scenario.attitudes) {
@@ -390,7 +399,8 @@ TEST(TaylorBundleVsCeres, SameMinimumOnSimulatedBlocks) {
       const double sigma = 0.01 / kDegreesPerRadian;
       for (size_t i = 0; i < data.block.images.size(); ++i) {
         data.block.images[i].measured_angles_rad =
-            data.true_eo[i].angles_seed_rad() + sigma * Eigen::Vector3d(gauss(rng), gauss(rng), gauss(rng));
+            data.true_eo[i].angles_seed_rad() +
+            sigma * Eigen::Vector3d(gauss(rng), gauss(rng), gauss(rng));
         data.block.images[i].attitude_accuracy_rad = Eigen::Vector3d::Constant(sigma);
       }
     }
@@ -425,10 +435,13 @@ TEST(TaylorBundleVsCeres, SameMinimumOnSimulatedBlocks) {
 TEST(TaylorBundle, NoiseFreeBlockReachesTheTruth) {
   FixtureBlock data = MakeFixtureBlock(NoiseFree(FixtureBlockOptions()));
   TaylorBundleResult result;
-  ASSERT_TRUE(TaylorBundleAdjust(TaylorOptions(), BundleAdjustmentConfig(), &data.block, &result).ok());
+  ASSERT_TRUE(
+      TaylorBundleAdjust(TaylorOptions(), BundleAdjustmentConfig(), &data.block, &result).ok());
   ASSERT_TRUE(result.summary.IsSolutionUsable()) << result.summary.BriefReport();
   for (size_t i = 0; i < data.true_eo.size(); ++i) {
-    EXPECT_LT((data.block.images[i].eo->center_in_ground() - data.true_eo[i].center_in_ground()).norm(), 1e-6);
+    EXPECT_LT(
+        (data.block.images[i].eo->center_in_ground() - data.true_eo[i].center_in_ground()).norm(),
+        1e-6);
     EXPECT_LT(RotationDifferenceRad(*data.block.images[i].eo, data.true_eo[i]), 1e-9);
   }
   EXPECT_LT(result.adjustment.check_rmse_total_m, 1e-6);
@@ -453,7 +466,8 @@ TEST(TaylorBundle, CameraPositionCovarianceIsHonest) {
     o.seed = 100 + seed;
     FixtureBlock data = MakeFixtureBlock(o);
     TaylorBundleResult result;
-    ASSERT_TRUE(TaylorBundleAdjust(TaylorOptions(), BundleAdjustmentConfig(), &data.block, &result).ok());
+    ASSERT_TRUE(
+        TaylorBundleAdjust(TaylorOptions(), BundleAdjustmentConfig(), &data.block, &result).ok());
     ASSERT_TRUE(result.summary.IsSolutionUsable());
     for (size_t i = 0; i < data.true_eo.size(); ++i) {
       ASSERT_TRUE(result.adjustment.images[i].has_covariance);
@@ -487,16 +501,19 @@ TEST(TaylorBundle, RejectionRoundsMatchCeresOnTheCleanedBlock) {
   BlockMark& mark = data.block.marks[blunder];
   mark.measured += Eigen::Vector2d(25.0, -10.0);
   ASSERT_TRUE(FilmFromPixel(data.block.cameras[0].table, mark.measured, PixelOrigin::kCorner,
-                            &mark.observation).ok());
+                            &mark.observation)
+                  .ok());
   BundleAdjustmentOptions with_rejection = CeresOptions();
   with_rejection.rejection_threshold = 4.5;
   TaylorBundleOptions taylor_options;
   ASSERT_TRUE(TaylorBundleOptionsFromBundleOptions(with_rejection, TaylorPartials::kCorrected,
-                                                   &taylor_options).ok());
+                                                   &taylor_options)
+                  .ok());
   ASSERT_EQ(taylor_options.rejection_threshold, 4.5);
   Block taylor_block = data.block;
   TaylorBundleResult taylor;
-  ASSERT_TRUE(TaylorBundleAdjust(taylor_options, BundleAdjustmentConfig(), &taylor_block, &taylor).ok());
+  ASSERT_TRUE(
+      TaylorBundleAdjust(taylor_options, BundleAdjustmentConfig(), &taylor_block, &taylor).ok());
   ASSERT_TRUE(taylor.summary.IsSolutionUsable()) << taylor.summary.BriefReport();
   std::printf("  %s\n", taylor.summary.BriefReport().c_str());
 
@@ -522,7 +539,8 @@ TEST(TaylorBundle, RejectionRoundsMatchCeresOnTheCleanedBlock) {
   std::sort(first_round.begin(), first_round.end());
   EXPECT_EQ(first_round, expected);
   EXPECT_NE(std::find(first_round.begin(), first_round.end(), blunder), first_round.end());
-  EXPECT_EQ(taylor.summary.num_rejected_marks, static_cast<int>(taylor.adjustment.rejected_marks.size()));
+  EXPECT_EQ(taylor.summary.num_rejected_marks,
+            static_cast<int>(taylor.adjustment.rejected_marks.size()));
   EXPECT_TRUE(std::isnan(taylor.adjustment.mark_residuals[blunder][0]));
 
   // Ceres on the block without every rejected mark: the same minimum.
@@ -538,11 +556,13 @@ TEST(TaylorBundle, RejectionRoundsMatchCeresOnTheCleanedBlock) {
   ASSERT_TRUE(BundleAdjust(CeresOptions(), BundleAdjustmentConfig(), &cleaned, &reference).ok());
   ASSERT_TRUE(reference.summary.IsSolutionUsable());
   EXPECT_EQ(reference.summary.redundancy, taylor.summary.redundancy);
-  EXPECT_NEAR(reference.summary.sigma0, taylor.summary.sigma0, kSigma0RelativeAgreement * reference.summary.sigma0);
+  EXPECT_NEAR(reference.summary.sigma0, taylor.summary.sigma0,
+              kSigma0RelativeAgreement * reference.summary.sigma0);
   for (size_t i = 0; i < data.block.images.size(); ++i)
-    EXPECT_LT((cleaned.images[i].eo->center_in_ground() -
-               taylor_block.images[i].eo->center_in_ground()).norm(),
-              kRelativeAgreement * data.size_m);
+    EXPECT_LT(
+        (cleaned.images[i].eo->center_in_ground() - taylor_block.images[i].eo->center_in_ground())
+            .norm(),
+        kRelativeAgreement * data.size_m);
 }
 
 // ------------------------------------------------------------------ honest failures
@@ -567,7 +587,8 @@ TEST(TaylorBundle, FailsCleanly) {
     block.images[5].eo->parameters[2] = -50.0;
     const Block before = block;
     TaylorBundleResult result;
-    ASSERT_TRUE(TaylorBundleAdjust(TaylorOptions(), BundleAdjustmentConfig(), &block, &result).ok());
+    ASSERT_TRUE(
+        TaylorBundleAdjust(TaylorOptions(), BundleAdjustmentConfig(), &block, &result).ok());
     EXPECT_EQ(result.summary.termination_type, TaylorTerminationType::kFailure);
     EXPECT_NE(result.summary.message.find("not in front of the camera"), std::string::npos)
         << result.summary.message;
@@ -592,7 +613,8 @@ TEST(TaylorBundle, FailsCleanly) {
     FixtureBlock two = MakeFixtureBlock(o);
     Block block = two.block;
     TaylorBundleResult result;
-    ASSERT_TRUE(TaylorBundleAdjust(TaylorOptions(), BundleAdjustmentConfig(), &block, &result).ok());
+    ASSERT_TRUE(
+        TaylorBundleAdjust(TaylorOptions(), BundleAdjustmentConfig(), &block, &result).ok());
     EXPECT_EQ(result.summary.termination_type, TaylorTerminationType::kFailure);
     EXPECT_NE(result.summary.message.find("singular"), std::string::npos) << result.summary.message;
     ExpectUntouched(two.block, block, result);
@@ -602,7 +624,8 @@ TEST(TaylorBundle, FailsCleanly) {
     Block block = data.block;
     for (BlockImage& image : block.images) image.eo->parameters[5] += 2.5;  // kappa 143 deg off
     TaylorBundleResult result;
-    ASSERT_TRUE(TaylorBundleAdjust(TaylorOptions(), BundleAdjustmentConfig(), &block, &result).ok());
+    ASSERT_TRUE(
+        TaylorBundleAdjust(TaylorOptions(), BundleAdjustmentConfig(), &block, &result).ok());
     std::printf("  kappa 143 deg off: %s\n", result.summary.BriefReport().c_str());
     if (!result.summary.IsSolutionUsable()) {
       Block before = data.block;
@@ -632,7 +655,8 @@ TEST(TaylorBundle, RefusesWhatItDoesNotDo) {
     block.cameras[0].model = CameraModelType::kSimpleRadial;
     block.cameras[0].params = {3000.0, 3000.0, 2000.0, 0.0};
     TaylorBundleResult result;
-    const Status status = TaylorBundleAdjust(TaylorOptions(), BundleAdjustmentConfig(), &block, &result);
+    const Status status =
+        TaylorBundleAdjust(TaylorOptions(), BundleAdjustmentConfig(), &block, &result);
     ASSERT_FALSE(status.ok());
     EXPECT_NE(status.message().find("SIMPLE_RADIAL"), std::string::npos) << status.message();
   }
@@ -640,7 +664,8 @@ TEST(TaylorBundle, RefusesWhatItDoesNotDo) {
     Block block = data.block;
     block.images[2].eo.reset();
     TaylorBundleResult result;
-    EXPECT_FALSE(TaylorBundleAdjust(TaylorOptions(), BundleAdjustmentConfig(), &block, &result).ok());
+    EXPECT_FALSE(
+        TaylorBundleAdjust(TaylorOptions(), BundleAdjustmentConfig(), &block, &result).ok());
   }
   {
     TaylorBundleOptions options = TaylorOptions();
@@ -658,18 +683,20 @@ TEST(TaylorBundle, RefusesWhatItDoesNotDo) {
     BundleAdjustmentOptions ceres;
     ceres.tie_loss = BundleAdjustmentOptions::TieLoss::kHuber;
     TaylorBundleOptions options;
-    EXPECT_FALSE(TaylorBundleOptionsFromBundleOptions(ceres, TaylorPartials::kCorrected, &options).ok());
+    EXPECT_FALSE(
+        TaylorBundleOptionsFromBundleOptions(ceres, TaylorPartials::kCorrected, &options).ok());
     ceres = BundleAdjustmentOptions();
     ceres.estimate_lever_arm = true;
-    EXPECT_FALSE(TaylorBundleOptionsFromBundleOptions(ceres, TaylorPartials::kCorrected, &options).ok());
+    EXPECT_FALSE(
+        TaylorBundleOptionsFromBundleOptions(ceres, TaylorPartials::kCorrected, &options).ok());
     ceres = BundleAdjustmentOptions();
     ceres.accuracies.camera_m = Eigen::Vector3d(1.0, 2.0, 3.0);
-    ASSERT_TRUE(TaylorBundleOptionsFromBundleOptions(ceres, TaylorPartials::kAsPrinted, &options).ok());
+    ASSERT_TRUE(
+        TaylorBundleOptionsFromBundleOptions(ceres, TaylorPartials::kAsPrinted, &options).ok());
     EXPECT_EQ(options.partials, TaylorPartials::kAsPrinted);
     EXPECT_EQ(options.accuracies.camera_m, ceres.accuracies.camera_m);
   }
 }
-
 
 // ------------------------------------------------------------------ what the printed eq. 21 costs
 
@@ -682,12 +709,14 @@ struct VariantPair {
 VariantPair AdjustBothVariants(const FixtureBlock& data) {
   VariantPair pair;
   pair.corrected = pair.printed = data.block;
-  EXPECT_TRUE(TaylorBundleAdjust(TaylorOptions(TaylorPartials::kCorrected), BundleAdjustmentConfig(),
-                                 &pair.corrected, &pair.corrected_result).ok());
+  EXPECT_TRUE(TaylorBundleAdjust(TaylorOptions(TaylorPartials::kCorrected),
+                                 BundleAdjustmentConfig(), &pair.corrected, &pair.corrected_result)
+                  .ok());
   TaylorBundleOptions printed = TaylorOptions(TaylorPartials::kAsPrinted);
   printed.max_iterations = 200;  // linear convergence: let it finish where it can
-  EXPECT_TRUE(TaylorBundleAdjust(printed, BundleAdjustmentConfig(), &pair.printed,
-                                 &pair.printed_result).ok());
+  EXPECT_TRUE(
+      TaylorBundleAdjust(printed, BundleAdjustmentConfig(), &pair.printed, &pair.printed_result)
+          .ok());
   return pair;
 }
 
@@ -695,13 +724,13 @@ VariantPair AdjustBothVariants(const FixtureBlock& data) {
 // the check points from the least-squares solution, against that solution's own error.
 struct PrintedOffset {
   int realisations = 0, printed_usable = 0;
-  double centre_shift_rms_m = 0.0, centre_shift_max_m = 0.0;  // |printed - corrected|
-  double centre_error_rms_m = 0.0;                            // |corrected - truth|
-  double check_shift_rms_m = 0.0;                             // |printed - corrected| check error
-  double check_error_rms_m = 0.0;                             // corrected check error
+  double centre_shift_rms_m = 0.0, centre_shift_max_m = 0.0;    // |printed - corrected|
+  double centre_error_rms_m = 0.0;                              // |corrected - truth|
+  double check_shift_rms_m = 0.0;                               // |printed - corrected| check error
+  double check_error_rms_m = 0.0;                               // corrected check error
   double iterations_corrected = 0.0, iterations_printed = 0.0;  // means
   int iterations_printed_max = 0;
-  double sigma0_corrected = 0.0, sigma0_printed = 0.0;          // means
+  double sigma0_corrected = 0.0, sigma0_printed = 0.0;  // means
   std::vector<double> per_image_shift_rms_m;
 };
 
@@ -721,7 +750,8 @@ PrintedOffset MeasurePrintedOffset(FixtureBlockOptions o, int realisations) {
     if (!pair.printed_result.summary.IsSolutionUsable()) continue;
     ++out.printed_usable;
     out.iterations_printed += pair.printed_result.summary.iterations;
-    out.iterations_printed_max = std::max(out.iterations_printed_max, pair.printed_result.summary.iterations);
+    out.iterations_printed_max =
+        std::max(out.iterations_printed_max, pair.printed_result.summary.iterations);
     out.sigma0_printed += pair.printed_result.summary.sigma0;
     // The corrected solution is the least-squares minimum: the printed fixed point cannot be lower.
     EXPECT_GE(pair.printed_result.summary.final_cost,
@@ -759,13 +789,14 @@ PrintedOffset MeasurePrintedOffset(FixtureBlockOptions o, int realisations) {
 }
 
 void PrintOffset(const char* name, const PrintedOffset& m) {
-  std::printf("  %-28s printed usable %d/%d; centres moved RMS %.3f mm (max %.3f) vs their error "
-              "%.2f mm; check points moved RMS %.3f mm vs their error %.2f mm; iterations %.1f "
-              "corrected, %.1f printed (max %d); sigma0 %.5f -> %.5f\n",
-              name, m.printed_usable, m.realisations, 1e3 * m.centre_shift_rms_m,
-              1e3 * m.centre_shift_max_m, 1e3 * m.centre_error_rms_m, 1e3 * m.check_shift_rms_m,
-              1e3 * m.check_error_rms_m, m.iterations_corrected, m.iterations_printed,
-              m.iterations_printed_max, m.sigma0_corrected, m.sigma0_printed);
+  std::printf(
+      "  %-28s printed usable %d/%d; centres moved RMS %.3f mm (max %.3f) vs their error "
+      "%.2f mm; check points moved RMS %.3f mm vs their error %.2f mm; iterations %.1f "
+      "corrected, %.1f printed (max %d); sigma0 %.5f -> %.5f\n",
+      name, m.printed_usable, m.realisations, 1e3 * m.centre_shift_rms_m,
+      1e3 * m.centre_shift_max_m, 1e3 * m.centre_error_rms_m, 1e3 * m.check_shift_rms_m,
+      1e3 * m.check_error_rms_m, m.iterations_corrected, m.iterations_printed,
+      m.iterations_printed_max, m.sigma0_corrected, m.sigma0_printed);
 }
 
 constexpr int kOffsetRealisations = 40;
@@ -782,9 +813,11 @@ TEST(TaylorBundleAsPrinted, OffsetOfNadirAndObliqueBlocks) {
     double shift = 0.0;
     for (size_t i = 0; i < data.block.images.size(); ++i)
       shift = std::max(shift, (pair.printed.images[i].eo->center_in_ground() -
-                               pair.corrected.images[i].eo->center_in_ground()).norm());
+                               pair.corrected.images[i].eo->center_in_ground())
+                                  .norm());
     std::printf("  oblique 35 deg, noise-free: printed %d iterations vs %d, centres %.2e m apart\n",
-                pair.printed_result.summary.iterations, pair.corrected_result.summary.iterations, shift);
+                pair.printed_result.summary.iterations, pair.corrected_result.summary.iterations,
+                shift);
     EXPECT_LT(shift, 1e-5);
     EXPECT_GT(pair.printed_result.summary.iterations, pair.corrected_result.summary.iterations);
   }
@@ -844,7 +877,8 @@ TEST(TaylorBundleAsPrinted, OneObliqueImagePropagatesThroughTiePoints) {
     const int p = data.block.marks[mt].point;
     for (const int other : data.block.marks_of_point[p]) ++shared[data.block.marks[other].image];
   }
-  std::printf("  centre moved RMS (mm) / tie points shared with the tilted image, by strip and image:\n");
+  std::printf(
+      "  centre moved RMS (mm) / tie points shared with the tilted image, by strip and image:\n");
   for (int s = 0; s < o.strips; ++s) {
     std::printf("   ");
     for (int k = 0; k < o.images_per_strip; ++k) {
@@ -864,18 +898,19 @@ TEST(TaylorBundleAsPrinted, OneObliqueImagePropagatesThroughTiePoints) {
   EXPECT_LT(unshared_max, 0.25 * m.per_image_shift_rms_m[tilted]);
 }
 
-
 // The --solver switch: each PoseSolver gives what the solver called directly gives.
 TEST(TaylorBundle, BundleAdjustWithSolverDispatches) {
   const FixtureBlock data = MakeFixtureBlock(FixtureBlockOptions());
   const BundleAdjustmentOptions options = CeresOptions();
-  for (const PoseSolver solver : {PoseSolver::kCeres, PoseSolver::kTaylor, PoseSolver::kTaylorAsPrinted}) {
+  for (const PoseSolver solver :
+       {PoseSolver::kCeres, PoseSolver::kTaylor, PoseSolver::kTaylorAsPrinted}) {
     SCOPED_TRACE(PoseSolverName(solver));
     Block via_switch = data.block, direct = data.block;
     BundleAdjustmentResult result;
     TaylorBundleResult taylor;
     ASSERT_TRUE(BundleAdjustWithSolver(solver, options, BundleAdjustmentConfig(), &via_switch,
-                                       &result, &taylor).ok());
+                                       &result, &taylor)
+                    .ok());
     ASSERT_TRUE(result.summary.IsSolutionUsable()) << result.summary.BriefReport();
     if (solver == PoseSolver::kCeres) {
       BundleAdjustmentResult expected;
@@ -885,7 +920,8 @@ TEST(TaylorBundle, BundleAdjustWithSolverDispatches) {
       TaylorBundleOptions taylor_options = TaylorOptions(
           solver == PoseSolver::kTaylor ? TaylorPartials::kCorrected : TaylorPartials::kAsPrinted);
       TaylorBundleResult expected;
-      ASSERT_TRUE(TaylorBundleAdjust(taylor_options, BundleAdjustmentConfig(), &direct, &expected).ok());
+      ASSERT_TRUE(
+          TaylorBundleAdjust(taylor_options, BundleAdjustmentConfig(), &direct, &expected).ok());
       EXPECT_EQ(taylor.summary.partials, taylor_options.partials);
       EXPECT_EQ(result.summary.iterations, expected.summary.iterations);
       EXPECT_EQ(result.summary.sigma0, taylor.summary.sigma0);
@@ -898,8 +934,9 @@ TEST(TaylorBundle, BundleAdjustWithSolverDispatches) {
   huber.tie_loss = BundleAdjustmentOptions::TieLoss::kHuber;
   Block block = data.block;
   BundleAdjustmentResult result;
-  EXPECT_FALSE(BundleAdjustWithSolver(PoseSolver::kTaylor, huber, BundleAdjustmentConfig(), &block,
-                                      &result).ok());
+  EXPECT_FALSE(
+      BundleAdjustWithSolver(PoseSolver::kTaylor, huber, BundleAdjustmentConfig(), &block, &result)
+          .ok());
 }
 
 }  // namespace

@@ -58,7 +58,8 @@ struct IterationClock {
 double CentreRmseMm(const testing::FixtureBlock& data, const Block& adjusted) {
   double ssq = 0.0;
   for (size_t i = 0; i < adjusted.images.size(); ++i)
-    ssq += (adjusted.images[i].eo->center_in_ground() - data.true_eo[i].center_in_ground()).squaredNorm();
+    ssq += (adjusted.images[i].eo->center_in_ground() - data.true_eo[i].center_in_ground())
+               .squaredNorm();
   return 1e3 * std::sqrt(ssq / adjusted.images.size());
 }
 
@@ -105,9 +106,11 @@ void BM_BundleTaylor(benchmark::State& state, TaylorPartials partials) {
   });
 }
 BENCHMARK_CAPTURE(BM_BundleTaylor, corrected, TaylorPartials::kCorrected)
-    ->DenseRange(0, 2)->Unit(benchmark::kMillisecond);
+    ->DenseRange(0, 2)
+    ->Unit(benchmark::kMillisecond);
 BENCHMARK_CAPTURE(BM_BundleTaylor, as_printed, TaylorPartials::kAsPrinted)
-    ->DenseRange(0, 2)->Unit(benchmark::kMillisecond);
+    ->DenseRange(0, 2)
+    ->Unit(benchmark::kMillisecond);
 
 void BM_BundleCeres(benchmark::State& state, JacobianType jacobian, int threads) {
   const testing::FixtureBlock& data = BenchBlock(static_cast<int>(state.range(0)));
@@ -124,11 +127,14 @@ void BM_BundleCeres(benchmark::State& state, JacobianType jacobian, int threads)
   });
 }
 BENCHMARK_CAPTURE(BM_BundleCeres, analytic, JacobianType::kAnalytic, 1)
-    ->DenseRange(0, 2)->Unit(benchmark::kMillisecond);
+    ->DenseRange(0, 2)
+    ->Unit(benchmark::kMillisecond);
 BENCHMARK_CAPTURE(BM_BundleCeres, autodiff, JacobianType::kAutodiff, 1)
-    ->DenseRange(0, 2)->Unit(benchmark::kMillisecond);
+    ->DenseRange(0, 2)
+    ->Unit(benchmark::kMillisecond);
 BENCHMARK_CAPTURE(BM_BundleCeres, analytic_all_threads, JacobianType::kAnalytic, 0)
-    ->DenseRange(0, 2)->Unit(benchmark::kMillisecond);
+    ->DenseRange(0, 2)
+    ->Unit(benchmark::kMillisecond);
 
 }  // namespace
 }  // namespace photopose
