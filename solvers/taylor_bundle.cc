@@ -69,7 +69,6 @@ inline void PointPartialsFromCentrePartials(const double* row_u, const double* r
 struct Plan {
   std::vector<char> mark_used;            // per mark
   std::vector<double> mark_sigma;         // per mark, observation unit
-  std::vector<char> mark_control;         // per mark: a control mark (else tie)
   std::vector<Eigen::Vector2d> ideal_um;  // per mark: the corrected (ideal) image-plane point
   std::vector<char> point_in_problem;
   std::vector<Eigen::Vector3d> point_sigma;  // control points (m)
@@ -178,7 +177,6 @@ Status MakePlan(const TaylorBundleOptions& options, const BundleAdjustmentConfig
   const size_t num_marks = block.marks.size();
   plan->mark_used.assign(num_marks, 0);
   plan->mark_sigma.assign(num_marks, 1.0);
-  plan->mark_control.assign(num_marks, 0);
   plan->ideal_um.assign(num_marks, Eigen::Vector2d::Zero());
   plan->point_in_problem.assign(block.points.size(), 0);
   plan->point_sigma.assign(block.points.size(), Eigen::Vector3d::Constant(acc.marker_m));
@@ -208,7 +206,6 @@ Status MakePlan(const TaylorBundleOptions& options, const BundleAdjustmentConfig
     const double sigma_film_um = DefaultFilmMarkSigmaUm(
         camera, sigma_px, control ? acc.marker_projection_film_um : acc.tie_film_um);
     plan->mark_sigma[m] = MarkSigma(mark, sigma_px, sigma_film_um);
-    plan->mark_control[m] = control;
     plan->mark_used[m] = 1;
     FrameCorrectFilmPoint(camera.params.data(), mark.observation.data(), camera.data(),
                           plan->ideal_um[m].data());
