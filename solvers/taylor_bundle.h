@@ -31,9 +31,9 @@
 //
 //   S = U - sum_p W_p V_p^-1 W_p^T,   r = g_e - sum_p W_p V_p^-1 g_p,
 //
-// S d_e = r is solved by a sparse LDL^T (Eigen::SimplicialLDLT, AMD ordering, of the Jacobi-scaled
-// S), and the point corrections are back-substituted, d_p = V_p^-1 (g_p - W_p^T d_e). Plain
-// Gauss-Newton, no damping: the lecture's method.
+// S d_e = r is solved by a sparse LDL^T (Eigen::SimplicialLDLT of the Jacobi-scaled S, the images
+// ordered by AMD on the image graph), and the point corrections are back-substituted,
+// d_p = V_p^-1 (g_p - W_p^T d_e). Plain Gauss-Newton, no damping: the lecture's method.
 //
 // Supported: kFrame cameras with fixed interior orientation (any distortion model or table,
 // affinity, Polarity); control, check and tie points; GNSS camera positions with an applied
