@@ -371,6 +371,30 @@ bool TaylorPartialsForPoint(TaylorPartials partials, const ExteriorOrientation& 
   return true;
 }
 
+TaylorPoseLinearization::TaylorPoseLinearization(TaylorPartials partials, const double* eo,
+                                                 double focal_um)
+    : focal_um_(focal_um), as_printed_(partials == TaylorPartials::kAsPrinted) {
+  PoseTrig trig;
+  ComputeTrig(eo, &trig);
+  std::copy(eo, eo + 3, center_);
+  std::copy(trig.R, trig.R + 9, R_);
+  sin_omega_ = trig.sin_omega;
+  cos_omega_ = trig.cos_omega;
+}
+
+bool TaylorPoseLinearization::Linearize(const double* point, const double* observed_um,
+                                        double row_u[6], double row_v[6], double* fu_um,
+                                        double* fv_um, double* w_m) const {
+  PoseTrig trig;
+  std::copy(R_, R_ + 9, trig.R);
+  trig.sin_omega = sin_omega_;
+  trig.cos_omega = cos_omega_;
+  const double d[3] = {point[0] - center_[0], point[1] - center_[1], point[2] - center_[2]};
+  return photopose::Linearize<true>(trig, focal_um_, 1.0 / focal_um_, as_printed_, d,
+                                    observed_um[0], observed_um[1], row_u, row_v, fu_um, fv_um,
+                                    w_m);
+}
+
 Status TaylorResection(const TaylorResectionOptions& options,
                        const std::vector<Eigen::Vector2d>& image_plane_um,
                        const std::vector<Eigen::Vector3d>& points_in_ground,

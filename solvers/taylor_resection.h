@@ -172,6 +172,29 @@ bool TaylorPartialsForPoint(TaylorPartials partials, const ExteriorOrientation& 
                             const Eigen::Vector2d& observed_um, double row_u[6], double row_v[6],
                             double* fu_um, double* fv_um);
 
+// The seed's functions and partials (eqs. 7-8 and 17-28) of any number of points seen from one
+// pose, with R and sin/cos(omega) computed once: the linearisation that TaylorPartialsForPoint
+// gives point by point, for the block solver (solvers/taylor_bundle.h), which linearises every mark
+// of an image at the same pose.
+class TaylorPoseLinearization {
+ public:
+  // eo = [X0, Y0, Z0, omega, phi, kappa] (m, rad, seed), focal_um = c (um).
+  TaylorPoseLinearization(TaylorPartials partials, const double* eo, double focal_um);
+
+  // For the point (m, the frame of eo's centre) observed at observed_um (um): Fu, Fv (um) and the
+  // rows dFu/dp, dFv/dp, p = (X0, Y0, Z0, omega, phi, kappa), exactly as TaylorPartialsForPoint.
+  // w_m receives w (m). Returns false when w >= 0 (or NaN); then only w_m is written.
+  bool Linearize(const double* point, const double* observed_um, double row_u[6], double row_v[6],
+                 double* fu_um, double* fv_um, double* w_m) const;
+
+ private:
+  double center_[3];
+  double R_[9];
+  double sin_omega_, cos_omega_;
+  double focal_um_;
+  bool as_printed_;
+};
+
 // Approximate values for a near-vertical frame: a 2-D similarity between the image coordinates and
 // the ground X, Y gives the scale c / H and kappa; the centre is the ground point imaged at the
 // principal point, at H above the mean height of the points; omega = phi = 0. Needs two or more
