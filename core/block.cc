@@ -311,11 +311,18 @@ Status AssembleBlock(const BlockTables& tables, Block* block) {
       if (!film.ok()) return Status::Error(Where(tables.marks_file, row.line, "Column") + film.message());
       if (!NearTheImage(camera, mark.measured + Eigen::Vector2d::Constant(origin_shift),
                         tables.max_outside_fraction)) {
-        return Status::Error(Where(tables.marks_file, row.line, "Column") + "(" +
-                             FormatNumber(mark.measured.x()) + ", " +
-                             FormatNumber(mark.measured.y()) + ") is far outside image " +
-                             Quoted(row.raster) + " (" + std::to_string(camera.n_columns) + " x " +
-                             std::to_string(camera.n_rows) + " pixels)");
+        const Eigen::Vector2d corner = mark.measured + Eigen::Vector2d::Constant(origin_shift);
+        const Eigen::Vector2d size(camera.n_columns, camera.n_rows);
+        double outside = 0.0;
+        for (int k = 0; k < 2; ++k)
+          outside = std::max(outside, corner[k] < 0.0 ? -corner[k] : corner[k] - size[k]);
+        return Status::Error(EscapeForMessage(
+            Where(tables.marks_file, row.line, "Column") + "the mark of point '" + row.point_id +
+            "' in image '" + row.raster + "' lies " + FormatNumber(std::round(outside)) +
+            " pixels outside the " + std::to_string(camera.n_columns) + " x " +
+            std::to_string(camera.n_rows) + " image of camera '" + camera.camera_id +
+            "' (at most " + FormatNumber(tables.max_outside_fraction * 100.0) +
+            "% of the image size is allowed)"));
       }
       const Status scale =
           FilmUmPerPixel(camera, mark.measured, tables.pixel_origin, &mark.observation_units_per_unit);

@@ -151,7 +151,7 @@ struct BlockTables {
   PixelOrigin pixel_origin = PixelOrigin::kCorner;
   // A pixel mark farther outside its image than this fraction of the image size (per axis) is
   // refused (when the camera gives the size): it cannot be a measurement in that image.
-  double max_outside_fraction = 0.1;
+  double max_outside_fraction = kMarkOutsideImageFraction;
   // Largest residual of a measured fiducial after the affine fit (um).
   double max_fiducial_residual_um = 30.0;
 };

@@ -70,22 +70,14 @@ Status BlockToTableRecords(const Block& block, const BlockTableWriteOptions& opt
                                                         : image.eo->center_in_ground());
     row.eo.set_angles_seed_rad(image.measured_angles_rad ? *image.measured_angles_rad
                                                          : image.eo->angles_seed_rad());
-    if (image.center_accuracy_m) {
-      const char* const kNames[] = {"AccuracyX", "AccuracyY", "AccuracyZ"};
-      for (int k = 0; k < 3; ++k)
-        row.extra_columns.emplace_back(kNames[k], FormatNumber((*image.center_accuracy_m)[k]));
-    }
+    row.center_accuracy_m = image.center_accuracy_m;
     if (image.attitude_accuracy_rad) {
       if (options.rotation != RotationConvention::kSeed) {
         return Status::Error("image '" + image.name +
                              "': attitude accuracies are per seed angle; write the frames table "
-                             "with the seed rotation convention");
+                             "with the rxryrz rotation convention");
       }
-      const char* const kNames[] = {"AccuracyOmega", "AccuracyPhi", "AccuracyKappa"};
-      for (int k = 0; k < 3; ++k) {
-        row.extra_columns.emplace_back(
-            kNames[k], FormatNumber(RadiansToDegrees((*image.attitude_accuracy_rad)[k])));
-      }
+      row.attitude_accuracy_deg = *image.attitude_accuracy_rad * (180.0 / M_PI);
     }
     result.frames.push_back(std::move(row));
   }
@@ -109,6 +101,19 @@ Status WriteBlockTables(const Block& block, const BlockTableFiles& files,
     PHOTOPOSE_RETURN_IF_ERROR(WriteFramesTable(files.frames, frames_options, records.frames));
   }
   return Status::Ok();
+}
+
+Status FormatBlockTables(const Block& block, const BlockTableWriteOptions& options,
+                         BlockTableText* text) {
+  BlockTableRecords records;
+  PHOTOPOSE_RETURN_IF_ERROR(BlockToTableRecords(block, options, &records));
+  PHOTOPOSE_RETURN_IF_ERROR(FormatCameraTable(records.cameras, "cameras", &text->cameras));
+  PHOTOPOSE_RETURN_IF_ERROR(FormatGroundPoints(records.points, "points", &text->points));
+  PHOTOPOSE_RETURN_IF_ERROR(FormatImageMarks(records.marks, "marks", &text->marks));
+  FramesTableOptions frames_options;
+  frames_options.convention = options.rotation;
+  frames_options.cameras = &records.cameras;
+  return FormatFramesTable(frames_options, records.frames, "frames", &text->frames);
 }
 
 }  // namespace photopose

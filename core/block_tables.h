@@ -59,4 +59,15 @@ struct BlockTableRecords {
 Status BlockToTableRecords(const Block& block, const BlockTableWriteOptions& options,
                            BlockTableRecords* records);
 
+// The four tables' contents as WriteBlockTables writes them, formatted in memory (for callers that
+// write them with other files as one transaction).
+struct BlockTableText {
+  std::string cameras;
+  std::string points;
+  std::string marks;
+  std::string frames;
+};
+Status FormatBlockTables(const Block& block, const BlockTableWriteOptions& options,
+                         BlockTableText* text);
+
 }  // namespace photopose

@@ -492,8 +492,8 @@ void MeanReprojectionErrors(const Block& block, std::vector<double>* point_error
     (*point_error_px)[p] = count[p] > 0 && std::isfinite(sum[p]) ? sum[p] / count[p] : -1.0;
 }
 
-Status WriteColmapModel(const std::string& directory, const Block& block,
-                        const ColmapModelExtras* extras) {
+Status FormatColmapModel(const Block& block, const ColmapModelExtras* extras,
+                         ColmapModelText* text) {
   PHOTOPOSE_RETURN_IF_ERROR(CheckBlock(block));
   if (extras != nullptr) PHOTOPOSE_RETURN_IF_ERROR(CheckExtras(block, *extras));
   const size_t num_images = block.images.size();
@@ -701,12 +701,22 @@ Status WriteColmapModel(const std::string& directory, const Block& block,
     points_text += '\n';
   }
 
+  text->cameras = std::move(cameras_text);
+  text->images = std::move(images_text);
+  text->points3D = std::move(points_text);
+  return Status::Ok();
+}
+
+Status WriteColmapModel(const std::string& directory, const Block& block,
+                        const ColmapModelExtras* extras) {
+  ColmapModelText text;
+  PHOTOPOSE_RETURN_IF_ERROR(FormatColmapModel(block, extras, &text));
   std::error_code error;
   std::filesystem::create_directories(directory, error);
   if (error) return Status::Error(directory + ": cannot create the folder: " + error.message());
-  PHOTOPOSE_RETURN_IF_ERROR(WriteFileAtomically(Path(directory, "cameras.txt"), cameras_text));
-  PHOTOPOSE_RETURN_IF_ERROR(WriteFileAtomically(Path(directory, "images.txt"), images_text));
-  PHOTOPOSE_RETURN_IF_ERROR(WriteFileAtomically(Path(directory, "points3D.txt"), points_text));
+  PHOTOPOSE_RETURN_IF_ERROR(WriteFileAtomically(Path(directory, "cameras.txt"), text.cameras));
+  PHOTOPOSE_RETURN_IF_ERROR(WriteFileAtomically(Path(directory, "images.txt"), text.images));
+  PHOTOPOSE_RETURN_IF_ERROR(WriteFileAtomically(Path(directory, "points3D.txt"), text.points3D));
   return Status::Ok();
 }
 

@@ -80,6 +80,16 @@ Status ReadColmapModel(const std::string& directory, Block* block,
 Status WriteColmapModel(const std::string& directory, const Block& block,
                         const ColmapModelExtras* extras = nullptr);
 
+// The three files of a COLMAP text model as WriteColmapModel writes them, formatted in memory (for
+// callers that write them with other outputs as one transaction, core/output_files.h).
+struct ColmapModelText {
+  std::string cameras;   // cameras.txt
+  std::string images;    // images.txt
+  std::string points3D;  // points3D.txt
+};
+Status FormatColmapModel(const Block& block, const ColmapModelExtras* extras,
+                         ColmapModelText* text);
+
 // The COLMAP camera (model and parameters, pixels with COLMAP's conventions) of a block camera:
 // COLMAP models unchanged; a kFrame camera as described for WriteColmapModel, else an error.
 Status ColmapCameraFromBlockCamera(const BlockCamera& camera, CameraModelType* model,

@@ -674,9 +674,9 @@ Status MakeSyntheticBlock(const SyntheticBlockOptions& o, Block* block,
   return Status::Ok();
 }
 
-Status WriteSyntheticBlockTruth(const Block& block, const SyntheticBlockTruth& truth,
-                                const SyntheticBlockOptions& options,
-                                const SyntheticTruthFiles& files) {
+Status FormatSyntheticBlockTruth(const Block& block, const SyntheticBlockTruth& truth,
+                                 const SyntheticBlockOptions& options, RotationConvention rotation,
+                                 SyntheticTruthText* text) {
   if (truth.eo.size() != block.images.size() || truth.points_m.size() != block.points.size() ||
       truth.mark_is_blunder.size() != block.marks.size())
     return Status::Error("the synthetic truth does not belong to this block");
@@ -698,27 +698,37 @@ Status WriteSyntheticBlockTruth(const Block& block, const SyntheticBlockTruth& t
     row.position = truth.points_m[p];
     points.push_back(std::move(row));
   }
-  std::string blunders = CsvLine({"Kind", "Raster", "PointID", "Magnitude", "Unit"});
+  text->blunders = CsvLine({"Kind", "Raster", "PointID", "Magnitude", "Unit"});
   for (const int m : truth.blunder_marks) {
     const BlockMark& mark = block.marks[m];
-    blunders += CsvLine({"mark", block.images[mark.image].name, block.points[mark.point].id,
-                         FormatNumber(options.tie_blunder_px), "px"});
+    text->blunders += CsvLine({"mark", block.images[mark.image].name, block.points[mark.point].id,
+                               FormatNumber(options.tie_blunder_px), "px"});
   }
   for (const int p : truth.blunder_control_points) {
-    blunders += CsvLine(
+    text->blunders += CsvLine(
         {"control_point", "", block.points[p].id, FormatNumber(options.control_blunder_m), "m"});
   }
   for (const int i : truth.blunder_gnss_images) {
-    blunders += CsvLine(
+    text->blunders += CsvLine(
         {"camera_position", block.images[i].name, "", FormatNumber(options.gnss_blunder_m), "m"});
   }
-  if (!files.frames.empty()) {
-    FramesTableOptions frames_options;
-    frames_options.cameras = &cameras;
-    PHOTOPOSE_RETURN_IF_ERROR(WriteFramesTable(files.frames, frames_options, frames));
-  }
-  if (!files.points.empty()) PHOTOPOSE_RETURN_IF_ERROR(WriteGroundPoints(files.points, points));
-  if (!files.blunders.empty()) PHOTOPOSE_RETURN_IF_ERROR(WriteFileAtomically(files.blunders, blunders));
+  FramesTableOptions frames_options;
+  frames_options.convention = rotation;
+  frames_options.cameras = &cameras;
+  PHOTOPOSE_RETURN_IF_ERROR(FormatFramesTable(frames_options, frames, "truth frames", &text->frames));
+  return FormatGroundPoints(points, "truth points", &text->points);
+}
+
+Status WriteSyntheticBlockTruth(const Block& block, const SyntheticBlockTruth& truth,
+                                const SyntheticBlockOptions& options,
+                                const SyntheticTruthFiles& files) {
+  SyntheticTruthText text;
+  PHOTOPOSE_RETURN_IF_ERROR(
+      FormatSyntheticBlockTruth(block, truth, options, RotationConvention::kSeed, &text));
+  if (!files.frames.empty()) PHOTOPOSE_RETURN_IF_ERROR(WriteFileAtomically(files.frames, text.frames));
+  if (!files.points.empty()) PHOTOPOSE_RETURN_IF_ERROR(WriteFileAtomically(files.points, text.points));
+  if (!files.blunders.empty())
+    PHOTOPOSE_RETURN_IF_ERROR(WriteFileAtomically(files.blunders, text.blunders));
   return Status::Ok();
 }
 

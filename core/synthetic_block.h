@@ -27,6 +27,7 @@
 
 #include "core/block.h"
 #include "core/camera_models.h"
+#include "core/rotation.h"
 #include "core/status.h"
 
 namespace photopose {
@@ -139,6 +140,17 @@ struct SyntheticTruthFiles {
 // cannot give what was asked (e.g. fewer tie points seen in min_tie_views images than asked).
 Status MakeSyntheticBlock(const SyntheticBlockOptions& options, Block* block,
                           SyntheticBlockTruth* truth);
+
+// The truth files' contents (frames table in `rotation`, degrees), formatted in memory for callers
+// that write them with other files as one transaction.
+struct SyntheticTruthText {
+  std::string frames;
+  std::string points;
+  std::string blunders;
+};
+Status FormatSyntheticBlockTruth(const Block& block, const SyntheticBlockTruth& truth,
+                                 const SyntheticBlockOptions& options, RotationConvention rotation,
+                                 SyntheticTruthText* text);
 
 // Writes the truth of a block made by MakeSyntheticBlock (with the options it was made with, for
 // the blunder magnitudes), apart from the block's own tables.

@@ -174,6 +174,8 @@ bool BundleAdjustmentOptions::IsValid(std::string* why) const {
   if (lever_arm_m && !lever_arm_m->allFinite()) return fail("the lever arm must be finite");
   if (max_covariance_parameters < 0) return fail("max_covariance_parameters must be >= 0");
   if (!(overfit_ratio > 0.0 && overfit_ratio < 1.0)) return fail("overfit_ratio must be in (0, 1)");
+  if (!(overfit_redundancy_share >= 0.0 && overfit_redundancy_share < 1.0))
+    return fail("overfit_redundancy_share must be in [0, 1)");
   if (!(high_correlation > 0.0 && high_correlation < 1.0))
     return fail("high_correlation must be in (0, 1)");
   if (max_variance_iterations < 1) return fail("max_variance_iterations must be >= 1");
@@ -356,8 +358,8 @@ Status BundleAdjust(const BundleAdjustmentOptions& options, const BundleAdjustme
         }
       }
     } else if (rejections_done < rejection_rounds) {
-      // Every mark beyond the threshold at once: normalized residuals when known, whitened
-      // residuals in units of max(1, sigma0) otherwise.
+      // Marks beyond the threshold: normalized residuals when known, whitened residuals in units
+      // of max(1, sigma0) otherwise.
       std::vector<double> score(block->marks.size(), 0.0);
       double limit = options.rejection_threshold;
       if (!result->observations.empty()) {
@@ -375,10 +377,18 @@ Status BundleAdjust(const BundleAdjustmentOptions& options, const BundleAdjustme
                      plan.mark_sigma[m];
         }
       }
+      // One mark per point and round, its worst: a blunder in one mark of a track pulls the
+      // point and raises its other marks' residuals too, and those recover once it is gone.
       BundlePlan trial = plan;
       std::vector<BundleRejectedMark> rejected;
+      std::vector<int> worst_of_point(block->points.size(), -1);
       for (size_t m = 0; m < block->marks.size(); ++m) {
         if (!trial.mark_used[m] || !(score[m] > limit)) continue;
+        int& worst = worst_of_point[block->marks[m].point];
+        if (worst < 0 || score[m] > score[worst]) worst = static_cast<int>(m);
+      }
+      for (size_t m = 0; m < block->marks.size(); ++m) {
+        if (worst_of_point[block->marks[m].point] != static_cast<int>(m)) continue;
         trial.mark_used[m] = 0;
         rejected.push_back({static_cast<int>(m), r, score[m]});
       }

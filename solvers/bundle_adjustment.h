@@ -22,7 +22,8 @@
 // The note's warning is part of the result: when tie points are too few or too weak the solution
 // bends to the priors, whose residual RMS then falls well below the stated accuracy and whose
 // redundancy share (how much of each prior the rest of the block checks) is small. Each prior group
-// is flagged `overfit` when either falls below BundleAdjustmentOptions::overfit_ratio.
+// is flagged `overfit` when either falls below its limit (BundleAdjustmentOptions::overfit_ratio,
+// overfit_redundancy_share).
 //
 // Data-dependent failures (no datum, disconnected block, an image with too few marks, a point
 // behind a camera, no convergence) are reported in the summary; nothing aborts.
@@ -109,9 +110,12 @@ struct BundleAdjustmentOptions {
   // Posterior covariances and redundancy shares (the normal matrix reduced to the cameras,
   // inverted densely): skipped for blocks with more parameters than this after point elimination.
   int max_covariance_parameters = 12000;
-  // A prior group is flagged `overfit` when its RMS / stated accuracy or its redundancy share is
-  // below this (unitless, the note's "well below").
+  // A prior group is flagged `overfit` when its RMS / stated accuracy is below overfit_ratio
+  // (unitless, the note's "well below"), or its redundancy share below overfit_redundancy_share
+  // (the tie points check less than a fifth of it: the solution follows the priors). A share near
+  // 0.4 is normal when the priors are as accurate as the block itself.
   double overfit_ratio = 0.5;
+  double overfit_redundancy_share = 0.2;
   // Camera-model parameters whose |correlation| exceeds this are named (unitless, DBAT's 0.95).
   double high_correlation = 0.95;
 

@@ -487,7 +487,7 @@ void ComputeBundleStatistics(const BundleAdjustmentOptions& options, const Block
     const bool prior = g == kControlPoints || g == kCameraPositions || g == kAttitudes;
     const bool share_known = std::isfinite(group.redundancy_share);
     if (prior && (group.ratio < options.overfit_ratio ||
-                  (share_known && group.redundancy_share < options.overfit_ratio))) {
+                  (share_known && group.redundancy_share < options.overfit_redundancy_share))) {
       group.overfit = true;
       std::ostringstream message;
       message << group.name << " over-fitted: residual RMS " << Format3(group.ratio)

@@ -438,7 +438,9 @@ Status MakeResectionInput(const Block& block, int image, const ResectionInputOpt
   for (const int m : block.marks_of_image[image]) {
     const BlockMark& mark = block.marks[m];
     const BlockPoint& point = block.points[mark.point];
-    if (point.role != PointRole::kControl || !point.surveyed_m) continue;
+    const bool tie_with_position = options.include_tie_points_with_positions &&
+                                   point.role == PointRole::kTie && point.position_m.has_value();
+    if (!tie_with_position && (point.role != PointRole::kControl || !point.surveyed_m)) continue;
     Eigen::Vector2d ab;
     const Status status = NormalizedFromObservation(camera.model, camera.params.data(), data,
                                                     mark.observation, &ab);
@@ -448,7 +450,7 @@ Status MakeResectionInput(const Block& block, int image, const ResectionInputOpt
                            block_image.name + "': " + status.message());
     }
     result.image_plane.push_back(focal * ab);
-    result.points_in_ground.push_back(*point.surveyed_m);
+    result.points_in_ground.push_back(tie_with_position ? *point.position_m : *point.surveyed_m);
     result.sigma.push_back(mark.accuracy.value_or(options.default_accuracy));
     result.observation_units_per_unit.push_back(mark.observation_units_per_unit);
     result.units.push_back(mark.unit);

@@ -164,6 +164,9 @@ struct ResectionInputOptions {
   // Standard deviation of marks without an Accuracy, in their own unit (pixels for pixel marks, um
   // for film marks); 0: not stated, so the tests estimate it from the data.
   double default_accuracy = 0.0;
+  // Also marks of tie points that have coordinates (position_m: intersected or approximate), as
+  // if they were control points: the block initialization orients images from them.
+  bool include_tie_points_with_positions = false;
 };
 
 // The control marks of block image `image` as a resection input: each mark's observation through

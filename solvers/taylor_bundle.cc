@@ -1336,13 +1336,26 @@ Status TaylorBundleAdjust(const TaylorBundleOptions& options, const BundleAdjust
     if (round == max_rounds) break;
     // Reject the marks beyond the threshold (in units of sigma0, never below the stated sigma).
     const double limit = options.rejection_threshold * std::max(1.0, summary.sigma0);
-    int rejected = 0;
+    // One mark per point and round, its worst (as BundleAdjust does: a blunder raises the other
+    // marks of its track too).
+    std::vector<int> worst_of_point(block->points.size(), -1);
+    std::vector<double> worst_whitened(block->points.size(), 0.0);
     for (size_t k = 0; k < layout.marks.size(); ++k) {
       const int m = layout.marks[k];
       const double whitened = normal.f[k].norm() / plan.mark_sigma[m];
       if (!(whitened > limit)) continue;
+      const int p = block->marks[m].point;
+      if (worst_of_point[p] < 0 || whitened > worst_whitened[p]) {
+        worst_of_point[p] = m;
+        worst_whitened[p] = whitened;
+      }
+    }
+    int rejected = 0;
+    for (size_t p = 0; p < worst_of_point.size(); ++p) {
+      const int m = worst_of_point[p];
+      if (m < 0) continue;
       plan.mark_used[m] = 0;
-      out.rejected_marks.push_back({m, round, whitened / summary.sigma0});
+      out.rejected_marks.push_back({m, round, worst_whitened[p] / summary.sigma0});
       ++rejected;
     }
     if (rejected == 0) break;

@@ -277,17 +277,6 @@ void PrintHelp(const std::string& usage, const CommandFlags& flags) {
             << kMaxFlagFileDepth << " levels deep at most.\n";
 }
 
-Status CheckOutputFolder(const std::string& flag, const std::string& path) {
-  if (path.empty()) return Status::Ok();
-  const size_t slash = path.find_last_of('/');
-  const std::string folder = slash == std::string::npos ? "." : slash == 0 ? "/" : path.substr(0, slash);
-  struct stat info;
-  if (stat(folder.c_str(), &info) != 0)
-    return Status::Error(flag + ": folder '" + folder + "' does not exist");
-  if (!S_ISDIR(info.st_mode)) return Status::Error(flag + ": '" + folder + "' is not a folder");
-  return Status::Ok();
-}
-
 int BadInput(const std::string& subcommand, const std::string& message) {
   std::cerr << "photopose " << subcommand << ": " << EscapeForMessage(message) << "\n";
   return kExitBadInput;

@@ -86,10 +86,6 @@ std::vector<std::string> NumericFlagsWithoutRange(const CommandFlags& flags);
 // Prints the usage text and the command's flags with their help texts and ranges.
 void PrintHelp(const std::string& usage, const CommandFlags& flags);
 
-// Refuses, before any work, an output file path whose folder does not exist or is not a folder:
-// "<flag>: folder '<dir>' does not exist". An empty path is fine (the output is not asked for).
-Status CheckOutputFolder(const std::string& flag, const std::string& path);
-
 // Prints "photopose <subcommand>: <message>" on stderr as one line (control characters and bytes
 // that are not UTF-8 escaped) and returns kExitBadInput.
 int BadInput(const std::string& subcommand, const std::string& message);

@@ -7,5 +7,6 @@ namespace photopose::cli {
 int RunResect(int argc, char** argv);
 int RunSimulate(int argc, char** argv);
 int RunCompare(int argc, char** argv);
+int RunBundle(int argc, char** argv);
 
 }  // namespace photopose::cli

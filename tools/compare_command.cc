@@ -529,13 +529,6 @@ int RunCompare(int argc, char** argv) {
   if (FLAGS_compare_threads < 0) return BadInput(kCommand, "--threads must be >= 0");
   std::string why;
   if (!resection.IsValid(&why)) return BadInput(kCommand, why);
-  for (const auto& [flag, path] :
-       {std::pair<std::string, std::string>{"--csv", FLAGS_compare_csv},
-        {"--html", FLAGS_compare_html},
-        {"--markdown", FLAGS_compare_markdown}}) {
-    const Status folder = CheckOutputFolder(flag, path);
-    if (!folder.ok()) return BadInput(kCommand, folder.message());
-  }
   return dataset ? RunDatasetMode(solvers, resection, command_line, parsed)
                  : RunMonteCarloMode(solvers, resection, command_line, parsed);
 }

@@ -23,6 +23,8 @@ constexpr char kUsage[] =
     "Commands:\n"
     "  resect    resect every image that has marks (robust: RANSAC + Ceres, or the Taylor\n"
     "            linearisation of the seed lecture)\n"
+    "  bundle    the weighted bundle adjustment of a block (tables, a COLMAP model or a BAL file):\n"
+    "            control, check and tie points, GNSS priors, self-calibration, diagnostics\n"
     "  simulate  write a synthetic dataset (camera table, frames, points, marks) with its truth\n"
     "  compare   the solvers side by side: Monte-Carlo sweeps against truth, or a dataset\n\n"
     "Run 'photopose <command> --help' for the flags of a command, 'photopose --version' for the\n"
@@ -81,6 +83,7 @@ int Run(int argc, char** argv) {
   if (command == "resect") return photopose::cli::RunResect(argc - 2, argv + 2);
   if (command == "simulate") return photopose::cli::RunSimulate(argc - 2, argv + 2);
   if (command == "compare") return photopose::cli::RunCompare(argc - 2, argv + 2);
+  if (command == "bundle") return photopose::cli::RunBundle(argc - 2, argv + 2);
   g_command[0] = '\0';
   std::cerr << "photopose: unknown command '" << photopose::EscapeForMessage(command) << "'\n"
             << kUsage;

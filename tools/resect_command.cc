@@ -103,11 +103,6 @@ int RunResect(int argc, char** argv) {
   if (!FLAGS_gcp_list.empty() && (!FLAGS_points.empty() || !FLAGS_marks.empty()))
     return BadInput("resect", "--gcp_list replaces --points and --marks; give one or the other");
   if (FLAGS_out.empty()) return BadInput("resect", "--out is required");
-  for (const auto& [flag, path] : {std::pair<std::string, std::string>{"--out", FLAGS_out},
-                                   {"--report", FLAGS_report}}) {
-    const Status folder = CheckOutputFolder(flag, path);
-    if (!folder.ok()) return BadInput("resect", folder.message());
-  }
   const auto rotation = ParseRotationConvention(FLAGS_rotation);
   if (!rotation)
     return BadInput("resect", std::string("--rotation must be ") + RotationConventionChoices() +

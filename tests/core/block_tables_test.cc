@@ -86,11 +86,10 @@ TEST(BlockTables, WritesWhatTheTableReadersReadBack) {
     EXPECT_EQ(frames[i].eo.center_in_ground(), *image.measured_center_m);
     EXPECT_LT((frames[i].eo.angles_seed_rad() - *image.measured_angles_rad).norm(),
               kAngleRoundTripRad);
-    std::map<std::string, std::string> extra(frames[i].extra_columns.begin(),
-                                             frames[i].extra_columns.end());
-    ASSERT_EQ(extra.count("AccuracyX"), 1u);
-    EXPECT_EQ(extra["AccuracyZ"], FormatNumber((*image.center_accuracy_m)[2]));
-    EXPECT_EQ(extra["AccuracyOmega"], FormatNumber(0.01));
+    ASSERT_TRUE(frames[i].center_accuracy_m.has_value());
+    EXPECT_EQ((*frames[i].center_accuracy_m)[2], (*image.center_accuracy_m)[2]);
+    ASSERT_TRUE(frames[i].attitude_accuracy_deg.has_value());
+    EXPECT_NEAR((*frames[i].attitude_accuracy_deg)[0], 0.01, 1e-12);
   }
 }
 

@@ -151,7 +151,9 @@ TEST(Block, ErrorsNameTheFileLineAndColumn) {
   t = Tables();
   t.marks[1].column_row = Eigen::Vector2d(26000, 20);
   EXPECT_EQ(AssembleBlock(t, &block).message(),
-            "marks.csv:3: Column: (26000, 20) is far outside image 'img1' (6000 x 4000 pixels)");
+            "marks.csv:3: Column: the mark of point '" + t.marks[1].point_id +
+                "' in image 'img1' lies 20000 pixels outside the 6000 x 4000 image of camera '" +
+                t.cameras[0].camera_id + "' (at most 5% of the image size is allowed)");
   // The frames row names another camera than the marks.
   t = Tables();
   t.frames[0].raster = "img1";

@@ -15,6 +15,7 @@
 #include <vector>
 
 #include "core/csv.h"
+#include "core/fiducials.h"
 #include "tests/test_data.h"
 
 namespace photopose {
@@ -1254,12 +1255,15 @@ TEST_F(TablesTest, EveryExampleOfTheFormatsPageReads) {
     } else if (header.rfind("Raster,PointID,", 0) == 0) {
       std::vector<ImageMark> marks;
       status = ReadImageMarks(path, &marks);
+    } else if (header.rfind("Raster,FiducialID,", 0) == 0) {
+      std::vector<MeasuredFiducial> fiducials;
+      status = ReadMeasuredFiducials(path, &fiducials);
     } else {
       ADD_FAILURE() << "an example of an unknown kind: " << header;
     }
     EXPECT_TRUE(status.ok()) << status.message() << "\n" << body;
   }
-  EXPECT_EQ(examples, 7);
+  EXPECT_EQ(examples, 9);
 }
 
 TEST_F(TablesTest, FailedTableWriteLeavesNoFile) {

@@ -31,28 +31,33 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   FuzzedDataProvider in(data, size);
   using namespace photopose;
   ResectionOptions options;
-  options.solver = static_cast<PoseSolver>(in.ConsumeIntegralInRange<int>(0, 2));
-  options.jacobian = in.ConsumeBool() ? JacobianType::kAnalytic : JacobianType::kAutodiff;
-  options.loss = static_cast<LossType>(in.ConsumeIntegralInRange<int>(0, 5));
-  options.minimizer = in.ConsumeBool() ? CeresMinimizer::kTinySolver : CeresMinimizer::kProblem;
-  // The CLI's ranges: (0, 1000] px.
-  options.loss_scale_px = in.ConsumeFloatingPointInRange<double>(1e-3, 1000.0);
-  options.ransac_threshold_px = in.ConsumeFloatingPointInRange<double>(1e-3, 1000.0);
-  options.ransac.seed = in.ConsumeIntegral<uint64_t>();
-  options.ransac.max_trials = 200;  // keeps one input in milliseconds
-  options.max_iterations = 30;
+  options.refinement.solver = static_cast<PoseSolver>(in.ConsumeIntegralInRange<int>(0, 2));
+  options.refinement.jacobian = in.ConsumeBool() ? JacobianType::kAnalytic : JacobianType::kAutodiff;
+  options.refinement.loss = static_cast<LossType>(in.ConsumeIntegralInRange<int>(0, 5));
+  options.refinement.ceres.minimizer =
+      in.ConsumeBool() ? CeresMinimizer::kTinySolver : CeresMinimizer::kProblem;
+  // The CLI's ranges: loss scale (0, 1000] standard deviations, confidence [0.5, 1).
+  options.refinement.loss_scale = in.ConsumeFloatingPointInRange<double>(1e-3, 1000.0);
+  options.test.confidence = in.ConsumeFloatingPointInRange<double>(0.5, 0.999999);
+  options.consensus.ransac.seed = in.ConsumeIntegral<uint64_t>();
+  options.consensus.ransac.max_trials = 200;  // keeps one input in milliseconds
+  options.refinement.ceres.max_iterations = 30;
+  options.refinement.taylor.max_iterations = 30;
+  options.allow_no_redundancy = in.ConsumeBool();
 
   ResectionInput input;
   input.raster = "fuzz";
-  input.focal_length_um = in.ConsumeFloatingPointInRange<double>(1.0, kMaxCoordinate);
-  input.pixel_size_um =
-      in.ConsumeFloatingPointInRange<double>(kMinPixelSizeUm * 1.001, kMaxPixelSizeUm * 0.999);
+  input.focal_length = in.ConsumeFloatingPointInRange<double>(1.0, kMaxCoordinate);
   const int n = in.ConsumeIntegralInRange<int>(0, 16);
+  const bool stated = in.ConsumeBool();
   for (int i = 0; i < n; ++i) {
-    input.image_plane_um.emplace_back(Number(&in, kMaxCoordinate), Number(&in, kMaxCoordinate));
+    input.image_plane.emplace_back(Number(&in, kMaxCoordinate), Number(&in, kMaxCoordinate));
     input.points_in_ground.emplace_back(Number(&in, kMaxCoordinate), Number(&in, kMaxCoordinate),
                                         Number(&in, kMaxCoordinate));
-    input.sigma_px.push_back(in.ConsumeFloatingPointInRange<double>(1e-3, 1000.0));
+    input.sigma.push_back(stated ? in.ConsumeFloatingPointInRange<double>(1e-3, 1000.0) : 0.0);
+    input.observation_units_per_unit.push_back(
+        in.ConsumeFloatingPointInRange<double>(kMinPixelSizeUm * 1.001, kMaxPixelSizeUm * 0.999));
+    input.units.push_back(MarkUnit::kPixel);
     input.point_ids.push_back("P" + std::to_string(i));
   }
   if (in.ConsumeBool()) {
@@ -68,8 +73,9 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
     Require(result.eo.parameters.allFinite());
     Require(result.covariance.allFinite());
     Require(std::isfinite(result.sigma0) && result.sigma0 >= 0.0);
-    Require(result.residuals_px.size() == input.image_plane_um.size());
-    Require(result.inliers.size() == input.image_plane_um.size());
+    Require(result.residuals.size() == input.image_plane.size());
+    Require(result.inliers.size() == input.image_plane.size());
+    Require(result.num_inliers >= 4 || options.allow_no_redundancy);
   }
   return 0;
 }

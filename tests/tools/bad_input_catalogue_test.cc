@@ -274,14 +274,14 @@ TEST_F(BadInputCatalogue, AnUnknownFlagInsideAFlagFileIsRefused) {
 }
 
 TEST_F(BadInputCatalogue, NumericFlagsOutsideTheirRangeAreBadUsageBeforeAnyWork) {
-  ExpectRefused(Resect("--out=frames.csv --ransac_threshold=inf"), 2,
-                "photopose resect: --ransac_threshold=inf is not a finite number; the range is "
-                "(0, 1000] px");
+  ExpectRefused(Resect("--out=frames.csv --confidence=inf"), 2,
+                "photopose resect: --confidence=inf is not a finite number; the range is "
+                "[0.5, 1)");
   ExpectRefused(Resect("--out=frames.csv --loss_scale=nan"), 2,
                 "photopose resect: --loss_scale=nan is not a finite number; the range is (0, "
-                "1000] px");
-  ExpectRefused(Resect("--out=frames.csv --ransac_threshold=0"), 2,
-                "photopose resect: --ransac_threshold=0 is outside (0, 1000] px");
+                "1000] standard deviations");
+  ExpectRefused(Resect("--out=frames.csv --confidence=1"), 2,
+                "photopose resect: --confidence=1 is outside [0.5, 1)");
   ExpectRefused(Resect("--out=frames.csv --threads=100000"), 2,
                 "photopose resect: --threads=100000 is outside [0, 1024]");
   ExpectRefused("compare --trials=10 --success_sigmas=-inf", 2,
@@ -445,7 +445,8 @@ TEST_F(BadInputCatalogue, BinaryBytesAreNamedEscapedNeverEchoed) {
                 "reads plain UTF-8 text");
   // Bytes on the command line are escaped too.
   ExpectRefused(Resect("--out=frames.csv --rotation=\"$(printf '\\033[2Jx')\""), 2,
-                "photopose resect: --rotation must be seed, opk or pok, not '\\x1B[2Jx'");
+                "photopose resect: --rotation must be rxryrz (alias seed), opk or pok, not "
+                "'\\x1B[2Jx'");
 }
 
 TEST_F(BadInputCatalogue, Utf16FilesAreRecognisedAndNamed) {

@@ -201,7 +201,7 @@ INSTANTIATE_TEST_SUITE_P(
                   "--cameras=EX/cameras.csv --points=EX/points.csv --marks=EX/marks.csv --trials=2",
                   "--trials applies to the Monte-Carlo mode only"},
         UsageCase{"missing_output_folder", "--csv=/nonexistent/folder/c.csv",
-                  "--csv: folder '/nonexistent/folder' does not exist"},
+                  "--csv=/nonexistent/folder/c.csv: the folder '/nonexistent/folder' does not exist"},
         UsageCase{"sweep_flag_in_dataset_mode",
                   "--cameras=EX/cameras.csv --points=EX/points.csv --sweep=axes",
                   "--sweep applies"}),

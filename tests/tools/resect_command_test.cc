@@ -407,7 +407,8 @@ TEST(ResectCommand, VersionMissingOutputFolderAndTiePoints) {
   // An output in a folder that does not exist is refused before any work.
   run = RunCli("resect " + ExampleArgs() + " --out=" + dir + "/missing/frames.csv", dir);
   EXPECT_EQ(run.exit_code, 2);
-  EXPECT_EQ(run.err, "photopose resect: --out: folder '" + dir + "/missing' does not exist\n");
+  EXPECT_EQ(run.err, "photopose resect: --out=" + dir + "/missing/frames.csv: the folder '" + dir +
+                         "/missing' does not exist\n");
   EXPECT_EQ(run.out, "");
   run = RunCli("resect " + ExampleArgs() + " --out=" + dir + "/f.csv --report=" + dir +
                    "/nope/r.json",
