@@ -13,7 +13,12 @@ namespace {
 Status ResectionInputFromKnownPoints(const Block& block, int image, ResectionInput* input) {
   ResectionInputOptions options;
   options.include_tie_points_with_positions = true;
-  return MakeResectionInput(block, image, options, input, nullptr);
+  PHOTOPOSE_RETURN_IF_ERROR(MakeResectionInput(block, image, options, input, nullptr));
+  // Initial values only: the camera may not be calibrated yet and intersected points are
+  // approximate, so the marks' stated accuracy cannot judge this fit; sigma0 comes from the data
+  // (the adjustment then tests every mark with its own accuracy).
+  std::fill(input->sigma.begin(), input->sigma.end(), 0.0);
+  return Status::Ok();
 }
 
 }  // namespace

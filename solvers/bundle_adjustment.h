@@ -94,7 +94,8 @@ struct BundleAdjustmentOptions {
   // adjusted again, at most max_rejection_rounds times (0 disables rejection). The normalized
   // residual of a mark is the larger of |w_x|, |w_y| (see observation_diagnostics) when the
   // diagnostics are computed, otherwise |v| / (max(1, s0) sigma) (the whitened residual, 2-D).
-  // Control marks are tested like tie marks; every mark above the threshold goes at once.
+  // Control marks are tested like tie marks; per point and round its worst mark above the
+  // threshold goes (a blunder raises the other marks of its track too).
   double rejection_threshold = 4.5;
   int max_rejection_rounds = 3;
   // Levenberg-Marquardt.

@@ -326,6 +326,11 @@ int RunBundle(int argc, char** argv) {
       std::cerr << "photopose bundle: " << initialization.not_oriented.size()
                 << " images could not be oriented; the adjustment goes on without them\n";
       RemoveImages(initialization.not_oriented, &block);
+      if (block.images.empty()) {
+        std::cerr << "photopose bundle: no image could be oriented: give control points (--points) "
+                     "or initial values (--frames); nothing written\n";
+        return kExitSomeFailed;
+      }
     }
     if (!FLAGS_bundle_quiet) std::cerr << "photopose bundle: initial values: " << initialization.BriefReport() << "\n";
     const Status adjusted = BundleAdjustWithSolver(*solver, options, config, &block, &result);

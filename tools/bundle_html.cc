@@ -294,7 +294,7 @@ std::string BundleReportHtml(const Block& block, const BundleAdjustmentResult& r
     std::vector<std::vector<std::string>> out;
     for (size_t p = 0; p < block.points.size(); ++p) {
       const BlockPoint& point = block.points[p];
-      if (point.role != role) continue;
+      if (point.role != role || p >= result.points.size()) continue;
       const BundlePointResult& r = result.points[p];
       if (r.error_m) {
         out.push_back({point.id, std::to_string(r.num_observations), F(r.error_m->x()),

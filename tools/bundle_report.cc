@@ -144,7 +144,8 @@ json BundleReportJson(const Block& block, const BundleAdjustmentResult& result,
   for (size_t p = 0; p < block.points.size(); ++p) {
     const BlockPoint& point = block.points[p];
     if (point.role == PointRole::kTie) continue;
-    const BundlePointResult& r = result.points[p];
+    // An adjustment that failed early has no per-point results: the point is listed without them.
+    const BundlePointResult& r = p < result.points.size() ? result.points[p] : BundlePointResult();
     json row = {{"point_id", point.id},
                 {"num_images", r.num_observations},
                 {"surveyed", point.surveyed_m ? Vector3(*point.surveyed_m) : json(nullptr)},

@@ -4,8 +4,8 @@
 #include <ceres/rotation.h>
 #include <gtest/gtest.h>
 
+#include <cstdio>
 #include <fstream>
-
 #include <random>
 #include <set>
 
@@ -13,7 +13,9 @@
 #include "core/colmap_io.h"
 #include "core/collinearity.h"
 #include "core/rotation.h"
+#include "solvers/block_initialization.h"
 #include "test_data.h"
+#include "tests/support/dbat_data.h"
 
 namespace photopose {
 namespace {
@@ -421,6 +423,87 @@ TEST(BundleAdjustment, BalProblemsReachTheIndependentMinimum) {
     EXPECT_NEAR(result.summary.final_cost, final_cost, 1e-9 * std::max(1.0, final_cost));
     EXPECT_LT(final_cost, 0.5 * initial) << initial;
   }
+}
+
+// DBAT's published close-range self-calibration (../shared/data/dbat_c4040z: 21 images, four
+// fixed sheet corners, 96 object points, no approximate values), adjusted here from nothing: DBAT's
+// default camera (c = nominal focal, principal point at the centre, no distortion), every image
+// resected from the corners and the points intersected (solvers/block_initialization), then the
+// self-calibration of DBAT's parameters with the corners held fixed, every mark kept.
+TEST(BundleAdjustment, DbatC4040zSelfCalibrationReproduced) {
+  using testing::DbatCamera;
+  const testing::DbatDataset files = testing::DbatDataset::C4040z();
+  DbatCamera input, published;
+  ASSERT_TRUE(testing::ReadDbatCameraXml(files.camera_xml, &input).ok());
+  ASSERT_TRUE(testing::ReadDbatCameraXml(testing::SharedDataPath("dbat_c4040z/result_c4040z.xml"),
+                                         &published)
+                  .ok());
+  testing::DbatReport report;
+  ASSERT_TRUE(
+      testing::ReadDbatReport(testing::SharedDataPath("dbat_c4040z/result_report.txt"), &report)
+          .ok());
+  Block block;
+  ASSERT_TRUE(testing::ReadDbatBlock(files, testing::DbatDefaultCamera(input), &block).ok());
+
+  BlockInitializationSummary initialization;
+  ASSERT_TRUE(InitializeBlock(BlockInitializationOptions(), &block, &initialization).ok());
+  ASSERT_TRUE(initialization.not_oriented.empty()) << initialization.BriefReport();
+  ASSERT_EQ(initialization.points_not_triangulated, 0) << initialization.BriefReport();
+
+  BundleAdjustmentConfig config;
+  ASSERT_TRUE(BundleAdjustmentConfig::FromCalibrationNames(
+                  block,
+                  {"FocalLength", "PrincipalX", "PrincipalY", "K1", "K2", "K3", "P1", "P2",
+                   "Affinity"},
+                  &config)
+                  .ok());
+  for (size_t p = 0; p < block.points.size(); ++p)
+    if (block.points[p].role == PointRole::kControl) config.constant_points.insert(int(p));
+  BundleAdjustmentOptions options = QuietOptions();
+  options.rejection_threshold = 0.0;  // DBAT keeps every mark
+  BundleAdjustmentResult result;
+  const Status status = BundleAdjust(options, config, &block, &result);
+  ASSERT_TRUE(status.ok()) << status.message();
+  ASSERT_TRUE(result.summary.IsSolutionUsable()) << result.summary.BriefReport();
+  std::printf("  photopose: %s\n  DBAT: sigma0 %.5f, redundancy %d\n",
+              result.summary.BriefReport().c_str(), report.sigma0, report.redundancy);
+
+  // sigma0 within 2% of DBAT's, with the same redundancy.
+  EXPECT_EQ(result.summary.redundancy, report.redundancy);
+  EXPECT_NEAR(result.summary.sigma0, report.sigma0, 0.02 * report.sigma0);
+  // The calibrated camera, converted to DBAT's parameters, within DBAT's deviations.
+  testing::DbatCamera ours;
+  ASSERT_TRUE(testing::DbatFromBlockCamera(block.cameras[0], published, &ours).ok());
+  std::printf("  camera constant %.6f mm (DBAT %.6f), pp (%.6f, %.6f) mm (DBAT %.6f, %.6f)\n",
+              ours.cc_mm, published.cc_mm, ours.pp_mm.x(), ours.pp_mm.y(), published.pp_mm.x(),
+              published.pp_mm.y());
+  for (const auto& [name, value] : report.camera) {
+    double mine = NAN;
+    if (name == "cc") mine = ours.cc_mm;
+    if (name == "px") mine = ours.pp_mm.x();
+    if (name == "py") mine = ours.pp_mm.y();
+    if (name == "K1") mine = ours.K[0];
+    if (name == "K2") mine = ours.K[1];
+    if (name == "K3") mine = ours.K[2];
+    if (name == "P1") mine = ours.P[0];
+    if (name == "P2") mine = ours.P[1];
+    if (name == "as") mine = ours.as();
+    if (std::isnan(mine)) continue;
+    EXPECT_NEAR(mine, value[0], std::max(value[1], 1e-12)) << name;
+  }
+  // Every camera station within DBAT's standard deviation of DBAT's.
+  ASSERT_EQ(report.photos.size(), block.images.size());
+  double worst = 0.0;
+  for (size_t i = 0; i < block.images.size(); ++i) {
+    const Eigen::Vector3d difference =
+        block.images[i].eo->center_in_ground() - report.photos[i].center_m;
+    for (int k = 0; k < 3; ++k) {
+      EXPECT_LE(std::abs(difference[k]), report.photos[i].center_sigma_m[k])
+          << block.images[i].name << " axis " << k;
+      worst = std::max(worst, std::abs(difference[k]) / report.photos[i].center_sigma_m[k]);
+    }
+  }
+  std::printf("  stations: largest difference %.3f of DBAT's sigma\n", worst);
 }
 
 TEST(BundleAdjustment, RefusesBlocksItCannotAdjust) {
