@@ -494,6 +494,19 @@ Status CrossValidateControlPoints(const BundleAdjustmentOptions& options,
         s.item < static_cast<int>(rejected.size()))
       rejected[s.item] = 1;
   Block base = adjusted;
+  // The priors snooping removed stay out too: a control point whose coordinates were rejected is
+  // a tie point here, a rejected camera position or attitude no prior.
+  for (const BundleSnoopingStep& s : full.snooping) {
+    if (s.item < 0) continue;
+    if (s.group == "control_points" && s.item < static_cast<int>(base.points.size())) {
+      base.points[s.item].role = PointRole::kTie;
+      base.points[s.item].surveyed_m.reset();
+    } else if (s.group == "camera_positions" && s.item < static_cast<int>(base.images.size())) {
+      base.images[s.item].measured_center_m.reset();
+    } else if (s.group == "attitudes" && s.item < static_cast<int>(base.images.size())) {
+      base.images[s.item].measured_angles_rad.reset();
+    }
+  }
   base.BuildIndex();
   std::vector<int> controls;
   for (size_t p = 0; p < base.points.size(); ++p)

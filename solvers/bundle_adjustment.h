@@ -139,6 +139,10 @@ struct BundleAdjustmentOptions {
   // a camera centre (external reliability). Marks per coordinate, priors per axis.
   bool observation_diagnostics = true;
   double snooping_alpha = 0.001;  // two-sided significance of the w-test (unitless)
+  // snooping_alpha is the block's (family-wise): each observation is tested at alpha / n, n the
+  // number of scalar observations (Bonferroni), so that a block of 30 000 observations gives about
+  // alpha false alarms, not 30. false: alpha per observation (Baarda's classical alpha_0).
+  bool snooping_family_wise = true;
   double snooping_power = 0.8;    // power of the test behind the smallest detectable error
   // Observations with r_i below this are listed as uncontrolled (a blunder there cannot be seen).
   double uncontrolled_redundancy = 0.1;
@@ -310,6 +314,7 @@ struct BundleAdjustmentResult {
   // delta0 the non-centrality behind the smallest detectable errors.
   std::vector<BundleObservationDiagnostics> observations;
   double critical_value = 0.0;
+  double alpha_per_observation = 0.0;  // the w-test's two-sided level per observation
   double delta0 = 0.0;
   int num_uncontrolled = 0;  // observations with r_i below uncontrolled_redundancy
   std::vector<BundleSnoopingStep> snooping;  // removals in order (snoop)

@@ -334,7 +334,16 @@ void ComputeBundleStatistics(const BundleAdjustmentOptions& options, const Block
   const bool asked = e_size <= options.max_covariance_parameters;
   if (asked) BuildReducedNormals(round, &reduced);
   const bool diagnostics = reduced.ok && options.observation_diagnostics;
-  result->critical_value = NormalQuantile(1.0 - 0.5 * options.snooping_alpha);
+  // The w-test's level: alpha for the whole block (Bonferroni: alpha / n per observation) unless
+  // asked per observation; with tens of thousands of observations a per-observation 0.1 % would
+  // reject dozens of good ones.
+  int num_tested = 0;
+  for (int g = 0; g < kNumBundleGroups; ++g) num_tested += variance->scalar_rows[g];
+  const double alpha_each = options.snooping_family_wise
+                                ? options.snooping_alpha / std::max(1, num_tested)
+                                : options.snooping_alpha;
+  result->alpha_per_observation = alpha_each;
+  result->critical_value = NormalQuantile(1.0 - 0.5 * alpha_each);
   result->delta0 = result->critical_value + NormalQuantile(options.snooping_power);
   if (reduced.ok) {
     // Exterior orientations, in the ambient (Euler) parameters: P C P^T.
@@ -509,7 +518,12 @@ void ComputeBundleStatistics(const BundleAdjustmentOptions& options, const Block
   for (size_t p = 0; p < block.points.size(); ++p) {
     const BlockPoint& point = block.points[p];
     BundlePointResult& out = result->points[p];
-    if (point.role == PointRole::kControl && out.error_m) {
+    // A control point whose coordinates snooping removed keeps its error in the table but stays
+    // out of the RMSE (it is reported as removed).
+    bool prior_kept = true;
+    for (const BundleSnoopingStep& step : result->snooping)
+      if (step.group == "control_points" && step.item == static_cast<int>(p)) prior_kept = false;
+    if (point.role == PointRole::kControl && out.error_m && prior_kept) {
       ++result->num_control_points;
       control_ssq += out.error_m->cwiseAbs2();
     }
