@@ -592,8 +592,14 @@ std::vector<std::string_view> SplitListItems(std::string_view text) {
 }
 
 std::string FormatNumber(double value) {
-  char buffer[64];
-  const std::to_chars_result result = std::to_chars(buffer, buffer + sizeof(buffer), value);
+  // The shortest text that reads back exactly; positional (500000, 0.0125) rather than
+  // scientific (5e+05) in the range of coordinates and accuracies, as a surveyor writes them.
+  char buffer[400];
+  const double magnitude = std::abs(value);
+  const std::to_chars_result result =
+      magnitude >= 1e-4 && magnitude < 1e15
+          ? std::to_chars(buffer, buffer + sizeof(buffer), value, std::chars_format::fixed)
+          : std::to_chars(buffer, buffer + sizeof(buffer), value);
   return std::string(buffer, result.ptr);
 }
 

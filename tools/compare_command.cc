@@ -23,6 +23,7 @@
 #include "core/rotation.h"
 #include "core/synthetic_scene.h"
 #include "core/tables.h"
+#include "tools/block_comparison.h"
 #include "tools/cli_common.h"
 #include "tools/commands.h"
 #include "tools/comparison.h"
@@ -85,7 +86,20 @@ DEFINE_string(
     "Monte-Carlo: comma-separated errors of the approximate frames as POSITION_M:ANGLE_DEG, "
     "uniform in plus or minus that much per axis and per angle; the first is the baseline. "
     "Positions in [0, 1000000] m, angles in [0, 180] degrees, at most 100 items.");
-DEFINE_int32(compare_trials, 50, "Monte-Carlo: trials per setting, each a new seeded scene.");
+DEFINE_int32(compare_trials, 50, "Monte-Carlo: trials per setting, each a new seeded scene (5 blocks by default with --scenarios=block).");
+DEFINE_string(compare_tie_blunders, "0,10",
+              "Monte-Carlo, --scenarios=block: comma-separated numbers of tie marks moved by 20 "
+              "pixels; the first is the baseline.");
+DEFINE_string(compare_tie_points, "600,100",
+              "Monte-Carlo, --scenarios=block: comma-separated numbers of tie points per block; the "
+              "first is the baseline.");
+DEFINE_string(compare_gnss_sigma, "0.03,0.3",
+              "Monte-Carlo, --scenarios=block: comma-separated GNSS noise levels, one sigma in "
+              "metres horizontally (twice that vertically), also the stated accuracy; the first is "
+              "the baseline.");
+DEFINE_int32(compare_block_lines, 3, "Monte-Carlo, --scenarios=block: flight lines per block.");
+DEFINE_int32(compare_block_images, 8,
+             "Monte-Carlo, --scenarios=block: images per flight line.");
 DEFINE_string(compare_sweep, "axes",
               "Monte-Carlo: axes (vary one list at a time, the others at their first value) or "
               "grid (every combination).");
@@ -139,6 +153,9 @@ constexpr char kUsage[] =
     "and initial error, every solver on the same data from the same initial values, against "
     "truth:\n"
     "  photopose compare [--scenarios=nadir,oblique,uav_block] [--noise_px=0.5,0,1] [--trials=N]\n"
+    "  photopose compare --scenarios=block [--noise_px=0.5,1] [--tie_blunders=0,10]\n"
+    "      [--tie_points=600,100] [--gnss_sigma=0.03,0.3] [--block_lines=3] [--block_images=8]\n"
+    "      [--losses=none,huber]   (the block solvers: Taylor as printed, Taylor, Ceres)\n"
     "      [--outlier_fractions=0,0.2] [--control_points=20,6] [--initial_errors=5:2,100:20]\n"
     "      [--solvers=...] [--losses=none,huber,cauchy] [--csv=F] [--html=F] [--markdown=F]\n"
     "Dataset mode: every solver on real tables, their differences and, optionally, a reference:\n"
@@ -152,7 +169,8 @@ constexpr char kUsage[] =
 const char* const kMonteCarloFlags[] = {"scenarios",      "noise_px",     "outlier_fractions",
                                         "control_points", "check_points", "initial_errors",
                                         "trials",         "sweep",        "initial",
-                                        "success_sigmas"};
+                                        "success_sigmas", "tie_blunders", "tie_points",
+                                        "gnss_sigma",     "block_lines",  "block_images"};
 const char* const kDatasetFlags[] = {"frames", "reference", "rotation", "default_accuracy",
                                      "pixel_center_origin"};
 
@@ -172,6 +190,8 @@ const CommandFlags& CompareFlags() {
                         {"check_points", 0.0, 10000.0},
                         {"trials", 1.0, 100000.0},
                         {"success_sigmas", 0.0, 1e6, true, false},
+                        {"block_lines", 1.0, 100.0},
+                        {"block_images", 2.0, 100.0},
                         {"default_accuracy", 0.0, 1e6, false, false, "px or um (the mark's unit)"}}};
   return *kFlags;
 }
@@ -182,6 +202,9 @@ const FlagRange kOutlierItem{"outlier_fractions", 0.0, 1.0, false, true};
 const FlagRange kControlItem{"control_points", 3.0, 10000.0};
 const FlagRange kPositionErrorItem{"initial_errors", 0.0, 1e6, false, false, "m (position)"};
 const FlagRange kAngleErrorItem{"initial_errors", 0.0, 180.0, false, false, "degrees (angle)"};
+const FlagRange kTieBlunderItem{"tie_blunders", 0.0, 100000.0};
+const FlagRange kTiePointItem{"tie_points", 10.0, 1000000.0};
+const FlagRange kGnssItem{"gnss_sigma", 0.0, 100.0, true, false, "m"};
 // Items of one list flag, at most.
 constexpr size_t kMaxListItems = 100;
 // Solves of one Monte-Carlo run, at most (settings x trials x solver variants): about an hour.
@@ -487,6 +510,74 @@ int RunDatasetMode(const std::vector<SolverVariant>& solvers, const ResectionOpt
   return kExitSuccess;
 }
 
+
+// --scenarios=block: the block solvers on simulated blocks (tools/block_comparison.h).
+int RunBlockMode(const std::string& command_line, const ParsedFlags& parsed) {
+  BlockComparisonOptions options;
+  const Status variants =
+      ParseBlockSolverVariants(FLAGS_compare_solvers, FLAGS_compare_losses, &options.solvers);
+  if (!variants.ok()) return BadInput(kCommand, variants.message());
+  for (const char* name : {"outlier_fractions", "control_points", "check_points", "initial_errors",
+                           "initial", "success_sigmas", "sweep"}) {
+    if (WasGiven(name))
+      return BadInput(kCommand, std::string("--") + name +
+                                    " applies to the single-image scenarios; blocks sweep "
+                                    "--noise_px, --tie_blunders, --tie_points, --gnss_sigma");
+  }
+  std::vector<double> values;
+  std::string why;
+  if (!ParseList(FLAGS_compare_noise_px, kNoiseItem, false, &options.noise_px, &why))
+    return BadInput(kCommand, why);
+  if (!ParseList(FLAGS_compare_tie_blunders, kTieBlunderItem, true, &values, &why))
+    return BadInput(kCommand, why);
+  options.tie_blunders.assign(values.begin(), values.end());
+  if (!ParseList(FLAGS_compare_tie_points, kTiePointItem, true, &values, &why))
+    return BadInput(kCommand, why);
+  options.tie_points.assign(values.begin(), values.end());
+  if (!ParseList(FLAGS_compare_gnss_sigma, kGnssItem, false, &options.gnss_sigma_m, &why))
+    return BadInput(kCommand, why);
+  options.lines = FLAGS_compare_block_lines;
+  options.images_per_line = FLAGS_compare_block_images;
+  options.trials = WasGiven("trials") ? FLAGS_compare_trials : 5;
+  options.seed = FLAGS_compare_seed;
+  options.num_threads = FLAGS_compare_threads;
+  if (!options.IsValid(&why)) return BadInput(kCommand, why);
+  const int64_t settings = static_cast<int64_t>(options.noise_px.size() + options.tie_blunders.size() +
+                                                options.tie_points.size() +
+                                                options.gnss_sigma_m.size()) - 3;
+  const int64_t solves = SaturatedProduct(SaturatedProduct(settings, options.trials),
+                                          static_cast<int64_t>(options.solvers.size()));
+  if (solves > kMaxSolves / 1000) {
+    return BadInput(kCommand, "the block sweep asks for " + std::to_string(solves) +
+                                  " block adjustments; at most " +
+                                  std::to_string(kMaxSolves / 1000) + " per run");
+  }
+  OutputFiles outputs;
+  std::vector<std::pair<std::string, std::string>> inputs;
+  for (const std::string& flag_file : parsed.flag_files) inputs.emplace_back("--flagfile", flag_file);
+  const Status declared = DeclareOutputs(inputs, &outputs);
+  if (!declared.ok()) return BadInput(kCommand, declared.message());
+
+  ProgressLine progress("blocks");
+  options.progress = [&progress](size_t done, size_t total) { progress(done, total); };
+  BlockComparisonResult result;
+  Status status;
+  {
+    const ScopedSolving solving;
+    status = RunBlockComparison(options, &result);
+  }
+  if (!status.ok()) return BadInput(kCommand, status.message());
+  const std::vector<TextTable> tables = BlockComparisonTables(options, result);
+  for (const TextTable& table : tables) std::cout << RenderText(table) << "\n";
+  const Status written = WriteOutputs(BlockComparisonCsv(result),
+                                      BlockComparisonHtml(options, result, command_line), tables,
+                                      {}, &outputs);
+  if (!written.ok()) return BadInput(kCommand, written.message());
+  std::cout << "compare: " << result.settings.size() << " settings x " << options.trials
+            << " blocks x " << result.solver_names.size() << " solvers in " << result.wall_seconds
+            << " s; " << WrittenFiles() << "\n";
+  return kExitSuccess;
+}
 }  // namespace
 
 int RunCompare(int argc, char** argv) {
@@ -510,6 +601,12 @@ int RunCompare(int argc, char** argv) {
                                     (dataset ? "Monte-Carlo mode only (drop --cameras, --points, "
                                                "--marks, --gcp_list)"
                                              : "dataset mode only (give --cameras and the marks)"));
+  }
+  if (!dataset && FLAGS_compare_scenarios == "block") return RunBlockMode(command_line, parsed);
+  if (!dataset) {
+    for (const char* name : {"tie_blunders", "tie_points", "gnss_sigma", "block_lines", "block_images"})
+      if (WasGiven(name))
+        return BadInput(kCommand, std::string("--") + name + " applies to --scenarios=block only");
   }
   std::vector<SolverVariant> solvers;
   const Status variants =
