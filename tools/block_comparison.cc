@@ -495,4 +495,116 @@ std::string BlockComparisonHtml(const BlockComparisonOptions& options,
   return html.str();
 }
 
+Status RunBlockDatasetComparison(const BlockDatasetOptions& options, const Block& block,
+                                 BlockDatasetResult* result) {
+  *result = BlockDatasetResult();
+  if (options.solvers.empty()) return Status::Error("no solver");
+  result->num_images = static_cast<int>(block.images.size());
+  result->num_points = static_cast<int>(block.points.size());
+  result->num_marks = static_cast<int>(block.marks.size());
+  std::vector<std::vector<Eigen::Vector3d>> centres(options.solvers.size());
+  int reference = -1, taylor = -1;
+  for (size_t s = 0; s < options.solvers.size(); ++s) {
+    const BlockSolverVariant& variant = options.solvers[s];
+    BlockDatasetSolverSummary summary;
+    summary.name = variant.Name();
+    Block copy = block;
+    BundleAdjustmentOptions adjustment;
+    adjustment.num_threads = options.num_threads;
+    adjustment.jacobian = variant.jacobian;
+    adjustment.tie_loss = variant.loss;
+    adjustment.observation_diagnostics = false;
+    BundleAdjustmentResult adjusted;
+    const Clock::time_point begin = Clock::now();
+    const Status status = BundleAdjustWithSolver(variant.solver, adjustment,
+                                                 BundleAdjustmentConfig(), &copy, &adjusted);
+    summary.seconds = std::chrono::duration<double>(Clock::now() - begin).count();
+    summary.iterations = adjusted.summary.iterations;
+    if (!status.ok()) {
+      summary.message = status.message();
+    } else if (!adjusted.summary.IsSolutionUsable()) {
+      summary.message = adjusted.summary.message;
+    } else {
+      summary.success = true;
+      summary.sigma0 = adjusted.summary.sigma0;
+      summary.num_check_points = adjusted.num_check_points;
+      summary.check_rmse_m = adjusted.num_check_points > 0 ? adjusted.check_rmse_total_m : kNaN;
+      for (const BlockImage& image : copy.images) centres[s].push_back(image.eo->center_in_ground());
+      if (reference < 0 && variant.solver == PoseSolver::kCeres) reference = static_cast<int>(s);
+      if (variant.solver == PoseSolver::kTaylor) taylor = static_cast<int>(s);
+    }
+    result->solvers.push_back(summary);
+  }
+  if (reference < 0) {
+    for (size_t s = 0; s < options.solvers.size() && reference < 0; ++s)
+      if (result->solvers[s].success) reference = static_cast<int>(s);
+  }
+  result->reference = reference >= 0 ? result->solvers[reference].name : "";
+  for (size_t s = 0; s < result->solvers.size(); ++s) {
+    BlockDatasetSolverSummary& summary = result->solvers[s];
+    summary.time_ratio_to_taylor =
+        taylor >= 0 ? summary.seconds / result->solvers[taylor].seconds : kNaN;
+    if (!summary.success || reference < 0) {
+      summary.offset_rms_m = summary.offset_max_m = kNaN;
+      continue;
+    }
+    double ssq = 0.0;
+    for (size_t i = 0; i < centres[s].size(); ++i) {
+      const double d = (centres[s][i] - centres[reference][i]).norm();
+      ssq += d * d;
+      summary.offset_max_m = std::max(summary.offset_max_m, d);
+    }
+    summary.offset_rms_m = centres[s].empty() ? kNaN : std::sqrt(ssq / (3.0 * centres[s].size()));
+  }
+  return Status::Ok();
+}
+
+TextTable BlockDatasetTable(const BlockDatasetResult& result) {
+  TextTable table;
+  table.title = "The block (" + std::to_string(result.num_images) + " images, " +
+                std::to_string(result.num_points) + " points, " +
+                std::to_string(result.num_marks) + " marks): every solver from the same start; "
+                "offsets from " + (result.reference.empty() ? "no reference" : result.reference);
+  table.header = {"solver", "result", "offset RMS (mm)", "offset max (mm)", "check RMSE (mm)",
+                  "sigma0", "iterations", "time (ms)", "x Taylor"};
+  for (const BlockDatasetSolverSummary& s : result.solvers) {
+    table.rows.push_back({s.name, s.success ? "converged" : "failed",
+                          Fixed(1e3 * s.offset_rms_m, 4), Fixed(1e3 * s.offset_max_m, 4),
+                          Fixed(1e3 * s.check_rmse_m, 2), Fixed(s.sigma0, 4),
+                          std::to_string(s.iterations), Fixed(1e3 * s.seconds, 1),
+                          Fixed(s.time_ratio_to_taylor, 2)});
+    if (!s.success) table.notes.push_back(s.name + ": " + s.message);
+  }
+  return table;
+}
+
+std::string BlockDatasetCsv(const BlockDatasetResult& result) {
+  std::string csv =
+      "Solver,Success,OffsetRmsM,OffsetMaxM,CheckRmseM,NumCheckPoints,Sigma0,Iterations,Seconds,"
+      "TimeRatioToTaylor\n";
+  char line[512];
+  for (const BlockDatasetSolverSummary& s : result.solvers) {
+    std::snprintf(line, sizeof(line), "%s,%d,%.17g,%.17g,%.17g,%d,%.17g,%d,%.17g,%.17g\n",
+                  s.name.c_str(), s.success ? 1 : 0, s.offset_rms_m, s.offset_max_m,
+                  s.check_rmse_m, s.num_check_points, s.sigma0, s.iterations, s.seconds,
+                  s.time_ratio_to_taylor);
+    csv += line;
+  }
+  return csv;
+}
+
+std::string BlockDatasetHtml(const BlockDatasetResult& result, const std::string& command_line) {
+  std::ostringstream html;
+  html << "<!DOCTYPE html>\n<html><head><meta charset=\"utf-8\"><title>photopose compare: a "
+          "block</title>\n<style>body{font-family:sans-serif;max-width:1100px;margin:2em auto}"
+          "table{border-collapse:collapse}td,th{border:1px solid #ccc;padding:3px 8px;text-align:"
+          "right}td:first-child,th:first-child{text-align:left}caption{font-weight:bold;"
+          "text-align:left}</style></head><body>\n<h1>The block solvers on one block</h1>\n<p><code>"
+       << HtmlEscape(command_line) << "</code></p>\n<p>No truth: every solver's camera centres "
+       << "against " << HtmlEscape(result.reference.empty() ? "no reference" : result.reference)
+       << "; check points against their surveyed coordinates.</p>\n"
+       << RenderHtmlTable(BlockDatasetTable(result)) << "\n</body></html>\n";
+  return html.str();
+}
+
 }  // namespace photopose::cli

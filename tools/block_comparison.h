@@ -95,4 +95,41 @@ std::string BlockComparisonHtml(const BlockComparisonOptions& options,
                                 const BlockComparisonResult& result,
                                 const std::string& command_line);
 
+// ------------------------------------------------------------------ dataset mode
+
+// The block solvers on one given block (tables or a COLMAP model), without truth: each solver's
+// camera centres against the first Ceres solver's (the reference), check points against their
+// surveyed coordinates.
+struct BlockDatasetOptions {
+  std::vector<BlockSolverVariant> solvers;
+  int num_threads = 1;  // of each adjustment
+};
+
+struct BlockDatasetSolverSummary {
+  std::string name;
+  bool success = false;
+  std::string message;                 // why not, when not
+  double offset_rms_m = 0.0;           // RMS over images and axes of centre - reference centre
+  double offset_max_m = 0.0;           // largest |centre - reference centre|
+  double check_rmse_m = 0.0;           // total, against the surveyed coordinates (NaN: none)
+  int num_check_points = 0;
+  double sigma0 = 0.0;
+  int iterations = 0;
+  double seconds = 0.0;
+  double time_ratio_to_taylor = 0.0;   // NaN without the corrected Taylor solver
+};
+
+struct BlockDatasetResult {
+  int num_images = 0, num_points = 0, num_marks = 0;
+  std::string reference;  // name of the reference solver
+  std::vector<BlockDatasetSolverSummary> solvers;
+};
+
+// `block` must have initial values (solvers/block_initialization.h).
+Status RunBlockDatasetComparison(const BlockDatasetOptions& options, const Block& block,
+                                 BlockDatasetResult* result);
+TextTable BlockDatasetTable(const BlockDatasetResult& result);
+std::string BlockDatasetCsv(const BlockDatasetResult& result);
+std::string BlockDatasetHtml(const BlockDatasetResult& result, const std::string& command_line);
+
 }  // namespace photopose::cli

@@ -55,7 +55,7 @@ DEFINE_bool(bundle_estimate_accuracies, false, "Estimate every group's accuracy 
 DEFINE_bool(bundle_snoop, false, "Data snooping: remove the most significant rejected observation (marks, control points, camera positions), adjust again, repeat.");
 DEFINE_double(bundle_alpha, 0.001, "Significance level of the w-test per observation (two-sided).");
 DEFINE_bool(bundle_cross_validate, false, "Leave each control point out in turn and report its error as a check point.");
-DEFINE_int32(bundle_max_covariance_parameters, 6000, "Covariances, redundancy numbers and diagnostics are computed when the reduced camera system has at most this many parameters.");
+DEFINE_int32(bundle_max_covariance_parameters, 3000, "Covariances, redundancy numbers and diagnostics are computed when the reduced camera system has at most this many parameters (3000: blocks of up to 500 images; they take a dense inverse, which on 1000 images outlasts the adjustment itself by minutes).");
 DEFINE_int32(bundle_threads, 0, "Threads of the linear algebra and of the cross-validation; 0 uses all cores.");
 DEFINE_bool(bundle_quiet, false, "No progress lines on stderr.");
 DEFINE_bool(bundle_pixel_center_origin, false, "Read Column/Row with (0,0) at the centre of the first pixel instead of the top-left corner of the image.");

@@ -268,8 +268,9 @@ std::string BundleReportHtml(const Block& block, const BundleAdjustmentResult& r
                 rows,
                 {"redundancy share: the group's summed redundancy numbers over its observations, "
                  "how much of it the rest of the block checks",
-                 "over-fitted: a prior group whose RMS / stated or redundancy share is below " +
-                     F(context.options.overfit_ratio)});
+                 "over-fitted: a prior group whose RMS / stated is below " +
+                     F(context.options.overfit_ratio) + " or whose redundancy share is below " +
+                     F(context.options.overfit_redundancy_share)});
 
   // Histograms.
   std::map<std::string, std::vector<double>> by_group;

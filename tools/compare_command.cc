@@ -18,11 +18,14 @@
 #include <string>
 #include <vector>
 
+#include "core/block.h"
+#include "core/colmap_io.h"
 #include "core/csv.h"
 #include "core/output_files.h"
 #include "core/rotation.h"
 #include "core/synthetic_scene.h"
 #include "core/tables.h"
+#include "solvers/block_initialization.h"
 #include "tools/block_comparison.h"
 #include "tools/cli_common.h"
 #include "tools/commands.h"
@@ -97,6 +100,9 @@ DEFINE_string(compare_gnss_sigma, "0.03,0.3",
               "Monte-Carlo, --scenarios=block: comma-separated GNSS noise levels, one sigma in "
               "metres horizontally (twice that vertically), also the stated accuracy; the first is "
               "the baseline.");
+DEFINE_string(compare_colmap_model, "",
+              "Dataset, --scenarios=block: a COLMAP text model folder to compare the block solvers "
+              "on (or give the tables: --cameras, --marks, --points, --frames).");
 DEFINE_int32(compare_block_lines, 3, "Monte-Carlo, --scenarios=block: flight lines per block.");
 DEFINE_int32(compare_block_images, 8,
              "Monte-Carlo, --scenarios=block: images per flight line.");
@@ -156,6 +162,8 @@ constexpr char kUsage[] =
     "  photopose compare --scenarios=block [--noise_px=0.5,1] [--tie_blunders=0,10]\n"
     "      [--tie_points=600,100] [--gnss_sigma=0.03,0.3] [--block_lines=3] [--block_images=8]\n"
     "      [--losses=none,huber]   (the block solvers: Taylor as printed, Taylor, Ceres)\n"
+    "  photopose compare --scenarios=block --colmap_model=DIR   (or --cameras --marks --points\n"
+    "      --frames): the block solvers on one given block, offsets from the Ceres solution\n"
     "      [--outlier_fractions=0,0.2] [--control_points=20,6] [--initial_errors=5:2,100:20]\n"
     "      [--solvers=...] [--losses=none,huber,cauchy] [--csv=F] [--html=F] [--markdown=F]\n"
     "Dataset mode: every solver on real tables, their differences and, optionally, a reference:\n"
@@ -578,6 +586,75 @@ int RunBlockMode(const std::string& command_line, const ParsedFlags& parsed) {
             << " s; " << WrittenFiles() << "\n";
   return kExitSuccess;
 }
+// --scenarios=block with a dataset: the block solvers on one given block.
+int RunBlockDatasetMode(const std::string& command_line, const ParsedFlags& parsed) {
+  BlockDatasetOptions options;
+  const Status variants =
+      ParseBlockSolverVariants(FLAGS_compare_solvers, FLAGS_compare_losses, &options.solvers);
+  if (!variants.ok()) return BadInput(kCommand, variants.message());
+  options.num_threads = FLAGS_compare_threads;
+  const bool colmap = !FLAGS_compare_colmap_model.empty();
+  if (colmap && !(FLAGS_compare_cameras.empty() && FLAGS_compare_marks.empty()))
+    return BadInput(kCommand, "give --colmap_model or the tables (--cameras, --marks), not both");
+  if (!colmap && (FLAGS_compare_cameras.empty() || FLAGS_compare_marks.empty()))
+    return BadInput(kCommand, "a block needs --cameras and --marks (or --colmap_model)");
+  const auto rotation = ParseRotationConvention(FLAGS_compare_rotation);
+  if (!rotation)
+    return BadInput(kCommand, std::string("--rotation must be ") + RotationConventionChoices());
+  OutputFiles outputs;
+  std::vector<std::pair<std::string, std::string>> inputs = {
+      {"--cameras", FLAGS_compare_cameras}, {"--points", FLAGS_compare_points},
+      {"--marks", FLAGS_compare_marks},     {"--frames", FLAGS_compare_frames}};
+  if (colmap) {
+    for (const char* name : {"cameras.txt", "images.txt", "points3D.txt"})
+      inputs.emplace_back("--colmap_model", FLAGS_compare_colmap_model + "/" + name);
+  }
+  for (const std::string& flag_file : parsed.flag_files) inputs.emplace_back("--flagfile", flag_file);
+  const Status declared = DeclareOutputs(inputs, &outputs);
+  if (!declared.ok()) return BadInput(kCommand, declared.message());
+
+  Block block;
+  if (colmap) {
+    const Status read = ReadColmapModel(FLAGS_compare_colmap_model, &block);
+    if (!read.ok()) return BadInput(kCommand, read.message());
+  } else {
+    BlockFiles files;
+    files.cameras = FLAGS_compare_cameras;
+    files.points = FLAGS_compare_points;
+    files.marks = FLAGS_compare_marks;
+    files.frames = FLAGS_compare_frames;
+    files.rotation = *rotation;
+    files.pixel_origin =
+        FLAGS_compare_pixel_center_origin ? PixelOrigin::kCenter : PixelOrigin::kCorner;
+    const Status read = ReadBlock(files, &block);
+    if (!read.ok()) return BadInput(kCommand, read.message());
+  }
+  BlockDatasetResult result;
+  {
+    const ScopedSolving solving;
+    BlockInitializationSummary initialization;
+    const Status initialized =
+        InitializeBlock(BlockInitializationOptions(), &block, &initialization);
+    if (!initialized.ok()) return BadInput(kCommand, initialized.message());
+    if (!initialization.not_oriented.empty()) {
+      for (const auto& [image, reason] : initialization.not_oriented)
+        std::cerr << "photopose compare: " << block.images[image].name
+                  << ": not oriented: " << reason << "\n";
+      return kExitSomeFailed;
+    }
+    const Status status = RunBlockDatasetComparison(options, block, &result);
+    if (!status.ok()) return BadInput(kCommand, status.message());
+  }
+  const TextTable table = BlockDatasetTable(result);
+  std::cout << RenderText(table) << "\n";
+  const Status written = WriteOutputs(BlockDatasetCsv(result), BlockDatasetHtml(result, command_line),
+                                      {table}, {}, &outputs);
+  if (!written.ok()) return BadInput(kCommand, written.message());
+  std::cout << "compare: a block of " << result.num_images << " images x "
+            << result.solvers.size() << " solvers; " << WrittenFiles() << "\n";
+  return kExitSuccess;
+}
+
 }  // namespace
 
 int RunCompare(int argc, char** argv) {
@@ -592,6 +669,10 @@ int RunCompare(int argc, char** argv) {
 
   const bool dataset = !FLAGS_compare_cameras.empty() || !FLAGS_compare_points.empty() ||
                        !FLAGS_compare_marks.empty() || !FLAGS_compare_gcp_list.empty();
+  if (FLAGS_compare_scenarios == "block" && (dataset || !FLAGS_compare_colmap_model.empty()))
+    return RunBlockDatasetMode(command_line, parsed);
+  if (!FLAGS_compare_colmap_model.empty())
+    return BadInput(kCommand, "--colmap_model is a block: give --scenarios=block with it");
   const std::vector<std::string> other_mode_flags =
       dataset ? std::vector<std::string>(std::begin(kMonteCarloFlags), std::end(kMonteCarloFlags))
               : std::vector<std::string>(std::begin(kDatasetFlags), std::end(kDatasetFlags));

@@ -269,5 +269,47 @@ TEST(CompareCommand, BlockModeComparesTheBlockSolversOnTheSameBlocks) {
   EXPECT_EQ(testing::RunCli("compare --scenarios=nadir --tie_points=100", dir).exit_code, 2);
 }
 
+TEST(CompareCommand, BlockDatasetModeComparesTheSolversOnOneBlock) {
+  const std::string dir = testing::ScratchDir();
+  testing::CliRun run = testing::RunCli(
+      "simulate --scenario=block --lines=3 --images_per_line=6 --seed=4 --colmap --out_dir=" + dir +
+          "/block",
+      dir);
+  ASSERT_EQ(run.exit_code, 0) << run.err;
+  const std::string b = dir + "/block";
+  run = testing::RunCli("compare --scenarios=block --losses=none --cameras=" + b +
+                            "/cameras.csv --points=" + b + "/points.csv --marks=" + b +
+                            "/marks.csv --frames=" + b + "/frames.csv --csv=" + dir + "/one.csv",
+                        dir);
+  ASSERT_EQ(run.exit_code, 0) << run.err;
+  const std::string csv = testing::ReadFile(dir + "/one.csv");
+  std::stringstream lines(csv);
+  std::string line;
+  std::getline(lines, line);  // header
+  int rows = 0;
+  while (std::getline(lines, line)) {
+    ++rows;
+    std::vector<std::string> cells;
+    std::stringstream fields(line);
+    for (std::string cell; std::getline(fields, cell, ',');) cells.push_back(cell);
+    ASSERT_GE(cells.size(), 3u);
+    EXPECT_EQ(cells[1], "1") << line;  // converged
+    // Offsets from the Ceres solution: Taylor and the other Ceres path at the same minimum, the
+    // printed eq. 21 off it.
+    if (cells[0] == "taylor_as_printed") {
+      EXPECT_GT(std::stod(cells[3]), 1e-5) << line;
+    } else {
+      EXPECT_LT(std::stod(cells[3]), 1e-5) << line;
+    }
+  }
+  EXPECT_EQ(rows, 4);
+  // The same on the COLMAP model of the block (a relative block: offsets in its own frame).
+  run = testing::RunCli("compare --scenarios=block --losses=none --solvers=taylor,ceres_analytic "
+                        "--colmap_model=" + b + "/colmap",
+                        dir);
+  EXPECT_EQ(run.exit_code, 0) << run.err;
+  EXPECT_NE(run.out.find("ceres_analytic/none"), std::string::npos) << run.out;
+}
+
 }  // namespace
 }  // namespace photopose
