@@ -10,6 +10,7 @@
 
 #include "cost_functions/exterior_orientation_manifold.h"
 #include "cost_functions/priors.h"
+#include "solvers/check_points.h"
 #include "solvers/triangulation.h"
 
 namespace photopose::internal {
@@ -145,12 +146,6 @@ Status CheckDatum(const BundleAdjustmentConfig& config, const Block& block, Bund
 
 }  // namespace
 
-double FilmDefaultUm(const BlockCamera& camera, double default_px, double default_film_um) {
-  if (camera.model == CameraModelType::kFrame && camera.table.pixel_size_um > 0.0)
-    return default_px * camera.table.pixel_size_um;
-  return default_film_um;
-}
-
 Status MakeBundlePlan(const BundleAdjustmentOptions& options, const BundleAdjustmentConfig& config,
                 const Block& block, BundlePlan* plan) {
   const BundleAccuracies& acc = options.accuracies;
@@ -193,7 +188,7 @@ Status MakeBundlePlan(const BundleAdjustmentOptions& options, const BundleAdjust
     const BlockCamera& camera = block.cameras[block.images[mark.image].camera];
     const bool control = point.role == PointRole::kControl;
     const double px = control ? acc.marker_projection_px : acc.tie_px;
-    const double film = FilmDefaultUm(camera, px,
+    const double film = DefaultFilmMarkSigmaUm(camera, px,
                                       control ? acc.marker_projection_film_um : acc.tie_film_um);
     plan->mark_sigma[m] = MarkSigma(mark, px, film);
     plan->mark_group[m] = control ? kControlMarks : kTieMarks;

@@ -104,10 +104,6 @@ void BuildBundleRound(const BundleAdjustmentOptions& options, const BundleAdjust
 ceres::Solver::Options BundleSolverOptions(const BundleAdjustmentOptions& options,
                                            const BundleRound& round);
 
-// The default sigma of a film mark of this camera: the pixel default through the pixel size when
-// the camera has one, the film default otherwise (um).
-double FilmDefaultUm(const BlockCamera& camera, double default_px, double default_film_um);
-
 // The reduced normal matrix S (e blocks; points eliminated 3 x 3 at a time) of the whitened
 // problem, its inverse C and what the statistics need of the point blocks.
 struct ReducedNormals {

@@ -10,6 +10,7 @@
 
 #include "core/rotation.h"
 #include "solvers/bundle_problem.h"
+#include "solvers/check_points.h"
 #include "solvers/triangulation.h"
 
 namespace photopose::internal {
@@ -536,7 +537,7 @@ void ComputeBundleStatistics(const BundleAdjustmentOptions& options, const Block
       ray.eo.parameters = state.eo[mark.image];
       ray.observation = mark.observation;
       ray.sigma = MarkSigma(mark, marker_px,
-                            FilmDefaultUm(*ray.camera, marker_px,
+                            DefaultFilmMarkSigmaUm(*ray.camera, marker_px,
                                           options.accuracies.marker_projection_film_um));
       rays.push_back(ray);
     }

@@ -13,7 +13,8 @@
 namespace photopose {
 
 // The default sigma (um) of a film mark of this camera: sigma_px through the camera's pixel size
-// when it has one, sigma_film_um otherwise (the BundleAccuracies rule for film marks).
+// when it has one, sigma_film_um otherwise (the BundleAccuracies rule for film marks; the bundle
+// plan and statistics use it too).
 double DefaultFilmMarkSigmaUm(const BlockCamera& camera, double sigma_px, double sigma_film_um);
 
 // Fills, from `adjusted` (the block holding the adjusted orientations and cameras):

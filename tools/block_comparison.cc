@@ -13,6 +13,7 @@
 #include "core/statistics.h"
 #include "core/synthetic_block.h"
 #include "solvers/taylor_bundle.h"
+#include "tools/cli_common.h"
 #include "tools/html_report.h"
 
 namespace photopose::cli {
@@ -33,18 +34,6 @@ const char* LossName(BundleAdjustmentOptions::TieLoss loss) {
       return "softl1";
   }
   return "?";
-}
-
-std::vector<std::string> SplitList(const std::string& text) {
-  std::vector<std::string> items;
-  std::stringstream stream(text);
-  std::string item;
-  while (std::getline(stream, item, ',')) {
-    const size_t first = item.find_first_not_of(" \t");
-    if (first == std::string::npos) continue;
-    items.push_back(item.substr(first, item.find_last_not_of(" \t") - first + 1));
-  }
-  return items;
 }
 
 std::string Fixed(double value, int digits) {
@@ -141,7 +130,8 @@ Status ParseBlockSolverVariants(const std::string& solvers, const std::string& l
                                 std::vector<BlockSolverVariant>* variants) {
   variants->clear();
   std::vector<BundleAdjustmentOptions::TieLoss> loss_list;
-  for (const std::string& name : SplitList(losses)) {
+  for (const std::string& name : SplitCommaList(losses)) {
+    if (name.empty()) continue;
     const std::vector<std::string> names =
         name == "all" ? std::vector<std::string>{"none", "huber", "cauchy", "softl1"}
                       : std::vector<std::string>{name};
@@ -165,7 +155,8 @@ Status ParseBlockSolverVariants(const std::string& solvers, const std::string& l
     }
   }
   if (loss_list.empty()) loss_list.push_back(BundleAdjustmentOptions::TieLoss::kNone);
-  for (const std::string& name : SplitList(solvers)) {
+  for (const std::string& name : SplitCommaList(solvers)) {
+    if (name.empty()) continue;
     const std::vector<std::string> names =
         name == "all"
             ? std::vector<std::string>{"taylor_as_printed", "taylor", "ceres_analytic",

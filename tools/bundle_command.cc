@@ -5,7 +5,6 @@
 #include <cstdio>
 #include <filesystem>
 #include <iostream>
-#include <sstream>
 
 #include "core/bal_io.h"
 #include "core/block.h"
@@ -105,9 +104,7 @@ const CommandFlags& BundleFlags() {
 // "a" or "a,b,c" -> three finite numbers.
 bool ParseTriple(const std::string& text, bool allow_one, Eigen::Vector3d* value) {
   std::vector<double> numbers;
-  std::string item;
-  std::stringstream stream(text);
-  while (std::getline(stream, item, ',')) {
+  for (const std::string& item : SplitCommaList(text)) {
     double number;
     std::string why;
     if (!ParseFiniteNumber(item, &number, &why)) return false;
@@ -122,18 +119,6 @@ bool ParseTriple(const std::string& text, bool allow_one, Eigen::Vector3d* value
     return true;
   }
   return false;
-}
-
-std::vector<std::string> SplitCommas(const std::string& text) {
-  std::vector<std::string> items;
-  std::string item;
-  std::stringstream stream(text);
-  while (std::getline(stream, item, ',')) {
-    const auto first = item.find_first_not_of(" \t");
-    const auto last = item.find_last_not_of(" \t");
-    if (first != std::string::npos) items.push_back(item.substr(first, last - first + 1));
-  }
-  return items;
 }
 
 }  // namespace
@@ -228,7 +213,9 @@ int RunBundle(int argc, char** argv) {
   }
   std::string why;
   if (!options.IsValid(&why)) return BadInput(kCommand, why);
-  const std::vector<std::string> calibrate = SplitCommas(FLAGS_bundle_calibrate);
+  std::vector<std::string> calibrate;
+  for (const std::string& name : SplitCommaList(FLAGS_bundle_calibrate))
+    if (!name.empty()) calibrate.push_back(name);
   context.calibrate = calibrate;
   const auto solver = ParsePoseSolver(FLAGS_bundle_solver);
   if (!solver) return BadInput(kCommand, "--solver must be ceres, taylor or taylor_as_printed, not '" + FLAGS_bundle_solver + "'");

@@ -86,6 +86,10 @@ std::vector<std::string> NumericFlagsWithoutRange(const CommandFlags& flags);
 // Prints the usage text and the command's flags with their help texts and ranges.
 void PrintHelp(const std::string& usage, const CommandFlags& flags);
 
+// The items of a comma-separated flag value, each trimmed of blanks; an empty item stays as an empty
+// string so that callers can name it ("a,,b" -> "a", "", "b").
+std::vector<std::string> SplitCommaList(const std::string& text);
+
 // Prints "photopose <subcommand>: <message>" on stderr as one line (control characters and bytes
 // that are not UTF-8 escaped) and returns kExitBadInput.
 int BadInput(const std::string& subcommand, const std::string& message);

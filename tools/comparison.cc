@@ -17,23 +17,12 @@
 #include "core/rotation.h"
 #include "core/statistics.h"
 #include "core/tables.h"
+#include "tools/cli_common.h"
 
 namespace photopose::cli {
 namespace {
 
 constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
-
-std::vector<std::string> SplitList(const std::string& text) {
-  std::vector<std::string> items;
-  std::string item;
-  std::stringstream stream(text);
-  while (std::getline(stream, item, ',')) {
-    const size_t begin = item.find_first_not_of(" \t");
-    const size_t end = item.find_last_not_of(" \t");
-    items.push_back(begin == std::string::npos ? "" : item.substr(begin, end - begin + 1));
-  }
-  return items;
-}
 
 // Root mean square of the values (NaN for none).
 double Rms(const std::vector<double>& values) {
@@ -357,7 +346,7 @@ Status ParseSolverVariants(const std::string& solvers, const std::string& losses
                            std::vector<SolverVariant>* variants) {
   variants->clear();
   std::vector<LossType> loss_types;
-  for (const std::string& name : SplitList(losses)) {
+  for (const std::string& name : SplitCommaList(losses)) {
     if (name == "all") {
       for (LossType loss : {LossType::kNone, LossType::kHuber, LossType::kSoftL1, LossType::kCauchy,
                             LossType::kArctan, LossType::kTukey})
@@ -371,7 +360,7 @@ Status ParseSolverVariants(const std::string& solvers, const std::string& losses
     loss_types.push_back(*loss);
   }
   std::vector<std::string> names;
-  for (const std::string& name : SplitList(solvers)) {
+  for (const std::string& name : SplitCommaList(solvers)) {
     if (name == "all") {
       for (const char* n : {"taylor_as_printed", "taylor", "ceres_analytic", "ceres_autodiff"})
         names.push_back(n);
@@ -467,7 +456,7 @@ const char* InitialValuesName(InitialValues initial) {
 
 Status ParseInitialErrors(const std::string& text, std::vector<InitialError>* errors) {
   errors->clear();
-  for (const std::string& item : SplitList(text)) {
+  for (const std::string& item : SplitCommaList(text)) {
     const size_t colon = item.find(':');
     InitialError error;
     char* end = nullptr;
