@@ -31,6 +31,7 @@
 #include <Eigen/Core>
 #include <cmath>
 #include <functional>
+#include <limits>
 #include <optional>
 #include <set>
 #include <string>
@@ -81,6 +82,19 @@ struct BundleIterationInfo {
   double sigma0 = 0.0;     // sqrt(2 cost / redundancy)
   double step_norm = 0.0;  // |step| of the iteration (parameter units)
   double elapsed_seconds = 0.0;
+  // A relative block's first solve, without a gauge (BundleAdjustmentOptions::
+  // free_gauge_for_relative_blocks); its sigma0 counts the 7 free directions as unknowns.
+  bool free_gauge = false;
+  // Levenberg-Marquardt state (Ceres solver only; NaN for the Taylor solver): the trust region
+  // radius after the iteration (1 / damping, unitless) and the step quality (actual over
+  // predicted cost decrease, unitless; 1 on a quadratic model).
+  double trust_region_radius = std::numeric_limits<double>::quiet_NaN();
+  double step_quality = std::numeric_limits<double>::quiet_NaN();
+  bool step_successful = true;
+  // Where the iteration went: the linear solve of the step (Schur elimination, factorisation,
+  // back-substitution) and the whole iteration (plus residual and Jacobian evaluation), s.
+  double linear_solver_seconds = 0.0;
+  double iteration_seconds = 0.0;
 };
 
 struct BundleAdjustmentOptions {
@@ -108,6 +122,12 @@ struct BundleAdjustmentOptions {
   double parameter_tolerance = 1e-16;
   double gradient_tolerance = 1e-12;    // max-norm of the projected gradient (unitless)
   BundleLinearSolver linear_solver = BundleLinearSolver::kSparseSchur;
+  // A relative block (no control points, no camera positions) is solved first without a gauge
+  // and then moved by a similarity into COLMAP's gauge (first image fixed, one coordinate of the
+  // second) and polished there: the same minimum, in far fewer iterations when the first image's
+  // approximate attitude is off (the gauge turns the whole block about it). false: solved in
+  // COLMAP's gauge from the start.
+  bool free_gauge_for_relative_blocks = true;
   int num_threads = 0;                  // 0: all cores
   // GNSS lever arm: antenna offset from the projection centre in the camera frame (u, v, w; m).
   std::optional<Eigen::Vector3d> lever_arm_m;
@@ -286,6 +306,18 @@ struct BundleAdjustmentSummary {
   int num_rejected_marks = 0;
   double time_seconds = 0.0;
   double statistics_seconds = 0.0;  // covariances and redundancy shares
+  // Where the adjustment's time went, over all rounds (s): building the Ceres problems; Ceres'
+  // preprocessing (program, ordering, Schur structure, symbolic factorisation); residual and
+  // Jacobian evaluation; the linear solves of the Levenberg-Marquardt steps (Schur elimination,
+  // factorisation of the reduced camera system, back-substitution).
+  double problem_build_seconds = 0.0;
+  double solver_preprocessing_seconds = 0.0;
+  double residual_evaluation_seconds = 0.0;
+  double jacobian_evaluation_seconds = 0.0;
+  double linear_solver_seconds = 0.0;
+  // Ceres' fixed-size Schur specialisation of the last solve, "row,point,image" block sizes ("d":
+  // dynamic, the slower generic path): "2,3,6" when every image block has 6 free parameters.
+  std::string schur_structure;
 
   bool IsSolutionUsable() const { return termination == BundleTermination::kConverged; }
   std::string BriefReport() const;

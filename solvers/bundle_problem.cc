@@ -414,6 +414,8 @@ void BuildBundleRound(const BundleAdjustmentOptions& options, const BundleAdjust
   }
 
   // Marks.
+  round->residuals.reserve(std::count(plan.mark_used.begin(), plan.mark_used.end(), 1) +
+                           2 * block.points.size() + 2 * block.images.size());
   for (size_t m = 0; m < block.marks.size(); ++m) {
     if (!plan.mark_used[m]) continue;
     const BlockMark& mark = block.marks[m];
@@ -422,12 +424,12 @@ void BuildBundleRound(const BundleAdjustmentOptions& options, const BundleAdjust
     ceres::CostFunction* cost = CreateCollinearityCost(
         options.jacobian, CollinearityFunctor(camera.model, mark.observation, camera.data(),
                                               1.0 / plan.mark_sigma[m]));
-    std::vector<double*> parameters = {state->eo[mark.image].data(),
-                                       state->points[mark.point].data(),
-                                       state->cameras[camera_index].data()};
     ceres::LossFunction* loss = plan.mark_group[m] == kTieMarks ? round->tie_loss.get() : nullptr;
-    const ceres::ResidualBlockId id = problem.AddResidualBlock(cost, loss, parameters);
-    round->residuals.push_back({plan.mark_group[m], static_cast<int>(m), 2, 0, id, parameters});
+    const ceres::ResidualBlockId id =
+        problem.AddResidualBlock(cost, loss, state->eo[mark.image].data(),
+                                 state->points[mark.point].data(),
+                                 state->cameras[camera_index].data());
+    round->residuals.push_back({plan.mark_group[m], static_cast<int>(m), 2, 0, id});
   }
   // Control point priors, two rows at a time.
   for (size_t p = 0; p < block.points.size(); ++p) {
@@ -436,10 +438,10 @@ void BuildBundleRound(const BundleAdjustmentOptions& options, const BundleAdjust
     const Eigen::Vector3d& surveyed = *block.points[p].surveyed_m;
     const ceres::ResidualBlockId xy = problem.AddResidualBlock(
         new GroundPointPriorRows(surveyed, plan.point_sigma[p], 0, 1), nullptr, point);
-    round->residuals.push_back({kControlPoints, static_cast<int>(p), 2, 0, xy, {point}});
+    round->residuals.push_back({kControlPoints, static_cast<int>(p), 2, 0, xy});
     const ceres::ResidualBlockId z = problem.AddResidualBlock(
         new GroundPointPriorRows(surveyed, plan.point_sigma[p], 2, -1), nullptr, point);
-    round->residuals.push_back({kControlPoints, static_cast<int>(p), 1, 2, z, {point}});
+    round->residuals.push_back({kControlPoints, static_cast<int>(p), 1, 2, z});
   }
   // Camera positions and attitudes.
   for (size_t i = 0; i < block.images.size(); ++i) {
@@ -457,13 +459,13 @@ void BuildBundleRound(const BundleAdjustmentOptions& options, const BundleAdjust
         id = problem.AddResidualBlock(new CameraPositionPrior(measured, plan.image_prior_sigma[i]),
                                       nullptr, parameters);
       }
-      round->residuals.push_back({kCameraPositions, static_cast<int>(i), 3, 0, id, parameters});
+      round->residuals.push_back({kCameraPositions, static_cast<int>(i), 3, 0, id});
     }
     if (plan.image_attitude[i]) {
       const ceres::ResidualBlockId id = problem.AddResidualBlock(
           new AttitudePrior(*block.images[i].measured_angles_rad, plan.image_attitude_sigma[i]),
           nullptr, eo);
-      round->residuals.push_back({kAttitudes, static_cast<int>(i), 3, 0, id, {eo}});
+      round->residuals.push_back({kAttitudes, static_cast<int>(i), 3, 0, id});
     }
   }
 
@@ -471,6 +473,28 @@ void BuildBundleRound(const BundleAdjustmentOptions& options, const BundleAdjust
   for (const int size : round->e_sizes) round->num_free_parameters += size;
   round->num_observations = 0;
   for (const ResidualInfo& info : round->residuals) round->num_observations += info.rows;
+}
+
+void ApplyRelativeGauge(const BundlePlan& plan, BundleState* state, BundleRound* round) {
+  ceres::Problem& problem = *round->problem;
+  double* fixed = state->eo[plan.relative_fixed_image].data();
+  double* scale = state->eo[plan.relative_scale_image].data();
+  problem.SetParameterBlockConstant(fixed);
+  std::array<bool, 6> axis{};
+  axis[plan.relative_scale_axis] = true;
+  round->manifolds.emplace_back(new ExteriorOrientationManifold(axis));
+  problem.SetManifold(scale, round->manifolds.back().get());
+  for (size_t k = 0; k < round->e_blocks.size(); ++k) {
+    if (round->e_blocks[k] == scale) round->e_sizes[k] = 5;
+  }
+  for (size_t k = 0; k < round->e_blocks.size(); ++k) {
+    if (round->e_blocks[k] != fixed) continue;
+    round->e_blocks.erase(round->e_blocks.begin() + k);
+    round->e_sizes.erase(round->e_sizes.begin() + k);
+    break;
+  }
+  round->num_free_parameters = 3 * static_cast<int>(round->point_blocks.size());
+  for (const int size : round->e_sizes) round->num_free_parameters += size;
 }
 
 ceres::Solver::Options BundleSolverOptions(const BundleAdjustmentOptions& options,

@@ -33,13 +33,14 @@ constexpr int kMinMarksPerImage = 3;
 // One residual block of the problem: which group, which item (mark, point or image), how many of
 // its rows are observations (the zero row of a control point's Z prior is not) and the axis of its
 // first row (priors: 0 for X / omega, 2 for Z).
+// One residual block of the round (24 bytes: a 1000-image block has 1.7 million of them). Its
+// parameter blocks come from Ceres when needed (Problem::GetParameterBlocksForResidualBlock).
 struct ResidualInfo {
   BundleGroup group;
   int item;
   int rows;
   int first_axis;
   ceres::ResidualBlockId id;
-  std::vector<double*> parameters;
 };
 
 // The values being adjusted, copied from the block so that a failure leaves it untouched.
@@ -101,6 +102,10 @@ struct BundleRound {
 void BuildBundleRound(const BundleAdjustmentOptions& options, const BundleAdjustmentConfig& config,
                       const Block& block, const BundlePlan& plan, BundleState* state,
                       BundleRound* round);
+// Turns a round built without a gauge (plan.relative_fixed_image = -1) into one in the relative
+// gauge of `plan` (kRelative): holds the first image and one coordinate of the second, without
+// building the problem again.
+void ApplyRelativeGauge(const BundlePlan& plan, BundleState* state, BundleRound* round);
 ceres::Solver::Options BundleSolverOptions(const BundleAdjustmentOptions& options,
                                            const BundleRound& round);
 

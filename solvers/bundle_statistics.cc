@@ -68,10 +68,12 @@ bool EvaluateBlockRows(const BundleRound& round, const ReducedNormals& reduced,
                        const ResidualInfo& info, BlockRows* out) {
   ceres::Problem& problem = *round.problem;
   const int num_residuals = problem.GetCostFunctionForResidualBlock(info.id)->num_residuals();
-  std::vector<double*> jacobians(info.parameters.size(), nullptr);
-  std::vector<std::vector<double>> storage(info.parameters.size());
-  for (size_t k = 0; k < info.parameters.size(); ++k) {
-    double* block = info.parameters[k];
+  std::vector<double*> parameters;
+  problem.GetParameterBlocksForResidualBlock(info.id, &parameters);
+  std::vector<double*> jacobians(parameters.size(), nullptr);
+  std::vector<std::vector<double>> storage(parameters.size());
+  for (size_t k = 0; k < parameters.size(); ++k) {
+    double* block = parameters[k];
     if (problem.IsParameterBlockConstant(block)) continue;
     const int tangent = problem.ParameterBlockTangentSize(block);
     storage[k].assign(static_cast<size_t>(num_residuals) * tangent, 0.0);
@@ -87,15 +89,15 @@ bool EvaluateBlockRows(const BundleRound& round, const ReducedNormals& reduced,
   out->point = -1;
   out->J_p.resize(0, 3);
   std::vector<std::pair<int, int>> e_parts;  // (parameter k, tangent size)
-  for (size_t k = 0; k < info.parameters.size(); ++k) {
+  for (size_t k = 0; k < parameters.size(); ++k) {
     if (jacobians[k] == nullptr) continue;
-    const int tangent = problem.ParameterBlockTangentSize(info.parameters[k]);
-    const auto e = reduced.e_index.find(info.parameters[k]);
+    const int tangent = problem.ParameterBlockTangentSize(parameters[k]);
+    const auto e = reduced.e_index.find(parameters[k]);
     if (e != reduced.e_index.end()) {
       for (int c = 0; c < tangent; ++c) out->e_columns.push_back(reduced.e_offset[e->second] + c);
       e_parts.push_back({static_cast<int>(k), tangent});
     } else {
-      const auto p = reduced.point_index.find(info.parameters[k]);
+      const auto p = reduced.point_index.find(parameters[k]);
       if (p == reduced.point_index.end()) continue;
       out->point = p->second;
       out->J_p = Eigen::Map<const Eigen::Matrix<double, Eigen::Dynamic, 3, Eigen::RowMajor>>(

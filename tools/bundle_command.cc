@@ -55,6 +55,7 @@ DEFINE_bool(bundle_snoop, false, "Data snooping: remove the most significant rej
 DEFINE_double(bundle_alpha, 0.001, "Significance level of the w-test per observation (two-sided).");
 DEFINE_bool(bundle_cross_validate, false, "Leave each control point out in turn and report its error as a check point.");
 DEFINE_int32(bundle_max_covariance_parameters, 3000, "Covariances, redundancy numbers and diagnostics are computed when the reduced camera system has at most this many parameters (3000: blocks of up to 500 images; they take a dense inverse, which on 1000 images outlasts the adjustment itself by minutes).");
+DEFINE_string(bundle_relative_gauge, "free", "Relative blocks (no control points, no camera positions): free solves without a gauge and then moves the result into COLMAP's gauge (the first image as given, one coordinate of the second), the same minimum in far fewer iterations; fixed holds COLMAP's gauge from the start.");
 DEFINE_int32(bundle_threads, 0, "Threads of the linear algebra and of the cross-validation; 0 uses all cores.");
 DEFINE_bool(bundle_quiet, false, "No progress lines on stderr.");
 DEFINE_bool(bundle_pixel_center_origin, false, "Read Column/Row with (0,0) at the centre of the first pixel instead of the top-left corner of the image.");
@@ -202,12 +203,25 @@ int RunBundle(int argc, char** argv) {
   options.snooping_alpha = FLAGS_bundle_alpha;
   options.max_covariance_parameters = FLAGS_bundle_max_covariance_parameters;
   options.num_threads = FLAGS_bundle_threads;
+  if (FLAGS_bundle_relative_gauge != "free" && FLAGS_bundle_relative_gauge != "fixed")
+    return BadInput(kCommand, "--relative_gauge must be free or fixed, not '" + FLAGS_bundle_relative_gauge + "'");
+  options.free_gauge_for_relative_blocks = FLAGS_bundle_relative_gauge == "free";
   if (!FLAGS_bundle_quiet) {
     options.progress = [](const BundleIterationInfo& info) {
+      std::string lm;
+      if (std::isfinite(info.trust_region_radius)) {
+        char buffer[128];
+        std::snprintf(buffer, sizeof(buffer), "  %s quality %.2f radius %.2g  solve %.2f of %.2f s",
+                      info.step_successful ? "taken" : "REJECTED", info.step_quality,
+                      info.trust_region_radius, info.linear_solver_seconds,
+                      info.iteration_seconds);
+        lm = buffer;
+      }
       std::fprintf(stderr,
-                   "photopose bundle: round %d iteration %3d: cost %.6g  sigma0 %.4f  step %.3g  "
+                   "photopose bundle: round %d%s iteration %3d: cost %.6g  sigma0 %.4f  step %.3g%s  "
                    "%.1f s\n",
-                   info.round, info.iteration, info.cost, info.sigma0, info.step_norm,
+                   info.round, info.free_gauge ? " (free gauge)" : "", info.iteration, info.cost,
+                   info.sigma0, info.step_norm, lm.c_str(),
                    info.elapsed_seconds);
     };
   }

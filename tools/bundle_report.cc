@@ -108,6 +108,13 @@ json BundleReportJson(const Block& block, const BundleAdjustmentResult& result,
                        {"final_cost", Number(s.final_cost)},
                        {"time_seconds", s.time_seconds},
                        {"statistics_seconds", s.statistics_seconds},
+                       {"time_breakdown",
+                        {{"problem_build_seconds", s.problem_build_seconds},
+                         {"solver_preprocessing_seconds", s.solver_preprocessing_seconds},
+                         {"residual_evaluation_seconds", s.residual_evaluation_seconds},
+                         {"jacobian_evaluation_seconds", s.jacobian_evaluation_seconds},
+                         {"linear_solver_seconds", s.linear_solver_seconds},
+                         {"schur_structure", s.schur_structure}}},
                        {"num_images", s.num_images},
                        {"num_points", s.num_points},
                        {"num_marks", s.num_marks},
@@ -398,6 +405,16 @@ std::vector<std::string> BundleConsoleLines(const Block& block, const BundleAdju
   std::vector<std::string> lines;
   const BundleAdjustmentSummary& s = result.summary;
   lines.push_back("bundle: " + s.BriefReport());
+  {
+    std::ostringstream time;
+    time << "time: problem " << Format(s.problem_build_seconds) << " s, Ceres preprocessing "
+         << Format(s.solver_preprocessing_seconds) << " s, residuals "
+         << Format(s.residual_evaluation_seconds) << " s, Jacobians "
+         << Format(s.jacobian_evaluation_seconds) << " s, linear solves "
+         << Format(s.linear_solver_seconds) << " s, statistics " << Format(s.statistics_seconds)
+         << " s; Schur structure " << (s.schur_structure.empty() ? "n/a" : s.schur_structure);
+    lines.push_back(time.str());
+  }
   lines.push_back("datum: " + s.datum_description);
   for (const BundleGroupStatistics& g : result.groups) {
     std::ostringstream line;

@@ -324,6 +324,67 @@ TEST(BundleAdjustment, RelativeBlockUsesColmapsGauge) {
   EXPECT_NEAR(result.summary.sigma0, 1.0, 0.2);
 }
 
+TEST(BundleAdjustment, RelativeBlockSolvedFreeLandsInColmapsGauge) {
+  // The free-gauge solve, moved into COLMAP's gauge, is the minimum the fixed gauge reaches: the
+  // same cost, the same orientations in the same frame (the first image exactly as given, the
+  // scale coordinate of the second exactly as given) and the same covariances; in fewer
+  // iterations when the first image's start is off (here by up to 3 deg and 6 m).
+  SmallBlockOptions o;
+  o.rows = 4;
+  o.cols = 6;
+  o.gnss = false;
+  o.control_xy.clear();
+  o.check_xy.clear();
+  o.start_angle_error_deg = 3.0;
+  o.start_position_error_m = 6.0;
+  const SmallBlock data = MakeSmallBlock(o);
+  BundleAdjustmentOptions options = QuietOptions();
+  options.rejection_threshold = 0.0;
+  Block fixed_block = data.block, free_block = data.block;
+  BundleAdjustmentResult fixed, free;
+  options.free_gauge_for_relative_blocks = false;
+  ASSERT_TRUE(BundleAdjust(options, BundleAdjustmentConfig(), &fixed_block, &fixed).ok());
+  options.free_gauge_for_relative_blocks = true;
+  std::vector<BundleIterationInfo> progress;
+  options.progress = [&progress](const BundleIterationInfo& info) { progress.push_back(info); };
+  ASSERT_TRUE(BundleAdjust(options, BundleAdjustmentConfig(), &free_block, &free).ok());
+  ASSERT_TRUE(fixed.summary.IsSolutionUsable()) << fixed.summary.BriefReport();
+  ASSERT_TRUE(free.summary.IsSolutionUsable()) << free.summary.BriefReport();
+  EXPECT_EQ(free.summary.datum, BundleDatum::kRelative);
+  EXPECT_NEAR(free.summary.final_cost, fixed.summary.final_cost, 1e-8 * fixed.summary.final_cost);
+  EXPECT_EQ(free.summary.redundancy, fixed.summary.redundancy);
+  EXPECT_LE(free.summary.iterations, fixed.summary.iterations);
+  EXPECT_EQ(free.summary.schur_structure, "2,3,6");  // every image block has 6 free parameters
+  ASSERT_FALSE(progress.empty());
+  EXPECT_TRUE(progress.front().free_gauge);
+  EXPECT_TRUE(std::isfinite(progress.back().trust_region_radius));
+  // The held values, exactly.
+  EXPECT_EQ(free_block.images[0].eo->parameters, data.block.images[0].eo->parameters);
+  const Eigen::Vector3d start_second = data.block.images[1].eo->center_in_ground();
+  const Eigen::Vector3d free_second = free_block.images[1].eo->center_in_ground();
+  const Eigen::Vector3d fixed_second = fixed_block.images[1].eo->center_in_ground();
+  int axis;
+  (start_second - data.block.images[0].eo->center_in_ground()).cwiseAbs().maxCoeff(&axis);
+  EXPECT_EQ(free_second[axis], start_second[axis]);
+  EXPECT_EQ(fixed_second[axis], start_second[axis]);
+  // Both stop at their tolerances (cost change 1e-10): within a hundredth of each standard
+  // deviation of each other.
+  for (size_t i = 0; i < free_block.images.size(); ++i) {
+    ASSERT_EQ(free.images[i].has_covariance, fixed.images[i].has_covariance);
+    if (!free.images[i].has_covariance) continue;
+    const Vector6d difference = free_block.images[i].eo->parameters - fixed_block.images[i].eo->parameters;
+    for (int k = 0; k < 6; ++k) {
+      const double sigma = std::sqrt(fixed.images[i].covariance(k, k));
+      EXPECT_LT(std::abs(difference[k]), 0.01 * sigma + 1e-12) << "image " << i << " parameter " << k;
+    }
+    EXPECT_LT((free.images[i].covariance - fixed.images[i].covariance).norm(),
+              1e-5 * fixed.images[i].covariance.norm() + 1e-15) << i;
+  }
+  ASSERT_EQ(free.groups.size(), fixed.groups.size());
+  for (size_t g = 0; g < free.groups.size(); ++g)
+    EXPECT_NEAR(free.groups[g].redundancy_share, fixed.groups[g].redundancy_share, 1e-6);
+}
+
 TEST(BundleAdjustment, ColmapAr7ReachesColmapsCost) {
   // The real COLMAP model, adjusted as `colmap bundle_adjuster` does by default: focal length and
   // radial distortion refined, principal point fixed, unweighted pixels (tie accuracy 1 px), no
