@@ -34,7 +34,7 @@ DEFINE_double(control_sigma, 0.005, "block: Gaussian error of the surveyed contr
 DEFINE_int32(tie_blunders, 0, "block: tie marks moved by 20 pixels (listed in truth/blunders.csv).");
 DEFINE_int32(control_blunders, 0, "block: control points whose surveyed position is 0.5 m off.");
 DEFINE_int32(gnss_blunders, 0, "block: camera positions 5 m off (needs --gnss).");
-DEFINE_bool(benchmark_block, false, "block: the scaling benchmark's block instead (25 lines x 40 images, 120 000 tie points, about 1.7 million marks; docs/performance.md); the other block flags are ignored.");
+DEFINE_bool(benchmark_block, false, "block: the scaling benchmark's block instead (25 lines x 40 images 13 m apart on lines 30 m apart, 120 000 tie points, about 1.7 million marks; docs/performance.md). --lines and --images_per_line resize it (120 tie points per image unless --tie_points is given); the other block flags are ignored.");
 DEFINE_bool(colmap, false, "block: also write the block as a COLMAP text model (colmap/cameras.txt, images.txt, points3D.txt) at the perturbed start, tie points included.");
 DEFINE_string(sim_rotation, "rxryrz", "Angle convention of the frames tables written: rxryrz (alias seed), opk or pok.");
 
@@ -99,7 +99,19 @@ int RunSimulateBlock(const ParsedFlags& parsed, RotationConvention rotation) {
                                 "--tie_blunders, --control_blunders and --gnss_blunders");
   SyntheticBlockOptions options;
   if (FLAGS_benchmark_block) {
+    // The benchmark's layout; --lines and --images_per_line resize it for the growth curve, with
+    // the same tie-point density (120 per image) unless --tie_points says otherwise.
     options = BenchmarkBlockOptions();
+    const int default_images = options.num_lines * options.images_per_line;
+    if (!IsDefault("lines")) options.num_lines = FLAGS_lines;
+    if (!IsDefault("images_per_line")) options.images_per_line = FLAGS_images_per_line;
+    if (!IsDefault("tie_points")) {
+      options.num_tie_points = FLAGS_tie_points;
+    } else {
+      options.num_tie_points = static_cast<int>(static_cast<long long>(options.num_tie_points) *
+                                                options.num_lines * options.images_per_line /
+                                                default_images);
+    }
   } else {
     options.num_lines = FLAGS_lines;
     options.images_per_line = FLAGS_images_per_line;
