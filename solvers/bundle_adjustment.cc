@@ -266,6 +266,8 @@ std::string BundleAdjustmentSummary::BriefReport() const {
      << ", " << iterations << " iterations, cost " << initial_cost << " -> " << final_cost
      << ", sigma0 " << sigma0 << " (redundancy " << redundancy << ")";
   if (num_rejected_marks > 0) os << ", " << num_rejected_marks << " marks rejected";
+  if (!tie_points_left_out.empty())
+    os << ", " << tie_points_left_out.size() << " tie points without initial coordinates left out";
   os << ", " << time_seconds << " s";
   if (!message.empty()) os << ": " << message;
   return os.str();
@@ -338,6 +340,8 @@ Status BundleAdjust(const BundleAdjustmentOptions& options, const BundleAdjustme
   PHOTOPOSE_RETURN_IF_ERROR(internal::MakeBundlePlan(options, config, *block, &plan));
   summary.datum = plan.datum;
   summary.datum_description = plan.datum_description;
+  for (const int p : plan.tie_points_left_out)
+    summary.tie_points_left_out.push_back(block->points[p].id);
 
   BundleState state;
   for (const BlockImage& image : block->images) state.eo.push_back(image.eo->parameters);
@@ -424,6 +428,12 @@ Status BundleAdjust(const BundleAdjustmentOptions& options, const BundleAdjustme
                                 ? BundleTermination::kNoConvergence
                                 : BundleTermination::kFailure;
       summary.message = "round " + std::to_string(r) + ": " + ceres_summary.message;
+      // What the round adjusted (the statistics, which count them otherwise, are not computed).
+      summary.num_images = static_cast<int>(block->images.size());
+      summary.num_points = static_cast<int>(
+          std::count(plan.point_in_problem.begin(), plan.point_in_problem.end(), 1));
+      summary.num_marks = static_cast<int>(
+          std::count(plan.mark_used.begin(), plan.mark_used.end(), 1));
       summary.time_seconds = SecondsSince(start);
       return Status::Ok();
     }

@@ -304,6 +304,9 @@ struct BundleAdjustmentSummary {
   int redundancy = 0;             // scalar observations - free parameters
   int num_images = 0, num_points = 0, num_marks = 0;  // in the final round
   int num_rejected_marks = 0;
+  // Tie points left out because they had no initial coordinates (seen twice or more, but not
+  // intersected: rays too close to parallel or marks that do not meet), by PointID.
+  std::vector<std::string> tie_points_left_out;
   double time_seconds = 0.0;
   double statistics_seconds = 0.0;  // covariances and redundancy shares
   // Where the adjustment's time went, over all rounds (s): building the Ceres problems; Ceres'

@@ -174,7 +174,7 @@ Status MakeBundlePlan(const BundleAdjustmentOptions& options, const BundleAdjust
   }
 
   // Marks in the adjustment: of control and tie points, of images with an orientation.
-  std::vector<std::string> missing_eo, missing_position;
+  std::vector<std::string> missing_eo;
   for (size_t i = 0; i < block.images.size(); ++i)
     if (!block.images[i].eo) missing_eo.push_back(block.images[i].name);
   if (!missing_eo.empty()) {
@@ -205,15 +205,17 @@ Status MakeBundlePlan(const BundleAdjustmentOptions& options, const BundleAdjust
       continue;
     }
     if (rays == 0) continue;
-    if (point.role == PointRole::kTie && !point.position_m) missing_position.push_back(point.id);
+    if (point.role == PointRole::kTie && !point.position_m) {
+      // Not intersected by the initialisation (rays too close to parallel, or marks that do not
+      // meet): left out like a one-ray point, and listed in the summary.
+      for (const int m : block.marks_of_point[p]) plan->mark_used[m] = 0;
+      plan->tie_points_left_out.push_back(static_cast<int>(p));
+      continue;
+    }
     plan->point_in_problem[p] = 1;
     if (point.role == PointRole::kControl && !config.constant_points.count(static_cast<int>(p)))
       plan->point_prior[p] = 1;
     if (point.role == PointRole::kControl && point.accuracy_m) plan->point_sigma[p] = *point.accuracy_m;
-  }
-  if (!missing_position.empty()) {
-    return Status::Error("tie points without initial coordinates: " + Names(missing_position) +
-                         " (let the initialisation triangulate them)");
   }
   for (size_t i = 0; i < block.images.size(); ++i) {
     int count = 0;

@@ -66,6 +66,9 @@ struct BundlePlan {
   std::vector<std::vector<int>> calibrated;    // per camera: parameter indices estimated
   BundleDatum datum = BundleDatum::kControl;
   std::string datum_description;
+  // Tie points seen twice or more but without initial coordinates (the initialisation could not
+  // intersect them): left out of the adjustment with their marks.
+  std::vector<int> tie_points_left_out;
   int relative_fixed_image = -1;  // kRelative: the image held fixed
   int relative_scale_image = -1;  // and the image whose one coordinate fixes the scale
   int relative_scale_axis = -1;

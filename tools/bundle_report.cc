@@ -119,6 +119,7 @@ json BundleReportJson(const Block& block, const BundleAdjustmentResult& result,
                        {"num_points", s.num_points},
                        {"num_marks", s.num_marks},
                        {"num_rejected_marks", s.num_rejected_marks},
+                       {"tie_points_left_out", s.tie_points_left_out},
                        {"num_images_initialized", context.num_images_initialized},
                        {"datum", s.datum == BundleDatum::kControl ? "absolute" : "relative"},
                        {"datum_description", s.datum_description}};
@@ -426,6 +427,16 @@ std::vector<std::string> BundleConsoleLines(const Block& block, const BundleAdju
   }
   for (const BundleGroupStatistics& g : result.groups)
     if (g.overfit) lines.push_back("warning: " + g.message);
+  if (!s.tie_points_left_out.empty()) {
+    std::string names;
+    for (size_t k = 0; k < s.tie_points_left_out.size() && k < 5; ++k)
+      names += (k ? ", " : "") + s.tie_points_left_out[k];
+    if (s.tie_points_left_out.size() > 5) names += ", ...";
+    lines.push_back("warning: " + std::to_string(s.tie_points_left_out.size()) +
+                    " tie points seen in two or more images could not be intersected (rays too "
+                    "close to parallel, or marks that do not meet) and were left out: " + names +
+                    " (report: summary.tie_points_left_out)");
+  }
   // Advice from the estimated accuracies.
   static const std::pair<const char*, const char*> kFlags[] = {
       {"tie_marks", "--tie_accuracy"},

@@ -385,6 +385,30 @@ TEST(BundleAdjustment, RelativeBlockSolvedFreeLandsInColmapsGauge) {
     EXPECT_NEAR(free.groups[g].redundancy_share, fixed.groups[g].redundancy_share, 1e-6);
 }
 
+TEST(BundleAdjustment, TiePointsWithoutStartAreLeftOutAndNamed) {
+  // A tie point the initialisation could not intersect has no coordinates: the adjustment leaves
+  // it out with its marks and names it, instead of refusing the block.
+  SmallBlock data = MakeSmallBlock(SmallBlockOptions());
+  std::vector<std::string> removed;
+  for (BlockPoint& point : data.block.points) {
+    if (point.role != PointRole::kTie || removed.size() == 2) continue;
+    point.position_m.reset();
+    removed.push_back(point.id);
+  }
+  ASSERT_EQ(removed.size(), 2u);
+  BundleAdjustmentResult result;
+  ASSERT_TRUE(BundleAdjust(QuietOptions(), BundleAdjustmentConfig(), &data.block, &result).ok());
+  ASSERT_TRUE(result.summary.IsSolutionUsable()) << result.summary.BriefReport();
+  EXPECT_EQ(result.summary.tie_points_left_out, removed);
+  EXPECT_NE(result.summary.BriefReport().find("2 tie points without initial coordinates left out"),
+            std::string::npos);
+  for (size_t p = 0; p < data.block.points.size(); ++p) {
+    if (data.block.points[p].id != removed[0]) continue;
+    EXPECT_EQ(result.points[p].num_observations, 0);
+    EXPECT_FALSE(data.block.points[p].position_m.has_value());
+  }
+}
+
 TEST(BundleAdjustment, ColmapAr7ReachesColmapsCost) {
   // The real COLMAP model, adjusted as `colmap bundle_adjuster` does by default: focal length and
   // radial distortion refined, principal point fixed, unweighted pixels (tie accuracy 1 px), no
