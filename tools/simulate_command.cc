@@ -17,11 +17,11 @@ DEFINE_string(scenario, "nadir", "Scene to simulate: nadir (one vertical aerial 
 DEFINE_uint64(sim_seed, 1, "Seed of the random generator; the same seed and flags give the same dataset.");
 DEFINE_double(noise_px, 0.5, "Gaussian noise added to every mark, one sigma in pixels.");
 DEFINE_double(outlier_fraction, 0.0, "Fraction of the marks replaced by gross errors of 20 to 200 pixels, from 0 up to (not including) 1.");
-DEFINE_int32(control_points, 20, "Control points generated per image footprint.");
-DEFINE_int32(check_points, 5, "Check points generated per image footprint (Role check: not used to resect, reported as check residuals).");
-DEFINE_double(initial_position_error, 5.0, "Error of the approximate frames: uniform in plus or minus this many metres per axis.");
-DEFINE_double(initial_angle_error, 2.0, "Error of the approximate frames: uniform in plus or minus this many degrees per angle.");
-DEFINE_string(out_dir, "", "Folder to write the dataset into (created when missing): cameras.csv, points.csv, marks.csv, frames_approx.csv, and truth/frames.csv with truth/outliers.csv. The folder is replaced as a whole, all or nothing: other files in it are carried over, subfolders other than truth are refused.");
+DEFINE_int32(control_points, 20, "Control points generated per image footprint (nadir, oblique, uav_block); with --scenario=block the block's total (default there 8: corners, edge midpoints, centre, interior).");
+DEFINE_int32(check_points, 5, "Check points generated per image footprint (Role check: not used to resect, reported as check residuals); with --scenario=block the block's total (default there 6).");
+DEFINE_double(initial_position_error, 5.0, "Error of the approximate frames: uniform in plus or minus this many metres per axis (single-image scenarios); with --scenario=block a Gaussian sigma per axis (default there 2 m).");
+DEFINE_double(initial_angle_error, 2.0, "Error of the approximate frames: uniform in plus or minus this many degrees per angle (single-image scenarios); with --scenario=block a Gaussian sigma per angle (default there 1 degree).");
+DEFINE_string(out_dir, "", "Folder to write the dataset into (created when missing): cameras.csv, points.csv, marks.csv, frames_approx.csv, and truth/frames.csv with truth/outliers.csv (--scenario=block: frames.csv with the start and the GNSS positions, truth/frames.csv, truth/points.csv, truth/blunders.csv, and colmap/ with --colmap). The folder is replaced as a whole, all or nothing: other files in it are carried over, subfolders other than truth are refused.");
 DEFINE_int32(lines, 4, "block: flight lines.");
 DEFINE_int32(images_per_line, 10, "block: exposures per flight line.");
 DEFINE_double(forward_overlap, 0.8, "block: forward overlap of neighbouring images along a line, from 0 up to (not including) 1.");
