@@ -3,6 +3,8 @@
 #include <Eigen/LU>
 #include <cmath>
 #include <map>
+#include <string_view>
+#include <unordered_map>
 
 #include "core/csv.h"
 
@@ -165,8 +167,11 @@ Status AssembleBlock(const BlockTables& tables, Block* block) {
     result.cameras.push_back(CameraOf(table));
   }
 
+  // Name -> index maps hold views of the tables' strings (which outlive them): a block has millions
+  // of marks, each looked up by its raster and point.
   // Points of the table.
-  std::map<std::string, int> point_index;
+  std::unordered_map<std::string_view, int> point_index;
+  point_index.reserve(tables.points.size());
   for (const GroundPoint& row : tables.points) {
     BlockPoint point;
     point.id = row.point_id;
@@ -184,9 +189,9 @@ Status AssembleBlock(const BlockTables& tables, Block* block) {
   }
 
   // Images: from the marks, in order of first appearance, then frames rows without marks.
-  std::map<std::string, const FrameRecord*> frame_of;
+  std::unordered_map<std::string_view, const FrameRecord*> frame_of;
   for (const FrameRecord& frame : tables.frames) frame_of.emplace(frame.raster, &frame);
-  std::map<std::string, int> image_index;
+  std::unordered_map<std::string_view, int> image_index;
   // The camera of an image named by a mark's or a frame's CameraID; -1 and an error otherwise.
   const auto find_camera = [&](const std::string& camera_id, const std::string& file, int line,
                                int* camera) -> Status {
@@ -282,6 +287,7 @@ Status AssembleBlock(const BlockTables& tables, Block* block) {
   for (size_t i = 0; i < result.images.size(); ++i)
     pixel_cameras.push_back(PixelToFilmCamera(result, static_cast<int>(i)));
   const double origin_shift = tables.pixel_origin == PixelOrigin::kCenter ? 0.5 : 0.0;
+  result.marks.reserve(tables.marks.size());
   for (const ImageMark& row : tables.marks) {
     BlockMark mark;
     mark.line = row.line;

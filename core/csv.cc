@@ -5,6 +5,7 @@
 #include <sys/stat.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <cctype>
 #include <cerrno>
 #include <charconv>
@@ -107,112 +108,211 @@ bool ReadAtMost(int fd, size_t limit, std::string* text, int* error_number) {
   return true;
 }
 
-// The record parser: walks the text once, keeping the physical line number.
-class CsvParser {
- public:
-  CsvParser(std::string_view text, const std::string& file_name)
-      : text_(text), file_name_(file_name) {
-    if (text_.substr(0, 3) == "\xEF\xBB\xBF") pos_ = 3;  // UTF-8 byte order mark
-  }
+}  // namespace
 
-  // Skips empty and comment lines; false at the end of the text.
-  bool NextRecordStart() {
-    while (pos_ < text_.size()) {
-      size_t i = pos_;
-      while (i < text_.size() && (IsBlank(text_[i]) || text_[i] == '\r')) ++i;
-      if (i < text_.size() && text_[i] != '\n' && text_[i] != '#') return true;
-      const size_t end = text_.find('\n', i);
-      if (end == std::string_view::npos) {
-        pos_ = text_.size();
-        return false;
+// ------------------------------------------------------------------ CsvHeader
+
+Status CsvHeader::SetNames(std::vector<std::string> names) {
+  header_ = std::move(names);
+  column_by_name_.clear();
+  for (size_t i = 0; i < header_.size(); ++i) {
+    const std::string& name = header_[i];
+    if (name.empty())
+      return Error(header_line_, "column " + std::to_string(i + 1), "the header names no column here");
+    const auto [first, inserted] = column_by_name_.emplace(Normalized(name), i);
+    if (!inserted) {
+      return Error(header_line_, name,
+                   "column appears twice in the header (also as " + Quoted(header_[first->second]) +
+                       ")");
+    }
+  }
+  return Status::Ok();
+}
+
+std::string CsvHeader::Normalized(std::string_view name) const {
+  if (options_.tolerant_header) return FoldedName(name);
+  std::string lower(name);
+  for (char& c : lower) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+  return lower;
+}
+
+bool CsvHeader::SameName(std::string_view a, std::string_view b) const {
+  return Normalized(a) == Normalized(b);
+}
+
+std::optional<size_t> CsvHeader::ColumnIndex(std::string_view name) const {
+  const auto found = column_by_name_.find(Normalized(name));
+  if (found == column_by_name_.end()) return std::nullopt;
+  return found->second;
+}
+
+CsvColumn CsvHeader::Column(std::string_view name) const {
+  return CsvColumn{name, ColumnIndex(name).value_or(CsvColumn::kAbsent)};
+}
+
+Status CsvHeader::RequireColumns(const std::vector<std::string_view>& names) const {
+  for (const std::string_view name : names) {
+    if (!HasColumn(name)) return Error(header_line_, name, "required column is missing");
+  }
+  return Status::Ok();
+}
+
+std::vector<size_t> CsvHeader::ColumnsOtherThan(const std::vector<std::string_view>& known) const {
+  std::vector<size_t> others;
+  for (size_t i = 0; i < header_.size(); ++i) {
+    bool is_known = false;
+    for (const std::string_view name : known) is_known = is_known || SameName(header_[i], name);
+    if (!is_known) others.push_back(i);
+  }
+  return others;
+}
+
+Status CsvHeader::Error(int line, std::string_view column, std::string_view what) const {
+  std::string message = file_name_ + ":" + std::to_string(line) + ": ";
+  if (!column.empty()) message += std::string(column) + ": ";
+  message += what;
+  return Status::Error(EscapeForMessage(message));
+}
+
+// ------------------------------------------------------------------ CsvReader
+
+Status CsvReader::Open(std::string_view text, const std::string& file_name,
+                       const CsvOptions& options) {
+  PHOTOPOSE_RETURN_IF_ERROR(CheckTextInput(text, file_name));
+  text_ = text;
+  file_name_ = &file_name;
+  pos_ = text_.substr(0, 3) == "\xEF\xBB\xBF" ? 3 : 0;  // UTF-8 byte order mark
+  line_ = 1;
+  header_ = CsvHeader();
+  header_.file_name_ = file_name;
+  header_.options_ = options;
+  if (!NextRecordStart()) return Status::Error(EscapeForMessage(file_name) + ": no header line");
+  PHOTOPOSE_RETURN_IF_ERROR(ParseRecord(/*header=*/true));
+  header_.header_line_ = row_line_;
+  return header_.SetNames(std::vector<std::string>(fields_.begin(), fields_.end()));
+}
+
+size_t CsvReader::MaxRows() const {
+  return static_cast<size_t>(std::count(text_.begin() + pos_, text_.end(), '\n')) + 1;
+}
+
+Status CsvReader::Next(bool* has_row) {
+  *has_row = NextRecordStart();
+  if (!*has_row) return Status::Ok();
+  PHOTOPOSE_RETURN_IF_ERROR(ParseRecord(/*header=*/false));
+  if (fields_.size() != header_.header().size()) {
+    return header_.Error(row_line_, "",
+                         "row has " + std::to_string(fields_.size()) +
+                             " fields but the header has " +
+                             std::to_string(header_.header().size()));
+  }
+  return Status::Ok();
+}
+
+bool CsvReader::NextRecordStart() {
+  while (pos_ < text_.size()) {
+    size_t i = pos_;
+    while (i < text_.size() && (IsBlank(text_[i]) || text_[i] == '\r')) ++i;
+    if (i < text_.size() && text_[i] != '\n' && text_[i] != '#') return true;
+    const size_t end = text_.find('\n', i);
+    if (end == std::string_view::npos) {
+      pos_ = text_.size();
+      return false;
+    }
+    pos_ = end + 1;
+    ++line_;
+  }
+  return false;
+}
+
+Status CsvReader::ParseRecord(bool header) {
+  row_line_ = line_;
+  fields_.clear();
+  unescaped_.clear();
+  unescaped_fields_.clear();
+  while (true) {
+    std::string_view field;
+    PHOTOPOSE_RETURN_IF_ERROR(ParseField(header, fields_.size(), &field));
+    fields_.push_back(field);
+    if (pos_ < text_.size() && text_[pos_] == ',') {
+      if (fields_.size() >= kMaxColumns) {
+        return Status::Error(EscapeForMessage(*file_name_) + ":" + std::to_string(row_line_) +
+                             ": the " + (header ? "header" : "row") + " has more than " +
+                             std::to_string(kMaxColumns) + " fields; photopose reads at most " +
+                             std::to_string(kMaxColumns) + " columns");
       }
-      pos_ = end + 1;
+      ++pos_;
+      continue;
+    }
+    if (pos_ < text_.size()) {  // at '\n'
+      ++pos_;
       ++line_;
     }
-    return false;
-  }
-
-  // Parses one record starting at the current position. `header` names the columns in messages
-  // (null for the header itself).
-  Status ParseRecord(const std::vector<std::string>* header, CsvRow* row) {
-    row->line = line_;
-    row->fields.clear();
-    while (true) {
-      std::string field;
-      PHOTOPOSE_RETURN_IF_ERROR(ParseField(header, row->fields.size(), &field));
-      row->fields.push_back(std::move(field));
-      if (pos_ < text_.size() && text_[pos_] == ',') {
-        if (row->fields.size() >= kMaxColumns) {
-          return Status::Error(EscapeForMessage(file_name_) + ":" + std::to_string(row->line) +
-                               ": the " + (header == nullptr ? "header" : "row") +
-                               " has more than " + std::to_string(kMaxColumns) +
-                               " fields; photopose reads at most " + std::to_string(kMaxColumns) +
-                               " columns");
-        }
-        ++pos_;
-        continue;
-      }
-      if (pos_ < text_.size()) {  // at '\n'
-        ++pos_;
-        ++line_;
-      }
-      return Status::Ok();
-    }
-  }
-
- private:
-  std::string ColumnName(const std::vector<std::string>* header, size_t index) const {
-    if (header != nullptr && index < header->size()) return (*header)[index];
-    return "field " + std::to_string(index + 1);
-  }
-
-  Status ParseField(const std::vector<std::string>* header, size_t index, std::string* field) {
-    while (pos_ < text_.size() && IsBlank(text_[pos_])) ++pos_;
-    if (pos_ < text_.size() && text_[pos_] == '"') {
-      const int quote_line = line_;
-      ++pos_;
-      while (true) {
-        if (pos_ >= text_.size()) {
-          return Status::Error(EscapeForMessage(file_name_ + ":" + std::to_string(quote_line) +
-                                                ": " + ColumnName(header, index) +
-                                                ": quoted field is not closed"));
-        }
-        const char c = text_[pos_++];
-        if (c == '"') {
-          if (pos_ < text_.size() && text_[pos_] == '"') {
-            field->push_back('"');
-            ++pos_;
-            continue;
-          }
-          break;
-        }
-        if (c == '\n') {
-          ++line_;
-          if (!field->empty() && field->back() == '\r') field->pop_back();
-        }
-        field->push_back(c);
-      }
-      while (pos_ < text_.size() && (IsBlank(text_[pos_]) || text_[pos_] == '\r')) ++pos_;
-      if (pos_ < text_.size() && text_[pos_] != ',' && text_[pos_] != '\n') {
-        return Status::Error(EscapeForMessage(file_name_ + ":" + std::to_string(line_) + ": " +
-                                              ColumnName(header, index) +
-                                              ": text after the closing quote"));
-      }
-      return Status::Ok();
-    }
-    const size_t start = pos_;
-    while (pos_ < text_.size() && text_[pos_] != ',' && text_[pos_] != '\n') ++pos_;
-    *field = std::string(TrimBlanks(text_.substr(start, pos_ - start)));
+    // The unescaped fields point into unescaped_ only now that it no longer grows.
+    for (const UnescapedField& u : unescaped_fields_)
+      fields_[u.field] = std::string_view(unescaped_.data() + u.offset, u.size);
     return Status::Ok();
   }
+}
 
-  std::string_view text_;
-  const std::string& file_name_;
-  size_t pos_ = 0;
-  int line_ = 1;
-};
+std::string CsvReader::ColumnName(bool header, size_t index) const {
+  if (!header && index < header_.header().size()) return header_.header()[index];
+  return "field " + std::to_string(index + 1);
+}
 
-}  // namespace
+Status CsvReader::ParseField(bool header, size_t index, std::string_view* field) {
+  while (pos_ < text_.size() && IsBlank(text_[pos_])) ++pos_;
+  if (pos_ < text_.size() && text_[pos_] == '"') {
+    const int quote_line = line_;
+    const size_t start = ++pos_;
+    // A view of the text unless the field holds "" or a line break (unescaped into unescaped_).
+    bool plain = true;
+    size_t offset = unescaped_.size();
+    const auto copy_so_far = [&](size_t end) {
+      if (plain) unescaped_.append(text_.substr(start, end - start));
+      plain = false;
+    };
+    while (true) {
+      if (pos_ >= text_.size()) {
+        return Status::Error(EscapeForMessage(*file_name_ + ":" + std::to_string(quote_line) +
+                                              ": " + ColumnName(header, index) +
+                                              ": quoted field is not closed"));
+      }
+      const char c = text_[pos_++];
+      if (c == '"') {
+        if (pos_ < text_.size() && text_[pos_] == '"') {
+          copy_so_far(pos_ - 1);  // up to the first quote of the pair, which is the character
+          unescaped_.push_back('"');
+          ++pos_;
+          continue;
+        }
+        if (plain) *field = text_.substr(start, pos_ - 1 - start);
+        break;
+      }
+      if (c == '\n') {
+        copy_so_far(pos_ - 1);
+        ++line_;
+        if (unescaped_.size() > offset && unescaped_.back() == '\r') unescaped_.pop_back();
+      }
+      if (!plain) unescaped_.push_back(c);
+    }
+    if (!plain) {
+      unescaped_fields_.push_back({index, offset, unescaped_.size() - offset});
+      *field = std::string_view();
+    }
+    while (pos_ < text_.size() && (IsBlank(text_[pos_]) || text_[pos_] == '\r')) ++pos_;
+    if (pos_ < text_.size() && text_[pos_] != ',' && text_[pos_] != '\n') {
+      return Status::Error(EscapeForMessage(*file_name_ + ":" + std::to_string(line_) + ": " +
+                                            ColumnName(header, index) +
+                                            ": text after the closing quote"));
+    }
+    return Status::Ok();
+  }
+  const size_t start = pos_;
+  while (pos_ < text_.size() && text_[pos_] != ',' && text_[pos_] != '\n') ++pos_;
+  *field = TrimBlanks(text_.substr(start, pos_ - start));
+  return Status::Ok();
+}
 
 // ------------------------------------------------------------------ CsvTable
 
@@ -224,104 +324,39 @@ Status CsvTable::Read(const std::string& path, const CsvOptions& options, CsvTab
 
 Status CsvTable::Parse(std::string_view text, const std::string& file_name,
                        const CsvOptions& options, CsvTable* table) {
-  PHOTOPOSE_RETURN_IF_ERROR(CheckTextInput(text, file_name));
+  CsvReader reader;
+  PHOTOPOSE_RETURN_IF_ERROR(reader.Open(text, file_name, options));
   CsvTable result;
-  result.file_name_ = file_name;
-  result.options_ = options;
-  CsvParser parser(text, file_name);
-  if (!parser.NextRecordStart())
-    return Status::Error(EscapeForMessage(file_name) + ": no header line");
-
-  CsvRow header_row;
-  PHOTOPOSE_RETURN_IF_ERROR(parser.ParseRecord(nullptr, &header_row));
-  result.header_line_ = header_row.line;
-  result.header_ = std::move(header_row.fields);
-  for (size_t i = 0; i < result.header_.size(); ++i) {
-    const std::string& name = result.header_[i];
-    if (name.empty()) {
-      return result.Error(result.header_line_, "column " + std::to_string(i + 1),
-                          "the header names no column here");
-    }
-    const auto [first, inserted] = result.column_by_name_.emplace(result.Normalized(name), i);
-    if (!inserted) {
-      return result.Error(result.header_line_, name,
-                          "column appears twice in the header (also as " +
-                              Quoted(result.header_[first->second]) + ")");
-    }
-  }
-
-  while (parser.NextRecordStart()) {
+  static_cast<CsvHeader&>(result) = reader.header();
+  bool has_row = false;
+  while (true) {
+    PHOTOPOSE_RETURN_IF_ERROR(reader.Next(&has_row));
+    if (!has_row) break;
     CsvRow row;
-    PHOTOPOSE_RETURN_IF_ERROR(parser.ParseRecord(&result.header_, &row));
-    if (row.fields.size() != result.header_.size()) {
-      return result.Error(row.line, "",
-                          "row has " + std::to_string(row.fields.size()) +
-                              " fields but the header has " +
-                              std::to_string(result.header_.size()));
-    }
+    row.line = reader.line();
+    row.fields.assign(reader.fields().begin(), reader.fields().end());
     result.rows_.push_back(std::move(row));
   }
   *table = std::move(result);
   return Status::Ok();
 }
 
-std::string CsvTable::Normalized(std::string_view name) const {
-  if (options_.tolerant_header) return FoldedName(name);
-  std::string lower(name);
-  for (char& c : lower) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
-  return lower;
-}
-
-bool CsvTable::SameName(std::string_view a, std::string_view b) const {
-  return Normalized(a) == Normalized(b);
-}
-
-std::optional<size_t> CsvTable::ColumnIndex(std::string_view name) const {
-  const auto found = column_by_name_.find(Normalized(name));
-  if (found == column_by_name_.end()) return std::nullopt;
-  return found->second;
-}
-
-Status CsvTable::RequireColumns(const std::vector<std::string_view>& names) const {
-  for (const std::string_view name : names) {
-    if (!HasColumn(name)) return Error(header_line_, name, "required column is missing");
-  }
-  return Status::Ok();
-}
-
-std::vector<size_t> CsvTable::ColumnsOtherThan(const std::vector<std::string_view>& known) const {
-  std::vector<size_t> others;
-  for (size_t i = 0; i < header_.size(); ++i) {
-    bool is_known = false;
-    for (const std::string_view name : known) is_known = is_known || SameName(header_[i], name);
-    if (!is_known) others.push_back(i);
-  }
-  return others;
-}
-
-Status CsvTable::Error(int line, std::string_view column, std::string_view what) const {
-  std::string message = file_name_ + ":" + std::to_string(line) + ": ";
-  if (!column.empty()) message += std::string(column) + ": ";
-  message += what;
-  return Status::Error(EscapeForMessage(message));
-}
-
 // ------------------------------------------------------------------ CsvRowReader
 
-std::string_view CsvRowReader::Text(std::string_view column) const {
-  const std::optional<size_t> index = table_.ColumnIndex(column);
-  if (!index || *index >= row_.fields.size()) return {};
-  return row_.fields[*index];
-}
+CsvRowReader::CsvRowReader(const CsvTable& table, const CsvRow& row)
+    : header_(table),
+      line_(row.line),
+      table_fields_(row.fields.begin(), row.fields.end()),
+      fields_(&table_fields_) {}
 
-Status CsvRowReader::RequiredText(std::string_view column, std::string* value) const {
+Status CsvRowReader::RequiredText(const CsvColumn& column, std::string* value) const {
   const std::string_view text = Text(column);
   if (text.empty()) return Error(column, "is empty");
-  *value = std::string(text);
+  value->assign(text.data(), text.size());
   return Status::Ok();
 }
 
-Status CsvRowReader::Number(std::string_view column, std::optional<double>* value) const {
+Status CsvRowReader::Number(const CsvColumn& column, std::optional<double>* value) const {
   const std::string_view text = Text(column);
   value->reset();
   if (text.empty()) return Status::Ok();
@@ -332,7 +367,7 @@ Status CsvRowReader::Number(std::string_view column, std::optional<double>* valu
   return Status::Ok();
 }
 
-Status CsvRowReader::RequiredNumber(std::string_view column, double* value) const {
+Status CsvRowReader::RequiredNumber(const CsvColumn& column, double* value) const {
   std::optional<double> number;
   PHOTOPOSE_RETURN_IF_ERROR(Number(column, &number));
   if (!number) return Error(column, "is empty");
@@ -340,7 +375,7 @@ Status CsvRowReader::RequiredNumber(std::string_view column, double* value) cons
   return Status::Ok();
 }
 
-Status CsvRowReader::Integer(std::string_view column, std::optional<long long>* value) const {
+Status CsvRowReader::Integer(const CsvColumn& column, std::optional<long long>* value) const {
   const std::string_view text = Text(column);
   value->reset();
   if (text.empty()) return Status::Ok();
@@ -351,7 +386,7 @@ Status CsvRowReader::Integer(std::string_view column, std::optional<long long>* 
   return Status::Ok();
 }
 
-Status CsvRowReader::NumberList(std::string_view column, std::vector<double>* values) const {
+Status CsvRowReader::NumberList(const CsvColumn& column, std::vector<double>* values) const {
   values->clear();
   const std::vector<std::string_view> items = SplitListItems(Text(column));
   for (size_t i = 0; i < items.size(); ++i) {
@@ -365,7 +400,7 @@ Status CsvRowReader::NumberList(std::string_view column, std::vector<double>* va
   return Status::Ok();
 }
 
-Status CsvRowReader::NumberGroups(std::string_view column, int group_size,
+Status CsvRowReader::NumberGroups(const CsvColumn& column, int group_size,
                                   std::vector<double>* values) const {
   values->clear();
   const std::string_view text = Text(column);
@@ -461,6 +496,10 @@ Status CheckTextInput(std::string_view text, const std::string& file_name) {
       return Status::Error(name + ":" + std::to_string(line) + ": the line is longer than " +
                            std::to_string(kMaxLineBytes) +
                            " bytes, the longest line photopose reads");
+    }
+    if (c >= 0x20 && c < 0x7F) {  // printable ASCII, nearly every byte of a table
+      ++i;
+      continue;
     }
     if (c == 0) {
       return error(
@@ -591,7 +630,7 @@ std::vector<std::string_view> SplitListItems(std::string_view text) {
   return items;
 }
 
-std::string FormatNumber(double value) {
+void AppendFormattedNumber(double value, std::string* text) {
   // The shortest text that reads back exactly; positional (500000, 0.0125) rather than
   // scientific (5e+05) in the range of coordinates and accuracies, as a surveyor writes them.
   char buffer[400];
@@ -600,7 +639,13 @@ std::string FormatNumber(double value) {
       magnitude >= 1e-4 && magnitude < 1e15
           ? std::to_chars(buffer, buffer + sizeof(buffer), value, std::chars_format::fixed)
           : std::to_chars(buffer, buffer + sizeof(buffer), value);
-  return std::string(buffer, result.ptr);
+  text->append(buffer, result.ptr);
+}
+
+std::string FormatNumber(double value) {
+  std::string text;
+  AppendFormattedNumber(value, &text);
+  return text;
 }
 
 std::string FormatPlainNumber(double value) {
@@ -621,17 +666,25 @@ std::string FormatNumberList(const std::vector<double>& values) {
   return text;
 }
 
-std::string CsvQuote(std::string_view field) {
+void AppendCsvField(std::string_view field, std::string* text) {
   const bool needs_quotes =
       field.find_first_of(",\"\n\r") != std::string_view::npos ||
       (!field.empty() && (IsBlank(field.front()) || IsBlank(field.back()) || field.front() == '#'));
-  if (!needs_quotes) return std::string(field);
-  std::string quoted = "\"";
-  for (const char c : field) {
-    if (c == '"') quoted += '"';
-    quoted += c;
+  if (!needs_quotes) {
+    text->append(field);
+    return;
   }
-  quoted += '"';
+  *text += '"';
+  for (const char c : field) {
+    if (c == '"') *text += '"';
+    *text += c;
+  }
+  *text += '"';
+}
+
+std::string CsvQuote(std::string_view field) {
+  std::string quoted;
+  AppendCsvField(field, &quoted);
   return quoted;
 }
 
@@ -641,7 +694,7 @@ std::string CsvLine(const std::vector<std::string>& fields) {
   std::string line;
   for (size_t i = 0; i < fields.size(); ++i) {
     if (i > 0) line += ',';
-    line += CsvQuote(fields[i]);
+    AppendCsvField(fields[i], &line);
   }
   line += '\n';
   return line;

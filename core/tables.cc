@@ -11,10 +11,13 @@
 #include <climits>
 #include <cmath>
 #include <cstring>
+#include <deque>
+#include <functional>
 #include <map>
 #include <string_view>
 
 #include "core/csv.h"
+#include "core/text_scanner.h"
 
 namespace photopose {
 namespace {
@@ -151,28 +154,59 @@ const ValueRange* RangeOf(std::string_view column) {
   return found == kRanges->end() ? nullptr : &found->second;
 }
 
+// A schema column looked up once per table: its place in the header and the values it may hold
+// (nullptr: any finite number).
+struct TableColumn {
+  CsvColumn csv;
+  const ValueRange* range = nullptr;
+};
+
+TableColumn LookUp(const CsvHeader& header, std::string_view name) {
+  return {header.Column(name), RangeOf(name)};
+}
+
+// What is wrong with `value` for a column of `range` ("value is not finite", "1e9 is outside
+// [-100000000, 100000000] px"), or "" when nothing is.
+std::string ValueProblem(double value, const ValueRange* range) {
+  if (!std::isfinite(value)) return "value is not finite";
+  if (range != nullptr && !InRange(value, *range))
+    return FormatPlainNumber(value) + " is outside " + RangeText(*range);
+  return std::string();
+}
+
 // "column: '<text>' is outside [min, max] unit" for a value outside its column's range.
+Status CheckRange(const CsvRowReader& row, const TableColumn& column, std::string_view label,
+                  std::string_view text, double value) {
+  if (column.range == nullptr || InRange(value, *column.range)) return Status::Ok();
+  return row.Error(column.csv, std::string(label) + Quoted(text) + " is outside " +
+                                   RangeText(*column.range));
+}
 Status CheckRange(const CsvRowReader& row, std::string_view column, std::string_view label,
                   std::string_view text, double value) {
-  const ValueRange* range = RangeOf(column);
-  if (range == nullptr || InRange(value, *range)) return Status::Ok();
-  return row.Error(column, std::string(label) + Quoted(text) + " is outside " + RangeText(*range));
+  return CheckRange(row, LookUp(row.header(), column), label, text, value);
 }
 
 // A number within its column's range; an empty field gives nullopt.
-Status ReadNumber(const CsvRowReader& row, std::string_view column, std::optional<double>* value) {
-  PHOTOPOSE_RETURN_IF_ERROR(row.Number(column, value));
-  if (*value) PHOTOPOSE_RETURN_IF_ERROR(CheckRange(row, column, "", row.Text(column), **value));
+Status ReadNumber(const CsvRowReader& row, const TableColumn& column,
+                  std::optional<double>* value) {
+  PHOTOPOSE_RETURN_IF_ERROR(row.Number(column.csv, value));
+  if (*value) PHOTOPOSE_RETURN_IF_ERROR(CheckRange(row, column, "", row.Text(column.csv), **value));
   return Status::Ok();
+}
+Status ReadNumber(const CsvRowReader& row, std::string_view column, std::optional<double>* value) {
+  return ReadNumber(row, LookUp(row.header(), column), value);
 }
 
 // A number within its column's range; an empty field is an error.
-Status ReadRequiredNumber(const CsvRowReader& row, std::string_view column, double* value) {
+Status ReadRequiredNumber(const CsvRowReader& row, const TableColumn& column, double* value) {
   std::optional<double> number;
   PHOTOPOSE_RETURN_IF_ERROR(ReadNumber(row, column, &number));
-  if (!number) return row.Error(column, "is empty");
+  if (!number) return row.Error(column.csv, "is empty");
   *value = *number;
   return Status::Ok();
+}
+Status ReadRequiredNumber(const CsvRowReader& row, std::string_view column, double* value) {
+  return ReadRequiredNumber(row, LookUp(row.header(), column), value);
 }
 
 // A list of numbers, each within its column's range.
@@ -200,8 +234,8 @@ struct Spelling {
 
 // Reads an enumerated column: spellings are compared with FoldedName(); an empty field keeps
 // *value. The error lists the first `num_listed` spellings.
-template <typename Enum>
-Status ReadEnum(const CsvRowReader& row, std::string_view column,
+template <typename Enum, typename Column>
+Status ReadEnum(const CsvRowReader& row, const Column& column,
                 const std::vector<Spelling<Enum>>& spellings, size_t num_listed, Enum* value) {
   const std::string_view text = row.Text(column);
   if (text.empty()) return Status::Ok();
@@ -276,17 +310,137 @@ Status ReadCount(const CsvRowReader& row, std::string_view column, int* value) {
   return Status::Ok();
 }
 
-// Records where `key` was first seen; a second sighting is an error naming both lines.
-Status CheckUnique(const CsvTable& table, int line, std::string_view column, const std::string& key,
-                   const std::string& what, std::map<std::string, int>* first_lines) {
-  const auto [it, inserted] = first_lines->emplace(key, line);
-  if (inserted) return Status::Ok();
-  return table.Error(line, column,
-                     "duplicate " + what + " (first on line " + std::to_string(it->second) + ")");
+// An open-addressing hash table of (64-bit hash, value >= 0) entries: linear probing in a
+// power-of-two array kept at most half full, so that a look-up mostly reads one cache line and no
+// entry is allocated on its own (std::unordered_map allocates a node per entry: a million marks
+// made a million allocations).
+class FlatHashTable {
+ public:
+  explicit FlatHashTable(size_t expected = 0) {
+    size_t capacity = 16;
+    while (capacity < 2 * expected) capacity *= 2;
+    Resize(capacity);
+  }
+
+  // The value of the first entry of `hash` for which `matches(value)` holds, or -1.
+  template <typename Matches>
+  long long Find(uint64_t hash, Matches matches) const {
+    for (size_t i = Slot(hash);; i = (i + 1) & mask_) {
+      const Entry& entry = entries_[i];
+      if (entry.value < 0) return -1;
+      if (entry.hash == hash && matches(entry.value)) return entry.value;
+    }
+  }
+  void Insert(uint64_t hash, long long value) {
+    if (2 * (size_ + 1) > entries_.size()) Resize(2 * entries_.size());
+    Place(hash, value);
+    ++size_;
+  }
+
+ private:
+  struct Entry {
+    uint64_t hash = 0;
+    long long value = -1;  // -1: empty
+  };
+  // Fibonacci hashing: the high bits of hash * 2^64 / phi, so that keys that differ in their high
+  // bits only (a raster id << 32) still spread.
+  size_t Slot(uint64_t hash) const {
+    return static_cast<size_t>((hash * 0x9E3779B97F4A7C15ull) >> shift_);
+  }
+  void Place(uint64_t hash, long long value) {
+    size_t i = Slot(hash);
+    while (entries_[i].value >= 0) i = (i + 1) & mask_;
+    entries_[i] = {hash, value};
+  }
+  void Resize(size_t capacity) {
+    std::vector<Entry> old(capacity);
+    old.swap(entries_);
+    mask_ = capacity - 1;
+    shift_ = 64;
+    for (size_t c = capacity; c > 1; c /= 2) --shift_;
+    for (const Entry& entry : old)
+      if (entry.value >= 0) Place(entry.hash, entry.value);
+  }
+
+  std::vector<Entry> entries_;
+  size_t size_ = 0;
+  size_t mask_ = 0;
+  int shift_ = 64;
+};
+
+// Dense ids (0, 1, ...) of names in the order they are first seen. The names are kept as views:
+// into `stable_text` (the text being parsed) when a name lies in it, else into a copy kept here,
+// so that a name is copied once at most, never per row.
+class NameIds {
+ public:
+  explicit NameIds(std::string_view stable_text = {}) : stable_text_(stable_text) {}
+
+  // The id of `name`; *is_new tells whether it is seen for the first time.
+  int Id(std::string_view name, bool* is_new) {
+    // Marks come image by image: the raster of a row is mostly the one of the row before.
+    if (last_id_ >= 0 && name == names_[last_id_]) {
+      *is_new = false;
+      return last_id_;
+    }
+    const uint64_t hash = std::hash<std::string_view>()(name);
+    long long id = table_.Find(hash, [&](long long k) { return names_[k] == name; });
+    *is_new = id < 0;
+    if (*is_new) {
+      if (!IsStable(name)) name = copies_.emplace_back(name);
+      id = static_cast<long long>(names_.size());
+      names_.push_back(name);
+      table_.Insert(hash, id);
+    }
+    last_id_ = static_cast<int>(id);
+    return last_id_;
+  }
+  std::string_view Name(int id) const { return names_[id]; }
+  size_t size() const { return names_.size(); }
+
+ private:
+  bool IsStable(std::string_view name) const {
+    const std::less<const char*> before;
+    return !before(name.data(), stable_text_.data()) &&
+           !before(stable_text_.data() + stable_text_.size(), name.data() + name.size());
+  }
+
+  std::string_view stable_text_;
+  FlatHashTable table_;
+  std::vector<std::string_view> names_;  // by id
+  std::deque<std::string> copies_;
+  int last_id_ = -1;
+};
+
+// The line each name was first seen on, for duplicate checks that name both lines.
+class FirstLines {
+ public:
+  explicit FirstLines(std::string_view stable_text = {}) : ids_(stable_text) {}
+  // Whether `name` was seen before, on *first_line; else it is recorded at `line`.
+  bool Seen(std::string_view name, int line, int* first_line) {
+    bool is_new = false;
+    const int id = ids_.Id(name, &is_new);
+    if (is_new) lines_.push_back(line);
+    *first_line = lines_[id];
+    return !is_new;
+  }
+
+ private:
+  NameIds ids_;
+  std::vector<int> lines_;
+};
+
+// Records where `key` was first seen; a second sighting is an error naming both lines:
+// "duplicate <kind> '<key>' (first on line N)".
+Status CheckUnique(const CsvRowReader& row, std::string_view column, std::string_view key,
+                   std::string_view kind, FirstLines* first_lines) {
+  int first = 0;
+  if (!first_lines->Seen(key, row.line(), &first)) return Status::Ok();
+  return row.Error(column, "duplicate " + std::string(kind) + " " + Quoted(key) +
+                               " (first on line " + std::to_string(first) + ")");
 }
 
 // Both columns of a pair or neither.
-Status RequirePairedColumns(const CsvTable& table, std::string_view a, std::string_view b) {
+Status RequirePairedColumns(const CsvHeader& table, std::string_view a, std::string_view b) {
   if (table.HasColumn(a) && !table.HasColumn(b))
     return table.Error(table.header_line(), b,
                        "required column is missing (" + std::string(a) + " is given)");
@@ -296,12 +450,15 @@ Status RequirePairedColumns(const CsvTable& table, std::string_view a, std::stri
   return Status::Ok();
 }
 
-// Columns of a row that the schema does not know, as (header name, value).
-ExtraColumns ReadExtraColumns(const CsvTable& table, const CsvRow& row, const Names& known) {
-  ExtraColumns extra;
-  for (const size_t index : table.ColumnsOtherThan(known))
-    extra.emplace_back(table.header()[index], row.fields[index]);
-  return extra;
+// The fields of a row in the columns `extra` (CsvHeader::ColumnsOtherThan the schema's), as
+// (header name, value).
+ExtraColumns ReadExtraColumns(const CsvRowReader& row, const std::vector<size_t>& extra) {
+  ExtraColumns values;
+  for (const size_t index : extra) {
+    const std::string& name = row.header().header()[index];
+    values.emplace_back(name, std::string(row.Text(CsvColumn{name, index})));
+  }
+  return values;
 }
 
 // The union of the extra column names of `records`, in first-seen order. Names that clash with a
@@ -346,12 +503,8 @@ class RowFields {
 
   void Text(std::string_view text) { fields_.emplace_back(text); }
   void Number(std::string_view column, double value) {
-    const ValueRange* range = RangeOf(column);
-    if (!std::isfinite(value)) {
-      Fail(column, "value is not finite");
-    } else if (range != nullptr && !InRange(value, *range)) {
-      Fail(column, FormatPlainNumber(value) + " is outside " + RangeText(*range));
-    }
+    const std::string problem = ValueProblem(value, RangeOf(column));
+    if (!problem.empty()) Fail(column, problem);
     fields_.push_back(FormatNumber(value));
   }
   void OptionalNumber(std::string_view column, const std::optional<double>& value) {
@@ -607,8 +760,9 @@ Status ReadDistortion(const CsvRowReader& row, FrameCamera* camera) {
   return Status::Ok();
 }
 
-Status ReadCameraRow(const CsvTable& table, const CsvRow& csv_row, FrameCamera* camera) {
-  const CsvRowReader row(table, csv_row);
+// `extra`: the header's columns that are not the camera table's.
+Status ReadCameraRow(const CsvRowReader& row, const std::vector<size_t>& extra,
+                     FrameCamera* camera) {
   FrameCamera c;
   PHOTOPOSE_RETURN_IF_ERROR(row.Integer("ObjectID", &c.object_id));
   PHOTOPOSE_RETURN_IF_ERROR(row.RequiredText("CameraID", &c.camera_id));
@@ -643,11 +797,11 @@ Status ReadCameraRow(const CsvTable& table, const CsvRow& csv_row, FrameCamera* 
   PHOTOPOSE_RETURN_IF_ERROR(ReadEnum(row, "ApplyECC", BooleanSpellings(), 6, &c.apply_ecc));
   PHOTOPOSE_RETURN_IF_ERROR(ReadNumberOr(row, "EarthRadius", c.earth_radius_m, &c.earth_radius_m));
   c.srs = std::string(row.Text("SRS"));
-  c.extra_columns = ReadExtraColumns(table, csv_row, CameraColumns());
+  c.extra_columns = ReadExtraColumns(row, extra);
 
   std::string column;
   const Status valid = CheckCameraTableFields(c, &column);
-  if (!valid.ok()) return table.Error(csv_row.line, column, valid.message());
+  if (!valid.ok()) return row.Error(column, valid.message());
   *camera = std::move(c);
   return Status::Ok();
 }
@@ -766,11 +920,11 @@ Status ReadFrameSigmas(const CsvRowReader& row, const FramesTableOptions& option
   return Status::Ok();
 }
 
-Status ReadFrameRow(const CsvTable& table, const CsvRow& csv_row, const FramesTableOptions& options,
-                    FrameRecord* frame) {
-  const CsvRowReader row(table, csv_row);
+// `extra`: the header's columns that are not the frames table's.
+Status ReadFrameRow(const CsvRowReader& row, const std::vector<size_t>& extra,
+                    const FramesTableOptions& options, FrameRecord* frame) {
   FrameRecord f;
-  f.line = csv_row.line;
+  f.line = row.line();
   PHOTOPOSE_RETURN_IF_ERROR(row.RequiredText("Raster", &f.raster));
   PHOTOPOSE_RETURN_IF_ERROR(row.RequiredText("CameraID", &f.camera_id));
   const FrameCamera* camera = nullptr;
@@ -793,7 +947,7 @@ Status ReadFrameRow(const CsvTable& table, const CsvRow& csv_row, const FramesTa
   PHOTOPOSE_RETURN_IF_ERROR(ReadAccuracyTriple(row, kAccuracyColumns, &f.center_accuracy_m));
   PHOTOPOSE_RETURN_IF_ERROR(
       ReadAccuracyTriple(row, kAttitudeAccuracyColumns, &f.attitude_accuracy_deg));
-  f.extra_columns = ReadExtraColumns(table, csv_row, FrameColumns());
+  f.extra_columns = ReadExtraColumns(row, extra);
   *frame = std::move(f);
   return Status::Ok();
 }
@@ -806,44 +960,71 @@ const std::vector<Spelling<PointRole>>& RoleSpellings() {
   return *kSpellings;
 }
 
-Status ReadPointRow(const CsvTable& table, const CsvRow& csv_row, GroundPoint* point) {
-  const CsvRowReader row(table, csv_row);
+// The points table's columns, looked up once per table.
+struct PointTableColumns {
+  explicit PointTableColumns(const CsvHeader& header)
+      : point_id(LookUp(header, "PointID")),
+        x(LookUp(header, "X")),
+        y(LookUp(header, "Y")),
+        z(LookUp(header, "Z")),
+        accuracy{LookUp(header, kAccuracyColumns[0]), LookUp(header, kAccuracyColumns[1]),
+                 LookUp(header, kAccuracyColumns[2])},
+        role(LookUp(header, "Role")) {}
+  TableColumn point_id, x, y, z, accuracy[3], role;
+};
+
+Status ReadPointRow(const CsvRowReader& row, const PointTableColumns& c, GroundPoint* point) {
   GroundPoint p;
-  p.line = csv_row.line;
-  PHOTOPOSE_RETURN_IF_ERROR(row.RequiredText("PointID", &p.point_id));
-  PHOTOPOSE_RETURN_IF_ERROR(ReadRequiredNumber(row, "X", &p.position[0]));
-  PHOTOPOSE_RETURN_IF_ERROR(ReadRequiredNumber(row, "Y", &p.position[1]));
-  PHOTOPOSE_RETURN_IF_ERROR(ReadRequiredNumber(row, "Z", &p.position[2]));
-  if (row.Has("AccuracyX") || row.Has("AccuracyY") || row.Has("AccuracyZ")) {
+  p.line = row.line();
+  PHOTOPOSE_RETURN_IF_ERROR(row.RequiredText(c.point_id.csv, &p.point_id));
+  PHOTOPOSE_RETURN_IF_ERROR(ReadRequiredNumber(row, c.x, &p.position[0]));
+  PHOTOPOSE_RETURN_IF_ERROR(ReadRequiredNumber(row, c.y, &p.position[1]));
+  PHOTOPOSE_RETURN_IF_ERROR(ReadRequiredNumber(row, c.z, &p.position[2]));
+  if (row.Has(c.accuracy[0].csv) || row.Has(c.accuracy[1].csv) || row.Has(c.accuracy[2].csv)) {
     Eigen::Vector3d accuracy;
     for (int i = 0; i < 3; ++i) {
       std::optional<double> sigma;
-      PHOTOPOSE_RETURN_IF_ERROR(ReadNumber(row, kAccuracyColumns[i], &sigma));
+      PHOTOPOSE_RETURN_IF_ERROR(ReadNumber(row, c.accuracy[i], &sigma));
       if (!sigma) {
-        return row.Error(kAccuracyColumns[i],
+        return row.Error(c.accuracy[i].csv,
                          "is empty; AccuracyX, AccuracyY, AccuracyZ are given together");
       }
       accuracy[i] = *sigma;
     }
     p.accuracy_m = accuracy;
   }
-  PHOTOPOSE_RETURN_IF_ERROR(ReadEnum(row, "Role", RoleSpellings(), 3, &p.role));
+  PHOTOPOSE_RETURN_IF_ERROR(ReadEnum(row, c.role.csv, RoleSpellings(), 3, &p.role));
   *point = std::move(p);
   return Status::Ok();
 }
 
+// The marks table's columns, looked up once per table.
+struct MarkTableColumns {
+  explicit MarkTableColumns(const CsvHeader& header)
+      : raster(LookUp(header, "Raster")),
+        point_id(LookUp(header, "PointID")),
+        column(LookUp(header, "Column")),
+        row(LookUp(header, "Row")),
+        film_x(LookUp(header, "FilmX")),
+        film_y(LookUp(header, "FilmY")),
+        accuracy(LookUp(header, "Accuracy")),
+        camera_id(LookUp(header, "CameraID")) {}
+  TableColumn raster, point_id, column, row, film_x, film_y, accuracy, camera_id;
+};
+
 // Column/Row (pixels) or FilmX/FilmY (um): exactly one pair.
-Status ReadMarkPosition(const CsvRowReader& row, ImageMark* mark) {
-  const bool pixels = row.Has("Column") || row.Has("Row");
-  const bool film = row.Has("FilmX") || row.Has("FilmY");
-  if (pixels && film) return row.Error("FilmX", "give either Column/Row or FilmX/FilmY, not both");
-  if (!pixels && !film)
-    return row.Error("Column", "is empty; give Column and Row (pixels) or FilmX and FilmY (um)");
-  const char* x_name = pixels ? "Column" : "FilmX";
-  const char* y_name = pixels ? "Row" : "FilmY";
+Status ReadMarkPosition(const CsvRowReader& row, const MarkTableColumns& c, ImageMark* mark) {
+  const bool pixels = row.Has(c.column.csv) || row.Has(c.row.csv);
+  const bool film = row.Has(c.film_x.csv) || row.Has(c.film_y.csv);
+  if (pixels && film)
+    return row.Error(c.film_x.csv, "give either Column/Row or FilmX/FilmY, not both");
+  if (!pixels && !film) {
+    return row.Error(c.column.csv,
+                     "is empty; give Column and Row (pixels) or FilmX and FilmY (um)");
+  }
   Eigen::Vector2d xy;
-  PHOTOPOSE_RETURN_IF_ERROR(ReadRequiredNumber(row, x_name, &xy[0]));
-  PHOTOPOSE_RETURN_IF_ERROR(ReadRequiredNumber(row, y_name, &xy[1]));
+  PHOTOPOSE_RETURN_IF_ERROR(ReadRequiredNumber(row, pixels ? c.column : c.film_x, &xy[0]));
+  PHOTOPOSE_RETURN_IF_ERROR(ReadRequiredNumber(row, pixels ? c.row : c.film_y, &xy[1]));
   if (pixels) {
     mark->column_row = xy;
   } else {
@@ -852,26 +1033,86 @@ Status ReadMarkPosition(const CsvRowReader& row, ImageMark* mark) {
   return Status::Ok();
 }
 
-Status ReadMarkRow(const CsvTable& table, const CsvRow& csv_row, ImageMark* mark) {
-  const CsvRowReader row(table, csv_row);
-  ImageMark m;
-  m.line = csv_row.line;
-  PHOTOPOSE_RETURN_IF_ERROR(row.RequiredText("Raster", &m.raster));
-  PHOTOPOSE_RETURN_IF_ERROR(row.RequiredText("PointID", &m.point_id));
-  PHOTOPOSE_RETURN_IF_ERROR(ReadMarkPosition(row, &m));
-  PHOTOPOSE_RETURN_IF_ERROR(ReadNumber(row, "Accuracy", &m.accuracy_px));
-  m.camera_id = std::string(row.Text("CameraID"));
-  *mark = std::move(m);
+// Reads a row into *mark, whose strings keep their buffers from the row before.
+Status ReadMarkRow(const CsvRowReader& row, const MarkTableColumns& c, ImageMark* mark) {
+  mark->line = row.line();
+  mark->column_row.reset();
+  mark->film_um.reset();
+  PHOTOPOSE_RETURN_IF_ERROR(row.RequiredText(c.raster.csv, &mark->raster));
+  PHOTOPOSE_RETURN_IF_ERROR(row.RequiredText(c.point_id.csv, &mark->point_id));
+  PHOTOPOSE_RETURN_IF_ERROR(ReadMarkPosition(row, c, mark));
+  PHOTOPOSE_RETURN_IF_ERROR(ReadNumber(row, c.accuracy, &mark->accuracy_px));
+  const std::string_view camera_id = row.Text(c.camera_id.csv);
+  mark->camera_id.assign(camera_id.data(), camera_id.size());
   return Status::Ok();
 }
 
-// Key of a mark for duplicate detection: (raster, point).
-std::string MarkKey(const std::string& raster, const std::string& point_id) {
-  return raster + '\n' + point_id;
-}
-std::string MarkDescription(const std::string& raster, const std::string& point_id) {
+std::string MarkDescription(std::string_view raster, std::string_view point_id) {
   return "mark of point " + Quoted(point_id) + " in image " + Quoted(raster);
 }
+
+// Duplicate marks (a point marked twice in one image), found without a string, an allocation or
+// a random look-up per mark: each mark is kept as the dense ids of its raster and point (8 bytes),
+// and the check sorts the marks by point (counting sort, stable) and compares each point's rasters
+// through a stamp per raster, in time linear in the marks however they are spread.
+class DuplicateMarks {
+ public:
+  // `stable_text`: see NameIds.
+  DuplicateMarks(std::string_view stable_text, size_t expected_marks)
+      : rasters_(stable_text), points_(stable_text) {
+    pairs_.reserve(expected_marks);
+  }
+
+  // Adds the next mark (numbered from 0).
+  void Add(std::string_view raster, std::string_view point_id) {
+    bool is_new = false;
+    const int raster_id = rasters_.Id(raster, &is_new);
+    pairs_.push_back({raster_id, points_.Id(point_id, &is_new)});
+  }
+  std::string_view Raster(size_t mark) const { return rasters_.Name(pairs_[mark].raster); }
+  std::string_view PointId(size_t mark) const { return points_.Name(pairs_[mark].point); }
+
+  // The first mark (in the order added) whose point and raster an earlier mark has, and that
+  // earlier mark (the first of the pair); false when there is none.
+  bool FindFirst(size_t* duplicate, size_t* first) const {
+    std::vector<size_t> start(points_.size() + 1, 0);
+    for (const Pair& pair : pairs_) ++start[pair.point + 1];
+    for (size_t p = 0; p < points_.size(); ++p) start[p + 1] += start[p];
+    std::vector<uint32_t> by_point(pairs_.size());
+    {
+      std::vector<size_t> next(start.begin(), start.end() - 1);
+      for (size_t m = 0; m < pairs_.size(); ++m)
+        by_point[next[pairs_[m].point]++] = static_cast<uint32_t>(m);
+    }
+    // The last point seen in each raster and its first mark there.
+    std::vector<int> point_in_raster(rasters_.size(), -1);
+    std::vector<uint32_t> first_in_raster(rasters_.size(), 0);
+    bool found = false;
+    for (size_t p = 0; p < points_.size(); ++p) {
+      for (size_t i = start[p]; i < start[p + 1]; ++i) {
+        const uint32_t m = by_point[i];
+        const int raster = pairs_[m].raster;
+        if (point_in_raster[raster] != static_cast<int>(p)) {
+          point_in_raster[raster] = static_cast<int>(p);
+          first_in_raster[raster] = m;
+        } else if (!found || m < *duplicate) {
+          found = true;
+          *duplicate = m;
+          *first = first_in_raster[raster];
+        }
+      }
+    }
+    return found;
+  }
+
+ private:
+  struct Pair {
+    int raster;
+    int point;
+  };
+  NameIds rasters_, points_;
+  std::vector<Pair> pairs_;
+};
 
 // ------------------------------------------------------------------ gcp_list.txt
 
@@ -891,23 +1132,26 @@ bool IsGcpCrs(std::string_view crs) {
 
 Status ParseCameraTable(std::string_view text, const std::string& file_name,
                         std::vector<FrameCamera>* cameras) {
-  CsvTable table;
-  PHOTOPOSE_RETURN_IF_ERROR(CsvTable::Parse(text, file_name, kTableCsvOptions, &table));
+  CsvReader reader;
+  PHOTOPOSE_RETURN_IF_ERROR(reader.Open(text, file_name, kTableCsvOptions));
+  const CsvHeader& table = reader.header();
   PHOTOPOSE_RETURN_IF_ERROR(table.RequireColumns({"CameraID", "FocalLength"}));
   const Names& affine = AffineColumns();
   const bool has_affine_columns = std::all_of(
       affine.begin(), affine.end(), [&](std::string_view name) { return table.HasColumn(name); });
   if (!has_affine_columns) PHOTOPOSE_RETURN_IF_ERROR(table.RequireColumns({"PixelSize"}));
 
+  const std::vector<size_t> extra = table.ColumnsOtherThan(CameraColumns());
   std::vector<FrameCamera> result;
-  std::map<std::string, int> first_lines;
-  for (const CsvRow& row : table.rows()) {
+  FirstLines first_lines;
+  PHOTOPOSE_RETURN_IF_ERROR(reader.ForEachRow([&](const CsvRowReader& row) {
     FrameCamera camera;
-    PHOTOPOSE_RETURN_IF_ERROR(ReadCameraRow(table, row, &camera));
-    PHOTOPOSE_RETURN_IF_ERROR(CheckUnique(table, row.line, "CameraID", camera.camera_id,
-                                          "camera " + Quoted(camera.camera_id), &first_lines));
+    PHOTOPOSE_RETURN_IF_ERROR(ReadCameraRow(row, extra, &camera));
+    PHOTOPOSE_RETURN_IF_ERROR(
+        CheckUnique(row, "CameraID", camera.camera_id, "camera", &first_lines));
     result.push_back(std::move(camera));
-  }
+    return Status::Ok();
+  }));
   *cameras = std::move(result);
   return Status::Ok();
 }
@@ -982,8 +1226,9 @@ Status FormatCameraTable(const std::vector<FrameCamera>& cameras, const std::str
 
 Status ParseFramesTable(std::string_view text, const std::string& file_name,
                         const FramesTableOptions& options, std::vector<FrameRecord>* frames) {
-  CsvTable table;
-  PHOTOPOSE_RETURN_IF_ERROR(CsvTable::Parse(text, file_name, kTableCsvOptions, &table));
+  CsvReader reader;
+  PHOTOPOSE_RETURN_IF_ERROR(reader.Open(text, file_name, kTableCsvOptions));
+  const CsvHeader& table = reader.header();
   PHOTOPOSE_RETURN_IF_ERROR(
       table.RequireColumns({"Raster", "CameraID", "PerspectiveX", "PerspectiveY", "PerspectiveZ"}));
   const bool any_angle_column =
@@ -999,15 +1244,17 @@ Status ParseFramesTable(std::string_view text, const std::string& file_name,
                   [&](std::string_view name) { return table.HasColumn(name); }))
     PHOTOPOSE_RETURN_IF_ERROR(table.RequireColumns(sigmas));
 
+  const std::vector<size_t> extra = table.ColumnsOtherThan(FrameColumns());
   std::vector<FrameRecord> result;
-  std::map<std::string, int> first_lines;
-  for (const CsvRow& row : table.rows()) {
+  FirstLines first_lines(text);
+  PHOTOPOSE_RETURN_IF_ERROR(reader.ForEachRow([&](const CsvRowReader& row) {
     FrameRecord frame;
-    PHOTOPOSE_RETURN_IF_ERROR(ReadFrameRow(table, row, options, &frame));
-    PHOTOPOSE_RETURN_IF_ERROR(CheckUnique(table, row.line, "Raster", frame.raster,
-                                          "raster " + Quoted(frame.raster), &first_lines));
+    PHOTOPOSE_RETURN_IF_ERROR(ReadFrameRow(row, extra, options, &frame));
+    PHOTOPOSE_RETURN_IF_ERROR(
+        CheckUnique(row, "Raster", row.Text("Raster"), "raster", &first_lines));
     result.push_back(std::move(frame));
-  }
+    return Status::Ok();
+  }));
   *frames = std::move(result);
   return Status::Ok();
 }
@@ -1109,21 +1356,22 @@ Status FormatFramesTable(const FramesTableOptions& options, const std::vector<Fr
 
 Status ParseGroundPoints(std::string_view text, const std::string& file_name,
                          std::vector<GroundPoint>* points) {
-  CsvTable table;
-  PHOTOPOSE_RETURN_IF_ERROR(CsvTable::Parse(text, file_name, kTableCsvOptions, &table));
+  CsvReader reader;
+  PHOTOPOSE_RETURN_IF_ERROR(reader.Open(text, file_name, kTableCsvOptions));
+  const CsvHeader& table = reader.header();
   PHOTOPOSE_RETURN_IF_ERROR(table.RequireColumns({"PointID", "X", "Y", "Z"}));
   if (table.HasColumn("AccuracyX") || table.HasColumn("AccuracyY") || table.HasColumn("AccuracyZ"))
     PHOTOPOSE_RETURN_IF_ERROR(table.RequireColumns({"AccuracyX", "AccuracyY", "AccuracyZ"}));
 
+  const PointTableColumns columns(table);
   std::vector<GroundPoint> result;
-  std::map<std::string, int> first_lines;
-  for (const CsvRow& row : table.rows()) {
-    GroundPoint point;
-    PHOTOPOSE_RETURN_IF_ERROR(ReadPointRow(table, row, &point));
-    PHOTOPOSE_RETURN_IF_ERROR(CheckUnique(table, row.line, "PointID", point.point_id,
-                                          "point " + Quoted(point.point_id), &first_lines));
-    result.push_back(std::move(point));
-  }
+  result.reserve(reader.MaxRows());
+  FirstLines first_lines(text);
+  PHOTOPOSE_RETURN_IF_ERROR(reader.ForEachRow([&](const CsvRowReader& row) {
+    GroundPoint& point = result.emplace_back();
+    PHOTOPOSE_RETURN_IF_ERROR(ReadPointRow(row, columns, &point));
+    return CheckUnique(row, "PointID", row.Text(columns.point_id.csv), "point", &first_lines);
+  }));
   *points = std::move(result);
   return Status::Ok();
 }
@@ -1156,8 +1404,9 @@ Status FormatGroundPoints(const std::vector<GroundPoint>& points, const std::str
 
 Status ParseImageMarks(std::string_view text, const std::string& file_name,
                        std::vector<ImageMark>* marks) {
-  CsvTable table;
-  PHOTOPOSE_RETURN_IF_ERROR(CsvTable::Parse(text, file_name, kTableCsvOptions, &table));
+  CsvReader reader;
+  PHOTOPOSE_RETURN_IF_ERROR(reader.Open(text, file_name, kTableCsvOptions));
+  const CsvHeader& table = reader.header();
   PHOTOPOSE_RETURN_IF_ERROR(table.RequireColumns({"Raster", "PointID"}));
   PHOTOPOSE_RETURN_IF_ERROR(RequirePairedColumns(table, "Column", "Row"));
   PHOTOPOSE_RETURN_IF_ERROR(RequirePairedColumns(table, "FilmX", "FilmY"));
@@ -1166,51 +1415,131 @@ Status ParseImageMarks(std::string_view text, const std::string& file_name,
                        "required column is missing (give Column and Row, or FilmX and FilmY)");
   }
 
+  const MarkTableColumns columns(table);
+  const size_t max_rows = reader.MaxRows();
   std::vector<ImageMark> result;
-  std::map<std::string, int> first_lines;
-  for (const CsvRow& row : table.rows()) {
-    ImageMark mark;
-    PHOTOPOSE_RETURN_IF_ERROR(ReadMarkRow(table, row, &mark));
-    PHOTOPOSE_RETURN_IF_ERROR(
-        CheckUnique(table, row.line, "PointID", MarkKey(mark.raster, mark.point_id),
-                    MarkDescription(mark.raster, mark.point_id), &first_lines));
-    result.push_back(std::move(mark));
+  result.reserve(max_rows);
+  DuplicateMarks duplicates(text, max_rows);
+  const Status read = reader.ForEachRow([&](const CsvRowReader& row) {
+    ImageMark& mark = result.emplace_back();
+    PHOTOPOSE_RETURN_IF_ERROR(ReadMarkRow(row, columns, &mark));
+    // The names as views of the text (the mark's strings are copies).
+    duplicates.Add(row.Text(columns.raster.csv), row.Text(columns.point_id.csv));
+    return Status::Ok();
+  });
+  // The first problem in the file: a duplicate among the rows before a bad one comes first.
+  size_t duplicate = 0, first = 0;
+  if (duplicates.FindFirst(&duplicate, &first)) {
+    return table.Error(result[duplicate].line, "PointID",
+                       "duplicate " +
+                           MarkDescription(duplicates.Raster(duplicate),
+                                           duplicates.PointId(duplicate)) +
+                           " (first on line " + std::to_string(result[first].line) + ")");
   }
+  PHOTOPOSE_RETURN_IF_ERROR(read);
   *marks = std::move(result);
   return Status::Ok();
 }
 
+struct ImageMarksWriter::State {
+  State(const std::string& path, size_t num_marks)
+      : path(path),
+        duplicates(std::string_view(), num_marks),
+        column(RangeOf("Column")),
+        row(RangeOf("Row")),
+        film_x(RangeOf("FilmX")),
+        film_y(RangeOf("FilmY")),
+        accuracy(RangeOf("Accuracy")) {
+    lines.reserve(num_marks);
+  }
+  // The reader rejects a second mark of a point in an image: "path: mark of point 'P' in image
+  // 'I': PointID: the point is marked twice in the image (source lines 3 and 9)" for the first
+  // such mark up to `last` (all when npos), if any.
+  Status CheckDuplicates(size_t last) const {
+    size_t duplicate = 0, first = 0;
+    if (!duplicates.FindFirst(&duplicate, &first) || duplicate > last) return Status::Ok();
+    return Status::Error(EscapeForMessage(
+        path + ": " + MarkDescription(duplicates.Raster(duplicate), duplicates.PointId(duplicate)) +
+        ": PointID: the point is marked twice in the image (source lines " +
+        std::to_string(lines[first]) + " and " + std::to_string(lines[duplicate]) + ")"));
+  }
+
+  const std::string path;
+  DuplicateMarks duplicates;
+  std::vector<int> lines;  // source line of every mark added
+  const ValueRange *column, *row, *film_x, *film_y, *accuracy;
+};
+
+ImageMarksWriter::ImageMarksWriter(const std::string& path, size_t num_marks, std::string* text)
+    : state_(std::make_unique<State>(path, num_marks)), text_(text) {
+  // About 70 bytes per row for names of a dozen characters: one allocation, mostly.
+  text_->reserve(text_->size() + 128 + 80 * num_marks);
+  *text_ += CsvLine(HeaderFields(MarkColumns()));
+}
+
+ImageMarksWriter::~ImageMarksWriter() = default;
+
+Status ImageMarksWriter::Add(const ImageMark& m) {
+  const size_t number = state_->lines.size();
+  state_->duplicates.Add(m.raster, m.point_id);
+  state_->lines.push_back(m.line);
+  // The first problem in the order of the columns, as RowFields keeps it (a duplicate, checked at
+  // the end or at the first other problem, comes first); no string is made for a good row.
+  std::string problem;
+  const auto fail = [&problem](std::string_view column, const std::string& what) {
+    if (problem.empty()) problem = std::string(column) + ": " + what;
+  };
+  if (m.raster.empty()) fail("Raster", "is empty");
+  if (m.point_id.empty()) fail("PointID", "is empty");
+  if (m.column_row.has_value() == m.film_um.has_value())
+    fail("Column", "exactly one of Column/Row and FilmX/FilmY must be set");
+  if (m.accuracy_px && !(*m.accuracy_px > 0.0)) fail("Accuracy", "must be positive");
+  const auto check = [&fail](std::string_view column, const ValueRange* range, double value) {
+    if (std::isfinite(value) && InRange(value, *range)) return;
+    fail(column, ValueProblem(value, range));
+  };
+  if (m.column_row) {
+    check("Column", state_->column, m.column_row->x());
+    check("Row", state_->row, m.column_row->y());
+  }
+  if (m.film_um) {
+    check("FilmX", state_->film_x, m.film_um->x());
+    check("FilmY", state_->film_y, m.film_um->y());
+  }
+  if (m.accuracy_px) check("Accuracy", state_->accuracy, *m.accuracy_px);
+  if (!problem.empty()) {
+    PHOTOPOSE_RETURN_IF_ERROR(state_->CheckDuplicates(number));
+    return Status::Error(EscapeForMessage(state_->path + ": " +
+                                          MarkDescription(m.raster, m.point_id) + ": " + problem));
+  }
+
+  std::string& text = *text_;
+  AppendCsvField(m.raster, &text);
+  text += ',';
+  AppendCsvField(m.point_id, &text);
+  const auto number_field = [&text](const std::optional<double>& value) {
+    text += ',';
+    if (value) AppendFormattedNumber(*value, &text);
+  };
+  number_field(m.column_row ? std::optional<double>(m.column_row->x()) : std::nullopt);
+  number_field(m.column_row ? std::optional<double>(m.column_row->y()) : std::nullopt);
+  number_field(m.film_um ? std::optional<double>(m.film_um->x()) : std::nullopt);
+  number_field(m.film_um ? std::optional<double>(m.film_um->y()) : std::nullopt);
+  number_field(m.accuracy_px);
+  text += ',';
+  AppendCsvField(m.camera_id, &text);
+  text += '\n';
+  return Status::Ok();
+}
+
+Status ImageMarksWriter::Finish() { return state_->CheckDuplicates(std::string::npos); }
+
 Status FormatImageMarks(const std::vector<ImageMark>& marks, const std::string& path,
                         std::string* text) {
-  std::string contents = CsvLine(HeaderFields(MarkColumns()));
-  std::map<std::string, int>
-      first_lines;  // the reader rejects a second mark of a point in an image
-  for (const ImageMark& m : marks) {
-    RowFields row(MarkDescription(m.raster, m.point_id));
-    const auto [first, inserted] = first_lines.emplace(MarkKey(m.raster, m.point_id), m.line);
-    if (!inserted) {
-      row.Fail("PointID", "the point is marked twice in the image (source lines " +
-                              std::to_string(first->second) + " and " + std::to_string(m.line) +
-                              ")");
-    }
-    if (m.raster.empty()) row.Fail("Raster", "is empty");
-    if (m.point_id.empty()) row.Fail("PointID", "is empty");
-    if (m.column_row.has_value() == m.film_um.has_value())
-      row.Fail("Column", "exactly one of Column/Row and FilmX/FilmY must be set");
-    if (m.accuracy_px && !(*m.accuracy_px > 0.0)) row.Fail("Accuracy", "must be positive");
-    row.Text(m.raster);
-    row.Text(m.point_id);
-    row.OptionalNumber("Column",
-                       m.column_row ? std::optional<double>(m.column_row->x()) : std::nullopt);
-    row.OptionalNumber("Row",
-                       m.column_row ? std::optional<double>(m.column_row->y()) : std::nullopt);
-    row.OptionalNumber("FilmX", m.film_um ? std::optional<double>(m.film_um->x()) : std::nullopt);
-    row.OptionalNumber("FilmY", m.film_um ? std::optional<double>(m.film_um->y()) : std::nullopt);
-    row.OptionalNumber("Accuracy", m.accuracy_px);
-    row.Text(m.camera_id);
-    PHOTOPOSE_RETURN_IF_ERROR(row.status(path));
-    contents += CsvLine(*row.fields());
-  }
+  std::string contents;
+  ImageMarksWriter writer(path, marks.size(), &contents);
+  for (const ImageMark& m : marks) PHOTOPOSE_RETURN_IF_ERROR(writer.Add(m));
+  PHOTOPOSE_RETURN_IF_ERROR(writer.Finish());
   *text = std::move(contents);
   return Status::Ok();
 }
@@ -1346,12 +1675,13 @@ Status CheckMarkInsideImage(const std::string& marks_path, const ImageMark& mark
 
 namespace {
 
-// Reads the file at `path` and hands its text and its name for messages to `parse`.
+// Maps the file at `path` (or reads standard input for "-") and hands its text and its name for
+// messages to `parse`: a table of a hundred megabytes is parsed in place, not copied.
 template <typename Parse>
 Status ReadAndParse(const std::string& path, Parse parse) {
-  std::string text;
-  PHOTOPOSE_RETURN_IF_ERROR(ReadTextFile(path, &text));
-  return parse(std::string_view(text), InputName(path));
+  TextFile file;
+  PHOTOPOSE_RETURN_IF_ERROR(file.OpenInput(path));
+  return parse(file.text(), InputName(path));
 }
 
 }  // namespace

@@ -15,6 +15,7 @@
 
 #include <Eigen/Core>
 #include <map>
+#include <memory>
 #include <optional>
 #include <string>
 #include <string_view>
@@ -145,6 +146,34 @@ Status ParseImageMarks(std::string_view text, const std::string& file_name,
 Status WriteImageMarks(const std::string& path, const std::vector<ImageMark>& marks);
 Status FormatImageMarks(const std::vector<ImageMark>& marks, const std::string& path,
                         std::string* text);
+
+// Formats a marks table mark by mark, each checked as FormatImageMarks checks it, with no string
+// per row or field: FormatImageMarks uses it, and so does core/block_tables.cc to write a block's
+// millions of marks without a vector of ImageMark first.
+class ImageMarksWriter {
+ public:
+  // Appends the header to *text, which must outlive the writer; `path` names the file in
+  // messages; room is reserved for `num_marks` rows.
+  ImageMarksWriter(const std::string& path, size_t num_marks, std::string* text);
+  ~ImageMarksWriter();
+  ImageMarksWriter(const ImageMarksWriter&) = delete;
+  ImageMarksWriter& operator=(const ImageMarksWriter&) = delete;
+
+  // Checks a mark and appends its row, else "path: mark of point 'P' in image 'I': column: what"
+  // (empty names, both or neither position, a value that is not finite or outside its column's
+  // range, an accuracy that is not positive).
+  // A second mark of a point in an image is found when the marks are all there: at the first
+  // other problem, or by Finish.
+  Status Add(const ImageMark& mark);
+  // After the last Add: "path: mark of point 'P' in image 'I': PointID: the point is marked twice
+  // in the image (source lines 3 and 9)" for the first such mark.
+  Status Finish();
+
+ private:
+  struct State;
+  std::unique_ptr<State> state_;
+  std::string* text_;
+};
 
 // ------------------------------------------------------------------ OpenDroneMap gcp_list.txt
 // First line: the CRS (EPSG:xxxx, WGS84 UTM ..., or a proj string); then "X Y Z px py image [name]"

@@ -94,24 +94,37 @@ void TextFile::Close() {
   text_ = std::string_view();
 }
 
-Status TextFile::Open(const std::string& path) {
+bool TextFile::Map(int fd, size_t size) {
+  void* map = mmap(nullptr, size, PROT_READ, MAP_PRIVATE, fd, 0);
+  if (map == MAP_FAILED) return false;
+  madvise(map, size, MADV_SEQUENTIAL);
+  map_ = map;
+  map_size_ = size;
+  text_ = std::string_view(static_cast<const char*>(map_), map_size_);
+  return true;
+}
+
+Status TextFile::Open(const std::string& path) { return OpenFile(path, /*as_input=*/false); }
+
+Status TextFile::OpenInput(const std::string& path) { return OpenFile(path, /*as_input=*/true); }
+
+Status TextFile::OpenFile(const std::string& path, bool as_input) {
   Close();
-  const int fd = open(path.c_str(), O_RDONLY | O_CLOEXEC);
-  if (fd < 0) return Status::Error(path + ": cannot open: " + std::strerror(errno));
-  struct stat info;
-  if (fstat(fd, &info) == 0 && S_ISREG(info.st_mode) && info.st_size > 0) {
-    void* map = mmap(nullptr, static_cast<size_t>(info.st_size), PROT_READ, MAP_PRIVATE, fd, 0);
-    if (map != MAP_FAILED) {
-      close(fd);
-      madvise(map, static_cast<size_t>(info.st_size), MADV_SEQUENTIAL);
-      map_ = map;
-      map_size_ = static_cast<size_t>(info.st_size);
-      text_ = std::string_view(static_cast<const char*>(map_), map_size_);
-      return Status::Ok();
-    }
+  // As an input, O_NONBLOCK: opening a FIFO must not wait for a writer (ReadTextFile refuses it).
+  const int flags = O_RDONLY | O_CLOEXEC | (as_input ? O_NONBLOCK | O_NOCTTY : 0);
+  const int fd = as_input && path == "-" ? -1 : open(path.c_str(), flags);
+  if (fd < 0 && !as_input) return Status::Error(path + ": cannot open: " + std::strerror(errno));
+  if (fd >= 0) {
+    struct stat info;
+    const bool mapped =
+        fstat(fd, &info) == 0 && S_ISREG(info.st_mode) && info.st_size > 0 &&
+        (!as_input || static_cast<uint64_t>(info.st_size) <= kMaxInputBytes) &&
+        Map(fd, static_cast<size_t>(info.st_size));
+    close(fd);
+    if (mapped) return Status::Ok();
   }
-  close(fd);
-  // Not a regular file, empty, or not mappable: read it (with ReadTextFile's messages).
+  // Standard input, not a regular file, empty, too large or not mappable: read it, or refuse it,
+  // with ReadTextFile's messages.
   PHOTOPOSE_RETURN_IF_ERROR(ReadTextFile(path, &read_));
   text_ = read_;
   return Status::Ok();

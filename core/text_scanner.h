@@ -103,10 +103,18 @@ class TextFile {
   TextFile& operator=(const TextFile&) = delete;
 
   Status Open(const std::string& path);
+  // The same under the rules of core/csv.h's ReadTextFile for photopose's own inputs (the
+  // tables): "-" is standard input (read), anything but a regular file is refused, and so is a
+  // file of more than kMaxInputBytes; messages as ReadTextFile's ("<stdin>" for "-").
+  Status OpenInput(const std::string& path);
   std::string_view text() const { return text_; }
 
  private:
   void Close();
+  // Open (as_input false) or OpenInput (true).
+  Status OpenFile(const std::string& path, bool as_input);
+  // Maps `size` bytes of the open file `fd`; false when it cannot.
+  bool Map(int fd, size_t size);
   void* map_ = nullptr;
   size_t map_size_ = 0;
   std::string read_;

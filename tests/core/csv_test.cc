@@ -125,6 +125,49 @@ TEST(CsvTest, ColumnsOtherThanKeepsHeaderOrder) {
   EXPECT_EQ(table.ColumnsOtherThan({"X", "Y", "Z"}), (std::vector<size_t>{1, 3}));
 }
 
+TEST(CsvReaderTest, StreamsRowsAsViewsWithTheTableParse) {
+  const std::string text =
+      "\xEF\xBB\xBFName, Value ,Note\r\n"
+      "# comment\r\n"
+      "P1 , 1.5,\"a \"\"b\"\"\"\r\n"
+      "\r\n"
+      "\"P2\",2,\"two\r\nlines\"\r\n"
+      "P3,x,plain";
+  const std::string name = "t.csv";
+  CsvReader reader;
+  ASSERT_TRUE(reader.Open(text, name, kTolerant).ok());
+  EXPECT_EQ(reader.header().header(), (std::vector<std::string>{"Name", "Value", "Note"}));
+  EXPECT_EQ(reader.header().header_line(), 1);
+  EXPECT_EQ(reader.MaxRows(), 6u);  // a bound: one per line left
+  const CsvColumn value = reader.header().Column("value");
+  EXPECT_EQ(value.index, 1u);
+  EXPECT_FALSE(reader.header().Column("Other").present());
+  std::vector<int> lines;
+  std::vector<std::vector<std::string>> rows;
+  const Status status = reader.ForEachRow([&](const CsvRowReader& row) {
+    lines.push_back(row.line());
+    rows.emplace_back(row.header().header().size());
+    for (size_t i = 0; i < rows.back().size(); ++i)
+      rows.back()[i] = std::string(row.Text(CsvColumn{"", i}));
+    double number = 0.0;
+    return row.RequiredNumber(value, &number);
+  });
+  EXPECT_EQ(status.message(), "t.csv:7: value: 'x' is not a number");
+  EXPECT_EQ(lines, (std::vector<int>{3, 5, 7}));
+  ASSERT_EQ(rows.size(), 3u);
+  EXPECT_EQ(rows[0], (std::vector<std::string>{"P1", "1.5", "a \"b\""}));
+  EXPECT_EQ(rows[1], (std::vector<std::string>{"P2", "2", "two\nlines"}));
+  EXPECT_EQ(rows[2], (std::vector<std::string>{"P3", "x", "plain"}));
+  // Fields that need no unescaping are views into the text itself.
+  CsvReader again;
+  ASSERT_TRUE(again.Open(text, name, kTolerant).ok());
+  bool has_row = false;
+  ASSERT_TRUE(again.Next(&has_row).ok());
+  ASSERT_TRUE(has_row);
+  EXPECT_GE(again.fields()[0].data(), text.data());
+  EXPECT_LT(again.fields()[0].data(), text.data() + text.size());
+}
+
 TEST(CsvRowReaderTest, ReadsTypedFields) {
   const CsvTable table = ParseOrDie(
       "Name,Value,Count,List,Pairs,Empty\n"

@@ -1,6 +1,7 @@
 #include "core/tables.h"
 
 #include <gtest/gtest.h>
+#include <sys/stat.h>
 #include <unistd.h>
 
 #include <Eigen/Cholesky>
@@ -8,6 +9,7 @@
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <limits>
 #include <random>
 #include <set>
 #include <sstream>
@@ -945,12 +947,113 @@ TEST_F(TablesTest, ImageMarksErrors) {
       {full, "I,P,1,2,,,0\n", "2: Accuracy: '0' is outside (0, 100000000] px"},
       {full, "I,P,1,2,,,\nI,Q,1,2,,,\n\nI,P,3,4,,,\n",
        "5: PointID: duplicate mark of point 'P' in image 'I' (first on line 2)"},
+      // The first problem in the file wins: a duplicate before a bad row, a bad row before a
+      // duplicate, the earliest of two duplicates of different points.
+      {full, "I,P,1,2,,,\nI,P,3,4,,,\nI,Q,x,2,,,\n",
+       "3: PointID: duplicate mark of point 'P' in image 'I' (first on line 2)"},
+      {full, "I,P,1,2,,,\nI,Q,x,2,,,\nI,P,3,4,,,\n", "3: Column: 'x' is not a number"},
+      {full, "A,P,1,2,,,\nB,Q,1,2,,,\nB,Q,1,2,,,\nA,P,1,2,,,\n",
+       "4: PointID: duplicate mark of point 'Q' in image 'B' (first on line 3)"},
+      {full, "I,P,1,2,,,\nI,P,1,2,,,\nI,P,1,2,,,\n",
+       "3: PointID: duplicate mark of point 'P' in image 'I' (first on line 2)"},
+      // A bad number in the last row without a line end; CRLF line ends.
+      {full, "I,P,1,2,,,\nI,Q,1,2e,,,", "3: Row: '2e' is not a number"},
+      {full, "I,P,1,2,,,\r\nI,Q,1,x,,,\r\n", "3: Row: 'x' is not a number"},
+      {full, "I,P,1,2,,,\r\nI,P,1,2,,,\r\n",
+       "3: PointID: duplicate mark of point 'P' in image 'I' (first on line 2)"},
+      // Quoted names are the same names; one with "" is unescaped (kept apart from the text).
+      {full, "\"I\",P,1,2,,,\nI,\"P\",3,4,,,\n",
+       "3: PointID: duplicate mark of point 'P' in image 'I' (first on line 2)"},
+      {full, "\"I\"\"x\",P,1,2,,,\nI,P,1,2,,,\n\"I\"\"x\",P,3,4,,,\n",
+       "4: PointID: duplicate mark of point 'P' in image 'I\"x' (first on line 2)"},
+      {full, "\"I\nJ\",P,1,2,,,\n\"I\r\nJ\",P,3,4,,,\n",
+       "4: PointID: duplicate mark of point 'P' in image 'I\\nJ' (first on line 2)"},
   };
   for (const Case& c : cases) {
     const std::string path = Write("marks.csv", c.header + "\n" + c.rows);
     std::vector<ImageMark> marks;
     EXPECT_EQ(ReadImageMarks(path, &marks).message(), path + ":" + c.expected) << c.rows;
   }
+}
+
+TEST_F(TablesTest, ImageMarksReadCrLfQuotedAndUnterminatedRows) {
+  const std::string path = Write("marks.csv",
+                                 "raster,POINT ID,column,Row,Accuracy\r\n"
+                                 "\"IMG \"\"1\"\".JPG\",P1,1,2,0.5\r\n"
+                                 "# a comment\r\n"
+                                 "IMG_2.JPG , \"P,2\" ,3,4,");
+  std::vector<ImageMark> marks;
+  const Status status = ReadImageMarks(path, &marks);
+  ASSERT_TRUE(status.ok()) << status.message();
+  ASSERT_EQ(marks.size(), 2u);
+  EXPECT_EQ(marks[0].raster, "IMG \"1\".JPG");
+  EXPECT_EQ(marks[0].point_id, "P1");
+  EXPECT_EQ(marks[0].accuracy_px, 0.5);
+  EXPECT_EQ(marks[1].raster, "IMG_2.JPG");
+  EXPECT_EQ(marks[1].point_id, "P,2");
+  EXPECT_EQ(*marks[1].column_row, Eigen::Vector2d(3, 4));
+  EXPECT_FALSE(marks[1].accuracy_px.has_value());
+  EXPECT_EQ(marks[1].line, 4);
+}
+
+TEST_F(TablesTest, ImageMarksWriterNamesTheFirstProblemInMarkOrder) {
+  const auto mark = [](const std::string& raster, const std::string& point, double column,
+                       int line) {
+    ImageMark m;
+    m.raster = raster;
+    m.point_id = point;
+    m.column_row = Eigen::Vector2d(column, 2.0);
+    m.line = line;
+    return m;
+  };
+  const double kNan = std::numeric_limits<double>::quiet_NaN();
+  std::string text;
+  // A duplicate before a bad mark, a bad mark before a duplicate, the earliest of two duplicates.
+  EXPECT_EQ(FormatImageMarks({mark("I", "P", 1, 7), mark("I", "P", 1, 9), mark("I", "Q", kNan, 11)},
+                             "m.csv", &text)
+                .message(),
+            "m.csv: mark of point 'P' in image 'I': PointID: the point is marked twice in the "
+            "image (source lines 7 and 9)");
+  EXPECT_EQ(FormatImageMarks({mark("I", "P", 1, 7), mark("I", "Q", kNan, 9), mark("I", "P", 1, 11)},
+                             "m.csv", &text)
+                .message(),
+            "m.csv: mark of point 'Q' in image 'I': Column: value is not finite");
+  EXPECT_EQ(FormatImageMarks({mark("A", "P", 1, 2), mark("B", "Q", 1, 3), mark("B", "Q", 1, 4),
+                              mark("A", "P", 1, 5)},
+                             "m.csv", &text)
+                .message(),
+            "m.csv: mark of point 'Q' in image 'B': PointID: the point is marked twice in the "
+            "image (source lines 3 and 4)");
+  EXPECT_EQ(FormatImageMarks({mark("I", "P", 2e8, 7)}, "m.csv", &text).message(),
+            "m.csv: mark of point 'P' in image 'I': Column: 200000000 is outside [-100000000, "
+            "100000000] px");
+  // Good marks: one line each, numbers in their shortest positional form, fields quoted as needed.
+  ImageMark film = mark("I,1", " P", 0, 3);
+  film.column_row.reset();
+  film.film_um = Eigen::Vector2d(-1234.5, 0.125);
+  film.accuracy_px = 1.5;
+  film.camera_id = "C";
+  ASSERT_TRUE(FormatImageMarks({mark("I", "P", 1024.5, 2), film}, "m.csv", &text).ok());
+  EXPECT_EQ(text,
+            "Raster,PointID,Column,Row,FilmX,FilmY,Accuracy,CameraID\n"
+            "I,P,1024.5,2,,,,\n"
+            "\"I,1\",\" P\",,,-1234.5,0.125,1.5,C\n");
+}
+
+TEST_F(TablesTest, TablesAreReadFromStandardInputAndRegularFilesOnly) {
+  std::vector<ImageMark> marks;
+  EXPECT_EQ(ReadImageMarks(dir_.string(), &marks).message(),
+            dir_.string() +
+                ": is a folder, not a regular file; photopose reads regular files, or standard "
+                "input for '-'");
+  const std::string fifo = Path("fifo.csv");
+  ASSERT_EQ(mkfifo(fifo.c_str(), 0600), 0);
+  // A FIFO without a writer is refused at once, not waited on.
+  EXPECT_EQ(ReadImageMarks(fifo, &marks).message(),
+            fifo + ": is a FIFO (named pipe), not a regular file; photopose reads regular files, "
+                   "or standard input for '-'");
+  const std::string empty = Write("empty.csv", "");
+  EXPECT_EQ(ReadImageMarks(empty, &marks).message(), empty + ": no header line");
 }
 
 TEST_F(TablesTest, CheckMarksNamesTheUnknownPoint) {

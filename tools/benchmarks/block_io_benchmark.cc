@@ -1,11 +1,12 @@
 // Block I/O at scale (docs/performance.md, issue 10 section 2): generates issue 10's synthetic
 // block (25 lines x 40 images of a 24 mm / 4 um / 6000 x 4000 camera at 100 m, 13 m forward and
 // 30 m side spacing, 120 000 tie points: about 1.8 million marks), writes it as the project's
-// tables and as a COLMAP text model, reads both back, and times every step (wall clock, one run
-// each) with the peak resident memory after it. When `colmap` is on the PATH, its own text reader
-// runs on the same model in the same run (`colmap model_converter` text -> binary, and binary ->
-// text for its writer) as the peer. The dataset stays in --out_dir for the bundle-adjustment
-// benchmark:
+// tables and as a COLMAP text model, reads both back (the tables one by one, then assembled into a
+// block, then all at once with ReadBlock as `photopose bundle` does), and times every step (wall
+// clock, one run each) with the step's peak resident memory (and how far above the memory at its
+// start that peak is). When `colmap` is on the PATH, its own text reader runs on the same model in
+// the same run (`colmap model_converter` text -> binary, and binary -> text for its writer) as the
+// peer. The dataset stays in --out_dir for the bundle-adjustment benchmark:
 //   cameras.csv points.csv marks.csv frames.csv     the block's tables (perturbed start, GNSS)
 //   truth/frames.csv truth/points.csv truth/blunders.csv
 //   colmap/{cameras,images,points3D}.txt             the same block as a COLMAP model
@@ -14,15 +15,20 @@
 //            [--forward_spacing_m=13] [--side_spacing_m=30] [--tie_points=120000] [--seed=1]
 //            [--no_peer]
 #include <sys/resource.h>
+#ifdef __GLIBC__
+#include <malloc.h>
+#endif
 
 #include <chrono>
 #include <cstdio>
 #include <cstdlib>
+#include <cstring>
 #include <filesystem>
 #include <functional>
 #include <string>
 #include <vector>
 
+#include "core/block.h"
 #include "core/block_tables.h"
 #include "core/colmap_io.h"
 #include "core/synthetic_block.h"
@@ -31,10 +37,35 @@
 namespace photopose {
 namespace {
 
-double PeakRssMb() {
+// A field of /proc/self/status in MB ("VmHWM", "VmRSS"), or the peak of getrusage where there is
+// no /proc.
+double StatusMb(const char* field) {
+  if (std::FILE* status = std::fopen("/proc/self/status", "r")) {
+    char line[256];
+    const size_t length = std::strlen(field);
+    double kib = -1.0;
+    while (std::fgets(line, sizeof(line), status) != nullptr) {
+      if (std::strncmp(line, field, length) == 0 && line[length] == ':')
+        kib = std::atof(line + length + 1);
+    }
+    std::fclose(status);
+    if (kib >= 0.0) return kib / 1024.0;
+  }
   rusage usage;
   getrusage(RUSAGE_SELF, &usage);
   return usage.ru_maxrss / 1024.0;  // ru_maxrss is in KiB on Linux
+}
+
+// Resets the peak resident memory (VmHWM) to the current one, so that each step reports its own
+// peak (Linux >= 4.0; elsewhere the peak stays the process's).
+void ResetPeakRss() {
+#ifdef __GLIBC__
+  malloc_trim(0);  // hand the memory freed by the steps before back, so that RSS is what is in use
+#endif
+  if (std::FILE* clear = std::fopen("/proc/self/clear_refs", "w")) {
+    std::fputs("5", clear);
+    std::fclose(clear);
+  }
 }
 
 double FileMb(const std::string& path) {
@@ -45,6 +76,8 @@ double FileMb(const std::string& path) {
 
 // Runs `step`, prints its wall time and the peak memory so far; false (and the reason) on failure.
 bool Timed(const char* name, const std::function<Status()>& step, double* seconds) {
+  ResetPeakRss();
+  const double start_mb = StatusMb("VmRSS");
   const auto start = std::chrono::steady_clock::now();
   const Status status = step();
   *seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
@@ -52,7 +85,9 @@ bool Timed(const char* name, const std::function<Status()>& step, double* second
     std::fprintf(stderr, "%s failed: %s\n", name, status.message().c_str());
     return false;
   }
-  std::printf("%-44s %8.3f s   peak RSS %7.1f MB\n", name, *seconds, PeakRssMb());
+  const double peak_mb = StatusMb("VmHWM");
+  std::printf("%-44s %8.3f s   peak RSS %7.1f MB (%+7.1f MB over its start)\n", name, *seconds,
+              peak_mb, peak_mb - start_mb);
   std::fflush(stdout);
   return true;
 }
@@ -157,10 +192,45 @@ int Run(int argc, char** argv) {
     return 1;
   marks.clear();
   marks.shrink_to_fit();
-  std::vector<GroundPoint> points;
-  if (!Timed("read points table (ReadGroundPoints)",
-             [&] { return ReadGroundPoints(files.points, &points); }, &t))
+  // The tables as `photopose bundle --cameras --points --marks --frames` reads them (ReadBlock),
+  // step by step: each table, then the assembly of the block from them.
+  BlockTables tables;
+  tables.cameras_file = files.cameras;
+  tables.points_file = files.points;
+  tables.marks_file = files.marks;
+  tables.frames_file = files.frames;
+  if (!Timed("read camera table (ReadCameraTable)",
+             [&] { return ReadCameraTable(files.cameras, &tables.cameras); }, &t))
     return 1;
+  if (!Timed("read points table (ReadGroundPoints)",
+             [&] { return ReadGroundPoints(files.points, &tables.points); }, &t))
+    return 1;
+  FramesTableOptions frames_options;
+  frames_options.cameras = &tables.cameras;
+  if (!Timed("read frames table (ReadFramesTable)",
+             [&] { return ReadFramesTable(files.frames, frames_options, &tables.frames); }, &t))
+    return 1;
+  if (!Timed("read marks table again (ReadImageMarks)",
+             [&] { return ReadImageMarks(files.marks, &tables.marks); }, &t))
+    return 1;
+  if (!Timed("assemble the block (AssembleBlock)", [&] { return AssembleBlock(tables, &again); },
+             &t))
+    return 1;
+  if (again.marks.size() != num_marks) {
+    std::fprintf(stderr, "assembled %zu marks, wrote %zu\n", again.marks.size(), num_marks);
+    return 1;
+  }
+  tables = BlockTables();
+  again = Block();
+  BlockFiles block_files;
+  block_files.cameras = files.cameras;
+  block_files.points = files.points;
+  block_files.marks = files.marks;
+  block_files.frames = files.frames;
+  if (!Timed("read the block from tables (ReadBlock)",
+             [&] { return ReadBlock(block_files, &again); }, &t))
+    return 1;
+  again = Block();
 
   if (peer && std::system("command -v colmap > /dev/null 2>&1") == 0) {
     const std::string bin_dir = out_dir + "/colmap_bin", txt_dir = out_dir + "/colmap_txt";
