@@ -200,8 +200,10 @@ Eigen::Matrix3d PointCovariance(const ReducedNormals& reduced, int p) {
   return Vi + WV.transpose() * C_sub * WV;
 }
 
+// With `shift`, also C_rows g_i per row: the shift of the parameters in the rows of C_rows (the
+// camera-centre rows of C: the external reliability needs no others) per unit whitened error.
 Eigen::VectorXd Leverages(const ReducedNormals& reduced, const BlockRows& rows,
-                          std::vector<Eigen::VectorXd>* shift) {
+                          const Eigen::MatrixXd* C_rows, std::vector<Eigen::VectorXd>* shift) {
   // h_i = g_i^T C g_i + J_p,i V^-1 J_p,i^T with g_i = J_e,i^T - W V^-1 J_p,i^T (e space): the
   // point's own part and its elimination folded into one sparse vector per row.
   Eigen::VectorXd h(rows.rows);
@@ -226,8 +228,8 @@ Eigen::VectorXd Leverages(const ReducedNormals& reduced, const BlockRows& rows,
     h[r] = quadratic + point_part;
     if (shift != nullptr) {
       Eigen::VectorXd& s = (*shift)[r];
-      s = Eigen::VectorXd::Zero(reduced.size);
-      for (size_t b = 0; b < g.index.size(); ++b) s += reduced.C.col(g.index[b]) * g.value[b];
+      s = Eigen::VectorXd::Zero(C_rows->rows());
+      for (size_t b = 0; b < g.index.size(); ++b) s += C_rows->col(g.index[b]) * g.value[b];
     }
   }
   return h;
@@ -374,12 +376,22 @@ void ComputeBundleStatistics(const BundleAdjustmentOptions& options, const Block
       int offset;
       int count;
     };
+    // C restricted to those rows (C is symmetric: its columns), so that the shifts cost half the
+    // full products (measured: 58.6 s of statistics at 300 images before).
     std::vector<CentreColumns> centres;
+    std::vector<int> centre_rows;
     for (size_t i = 0; i < block.images.size(); ++i) {
       const auto found = reduced.e_index.find(state.eo[i].data());
       if (found == reduced.e_index.end()) continue;
-      centres.push_back({reduced.e_offset[found->second],
-                         static_cast<int>(i) == plan.relative_scale_image ? 2 : 3});
+      const int count = static_cast<int>(i) == plan.relative_scale_image ? 2 : 3;
+      centres.push_back({static_cast<int>(centre_rows.size()), count});
+      for (int k = 0; k < count; ++k) centre_rows.push_back(reduced.e_offset[found->second] + k);
+    }
+    Eigen::MatrixXd C_centres;
+    if (diagnostics) {
+      C_centres.resize(static_cast<Eigen::Index>(centre_rows.size()), reduced.size);
+      for (size_t r = 0; r < centre_rows.size(); ++r)
+        C_centres.row(static_cast<Eigen::Index>(r)) = reduced.C.col(centre_rows[r]).transpose();
     }
     // The yardstick of the normalized residuals: the stated accuracies (sigma0 = 1), or the
     // a-posteriori sigma0 when the data say they were optimistic (Pope's tau-test then).
@@ -389,7 +401,8 @@ void ComputeBundleStatistics(const BundleAdjustmentOptions& options, const Block
     for (const ResidualInfo& info : round.residuals) {
       if (!diagnostics && info.group == kTieMarks) continue;  // its share is the remainder
       if (!EvaluateBlockRows(round, reduced, info, &rows)) continue;
-      const Eigen::VectorXd h = Leverages(reduced, rows, diagnostics ? &shifts : nullptr);
+      const Eigen::VectorXd h =
+          Leverages(reduced, rows, &C_centres, diagnostics ? &shifts : nullptr);
       for (int row = 0; row < info.rows; ++row) sums[info.group].leverage += h[row];
       if (!diagnostics) continue;
       for (int row = 0; row < info.rows; ++row) {

@@ -81,6 +81,7 @@ struct Plan {
   std::vector<std::array<bool, 6>> image_fixed;  // components held fixed of a free image
   BundleDatum datum = BundleDatum::kControl;
   std::string datum_description;
+  std::vector<std::string> tie_points_left_out;  // seen twice or more, no initial coordinates
 };
 
 int CountUsedMarks(const std::vector<int>& marks, const std::vector<char>& used) {
@@ -220,13 +221,15 @@ Status MakePlan(const TaylorBundleOptions& options, const BundleAdjustmentConfig
       plan->point_in_problem[p] = 0;  // a control point nobody sees
       continue;
     }
-    if (point.role == PointRole::kTie && !point.position_m) missing.push_back(point.id);
+    if (point.role == PointRole::kTie && !point.position_m) {
+      // Not intersected by the initialisation: left out with its marks, as BundleAdjust does.
+      plan->point_in_problem[p] = 0;
+      for (const int m : block.marks_of_point[p]) plan->mark_used[m] = 0;
+      plan->tie_points_left_out.push_back(point.id);
+      continue;
+    }
     if (point.role == PointRole::kControl && point.accuracy_m)
       plan->point_sigma[p] = *point.accuracy_m;
-  }
-  if (!missing.empty()) {
-    return Status::Error("tie points without initial coordinates: " + ListNames(missing, 5) +
-                         " (let the initialisation triangulate them)");
   }
   int count = 0;
   const int weak = ImageWithTooFewMarks(block, *plan, &count);
@@ -1066,6 +1069,7 @@ void FillBundleSummary(const TaylorBundleSummary& taylor, BundleAdjustmentSummar
   out->message = taylor.message;
   out->datum = taylor.datum;
   out->datum_description = taylor.datum_description;
+  out->tie_points_left_out = taylor.tie_points_left_out;
   out->rounds = taylor.rounds;
   out->iterations = taylor.iterations;
   out->initial_cost = taylor.initial_cost;
@@ -1292,6 +1296,7 @@ Status TaylorBundleAdjust(const TaylorBundleOptions& options, const BundleAdjust
   if (!prepared.ok()) return refuse(prepared);
   summary.datum = plan.datum;
   summary.datum_description = plan.datum_description;
+  summary.tie_points_left_out = plan.tie_points_left_out;
   summary.message.clear();
 
   State state;

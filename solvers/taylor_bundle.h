@@ -127,6 +127,8 @@ struct TaylorBundleSummary {
   TaylorPartials partials = TaylorPartials::kCorrected;
   BundleDatum datum = BundleDatum::kControl;
   std::string datum_description;
+  // Tie points seen twice or more without initial coordinates: left out with their marks.
+  std::vector<std::string> tie_points_left_out;
   int rounds = 0;      // adjustment rounds (rejections re-adjust)
   int iterations = 0;  // Gauss-Newton corrections over all rounds (count)
   // 1/2 sum of squared whitened residuals (unitless, the Ceres cost): at the start of the first

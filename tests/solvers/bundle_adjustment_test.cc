@@ -389,9 +389,12 @@ TEST(BundleAdjustment, TiePointsWithoutStartAreLeftOutAndNamed) {
   // A tie point the initialisation could not intersect has no coordinates: the adjustment leaves
   // it out with its marks and names it, instead of refusing the block.
   SmallBlock data = MakeSmallBlock(SmallBlockOptions());
+  std::vector<int> rays(data.block.points.size(), 0);
+  for (const BlockMark& mark : data.block.marks) ++rays[mark.point];
   std::vector<std::string> removed;
-  for (BlockPoint& point : data.block.points) {
-    if (point.role != PointRole::kTie || removed.size() == 2) continue;
+  for (size_t p = 0; p < data.block.points.size(); ++p) {
+    BlockPoint& point = data.block.points[p];
+    if (point.role != PointRole::kTie || rays[p] < 3 || removed.size() == 2) continue;
     point.position_m.reset();
     removed.push_back(point.id);
   }

@@ -455,6 +455,28 @@ TEST(TaylorBundle, NoiseFreeBlockReachesTheTruth) {
   }
 }
 
+TEST(TaylorBundle, TiePointsWithoutStartAreLeftOutAndNamed) {
+  // As in BundleAdjust: a tie point without initial coordinates leaves with its marks and is
+  // named in the summary, instead of refusing the block.
+  FixtureBlock data = MakeFixtureBlock(FixtureBlockOptions());
+  std::vector<int> rays(data.block.points.size(), 0);
+  for (const BlockMark& mark : data.block.marks) ++rays[mark.point];
+  std::vector<std::string> removed;
+  for (size_t p = 0; p < data.block.points.size(); ++p) {
+    BlockPoint& point = data.block.points[p];
+    if (point.role != PointRole::kTie || rays[p] < 3 || removed.size() == 3) continue;
+    point.position_m.reset();
+    removed.push_back(point.id);
+  }
+  ASSERT_EQ(removed.size(), 3u);
+  TaylorBundleResult result;
+  ASSERT_TRUE(
+      TaylorBundleAdjust(TaylorOptions(), BundleAdjustmentConfig(), &data.block, &result).ok());
+  ASSERT_TRUE(result.summary.IsSolutionUsable()) << result.summary.BriefReport();
+  EXPECT_EQ(result.summary.tie_points_left_out, removed);
+  EXPECT_EQ(result.adjustment.summary.tie_points_left_out, removed);
+}
+
 // Independent of Ceres: the covariance the Taylor solver reports is honest, the mean NEES of the
 // adjusted camera centres against the truth in its chi-square band (as for BundleAdjust: 10 seeds
 // x 12 images; the band +- 0.6 is about 2.7 standard deviations of the mean of correlated values).
