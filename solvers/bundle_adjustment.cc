@@ -74,7 +74,9 @@ class ProgressCallback final : public ceres::IterationCallback {
 // X -> s R_s (X - C0) + C0_fixed that returns the first image to its fixed pose and the scale
 // image's fixed coordinate to its value. Reprojection errors are invariant under a similarity of
 // the whole block, and a relative block has no priors, so the cost does not change.
-void MoveToRelativeGauge(const BundlePlan& plan, const Vector6d& fixed_eo, double fixed_coordinate,
+// Returns false, leaving *state as it was, when the free solution cannot be moved (the second
+// image collapsed onto the first or passed to its other side: no positive scale).
+bool MoveToRelativeGauge(const BundlePlan& plan, const Vector6d& fixed_eo, double fixed_coordinate,
                          BundleState* state) {
   const int first = plan.relative_fixed_image;
   const int second = plan.relative_scale_image;
@@ -86,7 +88,8 @@ void MoveToRelativeGauge(const BundlePlan& plan, const Vector6d& fixed_eo, doubl
   // R_camera_from_ground' = R R_s^T, so R_s = R0_fixed^T R0 returns the first image's attitude.
   const Eigen::Matrix3d R_s = R0_fixed.transpose() * R0;
   const double along = (R_s * (state->eo[second].head<3>() - c0))[axis];
-  const double scale = along != 0.0 ? (fixed_coordinate - c0_fixed[axis]) / along : 1.0;
+  const double scale = (fixed_coordinate - c0_fixed[axis]) / along;
+  if (!std::isfinite(scale) || !(scale > 0.0)) return false;
   const auto move = [&](const Eigen::Vector3d& x) -> Eigen::Vector3d {
     return c0_fixed + scale * (R_s * (x - c0));
   };
@@ -105,6 +108,7 @@ void MoveToRelativeGauge(const BundlePlan& plan, const Vector6d& fixed_eo, doubl
   // Exactly the fixed values (no rounding left in the held parameters).
   state->eo[first] = fixed_eo;
   state->eo[second][axis] = fixed_coordinate;
+  return true;
 }
 
 void AddSolverTimes(const ceres::Solver::Summary& ceres_summary, BundleAdjustmentSummary* summary) {
@@ -378,10 +382,12 @@ Status BundleAdjust(const BundleAdjustmentOptions& options, const BundleAdjustme
       // cost is invariant and the gradient has no component along the similarity, so a
       // converged free solve is the minimum in COLMAP's gauge too: no second solve, only the
       // round's bookkeeping switched to the gauge (the statistics need it). A free solve that did
-      // not converge goes on in the gauge from where it stopped.
+      // not converge goes on in the gauge from where it stopped; one that cannot be moved (no
+      // positive scale) starts over in the gauge.
       BundlePlan free_plan = plan;
       free_plan.relative_fixed_image = -1;
       free_plan.relative_scale_image = -1;
+      const BundleState start_state = state;
       const Vector6d fixed_eo = state.eo[plan.relative_fixed_image];
       const double fixed_coordinate = state.eo[plan.relative_scale_image][plan.relative_scale_axis];
       const Clock::time_point build_start = Clock::now();
@@ -398,9 +404,14 @@ Status BundleAdjust(const BundleAdjustmentOptions& options, const BundleAdjustme
       AddSolverTimes(ceres_summary, &summary);
       summary.initial_cost = ceres_summary.initial_cost;
       free_iterations = static_cast<int>(ceres_summary.iterations.size()) - 1;
-      MoveToRelativeGauge(plan, fixed_eo, fixed_coordinate, &state);
-      internal::ApplyRelativeGauge(plan, &state, &round);
-      solved = ceres_summary.termination_type == ceres::CONVERGENCE;
+      if (MoveToRelativeGauge(plan, fixed_eo, fixed_coordinate, &state)) {
+        internal::ApplyRelativeGauge(plan, &state, &round);
+        solved = ceres_summary.termination_type == ceres::CONVERGENCE;
+      } else {
+        // No similarity reaches COLMAP's gauge from there: solved in that gauge from the start.
+        state = start_state;
+        internal::BuildBundleRound(options, config, *block, plan, &state, &round);
+      }
     } else {
       const Clock::time_point build_start = Clock::now();
       internal::BuildBundleRound(options, config, *block, plan, &state, &round);
