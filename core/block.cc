@@ -6,7 +6,7 @@
 #include <string_view>
 #include <unordered_map>
 
-#include "core/csv.h"
+#include "core/io/csv.h"
 
 namespace photopose {
 namespace {

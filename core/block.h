@@ -1,8 +1,8 @@
 #pragma once
 // A photogrammetric block: the cameras, images, ground points and image marks that resection and
 // bundle adjustment work on, in one model. It is assembled once from the tables (ReadBlock /
-// AssembleBlock below), from a COLMAP model or a BAL / Bundler problem (core/colmap_io.h,
-// core/bal_io.h), or built in memory (the synthetic scenes); every consumer (resect, bundle,
+// AssembleBlock below), from a COLMAP model or a BAL / Bundler problem (core/io/colmap.h,
+// core/io/bal.h), or built in memory (the synthetic scenes); every consumer (resect, bundle,
 // compare, the benchmarks, the tests) starts from it instead of pairing marks with points itself.
 //
 // Frames and units: the ground frame of the points (metres, Z up); exterior orientations in the
@@ -26,7 +26,7 @@
 #include "core/fiducials.h"
 #include "core/rotation.h"
 #include "core/status.h"
-#include "core/tables.h"
+#include "core/io/tables.h"
 #include "core/types.h"
 
 namespace photopose {
@@ -137,7 +137,7 @@ Status CheckBlock(const Block& block);
 
 // ------------------------------------------------------------------ from the tables
 
-// The tables of a block, as read by core/tables.h, and how to combine them.
+// The tables of a block, as read by core/io/tables.h, and how to combine them.
 struct BlockTables {
   std::vector<FrameCamera> cameras;
   std::vector<GroundPoint> points;
@@ -174,7 +174,7 @@ struct BlockTables {
 // Outputs are written only on success.
 Status AssembleBlock(const BlockTables& tables, Block* block);
 
-// The files of a block and how to read them; ReadBlock reads them (core/tables.h) and assembles.
+// The files of a block and how to read them; ReadBlock reads them (core/io/tables.h) and assembles.
 struct BlockFiles {
   std::string cameras;   // camera table (required)
   std::string points;    // ground points (or gcp_list)

@@ -5,7 +5,7 @@
 #include <cstdio>
 #include <map>
 
-#include "core/csv.h"
+#include "core/io/csv.h"
 
 namespace photopose {
 namespace {

@@ -1,6 +1,6 @@
 #pragma once
 // The one way photopose runs independent work items on several threads: resection of many images
-// (solvers/resection.h) and the trials of the comparison tool use it.
+// (solvers/resection/resection.h) and the trials of the comparison tool use it.
 
 #include <algorithm>
 #include <atomic>

@@ -2,7 +2,7 @@
 // A seeded synthetic photogrammetric block built in memory for the block-solver tests and the
 // benchmark: strips of frame images over flat terrain with relief, tie points on a jittered grid
 // over the union of the footprints, control and check points, GNSS centres, noisy pixel marks, and
-// perturbed approximate values. An interim fixture until core/synthetic_block.h (the shared block
+// perturbed approximate values. An interim fixture until core/simulation/synthetic_block.h (the shared block
 // generator being written) lands; the same options and seed always give the same block.
 
 #include <Eigen/Core>

@@ -12,9 +12,9 @@
 #include <new>
 #include <string>
 
-#include "core/csv.h"
-#include "tools/cli_common.h"
-#include "tools/commands.h"
+#include "core/io/csv.h"
+#include "tools/commands/cli_common.h"
+#include "tools/commands/commands.h"
 
 namespace {
 

@@ -1,4 +1,4 @@
-// libFuzzer harness: the CSV layer (core/csv.h) on arbitrary bytes. Every field of every row is
+// libFuzzer harness: the CSV layer (core/io/csv.h) on arbitrary bytes. Every field of every row is
 // read through every typed accessor; a message must be one clean line.
 #include <cmath>
 #include <cstddef>
@@ -9,7 +9,7 @@
 #include <string_view>
 #include <vector>
 
-#include "core/csv.h"
+#include "core/io/csv.h"
 #include "tests/fuzz/fuzz_util.h"
 
 extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {

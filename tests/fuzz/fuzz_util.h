@@ -3,7 +3,7 @@
 #include <cstdlib>
 #include <string>
 
-#include "core/csv.h"
+#include "core/io/csv.h"
 #include "core/status.h"
 
 namespace photopose::fuzz {

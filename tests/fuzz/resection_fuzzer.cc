@@ -1,4 +1,4 @@
-// libFuzzer harness: ResectImage (solvers/resection.h) on fuzzed numbers, with every solver,
+// libFuzzer harness: ResectImage (solvers/resection/resection.h) on fuzzed numbers, with every solver,
 // Jacobian, loss and minimiser. The numbers stay within what the readers and the CLI accept
 // (docs/formats.md, "Limits and refusals"): the library must then never crash, never hang, and
 // never report success with a pose or covariance that is not finite.
@@ -9,8 +9,8 @@
 #include <cstdint>
 #include <cstdlib>
 
-#include "core/tables.h"
-#include "solvers/resection.h"
+#include "core/io/tables.h"
+#include "solvers/resection/resection.h"
 
 namespace {
 

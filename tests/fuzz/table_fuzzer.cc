@@ -1,4 +1,4 @@
-// libFuzzer harness: one table reader of core/tables.h on arbitrary bytes, chosen at build time by
+// libFuzzer harness: one table reader of core/io/tables.h on arbitrary bytes, chosen at build time by
 // PHOTOPOSE_FUZZ_TABLE (camera, frames, points, marks, gcp_list). What a reader accepts must be
 // inside the physical ranges and must survive a write and a second read unchanged in size.
 #include <cmath>
@@ -9,7 +9,7 @@
 #include <string_view>
 #include <vector>
 
-#include "core/tables.h"
+#include "core/io/tables.h"
 #include "tests/fuzz/fuzz_util.h"
 
 namespace {

@@ -6,9 +6,9 @@
 #include <string_view>
 
 #include "core/camera.h"
-#include "core/csv.h"
+#include "core/io/csv.h"
 #include "core/rotation.h"
-#include "core/text_scanner.h"
+#include "core/io/text_scanner.h"
 #include "tests/test_data.h"
 
 namespace photopose::testing {

@@ -29,10 +29,10 @@
 #include <vector>
 
 #include "core/block.h"
-#include "core/block_tables.h"
-#include "core/colmap_io.h"
-#include "core/synthetic_block.h"
-#include "core/tables.h"
+#include "core/io/block_tables.h"
+#include "core/io/colmap.h"
+#include "core/simulation/synthetic_block.h"
+#include "core/io/tables.h"
 
 namespace photopose {
 namespace {

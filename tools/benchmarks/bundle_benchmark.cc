@@ -1,6 +1,6 @@
 // Block benchmarks (docs/performance.md, "Bundle adjustment: Taylor against Ceres"): the seed's
-// Taylor Gauss-Newton with its hand-assembled reduced normal equations (solvers/taylor_bundle.h)
-// against the Ceres adjustment (solvers/bundle_adjustment.h, SPARSE_SCHUR, analytic and autodiff
+// Taylor Gauss-Newton with its hand-assembled reduced normal equations (solvers/bundle/taylor_bundle.h)
+// against the Ceres adjustment (solvers/bundle/bundle_adjustment.h, SPARSE_SCHUR, analytic and autodiff
 // Jacobians), on the same simulated blocks from the same approximate values, in one run. Reported
 // per solve: the whole call and, as counters, the Gauss-Newton / Levenberg-Marquardt iterations,
 // the time per iteration and the camera-centre error against the truth, so that speed is never
@@ -18,8 +18,8 @@
 #include <utility>
 #include <vector>
 
-#include "solvers/bundle_adjustment.h"
-#include "solvers/taylor_bundle.h"
+#include "solvers/bundle/bundle_adjustment.h"
+#include "solvers/bundle/taylor_bundle.h"
 #include "tests/block_fixture.h"
 
 namespace photopose {

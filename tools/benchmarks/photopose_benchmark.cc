@@ -14,10 +14,10 @@
 #include <vector>
 
 #include "core/collinearity.h"
-#include "core/synthetic_scene.h"
+#include "core/simulation/synthetic_scene.h"
 #include "cost_functions/collinearity_cost.h"
-#include "solvers/resection.h"
-#include "solvers/taylor_resection.h"
+#include "solvers/resection/resection.h"
+#include "solvers/resection/taylor_resection.h"
 
 #ifdef PHOTOPOSE_HAVE_OPENCV
 #include <opencv2/calib3d.hpp>

@@ -4,8 +4,8 @@
 #include <iostream>
 
 #include <photopose/core/block.h>
-#include <photopose/core/synthetic_scene.h>
-#include <photopose/solvers/resection.h>
+#include <photopose/core/simulation/synthetic_scene.h>
+#include <photopose/solvers/resection/resection.h>
 
 int main() {
   photopose::SyntheticSceneOptions options;

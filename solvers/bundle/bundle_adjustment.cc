@@ -1,0 +1,723 @@
+#include "solvers/bundle/bundle_adjustment.h"
+
+#include <ceres/ceres.h>
+
+#include <Eigen/Dense>
+#include <algorithm>
+#include <atomic>
+#include <chrono>
+#include <cmath>
+#include <limits>
+#include <memory>
+#include <sstream>
+#include <thread>
+
+#include "core/rotation.h"
+#include "solvers/bundle/internal/bundle_problem.h"
+
+namespace photopose {
+namespace {
+
+using Clock = std::chrono::steady_clock;
+using internal::BundleGroup;
+using internal::BundlePlan;
+using internal::BundleRound;
+using internal::BundleState;
+
+double SecondsSince(Clock::time_point start) {
+  return std::chrono::duration<double>(Clock::now() - start).count();
+}
+
+constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
+
+std::string FormatNumber3(double value) {
+  std::ostringstream os;
+  os.precision(3);
+  os << value;
+  return os.str();
+}
+
+class ProgressCallback final : public ceres::IterationCallback {
+ public:
+  ProgressCallback(const BundleAdjustmentOptions& options, int round, int redundancy,
+                   Clock::time_point start)
+      : options_(options), round_(round), redundancy_(redundancy), start_(start) {}
+  void set_free_gauge(bool free_gauge) { free_gauge_ = free_gauge; }
+
+  ceres::CallbackReturnType operator()(const ceres::IterationSummary& summary) override {
+    BundleIterationInfo info;
+    info.round = round_;
+    info.iteration = summary.iteration;
+    info.cost = summary.cost;
+    info.sigma0 = redundancy_ > 0 ? std::sqrt(2.0 * summary.cost / redundancy_) : kNaN;
+    info.step_norm = summary.step_norm;
+    info.elapsed_seconds = SecondsSince(start_);
+    info.free_gauge = free_gauge_;
+    info.trust_region_radius = summary.trust_region_radius;
+    info.step_quality = summary.relative_decrease;
+    info.step_successful = summary.step_is_successful;
+    info.linear_solver_seconds = summary.step_solver_time_in_seconds;
+    info.iteration_seconds = summary.iteration_time_in_seconds;
+    options_.progress(info);
+    return ceres::SOLVER_CONTINUE;
+  }
+
+ private:
+  const BundleAdjustmentOptions& options_;
+  int round_;
+  int redundancy_;
+  Clock::time_point start_;
+  bool free_gauge_ = false;
+};
+
+// Moves a relative block solved without any gauge into COLMAP's gauge: the similarity
+// X -> s R_s (X - C0) + C0_fixed that returns the first image to its fixed pose and the scale
+// image's fixed coordinate to its value. Reprojection errors are invariant under a similarity of
+// the whole block, and a relative block has no priors, so the cost does not change.
+// Returns false, leaving *state as it was, when the free solution cannot be moved (the second
+// image collapsed onto the first or passed to its other side: no positive scale).
+bool MoveToRelativeGauge(const BundlePlan& plan, const Vector6d& fixed_eo, double fixed_coordinate,
+                         BundleState* state) {
+  const int first = plan.relative_fixed_image;
+  const int second = plan.relative_scale_image;
+  const int axis = plan.relative_scale_axis;
+  const Eigen::Vector3d c0 = state->eo[first].head<3>();
+  const Eigen::Matrix3d R0 = RotationFromAngles(RotationConvention::kSeed, state->eo[first].tail<3>());
+  const Eigen::Matrix3d R0_fixed = RotationFromAngles(RotationConvention::kSeed, fixed_eo.tail<3>());
+  const Eigen::Vector3d c0_fixed = fixed_eo.head<3>();
+  // R_camera_from_ground' = R R_s^T, so R_s = R0_fixed^T R0 returns the first image's attitude.
+  const Eigen::Matrix3d R_s = R0_fixed.transpose() * R0;
+  const double along = (R_s * (state->eo[second].head<3>() - c0))[axis];
+  const double scale = (fixed_coordinate - c0_fixed[axis]) / along;
+  if (!std::isfinite(scale) || !(scale > 0.0)) return false;
+  const auto move = [&](const Eigen::Vector3d& x) -> Eigen::Vector3d {
+    return c0_fixed + scale * (R_s * (x - c0));
+  };
+  for (Vector6d& eo : state->eo) {
+    const Eigen::Matrix3d R = RotationFromAngles(RotationConvention::kSeed, eo.tail<3>());
+    Eigen::Vector3d angles =
+        AnglesFromRotation(RotationConvention::kSeed, R * R_s.transpose());
+    // Keep every angle within pi of its previous value (no 2 pi jumps in the output).
+    for (int k = 0; k < 3; ++k)
+      angles[k] += 2.0 * M_PI * std::round((eo[3 + k] - angles[k]) / (2.0 * M_PI));
+    eo.head<3>() = move(eo.head<3>());
+    eo.tail<3>() = angles;
+  }
+  for (size_t p = 0; p < state->points.size(); ++p)
+    if (plan.point_in_problem[p]) state->points[p] = move(state->points[p]);
+  // Exactly the fixed values (no rounding left in the held parameters).
+  state->eo[first] = fixed_eo;
+  state->eo[second][axis] = fixed_coordinate;
+  return true;
+}
+
+void AddSolverTimes(const ceres::Solver::Summary& ceres_summary, BundleAdjustmentSummary* summary) {
+  summary->solver_preprocessing_seconds += ceres_summary.preprocessor_time_in_seconds;
+  summary->residual_evaluation_seconds += ceres_summary.residual_evaluation_time_in_seconds;
+  summary->jacobian_evaluation_seconds += ceres_summary.jacobian_evaluation_time_in_seconds;
+  summary->linear_solver_seconds += ceres_summary.linear_solver_time_in_seconds;
+  summary->schur_structure = ceres_summary.schur_structure_used;
+}
+
+int GroupIndex(const std::string& name) {
+  for (int g = 0; g < internal::kNumBundleGroups; ++g)
+    if (name == internal::kBundleGroupNames[g]) return g;
+  return -1;
+}
+
+// Removes one observation found by data snooping: a mark, or the whole prior of a control point,
+// camera position or attitude.
+void RemoveObservation(const BundleObservationDiagnostics& d, BundlePlan* plan) {
+  switch (GroupIndex(d.group)) {
+    case internal::kTieMarks:
+    case internal::kControlMarks:
+      plan->mark_used[d.item] = 0;
+      break;
+    case internal::kControlPoints:
+      plan->point_prior[d.item] = 0;
+      break;
+    case internal::kCameraPositions:
+      plan->image_prior[d.item] = 0;
+      break;
+    case internal::kAttitudes:
+      plan->image_attitude[d.item] = 0;
+      break;
+    default:
+      break;
+  }
+}
+
+// Scales every sigma of group g by `factor`.
+void ScaleGroup(int g, double factor, BundlePlan* plan) {
+  switch (g) {
+    case internal::kTieMarks:
+    case internal::kControlMarks:
+      for (size_t m = 0; m < plan->mark_sigma.size(); ++m)
+        if (plan->mark_group[m] == g) plan->mark_sigma[m] *= factor;
+      break;
+    case internal::kControlPoints:
+      for (auto& sigma : plan->point_sigma) sigma *= factor;
+      break;
+    case internal::kCameraPositions:
+      for (auto& sigma : plan->image_prior_sigma) sigma *= factor;
+      break;
+    case internal::kAttitudes:
+      for (auto& sigma : plan->image_attitude_sigma) sigma *= factor;
+      break;
+    default:
+      break;
+  }
+}
+
+}  // namespace
+
+std::optional<BundleLinearSolver> ParseBundleLinearSolver(const std::string& name) {
+  if (name == "sparse_schur") return BundleLinearSolver::kSparseSchur;
+  if (name == "dense_schur") return BundleLinearSolver::kDenseSchur;
+  if (name == "iterative_schur" || name == "iterative_schur_jacobi")
+    return BundleLinearSolver::kIterativeSchurJacobi;
+  if (name == "iterative_schur_cluster_jacobi")
+    return BundleLinearSolver::kIterativeSchurClusterJacobi;
+  return std::nullopt;
+}
+
+const char* BundleLinearSolverName(BundleLinearSolver solver) {
+  switch (solver) {
+    case BundleLinearSolver::kSparseSchur:
+      return "sparse_schur";
+    case BundleLinearSolver::kDenseSchur:
+      return "dense_schur";
+    case BundleLinearSolver::kIterativeSchurJacobi:
+      return "iterative_schur_jacobi";
+    case BundleLinearSolver::kIterativeSchurClusterJacobi:
+      return "iterative_schur_cluster_jacobi";
+  }
+  return "?";
+}
+
+const char* BundleTerminationName(BundleTermination termination) {
+  switch (termination) {
+    case BundleTermination::kConverged:
+      return "converged";
+    case BundleTermination::kNoConvergence:
+      return "no_convergence";
+    case BundleTermination::kFailure:
+      return "failure";
+  }
+  return "?";
+}
+
+bool BundleAdjustmentOptions::IsValid(std::string* why) const {
+  auto fail = [why](const std::string& text) {
+    if (why != nullptr) *why = text;
+    return false;
+  };
+  auto positive = [](double v) { return v > 0.0 && std::isfinite(v); };
+  const BundleAccuracies& a = accuracies;
+  if (!positive(a.tie_px) || !positive(a.marker_projection_px) || !positive(a.tie_film_um) ||
+      !positive(a.marker_projection_film_um) || !positive(a.marker_m) ||
+      !positive(a.camera_m.minCoeff()) || !a.camera_m.allFinite())
+    return fail("every accuracy must be positive and finite");
+  if (a.attitude_deg && !positive(*a.attitude_deg)) return fail("the attitude accuracy must be positive");
+  if (!positive(tie_loss_scale_sigmas)) return fail("the tie loss scale must be positive");
+  if (!(rejection_threshold >= 0.0) || !std::isfinite(rejection_threshold))
+    return fail("the rejection threshold must be >= 0 (0: no rejection)");
+  if (max_rejection_rounds < 0) return fail("max_rejection_rounds must be >= 0");
+  if (max_iterations < 1) return fail("max_iterations must be >= 1");
+  if (!positive(function_tolerance) || !positive(parameter_tolerance) ||
+      !(gradient_tolerance >= 0.0))
+    return fail("tolerances must be positive");
+  if (num_threads < 0) return fail("num_threads must be >= 0");
+  if (lever_arm_m && !lever_arm_m->allFinite()) return fail("the lever arm must be finite");
+  if (max_covariance_parameters < 0) return fail("max_covariance_parameters must be >= 0");
+  if (!(overfit_ratio > 0.0 && overfit_ratio < 1.0)) return fail("overfit_ratio must be in (0, 1)");
+  if (!(overfit_redundancy_share >= 0.0 && overfit_redundancy_share < 1.0))
+    return fail("overfit_redundancy_share must be in [0, 1)");
+  if (!(high_correlation > 0.0 && high_correlation < 1.0))
+    return fail("high_correlation must be in (0, 1)");
+  if (max_variance_iterations < 1) return fail("max_variance_iterations must be >= 1");
+  if (!positive(variance_tolerance)) return fail("variance_tolerance must be positive");
+  if (!(min_variance_redundancy >= 0.0)) return fail("min_variance_redundancy must be >= 0");
+  if (!(snooping_alpha > 0.0 && snooping_alpha < 0.5)) return fail("snooping_alpha must be in (0, 0.5)");
+  if (!(snooping_power > 0.0 && snooping_power < 1.0)) return fail("snooping_power must be in (0, 1)");
+  if (!(uncontrolled_redundancy >= 0.0 && uncontrolled_redundancy < 1.0))
+    return fail("uncontrolled_redundancy must be in [0, 1)");
+  if (max_snooping_removals < 0) return fail("max_snooping_removals must be >= 0");
+  return true;
+}
+
+Status BundleAdjustmentConfig::FromCalibrationNames(const Block& block,
+                                                    const std::vector<std::string>& names,
+                                                    BundleAdjustmentConfig* config) {
+  config->calibrated_params.assign(block.cameras.size(), {});
+  for (size_t c = 0; c < block.cameras.size(); ++c) {
+    for (const std::string& name : names) {
+      std::vector<int> indices;
+      const Status status = CalibrationParamIndices(block.cameras[c].model, name, &indices);
+      if (!status.ok())
+        return Status::Error("camera '" + block.cameras[c].camera_id + "': " + status.message());
+      config->calibrated_params[c].insert(config->calibrated_params[c].end(), indices.begin(),
+                                          indices.end());
+    }
+  }
+  return Status::Ok();
+}
+
+std::string BundleAdjustmentSummary::BriefReport() const {
+  std::ostringstream os;
+  os << BundleTerminationName(termination) << ": " << num_images << " images, " << num_points
+     << " points, " << num_marks << " marks, " << rounds << " round" << (rounds == 1 ? "" : "s")
+     << ", " << iterations << " iterations, cost " << initial_cost << " -> " << final_cost
+     << ", sigma0 " << sigma0 << " (redundancy " << redundancy << ")";
+  if (num_rejected_marks > 0) os << ", " << num_rejected_marks << " marks rejected";
+  if (!tie_points_left_out.empty())
+    os << ", " << tie_points_left_out.size() << " tie points without initial coordinates left out";
+  os << ", " << time_seconds << " s";
+  if (!message.empty()) os << ": " << message;
+  return os.str();
+}
+
+std::string BundleAdjustmentResult::FullReport(const Block& block) const {
+  std::ostringstream os;
+  os << "Bundle adjustment: " << summary.BriefReport() << "\n";
+  os << "Time: problem " << FormatNumber3(summary.problem_build_seconds) << " s, Ceres preprocessing "
+     << FormatNumber3(summary.solver_preprocessing_seconds) << " s, residuals "
+     << FormatNumber3(summary.residual_evaluation_seconds) << " s, Jacobians "
+     << FormatNumber3(summary.jacobian_evaluation_seconds) << " s, linear solves "
+     << FormatNumber3(summary.linear_solver_seconds) << " s, statistics "
+     << FormatNumber3(summary.statistics_seconds) << " s (Schur structure "
+     << summary.schur_structure << ")\n";
+  os << "Datum: " << summary.datum_description << "\n";
+  os << "Groups (count, stated, RMS, RMS/stated, redundancy share):\n";
+  for (const BundleGroupStatistics& g : groups) {
+    os << "  " << g.name << ": " << g.count << ", " << FormatNumber3(g.stated_accuracy.x()) << " "
+       << g.unit << ", " << FormatNumber3(g.rms_total) << " " << g.unit << ", "
+       << FormatNumber3(g.ratio) << ", " << FormatNumber3(g.redundancy_share)
+       << (g.overfit ? "  OVERFIT" : "") << "\n";
+    if (!g.message.empty()) os << "    " << g.message << "\n";
+  }
+  for (const BundleGroupStatistics& g : groups) {
+    if (std::isfinite(g.estimated_accuracy.x())) {
+      os << "  " << g.name << " accuracy estimated from the data: " << FormatNumber3(g.estimated_accuracy.x())
+         << " " << g.unit << " (stated " << FormatNumber3(g.stated_accuracy.x()) << ", relative standard error "
+         << FormatNumber3(g.estimated_accuracy_standard_error) << ")\n";
+    } else if (!g.estimation_message.empty()) {
+      os << "  " << g.name << ": " << g.estimation_message << "\n";
+    }
+  }
+  for (const BundleSnoopingStep& step : snooping)
+    os << "Snooping removed " << step.group << " #" << step.item << " axis " << step.axis
+       << ": |w| = " << FormatNumber3(step.normalized) << "\n";
+  if (num_control_points > 0)
+    os << "Control points: " << num_control_points << ", RMSE " << control_rmse_total_m << " m\n";
+  if (num_check_points > 0)
+    os << "Check points: " << num_check_points << ", RMSE " << check_rmse_total_m << " m\n";
+  for (const BundleCalibrationResult& c : calibration) {
+    os << "Camera '" << block.cameras[c.camera].camera_id << "':\n";
+    for (size_t k = 0; k < c.names.size(); ++k) {
+      os << "  " << c.names[k] << " = " << c.values[k];
+      if (k < c.sigmas.size()) os << " +- " << c.sigmas[k];
+      os << "\n";
+    }
+    for (const std::string& h : c.high_correlations) os << "  high correlation " << h << "\n";
+  }
+  return os.str();
+}
+
+Status BundleAdjust(const BundleAdjustmentOptions& options, const BundleAdjustmentConfig& config,
+                    Block* block, BundleAdjustmentResult* result) {
+  const Clock::time_point start = Clock::now();
+  *result = BundleAdjustmentResult();
+  BundleAdjustmentSummary& summary = result->summary;
+  std::string why;
+  if (!options.IsValid(&why)) return Status::Error("invalid options: " + why);
+  PHOTOPOSE_RETURN_IF_ERROR(CheckBlock(*block));
+  block->BuildIndex();
+  for (const int i : config.constant_images)
+    if (i < 0 || i >= static_cast<int>(block->images.size()))
+      return Status::Error("the config holds a non-existent image constant");
+  for (const int p : config.constant_points)
+    if (p < 0 || p >= static_cast<int>(block->points.size()))
+      return Status::Error("the config holds a non-existent point constant");
+
+  BundlePlan plan;
+  PHOTOPOSE_RETURN_IF_ERROR(internal::MakeBundlePlan(options, config, *block, &plan));
+  summary.datum = plan.datum;
+  summary.datum_description = plan.datum_description;
+  for (const int p : plan.tie_points_left_out)
+    summary.tie_points_left_out.push_back(block->points[p].id);
+
+  BundleState state;
+  for (const BlockImage& image : block->images) state.eo.push_back(image.eo->parameters);
+  for (const BlockPoint& point : block->points) {
+    state.points.push_back(point.position_m ? *point.position_m
+                           : point.surveyed_m ? *point.surveyed_m
+                                              : Eigen::Vector3d::Zero());
+  }
+  for (const BlockCamera& camera : block->cameras) state.cameras.push_back(camera.params);
+  if (options.lever_arm_m) state.lever = *options.lever_arm_m;
+  // Variance component estimation rescales each group's sigmas by group_scale.
+  double group_scale[internal::kNumBundleGroups] = {1.0, 1.0, 1.0, 1.0, 1.0};
+  bool group_estimable[internal::kNumBundleGroups] = {};
+
+  // Rounds: adjust; then remove blunders (rejection rounds or data snooping, one at a time) or
+  // rescale the groups (variance component estimation) and adjust again, until neither changes.
+  const int rejection_rounds =
+      options.snoop || options.rejection_threshold <= 0.0 ? 0 : options.max_rejection_rounds;
+  const int max_rounds = 1 + rejection_rounds + (options.snoop ? options.max_snooping_removals : 0) +
+                         (options.estimate_accuracies ? options.max_variance_iterations : 0);
+  int rejections_done = 0;
+  BundleRound round;
+  internal::GroupVariance variance;
+  for (int r = 1;; ++r) {
+    ceres::Solver::Summary ceres_summary;
+    bool solved = false;       // the round's solve is done (the free-gauge solve converged)
+    int free_iterations = 0;   // iterations of the free-gauge solve
+    if (r == 1 && plan.datum == BundleDatum::kRelative && options.free_gauge_for_relative_blocks) {
+      // COLMAP's gauge holds the first image at its approximate pose, so that the whole block has
+      // to turn about it: at 1 deg and 750 m, 13 m at the far corner, along a direction the
+      // damped steps follow slowly (39 iterations instead of 6 on a 200-image block, 59 instead
+      // of 7 on 1000 images). Solved first with no gauge at all (Levenberg-Marquardt's damping
+      // keeps the 7 free directions still), then moved into COLMAP's gauge by a similarity. The
+      // cost is invariant and the gradient has no component along the similarity, so a
+      // converged free solve is the minimum in COLMAP's gauge too: no second solve, only the
+      // round's bookkeeping switched to the gauge (the statistics need it). A free solve that did
+      // not converge goes on in the gauge from where it stopped; one that cannot be moved (no
+      // positive scale) starts over in the gauge.
+      BundlePlan free_plan = plan;
+      free_plan.relative_fixed_image = -1;
+      free_plan.relative_scale_image = -1;
+      const BundleState start_state = state;
+      const Vector6d fixed_eo = state.eo[plan.relative_fixed_image];
+      const double fixed_coordinate = state.eo[plan.relative_scale_image][plan.relative_scale_axis];
+      const Clock::time_point build_start = Clock::now();
+      internal::BuildBundleRound(options, config, *block, free_plan, &state, &round);
+      summary.problem_build_seconds += SecondsSince(build_start);
+      ceres::Solver::Options free_options = internal::BundleSolverOptions(options, round);
+      std::unique_ptr<ProgressCallback> free_callback;
+      if (options.progress) {
+        free_callback = std::make_unique<ProgressCallback>(options, r, round.redundancy(), start);
+        free_callback->set_free_gauge(true);
+        free_options.callbacks.push_back(free_callback.get());
+      }
+      ceres::Solve(free_options, round.problem.get(), &ceres_summary);
+      AddSolverTimes(ceres_summary, &summary);
+      summary.initial_cost = ceres_summary.initial_cost;
+      free_iterations = static_cast<int>(ceres_summary.iterations.size()) - 1;
+      if (MoveToRelativeGauge(plan, fixed_eo, fixed_coordinate, &state)) {
+        internal::ApplyRelativeGauge(plan, &state, &round);
+        solved = ceres_summary.termination_type == ceres::CONVERGENCE;
+      } else {
+        // No similarity reaches COLMAP's gauge from there: solved in that gauge from the start.
+        state = start_state;
+        internal::BuildBundleRound(options, config, *block, plan, &state, &round);
+      }
+    } else {
+      const Clock::time_point build_start = Clock::now();
+      internal::BuildBundleRound(options, config, *block, plan, &state, &round);
+      summary.problem_build_seconds += SecondsSince(build_start);
+    }
+    const int redundancy = round.redundancy();
+    if (!solved) {
+      ceres::Solver::Options solver_options = internal::BundleSolverOptions(options, round);
+      std::unique_ptr<ProgressCallback> callback;
+      if (options.progress) {
+        callback = std::make_unique<ProgressCallback>(options, r, redundancy, start);
+        solver_options.callbacks.push_back(callback.get());
+      }
+      ceres::Solve(solver_options, round.problem.get(), &ceres_summary);
+      AddSolverTimes(ceres_summary, &summary);
+      if (r == 1 && free_iterations == 0) summary.initial_cost = ceres_summary.initial_cost;
+      summary.iterations += static_cast<int>(ceres_summary.iterations.size()) - 1;
+    }
+    summary.iterations += free_iterations;
+    summary.rounds = r;
+    summary.final_cost = ceres_summary.final_cost;
+    summary.redundancy = redundancy;
+    if (ceres_summary.termination_type != ceres::CONVERGENCE) {
+      summary.termination = ceres_summary.termination_type == ceres::NO_CONVERGENCE
+                                ? BundleTermination::kNoConvergence
+                                : BundleTermination::kFailure;
+      summary.message = "round " + std::to_string(r) + ": " + ceres_summary.message;
+      // What the round adjusted (the statistics, which count them otherwise, are not computed).
+      summary.num_images = static_cast<int>(block->images.size());
+      summary.num_points = static_cast<int>(
+          std::count(plan.point_in_problem.begin(), plan.point_in_problem.end(), 1));
+      summary.num_marks = static_cast<int>(
+          std::count(plan.mark_used.begin(), plan.mark_used.end(), 1));
+      summary.time_seconds = SecondsSince(start);
+      return Status::Ok();
+    }
+    summary.sigma0 = redundancy > 0 ? std::sqrt(2.0 * ceres_summary.final_cost / redundancy) : kNaN;
+    const Clock::time_point statistics_start = Clock::now();
+    internal::ComputeBundleStatistics(options, *block, plan, state, round, result, &variance);
+    summary.statistics_seconds += SecondsSince(statistics_start);
+    if (r >= max_rounds) break;
+
+    // 1. Blunders.
+    bool removed = false;
+    if (options.snoop) {
+      if (result->observations.empty() && !result->groups.empty()) {
+        summary.message = "data snooping needs the covariance; it was not computed";
+      }
+      const BundleObservationDiagnostics* worst = nullptr;
+      for (const BundleObservationDiagnostics& d : result->observations) {
+        if (!d.rejected) continue;
+        if (worst == nullptr || std::abs(d.normalized) > std::abs(worst->normalized)) worst = &d;
+      }
+      if (worst != nullptr &&
+          static_cast<int>(result->snooping.size()) < options.max_snooping_removals) {
+        BundlePlan trial = plan;
+        RemoveObservation(*worst, &trial);
+        const Status still = internal::RecheckBundlePlan(config, *block, &trial);
+        if (still.ok()) {
+          result->snooping.push_back(
+              {worst->group, worst->item, worst->axis, std::abs(worst->normalized), worst->residual});
+          plan = std::move(trial);
+          removed = true;
+        } else {
+          summary.message = "data snooping stopped: removing " + worst->group + " #" +
+                            std::to_string(worst->item) + " would leave " + still.message();
+        }
+      }
+    } else if (rejections_done < rejection_rounds) {
+      // Marks beyond the threshold: normalized residuals when known, whitened residuals in units
+      // of max(1, sigma0) otherwise.
+      std::vector<double> score(block->marks.size(), 0.0);
+      double limit = options.rejection_threshold;
+      if (!result->observations.empty()) {
+        for (const BundleObservationDiagnostics& d : result->observations) {
+          const int g = GroupIndex(d.group);
+          if (g != internal::kTieMarks && g != internal::kControlMarks) continue;
+          if (std::isfinite(d.normalized))
+            score[d.item] = std::max(score[d.item], std::abs(d.normalized));
+        }
+      } else {
+        limit *= std::max(1.0, summary.sigma0);
+        for (size_t m = 0; m < block->marks.size(); ++m) {
+          if (!plan.mark_used[m] || !result->mark_residuals[m].allFinite()) continue;
+          score[m] = result->mark_residuals[m].norm() * block->marks[m].observation_units_per_unit /
+                     plan.mark_sigma[m];
+        }
+      }
+      // One mark per point and round, its worst: a blunder in one mark of a track pulls the
+      // point and raises its other marks' residuals too, and those recover once it is gone.
+      BundlePlan trial = plan;
+      std::vector<BundleRejectedMark> rejected;
+      std::vector<int> worst_of_point(block->points.size(), -1);
+      for (size_t m = 0; m < block->marks.size(); ++m) {
+        if (!trial.mark_used[m] || !(score[m] > limit)) continue;
+        int& worst = worst_of_point[block->marks[m].point];
+        if (worst < 0 || score[m] > score[worst]) worst = static_cast<int>(m);
+      }
+      for (size_t m = 0; m < block->marks.size(); ++m) {
+        if (worst_of_point[block->marks[m].point] != static_cast<int>(m)) continue;
+        trial.mark_used[m] = 0;
+        rejected.push_back({static_cast<int>(m), r, score[m]});
+      }
+      ++rejections_done;
+      if (!rejected.empty()) {
+        const Status still = internal::RecheckBundlePlan(config, *block, &trial);
+        if (!still.ok()) {
+          summary.termination = BundleTermination::kFailure;
+          summary.message = "after rejecting " + std::to_string(rejected.size()) +
+                            " marks as blunders, " + still.message();
+          summary.time_seconds = SecondsSince(start);
+          return Status::Ok();
+        }
+        result->rejected_marks.insert(result->rejected_marks.end(), rejected.begin(), rejected.end());
+        plan = std::move(trial);
+        removed = true;
+      }
+    }
+    if (removed) continue;
+
+    // 2. Variance components.
+    if (options.estimate_accuracies) {
+      if (!std::isfinite(variance.redundancy[0]) && variance.scalar_rows[0] > 0) {
+        summary.message = "accuracies not estimated: the covariance was not computed";
+        break;
+      }
+      // Each estimable group's factor; stop when all are 1 within the tolerance (the reported
+      // adjustment is then the one whose weights produced them), else rescale and adjust again.
+      double factors[internal::kNumBundleGroups];
+      bool changed = false;
+      for (int g = 0; g < internal::kNumBundleGroups; ++g) {
+        group_estimable[g] = variance.scalar_rows[g] > 0 &&
+                             variance.redundancy[g] >= options.min_variance_redundancy;
+        factors[g] = group_estimable[g] ? variance.whitened_ssq[g] / variance.redundancy[g] : 1.0;
+        if (std::abs(factors[g] - 1.0) > options.variance_tolerance) changed = true;
+      }
+      ++result->variance_iterations;
+      if (!changed) break;
+      if (result->variance_iterations >= options.max_variance_iterations) {
+        summary.message = "variance components did not settle in " +
+                          std::to_string(result->variance_iterations) + " iterations";
+        break;
+      }
+      for (int g = 0; g < internal::kNumBundleGroups; ++g) {
+        if (!group_estimable[g]) continue;
+        group_scale[g] *= std::sqrt(factors[g]);
+        ScaleGroup(g, std::sqrt(factors[g]), &plan);
+      }
+      continue;
+    }
+    break;
+  }
+  summary.termination = BundleTermination::kConverged;
+  summary.num_rejected_marks = static_cast<int>(result->rejected_marks.size());
+
+  // Estimated accuracies per group.
+  if (options.estimate_accuracies) {
+    for (BundleGroupStatistics& group : result->groups) {
+      const int g = GroupIndex(group.name);
+      const double r = variance.redundancy[g];
+      if (group_estimable[g]) {
+        group.estimated_accuracy = group.stated_accuracy;  // the sigmas in use are the estimates
+        group.estimated_accuracy_standard_error = 1.0 / std::sqrt(2.0 * r);
+        // The report's stated accuracy stays what the user stated.
+        group.stated_accuracy /= group_scale[g];
+        group.ratio *= group_scale[g];
+      } else {
+        std::ostringstream message;
+        message << "not estimated: the rest of the block checks it too little (redundancy "
+                << FormatNumber3(r) << " < " << FormatNumber3(options.min_variance_redundancy) << ")";
+        group.estimation_message = message.str();
+      }
+    }
+  }
+  // Write back.
+  for (size_t i = 0; i < block->images.size(); ++i) {
+    ExteriorOrientation eo;
+    eo.parameters = state.eo[i];
+    block->images[i].eo = eo;
+  }
+  for (size_t p = 0; p < block->points.size(); ++p)
+    if (plan.point_in_problem[p]) block->points[p].position_m = state.points[p];
+  for (size_t c = 0; c < block->cameras.size(); ++c) block->cameras[c].params = state.cameras[c];
+  summary.time_seconds = SecondsSince(start);
+  return Status::Ok();
+}
+
+Status CrossValidateControlPoints(const BundleAdjustmentOptions& options,
+                                  const BundleAdjustmentConfig& config, const Block& adjusted,
+                                  const BundleAdjustmentResult& full, int num_threads,
+                                  BundleCrossValidationResult* result) {
+  const Clock::time_point start = Clock::now();
+  *result = BundleCrossValidationResult();
+  std::string why;
+  if (!options.IsValid(&why)) return Status::Error("invalid options: " + why);
+  // The marks the full adjustment rejected stay out, except those of the point left out: its
+  // marks are what checks it (a wrong control coordinate makes the full adjustment reject them).
+  std::vector<char> rejected(adjusted.marks.size(), 0);
+  for (const BundleRejectedMark& r : full.rejected_marks)
+    if (r.mark >= 0 && r.mark < static_cast<int>(rejected.size())) rejected[r.mark] = 1;
+  for (const BundleSnoopingStep& s : full.snooping)
+    if ((s.group == "tie_marks" || s.group == "control_marks") && s.item >= 0 &&
+        s.item < static_cast<int>(rejected.size()))
+      rejected[s.item] = 1;
+  Block base = adjusted;
+  // The priors snooping removed stay out too: a control point whose coordinates were rejected is
+  // a tie point here, a rejected camera position or attitude no prior.
+  for (const BundleSnoopingStep& s : full.snooping) {
+    if (s.item < 0) continue;
+    if (s.group == "control_points" && s.item < static_cast<int>(base.points.size())) {
+      base.points[s.item].role = PointRole::kTie;
+      base.points[s.item].surveyed_m.reset();
+    } else if (s.group == "camera_positions" && s.item < static_cast<int>(base.images.size())) {
+      base.images[s.item].measured_center_m.reset();
+    } else if (s.group == "attitudes" && s.item < static_cast<int>(base.images.size())) {
+      base.images[s.item].measured_angles_rad.reset();
+    }
+  }
+  base.BuildIndex();
+  std::vector<int> controls;
+  for (size_t p = 0; p < base.points.size(); ++p)
+    if (base.points[p].role == PointRole::kControl && !base.marks_of_point[p].empty())
+      controls.push_back(static_cast<int>(p));
+  result->points.assign(controls.size(), BundleCrossValidationPoint());
+  // chi-square(3) quantile at 1 - alpha: 3 dof, by bisection on the closed-form CDF.
+  {
+    const double p = 1.0 - options.snooping_alpha;
+    auto cdf = [](double x) {
+      return std::erf(std::sqrt(x / 2.0)) - std::sqrt(2.0 * x / kPi) * std::exp(-x / 2.0);
+    };
+    double lo = 0.0, hi = 200.0;
+    for (int i = 0; i < 200; ++i) {
+      const double mid = 0.5 * (lo + hi);
+      (cdf(mid) < p ? lo : hi) = mid;
+    }
+    result->threshold = 0.5 * (lo + hi);
+  }
+
+  // One adjustment per left-out point, single-threaded (the points run in parallel), without
+  // blunder removal (the full adjustment's removals are applied above) or diagnostics.
+  BundleAdjustmentOptions one = options;
+  one.num_threads = 1;
+  one.progress = nullptr;
+  one.snoop = false;
+  one.estimate_accuracies = false;
+  one.rejection_threshold = 0.0;
+  one.observation_diagnostics = false;
+  std::atomic<size_t> next{0};
+  auto worker = [&]() {
+    for (size_t k = next++; k < controls.size(); k = next++) {
+      const int p = controls[k];
+      BundleCrossValidationPoint& out = result->points[k];
+      out.point = p;
+      Block block = base;
+      std::vector<BlockMark> kept;
+      for (size_t m = 0; m < base.marks.size(); ++m)
+        if (!rejected[m] || base.marks[m].point == p) kept.push_back(base.marks[m]);
+      block.marks = std::move(kept);
+      block.BuildIndex();
+      block.points[p].role = PointRole::kCheck;
+      block.points[p].position_m.reset();
+      BundleAdjustmentResult left_out;
+      const Status status = BundleAdjust(one, config, &block, &left_out);
+      if (!status.ok()) {
+        out.message = status.message();
+        continue;
+      }
+      if (!left_out.summary.IsSolutionUsable()) {
+        out.message = left_out.summary.message;
+        continue;
+      }
+      const BundlePointResult& point = left_out.points[p];
+      if (!point.error_m) {
+        out.message = point.message;
+        continue;
+      }
+      out.ok = true;
+      out.error_m = *point.error_m;
+      out.num_images = point.num_observations;
+      Eigen::Matrix3d C = point.covariance;
+      const Eigen::Vector3d surveyed_sigma =
+          adjusted.points[p].accuracy_m.value_or(Eigen::Vector3d::Constant(options.accuracies.marker_m));
+      C += surveyed_sigma.cwiseAbs2().asDiagonal();
+      out.normalized = out.error_m.dot(C.ldlt().solve(out.error_m));
+      out.stands_out = out.normalized > result->threshold;
+    }
+  };
+  if (num_threads <= 0) num_threads = static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
+  num_threads = std::min<int>(num_threads, std::max<size_t>(1, controls.size()));
+  std::vector<std::thread> threads;
+  for (int t = 1; t < num_threads; ++t) threads.emplace_back(worker);
+  worker();
+  for (std::thread& thread : threads) thread.join();
+
+  Eigen::Vector3d ssq = Eigen::Vector3d::Zero();
+  for (const BundleCrossValidationPoint& point : result->points) {
+    if (!point.ok) continue;
+    ++result->count;
+    ssq += point.error_m.cwiseAbs2();
+  }
+  if (result->count > 0) {
+    result->rmse_m = (ssq / result->count).cwiseSqrt();
+    result->rmse_total_m = std::sqrt(ssq.sum() / result->count);
+  }
+  result->time_seconds = SecondsSince(start);
+  return Status::Ok();
+}
+
+}  // namespace photopose

@@ -1,0 +1,407 @@
+#pragma once
+// Bundle adjustment of a block (core/block.h): the weighted objective of the bundle-objective seed
+// note (001_ad717511fdc5a198.txt), as Metashape's reference settings weight it,
+//
+//   sum over tie marks       |v|^2 / sigma_tie^2                 (image residuals)
+// + sum over control marks   |v|^2 / sigma_marker_projection^2    (image residuals)
+// + sum over control points  |X - X_surveyed|^2 / sigma_marker^2  (per axis, m)
+// + sum over camera centres  |X0 + R^T l - X_gnss|^2 / sigma_camera^2   (per axis, m; l the GNSS
+//                                                                      lever arm, camera frame)
+// + sum over attitudes       |angles - measured|^2 / sigma_attitude^2    (per angle, only if asked)
+//
+// minimised by Ceres over one 6-parameter exterior orientation block per image (seed angles, with
+// a rotation manifold so that no attitude is singular), one 3-parameter block per point and one
+// block of camera-model parameters per camera (core/camera_models.h), held constant except the
+// parameters named for self-calibration. Points are eliminated first (Schur complement); control
+// point priors are written as 2-row residual blocks so that every eliminated row has the same size
+// and Ceres' fixed-size Schur specialisation (2, 3, 6) applies.
+//
+// Check points stay out of the adjustment: afterwards each is intersected from the adjusted images
+// (solvers/bundle/triangulation.h) and compared with its surveyed coordinates.
+//
+// The note's warning is part of the result: when tie points are too few or too weak the solution
+// bends to the priors, whose residual RMS then falls well below the stated accuracy and whose
+// redundancy share (how much of each prior the rest of the block checks) is small. Each prior group
+// is flagged `overfit` when either falls below its limit (BundleAdjustmentOptions::overfit_ratio,
+// overfit_redundancy_share).
+//
+// Data-dependent failures (no datum, disconnected block, an image with too few marks, a point
+// behind a camera, no convergence) are reported in the summary; nothing aborts.
+
+#include <Eigen/Core>
+#include <cmath>
+#include <functional>
+#include <limits>
+#include <optional>
+#include <set>
+#include <string>
+#include <vector>
+
+#include "core/block.h"
+#include "core/status.h"
+#include "core/types.h"
+#include "cost_functions/collinearity_cost.h"
+
+namespace photopose {
+
+// The stated accuracies of the objective's groups (one sigma). Defaults: Metashape's reference
+// settings. A per-row accuracy in the tables (mark Accuracy, point AccuracyX/Y/Z, frames
+// AccuracyX/Y/Z, AccuracyOmega/Phi/Kappa) overrides the default of its row.
+struct BundleAccuracies {
+  double tie_px = 1.0;                // tie marks measured in pixels (px)
+  double marker_projection_px = 0.5;  // control and check marks measured in pixels (px)
+  // Marks measured in film coordinates (um) of a camera without a pixel size: the defaults above
+  // need a pixel size to become micrometres, so these apply instead (um).
+  double tie_film_um = 5.0;
+  double marker_projection_film_um = 2.5;
+  double marker_m = 0.005;                                // control point coordinates (m, per axis)
+  Eigen::Vector3d camera_m = Eigen::Vector3d::Constant(10.0);  // camera centres (m, X, Y, Z)
+  // Camera centres are priors: always when an image has per-row accuracies; for the others when
+  // this is true (a frames table with measured centres and --camera_accuracy given, or the
+  // default on). false: measured centres without per-row accuracy are initial values only.
+  bool camera_positions_are_priors = true;
+  // Attitude prior (deg per angle, seed angles); none unless set.
+  std::optional<double> attitude_deg;
+};
+
+// The linear solver of each Levenberg-Marquardt step.
+enum class BundleLinearSolver {
+  kSparseSchur,                  // SPARSE_SCHUR with SuiteSparse (default)
+  kDenseSchur,                   // DENSE_SCHUR (small blocks)
+  kIterativeSchurJacobi,         // ITERATIVE_SCHUR with SCHUR_JACOBI
+  kIterativeSchurClusterJacobi,  // ITERATIVE_SCHUR with CLUSTER_JACOBI
+};
+std::optional<BundleLinearSolver> ParseBundleLinearSolver(const std::string& name);
+const char* BundleLinearSolverName(BundleLinearSolver solver);
+
+// One line of progress, after every iteration (the CLI prints it on stderr).
+struct BundleIterationInfo {
+  int round = 0;           // adjustment round (1, then one more after each outlier rejection)
+  int iteration = 0;       // Ceres iteration within the round
+  double cost = 0.0;       // 1/2 sum of squared whitened residuals
+  double sigma0 = 0.0;     // sqrt(2 cost / redundancy)
+  double step_norm = 0.0;  // |step| of the iteration (parameter units)
+  double elapsed_seconds = 0.0;
+  // A relative block's first solve, without a gauge (BundleAdjustmentOptions::
+  // free_gauge_for_relative_blocks); its sigma0 counts the 7 free directions as unknowns.
+  bool free_gauge = false;
+  // Levenberg-Marquardt state (Ceres solver only; NaN for the Taylor solver): the trust region
+  // radius after the iteration (1 / damping, unitless) and the step quality (actual over
+  // predicted cost decrease, unitless; 1 on a quadratic model).
+  double trust_region_radius = std::numeric_limits<double>::quiet_NaN();
+  double step_quality = std::numeric_limits<double>::quiet_NaN();
+  bool step_successful = true;
+  // Where the iteration went: the linear solve of the step (Schur elimination, factorisation,
+  // back-substitution) and the whole iteration (plus residual and Jacobian evaluation), s.
+  double linear_solver_seconds = 0.0;
+  double iteration_seconds = 0.0;
+};
+
+struct BundleAdjustmentOptions {
+  BundleAccuracies accuracies;
+  JacobianType jacobian = JacobianType::kAnalytic;  // derivative path of the collinearity costs
+  // Robust loss on tie marks (kNone: plain least squares), scale in sigmas of the mark.
+  // Control marks and priors are never robustified.
+  enum class TieLoss { kNone, kHuber, kCauchy, kSoftL1 } tie_loss = TieLoss::kNone;
+  double tie_loss_scale_sigmas = 3.0;
+  // After convergence, marks whose normalized residual exceeds this are rejected and the block
+  // adjusted again, at most max_rejection_rounds times (0 disables rejection). The normalized
+  // residual of a mark is the larger of |w_x|, |w_y| (see observation_diagnostics) when the
+  // diagnostics are computed, otherwise |v| / (max(1, s0) sigma) (the whitened residual, 2-D).
+  // Control marks are tested like tie marks; per point and round its worst mark above the
+  // threshold goes (a blunder raises the other marks of its track too).
+  double rejection_threshold = 4.5;
+  int max_rejection_rounds = 3;
+  // Levenberg-Marquardt.
+  int max_iterations = 100;             // per round (count)
+  double function_tolerance = 1e-10;    // relative cost change (unitless)
+  // Relative step (unitless): Ceres compares the step with the norm of ALL parameters, which map
+  // coordinates make huge (a 1000-image block in UTM: ~2.5e9 m), so 1e-10 would stop 0.25 m short
+  // of the minimum (measured on a 24-image block: 0.5 mm, 0.05 sigma); the cost and gradient
+  // tolerances decide convergence.
+  double parameter_tolerance = 1e-16;
+  double gradient_tolerance = 1e-12;    // max-norm of the projected gradient (unitless)
+  BundleLinearSolver linear_solver = BundleLinearSolver::kSparseSchur;
+  // A relative block (no control points, no camera positions) is solved first without a gauge
+  // and then moved by a similarity into COLMAP's gauge (first image fixed, one coordinate of the
+  // second) and polished there: the same minimum, in far fewer iterations when the first image's
+  // approximate attitude is off (the gauge turns the whole block about it). false: solved in
+  // COLMAP's gauge from the start.
+  bool free_gauge_for_relative_blocks = true;
+  int num_threads = 0;                  // 0: all cores
+  // GNSS lever arm: antenna offset from the projection centre in the camera frame (u, v, w; m).
+  std::optional<Eigen::Vector3d> lever_arm_m;
+  bool estimate_lever_arm = false;  // estimate it (starting from lever_arm_m or zero)
+  // Posterior covariances and redundancy shares (the normal matrix reduced to the cameras,
+  // inverted densely): skipped for blocks with more parameters than this after point elimination.
+  int max_covariance_parameters = 12000;
+  // A prior group is flagged `overfit` when its RMS / stated accuracy is below overfit_ratio
+  // (unitless, the note's "well below"), or its redundancy share below overfit_redundancy_share
+  // (the tie points check less than a fifth of it: the solution follows the priors). A share near
+  // 0.4 is normal when the priors are as accurate as the block itself.
+  double overfit_ratio = 0.5;
+  double overfit_redundancy_share = 0.2;
+  // Camera-model parameters whose |correlation| exceeds this are named (unitless, DBAT's 0.95).
+  double high_correlation = 0.95;
+
+  // Variance component estimation (Helmert / Foerstner): after the adjustment, every group's
+  // variance factor s_g^2 = (its whitened residuals' sum of squares) / (its redundancy, the sum of
+  // its redundancy numbers) rescales the group's accuracies, and the block is adjusted again, until
+  // every estimated factor is 1 within variance_tolerance or max_variance_iterations is reached.
+  // Needs the covariance (max_covariance_parameters). A group whose redundancy is below
+  // min_variance_redundancy is not estimated (its accuracy stays as stated, and says why).
+  bool estimate_accuracies = false;
+  int max_variance_iterations = 20;     // count
+  double variance_tolerance = 0.01;     // |s_g^2 - 1| (unitless)
+  double min_variance_redundancy = 5.0; // summed redundancy numbers (unitless)
+
+  // Per-observation diagnostics (Baarda, Foerstner), computed with the covariance: redundancy
+  // number r_i, normalized residual w_i = v_i / (s sigma_i sqrt(r_i)) with s = max(1, sigma0) (the
+  // stated accuracy, or Pope's tau-test with the a-posteriori sigma0 when that is larger: never more
+  // sensitive than the stated accuracies allow), the smallest detectable error (internal reliability)
+  // nabla_i = delta0 sigma_i / sqrt(r_i) with delta0 = k(alpha) + k(beta), and its largest effect on
+  // a camera centre (external reliability). Marks per coordinate, priors per axis.
+  bool observation_diagnostics = true;
+  double snooping_alpha = 0.001;  // two-sided significance of the w-test (unitless)
+  // snooping_alpha is the block's (family-wise): each observation is tested at alpha / n, n the
+  // number of scalar observations (Bonferroni), so that a block of 30 000 observations gives about
+  // alpha false alarms, not 30. false: alpha per observation (Baarda's classical alpha_0).
+  bool snooping_family_wise = true;
+  double snooping_power = 0.8;    // power of the test behind the smallest detectable error
+  // Observations with r_i below this are listed as uncontrolled (a blunder there cannot be seen).
+  double uncontrolled_redundancy = 0.1;
+  // Data snooping: while the largest |w_i| exceeds k(alpha), remove that observation (a mark, or
+  // the whole prior of a control point, camera position or attitude) and adjust again, one at a
+  // time, at most max_snooping_removals times. Replaces the rejection rounds above.
+  bool snoop = false;
+  int max_snooping_removals = 200;
+  // Progress callback after every iteration (may be empty).
+  std::function<void(const BundleIterationInfo&)> progress;
+
+  bool IsValid(std::string* why) const;
+};
+
+// What the adjustment holds constant (in the manner of COLMAP's BundleAdjustmentConfig).
+struct BundleAdjustmentConfig {
+  // Per camera (index into Block::cameras): the parameter indices to estimate (self-calibration).
+  // Cameras not listed are held constant.
+  std::vector<std::vector<int>> calibrated_params;
+  std::set<int> constant_images;  // exterior orientations held fixed
+  std::set<int> constant_points;  // points held fixed (e.g. control points taken as error-free)
+  // Parses `photopose bundle --calibrate` names (core/camera_models.h) for every camera of the
+  // block; an error names a parameter a camera's model lacks.
+  static Status FromCalibrationNames(const Block& block, const std::vector<std::string>& names,
+                                     BundleAdjustmentConfig* config);
+};
+
+enum class BundleTermination { kConverged, kNoConvergence, kFailure };
+const char* BundleTerminationName(BundleTermination termination);
+
+// How the adjustment is tied to the ground.
+enum class BundleDatum {
+  kControl,   // control points and/or camera positions fix all seven similarity parameters
+  kRelative,  // neither: COLMAP's convention (first image fixed, one coordinate of the second)
+};
+
+// The statistics of one group of the objective.
+struct BundleGroupStatistics {
+  std::string name;  // tie_marks | control_marks | control_points | camera_positions | attitudes
+  int count = 0;     // observations (marks, points, cameras)
+  std::string unit;  // px, um, m or deg
+  // Stated accuracy: mean over the group per axis (unit above).
+  Eigen::Vector3d stated_accuracy = Eigen::Vector3d::Zero();
+  int num_axes = 2;  // 2 for marks, 3 otherwise
+  Eigen::Vector3d rms = Eigen::Vector3d::Zero();  // residual RMS per axis (unit above)
+  double rms_total = 0.0;                         // sqrt(mean over axes of rms^2)
+  // rms / stated accuracy (unitless): the whitened RMS, 1 when the accuracy was right.
+  double ratio = 0.0;
+  // The group's summed redundancy numbers over its number of scalar observations (unitless,
+  // 0..1): how much of it the rest of the block checks. NaN when not computed.
+  double redundancy_share = 0.0;
+  bool overfit = false;  // a prior group with ratio or redundancy share < overfit_ratio
+  std::string message;   // the warning, or empty
+  // Variance component estimation (estimate_accuracies): the group's accuracy estimated from the
+  // data (mean per axis, unit above; NaN when not estimated) and its standard error
+  // s / sqrt(2 r_g); why it was not estimated otherwise.
+  Eigen::Vector3d estimated_accuracy = Eigen::Vector3d::Constant(std::nan(""));
+  double estimated_accuracy_standard_error = std::nan("");  // relative (unitless)
+  std::string estimation_message;
+};
+
+// The diagnostics of one scalar observation (observation_diagnostics).
+struct BundleObservationDiagnostics {
+  std::string group;       // as BundleGroupStatistics::name
+  int item = -1;           // mark (marks), point (control_points) or image (priors) index
+  int axis = 0;            // marks: 0 x, 1 y; priors: 0..2 (X, Y, Z or omega, phi, kappa)
+  double residual = 0.0;   // observed - computed (marks: px or um; points, cameras: m; deg)
+  double sigma = 0.0;      // its accuracy, same unit
+  double redundancy = 0.0; // r_i in [0, 1]
+  double normalized = 0.0; // w_i (unitless); NaN when r_i is below 1e-6
+  double mdb = 0.0;        // smallest detectable error, same unit as residual; inf when r_i ~ 0
+  double external_m = 0.0; // largest shift of a camera centre caused by an error of size mdb (m)
+  bool rejected = false;   // |w_i| > k(alpha)
+};
+
+// One step of data snooping.
+struct BundleSnoopingStep {
+  std::string group;
+  int item = -1;
+  int axis = 0;
+  double normalized = 0.0;  // |w| of the removed observation
+  double residual = 0.0;    // its residual (unit of its group)
+};
+
+struct BundleImageResult {
+  bool adjusted = false;
+  std::string message;  // why not, or empty
+  // Posterior covariance sigma0^2 (J^T P J)^-1 of the exterior orientation (m, rad, seed); zero
+  // when not computed.
+  Matrix6d covariance = Matrix6d::Zero();
+  bool has_covariance = false;
+  int num_marks = 0;         // marks used in the final round
+  double rms_residual = 0.0; // of those, RMS of the residual vector length in the marks' unit
+  std::string unit;          // "px" or "um"
+};
+
+struct BundlePointResult {
+  int num_observations = 0;  // marks used in the final round
+  // sigma0^2-scaled (m^2). Control points: from the adjustment. Check points: of the
+  // intersection, with the uncertainty of the adjusted images and cameras carried into it (when
+  // the covariance was computed; the measurements' part alone otherwise).
+  Eigen::Matrix3d covariance = Eigen::Matrix3d::Zero();
+  bool has_covariance = false;
+  // Control points: adjusted - surveyed; check points: intersected - surveyed (m).
+  std::optional<Eigen::Vector3d> error_m;
+  std::string message;  // e.g. why a check point could not be intersected
+};
+
+struct BundleCalibrationResult {
+  int camera = -1;
+  std::vector<std::string> names;    // estimated parameters
+  std::vector<int> indices;          // their indices in the camera's params
+  std::vector<double> values;        // adjusted values (units of core/camera_models.h)
+  std::vector<double> sigmas;        // sigma0-scaled standard deviations; empty without covariance
+  Eigen::MatrixXd correlation;       // of the estimated parameters (empty without covariance)
+  std::vector<std::string> high_correlations;  // "K2~K3: -0.979"
+};
+
+struct BundleRejectedMark {
+  int mark = -1;               // index into Block::marks
+  int round = 0;               // the round after which it was rejected
+  double whitened_residual = 0.0;  // |v| / (sigma sigma0) when rejected
+};
+
+struct BundleAdjustmentSummary {
+  BundleTermination termination = BundleTermination::kFailure;
+  std::string message;
+  BundleDatum datum = BundleDatum::kControl;
+  std::string datum_description;  // in words, for the report
+  int rounds = 0;                 // adjustment rounds (rejections re-adjust)
+  int iterations = 0;             // over all rounds
+  double initial_cost = 0.0;      // 1/2 sum of squared whitened residuals, first round start
+  double final_cost = 0.0;        // at the end of the last round
+  double sigma0 = 0.0;            // sqrt(2 final_cost / redundancy) (unitless)
+  int redundancy = 0;             // scalar observations - free parameters
+  int num_images = 0, num_points = 0, num_marks = 0;  // in the final round
+  int num_rejected_marks = 0;
+  // Tie points left out because they had no initial coordinates (seen twice or more, but not
+  // intersected: rays too close to parallel or marks that do not meet), by PointID.
+  std::vector<std::string> tie_points_left_out;
+  double time_seconds = 0.0;
+  double statistics_seconds = 0.0;  // covariances and redundancy shares
+  // Where the adjustment's time went, over all rounds (s): building the Ceres problems; Ceres'
+  // preprocessing (program, ordering, Schur structure, symbolic factorisation); residual and
+  // Jacobian evaluation; the linear solves of the Levenberg-Marquardt steps (Schur elimination,
+  // factorisation of the reduced camera system, back-substitution).
+  double problem_build_seconds = 0.0;
+  double solver_preprocessing_seconds = 0.0;
+  double residual_evaluation_seconds = 0.0;
+  double jacobian_evaluation_seconds = 0.0;
+  double linear_solver_seconds = 0.0;
+  // Ceres' fixed-size Schur specialisation of the last solve, "row,point,image" block sizes ("d":
+  // dynamic, the slower generic path): "2,3,6" when every image block has 6 free parameters.
+  std::string schur_structure;
+
+  bool IsSolutionUsable() const { return termination == BundleTermination::kConverged; }
+  std::string BriefReport() const;
+};
+
+struct BundleAdjustmentResult {
+  BundleAdjustmentSummary summary;
+  std::vector<BundleImageResult> images;  // per Block::images
+  std::vector<BundlePointResult> points;  // per Block::points
+  std::vector<BundleGroupStatistics> groups;
+  std::vector<BundleCalibrationResult> calibration;
+  std::vector<BundleRejectedMark> rejected_marks;
+  std::optional<Eigen::Vector3d> lever_arm_m;  // estimated (or applied) lever arm
+  // Check points intersected and compared: RMSE per axis and total (m); count.
+  int num_check_points = 0;
+  Eigen::Vector3d check_rmse_m = Eigen::Vector3d::Zero();
+  double check_rmse_total_m = 0.0;
+  // Control points: RMSE of adjusted - surveyed per axis and total (m).
+  int num_control_points = 0;
+  Eigen::Vector3d control_rmse_m = Eigen::Vector3d::Zero();
+  double control_rmse_total_m = 0.0;
+  // Residual per mark used in the final round (observed - computed, in the mark's own unit); NaN
+  // for marks not used (check marks, rejected marks, marks of images not adjusted).
+  std::vector<Eigen::Vector2d> mark_residuals;
+
+  // Variance component estimation: iterations run (0 when not asked).
+  int variance_iterations = 0;
+  // Per-observation diagnostics, in the order marks (x, y), control points (X, Y, Z), camera
+  // positions, attitudes; empty when not computed. critical_value is k(alpha) of the w-test and
+  // delta0 the non-centrality behind the smallest detectable errors.
+  std::vector<BundleObservationDiagnostics> observations;
+  double critical_value = 0.0;
+  double alpha_per_observation = 0.0;  // the w-test's two-sided level per observation
+  double delta0 = 0.0;
+  int num_uncontrolled = 0;  // observations with r_i below uncontrolled_redundancy
+  std::vector<BundleSnoopingStep> snooping;  // removals in order (snoop)
+
+  // A multi-line report: summary, groups with their verdicts, images, points, calibration.
+  std::string FullReport(const Block& block) const;
+};
+
+// Adjusts the block in place: on success the images' eo, the points' position_m and the cameras'
+// params hold the adjusted values. Every image needs an initial eo and every tie point an initial
+// position (see solvers/bundle/block_initialization.h); control and check points start at their surveyed
+// coordinates. Returns an error (nothing changed) for invalid options or a block the adjustment
+// cannot use (no datum for the asked output, disconnected, an image with fewer than 3 marks, a
+// parameter to calibrate that the model lacks); a failed or unconverged adjustment is reported in
+// result->summary with the block left at its input values.
+Status BundleAdjust(const BundleAdjustmentOptions& options, const BundleAdjustmentConfig& config,
+                    Block* block, BundleAdjustmentResult* result);
+
+// ------------------------------------------------------------------ leave-one-out cross-validation
+
+struct BundleCrossValidationPoint {
+  int point = -1;           // index into Block::points (a control point of the full adjustment)
+  bool ok = false;          // adjusted and intersected without it
+  std::string message;      // why not
+  Eigen::Vector3d error_m = Eigen::Vector3d::Zero();  // intersected - surveyed, left out (m)
+  int num_images = 0;       // rays of its intersection
+  // e^T (C_intersection + C_surveyed)^-1 e: chi-square with 3 degrees of freedom for a point
+  // that agrees with the rest of the block within the stated accuracies.
+  double normalized = 0.0;
+  bool stands_out = false;  // normalized above the chi-square(3) quantile at 1 - snooping_alpha
+};
+
+struct BundleCrossValidationResult {
+  std::vector<BundleCrossValidationPoint> points;
+  int count = 0;  // points cross-validated
+  Eigen::Vector3d rmse_m = Eigen::Vector3d::Zero();  // per axis over those (m)
+  double rmse_total_m = 0.0;
+  double threshold = 0.0;  // of `normalized` for stands_out
+  double time_seconds = 0.0;
+};
+
+// Each control point of the adjusted block in turn becomes a check point; the block is adjusted
+// again without it (warm-started from `adjusted`, the marks rejected by `full` left out) and its
+// error recorded. Runs num_threads adjustments in parallel (0: all cores). A point whose removal
+// leaves no datum is reported as not cross-validated.
+Status CrossValidateControlPoints(const BundleAdjustmentOptions& options,
+                                  const BundleAdjustmentConfig& config, const Block& adjusted,
+                                  const BundleAdjustmentResult& full, int num_threads,
+                                  BundleCrossValidationResult* result);
+
+}  // namespace photopose

@@ -1,0 +1,542 @@
+#include "solvers/bundle/internal/bundle_problem.h"
+
+#include <Eigen/Dense>
+#include <algorithm>
+#include <cmath>
+#include <map>
+#include <numeric>
+#include <sstream>
+#include <thread>
+
+#include "cost_functions/exterior_orientation_manifold.h"
+#include "cost_functions/priors.h"
+#include "solvers/bundle/check_points.h"
+#include "solvers/bundle/triangulation.h"
+
+namespace photopose::internal {
+
+const char* const kBundleGroupNames[kNumBundleGroups] = {
+    "tie_marks", "control_marks", "control_points", "camera_positions", "attitudes"};
+
+namespace {
+
+// The seven datum parameters are fixed when the smallest singular value of the (scaled) datum
+// Jacobian is above this fraction of the largest: below it one similarity motion is all but free
+// (control points 1 mm off a line 1 km long, say), and the adjustment would rest on noise.
+constexpr double kDatumConditioning = 1e-3;
+
+// Union-find over images.
+int Root(std::vector<int>* parent, int i) {
+  while ((*parent)[i] != i) {
+    (*parent)[i] = (*parent)[(*parent)[i]];
+    i = (*parent)[i];
+  }
+  return i;
+}
+
+std::string Names(const std::vector<std::string>& names, size_t max_listed = 5) {
+  std::string text;
+  for (size_t i = 0; i < names.size() && i < max_listed; ++i)
+    text += (i ? ", " : "") + std::string("'") + names[i] + "'";
+  if (names.size() > max_listed) text += ", ... (" + std::to_string(names.size()) + " in all)";
+  return text;
+}
+
+// Rows of the datum Jacobian of one fixed position p: d p / d(t, rotation, scale) = [I, -[p-c]x,
+// (p-c)], columns scaled so that the three kinds are comparable (extent = RMS spread).
+void AddDatumRows(const Eigen::Vector3d& p, const Eigen::Vector3d& centroid, double extent,
+                  std::vector<Eigen::Matrix<double, 3, 7>>* rows) {
+  const Eigen::Vector3d d = (p - centroid) / extent;
+  Eigen::Matrix<double, 3, 7> J = Eigen::Matrix<double, 3, 7>::Zero();
+  J.leftCols<3>().setIdentity();
+  J(0, 4) = d.z();
+  J(0, 5) = -d.y();
+  J(1, 3) = -d.z();
+  J(1, 5) = d.x();
+  J(2, 3) = d.y();
+  J(2, 4) = -d.x();
+  J.col(6) = d;
+  rows->push_back(J);
+}
+
+// The datum: what fixes the seven similarity parameters of the block (control points, camera
+// positions, attitudes, held images and points), or COLMAP's gauge for a relative block.
+Status CheckDatum(const BundleAdjustmentConfig& config, const Block& block, BundlePlan* plan) {
+  std::vector<Eigen::Vector3d> fixed_positions;
+  int num_control = 0, num_cameras = 0, num_attitudes = 0;
+  bool fixed_rotation = false;
+  for (size_t p = 0; p < block.points.size(); ++p) {
+    if (!plan->point_in_problem[p]) continue;
+    if (plan->point_prior[p] || config.constant_points.count(static_cast<int>(p))) {
+      fixed_positions.push_back(block.points[p].role == PointRole::kTie
+                                    ? *block.points[p].position_m
+                                    : *block.points[p].surveyed_m);
+      ++num_control;
+    }
+  }
+  for (size_t i = 0; i < block.images.size(); ++i) {
+    if (plan->image_prior[i] || config.constant_images.count(static_cast<int>(i))) {
+      fixed_positions.push_back(plan->image_prior[i] ? *block.images[i].measured_center_m
+                                                     : block.images[i].eo->center_in_ground());
+      ++num_cameras;
+    }
+    if (plan->image_attitude[i] || config.constant_images.count(static_cast<int>(i))) {
+      fixed_rotation = true;
+      ++num_attitudes;
+    }
+  }
+  if (fixed_positions.empty() && !fixed_rotation) {
+    // A relative block: COLMAP's gauge. The first image fixed; of the second, the centre
+    // coordinate farthest from the first image's fixes the scale.
+    plan->datum = BundleDatum::kRelative;
+    if (block.images.size() < 2) return Status::Error("a relative block needs two images");
+    plan->relative_fixed_image = 0;
+    plan->relative_scale_image = 1;
+    const Eigen::Vector3d baseline =
+        block.images[1].eo->center_in_ground() - block.images[0].eo->center_in_ground();
+    baseline.cwiseAbs().maxCoeff(&plan->relative_scale_axis);
+    if (!(baseline.norm() > 0.0))
+      return Status::Error("a relative block needs its first two images at different positions");
+    const char* axes = "XYZ";
+    plan->datum_description =
+        "relative: no control points and no camera positions; image '" + block.images[0].name +
+        "' held fixed and the " + std::string(1, axes[plan->relative_scale_axis]) +
+        " coordinate of image '" + block.images[1].name +
+        "' fixes the scale (COLMAP's convention); coordinates are in the frame of the input";
+    return Status::Ok();
+  }
+  Eigen::Vector3d centroid = Eigen::Vector3d::Zero();
+  for (const auto& p : fixed_positions) centroid += p;
+  if (!fixed_positions.empty()) centroid /= static_cast<double>(fixed_positions.size());
+  double extent = 0.0;
+  for (const auto& p : fixed_positions) extent += (p - centroid).squaredNorm();
+  extent = fixed_positions.empty() ? 1.0 : std::sqrt(extent / fixed_positions.size());
+  if (!(extent > 0.0)) extent = 1.0;
+  std::vector<Eigen::Matrix<double, 3, 7>> rows;
+  for (const auto& p : fixed_positions) AddDatumRows(p, centroid, extent, &rows);
+  if (fixed_rotation) {
+    Eigen::Matrix<double, 3, 7> J = Eigen::Matrix<double, 3, 7>::Zero();
+    J.block<3, 3>(0, 3).setIdentity();
+    rows.push_back(J);
+  }
+  Eigen::MatrixXd D(3 * rows.size(), 7);
+  for (size_t k = 0; k < rows.size(); ++k) D.block<3, 7>(3 * k, 0) = rows[k];
+  const Eigen::VectorXd s = Eigen::JacobiSVD<Eigen::MatrixXd>(D).singularValues();
+  std::ostringstream what;
+  what << num_control << " control point" << (num_control == 1 ? "" : "s") << ", " << num_cameras
+       << " camera position" << (num_cameras == 1 ? "" : "s");
+  if (num_attitudes > 0) what << ", " << num_attitudes << " attitude" << (num_attitudes == 1 ? "" : "s");
+  if (s.size() < 7 || !(s[6] > kDatumConditioning * s[0])) {
+    int rank = 0;
+    for (int k = 0; k < s.size(); ++k) rank += s[k] > kDatumConditioning * s[0];
+    std::string why;
+    if (fixed_positions.size() <= 2 && !fixed_rotation) {
+      why = "fewer than three positions cannot fix the rotation";
+    } else {
+      why = "the positions lie on one line (the rotation about it is free)";
+    }
+    return Status::Error("no datum: the " + what.str() + " fix only " + std::to_string(rank) +
+                         " of the 7 similarity parameters of the block (" + why +
+                         "); add control points off that line or camera positions");
+  }
+  plan->datum = BundleDatum::kControl;
+  plan->datum_description = "absolute: " + what.str() + " weighted as stated";
+  return Status::Ok();
+}
+
+}  // namespace
+
+Status MakeBundlePlan(const BundleAdjustmentOptions& options, const BundleAdjustmentConfig& config,
+                const Block& block, BundlePlan* plan) {
+  const BundleAccuracies& acc = options.accuracies;
+  const size_t num_marks = block.marks.size();
+  plan->mark_used.assign(num_marks, 0);
+  plan->mark_sigma.assign(num_marks, 1.0);
+  plan->mark_group.assign(num_marks, kTieMarks);
+  plan->point_in_problem.assign(block.points.size(), 0);
+  plan->point_prior.assign(block.points.size(), 0);
+  plan->point_sigma.assign(block.points.size(), Eigen::Vector3d::Constant(acc.marker_m));
+
+  // Calibration config.
+  plan->calibrated.assign(block.cameras.size(), {});
+  if (config.calibrated_params.size() > block.cameras.size())
+    return Status::Error("the calibration config names more cameras than the block has");
+  for (size_t c = 0; c < config.calibrated_params.size(); ++c) {
+    const int n = CameraModelNumParams(block.cameras[c].model);
+    std::vector<int> indices = config.calibrated_params[c];
+    std::sort(indices.begin(), indices.end());
+    indices.erase(std::unique(indices.begin(), indices.end()), indices.end());
+    for (const int index : indices)
+      if (index < 0 || index >= n)
+        return Status::Error("camera '" + block.cameras[c].camera_id +
+                             "': parameter index " + std::to_string(index) + " out of range");
+    plan->calibrated[c] = indices;
+  }
+
+  // Marks in the adjustment: of control and tie points, of images with an orientation.
+  std::vector<std::string> missing_eo;
+  for (size_t i = 0; i < block.images.size(); ++i)
+    if (!block.images[i].eo) missing_eo.push_back(block.images[i].name);
+  if (!missing_eo.empty()) {
+    return Status::Error("images without initial exterior orientation: " + Names(missing_eo) +
+                         " (give a frames table or let the initialisation orient them)");
+  }
+  for (size_t m = 0; m < num_marks; ++m) {
+    const BlockMark& mark = block.marks[m];
+    const BlockPoint& point = block.points[mark.point];
+    if (point.role == PointRole::kCheck) continue;
+    const BlockCamera& camera = block.cameras[block.images[mark.image].camera];
+    const bool control = point.role == PointRole::kControl;
+    const double px = control ? acc.marker_projection_px : acc.tie_px;
+    const double film = DefaultFilmMarkSigmaUm(camera, px,
+                                      control ? acc.marker_projection_film_um : acc.tie_film_um);
+    plan->mark_sigma[m] = MarkSigma(mark, px, film);
+    plan->mark_group[m] = control ? kControlMarks : kTieMarks;
+    plan->mark_used[m] = 1;
+  }
+  // Tie points need a start and two rays; a tie point with one ray adds nothing.
+  for (size_t p = 0; p < block.points.size(); ++p) {
+    const BlockPoint& point = block.points[p];
+    if (point.role == PointRole::kCheck) continue;
+    int rays = 0;
+    for (const int m : block.marks_of_point[p]) rays += plan->mark_used[m];
+    if (point.role == PointRole::kTie && rays < 2) {
+      for (const int m : block.marks_of_point[p]) plan->mark_used[m] = 0;
+      continue;
+    }
+    if (rays == 0) continue;
+    if (point.role == PointRole::kTie && !point.position_m) {
+      // Not intersected by the initialisation (rays too close to parallel, or marks that do not
+      // meet): left out like a one-ray point, and listed in the summary.
+      for (const int m : block.marks_of_point[p]) plan->mark_used[m] = 0;
+      plan->tie_points_left_out.push_back(static_cast<int>(p));
+      continue;
+    }
+    plan->point_in_problem[p] = 1;
+    if (point.role == PointRole::kControl && !config.constant_points.count(static_cast<int>(p)))
+      plan->point_prior[p] = 1;
+    if (point.role == PointRole::kControl && point.accuracy_m) plan->point_sigma[p] = *point.accuracy_m;
+  }
+  for (size_t i = 0; i < block.images.size(); ++i) {
+    int count = 0;
+    for (const int m : block.marks_of_image[i]) count += plan->mark_used[m];
+    if (count < kMinMarksPerImage) {
+      return Status::Error("image '" + block.images[i].name + "' has " + std::to_string(count) +
+                           " usable marks; an image needs at least " +
+                           std::to_string(kMinMarksPerImage) +
+                           " (marks of control points and of tie points seen in two images)");
+    }
+  }
+
+  // Priors of the images.
+  plan->image_prior.assign(block.images.size(), 0);
+  plan->image_prior_sigma.assign(block.images.size(), acc.camera_m);
+  plan->image_attitude.assign(block.images.size(), 0);
+  plan->image_attitude_sigma.assign(block.images.size(), Eigen::Vector3d::Zero());
+  for (size_t i = 0; i < block.images.size(); ++i) {
+    const BlockImage& image = block.images[i];
+    if (config.constant_images.count(static_cast<int>(i))) continue;
+    if (image.measured_center_m && (image.center_accuracy_m || acc.camera_positions_are_priors)) {
+      plan->image_prior[i] = 1;
+      if (image.center_accuracy_m) plan->image_prior_sigma[i] = *image.center_accuracy_m;
+    }
+    if (image.measured_angles_rad && (image.attitude_accuracy_rad || acc.attitude_deg)) {
+      plan->image_attitude[i] = 1;
+      plan->image_attitude_sigma[i] =
+          image.attitude_accuracy_rad
+              ? *image.attitude_accuracy_rad
+              : Eigen::Vector3d::Constant(DegreesToRadians(*acc.attitude_deg));
+    }
+  }
+  plan->use_lever = options.lever_arm_m.has_value() || options.estimate_lever_arm;
+
+  // Connectivity: images joined by the points they share.
+  std::vector<int> parent(block.images.size());
+  std::iota(parent.begin(), parent.end(), 0);
+  for (size_t p = 0; p < block.points.size(); ++p) {
+    if (!plan->point_in_problem[p]) continue;
+    int first = -1;
+    for (const int m : block.marks_of_point[p]) {
+      if (!plan->mark_used[m]) continue;
+      const int image = block.marks[m].image;
+      if (first < 0) {
+        first = image;
+      } else {
+        parent[Root(&parent, image)] = Root(&parent, first);
+      }
+    }
+  }
+  std::map<int, std::vector<std::string>> components;
+  for (size_t i = 0; i < block.images.size(); ++i)
+    components[Root(&parent, static_cast<int>(i))].push_back(block.images[i].name);
+  if (components.size() > 1) {
+    std::string parts;
+    int k = 0;
+    for (const auto& [root, names] : components) {
+      if (k++ == 3) {
+        parts += "; ...";
+        break;
+      }
+      parts += (k > 1 ? "; " : "") + std::to_string(names.size()) + " image" +
+               (names.size() == 1 ? "" : "s") + " (" + Names(names, 3) + ")";
+    }
+    return Status::Error("the block falls apart into " + std::to_string(components.size()) +
+                         " parts that share no point: " + parts);
+  }
+
+  return CheckDatum(config, block, plan);
+}
+
+Status RecheckBundlePlan(const BundleAdjustmentConfig& config, const Block& block,
+                         BundlePlan* plan) {
+  for (size_t p = 0; p < block.points.size(); ++p) {
+    if (!plan->point_in_problem[p]) continue;
+    int rays = 0;
+    for (const int m : block.marks_of_point[p]) rays += plan->mark_used[m];
+    const bool tie_like = !plan->point_prior[p] && !config.constant_points.count(static_cast<int>(p));
+    if (rays == 0 || (tie_like && rays < 2)) {
+      for (const int m : block.marks_of_point[p]) plan->mark_used[m] = 0;
+      plan->point_in_problem[p] = 0;
+      plan->point_prior[p] = 0;
+    }
+  }
+  for (size_t i = 0; i < block.images.size(); ++i) {
+    int count = 0;
+    for (const int m : block.marks_of_image[i]) count += plan->mark_used[m];
+    if (count < kMinMarksPerImage) {
+      return Status::Error("image '" + block.images[i].name + "' keeps " + std::to_string(count) +
+                           " marks: too few to orient it");
+    }
+  }
+  const BundleDatum datum = plan->datum;
+  PHOTOPOSE_RETURN_IF_ERROR(CheckDatum(config, block, plan));
+  if (plan->datum != datum) return Status::Error("the block lost its datum");
+  return Status::Ok();
+}
+
+namespace {
+
+ceres::LossFunction* MakeTieLoss(const BundleAdjustmentOptions& options) {
+  const double s = options.tie_loss_scale_sigmas;
+  switch (options.tie_loss) {
+    case BundleAdjustmentOptions::TieLoss::kNone:
+      return nullptr;
+    case BundleAdjustmentOptions::TieLoss::kHuber:
+      return new ceres::HuberLoss(s);
+    case BundleAdjustmentOptions::TieLoss::kCauchy:
+      return new ceres::CauchyLoss(s);
+    case BundleAdjustmentOptions::TieLoss::kSoftL1:
+      return new ceres::SoftLOneLoss(s);
+  }
+  return nullptr;
+}
+
+}  // namespace
+
+void BuildBundleRound(const BundleAdjustmentOptions& options, const BundleAdjustmentConfig& config,
+                      const Block& block, const BundlePlan& plan, BundleState* state,
+                      BundleRound* round) {
+  round->problem.reset();
+  *round = BundleRound();
+  ceres::Problem::Options problem_options;
+  problem_options.manifold_ownership = ceres::DO_NOT_TAKE_OWNERSHIP;
+  problem_options.loss_function_ownership = ceres::DO_NOT_TAKE_OWNERSHIP;
+  problem_options.enable_fast_removal = false;
+  round->problem = std::make_unique<ceres::Problem>(problem_options);
+  ceres::Problem& problem = *round->problem;
+  round->tie_loss.reset(MakeTieLoss(options));
+
+  // Exterior orientations with their manifold (one shared; the relative gauge's second image
+  // gets one with a fixed coordinate).
+  round->manifolds.emplace_back(new ExteriorOrientationManifold());
+  ceres::Manifold* eo_manifold = round->manifolds.back().get();
+  for (size_t i = 0; i < block.images.size(); ++i) {
+    double* eo = state->eo[i].data();
+    problem.AddParameterBlock(eo, kExteriorOrientationSize);
+    const bool constant = config.constant_images.count(static_cast<int>(i)) ||
+                          static_cast<int>(i) == plan.relative_fixed_image;
+    if (constant) {
+      problem.SetParameterBlockConstant(eo);
+      continue;
+    }
+    if (static_cast<int>(i) == plan.relative_scale_image) {
+      std::array<bool, 6> fixed{};
+      fixed[plan.relative_scale_axis] = true;
+      round->manifolds.emplace_back(new ExteriorOrientationManifold(fixed));
+      problem.SetManifold(eo, round->manifolds.back().get());
+      round->e_sizes.push_back(5);
+    } else {
+      problem.SetManifold(eo, eo_manifold);
+      round->e_sizes.push_back(6);
+    }
+    round->e_blocks.push_back(eo);
+  }
+  // Camera parameters: constant except the calibrated ones.
+  for (size_t c = 0; c < block.cameras.size(); ++c) {
+    double* params = state->cameras[c].data();
+    const int n = static_cast<int>(state->cameras[c].size());
+    problem.AddParameterBlock(params, n);
+    const std::vector<int>& free = plan.calibrated[c];
+    if (free.empty()) {
+      problem.SetParameterBlockConstant(params);
+      continue;
+    }
+    if (static_cast<int>(free.size()) < n) {
+      std::vector<int> constant;
+      for (int k = 0; k < n; ++k)
+        if (!std::binary_search(free.begin(), free.end(), k)) constant.push_back(k);
+      round->manifolds.emplace_back(new ceres::SubsetManifold(n, constant));
+      problem.SetManifold(params, round->manifolds.back().get());
+    }
+    round->e_blocks.push_back(params);
+    round->e_sizes.push_back(static_cast<int>(free.size()));
+  }
+  double* lever = state->lever.data();
+  if (plan.use_lever) {
+    problem.AddParameterBlock(lever, 3);
+    if (options.estimate_lever_arm) {
+      round->e_blocks.push_back(lever);
+      round->e_sizes.push_back(3);
+    } else {
+      problem.SetParameterBlockConstant(lever);
+    }
+  }
+
+  // Points.
+  for (size_t p = 0; p < block.points.size(); ++p) {
+    if (!plan.point_in_problem[p]) continue;
+    double* point = state->points[p].data();
+    problem.AddParameterBlock(point, kPointSize);
+    if (config.constant_points.count(static_cast<int>(p))) {
+      problem.SetParameterBlockConstant(point);
+      continue;
+    }
+    round->point_blocks.push_back(point);
+    round->point_of_block.push_back(static_cast<int>(p));
+  }
+
+  // Marks.
+  round->residuals.reserve(std::count(plan.mark_used.begin(), plan.mark_used.end(), 1) +
+                           2 * block.points.size() + 2 * block.images.size());
+  for (size_t m = 0; m < block.marks.size(); ++m) {
+    if (!plan.mark_used[m]) continue;
+    const BlockMark& mark = block.marks[m];
+    const int camera_index = block.images[mark.image].camera;
+    const BlockCamera& camera = block.cameras[camera_index];
+    ceres::CostFunction* cost = CreateCollinearityCost(
+        options.jacobian, CollinearityFunctor(camera.model, mark.observation, camera.data(),
+                                              1.0 / plan.mark_sigma[m]));
+    ceres::LossFunction* loss = plan.mark_group[m] == kTieMarks ? round->tie_loss.get() : nullptr;
+    const ceres::ResidualBlockId id =
+        problem.AddResidualBlock(cost, loss, state->eo[mark.image].data(),
+                                 state->points[mark.point].data(),
+                                 state->cameras[camera_index].data());
+    round->residuals.push_back({plan.mark_group[m], static_cast<int>(m), 2, 0, id});
+  }
+  // Control point priors, two rows at a time.
+  for (size_t p = 0; p < block.points.size(); ++p) {
+    if (!plan.point_in_problem[p] || !plan.point_prior[p]) continue;
+    double* point = state->points[p].data();
+    const Eigen::Vector3d& surveyed = *block.points[p].surveyed_m;
+    const ceres::ResidualBlockId xy = problem.AddResidualBlock(
+        new GroundPointPriorRows(surveyed, plan.point_sigma[p], 0, 1), nullptr, point);
+    round->residuals.push_back({kControlPoints, static_cast<int>(p), 2, 0, xy});
+    const ceres::ResidualBlockId z = problem.AddResidualBlock(
+        new GroundPointPriorRows(surveyed, plan.point_sigma[p], 2, -1), nullptr, point);
+    round->residuals.push_back({kControlPoints, static_cast<int>(p), 1, 2, z});
+  }
+  // Camera positions and attitudes.
+  for (size_t i = 0; i < block.images.size(); ++i) {
+    double* eo = state->eo[i].data();
+    if (plan.image_prior[i]) {
+      const Eigen::Vector3d& measured = *block.images[i].measured_center_m;
+      ceres::ResidualBlockId id;
+      std::vector<double*> parameters = {eo};
+      if (plan.use_lever) {
+        parameters.push_back(lever);
+        id = problem.AddResidualBlock(
+            CameraPositionLeverArmPrior::Create(measured, plan.image_prior_sigma[i]), nullptr,
+            parameters);
+      } else {
+        id = problem.AddResidualBlock(new CameraPositionPrior(measured, plan.image_prior_sigma[i]),
+                                      nullptr, parameters);
+      }
+      round->residuals.push_back({kCameraPositions, static_cast<int>(i), 3, 0, id});
+    }
+    if (plan.image_attitude[i]) {
+      const ceres::ResidualBlockId id = problem.AddResidualBlock(
+          new AttitudePrior(*block.images[i].measured_angles_rad, plan.image_attitude_sigma[i]),
+          nullptr, eo);
+      round->residuals.push_back({kAttitudes, static_cast<int>(i), 3, 0, id});
+    }
+  }
+
+  round->num_free_parameters = 3 * static_cast<int>(round->point_blocks.size());
+  for (const int size : round->e_sizes) round->num_free_parameters += size;
+  round->num_observations = 0;
+  for (const ResidualInfo& info : round->residuals) round->num_observations += info.rows;
+}
+
+void ApplyRelativeGauge(const BundlePlan& plan, BundleState* state, BundleRound* round) {
+  ceres::Problem& problem = *round->problem;
+  double* fixed = state->eo[plan.relative_fixed_image].data();
+  double* scale = state->eo[plan.relative_scale_image].data();
+  problem.SetParameterBlockConstant(fixed);
+  std::array<bool, 6> axis{};
+  axis[plan.relative_scale_axis] = true;
+  round->manifolds.emplace_back(new ExteriorOrientationManifold(axis));
+  problem.SetManifold(scale, round->manifolds.back().get());
+  for (size_t k = 0; k < round->e_blocks.size(); ++k) {
+    if (round->e_blocks[k] == scale) round->e_sizes[k] = 5;
+  }
+  for (size_t k = 0; k < round->e_blocks.size(); ++k) {
+    if (round->e_blocks[k] != fixed) continue;
+    round->e_blocks.erase(round->e_blocks.begin() + k);
+    round->e_sizes.erase(round->e_sizes.begin() + k);
+    break;
+  }
+  round->num_free_parameters = 3 * static_cast<int>(round->point_blocks.size());
+  for (const int size : round->e_sizes) round->num_free_parameters += size;
+}
+
+ceres::Solver::Options BundleSolverOptions(const BundleAdjustmentOptions& options,
+                                     const BundleRound& round) {
+  ceres::Solver::Options solver;
+  solver.max_num_iterations = options.max_iterations;
+  solver.function_tolerance = options.function_tolerance;
+  solver.parameter_tolerance = options.parameter_tolerance;
+  solver.gradient_tolerance = options.gradient_tolerance;
+  solver.num_threads = options.num_threads > 0
+                           ? options.num_threads
+                           : static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
+  solver.logging_type = ceres::SILENT;
+  solver.minimizer_progress_to_stdout = false;
+  switch (options.linear_solver) {
+    case BundleLinearSolver::kSparseSchur:
+      solver.linear_solver_type = ceres::SPARSE_SCHUR;
+      solver.sparse_linear_algebra_library_type = ceres::SUITE_SPARSE;
+      break;
+    case BundleLinearSolver::kDenseSchur:
+      solver.linear_solver_type = ceres::DENSE_SCHUR;
+      break;
+    case BundleLinearSolver::kIterativeSchurJacobi:
+      solver.linear_solver_type = ceres::ITERATIVE_SCHUR;
+      solver.preconditioner_type = ceres::SCHUR_JACOBI;
+      break;
+    case BundleLinearSolver::kIterativeSchurClusterJacobi:
+      solver.linear_solver_type = ceres::ITERATIVE_SCHUR;
+      solver.preconditioner_type = ceres::CLUSTER_JACOBI;
+      solver.sparse_linear_algebra_library_type = ceres::SUITE_SPARSE;
+      break;
+  }
+  // Points first: they are eliminated (Schur complement); everything else forms the reduced
+  // camera system.
+  auto ordering = std::make_shared<ceres::ParameterBlockOrdering>();
+  for (double* point : round.point_blocks) ordering->AddElementToGroup(point, 0);
+  for (double* e : round.e_blocks) ordering->AddElementToGroup(e, 1);
+  if (!round.point_blocks.empty() && !round.e_blocks.empty())
+    solver.linear_solver_ordering = ordering;
+  return solver;
+}
+
+}  // namespace photopose::internal

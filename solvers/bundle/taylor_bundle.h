@@ -1,0 +1,231 @@
+#pragma once
+// Bundle adjustment by the seed's Taylor linearisation: the classical photogrammetric block
+// adjustment that the exterior-orientation lecture ("カメラの幾何学2", eqs. 7-28) leads to, written
+// from its formulas with Eigen only (no Ceres), as the independent baseline the Ceres adjustment
+// (solvers/bundle/bundle_adjustment.h) is compared with. It minimises the SAME weighted objective on the
+// SAME block:
+//
+//   sum over tie and control marks   |F|^2 / sigma_mark^2      F = (Fu, Fv), seed eqs. 7-8 (um)
+// + sum over control points          |X - X_surveyed|^2 / sigma_marker^2        (per axis, m)
+// + sum over camera centres          |X0 + R^T l - X_gnss|^2 / sigma_camera^2   (per axis, m)
+// + sum over attitudes               |angles - measured|^2 / sigma_attitude^2   (per angle, rad)
+//
+// with the accuracies, per-row overrides, check points, datum and gauge rules of BundleAdjust.
+//
+// Unknowns: per image not held constant its X0, Y0, Z0 (m), omega, phi, kappa (rad, seed angles,
+// used directly as the lecture does: singular only at phi = +-90 deg); per tie or control point
+// not held constant X, Y, Z (m). Every observation equation is linearised as in eqs. 9-16,
+//
+//   F(p) ~ F(p0) - A d,   p = p0 - d,   A = dF/dp,
+//
+// with A from eqs. 17-28 for the exterior orientation (TaylorPartials: eq. 21 corrected, or as
+// printed), the ground-point partials dF/dX = -dF/dX0 (docs/taylor_derivatives.md, "Ground-point
+// partials"), and the identity (and R^T l's derivative) for the priors. The camera model enters on
+// the observation side: for the ArcGIS frame model (kFrame) the measured film point is corrected
+// (affinity, principal point, distortion, Polarity) into the ideal image plane once, a constant
+// with the interior orientation fixed.
+//
+// Normal equations (A^T P A) d = A^T P F, assembled by hand and reduced to the cameras (the
+// classical reduced normal equations): with N = [U W; W^T V] (U cameras, V points, block-diagonal
+// 3 x 3) the points are eliminated one 3 x 3 block at a time,
+//
+//   S = U - sum_p W_p V_p^-1 W_p^T,   r = g_e - sum_p W_p V_p^-1 g_p,
+//
+// S d_e = r is solved by a sparse LDL^T (Eigen::SimplicialLDLT of the Jacobi-scaled S, the images
+// ordered by AMD on the image graph), and the point corrections are back-substituted,
+// d_p = V_p^-1 (g_p - W_p^T d_e). Plain Gauss-Newton, no damping: the lecture's method.
+//
+// Supported: kFrame cameras with fixed interior orientation (any distortion model or table,
+// affinity, Polarity); control, check and tie points; GNSS camera positions with an applied
+// (not estimated) lever arm; attitude priors; images and points held constant; the relative gauge
+// (COLMAP's convention) when nothing ties the block to the ground; rejection rounds of marks as
+// in BundleAdjust. Not supported, refused with the reason: self-calibration, the COLMAP forward
+// camera models (their residual lives in the pixel domain after distortion, whose derivative is
+// not part of the lecture's linearisation), robust losses, an estimated lever arm.
+//
+// Data-dependent failures (no datum, a singular reduced normal matrix, a point behind a camera,
+// divergence, no convergence) are reported in the summary with the block left at its input
+// values; nothing aborts.
+
+#include <Eigen/Core>
+#include <functional>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "core/block.h"
+#include "core/status.h"
+#include "core/types.h"
+#include "solvers/bundle/bundle_adjustment.h"
+#include "solvers/resection/resection.h"
+#include "solvers/resection/taylor_resection.h"
+
+namespace photopose {
+
+struct TaylorBundleOptions {
+  // Partial derivatives of the exterior orientation (eqs. 17-28): eq. 21 corrected or as printed.
+  TaylorPartials partials = TaylorPartials::kCorrected;
+  // The objective's accuracies, defaults and per-row overrides exactly as BundleAdjust takes them.
+  BundleAccuracies accuracies;
+  // GNSS lever arm: antenna offset from the projection centre in the camera frame (u, v, w; m),
+  // applied to every camera-position prior (not estimated).
+  std::optional<Eigen::Vector3d> lever_arm_m;
+  // After convergence, marks whose whitened residual |v| / sigma exceeds rejection_threshold *
+  // max(1, sigma0) (unitless) are rejected and the block adjusted again, at most
+  // max_rejection_rounds times (BundleAdjust's rule). 0 disables rejection.
+  double rejection_threshold = 4.5;
+  int max_rejection_rounds = 3;
+  // Gauss-Newton corrections per round (count). With the corrected partials a block converges in
+  // 3-6; the as-printed partials converge linearly and can need several times more.
+  int max_iterations = 50;
+  // Convergence: a round stops after the first correction whose every camera-centre and
+  // ground-point component is at most position_tolerance_m (m) and every angle component at most
+  // angle_tolerance_rad (rad). 1 um is three orders below the millimetre a block's control carries;
+  // 1e-9 rad is 1 um at 1 km. Gauss-Newton on a small-residual block converges with a linear rate
+  // of ~1e-3 or better, so the error left after that correction is far smaller still. The position
+  // test is never tighter than 256 epsilon times the extent of the block around its centroid (the
+  // solver works in coordinates relative to that centroid), so map coordinates cannot make
+  // convergence unreachable.
+  double position_tolerance_m = 1e-6;
+  double angle_tolerance_rad = 1e-9;
+  // Divergence: a round fails when a camera centre or a point moves farther from the block's
+  // centroid than this factor times the block's extent (unitless).
+  double divergence_distance_factor = 1e3;
+  // The reduced normal matrix is taken as singular (a datum defect or an undetermined image) when a
+  // pivot of the LDL^T of its Jacobi-scaled form is at most this fraction of the largest
+  // (unitless; the threshold BundleAdjust's statistics use).
+  double min_pivot_ratio = 1e-12;
+  // Posterior covariances (the reduced normal matrix inverted densely through its factorisation)
+  // are skipped for blocks with more camera unknowns than this (count).
+  int max_covariance_parameters = 12000;
+  // Called after every Gauss-Newton correction (may be empty); the fields as BundleAdjust fills
+  // them (round, iteration, cost, sigma0, step_norm = |d| over all unknowns, elapsed).
+  std::function<void(const BundleIterationInfo&)> progress;
+
+  bool IsValid(std::string* why) const;
+};
+
+// The Taylor options that minimise the same objective as `ceres` (accuracies, lever arm, rejection,
+// covariance limit, progress). Errors name what the Taylor path does not do: a robust tie loss or
+// an estimated lever arm.
+Status TaylorBundleOptionsFromBundleOptions(const BundleAdjustmentOptions& ceres,
+                                            TaylorPartials partials, TaylorBundleOptions* options);
+
+// One Gauss-Newton correction.
+struct TaylorBundleIteration {
+  int round = 0;
+  int iteration = 0;
+  double cost = 0.0;  // 1/2 sum of squared whitened residuals at the linearisation point
+  double max_position_correction_m = 0.0;  // camera centres and points (m)
+  double max_angle_correction_rad = 0.0;   // rad
+  double seconds = 0.0;                    // wall time of this correction (linearise + solve)
+};
+
+struct TaylorBundleSummary {
+  TaylorTerminationType termination_type = TaylorTerminationType::kFailure;
+  std::string message;  // why it stopped (one line)
+  TaylorPartials partials = TaylorPartials::kCorrected;
+  BundleDatum datum = BundleDatum::kControl;
+  std::string datum_description;
+  // Tie points seen twice or more without initial coordinates: left out with their marks.
+  std::vector<std::string> tie_points_left_out;
+  int rounds = 0;      // adjustment rounds (rejections re-adjust)
+  int iterations = 0;  // Gauss-Newton corrections over all rounds (count)
+  // 1/2 sum of squared whitened residuals (unitless, the Ceres cost): at the start of the first
+  // round and at the end of the last.
+  double initial_cost = 0.0;
+  double final_cost = 0.0;
+  double sigma0 = 0.0;  // sqrt(2 final_cost / redundancy) (unitless); NaN without redundancy
+  int redundancy = 0;   // scalar observations - unknowns (count)
+  int num_images = 0, num_points = 0, num_marks = 0;  // in the final round
+  int num_rejected_marks = 0;
+  int num_camera_unknowns = 0;  // exterior-orientation unknowns, i.e. of the reduced system (count)
+  int reduced_nonzeros = 0;     // stored (upper) entries of the reduced normal matrix (count)
+  // Largest components of the last correction (m, rad).
+  double last_position_correction_m = 0.0;
+  double last_angle_correction_rad = 0.0;
+  double time_seconds = 0.0;        // the whole call (s)
+  double iteration_seconds = 0.0;   // the Gauss-Newton corrections alone, over all rounds (s)
+  double statistics_seconds = 0.0;  // covariances and check points (s)
+
+  // One line: variant, termination, rounds, iterations, costs, sigma0, time, message.
+  std::string BriefReport() const;
+  // True only for kConvergence.
+  bool IsSolutionUsable() const;
+};
+
+struct TaylorBundleResult {
+  TaylorBundleSummary summary;
+  // The result in BundleAdjust's shape, for the same report writers:
+  //  - summary: filled from `summary` (termination kConverged / kNoConvergence / kFailure, the same
+  //    costs, sigma0, redundancy, counts and times);
+  //  - per image: adjusted, num_marks, rms_residual, unit, and the covariance, the 6 x 6 block of
+  //    sigma0^2 S^-1 in X0, Y0, Z0, omega, phi, kappa (with the as-printed partials S is built
+  //    from them, so this is that variant's own, wrong, covariance, as in TaylorResection);
+  //  - per point: num_observations; control points their covariance and error (adjusted -
+  //    surveyed); check points their intersection error (solvers/bundle/check_points.h, as BundleAdjust);
+  //  - mark_residuals, the control and check RMSE, rejected_marks and lever_arm_m as BundleAdjust.
+  // Not filled: groups (the per-group RMS, redundancy shares and over-fitting verdicts are
+  // BundleAdjust's) and calibration (no self-calibration here).
+  BundleAdjustmentResult adjustment;
+  // Every correction of every round, in order.
+  std::vector<TaylorBundleIteration> history;
+};
+
+// Adjusts the block in place with the seed's Gauss-Newton. On success the images' eo and the
+// points' position_m hold the adjusted values. Same preconditions as BundleAdjust: every image an
+// initial eo, every tie point an initial position. Returns an error (nothing changed) for invalid
+// options or a block it cannot adjust (see BundleAdjust, plus the unsupported features named in
+// the header comment); a failed or unconverged adjustment is reported in result->summary with the
+// block left at its input values and no image marked adjusted.
+Status TaylorBundleAdjust(const TaylorBundleOptions& options, const BundleAdjustmentConfig& config,
+                          Block* block, TaylorBundleResult* result);
+
+// The block adjustment that `photopose bundle --solver=ceres|taylor|taylor_as_printed` and the
+// block mode of `photopose compare` run, selected by the same PoseSolver switch as resection:
+// kCeres calls BundleAdjust(options, ...) (its derivative path from options.jacobian); kTaylor and
+// kTaylorAsPrinted call TaylorBundleAdjust with TaylorBundleOptionsFromBundleOptions(options) and
+// return its result in BundleAdjust's shape (taylor_result, when not null, receives the whole
+// Taylor result: its summary and iteration history). Errors as the solver called returns them,
+// plus the options the Taylor path refuses.
+Status BundleAdjustWithSolver(PoseSolver solver, const BundleAdjustmentOptions& options,
+                              const BundleAdjustmentConfig& config, Block* block,
+                              BundleAdjustmentResult* result,
+                              TaylorBundleResult* taylor_result = nullptr);
+
+// ------------------------------------------------------------------ the linearisation, exposed
+
+// One mark's observation equation for the block: Fu, Fv (um, seed eqs. 7-8: computed minus
+// observed ideal image-plane coordinates) with the partials with respect to the exterior
+// orientation (2 x 6, eqs. 17-28 per `partials`; um per m, um per rad) and to the ground point
+// (2 x 3, um per m; dF/dX = -dF/dX0). Returns false when the point is not in front of the camera
+// (w >= 0); then nothing is written.
+bool TaylorMarkPartials(TaylorPartials partials, const ExteriorOrientation& eo,
+                        const Eigen::Vector3d& point_in_ground, double focal_um,
+                        const Eigen::Vector2d& observed_um, Eigen::Matrix<double, 2, 6>* d_eo,
+                        Eigen::Matrix<double, 2, 3>* d_point, Eigen::Vector2d* f_um);
+
+// The antenna position X0 + R^T l of a camera (R = R_camera_from_ground of eo's seed angles, l the
+// lever arm in the camera frame, m) and its derivative with respect to (omega, phi, kappa) (3 x 3,
+// m per rad): dR/domega = [e1]x R, dR/dphi = [Rx(omega) e2]x R, dR/dkappa = R [e3]x.
+Eigen::Vector3d TaylorAntennaPosition(const ExteriorOrientation& eo, const Eigen::Vector3d& lever_m,
+                                      Eigen::Matrix3d* d_angles);
+
+// One linearisation of the whole block at its current values, dense, for tests and teaching
+// (small blocks only). Unknowns in order: per image not held constant its six parameters, then
+// per point in the adjustment and not held constant its three. The relative gauge's fixed
+// coordinate keeps its column, zeroed, and a zero correction.
+struct TaylorBundleLinearSystem {
+  std::vector<int> image_columns;  // per Block::images: first column, or -1 (held constant)
+  std::vector<int> point_columns;  // per Block::points: first column, or -1 (not an unknown)
+  Eigen::MatrixXd jacobian;        // whitened A: rows observation equations, columns unknowns
+  Eigen::VectorXd residual;        // whitened F (computed - observed) at the current values
+  Eigen::MatrixXd reduced_matrix;  // S (camera columns), as assembled block by block
+  Eigen::VectorXd reduced_rhs;     // r
+  Eigen::VectorXd correction;      // d: cameras from S d_e = r, points back-substituted
+};
+Status LinearizeTaylorBundle(const TaylorBundleOptions& options,
+                             const BundleAdjustmentConfig& config, const Block& block,
+                             TaylorBundleLinearSystem* system);
+
+}  // namespace photopose

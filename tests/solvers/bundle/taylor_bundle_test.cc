@@ -1,0 +1,972 @@
+#include "solvers/bundle/taylor_bundle.h"
+
+#include <gtest/gtest.h>
+
+#include <Eigen/Dense>
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <map>
+#include <random>
+#include <string>
+#include <vector>
+
+#include "core/rotation.h"
+#include "tests/block_fixture.h"
+
+namespace photopose {
+namespace {
+
+using testing::FixtureBlock;
+using testing::FixtureBlockOptions;
+using testing::MakeFixtureBlock;
+
+// ------------------------------------------------------------------ tolerances
+// Central differences with steps of 1e-4 of the camera-point distance have a truncation error
+// ~ (h / D)^2 = 1e-8 relative and rounding ~ 1e-11; 1e-6 leaves two orders of margin (the worst
+// case measured is printed).
+constexpr double kPartialRelativeTolerance = 1e-6;
+// Issue 12: Taylor and Ceres reach the same minimum, camera positions to 1e-6 of the block size.
+// Both stop on their own tolerances (Taylor: corrections below 1 um and 1e-9 rad; Ceres: relative
+// cost change 1e-10); the measured differences, printed, are ~1e-9 of the block size.
+constexpr double kRelativeAgreement = 1e-6;
+// The same statistic from two solvers: sigma0 from costs that agree to ~1e-12 relative.
+constexpr double kSigma0RelativeAgreement = 1e-6;
+// Exterior-orientation covariances: the same inverse normal matrix, reached through Euler angles
+// (Taylor) and a rotation manifold mapped back (Ceres), at solutions ~1e-9 of the block size apart.
+constexpr double kCovarianceRelativeAgreement = 1e-4;
+// The reduced system against the full one (dense LDL^T of a ~300 x 300 normal matrix whose scaled
+// condition is ~1e8): relative to the largest entry / correction.
+constexpr double kReductionRelativeTolerance = 1e-9;
+
+BundleAdjustmentOptions CeresOptions() {
+  BundleAdjustmentOptions options;
+  options.num_threads = 1;
+  options.rejection_threshold = 0.0;
+  return options;
+}
+
+TaylorBundleOptions TaylorOptions(TaylorPartials partials = TaylorPartials::kCorrected) {
+  TaylorBundleOptions options;
+  options.partials = partials;
+  options.rejection_threshold = 0.0;
+  return options;
+}
+
+FixtureBlockOptions NoiseFree(FixtureBlockOptions o) {
+  o.noise_px = 0.0;
+  o.gnss_noise_m = 0.0;
+  o.control_noise_m = 0.0;
+  return o;
+}
+
+double RotationDifferenceRad(const ExteriorOrientation& a, const ExteriorOrientation& b) {
+  const Eigen::Matrix3d Ra = RotationFromAngles(RotationConvention::kSeed, a.angles_seed_rad());
+  const Eigen::Matrix3d Rb = RotationFromAngles(RotationConvention::kSeed, b.angles_seed_rad());
+  return Eigen::AngleAxisd(Ra * Rb.transpose()).angle();
+}
+
+// ------------------------------------------------------------------ partial derivatives
+
+// A hand-computed case: a vertical camera (R = I) at height H above the point X = (dx, 0, -H)
+// relative to it. x = -c dx / dZ = c dx / H, y = 0, so dx/dX = c / H, dx/dZ = c dx / H^2 (from
+// -c dX / dZ with dZ = Z - Z0 = -H), dy/dY = c / H, and every other point partial is zero.
+TEST(TaylorBundlePartials, NominalVerticalCase) {
+  const double c = 24000.0, H = 100.0, dx = 10.0;
+  ExteriorOrientation eo;
+  eo.set_center_in_ground({5.0, 7.0, H});
+  const Eigen::Vector3d point(5.0 + dx, 7.0, 0.0);
+  Eigen::Matrix<double, 2, 6> d_eo;
+  Eigen::Matrix<double, 2, 3> d_point;
+  Eigen::Vector2d f;
+  ASSERT_TRUE(TaylorMarkPartials(TaylorPartials::kCorrected, eo, point, c, {1000.0, 0.0}, &d_eo,
+                                 &d_point, &f));
+  EXPECT_NEAR(f[0], c * dx / H - 1000.0, 1e-9);
+  EXPECT_NEAR(f[1], 0.0, 1e-9);
+  EXPECT_NEAR(d_point(0, 0), c / H, 1e-9);
+  EXPECT_NEAR(d_point(0, 1), 0.0, 1e-9);
+  EXPECT_NEAR(d_point(0, 2), c * dx / (H * H), 1e-9);
+  EXPECT_NEAR(d_point(1, 0), 0.0, 1e-9);
+  EXPECT_NEAR(d_point(1, 1), c / H, 1e-9);
+  EXPECT_NEAR(d_point(1, 2), 0.0, 1e-9);
+  EXPECT_TRUE(d_point.isApprox(-d_eo.leftCols<3>(), 1e-15));
+  // Behind the camera: no partials.
+  EXPECT_FALSE(TaylorMarkPartials(TaylorPartials::kCorrected, eo, Eigen::Vector3d(0, 0, 2 * H), c,
+                                  {0.0, 0.0}, &d_eo, &d_point, &f));
+}
+
+// Random oblique poses and points: the ground-point partials against central differences of the
+// seed's functions (TaylorFunctions, eqs. 7-8), for both variants (the misprint of eq. 21 does not
+// touch them); and the pose-at-a-time linearisation equal to the point-by-point one.
+TEST(TaylorBundlePartials, PointPartialsMatchCentralDifferences) {
+  std::mt19937_64 rng(12);
+  std::uniform_real_distribution<double> angle(-60.0 / kDegreesPerRadian, 60.0 / kDegreesPerRadian);
+  std::uniform_real_distribution<double> full(-kPi, kPi);
+  std::uniform_real_distribution<double> unit(-1.0, 1.0);
+  std::uniform_real_distribution<double> depth(100.0, 3000.0);
+  const double c = 150000.0;
+  double worst = 0.0;
+  int checked = 0;
+  for (int pose = 0; pose < 500; ++pose) {
+    ExteriorOrientation eo;
+    eo.set_center_in_ground({1000.0 * unit(rng), 1000.0 * unit(rng), 1000.0 * unit(rng)});
+    eo.set_angles_seed_rad({angle(rng), angle(rng), full(rng)});
+    const Eigen::Matrix3d R = RotationFromAngles(RotationConvention::kSeed, eo.angles_seed_rad());
+    for (int k = 0; k < 8; ++k) {
+      // A point imaged within +- 0.6 c, at a random depth in front of the camera.
+      const double D = depth(rng);
+      const Eigen::Vector3d ray(0.6 * unit(rng), 0.6 * unit(rng), -1.0);
+      const Eigen::Vector3d point = eo.center_in_ground() + R.transpose() * (D * ray.normalized());
+      const Eigen::Vector2d observed(100.0 * unit(rng), 100.0 * unit(rng));
+      for (const TaylorPartials partials :
+           {TaylorPartials::kCorrected, TaylorPartials::kAsPrinted}) {
+        Eigen::Matrix<double, 2, 6> d_eo;
+        Eigen::Matrix<double, 2, 3> d_point;
+        Eigen::Vector2d f;
+        ASSERT_TRUE(TaylorMarkPartials(partials, eo, point, c, observed, &d_eo, &d_point, &f));
+        const double h = 1e-4 * D;
+        for (int axis = 0; axis < 3; ++axis) {
+          Eigen::Vector3d plus = point, minus = point;
+          plus[axis] += h;
+          minus[axis] -= h;
+          double fu_p, fv_p, fu_m, fv_m;
+          ASSERT_TRUE(TaylorFunctions(eo, plus, c, observed, &fu_p, &fv_p));
+          ASSERT_TRUE(TaylorFunctions(eo, minus, c, observed, &fu_m, &fv_m));
+          const Eigen::Vector2d numeric((fu_p - fu_m) / (2 * h), (fv_p - fv_m) / (2 * h));
+          // Floor c / D: partials near zero are not divided by ~0.
+          for (int r = 0; r < 2; ++r) {
+            const double error =
+                std::abs(d_point(r, axis) - numeric[r]) / std::max(std::abs(numeric[r]), c / D);
+            worst = std::max(worst, error);
+            EXPECT_LT(error, kPartialRelativeTolerance);
+          }
+        }
+        // The pose-at-a-time linearisation is the point-by-point one, to the bit.
+        double row_u[6], row_v[6], fu, fv;
+        ASSERT_TRUE(
+            TaylorPartialsForPoint(partials, eo, point, c, observed, row_u, row_v, &fu, &fv));
+        for (int col = 0; col < 6; ++col) {
+          EXPECT_EQ(d_eo(0, col), row_u[col]);
+          EXPECT_EQ(d_eo(1, col), row_v[col]);
+        }
+        EXPECT_EQ(f[0], fu);
+        EXPECT_EQ(f[1], fv);
+        ++checked;
+      }
+    }
+  }
+  std::printf("  ground-point partials: %d checked, max relative error %.2e\n", checked, worst);
+}
+
+TEST(TaylorBundlePartials, AntennaPartialsMatchCentralDifferences) {
+  std::mt19937_64 rng(3);
+  std::uniform_real_distribution<double> angle(-1.2, 1.2);
+  const Eigen::Vector3d lever(0.12, -0.35, 0.8);
+  double worst = 0.0;
+  for (int trial = 0; trial < 200; ++trial) {
+    ExteriorOrientation eo;
+    eo.set_center_in_ground({10.0, -20.0, 300.0});
+    eo.set_angles_seed_rad({angle(rng), angle(rng), 2.5 * angle(rng)});
+    Eigen::Matrix3d d_angles;
+    const Eigen::Vector3d antenna = TaylorAntennaPosition(eo, lever, &d_angles);
+    const Eigen::Matrix3d R = RotationFromAngles(RotationConvention::kSeed, eo.angles_seed_rad());
+    EXPECT_LT((antenna - (eo.center_in_ground() + R.transpose() * lever)).norm(), 1e-12);
+    const double h = 1e-6;
+    for (int k = 0; k < 3; ++k) {
+      ExteriorOrientation plus = eo, minus = eo;
+      plus.parameters[3 + k] += h;
+      minus.parameters[3 + k] -= h;
+      const Eigen::Vector3d numeric = (TaylorAntennaPosition(plus, lever, nullptr) -
+                                       TaylorAntennaPosition(minus, lever, nullptr)) /
+                                      (2 * h);
+      const double error = (d_angles.col(k) - numeric).norm() / lever.norm();
+      worst = std::max(worst, error);
+      EXPECT_LT(error, kPartialRelativeTolerance);
+    }
+  }
+  std::printf("  lever-arm partials: max relative error %.2e\n", worst);
+}
+
+// ------------------------------------------------------------------ the reduced normal equations
+
+// The reduction (points eliminated 3 x 3 at a time, pairs accumulated into the sparse S, the sparse
+// LDL^T and the back-substitution) against the plain full normal equations of the same dense
+// Jacobian, on a small block with every kind of observation equation.
+void CheckReductionAgainstFullSystem(const FixtureBlock& data, const TaylorBundleOptions& options) {
+  TaylorBundleLinearSystem system;
+  const Status status =
+      LinearizeTaylorBundle(options, BundleAdjustmentConfig(), data.block, &system);
+  ASSERT_TRUE(status.ok()) << status.message();
+  const Eigen::MatrixXd& A = system.jacobian;
+  const Eigen::MatrixXd N = A.transpose() * A;
+  const Eigen::VectorXd g = A.transpose() * system.residual;
+  const int ne = static_cast<int>(system.reduced_matrix.rows());
+  ASSERT_GT(ne, 0);
+  ASSERT_EQ(N.rows(), ne + 3 * (N.rows() - ne) / 3);
+  // The Schur complement, densely: S = U - W V^-1 W^T, r = g_e - W V^-1 g_p.
+  const Eigen::MatrixXd U = N.topLeftCorner(ne, ne);
+  const Eigen::MatrixXd W = N.topRightCorner(ne, N.cols() - ne);
+  const Eigen::MatrixXd V = N.bottomRightCorner(N.cols() - ne, N.cols() - ne);
+  const Eigen::MatrixXd V_inverse_Wt = V.ldlt().solve(W.transpose());
+  Eigen::MatrixXd S = U - W * V_inverse_Wt;
+  Eigen::VectorXd r = g.head(ne) - W * V.ldlt().solve(g.tail(N.cols() - ne));
+  // Columns held fixed (the relative gauge) are zero in A: S gets 1 on their diagonal, as the
+  // solver does.
+  for (int k = 0; k < ne; ++k)
+    if (A.col(k).squaredNorm() == 0.0) S(k, k) = 1.0;
+  const double s_scale = S.cwiseAbs().maxCoeff();
+  const double s_error = (S - system.reduced_matrix).cwiseAbs().maxCoeff() / s_scale;
+  const double r_error = (r - system.reduced_rhs).cwiseAbs().maxCoeff() / r.cwiseAbs().maxCoeff();
+  // The full system solved directly (fixed columns: their correction is zero).
+  Eigen::MatrixXd N_fixed = N;
+  for (int k = 0; k < ne; ++k)
+    if (A.col(k).squaredNorm() == 0.0) N_fixed(k, k) = 1.0;
+  const Eigen::VectorXd d = N_fixed.ldlt().solve(g);
+  const double d_error = (d - system.correction).cwiseAbs().maxCoeff() / d.cwiseAbs().maxCoeff();
+  std::printf("  %d observations, %d unknowns (%d camera): S %.2e, r %.2e, correction %.2e\n",
+              static_cast<int>(A.rows()), static_cast<int>(A.cols()), ne, s_error, r_error,
+              d_error);
+  EXPECT_LT(s_error, kReductionRelativeTolerance);
+  EXPECT_LT(r_error, kReductionRelativeTolerance);
+  EXPECT_LT(d_error, kReductionRelativeTolerance);
+}
+
+TEST(TaylorBundleNormalEquations, ReducedEqualTheFullOnes) {
+  FixtureBlockOptions o;
+  o.strips = 2;
+  o.images_per_strip = 3;
+  o.tie_grid = 7;
+  FixtureBlock data = MakeFixtureBlock(o);
+  // Attitude priors too, and a lever arm on the camera positions.
+  for (size_t i = 0; i < data.block.images.size(); ++i) {
+    data.block.images[i].measured_angles_rad = data.true_eo[i].angles_seed_rad();
+    data.block.images[i].attitude_accuracy_rad = Eigen::Vector3d::Constant(1e-3);
+  }
+  TaylorBundleOptions options = TaylorOptions();
+  options.lever_arm_m = Eigen::Vector3d(0.1, 0.2, 0.3);
+  CheckReductionAgainstFullSystem(data, options);
+  // A relative block: the first image fixed, one coordinate of the second.
+  o.gnss = false;
+  o.control_at.clear();
+  o.check_at.clear();
+  CheckReductionAgainstFullSystem(MakeFixtureBlock(o), TaylorOptions());
+}
+
+// ------------------------------------------------------------------ the same minimum as Ceres
+
+struct Agreement {
+  double centre_m = 0.0;   // largest camera-centre difference (m)
+  double angle_rad = 0.0;  // largest rotation difference (rad)
+  double point_m = 0.0;    // largest tie/control point difference (m)
+  double check_m = 0.0;    // largest check-point error difference (m)
+  double sigma0_relative = 0.0;
+  double covariance_relative = 0.0;  // largest relative difference of a covariance diagonal entry
+  int taylor_iterations = 0, ceres_iterations = 0;
+  double taylor_seconds = 0.0, ceres_seconds = 0.0;
+};
+
+// Adjusts copies of the block with Ceres and with the Taylor solver; both must converge.
+Agreement CompareWithCeres(const FixtureBlock& data, const BundleAdjustmentOptions& ceres_options,
+                           const TaylorBundleOptions& taylor_options) {
+  Agreement agreement;
+  Block ceres_block = data.block, taylor_block = data.block;
+  BundleAdjustmentResult ceres;
+  TaylorBundleResult taylor;
+  const Status ceres_status =
+      BundleAdjust(ceres_options, BundleAdjustmentConfig(), &ceres_block, &ceres);
+  const Status taylor_status =
+      TaylorBundleAdjust(taylor_options, BundleAdjustmentConfig(), &taylor_block, &taylor);
+  EXPECT_TRUE(ceres_status.ok()) << ceres_status.message();
+  EXPECT_TRUE(taylor_status.ok()) << taylor_status.message();
+  EXPECT_TRUE(ceres.summary.IsSolutionUsable()) << ceres.summary.BriefReport();
+  EXPECT_TRUE(taylor.summary.IsSolutionUsable()) << taylor.summary.BriefReport();
+  if (!ceres.summary.IsSolutionUsable() || !taylor.summary.IsSolutionUsable()) return agreement;
+  EXPECT_EQ(taylor.summary.redundancy, ceres.summary.redundancy);
+  EXPECT_EQ(taylor.summary.num_marks, ceres.summary.num_marks);
+  EXPECT_EQ(taylor.summary.num_points, ceres.summary.num_points);
+  EXPECT_EQ(taylor.summary.datum, ceres.summary.datum);
+  EXPECT_EQ(taylor.adjustment.summary.termination, BundleTermination::kConverged);
+  EXPECT_EQ(taylor.adjustment.num_check_points, ceres.num_check_points);
+  for (size_t i = 0; i < data.block.images.size(); ++i) {
+    const ExteriorOrientation& a = *ceres_block.images[i].eo;
+    const ExteriorOrientation& b = *taylor_block.images[i].eo;
+    agreement.centre_m =
+        std::max(agreement.centre_m, (a.center_in_ground() - b.center_in_ground()).norm());
+    agreement.angle_rad = std::max(agreement.angle_rad, RotationDifferenceRad(a, b));
+    EXPECT_EQ(taylor.adjustment.images[i].num_marks, ceres.images[i].num_marks);
+    EXPECT_EQ(taylor.adjustment.images[i].has_covariance, ceres.images[i].has_covariance);
+    if (!ceres.images[i].has_covariance) continue;
+    const Vector6d c = ceres.images[i].covariance.diagonal();
+    const Vector6d t = taylor.adjustment.images[i].covariance.diagonal();
+    for (int k = 0; k < 6; ++k)
+      if (c[k] > 0.0)
+        agreement.covariance_relative =
+            std::max(agreement.covariance_relative, std::abs(t[k] - c[k]) / c[k]);
+  }
+  for (size_t p = 0; p < data.block.points.size(); ++p) {
+    if (ceres_block.points[p].position_m && taylor_block.points[p].position_m)
+      agreement.point_m =
+          std::max(agreement.point_m,
+                   (*ceres_block.points[p].position_m - *taylor_block.points[p].position_m).norm());
+    const auto& ce = ceres.points[p].error_m;
+    const auto& te = taylor.adjustment.points[p].error_m;
+    EXPECT_EQ(ce.has_value(), te.has_value());
+    if (ce && te && data.block.points[p].role == PointRole::kCheck)
+      agreement.check_m = std::max(agreement.check_m, (*ce - *te).norm());
+  }
+  const double s_c = ceres.summary.sigma0, s_t = taylor.summary.sigma0;
+  agreement.sigma0_relative = std::abs(s_t - s_c) / std::max(s_c, 1e-300);
+  agreement.taylor_iterations = taylor.summary.iterations;
+  agreement.ceres_iterations = ceres.summary.iterations;
+  agreement.taylor_seconds = taylor.summary.time_seconds;
+  agreement.ceres_seconds = ceres.summary.time_seconds;
+  return agreement;
+}
+
+struct Scenario {
+  const char* name;
+  FixtureBlockOptions block;
+  bool attitudes = false;  // attitude priors (0.01 deg) on every image
+  bool lever_arm = false;  // a GNSS lever arm
+  bool noise_free = false;
+};
+
+std::vector<Scenario> AgreementScenarios() {
+  std::vector<Scenario> scenarios;
+  scenarios.push_back({"nadir, noise-free", FixtureBlockOptions(), false, false, true});
+  for (unsigned seed = 1; seed <= 3; ++seed) {
+    Scenario s{"nadir, 0.5 px", FixtureBlockOptions()};
+    s.block.seed = seed;
+    scenarios.push_back(s);
+  }
+  {
+    Scenario s{"oblique 35 deg, 0.5 px", FixtureBlockOptions()};
+    s.block.base_angles_deg = Eigen::Vector3d(35.0, 0.0, 0.0);
+    s.block.tie_grid = 16;
+    scenarios.push_back(s);
+  }
+  {
+    Scenario s{"map coordinates (UTM-like offset)", FixtureBlockOptions()};
+    s.block.offset_m = Eigen::Vector3d(512345.0, 4123456.0, 250.0);
+    scenarios.push_back(s);
+  }
+  {
+    Scenario s{"attitude priors and lever arm", FixtureBlockOptions(), true, true};
+    scenarios.push_back(s);
+  }
+  {
+    Scenario s{"control points only", FixtureBlockOptions()};
+    s.block.gnss = false;
+    s.block.control_at = {{0, 0}, {1, 0}, {0, 1}, {1, 1}, {0.5, 0.5}};
+    s.block.check_at = {{0.25, 0.25}, {0.75, 0.75}};
+    scenarios.push_back(s);
+  }
+  {
+    Scenario s{"relative (COLMAP gauge)", FixtureBlockOptions()};
+    s.block.gnss = false;
+    s.block.control_at.clear();
+    s.block.check_at.clear();
+    scenarios.push_back(s);
+  }
+  {
+    Scenario s{"few tie points (4 x 4 grid)", FixtureBlockOptions()};
+    s.block.tie_grid = 4;
+    scenarios.push_back(s);
+  }
+  {
+    Scenario s{"larger block 5 x 8, 1 px", FixtureBlockOptions()};
+    s.block.strips = 5;
+    s.block.images_per_strip = 8;
+    s.block.tie_grid = 30;
+    s.block.noise_px = 1.0;
+    s.block.mark_accuracy_px = 1.0;
+    scenarios.push_back(s);
+  }
+  return scenarios;
+}
+
+TEST(TaylorBundleVsCeres, SameMinimumOnSimulatedBlocks) {
+  std::printf("  %-34s %10s %10s %10s %10s %9s %9s %6s\n", "block", "centre/size", "angle rad",
+              "points m", "check m", "sigma0 rel", "cov rel", "iter T/C");
+  for (const Scenario& scenario : AgreementScenarios()) {
+    SCOPED_TRACE(scenario.name);
+    FixtureBlock data =
+        MakeFixtureBlock(scenario.noise_free ? NoiseFree(scenario.block) : scenario.block);
+    BundleAdjustmentOptions ceres = CeresOptions();
+    TaylorBundleOptions taylor = TaylorOptions();
+    if (scenario.attitudes) {
+      std::mt19937_64 rng(7);
+      std::normal_distribution<double> gauss(0.0, 1.0);
+      const double sigma = 0.01 / kDegreesPerRadian;
+      for (size_t i = 0; i < data.block.images.size(); ++i) {
+        data.block.images[i].measured_angles_rad =
+            data.true_eo[i].angles_seed_rad() +
+            sigma * Eigen::Vector3d(gauss(rng), gauss(rng), gauss(rng));
+        data.block.images[i].attitude_accuracy_rad = Eigen::Vector3d::Constant(sigma);
+      }
+    }
+    if (scenario.lever_arm) {
+      // The GNSS antenna 0.3 m above the projection centre and a little aside; the measured
+      // positions are of the antenna.
+      const Eigen::Vector3d lever(0.05, -0.1, 0.3);
+      for (size_t i = 0; i < data.block.images.size(); ++i) {
+        Eigen::Matrix3d unused;
+        const Eigen::Vector3d offset = TaylorAntennaPosition(data.true_eo[i], lever, &unused) -
+                                       data.true_eo[i].center_in_ground();
+        *data.block.images[i].measured_center_m += offset;
+      }
+      ceres.lever_arm_m = lever;
+      taylor.lever_arm_m = lever;
+    }
+    const Agreement a = CompareWithCeres(data, ceres, taylor);
+    std::printf("  %-34s %10.2e %10.2e %10.2e %10.2e %9.2e %9.2e %3d/%d\n", scenario.name,
+                a.centre_m / data.size_m, a.angle_rad, a.point_m, a.check_m, a.sigma0_relative,
+                a.covariance_relative, a.taylor_iterations, a.ceres_iterations);
+    EXPECT_LT(a.centre_m, kRelativeAgreement * data.size_m);
+    EXPECT_LT(a.point_m, kRelativeAgreement * data.size_m);
+    EXPECT_LT(a.check_m, kRelativeAgreement * data.size_m);
+    EXPECT_LT(a.angle_rad, kRelativeAgreement);
+    if (!scenario.noise_free) {
+      EXPECT_LT(a.sigma0_relative, kSigma0RelativeAgreement);
+      EXPECT_LT(a.covariance_relative, kCovarianceRelativeAgreement);
+    }
+  }
+}
+
+TEST(TaylorBundle, NoiseFreeBlockReachesTheTruth) {
+  FixtureBlock data = MakeFixtureBlock(NoiseFree(FixtureBlockOptions()));
+  TaylorBundleResult result;
+  ASSERT_TRUE(
+      TaylorBundleAdjust(TaylorOptions(), BundleAdjustmentConfig(), &data.block, &result).ok());
+  ASSERT_TRUE(result.summary.IsSolutionUsable()) << result.summary.BriefReport();
+  for (size_t i = 0; i < data.true_eo.size(); ++i) {
+    EXPECT_LT(
+        (data.block.images[i].eo->center_in_ground() - data.true_eo[i].center_in_ground()).norm(),
+        1e-6);
+    EXPECT_LT(RotationDifferenceRad(*data.block.images[i].eo, data.true_eo[i]), 1e-9);
+  }
+  EXPECT_LT(result.adjustment.check_rmse_total_m, 1e-6);
+  // Quadratic convergence: from 2 m / 1 deg off, each correction at most about the square of the
+  // previous one (in metres, times a modest constant), and few of them.
+  EXPECT_LE(result.summary.iterations, 6);
+  for (size_t k = 1; k < result.history.size(); ++k) {
+    const double previous = result.history[k - 1].max_position_correction_m;
+    EXPECT_LT(result.history[k].max_position_correction_m, std::max(1e-6, previous * previous));
+  }
+}
+
+TEST(TaylorBundle, TiePointsWithoutStartAreLeftOutAndNamed) {
+  // As in BundleAdjust: a tie point without initial coordinates leaves with its marks and is
+  // named in the summary, instead of refusing the block.
+  FixtureBlock data = MakeFixtureBlock(FixtureBlockOptions());
+  std::vector<int> rays(data.block.points.size(), 0);
+  for (const BlockMark& mark : data.block.marks) ++rays[mark.point];
+  std::vector<std::string> removed;
+  for (size_t p = 0; p < data.block.points.size(); ++p) {
+    BlockPoint& point = data.block.points[p];
+    if (point.role != PointRole::kTie || rays[p] < 3 || removed.size() == 3) continue;
+    point.position_m.reset();
+    removed.push_back(point.id);
+  }
+  ASSERT_EQ(removed.size(), 3u);
+  TaylorBundleResult result;
+  ASSERT_TRUE(
+      TaylorBundleAdjust(TaylorOptions(), BundleAdjustmentConfig(), &data.block, &result).ok());
+  ASSERT_TRUE(result.summary.IsSolutionUsable()) << result.summary.BriefReport();
+  EXPECT_EQ(result.summary.tie_points_left_out, removed);
+  EXPECT_EQ(result.adjustment.summary.tie_points_left_out, removed);
+}
+
+// Independent of Ceres: the covariance the Taylor solver reports is honest, the mean NEES of the
+// adjusted camera centres against the truth in its chi-square band (as for BundleAdjust: 10 seeds
+// x 12 images; the band +- 0.6 is about 2.7 standard deviations of the mean of correlated values).
+TEST(TaylorBundle, CameraPositionCovarianceIsHonest) {
+  constexpr double kNeesBand = 0.6;
+  double sum = 0.0;
+  int count = 0;
+  for (unsigned seed = 1; seed <= 10; ++seed) {
+    FixtureBlockOptions o;
+    o.seed = 100 + seed;
+    FixtureBlock data = MakeFixtureBlock(o);
+    TaylorBundleResult result;
+    ASSERT_TRUE(
+        TaylorBundleAdjust(TaylorOptions(), BundleAdjustmentConfig(), &data.block, &result).ok());
+    ASSERT_TRUE(result.summary.IsSolutionUsable());
+    for (size_t i = 0; i < data.true_eo.size(); ++i) {
+      ASSERT_TRUE(result.adjustment.images[i].has_covariance);
+      const Eigen::Vector3d e =
+          data.block.images[i].eo->center_in_ground() - data.true_eo[i].center_in_ground();
+      const Eigen::Matrix3d C = result.adjustment.images[i].covariance.topLeftCorner<3, 3>();
+      sum += e.dot(C.ldlt().solve(e));
+      ++count;
+    }
+  }
+  std::printf("  mean NEES of the camera centres: %.3f (chi-square 3 dof: 3)\n", sum / count);
+  EXPECT_NEAR(sum / count, 3.0, kNeesBand);
+}
+
+// Rejection rounds: after a round, the marks whose whitened residual exceeds 4.5 max(1, sigma0)
+// leave (BundleAdjust's rule) and the block is adjusted again. Checked against Ceres without its
+// rejection rounds (whose second round fails on a blunder: see the report of issue 12): the marks
+// rejected after round 1 are those Ceres' one round puts beyond the limit, and the final
+// adjustment equals Ceres' on the block without the rejected marks.
+TEST(TaylorBundle, RejectionRoundsMatchCeresOnTheCleanedBlock) {
+  FixtureBlock data = MakeFixtureBlock(FixtureBlockOptions());
+  // A 25 px blunder on one tie mark of a point seen in several images.
+  int blunder = -1;
+  for (size_t m = 0; m < data.block.marks.size() && blunder < 0; ++m) {
+    const BlockMark& mark = data.block.marks[m];
+    if (data.block.points[mark.point].role == PointRole::kTie &&
+        data.block.marks_of_point[mark.point].size() >= 4)
+      blunder = static_cast<int>(m);
+  }
+  ASSERT_GE(blunder, 0);
+  BlockMark& mark = data.block.marks[blunder];
+  mark.measured += Eigen::Vector2d(25.0, -10.0);
+  ASSERT_TRUE(FilmFromPixel(data.block.cameras[0].table, mark.measured, PixelOrigin::kCorner,
+                            &mark.observation)
+                  .ok());
+  BundleAdjustmentOptions with_rejection = CeresOptions();
+  with_rejection.rejection_threshold = 4.5;
+  TaylorBundleOptions taylor_options;
+  ASSERT_TRUE(TaylorBundleOptionsFromBundleOptions(with_rejection, TaylorPartials::kCorrected,
+                                                   &taylor_options)
+                  .ok());
+  ASSERT_EQ(taylor_options.rejection_threshold, 4.5);
+  Block taylor_block = data.block;
+  TaylorBundleResult taylor;
+  ASSERT_TRUE(
+      TaylorBundleAdjust(taylor_options, BundleAdjustmentConfig(), &taylor_block, &taylor).ok());
+  ASSERT_TRUE(taylor.summary.IsSolutionUsable()) << taylor.summary.BriefReport();
+  std::printf("  %s\n", taylor.summary.BriefReport().c_str());
+
+  // Ceres, one round: the marks beyond the limit.
+  Block ceres_block = data.block;
+  BundleAdjustmentResult ceres;
+  ASSERT_TRUE(BundleAdjust(CeresOptions(), BundleAdjustmentConfig(), &ceres_block, &ceres).ok());
+  ASSERT_TRUE(ceres.summary.IsSolutionUsable());
+  const double limit = 4.5 * std::max(1.0, ceres.summary.sigma0);
+  // Per point, its worst mark beyond the limit (the others of the track recover once it is gone).
+  std::vector<int> expected, first_round;
+  std::map<int, std::pair<double, int>> worst_of_point;
+  for (size_t m = 0; m < data.block.marks.size(); ++m) {
+    const Eigen::Vector2d& residual_px = ceres.mark_residuals[m];
+    const double whitened = residual_px.norm() / *data.block.marks[m].accuracy;
+    if (!residual_px.allFinite() || !(whitened > limit)) continue;
+    auto& worst = worst_of_point[data.block.marks[m].point];
+    if (whitened > worst.first) worst = {whitened, static_cast<int>(m)};
+  }
+  for (const auto& [point, worst] : worst_of_point) expected.push_back(worst.second);
+  std::sort(expected.begin(), expected.end());
+  for (const BundleRejectedMark& rejected : taylor.adjustment.rejected_marks) {
+    if (rejected.round == 1) first_round.push_back(rejected.mark);
+    const BlockMark& m = data.block.marks[rejected.mark];
+    std::printf("  rejected after round %d: point %s in %s, %.1f sigma0%s\n", rejected.round,
+                data.block.points[m.point].id.c_str(), data.block.images[m.image].name.c_str(),
+                rejected.whitened_residual, rejected.mark == blunder ? " (the blunder)" : "");
+  }
+  std::sort(first_round.begin(), first_round.end());
+  EXPECT_EQ(first_round, expected);
+  EXPECT_NE(std::find(first_round.begin(), first_round.end(), blunder), first_round.end());
+  EXPECT_EQ(taylor.summary.num_rejected_marks,
+            static_cast<int>(taylor.adjustment.rejected_marks.size()));
+  EXPECT_TRUE(std::isnan(taylor.adjustment.mark_residuals[blunder][0]));
+
+  // Ceres on the block without every rejected mark: the same minimum.
+  Block cleaned = data.block;
+  std::vector<char> rejected(cleaned.marks.size(), 0);
+  for (const BundleRejectedMark& r : taylor.adjustment.rejected_marks) rejected[r.mark] = 1;
+  std::vector<BlockMark> kept;
+  for (size_t m = 0; m < cleaned.marks.size(); ++m)
+    if (!rejected[m]) kept.push_back(cleaned.marks[m]);
+  cleaned.marks = kept;
+  cleaned.BuildIndex();
+  BundleAdjustmentResult reference;
+  ASSERT_TRUE(BundleAdjust(CeresOptions(), BundleAdjustmentConfig(), &cleaned, &reference).ok());
+  ASSERT_TRUE(reference.summary.IsSolutionUsable());
+  EXPECT_EQ(reference.summary.redundancy, taylor.summary.redundancy);
+  EXPECT_NEAR(reference.summary.sigma0, taylor.summary.sigma0,
+              kSigma0RelativeAgreement * reference.summary.sigma0);
+  for (size_t i = 0; i < data.block.images.size(); ++i)
+    EXPECT_LT(
+        (cleaned.images[i].eo->center_in_ground() - taylor_block.images[i].eo->center_in_ground())
+            .norm(),
+        kRelativeAgreement * data.size_m);
+}
+
+// ------------------------------------------------------------------ honest failures
+
+// Nothing of a failed adjustment reaches the block: same orientations, no image marked adjusted.
+void ExpectUntouched(const Block& before, const Block& after, const TaylorBundleResult& result) {
+  for (size_t i = 0; i < before.images.size(); ++i)
+    EXPECT_EQ(before.images[i].eo->parameters, after.images[i].eo->parameters);
+  for (size_t p = 0; p < before.points.size(); ++p)
+    EXPECT_EQ(before.points[p].position_m.has_value(), after.points[p].position_m.has_value());
+  EXPECT_TRUE(result.adjustment.images.empty());
+  EXPECT_FALSE(result.summary.IsSolutionUsable());
+  EXPECT_FALSE(result.adjustment.summary.IsSolutionUsable());
+  EXPECT_FALSE(result.summary.message.empty());
+}
+
+TEST(TaylorBundle, FailsCleanly) {
+  const FixtureBlock data = MakeFixtureBlock(FixtureBlockOptions());
+  {
+    SCOPED_TRACE("an image starts below the ground: its points are behind it");
+    Block block = data.block;
+    block.images[5].eo->parameters[2] = -50.0;
+    const Block before = block;
+    TaylorBundleResult result;
+    ASSERT_TRUE(
+        TaylorBundleAdjust(TaylorOptions(), BundleAdjustmentConfig(), &block, &result).ok());
+    EXPECT_EQ(result.summary.termination_type, TaylorTerminationType::kFailure);
+    EXPECT_NE(result.summary.message.find("not in front of the camera"), std::string::npos)
+        << result.summary.message;
+    ExpectUntouched(before, block, result);
+  }
+  {
+    SCOPED_TRACE("one correction allowed: no convergence, no pose");
+    Block block = data.block;
+    TaylorBundleOptions options = TaylorOptions();
+    options.max_iterations = 1;
+    TaylorBundleResult result;
+    ASSERT_TRUE(TaylorBundleAdjust(options, BundleAdjustmentConfig(), &block, &result).ok());
+    EXPECT_EQ(result.summary.termination_type, TaylorTerminationType::kNoConvergence);
+    EXPECT_EQ(result.adjustment.summary.termination, BundleTermination::kNoConvergence);
+    ExpectUntouched(data.block, block, result);
+  }
+  {
+    SCOPED_TRACE("two control points and no GNSS: the rotation about their line is free");
+    FixtureBlockOptions o;
+    o.gnss = false;
+    o.control_at = {{0, 0}, {1, 1}};
+    FixtureBlock two = MakeFixtureBlock(o);
+    Block block = two.block;
+    TaylorBundleResult result;
+    ASSERT_TRUE(
+        TaylorBundleAdjust(TaylorOptions(), BundleAdjustmentConfig(), &block, &result).ok());
+    EXPECT_EQ(result.summary.termination_type, TaylorTerminationType::kFailure);
+    EXPECT_NE(result.summary.message.find("singular"), std::string::npos) << result.summary.message;
+    ExpectUntouched(two.block, block, result);
+  }
+  {
+    SCOPED_TRACE("far too poor a start: failure or no convergence, never a pose");
+    Block block = data.block;
+    for (BlockImage& image : block.images) image.eo->parameters[5] += 2.5;  // kappa 143 deg off
+    TaylorBundleResult result;
+    ASSERT_TRUE(
+        TaylorBundleAdjust(TaylorOptions(), BundleAdjustmentConfig(), &block, &result).ok());
+    std::printf("  kappa 143 deg off: %s\n", result.summary.BriefReport().c_str());
+    if (!result.summary.IsSolutionUsable()) {
+      Block before = data.block;
+      for (BlockImage& image : before.images) image.eo->parameters[5] += 2.5;
+      ExpectUntouched(before, block, result);
+    } else {
+      // If it converged it must be the truth (kappa is a full turn away from nothing).
+      for (size_t i = 0; i < block.images.size(); ++i)
+        EXPECT_LT(RotationDifferenceRad(*block.images[i].eo, data.true_eo[i]), 1e-3);
+    }
+  }
+}
+
+TEST(TaylorBundle, RefusesWhatItDoesNotDo) {
+  const FixtureBlock data = MakeFixtureBlock(FixtureBlockOptions());
+  {
+    Block block = data.block;
+    BundleAdjustmentConfig config;
+    ASSERT_TRUE(BundleAdjustmentConfig::FromCalibrationNames(block, {"FocalLength"}, &config).ok());
+    TaylorBundleResult result;
+    const Status status = TaylorBundleAdjust(TaylorOptions(), config, &block, &result);
+    ASSERT_FALSE(status.ok());
+    EXPECT_NE(status.message().find("self-calibration"), std::string::npos) << status.message();
+  }
+  {
+    Block block = data.block;
+    block.cameras[0].model = CameraModelType::kSimpleRadial;
+    block.cameras[0].params = {3000.0, 3000.0, 2000.0, 0.0};
+    TaylorBundleResult result;
+    const Status status =
+        TaylorBundleAdjust(TaylorOptions(), BundleAdjustmentConfig(), &block, &result);
+    ASSERT_FALSE(status.ok());
+    EXPECT_NE(status.message().find("SIMPLE_RADIAL"), std::string::npos) << status.message();
+  }
+  {
+    Block block = data.block;
+    block.images[2].eo.reset();
+    TaylorBundleResult result;
+    EXPECT_FALSE(
+        TaylorBundleAdjust(TaylorOptions(), BundleAdjustmentConfig(), &block, &result).ok());
+  }
+  {
+    TaylorBundleOptions options = TaylorOptions();
+    options.position_tolerance_m = 0.0;
+    std::string why;
+    EXPECT_FALSE(options.IsValid(&why));
+    options = TaylorOptions();
+    options.accuracies.tie_px = -1.0;
+    EXPECT_FALSE(options.IsValid(&why));
+    Block block = data.block;
+    TaylorBundleResult result;
+    EXPECT_FALSE(TaylorBundleAdjust(options, BundleAdjustmentConfig(), &block, &result).ok());
+  }
+  {
+    BundleAdjustmentOptions ceres;
+    ceres.tie_loss = BundleAdjustmentOptions::TieLoss::kHuber;
+    TaylorBundleOptions options;
+    EXPECT_FALSE(
+        TaylorBundleOptionsFromBundleOptions(ceres, TaylorPartials::kCorrected, &options).ok());
+    ceres = BundleAdjustmentOptions();
+    ceres.estimate_lever_arm = true;
+    EXPECT_FALSE(
+        TaylorBundleOptionsFromBundleOptions(ceres, TaylorPartials::kCorrected, &options).ok());
+    ceres = BundleAdjustmentOptions();
+    ceres.accuracies.camera_m = Eigen::Vector3d(1.0, 2.0, 3.0);
+    ASSERT_TRUE(
+        TaylorBundleOptionsFromBundleOptions(ceres, TaylorPartials::kAsPrinted, &options).ok());
+    EXPECT_EQ(options.partials, TaylorPartials::kAsPrinted);
+    EXPECT_EQ(options.accuracies.camera_m, ceres.accuracies.camera_m);
+  }
+}
+
+// ------------------------------------------------------------------ what the printed eq. 21 costs
+
+// One block adjusted with the corrected and with the as-printed partials from the same start.
+struct VariantPair {
+  Block corrected, printed;
+  TaylorBundleResult corrected_result, printed_result;
+};
+
+VariantPair AdjustBothVariants(const FixtureBlock& data) {
+  VariantPair pair;
+  pair.corrected = pair.printed = data.block;
+  EXPECT_TRUE(TaylorBundleAdjust(TaylorOptions(TaylorPartials::kCorrected),
+                                 BundleAdjustmentConfig(), &pair.corrected, &pair.corrected_result)
+                  .ok());
+  TaylorBundleOptions printed = TaylorOptions(TaylorPartials::kAsPrinted);
+  printed.max_iterations = 200;  // linear convergence: let it finish where it can
+  EXPECT_TRUE(
+      TaylorBundleAdjust(printed, BundleAdjustmentConfig(), &pair.printed, &pair.printed_result)
+          .ok());
+  return pair;
+}
+
+// Over realisations of one block design: how far the printed partials move the camera centres and
+// the check points from the least-squares solution, against that solution's own error.
+struct PrintedOffset {
+  int realisations = 0, printed_usable = 0;
+  double centre_shift_rms_m = 0.0, centre_shift_max_m = 0.0;    // |printed - corrected|
+  double centre_error_rms_m = 0.0;                              // |corrected - truth|
+  double check_shift_rms_m = 0.0;                               // |printed - corrected| check error
+  double check_error_rms_m = 0.0;                               // corrected check error
+  double iterations_corrected = 0.0, iterations_printed = 0.0;  // means
+  int iterations_printed_max = 0;
+  double sigma0_corrected = 0.0, sigma0_printed = 0.0;  // means
+  std::vector<double> per_image_shift_rms_m;
+};
+
+PrintedOffset MeasurePrintedOffset(FixtureBlockOptions o, int realisations) {
+  PrintedOffset out;
+  double centre_ssq = 0.0, error_ssq = 0.0, check_ssq = 0.0, check_error_ssq = 0.0;
+  int centre_count = 0, check_count = 0;
+  for (int r = 0; r < realisations; ++r) {
+    o.seed = 1000 + r;
+    const FixtureBlock data = MakeFixtureBlock(o);
+    const VariantPair pair = AdjustBothVariants(data);
+    EXPECT_TRUE(pair.corrected_result.summary.IsSolutionUsable())
+        << pair.corrected_result.summary.BriefReport();
+    ++out.realisations;
+    out.iterations_corrected += pair.corrected_result.summary.iterations;
+    out.sigma0_corrected += pair.corrected_result.summary.sigma0;
+    if (!pair.printed_result.summary.IsSolutionUsable()) continue;
+    ++out.printed_usable;
+    out.iterations_printed += pair.printed_result.summary.iterations;
+    out.iterations_printed_max =
+        std::max(out.iterations_printed_max, pair.printed_result.summary.iterations);
+    out.sigma0_printed += pair.printed_result.summary.sigma0;
+    // The corrected solution is the least-squares minimum: the printed fixed point cannot be lower.
+    EXPECT_GE(pair.printed_result.summary.final_cost,
+              pair.corrected_result.summary.final_cost * (1.0 - 1e-12));
+    out.per_image_shift_rms_m.resize(data.block.images.size(), 0.0);
+    for (size_t i = 0; i < data.block.images.size(); ++i) {
+      const Eigen::Vector3d c = pair.corrected.images[i].eo->center_in_ground();
+      const double shift2 = (pair.printed.images[i].eo->center_in_ground() - c).squaredNorm();
+      centre_ssq += shift2;
+      out.per_image_shift_rms_m[i] += shift2;
+      out.centre_shift_max_m = std::max(out.centre_shift_max_m, std::sqrt(shift2));
+      error_ssq += (c - data.true_eo[i].center_in_ground()).squaredNorm();
+      ++centre_count;
+    }
+    for (size_t p = 0; p < data.block.points.size(); ++p) {
+      const auto& ce = pair.corrected_result.adjustment.points[p].error_m;
+      const auto& pe = pair.printed_result.adjustment.points[p].error_m;
+      if (data.block.points[p].role != PointRole::kCheck || !ce || !pe) continue;
+      check_ssq += (*pe - *ce).squaredNorm();
+      check_error_ssq += ce->squaredNorm();
+      ++check_count;
+    }
+  }
+  const int n = std::max(1, out.printed_usable);
+  for (double& v : out.per_image_shift_rms_m) v = std::sqrt(v / n);
+  out.centre_shift_rms_m = std::sqrt(centre_ssq / std::max(1, centre_count));
+  out.centre_error_rms_m = std::sqrt(error_ssq / std::max(1, centre_count));
+  out.check_shift_rms_m = std::sqrt(check_ssq / std::max(1, check_count));
+  out.check_error_rms_m = std::sqrt(check_error_ssq / std::max(1, check_count));
+  out.iterations_corrected /= out.realisations;
+  out.iterations_printed /= n;
+  out.sigma0_corrected /= out.realisations;
+  out.sigma0_printed /= n;
+  return out;
+}
+
+void PrintOffset(const char* name, const PrintedOffset& m) {
+  std::printf(
+      "  %-28s printed usable %d/%d; centres moved RMS %.3f mm (max %.3f) vs their error "
+      "%.2f mm; check points moved RMS %.3f mm vs their error %.2f mm; iterations %.1f "
+      "corrected, %.1f printed (max %d); sigma0 %.5f -> %.5f\n",
+      name, m.printed_usable, m.realisations, 1e3 * m.centre_shift_rms_m,
+      1e3 * m.centre_shift_max_m, 1e3 * m.centre_error_rms_m, 1e3 * m.check_shift_rms_m,
+      1e3 * m.check_error_rms_m, m.iterations_corrected, m.iterations_printed,
+      m.iterations_printed_max, m.sigma0_corrected, m.sigma0_printed);
+}
+
+constexpr int kOffsetRealisations = 40;
+
+TEST(TaylorBundleAsPrinted, OffsetOfNadirAndObliqueBlocks) {
+  // Noise-free: the solution is a zero of F whatever the partials; only the iteration changes.
+  {
+    FixtureBlockOptions o = NoiseFree(FixtureBlockOptions());
+    o.base_angles_deg = Eigen::Vector3d(35.0, 0.0, 0.0);
+    o.tie_grid = 16;
+    const FixtureBlock data = MakeFixtureBlock(o);
+    const VariantPair pair = AdjustBothVariants(data);
+    ASSERT_TRUE(pair.printed_result.summary.IsSolutionUsable());
+    double shift = 0.0;
+    for (size_t i = 0; i < data.block.images.size(); ++i)
+      shift = std::max(shift, (pair.printed.images[i].eo->center_in_ground() -
+                               pair.corrected.images[i].eo->center_in_ground())
+                                  .norm());
+    std::printf("  oblique 35 deg, noise-free: printed %d iterations vs %d, centres %.2e m apart\n",
+                pair.printed_result.summary.iterations, pair.corrected_result.summary.iterations,
+                shift);
+    EXPECT_LT(shift, 1e-5);
+    EXPECT_GT(pair.printed_result.summary.iterations, pair.corrected_result.summary.iterations);
+  }
+  FixtureBlockOptions nadir;  // omega, phi, kappa within +- 2 deg
+  const PrintedOffset n = MeasurePrintedOffset(nadir, kOffsetRealisations);
+  PrintOffset("nadir (+-2 deg), 0.5 px", n);
+  FixtureBlockOptions oblique;
+  oblique.base_angles_deg = Eigen::Vector3d(35.0, 0.0, 0.0);
+  oblique.tie_grid = 16;
+  oblique.surveyed_in_footprints = true;
+  oblique.control_at = {{0.2, 0.2}, {0.8, 0.2}, {0.2, 0.8}, {0.8, 0.8}};
+  oblique.check_at = {{0.5, 0.5}, {0.35, 0.65}, {0.65, 0.35}};
+  const PrintedOffset b = MeasurePrintedOffset(oblique, kOffsetRealisations);
+  PrintOffset("oblique 35 deg, 0.5 px", b);
+  FixtureBlockOptions steep = oblique;
+  steep.base_angles_deg = Eigen::Vector3d(55.0, 0.0, 0.0);
+  const PrintedOffset s = MeasurePrintedOffset(steep, kOffsetRealisations);
+  PrintOffset("oblique 55 deg, 0.5 px", s);
+  // Nadir: harmless, the shift a small fraction of the error; oblique: a shift of the same order
+  // as a good part of the error, and many more iterations.
+  EXPECT_EQ(n.printed_usable, n.realisations);
+  EXPECT_LT(n.centre_shift_rms_m, 0.1 * n.centre_error_rms_m);
+  EXPECT_GT(b.centre_shift_rms_m, n.centre_shift_rms_m);
+  EXPECT_GT(b.iterations_printed, b.iterations_corrected + 2.0);
+  EXPECT_GT(b.sigma0_printed, b.sigma0_corrected);
+}
+
+// One image of a nadir block tilted 30 deg about the flight axis, every other image exactly
+// vertical (omega = 0: their eq. 21 is exact as printed). The printed partials are wrong for that
+// one image only; how far does the damage reach through the tie points?
+TEST(TaylorBundleAsPrinted, OneObliqueImagePropagatesThroughTiePoints) {
+  FixtureBlockOptions o;
+  o.strips = 3;
+  o.images_per_strip = 7;
+  o.forward_m = 40.0;  // 60 % forward overlap (100 m footprint)
+  o.side_m = 47.0;     // 30 % side overlap (67 m footprint)
+  o.tie_grid = 26;
+  o.attitude_jitter_deg = 0.0;
+  const int tilted = 1 * o.images_per_strip + 3;  // the middle of the middle strip
+  o.tilted = {{tilted, Eigen::Vector3d(30.0, 0.0, 0.0)}};
+  o.control_at = {{0, 0}, {1, 0}, {0, 1}, {1, 1}};
+  o.check_at = {{0.5, 0.5}, {0.5, 1.0}, {0.33, 0.75}, {0.67, 0.75}, {0.25, 0.25}, {0.75, 0.25}};
+  const PrintedOffset m = MeasurePrintedOffset(o, kOffsetRealisations);
+  PrintOffset("one image tilted 30 deg", m);
+  // The same block with that image vertical too: what the other images' own small omegas do.
+  FixtureBlockOptions level = o;
+  level.tilted.clear();
+  const PrintedOffset baseline = MeasurePrintedOffset(level, kOffsetRealisations);
+  PrintOffset("the same, no image tilted", baseline);
+  EXPECT_LT(baseline.centre_shift_rms_m, 0.1 * m.centre_shift_rms_m);
+  // Tie points the tilted image shares with each other image (realisation 0's block).
+  FixtureBlockOptions first = o;
+  first.seed = 1000;
+  const FixtureBlock data = MakeFixtureBlock(first);
+  std::vector<int> shared(data.block.images.size(), 0);
+  for (const int mt : data.block.marks_of_image[tilted]) {
+    const int p = data.block.marks[mt].point;
+    for (const int other : data.block.marks_of_point[p]) ++shared[data.block.marks[other].image];
+  }
+  std::printf(
+      "  centre moved RMS (mm) / tie points shared with the tilted image, by strip and image:\n");
+  for (int s = 0; s < o.strips; ++s) {
+    std::printf("   ");
+    for (int k = 0; k < o.images_per_strip; ++k) {
+      const int i = s * o.images_per_strip + k;
+      std::printf(" %7.3f/%-3d", 1e3 * m.per_image_shift_rms_m[i], i == tilted ? 0 : shared[i]);
+    }
+    std::printf("\n");
+  }
+  ASSERT_EQ(m.printed_usable, m.realisations);
+  // The tilted image moves most; images sharing no tie point with it move far less.
+  double unshared_max = 0.0;
+  for (size_t i = 0; i < shared.size(); ++i) {
+    if (static_cast<int>(i) == tilted) continue;
+    EXPECT_LT(m.per_image_shift_rms_m[i], m.per_image_shift_rms_m[tilted]);
+    if (shared[i] == 0) unshared_max = std::max(unshared_max, m.per_image_shift_rms_m[i]);
+  }
+  EXPECT_LT(unshared_max, 0.25 * m.per_image_shift_rms_m[tilted]);
+}
+
+// The --solver switch: each PoseSolver gives what the solver called directly gives.
+TEST(TaylorBundle, BundleAdjustWithSolverDispatches) {
+  const FixtureBlock data = MakeFixtureBlock(FixtureBlockOptions());
+  const BundleAdjustmentOptions options = CeresOptions();
+  for (const PoseSolver solver :
+       {PoseSolver::kCeres, PoseSolver::kTaylor, PoseSolver::kTaylorAsPrinted}) {
+    SCOPED_TRACE(PoseSolverName(solver));
+    Block via_switch = data.block, direct = data.block;
+    BundleAdjustmentResult result;
+    TaylorBundleResult taylor;
+    ASSERT_TRUE(BundleAdjustWithSolver(solver, options, BundleAdjustmentConfig(), &via_switch,
+                                       &result, &taylor)
+                    .ok());
+    ASSERT_TRUE(result.summary.IsSolutionUsable()) << result.summary.BriefReport();
+    if (solver == PoseSolver::kCeres) {
+      BundleAdjustmentResult expected;
+      ASSERT_TRUE(BundleAdjust(options, BundleAdjustmentConfig(), &direct, &expected).ok());
+      EXPECT_EQ(result.summary.iterations, expected.summary.iterations);
+    } else {
+      TaylorBundleOptions taylor_options = TaylorOptions(
+          solver == PoseSolver::kTaylor ? TaylorPartials::kCorrected : TaylorPartials::kAsPrinted);
+      TaylorBundleResult expected;
+      ASSERT_TRUE(
+          TaylorBundleAdjust(taylor_options, BundleAdjustmentConfig(), &direct, &expected).ok());
+      EXPECT_EQ(taylor.summary.partials, taylor_options.partials);
+      EXPECT_EQ(result.summary.iterations, expected.summary.iterations);
+      EXPECT_EQ(result.summary.sigma0, taylor.summary.sigma0);
+      EXPECT_EQ(result.images.size(), data.block.images.size());
+    }
+    for (size_t i = 0; i < data.block.images.size(); ++i)
+      EXPECT_EQ(via_switch.images[i].eo->parameters, direct.images[i].eo->parameters);
+  }
+  BundleAdjustmentOptions huber = options;
+  huber.tie_loss = BundleAdjustmentOptions::TieLoss::kHuber;
+  Block block = data.block;
+  BundleAdjustmentResult result;
+  EXPECT_FALSE(
+      BundleAdjustWithSolver(PoseSolver::kTaylor, huber, BundleAdjustmentConfig(), &block, &result)
+          .ok());
+}
+
+}  // namespace
+}  // namespace photopose

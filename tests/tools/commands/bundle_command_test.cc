@@ -1,0 +1,211 @@
+// End-to-end tests of `photopose bundle` (with `photopose simulate --scenario=block`): the
+// executable as a user runs it.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <filesystem>
+#include <map>
+#include <nlohmann/json.hpp>
+#include <set>
+#include <string>
+
+#include "core/block.h"
+#include "core/io/colmap.h"
+#include "core/rotation.h"
+#include "core/io/tables.h"
+#include "tests/tools/cli_test_util.h"
+
+namespace photopose {
+namespace {
+
+using testing::CliRun;
+using testing::ReadFile;
+using testing::RunCli;
+using testing::ScratchDir;
+using testing::SharedDataPath;
+
+std::map<std::string, FrameRecord> ReadFrames(const std::string& path) {
+  std::vector<FrameRecord> frames;
+  const Status status = ReadFramesTable(path, FramesTableOptions(), &frames);
+  EXPECT_TRUE(status.ok()) << status.message();
+  std::map<std::string, FrameRecord> by_raster;
+  for (FrameRecord& frame : frames) by_raster[frame.raster] = std::move(frame);
+  return by_raster;
+}
+
+// A small block: 3 lines of 6 images, tie blunders, written into dir/block.
+std::string SimulateBlock(const std::string& dir, const std::string& extra = "") {
+  const CliRun run = RunCli("simulate --scenario=block --lines=3 --images_per_line=6 --seed=7 "
+                            "--tie_blunders=4 --colmap --out_dir=" + dir + "/block " + extra,
+                            dir);
+  EXPECT_EQ(run.exit_code, 0) << run.err;
+  return dir + "/block";
+}
+
+std::string TableArgs(const std::string& block) {
+  return "--cameras=" + block + "/cameras.csv --points=" + block + "/points.csv --marks=" + block +
+         "/marks.csv --frames=" + block + "/frames.csv";
+}
+
+TEST(BundleCommand, SimulatedBlockAdjustsToItsTruthWithEveryBlunderFound) {
+  const std::string dir = ScratchDir();
+  const std::string block = SimulateBlock(dir);
+  const CliRun run = RunCli("bundle " + TableArgs(block) + " --out=" + dir + "/frames.csv" +
+                                " --out_points=" + dir + "/points.csv --report=" + dir +
+                                "/report.json --html=" + dir + "/report.html",
+                            dir);
+  ASSERT_EQ(run.exit_code, 0) << run.err;
+  // Progress on stderr, the closing summary with the files written on stdout.
+  EXPECT_NE(run.err.find("iteration"), std::string::npos) << run.err;
+  EXPECT_NE(run.out.find("wrote " + dir + "/frames.csv"), std::string::npos) << run.out;
+
+  // Every adjusted position within 5 of its own standard deviations (+1 mm) of the truth.
+  const auto solved = ReadFrames(dir + "/frames.csv");
+  const auto truth = ReadFrames(block + "/truth/frames.csv");
+  ASSERT_EQ(solved.size(), 18u);
+  for (const auto& [raster, frame] : solved) {
+    ASSERT_TRUE(frame.covariance.has_value()) << raster;
+    const Eigen::Vector3d error =
+        frame.eo.center_in_ground() - truth.at(raster).eo.center_in_ground();
+    for (int k = 0; k < 3; ++k) {
+      EXPECT_LT(std::abs(error[k]), 5.0 * std::sqrt((*frame.covariance)(k, k)) + 1e-3)
+          << raster << " axis " << k;
+    }
+  }
+
+  // The report: converged, the groups, and exactly the injected blunders rejected.
+  const nlohmann::json report = nlohmann::json::parse(ReadFile(dir + "/report.json"));
+  EXPECT_EQ(report["summary"]["termination"], "converged");
+  std::set<std::string> groups;
+  for (const auto& group : report["groups"]) groups.insert(group["name"].get<std::string>());
+  for (const char* name : {"tie_marks", "control_marks", "control_points", "camera_positions"})
+    EXPECT_EQ(groups.count(name), 1u) << name;
+  std::set<std::pair<std::string, std::string>> rejected, injected;
+  for (const auto& mark : report["rejected_marks"])
+    rejected.insert({mark["raster"].get<std::string>(), mark["point_id"].get<std::string>()});
+  const std::string blunders = ReadFile(block + "/truth/blunders.csv");
+  size_t pos = blunders.find('\n') + 1;
+  while (pos < blunders.size()) {
+    const size_t end = blunders.find('\n', pos);
+    const std::string line = blunders.substr(pos, end - pos);
+    pos = end + 1;
+    const size_t a = line.find(','), b = line.find(',', a + 1), c = line.find(',', b + 1);
+    injected.insert({line.substr(a + 1, b - a - 1), line.substr(b + 1, c - b - 1)});
+  }
+  EXPECT_EQ(injected.size(), 4u);
+  EXPECT_EQ(rejected, injected);
+  // The HTML page and the points table were written too.
+  EXPECT_NE(ReadFile(dir + "/report.html").find("<html"), std::string::npos);
+  EXPECT_NE(ReadFile(dir + "/points.csv").find("PointID"), std::string::npos);
+}
+
+TEST(BundleCommand, TaylorAndCeresSolversReachTheSamePoses) {
+  const std::string dir = ScratchDir();
+  // Without blunders and without rejection: the two minimise the same objective.
+  const std::string block = SimulateBlock(dir, "--tie_blunders=0");
+  for (const char* solver : {"ceres", "taylor"}) {
+    const CliRun run = RunCli("bundle " + TableArgs(block) + " --quiet --rejection_threshold=0 --solver=" + solver +
+                                  " --out=" + dir + "/" + solver + ".csv",
+                              dir);
+    ASSERT_EQ(run.exit_code, 0) << solver << ": " << run.err;
+  }
+  const auto ceres = ReadFrames(dir + "/ceres.csv");
+  const auto taylor = ReadFrames(dir + "/taylor.csv");
+  ASSERT_EQ(ceres.size(), taylor.size());
+  // The same minimum: 10 um (with Ceres' relative step tolerance at 1e-10 of the norm of all
+  // parameters, UTM coordinates made it stop 0.05 mm short here).
+  for (const auto& [raster, frame] : ceres) {
+    EXPECT_LT((frame.eo.center_in_ground() - taylor.at(raster).eo.center_in_ground()).norm(), 1e-5)
+        << raster;
+  }
+}
+
+TEST(BundleCommand, ColmapModelInColmapModelOut) {
+  const std::string dir = ScratchDir();
+  const std::string block = SimulateBlock(dir);
+  const CliRun run = RunCli("bundle --colmap_model=" + block + "/colmap --out_colmap=" + dir +
+                                "/adjusted --report=" + dir + "/report.json --quiet",
+                            dir);
+  ASSERT_EQ(run.exit_code, 0) << run.err;
+  Block in, out;
+  ASSERT_TRUE(ReadColmapModel(block + "/colmap", &in).ok());
+  const Status read = ReadColmapModel(dir + "/adjusted", &out);
+  ASSERT_TRUE(read.ok()) << read.message();
+  EXPECT_EQ(out.images.size(), in.images.size());
+  EXPECT_GE(out.marks.size(), in.marks.size() - 10);  // rejected marks are written unmatched
+  const nlohmann::json report = nlohmann::json::parse(ReadFile(dir + "/report.json"));
+  EXPECT_EQ(report["summary"]["termination"], "converged");
+  EXPECT_EQ(report["summary"]["datum"], "relative");
+}
+
+TEST(BundleCommand, BalProblemIsAdjusted) {
+  const std::string dir = ScratchDir();
+  const CliRun run =
+      RunCli("bundle --bal=" + SharedDataPath("bal_dubrovnik/dubrovnik-3-7-pre.txt") +
+                 " --rejection_threshold=0 --report=" + dir + "/report.json --quiet",
+             dir);
+  ASSERT_EQ(run.exit_code, 0) << run.err;
+  const nlohmann::json report = nlohmann::json::parse(ReadFile(dir + "/report.json"));
+  EXPECT_EQ(report["summary"]["termination"], "converged");
+  EXPECT_LT(report["summary"]["final_cost"].get<double>(),
+            0.5 * report["summary"]["initial_cost"].get<double>());
+}
+
+TEST(BundleCommand, AnOutputThatIsAnInputIsRefusedBeforeAnyWork) {
+  const std::string dir = ScratchDir();
+  const std::string block = SimulateBlock(dir);
+  const std::string marks_before = ReadFile(block + "/marks.csv");
+  const CliRun run = RunCli("bundle " + TableArgs(block) + " --out=" + block + "/marks.csv", dir);
+  EXPECT_EQ(run.exit_code, 2);
+  EXPECT_NE(run.err.find("--out=" + block + "/marks.csv is the input --marks"), std::string::npos)
+      << run.err;
+  EXPECT_EQ(ReadFile(block + "/marks.csv"), marks_before);
+}
+
+TEST(BundleCommand, AnAdjustmentThatDidNotConvergeWritesOnlyItsReport) {
+  const std::string dir = ScratchDir();
+  const std::string block = SimulateBlock(dir);
+  const CliRun run = RunCli("bundle " + TableArgs(block) + " --max_iterations=1 --quiet --out=" +
+                                dir + "/frames.csv --report=" + dir + "/report.json",
+                            dir);
+  EXPECT_EQ(run.exit_code, 1) << run.err;
+  EXPECT_NE(run.err.find("not adjusted"), std::string::npos) << run.err;
+  EXPECT_FALSE(std::filesystem::exists(dir + "/frames.csv"));
+  const nlohmann::json report = nlohmann::json::parse(ReadFile(dir + "/report.json"));
+  EXPECT_NE(report["summary"]["termination"], "converged");
+}
+
+TEST(BundleCommand, ImagesWithoutInitialValuesAreResectedOrNamed) {
+  const std::string dir = ScratchDir();
+  const std::string block = SimulateBlock(dir);
+  // Without the frames table every image is resected from the control points it sees, and the
+  // images that see too few are oriented from the tie points intersected so far.
+  const CliRun run = RunCli("bundle --cameras=" + block + "/cameras.csv --points=" + block +
+                                "/points.csv --marks=" + block + "/marks.csv --out=" + dir +
+                                "/frames.csv --report=" + dir + "/report.json",
+                            dir);
+  ASSERT_EQ(run.exit_code, 0) << run.err;
+  EXPECT_NE(run.err.find("resected"), std::string::npos) << run.err;
+  const auto solved = ReadFrames(dir + "/frames.csv");
+  const auto truth = ReadFrames(block + "/truth/frames.csv");
+  ASSERT_EQ(solved.size(), truth.size());
+  for (const auto& [raster, frame] : solved) {
+    EXPECT_LT((frame.eo.center_in_ground() - truth.at(raster).eo.center_in_ground()).norm(), 0.1)
+        << raster;
+  }
+}
+
+TEST(BundleCommand, ABlockWithNothingToOrientItFromIsRefusedWithTheReason) {
+  const std::string dir = ScratchDir();
+  const std::string block = SimulateBlock(dir);
+  // No control points and no frames: no image can be oriented, nothing is written.
+  const CliRun run = RunCli("bundle --cameras=" + block + "/cameras.csv --marks=" + block +
+                                "/marks.csv --quiet --out=" + dir + "/frames.csv",
+                            dir);
+  EXPECT_EQ(run.exit_code, 1) << run.out << run.err;
+  EXPECT_NE(run.err.find("not oriented"), std::string::npos) << run.err;
+  EXPECT_FALSE(std::filesystem::exists(dir + "/frames.csv"));
+}
+
+}  // namespace
+}  // namespace photopose

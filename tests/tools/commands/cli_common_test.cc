@@ -1,0 +1,106 @@
+// The shared flag handling of the subcommands: ranges, flag files, help.
+#include "tools/commands/cli_common.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <limits>
+#include <sstream>
+#include <string>
+
+#include "tests/tools/cli_test_util.h"
+
+namespace photopose::cli {
+namespace {
+
+using testing::CliRun;
+using testing::RunCli;
+using testing::ScratchDir;
+using testing::SourcePath;
+using testing::WriteFile;
+
+TEST(FlagRangeTest, StatesItsEndsAndRefusesWhatLiesOutside) {
+  const FlagRange threshold("ransac_threshold", 0.0, 1000.0, true, false, "px");
+  EXPECT_EQ(threshold.Text(), "(0, 1000] px");
+  EXPECT_FALSE(threshold.Contains(0.0));
+  EXPECT_TRUE(threshold.Contains(1e-300));
+  EXPECT_TRUE(threshold.Contains(1000.0));
+  EXPECT_FALSE(threshold.Contains(std::numeric_limits<double>::infinity()));
+  EXPECT_FALSE(threshold.Contains(std::nan("")));
+  EXPECT_EQ(threshold.Refusal("1e9"), "--ransac_threshold=1e9 is outside (0, 1000] px");
+  EXPECT_EQ(threshold.Refusal("inf"),
+            "--ransac_threshold=inf is not a finite number; the range is (0, 1000] px");
+  const FlagRange fraction("outlier_fraction", 0.0, 1.0, false, true);
+  EXPECT_EQ(fraction.Text(), "[0, 1)");
+  EXPECT_TRUE(fraction.Contains(0.0));
+  EXPECT_FALSE(fraction.Contains(1.0));
+}
+
+// Every numeric flag of every command states a finite range in its --help (and is checked
+// against it before any work, see bad_input_catalogue_test.cc).
+TEST(CliCommonTest, EveryNumericFlagOfEveryCommandHasARange) {
+  const std::string dir = ScratchDir();
+  for (const std::string command : {"resect", "simulate", "compare"}) {
+    const CliRun run = RunCli(command + " --help", dir);
+    ASSERT_EQ(run.exit_code, 0) << run.err;
+    std::istringstream help(run.out);
+    int numeric = 0;
+    for (std::string line; std::getline(help, line);) {
+      if (line.rfind("  --", 0) != 0) continue;
+      std::string description;
+      std::getline(help, description);
+      const bool is_numeric = line.find("(int32,") != std::string::npos ||
+                              line.find("(uint64,") != std::string::npos ||
+                              line.find("(double,") != std::string::npos;
+      if (!is_numeric) continue;
+      ++numeric;
+      EXPECT_NE(description.find(" Range: "), std::string::npos) << command << ": " << line;
+    }
+    EXPECT_GE(numeric, 5) << command;
+  }
+}
+
+TEST(CliCommonTest, FlagFilesTakeBothFormsCommentsAndNestedFiles) {
+  const std::string dir = ScratchDir();
+  WriteFile(dir + "/inputs.flags", "# the example\n--cameras " +
+                                       SourcePath("examples/cameras.csv") +
+                                       "\n\n   --points=" + SourcePath("examples/points.csv") +
+                                       "  \r\n--marks=" + SourcePath("examples/marks.csv") + "\n");
+  WriteFile(dir + "/run.flags", "--flagfile=" + dir + "/inputs.flags\n--out " + dir +
+                                    "/frames.csv\n--norandom_flag_that_is_not_there\n");
+  CliRun run = RunCli("resect --flagfile=" + dir + "/run.flags", dir);
+  EXPECT_EQ(run.exit_code, 2);
+  EXPECT_EQ(run.err, "photopose resect: " + dir +
+                         "/run.flags:3: unknown flag --norandom_flag_that_is_not_there (see "
+                         "photopose resect --help)\n");
+  WriteFile(dir + "/run.flags", "--flagfile=" + dir + "/inputs.flags\n--out " + dir +
+                                    "/frames.csv\n--nopixel_center_origin\n");
+  run = RunCli("resect --flagfile=" + dir + "/run.flags", dir);
+  EXPECT_EQ(run.exit_code, 0) << run.err;
+  // The same flag file twice in a row is no cycle.
+  run = RunCli("resect --flagfile=" + dir + "/inputs.flags --flagfile=" + dir +
+                   "/inputs.flags --out=" + dir + "/frames.csv",
+               dir);
+  EXPECT_EQ(run.exit_code, 0) << run.err;
+  // A flag file is an input: no output may overwrite it.
+  run = RunCli("resect --flagfile=" + dir + "/inputs.flags --out=" + dir + "/inputs.flags", dir);
+  EXPECT_EQ(run.exit_code, 2);
+  EXPECT_EQ(run.err, "photopose resect: --out=" + dir +
+                         "/inputs.flags is the input --flagfile=" + dir +
+                         "/inputs.flags; photopose never writes over an input: choose "
+                         "another output file\n");
+}
+
+TEST(CliCommonTest, LoggingFlagsOfTheLibrariesAreNotTheCommandsFlags) {
+  // glog's flags would write log files outside the run's outputs; gflags' would read flags from
+  // the environment. Neither is a photopose flag.
+  const std::string dir = ScratchDir();
+  for (const std::string flag : {"--logtostderr=false", "--log_dir=/tmp", "--fromenv=cameras"}) {
+    const CliRun run = RunCli("simulate --out_dir=" + dir + "/sim " + flag, dir);
+    EXPECT_EQ(run.exit_code, 2) << flag;
+    EXPECT_EQ(run.err.rfind("photopose simulate: unknown flag --", 0), 0u) << run.err;
+  }
+}
+
+}  // namespace
+}  // namespace photopose::cli

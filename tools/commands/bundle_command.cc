@@ -1,0 +1,425 @@
+// photopose bundle: the weighted bundle adjustment of a block (solvers/bundle/bundle_adjustment.h).
+#include <gflags/gflags.h>
+
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <iostream>
+
+#include "core/io/bal.h"
+#include "core/block.h"
+#include "core/io/colmap.h"
+#include "core/io/csv.h"
+#include "core/io/output_files.h"
+#include "core/io/tables.h"
+#include "solvers/bundle/block_initialization.h"
+#include "solvers/bundle/bundle_adjustment.h"
+#include "solvers/bundle/taylor_bundle.h"
+#include "tools/report/bundle_report.h"
+#include "tools/commands/cli_common.h"
+#include "tools/commands/commands.h"
+
+DEFINE_string(bundle_cameras, "", "Camera table (CSV, ArcGIS frame-camera schema): the interior orientation of every CameraID.");
+DEFINE_string(bundle_marks, "", "Image marks (CSV: Raster, PointID, Column and Row in pixels or FilmX and FilmY in micrometres, optional Accuracy in the mark's own unit and CameraID). A point with marks but no row in --points is a tie point.");
+DEFINE_string(bundle_points, "", "Ground points (CSV: PointID, X, Y, Z in metres, optional AccuracyX/Y/Z in metres and Role control|check|tie). Optional for a block held by camera positions.");
+DEFINE_string(bundle_frames, "", "Frames table: PerspectiveX/Y/Z are the measured camera positions (priors with --camera_accuracy or per-row AccuracyX/Y/Z, otherwise initial values only) and Omega/Phi/Kappa initial values (priors with --attitude_accuracy or per-row AccuracyOmega/Phi/Kappa). Images without a row are oriented by resection.");
+DEFINE_string(bundle_colmap_model, "", "A COLMAP text model folder (cameras.txt, images.txt, points3D.txt) to adjust instead of the tables.");
+DEFINE_string(bundle_bal, "", "A BAL problem file to adjust instead of the tables.");
+DEFINE_string(bundle_out, "", "Output frames table (CSV) of the adjusted images with SigmaX..SigmaKappa, Sigma0, NumObservations and RmsResidual.");
+DEFINE_string(bundle_out_points, "", "Output points table (CSV): PointID, X, Y, Z, SigmaX/Y/Z, Role, NumObservations, ErrorX/Y/Z.");
+DEFINE_string(bundle_out_cameras, "", "Output camera table (CSV) with the calibrated interior orientation (frame cameras).");
+DEFINE_string(bundle_out_colmap, "", "Output COLMAP text model folder of the adjusted block.");
+DEFINE_string(bundle_report, "", "JSON report: summary, groups with their over-fitting verdict, control and check points, images, calibration, diagnostics, options (docs/formats.md).");
+DEFINE_string(bundle_html, "", "Self-contained HTML page of the adjustment: verdicts, plan view, residual histograms, tables.");
+DEFINE_string(bundle_rotation, "rxryrz", "Angle convention of the frames tables read and written: rxryrz (R = Rx(omega) Ry(phi) Rz(kappa) maps ground to camera; 'seed' is an alias), opk or pok (see docs/conventions.md).");
+DEFINE_string(bundle_solver, "ceres", "Block solver: ceres (Levenberg-Marquardt on the cost functions), taylor (the seed's Taylor linearisation, hand-written Gauss-Newton) or taylor_as_printed (with the partial derivatives as printed in the seed).");
+DEFINE_double(bundle_tie_accuracy, 1.0, "Accuracy (one sigma) of tie marks without an Accuracy value, in pixels.");
+DEFINE_double(bundle_marker_projection_accuracy, 0.5, "Accuracy (one sigma) of control and check marks without an Accuracy value, in pixels.");
+DEFINE_double(bundle_film_tie_accuracy, 5.0, "Accuracy of tie marks in film coordinates without an Accuracy value when the camera has no pixel size, in micrometres.");
+DEFINE_double(bundle_film_marker_projection_accuracy, 2.5, "Accuracy of control marks in film coordinates without an Accuracy value when the camera has no pixel size, in micrometres.");
+DEFINE_double(bundle_marker_accuracy, 0.005, "Accuracy (one sigma, per axis) of control point coordinates without AccuracyX/Y/Z, in metres.");
+DEFINE_string(bundle_camera_accuracy, "", "Accuracy of the measured camera positions without per-row AccuracyX/Y/Z, in metres: one value or X,Y,Z. Empty: 10 m (Metashape's default) when --frames is given.");
+DEFINE_double(bundle_attitude_accuracy, 0.0, "Accuracy of the measured attitudes without per-row accuracies, in degrees per angle; 0: no attitude prior.");
+DEFINE_string(bundle_lever_arm, "", "GNSS antenna offset from the projection centre in the camera frame (x right, y up, z towards the viewer), in metres: X,Y,Z.");
+DEFINE_bool(bundle_estimate_lever_arm, false, "Estimate the lever arm (starting from --lever_arm or zero).");
+DEFINE_string(bundle_calibrate, "", "Self-calibration: a comma list of FocalLength, PrincipalX, PrincipalY, K0, K1, K2, K3, P1, P2, Affinity, Skew (for COLMAP models: f, cx, cy, k1, k2, p1, p2); the rest held constant.");
+DEFINE_string(bundle_loss, "none", "Robust loss on tie marks: none, huber, cauchy or softl1.");
+DEFINE_double(bundle_loss_scale, 3.0, "Scale of the robust loss on tie marks, in pixels.");
+DEFINE_string(bundle_jacobian, "analytic", "Derivative path of the collinearity cost: analytic or autodiff.");
+DEFINE_string(bundle_linear_solver, "sparse_schur", "Linear solver: sparse_schur (SuiteSparse), dense_schur, iterative_schur_jacobi or iterative_schur_cluster_jacobi.");
+DEFINE_int32(bundle_max_iterations, 100, "Largest number of Levenberg-Marquardt iterations per adjustment round.");
+DEFINE_double(bundle_rejection_threshold, 4.5, "Marks whose normalized residual exceeds this are rejected and the block adjusted again; 0 keeps every mark.");
+DEFINE_int32(bundle_max_rejection_rounds, 3, "Largest number of rejection rounds.");
+DEFINE_bool(bundle_estimate_accuracies, false, "Estimate every group's accuracy from the data (variance component estimation) and adjust with the estimates.");
+DEFINE_bool(bundle_snoop, false, "Data snooping: remove the most significant rejected observation (marks, control points, camera positions), adjust again, repeat.");
+DEFINE_double(bundle_alpha, 0.001, "Significance level of the w-test per observation (two-sided).");
+DEFINE_bool(bundle_cross_validate, false, "Leave each control point out in turn and report its error as a check point.");
+DEFINE_int32(bundle_max_covariance_parameters, 3000, "Covariances, redundancy numbers and diagnostics are computed when the reduced camera system has at most this many parameters (3000: blocks of up to 500 images; they take a dense inverse, which on 1000 images outlasts the adjustment itself by minutes).");
+DEFINE_string(bundle_relative_gauge, "free", "Relative blocks (no control points, no camera positions): free solves without a gauge and then moves the result into COLMAP's gauge (the first image as given, one coordinate of the second), the same minimum in far fewer iterations; fixed holds COLMAP's gauge from the start.");
+DEFINE_int32(bundle_threads, 0, "Threads of the linear algebra and of the cross-validation; 0 uses all cores.");
+DEFINE_bool(bundle_quiet, false, "No progress lines on stderr.");
+DEFINE_bool(bundle_pixel_center_origin, false, "Read Column/Row with (0,0) at the centre of the first pixel instead of the top-left corner of the image.");
+
+namespace photopose::cli {
+namespace {
+
+constexpr char kUsage[] =
+    "photopose bundle: the weighted bundle adjustment of a block of images.\n\n"
+    "Usage: photopose bundle --cameras=C.csv --marks=M.csv [--points=P.csv] [--frames=F.csv]\n"
+    "                        --out=frames.csv [--out_points=P.csv] [--out_cameras=C.csv]\n"
+    "                        [--report=report.json] [--html=report.html] [--rotation=rxryrz|opk|pok]\n"
+    "                        [--tie_accuracy=PX] [--marker_accuracy=M] [--marker_projection_accuracy=PX]\n"
+    "                        [--camera_accuracy=M or X,Y,Z] [--attitude_accuracy=DEG]\n"
+    "                        [--lever_arm=X,Y,Z] [--calibrate=LIST] [--estimate_accuracies]\n"
+    "                        [--snoop] [--cross_validate] [--threads=N] [--quiet]\n"
+    "   or: photopose bundle --colmap_model=DIR [--out_colmap=DIR] [--calibrate=LIST] ...\n"
+    "   or: photopose bundle --bal=problem.txt ...\n\n"
+    "Minimises reprojection errors^2 / tie accuracy^2 + control residuals^2 / marker accuracy^2 +\n"
+    "camera position residuals^2 / camera accuracy^2 (Metashape's reference settings) and reports,\n"
+    "per group, whether the block bends to its priors (over-fitting). Images without initial values\n"
+    "are oriented by resection and the tie points triangulated first. Exit status: 0 converged,\n"
+    "1 not converged or some image could not be oriented (each named), 2 bad input or usage.\n";
+
+const CommandFlags& BundleFlags() {
+  static const CommandFlags* const kFlags = new CommandFlags{
+      "bundle",
+      "bundle_command",
+      "bundle_",
+      {},
+      {{"tie_accuracy", 0.0, 1000.0, true, false, "px"},
+       {"marker_projection_accuracy", 0.0, 1000.0, true, false, "px"},
+       {"film_tie_accuracy", 0.0, 1e5, true, false, "um"},
+       {"film_marker_projection_accuracy", 0.0, 1e5, true, false, "um"},
+       {"marker_accuracy", 0.0, 1e6, true, false, "m"},
+       {"attitude_accuracy", 0.0, 180.0, false, false, "degrees"},
+       {"loss_scale", 0.0, 1000.0, true, false, "px"},
+       {"max_iterations", 1.0, 100000.0},
+       {"rejection_threshold", 0.0, 1000.0},
+       {"max_rejection_rounds", 0.0, 100.0},
+       {"alpha", 0.0, 0.5, true, true},
+       {"max_covariance_parameters", 0.0, 100000.0},
+       {"threads", 0.0, 1024.0}}};
+  return *kFlags;
+}
+
+// "a" or "a,b,c" -> three finite numbers.
+bool ParseTriple(const std::string& text, bool allow_one, Eigen::Vector3d* value) {
+  std::vector<double> numbers;
+  for (const std::string& item : SplitCommaList(text)) {
+    double number;
+    std::string why;
+    if (!ParseFiniteNumber(item, &number, &why)) return false;
+    numbers.push_back(number);
+  }
+  if (numbers.size() == 3) {
+    *value = Eigen::Vector3d(numbers[0], numbers[1], numbers[2]);
+    return true;
+  }
+  if (allow_one && numbers.size() == 1) {
+    *value = Eigen::Vector3d::Constant(numbers[0]);
+    return true;
+  }
+  return false;
+}
+
+}  // namespace
+
+int RunBundle(int argc, char** argv) {
+  const char* const kCommand = "bundle";
+  ParsedFlags parsed;
+  if (!ParseFlags(argc, argv, BundleFlags(), &parsed)) return kExitBadInput;
+  if (parsed.help) {
+    PrintHelp(kUsage, BundleFlags());
+    return kExitSuccess;
+  }
+  std::string command_line = "photopose bundle";
+  for (int i = 0; i < argc; ++i) command_line += std::string(" ") + argv[i];
+
+  // Which input.
+  const int sources = (!FLAGS_bundle_colmap_model.empty()) + (!FLAGS_bundle_bal.empty()) +
+                      (!FLAGS_bundle_marks.empty() || !FLAGS_bundle_cameras.empty());
+  if (sources != 1)
+    return BadInput(kCommand, "give the tables (--cameras and --marks), --colmap_model or --bal: one of them");
+  const bool tables = FLAGS_bundle_colmap_model.empty() && FLAGS_bundle_bal.empty();
+  if (tables && (FLAGS_bundle_cameras.empty() || FLAGS_bundle_marks.empty()))
+    return BadInput(kCommand, "--cameras and --marks are both required with the tables");
+  if (FLAGS_bundle_out.empty() && FLAGS_bundle_out_colmap.empty() && FLAGS_bundle_report.empty())
+    return BadInput(kCommand, "nothing to write: give --out, --out_colmap or --report");
+  if (!FLAGS_bundle_out_cameras.empty() && !tables)
+    return BadInput(kCommand, "--out_cameras writes a camera table of frame cameras; with --colmap_model or --bal use --out_colmap");
+
+  BundleReportContext context;
+  context.command_line = command_line;
+  context.input_kind = tables ? "tables" : !FLAGS_bundle_colmap_model.empty() ? "colmap" : "bal";
+  const auto rotation = ParseRotationConvention(FLAGS_bundle_rotation);
+  if (!rotation)
+    return BadInput(kCommand, std::string("--rotation must be ") + RotationConventionChoices() +
+                                  ", not '" + FLAGS_bundle_rotation + "'");
+  context.rotation = *rotation;
+
+  BundleAdjustmentOptions options;
+  BundleAccuracies& acc = options.accuracies;
+  acc.tie_px = FLAGS_bundle_tie_accuracy;
+  acc.marker_projection_px = FLAGS_bundle_marker_projection_accuracy;
+  acc.tie_film_um = FLAGS_bundle_film_tie_accuracy;
+  acc.marker_projection_film_um = FLAGS_bundle_film_marker_projection_accuracy;
+  acc.marker_m = FLAGS_bundle_marker_accuracy;
+  if (!FLAGS_bundle_camera_accuracy.empty()) {
+    if (!ParseTriple(FLAGS_bundle_camera_accuracy, true, &acc.camera_m) || !(acc.camera_m.minCoeff() > 0.0))
+      return BadInput(kCommand, "--camera_accuracy must be one positive number or three (X,Y,Z) in metres, not '" + FLAGS_bundle_camera_accuracy + "'");
+  }
+  if (FLAGS_bundle_attitude_accuracy > 0.0) acc.attitude_deg = FLAGS_bundle_attitude_accuracy;
+  if (!FLAGS_bundle_lever_arm.empty()) {
+    Eigen::Vector3d lever;
+    if (!ParseTriple(FLAGS_bundle_lever_arm, false, &lever) || lever.cwiseAbs().maxCoeff() > 100.0)
+      return BadInput(kCommand, "--lever_arm must be three numbers X,Y,Z in metres (at most 100 m each), not '" + FLAGS_bundle_lever_arm + "'");
+    options.lever_arm_m = lever;
+  }
+  options.estimate_lever_arm = FLAGS_bundle_estimate_lever_arm;
+  const auto jacobian = ParseJacobianType(FLAGS_bundle_jacobian);
+  if (!jacobian) return BadInput(kCommand, "--jacobian must be analytic or autodiff, not '" + FLAGS_bundle_jacobian + "'");
+  options.jacobian = *jacobian;
+  const auto linear_solver = ParseBundleLinearSolver(FLAGS_bundle_linear_solver);
+  if (!linear_solver)
+    return BadInput(kCommand, "--linear_solver must be sparse_schur, dense_schur, iterative_schur_jacobi or iterative_schur_cluster_jacobi, not '" + FLAGS_bundle_linear_solver + "'");
+  options.linear_solver = *linear_solver;
+  if (FLAGS_bundle_loss == "none") {
+    options.tie_loss = BundleAdjustmentOptions::TieLoss::kNone;
+  } else if (FLAGS_bundle_loss == "huber") {
+    options.tie_loss = BundleAdjustmentOptions::TieLoss::kHuber;
+  } else if (FLAGS_bundle_loss == "cauchy") {
+    options.tie_loss = BundleAdjustmentOptions::TieLoss::kCauchy;
+  } else if (FLAGS_bundle_loss == "softl1") {
+    options.tie_loss = BundleAdjustmentOptions::TieLoss::kSoftL1;
+  } else {
+    return BadInput(kCommand, "--loss must be none, huber, cauchy or softl1, not '" + FLAGS_bundle_loss + "'");
+  }
+  options.tie_loss_scale_sigmas = FLAGS_bundle_loss_scale / FLAGS_bundle_tie_accuracy;
+  options.max_iterations = FLAGS_bundle_max_iterations;
+  options.rejection_threshold = FLAGS_bundle_rejection_threshold;
+  options.max_rejection_rounds = FLAGS_bundle_max_rejection_rounds;
+  options.estimate_accuracies = FLAGS_bundle_estimate_accuracies;
+  options.snoop = FLAGS_bundle_snoop;
+  options.snooping_alpha = FLAGS_bundle_alpha;
+  options.max_covariance_parameters = FLAGS_bundle_max_covariance_parameters;
+  options.num_threads = FLAGS_bundle_threads;
+  if (FLAGS_bundle_relative_gauge != "free" && FLAGS_bundle_relative_gauge != "fixed")
+    return BadInput(kCommand, "--relative_gauge must be free or fixed, not '" + FLAGS_bundle_relative_gauge + "'");
+  options.free_gauge_for_relative_blocks = FLAGS_bundle_relative_gauge == "free";
+  if (!FLAGS_bundle_quiet) {
+    options.progress = [](const BundleIterationInfo& info) {
+      std::string lm;
+      if (std::isfinite(info.trust_region_radius)) {
+        char buffer[128];
+        std::snprintf(buffer, sizeof(buffer), "  %s quality %.2f radius %.2g  solve %.2f of %.2f s",
+                      info.step_successful ? "taken" : "REJECTED", info.step_quality,
+                      info.trust_region_radius, info.linear_solver_seconds,
+                      info.iteration_seconds);
+        lm = buffer;
+      }
+      std::fprintf(stderr,
+                   "photopose bundle: round %d%s iteration %3d: cost %.6g  sigma0 %.4f  step %.3g%s  "
+                   "%.1f s\n",
+                   info.round, info.free_gauge ? " (free gauge)" : "", info.iteration, info.cost,
+                   info.sigma0, info.step_norm, lm.c_str(),
+                   info.elapsed_seconds);
+    };
+  }
+  std::string why;
+  if (!options.IsValid(&why)) return BadInput(kCommand, why);
+  std::vector<std::string> calibrate;
+  for (const std::string& name : SplitCommaList(FLAGS_bundle_calibrate))
+    if (!name.empty()) calibrate.push_back(name);
+  context.calibrate = calibrate;
+  const auto solver = ParsePoseSolver(FLAGS_bundle_solver);
+  if (!solver) return BadInput(kCommand, "--solver must be ceres, taylor or taylor_as_printed, not '" + FLAGS_bundle_solver + "'");
+  if (*solver != PoseSolver::kCeres && (options.snoop || options.estimate_accuracies || FLAGS_bundle_cross_validate))
+    return BadInput(kCommand, "--solver=" + FLAGS_bundle_solver + " adjusts without snooping, accuracy estimation or cross-validation; use --solver=ceres for those");
+
+  // Outputs: checked before any work (never an input, never each other), written all or nothing.
+  if (!FLAGS_bundle_out_colmap.empty()) {
+    // The model's folder is created when missing (an empty folder is all a failed run leaves).
+    std::error_code error;
+    std::filesystem::create_directories(FLAGS_bundle_out_colmap, error);
+    if (error)
+      return BadInput(kCommand, "--out_colmap=" + FLAGS_bundle_out_colmap + ": cannot create the folder: " + error.message());
+  }
+  OutputFiles outputs;
+  for (const auto& [label, path] : {std::pair<const char*, const std::string&>{"--cameras", FLAGS_bundle_cameras},
+                                    {"--marks", FLAGS_bundle_marks}, {"--points", FLAGS_bundle_points},
+                                    {"--frames", FLAGS_bundle_frames}, {"--bal", FLAGS_bundle_bal}}) {
+    const Status input = outputs.AddInput(label, path);
+    if (!input.ok()) return BadInput(kCommand, input.message());
+    if (!path.empty()) context.inputs.push_back(path);
+  }
+  if (!FLAGS_bundle_colmap_model.empty()) {
+    for (const char* name : {"cameras.txt", "images.txt", "points3D.txt"}) {
+      const std::string path = FLAGS_bundle_colmap_model + "/" + name;
+      const Status input = outputs.AddInput("--colmap_model", path);
+      if (!input.ok()) return BadInput(kCommand, input.message());
+      context.inputs.push_back(path);
+    }
+  }
+  for (const std::string& flag_file : parsed.flag_files) outputs.AddInput("--flagfile", flag_file);
+  std::vector<std::pair<std::string, std::string>> written;  // (label, path)
+  for (const auto& [label, path] : {std::pair<const char*, const std::string&>{"--out", FLAGS_bundle_out},
+                                    {"--out_points", FLAGS_bundle_out_points},
+                                    {"--out_cameras", FLAGS_bundle_out_cameras},
+                                    {"--report", FLAGS_bundle_report}, {"--html", FLAGS_bundle_html}}) {
+    if (path.empty()) continue;
+    const Status declared = outputs.AddOutput(label, path);
+    if (!declared.ok()) return BadInput(kCommand, declared.message());
+    written.push_back({label, path});
+  }
+  if (!FLAGS_bundle_out_colmap.empty()) {
+    for (const char* name : {"cameras.txt", "images.txt", "points3D.txt"}) {
+      const std::string path = FLAGS_bundle_out_colmap + "/" + name;
+      const Status declared = outputs.AddOutput("--out_colmap", path);
+      if (!declared.ok()) return BadInput(kCommand, declared.message());
+      written.push_back({"--out_colmap", path});
+    }
+  }
+
+  // Read.
+  Block block;
+  ColmapModelExtras colmap_extras;
+  std::vector<FrameCamera> table_cameras;
+  if (tables) {
+    BlockFiles files;
+    files.cameras = FLAGS_bundle_cameras;
+    files.marks = FLAGS_bundle_marks;
+    files.points = FLAGS_bundle_points;
+    files.frames = FLAGS_bundle_frames;
+    files.rotation = *rotation;
+    files.pixel_origin = FLAGS_bundle_pixel_center_origin ? PixelOrigin::kCenter : PixelOrigin::kCorner;
+    const Status read = ReadBlock(files, &block);
+    if (!read.ok()) return BadInput(kCommand, read.message());
+    // Measured centres are priors when an accuracy is known: per row, --camera_accuracy, or the
+    // default when a frames table was given.
+    acc.camera_positions_are_priors = !FLAGS_bundle_camera_accuracy.empty() || !FLAGS_bundle_frames.empty();
+  } else if (!FLAGS_bundle_colmap_model.empty()) {
+    const Status read = ReadColmapModel(FLAGS_bundle_colmap_model, &block, &colmap_extras);
+    if (!read.ok()) return BadInput(kCommand, read.message());
+  } else {
+    const Status read = ReadBalProblem(FLAGS_bundle_bal, &block);
+    if (!read.ok()) return BadInput(kCommand, read.message());
+  }
+  if (block.images.empty()) return BadInput(kCommand, "the block has no image with marks");
+  BundleAdjustmentConfig config;
+  const Status calibration = BundleAdjustmentConfig::FromCalibrationNames(block, calibrate, &config);
+  if (!calibration.ok()) return BadInput(kCommand, "--calibrate: " + calibration.message());
+
+  int exit_code = kExitSuccess;
+  BundleAdjustmentResult result;
+  BundleCrossValidationResult cross_validation;
+  {
+    const ScopedSolving solving;
+    // Initial values where they are missing.
+    BlockInitializationSummary initialization;
+    const Status initialized = InitializeBlock(BlockInitializationOptions(), &block, &initialization);
+    if (!initialized.ok()) return BadInput(kCommand, initialized.message());
+    context.num_images_initialized = initialization.images_resected;
+    for (const auto& [image, reason] : initialization.not_oriented) {
+      std::cerr << "photopose bundle: " << block.images[image].name << ": not oriented: " << reason << "\n";
+      exit_code = kExitSomeFailed;
+    }
+    if (!initialization.not_oriented.empty()) {
+      std::cerr << "photopose bundle: " << initialization.not_oriented.size()
+                << " images could not be oriented; the adjustment goes on without them\n";
+      RemoveImages(initialization.not_oriented, &block);
+      if (block.images.empty()) {
+        std::cerr << "photopose bundle: no image could be oriented: give control points (--points) "
+                     "or initial values (--frames); nothing written\n";
+        return kExitSomeFailed;
+      }
+    }
+    if (!FLAGS_bundle_quiet) std::cerr << "photopose bundle: initial values: " << initialization.BriefReport() << "\n";
+    const Status adjusted = BundleAdjustWithSolver(*solver, options, config, &block, &result);
+    if (!adjusted.ok()) return BadInput(kCommand, adjusted.message());
+    if (tables && result.summary.datum == BundleDatum::kRelative) {
+      return BadInput(kCommand, "no datum: the block has no control points and no camera positions, so it has no ground coordinates to write; give --points with control points or --frames with camera positions");
+    }
+    if (result.summary.IsSolutionUsable() && FLAGS_bundle_cross_validate) {
+      const Status cv = CrossValidateControlPoints(options, config, block, result, FLAGS_bundle_threads, &cross_validation);
+      if (!cv.ok()) return BadInput(kCommand, cv.message());
+      context.cross_validation = &cross_validation;
+    }
+  }
+  for (const auto& [label, path] : written) context.outputs.push_back(path);
+  context.options = options;
+
+  const bool usable = result.summary.IsSolutionUsable();
+  for (const std::string& line : BundleConsoleLines(block, result, context)) std::cout << line << "\n";
+  if (!usable) {
+    std::cerr << "photopose bundle: not adjusted: " << result.summary.message << "\n";
+    exit_code = kExitSomeFailed;
+  }
+
+  // Outputs: the report and the page always (they say why when it failed); tables and models only
+  // for an adjustment that converged. The ones written are declared again in the transaction that
+  // writes them (the pre-flight one is dropped unstaged: nothing of it is written).
+  outputs.Abort();
+  OutputFiles final_outputs;
+  Status status = Status::Ok();
+  for (const auto& [label, path] : written) {
+    if (!usable && label != "--report" && label != "--html") continue;
+    if (status.ok()) status = final_outputs.AddOutput(label, path);
+  }
+  if (!status.ok()) return BadInput(kCommand, status.message());
+  auto stage = [&](const std::string& path, const std::string& text) {
+    if (status.ok() && !path.empty()) status = final_outputs.Stage(path, text);
+  };
+  stage(FLAGS_bundle_report, BundleReportJson(block, result, context).dump(2) + "\n");
+  stage(FLAGS_bundle_html, BundleReportHtml(block, result, context));
+  if (usable) {
+    if (status.ok() && !FLAGS_bundle_out.empty()) {
+      status = final_outputs.StageWith(FLAGS_bundle_out, [&](const std::string& path) {
+        FramesTableOptions frames_options;
+        frames_options.convention = *rotation;
+        std::vector<FrameCamera> cameras;
+        for (const BlockCamera& camera : block.cameras) cameras.push_back(camera.table);
+        frames_options.cameras = &cameras;
+        return WriteFramesTable(path, frames_options, BundleFrames(block, result));
+      });
+    }
+    stage(FLAGS_bundle_out_points, BundlePointsCsv(block, result));
+    if (status.ok() && !FLAGS_bundle_out_cameras.empty()) {
+      std::vector<FrameCamera> cameras;
+      for (const BlockCamera& camera : block.cameras) {
+        FrameCamera table = camera.table;
+        if (status.ok()) status = SetFrameModelParams(camera.params.data(), &table);
+        cameras.push_back(table);
+      }
+      if (status.ok())
+        status = final_outputs.StageWith(FLAGS_bundle_out_cameras,
+                                   [&](const std::string& path) { return WriteCameraTable(path, cameras); });
+    }
+    if (status.ok() && !FLAGS_bundle_out_colmap.empty()) {
+      ColmapModelText model;
+      status = FormatColmapModel(block, FLAGS_bundle_colmap_model.empty() ? nullptr : &colmap_extras, &model);
+      stage(FLAGS_bundle_out_colmap + "/cameras.txt", model.cameras);
+      stage(FLAGS_bundle_out_colmap + "/images.txt", model.images);
+      stage(FLAGS_bundle_out_colmap + "/points3D.txt", model.points3D);
+    }
+  }
+  if (status.ok()) status = final_outputs.Commit();
+  if (!status.ok()) return BadInput(kCommand, status.message());
+
+  // Closing summary.
+  std::cout << "bundle: " << (usable ? "adjusted " : "not adjusted: ") << result.summary.num_images
+            << " images";
+  if (std::isfinite(result.summary.sigma0)) std::cout << ", sigma0 " << result.summary.sigma0;
+  if (result.num_check_points > 0) std::cout << ", check RMSE " << result.check_rmse_total_m << " m";
+  std::cout << "; wrote";
+  bool any = false;
+  for (const auto& [label, path] : written) {
+    if (!usable && label != "--report" && label != "--html") continue;
+    std::cout << (any ? ", " : " ") << path;
+    any = true;
+  }
+  if (!any) std::cout << " nothing";
+  std::cout << "\n";
+  return exit_code;
+}
+
+}  // namespace photopose::cli

@@ -1,0 +1,111 @@
+#pragma once
+// Shared plumbing of the photopose subcommands: exit codes, flag parsing that never exits on its
+// own and checks every flag wherever it comes from, one-line error reporting, and the phase of a
+// run that main's top-level guard reads.
+
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "core/status.h"
+
+namespace photopose::cli {
+
+// Exit status of every subcommand.
+constexpr int kExitSuccess = 0;     // every image solved
+constexpr int kExitSomeFailed = 1;  // some image could not be solved (each says why)
+constexpr int kExitBadInput = 2;    // bad input or usage
+
+// Flag files may include further flag files down to this depth (the command line is depth 0).
+constexpr int kMaxFlagFileDepth = 4;
+
+// The pixel and film conventions, printed in every subcommand's --help.
+extern const char kConventionsHelp[];
+
+// The values a numeric flag may take: [min, max], each end excluded when open. Every numeric flag
+// of a command has one; a value outside (or not finite) is refused before any work.
+struct FlagRange {
+  FlagRange(std::string name, double min, double max, bool open_min = false, bool open_max = false,
+            std::string unit = "")
+      : name(std::move(name)),
+        min(min),
+        max(max),
+        open_min(open_min),
+        open_max(open_max),
+        unit(std::move(unit)) {}
+
+  std::string name;  // the user's flag name, without dashes
+  double min;
+  double max;
+  bool open_min;     // min itself excluded
+  bool open_max;     // max itself excluded
+  std::string unit;  // "px", "m", "degrees", or empty
+
+  // "[0, 1000] px", "(0, 1)".
+  std::string Text() const;
+  // Whether `value` is finite and inside.
+  bool Contains(double value) const;
+  // "--name=<text> is outside (0, 1000] px" or "--name=<text> is not a finite number; ...".
+  std::string Refusal(const std::string& text) const;
+};
+
+// How a subcommand's flags are registered. The user writes --<name>; the gflag behind it is
+// prefix + name (or the alias's target), defined in the source file `defined_in`.
+struct CommandFlags {
+  std::string command;     // "resect": messages read "photopose resect: ..."
+  std::string defined_in;  // "resect_command": flags defined in this file belong to the command
+  std::string prefix;      // "compare_" for compare, empty otherwise
+  // User name -> gflag name for the flags registered under another name ("seed" -> "sim_seed").
+  std::vector<std::pair<std::string, std::string>> aliases;
+  std::vector<FlagRange> ranges;  // one per numeric flag of the command (user names)
+
+  // The range of the user's flag `name`, or nullptr.
+  const FlagRange* RangeOf(const std::string& name) const;
+};
+
+// What parsing found besides the flag values.
+struct ParsedFlags {
+  bool help = false;                    // --help, -h, --helpfull
+  std::vector<std::string> flag_files;  // every --flagfile read: inputs of the run
+};
+
+// Parses --name=value, --name value, --bool_flag, --nobool_flag and --flagfile=F into the gflags of
+// `flags`. A flag file holds one flag per line ("--name=value" or "--name value"; blank lines and
+// lines starting with '#' skipped) and is read with the limits of every input (core/io/csv.h); it may
+// include other flag files down to kMaxFlagFileDepth, never itself (compared by inode). Unknown
+// flags, flags of other commands, unparsable values and, once everything is read, numeric values
+// outside their FlagRange are reported on stderr as one line ("photopose resect: f.txt:3: unknown
+// flag --bogus") and give false: the caller exits with kExitBadInput before any work. gflags never
+// sees a flag file.
+bool ParseFlags(int argc, char** argv, const CommandFlags& flags, ParsedFlags* parsed);
+
+// The numeric flags of `flags` (user names) that have no FlagRange: empty when the command is
+// complete (a test holds every command to it).
+std::vector<std::string> NumericFlagsWithoutRange(const CommandFlags& flags);
+
+// Prints the usage text and the command's flags with their help texts and ranges.
+void PrintHelp(const std::string& usage, const CommandFlags& flags);
+
+// The items of a comma-separated flag value, each trimmed of blanks; an empty item stays as an empty
+// string so that callers can name it ("a,,b" -> "a", "", "b").
+std::vector<std::string> SplitCommaList(const std::string& text);
+
+// Prints "photopose <subcommand>: <message>" on stderr as one line (control characters and bytes
+// that are not UTF-8 escaped) and returns kExitBadInput.
+int BadInput(const std::string& subcommand, const std::string& message);
+
+// The phase of the run, for main's guard: an unexpected failure (out of memory, an exception)
+// while solving exits kExitSomeFailed, at any other time kExitBadInput.
+void SetSolving(bool solving);
+int ExitCodeForUnexpectedFailure();
+
+// Marks the run as solving for its lifetime.
+class ScopedSolving {
+ public:
+  ScopedSolving() { SetSolving(true); }
+  ~ScopedSolving() { SetSolving(false); }
+  ScopedSolving(const ScopedSolving&) = delete;
+  ScopedSolving& operator=(const ScopedSolving&) = delete;
+};
+
+}  // namespace photopose::cli

@@ -1,0 +1,217 @@
+// photopose resect: space resection of every image that has marks.
+#include <gflags/gflags.h>
+
+#include <cstdio>
+#include <iostream>
+
+#include "core/camera.h"
+#include "core/io/output_files.h"
+#include "core/rotation.h"
+#include "solvers/resection/resection.h"
+#include "tools/commands/cli_common.h"
+#include "tools/commands/commands.h"
+#include "tools/commands/resection_job.h"
+
+DEFINE_string(cameras, "", "Camera table (CSV, ArcGIS frame-camera schema): the interior orientation of every CameraID.");
+DEFINE_string(points, "", "Ground points (CSV: PointID, X, Y, Z in metres, optional AccuracyX/Y/Z and Role control|check|tie); a point that has marks but no row is a tie point and is left out.");
+DEFINE_string(marks, "", "Image marks (CSV: Raster, PointID, Column and Row in pixels or FilmX and FilmY in micrometres, optional Accuracy in the mark's own unit and CameraID).");
+DEFINE_string(gcp_list, "", "OpenDroneMap gcp_list.txt to use instead of --points and --marks (first line a CRS, then 'X Y Z px py image [name]'); its CRS goes to the SRS column of the output.");
+DEFINE_string(frames, "", "Optional frames table with approximate exterior orientations; when an image has one, it replaces the automatic initial values (the consensus of minimal samples).");
+DEFINE_string(fiducials, "", "Optional measured fiducials of scanned film (CSV: Raster, FiducialID, Column, Row in pixels): each image's pixel-to-film affine is fitted to the camera table's FilmFiducials.");
+DEFINE_double(max_fiducial_residual, 30.0, "Largest accepted residual of a measured fiducial after the affine fit, in micrometres; a larger one is refused as a misnumbered or mismeasured fiducial.");
+DEFINE_string(out, "", "Output frames table (CSV) with the solved exterior orientations, their standard deviations, Sigma0, NumObservations and NumInliers.");
+DEFINE_string(report, "", "Optional JSON report: the options used and, per image, the pose, covariance, the residual, normalized residual, redundancy number and status of every mark, the residual of every check point, warnings, termination and time.");
+DEFINE_string(rotation, "rxryrz", "Angle convention of the frames tables read and written and of every angle printed: rxryrz (R = Rx(omega) Ry(phi) Rz(kappa) maps ground to camera; 'seed' is an alias), opk or pok (see docs/conventions.md).");
+DEFINE_string(solver, "ceres", "Pose solver: ceres (Levenberg-Marquardt), taylor (the seed's Taylor linearisation with corrected partials) or taylor_as_printed (with the partials as printed in the seed).");
+DEFINE_string(jacobian, "analytic", "Derivative path of the Ceres cost: analytic (closed-form partials) or autodiff (Ceres Jets).");
+DEFINE_string(loss, "none", "Loss of the Ceres solver: none (least squares over the accepted marks, the default), huber, softl1, cauchy, arctan or tukey.");
+DEFINE_string(ceres_minimizer, "tiny_solver", "How Ceres minimises each image: tiny_solver (ceres::TinySolver with an iteratively reweighted loss, fast for one image) or problem (ceres::Problem and ceres::Solve).");
+DEFINE_double(loss_scale, 2.0, "Scale of the robust loss in standard deviations of the marks: residuals beyond it are down-weighted.");
+DEFINE_double(confidence, 0.999, "Confidence of the outlier decisions, between 0 and 1: the consensus threshold is the square root of the chi-square(2) quantile at it (3.72 standard deviations at 0.999), and data snooping rejects a mark whose test statistic exceeds the quantile.");
+DEFINE_double(default_accuracy, 0.0, "Accuracy (one sigma) of marks without an Accuracy value, in the mark's own unit (pixels for Column/Row, micrometres for FilmX/FilmY); 0 leaves it unstated, and the tests then take sigma0 from the data.");
+DEFINE_bool(allow_no_redundancy, false, "Also report poses whose accepted marks leave no redundancy (three points), without standard deviations and with a warning; otherwise such an image is not solved.");
+DEFINE_uint64(seed, 0, "Seed of the random sampling of the consensus when an image has too many marks to try every minimal sample; the same seed gives the same result.");
+DEFINE_int32(threads, 0, "Number of images resected in parallel; 0 uses all cores.");
+DEFINE_bool(pixel_center_origin, false, "Read Column/Row with (0,0) at the centre of the first pixel instead of the top-left corner of the image.");
+
+namespace photopose::cli {
+namespace {
+
+constexpr char kUsage[] =
+    "photopose resect: space resection of every image that has marks.\n\n"
+    "Usage: photopose resect --cameras=C.csv --points=P.csv --marks=M.csv --out=frames.csv\n"
+    "                        [--frames=approx.csv] [--report=report.json] [--rotation=rxryrz|opk|pok]\n"
+    "                        [--fiducials=F.csv] [--default_accuracy=A] [--confidence=0.999]\n"
+    "                        [--allow_no_redundancy] [--solver=ceres|taylor|taylor_as_printed]\n"
+    "                        [--jacobian=analytic|autodiff] [--loss=none ...] [--threads=N]\n"
+    "   or: photopose resect --cameras=C.csv --gcp_list=gcp_list.txt --out=frames.csv ...\n\n"
+    "Without --frames the initial values come from a consensus of minimal samples (every sample\n"
+    "when there are few, LO-RANSAC over P3P and the DLT otherwise); least squares then refines\n"
+    "every pose over the marks that fit, and data snooping rejects blunders one at a time. Marks'\n"
+    "accuracies set the thresholds; without them sigma0 comes from the data. A pose that no\n"
+    "redundant mark checks is not reported. Exit status: 0 every image resected, 1 some image\n"
+    "could not be (each says why), 2 bad input or usage.\n";
+
+// Every numeric flag's range (docs/formats.md, "Limits and refusals").
+const CommandFlags& ResectFlags() {
+  static const CommandFlags* const kFlags =
+      new CommandFlags{"resect",
+                       "resect_command",
+                       "",
+                       {},
+                       {{"loss_scale", 0.0, 1000.0, true, false, "standard deviations"},
+                        {"confidence", 0.5, 1.0, false, true},
+                        {"default_accuracy", 0.0, 1e6, false, false, "px or um (the mark's unit)"},
+                        {"max_fiducial_residual", 0.0, 1e6, true, false, "um"},
+                        {"seed", 0.0, 18446744073709551615.0},
+                        {"threads", 0.0, 1024.0}}};
+  return *kFlags;
+}
+
+// "A, B and C" of at most five names, then "and N more".
+std::string NameList(const std::vector<std::string>& names) {
+  std::string text;
+  const size_t shown = std::min<size_t>(names.size(), 5);
+  for (size_t k = 0; k < shown; ++k) text += (k == 0 ? "" : ", ") + names[k];
+  if (names.size() > shown) text += " and " + std::to_string(names.size() - shown) + " more";
+  return text;
+}
+
+}  // namespace
+
+int RunResect(int argc, char** argv) {
+  ParsedFlags parsed;
+  if (!ParseFlags(argc, argv, ResectFlags(), &parsed)) return kExitBadInput;
+  if (parsed.help) {
+    PrintHelp(kUsage, ResectFlags());
+    return kExitSuccess;
+  }
+  ResectionJobOptions job;
+  BlockFiles& files = job.files;
+  files.cameras = FLAGS_cameras;
+  files.points = FLAGS_points;
+  files.marks = FLAGS_marks;
+  files.gcp_list = FLAGS_gcp_list;
+  files.frames = FLAGS_frames;
+  files.fiducials = FLAGS_fiducials;
+  files.max_fiducial_residual_um = FLAGS_max_fiducial_residual;
+  files.pixel_origin = FLAGS_pixel_center_origin ? PixelOrigin::kCenter : PixelOrigin::kCorner;
+  job.input.default_accuracy = FLAGS_default_accuracy;
+  if (FLAGS_cameras.empty()) return BadInput("resect", "--cameras is required");
+  if (FLAGS_gcp_list.empty() && (FLAGS_points.empty() || FLAGS_marks.empty()))
+    return BadInput("resect", "--points and --marks (or --gcp_list) are required");
+  if (!FLAGS_gcp_list.empty() && (!FLAGS_points.empty() || !FLAGS_marks.empty()))
+    return BadInput("resect", "--gcp_list replaces --points and --marks; give one or the other");
+  if (FLAGS_out.empty()) return BadInput("resect", "--out is required");
+  const auto rotation = ParseRotationConvention(FLAGS_rotation);
+  if (!rotation)
+    return BadInput("resect", std::string("--rotation must be ") + RotationConventionChoices() +
+                                  ", not '" + FLAGS_rotation + "'");
+  files.rotation = *rotation;
+  const auto solver = ParsePoseSolver(FLAGS_solver);
+  if (!solver) return BadInput("resect", "--solver must be ceres, taylor or taylor_as_printed, not '" + FLAGS_solver + "'");
+  const auto jacobian = ParseJacobianType(FLAGS_jacobian);
+  if (!jacobian) return BadInput("resect", "--jacobian must be analytic or autodiff, not '" + FLAGS_jacobian + "'");
+  const auto loss = ParseLossType(FLAGS_loss);
+  if (!loss) return BadInput("resect", std::string("--loss must be ") + LossTypeChoices() + ", not '" + FLAGS_loss + "'");
+  const auto minimizer = ParseCeresMinimizer(FLAGS_ceres_minimizer);
+  if (!minimizer) return BadInput("resect", "--ceres_minimizer must be tiny_solver or problem, not '" + FLAGS_ceres_minimizer + "'");
+  if (!(FLAGS_default_accuracy >= 0.0) || !std::isfinite(FLAGS_default_accuracy))
+    return BadInput("resect", "--default_accuracy must be positive (or 0 for none)");
+  if (!(FLAGS_max_fiducial_residual > 0.0) || !std::isfinite(FLAGS_max_fiducial_residual))
+    return BadInput("resect", "--max_fiducial_residual must be a positive number of micrometres");
+  if (FLAGS_threads < 0) return BadInput("resect", "--threads must be >= 0");
+
+  ResectionOptions& options = job.resection;
+  options.refinement.solver = *solver;
+  options.refinement.jacobian = *jacobian;
+  options.refinement.loss = *loss;
+  options.refinement.loss_scale = FLAGS_loss_scale;
+  options.refinement.ceres.minimizer = *minimizer;
+  options.test.confidence = FLAGS_confidence;
+  options.consensus.ransac.seed = FLAGS_seed;
+  options.allow_no_redundancy = FLAGS_allow_no_redundancy;
+  std::string why;
+  if (!options.IsValid(&why)) return BadInput("resect", why);
+
+  // Outputs: checked before any work (never an input, never each other), written all or nothing.
+  OutputFiles outputs;
+  for (const auto& [label, path] :
+       {std::pair<const char*, const std::string&>{"--cameras", FLAGS_cameras},
+        {"--points", FLAGS_points},
+        {"--marks", FLAGS_marks},
+        {"--gcp_list", FLAGS_gcp_list},
+        {"--frames", FLAGS_frames},
+        {"--fiducials", FLAGS_fiducials}}) {
+    const Status input = outputs.AddInput(label, path);
+    if (!input.ok()) return BadInput("resect", input.message());
+  }
+  for (const std::string& flag_file : parsed.flag_files) outputs.AddInput("--flagfile", flag_file);
+  for (const auto& [label, path] : {std::pair<const char*, const std::string&>{"--out", FLAGS_out},
+                                    {"--report", FLAGS_report}}) {
+    if (path.empty()) continue;
+    const Status declared = outputs.AddOutput(label, path);
+    if (!declared.ok()) return BadInput("resect", declared.message());
+  }
+
+  // Read and check every input before any output is written.
+  ResectionJob prepared;
+  const Status read = PrepareResectionJob(job, &prepared);
+  if (!read.ok()) return BadInput("resect", read.message());
+  if (prepared.inputs.empty()) return BadInput("resect", "no image has marks");
+
+  std::vector<ResectionResult> results;
+  {
+    const ScopedSolving solving;
+    results = ResectImages(options, prepared.inputs, FLAGS_threads);
+  }
+
+  std::vector<std::string> failed;
+  for (size_t i = 0; i < results.size(); ++i) {
+    const ResectionResult& r = results[i];
+    const std::string& raster = prepared.inputs[i].raster;
+    if (!r.success) {
+      failed.push_back(raster);
+      std::cerr << "photopose resect: " << raster << ": not resected: " << r.summary.message << "\n";
+      continue;
+    }
+    for (const std::string& warning : r.warnings)
+      std::cerr << "photopose resect: " << raster << ": warning: " << warning << "\n";
+    const Eigen::Vector3d angles = OutputAnglesDeg(prepared, i, files.rotation, r.eo);
+    const std::string unit = Sigma0Unit(prepared, i, r);
+    std::printf("%s: X=%.4f Y=%.4f Z=%.4f m  %s omega=%.6f phi=%.6f kappa=%.6f deg  ",
+                raster.c_str(), r.eo.parameters[0], r.eo.parameters[1], r.eo.parameters[2],
+                RotationConventionName(files.rotation), angles[0], angles[1], angles[2]);
+    if (r.degrees_of_freedom > 0) {
+      std::printf("sigma0=%.3f%s%s  ", r.sigma0, unit.empty() ? "" : " ", unit.c_str());
+    } else {
+      std::printf("sigma0=none (no redundancy)  ");
+    }
+    std::printf("inliers=%d/%zu  %s\n", r.num_inliers, r.inliers.size(),
+                r.summary.used_approximate ? "(from --frames)" : "(consensus)");
+  }
+
+  std::vector<std::string> written = {FLAGS_out};
+  if (!FLAGS_report.empty()) written.push_back(FLAGS_report);
+  Status status = outputs.StageWith(FLAGS_out, [&](const std::string& path) {
+    return WriteResectionFrames(path, job, prepared, results);
+  });
+  if (status.ok() && !FLAGS_report.empty()) {
+    status = outputs.StageWith(FLAGS_report, [&](const std::string& path) {
+      return WriteResectionReport(path, job, prepared, results, written);
+    });
+  }
+  if (status.ok()) status = outputs.Commit();
+  if (!status.ok()) return BadInput("resect", status.message());
+  std::string summary = "photopose resect: " + std::to_string(results.size() - failed.size()) +
+                        " of " + std::to_string(results.size()) + " images resected";
+  if (!failed.empty()) summary += ", not resected: " + NameList(failed);
+  if (prepared.num_tie_marks > 0)
+    summary += "; " + std::to_string(prepared.num_tie_marks) + " marks of tie points left out";
+  std::string files_written;
+  for (const std::string& path : written) files_written += (files_written.empty() ? "" : ", ") + path;
+  std::cerr << summary << "; wrote " << files_written << "\n";
+  return failed.empty() ? kExitSuccess : kExitSomeFailed;
+}
+
+}  // namespace photopose::cli

@@ -1,0 +1,247 @@
+#include "tools/commands/resection_job.h"
+
+#include <cmath>
+#include <nlohmann/json.hpp>
+
+#include "core/io/tables.h"
+
+namespace photopose::cli {
+namespace {
+
+const char* UnitName(MarkUnit unit) { return unit == MarkUnit::kFilm ? "um" : "px"; }
+
+const BlockCamera& CameraOf(const ResectionJob& job, size_t input) {
+  return job.block.cameras[job.block.images[job.images[input]].camera];
+}
+
+}  // namespace
+
+Status PrepareResectionJob(const ResectionJobOptions& options, ResectionJob* job) {
+  Block block;
+  PHOTOPOSE_RETURN_IF_ERROR(ReadBlock(options.files, &block));
+  return PrepareResectionJob(std::move(block), options.input, job);
+}
+
+Status PrepareResectionJob(Block block, const ResectionInputOptions& options, ResectionJob* job) {
+  ResectionJob result;
+  result.block = std::move(block);
+  const Block& b = result.block;
+  for (size_t i = 0; i < b.images.size(); ++i) {
+    if (b.marks_of_image[i].empty()) continue;  // a frames row only: nothing to resect
+    ResectionInput input;
+    std::vector<int> marks;
+    PHOTOPOSE_RETURN_IF_ERROR(MakeResectionInput(b, static_cast<int>(i), options, &input, &marks));
+    std::vector<int> checks;
+    for (const int m : b.marks_of_image[i]) {
+      const BlockPoint& point = b.points[b.marks[m].point];
+      if (point.role == PointRole::kCheck) checks.push_back(m);
+      if (point.role == PointRole::kTie) ++result.num_tie_marks;
+    }
+    result.images.push_back(static_cast<int>(i));
+    result.inputs.push_back(std::move(input));
+    result.input_marks.push_back(std::move(marks));
+    result.check_marks.push_back(std::move(checks));
+  }
+  *job = std::move(result);
+  return Status::Ok();
+}
+
+std::vector<CheckResidual> CheckResiduals(const ResectionJob& job, size_t input,
+                                          const ExteriorOrientation& eo) {
+  std::vector<CheckResidual> residuals;
+  for (const int m : job.check_marks[input]) {
+    CheckResidual check;
+    check.mark = m;
+    if (MarkResidual(job.block, m, eo, &check.residual).ok()) residuals.push_back(check);
+  }
+  return residuals;
+}
+
+Eigen::Vector3d OutputAnglesDeg(const ResectionJob& job, size_t input, RotationConvention rotation,
+                                const ExteriorOrientation& eo) {
+  return ConventionAnglesFromSeed(rotation, CameraOf(job, input).table.angle_flags(),
+                                  eo.angles_seed_rad()) *
+         kDegreesPerRadian;
+}
+
+std::optional<Eigen::Vector3d> OutputAngleSigmasDeg(const ResectionJob& job, size_t input,
+                                                    RotationConvention rotation,
+                                                    const ResectionResult& result) {
+  if (!result.has_covariance) return std::nullopt;
+  const Eigen::Matrix3d J = ConventionFromSeedJacobian(
+      rotation, CameraOf(job, input).table.angle_flags(), result.eo.angles_seed_rad());
+  const Eigen::Matrix3d covariance =
+      J * result.covariance.bottomRightCorner<3, 3>() * J.transpose();
+  return Eigen::Vector3d(covariance.diagonal().cwiseMax(0.0).cwiseSqrt() * kDegreesPerRadian);
+}
+
+std::string Sigma0Unit(const ResectionJob& job, size_t input, const ResectionResult& result) {
+  if (result.accuracy_stated) return "";
+  const std::vector<MarkUnit>& units = job.inputs[input].units;
+  if (units.empty()) return "px";
+  for (const MarkUnit unit : units)
+    if (unit != units.front()) return "mark units";
+  return UnitName(units.front());
+}
+
+Status WriteResectionFrames(const std::string& path, const ResectionJobOptions& options,
+                            const ResectionJob& job, const std::vector<ResectionResult>& results) {
+  std::vector<FrameRecord> frames;
+  std::vector<FrameCamera> cameras;
+  for (const BlockCamera& camera : job.block.cameras) cameras.push_back(camera.table);
+  for (size_t i = 0; i < results.size(); ++i) {
+    const ResectionResult& r = results[i];
+    if (!r.success) continue;
+    const BlockCamera& camera = CameraOf(job, i);
+    FrameRecord frame;
+    frame.raster = job.inputs[i].raster;
+    frame.camera_id = camera.camera_id;
+    // The camera's SRS, else the ground system the marks came with (a gcp_list's first line).
+    frame.srs = camera.table.srs.empty() ? job.block.crs : camera.table.srs;
+    frame.eo = r.eo;
+    if (r.has_covariance) {
+      frame.covariance = r.covariance;
+      frame.sigma0 = r.sigma0;
+    }
+    frame.extra_columns = {{"NumObservations", std::to_string(r.inliers.size())},
+                           {"NumInliers", std::to_string(r.num_inliers)}};
+    frames.push_back(std::move(frame));
+  }
+  FramesTableOptions frames_options;
+  frames_options.convention = options.files.rotation;
+  frames_options.cameras = &cameras;
+  return WriteFramesTable(path, frames_options, frames);
+}
+
+Status WriteResectionReport(const std::string& path, const ResectionJobOptions& options,
+                            const ResectionJob& job, const std::vector<ResectionResult>& results,
+                            const std::vector<std::string>& written) {
+  using nlohmann::json;
+  const ResectionOptions& o = options.resection;
+  const RotationConvention rotation = options.files.rotation;
+  const Block& block = job.block;
+  json report;
+  report["options"] = {
+      {"solver", PoseSolverName(o.refinement.solver)},
+      {"jacobian", JacobianTypeName(o.refinement.jacobian)},
+      {"loss", LossTypeName(o.refinement.loss)},
+      {"loss_scale_sigmas", o.refinement.loss_scale},
+      {"ceres_minimizer", CeresMinimizerName(o.refinement.ceres.minimizer)},
+      {"confidence", o.test.confidence},
+      {"consensus_threshold_sigmas", MarkThresholdSigmas(o.test.confidence)},
+      {"ransac_seed", o.consensus.ransac.seed},
+      {"max_exhaustive_samples", o.consensus.ransac.max_exhaustive_samples},
+      {"allow_no_redundancy", o.allow_no_redundancy},
+      {"rotation", RotationConventionName(rotation)},
+      {"default_accuracy", options.input.default_accuracy > 0.0 ? json(options.input.default_accuracy)
+                                                                : json(nullptr)},
+      {"pixel_origin", options.files.pixel_origin == PixelOrigin::kCorner ? "corner" : "center"}};
+  json images = json::array();
+  int solved = 0;
+  for (size_t i = 0; i < results.size(); ++i) {
+    const ResectionResult& r = results[i];
+    const ResectionSummary& s = r.summary;
+    const BlockImage& block_image = block.images[job.images[i]];
+    json image = {{"raster", job.inputs[i].raster},
+                  {"camera_id", CameraOf(job, i).camera_id},
+                  {"success", r.success},
+                  {"message", s.message},
+                  {"termination", ResectionTerminationName(s.termination)},
+                  {"initial_values", s.used_approximate ? "frames" : "consensus"},
+                  {"consensus", {{"trials", s.ransac_trials}, {"exhaustive", s.ransac_exhaustive}}},
+                  {"adjustments", s.adjustments},
+                  {"iterations", s.iterations},
+                  {"initial_cost", s.initial_cost},
+                  {"final_cost", s.final_cost},
+                  {"time_seconds", s.total_seconds},
+                  {"accuracy", r.accuracy_stated ? "stated" : "estimated"},
+                  {"warnings", r.warnings}};
+    if (block_image.fiducial_fit) {
+      const FiducialFit& fit = *block_image.fiducial_fit;
+      json residuals = json::array();
+      for (const FiducialResidual& f : fit.residuals)
+        residuals.push_back({{"fiducial_id", f.fiducial_id},
+                             {"line", f.line},
+                             {"residual_x_um", f.residual_um.x()},
+                             {"residual_y_um", f.residual_um.y()}});
+      image["fiducials"] = {{"count", fit.residuals.size()},
+                            {"rms_um", fit.rms_um},
+                            {"max_um", fit.max_um},
+                            {"redundancy", fit.redundancy},
+                            {"affine", fit.affine},
+                            {"residuals", residuals}};
+    }
+    if (r.success) {
+      ++solved;
+      const Eigen::Vector3d angles = OutputAnglesDeg(job, i, rotation, r.eo);
+      image["pose"] = {{"X", r.eo.parameters[0]},
+                       {"Y", r.eo.parameters[1]},
+                       {"Z", r.eo.parameters[2]},
+                       {"omega_deg", angles[0]},
+                       {"phi_deg", angles[1]},
+                       {"kappa_deg", angles[2]},
+                       {"convention", RotationConventionName(rotation)},
+                       {"angle_direction", CameraOf(job, i).table.angle_direction}};
+      image["seed_angles_rad"] = {r.eo.parameters[3], r.eo.parameters[4], r.eo.parameters[5]};
+      const std::optional<Eigen::Vector3d> angle_sigmas = OutputAngleSigmasDeg(job, i, rotation, r);
+      if (r.has_covariance) {
+        json covariance = json::array();
+        for (int row = 0; row < 6; ++row)
+          for (int col = 0; col < 6; ++col) covariance.push_back(r.covariance(row, col));
+        image["covariance_seed"] = covariance;  // row-major, X0 Y0 Z0 (m) omega phi kappa (rad)
+        image["standard_deviations"] = {{"X", r.standard_deviations[0]},
+                                        {"Y", r.standard_deviations[1]},
+                                        {"Z", r.standard_deviations[2]},
+                                        {"omega_deg", (*angle_sigmas)[0]},
+                                        {"phi_deg", (*angle_sigmas)[1]},
+                                        {"kappa_deg", (*angle_sigmas)[2]}};
+      } else {
+        image["covariance_seed"] = nullptr;
+        image["standard_deviations"] = nullptr;
+      }
+      image["sigma0"] = r.sigma0;
+      image["sigma0_unit"] = Sigma0Unit(job, i, r);
+      image["degrees_of_freedom"] = r.degrees_of_freedom;
+      image["num_inliers"] = r.num_inliers;
+      image["critical_normalized_residual"] =
+          std::isfinite(r.critical_normalized_residual) ? json(r.critical_normalized_residual)
+                                                        : json(nullptr);
+      json marks = json::array();
+      for (size_t k = 0; k < job.input_marks[i].size(); ++k) {
+        const BlockMark& mark = block.marks[job.input_marks[i][k]];
+        const double w = r.normalized_residuals[k];
+        marks.push_back({{"point_id", block.points[mark.point].id},
+                         {"line", mark.line},
+                         {"status", MarkStatusName(r.mark_status[k])},
+                         {"inlier", static_cast<bool>(r.inliers[k])},
+                         {"residual_x", r.residuals[k].x()},
+                         {"residual_y", r.residuals[k].y()},
+                         {"unit", UnitName(mark.unit)},
+                         {"normalized_residual", std::isfinite(w) ? json(w) : json(nullptr)},
+                         {"redundancy", r.redundancy_numbers[k]}});
+      }
+      image["marks"] = marks;
+      json checks = json::array();
+      for (const CheckResidual& c : CheckResiduals(job, i, r.eo)) {
+        const BlockMark& mark = block.marks[c.mark];
+        checks.push_back({{"point_id", block.points[mark.point].id},
+                          {"line", mark.line},
+                          {"residual_x", c.residual.x()},
+                          {"residual_y", c.residual.y()},
+                          {"residual", c.residual.norm()},
+                          {"unit", UnitName(mark.unit)}});
+      }
+      image["check_points"] = checks;
+    }
+    images.push_back(image);
+  }
+  report["images"] = images;
+  report["summary"] = {{"images", results.size()},
+                       {"solved", solved},
+                       {"not_solved", static_cast<int>(results.size()) - solved},
+                       {"tie_marks_left_out", job.num_tie_marks},
+                       {"files_written", written}};
+  return WriteFileAtomically(path, report.dump(2) + "\n");
+}
+
+}  // namespace photopose::cli

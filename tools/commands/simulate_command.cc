@@ -1,0 +1,283 @@
+// photopose simulate: a complete synthetic dataset with its truth kept apart.
+#include <gflags/gflags.h>
+
+#include <filesystem>
+#include <iostream>
+
+#include "core/io/block_tables.h"
+#include "core/io/colmap.h"
+#include "core/io/output_files.h"
+#include "core/simulation/synthetic_block.h"
+#include "core/simulation/synthetic_scene.h"
+#include "core/io/tables.h"
+#include "tools/commands/cli_common.h"
+#include "tools/commands/commands.h"
+
+DEFINE_string(scenario, "nadir", "Scene to simulate: nadir (one vertical aerial frame), oblique (one frame tilted 45 degrees), uav_block (3 x 4 UAV images with lens distortion, for resection) or block (an aerial block for bundle adjustment: flight lines, tie points, control and check points, GNSS positions; see the block flags).");
+DEFINE_uint64(sim_seed, 1, "Seed of the random generator; the same seed and flags give the same dataset.");
+DEFINE_double(noise_px, 0.5, "Gaussian noise added to every mark, one sigma in pixels.");
+DEFINE_double(outlier_fraction, 0.0, "Fraction of the marks replaced by gross errors of 20 to 200 pixels, from 0 up to (not including) 1.");
+DEFINE_int32(control_points, 20, "Control points generated per image footprint (nadir, oblique, uav_block); with --scenario=block the block's total (default there 8: corners, edge midpoints, centre, interior).");
+DEFINE_int32(check_points, 5, "Check points generated per image footprint (Role check: not used to resect, reported as check residuals); with --scenario=block the block's total (default there 6).");
+DEFINE_double(initial_position_error, 5.0, "Error of the approximate frames: uniform in plus or minus this many metres per axis (single-image scenarios); with --scenario=block a Gaussian sigma per axis (default there 2 m).");
+DEFINE_double(initial_angle_error, 2.0, "Error of the approximate frames: uniform in plus or minus this many degrees per angle (single-image scenarios); with --scenario=block a Gaussian sigma per angle (default there 1 degree).");
+DEFINE_string(out_dir, "", "Folder to write the dataset into (created when missing): cameras.csv, points.csv, marks.csv, frames_approx.csv, and truth/frames.csv with truth/outliers.csv (--scenario=block: frames.csv with the start and the GNSS positions, truth/frames.csv, truth/points.csv, truth/blunders.csv, and colmap/ with --colmap). The folder is replaced as a whole, all or nothing: other files in it are carried over, subfolders other than truth are refused.");
+DEFINE_int32(lines, 4, "block: flight lines.");
+DEFINE_int32(images_per_line, 10, "block: exposures per flight line.");
+DEFINE_double(forward_overlap, 0.8, "block: forward overlap of neighbouring images along a line, from 0 up to (not including) 1.");
+DEFINE_double(side_overlap, 0.6, "block: side overlap of neighbouring lines, from 0 up to (not including) 1.");
+DEFINE_double(flying_height, 100.0, "block: flying height above the mean terrain, in metres (24 mm / 4 um / 6000 x 4000 camera).");
+DEFINE_int64(tie_points, 0, "block: number of tie points; 0 draws them at 0.05 per square metre.");
+DEFINE_bool(gnss, true, "block: the frames table carries measured camera positions (GNSS) with AccuracyX/Y/Z.");
+DEFINE_double(gnss_sigma, 0.03, "block: Gaussian error of the measured camera positions, one sigma in metres horizontally (twice that vertically); also their stated accuracy.");
+DEFINE_double(control_sigma, 0.005, "block: Gaussian error of the surveyed control and check point coordinates, one sigma per axis in metres; also their stated accuracy.");
+DEFINE_int32(tie_blunders, 0, "block: tie marks moved by 20 pixels (listed in truth/blunders.csv).");
+DEFINE_int32(control_blunders, 0, "block: control points whose surveyed position is 0.5 m off.");
+DEFINE_int32(gnss_blunders, 0, "block: camera positions 5 m off (needs --gnss).");
+DEFINE_bool(benchmark_block, false, "block: the scaling benchmark's block instead (25 lines x 40 images 13 m apart on lines 30 m apart, 120 000 tie points, about 1.7 million marks; docs/performance.md). --lines and --images_per_line resize it (120 tie points per image unless --tie_points is given); the other block flags are ignored.");
+DEFINE_bool(colmap, false, "block: also write the block as a COLMAP text model (colmap/cameras.txt, images.txt, points3D.txt) at the perturbed start, tie points included.");
+DEFINE_string(sim_rotation, "rxryrz", "Angle convention of the frames tables written: rxryrz (alias seed), opk or pok.");
+
+namespace photopose::cli {
+namespace {
+
+constexpr char kUsage[] =
+    "photopose simulate: write a synthetic dataset with its truth kept apart.\n\n"
+    "Usage: photopose simulate --scenario=nadir|oblique|uav_block --seed=N --noise_px=S\n"
+    "                          --outlier_fraction=F --out_dir=D\n"
+    "   or: photopose simulate --scenario=block --lines=4 --images_per_line=10 [--tie_points=N]\n"
+    "                          [--gnss_sigma=M] [--tie_blunders=N] [--colmap] --out_dir=D\n\n"
+    "Writes D/cameras.csv, D/points.csv, D/marks.csv, D/frames_approx.csv (approximate exterior\n"
+    "orientations) and D/truth/frames.csv (true poses), D/truth/outliers.csv (which marks carry a\n"
+    "gross error). Resect it with: photopose resect --cameras=D/cameras.csv --points=D/points.csv\n"
+    "--marks=D/marks.csv --out=frames.csv\n\n"
+    "The block scenario writes D/cameras.csv, D/points.csv (control and check points; tie points\n"
+    "have marks and no row), D/marks.csv, D/frames.csv (measured camera positions with their\n"
+    "accuracy, start angles), D/truth/frames.csv, D/truth/points.csv (every point's true position),\n"
+    "D/truth/blunders.csv and, with --colmap, D/colmap/. Adjust it with: photopose bundle\n"
+    "--cameras=D/cameras.csv --points=D/points.csv --marks=D/marks.csv --frames=D/frames.csv\n"
+    "--out=frames.csv\n";
+
+const CommandFlags& SimulateFlags() {
+  static const CommandFlags* const kFlags =
+      new CommandFlags{"simulate",
+                       "simulate_command",
+                       "",
+                       // --seed and --rotation are the names the other commands use.
+                       {{"seed", "sim_seed"}, {"rotation", "sim_rotation"}},
+                       {{"seed", 0.0, 18446744073709551615.0},
+                        {"noise_px", 0.0, 1000.0, false, false, "px"},
+                        {"outlier_fraction", 0.0, 1.0, false, true},
+                        {"control_points", 0.0, 10000.0},
+                        {"check_points", 0.0, 10000.0},
+                        {"initial_position_error", 0.0, 1e6, false, false, "m"},
+                        {"initial_angle_error", 0.0, 180.0, false, false, "degrees"},
+                        {"lines", 1.0, 1000.0},
+                        {"images_per_line", 1.0, 1000.0},
+                        {"forward_overlap", 0.0, 1.0, false, true},
+                        {"side_overlap", 0.0, 1.0, false, true},
+                        {"flying_height", 0.0, 1e5, true, false, "m"},
+                        {"tie_points", 0.0, 1e7},
+                        {"gnss_sigma", 0.0, 1000.0, false, false, "m"},
+                        {"control_sigma", 0.0, 1000.0, false, false, "m"},
+                        {"tie_blunders", 0.0, 1e6},
+                        {"control_blunders", 0.0, 1e4},
+                        {"gnss_blunders", 0.0, 1e6}}};
+  return *kFlags;
+}
+
+bool IsDefault(const char* gflag) {
+  gflags::CommandLineFlagInfo info;
+  return !gflags::GetCommandLineFlagInfo(gflag, &info) || info.is_default;
+}
+
+// --scenario=block: a synthetic block (core/simulation/synthetic_block.h) as the project's tables, its truth
+// and, with --colmap, a COLMAP model, written into --out_dir all or nothing.
+int RunSimulateBlock(const ParsedFlags& parsed, RotationConvention rotation) {
+  if (FLAGS_outlier_fraction != 0.0)
+    return BadInput("simulate", "--outlier_fraction is for the single-image scenarios; a block takes "
+                                "--tie_blunders, --control_blunders and --gnss_blunders");
+  SyntheticBlockOptions options;
+  if (FLAGS_benchmark_block) {
+    // The benchmark's layout; --lines and --images_per_line resize it for the growth curve, with
+    // the same tie-point density (120 per image) unless --tie_points says otherwise.
+    options = BenchmarkBlockOptions();
+    const int default_images = options.num_lines * options.images_per_line;
+    if (!IsDefault("lines")) options.num_lines = FLAGS_lines;
+    if (!IsDefault("images_per_line")) options.images_per_line = FLAGS_images_per_line;
+    if (!IsDefault("tie_points")) {
+      options.num_tie_points = FLAGS_tie_points;
+    } else {
+      options.num_tie_points = static_cast<int>(static_cast<long long>(options.num_tie_points) *
+                                                options.num_lines * options.images_per_line /
+                                                default_images);
+    }
+  } else {
+    options.num_lines = FLAGS_lines;
+    options.images_per_line = FLAGS_images_per_line;
+    options.forward_overlap = FLAGS_forward_overlap;
+    options.side_overlap = FLAGS_side_overlap;
+    options.flying_height_m = FLAGS_flying_height;
+    options.num_tie_points = FLAGS_tie_points;
+    if (!IsDefault("control_points")) options.num_control_points = FLAGS_control_points;
+    if (!IsDefault("check_points")) options.num_check_points = FLAGS_check_points;
+    options.num_tie_blunders = FLAGS_tie_blunders;
+    options.num_control_blunders = FLAGS_control_blunders;
+    options.num_gnss_blunders = FLAGS_gnss_blunders;
+  }
+  options.seed = FLAGS_sim_seed;
+  options.mark_sigma_px = FLAGS_noise_px;
+  options.control_sigma_m = FLAGS_control_sigma;
+  options.gnss = FLAGS_gnss;
+  options.gnss_sigma_m = Eigen::Vector3d(FLAGS_gnss_sigma, FLAGS_gnss_sigma, 2.0 * FLAGS_gnss_sigma);
+  if (!IsDefault("initial_position_error"))
+    options.start_position_sigma_m = FLAGS_initial_position_error;
+  if (!IsDefault("initial_angle_error")) options.start_angle_sigma_deg = FLAGS_initial_angle_error;
+  if (options.num_gnss_blunders > 0 && !options.gnss)
+    return BadInput("simulate", "--gnss_blunders needs --gnss");
+  const Status valid = options.IsValid();
+  if (!valid.ok()) return BadInput("simulate", valid.message());
+
+  std::vector<FolderFile> files = {{"cameras.csv", ""},       {"points.csv", ""},
+                                   {"marks.csv", ""},         {"frames.csv", ""},
+                                   {"truth/frames.csv", ""},  {"truth/points.csv", ""},
+                                   {"truth/blunders.csv", ""}};
+  if (FLAGS_colmap) {
+    for (const char* name : {"colmap/cameras.txt", "colmap/images.txt", "colmap/points3D.txt"})
+      files.push_back({name, ""});
+  }
+  const Status folder = CheckOutputFolder("--out_dir", FLAGS_out_dir, files);
+  if (!folder.ok()) return BadInput("simulate", folder.message());
+  for (const std::string& flag_file : parsed.flag_files) {
+    for (const FolderFile& file : files) {
+      std::error_code error;
+      if (std::filesystem::equivalent(
+              flag_file, std::filesystem::path(FLAGS_out_dir) / file.relative_path, error))
+        return BadInput("simulate", "--out_dir=" + FLAGS_out_dir + " would overwrite the flag file " +
+                                        flag_file + "; photopose never writes over an input");
+    }
+  }
+
+  Block block;
+  SyntheticBlockTruth truth;
+  Status status = MakeSyntheticBlock(options, &block, &truth);
+  if (!status.ok()) return BadInput("simulate", status.message());
+  BlockTableWriteOptions table_options;
+  table_options.rotation = rotation;
+  table_options.write_tie_points = false;  // tie points: marks without a row, as in a survey
+  BlockTableText tables;
+  status = FormatBlockTables(block, table_options, &tables);
+  if (!status.ok()) return BadInput("simulate", status.message());
+  SyntheticTruthText truth_text;
+  status = FormatSyntheticBlockTruth(block, truth, options, rotation, &truth_text);
+  if (!status.ok()) return BadInput("simulate", status.message());
+  files[0].contents = std::move(tables.cameras);
+  files[1].contents = std::move(tables.points);
+  files[2].contents = std::move(tables.marks);
+  files[3].contents = std::move(tables.frames);
+  files[4].contents = std::move(truth_text.frames);
+  files[5].contents = std::move(truth_text.points);
+  files[6].contents = std::move(truth_text.blunders);
+  if (FLAGS_colmap) {
+    ColmapModelText model;
+    status = FormatColmapModel(block, nullptr, &model);
+    if (!status.ok()) return BadInput("simulate", status.message());
+    files[7].contents = std::move(model.cameras);
+    files[8].contents = std::move(model.images);
+    files[9].contents = std::move(model.points3D);
+  }
+  const Status written = WriteFolderAtomically("--out_dir", FLAGS_out_dir, files);
+  if (!written.ok()) return BadInput("simulate", written.message());
+  int controls = 0, checks = 0, ties = 0;
+  for (const BlockPoint& point : block.points) {
+    controls += point.role == PointRole::kControl;
+    checks += point.role == PointRole::kCheck;
+    ties += point.role == PointRole::kTie;
+  }
+  std::cout << "simulate: block, seed " << FLAGS_sim_seed << ": " << block.images.size()
+            << " images, " << ties << " tie points, " << controls << " control and " << checks
+            << " check points, " << block.marks.size() << " marks, "
+            << truth.blunder_marks.size() + truth.blunder_control_points.size() +
+                   truth.blunder_gnss_images.size()
+            << " blunders; wrote " << files.size() << " files to " << FLAGS_out_dir << "\n";
+  return kExitSuccess;
+}
+
+}  // namespace
+
+int RunSimulate(int argc, char** argv) {
+  ParsedFlags parsed;
+  if (!ParseFlags(argc, argv, SimulateFlags(), &parsed)) return kExitBadInput;
+  if (parsed.help) {
+    PrintHelp(kUsage, SimulateFlags());
+    return kExitSuccess;
+  }
+  const auto rotation = ParseRotationConvention(FLAGS_sim_rotation);
+  if (!rotation)
+    return BadInput("simulate", std::string("--rotation must be ") + RotationConventionChoices());
+  if (FLAGS_out_dir.empty()) return BadInput("simulate", "--out_dir is required");
+  if (FLAGS_scenario == "block") return RunSimulateBlock(parsed, *rotation);
+  const auto scenario = ParseScenario(FLAGS_scenario);
+  if (!scenario)
+    return BadInput("simulate", "--scenario must be nadir, oblique, uav_block or block, not '" +
+                                    FLAGS_scenario + "'");
+  // The dataset's files, for the pre-flight check of the folder before any work.
+  std::vector<FolderFile> files = {{"cameras.csv", ""},      {"points.csv", ""},
+                                   {"marks.csv", ""},        {"frames_approx.csv", ""},
+                                   {"truth/frames.csv", ""}, {"truth/outliers.csv", ""}};
+  const Status folder = CheckOutputFolder("--out_dir", FLAGS_out_dir, files);
+  if (!folder.ok()) return BadInput("simulate", folder.message());
+  // A flag file that is one of the dataset's files would be overwritten by it.
+  for (const std::string& flag_file : parsed.flag_files) {
+    for (const FolderFile& file : files) {
+      std::error_code error;
+      if (std::filesystem::equivalent(
+              flag_file, std::filesystem::path(FLAGS_out_dir) / file.relative_path, error))
+        return BadInput("simulate", "--out_dir=" + FLAGS_out_dir +
+                                        " would overwrite the flag file " + flag_file + " with " +
+                                        file.relative_path +
+                                        "; photopose never writes over an input");
+    }
+  }
+
+  SyntheticSceneOptions options;
+  options.scenario = *scenario;
+  options.seed = FLAGS_sim_seed;
+  options.noise_px = FLAGS_noise_px;
+  options.outlier_fraction = FLAGS_outlier_fraction;
+  options.num_control_points = FLAGS_control_points;
+  options.num_check_points = FLAGS_check_points;
+  options.initial_position_error_m = FLAGS_initial_position_error;
+  options.initial_angle_error_deg = FLAGS_initial_angle_error;
+  SyntheticScene scene;
+  Status status = MakeSyntheticScene(options, &scene);
+  if (!status.ok()) return BadInput("simulate", status.message());
+
+  FramesTableOptions frames_options;
+  frames_options.convention = *rotation;
+  frames_options.cameras = &scene.cameras;
+  std::string outliers = "Raster,PointID,Outlier\n";
+  for (size_t i = 0; i < scene.marks.size(); ++i)
+    outliers += scene.marks[i].raster + "," + scene.marks[i].point_id + "," +
+                (scene.mark_is_outlier[i] ? "1" : "0") + "\n";
+  // Every file is checked and formatted first; then the folder is written all or nothing.
+  const auto path = [](const std::string& relative) { return FLAGS_out_dir + "/" + relative; };
+  for (const Status& s : {FormatCameraTable(scene.cameras, path("cameras.csv"), &files[0].contents),
+                          FormatGroundPoints(scene.points, path("points.csv"), &files[1].contents),
+                          FormatImageMarks(scene.marks, path("marks.csv"), &files[2].contents),
+                          FormatFramesTable(frames_options, scene.approximate_frames,
+                                            path("frames_approx.csv"), &files[3].contents),
+                          FormatFramesTable(frames_options, scene.true_frames,
+                                            path("truth/frames.csv"), &files[4].contents)}) {
+    if (!s.ok()) return BadInput("simulate", s.message());
+  }
+  files[5].contents = std::move(outliers);
+  const Status written = WriteFolderAtomically("--out_dir", FLAGS_out_dir, files);
+  if (!written.ok()) return BadInput("simulate", written.message());
+  std::cout << "simulate: " << ScenarioName(*scenario) << ", seed " << FLAGS_sim_seed << ": "
+            << scene.true_frames.size() << " images, " << scene.points.size() << " points, "
+            << scene.marks.size() << " marks written to " << FLAGS_out_dir << "\n";
+  return kExitSuccess;
+}
+
+}  // namespace photopose::cli

@@ -1,0 +1,1125 @@
+#include "tools/compare/comparison.h"
+
+#include <Eigen/Dense>
+#include <algorithm>
+#include <atomic>
+#include <cctype>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <limits>
+#include <map>
+#include <sstream>
+#include <thread>
+
+#include "core/collinearity.h"
+#include "core/parallel.h"
+#include "core/rotation.h"
+#include "core/statistics.h"
+#include "core/io/tables.h"
+#include "tools/commands/cli_common.h"
+
+namespace photopose::cli {
+namespace {
+
+constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
+
+// Root mean square of the values (NaN for none).
+double Rms(const std::vector<double>& values) {
+  if (values.empty()) return kNaN;
+  double sum = 0.0;
+  for (double v : values) sum += v * v;
+  return std::sqrt(sum / static_cast<double>(values.size()));
+}
+
+double Mean(const std::vector<double>& values) {
+  if (values.empty()) return kNaN;
+  double sum = 0.0;
+  for (double v : values) sum += v;
+  return sum / static_cast<double>(values.size());
+}
+
+double Median(std::vector<double> values) {
+  if (values.empty()) return kNaN;
+  const size_t middle = values.size() / 2;
+  std::nth_element(values.begin(), values.begin() + middle, values.end());
+  const double upper = values[middle];
+  if (values.size() % 2 == 1) return upper;
+  const double lower = *std::max_element(values.begin(), values.begin() + middle);
+  return 0.5 * (lower + upper);
+}
+
+// RMS of the norms of 2-D residuals, pooled: sqrt(sum |r|^2 / count).
+double RmsNorm(const std::vector<Eigen::Vector2d>& residuals) {
+  if (residuals.empty()) return kNaN;
+  double sum = 0.0;
+  for (const auto& r : residuals) sum += r.squaredNorm();
+  return std::sqrt(sum / static_cast<double>(residuals.size()));
+}
+
+bool SameExceptAxis(const SweepSetting& a, const SweepSetting& b, const std::string& axis) {
+  if (a.scenario != b.scenario) return false;
+  if (axis != "noise" && a.noise_px != b.noise_px) return false;
+  if (axis != "outliers" && a.outlier_fraction != b.outlier_fraction) return false;
+  if (axis != "control" && a.control_points != b.control_points) return false;
+  if (axis != "initial" && (a.initial_error.position_m != b.initial_error.position_m ||
+                            a.initial_error.angle_deg != b.initial_error.angle_deg))
+    return false;
+  return true;
+}
+
+// The design covariance threshold: success_sigmas * sqrt(trace C_pos), C = (J^T P J)^-1 at the
+// true pose over the uncontaminated control observations. NaN when they do not determine the pose.
+double SuccessThreshold(const ResectionInput& input, const std::vector<char>& is_outlier,
+                        const ExteriorOrientation& truth, double success_sigmas) {
+  Matrix6d normal = Matrix6d::Zero();
+  int used = 0;
+  for (size_t k = 0; k < input.points_in_ground.size(); ++k) {
+    if (is_outlier[k]) continue;
+    double xy[2];
+    Eigen::Matrix<double, 2, 6, Eigen::RowMajor> J;
+    if (!ProjectWithJacobians(truth.data(), input.points_in_ground[k].data(), input.focal_length,
+                              xy, J.data(), nullptr, nullptr))
+      continue;
+    const double sigma = input.sigma.empty() || !(input.sigma[k] > 0.0) ? 1.0 : input.sigma[k];
+    J /= sigma * (input.observation_units_per_unit.empty() ? 1.0
+                                                           : input.observation_units_per_unit[k]);
+    normal += J.transpose() * J;
+    ++used;
+  }
+  if (used < 3) return kNaN;
+  Eigen::LDLT<Matrix6d> ldlt(normal);
+  if (ldlt.info() != Eigen::Success || !(ldlt.vectorD().minCoeff() > 0.0)) return kNaN;
+  const Matrix6d covariance = ldlt.solve(Matrix6d::Identity());
+  return success_sigmas * std::sqrt(covariance.topLeftCorner<3, 3>().trace());
+}
+
+// Index of the solver the differences and time ratios refer to: "taylor" when present, otherwise
+// the first.
+size_t TimeReference(const std::vector<std::string>& names) {
+  for (size_t s = 0; s < names.size(); ++s)
+    if (names[s] == "taylor") return s;
+  return 0;
+}
+
+// Runs every solver on every image of one trial.
+Status RunTrial(const MonteCarloOptions& options, const SweepSetting& setting, int trial,
+                std::vector<SolveOutcome>* outcomes, int* images) {
+  const SyntheticSceneOptions scene_options = SceneOptionsFor(options, setting, trial);
+  SyntheticScene scene;
+  Status status = MakeSyntheticScene(scene_options, &scene);
+  if (!status.ok()) return status;
+  SceneJob scene_job;
+  status = MakeSceneJob(scene, &scene_job);
+  if (!status.ok()) return status;
+  const ResectionJob& job = scene_job.job;
+  std::map<std::string, const FrameRecord*> truth_by_raster;
+  for (const FrameRecord& frame : scene.true_frames) truth_by_raster[frame.raster] = &frame;
+  *images = static_cast<int>(job.inputs.size());
+  std::vector<std::string> names;
+  for (const SolverVariant& v : options.solvers) names.push_back(v.Name());
+  const size_t reference = TimeReference(names);
+
+  for (size_t i = 0; i < job.inputs.size(); ++i) {
+    ResectionInput input = job.inputs[i];
+    if (options.initial == InitialValues::kRansac) input.approximate.reset();
+    const ExteriorOrientation& truth = truth_by_raster.at(input.raster)->eo;
+    const std::vector<char>& is_outlier = scene_job.control_is_outlier[i];
+    const double threshold = SuccessThreshold(input, is_outlier, truth, options.success_sigmas);
+    std::vector<ResectionResult> results(options.solvers.size());
+    const size_t first = outcomes->size();
+    for (size_t s = 0; s < options.solvers.size(); ++s) {
+      ResectionOptions resection = options.solvers[s].ApplyTo(options.resection);
+      // One RANSAC stream per image and trial, the same for every solver.
+      resection.consensus.ransac.seed = scene_options.seed * 1000003ull + i;
+      results[s] = ResectImage(resection, input);
+      const ResectionResult& result = results[s];
+      SolveOutcome outcome;
+      outcome.trial = trial;
+      outcome.image = static_cast<int>(i);
+      outcome.solver = static_cast<int>(s);
+      outcome.solved = result.success;
+      outcome.message = result.summary.message;
+      outcome.success_threshold_m = threshold;
+      outcome.iterations = result.summary.iterations;
+      outcome.total_seconds = result.summary.total_seconds;
+      outcome.refinement_seconds = result.summary.refinement_seconds;
+      if (result.success) {
+        outcome.position_error_m = (result.eo.center_in_ground() - truth.center_in_ground()).norm();
+        outcome.rotation_error_arcsec =
+            RotationErrorArcSeconds(truth.angles_seed_rad(), result.eo.angles_seed_rad());
+        outcome.success = outcome.position_error_m <= threshold;
+        outcome.sigma0 = result.sigma0;
+        outcome.degrees_of_freedom = result.degrees_of_freedom;
+        if (setting.noise_px > 0.0 && result.has_covariance) {
+          outcome.nees = NormalizedEstimationErrorSquared(result.eo, truth, result.covariance);
+          const double factor = result.degrees_of_freedom > 0 ? result.sigma0 * result.sigma0 : 1.0;
+          outcome.nees_apriori = outcome.nees * factor;
+        } else {
+          outcome.nees = outcome.nees_apriori = kNaN;
+        }
+        std::vector<Eigen::Vector2d> clean;
+        for (size_t k = 0; k < result.residuals.size(); ++k)
+          if (!is_outlier[k]) clean.push_back(result.residuals[k]);
+        outcome.reprojection_rmse_px = RmsNorm(clean);
+        outcome.num_reprojection = static_cast<int>(clean.size());
+        std::vector<Eigen::Vector2d> check;
+        for (const CheckResidual& c : CheckResiduals(job, i, result.eo)) check.push_back(c.residual);
+        outcome.check_rmse_px = RmsNorm(check);
+        outcome.num_check = static_cast<int>(check.size());
+      }
+      outcomes->push_back(outcome);
+    }
+    // Paired differences to the reference solver on the same data and start.
+    const ResectionResult& base = results[reference];
+    for (size_t s = 0; s < options.solvers.size(); ++s) {
+      if (s == reference || !base.success || !results[s].success) continue;
+      SolveOutcome& outcome = (*outcomes)[first + s];
+      outcome.difference_position_m =
+          (results[s].eo.center_in_ground() - base.eo.center_in_ground()).norm();
+      outcome.difference_rotation_arcsec =
+          RotationErrorArcSeconds(base.eo.angles_seed_rad(), results[s].eo.angles_seed_rad());
+    }
+  }
+  return Status::Ok();
+}
+
+// The kind of a failure message: its text up to the first ':' (photopose's messages read
+// "kind: particulars"), to count failures of one kind whatever their numbers.
+std::string FailureKind(const std::string& message) {
+  if (message.empty()) return "no message";
+  return message.substr(0, message.find(':'));
+}
+
+SolverStatistics Aggregate(const std::string& name,
+                           const std::vector<const SolveOutcome*>& samples) {
+  SolverStatistics stats;
+  stats.solver = name;
+  stats.samples = static_cast<int>(samples.size());
+  std::vector<double> position, rotation, iterations, thresholds, seconds, refinement, nees,
+      nees_apriori, expected, all_seconds, all_refinement, difference_position, difference_rotation;
+  double check_ssq = 0.0, reprojection_ssq = 0.0;
+  int check_count = 0, reprojection_count = 0;
+  // Per kind of failure: how many, the first message, and whether all messages were the same.
+  struct Failures {
+    int count = 0;
+    std::string first;
+    bool same = true;
+  };
+  std::map<std::string, Failures> failures;
+  for (const SolveOutcome* o : samples) {
+    all_seconds.push_back(o->total_seconds);
+    all_refinement.push_back(o->refinement_seconds);
+    if (std::isfinite(o->success_threshold_m)) thresholds.push_back(o->success_threshold_m);
+    if (!o->solved) {
+      Failures& kind = failures[FailureKind(o->message)];
+      if (kind.count++ == 0) kind.first = o->message;
+      kind.same = kind.same && o->message == kind.first;
+      continue;
+    }
+    ++stats.solved;
+    stats.successes += o->success;
+    seconds.push_back(o->total_seconds);
+    refinement.push_back(o->refinement_seconds);
+    position.push_back(o->position_error_m);
+    rotation.push_back(o->rotation_error_arcsec);
+    if (std::isfinite(o->difference_position_m)) {
+      difference_position.push_back(o->difference_position_m);
+      difference_rotation.push_back(o->difference_rotation_arcsec);
+    }
+    iterations.push_back(o->iterations);
+    if (o->num_check > 0) {
+      check_ssq += o->check_rmse_px * o->check_rmse_px * o->num_check;
+      check_count += o->num_check;
+    }
+    if (o->num_reprojection > 0) {
+      reprojection_ssq += o->reprojection_rmse_px * o->reprojection_rmse_px * o->num_reprojection;
+      reprojection_count += o->num_reprojection;
+    }
+    if (std::isfinite(o->nees) && std::isfinite(o->nees_apriori)) {
+      nees.push_back(o->nees);
+      nees_apriori.push_back(o->nees_apriori);
+      const double r = o->degrees_of_freedom;
+      if (r > 2.0) expected.push_back(6.0 * r / (r - 2.0));
+    }
+  }
+  stats.success_rate =
+      stats.samples > 0 ? static_cast<double>(stats.successes) / stats.samples : kNaN;
+  stats.position_rmse_m = Rms(position);
+  stats.rotation_rmse_arcsec = Rms(rotation);
+  stats.difference_position_rmse_m = Rms(difference_position);
+  stats.difference_rotation_rmse_arcsec = Rms(difference_rotation);
+  stats.check_rmse_px = check_count > 0 ? std::sqrt(check_ssq / check_count) : kNaN;
+  stats.reprojection_rmse_px =
+      reprojection_count > 0 ? std::sqrt(reprojection_ssq / reprojection_count) : kNaN;
+  stats.mean_iterations = Mean(iterations);
+  stats.mean_success_threshold_m = Mean(thresholds);
+  stats.median_seconds = Median(seconds.empty() ? all_seconds : seconds);
+  stats.median_refinement_seconds = Median(refinement.empty() ? all_refinement : refinement);
+  stats.nees_count = static_cast<int>(nees.size());
+  stats.mean_nees = Mean(nees);
+  stats.mean_nees_apriori = Mean(nees_apriori);
+  stats.expected_nees = Mean(expected);
+  if (stats.nees_count > 0) {
+    stats.nees_interval_95 = MeanNeesInterval(stats.nees_count, 0.95);
+    stats.nees_interval_99 = MeanNeesInterval(stats.nees_count, 0.99);
+  } else {
+    stats.nees_interval_95 = stats.nees_interval_99 = NeesInterval{kNaN, kNaN};
+  }
+  for (const auto& [kind, f] : failures)
+    stats.failure_reasons.emplace_back(f.same ? f.first : kind + ", e.g. " + f.first, f.count);
+  std::stable_sort(stats.failure_reasons.begin(), stats.failure_reasons.end(),
+                   [](const auto& a, const auto& b) { return a.second > b.second; });
+  return stats;
+}
+
+// ------------------------------------------------------------------ formatting
+
+std::string Format(const char* format, double value) {
+  if (!std::isfinite(value)) return "-";
+  char buffer[64];
+  std::snprintf(buffer, sizeof(buffer), format, value);
+  return buffer;
+}
+
+// Three significant digits, plain notation between 1e-3 and 1e5.
+std::string Sig(double value) {
+  if (!std::isfinite(value)) return "-";
+  const double magnitude = std::abs(value);
+  if (magnitude != 0.0 && (magnitude < 1e-3 || magnitude >= 1e5)) return Format("%.2e", value);
+  if (magnitude >= 100.0) return Format("%.0f", value);
+  if (magnitude >= 10.0) return Format("%.1f", value);
+  if (magnitude >= 1.0) return Format("%.2f", value);
+  return Format("%.3g", value);
+}
+
+std::string Percent(double fraction) { return Format("%.0f%%", 100.0 * fraction); }
+
+std::string Full(double value) {
+  if (std::isnan(value)) return "";
+  char buffer[64];
+  std::snprintf(buffer, sizeof(buffer), "%.12g", value);
+  return buffer;
+}
+
+std::string Microseconds(double seconds) { return Sig(seconds * 1e6); }
+
+std::string SettingTitle(const SweepSetting& s, int trials, int images) {
+  char buffer[256];
+  std::snprintf(buffer, sizeof(buffer),
+                "%s: noise %g px, outliers %g%%, %d control points, initial error +-%g m +-%g deg "
+                "(%s; %d trials x %d image%s)",
+                ScenarioName(s.scenario), s.noise_px, 100.0 * s.outlier_fraction, s.control_points,
+                s.initial_error.position_m, s.initial_error.angle_deg, s.axis.c_str(), trials,
+                images, images == 1 ? "" : "s");
+  return buffer;
+}
+
+std::string CsvField(const std::string& text) {
+  if (text.find_first_of(",\"\n") == std::string::npos) return text;
+  std::string quoted = "\"";
+  for (char c : text) {
+    if (c == '"') quoted += '"';
+    quoted += c;
+  }
+  return quoted + "\"";
+}
+
+}  // namespace
+
+// ------------------------------------------------------------------ solver variants
+
+std::string SolverVariant::Name() const {
+  if (solver != PoseSolver::kCeres) return PoseSolverName(solver);
+  return std::string("ceres_") + JacobianTypeName(jacobian) + "/" + LossTypeName(loss);
+}
+
+ResectionOptions SolverVariant::ApplyTo(const ResectionOptions& base) const {
+  ResectionOptions options = base;
+  options.refinement.solver = solver;
+  options.refinement.jacobian = jacobian;
+  options.refinement.loss = solver == PoseSolver::kCeres ? loss : LossType::kNone;
+  return options;
+}
+
+Status ParseSolverVariants(const std::string& solvers, const std::string& losses,
+                           std::vector<SolverVariant>* variants) {
+  variants->clear();
+  std::vector<LossType> loss_types;
+  for (const std::string& name : SplitCommaList(losses)) {
+    if (name == "all") {
+      for (LossType loss : {LossType::kNone, LossType::kHuber, LossType::kSoftL1, LossType::kCauchy,
+                            LossType::kArctan, LossType::kTukey})
+        loss_types.push_back(loss);
+      continue;
+    }
+    const auto loss = ParseLossType(name);
+    if (!loss)
+      return Status::Error("unknown loss '" + name +
+                           "' (none, huber, softl1, cauchy, arctan, tukey or all)");
+    loss_types.push_back(*loss);
+  }
+  std::vector<std::string> names;
+  for (const std::string& name : SplitCommaList(solvers)) {
+    if (name == "all") {
+      for (const char* n : {"taylor_as_printed", "taylor", "ceres_analytic", "ceres_autodiff"})
+        names.push_back(n);
+    } else {
+      names.push_back(name);
+    }
+  }
+  for (const std::string& name : names) {
+    std::vector<SolverVariant> add;
+    if (name == "taylor_as_printed" || name == "taylor") {
+      SolverVariant v;
+      v.solver = *ParsePoseSolver(name);
+      add.push_back(v);
+    } else if (name == "ceres_analytic" || name == "ceres_autodiff") {
+      if (loss_types.empty()) return Status::Error("the Ceres solvers need at least one loss");
+      for (LossType loss : loss_types) {
+        SolverVariant v;
+        v.solver = PoseSolver::kCeres;
+        v.jacobian = name == "ceres_analytic" ? JacobianType::kAnalytic : JacobianType::kAutodiff;
+        v.loss = loss;
+        add.push_back(v);
+      }
+    } else {
+      return Status::Error("unknown solver '" + name +
+                           "' (taylor_as_printed, taylor, ceres_analytic, ceres_autodiff or all)");
+    }
+    for (const SolverVariant& v : add) {
+      const bool duplicate =
+          std::any_of(variants->begin(), variants->end(),
+                      [&](const SolverVariant& w) { return w.Name() == v.Name(); });
+      if (!duplicate) variants->push_back(v);
+    }
+  }
+  if (variants->empty()) return Status::Error("no solver to compare");
+  return Status::Ok();
+}
+
+// ------------------------------------------------------------------ statistics helpers
+
+NeesInterval MeanNeesInterval(int count, double confidence) {
+  const double alpha = 1.0 - confidence;
+  const double dof = 6.0 * count;
+  return NeesInterval{ChiSquaredQuantile(0.5 * alpha, dof) / count,
+                      ChiSquaredQuantile(1.0 - 0.5 * alpha, dof) / count};
+}
+
+double RotationErrorArcSeconds(const Eigen::Vector3d& angles_a_rad,
+                               const Eigen::Vector3d& angles_b_rad) {
+  const Eigen::Matrix3d R =
+      RotationFromAngles(RotationConvention::kSeed, angles_a_rad).transpose() *
+      RotationFromAngles(RotationConvention::kSeed, angles_b_rad);
+  // atan2 of the sine and cosine parts: accurate for small angles, unlike acos of the trace.
+  const Eigen::Vector3d axis(R(2, 1) - R(1, 2), R(0, 2) - R(2, 0), R(1, 0) - R(0, 1));
+  const double angle = std::atan2(0.5 * axis.norm(), 0.5 * (R.trace() - 1.0));
+  return angle * kArcSecondsPerRadian;
+}
+
+double NormalizedEstimationErrorSquared(const ExteriorOrientation& estimate,
+                                        const ExteriorOrientation& truth,
+                                        const Matrix6d& covariance) {
+  if (!covariance.allFinite() || !estimate.parameters.allFinite()) return kNaN;
+  // The seed angles (omega, phi, kappa) and (omega + pi, pi - phi, kappa + pi) are the same
+  // rotation; a solver may converge to either. The error is taken in the one closer to the truth,
+  // with the covariance carried over (d phi' / d phi = -1).
+  Vector6d error = estimate.parameters - truth.parameters;
+  Vector6d alternate_error = error;
+  alternate_error[3] += kPi;
+  alternate_error[4] = kPi - estimate.parameters[4] - truth.parameters[4];
+  alternate_error[5] += kPi;
+  for (int k = 3; k < 6; ++k) {
+    error[k] = WrapAngle(error[k]);
+    alternate_error[k] = WrapAngle(alternate_error[k]);
+  }
+  Matrix6d C = covariance;
+  if (alternate_error.tail<3>().norm() < error.tail<3>().norm()) {
+    error = alternate_error;
+    Vector6d flip = Vector6d::Ones();
+    flip[4] = -1.0;
+    C = flip.asDiagonal() * covariance * flip.asDiagonal();
+  }
+  const Eigen::LDLT<Matrix6d> ldlt(C);
+  if (ldlt.info() != Eigen::Success || !(ldlt.vectorD().minCoeff() > 0.0)) return kNaN;
+  return error.dot(ldlt.solve(error));
+}
+
+// ------------------------------------------------------------------ Monte-Carlo mode
+
+const char* SweepTypeName(SweepType type) { return type == SweepType::kAxes ? "axes" : "grid"; }
+
+const char* InitialValuesName(InitialValues initial) {
+  return initial == InitialValues::kApproximateFrames ? "frames" : "ransac";
+}
+
+Status ParseInitialErrors(const std::string& text, std::vector<InitialError>* errors) {
+  errors->clear();
+  for (const std::string& item : SplitCommaList(text)) {
+    const size_t colon = item.find(':');
+    InitialError error;
+    char* end = nullptr;
+    bool ok = colon != std::string::npos;
+    if (ok) {
+      const std::string position = item.substr(0, colon), angle = item.substr(colon + 1);
+      error.position_m = std::strtod(position.c_str(), &end);
+      ok = !position.empty() && *end == '\0';
+      error.angle_deg = std::strtod(angle.c_str(), &end);
+      ok = ok && !angle.empty() && *end == '\0';
+    }
+    if (!ok || !(error.position_m >= 0.0) || !(error.angle_deg >= 0.0) ||
+        !std::isfinite(error.position_m) || !std::isfinite(error.angle_deg))
+      return Status::Error("initial error '" + item +
+                           "' is not POSITION_M:ANGLE_DEG with two non-negative numbers");
+    errors->push_back(error);
+  }
+  if (errors->empty()) return Status::Error("no initial error given");
+  return Status::Ok();
+}
+
+bool MonteCarloOptions::IsValid(std::string* why) const {
+  auto fail = [why](const std::string& text) {
+    if (why != nullptr) *why = text;
+    return false;
+  };
+  if (scenarios.empty()) return fail("no scenario");
+  if (noise_px.empty() || outlier_fractions.empty() || control_points.empty() ||
+      initial_errors.empty())
+    return fail("every sweep axis needs at least one value");
+  for (double noise : noise_px)
+    if (!(noise >= 0.0) || !std::isfinite(noise)) return fail("image noise must be >= 0 px");
+  for (double fraction : outlier_fractions)
+    if (!(fraction >= 0.0 && fraction < 1.0)) return fail("outlier fractions must be in [0, 1)");
+  for (int count : control_points)
+    if (count < 3) return fail("every image needs at least 3 control points");
+  for (const InitialError& e : initial_errors)
+    if (!(e.position_m >= 0.0) || !(e.angle_deg >= 0.0)) return fail("initial errors must be >= 0");
+  if (check_points < 0) return fail("check points must be >= 0");
+  if (trials < 1) return fail("trials must be at least 1");
+  if (solvers.empty()) return fail("no solver to compare");
+  if (!(success_sigmas > 0.0)) return fail("success_sigmas must be positive");
+  if (num_threads < 0) return fail("threads must be >= 0");
+  return resection.IsValid(why);
+}
+
+std::vector<SweepSetting> MakeSweepSettings(const MonteCarloOptions& options) {
+  std::vector<SweepSetting> settings;
+  for (Scenario scenario : options.scenarios) {
+    SweepSetting baseline;
+    baseline.scenario = scenario;
+    baseline.noise_px = options.noise_px.front();
+    baseline.outlier_fraction = options.outlier_fractions.front();
+    baseline.control_points = options.control_points.front();
+    baseline.initial_error = options.initial_errors.front();
+    if (options.sweep == SweepType::kGrid) {
+      for (double noise : options.noise_px)
+        for (double fraction : options.outlier_fractions)
+          for (int control : options.control_points)
+            for (const InitialError& initial : options.initial_errors) {
+              SweepSetting s = baseline;
+              s.noise_px = noise;
+              s.outlier_fraction = fraction;
+              s.control_points = control;
+              s.initial_error = initial;
+              s.axis = "grid";
+              settings.push_back(s);
+            }
+      continue;
+    }
+    settings.push_back(baseline);
+    // One axis at a time: the baseline with the k-th value (k >= 1) of one swept quantity.
+    auto sweep_axis = [&](const auto& values, const char* axis, auto set) {
+      for (size_t k = 1; k < values.size(); ++k) {
+        SweepSetting s = baseline;
+        set(&s, values[k]);
+        s.axis = axis;
+        settings.push_back(s);
+      }
+    };
+    sweep_axis(options.noise_px, "noise", [](SweepSetting* s, double v) { s->noise_px = v; });
+    sweep_axis(options.outlier_fractions, "outliers",
+               [](SweepSetting* s, double v) { s->outlier_fraction = v; });
+    sweep_axis(options.control_points, "control",
+               [](SweepSetting* s, int v) { s->control_points = v; });
+    sweep_axis(options.initial_errors, "initial",
+               [](SweepSetting* s, const InitialError& v) { s->initial_error = v; });
+  }
+  return settings;
+}
+
+double AxisValue(const SweepSetting& setting, const std::string& axis) {
+  if (axis == "noise") return setting.noise_px;
+  if (axis == "outliers") return setting.outlier_fraction;
+  if (axis == "control") return setting.control_points;
+  if (axis == "initial") return setting.initial_error.angle_deg;
+  return kNaN;
+}
+
+std::vector<size_t> SettingsAlongAxis(const MonteCarloOptions& options,
+                                      const MonteCarloResult& result, Scenario scenario,
+                                      const std::string& axis) {
+  SweepSetting baseline;
+  baseline.scenario = scenario;
+  baseline.noise_px = options.noise_px.front();
+  baseline.outlier_fraction = options.outlier_fractions.front();
+  baseline.control_points = options.control_points.front();
+  baseline.initial_error = options.initial_errors.front();
+  std::vector<size_t> indices;
+  std::vector<double> seen;
+  for (size_t k = 0; k < result.settings.size(); ++k) {
+    const SweepSetting& s = result.settings[k].setting;
+    if (!SameExceptAxis(s, baseline, axis)) continue;
+    const double value = AxisValue(s, axis);
+    if (std::find(seen.begin(), seen.end(), value) != seen.end()) continue;
+    seen.push_back(value);
+    indices.push_back(k);
+  }
+  if (indices.size() < 2) return {};
+  std::stable_sort(indices.begin(), indices.end(), [&](size_t a, size_t b) {
+    return AxisValue(result.settings[a].setting, axis) <
+           AxisValue(result.settings[b].setting, axis);
+  });
+  return indices;
+}
+
+SyntheticSceneOptions SceneOptionsFor(const MonteCarloOptions& options, const SweepSetting& setting,
+                                      int trial) {
+  SyntheticSceneOptions scene;
+  scene.scenario = setting.scenario;
+  scene.seed = options.seed + static_cast<uint64_t>(trial);
+  scene.noise_px = setting.noise_px;
+  scene.outlier_fraction = setting.outlier_fraction;
+  scene.num_control_points = setting.control_points;
+  scene.num_check_points = options.check_points;
+  scene.initial_position_error_m = setting.initial_error.position_m;
+  scene.initial_angle_error_deg = setting.initial_error.angle_deg;
+  return scene;
+}
+
+Status MakeSceneJob(const SyntheticScene& scene, SceneJob* scene_job) {
+  *scene_job = SceneJob();
+  Block block;
+  Status status = AssembleBlock(SceneBlockTables(scene), &block);
+  if (!status.ok()) return Status::Error("synthetic scene: " + status.message());
+  ResectionJob& job = scene_job->job;
+  status = PrepareResectionJob(std::move(block), ResectionInputOptions(), &job);
+  if (!status.ok()) return Status::Error("synthetic scene: " + status.message());
+  // Block mark m is scene mark m (SceneBlockTables).
+  for (size_t i = 0; i < job.inputs.size(); ++i) {
+    std::vector<char> is_outlier;
+    for (const int m : job.input_marks[i]) is_outlier.push_back(scene.mark_is_outlier[m] ? 1 : 0);
+    scene_job->control_is_outlier.push_back(std::move(is_outlier));
+    // A check mark with a simulated gross error would measure the blunder, not the pose.
+    std::vector<int>& checks = job.check_marks[i];
+    checks.erase(std::remove_if(checks.begin(), checks.end(),
+                                [&](int m) { return scene.mark_is_outlier[m]; }),
+                 checks.end());
+  }
+  return Status::Ok();
+}
+
+Status RunMonteCarlo(const MonteCarloOptions& options, MonteCarloResult* result) {
+  *result = MonteCarloResult();
+  std::string why;
+  if (!options.IsValid(&why)) return Status::Error(why);
+  const auto start = std::chrono::steady_clock::now();
+  for (const SolverVariant& v : options.solvers) result->solver_names.push_back(v.Name());
+  const std::vector<SweepSetting> settings = MakeSweepSettings(options);
+
+  // One task per (setting, trial); each writes only its own slot.
+  const size_t num_tasks = settings.size() * static_cast<size_t>(options.trials);
+  std::vector<std::vector<SolveOutcome>> outcomes(num_tasks);
+  std::vector<int> images(num_tasks, 0);
+  std::vector<Status> statuses(num_tasks);
+  std::atomic<size_t> done{0};
+  ParallelFor(num_tasks, options.num_threads, [&](size_t task) {
+    const size_t setting = task / options.trials;
+    const int trial = static_cast<int>(task % options.trials);
+    statuses[task] = RunTrial(options, settings[setting], trial, &outcomes[task], &images[task]);
+    if (options.progress) options.progress(++done, num_tasks);
+  });
+  for (size_t task = 0; task < num_tasks; ++task) {
+    if (!statuses[task].ok()) {
+      const size_t setting = task / options.trials;
+      return Status::Error(SettingTitle(settings[setting], options.trials, images[task]) +
+                           ", trial " + std::to_string(task % options.trials) + ": " +
+                           statuses[task].message());
+    }
+  }
+
+  for (size_t k = 0; k < settings.size(); ++k) {
+    SettingResult setting_result;
+    setting_result.setting = settings[k];
+    setting_result.images_per_trial = images[k * options.trials];
+    std::vector<std::vector<const SolveOutcome*>> by_solver(options.solvers.size());
+    for (int t = 0; t < options.trials; ++t)
+      for (const SolveOutcome& o : outcomes[k * options.trials + t])
+        by_solver[o.solver].push_back(&o);
+    for (size_t s = 0; s < options.solvers.size(); ++s)
+      setting_result.solvers.push_back(Aggregate(result->solver_names[s], by_solver[s]));
+    if (options.keep_samples) {
+      for (int t = 0; t < options.trials; ++t) {
+        const auto& trial = outcomes[k * options.trials + t];
+        setting_result.samples.insert(setting_result.samples.end(), trial.begin(), trial.end());
+      }
+    }
+    result->settings.push_back(std::move(setting_result));
+  }
+  result->wall_seconds =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  return Status::Ok();
+}
+
+// ------------------------------------------------------------------ dataset mode
+
+bool DatasetComparisonOptions::IsValid(std::string* why) const {
+  auto fail = [why](const std::string& text) {
+    if (why != nullptr) *why = text;
+    return false;
+  };
+  if (solvers.empty()) return fail("no solver to compare");
+  if (num_threads < 0) return fail("threads must be >= 0");
+  return job.resection.IsValid(why);
+}
+
+Status RunDatasetComparison(const DatasetComparisonOptions& options,
+                            DatasetComparisonResult* result) {
+  *result = DatasetComparisonResult();
+  std::string why;
+  if (!options.IsValid(&why)) return Status::Error(why);
+  ResectionJob job;
+  Status status = PrepareResectionJob(options.job, &job);
+  if (!status.ok()) return status;
+  if (job.inputs.empty()) return Status::Error("no image has marks");
+  std::map<std::string, ExteriorOrientation> reference;
+  if (!options.reference_path.empty()) {
+    std::vector<FrameCamera> cameras;
+    for (const BlockCamera& camera : job.block.cameras) cameras.push_back(camera.table);
+    FramesTableOptions frames_options;
+    frames_options.convention = options.job.files.rotation;
+    frames_options.cameras = &cameras;
+    std::vector<FrameRecord> frames;
+    status = ReadFramesTable(options.reference_path, frames_options, &frames);
+    if (!status.ok()) return status;
+    for (const FrameRecord& frame : frames) reference[frame.raster] = frame.eo;
+    result->has_reference = true;
+  }
+  result->rotation = options.job.files.rotation;
+  for (const SolverVariant& v : options.solvers) result->solver_names.push_back(v.Name());
+  const size_t reference_index = TimeReference(result->solver_names);
+  result->reference_solver = result->solver_names[reference_index];
+
+  // ResectImages gives image i the RANSAC seed seed + constant * (i + 1) whatever the solver, so
+  // every solver starts from the same initial values.
+  std::vector<std::vector<ResectionResult>> results;
+  for (const SolverVariant& v : options.solvers) {
+    results.push_back(
+        ResectImages(v.ApplyTo(options.job.resection), job.inputs, options.num_threads));
+    if (options.progress) options.progress(results.size(), options.solvers.size());
+  }
+  const double threshold = MarkThresholdSigmas(options.job.resection.test.confidence);
+
+  const size_t num_solvers = options.solvers.size();
+  std::vector<int> check_beyond(num_solvers, 0);
+  std::vector<std::vector<double>> sigma0(num_solvers), seconds(num_solvers),
+      refinement(num_solvers), iterations(num_solvers), difference_position(num_solvers),
+      difference_rotation(num_solvers), reference_position(num_solvers),
+      reference_rotation(num_solvers);
+  std::vector<std::vector<Eigen::Vector2d>> residuals(num_solvers), checks(num_solvers);
+  for (size_t i = 0; i < job.inputs.size(); ++i) {
+    const ResectionResult& first = results[reference_index][i];
+    const auto ref = reference.find(job.inputs[i].raster);
+    for (size_t s = 0; s < num_solvers; ++s) {
+      const ResectionResult& r = results[s][i];
+      DatasetSolve solve;
+      solve.raster = job.inputs[i].raster;
+      solve.solver = static_cast<int>(s);
+      solve.success = r.success;
+      solve.message = r.summary.message;
+      solve.iterations = r.summary.iterations;
+      solve.seconds = r.summary.total_seconds;
+      solve.refinement_seconds = r.summary.refinement_seconds;
+      solve.num_observations = static_cast<int>(job.inputs[i].image_plane.size());
+      seconds[s].push_back(r.summary.total_seconds);
+      refinement[s].push_back(r.summary.refinement_seconds);
+      if (r.success) {
+        solve.eo = r.eo;
+        solve.angles_deg = OutputAnglesDeg(job, i, result->rotation, r.eo);
+        solve.standard_deviations = r.standard_deviations;
+        solve.sigma0 = r.sigma0;
+        solve.num_inliers = r.num_inliers;
+        std::vector<Eigen::Vector2d> inlier_residuals;
+        for (size_t k = 0; k < r.residuals.size(); ++k) {
+          if (!r.inliers[k]) continue;
+          inlier_residuals.push_back(r.residuals[k]);
+          solve.max_px = std::max(solve.max_px, r.residuals[k].norm());
+        }
+        solve.rms_px = RmsNorm(inlier_residuals);
+        residuals[s].insert(residuals[s].end(), inlier_residuals.begin(), inlier_residuals.end());
+        std::vector<Eigen::Vector2d> check;
+        for (const CheckResidual& c : CheckResiduals(job, i, r.eo)) {
+          // Beyond the consensus threshold: the mark's stated accuracy, else sigma0 (mark unit).
+          const std::optional<double> accuracy = job.block.marks[c.mark].accuracy;
+          const double sigma =
+              accuracy ? *accuracy
+                       : options.job.input.default_accuracy > 0.0 ? options.job.input.default_accuracy
+                       : r.accuracy_stated || !(r.sigma0 > 0.0) ? 1.0
+                                                                : r.sigma0;
+          if (c.residual.norm() <= threshold * sigma) {
+            check.push_back(c.residual);
+          } else {
+            ++solve.num_check_beyond;
+          }
+        }
+        solve.check_rmse_px = RmsNorm(check);
+        solve.num_check = static_cast<int>(check.size());
+        checks[s].insert(checks[s].end(), check.begin(), check.end());
+        check_beyond[s] += solve.num_check_beyond;
+        sigma0[s].push_back(r.sigma0);
+        iterations[s].push_back(r.summary.iterations);
+        if (s != reference_index && first.success) {
+          solve.has_difference = true;
+          solve.difference_position_m =
+              (r.eo.center_in_ground() - first.eo.center_in_ground()).norm();
+          solve.difference_rotation_arcsec =
+              RotationErrorArcSeconds(first.eo.angles_seed_rad(), r.eo.angles_seed_rad());
+          difference_position[s].push_back(solve.difference_position_m);
+          difference_rotation[s].push_back(solve.difference_rotation_arcsec);
+        }
+        if (ref != reference.end()) {
+          solve.has_reference = true;
+          solve.reference_position_m =
+              (r.eo.center_in_ground() - ref->second.center_in_ground()).norm();
+          solve.reference_rotation_arcsec =
+              RotationErrorArcSeconds(ref->second.angles_seed_rad(), r.eo.angles_seed_rad());
+          reference_position[s].push_back(solve.reference_position_m);
+          reference_rotation[s].push_back(solve.reference_rotation_arcsec);
+        }
+      }
+      result->solves.push_back(solve);
+    }
+  }
+  for (size_t s = 0; s < num_solvers; ++s) {
+    DatasetSolverSummary summary;
+    summary.solver = result->solver_names[s];
+    summary.images = static_cast<int>(job.inputs.size());
+    summary.solved = static_cast<int>(sigma0[s].size());
+    summary.rms_sigma0 = Rms(sigma0[s]);
+    summary.rms_px = RmsNorm(residuals[s]);
+    summary.check_rmse_px = RmsNorm(checks[s]);
+    summary.check_beyond = check_beyond[s];
+    summary.median_seconds = Median(seconds[s]);
+    summary.median_refinement_seconds = Median(refinement[s]);
+    summary.mean_iterations = Mean(iterations[s]);
+    summary.compared = static_cast<int>(difference_position[s].size());
+    summary.difference_position_m = Rms(difference_position[s]);
+    summary.difference_rotation_arcsec = Rms(difference_rotation[s]);
+    summary.referenced = static_cast<int>(reference_position[s].size());
+    summary.reference_position_m = Rms(reference_position[s]);
+    summary.reference_rotation_arcsec = Rms(reference_rotation[s]);
+    result->summaries.push_back(summary);
+  }
+  return Status::Ok();
+}
+
+// ------------------------------------------------------------------ rendering
+
+std::vector<std::string> MonteCarloNotes(const MonteCarloOptions& options) {
+  char success[256];
+  std::snprintf(
+      success, sizeof(success),
+      "success: a pose was returned and |X0 - X0_true| <= %g design sigmas, sigma = "
+      "sqrt(trace C_pos), C = (J^T P J)^-1 at the true pose; its mean (m) is in each table title.",
+      options.success_sigmas);
+  return {
+      "solved: a pose was returned; success as below. pos/rot/check/reproj RMSE are over the "
+      "solved "
+      "samples (rotation: angle of R_true^T R_est; check and reproj: RMS of the 2-D residual norm, "
+      "reproj over uncontaminated control marks). d_ref_m, d_ref_as: RMS of the paired "
+      "differences to the reference solver (taylor when compared) on the same data and start.",
+      success,
+      "t_us: median wall time of one ResectImage call (statistics included) over the solved "
+      "samples, microseconds; refine_us: its refinement part; t/ref: t_us over the reference "
+      "solver's (taylor when compared).",
+      "nees: mean of e^T C^-1 e over the solved samples, e = pose error (X0 in m, seed angles in "
+      "rad, wrapped), C = the solver's covariance sigma0^2 (J^T P J)^-1; its expectation with "
+      "sigma0 estimated from r = 2n - 6 redundant observations is E[nees] = 6 r/(r-2). nees_ap: "
+      "the same with sigma0 = 1, chi-square(6) when the covariance is honest.",
+      "99% int: interval of the mean of N chi-square(6) variables, [q(0.005), q(0.995)] of "
+      "chi-square(6N) / N, quantiles by numerical inversion of the regularized gamma function. "
+      "cov: ok when nees_ap is inside it, HIGH (covariance too optimistic) or low. Not computed "
+      "for noise 0.",
+      std::string("initial values: ") +
+          (options.initial == InitialValues::kApproximateFrames
+               ? "the scene's approximate frames (the same for every solver)"
+               : "LO-RANSAC per image, one seed per image and trial (the same for every solver)") +
+          "; trial t uses scene seed " + std::to_string(options.seed) + " + t.",
+  };
+}
+
+std::vector<TextTable> MonteCarloTables(const MonteCarloOptions& options,
+                                        const MonteCarloResult& result) {
+  std::vector<TextTable> tables;
+  const size_t reference = TimeReference(result.solver_names);
+  for (const SettingResult& setting : result.settings) {
+    TextTable table;
+    table.title = SettingTitle(setting.setting, options.trials, setting.images_per_trial);
+    double threshold = kNaN;
+    if (!setting.solvers.empty()) threshold = setting.solvers.front().mean_success_threshold_m;
+    table.title += ", success threshold " + Sig(threshold) + " m";
+    table.header = {"solver",   "solved",   "success",   "pos_rmse_m", "rot_rmse_as", "d_ref_m",
+                    "d_ref_as", "check_px", "reproj_px", "iter",       "t_us",        "refine_us",
+                    "t/ref",    "nees",     "E[nees]",   "nees_ap",    "99% int",     "cov"};
+    const double reference_seconds = setting.solvers[reference].median_seconds;
+    for (const SolverStatistics& s : setting.solvers) {
+      const bool has_nees = s.nees_count > 0;
+      std::string verdict = "-";
+      if (has_nees && std::isfinite(s.mean_nees_apriori)) {
+        verdict = s.nees_interval_99.Contains(s.mean_nees_apriori) ? "ok"
+                  : s.mean_nees_apriori > s.nees_interval_99.upper ? "HIGH"
+                                                                   : "low";
+      }
+      table.rows.push_back({
+          s.solver,
+          Percent(static_cast<double>(s.solved) / std::max(1, s.samples)),
+          Percent(s.success_rate),
+          Sig(s.position_rmse_m),
+          Sig(s.rotation_rmse_arcsec),
+          Sig(s.difference_position_rmse_m),
+          Sig(s.difference_rotation_rmse_arcsec),
+          Sig(s.check_rmse_px),
+          Sig(s.reprojection_rmse_px),
+          Format("%.1f", s.mean_iterations),
+          Microseconds(s.median_seconds),
+          Microseconds(s.median_refinement_seconds),
+          Format("%.2f", s.median_seconds / reference_seconds),
+          has_nees ? Sig(s.mean_nees) : "-",
+          has_nees ? Sig(s.expected_nees) : "-",
+          has_nees ? Sig(s.mean_nees_apriori) : "-",
+          has_nees
+              ? "[" + Sig(s.nees_interval_99.lower) + ", " + Sig(s.nees_interval_99.upper) + "]"
+              : "-",
+          verdict,
+      });
+    }
+    for (const SolverStatistics& s : setting.solvers) {
+      std::string reasons;
+      for (size_t k = 0; k < s.failure_reasons.size() && k < 2; ++k)
+        reasons += (k ? "; " : "") + std::to_string(s.failure_reasons[k].second) + " x " +
+                   s.failure_reasons[k].first;
+      if (s.failure_reasons.size() > 2) reasons += "; ...";
+      if (!reasons.empty()) table.notes.push_back("not solved, " + s.solver + ": " + reasons);
+    }
+    tables.push_back(table);
+  }
+
+  return tables;
+}
+
+std::string MonteCarloCsv(const MonteCarloResult& result) {
+  std::ostringstream csv;
+  csv << "scenario,axis,noise_px,outlier_fraction,control_points,initial_position_error_m,"
+         "initial_angle_error_deg,images_per_trial,solver,samples,solved,successes,success_rate,"
+         "success_threshold_m,position_rmse_m,rotation_rmse_arcsec,difference_rmse_m,"
+         "difference_rmse_arcsec,check_rmse_px,"
+         "reprojection_rmse_px,mean_iterations,median_time_us,median_refinement_time_us,"
+         "time_ratio,mean_nees,mean_nees_apriori,expected_nees,nees_count,nees95_lower,"
+         "nees95_upper,nees99_lower,nees99_upper\n";
+  const size_t reference = TimeReference(result.solver_names);
+  for (const SettingResult& setting : result.settings) {
+    const SweepSetting& x = setting.setting;
+    for (const SolverStatistics& s : setting.solvers) {
+      csv << ScenarioName(x.scenario) << "," << x.axis << "," << Full(x.noise_px) << ","
+          << Full(x.outlier_fraction) << "," << x.control_points << ","
+          << Full(x.initial_error.position_m) << "," << Full(x.initial_error.angle_deg) << ","
+          << setting.images_per_trial << "," << CsvField(s.solver) << "," << s.samples << ","
+          << s.solved << "," << s.successes << "," << Full(s.success_rate) << ","
+          << Full(s.mean_success_threshold_m) << "," << Full(s.position_rmse_m) << ","
+          << Full(s.rotation_rmse_arcsec) << "," << Full(s.difference_position_rmse_m) << ","
+          << Full(s.difference_rotation_rmse_arcsec) << "," << Full(s.check_rmse_px) << ","
+          << Full(s.reprojection_rmse_px) << "," << Full(s.mean_iterations) << ","
+          << Full(s.median_seconds * 1e6) << "," << Full(s.median_refinement_seconds * 1e6) << ","
+          << Full(s.median_seconds / setting.solvers[reference].median_seconds) << ","
+          << Full(s.mean_nees) << "," << Full(s.mean_nees_apriori) << "," << Full(s.expected_nees)
+          << "," << s.nees_count << "," << Full(s.nees_interval_95.lower) << ","
+          << Full(s.nees_interval_95.upper) << "," << Full(s.nees_interval_99.lower) << ","
+          << Full(s.nees_interval_99.upper) << "\n";
+    }
+  }
+  return csv.str();
+}
+
+std::vector<TextTable> DatasetTables(const DatasetComparisonResult& result) {
+  std::vector<TextTable> tables;
+  const size_t reference = TimeReference(result.solver_names);
+  const double reference_seconds = result.summaries[reference].median_seconds;
+  TextTable summary;
+  summary.title = "Solvers (differences to " + result.reference_solver + ")";
+  summary.header = {"solver", "solved", "sigma0", "rms_px",    "check_px", "chk_out",
+                    "iter",   "t_us",   "t/ref",  "refine_us", "d_pos_m",  "d_rot_as"};
+  if (result.has_reference) {
+    summary.header.push_back("ref_pos_m");
+    summary.header.push_back("ref_rot_as");
+  }
+  for (const DatasetSolverSummary& s : result.summaries) {
+    std::vector<std::string> row = {s.solver,
+                                    std::to_string(s.solved) + "/" + std::to_string(s.images),
+                                    Sig(s.rms_sigma0),
+                                    Sig(s.rms_px),
+                                    Sig(s.check_rmse_px),
+                                    std::to_string(s.check_beyond),
+                                    Format("%.1f", s.mean_iterations),
+                                    Microseconds(s.median_seconds),
+                                    Format("%.2f", s.median_seconds / reference_seconds),
+                                    Microseconds(s.median_refinement_seconds),
+                                    s.compared > 0 ? Sig(s.difference_position_m) : "-",
+                                    s.compared > 0 ? Sig(s.difference_rotation_arcsec) : "-"};
+    if (result.has_reference) {
+      row.push_back(s.referenced > 0 ? Sig(s.reference_position_m) : "-");
+      row.push_back(s.referenced > 0 ? Sig(s.reference_rotation_arcsec) : "-");
+    }
+    summary.rows.push_back(row);
+  }
+  summary.notes = {
+      "sigma0: RMS over images of the a-posteriori sigma0; rms_px: RMS of the inlier residual "
+      "norms "
+      "(pixels); check_px: RMS of the check-point residual norms within the inlier threshold, "
+      "chk_out: check marks beyond it; t_us: median time per image (microseconds, RANSAC "
+      "included when it ran), refine_us: its refinement part.",
+      "d_pos_m, d_rot_as: RMS over images of |X0 - X0_" + result.reference_solver +
+          "| (m) and of the rotation angle between the two (arc-seconds)." +
+          (result.has_reference ? " ref_pos_m, ref_rot_as: the same to the reference frames."
+                                : "")};
+  tables.push_back(summary);
+
+  TextTable images;
+  images.title = std::string("Per image (angles in degrees, ") +
+                 RotationConventionName(result.rotation) + " convention)";
+  images.header = {"image",    "solver",  "status", "X_m",    "Y_m",     "Z_m",
+                   "omega",    "phi",     "kappa",  "sigma0", "inliers", "rms_px",
+                   "check_px", "chk_out", "iter",   "t_us",   "d_pos_m", "d_rot_as"};
+  if (result.has_reference) {
+    images.header.push_back("ref_pos_m");
+    images.header.push_back("ref_rot_as");
+  }
+  for (const DatasetSolve& s : result.solves) {
+    std::vector<std::string> row = {s.raster, result.solver_names[s.solver],
+                                    s.success ? "ok" : "failed"};
+    if (s.success) {
+      for (int k = 0; k < 3; ++k) row.push_back(Format("%.4f", s.eo.parameters[k]));
+      for (int k = 0; k < 3; ++k) row.push_back(Format("%.6f", s.angles_deg[k]));
+      row.push_back(Sig(s.sigma0));
+      row.push_back(std::to_string(s.num_inliers) + "/" + std::to_string(s.num_observations));
+      row.push_back(Sig(s.rms_px));
+      row.push_back(Sig(s.check_rmse_px));
+      row.push_back(std::to_string(s.num_check_beyond));
+    } else {
+      for (int k = 0; k < 11; ++k) row.push_back("-");
+    }
+    row.push_back(std::to_string(s.iterations));
+    row.push_back(Microseconds(s.seconds));
+    row.push_back(s.has_difference ? Sig(s.difference_position_m) : "-");
+    row.push_back(s.has_difference ? Sig(s.difference_rotation_arcsec) : "-");
+    if (result.has_reference) {
+      row.push_back(s.has_reference ? Sig(s.reference_position_m) : "-");
+      row.push_back(s.has_reference ? Sig(s.reference_rotation_arcsec) : "-");
+    }
+    images.rows.push_back(row);
+  }
+  for (const DatasetSolve& s : result.solves)
+    if (!s.success)
+      images.notes.push_back(s.raster + " " + result.solver_names[s.solver] + ": " + s.message);
+  tables.push_back(images);
+  return tables;
+}
+
+std::string DatasetCsv(const DatasetComparisonResult& result) {
+  std::ostringstream csv;
+  csv << "Raster,Solver,Success,Message,X,Y,Z,Omega,Phi,Kappa,Convention,SigmaX,SigmaY,SigmaZ,"
+         "SigmaOmegaSeed,SigmaPhiSeed,SigmaKappaSeed,Sigma0,NumObservations,NumInliers,RmsPx,"
+         "MaxPx,CheckRmsePx,NumCheck,NumCheckBeyond,Iterations,TimeUs,RefinementTimeUs,"
+         "DiffPositionM,DiffRotationArcsec,"
+         "RefPositionM,RefRotationArcsec\n";
+  for (const DatasetSolve& s : result.solves) {
+    csv << CsvField(s.raster) << "," << CsvField(result.solver_names[s.solver]) << ","
+        << (s.success ? 1 : 0) << "," << CsvField(s.message) << ",";
+    if (s.success) {
+      for (int k = 0; k < 3; ++k) csv << Full(s.eo.parameters[k]) << ",";
+      for (int k = 0; k < 3; ++k) csv << Full(s.angles_deg[k]) << ",";
+      csv << RotationConventionName(result.rotation) << ",";
+      for (int k = 0; k < 3; ++k) csv << Full(s.standard_deviations[k]) << ",";
+      for (int k = 3; k < 6; ++k) csv << Full(RadiansToDegrees(s.standard_deviations[k])) << ",";
+      csv << Full(s.sigma0) << "," << s.num_observations << "," << s.num_inliers << ","
+          << Full(s.rms_px) << "," << Full(s.max_px) << "," << Full(s.check_rmse_px) << ","
+          << s.num_check << "," << s.num_check_beyond << ",";
+    } else {
+      csv << ",,,,,,,,,,,,,," << s.num_observations << ",,,,,,,";
+    }
+    csv << s.iterations << "," << Full(s.seconds * 1e6) << "," << Full(s.refinement_seconds * 1e6)
+        << "," << (s.has_difference ? Full(s.difference_position_m) : "") << ","
+        << (s.has_difference ? Full(s.difference_rotation_arcsec) : "") << ","
+        << (s.has_reference ? Full(s.reference_position_m) : "") << ","
+        << (s.has_reference ? Full(s.reference_rotation_arcsec) : "") << "\n";
+  }
+  return csv.str();
+}
+
+std::string RenderText(const TextTable& table) {
+  std::vector<size_t> width(table.header.size(), 0);
+  for (size_t c = 0; c < table.header.size(); ++c) width[c] = table.header[c].size();
+  for (const auto& row : table.rows)
+    for (size_t c = 0; c < row.size() && c < width.size(); ++c)
+      width[c] = std::max(width[c], row[c].size());
+  std::ostringstream out;
+  if (!table.title.empty()) out << table.title << "\n";
+  auto line = [&](const std::vector<std::string>& cells) {
+    std::string text;
+    for (size_t c = 0; c < width.size(); ++c) {
+      const std::string cell = c < cells.size() ? cells[c] : "";
+      const std::string pad(width[c] - std::min(width[c], cell.size()), ' ');
+      // The first columns name things (left-aligned); the rest are numbers (right-aligned).
+      const bool left = c == 0 || (c == 1 && table.header[0] == "image");
+      text += (c == 0 ? "" : "  ") + (left ? cell + pad : pad + cell);
+    }
+    while (!text.empty() && text.back() == ' ') text.pop_back();
+    out << text << "\n";
+  };
+  line(table.header);
+  size_t total = 0;
+  for (size_t c = 0; c < width.size(); ++c) total += width[c] + (c == 0 ? 0 : 2);
+  out << std::string(total, '-') << "\n";
+  for (const auto& row : table.rows) line(row);
+  for (const std::string& note : table.notes) out << "  " << note << "\n";
+  return out.str();
+}
+
+std::string RenderMarkdown(const TextTable& table) {
+  std::ostringstream out;
+  auto escape = [](const std::string& cell) {
+    std::string text;
+    for (char c : cell) {
+      if (c == '|') text += '\\';
+      text += c;
+    }
+    return text;
+  };
+  if (!table.title.empty()) out << "**" << escape(table.title) << "**\n\n";
+  out << "|";
+  for (const auto& h : table.header) out << " " << escape(h) << " |";
+  out << "\n|";
+  for (size_t c = 0; c < table.header.size(); ++c) out << (c == 0 ? "---|" : "---:|");
+  out << "\n";
+  for (const auto& row : table.rows) {
+    out << "|";
+    for (const auto& cell : row) out << " " << escape(cell) << " |";
+    out << "\n";
+  }
+  if (!table.notes.empty()) {
+    out << "\n";
+    for (const std::string& note : table.notes) out << "- " << escape(note) << "\n";
+  }
+  return out.str();
+}
+
+}  // namespace photopose::cli

@@ -1,0 +1,376 @@
+// The HTML page of `photopose bundle` (tools/report/bundle_report.h): one self-contained file, inline CSS
+// and SVG, no script.
+#include <Eigen/Eigenvalues>
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <limits>
+#include <map>
+#include <sstream>
+
+#include "tools/report/bundle_report.h"
+#include "tools/report/comparison_html.h"
+
+namespace photopose::cli {
+namespace {
+
+// Plan view (SVG user units).
+constexpr double kPlanWidth = 760.0;
+constexpr double kPlanHeight = 560.0;
+constexpr double kPlanMargin = 40.0;
+// Tie points drawn at most (evenly subsampled beyond).
+constexpr size_t kMaxTieDots = 4000;
+
+std::string F(double value, const char* format = "%.3g") {
+  if (!std::isfinite(value)) return "n/a";
+  char buffer[64];
+  std::snprintf(buffer, sizeof(buffer), format, value);
+  return buffer;
+}
+
+// 1, 2 or 5 times a power of ten, at most `value`.
+double NiceAtMost(double value) {
+  if (!(value > 0.0)) return 1.0;
+  const double magnitude = std::pow(10.0, std::floor(std::log10(value)));
+  for (const double f : {5.0, 2.0, 1.0})
+    if (f * magnitude <= value) return f * magnitude;
+  return magnitude;
+}
+
+const char kStyle[] =
+    "body{font-family:sans-serif;margin:24px;max-width:1100px;color:#222}"
+    "h1{font-size:22px}h2{font-size:17px;margin-top:28px;border-bottom:1px solid #ccc}"
+    ".verdict{padding:12px 16px;border-radius:6px;margin:8px 0;font-size:15px}"
+    ".bad{background:#fde2e1;border:1px solid #d55e00}.good{background:#e3f4ea;border:1px solid #009e73}"
+    ".note{background:#eef3fa;border:1px solid #0072b2}"
+    "table{border-collapse:collapse;margin:8px 0;font-size:13px}"
+    "td,th{border:1px solid #ccc;padding:3px 8px;text-align:right}th{background:#f2f2f2}"
+    "td:first-child,th:first-child{text-align:left}caption{text-align:left;font-weight:bold;padding:4px 0}"
+    "svg{background:#fff;border:1px solid #ddd}";
+
+std::string Table(const std::string& title, const std::vector<std::string>& header,
+                  const std::vector<std::vector<std::string>>& rows,
+                  const std::vector<std::string>& notes = {}) {
+  TextTable table;
+  table.title = title;
+  table.header = header;
+  table.rows = rows;
+  table.notes = notes;
+  return RenderHtmlTable(table);
+}
+
+// The plan view: tie points, cameras with 1-sigma error ellipses, control and check points with
+// their residual vectors, each exaggerated by a stated factor.
+std::string PlanView(const Block& block, const BundleAdjustmentResult& result) {
+  std::vector<Eigen::Vector2d> all;
+  for (const BlockImage& image : block.images)
+    if (image.eo) all.push_back(image.eo->center_in_ground().head<2>());
+  for (const BlockPoint& point : block.points) {
+    if (point.role != PointRole::kTie && point.surveyed_m) all.push_back(point.surveyed_m->head<2>());
+    else if (point.position_m) all.push_back(point.position_m->head<2>());
+  }
+  if (all.empty()) return "<p>Nothing to draw.</p>";
+  Eigen::Vector2d lo = all.front(), hi = all.front();
+  for (const auto& p : all) {
+    lo = lo.cwiseMin(p);
+    hi = hi.cwiseMax(p);
+  }
+  Eigen::Vector2d span = (hi - lo).cwiseMax(1e-9);
+  const double scale = std::min((kPlanWidth - 2 * kPlanMargin) / span.x(),
+                                (kPlanHeight - 2 * kPlanMargin) / span.y());
+  auto X = [&](double x) { return kPlanMargin + (x - lo.x()) * scale; };
+  auto Y = [&](double y) { return kPlanHeight - kPlanMargin - (y - lo.y()) * scale; };
+  const double extent = std::max(span.x(), span.y());
+
+  // Exaggerations: the largest ellipse and vector drawn about 4 % of the extent.
+  double largest_sigma = 0.0, largest_error = 0.0;
+  for (const BundleImageResult& r : result.images) {
+    if (!r.has_covariance) continue;
+    largest_sigma = std::max(largest_sigma, std::sqrt(r.covariance.topLeftCorner<2, 2>().trace()));
+  }
+  for (const BundlePointResult& r : result.points)
+    if (r.error_m) largest_error = std::max(largest_error, r.error_m->head<2>().norm());
+  const double ellipse_factor = largest_sigma > 0.0 ? NiceAtMost(0.04 * extent / largest_sigma) : 1.0;
+  const double vector_factor = largest_error > 0.0 ? NiceAtMost(0.04 * extent / largest_error) : 1.0;
+
+  std::ostringstream svg;
+  svg << "<svg xmlns=\"http://www.w3.org/2000/svg\" width=\"" << kPlanWidth << "\" height=\""
+      << kPlanHeight << "\" viewBox=\"0 0 " << kPlanWidth << " " << kPlanHeight
+      << "\" font-family=\"sans-serif\" font-size=\"11\">\n";
+  // Tie points.
+  std::vector<const BlockPoint*> ties;
+  for (const BlockPoint& point : block.points)
+    if (point.role == PointRole::kTie && point.position_m) ties.push_back(&point);
+  const size_t step = std::max<size_t>(1, ties.size() / kMaxTieDots);
+  svg << "<g fill=\"#999\">";
+  for (size_t k = 0; k < ties.size(); k += step)
+    svg << "<circle cx=\"" << F(X(ties[k]->position_m->x()), "%.1f") << "\" cy=\""
+        << F(Y(ties[k]->position_m->y()), "%.1f") << "\" r=\"0.8\"/>";
+  svg << "</g>\n";
+  // Cameras and their ellipses.
+  for (size_t i = 0; i < block.images.size(); ++i) {
+    const BlockImage& image = block.images[i];
+    if (!image.eo) continue;
+    const double cx = X(image.eo->parameters[0]), cy = Y(image.eo->parameters[1]);
+    if (i < result.images.size() && result.images[i].has_covariance) {
+      const Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d> eigen(
+          result.images[i].covariance.topLeftCorner<2, 2>());
+      const Eigen::Vector2d axes = eigen.eigenvalues().cwiseMax(0.0).cwiseSqrt() * ellipse_factor * scale;
+      const Eigen::Vector2d major = eigen.eigenvectors().col(1);
+      const double angle = -std::atan2(major.y(), major.x()) * 180.0 / kPi;
+      svg << "<ellipse cx=\"" << F(cx, "%.1f") << "\" cy=\"" << F(cy, "%.1f") << "\" rx=\""
+          << F(std::max(axes[1], 0.5), "%.2f") << "\" ry=\"" << F(std::max(axes[0], 0.5), "%.2f")
+          << "\" transform=\"rotate(" << F(angle, "%.1f") << " " << F(cx, "%.1f") << " "
+          << F(cy, "%.1f") << ")\" fill=\"none\" stroke=\"#0072B2\" stroke-width=\"1\"/>";
+    }
+    svg << "<rect x=\"" << F(cx - 2.5, "%.1f") << "\" y=\"" << F(cy - 2.5, "%.1f")
+        << "\" width=\"5\" height=\"5\" fill=\"#0072B2\"><title>" << HtmlEscape(image.name)
+        << "</title></rect>\n";
+  }
+  // Control and check points with their residual vectors.
+  for (size_t p = 0; p < block.points.size(); ++p) {
+    const BlockPoint& point = block.points[p];
+    if (point.role == PointRole::kTie || !point.surveyed_m) continue;
+    const double px = X(point.surveyed_m->x()), py = Y(point.surveyed_m->y());
+    const bool control = point.role == PointRole::kControl;
+    const char* color = control ? "#D55E00" : "#009E73";
+    if (p < result.points.size() && result.points[p].error_m) {
+      const Eigen::Vector3d& e = *result.points[p].error_m;
+      svg << "<line x1=\"" << F(px, "%.1f") << "\" y1=\"" << F(py, "%.1f") << "\" x2=\""
+          << F(px + e.x() * vector_factor * scale, "%.1f") << "\" y2=\""
+          << F(py - e.y() * vector_factor * scale, "%.1f") << "\" stroke=\"" << color
+          << "\" stroke-width=\"2\"/>";
+    }
+    if (control) {
+      svg << "<path d=\"M" << F(px, "%.1f") << "," << F(py - 5, "%.1f") << "l4.5,8h-9z\" fill=\""
+          << color << "\">";
+    } else {
+      svg << "<circle cx=\"" << F(px, "%.1f") << "\" cy=\"" << F(py, "%.1f") << "\" r=\"4\" fill=\""
+          << color << "\">";
+    }
+    svg << "<title>" << HtmlEscape(point.id) << "</title>" << (control ? "</path>" : "</circle>")
+        << "\n";
+  }
+  // Scale bar and legend.
+  const double bar = NiceAtMost(0.25 * extent);
+  const double bar_y = kPlanHeight - 14.0;
+  svg << "<line x1=\"" << kPlanMargin << "\" y1=\"" << bar_y << "\" x2=\""
+      << F(kPlanMargin + bar * scale, "%.1f") << "\" y2=\"" << bar_y
+      << "\" stroke=\"#222\" stroke-width=\"2\"/><text x=\"" << F(kPlanMargin + bar * scale + 6, "%.1f")
+      << "\" y=\"" << bar_y + 4 << "\">" << F(bar, "%g") << " m</text>\n";
+  svg << "<text x=\"" << kPlanWidth - 10 << "\" y=\"16\" text-anchor=\"end\">"
+      << "blue squares: cameras, ellipses 1-sigma x" << F(ellipse_factor, "%g")
+      << "; red triangles: control, green dots: check, vectors x" << F(vector_factor, "%g")
+      << "; grey: tie points</text>\n";
+  svg << "</svg>";
+  return svg.str();
+}
+
+// A histogram of values (vertical bars) with its title and unit.
+std::string Histogram(const std::string& title, const std::string& unit,
+                      const std::vector<double>& values) {
+  constexpr double kWidth = 360.0, kHeight = 200.0, kLeft = 40.0, kBottom = 30.0, kTop = 22.0;
+  std::vector<double> finite;
+  for (const double v : values)
+    if (std::isfinite(v)) finite.push_back(v);
+  std::ostringstream svg;
+  svg << "<svg xmlns=\"http://www.w3.org/2000/svg\" width=\"" << kWidth << "\" height=\"" << kHeight
+      << "\" font-family=\"sans-serif\" font-size=\"11\"><text x=\"" << kWidth / 2
+      << "\" y=\"14\" text-anchor=\"middle\">" << HtmlEscape(title) << " (" << finite.size()
+      << ")</text>";
+  if (finite.empty()) {
+    svg << "</svg>";
+    return svg.str();
+  }
+  std::vector<double> sorted = finite;
+  std::sort(sorted.begin(), sorted.end());
+  // The central 99.5 % decides the range (a blunder would squash the rest); the bins are 24.
+  const double low = sorted[static_cast<size_t>(0.0025 * (sorted.size() - 1))];
+  const double high = sorted[static_cast<size_t>(0.9975 * (sorted.size() - 1))];
+  const double half = std::max({std::abs(low), std::abs(high), 1e-12});
+  constexpr int kBins = 24;
+  std::vector<int> counts(kBins, 0);
+  for (const double v : finite) {
+    const int bin = static_cast<int>(std::floor((v + half) / (2.0 * half) * kBins));
+    ++counts[std::clamp(bin, 0, kBins - 1)];
+  }
+  const int top = *std::max_element(counts.begin(), counts.end());
+  const double bar_width = (kWidth - kLeft - 10.0) / kBins;
+  for (int b = 0; b < kBins; ++b) {
+    const double h = top > 0 ? (kHeight - kTop - kBottom) * counts[b] / top : 0.0;
+    svg << "<rect x=\"" << F(kLeft + b * bar_width, "%.1f") << "\" y=\""
+        << F(kHeight - kBottom - h, "%.1f") << "\" width=\"" << F(bar_width - 1, "%.1f")
+        << "\" height=\"" << F(h, "%.1f") << "\" fill=\"#0072B2\"/>";
+  }
+  svg << "<text x=\"" << kLeft << "\" y=\"" << kHeight - 10 << "\">" << F(-half) << "</text>"
+      << "<text x=\"" << F((kWidth + kLeft) / 2, "%.1f") << "\" y=\"" << kHeight - 10
+      << "\" text-anchor=\"middle\">0 " << HtmlEscape(unit) << "</text><text x=\"" << kWidth - 10
+      << "\" y=\"" << kHeight - 10 << "\" text-anchor=\"end\">" << F(half) << "</text></svg>";
+  return svg.str();
+}
+
+}  // namespace
+
+std::string BundleReportHtml(const Block& block, const BundleAdjustmentResult& result,
+                             const BundleReportContext& context) {
+  const BundleAdjustmentSummary& s = result.summary;
+  std::ostringstream html;
+  html << "<!DOCTYPE html>\n<html lang=\"en\"><head><meta charset=\"utf-8\"><title>photopose "
+          "bundle</title><style>"
+       << kStyle << "</style></head><body>\n<h1>photopose bundle: " << s.num_images << " images, "
+       << s.num_points << " points, " << s.num_marks << " marks</h1>\n";
+
+  // The verdicts first.
+  std::vector<std::string> overfit;
+  for (const BundleGroupStatistics& g : result.groups)
+    if (g.overfit) overfit.push_back(g.message);
+  if (!s.IsSolutionUsable()) {
+    html << "<div class=\"verdict bad\"><b>Not adjusted:</b> " << HtmlEscape(s.message) << "</div>\n";
+  }
+  if (overfit.empty()) {
+    html << "<div class=\"verdict good\"><b>No prior group is over-fitted:</b> each is checked "
+            "by the tie points and fits within its stated accuracy.</div>\n";
+  } else {
+    html << "<div class=\"verdict bad\"><b>Over-fitted:</b><ul>";
+    for (const std::string& m : overfit) html << "<li>" << HtmlEscape(m) << "</li>";
+    html << "</ul></div>\n";
+  }
+  if (result.num_check_points > 0) {
+    html << "<div class=\"verdict note\"><b>Check points:</b> " << result.num_check_points
+         << ", RMSE X " << F(result.check_rmse_m.x()) << " m, Y " << F(result.check_rmse_m.y())
+         << " m, Z " << F(result.check_rmse_m.z()) << " m, total " << F(result.check_rmse_total_m)
+         << " m</div>\n";
+  } else {
+    html << "<div class=\"verdict note\"><b>No check points:</b> nothing independent measures the "
+            "block's accuracy"
+         << (context.cross_validation != nullptr ? " (see the leave-one-out table below)" : "")
+         << ".</div>\n";
+  }
+  html << "<p>" << HtmlEscape(s.BriefReport()) << "<br>Datum: " << HtmlEscape(s.datum_description)
+       << "</p>\n";
+
+  html << "<h2>Plan view</h2>\n" << PlanView(block, result) << "\n";
+
+  // Groups.
+  std::vector<std::vector<std::string>> rows;
+  for (const BundleGroupStatistics& g : result.groups) {
+    rows.push_back({g.name, std::to_string(g.count), F(g.stated_accuracy.x()) + " " + g.unit,
+                    F(g.rms_total) + " " + g.unit, F(g.ratio), F(g.redundancy_share),
+                    std::isfinite(g.estimated_accuracy.x())
+                        ? F(g.estimated_accuracy.x()) + " " + g.unit
+                        : (g.estimation_message.empty() ? "" : "not estimated"),
+                    g.overfit ? "OVERFIT" : ""});
+  }
+  html << "<h2>Groups of the objective</h2>\n"
+       << Table("Residuals against the stated accuracies",
+                {"group", "count", "stated", "RMS", "RMS / stated", "redundancy share",
+                 "estimated accuracy", "verdict"},
+                rows,
+                {"redundancy share: the group's summed redundancy numbers over its observations, "
+                 "how much of it the rest of the block checks",
+                 "over-fitted: a prior group whose RMS / stated is below " +
+                     F(context.options.overfit_ratio) + " or whose redundancy share is below " +
+                     F(context.options.overfit_redundancy_share)});
+
+  // Histograms.
+  std::map<std::string, std::vector<double>> by_group;
+  std::map<std::string, std::string> units;
+  if (!result.observations.empty()) {
+    for (const BundleObservationDiagnostics& d : result.observations) by_group[d.group].push_back(d.residual);
+  } else {
+    for (size_t m = 0; m < block.marks.size() && m < result.mark_residuals.size(); ++m) {
+      if (!result.mark_residuals[m].allFinite()) continue;
+      const std::string group =
+          block.points[block.marks[m].point].role == PointRole::kControl ? "control_marks" : "tie_marks";
+      by_group[group].push_back(result.mark_residuals[m].x());
+      by_group[group].push_back(result.mark_residuals[m].y());
+    }
+  }
+  for (const BundleGroupStatistics& g : result.groups) units[g.name] = g.unit;
+  html << "<h2>Residuals</h2>\n";
+  for (const auto& [group, values] : by_group) html << Histogram(group, units[group], values) << "\n";
+
+  // Control and check points.
+  auto point_rows = [&](PointRole role) {
+    std::vector<std::vector<std::string>> out;
+    for (size_t p = 0; p < block.points.size(); ++p) {
+      const BlockPoint& point = block.points[p];
+      if (point.role != role || p >= result.points.size()) continue;
+      const BundlePointResult& r = result.points[p];
+      if (r.error_m) {
+        out.push_back({point.id, std::to_string(r.num_observations), F(r.error_m->x()),
+                       F(r.error_m->y()), F(r.error_m->z()), F(r.error_m->norm()),
+                       r.has_covariance ? F(std::sqrt(r.covariance.trace())) : ""});
+      } else {
+        out.push_back({point.id, std::to_string(r.num_observations), "", "", "", "",
+                       r.message.empty() ? "not in the adjustment" : r.message});
+      }
+    }
+    return out;
+  };
+  const std::vector<std::string> point_header = {"point", "images", "error X (m)", "error Y (m)",
+                                                 "error Z (m)", "|error| (m)", "sigma (m)"};
+  html << "<h2>Control points</h2>\n"
+       << Table("Adjusted minus surveyed; RMSE " + F(result.control_rmse_total_m) + " m",
+                point_header, point_rows(PointRole::kControl))
+       << "<h2>Check points</h2>\n"
+       << Table("Intersected from the adjusted images minus surveyed; RMSE " +
+                    F(result.check_rmse_total_m) + " m",
+                point_header, point_rows(PointRole::kCheck));
+
+  if (!result.calibration.empty()) {
+    html << "<h2>Self-calibration</h2>\n";
+    for (const BundleCalibrationResult& c : result.calibration) {
+      std::vector<std::vector<std::string>> calibration_rows;
+      for (size_t k = 0; k < c.names.size(); ++k)
+        calibration_rows.push_back(
+            {c.names[k], F(c.values[k], "%.8g"), k < c.sigmas.size() ? F(c.sigmas[k]) : ""});
+      html << Table("Camera '" + block.cameras[c.camera].camera_id + "' (" +
+                        CameraModelTypeName(block.cameras[c.camera].model) + ")",
+                    {"parameter", "value", "sigma"}, calibration_rows, c.high_correlations);
+    }
+  }
+  if (!result.snooping.empty()) {
+    std::vector<std::vector<std::string>> snooping_rows;
+    for (size_t k = 0; k < result.snooping.size(); ++k) {
+      const BundleSnoopingStep& step = result.snooping[k];
+      snooping_rows.push_back({std::to_string(k + 1), step.group, std::to_string(step.item),
+                               F(step.normalized), F(step.residual)});
+    }
+    html << "<h2>Data snooping</h2>\n"
+         << Table("Observations removed, in order (|w| > " + F(result.critical_value) + ")",
+                  {"step", "group", "item", "|w|", "residual"}, snooping_rows);
+  }
+  if (!result.observations.empty()) {
+    // Redundancy numbers per group as a distribution.
+    std::map<std::string, std::vector<double>> redundancy;
+    for (const BundleObservationDiagnostics& d : result.observations)
+      redundancy[d.group].push_back(d.redundancy);
+    html << "<h2>Reliability</h2>\n<p>" << result.num_uncontrolled
+         << " observations have a redundancy number below "
+         << F(context.options.uncontrolled_redundancy)
+         << ": a blunder there cannot be seen. Smallest detectable errors use delta0 = "
+         << F(result.delta0) << ".</p>\n";
+    for (const auto& [group, values] : redundancy)
+      html << Histogram("redundancy numbers, " + group, "", values) << "\n";
+  }
+  if (context.cross_validation != nullptr) {
+    const BundleCrossValidationResult& cv = *context.cross_validation;
+    std::vector<std::vector<std::string>> cv_rows;
+    for (const BundleCrossValidationPoint& p : cv.points) {
+      cv_rows.push_back({block.points[p.point].id, p.ok ? F(p.error_m.x()) : "",
+                         p.ok ? F(p.error_m.y()) : "", p.ok ? F(p.error_m.z()) : "",
+                         p.ok ? F(p.normalized) : "", p.stands_out ? "STANDS OUT" : p.message});
+    }
+    html << "<h2>Leave-one-out control points</h2>\n"
+         << Table("Each control point adjusted as a check point; RMSE X " + F(cv.rmse_m.x()) +
+                      ", Y " + F(cv.rmse_m.y()) + ", Z " + F(cv.rmse_m.z()) + " m",
+                  {"point", "error X (m)", "error Y (m)", "error Z (m)", "normalized", "verdict"},
+                  cv_rows, {"normalized: e^T C^-1 e, chi-square(3); stands out above " + F(cv.threshold)});
+  }
+  html << "<h2>Run</h2>\n<p><code>" << HtmlEscape(context.command_line) << "</code></p>\n";
+  html << "</body></html>\n";
+  return html.str();
+}
+
+}  // namespace photopose::cli

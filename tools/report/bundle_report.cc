@@ -1,0 +1,501 @@
+#include "tools/report/bundle_report.h"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <limits>
+#include <sstream>
+
+#include "core/io/csv.h"
+#include "tools/report/comparison_html.h"
+
+namespace photopose::cli {
+namespace {
+
+using nlohmann::json;
+
+constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
+
+// A JSON number, or null when not finite.
+json Number(double value) { return std::isfinite(value) ? json(value) : json(nullptr); }
+
+json Vector3(const Eigen::Vector3d& v) { return json::array({Number(v.x()), Number(v.y()), Number(v.z())}); }
+
+std::string Format(double value, const char* format = "%.3g") {
+  if (!std::isfinite(value)) return "n/a";
+  char buffer[64];
+  std::snprintf(buffer, sizeof(buffer), format, value);
+  return buffer;
+}
+
+const char* RoleName(PointRole role) {
+  switch (role) {
+    case PointRole::kControl:
+      return "control";
+    case PointRole::kCheck:
+      return "check";
+    case PointRole::kTie:
+      return "tie";
+  }
+  return "tie";
+}
+
+// The angles of an image in the report's convention, the camera's AngleDirection applied (deg),
+// and their standard deviations propagated from the seed covariance (deg).
+void ReportedAngles(const BlockCamera& camera, const ExteriorOrientation& eo,
+                    const Matrix6d* covariance, RotationConvention convention,
+                    Eigen::Vector3d* angles_deg, Eigen::Vector3d* sigmas_deg) {
+  AngleFlags flags;
+  flags.angle_direction = camera.table.angle_direction;
+  auto file_angles = [&](const Eigen::Vector3d& seed) {
+    return ApplyAngleDirection(
+        flags, AnglesFromRotation(convention, RotationFromAngles(RotationConvention::kSeed, seed)));
+  };
+  const Eigen::Vector3d seed = eo.angles_seed_rad();
+  *angles_deg = file_angles(seed) * kDegreesPerRadian;
+  sigmas_deg->setConstant(kNaN);
+  if (covariance == nullptr) return;
+  // Central differences of the conversion (1e-6 rad: truncation and rounding both below 1e-10).
+  constexpr double kStep = 1e-6;
+  Eigen::Matrix3d J;
+  for (int j = 0; j < 3; ++j) {
+    Eigen::Vector3d h = Eigen::Vector3d::Zero();
+    h[j] = kStep;
+    const Eigen::Vector3d plus = file_angles(seed + h), minus = file_angles(seed - h);
+    for (int i = 0; i < 3; ++i) J(i, j) = WrapAngle(plus[i] - minus[i]) / (2.0 * kStep);
+  }
+  const Eigen::Matrix3d C = J * covariance->bottomRightCorner<3, 3>() * J.transpose();
+  *sigmas_deg = C.diagonal().cwiseMax(0.0).cwiseSqrt() * kDegreesPerRadian;
+}
+
+std::string PointName(const Block& block, int p) { return block.points[p].id; }
+
+// The item a diagnostic refers to, in words.
+std::string ItemName(const Block& block, const std::string& group, int item) {
+  if (group == "tie_marks" || group == "control_marks") {
+    const BlockMark& mark = block.marks[item];
+    return "mark of '" + block.points[mark.point].id + "' in '" + block.images[mark.image].name + "'";
+  }
+  if (group == "control_points") return "control point '" + block.points[item].id + "'";
+  if (group == "camera_positions") return "camera position of '" + block.images[item].name + "'";
+  if (group == "attitudes") return "attitude of '" + block.images[item].name + "'";
+  return group + " #" + std::to_string(item);
+}
+
+const char* AxisName(const std::string& group, int axis) {
+  static const char* const kMark[] = {"x", "y"};
+  static const char* const kXyz[] = {"X", "Y", "Z"};
+  static const char* const kAngles[] = {"omega", "phi", "kappa"};
+  if (group == "tie_marks" || group == "control_marks") return kMark[std::clamp(axis, 0, 1)];
+  if (group == "attitudes") return kAngles[std::clamp(axis, 0, 2)];
+  return kXyz[std::clamp(axis, 0, 2)];
+}
+
+}  // namespace
+
+json BundleReportJson(const Block& block, const BundleAdjustmentResult& result,
+                      const BundleReportContext& context) {
+  const BundleAdjustmentSummary& s = result.summary;
+  const BundleAdjustmentOptions& o = context.options;
+  json report;
+  report["summary"] = {{"termination", BundleTerminationName(s.termination)},
+                       {"message", s.message},
+                       {"sigma0", Number(s.sigma0)},
+                       {"redundancy", s.redundancy},
+                       {"rounds", s.rounds},
+                       {"iterations", s.iterations},
+                       {"initial_cost", Number(s.initial_cost)},
+                       {"final_cost", Number(s.final_cost)},
+                       {"time_seconds", s.time_seconds},
+                       {"statistics_seconds", s.statistics_seconds},
+                       {"time_breakdown",
+                        {{"problem_build_seconds", s.problem_build_seconds},
+                         {"solver_preprocessing_seconds", s.solver_preprocessing_seconds},
+                         {"residual_evaluation_seconds", s.residual_evaluation_seconds},
+                         {"jacobian_evaluation_seconds", s.jacobian_evaluation_seconds},
+                         {"linear_solver_seconds", s.linear_solver_seconds},
+                         {"schur_structure", s.schur_structure}}},
+                       {"num_images", s.num_images},
+                       {"num_points", s.num_points},
+                       {"num_marks", s.num_marks},
+                       {"num_rejected_marks", s.num_rejected_marks},
+                       {"tie_points_left_out", s.tie_points_left_out},
+                       {"num_images_initialized", context.num_images_initialized},
+                       {"datum", s.datum == BundleDatum::kControl ? "absolute" : "relative"},
+                       {"datum_description", s.datum_description}};
+  json groups = json::array();
+  for (const BundleGroupStatistics& g : result.groups) {
+    json group = {{"name", g.name},
+                  {"count", g.count},
+                  {"unit", g.unit},
+                  {"stated_accuracy", g.num_axes == 2 ? Number(g.stated_accuracy.x())
+                                                      : Vector3(g.stated_accuracy)},
+                  {"rms", g.num_axes == 2 ? json::array({Number(g.rms.x()), Number(g.rms.y())})
+                                          : Vector3(g.rms)},
+                  {"rms_total", Number(g.rms_total)},
+                  {"ratio", Number(g.ratio)},
+                  {"redundancy_share", Number(g.redundancy_share)},
+                  {"overfit", g.overfit},
+                  {"message", g.message}};
+    if (o.estimate_accuracies) {
+      group["estimated_accuracy"] = g.num_axes == 2 ? Number(g.estimated_accuracy.x())
+                                                    : Vector3(g.estimated_accuracy);
+      group["estimated_accuracy_relative_standard_error"] =
+          Number(g.estimated_accuracy_standard_error);
+      group["estimation_message"] = g.estimation_message;
+    }
+    groups.push_back(group);
+  }
+  report["groups"] = groups;
+
+  json control = json::array(), check = json::array();
+  for (size_t p = 0; p < block.points.size(); ++p) {
+    const BlockPoint& point = block.points[p];
+    if (point.role == PointRole::kTie) continue;
+    // An adjustment that failed early has no per-point results: the point is listed without them.
+    const BundlePointResult& r = p < result.points.size() ? result.points[p] : BundlePointResult();
+    json row = {{"point_id", point.id},
+                {"num_images", r.num_observations},
+                {"surveyed", point.surveyed_m ? Vector3(*point.surveyed_m) : json(nullptr)},
+                {"error_m", r.error_m ? Vector3(*r.error_m) : json(nullptr)},
+                {"sigma_m", r.has_covariance ? Vector3(r.covariance.diagonal().cwiseSqrt())
+                                             : json(nullptr)},
+                {"message", r.message}};
+    (point.role == PointRole::kControl ? control : check).push_back(row);
+  }
+  report["control_points"] = control;
+  report["check_points"] = check;
+  report["control_rmse_m"] = {{"x", Number(result.control_rmse_m.x())},
+                              {"y", Number(result.control_rmse_m.y())},
+                              {"z", Number(result.control_rmse_m.z())},
+                              {"total", Number(result.control_rmse_total_m)},
+                              {"count", result.num_control_points}};
+  report["check_rmse_m"] = {{"x", Number(result.check_rmse_m.x())},
+                            {"y", Number(result.check_rmse_m.y())},
+                            {"z", Number(result.check_rmse_m.z())},
+                            {"total", Number(result.check_rmse_total_m)},
+                            {"count", result.num_check_points}};
+
+  json images = json::array();
+  for (size_t i = 0; i < block.images.size(); ++i) {
+    const BlockImage& image = block.images[i];
+    const BundleImageResult& r = i < result.images.size() ? result.images[i] : BundleImageResult();
+    json row = {{"raster", image.name},
+                {"camera_id", block.cameras[image.camera].camera_id},
+                {"adjusted", r.adjusted},
+                {"message", r.message},
+                {"num_marks", r.num_marks},
+                {"rms_residual", Number(r.rms_residual)},
+                {"unit", r.unit}};
+    if (image.eo) {
+      Eigen::Vector3d angles, sigmas;
+      ReportedAngles(block.cameras[image.camera], *image.eo, r.has_covariance ? &r.covariance : nullptr,
+                     context.rotation, &angles, &sigmas);
+      row["pose"] = {{"X", image.eo->parameters[0]},
+                     {"Y", image.eo->parameters[1]},
+                     {"Z", image.eo->parameters[2]},
+                     {"omega_deg", angles[0]},
+                     {"phi_deg", angles[1]},
+                     {"kappa_deg", angles[2]},
+                     {"convention", RotationConventionName(context.rotation)}};
+      if (r.has_covariance) {
+        row["sigma"] = {{"X", std::sqrt(r.covariance(0, 0))},
+                        {"Y", std::sqrt(r.covariance(1, 1))},
+                        {"Z", std::sqrt(r.covariance(2, 2))},
+                        {"omega_deg", Number(sigmas[0])},
+                        {"phi_deg", Number(sigmas[1])},
+                        {"kappa_deg", Number(sigmas[2])}};
+      }
+    }
+    images.push_back(row);
+  }
+  report["images"] = images;
+
+  json calibration = json::array();
+  for (const BundleCalibrationResult& c : result.calibration) {
+    json correlation = json::array();
+    for (int a = 0; a < c.correlation.rows(); ++a) {
+      json row = json::array();
+      for (int b = 0; b < c.correlation.cols(); ++b) row.push_back(Number(c.correlation(a, b)));
+      correlation.push_back(row);
+    }
+    json values = json::array();
+    for (size_t k = 0; k < c.names.size(); ++k) {
+      values.push_back({{"name", c.names[k]},
+                        {"value", c.values[k]},
+                        {"sigma", k < c.sigmas.size() ? Number(c.sigmas[k]) : json(nullptr)}});
+    }
+    calibration.push_back({{"camera_id", block.cameras[c.camera].camera_id},
+                           {"model", CameraModelTypeName(block.cameras[c.camera].model)},
+                           {"parameters", values},
+                           {"correlation", correlation},
+                           {"high_correlations", c.high_correlations}});
+  }
+  report["calibration"] = calibration;
+  if (result.lever_arm_m) report["lever_arm_m"] = Vector3(*result.lever_arm_m);
+
+  json rejected = json::array();
+  for (const BundleRejectedMark& r : result.rejected_marks) {
+    const BlockMark& mark = block.marks[r.mark];
+    rejected.push_back({{"raster", block.images[mark.image].name},
+                        {"point_id", block.points[mark.point].id},
+                        {"round", r.round},
+                        {"normalized_residual", Number(r.whitened_residual)}});
+  }
+  report["rejected_marks"] = rejected;
+
+  // Diagnostics (observation_diagnostics): the rejected, the uncontrolled and the reliability
+  // per image and control point.
+  if (!result.observations.empty()) {
+    json flagged = json::array(), uncontrolled = json::array();
+    std::vector<double> image_mdb(block.images.size(), 0.0);
+    std::vector<double> image_external(block.images.size(), 0.0);
+    for (const BundleObservationDiagnostics& d : result.observations) {
+      const json row = {{"group", d.group},
+                        {"item", ItemName(block, d.group, d.item)},
+                        {"axis", AxisName(d.group, d.axis)},
+                        {"residual", Number(d.residual)},
+                        {"sigma", Number(d.sigma)},
+                        {"redundancy", Number(d.redundancy)},
+                        {"normalized_residual", Number(d.normalized)},
+                        {"mdb", Number(d.mdb)},
+                        {"external_m", Number(d.external_m)}};
+      if (d.rejected) flagged.push_back(row);
+      if (d.redundancy < o.uncontrolled_redundancy) uncontrolled.push_back(row);
+      if (d.group == "tie_marks" || d.group == "control_marks") {
+        const int image = block.marks[d.item].image;
+        image_mdb[image] = std::max(image_mdb[image], d.mdb);
+        image_external[image] = std::max(image_external[image], d.external_m);
+      }
+    }
+    json per_image = json::array();
+    for (size_t i = 0; i < block.images.size(); ++i) {
+      per_image.push_back({{"raster", block.images[i].name},
+                           {"largest_mdb", Number(image_mdb[i])},
+                           {"largest_external_m", Number(image_external[i])}});
+    }
+    json per_control = json::array();
+    for (size_t p = 0; p < block.points.size(); ++p) {
+      if (block.points[p].role != PointRole::kControl) continue;
+      Eigen::Vector3d mdb = Eigen::Vector3d::Constant(kNaN);
+      for (const BundleObservationDiagnostics& d : result.observations)
+        if (d.group == "control_points" && d.item == static_cast<int>(p)) mdb[d.axis] = d.mdb;
+      per_control.push_back({{"point_id", block.points[p].id}, {"mdb_m", Vector3(mdb)}});
+    }
+    report["diagnostics"] = {{"critical_value", result.critical_value},
+                             {"delta0", result.delta0},
+                             {"alpha", o.snooping_alpha},
+                             {"alpha_per_observation", result.alpha_per_observation},
+                             {"family_wise", o.snooping_family_wise},
+                             {"power", o.snooping_power},
+                             {"num_observations", result.observations.size()},
+                             {"num_uncontrolled", result.num_uncontrolled},
+                             {"rejected", flagged},
+                             {"uncontrolled", uncontrolled},
+                             {"images", per_image},
+                             {"control_points", per_control}};
+  }
+  if (!result.snooping.empty() || o.snoop) {
+    json steps = json::array();
+    for (const BundleSnoopingStep& step : result.snooping) {
+      steps.push_back({{"group", step.group},
+                       {"item", ItemName(block, step.group, step.item)},
+                       {"axis", AxisName(step.group, step.axis)},
+                       {"normalized_residual", step.normalized},
+                       {"residual", step.residual}});
+    }
+    report["snooping"] = steps;
+  }
+  if (context.cross_validation != nullptr) {
+    const BundleCrossValidationResult& cv = *context.cross_validation;
+    json points = json::array();
+    for (const BundleCrossValidationPoint& p : cv.points) {
+      points.push_back({{"point_id", PointName(block, p.point)},
+                        {"ok", p.ok},
+                        {"message", p.message},
+                        {"error_m", p.ok ? Vector3(p.error_m) : json(nullptr)},
+                        {"num_images", p.num_images},
+                        {"normalized", Number(p.normalized)},
+                        {"stands_out", p.stands_out}});
+    }
+    report["cross_validation"] = {{"points", points},
+                                  {"count", cv.count},
+                                  {"rmse_m", {{"x", Number(cv.rmse_m.x())},
+                                              {"y", Number(cv.rmse_m.y())},
+                                              {"z", Number(cv.rmse_m.z())},
+                                              {"total", Number(cv.rmse_total_m)}}},
+                                  {"threshold", cv.threshold},
+                                  {"time_seconds", cv.time_seconds}};
+  }
+  const BundleAccuracies& a = o.accuracies;
+  report["options"] = {{"input", context.input_kind},
+                       {"rotation", RotationConventionName(context.rotation)},
+                       {"jacobian", JacobianTypeName(o.jacobian)},
+                       {"linear_solver", BundleLinearSolverName(o.linear_solver)},
+                       {"tie_accuracy_px", a.tie_px},
+                       {"marker_projection_accuracy_px", a.marker_projection_px},
+                       {"tie_accuracy_film_um", a.tie_film_um},
+                       {"marker_projection_accuracy_film_um", a.marker_projection_film_um},
+                       {"marker_accuracy_m", a.marker_m},
+                       {"camera_accuracy_m", Vector3(a.camera_m)},
+                       {"camera_positions_are_priors", a.camera_positions_are_priors},
+                       {"attitude_accuracy_deg", a.attitude_deg ? json(*a.attitude_deg) : json(nullptr)},
+                       {"lever_arm_m", o.lever_arm_m ? Vector3(*o.lever_arm_m) : json(nullptr)},
+                       {"estimate_lever_arm", o.estimate_lever_arm},
+                       {"calibrate", context.calibrate},
+                       {"rejection_threshold", o.rejection_threshold},
+                       {"estimate_accuracies", o.estimate_accuracies},
+                       {"snoop", o.snoop},
+                       {"snooping_alpha", o.snooping_alpha},
+                       {"max_iterations", o.max_iterations},
+                       {"num_threads", o.num_threads}};
+  report["inputs"] = context.inputs;
+  report["outputs"] = context.outputs;
+  report["command_line"] = context.command_line;
+  return report;
+}
+
+std::string BundlePointsCsv(const Block& block, const BundleAdjustmentResult& result) {
+  std::string csv = CsvLine({"PointID", "X", "Y", "Z", "SigmaX", "SigmaY", "SigmaZ", "Role",
+                             "NumObservations", "ErrorX", "ErrorY", "ErrorZ"});
+  for (size_t p = 0; p < block.points.size(); ++p) {
+    const BlockPoint& point = block.points[p];
+    const BundlePointResult* r = p < result.points.size() ? &result.points[p] : nullptr;
+    const std::optional<Eigen::Vector3d> position =
+        point.role == PointRole::kCheck ? point.surveyed_m : point.position_m;
+    if (!position) continue;  // a tie point that was not adjusted
+    std::vector<std::string> fields = {point.id, FormatNumber(position->x()),
+                                       FormatNumber(position->y()), FormatNumber(position->z())};
+    for (int k = 0; k < 3; ++k) {
+      fields.push_back(r != nullptr && r->has_covariance
+                           ? FormatNumber(std::sqrt(std::max(r->covariance(k, k), 0.0)))
+                           : std::string());
+    }
+    fields.push_back(RoleName(point.role));
+    fields.push_back(std::to_string(r != nullptr ? r->num_observations : 0));
+    for (int k = 0; k < 3; ++k)
+      fields.push_back(r != nullptr && r->error_m ? FormatNumber((*r->error_m)[k]) : std::string());
+    csv += CsvLine(fields);
+  }
+  return csv;
+}
+
+std::vector<FrameRecord> BundleFrames(const Block& block, const BundleAdjustmentResult& result) {
+  std::vector<FrameRecord> frames;
+  for (size_t i = 0; i < block.images.size(); ++i) {
+    const BlockImage& image = block.images[i];
+    if (!image.eo || i >= result.images.size() || !result.images[i].adjusted) continue;
+    const BundleImageResult& r = result.images[i];
+    FrameRecord frame;
+    frame.raster = image.name;
+    frame.camera_id = block.cameras[image.camera].camera_id;
+    frame.srs = block.cameras[image.camera].table.srs.empty() ? block.crs
+                                                              : block.cameras[image.camera].table.srs;
+    frame.eo = *image.eo;
+    if (r.has_covariance) frame.covariance = r.covariance;
+    if (std::isfinite(result.summary.sigma0)) frame.sigma0 = result.summary.sigma0;
+    frame.extra_columns = {{"NumObservations", std::to_string(r.num_marks)},
+                           {"RmsResidual", FormatNumber(r.rms_residual)}};
+    frames.push_back(std::move(frame));
+  }
+  return frames;
+}
+
+std::vector<std::string> BundleConsoleLines(const Block& block, const BundleAdjustmentResult& result,
+                                            const BundleReportContext& context) {
+  std::vector<std::string> lines;
+  const BundleAdjustmentSummary& s = result.summary;
+  lines.push_back("bundle: " + s.BriefReport());
+  {
+    std::ostringstream time;
+    time << "time: problem " << Format(s.problem_build_seconds) << " s, Ceres preprocessing "
+         << Format(s.solver_preprocessing_seconds) << " s, residuals "
+         << Format(s.residual_evaluation_seconds) << " s, Jacobians "
+         << Format(s.jacobian_evaluation_seconds) << " s, linear solves "
+         << Format(s.linear_solver_seconds) << " s, statistics " << Format(s.statistics_seconds)
+         << " s; Schur structure " << (s.schur_structure.empty() ? "n/a" : s.schur_structure);
+    lines.push_back(time.str());
+  }
+  lines.push_back("datum: " + s.datum_description);
+  for (const BundleGroupStatistics& g : result.groups) {
+    std::ostringstream line;
+    line << g.name << ": " << g.count << ", stated " << Format(g.stated_accuracy.x()) << " "
+         << g.unit << ", RMS " << Format(g.rms_total) << " " << g.unit << ", RMS/stated "
+         << Format(g.ratio) << ", redundancy share " << Format(g.redundancy_share)
+         << (g.overfit ? "  OVERFIT" : "");
+    lines.push_back(line.str());
+  }
+  for (const BundleGroupStatistics& g : result.groups)
+    if (g.overfit) lines.push_back("warning: " + g.message);
+  if (!s.tie_points_left_out.empty()) {
+    std::string names;
+    for (size_t k = 0; k < s.tie_points_left_out.size() && k < 5; ++k)
+      names += (k ? ", " : "") + s.tie_points_left_out[k];
+    if (s.tie_points_left_out.size() > 5) names += ", ...";
+    lines.push_back("warning: " + std::to_string(s.tie_points_left_out.size()) +
+                    " tie points seen in two or more images could not be intersected (rays too "
+                    "close to parallel, or marks that do not meet) and were left out: " + names +
+                    " (report: summary.tie_points_left_out)");
+  }
+  // Advice from the estimated accuracies.
+  static const std::pair<const char*, const char*> kFlags[] = {
+      {"tie_marks", "--tie_accuracy"},
+      {"control_marks", "--marker_projection_accuracy"},
+      {"control_points", "--marker_accuracy"},
+      {"camera_positions", "--camera_accuracy"},
+      {"attitudes", "--attitude_accuracy"}};
+  for (const BundleGroupStatistics& g : result.groups) {
+    if (!std::isfinite(g.estimated_accuracy.x())) {
+      if (!g.estimation_message.empty()) lines.push_back(g.name + " accuracy " + g.estimation_message);
+      continue;
+    }
+    for (const auto& [name, flag] : kFlags) {
+      if (g.name != name) continue;
+      std::ostringstream line;
+      line << g.name << ": " << Format(g.stated_accuracy.x()) << " " << g.unit << " stated, "
+           << Format(g.estimated_accuracy.x()) << " " << g.unit << " estimated (+-"
+           << Format(100.0 * g.estimated_accuracy_standard_error, "%.0f") << " %): set " << flag
+           << "=" << Format(g.estimated_accuracy.x(), "%.2g");
+      lines.push_back(line.str());
+    }
+  }
+  if (result.num_control_points > 0)
+    lines.push_back("control points: " + std::to_string(result.num_control_points) + ", RMSE " +
+                    Format(result.control_rmse_total_m) + " m");
+  if (result.num_check_points > 0) {
+    lines.push_back("check points: " + std::to_string(result.num_check_points) + ", RMSE X " +
+                    Format(result.check_rmse_m.x()) + " Y " + Format(result.check_rmse_m.y()) +
+                    " Z " + Format(result.check_rmse_m.z()) + " total " +
+                    Format(result.check_rmse_total_m) + " m");
+  }
+  if (!result.rejected_marks.empty())
+    lines.push_back(std::to_string(result.rejected_marks.size()) +
+                    " marks rejected as blunders (listed in the report)");
+  for (const BundleSnoopingStep& step : result.snooping)
+    lines.push_back("snooping removed the " + ItemName(block, step.group, step.item) + " (" +
+                    AxisName(step.group, step.axis) + ", |w| = " + Format(step.normalized) + ")");
+  if (result.num_uncontrolled > 0)
+    lines.push_back(std::to_string(result.num_uncontrolled) +
+                    " observations are uncontrolled (redundancy number below " +
+                    Format(context.options.uncontrolled_redundancy) +
+                    "): a blunder there cannot be seen; add images or points around them");
+  if (context.cross_validation != nullptr) {
+    const BundleCrossValidationResult& cv = *context.cross_validation;
+    lines.push_back("leave-one-out control points: " + std::to_string(cv.count) + ", RMSE X " +
+                    Format(cv.rmse_m.x()) + " Y " + Format(cv.rmse_m.y()) + " Z " +
+                    Format(cv.rmse_m.z()) + " m");
+    for (const BundleCrossValidationPoint& p : cv.points) {
+      if (p.stands_out)
+        lines.push_back("control point '" + PointName(block, p.point) +
+                        "' stands out: left out, it misses by " + Format(p.error_m.norm()) +
+                        " m (normalized " + Format(p.normalized) + " > " + Format(cv.threshold) +
+                        "): check its coordinates and marks");
+      else if (!p.ok)
+        lines.push_back("control point '" + PointName(block, p.point) +
+                        "' not cross-validated: " + p.message);
+    }
+  }
+  return lines;
+}
+
+}  // namespace photopose::cli

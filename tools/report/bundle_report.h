@@ -1,0 +1,57 @@
+#pragma once
+// What `photopose bundle` writes about an adjustment (docs/formats.md, "Output of photopose
+// bundle"): the JSON report, the self-contained HTML page, the points table, the frames records
+// and the console summary. Everything here reads a block and its BundleAdjustmentResult; nothing
+// adjusts.
+
+#include <nlohmann/json.hpp>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "core/block.h"
+#include "core/rotation.h"
+#include "core/io/tables.h"
+#include "solvers/bundle/bundle_adjustment.h"
+
+namespace photopose::cli {
+
+// How the run was asked for, for the report.
+struct BundleReportContext {
+  std::string command_line;
+  RotationConvention rotation = RotationConvention::kSeed;  // of the angles reported
+  std::vector<std::string> inputs;                          // files read
+  std::vector<std::string> outputs;                         // files written (besides the report)
+  std::string input_kind;  // "tables", "colmap" or "bal"
+  BundleAdjustmentOptions options;
+  std::vector<std::string> calibrate;  // --calibrate names
+  const BundleCrossValidationResult* cross_validation = nullptr;  // when run
+  int num_images_initialized = 0;      // images oriented by the initialisation
+};
+
+// The JSON report; every key is documented in docs/formats.md.
+nlohmann::json BundleReportJson(const Block& block, const BundleAdjustmentResult& result,
+                                const BundleReportContext& context);
+
+// A self-contained HTML page (inline CSS and SVG, no script): the over-fitting verdict and the
+// check RMSE at the top; cameras and points in plan view with error ellipses and control/check
+// residual vectors (exaggerated, the scale stated); residual histograms per group; the control
+// and check tables, calibration, diagnostics.
+std::string BundleReportHtml(const Block& block, const BundleAdjustmentResult& result,
+                             const BundleReportContext& context);
+
+// The points table: PointID, X, Y, Z, SigmaX, SigmaY, SigmaZ (m), Role, NumObservations, ErrorX,
+// ErrorY, ErrorZ (m; control: adjusted - surveyed, check: intersected - surveyed). Control points
+// are reported at their adjusted coordinates, check points at their surveyed ones.
+std::string BundlePointsCsv(const Block& block, const BundleAdjustmentResult& result);
+
+// The frames records of the adjusted images: eo, covariance, Sigma0, NumObservations (marks
+// used) and RmsResidual (their RMS, in the marks' unit) as extra columns.
+std::vector<FrameRecord> BundleFrames(const Block& block, const BundleAdjustmentResult& result);
+
+// The lines printed at the end of a run: the result, each group's verdict, and one line of advice
+// per finding (over-fitted priors, estimated accuracies, blunders, points that stand out).
+std::vector<std::string> BundleConsoleLines(const Block& block, const BundleAdjustmentResult& result,
+                                            const BundleReportContext& context);
+
+}  // namespace photopose::cli
