@@ -1,9 +1,10 @@
 #pragma once
 // A photogrammetric block: the cameras, images, ground points and image marks that resection and
 // bundle adjustment work on, in one model. It is assembled once from the tables (ReadBlock /
-// AssembleBlock below), from a COLMAP model or a BAL / Bundler problem (core/io/colmap.h,
-// core/io/bal.h), or built in memory (the synthetic scenes); every consumer (resect, bundle,
-// compare, the benchmarks, the tests) starts from it instead of pairing marks with points itself.
+// AssembleBlock, core/io/block_tables.h), from a COLMAP model or a BAL / Bundler problem
+// (core/io/colmap.h, core/io/bal.h), or built in memory (core/simulation/); every consumer (resect,
+// bundle, compare, the benchmarks, the tests) starts from it instead of pairing marks with points
+// itself.
 //
 // Frames and units: the ground frame of the points (metres, Z up); exterior orientations in the
 // seed convention (core/types.h); each camera's measurements in the observation unit of its camera
@@ -26,7 +27,6 @@
 #include "core/fiducials.h"
 #include "core/rotation.h"
 #include "core/status.h"
-#include "core/io/tables.h"
 #include "core/types.h"
 
 namespace photopose {
@@ -67,6 +67,9 @@ struct BlockImage {
   // marks (PixelToFilmCamera).
   std::optional<FiducialFit> fiducial_fit;
 };
+
+// The role of a ground point (the points table's Role column).
+enum class PointRole { kControl, kCheck, kTie };
 
 // One ground point.
 struct BlockPoint {
@@ -134,58 +137,5 @@ FrameCamera PixelToFilmCamera(const Block& block, int image);
 // Structural checks: every index in range, parameter counts match the models, every number
 // finite. Names the first offence.
 Status CheckBlock(const Block& block);
-
-// ------------------------------------------------------------------ from the tables
-
-// The tables of a block, as read by core/io/tables.h, and how to combine them.
-struct BlockTables {
-  std::vector<FrameCamera> cameras;
-  std::vector<GroundPoint> points;
-  std::vector<ImageMark> marks;
-  std::vector<FrameRecord> frames;  // may be empty
-  std::vector<MeasuredFiducial> fiducials;  // scanned film, may be empty
-  std::string crs;                  // e.g. the gcp_list header
-  RotationConvention frames_rotation = RotationConvention::kSeed;  // of the frames' accuracy angles
-  // File names for messages ("file:line: column: what").
-  std::string cameras_file, points_file, marks_file, frames_file, fiducials_file;
-  PixelOrigin pixel_origin = PixelOrigin::kCorner;
-  // A pixel mark farther outside its image than this fraction of the image size (per axis) is
-  // refused (when the camera gives the size): it cannot be a measurement in that image.
-  double max_outside_fraction = kMarkOutsideImageFraction;
-  // Largest residual of a measured fiducial after the affine fit (um).
-  double max_fiducial_residual_um = 30.0;
-};
-
-// Pairs marks with points, images with cameras and frames, converts every mark into its camera
-// model's observation unit, and gives every point a role (marks of points without a row are tie
-// points). Errors read "file:line: column: what is wrong".
-//  - Images: in the order they first appear in the marks, then the frames-table images without
-//    marks. The camera of an image is its marks' CameraID, else its frames row's, else the only
-//    camera of the table. A frames row gives the initial eo and the measured centre (and angles)
-//    with its AccuracyX/Y/Z (m) and AccuracyOmega/Phi/Kappa (degrees in the file's convention,
-//    turned into seed-angle sigmas through the convention's Jacobian, correlations dropped).
-//  - Points: the points-table rows in file order (control, check or tie as their Role says), then
-//    the tie points that only marks name, in the order of their first mark.
-//  - Marks: film marks are the observation as they are; pixel marks go through FilmFromPixel of
-//    PixelToFilmCamera (their image's fiducial affine, or the camera table's map), and
-//    observation_units_per_unit is the local um per pixel of that map (FilmUmPerPixel). A pixel mark
-//    of a camera without PixelSize/NRows/NColumns (or A0-B2) is refused at its own line, as is one
-//    farther than max_outside_fraction outside its image.
-// Outputs are written only on success.
-Status AssembleBlock(const BlockTables& tables, Block* block);
-
-// The files of a block and how to read them; ReadBlock reads them (core/io/tables.h) and assembles.
-struct BlockFiles {
-  std::string cameras;   // camera table (required)
-  std::string points;    // ground points (or gcp_list)
-  std::string marks;     // image marks (or gcp_list)
-  std::string gcp_list;  // OpenDroneMap gcp_list.txt instead of points + marks
-  std::string frames;    // optional frames table
-  std::string fiducials;  // optional measured fiducials of scanned film (core/fiducials.h)
-  RotationConvention rotation = RotationConvention::kSeed;  // of the frames table
-  PixelOrigin pixel_origin = PixelOrigin::kCorner;          // of the marks' Column/Row
-  double max_fiducial_residual_um = 30.0;                   // see BlockTables
-};
-Status ReadBlock(const BlockFiles& files, Block* block);
 
 }  // namespace photopose

@@ -22,6 +22,7 @@
 #include <utility>
 #include <vector>
 
+#include "core/block.h"
 #include "core/camera.h"
 #include "core/io/output_files.h"
 #include "core/rotation.h"
@@ -108,7 +109,6 @@ Status FormatFramesTable(const FramesTableOptions& options, const std::vector<Fr
 // control: used to orient the images (resection) or as a weighted constraint (bundle adjustment);
 // check: only compared with the result; tie: coordinates unknown (a points-table row gives
 // approximate values only).
-enum class PointRole { kControl, kCheck, kTie };
 
 struct GroundPoint {
   std::string point_id;

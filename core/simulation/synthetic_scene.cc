@@ -1,3 +1,4 @@
+#include "core/io/block_tables.h"
 #include "core/simulation/synthetic_scene.h"
 
 #include <algorithm>

@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "core/block.h"
+#include "core/io/block_tables.h"
 #include "core/camera.h"
 #include "core/status.h"
 #include "core/io/tables.h"

@@ -13,6 +13,7 @@
 #include <random>
 #include <vector>
 
+#include "core/io/block_tables.h"
 #include "core/collinearity.h"
 #include "core/simulation/synthetic_scene.h"
 #include "cost_functions/collinearity_cost.h"

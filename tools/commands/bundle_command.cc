@@ -8,6 +8,7 @@
 
 #include "core/io/bal.h"
 #include "core/block.h"
+#include "core/io/block_tables.h"
 #include "core/io/colmap.h"
 #include "core/io/csv.h"
 #include "core/io/output_files.h"

@@ -19,6 +19,7 @@
 #include <vector>
 
 #include "core/block.h"
+#include "core/io/block_tables.h"
 #include "core/io/colmap.h"
 #include "core/io/csv.h"
 #include "core/io/output_files.h"

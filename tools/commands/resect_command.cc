@@ -4,6 +4,7 @@
 #include <cstdio>
 #include <iostream>
 
+#include "core/io/block_tables.h"
 #include "core/camera.h"
 #include "core/io/output_files.h"
 #include "core/rotation.h"

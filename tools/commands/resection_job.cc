@@ -1,3 +1,4 @@
+#include "core/io/block_tables.h"
 #include "tools/commands/resection_job.h"
 
 #include <cmath>

@@ -7,6 +7,7 @@
 #include <vector>
 
 #include "core/block.h"
+#include "core/io/block_tables.h"
 #include "core/rotation.h"
 #include "core/status.h"
 #include "solvers/resection/resection.h"

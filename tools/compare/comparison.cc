@@ -1,3 +1,4 @@
+#include "core/io/block_tables.h"
 #include "tools/compare/comparison.h"
 
 #include <Eigen/Dense>

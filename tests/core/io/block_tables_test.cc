@@ -3,6 +3,8 @@
 #include <gtest/gtest.h>
 
 #include <filesystem>
+#include <fstream>
+#include <cmath>
 #include <map>
 #include <string>
 #include <vector>
@@ -11,6 +13,7 @@
 #include "core/simulation/synthetic_block.h"
 #include "core/io/tables.h"
 #include "tests/support/temp_dir.h"
+#include "tests/test_data.h"
 
 namespace photopose {
 namespace {
@@ -136,6 +139,218 @@ TEST(BlockTables, AttitudeAccuracyNeedsTheSeedConvention) {
   const Status status = BlockToTableRecords(block, options, &records);
   ASSERT_FALSE(status.ok());
   EXPECT_NE(status.message().find("attitude accuracies are per seed angle"), std::string::npos);
+}
+
+// ------------------------------------------------------------------ reading: ReadBlock, AssembleBlock
+
+
+// A digital camera (4.4 um pixels, 6000 x 4000), and a film camera with only the schema's required
+// columns (no image size): its pixel marks cannot be turned into film, its film marks can.
+BlockTables Tables() {
+  BlockTables t;
+  FrameCamera digital;
+  digital.camera_id = "cam";
+  digital.focal_length_um = 35000.0;
+  digital.pixel_size_um = 4.4;
+  digital.n_columns = 6000;
+  digital.n_rows = 4000;
+  FrameCamera film;
+  film.camera_id = "film";
+  film.focal_length_um = 152916.0;
+  film.pixel_size_um = 1.0;
+  t.cameras = {digital, film};
+  GroundPoint a, b, c;
+  a.point_id = "A";
+  a.position = {100, 100, 0};
+  a.accuracy_m = Eigen::Vector3d(0.02, 0.02, 0.05);
+  a.line = 2;
+  b.point_id = "B";
+  b.position = {300, 120, 5};
+  b.role = PointRole::kCheck;
+  b.line = 3;
+  c.point_id = "C";
+  c.position = {180, 300, 2};
+  c.role = PointRole::kTie;  // a row with approximate values only
+  c.line = 4;
+  t.points = {a, b, c};
+  const auto mark = [](const std::string& raster, const std::string& point, int line,
+                       std::optional<Eigen::Vector2d> pixels, std::optional<Eigen::Vector2d> film,
+                       const std::string& camera = "") {
+    ImageMark m;
+    m.raster = raster;
+    m.point_id = point;
+    m.line = line;
+    m.column_row = pixels;
+    m.film_um = film;
+    m.camera_id = camera;
+    return m;
+  };
+  t.marks = {mark("img2", "A", 2, Eigen::Vector2d(1409.1, 3590.9), std::nullopt, "cam"),
+             mark("img1", "B", 3, Eigen::Vector2d(10, 20), std::nullopt, "cam"),
+             mark("img2", "X9", 4, Eigen::Vector2d(3000, 2000), std::nullopt),
+             mark("photo", "A", 5, std::nullopt, Eigen::Vector2d(86421, -83977), "film")};
+  t.marks[0].accuracy_px = 0.5;
+  t.marks[3].accuracy_px = 3.0;  // um: the mark's own unit
+  FrameRecord frame;
+  frame.raster = "img3";
+  frame.camera_id = "cam";
+  frame.eo.set_center_in_ground({200, 200, 500});
+  frame.eo.set_angles_seed_rad({0.01, -0.02, 0.3});
+  frame.center_accuracy_m = Eigen::Vector3d(5, 5, 10);
+  frame.attitude_accuracy_deg = Eigen::Vector3d(0.1, 0.1, 0.5);
+  frame.line = 2;
+  t.frames = {frame};
+  t.cameras_file = "cameras.csv";
+  t.points_file = "points.csv";
+  t.marks_file = "marks.csv";
+  t.frames_file = "frames.csv";
+  return t;
+}
+
+TEST(BlockAssembly, AssemblesMarksPointsImagesAndFrames) {
+  Block block;
+  const Status status = AssembleBlock(Tables(), &block);
+  ASSERT_TRUE(status.ok()) << status.message();
+  ASSERT_TRUE(CheckBlock(block).ok());
+  // Images in the order of their first mark, then the frames row without marks.
+  ASSERT_EQ(block.images.size(), 4u);
+  EXPECT_EQ(block.images[0].name, "img2");
+  EXPECT_EQ(block.images[1].name, "img1");
+  EXPECT_EQ(block.images[2].name, "photo");
+  EXPECT_EQ(block.images[3].name, "img3");
+  EXPECT_EQ(block.cameras[block.images[2].camera].camera_id, "film");
+  // The points of the table, then the tie point only a mark names.
+  ASSERT_EQ(block.points.size(), 4u);
+  EXPECT_EQ(block.points[0].role, PointRole::kControl);
+  EXPECT_EQ(block.points[0].surveyed_m, Eigen::Vector3d(100, 100, 0));
+  EXPECT_EQ(block.points[0].accuracy_m, Eigen::Vector3d(0.02, 0.02, 0.05));
+  EXPECT_EQ(block.points[1].role, PointRole::kCheck);
+  EXPECT_EQ(block.points[2].role, PointRole::kTie);
+  EXPECT_FALSE(block.points[2].surveyed_m.has_value());
+  EXPECT_EQ(block.points[2].position_m, Eigen::Vector3d(180, 300, 2));
+  EXPECT_EQ(block.points[3].id, "X9");
+  EXPECT_EQ(block.points[3].role, PointRole::kTie);
+  EXPECT_FALSE(block.points[3].position_m.has_value());
+  // A pixel mark: film through the camera table, um per pixel, accuracy kept in pixels.
+  const BlockMark& pixel = block.marks[0];
+  EXPECT_EQ(pixel.unit, MarkUnit::kPixel);
+  EXPECT_EQ(pixel.measured, Eigen::Vector2d(1409.1, 3590.9));
+  EXPECT_NEAR(pixel.observation.x(), (1409.1 - 3000.0) * 4.4, 1e-9);
+  EXPECT_NEAR(pixel.observation.y(), (2000.0 - 3590.9) * 4.4, 1e-9);
+  EXPECT_NEAR(pixel.observation_units_per_unit, 4.4, 1e-12);
+  EXPECT_EQ(pixel.accuracy, 0.5);
+  EXPECT_EQ(pixel.line, 2);
+  // A film mark: as it is, accuracy in um.
+  const BlockMark& film = block.marks[3];
+  EXPECT_EQ(film.unit, MarkUnit::kFilm);
+  EXPECT_EQ(film.observation, Eigen::Vector2d(86421, -83977));
+  EXPECT_EQ(film.observation_units_per_unit, 1.0);
+  EXPECT_EQ(film.accuracy, 3.0);
+  // The frames row: initial pose and measured centre and attitude with their accuracies.
+  const BlockImage& framed = block.images[3];
+  ASSERT_TRUE(framed.eo.has_value());
+  EXPECT_EQ(framed.measured_center_m, Eigen::Vector3d(200, 200, 500));
+  EXPECT_EQ(framed.center_accuracy_m, Eigen::Vector3d(5, 5, 10));
+  ASSERT_TRUE(framed.attitude_accuracy_rad.has_value());
+  // rxryrz with AngleDirection -1: the file's angles are the seed angles, sigmas unchanged.
+  EXPECT_NEAR((*framed.attitude_accuracy_rad)[0], DegreesToRadians(0.1), 1e-9);
+  EXPECT_NEAR((*framed.attitude_accuracy_rad)[2], DegreesToRadians(0.5), 1e-9);
+  EXPECT_EQ(framed.line, 2);
+  EXPECT_EQ(block.marks_of_image[0].size(), 2u);
+  EXPECT_EQ(block.marks_of_point[0].size(), 2u);
+}
+
+TEST(BlockAssembly, ErrorsNameTheFileLineAndColumn) {
+  BlockTables t = Tables();
+  t.marks[1].camera_id = "nocam";
+  Block block;
+  EXPECT_EQ(AssembleBlock(t, &block).message(), "marks.csv:3: CameraID: unknown camera 'nocam'");
+  t = Tables();
+  t.marks[2].camera_id = "film";
+  EXPECT_EQ(AssembleBlock(t, &block).message(),
+            "marks.csv:4: CameraID: image 'img2' has marks of two cameras ('cam' and 'film')");
+  t = Tables();
+  t.marks[1].camera_id.clear();
+  EXPECT_EQ(AssembleBlock(t, &block).message(),
+            "marks.csv:3: CameraID: image 'img1' names no camera and the camera table has several");
+  // A pixel mark of the film camera, which has no image size: refused at that mark.
+  t = Tables();
+  t.marks[3].film_um.reset();
+  t.marks[3].column_row = Eigen::Vector2d(10, 10);
+  const std::string message = AssembleBlock(t, &block).message();
+  EXPECT_EQ(message.rfind("marks.csv:5: Column: camera 'film' has no NRows and NColumns", 0), 0u)
+      << message;
+  // 20 000 px outside a 6000 x 4000 image.
+  t = Tables();
+  t.marks[1].column_row = Eigen::Vector2d(26000, 20);
+  EXPECT_EQ(AssembleBlock(t, &block).message(),
+            "marks.csv:3: Column: the mark of point '" + t.marks[1].point_id +
+                "' in image 'img1' lies 20000 pixels outside the 6000 x 4000 image of camera '" +
+                t.cameras[0].camera_id + "' (at most 5% of the image size is allowed)");
+  // The frames row names another camera than the marks.
+  t = Tables();
+  t.frames[0].raster = "img1";
+  t.frames[0].camera_id = "film";
+  EXPECT_EQ(AssembleBlock(t, &block).message().rfind("frames.csv:2: CameraID:", 0), 0u);
+}
+
+TEST(BlockAssembly, ReadsTheFilesAndKeepsTheCoordinateSystemOfAGcpList) {
+  const std::filesystem::path dir = std::filesystem::temp_directory_path() / "photopose_tests";
+  std::filesystem::create_directories(dir);
+  const std::string cameras = (dir / "block_cameras.csv").string();
+  std::ofstream(cameras) << "CameraID,FocalLength,PixelSize,NColumns,NRows\n"
+                            "SX260HS,4500,1.5495867768595042,4000,3000\n";
+  BlockFiles files;
+  files.cameras = cameras;
+  files.gcp_list = testing::SharedDataPath("odm_br/gcp_list.txt");
+  Block block;
+  const Status status = ReadBlock(files, &block);
+  ASSERT_TRUE(status.ok()) << status.message();
+  EXPECT_EQ(block.crs, "+proj=utm +zone=22 +south +datum=WGS84 +units=m +no_defs");
+  EXPECT_EQ(block.images.size(), 10u);
+  EXPECT_EQ(block.marks.size(), 25u);
+  EXPECT_EQ(block.marks_source, files.gcp_list);
+  EXPECT_EQ(block.marks[0].line, 2);
+}
+
+TEST(BlockAssembly, ScannedFilmUsesEachImagesFiducialAffine) {
+  BlockTables t;
+  FrameCamera rc30;
+  rc30.camera_id = "RC30";
+  rc30.focal_length_um = 153012.0;
+  rc30.film_fiducials_um = {{-106000, -106000}, {106000, -106000}, {106000, 106000},
+                            {-106000, 106000}};
+  t.cameras = {rc30};
+  ImageMark mark;
+  mark.raster = "scan_1";
+  mark.point_id = "P";
+  mark.column_row = Eigen::Vector2d(5750 + 3000, 5750 - 2000);
+  mark.line = 2;
+  t.marks = {mark};
+  // 20 um pixels, the film centre at (5750, 5750), rows down.
+  for (int k = 0; k < 4; ++k) {
+    MeasuredFiducial f;
+    f.raster = "scan_1";
+    f.fiducial_id = k + 1;
+    f.column_row = Eigen::Vector2d(5750.0 + rc30.film_fiducials_um[k].x() / 20.0,
+                                   5750.0 - rc30.film_fiducials_um[k].y() / 20.0);
+    f.line = k + 2;
+    t.fiducials.push_back(f);
+  }
+  t.marks_file = "marks.csv";
+  t.fiducials_file = "fiducials.csv";
+  Block block;
+  const Status status = AssembleBlock(t, &block);
+  ASSERT_TRUE(status.ok()) << status.message();
+  ASSERT_TRUE(block.images[0].fiducial_fit.has_value());
+  EXPECT_EQ(block.images[0].fiducial_fit->redundancy, 2);
+  EXPECT_LT((block.marks[0].observation - Eigen::Vector2d(60000, 40000)).norm(), 1e-6);
+  EXPECT_NEAR(block.marks[0].observation_units_per_unit, 20.0, 1e-9);
+  EXPECT_TRUE(PixelToFilmCamera(block, 0).has_affine);
+  // Fiducials of an image the block does not have.
+  t.fiducials[0].raster = "scan_9";
+  EXPECT_EQ(AssembleBlock(t, &block).message(),
+            "fiducials.csv:2: Raster: image 'scan_9' has no marks and no frames row");
 }
 
 }  // namespace

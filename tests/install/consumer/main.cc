@@ -4,6 +4,7 @@
 #include <iostream>
 
 #include <photopose/core/block.h>
+#include <photopose/core/io/block_tables.h>
 #include <photopose/core/simulation/synthetic_scene.h>
 #include <photopose/solvers/resection/resection.h>
 

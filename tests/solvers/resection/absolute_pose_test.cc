@@ -1,3 +1,4 @@
+#include "core/io/block_tables.h"
 #include "solvers/resection/absolute_pose.h"
 
 #include <gtest/gtest.h>

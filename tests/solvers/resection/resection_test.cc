@@ -1,3 +1,4 @@
+#include "core/io/block_tables.h"
 #include "solvers/resection/resection.h"
 
 #include <gtest/gtest.h>

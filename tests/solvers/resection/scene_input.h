@@ -6,6 +6,7 @@
 
 #include <vector>
 
+#include "core/io/block_tables.h"
 #include "core/simulation/synthetic_scene.h"
 #include "solvers/resection/resection.h"
 

@@ -1,6 +1,7 @@
 // Tests of the comparison engine (tools/compare/comparison.h) and its HTML report: the statistics helpers
 // against published values, one Monte-Carlo trial recomputed by calling the solver directly, the
 // covariance honesty of a correctly weighted solver, and what the comparison must show.
+#include "core/io/block_tables.h"
 #include "tools/compare/comparison.h"
 
 #include <gtest/gtest.h>
