@@ -213,34 +213,66 @@ bool NearTheImage(const FrameCamera& camera, const Eigen::Vector2d& corner_colum
          r <= (1.0 + fraction) * h;
 }
 
-}  // namespace
-
-Status AssembleBlock(const BlockTables& tables, Block* block) {
-  Block result;
-  result.pixel_origin = tables.pixel_origin;
-  result.crs = tables.crs;
-  result.marks_source = tables.marks_file;
-
-  // Cameras.
-  if (tables.cameras.empty())
-    return Status::Error(Where(tables.cameras_file, 0, "") + "the camera table has no rows");
-  for (const FrameCamera& table : tables.cameras) {
-    const Status valid = table.IsValid();
-    if (!valid.ok())
-      return Status::Error(Where(tables.cameras_file, 0, "") + "camera " +
-                           Quoted(table.camera_id) + ": " + valid.message());
-    if (result.FindCamera(table.camera_id) >= 0)
-      return Status::Error(Where(tables.cameras_file, 0, "CameraID") + "duplicate camera " +
-                           Quoted(table.camera_id));
-    result.cameras.push_back(CameraOf(table));
+// The steps of AssembleBlock, each over the tables and the block assembled so far. Name -> index
+// maps hold views of the tables' strings (which outlive them): a block has millions of marks, each
+// looked up by its raster and point.
+class BlockAssembler {
+ public:
+  explicit BlockAssembler(const BlockTables& tables) : tables_(tables) {
+    result_.pixel_origin = tables.pixel_origin;
+    result_.crs = tables.crs;
+    result_.marks_source = tables.marks_file;
   }
 
-  // Name -> index maps hold views of the tables' strings (which outlive them): a block has millions
-  // of marks, each looked up by its raster and point.
-  // Points of the table.
-  std::unordered_map<std::string_view, int> point_index;
-  point_index.reserve(tables.points.size());
-  for (const GroundPoint& row : tables.points) {
+  Status AddCameras();
+  Status AddPoints();
+  // From the marks, in order of first appearance, then frames rows without marks.
+  Status AddImages();
+  // Scanned film: each image's affine from its measured fiducials.
+  Status FitScannedFilm();
+  Status AddMarks();
+  Block& result() { return result_; }
+
+ private:
+  // The camera of an image named by a mark's or a frame's CameraID; an error otherwise.
+  Status FindCamera(const std::string& camera_id, const std::string& file, int line,
+                    int* camera) const;
+  Status AddImage(const std::string& raster, const std::string& mark_camera_id, int mark_line);
+  // The frames row's orientation, measured centre and attitude (with its accuracies) of `image`.
+  Status TakeFrame(const FrameRecord& frame, int mark_line, BlockImage* image) const;
+  // The block mark of a marks-table row (its point added as a tie point when it has no row).
+  Status MarkOf(const ImageMark& row, const std::vector<FrameCamera>& pixel_cameras,
+                BlockMark* mark);
+  // A pixel mark: its film observation through the image's pixel -> film map and the local um per
+  // pixel; refused farther than max_outside_fraction outside its image.
+  Status PixelMark(const ImageMark& row, const FrameCamera& camera, BlockMark* mark) const;
+
+  const BlockTables& tables_;
+  Block result_;
+  std::unordered_map<std::string_view, int> point_index_;
+  std::unordered_map<std::string_view, int> image_index_;
+  std::unordered_map<std::string_view, const FrameRecord*> frame_of_;
+};
+
+Status BlockAssembler::AddCameras() {
+  if (tables_.cameras.empty())
+    return Status::Error(Where(tables_.cameras_file, 0, "") + "the camera table has no rows");
+  for (const FrameCamera& table : tables_.cameras) {
+    const Status valid = table.IsValid();
+    if (!valid.ok())
+      return Status::Error(Where(tables_.cameras_file, 0, "") + "camera " +
+                           Quoted(table.camera_id) + ": " + valid.message());
+    if (result_.FindCamera(table.camera_id) >= 0)
+      return Status::Error(Where(tables_.cameras_file, 0, "CameraID") + "duplicate camera " +
+                           Quoted(table.camera_id));
+    result_.cameras.push_back(CameraOf(table));
+  }
+  return Status::Ok();
+}
+
+Status BlockAssembler::AddPoints() {
+  point_index_.reserve(tables_.points.size());
+  for (const GroundPoint& row : tables_.points) {
     BlockPoint point;
     point.id = row.point_id;
     point.role = row.role;
@@ -250,166 +282,193 @@ Status AssembleBlock(const BlockTables& tables, Block* block) {
       point.surveyed_m = row.position;
       point.accuracy_m = row.accuracy_m;
     }
-    if (!point_index.emplace(row.point_id, static_cast<int>(result.points.size())).second)
-      return Status::Error(Where(tables.points_file, row.line, "PointID") + "duplicate point " +
+    if (!point_index_.emplace(row.point_id, static_cast<int>(result_.points.size())).second)
+      return Status::Error(Where(tables_.points_file, row.line, "PointID") + "duplicate point " +
                            Quoted(row.point_id));
-    result.points.push_back(std::move(point));
+    result_.points.push_back(std::move(point));
   }
+  return Status::Ok();
+}
 
-  // Images: from the marks, in order of first appearance, then frames rows without marks.
-  std::unordered_map<std::string_view, const FrameRecord*> frame_of;
-  for (const FrameRecord& frame : tables.frames) frame_of.emplace(frame.raster, &frame);
-  std::unordered_map<std::string_view, int> image_index;
-  // The camera of an image named by a mark's or a frame's CameraID; -1 and an error otherwise.
-  const auto find_camera = [&](const std::string& camera_id, const std::string& file, int line,
-                               int* camera) -> Status {
-    *camera = result.FindCamera(camera_id);
-    if (*camera < 0)
-      return Status::Error(Where(file, line, "CameraID") + "unknown camera " + Quoted(camera_id));
-    return Status::Ok();
-  };
-  const auto add_image = [&](const std::string& raster, const std::string& mark_camera_id,
-                             int mark_line) -> Status {
-    BlockImage image;
-    image.name = raster;
-    const auto frame = frame_of.find(raster);
-    if (!mark_camera_id.empty()) {
-      PHOTOPOSE_RETURN_IF_ERROR(
-          find_camera(mark_camera_id, tables.marks_file, mark_line, &image.camera));
-    } else if (frame != frame_of.end()) {
-      PHOTOPOSE_RETURN_IF_ERROR(find_camera(frame->second->camera_id, tables.frames_file,
-                                            frame->second->line, &image.camera));
-    } else if (result.cameras.size() == 1) {
-      image.camera = 0;
-    } else {
-      return Status::Error(Where(tables.marks_file, mark_line, "CameraID") + "image " +
-                           Quoted(raster) + " names no camera and the camera table has several");
-    }
-    if (frame != frame_of.end()) {
-      const FrameRecord& f = *frame->second;
-      if (f.camera_id != result.cameras[image.camera].camera_id) {
-        return Status::Error(Where(tables.frames_file, f.line, "CameraID") + "image " +
-                             Quoted(raster) + " is of camera " +
-                             Quoted(result.cameras[image.camera].camera_id) +
-                             " in the marks (line " + std::to_string(mark_line) + ")");
-      }
-      image.line = f.line;
-      image.eo = f.eo;
-      image.measured_center_m = f.eo.center_in_ground();
-      image.center_accuracy_m = f.center_accuracy_m;
-      image.measured_angles_rad = f.eo.angles_seed_rad();
-      if (f.attitude_accuracy_deg) {
-        image.attitude_accuracy_rad = SeedAttitudeSigmas(
-            tables.frames_rotation, result.cameras[image.camera].table.angle_flags(),
-            f.eo.angles_seed_rad(), *f.attitude_accuracy_deg);
-        if (!image.attitude_accuracy_rad)
-          return Status::Error(Where(tables.frames_file, f.line, "AccuracyOmega") +
-                               "cannot be converted: the angles are at a gimbal lock of the "
-                               "convention");
-      }
-    }
-    image_index.emplace(raster, static_cast<int>(result.images.size()));
-    result.images.push_back(std::move(image));
-    return Status::Ok();
-  };
-  for (const ImageMark& mark : tables.marks) {
-    const auto found = image_index.find(mark.raster);
-    if (found == image_index.end()) {
-      PHOTOPOSE_RETURN_IF_ERROR(add_image(mark.raster, mark.camera_id, mark.line));
+Status BlockAssembler::FindCamera(const std::string& camera_id, const std::string& file, int line,
+                                  int* camera) const {
+  *camera = result_.FindCamera(camera_id);
+  if (*camera < 0)
+    return Status::Error(Where(file, line, "CameraID") + "unknown camera " + Quoted(camera_id));
+  return Status::Ok();
+}
+
+Status BlockAssembler::TakeFrame(const FrameRecord& f, int mark_line, BlockImage* image) const {
+  if (f.camera_id != result_.cameras[image->camera].camera_id) {
+    return Status::Error(Where(tables_.frames_file, f.line, "CameraID") + "image " +
+                         Quoted(image->name) + " is of camera " +
+                         Quoted(result_.cameras[image->camera].camera_id) +
+                         " in the marks (line " + std::to_string(mark_line) + ")");
+  }
+  image->line = f.line;
+  image->eo = f.eo;
+  image->measured_center_m = f.eo.center_in_ground();
+  image->center_accuracy_m = f.center_accuracy_m;
+  image->measured_angles_rad = f.eo.angles_seed_rad();
+  if (f.attitude_accuracy_deg) {
+    image->attitude_accuracy_rad = SeedAttitudeSigmas(
+        tables_.frames_rotation, result_.cameras[image->camera].table.angle_flags(),
+        f.eo.angles_seed_rad(), *f.attitude_accuracy_deg);
+    if (!image->attitude_accuracy_rad)
+      return Status::Error(Where(tables_.frames_file, f.line, "AccuracyOmega") +
+                           "cannot be converted: the angles are at a gimbal lock of the "
+                           "convention");
+  }
+  return Status::Ok();
+}
+
+Status BlockAssembler::AddImage(const std::string& raster, const std::string& mark_camera_id,
+                                int mark_line) {
+  BlockImage image;
+  image.name = raster;
+  const auto frame = frame_of_.find(raster);
+  if (!mark_camera_id.empty()) {
+    PHOTOPOSE_RETURN_IF_ERROR(
+        FindCamera(mark_camera_id, tables_.marks_file, mark_line, &image.camera));
+  } else if (frame != frame_of_.end()) {
+    PHOTOPOSE_RETURN_IF_ERROR(FindCamera(frame->second->camera_id, tables_.frames_file,
+                                         frame->second->line, &image.camera));
+  } else if (result_.cameras.size() == 1) {
+    image.camera = 0;
+  } else {
+    return Status::Error(Where(tables_.marks_file, mark_line, "CameraID") + "image " +
+                         Quoted(raster) + " names no camera and the camera table has several");
+  }
+  if (frame != frame_of_.end()) PHOTOPOSE_RETURN_IF_ERROR(TakeFrame(*frame->second, mark_line, &image));
+  image_index_.emplace(raster, static_cast<int>(result_.images.size()));
+  result_.images.push_back(std::move(image));
+  return Status::Ok();
+}
+
+Status BlockAssembler::AddImages() {
+  for (const FrameRecord& frame : tables_.frames) frame_of_.emplace(frame.raster, &frame);
+  for (const ImageMark& mark : tables_.marks) {
+    const auto found = image_index_.find(mark.raster);
+    if (found == image_index_.end()) {
+      PHOTOPOSE_RETURN_IF_ERROR(AddImage(mark.raster, mark.camera_id, mark.line));
       continue;
     }
-    const BlockImage& image = result.images[found->second];
-    if (!mark.camera_id.empty() && mark.camera_id != result.cameras[image.camera].camera_id) {
-      return Status::Error(Where(tables.marks_file, mark.line, "CameraID") + "image " +
+    const BlockImage& image = result_.images[found->second];
+    if (!mark.camera_id.empty() && mark.camera_id != result_.cameras[image.camera].camera_id) {
+      return Status::Error(Where(tables_.marks_file, mark.line, "CameraID") + "image " +
                            Quoted(mark.raster) + " has marks of two cameras (" +
-                           Quoted(result.cameras[image.camera].camera_id) + " and " +
+                           Quoted(result_.cameras[image.camera].camera_id) + " and " +
                            Quoted(mark.camera_id) + ")");
     }
   }
-  for (const FrameRecord& frame : tables.frames) {
-    if (image_index.count(frame.raster) == 0)
-      PHOTOPOSE_RETURN_IF_ERROR(add_image(frame.raster, frame.camera_id, frame.line));
+  for (const FrameRecord& frame : tables_.frames) {
+    if (image_index_.count(frame.raster) == 0)
+      PHOTOPOSE_RETURN_IF_ERROR(AddImage(frame.raster, frame.camera_id, frame.line));
   }
+  return Status::Ok();
+}
 
-  // Scanned film: each image's affine from its measured fiducials.
+Status BlockAssembler::FitScannedFilm() {
   std::map<std::string, std::vector<MeasuredFiducial>> fiducials_of;
-  for (const MeasuredFiducial& f : tables.fiducials) fiducials_of[f.raster].push_back(f);
+  for (const MeasuredFiducial& f : tables_.fiducials) fiducials_of[f.raster].push_back(f);
   FiducialFitOptions fit_options;
-  fit_options.max_residual_um = tables.max_fiducial_residual_um;
-  fit_options.pixel_origin = tables.pixel_origin;
+  fit_options.max_residual_um = tables_.max_fiducial_residual_um;
+  fit_options.pixel_origin = tables_.pixel_origin;
   for (const auto& [raster, measured] : fiducials_of) {
-    const auto found = image_index.find(raster);
-    if (found == image_index.end()) {
-      return Status::Error(Where(tables.fiducials_file, measured.front().line, "Raster") +
+    const auto found = image_index_.find(raster);
+    if (found == image_index_.end()) {
+      return Status::Error(Where(tables_.fiducials_file, measured.front().line, "Raster") +
                            "image " + Quoted(raster) + " has no marks and no frames row");
     }
-    BlockImage& image = result.images[found->second];
+    BlockImage& image = result_.images[found->second];
     FiducialFit fit;
-    PHOTOPOSE_RETURN_IF_ERROR(FitFiducials(result.cameras[image.camera].table, measured,
-                                           fit_options, tables.fiducials_file, &fit));
+    PHOTOPOSE_RETURN_IF_ERROR(FitFiducials(result_.cameras[image.camera].table, measured,
+                                           fit_options, tables_.fiducials_file, &fit));
     image.fiducial_fit = std::move(fit);
   }
+  return Status::Ok();
+}
 
-  // Marks.
-  std::vector<FrameCamera> pixel_cameras;
-  for (size_t i = 0; i < result.images.size(); ++i)
-    pixel_cameras.push_back(PixelToFilmCamera(result, static_cast<int>(i)));
-  const double origin_shift = tables.pixel_origin == PixelOrigin::kCenter ? 0.5 : 0.0;
-  result.marks.reserve(tables.marks.size());
-  for (const ImageMark& row : tables.marks) {
-    BlockMark mark;
-    mark.line = row.line;
-    mark.image = image_index.at(row.raster);
-    const auto point = point_index.find(row.point_id);
-    if (point != point_index.end()) {
-      mark.point = point->second;
-    } else {
-      // A point without a row: a tie point of unknown coordinates.
-      BlockPoint tie;
-      tie.id = row.point_id;
-      tie.role = PointRole::kTie;
-      mark.point = static_cast<int>(result.points.size());
-      point_index.emplace(row.point_id, mark.point);
-      result.points.push_back(std::move(tie));
-    }
-    mark.accuracy = row.accuracy_px;
-    if (row.film_um) {
-      mark.unit = MarkUnit::kFilm;
-      mark.measured = *row.film_um;
-      mark.observation = *row.film_um;
-    } else if (row.column_row) {
-      mark.unit = MarkUnit::kPixel;
-      mark.measured = *row.column_row;
-      const FrameCamera& camera = pixel_cameras[mark.image];
-      const Status film = FilmFromPixel(camera, mark.measured, tables.pixel_origin, &mark.observation);
-      if (!film.ok()) return Status::Error(Where(tables.marks_file, row.line, "Column") + film.message());
-      if (!NearTheImage(camera, mark.measured + Eigen::Vector2d::Constant(origin_shift),
-                        tables.max_outside_fraction)) {
-        const Eigen::Vector2d corner = mark.measured + Eigen::Vector2d::Constant(origin_shift);
-        const Eigen::Vector2d size(camera.n_columns, camera.n_rows);
-        double outside = 0.0;
-        for (int k = 0; k < 2; ++k)
-          outside = std::max(outside, corner[k] < 0.0 ? -corner[k] : corner[k] - size[k]);
-        return Status::Error(EscapeForMessage(
-            Where(tables.marks_file, row.line, "Column") + "the mark of point '" + row.point_id +
-            "' in image '" + row.raster + "' lies " + FormatNumber(std::round(outside)) +
-            " pixels outside the " + std::to_string(camera.n_columns) + " x " +
-            std::to_string(camera.n_rows) + " image of camera '" + camera.camera_id +
-            "' (at most " + FormatNumber(tables.max_outside_fraction * 100.0) +
-            "% of the image size is allowed)"));
-      }
-      const Status scale =
-          FilmUmPerPixel(camera, mark.measured, tables.pixel_origin, &mark.observation_units_per_unit);
-      if (!scale.ok()) return Status::Error(Where(tables.marks_file, row.line, "Column") + scale.message());
-    } else {
-      return Status::Error(Where(tables.marks_file, row.line, "Column") +
-                           "the mark has neither Column/Row nor FilmX/FilmY");
-    }
-    result.marks.push_back(mark);
+Status BlockAssembler::PixelMark(const ImageMark& row, const FrameCamera& camera,
+                                 BlockMark* mark) const {
+  const double origin_shift = tables_.pixel_origin == PixelOrigin::kCenter ? 0.5 : 0.0;
+  mark->unit = MarkUnit::kPixel;
+  mark->measured = *row.column_row;
+  const Status film = FilmFromPixel(camera, mark->measured, tables_.pixel_origin, &mark->observation);
+  if (!film.ok()) return Status::Error(Where(tables_.marks_file, row.line, "Column") + film.message());
+  const Eigen::Vector2d corner = mark->measured + Eigen::Vector2d::Constant(origin_shift);
+  if (!NearTheImage(camera, corner, tables_.max_outside_fraction)) {
+    const Eigen::Vector2d size(camera.n_columns, camera.n_rows);
+    double outside = 0.0;
+    for (int k = 0; k < 2; ++k)
+      outside = std::max(outside, corner[k] < 0.0 ? -corner[k] : corner[k] - size[k]);
+    return Status::Error(EscapeForMessage(
+        Where(tables_.marks_file, row.line, "Column") + "the mark of point '" + row.point_id +
+        "' in image '" + row.raster + "' lies " + FormatNumber(std::round(outside)) +
+        " pixels outside the " + std::to_string(camera.n_columns) + " x " +
+        std::to_string(camera.n_rows) + " image of camera '" + camera.camera_id +
+        "' (at most " + FormatNumber(tables_.max_outside_fraction * 100.0) +
+        "% of the image size is allowed)"));
   }
-  result.BuildIndex();
-  PHOTOPOSE_RETURN_IF_ERROR(CheckBlock(result));
-  *block = std::move(result);
+  const Status scale = FilmUmPerPixel(camera, mark->measured, tables_.pixel_origin,
+                                      &mark->observation_units_per_unit);
+  if (!scale.ok()) return Status::Error(Where(tables_.marks_file, row.line, "Column") + scale.message());
+  return Status::Ok();
+}
+
+Status BlockAssembler::MarkOf(const ImageMark& row, const std::vector<FrameCamera>& pixel_cameras,
+                              BlockMark* mark) {
+  mark->line = row.line;
+  mark->image = image_index_.at(row.raster);
+  const auto point = point_index_.find(row.point_id);
+  if (point != point_index_.end()) {
+    mark->point = point->second;
+  } else {
+    // A point without a row: a tie point of unknown coordinates.
+    BlockPoint tie;
+    tie.id = row.point_id;
+    tie.role = PointRole::kTie;
+    mark->point = static_cast<int>(result_.points.size());
+    point_index_.emplace(row.point_id, mark->point);
+    result_.points.push_back(std::move(tie));
+  }
+  mark->accuracy = row.accuracy_px;
+  if (row.film_um) {
+    mark->unit = MarkUnit::kFilm;
+    mark->measured = *row.film_um;
+    mark->observation = *row.film_um;
+    return Status::Ok();
+  }
+  if (row.column_row) return PixelMark(row, pixel_cameras[mark->image], mark);
+  return Status::Error(Where(tables_.marks_file, row.line, "Column") +
+                       "the mark has neither Column/Row nor FilmX/FilmY");
+}
+
+Status BlockAssembler::AddMarks() {
+  std::vector<FrameCamera> pixel_cameras;
+  for (size_t i = 0; i < result_.images.size(); ++i)
+    pixel_cameras.push_back(PixelToFilmCamera(result_, static_cast<int>(i)));
+  result_.marks.reserve(tables_.marks.size());
+  for (const ImageMark& row : tables_.marks) {
+    BlockMark mark;
+    PHOTOPOSE_RETURN_IF_ERROR(MarkOf(row, pixel_cameras, &mark));
+    result_.marks.push_back(mark);
+  }
+  result_.BuildIndex();
+  return Status::Ok();
+}
+
+}  // namespace
+
+Status AssembleBlock(const BlockTables& tables, Block* block) {
+  BlockAssembler assembler(tables);
+  PHOTOPOSE_RETURN_IF_ERROR(assembler.AddCameras());
+  PHOTOPOSE_RETURN_IF_ERROR(assembler.AddPoints());
+  PHOTOPOSE_RETURN_IF_ERROR(assembler.AddImages());
+  PHOTOPOSE_RETURN_IF_ERROR(assembler.FitScannedFilm());
+  PHOTOPOSE_RETURN_IF_ERROR(assembler.AddMarks());
+  PHOTOPOSE_RETURN_IF_ERROR(CheckBlock(assembler.result()));
+  *block = std::move(assembler.result());
   return Status::Ok();
 }
 
