@@ -225,7 +225,6 @@ AbsolutePoseEstimator::AbsolutePoseEstimator(const std::vector<Eigen::Vector2d>&
                                              const std::vector<double>& sigmas,
                                              ConsensusScore score)
     : num_data_(static_cast<int>(points_in_ground.size())),
-      focal_um_(focal_um),
       threshold_sq_(inlier_threshold * inlier_threshold),
       gauss_newton_iterations_(gauss_newton_iterations),
       score_(score),

@@ -107,7 +107,6 @@ class AbsolutePoseEstimator {
   void WhitenedSquares(const Model& model, std::vector<double>* squares) const;
 
   int num_data_ = 0;
-  double focal_um_ = 0.0;
   double threshold_sq_ = 0.0;  // in whitened units
   // Squared threshold in image-plane units over c, for the typical datum (the RMS sigma): the
   // scale of Gauss-Newton's convergence test.
