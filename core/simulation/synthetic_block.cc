@@ -272,6 +272,327 @@ std::optional<double> Stated(double accuracy, double sigma) {
   return std::nullopt;
 }
 
+// ---- the steps of MakeSyntheticBlock, in order; each draws from its own random stream.
+
+// The true poses on the grid, images in flight order, and their names.
+void PlaceImages(const SyntheticBlockOptions& o, const Flight& flight, Block* block,
+                 SyntheticBlockTruth* t) {
+  const int num_images = o.num_lines * o.images_per_line;
+  block->images.resize(num_images);
+  t->eo.resize(num_images);
+  PortableRandom random(o.seed, kStreamPoses);
+  const int line_digits = std::max(2, Digits(o.num_lines));
+  const int image_digits = std::max(3, Digits(o.images_per_line));
+  const double jitter_rad = DegreesToRadians(o.attitude_jitter_deg);
+  for (int line = 0; line < o.num_lines; ++line) {
+    for (int j = 0; j < o.images_per_line; ++j) {
+      const int k = flight.FlownBack(line) ? o.images_per_line - 1 - j : j;
+      const int index = flight.Image(line, k);
+      ExteriorOrientation eo;
+      const double J = o.position_jitter_m;
+      eo.set_center_in_ground({flight.LineX(line) + random.Uniform(-J, J),
+                               flight.ExposureY(k) + random.Uniform(-J, J),
+                               o.ground_height_m + o.flying_height_m + random.Uniform(-J, J)});
+      eo.set_angles_seed_rad({random.Uniform(-jitter_rad, jitter_rad),
+                              random.Uniform(-jitter_rad, jitter_rad),
+                              WrapAngle((flight.FlownBack(line) ? kPi : 0.0) +
+                                        random.Uniform(-jitter_rad, jitter_rad))});
+      t->eo[index] = eo;
+      BlockImage& image = block->images[index];
+      image.name = Numbered("L", line + 1, line_digits) + Numbered("_", j + 1, image_digits);
+      image.camera = 0;
+    }
+  }
+}
+
+// The true views of ground points: the candidate images of the flight grid whose frame a point
+// projects into.
+class ViewFinder {
+ public:
+  ViewFinder(const SyntheticBlockOptions& o, const Flight& flight, const Projector& projector,
+             const std::vector<ExteriorOrientation>& eo)
+      : flight_(flight),
+        projector_(projector),
+        eo_(eo),
+        // Jitter, tilt and relief can move a footprint by this much (m).
+        margin_(o.position_jitter_m +
+                o.flying_height_m * std::tan(DegreesToRadians(o.attitude_jitter_deg)) * 1.5 +
+                o.terrain_relief_m + 1.0) {}
+  // Finds the views of ground point X (index point_index); returns their number.
+  int Look(const Eigen::Vector3d& X, int point_index) {
+    views_.clear();
+    int l0, l1, k0, k1;
+    flight_.Candidates(X.x(), X.y(), margin_, &l0, &l1, &k0, &k1);
+    for (int line = l0; line <= l1; ++line) {
+      for (int k = k0; k <= k1; ++k) {
+        const int image = flight_.Image(line, k);
+        Eigen::Vector2d pixel;
+        if (projector_.Pixel(eo_[image], X, &pixel)) views_.push_back({image, point_index, pixel});
+      }
+    }
+    return static_cast<int>(views_.size());
+  }
+  // The views the last Look found.
+  const std::vector<View>& views() const { return views_; }
+
+ private:
+  const Flight& flight_;
+  const Projector& projector_;
+  const std::vector<ExteriorOrientation>& eo_;
+  const double margin_;
+  std::vector<View> views_;
+};
+
+// The rectangle control and check points are placed on: the image centres' (on one line or one
+// exposure per line: the middle half of the footprint across it).
+struct SurveyRectangle {
+  double x0, y0, span_x, span_y;
+};
+
+SurveyRectangle SurveyedArea(const SyntheticBlockOptions& o, const Geometry& g) {
+  SurveyRectangle r{o.origin_m.x(), o.origin_m.y(), (o.num_lines - 1) * g.side_m,
+                    (o.images_per_line - 1) * g.forward_m};
+  if (r.span_x <= 0.0) {
+    r.span_x = 0.5 * g.footprint_width_m;
+    r.x0 -= 0.25 * g.footprint_width_m;
+  }
+  if (r.span_y <= 0.0) {
+    r.span_y = 0.5 * g.footprint_height_m;
+    r.y0 -= 0.25 * g.footprint_height_m;
+  }
+  return r;
+}
+
+// Control points at ControlLayout() (then uniform), check points one per cell of a grid as square
+// as the rectangle allows (cells chosen at random when there are more cells than points, inset by
+// 5% of a cell); every one must be seen by an image.
+Status PlaceSurveyedPoints(const SyntheticBlockOptions& o, const Geometry& g,
+                           const Terrain& terrain, ViewFinder* finder, Block* block,
+                           SyntheticBlockTruth* t, std::vector<View>* views) {
+  const SurveyRectangle r = SurveyedArea(o, g);
+  PortableRandom random(o.seed, kStreamControl);
+  auto add = [&](const std::string& id, PointRole role, double u, double v) {
+    const double x = r.x0 + u * r.span_x, y = r.y0 + v * r.span_y;
+    BlockPoint point;
+    point.id = id;
+    point.role = role;
+    block->points.push_back(point);
+    t->points_m.emplace_back(x, y, terrain.Height(x, y));
+  };
+  const int control_digits = std::max(3, Digits(o.num_control_points));
+  for (int c = 0; c < o.num_control_points; ++c) {
+    const Eigen::Vector2d unit = c < static_cast<int>(ControlLayout().size())
+                                     ? ControlLayout()[c]
+                                     : Eigen::Vector2d(random.Uniform01(), random.Uniform01());
+    add(Numbered("C", c + 1, control_digits), PointRole::kControl, unit.x(), unit.y());
+  }
+  const int n = o.num_check_points;
+  if (n > 0) {
+    const int gx = std::max(1, static_cast<int>(std::round(std::sqrt(n * r.span_x / r.span_y))));
+    const int gy = (n + gx - 1) / gx;
+    std::vector<int> cells(static_cast<size_t>(gx) * gy);
+    std::iota(cells.begin(), cells.end(), 0);
+    cells = Choose(cells, n, &random);
+    const int check_digits = std::max(3, Digits(n));
+    for (int c = 0; c < n; ++c) {
+      const double u = ((cells[c] % gx) + random.Uniform(0.05, 0.95)) / gx;
+      const double v = ((cells[c] / gx) + random.Uniform(0.05, 0.95)) / gy;
+      add(Numbered("K", c + 1, check_digits), PointRole::kCheck, u, v);
+    }
+  }
+  for (size_t p = 0; p < block->points.size(); ++p) {
+    if (finder->Look(t->points_m[p], static_cast<int>(p)) == 0) {
+      return Status::Error("synthetic block: " + block->points[p].id +
+                           " is seen by no image (check the flight geometry)");
+    }
+    views->insert(views->end(), finder->views().begin(), finder->views().end());
+  }
+  return Status::Ok();
+}
+
+// Tie points uniform over the covered rectangle, kept when seen in min_tie_views images: exactly
+// num_tie_points of them, or as many as the density's candidates give.
+Status PlaceTiePoints(const SyntheticBlockOptions& o, const Geometry& g, const Terrain& terrain,
+                      ViewFinder* finder, Block* block, SyntheticBlockTruth* t,
+                      std::vector<View>* views) {
+  const double left = o.origin_m.x() - 0.5 * g.footprint_width_m;
+  const double bottom = o.origin_m.y() - 0.5 * g.footprint_height_m;
+  const double width = (o.num_lines - 1) * g.side_m + g.footprint_width_m;
+  const double height = (o.images_per_line - 1) * g.forward_m + g.footprint_height_m;
+  t->covered_area_m2 = width * height;
+  const bool by_count = o.num_tie_points > 0;
+  const long long candidates = by_count
+                                   ? o.num_tie_points * kTieAttemptsPerPoint
+                                   : std::llround(o.tie_point_density_per_m2 * t->covered_area_m2);
+  const long long wanted = by_count ? o.num_tie_points : candidates;
+  const int tie_digits = std::max(6, Digits(wanted));
+  PortableRandom random(o.seed, kStreamTiePoints);
+  long long placed = 0;
+  for (long long attempt = 0; attempt < candidates && (!by_count || placed < wanted); ++attempt) {
+    const double x = left + random.Uniform01() * width;
+    const double y = bottom + random.Uniform01() * height;
+    const Eigen::Vector3d X(x, y, terrain.Height(x, y));
+    const int index = static_cast<int>(block->points.size());
+    if (finder->Look(X, index) < o.min_tie_views) continue;
+    BlockPoint point;
+    point.id = Numbered("T", ++placed, tie_digits);
+    point.role = PointRole::kTie;
+    block->points.push_back(std::move(point));
+    t->points_m.push_back(X);
+    views->insert(views->end(), finder->views().begin(), finder->views().end());
+    if (views->size() > static_cast<size_t>(kMaxIndex))
+      return Status::Error("synthetic block: more marks than 32-bit indices hold");
+  }
+  if (by_count && placed < wanted) {
+    return Status::Error("synthetic block: only " + std::to_string(placed) + " of " +
+                         std::to_string(wanted) + " tie points are seen by " +
+                         std::to_string(o.min_tie_views) +
+                         " images or more (lower min_tie_views or raise the overlap)");
+  }
+  return Status::Ok();
+}
+
+// The marks, image by image (a counting sort of the views), with Gaussian noise.
+Status MakeMarks(const SyntheticBlockOptions& o, const std::vector<View>& views,
+                 const Projector& projector, Block* block) {
+  const int num_images = static_cast<int>(block->images.size());
+  std::vector<size_t> offset(num_images + 1, 0);
+  for (const View& v : views) ++offset[v.image + 1];
+  for (int i = 0; i < num_images; ++i) offset[i + 1] += offset[i];
+  std::vector<int> order(views.size());
+  std::vector<size_t> next(offset.begin(), offset.end() - 1);
+  for (size_t v = 0; v < views.size(); ++v) order[next[views[v].image]++] = static_cast<int>(v);
+  PortableRandom random(o.seed, kStreamMarkNoise);
+  const std::optional<double> accuracy = Stated(o.mark_accuracy_px, o.mark_sigma_px);
+  const BlockCamera& camera = block->cameras.front();
+  const double units_per_px =
+      camera.model == CameraModelType::kFrame ? camera.table.MeanPixelSizeUm() : 1.0;
+  block->marks.resize(views.size());
+  for (size_t m = 0; m < order.size(); ++m) {
+    const View& v = views[order[m]];
+    BlockMark& mark = block->marks[m];
+    mark.image = v.image;
+    mark.point = v.point;
+    mark.unit = MarkUnit::kPixel;
+    mark.measured =
+        v.pixel + o.mark_sigma_px * Eigen::Vector2d(random.Gaussian(), random.Gaussian());
+    mark.accuracy = accuracy;
+    mark.observation_units_per_unit = units_per_px;
+    PHOTOPOSE_RETURN_IF_ERROR(projector.Observation(mark.measured, &mark.observation));
+  }
+  return Status::Ok();
+}
+
+// Surveyed coordinates of control and check points, then the GNSS centres (one stream).
+void MeasureSurveyedAndGnss(const SyntheticBlockOptions& o, const SyntheticBlockTruth& t,
+                            Block* block) {
+  PortableRandom random(o.seed, kStreamGnss);
+  const std::optional<double> accuracy = Stated(o.control_accuracy_m, o.control_sigma_m);
+  for (size_t p = 0; p < block->points.size(); ++p) {
+    BlockPoint& point = block->points[p];
+    if (point.role == PointRole::kTie) continue;
+    point.surveyed_m =
+        t.points_m[p] + o.control_sigma_m * Eigen::Vector3d(random.Gaussian(), random.Gaussian(),
+                                                            random.Gaussian());
+    if (accuracy) point.accuracy_m = Eigen::Vector3d::Constant(*accuracy);
+  }
+  if (!o.gnss) return;
+  Eigen::Vector3d stated;
+  bool stated_all = true;
+  for (int k = 0; k < 3; ++k) {
+    const std::optional<double> a = Stated(o.gnss_accuracy_m[k], o.gnss_sigma_m[k]);
+    stated_all = stated_all && a.has_value();
+    stated[k] = a.value_or(0.0);
+  }
+  for (size_t i = 0; i < block->images.size(); ++i) {
+    Eigen::Vector3d noise;
+    for (int k = 0; k < 3; ++k) noise[k] = o.gnss_sigma_m[k] * random.Gaussian();
+    block->images[i].measured_center_m = t.eo[i].center_in_ground() + noise;
+    if (stated_all) block->images[i].center_accuracy_m = stated;
+  }
+}
+
+// Measured attitudes, when asked.
+void MeasureAttitude(const SyntheticBlockOptions& o, const SyntheticBlockTruth& t, Block* block) {
+  if (!o.attitude) return;
+  PortableRandom random(o.seed, kStreamAttitude);
+  const double sigma = DegreesToRadians(o.attitude_sigma_deg);
+  const std::optional<double> accuracy = Stated(o.attitude_accuracy_deg, o.attitude_sigma_deg);
+  for (size_t i = 0; i < block->images.size(); ++i) {
+    Eigen::Vector3d angles = t.eo[i].angles_seed_rad();
+    for (int k = 0; k < 3; ++k) angles[k] += sigma * random.Gaussian();
+    block->images[i].measured_angles_rad = angles;
+    if (accuracy)
+      block->images[i].attitude_accuracy_rad =
+          Eigen::Vector3d::Constant(DegreesToRadians(*accuracy));
+  }
+}
+
+// Blunders of tie marks, control points and GNSS centres; the truth records which.
+Status AddBlunders(const SyntheticBlockOptions& o, const Projector& projector, Block* block,
+                   SyntheticBlockTruth* t) {
+  PortableRandom random(o.seed, kStreamBlunders);
+  if (o.num_tie_blunders > 0) {
+    std::vector<int> tie_marks;
+    for (size_t m = 0; m < block->marks.size(); ++m)
+      if (block->points[block->marks[m].point].role == PointRole::kTie)
+        tie_marks.push_back(static_cast<int>(m));
+    if (static_cast<size_t>(o.num_tie_blunders) > tie_marks.size()) {
+      return Status::Error("synthetic block: " + std::to_string(o.num_tie_blunders) +
+                           " tie-mark blunders asked, the block has " +
+                           std::to_string(tie_marks.size()) + " tie marks");
+    }
+    t->blunder_marks = Choose(std::move(tie_marks), o.num_tie_blunders, &random);
+    for (const int m : t->blunder_marks) {
+      BlockMark& mark = block->marks[m];
+      const double angle = random.Uniform(0.0, 2.0 * kPi);
+      mark.measured += o.tie_blunder_px * Eigen::Vector2d(std::cos(angle), std::sin(angle));
+      PHOTOPOSE_RETURN_IF_ERROR(projector.Observation(mark.measured, &mark.observation));
+      t->mark_is_blunder[m] = 1;
+    }
+  }
+  if (o.num_control_blunders > 0) {
+    std::vector<int> control(o.num_control_points);
+    std::iota(control.begin(), control.end(), 0);  // control points come first
+    t->blunder_control_points = Choose(std::move(control), o.num_control_blunders, &random);
+    for (const int p : t->blunder_control_points)
+      *block->points[p].surveyed_m += o.control_blunder_m * RandomDirection(&random);
+  }
+  if (o.num_gnss_blunders > 0) {
+    std::vector<int> images(block->images.size());
+    std::iota(images.begin(), images.end(), 0);
+    t->blunder_gnss_images = Choose(std::move(images), o.num_gnss_blunders, &random);
+    for (const int i : t->blunder_gnss_images)
+      *block->images[i].measured_center_m += o.gnss_blunder_m * RandomDirection(&random);
+  }
+  return Status::Ok();
+}
+
+// The perturbed start: orientations and tie points from the truth plus Gaussian errors, control
+// and check points at their surveyed positions.
+void PerturbStart(const SyntheticBlockOptions& o, const SyntheticBlockTruth& t, Block* block) {
+  PortableRandom random(o.seed, kStreamStart);
+  const double angle_sigma = DegreesToRadians(o.start_angle_sigma_deg);
+  for (size_t i = 0; i < block->images.size(); ++i) {
+    ExteriorOrientation eo = t.eo[i];
+    for (int k = 0; k < 3; ++k) {
+      eo.parameters[k] += o.start_position_sigma_m * random.Gaussian();
+      eo.parameters[3 + k] += angle_sigma * random.Gaussian();
+    }
+    block->images[i].eo = eo;
+  }
+  for (size_t p = 0; p < block->points.size(); ++p) {
+    BlockPoint& point = block->points[p];
+    if (point.role != PointRole::kTie) {
+      point.position_m = point.surveyed_m;
+    } else if (o.tie_point_start) {
+      point.position_m = t.points_m[p] + o.start_point_sigma_m * Eigen::Vector3d(random.Gaussian(),
+                                                                                 random.Gaussian(),
+                                                                                 random.Gaussian());
+    }
+  }
+}
+
 }  // namespace
 
 SyntheticBlockOptions BenchmarkBlockOptions() {
@@ -385,286 +706,21 @@ Status MakeSyntheticBlock(const SyntheticBlockOptions& o, Block* block,
   t.footprint_height_m = g.footprint_height_m;
   const Flight flight(o, g);
   const Terrain terrain(o);
-
   result.cameras.push_back(MakeCamera(o));
-  const BlockCamera& camera = result.cameras.front();
-  const Projector projector(camera);
+  const Projector projector(result.cameras.front());
 
-  // ---- images: true poses on the grid
-  const int num_images = o.num_lines * o.images_per_line;
-  result.images.resize(num_images);
-  t.eo.resize(num_images);
-  {
-    PortableRandom random(o.seed, kStreamPoses);
-    const int line_digits = std::max(2, Digits(o.num_lines));
-    const int image_digits = std::max(3, Digits(o.images_per_line));
-    const double jitter_rad = DegreesToRadians(o.attitude_jitter_deg);
-    for (int line = 0; line < o.num_lines; ++line) {
-      for (int j = 0; j < o.images_per_line; ++j) {
-        const int k = flight.FlownBack(line) ? o.images_per_line - 1 - j : j;
-        const int index = flight.Image(line, k);
-        ExteriorOrientation eo;
-        const double J = o.position_jitter_m;
-        eo.set_center_in_ground({flight.LineX(line) + random.Uniform(-J, J),
-                                 flight.ExposureY(k) + random.Uniform(-J, J),
-                                 o.ground_height_m + o.flying_height_m + random.Uniform(-J, J)});
-        eo.set_angles_seed_rad(
-            {random.Uniform(-jitter_rad, jitter_rad), random.Uniform(-jitter_rad, jitter_rad),
-             WrapAngle((flight.FlownBack(line) ? kPi : 0.0) + random.Uniform(-jitter_rad, jitter_rad))});
-        t.eo[index] = eo;
-        BlockImage& image = result.images[index];
-        image.name = Numbered("L", line + 1, line_digits) + Numbered("_", j + 1, image_digits);
-        image.camera = 0;
-      }
-    }
-  }
-
-  // Candidate margin: jitter, tilt and relief can move a footprint by this much (m).
-  const double margin = o.position_jitter_m +
-                        o.flying_height_m * std::tan(DegreesToRadians(o.attitude_jitter_deg)) * 1.5 +
-                        o.terrain_relief_m + 1.0;
+  PlaceImages(o, flight, &result, &t);
+  ViewFinder finder(o, flight, projector, t.eo);
   std::vector<View> views;
-  std::vector<View> point_views;
-  // The views of a ground point; returns their number.
-  const auto look = [&](const Eigen::Vector3d& X, int point_index) {
-    point_views.clear();
-    int l0, l1, k0, k1;
-    flight.Candidates(X.x(), X.y(), margin, &l0, &l1, &k0, &k1);
-    for (int line = l0; line <= l1; ++line) {
-      for (int k = k0; k <= k1; ++k) {
-        const int image = flight.Image(line, k);
-        Eigen::Vector2d pixel;
-        if (projector.Pixel(t.eo[image], X, &pixel)) point_views.push_back({image, point_index, pixel});
-      }
-    }
-    return static_cast<int>(point_views.size());
-  };
-
-  // ---- control and check points on the rectangle of the image centres
-  const double x0 = o.origin_m.x(), y0 = o.origin_m.y();
-  double span_x = (o.num_lines - 1) * g.side_m, span_y = (o.images_per_line - 1) * g.forward_m;
-  double cx0 = x0, cy0 = y0;
-  if (span_x <= 0.0) {  // one line: use the middle half of the footprint across it
-    span_x = 0.5 * g.footprint_width_m;
-    cx0 = x0 - 0.25 * g.footprint_width_m;
-  }
-  if (span_y <= 0.0) {
-    span_y = 0.5 * g.footprint_height_m;
-    cy0 = y0 - 0.25 * g.footprint_height_m;
-  }
-  {
-    PortableRandom random(o.seed, kStreamControl);
-    const int control_digits = std::max(3, Digits(o.num_control_points));
-    for (int c = 0; c < o.num_control_points; ++c) {
-      const Eigen::Vector2d unit = c < static_cast<int>(ControlLayout().size())
-                                       ? ControlLayout()[c]
-                                       : Eigen::Vector2d(random.Uniform01(), random.Uniform01());
-      const double x = cx0 + unit.x() * span_x, y = cy0 + unit.y() * span_y;
-      BlockPoint point;
-      point.id = Numbered("C", c + 1, control_digits);
-      point.role = PointRole::kControl;
-      result.points.push_back(point);
-      t.points_m.emplace_back(x, y, terrain.Height(x, y));
-    }
-    // Check points: one per cell of a grid as square as the rectangle allows, cells chosen at
-    // random when there are more cells than points, inset by 5% of a cell.
-    const int n = o.num_check_points;
-    if (n > 0) {
-      int gx = std::max(1, static_cast<int>(std::round(std::sqrt(n * span_x / span_y))));
-      int gy = (n + gx - 1) / gx;
-      std::vector<int> cells(static_cast<size_t>(gx) * gy);
-      std::iota(cells.begin(), cells.end(), 0);
-      cells = Choose(cells, n, &random);
-      const int check_digits = std::max(3, Digits(n));
-      for (int c = 0; c < n; ++c) {
-        const int cell = cells[c];
-        const double u = ((cell % gx) + random.Uniform(0.05, 0.95)) / gx;
-        const double v = ((cell / gx) + random.Uniform(0.05, 0.95)) / gy;
-        const double x = cx0 + u * span_x, y = cy0 + v * span_y;
-        BlockPoint point;
-        point.id = Numbered("K", c + 1, check_digits);
-        point.role = PointRole::kCheck;
-        result.points.push_back(point);
-        t.points_m.emplace_back(x, y, terrain.Height(x, y));
-      }
-    }
-    for (size_t p = 0; p < result.points.size(); ++p) {
-      if (look(t.points_m[p], static_cast<int>(p)) == 0) {
-        return Status::Error("synthetic block: " + result.points[p].id +
-                             " is seen by no image (check the flight geometry)");
-      }
-      views.insert(views.end(), point_views.begin(), point_views.end());
-    }
-  }
-
-  // ---- tie points, uniform over the covered rectangle
-  {
-    const double left = x0 - 0.5 * g.footprint_width_m;
-    const double bottom = y0 - 0.5 * g.footprint_height_m;
-    const double width = (o.num_lines - 1) * g.side_m + g.footprint_width_m;
-    const double height = (o.images_per_line - 1) * g.forward_m + g.footprint_height_m;
-    t.covered_area_m2 = width * height;
-    const bool by_count = o.num_tie_points > 0;
-    const long long candidates =
-        by_count ? o.num_tie_points * kTieAttemptsPerPoint
-                 : std::llround(o.tie_point_density_per_m2 * t.covered_area_m2);
-    const long long wanted = by_count ? o.num_tie_points : candidates;
-    const int tie_digits = std::max(6, Digits(wanted));
-    PortableRandom random(o.seed, kStreamTiePoints);
-    long long placed = 0;
-    for (long long attempt = 0; attempt < candidates && (!by_count || placed < wanted); ++attempt) {
-      const double x = left + random.Uniform01() * width;
-      const double y = bottom + random.Uniform01() * height;
-      const Eigen::Vector3d X(x, y, terrain.Height(x, y));
-      const int index = static_cast<int>(result.points.size());
-      if (look(X, index) < o.min_tie_views) continue;
-      BlockPoint point;
-      point.id = Numbered("T", ++placed, tie_digits);
-      point.role = PointRole::kTie;
-      result.points.push_back(std::move(point));
-      t.points_m.push_back(X);
-      views.insert(views.end(), point_views.begin(), point_views.end());
-      if (views.size() > static_cast<size_t>(kMaxIndex))
-        return Status::Error("synthetic block: more marks than 32-bit indices hold");
-    }
-    if (by_count && placed < wanted) {
-      return Status::Error("synthetic block: only " + std::to_string(placed) + " of " +
-                           std::to_string(wanted) + " tie points are seen by " +
-                           std::to_string(o.min_tie_views) +
-                           " images or more (lower min_tie_views or raise the overlap)");
-    }
-  }
-
-  // ---- marks, image by image (a counting sort of the views), with noise
-  {
-    std::vector<size_t> offset(num_images + 1, 0);
-    for (const View& v : views) ++offset[v.image + 1];
-    for (int i = 0; i < num_images; ++i) offset[i + 1] += offset[i];
-    std::vector<int> order(views.size());
-    std::vector<size_t> next(offset.begin(), offset.end() - 1);
-    for (size_t v = 0; v < views.size(); ++v) order[next[views[v].image]++] = static_cast<int>(v);
-    PortableRandom random(o.seed, kStreamMarkNoise);
-    const std::optional<double> accuracy = Stated(o.mark_accuracy_px, o.mark_sigma_px);
-    const double units_per_px =
-        camera.model == CameraModelType::kFrame ? camera.table.MeanPixelSizeUm() : 1.0;
-    result.marks.resize(views.size());
-    for (size_t m = 0; m < order.size(); ++m) {
-      const View& v = views[order[m]];
-      BlockMark& mark = result.marks[m];
-      mark.image = v.image;
-      mark.point = v.point;
-      mark.unit = MarkUnit::kPixel;
-      mark.measured = v.pixel + o.mark_sigma_px * Eigen::Vector2d(random.Gaussian(), random.Gaussian());
-      mark.accuracy = accuracy;
-      mark.observation_units_per_unit = units_per_px;
-      PHOTOPOSE_RETURN_IF_ERROR(projector.Observation(mark.measured, &mark.observation));
-    }
-  }
+  PHOTOPOSE_RETURN_IF_ERROR(PlaceSurveyedPoints(o, g, terrain, &finder, &result, &t, &views));
+  PHOTOPOSE_RETURN_IF_ERROR(PlaceTiePoints(o, g, terrain, &finder, &result, &t, &views));
+  PHOTOPOSE_RETURN_IF_ERROR(MakeMarks(o, views, projector, &result));
   std::vector<View>().swap(views);
   t.mark_is_blunder.assign(result.marks.size(), 0);
-
-  // ---- surveyed coordinates, GNSS and attitude
-  {
-    PortableRandom random(o.seed, kStreamGnss);
-    const std::optional<double> accuracy = Stated(o.control_accuracy_m, o.control_sigma_m);
-    for (size_t p = 0; p < result.points.size(); ++p) {
-      BlockPoint& point = result.points[p];
-      if (point.role == PointRole::kTie) continue;
-      point.surveyed_m =
-          t.points_m[p] + o.control_sigma_m * Eigen::Vector3d(random.Gaussian(), random.Gaussian(),
-                                                               random.Gaussian());
-      if (accuracy) point.accuracy_m = Eigen::Vector3d::Constant(*accuracy);
-    }
-    if (o.gnss) {
-      Eigen::Vector3d stated;
-      bool stated_all = true;
-      for (int k = 0; k < 3; ++k) {
-        const std::optional<double> a = Stated(o.gnss_accuracy_m[k], o.gnss_sigma_m[k]);
-        stated_all = stated_all && a.has_value();
-        stated[k] = a.value_or(0.0);
-      }
-      for (int i = 0; i < num_images; ++i) {
-        Eigen::Vector3d noise;
-        for (int k = 0; k < 3; ++k) noise[k] = o.gnss_sigma_m[k] * random.Gaussian();
-        result.images[i].measured_center_m = t.eo[i].center_in_ground() + noise;
-        if (stated_all) result.images[i].center_accuracy_m = stated;
-      }
-    }
-  }
-  if (o.attitude) {
-    PortableRandom random(o.seed, kStreamAttitude);
-    const double sigma = DegreesToRadians(o.attitude_sigma_deg);
-    const std::optional<double> accuracy = Stated(o.attitude_accuracy_deg, o.attitude_sigma_deg);
-    for (int i = 0; i < num_images; ++i) {
-      Eigen::Vector3d angles = t.eo[i].angles_seed_rad();
-      for (int k = 0; k < 3; ++k) angles[k] += sigma * random.Gaussian();
-      result.images[i].measured_angles_rad = angles;
-      if (accuracy)
-        result.images[i].attitude_accuracy_rad = Eigen::Vector3d::Constant(DegreesToRadians(*accuracy));
-    }
-  }
-
-  // ---- blunders
-  {
-    PortableRandom random(o.seed, kStreamBlunders);
-    if (o.num_tie_blunders > 0) {
-      std::vector<int> tie_marks;
-      for (size_t m = 0; m < result.marks.size(); ++m)
-        if (result.points[result.marks[m].point].role == PointRole::kTie)
-          tie_marks.push_back(static_cast<int>(m));
-      if (static_cast<size_t>(o.num_tie_blunders) > tie_marks.size()) {
-        return Status::Error("synthetic block: " + std::to_string(o.num_tie_blunders) +
-                             " tie-mark blunders asked, the block has " +
-                             std::to_string(tie_marks.size()) + " tie marks");
-      }
-      t.blunder_marks = Choose(std::move(tie_marks), o.num_tie_blunders, &random);
-      for (const int m : t.blunder_marks) {
-        BlockMark& mark = result.marks[m];
-        const double angle = random.Uniform(0.0, 2.0 * kPi);
-        mark.measured += o.tie_blunder_px * Eigen::Vector2d(std::cos(angle), std::sin(angle));
-        PHOTOPOSE_RETURN_IF_ERROR(projector.Observation(mark.measured, &mark.observation));
-        t.mark_is_blunder[m] = 1;
-      }
-    }
-    if (o.num_control_blunders > 0) {
-      std::vector<int> control(o.num_control_points);
-      std::iota(control.begin(), control.end(), 0);  // control points come first
-      t.blunder_control_points = Choose(std::move(control), o.num_control_blunders, &random);
-      for (const int p : t.blunder_control_points)
-        *result.points[p].surveyed_m += o.control_blunder_m * RandomDirection(&random);
-    }
-    if (o.num_gnss_blunders > 0) {
-      std::vector<int> images(num_images);
-      std::iota(images.begin(), images.end(), 0);
-      t.blunder_gnss_images = Choose(std::move(images), o.num_gnss_blunders, &random);
-      for (const int i : t.blunder_gnss_images)
-        *result.images[i].measured_center_m += o.gnss_blunder_m * RandomDirection(&random);
-    }
-  }
-
-  // ---- perturbed start
-  {
-    PortableRandom random(o.seed, kStreamStart);
-    const double angle_sigma = DegreesToRadians(o.start_angle_sigma_deg);
-    for (int i = 0; i < num_images; ++i) {
-      ExteriorOrientation eo = t.eo[i];
-      for (int k = 0; k < 3; ++k) {
-        eo.parameters[k] += o.start_position_sigma_m * random.Gaussian();
-        eo.parameters[3 + k] += angle_sigma * random.Gaussian();
-      }
-      result.images[i].eo = eo;
-    }
-    for (size_t p = 0; p < result.points.size(); ++p) {
-      BlockPoint& point = result.points[p];
-      if (point.role != PointRole::kTie) {
-        point.position_m = point.surveyed_m;
-      } else if (o.tie_point_start) {
-        point.position_m = t.points_m[p] + o.start_point_sigma_m * Eigen::Vector3d(random.Gaussian(),
-                                                                                   random.Gaussian(),
-                                                                                   random.Gaussian());
-      }
-    }
-  }
+  MeasureSurveyedAndGnss(o, t, &result);
+  MeasureAttitude(o, t, &result);
+  PHOTOPOSE_RETURN_IF_ERROR(AddBlunders(o, projector, &result, &t));
+  PerturbStart(o, t, &result);
 
   result.pixel_origin = PixelOrigin::kCorner;
   result.marks_source = "synthetic block";

@@ -3,6 +3,8 @@
 // `photopose compare`: cameras, true and approximate exterior orientations, ground points with
 // control/check roles, and pixel marks with Gaussian noise and gross outliers. The same options and
 // seed always give the same scene.
+// Not merged with synthetic_block.h: a scene is independent images for resection (points per
+// footprint, outliers, no tie points) and its draws are pinned by examples/; a block is one survey.
 
 #include <cstdint>
 #include <string>

@@ -10,11 +10,12 @@
 #include <sstream>
 #include <thread>
 
-#include "core/statistics.h"
 #include "core/simulation/synthetic_block.h"
+#include "core/statistics.h"
 #include "solvers/bundle/taylor_bundle.h"
 #include "tools/commands/cli_common.h"
 #include "tools/report/comparison_html.h"
+#include "tools/report/html_kit.h"
 
 namespace photopose::cli {
 namespace {
@@ -34,13 +35,6 @@ const char* LossName(BundleAdjustmentOptions::TieLoss loss) {
       return "softl1";
   }
   return "?";
-}
-
-std::string Fixed(double value, int digits) {
-  if (!std::isfinite(value)) return "n/a";
-  char buffer[64];
-  std::snprintf(buffer, sizeof(buffer), "%.*f", digits, value);
-  return buffer;
 }
 
 // What one solver gave on one block.
@@ -385,13 +379,15 @@ std::vector<TextTable> BlockComparisonTables(const BlockComparisonOptions& optio
       const BlockSolverStatistics& st = result.statistics[setting][s];
       table.rows.push_back(
           {result.solver_names[s], std::to_string(st.successes) + "/" + std::to_string(st.trials),
-           Fixed(1e3 * st.camera_rmse_m, 2), Fixed(1e3 * st.check_rmse_m, 2),
-           Fixed(st.mean_nees, 2) + (st.nees_count > 0 && !st.nees_interval_95.Contains(st.mean_nees)
-                                         ? " (outside " + Fixed(st.nees_interval_95.lower, 2) +
-                                               "-" + Fixed(st.nees_interval_95.upper, 2) + ")"
-                                         : ""),
-           Fixed(st.mean_iterations, 1), Fixed(1e3 * st.mean_seconds, 1),
-           Fixed(st.time_ratio_to_taylor, 2), Fixed(1e3 * st.max_position_offset_m, 4)});
+           ReportFixed(1e3 * st.camera_rmse_m, 2), ReportFixed(1e3 * st.check_rmse_m, 2),
+           ReportFixed(st.mean_nees, 2) +
+               (st.nees_count > 0 && !st.nees_interval_95.Contains(st.mean_nees)
+                    ? " (outside " + ReportFixed(st.nees_interval_95.lower, 2) + "-" +
+                          ReportFixed(st.nees_interval_95.upper, 2) + ")"
+                    : ""),
+           ReportFixed(st.mean_iterations, 1), ReportFixed(1e3 * st.mean_seconds, 1),
+           ReportFixed(st.time_ratio_to_taylor, 2),
+           ReportFixed(1e3 * st.max_position_offset_m, 4)});
       for (const std::string& failure : st.failures)
         table.notes.push_back(result.solver_names[s] + " failed: " + failure);
     }
@@ -428,13 +424,8 @@ std::string BlockComparisonHtml(const BlockComparisonOptions& options,
                                 const BlockComparisonResult& result,
                                 const std::string& command_line) {
   std::ostringstream html;
-  html << "<!DOCTYPE html>\n<html><head><meta charset=\"utf-8\"><title>photopose compare: "
-          "blocks</title>\n<style>body{font-family:sans-serif;max-width:1100px;margin:2em auto}"
-          "table{border-collapse:collapse;margin:1em 0}td,th{border:1px solid #ccc;padding:3px "
-          "8px;text-align:right}td:first-child,th:first-child{text-align:left}caption{font-weight:"
-          "bold;text-align:left}</style></head><body>\n";
-  html << "<h1>The block solvers side by side</h1>\n<p><code>" << HtmlEscape(command_line)
-       << "</code></p>\n";
+  html << HtmlPageOpen("photopose compare: blocks", "The block solvers side by side");
+  html << "<p><code>" << HtmlEscape(command_line) << "</code></p>\n";
   // Verdicts from the baseline setting.
   html << "<h2>Verdicts</h2>\n<ul>\n";
   if (!result.statistics.empty()) {
@@ -447,7 +438,7 @@ std::string BlockComparisonHtml(const BlockComparisonOptions& options,
     if (best >= 0) {
       html << "<li>Most accurate camera positions at the baseline: <b>"
            << HtmlEscape(result.solver_names[best]) << "</b>, RMSE "
-           << Fixed(1e3 * base[best].camera_rmse_m, 2) << " mm.</li>\n";
+           << ReportFixed(1e3 * base[best].camera_rmse_m, 2) << " mm.</li>\n";
     }
     for (size_t s = 0; s < base.size(); ++s) {
       const BlockSolverStatistics& st = base[s];
@@ -456,15 +447,16 @@ std::string BlockComparisonHtml(const BlockComparisonOptions& options,
              << " of " << st.trials << " blocks.</li>\n";
       }
       if (st.nees_count > 0 && !st.nees_interval_95.Contains(st.mean_nees)) {
-        html << "<li>" << HtmlEscape(result.solver_names[s]) << ": covariance not honest (mean NEES "
-             << Fixed(st.mean_nees, 2) << ", expected " << Fixed(st.nees_interval_95.lower, 2)
-             << "&ndash;" << Fixed(st.nees_interval_95.upper, 2) << ").</li>\n";
+        html << "<li>" << HtmlEscape(result.solver_names[s])
+             << ": covariance not honest (mean NEES " << ReportFixed(st.mean_nees, 2)
+             << ", expected " << ReportFixed(st.nees_interval_95.lower, 2) << "&ndash;"
+             << ReportFixed(st.nees_interval_95.upper, 2) << ").</li>\n";
       }
       if (result.solver_names[s] == "taylor_as_printed" && std::isfinite(st.max_position_offset_m)) {
         html << "<li>The printed eq. 21 moves camera centres by up to "
-             << Fixed(1e3 * st.max_position_offset_m, 3)
+             << ReportFixed(1e3 * st.max_position_offset_m, 3)
              << " mm from the corrected linearisation in these blocks (camera RMSE "
-             << Fixed(1e3 * st.camera_rmse_m, 2) << " mm against the truth).</li>\n";
+             << ReportFixed(1e3 * st.camera_rmse_m, 2) << " mm against the truth).</li>\n";
       }
     }
   }
@@ -482,7 +474,8 @@ std::string BlockComparisonHtml(const BlockComparisonOptions& options,
   for (const TextTable& table : BlockComparisonTables(options, result))
     html << RenderHtmlTable(table) << "\n";
   html << "<p>" << result.settings.size() * options.trials << " blocks in "
-       << Fixed(result.wall_seconds, 1) << " s.</p>\n</body></html>\n";
+       << ReportFixed(result.wall_seconds, 1) << " s.</p>\n"
+       << HtmlPageClose();
   return html.str();
 }
 
@@ -559,11 +552,11 @@ TextTable BlockDatasetTable(const BlockDatasetResult& result) {
   table.header = {"solver", "result", "offset RMS (mm)", "offset max (mm)", "check RMSE (mm)",
                   "sigma0", "iterations", "time (ms)", "x Taylor"};
   for (const BlockDatasetSolverSummary& s : result.solvers) {
-    table.rows.push_back({s.name, s.success ? "converged" : "failed",
-                          Fixed(1e3 * s.offset_rms_m, 4), Fixed(1e3 * s.offset_max_m, 4),
-                          Fixed(1e3 * s.check_rmse_m, 2), Fixed(s.sigma0, 4),
-                          std::to_string(s.iterations), Fixed(1e3 * s.seconds, 1),
-                          Fixed(s.time_ratio_to_taylor, 2)});
+    table.rows.push_back(
+        {s.name, s.success ? "converged" : "failed", ReportFixed(1e3 * s.offset_rms_m, 4),
+         ReportFixed(1e3 * s.offset_max_m, 4), ReportFixed(1e3 * s.check_rmse_m, 2),
+         ReportFixed(s.sigma0, 4), std::to_string(s.iterations), ReportFixed(1e3 * s.seconds, 1),
+         ReportFixed(s.time_ratio_to_taylor, 2)});
     if (!s.success) table.notes.push_back(s.name + ": " + s.message);
   }
   return table;
@@ -586,15 +579,13 @@ std::string BlockDatasetCsv(const BlockDatasetResult& result) {
 
 std::string BlockDatasetHtml(const BlockDatasetResult& result, const std::string& command_line) {
   std::ostringstream html;
-  html << "<!DOCTYPE html>\n<html><head><meta charset=\"utf-8\"><title>photopose compare: a "
-          "block</title>\n<style>body{font-family:sans-serif;max-width:1100px;margin:2em auto}"
-          "table{border-collapse:collapse}td,th{border:1px solid #ccc;padding:3px 8px;text-align:"
-          "right}td:first-child,th:first-child{text-align:left}caption{font-weight:bold;"
-          "text-align:left}</style></head><body>\n<h1>The block solvers on one block</h1>\n<p><code>"
-       << HtmlEscape(command_line) << "</code></p>\n<p>No truth: every solver's camera centres "
+  html << HtmlPageOpen("photopose compare: a block", "The block solvers on one block")
+       << "<p><code>" << HtmlEscape(command_line)
+       << "</code></p>\n<p>No truth: every solver's camera centres "
        << "against " << HtmlEscape(result.reference.empty() ? "no reference" : result.reference)
        << "; check points against their surveyed coordinates.</p>\n"
-       << RenderHtmlTable(BlockDatasetTable(result)) << "\n</body></html>\n";
+       << RenderHtmlTable(BlockDatasetTable(result)) << "\n"
+       << HtmlPageClose();
   return html.str();
 }
 

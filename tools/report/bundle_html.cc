@@ -1,5 +1,6 @@
-// The HTML page of `photopose bundle` (tools/report/bundle_report.h): one self-contained file, inline CSS
-// and SVG, no script.
+// The HTML page of `photopose bundle` (tools/report/bundle_report.h): one self-contained file,
+// inline CSS and SVG, no script; page head, tables, histograms and SVG primitives from
+// tools/report/html_kit.h.
 #include <Eigen/Eigenvalues>
 #include <algorithm>
 #include <cmath>
@@ -9,7 +10,7 @@
 #include <sstream>
 
 #include "tools/report/bundle_report.h"
-#include "tools/report/comparison_html.h"
+#include "tools/report/html_kit.h"
 
 namespace photopose::cli {
 namespace {
@@ -21,43 +22,8 @@ constexpr double kPlanMargin = 40.0;
 // Tie points drawn at most (evenly subsampled beyond).
 constexpr size_t kMaxTieDots = 4000;
 
-std::string F(double value, const char* format = "%.3g") {
-  if (!std::isfinite(value)) return "n/a";
-  char buffer[64];
-  std::snprintf(buffer, sizeof(buffer), format, value);
-  return buffer;
-}
-
-// 1, 2 or 5 times a power of ten, at most `value`.
-double NiceAtMost(double value) {
-  if (!(value > 0.0)) return 1.0;
-  const double magnitude = std::pow(10.0, std::floor(std::log10(value)));
-  for (const double f : {5.0, 2.0, 1.0})
-    if (f * magnitude <= value) return f * magnitude;
-  return magnitude;
-}
-
-const char kStyle[] =
-    "body{font-family:sans-serif;margin:24px;max-width:1100px;color:#222}"
-    "h1{font-size:22px}h2{font-size:17px;margin-top:28px;border-bottom:1px solid #ccc}"
-    ".verdict{padding:12px 16px;border-radius:6px;margin:8px 0;font-size:15px}"
-    ".bad{background:#fde2e1;border:1px solid #d55e00}.good{background:#e3f4ea;border:1px solid #009e73}"
-    ".note{background:#eef3fa;border:1px solid #0072b2}"
-    "table{border-collapse:collapse;margin:8px 0;font-size:13px}"
-    "td,th{border:1px solid #ccc;padding:3px 8px;text-align:right}th{background:#f2f2f2}"
-    "td:first-child,th:first-child{text-align:left}caption{text-align:left;font-weight:bold;padding:4px 0}"
-    "svg{background:#fff;border:1px solid #ddd}";
-
-std::string Table(const std::string& title, const std::vector<std::string>& header,
-                  const std::vector<std::vector<std::string>>& rows,
-                  const std::vector<std::string>& notes = {}) {
-  TextTable table;
-  table.title = title;
-  table.header = header;
-  table.rows = rows;
-  table.notes = notes;
-  return RenderHtmlTable(table);
-}
+// Numbers on the page: three significant digits unless a format is given; "n/a" when not finite.
+std::string F(double value, const char* format = "%.3g") { return ReportNumber(value, format); }
 
 // The plan view: tie points, cameras with 1-sigma error ellipses, control and check points with
 // their residual vectors, each exaggerated by a stated factor.
@@ -94,9 +60,7 @@ std::string PlanView(const Block& block, const BundleAdjustmentResult& result) {
   const double vector_factor = largest_error > 0.0 ? NiceAtMost(0.04 * extent / largest_error) : 1.0;
 
   std::ostringstream svg;
-  svg << "<svg xmlns=\"http://www.w3.org/2000/svg\" width=\"" << kPlanWidth << "\" height=\""
-      << kPlanHeight << "\" viewBox=\"0 0 " << kPlanWidth << " " << kPlanHeight
-      << "\" font-family=\"sans-serif\" font-size=\"11\">\n";
+  svg << SvgOpen(kPlanWidth, kPlanHeight, "plan view") << "\n";
   // Tie points.
   std::vector<const BlockPoint*> ties;
   for (const BlockPoint& point : block.points)
@@ -166,61 +130,20 @@ std::string PlanView(const Block& block, const BundleAdjustmentResult& result) {
   return svg.str();
 }
 
-// A histogram of values (vertical bars) with its title and unit.
-std::string Histogram(const std::string& title, const std::string& unit,
+// A histogram of a group's values, the axis titled with the quantity and unit.
+std::string Histogram(const std::string& title, const std::string& x_label,
                       const std::vector<double>& values) {
-  constexpr double kWidth = 360.0, kHeight = 200.0, kLeft = 40.0, kBottom = 30.0, kTop = 22.0;
-  std::vector<double> finite;
-  for (const double v : values)
-    if (std::isfinite(v)) finite.push_back(v);
-  std::ostringstream svg;
-  svg << "<svg xmlns=\"http://www.w3.org/2000/svg\" width=\"" << kWidth << "\" height=\"" << kHeight
-      << "\" font-family=\"sans-serif\" font-size=\"11\"><text x=\"" << kWidth / 2
-      << "\" y=\"14\" text-anchor=\"middle\">" << HtmlEscape(title) << " (" << finite.size()
-      << ")</text>";
-  if (finite.empty()) {
-    svg << "</svg>";
-    return svg.str();
-  }
-  std::vector<double> sorted = finite;
-  std::sort(sorted.begin(), sorted.end());
-  // The central 99.5 % decides the range (a blunder would squash the rest); the bins are 24.
-  const double low = sorted[static_cast<size_t>(0.0025 * (sorted.size() - 1))];
-  const double high = sorted[static_cast<size_t>(0.9975 * (sorted.size() - 1))];
-  const double half = std::max({std::abs(low), std::abs(high), 1e-12});
-  constexpr int kBins = 24;
-  std::vector<int> counts(kBins, 0);
-  for (const double v : finite) {
-    const int bin = static_cast<int>(std::floor((v + half) / (2.0 * half) * kBins));
-    ++counts[std::clamp(bin, 0, kBins - 1)];
-  }
-  const int top = *std::max_element(counts.begin(), counts.end());
-  const double bar_width = (kWidth - kLeft - 10.0) / kBins;
-  for (int b = 0; b < kBins; ++b) {
-    const double h = top > 0 ? (kHeight - kTop - kBottom) * counts[b] / top : 0.0;
-    svg << "<rect x=\"" << F(kLeft + b * bar_width, "%.1f") << "\" y=\""
-        << F(kHeight - kBottom - h, "%.1f") << "\" width=\"" << F(bar_width - 1, "%.1f")
-        << "\" height=\"" << F(h, "%.1f") << "\" fill=\"#0072B2\"/>";
-  }
-  svg << "<text x=\"" << kLeft << "\" y=\"" << kHeight - 10 << "\">" << F(-half) << "</text>"
-      << "<text x=\"" << F((kWidth + kLeft) / 2, "%.1f") << "\" y=\"" << kHeight - 10
-      << "\" text-anchor=\"middle\">0 " << HtmlEscape(unit) << "</text><text x=\"" << kWidth - 10
-      << "\" y=\"" << kHeight - 10 << "\" text-anchor=\"end\">" << F(half) << "</text></svg>";
-  return svg.str();
+  HistogramPlot plot;
+  plot.title = title;
+  plot.x_label = x_label;
+  plot.values = values;
+  return RenderHistogramSvg(plot);
 }
 
-}  // namespace
-
-std::string BundleReportHtml(const Block& block, const BundleAdjustmentResult& result,
-                             const BundleReportContext& context) {
+// The verdicts, first on the page: not adjusted, over-fitted groups, the check points.
+std::string VerdictsHtml(const BundleAdjustmentResult& result, const BundleReportContext& context) {
   const BundleAdjustmentSummary& s = result.summary;
   std::ostringstream html;
-  html << "<!DOCTYPE html>\n<html lang=\"en\"><head><meta charset=\"utf-8\"><title>photopose "
-          "bundle</title><style>"
-       << kStyle << "</style></head><body>\n<h1>photopose bundle: " << s.num_images << " images, "
-       << s.num_points << " points, " << s.num_marks << " marks</h1>\n";
-
-  // The verdicts first.
   std::vector<std::string> overfit;
   for (const BundleGroupStatistics& g : result.groups)
     if (g.overfit) overfit.push_back(g.message);
@@ -246,12 +169,13 @@ std::string BundleReportHtml(const Block& block, const BundleAdjustmentResult& r
          << (context.cross_validation != nullptr ? " (see the leave-one-out table below)" : "")
          << ".</div>\n";
   }
-  html << "<p>" << HtmlEscape(s.BriefReport()) << "<br>Datum: " << HtmlEscape(s.datum_description)
-       << "</p>\n";
+  return html.str();
+}
 
-  html << "<h2>Plan view</h2>\n" << PlanView(block, result) << "\n";
-
-  // Groups.
+// The groups of the objective against their stated accuracies, and their residuals' histograms.
+std::string GroupsHtml(const Block& block, const BundleAdjustmentResult& result,
+                       const BundleReportContext& context) {
+  std::ostringstream html;
   std::vector<std::vector<std::string>> rows;
   for (const BundleGroupStatistics& g : result.groups) {
     rows.push_back({g.name, std::to_string(g.count), F(g.stated_accuracy.x()) + " " + g.unit,
@@ -262,15 +186,16 @@ std::string BundleReportHtml(const Block& block, const BundleAdjustmentResult& r
                     g.overfit ? "OVERFIT" : ""});
   }
   html << "<h2>Groups of the objective</h2>\n"
-       << Table("Residuals against the stated accuracies",
-                {"group", "count", "stated", "RMS", "RMS / stated", "redundancy share",
-                 "estimated accuracy", "verdict"},
-                rows,
-                {"redundancy share: the group's summed redundancy numbers over its observations, "
-                 "how much of it the rest of the block checks",
-                 "over-fitted: a prior group whose RMS / stated is below " +
-                     F(context.options.overfit_ratio) + " or whose redundancy share is below " +
-                     F(context.options.overfit_redundancy_share)});
+       << HtmlTable(
+              "Residuals against the stated accuracies",
+              {"group", "count", "stated", "RMS", "RMS / stated", "redundancy share",
+               "estimated accuracy", "verdict"},
+              rows,
+              {"redundancy share: the group's summed redundancy numbers over its observations, "
+               "how much of it the rest of the block checks",
+               "over-fitted: a prior group whose RMS / stated is below " +
+                   F(context.options.overfit_ratio) + " or whose redundancy share is below " +
+                   F(context.options.overfit_redundancy_share)});
 
   // Histograms.
   std::map<std::string, std::vector<double>> by_group;
@@ -288,9 +213,15 @@ std::string BundleReportHtml(const Block& block, const BundleAdjustmentResult& r
   }
   for (const BundleGroupStatistics& g : result.groups) units[g.name] = g.unit;
   html << "<h2>Residuals</h2>\n";
-  for (const auto& [group, values] : by_group) html << Histogram(group, units[group], values) << "\n";
+  for (const auto& [group, values] : by_group)
+    html << Histogram(group, "residual (" + units[group] + ")", values) << "\n";
 
-  // Control and check points.
+  return html.str();
+}
+
+// The control and check points: adjusted (or intersected) minus surveyed.
+std::string PointsHtml(const Block& block, const BundleAdjustmentResult& result) {
+  std::ostringstream html;
   auto point_rows = [&](PointRole role) {
     std::vector<std::vector<std::string>> out;
     for (size_t p = 0; p < block.points.size(); ++p) {
@@ -311,13 +242,19 @@ std::string BundleReportHtml(const Block& block, const BundleAdjustmentResult& r
   const std::vector<std::string> point_header = {"point", "images", "error X (m)", "error Y (m)",
                                                  "error Z (m)", "|error| (m)", "sigma (m)"};
   html << "<h2>Control points</h2>\n"
-       << Table("Adjusted minus surveyed; RMSE " + F(result.control_rmse_total_m) + " m",
-                point_header, point_rows(PointRole::kControl))
+       << HtmlTable("Adjusted minus surveyed; RMSE " + F(result.control_rmse_total_m) + " m",
+                    point_header, point_rows(PointRole::kControl))
        << "<h2>Check points</h2>\n"
-       << Table("Intersected from the adjusted images minus surveyed; RMSE " +
-                    F(result.check_rmse_total_m) + " m",
-                point_header, point_rows(PointRole::kCheck));
+       << HtmlTable("Intersected from the adjusted images minus surveyed; RMSE " +
+                        F(result.check_rmse_total_m) + " m",
+                    point_header, point_rows(PointRole::kCheck));
 
+  return html.str();
+}
+
+// Self-calibration and data snooping, when there were any.
+std::string CalibrationAndSnoopingHtml(const Block& block, const BundleAdjustmentResult& result) {
+  std::ostringstream html;
   if (!result.calibration.empty()) {
     html << "<h2>Self-calibration</h2>\n";
     for (const BundleCalibrationResult& c : result.calibration) {
@@ -325,9 +262,9 @@ std::string BundleReportHtml(const Block& block, const BundleAdjustmentResult& r
       for (size_t k = 0; k < c.names.size(); ++k)
         calibration_rows.push_back(
             {c.names[k], F(c.values[k], "%.8g"), k < c.sigmas.size() ? F(c.sigmas[k]) : ""});
-      html << Table("Camera '" + block.cameras[c.camera].camera_id + "' (" +
-                        CameraModelTypeName(block.cameras[c.camera].model) + ")",
-                    {"parameter", "value", "sigma"}, calibration_rows, c.high_correlations);
+      html << HtmlTable("Camera '" + block.cameras[c.camera].camera_id + "' (" +
+                            CameraModelTypeName(block.cameras[c.camera].model) + ")",
+                        {"parameter", "value", "sigma"}, calibration_rows, c.high_correlations);
     }
   }
   if (!result.snooping.empty()) {
@@ -338,9 +275,16 @@ std::string BundleReportHtml(const Block& block, const BundleAdjustmentResult& r
                                F(step.normalized), F(step.residual)});
     }
     html << "<h2>Data snooping</h2>\n"
-         << Table("Observations removed, in order (|w| > " + F(result.critical_value) + ")",
-                  {"step", "group", "item", "|w|", "residual"}, snooping_rows);
+         << HtmlTable("Observations removed, in order (|w| > " + F(result.critical_value) + ")",
+                      {"step", "group", "item", "|w|", "residual"}, snooping_rows);
   }
+  return html.str();
+}
+
+// Reliability (redundancy numbers) and the leave-one-out control points, when computed.
+std::string ReliabilityHtml(const Block& block, const BundleAdjustmentResult& result,
+                            const BundleReportContext& context) {
+  std::ostringstream html;
   if (!result.observations.empty()) {
     // Redundancy numbers per group as a distribution.
     std::map<std::string, std::vector<double>> redundancy;
@@ -352,7 +296,7 @@ std::string BundleReportHtml(const Block& block, const BundleAdjustmentResult& r
          << ": a blunder there cannot be seen. Smallest detectable errors use delta0 = "
          << F(result.delta0) << ".</p>\n";
     for (const auto& [group, values] : redundancy)
-      html << Histogram("redundancy numbers, " + group, "", values) << "\n";
+      html << Histogram("redundancy numbers, " + group, "redundancy number", values) << "\n";
   }
   if (context.cross_validation != nullptr) {
     const BundleCrossValidationResult& cv = *context.cross_validation;
@@ -363,13 +307,34 @@ std::string BundleReportHtml(const Block& block, const BundleAdjustmentResult& r
                          p.ok ? F(p.normalized) : "", p.stands_out ? "STANDS OUT" : p.message});
     }
     html << "<h2>Leave-one-out control points</h2>\n"
-         << Table("Each control point adjusted as a check point; RMSE X " + F(cv.rmse_m.x()) +
-                      ", Y " + F(cv.rmse_m.y()) + ", Z " + F(cv.rmse_m.z()) + " m",
-                  {"point", "error X (m)", "error Y (m)", "error Z (m)", "normalized", "verdict"},
-                  cv_rows, {"normalized: e^T C^-1 e, chi-square(3); stands out above " + F(cv.threshold)});
+         << HtmlTable(
+                "Each control point adjusted as a check point; RMSE X " + F(cv.rmse_m.x()) +
+                    ", Y " + F(cv.rmse_m.y()) + ", Z " + F(cv.rmse_m.z()) + " m",
+                {"point", "error X (m)", "error Y (m)", "error Z (m)", "normalized", "verdict"},
+                cv_rows,
+                {"normalized: e^T C^-1 e, chi-square(3); stands out above " + F(cv.threshold)});
   }
+  return html.str();
+}
+
+}  // namespace
+
+std::string BundleReportHtml(const Block& block, const BundleAdjustmentResult& result,
+                             const BundleReportContext& context) {
+  const BundleAdjustmentSummary& s = result.summary;
+  std::ostringstream html;
+  html << HtmlPageOpen("photopose bundle", "photopose bundle: " + std::to_string(s.num_images) +
+                                               " images, " + std::to_string(s.num_points) +
+                                               " points, " + std::to_string(s.num_marks) +
+                                               " marks");
+  html << VerdictsHtml(result, context);
+  html << "<p>" << HtmlEscape(s.BriefReport()) << "<br>Datum: " << HtmlEscape(s.datum_description)
+       << "</p>\n";
+  html << "<h2>Plan view</h2>\n" << PlanView(block, result) << "\n";
+  html << GroupsHtml(block, result, context) << PointsHtml(block, result)
+       << CalibrationAndSnoopingHtml(block, result) << ReliabilityHtml(block, result, context);
   html << "<h2>Run</h2>\n<p><code>" << HtmlEscape(context.command_line) << "</code></p>\n";
-  html << "</body></html>\n";
+  html << HtmlPageClose();
   return html.str();
 }
 

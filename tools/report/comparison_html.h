@@ -1,53 +1,16 @@
 #pragma once
 // The HTML report of `photopose compare`: one self-contained file (inline CSS and SVG, no script,
 // no external resource) that opens in any browser without a server. Tables are those of
-// tools/compare/comparison.h; the plots are drawn here as SVG.
+// tools/compare/comparison.h; the page head and the plots come from tools/report/html_kit.h.
 
-#include <limits>
 #include <string>
-#include <vector>
 
 #include "tools/compare/comparison.h"
+#include "tools/report/html_kit.h"
 
 namespace photopose::cli {
 
-// One polyline of a line plot. Points with a non-finite y are left out (the line breaks there).
-struct PlotSeries {
-  std::string label;
-  std::vector<double> x;
-  std::vector<double> y;
-};
-
-struct LinePlot {
-  std::string title;
-  std::string x_label;  // with its unit
-  std::string y_label;  // with its unit
-  // Logarithmic y axis (decades); values <= 0 are drawn on the bottom of the axis.
-  bool log_y = false;
-  // Fixed y range when both are finite (linear axis only), e.g. 0 and 1 for rates.
-  double y_min = std::numeric_limits<double>::quiet_NaN();
-  double y_max = std::numeric_limits<double>::quiet_NaN();
-  // Optional horizontal reference line (e.g. the expected NEES), drawn dashed, with its label.
-  double reference_y = std::numeric_limits<double>::quiet_NaN();
-  std::string reference_label;
-  std::vector<PlotSeries> series;
-};
-
-// Horizontal bars, one per label.
-struct BarPlot {
-  std::string title;
-  std::string value_label;  // with its unit
-  std::vector<std::string> labels;
-  std::vector<double> values;  // non-finite values are drawn as "n/a"
-};
-
-// An <svg> element (no XML prolog), 680 x 380 user units for line plots.
-std::string RenderLinePlotSvg(const LinePlot& plot);
-std::string RenderBarPlotSvg(const BarPlot& plot);
-
-// &, <, >, " and ' escaped.
-std::string HtmlEscape(const std::string& text);
-// A <table> with a <caption> (the title) and the notes as a list under it.
+// A TextTable as an HTML table (HtmlTable: its title as the caption, its notes under it).
 std::string RenderHtmlTable(const TextTable& table);
 
 // The Monte-Carlo report: the command line, the definitions, and per scenario the plots (error

@@ -1,0 +1,128 @@
+#include "tools/report/html_kit.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <string>
+#include <vector>
+
+namespace photopose::cli {
+namespace {
+
+size_t Count(const std::string& text, const std::string& what) {
+  size_t count = 0;
+  for (size_t at = text.find(what); at != std::string::npos; at = text.find(what, at + 1)) ++count;
+  return count;
+}
+
+TEST(HtmlKit, EscapesTheFiveSpecialCharacters) {
+  EXPECT_EQ(HtmlEscape("a<b & \"c\" 'd' > e"), "a&lt;b &amp; &quot;c&quot; &#39;d&#39; &gt; e");
+  EXPECT_EQ(HtmlEscape("plain text, 1.5 m"), "plain text, 1.5 m");
+  EXPECT_EQ(HtmlEscape("&amp;"), "&amp;amp;");  // not idempotent: escape once
+}
+
+TEST(HtmlKit, NumbersSayNaWhenNotFinite) {
+  EXPECT_EQ(ReportNumber(0.0123456), "0.0123");
+  EXPECT_EQ(ReportNumber(2.5, "%g"), "2.5");
+  EXPECT_EQ(ReportFixed(1.23456, 2), "1.23");
+  EXPECT_EQ(ReportFixed(-0.5, 0), "-0");
+  EXPECT_EQ(ReportNumber(std::nan("")), "n/a");
+  EXPECT_EQ(ReportFixed(INFINITY, 3), "n/a");
+}
+
+TEST(HtmlKit, PageHeadIsWellFormed) {
+  const std::string page = HtmlPageOpen("a <title>", "a & heading") + HtmlPageClose();
+  EXPECT_EQ(page.rfind("<!DOCTYPE html>\n<html lang=\"en\">\n<head>\n<meta charset=\"utf-8\">", 0),
+            0u);
+  EXPECT_NE(page.find("<title>a &lt;title&gt;</title>"), std::string::npos);
+  EXPECT_NE(page.find("<h1>a &amp; heading</h1>"), std::string::npos);
+  // One screen stylesheet and one print stylesheet, both inside the head, the body after it.
+  EXPECT_EQ(Count(page, "<style>"), 1u);
+  EXPECT_EQ(Count(page, "<style media=\"print\">"), 1u);
+  EXPECT_EQ(Count(page, "</style>"), 2u);
+  const size_t head_end = page.find("</head>");
+  ASSERT_NE(head_end, std::string::npos);
+  EXPECT_LT(page.rfind("</style>"), head_end);
+  EXPECT_LT(head_end, page.find("<body>"));
+  EXPECT_EQ(Count(page, "<head>"), 1u);
+  EXPECT_EQ(Count(page, "<body>"), 1u);
+  EXPECT_EQ(Count(page, "</body>"), 1u);
+  EXPECT_EQ(page.substr(page.size() - 8), "</html>\n");
+  for (const char* forbidden : {"<script", "src=", "href=", "@import", "url("})
+    EXPECT_EQ(page.find(forbidden), std::string::npos) << forbidden;
+}
+
+TEST(HtmlKit, TableEscapesCellsAndListsNotes) {
+  const std::string table = HtmlTable("t<1>", {"a", "b&c"}, {{"1", "<2>"}}, {"note 'x'"});
+  EXPECT_NE(table.find("<caption>t&lt;1&gt;</caption>"), std::string::npos);
+  EXPECT_NE(table.find("<th>b&amp;c</th>"), std::string::npos);
+  EXPECT_NE(table.find("<td>&lt;2&gt;</td>"), std::string::npos);
+  EXPECT_NE(table.find("<li>note &#39;x&#39;</li>"), std::string::npos);
+  EXPECT_EQ(HtmlTable("", {"a"}, {}).find("<caption>"), std::string::npos);
+}
+
+TEST(HtmlKit, NiceSteps) {
+  EXPECT_DOUBLE_EQ(NiceStep(10.0, 5), 2.0);
+  EXPECT_DOUBLE_EQ(NiceStep(0.7, 5), 0.2);
+  EXPECT_DOUBLE_EQ(NiceAtMost(7.0), 5.0);
+  EXPECT_DOUBLE_EQ(NiceAtMost(0.3), 0.2);
+  EXPECT_DOUBLE_EQ(NiceAtMost(0.0), 1.0);
+  const PlotAxis axis = LinearPlotAxis(0.3, 9.2, true);
+  EXPECT_DOUBLE_EQ(axis.lo, 0.0);
+  EXPECT_DOUBLE_EQ(axis.hi, 10.0);
+  EXPECT_EQ(axis.Ticks(), (std::vector<double>{0, 2, 4, 6, 8, 10}));
+  EXPECT_DOUBLE_EQ(axis.Fraction(5.0), 0.5);
+}
+
+TEST(HtmlKit, LinePlotCarriesItsAxisTitlesTicksAndLegend) {
+  LinePlot plot;
+  plot.title = "error vs noise";
+  plot.x_label = "noise (px)";
+  plot.y_label = "RMSE <m>";
+  plot.series = {{"taylor", {0, 1, 2}, {0.0, 5.0, 10.0}}, {"ceres", {0, 1, 2}, {1.0, 2.0, 3.0}}};
+  const std::string svg = RenderLinePlotSvg(plot);
+  EXPECT_EQ(svg.rfind("<svg", 0), 0u);
+  EXPECT_EQ(svg.substr(svg.size() - 6), "</svg>");
+  EXPECT_NE(svg.find("aria-label=\"error vs noise\""), std::string::npos);
+  EXPECT_NE(svg.find(">noise (px)</text>"), std::string::npos);
+  EXPECT_NE(svg.find("rotate(-90"), std::string::npos);  // the y title along the axis
+  EXPECT_NE(svg.find(">RMSE &lt;m&gt;</text>"), std::string::npos);
+  // Ticks of both axes labelled: y 0..10 by 2, x 0..2 by 0.5.
+  for (const char* tick : {">0</text>", ">2</text>", ">10</text>", ">0.5</text>", ">1.5</text>"})
+    EXPECT_NE(svg.find(tick), std::string::npos) << tick;
+  // Legend: each series named once in it (and in its markers' titles).
+  EXPECT_NE(svg.find(">taylor</text>"), std::string::npos);
+  EXPECT_NE(svg.find(">ceres</text>"), std::string::npos);
+  EXPECT_EQ(Count(svg, "<polyline"), 2u);
+}
+
+TEST(HtmlKit, BarPlotAndHistogram) {
+  BarPlot bars;
+  bars.title = "time";
+  bars.value_label = "microseconds";
+  bars.labels = {"a", "b"};
+  bars.values = {3.0, std::nan("")};
+  const std::string bar_svg = RenderBarPlotSvg(bars);
+  EXPECT_NE(bar_svg.find(">microseconds</text>"), std::string::npos);
+  EXPECT_NE(bar_svg.find(">n/a</text>"), std::string::npos);
+  EXPECT_EQ(Count(bar_svg, "<title>"), 1u);
+
+  HistogramPlot histogram;
+  histogram.title = "tie_marks";
+  histogram.x_label = "residual (px)";
+  for (int k = -50; k <= 50; ++k) histogram.values.push_back(0.01 * k);
+  histogram.values.push_back(std::nan(""));
+  const std::string svg = RenderHistogramSvg(histogram);
+  EXPECT_NE(svg.find(">tie_marks (101)</text>"), std::string::npos);
+  EXPECT_NE(svg.find(">residual (px)</text>"), std::string::npos);
+  EXPECT_NE(svg.find(">count</text>"), std::string::npos);
+  EXPECT_NE(svg.find(">-0.4</text>"), std::string::npos);  // a labelled tick of the x axis
+  // 24 bins and the frame.
+  EXPECT_EQ(Count(svg, "<rect x="), 24u + 1u);
+  HistogramPlot empty;
+  empty.title = "none";
+  EXPECT_NE(RenderHistogramSvg(empty).find(">none (0)</text>"), std::string::npos);
+}
+
+}  // namespace
+}  // namespace photopose::cli

@@ -1,0 +1,467 @@
+#include "tools/report/html_kit.h"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <sstream>
+
+namespace photopose::cli {
+namespace {
+
+constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
+
+// Line plot geometry (SVG user units).
+constexpr double kLineWidth = 680.0;
+constexpr double kLineHeight = 380.0;
+constexpr double kLineLeft = 72.0;
+constexpr double kLineRight = 200.0;  // room for the legend
+constexpr double kLineTop = 34.0;
+constexpr double kLineBottom = 52.0;
+
+const char* const kColors[kNumPlotColors] = {"#0072B2", "#D55E00", "#009E73", "#CC79A7", "#E69F00",
+                                             "#56B4E9", "#000000", "#8C510A", "#762A83", "#1B7837"};
+
+// The one stylesheet, then what changes on paper: full width, plots one under the other, no
+// plot or table row split across pages.
+const char kStyle[] =
+    "body{font-family:sans-serif;margin:2em auto;max-width:1400px;color:#222;padding:0 1em}"
+    "h1{font-size:1.5em}h2{font-size:1.25em;margin-top:2em;border-bottom:1px solid #ccc}"
+    "table{border-collapse:collapse;margin:1em 0;font-size:0.85em}"
+    "caption{text-align:left;font-weight:bold;padding:0.3em 0}"
+    "th,td{border:1px solid #ccc;padding:0.2em 0.5em;text-align:right;white-space:nowrap}"
+    "th{background:#f0f0f0}td:first-child,th:first-child{text-align:left}"
+    "ul.notes{font-size:0.85em;color:#444}"
+    ".plots{display:flex;flex-wrap:wrap;gap:1em}svg{background:#fff;border:1px solid #ddd}"
+    ".verdict{padding:0.75em 1em;border-radius:6px;margin:0.5em 0}"
+    ".bad{background:#fde2e1;border:1px solid #d55e00}"
+    ".good{background:#e3f4ea;border:1px solid #009e73}"
+    ".note{background:#eef3fa;border:1px solid #0072b2}"
+    "code,pre{background:#f6f6f6;padding:0.1em 0.3em;white-space:pre-wrap}";
+const char kPrintStyle[] =
+    "body{margin:0;max-width:none;padding:0}.plots{display:block}"
+    "svg,tr,.verdict{break-inside:avoid}h2{break-after:avoid}";
+
+std::string Coordinate(double value) { return ReportNumber(value, "%.1f"); }
+
+// A line from (x1, y1) to (x2, y2) with more attributes.
+std::string SvgLine(double x1, double y1, double x2, double y2, const std::string& attributes) {
+  return "<line x1=\"" + Coordinate(x1) + "\" x2=\"" + Coordinate(x2) + "\" y1=\"" +
+         Coordinate(y1) + "\" y2=\"" + Coordinate(y2) + "\" " + attributes + "/>";
+}
+
+// The line plot's axes from its data (and reference line).
+void LinePlotAxes(const LinePlot& plot, PlotAxis* x_axis, PlotAxis* y_axis, bool* empty) {
+  double x_lo = std::numeric_limits<double>::infinity(), x_hi = -x_lo;
+  double y_lo = x_lo, y_hi = -x_lo, y_positive_lo = x_lo;
+  auto add_y = [&](double y) {
+    y_lo = std::min(y_lo, y);
+    y_hi = std::max(y_hi, y);
+    if (y > 0.0) y_positive_lo = std::min(y_positive_lo, y);
+  };
+  for (const PlotSeries& s : plot.series) {
+    for (size_t k = 0; k < s.x.size() && k < s.y.size(); ++k) {
+      if (!std::isfinite(s.x[k]) || !std::isfinite(s.y[k])) continue;
+      x_lo = std::min(x_lo, s.x[k]);
+      x_hi = std::max(x_hi, s.x[k]);
+      add_y(s.y[k]);
+    }
+  }
+  if (std::isfinite(plot.reference_y)) add_y(plot.reference_y);
+  *empty = !std::isfinite(x_lo);
+  if (*empty) x_lo = 0.0, x_hi = 1.0, y_lo = 0.0, y_hi = 1.0, y_positive_lo = 1.0;
+  *x_axis = LinearPlotAxis(x_lo, x_hi, false);
+  if (plot.log_y) {
+    *y_axis = PlotAxis();
+    y_axis->log = true;
+    if (!std::isfinite(y_positive_lo)) y_positive_lo = 1.0;
+    y_axis->lo = std::floor(std::log10(y_positive_lo));
+    y_axis->hi = std::ceil(std::log10(std::max(y_hi, y_positive_lo)));
+    if (y_axis->hi <= y_axis->lo) y_axis->hi = y_axis->lo + 1.0;
+  } else if (std::isfinite(plot.y_min) && std::isfinite(plot.y_max)) {
+    y_axis->lo = plot.y_min;
+    y_axis->hi = plot.y_max;
+  } else {
+    *y_axis = LinearPlotAxis(y_lo, y_hi, true);
+  }
+}
+
+// Series `s` of a line plot: its polylines (broken at non-finite values) and markers.
+std::string LineSeriesSvg(const LinePlot& plot, size_t s, const PlotFrame& frame,
+                          const PlotAxis& x_axis, const PlotAxis& y_axis) {
+  const PlotSeries& series = plot.series[s];
+  const size_t num_series = plot.series.size();
+  const char* color = PlotColor(s);
+  const char* dash = (s / kNumPlotColors) % 2 == 1 ? " stroke-dasharray=\"4 3\"" : "";
+  // Earlier series are drawn wider, so that series with equal values still show underneath.
+  const double line_width =
+      1.5 + 3.5 * static_cast<double>(num_series - 1 - s) / std::max<size_t>(1, num_series - 1);
+  std::ostringstream svg;
+  std::string points;
+  auto flush = [&]() {
+    if (!points.empty())
+      svg << "<polyline fill=\"none\" stroke=\"" << color << "\" stroke-width=\""
+          << ReportNumber(line_width, "%.2f") << "\"" << dash << " points=\"" << points << "\"/>";
+    points.clear();
+  };
+  const size_t n = std::min(series.x.size(), series.y.size());
+  for (size_t k = 0; k < n; ++k) {
+    if (!std::isfinite(series.x[k]) || !std::isfinite(series.y[k])) {
+      flush();
+      continue;
+    }
+    points += Coordinate(frame.X(x_axis, series.x[k])) + "," +
+              Coordinate(frame.Y(y_axis, series.y[k])) + " ";
+  }
+  flush();
+  for (size_t k = 0; k < n; ++k) {
+    if (!std::isfinite(series.x[k]) || !std::isfinite(series.y[k])) continue;
+    svg << SvgMarker(s, frame.X(x_axis, series.x[k]), frame.Y(y_axis, series.y[k]),
+                     1.0 + line_width, color)
+        << "<title>" << HtmlEscape(series.label) << ": " << ReportNumber(series.x[k], "%g") << ", "
+        << ReportNumber(series.y[k], "%.4g") << "</title></path>";
+  }
+  return svg.str();
+}
+
+std::string PlotTitle(double x, const std::string& title) {
+  return SvgText(x, 20, title, "middle", " font-size=\"14\" font-weight=\"bold\"");
+}
+
+}  // namespace
+
+std::string HtmlPageOpen(const std::string& title, const std::string& heading) {
+  return "<!DOCTYPE html>\n<html lang=\"en\">\n<head>\n<meta charset=\"utf-8\">\n<title>" +
+         HtmlEscape(title) + "</title>\n<style>" + kStyle + "</style>\n<style media=\"print\">" +
+         kPrintStyle + "</style>\n</head>\n<body>\n<h1>" + HtmlEscape(heading) + "</h1>\n";
+}
+
+std::string HtmlPageClose() { return "</body>\n</html>\n"; }
+
+std::string HtmlEscape(const std::string& text) {
+  std::string out;
+  out.reserve(text.size());
+  for (char c : text) {
+    switch (c) {
+      case '&':
+        out += "&amp;";
+        break;
+      case '<':
+        out += "&lt;";
+        break;
+      case '>':
+        out += "&gt;";
+        break;
+      case '"':
+        out += "&quot;";
+        break;
+      case '\'':
+        out += "&#39;";
+        break;
+      default:
+        out += c;
+    }
+  }
+  return out;
+}
+
+std::string ReportNumber(double value, const char* format) {
+  if (!std::isfinite(value)) return "n/a";
+  char buffer[64];
+  std::snprintf(buffer, sizeof(buffer), format, value);
+  return buffer;
+}
+
+std::string ReportFixed(double value, int digits) {
+  if (!std::isfinite(value)) return "n/a";
+  char buffer[64];
+  std::snprintf(buffer, sizeof(buffer), "%.*f", digits, value);
+  return buffer;
+}
+
+std::string HtmlTable(const std::string& title, const std::vector<std::string>& header,
+                      const std::vector<std::vector<std::string>>& rows,
+                      const std::vector<std::string>& notes) {
+  std::ostringstream html;
+  html << "<table>\n";
+  if (!title.empty()) html << "<caption>" << HtmlEscape(title) << "</caption>\n";
+  html << "<tr>";
+  for (const auto& h : header) html << "<th>" << HtmlEscape(h) << "</th>";
+  html << "</tr>\n";
+  for (const auto& row : rows) {
+    html << "<tr>";
+    for (const auto& cell : row) html << "<td>" << HtmlEscape(cell) << "</td>";
+    html << "</tr>\n";
+  }
+  html << "</table>\n";
+  if (!notes.empty()) {
+    html << "<ul class=\"notes\">\n";
+    for (const auto& note : notes) html << "<li>" << HtmlEscape(note) << "</li>\n";
+    html << "</ul>\n";
+  }
+  return html.str();
+}
+
+const char* PlotColor(size_t index) { return kColors[index % kNumPlotColors]; }
+
+std::string SvgOpen(double width, double height, const std::string& title) {
+  std::ostringstream out;
+  out << "<svg xmlns=\"http://www.w3.org/2000/svg\" viewBox=\"0 0 " << width << " " << height
+      << "\" width=\"" << width << "\" height=\"" << height << "\" role=\"img\" aria-label=\""
+      << HtmlEscape(title) << "\" font-family=\"sans-serif\" font-size=\"12\">"
+      << "<rect width=\"100%\" height=\"100%\" fill=\"#ffffff\"/>";
+  return out.str();
+}
+
+std::string SvgText(double x, double y, const std::string& text, const char* anchor,
+                    const std::string& extra) {
+  return "<text x=\"" + Coordinate(x) + "\" y=\"" + Coordinate(y) + "\" text-anchor=\"" + anchor +
+         "\"" + extra + ">" + HtmlEscape(text) + "</text>";
+}
+
+std::string SvgMarker(size_t index, double x, double y, double r, const char* color) {
+  std::ostringstream d;
+  auto p = [](double v) { return Coordinate(v); };
+  switch (index % 4) {
+    case 0:  // circle, as two arcs
+      d << "M" << p(x - r) << "," << p(y) << "a" << p(r) << "," << p(r) << " 0 1,0 " << p(2 * r)
+        << ",0a" << p(r) << "," << p(r) << " 0 1,0 " << p(-2 * r) << ",0Z";
+      break;
+    case 1:  // square
+      d << "M" << p(x - r) << "," << p(y - r) << "h" << p(2 * r) << "v" << p(2 * r) << "h"
+        << p(-2 * r) << "Z";
+      break;
+    case 2:  // triangle
+      d << "M" << p(x) << "," << p(y - 1.2 * r) << "L" << p(x + 1.1 * r) << "," << p(y + r) << "L"
+        << p(x - 1.1 * r) << "," << p(y + r) << "Z";
+      break;
+    default:  // diamond
+      d << "M" << p(x) << "," << p(y - 1.3 * r) << "L" << p(x + 1.3 * r) << "," << p(y) << "L"
+        << p(x) << "," << p(y + 1.3 * r) << "L" << p(x - 1.3 * r) << "," << p(y) << "Z";
+  }
+  return "<path d=\"" + d.str() + "\" fill=\"" + color +
+         "\" stroke=\"#ffffff\" stroke-width=\"0.5\">";
+}
+
+double NiceStep(double range, int count) {
+  const double raw = range / count;
+  const double magnitude = std::pow(10.0, std::floor(std::log10(raw)));
+  for (double factor : {1.0, 2.0, 5.0, 10.0})
+    if (factor * magnitude >= raw) return factor * magnitude;
+  return 10.0 * magnitude;
+}
+
+double NiceAtMost(double value) {
+  if (!(value > 0.0)) return 1.0;
+  const double magnitude = std::pow(10.0, std::floor(std::log10(value)));
+  for (const double f : {5.0, 2.0, 1.0})
+    if (f * magnitude <= value) return f * magnitude;
+  return magnitude;
+}
+
+double PlotAxis::Fraction(double value) const {
+  if (log) {
+    const double v = value > 0.0 ? std::log10(value) : lo;
+    return (std::clamp(v, lo, hi) - lo) / (hi - lo);
+  }
+  return (value - lo) / (hi - lo);
+}
+
+std::vector<double> PlotAxis::Ticks() const {
+  std::vector<double> ticks;
+  if (log) {
+    const int step = std::max(1, static_cast<int>(std::ceil((hi - lo) / 8.0)));
+    for (int e = static_cast<int>(lo); e <= static_cast<int>(hi); e += step) {
+      ticks.push_back(std::pow(10.0, e));
+      // Few decades: 2 and 5 times each power of ten as well.
+      if (hi - lo <= 2.0 && e < static_cast<int>(hi))
+        for (double f : {2.0, 5.0}) ticks.push_back(f * std::pow(10.0, e));
+    }
+    return ticks;
+  }
+  const double step = NiceStep(hi - lo, 5);
+  for (double t = std::ceil(lo / step - 1e-9) * step; t <= hi + 1e-9 * step; t += step)
+    ticks.push_back(std::abs(t) < 1e-12 * step ? 0.0 : t);
+  return ticks;
+}
+
+PlotAxis LinearPlotAxis(double lo, double hi, bool from_zero) {
+  if (from_zero && lo >= 0.0) lo = 0.0;
+  if (!(hi > lo)) {
+    const double pad = lo == 0.0 ? 1.0 : 0.1 * std::abs(lo);
+    lo -= pad;
+    hi += pad;
+    if (from_zero && lo < 0.0 && hi > 0.0) lo = 0.0;
+  } else {
+    const double step = NiceStep(hi - lo, 5);
+    lo = std::floor(lo / step + 1e-9) * step;
+    hi = std::ceil(hi / step - 1e-9) * step;
+  }
+  PlotAxis axis;
+  axis.lo = lo;
+  axis.hi = hi;
+  return axis;
+}
+
+std::string TickLabel(double value) {
+  if (value == 0.0) return "0";
+  const double magnitude = std::abs(value);
+  if (magnitude < 1e-3 || magnitude >= 1e5) return ReportNumber(value, "%.0e");
+  return ReportNumber(value, "%g");
+}
+
+std::string SvgAxes(const PlotFrame& frame, const PlotAxis* x_axis, const PlotAxis* y_axis,
+                    const std::string& x_title, const std::string& y_title) {
+  const double right = frame.left + frame.width, bottom = frame.top + frame.height;
+  std::ostringstream svg;
+  if (y_axis != nullptr) {
+    for (double t : y_axis->Ticks()) {
+      const double y = frame.Y(*y_axis, t);
+      svg << SvgLine(frame.left, y, right, y, "stroke=\"#e5e5e5\"");
+      svg << SvgText(frame.left - 6, y + 4, TickLabel(t), "end");
+    }
+  }
+  if (x_axis != nullptr) {
+    for (double t : x_axis->Ticks()) {
+      const double x = frame.X(*x_axis, t);
+      svg << SvgLine(x, frame.top, x, bottom, "stroke=\"#f0f0f0\"");
+      svg << SvgText(x, bottom + 16, TickLabel(t));
+    }
+  }
+  svg << "<rect x=\"" << frame.left << "\" y=\"" << frame.top << "\" width=\"" << frame.width
+      << "\" height=\"" << frame.height << "\" fill=\"none\" stroke=\"#888\"/>";
+  if (!x_title.empty())
+    svg << SvgText(frame.left + frame.width / 2, frame.svg_height - 12, x_title);
+  if (!y_title.empty()) {
+    const std::string middle = Coordinate(frame.top + frame.height / 2);
+    svg << SvgText(16, frame.top + frame.height / 2, y_title, "middle",
+                   " transform=\"rotate(-90 16 " + middle + ")\"");
+  }
+  return svg.str();
+}
+
+std::string SvgLegendEntry(size_t index, double x, double top, const std::string& label,
+                           const char* dash) {
+  const double y = top + 18.0 * index;
+  const char* color = PlotColor(index);
+  return SvgLine(x, y, x + 22, y,
+                 std::string("stroke=\"") + color + "\" stroke-width=\"2\"" + dash) +
+         SvgMarker(index, x + 11, y, 3.5, color) + "</path>" +
+         SvgText(x + 28, y + 4, label, "start");
+}
+
+std::string RenderLinePlotSvg(const LinePlot& plot) {
+  PlotAxis x_axis, y_axis;
+  bool empty = false;
+  LinePlotAxes(plot, &x_axis, &y_axis, &empty);
+  PlotFrame frame;
+  frame.left = kLineLeft;
+  frame.top = kLineTop;
+  frame.width = kLineWidth - kLineLeft - kLineRight;
+  frame.height = kLineHeight - kLineTop - kLineBottom;
+  frame.svg_height = kLineHeight;
+
+  std::ostringstream svg;
+  svg << SvgOpen(kLineWidth, kLineHeight, plot.title);
+  svg << PlotTitle(frame.left + frame.width / 2, plot.title);
+  svg << SvgAxes(frame, &x_axis, &y_axis, plot.x_label, plot.y_label);
+  if (std::isfinite(plot.reference_y)) {
+    const double y = frame.Y(y_axis, plot.reference_y);
+    svg << SvgLine(frame.left, y, frame.left + frame.width, y,
+                   "stroke=\"#555\" stroke-dasharray=\"6 4\"");
+    svg << SvgText(frame.left + 4, y - 4, plot.reference_label, "start", " fill=\"#555\"");
+  }
+  if (empty) svg << SvgText(frame.left + frame.width / 2, frame.top + frame.height / 2, "no data");
+  // Series, then the legend.
+  for (size_t s = 0; s < plot.series.size(); ++s) {
+    svg << LineSeriesSvg(plot, s, frame, x_axis, y_axis);
+    const char* dash = (s / kNumPlotColors) % 2 == 1 ? " stroke-dasharray=\"4 3\"" : "";
+    svg << SvgLegendEntry(s, kLineWidth - kLineRight + 14, kLineTop + 8, plot.series[s].label,
+                          dash);
+  }
+  svg << "</svg>";
+  return svg.str();
+}
+
+std::string RenderBarPlotSvg(const BarPlot& plot) {
+  constexpr double kBarHeight = 20.0, kGap = 6.0, kLabelWidth = 190.0, kValueRoom = 80.0;
+  const double width = kLineWidth;
+  const double plot_h = plot.labels.size() * (kBarHeight + kGap);
+  const double height = kLineTop + plot_h + kLineBottom;
+  double max_value = 0.0;
+  for (double v : plot.values)
+    if (std::isfinite(v)) max_value = std::max(max_value, v);
+  if (!(max_value > 0.0)) max_value = 1.0;
+  const PlotAxis axis = LinearPlotAxis(0.0, max_value, true);
+  PlotFrame frame;
+  frame.left = kLabelWidth;
+  frame.top = kLineTop;
+  frame.width = width - kLabelWidth - kValueRoom - 20.0;
+  frame.height = plot_h;
+  frame.svg_height = height;
+  std::ostringstream svg;
+  svg << SvgOpen(width, height, plot.title) << PlotTitle(width / 2, plot.title);
+  svg << SvgAxes(frame, &axis, nullptr, plot.value_label, "");
+  for (size_t k = 0; k < plot.labels.size(); ++k) {
+    const double y = kLineTop + k * (kBarHeight + kGap);
+    const double text_y = y + kBarHeight * 0.7;
+    svg << SvgText(kLabelWidth - 8, text_y, plot.labels[k], "end");
+    const double v = k < plot.values.size() ? plot.values[k] : kNaN;
+    if (!std::isfinite(v)) {
+      svg << SvgText(kLabelWidth + 4, text_y, "n/a", "start", " fill=\"#888\"");
+      continue;
+    }
+    const double w = std::max(0.5, axis.Fraction(v) * frame.width);
+    svg << "<rect x=\"" << kLabelWidth << "\" y=\"" << Coordinate(y) << "\" width=\""
+        << Coordinate(w) << "\" height=\"" << kBarHeight << "\" fill=\"" << PlotColor(k)
+        << "\"><title>" << HtmlEscape(plot.labels[k]) << ": " << ReportNumber(v, "%.4g")
+        << "</title></rect>";
+    svg << SvgText(kLabelWidth + w + 4, text_y, ReportNumber(v, "%.3g"), "start");
+  }
+  svg << "</svg>";
+  return svg.str();
+}
+
+std::string RenderHistogramSvg(const HistogramPlot& plot) {
+  constexpr double kWidth = 360.0, kHeight = 220.0;
+  constexpr int kBins = 24;
+  std::vector<double> finite;
+  for (const double v : plot.values)
+    if (std::isfinite(v)) finite.push_back(v);
+  const std::string title = plot.title + " (" + std::to_string(finite.size()) + ")";
+  std::ostringstream svg;
+  svg << SvgOpen(kWidth, kHeight, title) << PlotTitle(kWidth / 2, title);
+  if (finite.empty()) return svg.str() + "</svg>";
+  std::vector<double> sorted = finite;
+  std::sort(sorted.begin(), sorted.end());
+  const double low = sorted[static_cast<size_t>(0.0025 * (sorted.size() - 1))];
+  const double high = sorted[static_cast<size_t>(0.9975 * (sorted.size() - 1))];
+  const double half = std::max({std::abs(low), std::abs(high), 1e-12});
+  std::vector<int> counts(kBins, 0);
+  for (const double v : finite) {
+    const int bin = static_cast<int>(std::floor((v + half) / (2.0 * half) * kBins));
+    ++counts[std::clamp(bin, 0, kBins - 1)];
+  }
+  const int top = *std::max_element(counts.begin(), counts.end());
+  PlotFrame frame;
+  frame.left = 52.0;
+  frame.top = 30.0;
+  frame.width = kWidth - frame.left - 12.0;
+  frame.height = kHeight - frame.top - 52.0;
+  frame.svg_height = kHeight;
+  PlotAxis x_axis;
+  x_axis.lo = -half;
+  x_axis.hi = half;
+  const PlotAxis y_axis = LinearPlotAxis(0.0, top, true);
+  svg << SvgAxes(frame, &x_axis, &y_axis, plot.x_label, "count");
+  const double bar_width = frame.width / kBins;
+  for (int b = 0; b < kBins; ++b) {
+    const double y = frame.Y(y_axis, counts[b]);
+    svg << "<rect x=\"" << Coordinate(frame.left + b * bar_width) << "\" y=\"" << Coordinate(y)
+        << "\" width=\"" << Coordinate(bar_width - 1) << "\" height=\""
+        << Coordinate(frame.top + frame.height - y) << "\" fill=\"" << PlotColor(0) << "\"/>";
+  }
+  svg << "</svg>";
+  return svg.str();
+}
+
+}  // namespace photopose::cli
