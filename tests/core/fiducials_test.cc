@@ -2,6 +2,8 @@
 
 #include <gtest/gtest.h>
 
+#include "tests/support/temp_dir.h"
+
 #include <cmath>
 #include <filesystem>
 #include <fstream>
@@ -105,7 +107,7 @@ TEST(Fiducials, BadInputIsNamed) {
 }
 
 TEST(Fiducials, TheTableIsReadWithItsChecks) {
-  const std::filesystem::path dir = std::filesystem::temp_directory_path() / "photopose_tests";
+  const std::filesystem::path dir = testing::ScratchRoot();
   std::filesystem::create_directories(dir);
   const std::string path = (dir / "fiducials_test.csv").string();
   std::ofstream(path) << "Raster,FiducialID,Column,Row\nscan_017.tif,1,448.8,10838.3\n"

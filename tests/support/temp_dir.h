@@ -11,6 +11,10 @@
 
 namespace photopose::testing {
 
+// The folder of this build tree's named scratch folders (tests/CMakeLists.txt): never shared with
+// the tests of another checkout running at the same time.
+inline std::filesystem::path ScratchRoot() { return PHOTOPOSE_TEST_SCRATCH_DIR; }
+
 class ScopedTempDir {
  public:
   ScopedTempDir() {

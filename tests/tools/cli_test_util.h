@@ -2,6 +2,8 @@
 // Runs the photopose executable for end-to-end tests and gives a scratch folder per test.
 
 #include <gtest/gtest.h>
+
+#include "tests/support/temp_dir.h"
 #include <sys/wait.h>
 
 #include <cstdio>
@@ -66,7 +68,7 @@ inline std::string FirstLine(const std::string& text) { return text.substr(0, te
 // A fresh, empty folder for one test.
 inline std::string ScratchDir() {
   const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
-  const std::filesystem::path dir = std::filesystem::temp_directory_path() / "photopose_tests" /
+  const std::filesystem::path dir = testing::ScratchRoot() /
                                     (std::string(info->test_suite_name()) + "." + info->name());
   std::filesystem::remove_all(dir);
   std::filesystem::create_directories(dir);

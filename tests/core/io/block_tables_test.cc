@@ -295,7 +295,7 @@ TEST(BlockAssembly, ErrorsNameTheFileLineAndColumn) {
 }
 
 TEST(BlockAssembly, ReadsTheFilesAndKeepsTheCoordinateSystemOfAGcpList) {
-  const std::filesystem::path dir = std::filesystem::temp_directory_path() / "photopose_tests";
+  const std::filesystem::path dir = testing::ScratchRoot();
   std::filesystem::create_directories(dir);
   const std::string cameras = (dir / "block_cameras.csv").string();
   std::ofstream(cameras) << "CameraID,FocalLength,PixelSize,NColumns,NRows\n"

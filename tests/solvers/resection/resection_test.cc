@@ -14,6 +14,7 @@
 #include "core/rotation.h"
 #include "core/simulation/synthetic_scene.h"
 #include "solvers/resection/taylor_resection.h"
+#include "tests/support/temp_dir.h"
 #include "tests/test_data.h"
 
 namespace photopose {
@@ -475,7 +476,7 @@ TEST(Resection, AppliesTheEarthCurvatureCorrectionOfTheCameraTable) {
 class ResectionRealData : public ::testing::Test {
  protected:
   void SetUp() override {
-    dir_ = std::filesystem::temp_directory_path() / "photopose_tests" /
+    dir_ = testing::ScratchRoot() /
            (std::string("ResectionRealData.") +
             ::testing::UnitTest::GetInstance()->current_test_info()->name());
     std::filesystem::remove_all(dir_);
