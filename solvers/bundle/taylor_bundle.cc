@@ -22,7 +22,7 @@
 #include "core/camera_models.h"
 #include "core/rotation.h"
 #include "solvers/bundle/check_points.h"
-#include "solvers/bundle/triangulation.h"
+#include "solvers/bundle/internal/bundle_problem.h"
 
 namespace photopose {
 namespace {
@@ -37,8 +37,6 @@ constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
 constexpr double kEpsilon = std::numeric_limits<double>::epsilon();
 // Multiple of epsilon times the block's size below which a position correction is rounding noise.
 constexpr double kPositionResolutionFactor = 256.0;
-// An image needs at least this many marks for its six unknowns (BundleAdjust's rule).
-constexpr int kMinMarksPerImage = 3;
 // A point's 3 x 3 normal block is singular (its rays meet at no definite point) when its smallest
 // LDL^T pivot is at most this fraction of the largest.
 constexpr double kPointPivotRatio = 1e-14;
@@ -63,51 +61,15 @@ inline void PointPartialsFromCentrePartials(const double* row_u, const double* r
 
 // ------------------------------------------------------------------ what the adjustment holds
 
-// The decisions made before the first round: which marks, points and priors enter, with which
-// sigmas, and how the block is tied to the ground. They follow BundleAdjust's rules (see the
-// report of issue 12 for the shared function proposed in their place).
-struct Plan {
-  std::vector<char> mark_used;            // per mark
-  std::vector<double> mark_sigma;         // per mark, observation unit
+// The decisions made before the first round (which marks, points and priors enter, with which
+// sigmas, and how the block is tied to the ground) are BundleAdjust's plan
+// (internal::MakeBundlePlan); the Taylor adjustment adds only what is its own.
+struct Plan : internal::BundlePlan {
   std::vector<Eigen::Vector2d> ideal_um;  // per mark: the corrected (ideal) image-plane point
-  std::vector<char> point_in_problem;
-  std::vector<Eigen::Vector3d> point_sigma;  // control points (m)
-  std::vector<char> position_prior;
-  std::vector<Eigen::Vector3d> position_sigma;  // m
-  std::vector<char> attitude_prior;
-  std::vector<Eigen::Vector3d> attitude_sigma;  // rad
   std::vector<char> image_constant;  // held constant (config or the relative gauge's first image)
   std::vector<char> point_constant;
   std::vector<std::array<bool, 6>> image_fixed;  // components held fixed of a free image
-  BundleDatum datum = BundleDatum::kControl;
-  std::string datum_description;
-  std::vector<std::string> tie_points_left_out;  // seen twice or more, no initial coordinates
 };
-
-int CountUsedMarks(const std::vector<int>& marks, const std::vector<char>& used) {
-  int count = 0;
-  for (const int m : marks) count += used[m];
-  return count;
-}
-
-// Tie points seen in fewer than two images add nothing: they and their marks leave.
-void DropSingleRayTiePoints(const Block& block, Plan* plan) {
-  for (size_t p = 0; p < block.points.size(); ++p) {
-    if (block.points[p].role != PointRole::kTie) continue;
-    if (CountUsedMarks(block.marks_of_point[p], plan->mark_used) >= 2) continue;
-    for (const int m : block.marks_of_point[p]) plan->mark_used[m] = 0;
-    plan->point_in_problem[p] = 0;
-  }
-}
-
-// The first image with fewer than kMinMarksPerImage marks in the adjustment, or -1.
-int ImageWithTooFewMarks(const Block& block, const Plan& plan, int* count) {
-  for (size_t i = 0; i < block.images.size(); ++i) {
-    *count = CountUsedMarks(block.marks_of_image[i], plan.mark_used);
-    if (*count < kMinMarksPerImage) return static_cast<int>(i);
-  }
-  return -1;
-}
 
 Status CheckSupported(const BundleAdjustmentConfig& config, const Block& block) {
   for (const std::vector<int>& params : config.calibrated_params) {
@@ -135,182 +97,34 @@ Status CheckSupported(const BundleAdjustmentConfig& config, const Block& block) 
   return Status::Ok();
 }
 
-// Connected parts of the image graph (images joined by the points they share), as lists of image
-// names; one entry for a connected block.
-std::vector<std::vector<std::string>> ConnectedParts(const Block& block, const Plan& plan) {
-  const int n = static_cast<int>(block.images.size());
-  std::vector<int> label(n, -1);
-  std::vector<std::vector<std::string>> parts;
-  for (int seed = 0; seed < n; ++seed) {
-    if (label[seed] >= 0) continue;
-    const int part = static_cast<int>(parts.size());
-    parts.emplace_back();
-    std::vector<int> stack = {seed};
-    label[seed] = part;
-    while (!stack.empty()) {
-      const int image = stack.back();
-      stack.pop_back();
-      parts[part].push_back(block.images[image].name);
-      for (const int m : block.marks_of_image[image]) {
-        if (!plan.mark_used[m] || !plan.point_in_problem[block.marks[m].point]) continue;
-        for (const int other : block.marks_of_point[block.marks[m].point]) {
-          const int j = block.marks[other].image;
-          if (!plan.mark_used[other] || label[j] >= 0) continue;
-          label[j] = part;
-          stack.push_back(j);
-        }
-      }
-    }
-  }
-  return parts;
-}
-
-std::string ListNames(const std::vector<std::string>& names, size_t most) {
-  std::string text;
-  for (size_t k = 0; k < names.size() && k < most; ++k) text += (k ? ", " : "") + Quoted(names[k]);
-  if (names.size() > most) text += ", ... (" + std::to_string(names.size()) + " in all)";
-  return text;
-}
-
+// The plan: BundleAdjust's (a weak datum is not refused: it shows as a singular reduced normal
+// matrix in the round), then the unknowns held (config, relative gauge) and each mark's ideal
+// image-plane point: the frame model's correction of the measured film point, constant with the
+// interior orientation.
 Status MakePlan(const TaylorBundleOptions& options, const BundleAdjustmentConfig& config,
                 const Block& block, Plan* plan) {
-  const BundleAccuracies& acc = options.accuracies;
-  const size_t num_marks = block.marks.size();
-  plan->mark_used.assign(num_marks, 0);
-  plan->mark_sigma.assign(num_marks, 1.0);
-  plan->ideal_um.assign(num_marks, Eigen::Vector2d::Zero());
-  plan->point_in_problem.assign(block.points.size(), 0);
-  plan->point_sigma.assign(block.points.size(), Eigen::Vector3d::Constant(acc.marker_m));
+  internal::BundlePlanOptions plan_options;
+  plan_options.accuracies = options.accuracies;
+  plan_options.use_lever = options.lever_arm_m.has_value();
+  plan_options.refuse_weak_datum = false;
+  PHOTOPOSE_RETURN_IF_ERROR(internal::MakeBundlePlan(plan_options, config, block, plan));
   plan->image_constant.assign(block.images.size(), 0);
   plan->point_constant.assign(block.points.size(), 0);
   plan->image_fixed.assign(block.images.size(), std::array<bool, 6>{});
   for (const int i : config.constant_images) plan->image_constant[i] = 1;
   for (const int p : config.constant_points) plan->point_constant[p] = 1;
-
-  std::vector<std::string> missing;
-  for (const BlockImage& image : block.images)
-    if (!image.eo) missing.push_back(image.name);
-  if (!missing.empty()) {
-    return Status::Error("images without initial exterior orientation: " + ListNames(missing, 5) +
-                         " (give a frames table or let the initialisation orient them)");
+  if (plan->datum == BundleDatum::kRelative) {
+    plan->image_constant[plan->relative_fixed_image] = 1;
+    plan->image_fixed[plan->relative_scale_image][plan->relative_scale_axis] = true;
   }
-
-  // Marks of control and tie points, with their sigma and their ideal image-plane point: the
-  // frame model's correction of the measured film point, constant with the interior orientation.
-  for (size_t m = 0; m < num_marks; ++m) {
+  plan->ideal_um.assign(block.marks.size(), Eigen::Vector2d::Zero());
+  for (size_t m = 0; m < block.marks.size(); ++m) {
+    if (!plan->mark_used[m]) continue;
     const BlockMark& mark = block.marks[m];
-    const PointRole role = block.points[mark.point].role;
-    if (role == PointRole::kCheck) continue;
     const BlockCamera& camera = block.cameras[block.images[mark.image].camera];
-    const bool control = role == PointRole::kControl;
-    const double sigma_px = control ? acc.marker_projection_px : acc.tie_px;
-    const double sigma_film_um = DefaultFilmMarkSigmaUm(
-        camera, sigma_px, control ? acc.marker_projection_film_um : acc.tie_film_um);
-    plan->mark_sigma[m] = MarkSigma(mark, sigma_px, sigma_film_um);
-    plan->mark_used[m] = 1;
     FrameCorrectFilmPoint(camera.params.data(), mark.observation.data(), camera.data(),
                           plan->ideal_um[m].data());
   }
-  for (size_t p = 0; p < block.points.size(); ++p)
-    if (block.points[p].role != PointRole::kCheck) plan->point_in_problem[p] = 1;
-  DropSingleRayTiePoints(block, plan);
-  for (size_t p = 0; p < block.points.size(); ++p) {
-    const BlockPoint& point = block.points[p];
-    if (!plan->point_in_problem[p]) continue;
-    if (CountUsedMarks(block.marks_of_point[p], plan->mark_used) == 0) {
-      plan->point_in_problem[p] = 0;  // a control point nobody sees
-      continue;
-    }
-    if (point.role == PointRole::kTie && !point.position_m) {
-      // Not intersected by the initialisation: left out with its marks, as BundleAdjust does.
-      plan->point_in_problem[p] = 0;
-      for (const int m : block.marks_of_point[p]) plan->mark_used[m] = 0;
-      plan->tie_points_left_out.push_back(point.id);
-      continue;
-    }
-    if (point.role == PointRole::kControl && point.accuracy_m)
-      plan->point_sigma[p] = *point.accuracy_m;
-  }
-  int count = 0;
-  const int weak = ImageWithTooFewMarks(block, *plan, &count);
-  if (weak >= 0) {
-    return Status::Error("image " + Quoted(block.images[weak].name) + " has " +
-                         std::to_string(count) + " usable marks; an image needs at least " +
-                         std::to_string(kMinMarksPerImage) +
-                         " (marks of control points and of tie points seen in two images)");
-  }
-
-  // Priors of the images that are adjusted.
-  plan->position_prior.assign(block.images.size(), 0);
-  plan->position_sigma.assign(block.images.size(), acc.camera_m);
-  plan->attitude_prior.assign(block.images.size(), 0);
-  plan->attitude_sigma.assign(block.images.size(), Eigen::Vector3d::Zero());
-  int num_positions = 0, num_attitudes = 0;
-  for (size_t i = 0; i < block.images.size(); ++i) {
-    const BlockImage& image = block.images[i];
-    if (plan->image_constant[i]) continue;
-    if (image.measured_center_m && (image.center_accuracy_m || acc.camera_positions_are_priors)) {
-      plan->position_prior[i] = 1;
-      if (image.center_accuracy_m) plan->position_sigma[i] = *image.center_accuracy_m;
-      ++num_positions;
-    }
-    if (image.measured_angles_rad && (image.attitude_accuracy_rad || acc.attitude_deg)) {
-      plan->attitude_prior[i] = 1;
-      plan->attitude_sigma[i] =
-          image.attitude_accuracy_rad
-              ? *image.attitude_accuracy_rad
-              : Eigen::Vector3d::Constant(DegreesToRadians(*acc.attitude_deg));
-      ++num_attitudes;
-    }
-  }
-
-  const std::vector<std::vector<std::string>> parts = ConnectedParts(block, *plan);
-  if (parts.size() > 1) {
-    std::string text;
-    for (size_t k = 0; k < parts.size() && k < 3; ++k)
-      text += (k ? "; " : "") + std::to_string(parts[k].size()) + " image" +
-              (parts[k].size() == 1 ? "" : "s") + " (" + ListNames(parts[k], 3) + ")";
-    if (parts.size() > 3) text += "; ...";
-    return Status::Error("the block falls apart into " + std::to_string(parts.size()) +
-                         " parts that share no point: " + text);
-  }
-
-  // Datum. Ground-fixed when anything ties the block to the ground: control points (or points
-  // held constant), camera positions, attitudes, images held constant. Otherwise COLMAP's gauge.
-  int num_control = 0;
-  for (size_t p = 0; p < block.points.size(); ++p)
-    if (plan->point_in_problem[p] &&
-        (block.points[p].role == PointRole::kControl || plan->point_constant[p]))
-      ++num_control;
-  const int num_constant_images = static_cast<int>(config.constant_images.size());
-  if (num_control + num_positions + num_attitudes + num_constant_images > 0) {
-    plan->datum = BundleDatum::kControl;
-    std::ostringstream os;
-    os << "absolute: " << num_control << " control point" << (num_control == 1 ? "" : "s") << ", "
-       << num_positions << " camera position" << (num_positions == 1 ? "" : "s");
-    if (num_attitudes > 0)
-      os << ", " << num_attitudes << " attitude" << (num_attitudes == 1 ? "" : "s");
-    if (num_constant_images > 0) os << ", " << num_constant_images << " image(s) held constant";
-    os << " weighted as stated (a datum defect shows as a singular reduced normal matrix)";
-    plan->datum_description = os.str();
-    return Status::Ok();
-  }
-  plan->datum = BundleDatum::kRelative;
-  if (block.images.size() < 2) return Status::Error("a relative block needs two images");
-  const Eigen::Vector3d baseline =
-      block.images[1].eo->center_in_ground() - block.images[0].eo->center_in_ground();
-  if (!(baseline.norm() > 0.0))
-    return Status::Error("a relative block needs its first two images at different positions");
-  int axis = 0;
-  baseline.cwiseAbs().maxCoeff(&axis);
-  plan->image_constant[0] = 1;
-  plan->image_fixed[1][axis] = true;
-  plan->datum_description = "relative: no control points and no camera positions; image " +
-                            Quoted(block.images[0].name) + " held fixed and the " +
-                            std::string(1, "XYZ"[axis]) + " coordinate of image " +
-                            Quoted(block.images[1].name) +
-                            " fixes the scale (COLMAP's convention); coordinates are in the "
-                            "frame of the input";
   return Status::Ok();
 }
 
@@ -392,10 +206,10 @@ void BuildLayout(const Block& block, const Plan& plan, Layout* layout) {
     layout->point_block[p] = static_cast<int>(layout->free_points.size());
     layout->free_points.push_back(static_cast<int>(p));
     layout->num_unknowns += 3;
-    if (block.points[p].role == PointRole::kControl) layout->num_observations += 3;
+    if (plan.point_prior[p]) layout->num_observations += 3;
   }
   for (size_t i = 0; i < block.images.size(); ++i)
-    layout->num_observations += 3 * (plan.position_prior[i] + plan.attitude_prior[i]);
+    layout->num_observations += 3 * (plan.image_prior[i] + plan.image_attitude[i]);
   layout->point_marks.assign(layout->free_points.size(), {});
   for (size_t m = 0; m < block.marks.size(); ++m) {
     if (!plan.mark_used[m]) continue;
@@ -581,7 +395,7 @@ bool Linearize(TaylorPartials partials, const Block& block, const Plan& plan, co
   // Control points: F = X - X_surveyed per axis, A = I.
   for (size_t q = 0; q < num_points; ++q) {
     const int p = layout.free_points[q];
-    if (block.points[p].role != PointRole::kControl) continue;
+    if (!plan.point_prior[p]) continue;
     const Eigen::Vector3d F = state.points[p] - frame.surveyed[p];
     const Eigen::Vector3d weight = plan.point_sigma[p].cwiseAbs2().cwiseInverse();
     normal->V[q].diagonal() += weight;
@@ -599,7 +413,7 @@ bool Linearize(TaylorPartials partials, const Block& block, const Plan& plan, co
   for (size_t i = 0; i < block.images.size(); ++i) {
     const int b = layout.image_block[i];
     if (b < 0) continue;
-    if (plan.position_prior[i]) {
+    if (plan.image_prior[i]) {
       Eigen::Matrix<double, 3, 6> A = Eigen::Matrix<double, 3, 6>::Zero();
       A.leftCols<3>().setIdentity();
       Eigen::Vector3d antenna = state.eo[i].head<3>();
@@ -611,7 +425,7 @@ bool Linearize(TaylorPartials partials, const Block& block, const Plan& plan, co
         A.rightCols<3>() = d_angles;
       }
       const Eigen::Vector3d F = antenna - frame.measured[i];
-      const Eigen::Vector3d weight = plan.position_sigma[i].cwiseAbs2().cwiseInverse();
+      const Eigen::Vector3d weight = plan.image_prior_sigma[i].cwiseAbs2().cwiseInverse();
       normal->U[b].noalias() += A.transpose() * weight.asDiagonal() * A;
       normal->ge[b].noalias() += A.transpose() * weight.cwiseProduct(F);
       normal->weighted_ssr += weight.dot(F.cwiseAbs2());
@@ -623,11 +437,11 @@ bool Linearize(TaylorPartials partials, const Block& block, const Plan& plan, co
         }
       }
     }
-    if (plan.attitude_prior[i]) {
+    if (plan.image_attitude[i]) {
       Eigen::Vector3d F;
       for (int k = 0; k < 3; ++k)
         F[k] = WrapAngle(state.eo[i][3 + k] - (*block.images[i].measured_angles_rad)[k]);
-      const Eigen::Vector3d weight = plan.attitude_sigma[i].cwiseAbs2().cwiseInverse();
+      const Eigen::Vector3d weight = plan.image_attitude_sigma[i].cwiseAbs2().cwiseInverse();
       normal->U[b].bottomRightCorner<3, 3>().diagonal() += weight;
       normal->ge[b].tail<3>() += weight.cwiseProduct(F);
       normal->weighted_ssr += weight.dot(F.cwiseAbs2());
@@ -1296,7 +1110,8 @@ Status TaylorBundleAdjust(const TaylorBundleOptions& options, const BundleAdjust
   if (!prepared.ok()) return refuse(prepared);
   summary.datum = plan.datum;
   summary.datum_description = plan.datum_description;
-  summary.tie_points_left_out = plan.tie_points_left_out;
+  for (const int p : plan.tie_points_left_out)
+    summary.tie_points_left_out.push_back(block->points[p].id);
   summary.message.clear();
 
   State state;
@@ -1364,14 +1179,11 @@ Status TaylorBundleAdjust(const TaylorBundleOptions& options, const BundleAdjust
       ++rejected;
     }
     if (rejected == 0) break;
-    DropSingleRayTiePoints(*block, &plan);
-    int count = 0;
-    const int weak = ImageWithTooFewMarks(*block, plan, &count);
-    if (weak >= 0) {
+    const Status still = internal::RecheckBundlePlan(config, *block, &plan);
+    if (!still.ok()) {
       return finish(TaylorTerminationType::kFailure,
                     "after rejecting " + std::to_string(out.rejected_marks.size()) +
-                        " marks as blunders, image " + Quoted(block->images[weak].name) +
-                        " keeps " + std::to_string(count) + " marks: too few to orient it");
+                        " marks as blunders, " + still.message());
     }
   }
   summary.num_rejected_marks = static_cast<int>(out.rejected_marks.size());
