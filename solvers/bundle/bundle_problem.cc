@@ -394,21 +394,13 @@ ceres::LossFunction* MakeTieLoss(const BundleAdjustmentOptions& options) {
 
 }  // namespace
 
-void BuildBundleRound(const BundleAdjustmentOptions& options, const BundleAdjustmentConfig& config,
-                      const Block& block, const BundlePlan& plan, BundleState* state,
-                      BundleRound* round) {
-  round->problem.reset();
-  *round = BundleRound();
-  ceres::Problem::Options problem_options;
-  problem_options.manifold_ownership = ceres::DO_NOT_TAKE_OWNERSHIP;
-  problem_options.loss_function_ownership = ceres::DO_NOT_TAKE_OWNERSHIP;
-  problem_options.enable_fast_removal = false;
-  round->problem = std::make_unique<ceres::Problem>(problem_options);
-  ceres::Problem& problem = *round->problem;
-  round->tie_loss.reset(MakeTieLoss(options));
+namespace {
 
-  // Exterior orientations with their manifold (one shared; the relative gauge's second image
-  // gets one with a fixed coordinate).
+// Exterior orientations with their manifold (one shared; the relative gauge's second image gets
+// one with a fixed coordinate).
+void AddOrientationBlocks(const BundleAdjustmentConfig& config, const Block& block,
+                          const BundlePlan& plan, BundleState* state, BundleRound* round) {
+  ceres::Problem& problem = *round->problem;
   round->manifolds.emplace_back(new ExteriorOrientationManifold());
   ceres::Manifold* eo_manifold = round->manifolds.back().get();
   for (size_t i = 0; i < block.images.size(); ++i) {
@@ -432,7 +424,12 @@ void BuildBundleRound(const BundleAdjustmentOptions& options, const BundleAdjust
     }
     round->e_blocks.push_back(eo);
   }
-  // Camera parameters: constant except the calibrated ones.
+}
+
+// Camera parameters: constant except the calibrated ones; the lever arm when used.
+void AddCameraBlocks(const BundleAdjustmentOptions& options, const Block& block,
+                     const BundlePlan& plan, BundleState* state, BundleRound* round) {
+  ceres::Problem& problem = *round->problem;
   for (size_t c = 0; c < block.cameras.size(); ++c) {
     double* params = state->cameras[c].data();
     const int n = static_cast<int>(state->cameras[c].size());
@@ -463,7 +460,11 @@ void BuildBundleRound(const BundleAdjustmentOptions& options, const BundleAdjust
     }
   }
 
-  // Points.
+}
+
+void AddPointBlocks(const BundleAdjustmentConfig& config, const Block& block,
+                    const BundlePlan& plan, BundleState* state, BundleRound* round) {
+  ceres::Problem& problem = *round->problem;
   for (size_t p = 0; p < block.points.size(); ++p) {
     if (!plan.point_in_problem[p]) continue;
     double* point = state->points[p].data();
@@ -476,7 +477,13 @@ void BuildBundleRound(const BundleAdjustmentOptions& options, const BundleAdjust
     round->point_of_block.push_back(static_cast<int>(p));
   }
 
-  // Marks.
+}
+
+// The collinearity residual of every mark in use, weighted by its sigma; the tie loss on tie
+// marks.
+void AddMarkResiduals(const BundleAdjustmentOptions& options, const Block& block,
+                      const BundlePlan& plan, BundleState* state, BundleRound* round) {
+  ceres::Problem& problem = *round->problem;
   round->residuals.reserve(std::count(plan.mark_used.begin(), plan.mark_used.end(), 1) +
                            2 * block.points.size() + 2 * block.images.size());
   for (size_t m = 0; m < block.marks.size(); ++m) {
@@ -494,7 +501,13 @@ void BuildBundleRound(const BundleAdjustmentOptions& options, const BundleAdjust
                                  state->cameras[camera_index].data());
     round->residuals.push_back({plan.mark_group[m], static_cast<int>(m), 2, 0, id});
   }
-  // Control point priors, two rows at a time.
+}
+
+// Control-point priors (two rows at a time: XY, then Z), camera positions and attitudes.
+void AddPriorResiduals(const Block& block, const BundlePlan& plan, BundleState* state,
+                       BundleRound* round) {
+  ceres::Problem& problem = *round->problem;
+  double* lever = state->lever.data();
   for (size_t p = 0; p < block.points.size(); ++p) {
     if (!plan.point_in_problem[p] || !plan.point_prior[p]) continue;
     double* point = state->points[p].data();
@@ -532,6 +545,26 @@ void BuildBundleRound(const BundleAdjustmentOptions& options, const BundleAdjust
     }
   }
 
+}
+
+}  // namespace
+
+void BuildBundleRound(const BundleAdjustmentOptions& options, const BundleAdjustmentConfig& config,
+                      const Block& block, const BundlePlan& plan, BundleState* state,
+                      BundleRound* round) {
+  round->problem.reset();
+  *round = BundleRound();
+  ceres::Problem::Options problem_options;
+  problem_options.manifold_ownership = ceres::DO_NOT_TAKE_OWNERSHIP;
+  problem_options.loss_function_ownership = ceres::DO_NOT_TAKE_OWNERSHIP;
+  problem_options.enable_fast_removal = false;
+  round->problem = std::make_unique<ceres::Problem>(problem_options);
+  round->tie_loss.reset(MakeTieLoss(options));
+  AddOrientationBlocks(config, block, plan, state, round);
+  AddCameraBlocks(options, block, plan, state, round);
+  AddPointBlocks(config, block, plan, state, round);
+  AddMarkResiduals(options, block, plan, state, round);
+  AddPriorResiduals(block, plan, state, round);
   round->num_free_parameters = 3 * static_cast<int>(round->point_blocks.size());
   for (const int size : round->e_sizes) round->num_free_parameters += size;
   round->num_observations = 0;
