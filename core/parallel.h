@@ -1,6 +1,9 @@
 #pragma once
-// The one way photopose runs independent work items on several threads: resection of many images
-// (solvers/resection/resection.h) and the trials of the comparison tool use it.
+// The one way photopose runs independent work items on several threads, and the one reading of a
+// thread count (0: every core). Used by the resection of many images
+// (solvers/resection/resection.h), the control-point cross-validation of the bundle adjustment
+// (solvers/bundle/bundle_adjustment.h), the trials of the comparison tool, and, for the count
+// alone, the Ceres solver options of the bundle adjustment.
 
 #include <algorithm>
 #include <atomic>
@@ -10,13 +13,21 @@
 
 namespace photopose {
 
-// Calls fn(i) for every i in [0, count) on num_threads threads (0: all cores; never more threads
-// than items). Items are handed out in increasing order as threads become free, so fn must only
-// write to its own item's slots. Returns when every call has returned. fn must not throw.
+// The number of threads `num_threads` asks for: itself when positive, else every core the
+// machine reports (at least 1).
+inline int ResolveThreadCount(int num_threads) {
+  if (num_threads > 0) return num_threads;
+  return static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
+}
+
+// Calls fn(i) for every i in [0, count) on ResolveThreadCount(num_threads) threads, never more
+// threads than items (the calling thread is one of them). Items are handed out in increasing
+// order as threads become free, so fn must only write to its own item's slots. Returns when every
+// call has returned. fn must not throw.
 template <typename Fn>
 void ParallelFor(size_t count, int num_threads, const Fn& fn) {
-  if (num_threads <= 0) num_threads = static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
-  num_threads = static_cast<int>(std::min<size_t>(num_threads, std::max<size_t>(1, count)));
+  num_threads = static_cast<int>(
+      std::min<size_t>(ResolveThreadCount(num_threads), std::max<size_t>(1, count)));
   std::atomic<size_t> next{0};
   const auto worker = [&]() {
     for (size_t i = next++; i < count; i = next++) fn(i);

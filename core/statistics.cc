@@ -59,4 +59,17 @@ double ChiSquaredQuantile(double p, double dof) {
   return 0.5 * (low + high);
 }
 
+double NormalQuantile(double p) {
+  double lo = -40.0, hi = 40.0;
+  for (int i = 0; i < 200 && hi - lo > 1e-12; ++i) {
+    const double mid = 0.5 * (lo + hi);
+    if (0.5 * std::erfc(-mid / std::sqrt(2.0)) < p) {
+      lo = mid;
+    } else {
+      hi = mid;
+    }
+  }
+  return 0.5 * (lo + hi);
+}
+
 }  // namespace photopose

@@ -189,4 +189,14 @@ inline FixtureBlock MakeFixtureBlock(const FixtureBlockOptions& o) {
   return out;
 }
 
+// The block of `o` without mark noise or survey error, its true orientations in place of the
+// approximate ones: what an adjustment returns on perfect data.
+inline FixtureBlock MakeExactFixtureBlock(FixtureBlockOptions o = FixtureBlockOptions()) {
+  o.noise_px = 0.0;
+  o.control_noise_m = 0.0;
+  FixtureBlock data = MakeFixtureBlock(o);
+  for (size_t i = 0; i < data.block.images.size(); ++i) data.block.images[i].eo = data.true_eo[i];
+  return data;
+}
+
 }  // namespace photopose::testing

@@ -50,6 +50,10 @@ Status InitializeBlock(const BlockInitializationOptions& options, Block* block,
   std::vector<std::string> last_reason(num_images);
   TriangulationOptions triangulation;
   triangulation.min_intersection_angle_rad = options.min_intersection_angle_rad;
+  MarkSigmaDefaults mark_defaults;
+  mark_defaults.pixel_px = options.default_sigma_px;
+  mark_defaults.film_um = options.default_sigma_um;
+  mark_defaults.film_from_pixel_size = false;
   for (int round = 0; round < options.max_rounds; ++round) {
     bool changed = false;
     // Resect every image without orientation that sees enough known points.
@@ -83,8 +87,8 @@ Status InitializeBlock(const BlockInitializationOptions& options, Block* block,
     for (size_t p = 0; p < block->points.size(); ++p) {
       BlockPoint& point = block->points[p];
       if (point.role != PointRole::kTie || point.position_m) continue;
-      const std::vector<RayObservation> rays = PointRays(
-          *block, static_cast<int>(p), options.default_sigma_px, options.default_sigma_um);
+      const std::vector<RayObservation> rays =
+          PointRays(*block, static_cast<int>(p), mark_defaults);
       if (rays.size() < 2) continue;
       TriangulationResult result;
       if (!TriangulatePoint(triangulation, rays, &result).ok()) continue;

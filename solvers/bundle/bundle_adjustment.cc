@@ -1,19 +1,24 @@
+// BundleAdjust and CrossValidateControlPoints (bundle_adjustment.h): options and reports, the rounds
+// (solve, snooping or rejection, variance components) as named steps, the cross-validation. The
+// plan and the Ceres problem are in bundle_problem.cc, the statistics in bundle_statistics.cc. About
+// 800 lines because it also holds the public types' methods (IsValid, BriefReport, FullReport).
 #include "solvers/bundle/bundle_adjustment.h"
 
 #include <ceres/ceres.h>
 
 #include <Eigen/Dense>
 #include <algorithm>
-#include <atomic>
 #include <chrono>
 #include <cmath>
 #include <limits>
 #include <memory>
 #include <sstream>
-#include <thread>
 
+#include "core/parallel.h"
 #include "core/rotation.h"
+#include "core/statistics.h"
 #include "solvers/bundle/internal/bundle_problem.h"
+#include "solvers/bundle/internal/bundle_statistics.h"
 
 namespace photopose {
 namespace {
@@ -324,11 +329,30 @@ std::string BundleAdjustmentResult::FullReport(const Block& block) const {
   return os.str();
 }
 
-Status BundleAdjust(const BundleAdjustmentOptions& options, const BundleAdjustmentConfig& config,
-                    Block* block, BundleAdjustmentResult* result) {
-  const Clock::time_point start = Clock::now();
-  *result = BundleAdjustmentResult();
-  BundleAdjustmentSummary& summary = result->summary;
+namespace {
+
+// One adjustment across its rounds: what BundleAdjust's steps share.
+struct Adjustment {
+  Adjustment(const BundleAdjustmentOptions& options, const BundleAdjustmentConfig& config,
+             Block* block, BundleAdjustmentResult* result)
+      : options(options), config(config), block(block), result(result), start(Clock::now()) {}
+  const BundleAdjustmentOptions& options;
+  const BundleAdjustmentConfig& config;
+  Block* block;
+  BundleAdjustmentResult* result;
+  Clock::time_point start;
+  BundlePlan plan;
+  BundleState state;
+  BundleRound round;
+  internal::GroupVariance variance;
+  // Variance component estimation rescales each group's sigmas by group_scale.
+  double group_scale[internal::kNumBundleGroups] = {1.0, 1.0, 1.0, 1.0, 1.0};
+  bool group_estimable[internal::kNumBundleGroups] = {};
+  int rejections_done = 0;
+};
+
+Status CheckInputs(const BundleAdjustmentOptions& options, const BundleAdjustmentConfig& config,
+                   Block* block) {
   std::string why;
   if (!options.IsValid(&why)) return Status::Error("invalid options: " + why);
   PHOTOPOSE_RETURN_IF_ERROR(CheckBlock(*block));
@@ -339,254 +363,261 @@ Status BundleAdjust(const BundleAdjustmentOptions& options, const BundleAdjustme
   for (const int p : config.constant_points)
     if (p < 0 || p >= static_cast<int>(block->points.size()))
       return Status::Error("the config holds a non-existent point constant");
+  return Status::Ok();
+}
 
-  BundlePlan plan;
-  PHOTOPOSE_RETURN_IF_ERROR(internal::MakeBundlePlan(options, config, *block, &plan));
-  summary.datum = plan.datum;
-  summary.datum_description = plan.datum_description;
-  for (const int p : plan.tie_points_left_out)
-    summary.tie_points_left_out.push_back(block->points[p].id);
-
+// The values the adjustment starts from: the block's orientations, points (tie points from their
+// coordinates, control points from their survey) and cameras, and the given lever arm.
+BundleState StartState(const BundleAdjustmentOptions& options, const Block& block) {
   BundleState state;
-  for (const BlockImage& image : block->images) state.eo.push_back(image.eo->parameters);
-  for (const BlockPoint& point : block->points) {
+  for (const BlockImage& image : block.images) state.eo.push_back(image.eo->parameters);
+  for (const BlockPoint& point : block.points) {
     state.points.push_back(point.position_m ? *point.position_m
                            : point.surveyed_m ? *point.surveyed_m
                                               : Eigen::Vector3d::Zero());
   }
-  for (const BlockCamera& camera : block->cameras) state.cameras.push_back(camera.params);
+  for (const BlockCamera& camera : block.cameras) state.cameras.push_back(camera.params);
   if (options.lever_arm_m) state.lever = *options.lever_arm_m;
-  // Variance component estimation rescales each group's sigmas by group_scale.
-  double group_scale[internal::kNumBundleGroups] = {1.0, 1.0, 1.0, 1.0, 1.0};
-  bool group_estimable[internal::kNumBundleGroups] = {};
+  return state;
+}
 
-  // Rounds: adjust; then remove blunders (rejection rounds or data snooping, one at a time) or
-  // rescale the groups (variance component estimation) and adjust again, until neither changes.
-  const int rejection_rounds =
-      options.snoop || options.rejection_threshold <= 0.0 ? 0 : options.max_rejection_rounds;
-  const int max_rounds = 1 + rejection_rounds + (options.snoop ? options.max_snooping_removals : 0) +
-                         (options.estimate_accuracies ? options.max_variance_iterations : 0);
-  int rejections_done = 0;
-  BundleRound round;
-  internal::GroupVariance variance;
-  for (int r = 1;; ++r) {
-    ceres::Solver::Summary ceres_summary;
-    bool solved = false;       // the round's solve is done (the free-gauge solve converged)
-    int free_iterations = 0;   // iterations of the free-gauge solve
-    if (r == 1 && plan.datum == BundleDatum::kRelative && options.free_gauge_for_relative_blocks) {
-      // COLMAP's gauge holds the first image at its approximate pose, so that the whole block has
-      // to turn about it: at 1 deg and 750 m, 13 m at the far corner, along a direction the
-      // damped steps follow slowly (39 iterations instead of 6 on a 200-image block, 59 instead
-      // of 7 on 1000 images). Solved first with no gauge at all (Levenberg-Marquardt's damping
-      // keeps the 7 free directions still), then moved into COLMAP's gauge by a similarity. The
-      // cost is invariant and the gradient has no component along the similarity, so a
-      // converged free solve is the minimum in COLMAP's gauge too: no second solve, only the
-      // round's bookkeeping switched to the gauge (the statistics need it). A free solve that did
-      // not converge goes on in the gauge from where it stopped; one that cannot be moved (no
-      // positive scale) starts over in the gauge.
-      BundlePlan free_plan = plan;
-      free_plan.relative_fixed_image = -1;
-      free_plan.relative_scale_image = -1;
-      const BundleState start_state = state;
-      const Vector6d fixed_eo = state.eo[plan.relative_fixed_image];
-      const double fixed_coordinate = state.eo[plan.relative_scale_image][plan.relative_scale_axis];
-      const Clock::time_point build_start = Clock::now();
-      internal::BuildBundleRound(options, config, *block, free_plan, &state, &round);
-      summary.problem_build_seconds += SecondsSince(build_start);
-      ceres::Solver::Options free_options = internal::BundleSolverOptions(options, round);
-      std::unique_ptr<ProgressCallback> free_callback;
-      if (options.progress) {
-        free_callback = std::make_unique<ProgressCallback>(options, r, round.redundancy(), start);
-        free_callback->set_free_gauge(true);
-        free_options.callbacks.push_back(free_callback.get());
-      }
-      ceres::Solve(free_options, round.problem.get(), &ceres_summary);
-      AddSolverTimes(ceres_summary, &summary);
-      summary.initial_cost = ceres_summary.initial_cost;
-      free_iterations = static_cast<int>(ceres_summary.iterations.size()) - 1;
-      if (MoveToRelativeGauge(plan, fixed_eo, fixed_coordinate, &state)) {
-        internal::ApplyRelativeGauge(plan, &state, &round);
-        solved = ceres_summary.termination_type == ceres::CONVERGENCE;
-      } else {
-        // No similarity reaches COLMAP's gauge from there: solved in that gauge from the start.
-        state = start_state;
-        internal::BuildBundleRound(options, config, *block, plan, &state, &round);
-      }
+// Runs Ceres on the round's problem, with the progress callback when asked.
+void Solve(Adjustment* a, int r, bool free_gauge, ceres::Solver::Summary* ceres_summary) {
+  ceres::Solver::Options solver_options = internal::BundleSolverOptions(a->options, a->round);
+  std::unique_ptr<ProgressCallback> callback;
+  if (a->options.progress) {
+    callback = std::make_unique<ProgressCallback>(a->options, r, a->round.redundancy(), a->start);
+    callback->set_free_gauge(free_gauge);
+    solver_options.callbacks.push_back(callback.get());
+  }
+  ceres::Solve(solver_options, a->round.problem.get(), ceres_summary);
+  AddSolverTimes(*ceres_summary, &a->result->summary);
+}
+
+// The first round of a relative block, solved without a gauge first. COLMAP's gauge holds the
+// first image at its approximate pose, so that the whole block has to turn about it: at 1 deg and
+// 750 m, 13 m at the far corner, along a direction the damped steps follow slowly (39 iterations
+// instead of 6 on a 200-image block, 59 instead of 7 on 1000 images). Solved first with no gauge
+// at all (Levenberg-Marquardt's damping keeps the 7 free directions still), then moved into
+// COLMAP's gauge by a similarity. The cost is invariant and the gradient has no component along
+// the similarity, so a converged free solve is the minimum in COLMAP's gauge too: no second solve,
+// only the round's bookkeeping switched to the gauge (the statistics need it). A free solve that
+// did not converge goes on in the gauge from where it stopped; one that cannot be moved (no
+// positive scale) starts over in the gauge. Returns whether the round's solve is done.
+bool SolveInFreeGaugeFirst(Adjustment* a, int r, ceres::Solver::Summary* ceres_summary,
+                           int* free_iterations) {
+  BundleAdjustmentSummary& summary = a->result->summary;
+  BundlePlan free_plan = a->plan;
+  free_plan.relative_fixed_image = -1;
+  free_plan.relative_scale_image = -1;
+  const BundleState start_state = a->state;
+  const Vector6d fixed_eo = a->state.eo[a->plan.relative_fixed_image];
+  const double fixed_coordinate =
+      a->state.eo[a->plan.relative_scale_image][a->plan.relative_scale_axis];
+  const Clock::time_point build_start = Clock::now();
+  internal::BuildBundleRound(a->options, a->config, *a->block, free_plan, &a->state, &a->round);
+  summary.problem_build_seconds += SecondsSince(build_start);
+  Solve(a, r, /*free_gauge=*/true, ceres_summary);
+  summary.initial_cost = ceres_summary->initial_cost;
+  *free_iterations = static_cast<int>(ceres_summary->iterations.size()) - 1;
+  if (MoveToRelativeGauge(a->plan, fixed_eo, fixed_coordinate, &a->state)) {
+    internal::ApplyRelativeGauge(a->plan, &a->state, &a->round);
+    return ceres_summary->termination_type == ceres::CONVERGENCE;
+  }
+  // No similarity reaches COLMAP's gauge from there: solved in that gauge from the start.
+  a->state = start_state;
+  internal::BuildBundleRound(a->options, a->config, *a->block, a->plan, &a->state, &a->round);
+  return false;
+}
+
+// Builds and solves round r; the summary's iteration counts, costs and redundancy follow.
+void SolveRound(Adjustment* a, int r, ceres::Solver::Summary* ceres_summary) {
+  BundleAdjustmentSummary& summary = a->result->summary;
+  bool solved = false;      // the round's solve is done (the free-gauge solve converged)
+  int free_iterations = 0;  // iterations of the free-gauge solve
+  if (r == 1 && a->plan.datum == BundleDatum::kRelative &&
+      a->options.free_gauge_for_relative_blocks) {
+    solved = SolveInFreeGaugeFirst(a, r, ceres_summary, &free_iterations);
+  } else {
+    const Clock::time_point build_start = Clock::now();
+    internal::BuildBundleRound(a->options, a->config, *a->block, a->plan, &a->state, &a->round);
+    summary.problem_build_seconds += SecondsSince(build_start);
+  }
+  if (!solved) {
+    Solve(a, r, /*free_gauge=*/false, ceres_summary);
+    if (r == 1 && free_iterations == 0) summary.initial_cost = ceres_summary->initial_cost;
+    summary.iterations += static_cast<int>(ceres_summary->iterations.size()) - 1;
+  }
+  summary.iterations += free_iterations;
+  summary.rounds = r;
+  summary.final_cost = ceres_summary->final_cost;
+  summary.redundancy = a->round.redundancy();
+}
+
+// A round that did not converge ends the adjustment: the summary says so, with what the round
+// adjusted (the statistics, which count them otherwise, are not computed).
+void EndWithFailedRound(const Adjustment& a, int r, const ceres::Solver::Summary& ceres_summary) {
+  BundleAdjustmentSummary& summary = a.result->summary;
+  summary.termination = ceres_summary.termination_type == ceres::NO_CONVERGENCE
+                            ? BundleTermination::kNoConvergence
+                            : BundleTermination::kFailure;
+  summary.message = "round " + std::to_string(r) + ": " + ceres_summary.message;
+  summary.num_images = static_cast<int>(a.block->images.size());
+  summary.num_points = static_cast<int>(
+      std::count(a.plan.point_in_problem.begin(), a.plan.point_in_problem.end(), 1));
+  summary.num_marks =
+      static_cast<int>(std::count(a.plan.mark_used.begin(), a.plan.mark_used.end(), 1));
+  summary.time_seconds = SecondsSince(a.start);
+}
+
+// Data snooping: removes the observation with the largest rejected |w|, if the block still holds
+// without it. Returns whether one was removed.
+bool SnoopOne(Adjustment* a) {
+  BundleAdjustmentResult* result = a->result;
+  if (result->observations.empty() && !result->groups.empty())
+    result->summary.message = "data snooping needs the covariance; it was not computed";
+  const BundleObservationDiagnostics* worst = nullptr;
+  for (const BundleObservationDiagnostics& d : result->observations) {
+    if (!d.rejected) continue;
+    if (worst == nullptr || std::abs(d.normalized) > std::abs(worst->normalized)) worst = &d;
+  }
+  if (worst == nullptr ||
+      static_cast<int>(result->snooping.size()) >= a->options.max_snooping_removals)
+    return false;
+  BundlePlan trial = a->plan;
+  RemoveObservation(*worst, &trial);
+  const Status still = internal::RecheckBundlePlan(a->config, *a->block, &trial);
+  if (!still.ok()) {
+    result->summary.message = "data snooping stopped: removing " + worst->group + " #" +
+                              std::to_string(worst->item) + " would leave " + still.message();
+    return false;
+  }
+  result->snooping.push_back(
+      {worst->group, worst->item, worst->axis, std::abs(worst->normalized), worst->residual});
+  a->plan = std::move(trial);
+  return true;
+}
+
+// The rejection score of every mark: its normalized residual when known, else its whitened
+// residual, with the limit it is held against.
+std::vector<double> RejectionScores(const Adjustment& a, double* limit) {
+  const Block& block = *a.block;
+  std::vector<double> score(block.marks.size(), 0.0);
+  *limit = a.options.rejection_threshold;
+  if (!a.result->observations.empty()) {
+    for (const BundleObservationDiagnostics& d : a.result->observations) {
+      const int g = GroupIndex(d.group);
+      if (g != internal::kTieMarks && g != internal::kControlMarks) continue;
+      if (std::isfinite(d.normalized)) score[d.item] = std::max(score[d.item], std::abs(d.normalized));
+    }
+    return score;
+  }
+  *limit *= std::max(1.0, a.result->summary.sigma0);
+  for (size_t m = 0; m < block.marks.size(); ++m) {
+    if (!a.plan.mark_used[m] || !a.result->mark_residuals[m].allFinite()) continue;
+    score[m] = a.result->mark_residuals[m].norm() * block.marks[m].observation_units_per_unit /
+               a.plan.mark_sigma[m];
+  }
+  return score;
+}
+
+enum class Rejection { kNone, kRemoved, kFailed };
+
+// A rejection round: marks beyond the threshold (normalized residuals when known, whitened
+// residuals in units of max(1, sigma0) otherwise), one per point and round, its worst: a blunder
+// in one mark of a track pulls the point and raises its other marks' residuals too, and those
+// recover once it is gone. kFailed when the block no longer holds (the summary says why).
+Rejection RejectMarks(Adjustment* a, int r) {
+  const Block& block = *a->block;
+  double limit = 0.0;
+  const std::vector<double> score = RejectionScores(*a, &limit);
+  BundlePlan trial = a->plan;
+  std::vector<BundleRejectedMark> rejected;
+  std::vector<int> worst_of_point(block.points.size(), -1);
+  for (size_t m = 0; m < block.marks.size(); ++m) {
+    if (!trial.mark_used[m] || !(score[m] > limit)) continue;
+    int& worst = worst_of_point[block.marks[m].point];
+    if (worst < 0 || score[m] > score[worst]) worst = static_cast<int>(m);
+  }
+  for (size_t m = 0; m < block.marks.size(); ++m) {
+    if (worst_of_point[block.marks[m].point] != static_cast<int>(m)) continue;
+    trial.mark_used[m] = 0;
+    rejected.push_back({static_cast<int>(m), r, score[m]});
+  }
+  ++a->rejections_done;
+  if (rejected.empty()) return Rejection::kNone;
+  const Status still = internal::RecheckBundlePlan(a->config, block, &trial);
+  if (!still.ok()) {
+    BundleAdjustmentSummary& summary = a->result->summary;
+    summary.termination = BundleTermination::kFailure;
+    summary.message = "after rejecting " + std::to_string(rejected.size()) +
+                      " marks as blunders, " + still.message();
+    summary.time_seconds = SecondsSince(a->start);
+    return Rejection::kFailed;
+  }
+  a->result->rejected_marks.insert(a->result->rejected_marks.end(), rejected.begin(),
+                                   rejected.end());
+  a->plan = std::move(trial);
+  return Rejection::kRemoved;
+}
+
+// Variance components: each estimable group's factor; true (adjust again) when one is not 1
+// within the tolerance, after rescaling the groups; false when they settled (the reported
+// adjustment is then the one whose weights produced them) or cannot go on.
+bool RescaleGroups(Adjustment* a) {
+  const BundleAdjustmentOptions& options = a->options;
+  const internal::GroupVariance& variance = a->variance;
+  BundleAdjustmentResult* result = a->result;
+  if (!std::isfinite(variance.redundancy[0]) && variance.scalar_rows[0] > 0) {
+    result->summary.message = "accuracies not estimated: the covariance was not computed";
+    return false;
+  }
+  double factors[internal::kNumBundleGroups];
+  bool changed = false;
+  for (int g = 0; g < internal::kNumBundleGroups; ++g) {
+    a->group_estimable[g] = variance.scalar_rows[g] > 0 &&
+                            variance.redundancy[g] >= options.min_variance_redundancy;
+    factors[g] = a->group_estimable[g] ? variance.whitened_ssq[g] / variance.redundancy[g] : 1.0;
+    if (std::abs(factors[g] - 1.0) > options.variance_tolerance) changed = true;
+  }
+  ++result->variance_iterations;
+  if (!changed) return false;
+  if (result->variance_iterations >= options.max_variance_iterations) {
+    result->summary.message = "variance components did not settle in " +
+                              std::to_string(result->variance_iterations) + " iterations";
+    return false;
+  }
+  for (int g = 0; g < internal::kNumBundleGroups; ++g) {
+    if (!a->group_estimable[g]) continue;
+    a->group_scale[g] *= std::sqrt(factors[g]);
+    ScaleGroup(g, std::sqrt(factors[g]), &a->plan);
+  }
+  return true;
+}
+
+// Estimated accuracies per group: the sigmas in use are the estimates; the report's stated
+// accuracy stays what the user stated.
+void ReportEstimatedAccuracies(const Adjustment& a) {
+  for (BundleGroupStatistics& group : a.result->groups) {
+    const int g = GroupIndex(group.name);
+    const double r = a.variance.redundancy[g];
+    if (a.group_estimable[g]) {
+      group.estimated_accuracy = group.stated_accuracy;
+      group.estimated_accuracy_standard_error = 1.0 / std::sqrt(2.0 * r);
+      group.stated_accuracy /= a.group_scale[g];
+      group.ratio *= a.group_scale[g];
     } else {
-      const Clock::time_point build_start = Clock::now();
-      internal::BuildBundleRound(options, config, *block, plan, &state, &round);
-      summary.problem_build_seconds += SecondsSince(build_start);
-    }
-    const int redundancy = round.redundancy();
-    if (!solved) {
-      ceres::Solver::Options solver_options = internal::BundleSolverOptions(options, round);
-      std::unique_ptr<ProgressCallback> callback;
-      if (options.progress) {
-        callback = std::make_unique<ProgressCallback>(options, r, redundancy, start);
-        solver_options.callbacks.push_back(callback.get());
-      }
-      ceres::Solve(solver_options, round.problem.get(), &ceres_summary);
-      AddSolverTimes(ceres_summary, &summary);
-      if (r == 1 && free_iterations == 0) summary.initial_cost = ceres_summary.initial_cost;
-      summary.iterations += static_cast<int>(ceres_summary.iterations.size()) - 1;
-    }
-    summary.iterations += free_iterations;
-    summary.rounds = r;
-    summary.final_cost = ceres_summary.final_cost;
-    summary.redundancy = redundancy;
-    if (ceres_summary.termination_type != ceres::CONVERGENCE) {
-      summary.termination = ceres_summary.termination_type == ceres::NO_CONVERGENCE
-                                ? BundleTermination::kNoConvergence
-                                : BundleTermination::kFailure;
-      summary.message = "round " + std::to_string(r) + ": " + ceres_summary.message;
-      // What the round adjusted (the statistics, which count them otherwise, are not computed).
-      summary.num_images = static_cast<int>(block->images.size());
-      summary.num_points = static_cast<int>(
-          std::count(plan.point_in_problem.begin(), plan.point_in_problem.end(), 1));
-      summary.num_marks = static_cast<int>(
-          std::count(plan.mark_used.begin(), plan.mark_used.end(), 1));
-      summary.time_seconds = SecondsSince(start);
-      return Status::Ok();
-    }
-    summary.sigma0 = redundancy > 0 ? std::sqrt(2.0 * ceres_summary.final_cost / redundancy) : kNaN;
-    const Clock::time_point statistics_start = Clock::now();
-    internal::ComputeBundleStatistics(options, *block, plan, state, round, result, &variance);
-    summary.statistics_seconds += SecondsSince(statistics_start);
-    if (r >= max_rounds) break;
-
-    // 1. Blunders.
-    bool removed = false;
-    if (options.snoop) {
-      if (result->observations.empty() && !result->groups.empty()) {
-        summary.message = "data snooping needs the covariance; it was not computed";
-      }
-      const BundleObservationDiagnostics* worst = nullptr;
-      for (const BundleObservationDiagnostics& d : result->observations) {
-        if (!d.rejected) continue;
-        if (worst == nullptr || std::abs(d.normalized) > std::abs(worst->normalized)) worst = &d;
-      }
-      if (worst != nullptr &&
-          static_cast<int>(result->snooping.size()) < options.max_snooping_removals) {
-        BundlePlan trial = plan;
-        RemoveObservation(*worst, &trial);
-        const Status still = internal::RecheckBundlePlan(config, *block, &trial);
-        if (still.ok()) {
-          result->snooping.push_back(
-              {worst->group, worst->item, worst->axis, std::abs(worst->normalized), worst->residual});
-          plan = std::move(trial);
-          removed = true;
-        } else {
-          summary.message = "data snooping stopped: removing " + worst->group + " #" +
-                            std::to_string(worst->item) + " would leave " + still.message();
-        }
-      }
-    } else if (rejections_done < rejection_rounds) {
-      // Marks beyond the threshold: normalized residuals when known, whitened residuals in units
-      // of max(1, sigma0) otherwise.
-      std::vector<double> score(block->marks.size(), 0.0);
-      double limit = options.rejection_threshold;
-      if (!result->observations.empty()) {
-        for (const BundleObservationDiagnostics& d : result->observations) {
-          const int g = GroupIndex(d.group);
-          if (g != internal::kTieMarks && g != internal::kControlMarks) continue;
-          if (std::isfinite(d.normalized))
-            score[d.item] = std::max(score[d.item], std::abs(d.normalized));
-        }
-      } else {
-        limit *= std::max(1.0, summary.sigma0);
-        for (size_t m = 0; m < block->marks.size(); ++m) {
-          if (!plan.mark_used[m] || !result->mark_residuals[m].allFinite()) continue;
-          score[m] = result->mark_residuals[m].norm() * block->marks[m].observation_units_per_unit /
-                     plan.mark_sigma[m];
-        }
-      }
-      // One mark per point and round, its worst: a blunder in one mark of a track pulls the
-      // point and raises its other marks' residuals too, and those recover once it is gone.
-      BundlePlan trial = plan;
-      std::vector<BundleRejectedMark> rejected;
-      std::vector<int> worst_of_point(block->points.size(), -1);
-      for (size_t m = 0; m < block->marks.size(); ++m) {
-        if (!trial.mark_used[m] || !(score[m] > limit)) continue;
-        int& worst = worst_of_point[block->marks[m].point];
-        if (worst < 0 || score[m] > score[worst]) worst = static_cast<int>(m);
-      }
-      for (size_t m = 0; m < block->marks.size(); ++m) {
-        if (worst_of_point[block->marks[m].point] != static_cast<int>(m)) continue;
-        trial.mark_used[m] = 0;
-        rejected.push_back({static_cast<int>(m), r, score[m]});
-      }
-      ++rejections_done;
-      if (!rejected.empty()) {
-        const Status still = internal::RecheckBundlePlan(config, *block, &trial);
-        if (!still.ok()) {
-          summary.termination = BundleTermination::kFailure;
-          summary.message = "after rejecting " + std::to_string(rejected.size()) +
-                            " marks as blunders, " + still.message();
-          summary.time_seconds = SecondsSince(start);
-          return Status::Ok();
-        }
-        result->rejected_marks.insert(result->rejected_marks.end(), rejected.begin(), rejected.end());
-        plan = std::move(trial);
-        removed = true;
-      }
-    }
-    if (removed) continue;
-
-    // 2. Variance components.
-    if (options.estimate_accuracies) {
-      if (!std::isfinite(variance.redundancy[0]) && variance.scalar_rows[0] > 0) {
-        summary.message = "accuracies not estimated: the covariance was not computed";
-        break;
-      }
-      // Each estimable group's factor; stop when all are 1 within the tolerance (the reported
-      // adjustment is then the one whose weights produced them), else rescale and adjust again.
-      double factors[internal::kNumBundleGroups];
-      bool changed = false;
-      for (int g = 0; g < internal::kNumBundleGroups; ++g) {
-        group_estimable[g] = variance.scalar_rows[g] > 0 &&
-                             variance.redundancy[g] >= options.min_variance_redundancy;
-        factors[g] = group_estimable[g] ? variance.whitened_ssq[g] / variance.redundancy[g] : 1.0;
-        if (std::abs(factors[g] - 1.0) > options.variance_tolerance) changed = true;
-      }
-      ++result->variance_iterations;
-      if (!changed) break;
-      if (result->variance_iterations >= options.max_variance_iterations) {
-        summary.message = "variance components did not settle in " +
-                          std::to_string(result->variance_iterations) + " iterations";
-        break;
-      }
-      for (int g = 0; g < internal::kNumBundleGroups; ++g) {
-        if (!group_estimable[g]) continue;
-        group_scale[g] *= std::sqrt(factors[g]);
-        ScaleGroup(g, std::sqrt(factors[g]), &plan);
-      }
-      continue;
-    }
-    break;
-  }
-  summary.termination = BundleTermination::kConverged;
-  summary.num_rejected_marks = static_cast<int>(result->rejected_marks.size());
-
-  // Estimated accuracies per group.
-  if (options.estimate_accuracies) {
-    for (BundleGroupStatistics& group : result->groups) {
-      const int g = GroupIndex(group.name);
-      const double r = variance.redundancy[g];
-      if (group_estimable[g]) {
-        group.estimated_accuracy = group.stated_accuracy;  // the sigmas in use are the estimates
-        group.estimated_accuracy_standard_error = 1.0 / std::sqrt(2.0 * r);
-        // The report's stated accuracy stays what the user stated.
-        group.stated_accuracy /= group_scale[g];
-        group.ratio *= group_scale[g];
-      } else {
-        std::ostringstream message;
-        message << "not estimated: the rest of the block checks it too little (redundancy "
-                << FormatNumber3(r) << " < " << FormatNumber3(options.min_variance_redundancy) << ")";
-        group.estimation_message = message.str();
-      }
+      std::ostringstream message;
+      message << "not estimated: the rest of the block checks it too little (redundancy "
+              << FormatNumber3(r) << " < " << FormatNumber3(a.options.min_variance_redundancy)
+              << ")";
+      group.estimation_message = message.str();
     }
   }
-  // Write back.
+}
+
+// The adjusted orientations, points and cameras, written into the block.
+void WriteBack(const BundlePlan& plan, const BundleState& state, Block* block) {
   for (size_t i = 0; i < block->images.size(); ++i) {
     ExteriorOrientation eo;
     eo.parameters = state.eo[i];
@@ -595,30 +626,82 @@ Status BundleAdjust(const BundleAdjustmentOptions& options, const BundleAdjustme
   for (size_t p = 0; p < block->points.size(); ++p)
     if (plan.point_in_problem[p]) block->points[p].position_m = state.points[p];
   for (size_t c = 0; c < block->cameras.size(); ++c) block->cameras[c].params = state.cameras[c];
-  summary.time_seconds = SecondsSince(start);
+}
+
+}  // namespace
+
+Status BundleAdjust(const BundleAdjustmentOptions& options, const BundleAdjustmentConfig& config,
+                    Block* block, BundleAdjustmentResult* result) {
+  Adjustment a(options, config, block, result);
+  *result = BundleAdjustmentResult();
+  BundleAdjustmentSummary& summary = result->summary;
+  PHOTOPOSE_RETURN_IF_ERROR(CheckInputs(options, config, block));
+  PHOTOPOSE_RETURN_IF_ERROR(
+      internal::MakeBundlePlan(internal::PlanOptionsOf(options), config, *block, &a.plan));
+  summary.datum = a.plan.datum;
+  summary.datum_description = a.plan.datum_description;
+  for (const int p : a.plan.tie_points_left_out)
+    summary.tie_points_left_out.push_back(block->points[p].id);
+  a.state = StartState(options, *block);
+
+  // Rounds: adjust; then remove blunders (rejection rounds or data snooping, one at a time) or
+  // rescale the groups (variance component estimation) and adjust again, until neither changes.
+  const int rejection_rounds =
+      options.snoop || options.rejection_threshold <= 0.0 ? 0 : options.max_rejection_rounds;
+  const int max_rounds = 1 + rejection_rounds + (options.snoop ? options.max_snooping_removals : 0) +
+                         (options.estimate_accuracies ? options.max_variance_iterations : 0);
+  for (int r = 1;; ++r) {
+    ceres::Solver::Summary ceres_summary;
+    SolveRound(&a, r, &ceres_summary);
+    if (ceres_summary.termination_type != ceres::CONVERGENCE) {
+      EndWithFailedRound(a, r, ceres_summary);
+      return Status::Ok();
+    }
+    summary.sigma0 = summary.redundancy > 0
+                         ? std::sqrt(2.0 * ceres_summary.final_cost / summary.redundancy)
+                         : kNaN;
+    const Clock::time_point statistics_start = Clock::now();
+    internal::ComputeBundleStatistics(options, *block, a.plan, a.state, a.round, result,
+                                      &a.variance);
+    summary.statistics_seconds += SecondsSince(statistics_start);
+    if (r >= max_rounds) break;
+    // 1. Blunders.
+    if (options.snoop) {
+      if (SnoopOne(&a)) continue;
+    } else if (a.rejections_done < rejection_rounds) {
+      const Rejection rejection = RejectMarks(&a, r);
+      if (rejection == Rejection::kFailed) return Status::Ok();
+      if (rejection == Rejection::kRemoved) continue;
+    }
+    // 2. Variance components.
+    if (options.estimate_accuracies && RescaleGroups(&a)) continue;
+    break;
+  }
+  summary.termination = BundleTermination::kConverged;
+  summary.num_rejected_marks = static_cast<int>(result->rejected_marks.size());
+  if (options.estimate_accuracies) ReportEstimatedAccuracies(a);
+  WriteBack(a.plan, a.state, block);
+  summary.time_seconds = SecondsSince(a.start);
   return Status::Ok();
 }
 
-Status CrossValidateControlPoints(const BundleAdjustmentOptions& options,
-                                  const BundleAdjustmentConfig& config, const Block& adjusted,
-                                  const BundleAdjustmentResult& full, int num_threads,
-                                  BundleCrossValidationResult* result) {
-  const Clock::time_point start = Clock::now();
-  *result = BundleCrossValidationResult();
-  std::string why;
-  if (!options.IsValid(&why)) return Status::Error("invalid options: " + why);
-  // The marks the full adjustment rejected stay out, except those of the point left out: its
-  // marks are what checks it (a wrong control coordinate makes the full adjustment reject them).
-  std::vector<char> rejected(adjusted.marks.size(), 0);
+namespace {
+
+// The block every left-out adjustment of the cross-validation starts from: what the full
+// adjustment removed stays out. The marks it rejected (in *rejected) except those of the point left
+// out, whose marks are what checks it (a wrong control coordinate makes the full adjustment reject
+// them); a control point whose coordinates were rejected is a tie point here, a rejected camera
+// position or attitude no prior.
+Block CrossValidationBase(const Block& adjusted, const BundleAdjustmentResult& full,
+                          std::vector<char>* rejected) {
+  rejected->assign(adjusted.marks.size(), 0);
   for (const BundleRejectedMark& r : full.rejected_marks)
-    if (r.mark >= 0 && r.mark < static_cast<int>(rejected.size())) rejected[r.mark] = 1;
+    if (r.mark >= 0 && r.mark < static_cast<int>(rejected->size())) (*rejected)[r.mark] = 1;
   for (const BundleSnoopingStep& s : full.snooping)
     if ((s.group == "tie_marks" || s.group == "control_marks") && s.item >= 0 &&
-        s.item < static_cast<int>(rejected.size()))
-      rejected[s.item] = 1;
+        s.item < static_cast<int>(rejected->size()))
+      (*rejected)[s.item] = 1;
   Block base = adjusted;
-  // The priors snooping removed stay out too: a control point whose coordinates were rejected is
-  // a tie point here, a rejected camera position or attitude no prior.
   for (const BundleSnoopingStep& s : full.snooping) {
     if (s.item < 0) continue;
     if (s.group == "control_points" && s.item < static_cast<int>(base.points.size())) {
@@ -631,24 +714,71 @@ Status CrossValidateControlPoints(const BundleAdjustmentOptions& options,
     }
   }
   base.BuildIndex();
+  return base;
+}
+
+// Control point p left out (a check point) of an adjustment of `base`: its error against the
+// survey and that error normalized by its covariance plus the survey's.
+BundleCrossValidationPoint LeaveOneOut(const BundleAdjustmentOptions& one,
+                                       const BundleAdjustmentConfig& config, const Block& base,
+                                       const std::vector<char>& rejected, const Block& adjusted,
+                                       double marker_m, double threshold, int p) {
+  BundleCrossValidationPoint out;
+  out.point = p;
+  Block block = base;
+  std::vector<BlockMark> kept;
+  for (size_t m = 0; m < base.marks.size(); ++m)
+    if (!rejected[m] || base.marks[m].point == p) kept.push_back(base.marks[m]);
+  block.marks = std::move(kept);
+  block.BuildIndex();
+  block.points[p].role = PointRole::kCheck;
+  block.points[p].position_m.reset();
+  BundleAdjustmentResult left_out;
+  const Status status = BundleAdjust(one, config, &block, &left_out);
+  if (!status.ok()) {
+    out.message = status.message();
+    return out;
+  }
+  if (!left_out.summary.IsSolutionUsable()) {
+    out.message = left_out.summary.message;
+    return out;
+  }
+  const BundlePointResult& point = left_out.points[p];
+  if (!point.error_m) {
+    out.message = point.message;
+    return out;
+  }
+  out.ok = true;
+  out.error_m = *point.error_m;
+  out.num_images = point.num_observations;
+  Eigen::Matrix3d C = point.covariance;
+  const Eigen::Vector3d surveyed_sigma =
+      adjusted.points[p].accuracy_m.value_or(Eigen::Vector3d::Constant(marker_m));
+  C += surveyed_sigma.cwiseAbs2().asDiagonal();
+  out.normalized = out.error_m.dot(C.ldlt().solve(out.error_m));
+  out.stands_out = out.normalized > threshold;
+  return out;
+}
+
+}  // namespace
+
+Status CrossValidateControlPoints(const BundleAdjustmentOptions& options,
+                                  const BundleAdjustmentConfig& config, const Block& adjusted,
+                                  const BundleAdjustmentResult& full, int num_threads,
+                                  BundleCrossValidationResult* result) {
+  const Clock::time_point start = Clock::now();
+  *result = BundleCrossValidationResult();
+  std::string why;
+  if (!options.IsValid(&why)) return Status::Error("invalid options: " + why);
+  std::vector<char> rejected;
+  const Block base = CrossValidationBase(adjusted, full, &rejected);
   std::vector<int> controls;
   for (size_t p = 0; p < base.points.size(); ++p)
     if (base.points[p].role == PointRole::kControl && !base.marks_of_point[p].empty())
       controls.push_back(static_cast<int>(p));
   result->points.assign(controls.size(), BundleCrossValidationPoint());
-  // chi-square(3) quantile at 1 - alpha: 3 dof, by bisection on the closed-form CDF.
-  {
-    const double p = 1.0 - options.snooping_alpha;
-    auto cdf = [](double x) {
-      return std::erf(std::sqrt(x / 2.0)) - std::sqrt(2.0 * x / kPi) * std::exp(-x / 2.0);
-    };
-    double lo = 0.0, hi = 200.0;
-    for (int i = 0; i < 200; ++i) {
-      const double mid = 0.5 * (lo + hi);
-      (cdf(mid) < p ? lo : hi) = mid;
-    }
-    result->threshold = 0.5 * (lo + hi);
-  }
+  // The normalized error of a point is chi-square with 3 degrees of freedom.
+  result->threshold = ChiSquaredQuantile(1.0 - options.snooping_alpha, 3.0);
 
   // One adjustment per left-out point, single-threaded (the points run in parallel), without
   // blunder removal (the full adjustment's removals are applied above) or diagnostics.
@@ -659,52 +789,10 @@ Status CrossValidateControlPoints(const BundleAdjustmentOptions& options,
   one.estimate_accuracies = false;
   one.rejection_threshold = 0.0;
   one.observation_diagnostics = false;
-  std::atomic<size_t> next{0};
-  auto worker = [&]() {
-    for (size_t k = next++; k < controls.size(); k = next++) {
-      const int p = controls[k];
-      BundleCrossValidationPoint& out = result->points[k];
-      out.point = p;
-      Block block = base;
-      std::vector<BlockMark> kept;
-      for (size_t m = 0; m < base.marks.size(); ++m)
-        if (!rejected[m] || base.marks[m].point == p) kept.push_back(base.marks[m]);
-      block.marks = std::move(kept);
-      block.BuildIndex();
-      block.points[p].role = PointRole::kCheck;
-      block.points[p].position_m.reset();
-      BundleAdjustmentResult left_out;
-      const Status status = BundleAdjust(one, config, &block, &left_out);
-      if (!status.ok()) {
-        out.message = status.message();
-        continue;
-      }
-      if (!left_out.summary.IsSolutionUsable()) {
-        out.message = left_out.summary.message;
-        continue;
-      }
-      const BundlePointResult& point = left_out.points[p];
-      if (!point.error_m) {
-        out.message = point.message;
-        continue;
-      }
-      out.ok = true;
-      out.error_m = *point.error_m;
-      out.num_images = point.num_observations;
-      Eigen::Matrix3d C = point.covariance;
-      const Eigen::Vector3d surveyed_sigma =
-          adjusted.points[p].accuracy_m.value_or(Eigen::Vector3d::Constant(options.accuracies.marker_m));
-      C += surveyed_sigma.cwiseAbs2().asDiagonal();
-      out.normalized = out.error_m.dot(C.ldlt().solve(out.error_m));
-      out.stands_out = out.normalized > result->threshold;
-    }
-  };
-  if (num_threads <= 0) num_threads = static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
-  num_threads = std::min<int>(num_threads, std::max<size_t>(1, controls.size()));
-  std::vector<std::thread> threads;
-  for (int t = 1; t < num_threads; ++t) threads.emplace_back(worker);
-  worker();
-  for (std::thread& thread : threads) thread.join();
+  ParallelFor(controls.size(), num_threads, [&](size_t k) {
+    result->points[k] = LeaveOneOut(one, config, base, rejected, adjusted,
+                                    options.accuracies.marker_m, result->threshold, controls[k]);
+  });
 
   Eigen::Vector3d ssq = Eigen::Vector3d::Zero();
   for (const BundleCrossValidationPoint& point : result->points) {

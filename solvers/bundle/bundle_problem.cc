@@ -6,12 +6,10 @@
 #include <map>
 #include <numeric>
 #include <sstream>
-#include <thread>
 
+#include "core/parallel.h"
 #include "cost_functions/exterior_orientation_manifold.h"
 #include "cost_functions/priors.h"
-#include "solvers/bundle/check_points.h"
-#include "solvers/bundle/triangulation.h"
 
 namespace photopose::internal {
 
@@ -59,8 +57,54 @@ void AddDatumRows(const Eigen::Vector3d& p, const Eigen::Vector3d& centroid, dou
   rows->push_back(J);
 }
 
+// COLMAP's gauge for a relative block (no control points, camera positions or attitudes): the
+// first image fixed; of the second, the centre coordinate farthest from the first image's fixes
+// the scale.
+Status PlanRelativeGauge(const Block& block, BundlePlan* plan) {
+  plan->datum = BundleDatum::kRelative;
+  if (block.images.size() < 2) return Status::Error("a relative block needs two images");
+  plan->relative_fixed_image = 0;
+  plan->relative_scale_image = 1;
+  const Eigen::Vector3d baseline =
+      block.images[1].eo->center_in_ground() - block.images[0].eo->center_in_ground();
+  baseline.cwiseAbs().maxCoeff(&plan->relative_scale_axis);
+  if (!(baseline.norm() > 0.0))
+    return Status::Error("a relative block needs its first two images at different positions");
+  const char* axes = "XYZ";
+  plan->datum_description =
+      "relative: no control points and no camera positions; image '" + block.images[0].name +
+      "' held fixed and the " + std::string(1, axes[plan->relative_scale_axis]) +
+      " coordinate of image '" + block.images[1].name +
+      "' fixes the scale (COLMAP's convention); coordinates are in the frame of the input";
+  return Status::Ok();
+}
+
+// The singular values of the scaled datum Jacobian of the fixed positions and, when
+// fixed_rotation, an attitude: how well they fix the seven similarity parameters.
+Eigen::VectorXd DatumSingularValues(const std::vector<Eigen::Vector3d>& fixed_positions,
+                                    bool fixed_rotation) {
+  Eigen::Vector3d centroid = Eigen::Vector3d::Zero();
+  for (const auto& p : fixed_positions) centroid += p;
+  if (!fixed_positions.empty()) centroid /= static_cast<double>(fixed_positions.size());
+  double extent = 0.0;
+  for (const auto& p : fixed_positions) extent += (p - centroid).squaredNorm();
+  extent = fixed_positions.empty() ? 1.0 : std::sqrt(extent / fixed_positions.size());
+  if (!(extent > 0.0)) extent = 1.0;
+  std::vector<Eigen::Matrix<double, 3, 7>> rows;
+  for (const auto& p : fixed_positions) AddDatumRows(p, centroid, extent, &rows);
+  if (fixed_rotation) {
+    Eigen::Matrix<double, 3, 7> J = Eigen::Matrix<double, 3, 7>::Zero();
+    J.block<3, 3>(0, 3).setIdentity();
+    rows.push_back(J);
+  }
+  Eigen::MatrixXd D(3 * rows.size(), 7);
+  for (size_t k = 0; k < rows.size(); ++k) D.block<3, 7>(3 * k, 0) = rows[k];
+  return Eigen::JacobiSVD<Eigen::MatrixXd>(D).singularValues();
+}
+
 // The datum: what fixes the seven similarity parameters of the block (control points, camera
-// positions, attitudes, held images and points), or COLMAP's gauge for a relative block.
+// positions, attitudes, held images and points), or COLMAP's gauge for a relative block. A weak
+// datum is refused with the reason when plan->refuse_weak_datum, else left to the round.
 Status CheckDatum(const BundleAdjustmentConfig& config, const Block& block, BundlePlan* plan) {
   std::vector<Eigen::Vector3d> fixed_positions;
   int num_control = 0, num_cameras = 0, num_attitudes = 0;
@@ -85,47 +129,19 @@ Status CheckDatum(const BundleAdjustmentConfig& config, const Block& block, Bund
       ++num_attitudes;
     }
   }
-  if (fixed_positions.empty() && !fixed_rotation) {
-    // A relative block: COLMAP's gauge. The first image fixed; of the second, the centre
-    // coordinate farthest from the first image's fixes the scale.
-    plan->datum = BundleDatum::kRelative;
-    if (block.images.size() < 2) return Status::Error("a relative block needs two images");
-    plan->relative_fixed_image = 0;
-    plan->relative_scale_image = 1;
-    const Eigen::Vector3d baseline =
-        block.images[1].eo->center_in_ground() - block.images[0].eo->center_in_ground();
-    baseline.cwiseAbs().maxCoeff(&plan->relative_scale_axis);
-    if (!(baseline.norm() > 0.0))
-      return Status::Error("a relative block needs its first two images at different positions");
-    const char* axes = "XYZ";
-    plan->datum_description =
-        "relative: no control points and no camera positions; image '" + block.images[0].name +
-        "' held fixed and the " + std::string(1, axes[plan->relative_scale_axis]) +
-        " coordinate of image '" + block.images[1].name +
-        "' fixes the scale (COLMAP's convention); coordinates are in the frame of the input";
-    return Status::Ok();
-  }
-  Eigen::Vector3d centroid = Eigen::Vector3d::Zero();
-  for (const auto& p : fixed_positions) centroid += p;
-  if (!fixed_positions.empty()) centroid /= static_cast<double>(fixed_positions.size());
-  double extent = 0.0;
-  for (const auto& p : fixed_positions) extent += (p - centroid).squaredNorm();
-  extent = fixed_positions.empty() ? 1.0 : std::sqrt(extent / fixed_positions.size());
-  if (!(extent > 0.0)) extent = 1.0;
-  std::vector<Eigen::Matrix<double, 3, 7>> rows;
-  for (const auto& p : fixed_positions) AddDatumRows(p, centroid, extent, &rows);
-  if (fixed_rotation) {
-    Eigen::Matrix<double, 3, 7> J = Eigen::Matrix<double, 3, 7>::Zero();
-    J.block<3, 3>(0, 3).setIdentity();
-    rows.push_back(J);
-  }
-  Eigen::MatrixXd D(3 * rows.size(), 7);
-  for (size_t k = 0; k < rows.size(); ++k) D.block<3, 7>(3 * k, 0) = rows[k];
-  const Eigen::VectorXd s = Eigen::JacobiSVD<Eigen::MatrixXd>(D).singularValues();
+  if (fixed_positions.empty() && !fixed_rotation) return PlanRelativeGauge(block, plan);
   std::ostringstream what;
   what << num_control << " control point" << (num_control == 1 ? "" : "s") << ", " << num_cameras
        << " camera position" << (num_cameras == 1 ? "" : "s");
   if (num_attitudes > 0) what << ", " << num_attitudes << " attitude" << (num_attitudes == 1 ? "" : "s");
+  plan->datum = BundleDatum::kControl;
+  if (!plan->refuse_weak_datum) {
+    plan->datum_description = "absolute: " + what.str() +
+                              " weighted as stated (a datum defect shows as a singular reduced "
+                              "normal matrix)";
+    return Status::Ok();
+  }
+  const Eigen::VectorXd s = DatumSingularValues(fixed_positions, fixed_rotation);
   if (s.size() < 7 || !(s[6] > kDatumConditioning * s[0])) {
     int rank = 0;
     for (int k = 0; k < s.size(); ++k) rank += s[k] > kDatumConditioning * s[0];
@@ -139,25 +155,16 @@ Status CheckDatum(const BundleAdjustmentConfig& config, const Block& block, Bund
                          " of the 7 similarity parameters of the block (" + why +
                          "); add control points off that line or camera positions");
   }
-  plan->datum = BundleDatum::kControl;
   plan->datum_description = "absolute: " + what.str() + " weighted as stated";
   return Status::Ok();
 }
 
 }  // namespace
 
-Status MakeBundlePlan(const BundleAdjustmentOptions& options, const BundleAdjustmentConfig& config,
-                const Block& block, BundlePlan* plan) {
-  const BundleAccuracies& acc = options.accuracies;
-  const size_t num_marks = block.marks.size();
-  plan->mark_used.assign(num_marks, 0);
-  plan->mark_sigma.assign(num_marks, 1.0);
-  plan->mark_group.assign(num_marks, kTieMarks);
-  plan->point_in_problem.assign(block.points.size(), 0);
-  plan->point_prior.assign(block.points.size(), 0);
-  plan->point_sigma.assign(block.points.size(), Eigen::Vector3d::Constant(acc.marker_m));
+namespace {
 
-  // Calibration config.
+// Which parameters of each camera are estimated (self-calibration), from the config.
+Status PlanCalibration(const BundleAdjustmentConfig& config, const Block& block, BundlePlan* plan) {
   plan->calibrated.assign(block.cameras.size(), {});
   if (config.calibrated_params.size() > block.cameras.size())
     return Status::Error("the calibration config names more cameras than the block has");
@@ -172,8 +179,12 @@ Status MakeBundlePlan(const BundleAdjustmentOptions& options, const BundleAdjust
                              "': parameter index " + std::to_string(index) + " out of range");
     plan->calibrated[c] = indices;
   }
+  return Status::Ok();
+}
 
-  // Marks in the adjustment: of control and tie points, of images with an orientation.
+// Marks in the adjustment: of control and tie points (check points stay out), each with its
+// group's sigma (core/mark_weight.h). Every image needs an initial orientation.
+Status PlanMarks(const BundleAccuracies& accuracies, const Block& block, BundlePlan* plan) {
   std::vector<std::string> missing_eo;
   for (size_t i = 0; i < block.images.size(); ++i)
     if (!block.images[i].eo) missing_eo.push_back(block.images[i].name);
@@ -181,20 +192,24 @@ Status MakeBundlePlan(const BundleAdjustmentOptions& options, const BundleAdjust
     return Status::Error("images without initial exterior orientation: " + Names(missing_eo) +
                          " (give a frames table or let the initialisation orient them)");
   }
-  for (size_t m = 0; m < num_marks; ++m) {
+  const MarkSigmaDefaults tie = GroupMarkDefaults(accuracies, kTieMarks);
+  const MarkSigmaDefaults control = GroupMarkDefaults(accuracies, kControlMarks);
+  for (size_t m = 0; m < block.marks.size(); ++m) {
     const BlockMark& mark = block.marks[m];
-    const BlockPoint& point = block.points[mark.point];
-    if (point.role == PointRole::kCheck) continue;
+    const PointRole role = block.points[mark.point].role;
+    if (role == PointRole::kCheck) continue;
     const BlockCamera& camera = block.cameras[block.images[mark.image].camera];
-    const bool control = point.role == PointRole::kControl;
-    const double px = control ? acc.marker_projection_px : acc.tie_px;
-    const double film = DefaultFilmMarkSigmaUm(camera, px,
-                                      control ? acc.marker_projection_film_um : acc.tie_film_um);
-    plan->mark_sigma[m] = MarkSigma(mark, px, film);
-    plan->mark_group[m] = control ? kControlMarks : kTieMarks;
+    const bool is_control = role == PointRole::kControl;
+    plan->mark_sigma[m] = MarkSigma(mark, camera, is_control ? control : tie);
+    plan->mark_group[m] = is_control ? kControlMarks : kTieMarks;
     plan->mark_used[m] = 1;
   }
-  // Tie points need a start and two rays; a tie point with one ray adds nothing.
+  return Status::Ok();
+}
+
+// Points in the adjustment: tie points need a start and two rays (a tie point with one ray adds
+// nothing); control points seen at least once, with their prior unless held constant.
+void PlanPoints(const BundleAdjustmentConfig& config, const Block& block, BundlePlan* plan) {
   for (size_t p = 0; p < block.points.size(); ++p) {
     const BlockPoint& point = block.points[p];
     if (point.role == PointRole::kCheck) continue;
@@ -217,9 +232,12 @@ Status MakeBundlePlan(const BundleAdjustmentOptions& options, const BundleAdjust
       plan->point_prior[p] = 1;
     if (point.role == PointRole::kControl && point.accuracy_m) plan->point_sigma[p] = *point.accuracy_m;
   }
+}
+
+Status CheckMarksPerImage(const Block& block, const BundlePlan& plan) {
   for (size_t i = 0; i < block.images.size(); ++i) {
     int count = 0;
-    for (const int m : block.marks_of_image[i]) count += plan->mark_used[m];
+    for (const int m : block.marks_of_image[i]) count += plan.mark_used[m];
     if (count < kMinMarksPerImage) {
       return Status::Error("image '" + block.images[i].name + "' has " + std::to_string(count) +
                            " usable marks; an image needs at least " +
@@ -227,8 +245,12 @@ Status MakeBundlePlan(const BundleAdjustmentOptions& options, const BundleAdjust
                            " (marks of control points and of tie points seen in two images)");
     }
   }
+  return Status::Ok();
+}
 
-  // Priors of the images.
+// Camera-position and attitude priors of the images that are adjusted.
+void PlanImagePriors(const BundleAccuracies& acc, const BundleAdjustmentConfig& config,
+                     const Block& block, BundlePlan* plan) {
   plan->image_prior.assign(block.images.size(), 0);
   plan->image_prior_sigma.assign(block.images.size(), acc.camera_m);
   plan->image_attitude.assign(block.images.size(), 0);
@@ -248,16 +270,17 @@ Status MakeBundlePlan(const BundleAdjustmentOptions& options, const BundleAdjust
               : Eigen::Vector3d::Constant(DegreesToRadians(*acc.attitude_deg));
     }
   }
-  plan->use_lever = options.lever_arm_m.has_value() || options.estimate_lever_arm;
+}
 
-  // Connectivity: images joined by the points they share.
+// Connectivity: images joined by the points they share; an error names the parts.
+Status CheckConnected(const Block& block, const BundlePlan& plan) {
   std::vector<int> parent(block.images.size());
   std::iota(parent.begin(), parent.end(), 0);
   for (size_t p = 0; p < block.points.size(); ++p) {
-    if (!plan->point_in_problem[p]) continue;
+    if (!plan.point_in_problem[p]) continue;
     int first = -1;
     for (const int m : block.marks_of_point[p]) {
-      if (!plan->mark_used[m]) continue;
+      if (!plan.mark_used[m]) continue;
       const int image = block.marks[m].image;
       if (first < 0) {
         first = image;
@@ -269,21 +292,59 @@ Status MakeBundlePlan(const BundleAdjustmentOptions& options, const BundleAdjust
   std::map<int, std::vector<std::string>> components;
   for (size_t i = 0; i < block.images.size(); ++i)
     components[Root(&parent, static_cast<int>(i))].push_back(block.images[i].name);
-  if (components.size() > 1) {
-    std::string parts;
-    int k = 0;
-    for (const auto& [root, names] : components) {
-      if (k++ == 3) {
-        parts += "; ...";
-        break;
-      }
-      parts += (k > 1 ? "; " : "") + std::to_string(names.size()) + " image" +
-               (names.size() == 1 ? "" : "s") + " (" + Names(names, 3) + ")";
+  if (components.size() <= 1) return Status::Ok();
+  std::string parts;
+  int k = 0;
+  for (const auto& [root, names] : components) {
+    if (k++ == 3) {
+      parts += "; ...";
+      break;
     }
-    return Status::Error("the block falls apart into " + std::to_string(components.size()) +
-                         " parts that share no point: " + parts);
+    parts += (k > 1 ? "; " : "") + std::to_string(names.size()) + " image" +
+             (names.size() == 1 ? "" : "s") + " (" + Names(names, 3) + ")";
   }
+  return Status::Error("the block falls apart into " + std::to_string(components.size()) +
+                       " parts that share no point: " + parts);
+}
 
+}  // namespace
+
+MarkSigmaDefaults GroupMarkDefaults(const BundleAccuracies& accuracies, BundleGroup group) {
+  MarkSigmaDefaults defaults;
+  const bool control = group == kControlMarks;
+  defaults.pixel_px = control ? accuracies.marker_projection_px : accuracies.tie_px;
+  defaults.film_um = control ? accuracies.marker_projection_film_um : accuracies.tie_film_um;
+  defaults.film_from_pixel_size = true;
+  return defaults;
+}
+
+BundlePlanOptions PlanOptionsOf(const BundleAdjustmentOptions& options) {
+  BundlePlanOptions plan_options;
+  plan_options.accuracies = options.accuracies;
+  plan_options.use_lever = options.lever_arm_m.has_value() || options.estimate_lever_arm;
+  plan_options.refuse_weak_datum = true;
+  return plan_options;
+}
+
+Status MakeBundlePlan(const BundlePlanOptions& options, const BundleAdjustmentConfig& config,
+                      const Block& block, BundlePlan* plan) {
+  const BundleAccuracies& acc = options.accuracies;
+  *plan = BundlePlan();
+  const size_t num_marks = block.marks.size();
+  plan->mark_used.assign(num_marks, 0);
+  plan->mark_sigma.assign(num_marks, 1.0);
+  plan->mark_group.assign(num_marks, kTieMarks);
+  plan->point_in_problem.assign(block.points.size(), 0);
+  plan->point_prior.assign(block.points.size(), 0);
+  plan->point_sigma.assign(block.points.size(), Eigen::Vector3d::Constant(acc.marker_m));
+  plan->refuse_weak_datum = options.refuse_weak_datum;
+  plan->use_lever = options.use_lever;
+  PHOTOPOSE_RETURN_IF_ERROR(PlanCalibration(config, block, plan));
+  PHOTOPOSE_RETURN_IF_ERROR(PlanMarks(acc, block, plan));
+  PlanPoints(config, block, plan);
+  PHOTOPOSE_RETURN_IF_ERROR(CheckMarksPerImage(block, *plan));
+  PlanImagePriors(acc, config, block, plan);
+  PHOTOPOSE_RETURN_IF_ERROR(CheckConnected(block, *plan));
   return CheckDatum(config, block, plan);
 }
 
@@ -333,21 +394,13 @@ ceres::LossFunction* MakeTieLoss(const BundleAdjustmentOptions& options) {
 
 }  // namespace
 
-void BuildBundleRound(const BundleAdjustmentOptions& options, const BundleAdjustmentConfig& config,
-                      const Block& block, const BundlePlan& plan, BundleState* state,
-                      BundleRound* round) {
-  round->problem.reset();
-  *round = BundleRound();
-  ceres::Problem::Options problem_options;
-  problem_options.manifold_ownership = ceres::DO_NOT_TAKE_OWNERSHIP;
-  problem_options.loss_function_ownership = ceres::DO_NOT_TAKE_OWNERSHIP;
-  problem_options.enable_fast_removal = false;
-  round->problem = std::make_unique<ceres::Problem>(problem_options);
-  ceres::Problem& problem = *round->problem;
-  round->tie_loss.reset(MakeTieLoss(options));
+namespace {
 
-  // Exterior orientations with their manifold (one shared; the relative gauge's second image
-  // gets one with a fixed coordinate).
+// Exterior orientations with their manifold (one shared; the relative gauge's second image gets
+// one with a fixed coordinate).
+void AddOrientationBlocks(const BundleAdjustmentConfig& config, const Block& block,
+                          const BundlePlan& plan, BundleState* state, BundleRound* round) {
+  ceres::Problem& problem = *round->problem;
   round->manifolds.emplace_back(new ExteriorOrientationManifold());
   ceres::Manifold* eo_manifold = round->manifolds.back().get();
   for (size_t i = 0; i < block.images.size(); ++i) {
@@ -371,7 +424,12 @@ void BuildBundleRound(const BundleAdjustmentOptions& options, const BundleAdjust
     }
     round->e_blocks.push_back(eo);
   }
-  // Camera parameters: constant except the calibrated ones.
+}
+
+// Camera parameters: constant except the calibrated ones; the lever arm when used.
+void AddCameraBlocks(const BundleAdjustmentOptions& options, const Block& block,
+                     const BundlePlan& plan, BundleState* state, BundleRound* round) {
+  ceres::Problem& problem = *round->problem;
   for (size_t c = 0; c < block.cameras.size(); ++c) {
     double* params = state->cameras[c].data();
     const int n = static_cast<int>(state->cameras[c].size());
@@ -402,7 +460,11 @@ void BuildBundleRound(const BundleAdjustmentOptions& options, const BundleAdjust
     }
   }
 
-  // Points.
+}
+
+void AddPointBlocks(const BundleAdjustmentConfig& config, const Block& block,
+                    const BundlePlan& plan, BundleState* state, BundleRound* round) {
+  ceres::Problem& problem = *round->problem;
   for (size_t p = 0; p < block.points.size(); ++p) {
     if (!plan.point_in_problem[p]) continue;
     double* point = state->points[p].data();
@@ -415,7 +477,13 @@ void BuildBundleRound(const BundleAdjustmentOptions& options, const BundleAdjust
     round->point_of_block.push_back(static_cast<int>(p));
   }
 
-  // Marks.
+}
+
+// The collinearity residual of every mark in use, weighted by its sigma; the tie loss on tie
+// marks.
+void AddMarkResiduals(const BundleAdjustmentOptions& options, const Block& block,
+                      const BundlePlan& plan, BundleState* state, BundleRound* round) {
+  ceres::Problem& problem = *round->problem;
   round->residuals.reserve(std::count(plan.mark_used.begin(), plan.mark_used.end(), 1) +
                            2 * block.points.size() + 2 * block.images.size());
   for (size_t m = 0; m < block.marks.size(); ++m) {
@@ -433,7 +501,13 @@ void BuildBundleRound(const BundleAdjustmentOptions& options, const BundleAdjust
                                  state->cameras[camera_index].data());
     round->residuals.push_back({plan.mark_group[m], static_cast<int>(m), 2, 0, id});
   }
-  // Control point priors, two rows at a time.
+}
+
+// Control-point priors (two rows at a time: XY, then Z), camera positions and attitudes.
+void AddPriorResiduals(const Block& block, const BundlePlan& plan, BundleState* state,
+                       BundleRound* round) {
+  ceres::Problem& problem = *round->problem;
+  double* lever = state->lever.data();
   for (size_t p = 0; p < block.points.size(); ++p) {
     if (!plan.point_in_problem[p] || !plan.point_prior[p]) continue;
     double* point = state->points[p].data();
@@ -471,6 +545,26 @@ void BuildBundleRound(const BundleAdjustmentOptions& options, const BundleAdjust
     }
   }
 
+}
+
+}  // namespace
+
+void BuildBundleRound(const BundleAdjustmentOptions& options, const BundleAdjustmentConfig& config,
+                      const Block& block, const BundlePlan& plan, BundleState* state,
+                      BundleRound* round) {
+  round->problem.reset();
+  *round = BundleRound();
+  ceres::Problem::Options problem_options;
+  problem_options.manifold_ownership = ceres::DO_NOT_TAKE_OWNERSHIP;
+  problem_options.loss_function_ownership = ceres::DO_NOT_TAKE_OWNERSHIP;
+  problem_options.enable_fast_removal = false;
+  round->problem = std::make_unique<ceres::Problem>(problem_options);
+  round->tie_loss.reset(MakeTieLoss(options));
+  AddOrientationBlocks(config, block, plan, state, round);
+  AddCameraBlocks(options, block, plan, state, round);
+  AddPointBlocks(config, block, plan, state, round);
+  AddMarkResiduals(options, block, plan, state, round);
+  AddPriorResiduals(block, plan, state, round);
   round->num_free_parameters = 3 * static_cast<int>(round->point_blocks.size());
   for (const int size : round->e_sizes) round->num_free_parameters += size;
   round->num_observations = 0;
@@ -506,9 +600,7 @@ ceres::Solver::Options BundleSolverOptions(const BundleAdjustmentOptions& option
   solver.function_tolerance = options.function_tolerance;
   solver.parameter_tolerance = options.parameter_tolerance;
   solver.gradient_tolerance = options.gradient_tolerance;
-  solver.num_threads = options.num_threads > 0
-                           ? options.num_threads
-                           : static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
+  solver.num_threads = ResolveThreadCount(options.num_threads);
   solver.logging_type = ceres::SILENT;
   solver.minimizer_progress_to_stdout = false;
   switch (options.linear_solver) {

@@ -1,6 +1,8 @@
 // The statistics of a converged bundle adjustment round: residuals per group, covariances from
 // the reduced normal matrix, redundancy numbers, normalized residuals and reliability (Baarda,
 // Foerstner), self-calibration correlations, check points.
+#include "solvers/bundle/internal/bundle_statistics.h"
+
 #include <Eigen/Dense>
 #include <algorithm>
 #include <cmath>
@@ -9,8 +11,7 @@
 #include <sstream>
 
 #include "core/rotation.h"
-#include "solvers/bundle/internal/bundle_problem.h"
-#include "solvers/bundle/check_points.h"
+#include "core/statistics.h"
 #include "solvers/bundle/triangulation.h"
 
 namespace photopose::internal {
@@ -49,20 +50,6 @@ struct SparseE {
 };
 
 }  // namespace
-
-double NormalQuantile(double p) {
-  // Phi(x) = erfc(-x / sqrt 2) / 2 is increasing; bisect on [-40, 40].
-  double lo = -40.0, hi = 40.0;
-  for (int i = 0; i < 200 && hi - lo > 1e-12; ++i) {
-    const double mid = 0.5 * (lo + hi);
-    if (0.5 * std::erfc(-mid / std::sqrt(2.0)) < p) {
-      lo = mid;
-    } else {
-      hi = mid;
-    }
-  }
-  return 0.5 * (lo + hi);
-}
 
 bool EvaluateBlockRows(const BundleRound& round, const ReducedNormals& reduced,
                        const ResidualInfo& info, BlockRows* out) {
@@ -235,14 +222,41 @@ Eigen::VectorXd Leverages(const ReducedNormals& reduced, const BlockRows& rows,
   return h;
 }
 
-void ComputeBundleStatistics(const BundleAdjustmentOptions& options, const Block& block,
-                             const BundlePlan& plan, const BundleState& state,
-                             const BundleRound& round, BundleAdjustmentResult* result,
-                             GroupVariance* variance) {
+// ------------------------------------------------------------------ the steps of the statistics
+namespace {
+
+// Per group: count, per-axis sums of squared residuals and of stated sigmas (in the group's
+// unit), and the leverage (sum of hat-matrix diagonals) once known.
+struct GroupSums {
+  int count = 0;
+  Eigen::Vector3d ssq = Eigen::Vector3d::Zero();
+  Eigen::Vector3d stated = Eigen::Vector3d::Zero();
+  double leverage = 0.0;
+  std::string unit;
+};
+
+// The unit scale of one row of a residual block: residual (unit of its group) = whitened * scale.
+double RowScale(const Block& block, const BundlePlan& plan, const ResidualInfo& info, int row) {
+  switch (info.group) {
+    case kTieMarks:
+    case kControlMarks:
+      return plan.mark_sigma[info.item] / block.marks[info.item].observation_units_per_unit;
+    case kControlPoints:
+      return plan.point_sigma[info.item][info.first_axis + row];
+    case kCameraPositions:
+      return plan.image_prior_sigma[info.item][row];
+    case kAttitudes:
+      return plan.image_attitude_sigma[info.item][row] * kDegreesPerRadian;
+    default:
+      return 1.0;
+  }
+}
+
+// Clears the result's per-item tables and counts the points of the round.
+void ResetStatistics(const Block& block, const BundlePlan& plan, BundleAdjustmentResult* result,
+                     GroupVariance* variance) {
   BundleAdjustmentSummary& summary = result->summary;
   *variance = GroupVariance();
-  const double sigma0 = summary.sigma0;
-  const double variance_factor = std::isfinite(sigma0) ? sigma0 * sigma0 : 1.0;
   result->images.assign(block.images.size(), BundleImageResult());
   result->points.assign(block.points.size(), BundlePointResult());
   result->mark_residuals.assign(block.marks.size(), Eigen::Vector2d::Constant(kNaN));
@@ -254,51 +268,29 @@ void ComputeBundleStatistics(const BundleAdjustmentOptions& options, const Block
   summary.num_points = 0;
   summary.num_marks = 0;
   for (size_t p = 0; p < block.points.size(); ++p) summary.num_points += plan.point_in_problem[p];
+}
 
-  // Per group: count, per-axis sums of squared residuals and of stated sigmas (in the group's
-  // unit), and the leverage (sum of hat-matrix diagonals) once known.
-  struct Sums {
-    int count = 0;
-    Eigen::Vector3d ssq = Eigen::Vector3d::Zero();
-    Eigen::Vector3d stated = Eigen::Vector3d::Zero();
-    double leverage = 0.0;
-    std::string unit;
-  };
-  Sums sums[kNumBundleGroups];
+// Residuals of every observation in its unit, from the round's whitened residuals: per group
+// (sums, variance), per mark, per image, and the control points' errors.
+void TabulateResiduals(const Block& block, const BundlePlan& plan, const BundleState& state,
+                       const BundleRound& round, GroupSums* sums, BundleAdjustmentResult* result,
+                       GroupVariance* variance) {
   sums[kTieMarks].unit = sums[kControlMarks].unit = "px";
   sums[kControlPoints].unit = sums[kCameraPositions].unit = "m";
   sums[kAttitudes].unit = "deg";
-
-  // Residuals of every observation in its unit, from the round's whitened residuals.
   std::vector<double> image_ssq(block.images.size(), 0.0);
   bool film_marks = false;
-  // The unit scale of one row: residual (unit) = whitened * scale.
-  auto row_scale = [&](const ResidualInfo& info, int row) -> double {
-    switch (info.group) {
-      case kTieMarks:
-      case kControlMarks:
-        return plan.mark_sigma[info.item] / block.marks[info.item].observation_units_per_unit;
-      case kControlPoints:
-        return plan.point_sigma[info.item][info.first_axis + row];
-      case kCameraPositions:
-        return plan.image_prior_sigma[info.item][row];
-      case kAttitudes:
-        return plan.image_attitude_sigma[info.item][row] * kDegreesPerRadian;
-      default:
-        return 1.0;
-    }
-  };
   for (const ResidualInfo& info : round.residuals) {
     double whitened[3] = {0.0, 0.0, 0.0};
     double cost;
     round.problem->EvaluateResidualBlock(info.id, false, &cost, whitened, nullptr);
-    Sums& s = sums[info.group];
+    GroupSums& s = sums[info.group];
     variance->scalar_rows[info.group] += info.rows;
     for (int row = 0; row < info.rows; ++row)
       variance->whitened_ssq[info.group] += whitened[row] * whitened[row];
     if (info.group == kTieMarks || info.group == kControlMarks) {
       const BlockMark& mark = block.marks[info.item];
-      const double scale = row_scale(info, 0);
+      const double scale = RowScale(block, plan, info, 0);
       const Eigen::Vector2d residual(whitened[0] * scale, whitened[1] * scale);
       result->mark_residuals[info.item] = residual;
       ++s.count;
@@ -310,13 +302,13 @@ void ComputeBundleStatistics(const BundleAdjustmentOptions& options, const Block
       image_ssq[mark.image] += residual.squaredNorm();
       image.unit = mark.unit == MarkUnit::kFilm ? "um" : "px";
       ++result->points[mark.point].num_observations;
-      ++summary.num_marks;
+      ++result->summary.num_marks;
       continue;
     }
     if (info.group != kControlPoints || info.first_axis == 0) ++s.count;
     for (int row = 0; row < info.rows; ++row) {
       const int axis = info.first_axis + row;
-      const double scale = row_scale(info, row);
+      const double scale = RowScale(block, plan, info, row);
       s.ssq[axis] += (whitened[row] * scale) * (whitened[row] * scale);
       s.stated[axis] += scale;
     }
@@ -331,137 +323,180 @@ void ComputeBundleStatistics(const BundleAdjustmentOptions& options, const Block
     if (plan.point_in_problem[p] && block.points[p].role == PointRole::kControl)
       result->points[p].error_m = state.points[p] - *block.points[p].surveyed_m;
   }
+}
 
-  // Covariances and redundancy numbers from the reduced normal matrix.
-  ReducedNormals reduced;
-  int e_size = 0;
-  for (const int size : round.e_sizes) e_size += size;
-  const bool asked = e_size <= options.max_covariance_parameters;
-  if (asked) BuildReducedNormals(round, &reduced);
-  const bool diagnostics = reduced.ok && options.observation_diagnostics;
-  // The w-test's level: alpha for the whole block (Bonferroni: alpha / n per observation) unless
-  // asked per observation; with tens of thousands of observations a per-observation 0.1 % would
-  // reject dozens of good ones.
+// The w-test's level: alpha for the whole block (Bonferroni: alpha / n per observation) unless
+// asked per observation; with tens of thousands of observations a per-observation 0.1 % would
+// reject dozens of good ones.
+void SetTestLevel(const BundleAdjustmentOptions& options, const GroupVariance& variance,
+                  BundleAdjustmentResult* result) {
   int num_tested = 0;
-  for (int g = 0; g < kNumBundleGroups; ++g) num_tested += variance->scalar_rows[g];
+  for (int g = 0; g < kNumBundleGroups; ++g) num_tested += variance.scalar_rows[g];
   const double alpha_each = options.snooping_family_wise
                                 ? options.snooping_alpha / std::max(1, num_tested)
                                 : options.snooping_alpha;
   result->alpha_per_observation = alpha_each;
   result->critical_value = NormalQuantile(1.0 - 0.5 * alpha_each);
   result->delta0 = result->critical_value + NormalQuantile(options.snooping_power);
-  if (reduced.ok) {
-    // Exterior orientations, in the ambient (Euler) parameters: P C P^T.
-    for (size_t i = 0; i < block.images.size(); ++i) {
-      const double* eo = state.eo[i].data();
-      const auto found = reduced.e_index.find(eo);
-      if (found == reduced.e_index.end()) continue;
-      const int offset = reduced.e_offset[found->second];
-      const int tangent = round.e_sizes[found->second];
-      Eigen::Matrix<double, 6, Eigen::Dynamic, Eigen::RowMajor> P(6, tangent);
-      round.problem->GetManifold(const_cast<double*>(eo))->PlusJacobian(eo, P.data());
-      const Eigen::MatrixXd C = reduced.C.block(offset, offset, tangent, tangent);
-      result->images[i].covariance = variance_factor * P * C * P.transpose();
-      result->images[i].has_covariance = true;
+}
+
+// Exterior orientations, in the ambient (Euler) parameters (P C P^T), and control points.
+void OrientationAndPointCovariances(const Block& block, const BundleState& state,
+                                    const BundleRound& round, const ReducedNormals& reduced,
+                                    double variance_factor, BundleAdjustmentResult* result) {
+  for (size_t i = 0; i < block.images.size(); ++i) {
+    const double* eo = state.eo[i].data();
+    const auto found = reduced.e_index.find(eo);
+    if (found == reduced.e_index.end()) continue;
+    const int offset = reduced.e_offset[found->second];
+    const int tangent = round.e_sizes[found->second];
+    Eigen::Matrix<double, 6, Eigen::Dynamic, Eigen::RowMajor> P(6, tangent);
+    round.problem->GetManifold(const_cast<double*>(eo))->PlusJacobian(eo, P.data());
+    const Eigen::MatrixXd C = reduced.C.block(offset, offset, tangent, tangent);
+    result->images[i].covariance = variance_factor * P * C * P.transpose();
+    result->images[i].has_covariance = true;
+  }
+  for (const auto& [block_ptr, index] : reduced.point_index) {
+    const int p = round.point_of_block[index];
+    if (block.points[p].role != PointRole::kControl) continue;
+    result->points[p].covariance = variance_factor * PointCovariance(reduced, index);
+    result->points[p].has_covariance = true;
+  }
+}
+
+// The camera-centre columns of the e space (tangent components 0..2 of each image block; the
+// relative gauge's scale image has one of them held), for the external reliability, with C
+// restricted to those rows (C is symmetric: its columns), so that the shifts cost half the full
+// products (measured: 58.6 s of statistics at 300 images before).
+struct CentreColumns {
+  struct Image {
+    int offset;  // first row in `C_rows`
+    int count;
+  };
+  std::vector<Image> images;
+  Eigen::MatrixXd C_rows;
+};
+
+CentreColumns MakeCentreColumns(const Block& block, const BundlePlan& plan,
+                                const BundleState& state, const ReducedNormals& reduced,
+                                bool with_rows) {
+  CentreColumns centres;
+  std::vector<int> rows;
+  for (size_t i = 0; i < block.images.size(); ++i) {
+    const auto found = reduced.e_index.find(state.eo[i].data());
+    if (found == reduced.e_index.end()) continue;
+    const int count = static_cast<int>(i) == plan.relative_scale_image ? 2 : 3;
+    centres.images.push_back({static_cast<int>(rows.size()), count});
+    for (int k = 0; k < count; ++k) rows.push_back(reduced.e_offset[found->second] + k);
+  }
+  if (with_rows) {
+    centres.C_rows.resize(static_cast<Eigen::Index>(rows.size()), reduced.size);
+    for (size_t r = 0; r < rows.size(); ++r)
+      centres.C_rows.row(static_cast<Eigen::Index>(r)) = reduced.C.col(rows[r]).transpose();
+  }
+  return centres;
+}
+
+// The diagnostics of one row: redundancy number, normalized residual (w-test against the
+// critical value), smallest detectable error and its largest camera-centre shift.
+BundleObservationDiagnostics RowDiagnostics(const BundleAdjustmentResult& result,
+                                            const ResidualInfo& info, int row, double whitened,
+                                            double scale, double leverage, double s0,
+                                            const CentreColumns& centres,
+                                            const Eigen::VectorXd& shift) {
+  BundleObservationDiagnostics d;
+  d.group = kBundleGroupNames[info.group];
+  d.item = info.item;
+  d.axis = info.first_axis + row;
+  d.residual = whitened * scale;
+  d.sigma = scale;
+  d.redundancy = std::clamp(1.0 - leverage, 0.0, 1.0);
+  if (d.redundancy > kZeroRedundancy) {
+    d.normalized = whitened / (s0 * std::sqrt(d.redundancy));
+    d.mdb = result.delta0 * scale / std::sqrt(d.redundancy);
+    // The largest camera-centre shift from a whitened error mdb / sigma in this row.
+    const double delta = result.delta0 / std::sqrt(d.redundancy);
+    double largest = 0.0;
+    for (const CentreColumns::Image& centre : centres.images)
+      largest = std::max(largest, shift.segment(centre.offset, centre.count).norm());
+    d.external_m = largest * delta;
+    d.rejected = std::abs(d.normalized) > result.critical_value;
+  } else {
+    d.normalized = kNaN;
+    d.mdb = kInfinity;
+    d.external_m = kInfinity;
+  }
+  return d;
+}
+
+// Leverages per group (variance->redundancy) and, with `diagnostics`, every observation's
+// diagnostics. Without them the tie marks' share is the remainder (the sum of all redundancy
+// numbers is the redundancy), which spares their rows.
+void ObservationDiagnostics(const BundleAdjustmentOptions& options, const Block& block,
+                            const BundlePlan& plan, const BundleState& state,
+                            const BundleRound& round, const ReducedNormals& reduced,
+                            bool diagnostics, GroupSums* sums, BundleAdjustmentResult* result,
+                            GroupVariance* variance) {
+  const CentreColumns centres = MakeCentreColumns(block, plan, state, reduced, diagnostics);
+  // The yardstick of the normalized residuals: the stated accuracies (sigma0 = 1), or the
+  // a-posteriori sigma0 when the data say they were optimistic (Pope's tau-test then).
+  const double sigma0 = result->summary.sigma0;
+  const double s0 = std::isfinite(sigma0) ? std::max(1.0, sigma0) : 1.0;
+  BlockRows rows;
+  std::vector<Eigen::VectorXd> shifts;
+  for (const ResidualInfo& info : round.residuals) {
+    if (!diagnostics && info.group == kTieMarks) continue;  // its share is the remainder
+    if (!EvaluateBlockRows(round, reduced, info, &rows)) continue;
+    const Eigen::VectorXd h =
+        Leverages(reduced, rows, &centres.C_rows, diagnostics ? &shifts : nullptr);
+    for (int row = 0; row < info.rows; ++row) sums[info.group].leverage += h[row];
+    if (!diagnostics) continue;
+    for (int row = 0; row < info.rows; ++row) {
+      const BundleObservationDiagnostics d =
+          RowDiagnostics(*result, info, row, rows.residuals[row],
+                         RowScale(block, plan, info, row), h[row], s0, centres, shifts[row]);
+      if (d.redundancy < options.uncontrolled_redundancy) ++result->num_uncontrolled;
+      result->observations.push_back(d);
     }
-    for (const auto& [block_ptr, index] : reduced.point_index) {
-      const int p = round.point_of_block[index];
-      if (block.points[p].role != PointRole::kControl) continue;
-      result->points[p].covariance = variance_factor * PointCovariance(reduced, index);
-      result->points[p].has_covariance = true;
+  }
+  if (!diagnostics) {
+    double other_redundancy = 0.0;
+    for (int g = kControlMarks; g < kNumBundleGroups; ++g)
+      other_redundancy += variance->scalar_rows[g] - sums[g].leverage;
+    sums[kTieMarks].leverage =
+        variance->scalar_rows[kTieMarks] - (result->summary.redundancy - other_redundancy);
+  }
+  for (int g = 0; g < kNumBundleGroups; ++g)
+    variance->redundancy[g] = variance->scalar_rows[g] - sums[g].leverage;
+}
+
+// Self-calibration: the estimated parameters of each calibrated camera, with their sigmas and
+// correlations when the reduced normal matrix is known (`reduced` not null).
+void CalibrationResults(const BundleAdjustmentOptions& options, const Block& block,
+                        const BundlePlan& plan, const BundleState& state,
+                        const ReducedNormals* reduced, double variance_factor,
+                        BundleAdjustmentResult* result) {
+  for (size_t c = 0; c < block.cameras.size(); ++c) {
+    if (plan.calibrated[c].empty()) continue;
+    int offset = -1;
+    if (reduced != nullptr) {
+      const auto found = reduced->e_index.find(state.cameras[c].data());
+      if (found == reduced->e_index.end()) continue;
+      offset = reduced->e_offset[found->second];
     }
-    // The camera-centre columns of the e space (tangent components 0..2 of each image block; the
-    // relative gauge's scale image has one of them held), for the external reliability.
-    struct CentreColumns {
-      int offset;
-      int count;
-    };
-    // C restricted to those rows (C is symmetric: its columns), so that the shifts cost half the
-    // full products (measured: 58.6 s of statistics at 300 images before).
-    std::vector<CentreColumns> centres;
-    std::vector<int> centre_rows;
-    for (size_t i = 0; i < block.images.size(); ++i) {
-      const auto found = reduced.e_index.find(state.eo[i].data());
-      if (found == reduced.e_index.end()) continue;
-      const int count = static_cast<int>(i) == plan.relative_scale_image ? 2 : 3;
-      centres.push_back({static_cast<int>(centre_rows.size()), count});
-      for (int k = 0; k < count; ++k) centre_rows.push_back(reduced.e_offset[found->second] + k);
+    const int n = static_cast<int>(plan.calibrated[c].size());
+    BundleCalibrationResult calibration;
+    calibration.camera = static_cast<int>(c);
+    const std::vector<std::string> names = CameraModelParamNames(block.cameras[c].model);
+    for (const int index : plan.calibrated[c]) {
+      calibration.indices.push_back(index);
+      calibration.names.push_back(names[index]);
+      calibration.values.push_back(state.cameras[c][index]);
     }
-    Eigen::MatrixXd C_centres;
-    if (diagnostics) {
-      C_centres.resize(static_cast<Eigen::Index>(centre_rows.size()), reduced.size);
-      for (size_t r = 0; r < centre_rows.size(); ++r)
-        C_centres.row(static_cast<Eigen::Index>(r)) = reduced.C.col(centre_rows[r]).transpose();
-    }
-    // The yardstick of the normalized residuals: the stated accuracies (sigma0 = 1), or the
-    // a-posteriori sigma0 when the data say they were optimistic (Pope's tau-test then).
-    const double s0 = std::isfinite(sigma0) ? std::max(1.0, sigma0) : 1.0;
-    BlockRows rows;
-    std::vector<Eigen::VectorXd> shifts;
-    for (const ResidualInfo& info : round.residuals) {
-      if (!diagnostics && info.group == kTieMarks) continue;  // its share is the remainder
-      if (!EvaluateBlockRows(round, reduced, info, &rows)) continue;
-      const Eigen::VectorXd h =
-          Leverages(reduced, rows, &C_centres, diagnostics ? &shifts : nullptr);
-      for (int row = 0; row < info.rows; ++row) sums[info.group].leverage += h[row];
-      if (!diagnostics) continue;
-      for (int row = 0; row < info.rows; ++row) {
-        BundleObservationDiagnostics d;
-        d.group = kBundleGroupNames[info.group];
-        d.item = info.item;
-        d.axis = info.first_axis + row;
-        const double scale = row_scale(info, row);
-        d.residual = rows.residuals[row] * scale;
-        d.sigma = scale;
-        d.redundancy = std::clamp(1.0 - h[row], 0.0, 1.0);
-        if (d.redundancy > kZeroRedundancy) {
-          d.normalized = rows.residuals[row] / (s0 * std::sqrt(d.redundancy));
-          d.mdb = result->delta0 * scale / std::sqrt(d.redundancy);
-          // The largest camera-centre shift from a whitened error mdb / sigma in this row.
-          const double delta = result->delta0 / std::sqrt(d.redundancy);
-          double largest = 0.0;
-          for (const CentreColumns& centre : centres)
-            largest = std::max(largest, shifts[row].segment(centre.offset, centre.count).norm());
-          d.external_m = largest * delta;
-          d.rejected = std::abs(d.normalized) > result->critical_value;
-        } else {
-          d.normalized = kNaN;
-          d.mdb = kInfinity;
-          d.external_m = kInfinity;
-        }
-        if (d.redundancy < options.uncontrolled_redundancy) ++result->num_uncontrolled;
-        result->observations.push_back(d);
-      }
-    }
-    if (!diagnostics) {
-      // The tie marks' leverage is the rest: sum of all redundancy numbers = redundancy.
-      double other_redundancy = 0.0;
-      for (int g = kControlMarks; g < kNumBundleGroups; ++g)
-        other_redundancy += variance->scalar_rows[g] - sums[g].leverage;
-      sums[kTieMarks].leverage =
-          variance->scalar_rows[kTieMarks] - (summary.redundancy - other_redundancy);
-    }
-    for (int g = 0; g < kNumBundleGroups; ++g)
-      variance->redundancy[g] = variance->scalar_rows[g] - sums[g].leverage;
-    // Self-calibration.
-    for (size_t c = 0; c < block.cameras.size(); ++c) {
-      if (plan.calibrated[c].empty()) continue;
-      const auto found = reduced.e_index.find(state.cameras[c].data());
-      if (found == reduced.e_index.end()) continue;
-      const int offset = reduced.e_offset[found->second];
-      const int n = static_cast<int>(plan.calibrated[c].size());
-      BundleCalibrationResult calibration;
-      calibration.camera = static_cast<int>(c);
-      const std::vector<std::string> names = CameraModelParamNames(block.cameras[c].model);
-      const Eigen::MatrixXd C = variance_factor * reduced.C.block(offset, offset, n, n);
+    if (reduced != nullptr) {
+      const Eigen::MatrixXd C = variance_factor * reduced->C.block(offset, offset, n, n);
+      for (int a = 0; a < n; ++a) calibration.sigmas.push_back(std::sqrt(std::max(C(a, a), 0.0)));
       calibration.correlation.resize(n, n);
-      for (int a = 0; a < n; ++a) {
-        const int index = plan.calibrated[c][a];
-        calibration.indices.push_back(index);
-        calibration.names.push_back(names[index]);
-        calibration.values.push_back(state.cameras[c][index]);
-        calibration.sigmas.push_back(std::sqrt(std::max(C(a, a), 0.0)));
-      }
       for (int a = 0; a < n; ++a) {
         for (int b = 0; b < n; ++b) {
           calibration.correlation(a, b) = C(a, b) / (calibration.sigmas[a] * calibration.sigmas[b]);
@@ -472,31 +507,16 @@ void ComputeBundleStatistics(const BundleAdjustmentOptions& options, const Block
           }
         }
       }
-      result->calibration.push_back(std::move(calibration));
     }
-  } else {
-    for (int g = 0; g < kNumBundleGroups; ++g) variance->redundancy[g] = kNaN;
-    for (size_t c = 0; c < block.cameras.size(); ++c) {
-      if (plan.calibrated[c].empty()) continue;
-      BundleCalibrationResult calibration;
-      calibration.camera = static_cast<int>(c);
-      const std::vector<std::string> names = CameraModelParamNames(block.cameras[c].model);
-      for (const int index : plan.calibrated[c]) {
-        calibration.indices.push_back(index);
-        calibration.names.push_back(names[index]);
-        calibration.values.push_back(state.cameras[c][index]);
-      }
-      result->calibration.push_back(std::move(calibration));
-    }
-    summary.message = asked ? "the normal matrix is singular: no covariances"
-                            : "covariances skipped (" + std::to_string(e_size) +
-                                  " parameters after point elimination, more than " +
-                                  std::to_string(options.max_covariance_parameters) + ")";
+    result->calibration.push_back(std::move(calibration));
   }
-  if (plan.use_lever) result->lever_arm_m = state.lever;
+}
 
+// The report's groups: counts, stated accuracies, RMS, ratio, redundancy share, over-fit flags.
+void GroupStatistics(const BundleAdjustmentOptions& options, const GroupSums* sums,
+                     const GroupVariance& variance, BundleAdjustmentResult* result) {
   for (int g = 0; g < kNumBundleGroups; ++g) {
-    const Sums& s = sums[g];
+    const GroupSums& s = sums[g];
     if (s.count == 0) continue;
     BundleGroupStatistics group;
     group.name = kBundleGroupNames[g];
@@ -506,9 +526,9 @@ void ComputeBundleStatistics(const BundleAdjustmentOptions& options, const Block
     group.stated_accuracy = s.stated / s.count;
     group.rms = (s.ssq / s.count).cwiseSqrt();
     group.rms_total = std::sqrt(s.ssq.sum() / (s.count * group.num_axes));
-    const int rows = variance->scalar_rows[g];
-    group.ratio = std::sqrt(variance->whitened_ssq[g] / rows);
-    group.redundancy_share = variance->redundancy[g] / rows;
+    const int rows = variance.scalar_rows[g];
+    group.ratio = std::sqrt(variance.whitened_ssq[g] / rows);
+    group.redundancy_share = variance.redundancy[g] / rows;
     const bool prior = g == kControlPoints || g == kCameraPositions || g == kAttitudes;
     const bool share_known = std::isfinite(group.redundancy_share);
     if (prior && (group.ratio < options.overfit_ratio ||
@@ -524,108 +544,117 @@ void ComputeBundleStatistics(const BundleAdjustmentOptions& options, const Block
     }
     result->groups.push_back(group);
   }
+}
 
-  // Control and check points; check points are intersected from the adjusted images and cameras.
-  Eigen::Vector3d control_ssq = Eigen::Vector3d::Zero(), check_ssq = Eigen::Vector3d::Zero();
-  result->num_control_points = result->num_check_points = 0;
+// The covariance of a check point with the images' and cameras' own uncertainty carried in. The
+// point minimises sum_j |r_j(X, e)|^2, so dX/de = -N^-1 B with N = sum_j J_X,j^T J_X,j and
+// B = sum_j J_X,j^T J_e,j (whitened, e in the tangent spaces of the reduced system), and
+// C_X = N^-1 + (N^-1 B) C (N^-1 B)^T (unscaled).
+Eigen::Matrix3d PropagatedCheckPointCovariance(const Block& block, const BundleState& state,
+                                               const BundleRound& round,
+                                               const ReducedNormals& reduced,
+                                               const std::vector<RayObservation>& rays,
+                                               const std::vector<int>& marks,
+                                               const TriangulationResult& intersection) {
+  Eigen::Matrix3d N = Eigen::Matrix3d::Zero();
+  Eigen::MatrixXd B = Eigen::MatrixXd::Zero(3, reduced.size);
+  for (size_t j = 0; j < rays.size(); ++j) {
+    const int image = block.marks[marks[j]].image;
+    const int camera = block.images[image].camera;
+    const std::unique_ptr<ceres::CostFunction> cost(CreateCollinearityCost(
+        JacobianType::kAnalytic, CollinearityFunctor(rays[j].camera->model, rays[j].observation,
+                                                     rays[j].camera->data(), 1.0 / rays[j].sigma)));
+    const int n = static_cast<int>(state.cameras[camera].size());
+    Eigen::Matrix<double, 2, 6, Eigen::RowMajor> J_eo;
+    Eigen::Matrix<double, 2, 3, Eigen::RowMajor> J_X;
+    Eigen::Matrix<double, 2, Eigen::Dynamic, Eigen::RowMajor> J_cam(2, n);
+    const double* parameters[] = {state.eo[image].data(), intersection.point_m.data(),
+                                  state.cameras[camera].data()};
+    double residual[2];
+    double* jacobians[] = {J_eo.data(), J_X.data(), J_cam.data()};
+    if (!cost->Evaluate(parameters, residual, jacobians)) continue;
+    N += J_X.transpose() * J_X;
+    auto add = [&](const double* block_ptr, const Eigen::MatrixXd& J_ambient) {
+      const auto found = reduced.e_index.find(block_ptr);
+      if (found == reduced.e_index.end()) return;
+      const int offset = reduced.e_offset[found->second];
+      const int tangent = round.e_sizes[found->second];
+      const ceres::Manifold* manifold = round.problem->GetManifold(const_cast<double*>(block_ptr));
+      Eigen::MatrixXd P = Eigen::MatrixXd::Identity(J_ambient.cols(), tangent);
+      if (manifold != nullptr) {
+        Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor> Pr(
+            J_ambient.cols(), tangent);
+        manifold->PlusJacobian(block_ptr, Pr.data());
+        P = Pr;
+      }
+      B.block(0, offset, 3, tangent) += J_X.transpose() * (J_ambient * P);
+    };
+    add(state.eo[image].data(), J_eo);
+    add(state.cameras[camera].data(), J_cam);
+  }
+  const Eigen::Matrix3d N_inverse = N.ldlt().solve(Eigen::Matrix3d::Identity());
+  const Eigen::MatrixXd A = N_inverse * B;
+  return N_inverse + A * reduced.C * A.transpose();
+}
+
+// Control and check points: the shared table (internal/bundle_statistics.h), check points
+// intersected from the adjusted images and cameras.
+void ControlAndCheckPoints(const BundleAdjustmentOptions& options, const Block& block,
+                           const BundleState& state, const BundleRound& round,
+                           const ReducedNormals& reduced, double variance_factor,
+                           BundleAdjustmentResult* result) {
   std::vector<BlockCamera> adjusted_cameras = block.cameras;
   for (size_t c = 0; c < adjusted_cameras.size(); ++c) adjusted_cameras[c].params = state.cameras[c];
-  const double marker_px = options.accuracies.marker_projection_px;
-  for (size_t p = 0; p < block.points.size(); ++p) {
-    const BlockPoint& point = block.points[p];
-    BundlePointResult& out = result->points[p];
-    // A control point whose coordinates snooping removed keeps its error in the table but stays
-    // out of the RMSE (it is reported as removed).
-    bool prior_kept = true;
-    for (const BundleSnoopingStep& step : result->snooping)
-      if (step.group == "control_points" && step.item == static_cast<int>(p)) prior_kept = false;
-    if (point.role == PointRole::kControl && out.error_m && prior_kept) {
-      ++result->num_control_points;
-      control_ssq += out.error_m->cwiseAbs2();
-    }
-    if (point.role != PointRole::kCheck) continue;
-    std::vector<RayObservation> rays;
-    for (const int m : block.marks_of_point[p]) {
-      const BlockMark& mark = block.marks[m];
-      RayObservation ray;
-      ray.camera = &adjusted_cameras[block.images[mark.image].camera];
-      ray.eo.parameters = state.eo[mark.image];
-      ray.observation = mark.observation;
-      ray.sigma = MarkSigma(mark, marker_px,
-                            DefaultFilmMarkSigmaUm(*ray.camera, marker_px,
-                                          options.accuracies.marker_projection_film_um));
-      rays.push_back(ray);
-    }
-    out.num_observations = static_cast<int>(rays.size());
-    TriangulationResult triangulated;
-    const Status status = TriangulatePoint(TriangulationOptions(), rays, &triangulated);
-    if (!status.ok()) {
-      out.message = "not intersected: " + status.message();
-      continue;
-    }
-    out.error_m = triangulated.point_m - *point.surveyed_m;
-    out.covariance = triangulated.covariance;
-    if (reduced.ok) {
-      // The images' and cameras' own uncertainty carried into the intersection. The point
-      // minimises sum_j |r_j(X, e)|^2, so dX/de = -N^-1 B with N = sum_j J_X,j^T J_X,j and
-      // B = sum_j J_X,j^T J_e,j (whitened, e in the tangent spaces of the reduced system), and
-      // C_X = N^-1 + (N^-1 B) C (N^-1 B)^T.
-      Eigen::Matrix3d N = Eigen::Matrix3d::Zero();
-      Eigen::MatrixXd B = Eigen::MatrixXd::Zero(3, reduced.size);
-      for (size_t j = 0; j < rays.size(); ++j) {
-        const int image = block.marks[block.marks_of_point[p][j]].image;
-        const int camera = block.images[image].camera;
-        const std::unique_ptr<ceres::CostFunction> cost(CreateCollinearityCost(
-            JacobianType::kAnalytic, CollinearityFunctor(rays[j].camera->model, rays[j].observation,
-                                                         rays[j].camera->data(), 1.0 / rays[j].sigma)));
-        const int n = static_cast<int>(state.cameras[camera].size());
-        Eigen::Matrix<double, 2, 6, Eigen::RowMajor> J_eo;
-        Eigen::Matrix<double, 2, 3, Eigen::RowMajor> J_X;
-        Eigen::Matrix<double, 2, Eigen::Dynamic, Eigen::RowMajor> J_cam(2, n);
-        const double* parameters[] = {state.eo[image].data(), triangulated.point_m.data(),
-                                      state.cameras[camera].data()};
-        double residual[2];
-        double* jacobians[] = {J_eo.data(), J_X.data(), J_cam.data()};
-        if (!cost->Evaluate(parameters, residual, jacobians)) continue;
-        N += J_X.transpose() * J_X;
-        auto add = [&](const double* block_ptr, const Eigen::MatrixXd& J_ambient) {
-          const auto found = reduced.e_index.find(block_ptr);
-          if (found == reduced.e_index.end()) return;
-          const int offset = reduced.e_offset[found->second];
-          const int tangent = round.e_sizes[found->second];
-          const ceres::Manifold* manifold =
-              round.problem->GetManifold(const_cast<double*>(block_ptr));
-          Eigen::MatrixXd P = Eigen::MatrixXd::Identity(J_ambient.cols(), tangent);
-          if (manifold != nullptr) {
-            Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor> Pr(
-                J_ambient.cols(), tangent);
-            manifold->PlusJacobian(block_ptr, Pr.data());
-            P = Pr;
-          }
-          B.block(0, offset, 3, tangent) += J_X.transpose() * (J_ambient * P);
-        };
-        add(state.eo[image].data(), J_eo);
-        add(state.cameras[camera].data(), J_cam);
-      }
-      const Eigen::Matrix3d N_inverse = N.ldlt().solve(Eigen::Matrix3d::Identity());
-      const Eigen::MatrixXd A = N_inverse * B;
-      out.covariance = N_inverse + A * reduced.C * A.transpose();
-    }
-    out.covariance *= variance_factor;
-    out.has_covariance = true;
-    ++result->num_check_points;
-    check_ssq += out.error_m->cwiseAbs2();
+  std::vector<const Vector6d*> eo(block.images.size());
+  for (size_t i = 0; i < block.images.size(); ++i) eo[i] = &state.eo[i];
+  CheckPointCovariance covariance;
+  if (reduced.ok) {
+    covariance = [&](const std::vector<RayObservation>& rays, const std::vector<int>& marks,
+                     const TriangulationResult& intersection) {
+      return PropagatedCheckPointCovariance(block, state, round, reduced, rays, marks,
+                                            intersection);
+    };
   }
-  result->control_rmse_m = result->check_rmse_m = Eigen::Vector3d::Zero();
-  result->control_rmse_total_m = result->check_rmse_total_m = 0.0;
-  if (result->num_control_points > 0) {
-    result->control_rmse_m = (control_ssq / result->num_control_points).cwiseSqrt();
-    result->control_rmse_total_m = std::sqrt(control_ssq.sum() / result->num_control_points);
+  TabulateControlAndCheckPoints(block, eo, adjusted_cameras, options.accuracies, variance_factor,
+                                covariance, result);
+}
+
+}  // namespace
+
+void ComputeBundleStatistics(const BundleAdjustmentOptions& options, const Block& block,
+                             const BundlePlan& plan, const BundleState& state,
+                             const BundleRound& round, BundleAdjustmentResult* result,
+                             GroupVariance* variance) {
+  BundleAdjustmentSummary& summary = result->summary;
+  const double sigma0 = summary.sigma0;
+  const double variance_factor = std::isfinite(sigma0) ? sigma0 * sigma0 : 1.0;
+  ResetStatistics(block, plan, result, variance);
+  GroupSums sums[kNumBundleGroups];
+  TabulateResiduals(block, plan, state, round, sums, result, variance);
+
+  // Covariances and redundancy numbers from the reduced normal matrix.
+  ReducedNormals reduced;
+  int e_size = 0;
+  for (const int size : round.e_sizes) e_size += size;
+  const bool asked = e_size <= options.max_covariance_parameters;
+  if (asked) BuildReducedNormals(round, &reduced);
+  SetTestLevel(options, *variance, result);
+  if (reduced.ok) {
+    OrientationAndPointCovariances(block, state, round, reduced, variance_factor, result);
+    ObservationDiagnostics(options, block, plan, state, round, reduced,
+                           options.observation_diagnostics, sums, result, variance);
+    CalibrationResults(options, block, plan, state, &reduced, variance_factor, result);
+  } else {
+    for (int g = 0; g < kNumBundleGroups; ++g) variance->redundancy[g] = kNaN;
+    CalibrationResults(options, block, plan, state, nullptr, variance_factor, result);
+    summary.message = asked ? "the normal matrix is singular: no covariances"
+                            : "covariances skipped (" + std::to_string(e_size) +
+                                  " parameters after point elimination, more than " +
+                                  std::to_string(options.max_covariance_parameters) + ")";
   }
-  if (result->num_check_points > 0) {
-    result->check_rmse_m = (check_ssq / result->num_check_points).cwiseSqrt();
-    result->check_rmse_total_m = std::sqrt(check_ssq.sum() / result->num_check_points);
-  }
+  if (plan.use_lever) result->lever_arm_m = state.lever;
+  GroupStatistics(options, sums, *variance, result);
+  ControlAndCheckPoints(options, block, state, round, reduced, variance_factor, result);
 }
 
 }  // namespace photopose::internal

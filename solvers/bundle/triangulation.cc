@@ -18,14 +18,9 @@ constexpr double kRelativeStep = 1e-9;
 
 }  // namespace
 
-double MarkSigma(const BlockMark& mark, double default_sigma_px, double default_sigma_um) {
-  if (mark.accuracy) return *mark.accuracy * mark.observation_units_per_unit;
-  if (mark.unit == MarkUnit::kFilm) return default_sigma_um;
-  return default_sigma_px * mark.observation_units_per_unit;
-}
-
-std::vector<RayObservation> PointRays(const Block& block, int point, double default_sigma_px,
-                                      double default_sigma_um, const std::vector<char>* skip) {
+std::vector<RayObservation> PointRays(const Block& block, int point,
+                                      const MarkSigmaDefaults& defaults,
+                                      const std::vector<char>* skip) {
   std::vector<RayObservation> rays;
   if (point < 0 || point >= static_cast<int>(block.marks_of_point.size())) return rays;
   for (const int m : block.marks_of_point[point]) {
@@ -37,7 +32,7 @@ std::vector<RayObservation> PointRays(const Block& block, int point, double defa
     ray.camera = &block.cameras[image.camera];
     ray.eo = *image.eo;
     ray.observation = mark.observation;
-    ray.sigma = MarkSigma(mark, default_sigma_px, default_sigma_um);
+    ray.sigma = MarkSigma(mark, *ray.camera, defaults);
     rays.push_back(ray);
   }
   return rays;

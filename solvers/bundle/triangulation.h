@@ -20,6 +20,7 @@
 #include <vector>
 
 #include "core/block.h"
+#include "core/mark_weight.h"
 #include "core/status.h"
 #include "core/types.h"
 
@@ -53,16 +54,11 @@ struct TriangulationResult {
 Status TriangulatePoint(const TriangulationOptions& options,
                         const std::vector<RayObservation>& rays, TriangulationResult* result);
 
-// The rays of every mark of block point `point` whose image has an eo, with the sigma each mark's
-// accuracy gives (or default_sigma_px converted for pixel marks, default_sigma_um for film marks of
-// a camera without pixel size). Marks listed in `skip` (indices into Block::marks) are left out.
-std::vector<RayObservation> PointRays(const Block& block, int point, double default_sigma_px,
-                                      double default_sigma_um,
+// The rays of every mark of block point `point` whose image has an eo, each with the sigma of
+// core/mark_weight.h under `defaults`. Marks listed in `skip` (indices into Block::marks) are left
+// out.
+std::vector<RayObservation> PointRays(const Block& block, int point,
+                                      const MarkSigmaDefaults& defaults,
                                       const std::vector<char>* skip = nullptr);
-
-// The sigma of a mark in its camera model's observation unit: its own accuracy, else the default
-// in its unit (pixels: default_sigma_px times observation units per pixel; film marks:
-// default_sigma_um).
-double MarkSigma(const BlockMark& mark, double default_sigma_px, double default_sigma_um);
 
 }  // namespace photopose

@@ -31,5 +31,27 @@ TEST(Statistics, RegularizedLowerGammaOfTwoDegreesIsClosedForm) {
   EXPECT_EQ(RegularizedLowerGamma(3.0, 0.0), 0.0);
 }
 
+TEST(Statistics, NormalQuantilesMatchTables) {
+  // The bisection stops at 1e-12; tabulated values to 15 digits.
+  constexpr double kBisection = 1e-11;
+  EXPECT_NEAR(NormalQuantile(0.5), 0.0, kBisection);
+  EXPECT_NEAR(NormalQuantile(0.975), 1.959963984540054, kBisection);
+  EXPECT_NEAR(NormalQuantile(0.999), 3.090232306167814, kBisection);
+  EXPECT_NEAR(NormalQuantile(0.8), 0.841621233572914, kBisection);
+  EXPECT_NEAR(NormalQuantile(0.1), -NormalQuantile(0.9), kBisection);
+}
+
+TEST(Statistics, ChiSquaredQuantileOfThreeDegreesInvertsTheClosedForm) {
+  // F(x) = erf(sqrt(x / 2)) - sqrt(2 x / pi) exp(-x / 2) for 3 degrees of freedom.
+  const double pi = std::acos(-1.0);
+  for (const double p : {0.5, 0.95, 0.999}) {
+    const double x = ChiSquaredQuantile(p, 3.0);
+    EXPECT_NEAR(std::erf(std::sqrt(x / 2.0)) - std::sqrt(2.0 * x / pi) * std::exp(-x / 2.0), p,
+                1e-11)
+        << p;
+  }
+  EXPECT_NEAR(ChiSquaredQuantile(0.999, 3.0), 16.266, kTableTolerance);
+}
+
 }  // namespace
 }  // namespace photopose

@@ -47,23 +47,11 @@ void ReportedAngles(const BlockCamera& camera, const ExteriorOrientation& eo,
                     Eigen::Vector3d* angles_deg, Eigen::Vector3d* sigmas_deg) {
   AngleFlags flags;
   flags.angle_direction = camera.table.angle_direction;
-  auto file_angles = [&](const Eigen::Vector3d& seed) {
-    return ApplyAngleDirection(
-        flags, AnglesFromRotation(convention, RotationFromAngles(RotationConvention::kSeed, seed)));
-  };
   const Eigen::Vector3d seed = eo.angles_seed_rad();
-  *angles_deg = file_angles(seed) * kDegreesPerRadian;
+  *angles_deg = ConventionAnglesFromSeed(convention, flags, seed) * kDegreesPerRadian;
   sigmas_deg->setConstant(kNaN);
   if (covariance == nullptr) return;
-  // Central differences of the conversion (1e-6 rad: truncation and rounding both below 1e-10).
-  constexpr double kStep = 1e-6;
-  Eigen::Matrix3d J;
-  for (int j = 0; j < 3; ++j) {
-    Eigen::Vector3d h = Eigen::Vector3d::Zero();
-    h[j] = kStep;
-    const Eigen::Vector3d plus = file_angles(seed + h), minus = file_angles(seed - h);
-    for (int i = 0; i < 3; ++i) J(i, j) = WrapAngle(plus[i] - minus[i]) / (2.0 * kStep);
-  }
+  const Eigen::Matrix3d J = ConventionFromSeedJacobian(convention, flags, seed);
   const Eigen::Matrix3d C = J * covariance->bottomRightCorner<3, 3>() * J.transpose();
   *sigmas_deg = C.diagonal().cwiseMax(0.0).cwiseSqrt() * kDegreesPerRadian;
 }

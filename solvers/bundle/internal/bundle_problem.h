@@ -1,7 +1,8 @@
 #pragma once
-// The inside of solvers/bundle/bundle_adjustment.h, shared by its three files: the plan of an
-// adjustment (which observations, weights and datum), the Ceres problem of one round, and the
-// reduced normal matrix behind its statistics. Not part of the library's interface.
+// The inside of solvers/bundle/bundle_adjustment.h and solvers/bundle/taylor_bundle.h: the plan of
+// an adjustment (which observations, weights and datum; both solvers make it here) and the Ceres
+// problem of one round. The statistics of a round are in internal/bundle_statistics.h. Not part of
+// the library's interface.
 
 #include <ceres/ceres.h>
 
@@ -12,6 +13,7 @@
 #include <vector>
 
 #include "core/block.h"
+#include "core/mark_weight.h"
 #include "solvers/bundle/bundle_adjustment.h"
 
 namespace photopose::internal {
@@ -30,11 +32,15 @@ extern const char* const kBundleGroupNames[kNumBundleGroups];
 // An image needs at least this many marks for its six unknowns.
 constexpr int kMinMarksPerImage = 3;
 
-// One residual block of the problem: which group, which item (mark, point or image), how many of
+// The default sigmas of the marks of `group` (kTieMarks or kControlMarks; check marks weigh as
+// control marks) under `accuracies`, for the rule of core/mark_weight.h.
+MarkSigmaDefaults GroupMarkDefaults(const BundleAccuracies& accuracies, BundleGroup group);
+
+// One residual block of the round: which group, which item (mark, point or image), how many of
 // its rows are observations (the zero row of a control point's Z prior is not) and the axis of its
-// first row (priors: 0 for X / omega, 2 for Z).
-// One residual block of the round (24 bytes: a 1000-image block has 1.7 million of them). Its
-// parameter blocks come from Ceres when needed (Problem::GetParameterBlocksForResidualBlock).
+// first row (priors: 0 for X / omega, 2 for Z). 24 bytes: a 1000-image block has 1.7 million of
+// them; their parameter blocks come from Ceres when needed
+// (Problem::GetParameterBlocksForResidualBlock).
 struct ResidualInfo {
   BundleGroup group;
   int item;
@@ -49,6 +55,16 @@ struct BundleState {
   std::vector<Eigen::Vector3d> points;
   std::vector<std::vector<double>> cameras;
   Eigen::Vector3d lever = Eigen::Vector3d::Zero();
+};
+
+// What the plan takes from the options of either solver.
+struct BundlePlanOptions {
+  BundleAccuracies accuracies;
+  bool use_lever = false;  // a lever arm enters the camera-position priors
+  // A datum that fixes fewer than the 7 similarity parameters of the block: refused with the reason
+  // (BundleAdjust), or accepted so that it shows as a singular normal matrix in the round (the
+  // Taylor adjustment, which reports it as a failed round).
+  bool refuse_weak_datum = true;
 };
 
 // Everything decided before a round: observations in use, their sigmas, the datum.
@@ -73,12 +89,16 @@ struct BundlePlan {
   int relative_scale_image = -1;  // and the image whose one coordinate fixes the scale
   int relative_scale_axis = -1;
   bool use_lever = false;
+  bool refuse_weak_datum = true;  // from BundlePlanOptions
 };
 
-// The plan of a block: marks, priors, calibration, connectivity and datum. Errors name what makes
-// the block unusable.
-Status MakeBundlePlan(const BundleAdjustmentOptions& options, const BundleAdjustmentConfig& config,
+// The plan of a block: marks (weights by core/mark_weight.h), points, priors, calibration,
+// connectivity and datum. Errors name what makes the block unusable. The one place that decides
+// which observations an adjustment uses, for BundleAdjust and TaylorBundleAdjust alike.
+Status MakeBundlePlan(const BundlePlanOptions& options, const BundleAdjustmentConfig& config,
                       const Block& block, BundlePlan* plan);
+// BundleAdjust's options for the plan.
+BundlePlanOptions PlanOptionsOf(const BundleAdjustmentOptions& options);
 // After observations were removed: tie points left with one ray leave, every image keeps three
 // marks, and the datum still holds (plan->datum unchanged). An error says which fails.
 Status RecheckBundlePlan(const BundleAdjustmentConfig& config, const Block& block,
@@ -111,59 +131,5 @@ void BuildBundleRound(const BundleAdjustmentOptions& options, const BundleAdjust
 void ApplyRelativeGauge(const BundlePlan& plan, BundleState* state, BundleRound* round);
 ceres::Solver::Options BundleSolverOptions(const BundleAdjustmentOptions& options,
                                            const BundleRound& round);
-
-// The reduced normal matrix S (e blocks; points eliminated 3 x 3 at a time) of the whitened
-// problem, its inverse C and what the statistics need of the point blocks.
-struct ReducedNormals {
-  int size = 0;                                 // number of e columns
-  std::vector<int> e_offset;                    // per e block
-  std::map<const double*, int> e_index;         // e block -> index
-  std::map<const double*, int> point_index;     // point block -> index into the point data
-  std::vector<Eigen::Matrix3d> V_inverse;       // per point block
-  std::vector<std::vector<int>> W_columns;      // per point block: e columns it touches
-  std::vector<Eigen::MatrixXd> W;               // per point block: (columns x 3) of J_e^T J_p
-  Eigen::MatrixXd C;                            // S^-1 (unscaled)
-  bool ok = false;
-};
-void BuildReducedNormals(const BundleRound& round, ReducedNormals* reduced);
-
-// The tangent-space Jacobian rows of one residual block: e columns (global) and point columns.
-struct BlockRows {
-  int rows = 0;
-  std::vector<double> residuals;                 // whitened
-  std::vector<int> e_columns;
-  Eigen::MatrixXd J_e;                           // rows x e_columns
-  Eigen::Matrix<double, Eigen::Dynamic, 3> J_p;  // rows x 3, when `point` >= 0
-  int point = -1;                                // index into the reduced point data, or -1
-};
-bool EvaluateBlockRows(const BundleRound& round, const ReducedNormals& reduced,
-                       const ResidualInfo& info, BlockRows* rows);
-
-// Unscaled covariance of point block p: V^-1 + V^-1 W^T C W V^-1.
-Eigen::Matrix3d PointCovariance(const ReducedNormals& reduced, int p);
-// The diagonal of the hat matrix J C J^T of a block's rows (unscaled C), and, when `shift` is not
-// null, for each row i the vector C J_i^T (global e columns; the part of the points eliminated
-// folded in) that gives the parameters' response to a unit whitened error in that row.
-Eigen::VectorXd Leverages(const ReducedNormals& reduced, const BlockRows& rows,
-                          std::vector<Eigen::VectorXd>* shift);
-
-// Per group, what variance component estimation needs: the whitened sum of squares and the
-// redundancy (sum of redundancy numbers; NaN when not computed).
-struct GroupVariance {
-  double whitened_ssq[kNumBundleGroups] = {};
-  double redundancy[kNumBundleGroups] = {};
-  int scalar_rows[kNumBundleGroups] = {};
-};
-
-// Everything the result reports about a converged round: residuals, groups, covariances,
-// calibration, per-observation diagnostics (with the whitened normalized residual of each of the
-// round's observations in `normalized`, aligned with `round.residuals` rows), check points.
-void ComputeBundleStatistics(const BundleAdjustmentOptions& options, const Block& block,
-                             const BundlePlan& plan, const BundleState& state,
-                             const BundleRound& round, BundleAdjustmentResult* result,
-                             GroupVariance* variance);
-
-// The standard normal quantile: Phi^-1(p), p in (0, 1), by bisection on erfc to 1e-12.
-double NormalQuantile(double p);
 
 }  // namespace photopose::internal

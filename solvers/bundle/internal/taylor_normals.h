@@ -1,0 +1,176 @@
+#pragma once
+// The inside of the Taylor bundle adjustment (solvers/bundle/taylor_bundle.h) shared by its two
+// files: the plan, the layout of a round's unknowns and of the sparse reduced normal matrix, the
+// linearisation of the observation equations (eqs. 7-8, 17-28 of the seed), the elimination of the
+// points, the factorisation and the covariances (taylor_bundle_normals.cc). taylor_bundle.cc runs
+// the rounds and fills the results. Not part of the library's interface.
+
+#include <Eigen/Core>
+#include <Eigen/OrderingMethods>
+#include <Eigen/SparseCholesky>
+#include <Eigen/SparseCore>
+#include <array>
+#include <utility>
+#include <vector>
+
+#include "core/block.h"
+#include "solvers/bundle/internal/bundle_problem.h"
+#include "solvers/bundle/taylor_bundle.h"
+
+namespace photopose::internal::taylor {
+
+using Matrix63 = Eigen::Matrix<double, 6, 3>;
+using Matrix26 = Eigen::Matrix<double, 2, 6>;
+using Matrix23 = Eigen::Matrix<double, 2, 3>;
+using SparseMatrix = Eigen::SparseMatrix<double, Eigen::ColMajor, int>;
+
+// The ground-point partials.
+// dF/dX = -dF/dX0: F depends on the point and the centre only through X - X0 (eqs. 7-8), so the
+// point's three columns are the negated eqs. 17-19 and 23-25.
+inline void PointPartialsFromCentrePartials(const double* row_u, const double* row_v,
+                                            Matrix23* d_point) {
+  for (int k = 0; k < 3; ++k) {
+    (*d_point)(0, k) = -row_u[k];
+    (*d_point)(1, k) = -row_v[k];
+  }
+}
+
+// The decisions made before the first round (which marks, points and priors enter, with which
+// sigmas, and how the block is tied to the ground) are BundleAdjust's plan
+// (internal::MakeBundlePlan); the Taylor adjustment adds only what is its own.
+struct Plan : BundlePlan {
+  std::vector<Eigen::Vector2d> ideal_um;  // per mark: the corrected (ideal) image-plane point
+  std::vector<char> image_constant;  // held constant (config or the relative gauge's first image)
+  std::vector<char> point_constant;
+  std::vector<std::array<bool, 6>> image_fixed;  // components held fixed of a free image
+};
+
+// The unknowns and the sparsity of the reduced normal matrix of one round. Camera block b is
+// image free_images[b], columns 6 b .. 6 b + 5. The reduced matrix is stored as its upper triangle
+// in a compressed sparse column matrix whose pattern is built once per round; pairs[k] = (b1, b2),
+// b1 <= b2, is a 6 x 6 block of it and value_start[k][c] the position in its value array of row
+// 6 b1 of column 6 b2 + c (the block's rows of a column are contiguous).
+struct Layout {
+  std::vector<int> image_block;  // per image: camera block or -1
+  std::vector<int> point_block;  // per point: free point or -1
+  std::vector<int> free_images;
+  std::vector<int> free_points;
+  std::vector<int> marks;                     // the marks of the round (indices into Block::marks)
+  std::vector<int> mark_block;                // per mark of the round: camera block or -1
+  std::vector<int> mark_point;                // per mark of the round: free point or -1
+  std::vector<std::vector<int>> point_marks;  // per free point: positions in `marks` of its
+                                              // marks in free images
+  std::vector<std::vector<int>> point_pairs;  // per free point: pair of each (a <= c) of those
+  std::vector<int> diagonal_pair;             // per camera block
+  std::vector<std::pair<int, int>> pairs;
+  std::vector<std::array<int, 6>> value_start;
+  SparseMatrix S;
+  int num_observations = 0;
+  int num_unknowns = 0;
+};
+
+// The values being adjusted, relative to the block's centroid.
+struct State {
+  std::vector<Vector6d> eo;             // per image
+  std::vector<Eigen::Vector3d> points;  // per point
+};
+
+// The block's fixed data in the centred frame.
+struct Frame {
+  Eigen::Vector3d centroid = Eigen::Vector3d::Zero();
+  double extent_m = 1.0;                  // RMS distance of cameras and points from the centroid
+  std::vector<Eigen::Vector3d> surveyed;  // per point (control points), centred
+  std::vector<Eigen::Vector3d> measured;  // per image (camera positions), centred
+  std::vector<double> focal_um;           // per image
+  Eigen::Vector3d lever = Eigen::Vector3d::Zero();
+  bool use_lever = false;
+};
+
+// The normal equations of one linearisation (seed sign: N d = A^T P F, p = p0 - d).
+struct Normal {
+  std::vector<Matrix6d> U;  // per camera block
+  std::vector<Vector6d> ge;
+  std::vector<Eigen::Matrix3d> V;  // per free point
+  std::vector<Eigen::Vector3d> gp;
+  std::vector<Matrix63> W;         // per mark of the round (zero unless image and point free)
+  std::vector<Eigen::Vector2d> f;  // per mark of the round: F (um)
+  double weighted_ssr = 0.0;       // F^T P F over every observation
+  int behind_mark = -1;            // a mark whose point is not in front of its camera
+  double behind_w = 0.0;
+};
+
+// Optional dense copy of the whitened observation equations, for LinearizeTaylorBundle.
+struct DenseRows {
+  std::vector<int> image_columns;  // per image: first column or -1
+  std::vector<int> point_columns;  // per point: first column or -1
+  int num_columns = 0;
+  std::vector<Eigen::VectorXd> rows;
+  std::vector<double> residuals;
+
+  // One equation: sqrt_weight times (eo_row at the image's columns, point_row at the point's) and
+  // times F. image / point -1 (or a null row): no such part.
+  void Add(int image, const double* eo_row, int point, const double* point_row, double sqrt_weight,
+           double f) {
+    Eigen::VectorXd row = Eigen::VectorXd::Zero(num_columns);
+    if (image >= 0 && eo_row != nullptr && image_columns[image] >= 0)
+      for (int k = 0; k < 6; ++k) row[image_columns[image] + k] = sqrt_weight * eo_row[k];
+    if (point >= 0 && point_row != nullptr && point_columns[point] >= 0)
+      for (int k = 0; k < 3; ++k) row[point_columns[point] + k] = sqrt_weight * point_row[k];
+    rows.push_back(std::move(row));
+    residuals.push_back(sqrt_weight * f);
+  }
+};
+
+// The points eliminated, the reduced camera system factorised.
+struct Reduction {
+  std::vector<Eigen::Matrix3d> V_inverse;  // per free point
+  std::vector<Matrix63> Y;                 // scratch: W V^-1 of the marks of one point
+  std::vector<Matrix6d> blocks;            // per pair: the reduced matrix S (unscaled)
+  Eigen::VectorXd r;                       // reduced right-hand side (unscaled)
+  Eigen::VectorXd scale;                   // Jacobi scale 1 / sqrt(diag S); 1 where fixed
+  // Natural order: the camera blocks are already in a fill-reducing order (BuildLayout).
+  Eigen::SimplicialLDLT<SparseMatrix, Eigen::Upper, Eigen::NaturalOrdering<int>> ldlt;
+  bool analysed = false;
+  double pivot_ratio = 0.0;  // smallest / largest pivot of the scaled LDL^T
+};
+
+inline bool IsFixed(const Plan& plan, const Layout& layout, int b, int component) {
+  return plan.image_fixed[layout.free_images[b]][component];
+}
+
+// The layout of a round from the plan: free images (in a fill-reducing order) and points, the
+// marks of the round, the block pairs of S and its sparse pattern, the observation count.
+void BuildLayout(const Block& block, const Plan& plan, Layout* layout);
+
+// Linearises every observation equation at `state` and accumulates the normal equations (and,
+// when `dense` is not null, the whitened rows). False when a point is not in front of its camera
+// (normal->behind_mark says which) or the residuals are not finite.
+bool Linearize(TaylorPartials partials, const Block& block, const Plan& plan, const Layout& layout,
+               const Frame& frame, const State& state, Normal* normal, DenseRows* dense);
+
+// Eliminates the points, 3 x 3 at a time:
+//   S = U - sum_p W_p V_p^-1 W_p^T,   r = g_e - sum_p W_p V_p^-1 g_p.
+// Returns the first free point whose block V_p is singular (its rays fix no point), or -1.
+int Reduce(const Normal& normal, const Layout& layout, Reduction* reduction);
+
+// Writes the Jacobi-scaled S into layout->S (fixed components: their row and column zero, 1 on
+// the diagonal, which removes them exactly) and sets the scale. Returns the first camera column
+// without weight (a zero diagonal), or -1.
+int WriteScaled(const Plan& plan, Layout* layout, Reduction* reduction);
+
+// Factorises the scaled S. False when it is not positive definite to min_pivot_ratio.
+bool Factorize(double min_pivot_ratio, const Layout& layout, Reduction* reduction);
+
+// Solves S d_e = r (through the scaled factorisation) and back-substitutes
+// d_p = V_p^-1 (g_p - W_p^T d_e).
+void SolveCorrections(const Plan& plan, const Layout& layout, const Normal& normal,
+                      const Reduction& reduction, Eigen::VectorXd* d_e,
+                      std::vector<Eigen::Vector3d>* d_p);
+
+// The blocks of S^-1 the statistics need, unscaled: per camera block its 6 x 6 diagonal block,
+// and per free control point its 3 x 3 covariance (has_point).
+void Covariances(const Block& block, const Plan& plan, const Layout& layout, const Normal& normal,
+                 const Reduction& reduction, std::vector<Matrix6d>* cameras,
+                 std::vector<Eigen::Matrix3d>* points, std::vector<char>* has_point);
+
+}  // namespace photopose::internal::taylor

@@ -1,0 +1,469 @@
+// The normal equations of the Taylor bundle adjustment (internal/taylor_normals.h): layout,
+// linearisation, elimination of the points, factorisation, covariances.
+#include "solvers/bundle/internal/taylor_normals.h"
+
+#include <Eigen/Dense>
+#include <algorithm>
+#include <cmath>
+#include <unordered_map>
+
+#include "core/rotation.h"
+#include "solvers/resection/taylor_resection.h"
+
+namespace photopose::internal::taylor {
+namespace {
+
+// A point's 3 x 3 normal block is singular (its rays meet at no definite point) when its smallest
+// LDL^T pivot is at most this fraction of the largest.
+constexpr double kPointPivotRatio = 1e-14;
+
+// ------------------------------------------------------------------ one round's structure
+
+int TriangleIndex(int a, int c, int n) { return a * n - a * (a - 1) / 2 + (c - a); }
+
+// Renumbers the camera blocks in a fill-reducing order: approximate minimum degree on the image
+// graph (images joined when they see a common point that is an unknown). Each image's 6 x 6 block
+// of S is dense, so ordering images rather than scalars loses nothing (Ceres orders its Schur
+// complement the same way), and the sparse LDL^T then runs in the natural order: the scalar AMD
+// of a dense-ish S would cost more than a whole Gauss-Newton iteration.
+void OrderImagesToReduceFill(const Block& block, const Plan& plan, Layout* layout) {
+  const int num_blocks = static_cast<int>(layout->free_images.size());
+  if (num_blocks < 3) return;
+  std::vector<Eigen::Triplet<double, int>> entries;
+  std::vector<int> seen;
+  for (size_t p = 0; p < block.points.size(); ++p) {
+    if (!plan.point_in_problem[p] || plan.point_constant[p]) continue;
+    seen.clear();
+    for (const int m : block.marks_of_point[p]) {
+      const int b = layout->image_block[block.marks[m].image];
+      if (plan.mark_used[m] && b >= 0) seen.push_back(b);
+    }
+    for (const int b1 : seen)
+      for (const int b2 : seen) entries.emplace_back(b1, b2, 1.0);
+  }
+  for (int b = 0; b < num_blocks; ++b) entries.emplace_back(b, b, 1.0);
+  SparseMatrix graph(num_blocks, num_blocks);
+  graph.setFromTriplets(entries.begin(), entries.end());
+  Eigen::PermutationMatrix<Eigen::Dynamic, Eigen::Dynamic, int> order;
+  Eigen::AMDOrdering<int>()(graph, order);  // order.indices()[new] = old
+  std::vector<int> images(num_blocks);
+  for (int k = 0; k < num_blocks; ++k) {
+    images[k] = layout->free_images[order.indices()[k]];
+    layout->image_block[images[k]] = k;
+  }
+  layout->free_images = std::move(images);
+}
+
+}  // namespace
+
+void BuildLayout(const Block& block, const Plan& plan, Layout* layout) {
+  *layout = Layout();
+  layout->image_block.assign(block.images.size(), -1);
+  layout->point_block.assign(block.points.size(), -1);
+  for (size_t i = 0; i < block.images.size(); ++i) {
+    if (plan.image_constant[i]) continue;
+    layout->image_block[i] = static_cast<int>(layout->free_images.size());
+    layout->free_images.push_back(static_cast<int>(i));
+    layout->num_unknowns += 6;
+    for (const bool fixed : plan.image_fixed[i]) layout->num_unknowns -= fixed;
+  }
+  OrderImagesToReduceFill(block, plan, layout);
+  for (size_t p = 0; p < block.points.size(); ++p) {
+    if (!plan.point_in_problem[p] || plan.point_constant[p]) continue;
+    layout->point_block[p] = static_cast<int>(layout->free_points.size());
+    layout->free_points.push_back(static_cast<int>(p));
+    layout->num_unknowns += 3;
+    if (plan.point_prior[p]) layout->num_observations += 3;
+  }
+  for (size_t i = 0; i < block.images.size(); ++i)
+    layout->num_observations += 3 * (plan.image_prior[i] + plan.image_attitude[i]);
+  layout->point_marks.assign(layout->free_points.size(), {});
+  for (size_t m = 0; m < block.marks.size(); ++m) {
+    if (!plan.mark_used[m]) continue;
+    const int k = static_cast<int>(layout->marks.size());
+    layout->marks.push_back(static_cast<int>(m));
+    layout->num_observations += 2;
+    const int b = layout->image_block[block.marks[m].image];
+    const int q = layout->point_block[block.marks[m].point];
+    layout->mark_block.push_back(b);
+    layout->mark_point.push_back(q);
+    if (q >= 0 && b >= 0) layout->point_marks[q].push_back(k);
+  }
+
+  // Block pairs: the diagonal, and every two images that see a common free point.
+  std::unordered_map<long long, int> pair_index;
+  const long long num_blocks = static_cast<long long>(layout->free_images.size());
+  auto pair_of = [&](int b1, int b2) {
+    if (b1 > b2) std::swap(b1, b2);
+    const auto [it, inserted] =
+        pair_index.emplace(b1 * num_blocks + b2, static_cast<int>(layout->pairs.size()));
+    if (inserted) layout->pairs.emplace_back(b1, b2);
+    return it->second;
+  };
+  for (int b = 0; b < static_cast<int>(num_blocks); ++b)
+    layout->diagonal_pair.push_back(pair_of(b, b));
+  layout->point_pairs.assign(layout->free_points.size(), {});
+  for (size_t q = 0; q < layout->free_points.size(); ++q) {
+    const std::vector<int>& marks = layout->point_marks[q];
+    const int n = static_cast<int>(marks.size());
+    std::vector<int>& ids = layout->point_pairs[q];
+    ids.resize(n * (n + 1) / 2);
+    for (int a = 0; a < n; ++a)
+      for (int c = a; c < n; ++c)
+        ids[TriangleIndex(a, c, n)] =
+            pair_of(layout->mark_block[marks[a]], layout->mark_block[marks[c]]);
+  }
+
+  // The sparse pattern (upper triangle) and where each block's columns start in it.
+  const int size = 6 * static_cast<int>(num_blocks);
+  std::vector<Eigen::Triplet<double, int>> entries;
+  for (const auto& [b1, b2] : layout->pairs)
+    for (int c = 0; c < 6; ++c)
+      for (int r = 0; r < (b1 == b2 ? c + 1 : 6); ++r)
+        entries.emplace_back(6 * b1 + r, 6 * b2 + c, 1.0);
+  layout->S.resize(size, size);
+  layout->S.setFromTriplets(entries.begin(), entries.end());
+  layout->S.makeCompressed();
+  const int* outer = layout->S.outerIndexPtr();
+  const int* inner = layout->S.innerIndexPtr();
+  layout->value_start.resize(layout->pairs.size());
+  for (size_t k = 0; k < layout->pairs.size(); ++k) {
+    const auto [b1, b2] = layout->pairs[k];
+    for (int c = 0; c < 6; ++c) {
+      const int column = 6 * b2 + c;
+      const int* begin = inner + outer[column];
+      const int* end = inner + outer[column + 1];
+      layout->value_start[k][c] = static_cast<int>(std::lower_bound(begin, end, 6 * b1) - inner);
+    }
+  }
+}
+
+// ------------------------------------------------------------------ the linearisation
+
+namespace {
+
+// Marks: eqs. 7-8 with eqs. 17-28 for the camera and dF/dX = -dF/dX0 for the point. False when a
+// point is not in front of its camera (normal->behind_mark says which).
+bool LinearizeMarks(TaylorPartials partials, const Block& block, const Plan& plan,
+                    const Layout& layout, const Frame& frame, const State& state, Normal* normal,
+                    DenseRows* dense) {
+  std::vector<TaylorPoseLinearization> poses;
+  poses.reserve(block.images.size());
+  for (size_t i = 0; i < block.images.size(); ++i)
+    poses.emplace_back(partials, state.eo[i].data(), frame.focal_um[i]);
+  for (size_t k = 0; k < layout.marks.size(); ++k) {
+    const int m = layout.marks[k];
+    const BlockMark& mark = block.marks[m];
+    double row_u[6], row_v[6], fu, fv, w;
+    if (!poses[mark.image].Linearize(state.points[mark.point].data(), plan.ideal_um[m].data(),
+                                     row_u, row_v, &fu, &fv, &w)) {
+      normal->behind_mark = m;
+      normal->behind_w = w;
+      return false;
+    }
+    const double weight = 1.0 / (plan.mark_sigma[m] * plan.mark_sigma[m]);
+    const Eigen::Vector2d F(fu, fv);
+    normal->f[k] = F;
+    normal->weighted_ssr += weight * F.squaredNorm();
+    Matrix26 A_e;
+    for (int c = 0; c < 6; ++c) {
+      A_e(0, c) = row_u[c];
+      A_e(1, c) = row_v[c];
+    }
+    Matrix23 A_p;
+    PointPartialsFromCentrePartials(row_u, row_v, &A_p);
+    const int b = layout.mark_block[k];
+    const int q = layout.mark_point[k];
+    if (b >= 0) {
+      normal->U[b].noalias() += weight * A_e.transpose() * A_e;
+      normal->ge[b].noalias() += weight * A_e.transpose() * F;
+    }
+    if (q >= 0) {
+      normal->V[q].noalias() += weight * A_p.transpose() * A_p;
+      normal->gp[q].noalias() += weight * A_p.transpose() * F;
+    }
+    if (b >= 0 && q >= 0) {
+      normal->W[k].noalias() = weight * A_e.transpose() * A_p;
+    } else {
+      normal->W[k].setZero();
+    }
+    if (dense != nullptr) {
+      const double s = std::sqrt(weight);
+      const double point_u[3] = {A_p(0, 0), A_p(0, 1), A_p(0, 2)};
+      const double point_v[3] = {A_p(1, 0), A_p(1, 1), A_p(1, 2)};
+      dense->Add(mark.image, row_u, mark.point, point_u, s, fu);
+      dense->Add(mark.image, row_v, mark.point, point_v, s, fv);
+    }
+  }
+  return true;
+}
+
+// Control points: F = X - X_surveyed per axis, A = I.
+void LinearizeControlPoints(const Plan& plan, const Layout& layout, const Frame& frame,
+                            const State& state, Normal* normal, DenseRows* dense) {
+  for (size_t q = 0; q < layout.free_points.size(); ++q) {
+    const int p = layout.free_points[q];
+    if (!plan.point_prior[p]) continue;
+    const Eigen::Vector3d F = state.points[p] - frame.surveyed[p];
+    const Eigen::Vector3d weight = plan.point_sigma[p].cwiseAbs2().cwiseInverse();
+    normal->V[q].diagonal() += weight;
+    normal->gp[q] += weight.cwiseProduct(F);
+    normal->weighted_ssr += weight.dot(F.cwiseAbs2());
+    if (dense != nullptr) {
+      for (int axis = 0; axis < 3; ++axis) {
+        const Eigen::Vector3d row = Eigen::Vector3d::Unit(axis);
+        dense->Add(-1, nullptr, p, row.data(), std::sqrt(weight[axis]), F[axis]);
+      }
+    }
+  }
+}
+
+// Camera positions: F = X0 + R^T l - X_gnss, A = [I, d(R^T l)/d angles]. Attitudes: F = the
+// angle differences (wrapped), A = [0, I].
+void LinearizeImagePriors(const Block& block, const Plan& plan, const Layout& layout,
+                          const Frame& frame, const State& state, Normal* normal,
+                          DenseRows* dense) {
+  for (size_t i = 0; i < block.images.size(); ++i) {
+    const int b = layout.image_block[i];
+    if (b < 0) continue;
+    if (plan.image_prior[i]) {
+      Eigen::Matrix<double, 3, 6> A = Eigen::Matrix<double, 3, 6>::Zero();
+      A.leftCols<3>().setIdentity();
+      Eigen::Vector3d antenna = state.eo[i].head<3>();
+      if (frame.use_lever) {
+        ExteriorOrientation eo;
+        eo.parameters = state.eo[i];
+        Eigen::Matrix3d d_angles;
+        antenna = TaylorAntennaPosition(eo, frame.lever, &d_angles);
+        A.rightCols<3>() = d_angles;
+      }
+      const Eigen::Vector3d F = antenna - frame.measured[i];
+      const Eigen::Vector3d weight = plan.image_prior_sigma[i].cwiseAbs2().cwiseInverse();
+      normal->U[b].noalias() += A.transpose() * weight.asDiagonal() * A;
+      normal->ge[b].noalias() += A.transpose() * weight.cwiseProduct(F);
+      normal->weighted_ssr += weight.dot(F.cwiseAbs2());
+      if (dense != nullptr) {
+        for (int axis = 0; axis < 3; ++axis) {
+          const Vector6d row = A.row(axis).transpose();
+          dense->Add(static_cast<int>(i), row.data(), -1, nullptr, std::sqrt(weight[axis]),
+                     F[axis]);
+        }
+      }
+    }
+    if (plan.image_attitude[i]) {
+      Eigen::Vector3d F;
+      for (int k = 0; k < 3; ++k)
+        F[k] = WrapAngle(state.eo[i][3 + k] - (*block.images[i].measured_angles_rad)[k]);
+      const Eigen::Vector3d weight = plan.image_attitude_sigma[i].cwiseAbs2().cwiseInverse();
+      normal->U[b].bottomRightCorner<3, 3>().diagonal() += weight;
+      normal->ge[b].tail<3>() += weight.cwiseProduct(F);
+      normal->weighted_ssr += weight.dot(F.cwiseAbs2());
+      if (dense != nullptr) {
+        for (int axis = 0; axis < 3; ++axis) {
+          const Vector6d row = Vector6d::Unit(3 + axis);
+          dense->Add(static_cast<int>(i), row.data(), -1, nullptr, std::sqrt(weight[axis]),
+                     F[axis]);
+        }
+      }
+    }
+  }
+}
+
+}  // namespace
+
+bool Linearize(TaylorPartials partials, const Block& block, const Plan& plan, const Layout& layout,
+               const Frame& frame, const State& state, Normal* normal, DenseRows* dense) {
+  const size_t num_blocks = layout.free_images.size();
+  const size_t num_points = layout.free_points.size();
+  normal->U.assign(num_blocks, Matrix6d::Zero());
+  normal->ge.assign(num_blocks, Vector6d::Zero());
+  normal->V.assign(num_points, Eigen::Matrix3d::Zero());
+  normal->gp.assign(num_points, Eigen::Vector3d::Zero());
+  normal->W.resize(layout.marks.size());
+  normal->f.resize(layout.marks.size());
+  normal->weighted_ssr = 0.0;
+  normal->behind_mark = -1;
+  if (!LinearizeMarks(partials, block, plan, layout, frame, state, normal, dense)) return false;
+  LinearizeControlPoints(plan, layout, frame, state, normal, dense);
+  LinearizeImagePriors(block, plan, layout, frame, state, normal, dense);
+  return std::isfinite(normal->weighted_ssr);
+}
+
+// ------------------------------------------------------------------ the reduced normal equations
+
+
+// Eliminates the points, 3 x 3 at a time:
+//   S = U - sum_p W_p V_p^-1 W_p^T,   r = g_e - sum_p W_p V_p^-1 g_p.
+// Returns the first free point whose block V_p is singular (its rays fix no point), or -1.
+int Reduce(const Normal& normal, const Layout& layout, Reduction* reduction) {
+  const int num_blocks = static_cast<int>(layout.free_images.size());
+  reduction->blocks.assign(layout.pairs.size(), Matrix6d::Zero());
+  reduction->r.resize(6 * num_blocks);
+  for (int b = 0; b < num_blocks; ++b) {
+    reduction->blocks[layout.diagonal_pair[b]] = normal.U[b];
+    reduction->r.segment<6>(6 * b) = normal.ge[b];
+  }
+  reduction->V_inverse.resize(layout.free_points.size());
+  for (size_t q = 0; q < layout.free_points.size(); ++q) {
+    const Eigen::LDLT<Eigen::Matrix3d> ldlt(normal.V[q]);
+    const Eigen::Vector3d d = ldlt.vectorD();
+    if (ldlt.info() != Eigen::Success || !(d.minCoeff() > kPointPivotRatio * d.maxCoeff()))
+      return layout.free_points[q];
+    const Eigen::Matrix3d V_inverse = ldlt.solve(Eigen::Matrix3d::Identity());
+    reduction->V_inverse[q] = V_inverse;
+    const std::vector<int>& marks = layout.point_marks[q];
+    const std::vector<int>& ids = layout.point_pairs[q];
+    const int n = static_cast<int>(marks.size());
+    std::vector<Matrix63>& Y = reduction->Y;
+    Y.resize(n);
+    for (int a = 0; a < n; ++a) {
+      Y[a].noalias() = normal.W[marks[a]] * V_inverse;
+      reduction->r.segment<6>(6 * layout.mark_block[marks[a]]).noalias() -= Y[a] * normal.gp[q];
+    }
+    for (int a = 0; a < n; ++a) {
+      const int ka = marks[a];
+      const int ba = layout.mark_block[ka];
+      for (int c = a; c < n; ++c) {
+        const int kc = marks[c];
+        const int bc = layout.mark_block[kc];
+        Matrix6d& block = reduction->blocks[ids[TriangleIndex(a, c, n)]];
+        const Matrix6d M = Y[a] * normal.W[kc].transpose();  // W_a V^-1 W_c^T
+        if (a == c || ba < bc) {
+          block -= M;
+        } else if (ba > bc) {
+          block -= M.transpose();
+        } else {  // two marks of the point in one image
+          block -= M + M.transpose();
+        }
+      }
+    }
+  }
+  return -1;
+}
+
+// Writes the Jacobi-scaled S into layout->S (fixed components: their row and column zero, 1 on
+// the diagonal, which removes them exactly) and sets the scale. Returns the first camera column
+// without weight (a zero diagonal), or -1.
+int WriteScaled(const Plan& plan, Layout* layout, Reduction* reduction) {
+  const int num_blocks = static_cast<int>(layout->free_images.size());
+  reduction->scale.resize(6 * num_blocks);
+  for (int b = 0; b < num_blocks; ++b) {
+    const Matrix6d& diagonal = reduction->blocks[layout->diagonal_pair[b]];
+    for (int r = 0; r < 6; ++r) {
+      if (IsFixed(plan, *layout, b, r)) {
+        reduction->scale[6 * b + r] = 1.0;
+        continue;
+      }
+      const double d = diagonal(r, r);
+      if (!(d > 0.0) || !std::isfinite(d)) return 6 * b + r;
+      reduction->scale[6 * b + r] = 1.0 / std::sqrt(d);
+    }
+  }
+  double* values = layout->S.valuePtr();
+  const Eigen::VectorXd& s = reduction->scale;
+  for (size_t k = 0; k < layout->pairs.size(); ++k) {
+    const auto [b1, b2] = layout->pairs[k];
+    const Matrix6d& block = reduction->blocks[k];
+    for (int c = 0; c < 6; ++c) {
+      const bool fixed_c = IsFixed(plan, *layout, b2, c);
+      double* column = values + layout->value_start[k][c];
+      const int rows = b1 == b2 ? c + 1 : 6;
+      for (int r = 0; r < rows; ++r) {
+        if (fixed_c || IsFixed(plan, *layout, b1, r)) {
+          column[r] = (b1 == b2 && r == c) ? 1.0 : 0.0;
+        } else {
+          column[r] = block(r, c) * s[6 * b1 + r] * s[6 * b2 + c];
+        }
+      }
+    }
+  }
+  return -1;
+}
+
+// Factorises the scaled S. False when it is not positive definite to min_pivot_ratio.
+bool Factorize(double min_pivot_ratio, const Layout& layout, Reduction* reduction) {
+  if (!reduction->analysed) {
+    reduction->ldlt.analyzePattern(layout.S);
+    reduction->analysed = true;
+  }
+  reduction->ldlt.factorize(layout.S);
+  if (reduction->ldlt.info() != Eigen::Success) {
+    reduction->pivot_ratio = 0.0;
+    return false;
+  }
+  const Eigen::VectorXd d = reduction->ldlt.vectorD();
+  if (d.size() == 0) {
+    reduction->pivot_ratio = 1.0;
+    return true;
+  }
+  reduction->pivot_ratio = d.minCoeff() / d.maxCoeff();
+  return d.minCoeff() > 0.0 && reduction->pivot_ratio > min_pivot_ratio;
+}
+
+// Solves S d_e = r (through the scaled factorisation) and back-substitutes
+// d_p = V_p^-1 (g_p - W_p^T d_e).
+void SolveCorrections(const Plan& plan, const Layout& layout, const Normal& normal,
+                      const Reduction& reduction, Eigen::VectorXd* d_e,
+                      std::vector<Eigen::Vector3d>* d_p) {
+  const Eigen::VectorXd& s = reduction.scale;
+  Eigen::VectorXd rhs = s.cwiseProduct(reduction.r);
+  for (int b = 0; b < static_cast<int>(layout.free_images.size()); ++b)
+    for (int c = 0; c < 6; ++c)
+      if (IsFixed(plan, layout, b, c)) rhs[6 * b + c] = 0.0;
+  *d_e = s.cwiseProduct(reduction.ldlt.solve(rhs));
+  d_p->resize(layout.free_points.size());
+  for (size_t q = 0; q < layout.free_points.size(); ++q) {
+    Eigen::Vector3d t = normal.gp[q];
+    for (const int k : layout.point_marks[q])
+      t.noalias() -= normal.W[k].transpose() * d_e->segment<6>(6 * layout.mark_block[k]);
+    (*d_p)[q] = reduction.V_inverse[q] * t;
+  }
+}
+
+// The blocks of S^-1 the statistics need, unscaled (the whitened system's inverse): per camera
+// block its 6 x 6 diagonal block, and per free control point its 3 x 3 covariance
+// V^-1 + sum_a sum_c Y_a^T C(a, c) Y_c (a, c over its marks in free images). Column block by
+// column block through the sparse factorisation, so memory stays O(n).
+void Covariances(const Block& block, const Plan& plan, const Layout& layout, const Normal& normal,
+                 const Reduction& reduction, std::vector<Matrix6d>* cameras,
+                 std::vector<Eigen::Matrix3d>* points, std::vector<char>* has_point) {
+  const int num_blocks = static_cast<int>(layout.free_images.size());
+  const int n = 6 * num_blocks;
+  cameras->assign(num_blocks, Matrix6d::Zero());
+  points->assign(layout.free_points.size(), Eigen::Matrix3d::Zero());
+  has_point->assign(layout.free_points.size(), 0);
+  std::vector<std::vector<std::pair<int, int>>> control_of_block(num_blocks);
+  for (size_t q = 0; q < layout.free_points.size(); ++q) {
+    if (block.points[layout.free_points[q]].role != PointRole::kControl) continue;
+    (*points)[q] = reduction.V_inverse[q];
+    (*has_point)[q] = 1;
+    const std::vector<int>& marks = layout.point_marks[q];
+    for (size_t c = 0; c < marks.size(); ++c)
+      control_of_block[layout.mark_block[marks[c]]].emplace_back(static_cast<int>(q),
+                                                                 static_cast<int>(c));
+  }
+  const Eigen::VectorXd& s = reduction.scale;
+  Eigen::MatrixXd rhs(n, 6);
+  for (int b = 0; b < num_blocks; ++b) {
+    rhs.setZero();
+    // A fixed component has a zero right-hand side and (being decoupled) a zero solution row:
+    // its variance and covariances are zero.
+    for (int c = 0; c < 6; ++c)
+      if (!IsFixed(plan, layout, b, c)) rhs(6 * b + c, c) = s[6 * b + c];
+    Eigen::MatrixXd X = reduction.ldlt.solve(rhs);
+    X = s.asDiagonal() * X;  // C(:, b)
+    (*cameras)[b] = X.middleRows<6>(6 * b);
+    for (const auto& [q, c] : control_of_block[b]) {
+      const std::vector<int>& marks = layout.point_marks[q];
+      const Eigen::Matrix3d& V_inverse = reduction.V_inverse[q];
+      const Matrix63 Y_c = normal.W[marks[c]] * V_inverse;
+      for (const int ka : marks) {
+        const Matrix6d C_ac = X.middleRows<6>(6 * layout.mark_block[ka]);
+        const Matrix63 Y_a = normal.W[ka] * V_inverse;
+        (*points)[q].noalias() += Y_a.transpose() * C_ac * Y_c;
+      }
+    }
+  }
+}
+
+}  // namespace photopose::internal::taylor

@@ -1,0 +1,77 @@
+#include "core/mark_weight.h"
+
+#include <gtest/gtest.h>
+
+namespace photopose {
+namespace {
+
+// Every branch is a product of two or three decimal numbers: exact to a few ulps.
+constexpr double kTolerance = 1e-12;
+
+BlockCamera FrameCamera(double pixel_size_um) {
+  BlockCamera camera;
+  camera.model = CameraModelType::kFrame;
+  camera.table.pixel_size_um = pixel_size_um;
+  return camera;
+}
+
+BlockMark Mark(MarkUnit unit, double units_per_unit) {
+  BlockMark mark;
+  mark.unit = unit;
+  mark.observation_units_per_unit = units_per_unit;
+  return mark;
+}
+
+MarkSigmaDefaults Defaults(double pixel_px, double film_um) {
+  MarkSigmaDefaults defaults;
+  defaults.pixel_px = pixel_px;
+  defaults.film_um = film_um;
+  return defaults;
+}
+
+TEST(MarkSigma, OwnAccuracyInItsUnitTimesObservationUnits) {
+  // A pixel mark of a frame camera (4.5 um per pixel) stated at 0.3 px: 1.35 um.
+  BlockMark pixel = Mark(MarkUnit::kPixel, 4.5);
+  pixel.accuracy = 0.3;
+  EXPECT_NEAR(MarkSigma(pixel, FrameCamera(4.5), Defaults(1.0, 5.0)), 1.35, kTolerance);
+  // A film mark stated at 2 um stays 2 um, whatever the pixel size and defaults.
+  BlockMark film = Mark(MarkUnit::kFilm, 1.0);
+  film.accuracy = 2.0;
+  EXPECT_NEAR(MarkSigma(film, FrameCamera(9.0), Defaults(0.5, 7.0)), 2.0, kTolerance);
+}
+
+TEST(MarkSigma, PixelMarkDefaultTimesObservationUnits) {
+  // 0.5 px at 6 um per pixel: 3 um on the film of a frame camera.
+  EXPECT_NEAR(MarkSigma(Mark(MarkUnit::kPixel, 6.0), FrameCamera(6.0), Defaults(0.5, 2.5)), 3.0,
+              kTolerance);
+  // A COLMAP camera observes in pixels: 0.5 px.
+  BlockCamera colmap;
+  colmap.model = CameraModelType::kSimpleRadial;
+  EXPECT_NEAR(MarkSigma(Mark(MarkUnit::kPixel, 1.0), colmap, Defaults(0.5, 2.5)), 0.5, kTolerance);
+}
+
+TEST(MarkSigma, FilmMarkOfAFrameCameraWithPixelSizeTakesThePixelDefault) {
+  // 0.5 px of 9 um: 4.5 um, not the film default of 2.5 um.
+  EXPECT_NEAR(MarkSigma(Mark(MarkUnit::kFilm, 1.0), FrameCamera(9.0), Defaults(0.5, 2.5)), 4.5,
+              kTolerance);
+}
+
+TEST(MarkSigma, FilmMarkWithoutPixelSizeTakesTheFilmDefault) {
+  EXPECT_NEAR(MarkSigma(Mark(MarkUnit::kFilm, 1.0), FrameCamera(0.0), Defaults(0.5, 2.5)), 2.5,
+              kTolerance);
+  // The pixel size of a non-frame camera does not enter.
+  BlockCamera colmap = FrameCamera(9.0);
+  colmap.model = CameraModelType::kSimpleRadial;
+  EXPECT_NEAR(MarkSigma(Mark(MarkUnit::kFilm, 1.0), colmap, Defaults(0.5, 2.5)), 2.5, kTolerance);
+}
+
+TEST(MarkSigma, FilmDefaultAsGivenWhenThePixelSizeIsNotToBeUsed) {
+  MarkSigmaDefaults defaults = Defaults(0.5, 5.0);
+  defaults.film_from_pixel_size = false;
+  EXPECT_NEAR(MarkSigma(Mark(MarkUnit::kFilm, 1.0), FrameCamera(9.0), defaults), 5.0, kTolerance);
+  // Pixel marks are unaffected: 0.5 px at 9 um per pixel.
+  EXPECT_NEAR(MarkSigma(Mark(MarkUnit::kPixel, 9.0), FrameCamera(9.0), defaults), 4.5, kTolerance);
+}
+
+}  // namespace
+}  // namespace photopose

@@ -1,0 +1,104 @@
+#include "solvers/bundle/check_points.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+#include "solvers/bundle/triangulation.h"
+#include "tests/block_fixture.h"
+
+namespace photopose {
+namespace {
+
+using testing::FixtureBlock;
+using testing::MakeExactFixtureBlock;
+
+// Noise-free marks, true orientations and an exact survey: a check point's intersection error is
+// the Gauss-Newton stop and rounding only.
+constexpr double kExactPointM = 1e-6;
+
+std::vector<int> PointsOfRole(const Block& block, PointRole role) {
+  std::vector<int> points;
+  for (size_t p = 0; p < block.points.size(); ++p)
+    if (block.points[p].role == role) points.push_back(static_cast<int>(p));
+  return points;
+}
+
+TEST(CheckPoints, ExactBlockHasNoCheckErrorAndItsControlErrorsAsGiven) {
+  const FixtureBlock data = MakeExactFixtureBlock();
+  const std::vector<int> checks = PointsOfRole(data.block, PointRole::kCheck);
+  const std::vector<int> controls = PointsOfRole(data.block, PointRole::kControl);
+  ASSERT_EQ(checks.size(), 2u);
+  ASSERT_GE(controls.size(), 2u);
+  BundleAdjustmentResult result;
+  result.points.assign(data.block.points.size(), BundlePointResult());
+  // Two control points with errors (3, 4, 0) mm and (0, 0, 5) mm: RMSE per axis
+  // (sqrt(4.5), sqrt(8), sqrt(12.5)) mm, total 5 mm.
+  result.points[controls[0]].error_m = Eigen::Vector3d(0.003, 0.004, 0.0);
+  result.points[controls[1]].error_m = Eigen::Vector3d(0.0, 0.0, 0.005);
+  constexpr double kVarianceFactor = 4.0;
+  TabulateControlAndCheckPoints(data.block, BundleAccuracies(), kVarianceFactor, &result);
+  EXPECT_EQ(result.num_control_points, 2);
+  EXPECT_NEAR(result.control_rmse_total_m, 0.005, 1e-15);
+  EXPECT_NEAR(result.control_rmse_m.x(), std::sqrt(4.5e-6), 1e-15);
+  EXPECT_NEAR(result.control_rmse_m.z(), std::sqrt(12.5e-6), 1e-15);
+  EXPECT_EQ(result.num_check_points, 2);
+  EXPECT_LT(result.check_rmse_total_m, kExactPointM);
+  for (const int p : checks) {
+    const BundlePointResult& row = result.points[p];
+    ASSERT_TRUE(row.error_m.has_value()) << row.message;
+    EXPECT_EQ(row.num_observations, static_cast<int>(data.block.marks_of_point[p].size()));
+    EXPECT_TRUE(row.has_covariance);
+    // The intersection's a-priori covariance (marks with their stated 0.5 px) times the factor.
+    MarkSigmaDefaults control;
+    control.pixel_px = BundleAccuracies().marker_projection_px;
+    control.film_um = BundleAccuracies().marker_projection_film_um;
+    TriangulationResult intersection;
+    ASSERT_TRUE(
+        TriangulatePoint(TriangulationOptions(), PointRays(data.block, p, control), &intersection)
+            .ok());
+    EXPECT_TRUE(row.covariance.isApprox(kVarianceFactor * intersection.covariance, 1e-12));
+  }
+}
+
+TEST(CheckPoints, MarksWithoutAccuracyTakeTheMarkerProjectionDefault) {
+  FixtureBlock data = MakeExactFixtureBlock();
+  for (BlockMark& mark : data.block.marks) mark.accuracy.reset();
+  const int p = PointsOfRole(data.block, PointRole::kCheck)[0];
+  BundleAccuracies accuracies;
+  accuracies.marker_projection_px = 2.0;  // 8 um on 4 um pixels: covariance (8 / 2)^2 the 2 um one
+  BundleAdjustmentResult result;
+  result.points.assign(data.block.points.size(), BundlePointResult());
+  TabulateControlAndCheckPoints(data.block, accuracies, 1.0, &result);
+  MarkSigmaDefaults two_um;
+  two_um.pixel_px = 0.5;
+  TriangulationResult reference;
+  ASSERT_TRUE(
+      TriangulatePoint(TriangulationOptions(), PointRays(data.block, p, two_um), &reference).ok());
+  EXPECT_TRUE(result.points[p].covariance.isApprox(16.0 * reference.covariance, 1e-9));
+}
+
+TEST(CheckPoints, OneRayIsReportedNotCountedAndRemovedControlLeavesTheRmse) {
+  FixtureBlock data = MakeExactFixtureBlock();
+  const int check = PointsOfRole(data.block, PointRole::kCheck)[0];
+  const int control = PointsOfRole(data.block, PointRole::kControl)[0];
+  // Every image but the first of the check point's marks loses its orientation.
+  const std::vector<int> marks = data.block.marks_of_point[check];
+  for (size_t k = 1; k < marks.size(); ++k)
+    data.block.images[data.block.marks[marks[k]].image].eo.reset();
+  BundleAdjustmentResult result;
+  result.points.assign(data.block.points.size(), BundlePointResult());
+  result.points[control].error_m = Eigen::Vector3d(1.0, 0.0, 0.0);
+  result.snooping.push_back({"control_points", control, 0, 5.0, 1.0});
+  TabulateControlAndCheckPoints(data.block, BundleAccuracies(), 1.0, &result);
+  const BundlePointResult& row = result.points[check];
+  EXPECT_FALSE(row.error_m.has_value());
+  EXPECT_FALSE(row.has_covariance);
+  EXPECT_EQ(row.num_observations, 1);
+  EXPECT_NE(row.message.find("not intersected"), std::string::npos) << row.message;
+  EXPECT_EQ(result.num_control_points, 0);  // its coordinates were removed by snooping
+  EXPECT_EQ(result.control_rmse_total_m, 0.0);
+}
+
+}  // namespace
+}  // namespace photopose
