@@ -95,14 +95,6 @@ double SuccessThreshold(const ResectionInput& input, const std::vector<char>& is
   return success_sigmas * std::sqrt(covariance.topLeftCorner<3, 3>().trace());
 }
 
-// Index of the solver the differences and time ratios refer to: "taylor" when present, otherwise
-// the first.
-size_t TimeReference(const std::vector<std::string>& names) {
-  for (size_t s = 0; s < names.size(); ++s)
-    if (names[s] == "taylor") return s;
-  return 0;
-}
-
 // Runs every solver on every image of one trial.
 Status RunTrial(const MonteCarloOptions& options, const SweepSetting& setting, int trial,
                 std::vector<SolveOutcome>* outcomes, int* images) {
@@ -119,7 +111,7 @@ Status RunTrial(const MonteCarloOptions& options, const SweepSetting& setting, i
   *images = static_cast<int>(job.inputs.size());
   std::vector<std::string> names;
   for (const SolverVariant& v : options.solvers) names.push_back(v.Name());
-  const size_t reference = TimeReference(names);
+  const size_t reference = ReferenceSolverIndex(names);
 
   for (size_t i = 0; i < job.inputs.size(); ++i) {
     ResectionInput input = job.inputs[i];
@@ -274,38 +266,9 @@ SolverStatistics Aggregate(const std::string& name,
   return stats;
 }
 
-// ------------------------------------------------------------------ formatting
+}  // namespace
 
-std::string Format(const char* format, double value) {
-  if (!std::isfinite(value)) return "-";
-  char buffer[64];
-  std::snprintf(buffer, sizeof(buffer), format, value);
-  return buffer;
-}
-
-// Three significant digits, plain notation between 1e-3 and 1e5.
-std::string Sig(double value) {
-  if (!std::isfinite(value)) return "-";
-  const double magnitude = std::abs(value);
-  if (magnitude != 0.0 && (magnitude < 1e-3 || magnitude >= 1e5)) return Format("%.2e", value);
-  if (magnitude >= 100.0) return Format("%.0f", value);
-  if (magnitude >= 10.0) return Format("%.1f", value);
-  if (magnitude >= 1.0) return Format("%.2f", value);
-  return Format("%.3g", value);
-}
-
-std::string Percent(double fraction) { return Format("%.0f%%", 100.0 * fraction); }
-
-std::string Full(double value) {
-  if (std::isnan(value)) return "";
-  char buffer[64];
-  std::snprintf(buffer, sizeof(buffer), "%.12g", value);
-  return buffer;
-}
-
-std::string Microseconds(double seconds) { return Sig(seconds * 1e6); }
-
-std::string SettingTitle(const SweepSetting& s, int trials, int images) {
+std::string SweepSettingTitle(const SweepSetting& s, int trials, int images) {
   char buffer[256];
   std::snprintf(buffer, sizeof(buffer),
                 "%s: noise %g px, outliers %g%%, %d control points, initial error +-%g m +-%g deg "
@@ -316,17 +279,11 @@ std::string SettingTitle(const SweepSetting& s, int trials, int images) {
   return buffer;
 }
 
-std::string CsvField(const std::string& text) {
-  if (text.find_first_of(",\"\n") == std::string::npos) return text;
-  std::string quoted = "\"";
-  for (char c : text) {
-    if (c == '"') quoted += '"';
-    quoted += c;
-  }
-  return quoted + "\"";
+size_t ReferenceSolverIndex(const std::vector<std::string>& names) {
+  for (size_t s = 0; s < names.size(); ++s)
+    if (names[s] == "taylor") return s;
+  return 0;
 }
-
-}  // namespace
 
 // ------------------------------------------------------------------ solver variants
 
@@ -643,7 +600,7 @@ Status RunMonteCarlo(const MonteCarloOptions& options, MonteCarloResult* result)
   for (size_t task = 0; task < num_tasks; ++task) {
     if (!statuses[task].ok()) {
       const size_t setting = task / options.trials;
-      return Status::Error(SettingTitle(settings[setting], options.trials, images[task]) +
+      return Status::Error(SweepSettingTitle(settings[setting], options.trials, images[task]) +
                            ", trial " + std::to_string(task % options.trials) + ": " +
                            statuses[task].message());
     }
@@ -708,7 +665,7 @@ Status RunDatasetComparison(const DatasetComparisonOptions& options,
   }
   result->rotation = options.job.files.rotation;
   for (const SolverVariant& v : options.solvers) result->solver_names.push_back(v.Name());
-  const size_t reference_index = TimeReference(result->solver_names);
+  const size_t reference_index = ReferenceSolverIndex(result->solver_names);
   result->reference_solver = result->solver_names[reference_index];
 
   // ResectImages gives image i the RANSAC seed seed + constant * (i + 1) whatever the solver, so
@@ -822,305 +779,6 @@ Status RunDatasetComparison(const DatasetComparisonOptions& options,
     result->summaries.push_back(summary);
   }
   return Status::Ok();
-}
-
-// ------------------------------------------------------------------ rendering
-
-std::vector<std::string> MonteCarloNotes(const MonteCarloOptions& options) {
-  char success[256];
-  std::snprintf(
-      success, sizeof(success),
-      "success: a pose was returned and |X0 - X0_true| <= %g design sigmas, sigma = "
-      "sqrt(trace C_pos), C = (J^T P J)^-1 at the true pose; its mean (m) is in each table title.",
-      options.success_sigmas);
-  return {
-      "solved: a pose was returned; success as below. pos/rot/check/reproj RMSE are over the "
-      "solved "
-      "samples (rotation: angle of R_true^T R_est; check and reproj: RMS of the 2-D residual norm, "
-      "reproj over uncontaminated control marks). d_ref_m, d_ref_as: RMS of the paired "
-      "differences to the reference solver (taylor when compared) on the same data and start.",
-      success,
-      "t_us: median wall time of one ResectImage call (statistics included) over the solved "
-      "samples, microseconds; refine_us: its refinement part; t/ref: t_us over the reference "
-      "solver's (taylor when compared).",
-      "nees: mean of e^T C^-1 e over the solved samples, e = pose error (X0 in m, seed angles in "
-      "rad, wrapped), C = the solver's covariance sigma0^2 (J^T P J)^-1; its expectation with "
-      "sigma0 estimated from r = 2n - 6 redundant observations is E[nees] = 6 r/(r-2). nees_ap: "
-      "the same with sigma0 = 1, chi-square(6) when the covariance is honest.",
-      "99% int: interval of the mean of N chi-square(6) variables, [q(0.005), q(0.995)] of "
-      "chi-square(6N) / N, quantiles by numerical inversion of the regularized gamma function. "
-      "cov: ok when nees_ap is inside it, HIGH (covariance too optimistic) or low. Not computed "
-      "for noise 0.",
-      std::string("initial values: ") +
-          (options.initial == InitialValues::kApproximateFrames
-               ? "the scene's approximate frames (the same for every solver)"
-               : "LO-RANSAC per image, one seed per image and trial (the same for every solver)") +
-          "; trial t uses scene seed " + std::to_string(options.seed) + " + t.",
-  };
-}
-
-std::vector<TextTable> MonteCarloTables(const MonteCarloOptions& options,
-                                        const MonteCarloResult& result) {
-  std::vector<TextTable> tables;
-  const size_t reference = TimeReference(result.solver_names);
-  for (const SettingResult& setting : result.settings) {
-    TextTable table;
-    table.title = SettingTitle(setting.setting, options.trials, setting.images_per_trial);
-    double threshold = kNaN;
-    if (!setting.solvers.empty()) threshold = setting.solvers.front().mean_success_threshold_m;
-    table.title += ", success threshold " + Sig(threshold) + " m";
-    table.header = {"solver",   "solved",   "success",   "pos_rmse_m", "rot_rmse_as", "d_ref_m",
-                    "d_ref_as", "check_px", "reproj_px", "iter",       "t_us",        "refine_us",
-                    "t/ref",    "nees",     "E[nees]",   "nees_ap",    "99% int",     "cov"};
-    const double reference_seconds = setting.solvers[reference].median_seconds;
-    for (const SolverStatistics& s : setting.solvers) {
-      const bool has_nees = s.nees_count > 0;
-      std::string verdict = "-";
-      if (has_nees && std::isfinite(s.mean_nees_apriori)) {
-        verdict = s.nees_interval_99.Contains(s.mean_nees_apriori) ? "ok"
-                  : s.mean_nees_apriori > s.nees_interval_99.upper ? "HIGH"
-                                                                   : "low";
-      }
-      table.rows.push_back({
-          s.solver,
-          Percent(static_cast<double>(s.solved) / std::max(1, s.samples)),
-          Percent(s.success_rate),
-          Sig(s.position_rmse_m),
-          Sig(s.rotation_rmse_arcsec),
-          Sig(s.difference_position_rmse_m),
-          Sig(s.difference_rotation_rmse_arcsec),
-          Sig(s.check_rmse_px),
-          Sig(s.reprojection_rmse_px),
-          Format("%.1f", s.mean_iterations),
-          Microseconds(s.median_seconds),
-          Microseconds(s.median_refinement_seconds),
-          Format("%.2f", s.median_seconds / reference_seconds),
-          has_nees ? Sig(s.mean_nees) : "-",
-          has_nees ? Sig(s.expected_nees) : "-",
-          has_nees ? Sig(s.mean_nees_apriori) : "-",
-          has_nees
-              ? "[" + Sig(s.nees_interval_99.lower) + ", " + Sig(s.nees_interval_99.upper) + "]"
-              : "-",
-          verdict,
-      });
-    }
-    for (const SolverStatistics& s : setting.solvers) {
-      std::string reasons;
-      for (size_t k = 0; k < s.failure_reasons.size() && k < 2; ++k)
-        reasons += (k ? "; " : "") + std::to_string(s.failure_reasons[k].second) + " x " +
-                   s.failure_reasons[k].first;
-      if (s.failure_reasons.size() > 2) reasons += "; ...";
-      if (!reasons.empty()) table.notes.push_back("not solved, " + s.solver + ": " + reasons);
-    }
-    tables.push_back(table);
-  }
-
-  return tables;
-}
-
-std::string MonteCarloCsv(const MonteCarloResult& result) {
-  std::ostringstream csv;
-  csv << "scenario,axis,noise_px,outlier_fraction,control_points,initial_position_error_m,"
-         "initial_angle_error_deg,images_per_trial,solver,samples,solved,successes,success_rate,"
-         "success_threshold_m,position_rmse_m,rotation_rmse_arcsec,difference_rmse_m,"
-         "difference_rmse_arcsec,check_rmse_px,"
-         "reprojection_rmse_px,mean_iterations,median_time_us,median_refinement_time_us,"
-         "time_ratio,mean_nees,mean_nees_apriori,expected_nees,nees_count,nees95_lower,"
-         "nees95_upper,nees99_lower,nees99_upper\n";
-  const size_t reference = TimeReference(result.solver_names);
-  for (const SettingResult& setting : result.settings) {
-    const SweepSetting& x = setting.setting;
-    for (const SolverStatistics& s : setting.solvers) {
-      csv << ScenarioName(x.scenario) << "," << x.axis << "," << Full(x.noise_px) << ","
-          << Full(x.outlier_fraction) << "," << x.control_points << ","
-          << Full(x.initial_error.position_m) << "," << Full(x.initial_error.angle_deg) << ","
-          << setting.images_per_trial << "," << CsvField(s.solver) << "," << s.samples << ","
-          << s.solved << "," << s.successes << "," << Full(s.success_rate) << ","
-          << Full(s.mean_success_threshold_m) << "," << Full(s.position_rmse_m) << ","
-          << Full(s.rotation_rmse_arcsec) << "," << Full(s.difference_position_rmse_m) << ","
-          << Full(s.difference_rotation_rmse_arcsec) << "," << Full(s.check_rmse_px) << ","
-          << Full(s.reprojection_rmse_px) << "," << Full(s.mean_iterations) << ","
-          << Full(s.median_seconds * 1e6) << "," << Full(s.median_refinement_seconds * 1e6) << ","
-          << Full(s.median_seconds / setting.solvers[reference].median_seconds) << ","
-          << Full(s.mean_nees) << "," << Full(s.mean_nees_apriori) << "," << Full(s.expected_nees)
-          << "," << s.nees_count << "," << Full(s.nees_interval_95.lower) << ","
-          << Full(s.nees_interval_95.upper) << "," << Full(s.nees_interval_99.lower) << ","
-          << Full(s.nees_interval_99.upper) << "\n";
-    }
-  }
-  return csv.str();
-}
-
-std::vector<TextTable> DatasetTables(const DatasetComparisonResult& result) {
-  std::vector<TextTable> tables;
-  const size_t reference = TimeReference(result.solver_names);
-  const double reference_seconds = result.summaries[reference].median_seconds;
-  TextTable summary;
-  summary.title = "Solvers (differences to " + result.reference_solver + ")";
-  summary.header = {"solver", "solved", "sigma0", "rms_px",    "check_px", "chk_out",
-                    "iter",   "t_us",   "t/ref",  "refine_us", "d_pos_m",  "d_rot_as"};
-  if (result.has_reference) {
-    summary.header.push_back("ref_pos_m");
-    summary.header.push_back("ref_rot_as");
-  }
-  for (const DatasetSolverSummary& s : result.summaries) {
-    std::vector<std::string> row = {s.solver,
-                                    std::to_string(s.solved) + "/" + std::to_string(s.images),
-                                    Sig(s.rms_sigma0),
-                                    Sig(s.rms_px),
-                                    Sig(s.check_rmse_px),
-                                    std::to_string(s.check_beyond),
-                                    Format("%.1f", s.mean_iterations),
-                                    Microseconds(s.median_seconds),
-                                    Format("%.2f", s.median_seconds / reference_seconds),
-                                    Microseconds(s.median_refinement_seconds),
-                                    s.compared > 0 ? Sig(s.difference_position_m) : "-",
-                                    s.compared > 0 ? Sig(s.difference_rotation_arcsec) : "-"};
-    if (result.has_reference) {
-      row.push_back(s.referenced > 0 ? Sig(s.reference_position_m) : "-");
-      row.push_back(s.referenced > 0 ? Sig(s.reference_rotation_arcsec) : "-");
-    }
-    summary.rows.push_back(row);
-  }
-  summary.notes = {
-      "sigma0: RMS over images of the a-posteriori sigma0; rms_px: RMS of the inlier residual "
-      "norms "
-      "(pixels); check_px: RMS of the check-point residual norms within the inlier threshold, "
-      "chk_out: check marks beyond it; t_us: median time per image (microseconds, RANSAC "
-      "included when it ran), refine_us: its refinement part.",
-      "d_pos_m, d_rot_as: RMS over images of |X0 - X0_" + result.reference_solver +
-          "| (m) and of the rotation angle between the two (arc-seconds)." +
-          (result.has_reference ? " ref_pos_m, ref_rot_as: the same to the reference frames."
-                                : "")};
-  tables.push_back(summary);
-
-  TextTable images;
-  images.title = std::string("Per image (angles in degrees, ") +
-                 RotationConventionName(result.rotation) + " convention)";
-  images.header = {"image",    "solver",  "status", "X_m",    "Y_m",     "Z_m",
-                   "omega",    "phi",     "kappa",  "sigma0", "inliers", "rms_px",
-                   "check_px", "chk_out", "iter",   "t_us",   "d_pos_m", "d_rot_as"};
-  if (result.has_reference) {
-    images.header.push_back("ref_pos_m");
-    images.header.push_back("ref_rot_as");
-  }
-  for (const DatasetSolve& s : result.solves) {
-    std::vector<std::string> row = {s.raster, result.solver_names[s.solver],
-                                    s.success ? "ok" : "failed"};
-    if (s.success) {
-      for (int k = 0; k < 3; ++k) row.push_back(Format("%.4f", s.eo.parameters[k]));
-      for (int k = 0; k < 3; ++k) row.push_back(Format("%.6f", s.angles_deg[k]));
-      row.push_back(Sig(s.sigma0));
-      row.push_back(std::to_string(s.num_inliers) + "/" + std::to_string(s.num_observations));
-      row.push_back(Sig(s.rms_px));
-      row.push_back(Sig(s.check_rmse_px));
-      row.push_back(std::to_string(s.num_check_beyond));
-    } else {
-      for (int k = 0; k < 11; ++k) row.push_back("-");
-    }
-    row.push_back(std::to_string(s.iterations));
-    row.push_back(Microseconds(s.seconds));
-    row.push_back(s.has_difference ? Sig(s.difference_position_m) : "-");
-    row.push_back(s.has_difference ? Sig(s.difference_rotation_arcsec) : "-");
-    if (result.has_reference) {
-      row.push_back(s.has_reference ? Sig(s.reference_position_m) : "-");
-      row.push_back(s.has_reference ? Sig(s.reference_rotation_arcsec) : "-");
-    }
-    images.rows.push_back(row);
-  }
-  for (const DatasetSolve& s : result.solves)
-    if (!s.success)
-      images.notes.push_back(s.raster + " " + result.solver_names[s.solver] + ": " + s.message);
-  tables.push_back(images);
-  return tables;
-}
-
-std::string DatasetCsv(const DatasetComparisonResult& result) {
-  std::ostringstream csv;
-  csv << "Raster,Solver,Success,Message,X,Y,Z,Omega,Phi,Kappa,Convention,SigmaX,SigmaY,SigmaZ,"
-         "SigmaOmegaSeed,SigmaPhiSeed,SigmaKappaSeed,Sigma0,NumObservations,NumInliers,RmsPx,"
-         "MaxPx,CheckRmsePx,NumCheck,NumCheckBeyond,Iterations,TimeUs,RefinementTimeUs,"
-         "DiffPositionM,DiffRotationArcsec,"
-         "RefPositionM,RefRotationArcsec\n";
-  for (const DatasetSolve& s : result.solves) {
-    csv << CsvField(s.raster) << "," << CsvField(result.solver_names[s.solver]) << ","
-        << (s.success ? 1 : 0) << "," << CsvField(s.message) << ",";
-    if (s.success) {
-      for (int k = 0; k < 3; ++k) csv << Full(s.eo.parameters[k]) << ",";
-      for (int k = 0; k < 3; ++k) csv << Full(s.angles_deg[k]) << ",";
-      csv << RotationConventionName(result.rotation) << ",";
-      for (int k = 0; k < 3; ++k) csv << Full(s.standard_deviations[k]) << ",";
-      for (int k = 3; k < 6; ++k) csv << Full(RadiansToDegrees(s.standard_deviations[k])) << ",";
-      csv << Full(s.sigma0) << "," << s.num_observations << "," << s.num_inliers << ","
-          << Full(s.rms_px) << "," << Full(s.max_px) << "," << Full(s.check_rmse_px) << ","
-          << s.num_check << "," << s.num_check_beyond << ",";
-    } else {
-      csv << ",,,,,,,,,,,,,," << s.num_observations << ",,,,,,,";
-    }
-    csv << s.iterations << "," << Full(s.seconds * 1e6) << "," << Full(s.refinement_seconds * 1e6)
-        << "," << (s.has_difference ? Full(s.difference_position_m) : "") << ","
-        << (s.has_difference ? Full(s.difference_rotation_arcsec) : "") << ","
-        << (s.has_reference ? Full(s.reference_position_m) : "") << ","
-        << (s.has_reference ? Full(s.reference_rotation_arcsec) : "") << "\n";
-  }
-  return csv.str();
-}
-
-std::string RenderText(const TextTable& table) {
-  std::vector<size_t> width(table.header.size(), 0);
-  for (size_t c = 0; c < table.header.size(); ++c) width[c] = table.header[c].size();
-  for (const auto& row : table.rows)
-    for (size_t c = 0; c < row.size() && c < width.size(); ++c)
-      width[c] = std::max(width[c], row[c].size());
-  std::ostringstream out;
-  if (!table.title.empty()) out << table.title << "\n";
-  auto line = [&](const std::vector<std::string>& cells) {
-    std::string text;
-    for (size_t c = 0; c < width.size(); ++c) {
-      const std::string cell = c < cells.size() ? cells[c] : "";
-      const std::string pad(width[c] - std::min(width[c], cell.size()), ' ');
-      // The first columns name things (left-aligned); the rest are numbers (right-aligned).
-      const bool left = c == 0 || (c == 1 && table.header[0] == "image");
-      text += (c == 0 ? "" : "  ") + (left ? cell + pad : pad + cell);
-    }
-    while (!text.empty() && text.back() == ' ') text.pop_back();
-    out << text << "\n";
-  };
-  line(table.header);
-  size_t total = 0;
-  for (size_t c = 0; c < width.size(); ++c) total += width[c] + (c == 0 ? 0 : 2);
-  out << std::string(total, '-') << "\n";
-  for (const auto& row : table.rows) line(row);
-  for (const std::string& note : table.notes) out << "  " << note << "\n";
-  return out.str();
-}
-
-std::string RenderMarkdown(const TextTable& table) {
-  std::ostringstream out;
-  auto escape = [](const std::string& cell) {
-    std::string text;
-    for (char c : cell) {
-      if (c == '|') text += '\\';
-      text += c;
-    }
-    return text;
-  };
-  if (!table.title.empty()) out << "**" << escape(table.title) << "**\n\n";
-  out << "|";
-  for (const auto& h : table.header) out << " " << escape(h) << " |";
-  out << "\n|";
-  for (size_t c = 0; c < table.header.size(); ++c) out << (c == 0 ? "---|" : "---:|");
-  out << "\n";
-  for (const auto& row : table.rows) {
-    out << "|";
-    for (const auto& cell : row) out << " " << escape(cell) << " |";
-    out << "\n";
-  }
-  if (!table.notes.empty()) {
-    out << "\n";
-    for (const std::string& note : table.notes) out << "- " << escape(note) << "\n";
-  }
-  return out.str();
 }
 
 }  // namespace photopose::cli

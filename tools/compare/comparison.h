@@ -373,6 +373,14 @@ std::string DatasetCsv(const DatasetComparisonResult& result);
 // The definitions of the Monte-Carlo columns (success, RMSEs, times, NEES), one line each.
 std::vector<std::string> MonteCarloNotes(const MonteCarloOptions& options);
 
+// "oblique: noise 1 px, outliers 10%, ... (axis; 200 trials x 1 image)": one sweep setting, for
+// titles and messages.
+std::string SweepSettingTitle(const SweepSetting& setting, int trials, int images);
+
+// Index of the solver the differences and time ratios refer to: "taylor" when present, otherwise
+// the first.
+size_t ReferenceSolverIndex(const std::vector<std::string>& names);
+
 const char* SweepTypeName(SweepType type);
 const char* InitialValuesName(InitialValues initial);
 
