@@ -34,8 +34,9 @@ struct BlockInitializationOptions {
   // marks' accuracy cannot judge the fit; a larger misfit means a blunder in its marks or a wrong
   // image orientation, and the point waits for more rays.
   double max_ray_misfit_rad = 0.05;
-  // Accuracy of marks without one, in their own unit, for the intersections (pixels; film marks
-  // use max(1, this) um per pixel... see MarkSigma in solvers/bundle/triangulation.h).
+  // Accuracy of marks without one, for the intersections (MarkSigma in
+  // solvers/bundle/triangulation.h): pixel marks default_sigma_px pixels, film marks
+  // default_sigma_um micrometres.
   double default_sigma_px = 1.0;
   double default_sigma_um = 5.0;
   int max_rounds = 50;  // of steps 2-3 (count)
