@@ -82,8 +82,8 @@ struct AngleFlags {
 Eigen::Vector3d ApplyAngleDirection(const AngleFlags& flags, const Eigen::Vector3d& angles_rad);
 
 // ------------------------------------------------------------------ the one boundary conversion
-// Every output that shows angles (frames table, JSON report, console line, comparison tool) and
-// every input that reads them goes through these two functions, so that all agree.
+// The frames tables (read and written), resect's and bundle's JSON reports and console lines and
+// the comparison tool go through these two functions, so that all agree.
 //
 // ConventionAnglesFromSeed: photopose's internal angles (seed convention, rad) -> the three angles
 // (rad) of `convention` with the camera's AngleDirection applied: the rotation matrix of the seed

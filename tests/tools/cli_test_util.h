@@ -9,9 +9,13 @@
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <map>
 #include <sstream>
 #include <string>
+#include <vector>
 
+#include "core/io/tables.h"
+#include "core/rotation.h"
 #include "test_data.h"
 
 namespace photopose::testing {
@@ -73,6 +77,19 @@ inline std::string ScratchDir() {
   std::filesystem::remove_all(dir);
   std::filesystem::create_directories(dir);
   return dir.string();
+}
+
+// A frames table the executable wrote, by raster; a read error fails the test.
+inline std::map<std::string, FrameRecord> ReadFrames(
+    const std::string& path, RotationConvention convention = RotationConvention::kSeed) {
+  std::vector<FrameRecord> frames;
+  FramesTableOptions options;
+  options.convention = convention;
+  const Status status = ReadFramesTable(path, options, &frames);
+  EXPECT_TRUE(status.ok()) << status.message();
+  std::map<std::string, FrameRecord> by_raster;
+  for (FrameRecord& frame : frames) by_raster[frame.raster] = std::move(frame);
+  return by_raster;
 }
 
 inline int CountLines(const std::string& text) {

@@ -41,14 +41,30 @@ TEST(SyntheticScene, NoiseFreeMarksAreExactProjectionsInsideTheImage) {
     for (const auto& p : scene.points) points[p.point_id] = p.position;
     std::map<std::string, ExteriorOrientation> poses;
     for (const auto& f : scene.true_frames) poses[f.raster] = f.eo;
+    // Marks to check, in every image: one image sees each of its 20 control and 5 check points
+    // (the defaults) once; the UAV block's 12 images see their own footprint's points at least.
+    if (scenario == Scenario::kUavBlock) {
+      ASSERT_EQ(scene.true_frames.size(), 12u);
+    } else {
+      ASSERT_EQ(scene.true_frames.size(), 1u);
+      ASSERT_EQ(scene.marks.size(), 25u) << ScenarioName(scenario);
+    }
+    std::map<std::string, int> marks_per_image;
     for (const ImageMark& mark : scene.marks) {
+      ASSERT_TRUE(mark.column_row.has_value());
+      ++marks_per_image[mark.raster];
       Eigen::Vector2d projected;
       ASSERT_TRUE(ProjectGroundPoint(camera, poses.at(mark.raster), points.at(mark.point_id),
                                      PixelOrigin::kCorner, &projected).ok());
       EXPECT_LE((projected - *mark.column_row).norm(), 1e-9) << ScenarioName(scenario);
+      // Inside the image: column in [0, n_columns], row in [0, n_rows] (pixel corners).
       EXPECT_GE(mark.column_row->x(), 0.0);
+      EXPECT_LE(mark.column_row->x(), camera.n_columns);
+      EXPECT_GE(mark.column_row->y(), 0.0);
       EXPECT_LE(mark.column_row->y(), camera.n_rows);
     }
+    EXPECT_EQ(marks_per_image.size(), scene.true_frames.size()) << ScenarioName(scenario);
+    for (const auto& [raster, count] : marks_per_image) EXPECT_GE(count, 6) << raster;
   }
 }
 

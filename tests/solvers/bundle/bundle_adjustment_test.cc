@@ -686,6 +686,7 @@ TEST(BundleDiagnostics, DataSnoopingFindsEveryInjectedBlunder) {
     if (step.group == "control_points" && step.item == data.blunder_control) found_control = true;
     if (step.group == "camera_positions" && step.item == data.blunder_image) found_gnss = true;
   }
+  ASSERT_EQ(data.blunder_marks.size(), 8u);  // o.tie_blunders: every one was placed
   for (const int m : data.blunder_marks) EXPECT_TRUE(found_marks.count(m)) << "mark " << m;
   EXPECT_TRUE(found_control);
   EXPECT_TRUE(found_gnss);
@@ -693,6 +694,8 @@ TEST(BundleDiagnostics, DataSnoopingFindsEveryInjectedBlunder) {
   // alpha = 0.1 % for the whole block (alpha / n per observation): a false alarm in a thousand
   // blocks; a handful at most is allowed here.
   EXPECT_LE(static_cast<int>(result.snooping.size()), injected + 3) << result.FullReport(data.block);
+  // Diagnostics were computed: two rows (x, y) per mark, less the few snooped ones.
+  ASSERT_GE(result.observations.size(), data.block.marks.size());
   // After snooping nothing is rejected any more, and sigma0 is back near 1.
   for (const BundleObservationDiagnostics& d : result.observations) EXPECT_FALSE(d.rejected);
   EXPECT_NEAR(result.summary.sigma0, 1.0, 0.1);

@@ -40,7 +40,7 @@ TEST(FlagRangeTest, StatesItsEndsAndRefusesWhatLiesOutside) {
 // against it before any work, see bad_input_catalogue_test.cc).
 TEST(CliCommonTest, EveryNumericFlagOfEveryCommandHasARange) {
   const std::string dir = ScratchDir();
-  for (const std::string command : {"resect", "simulate", "compare"}) {
+  for (const std::string command : {"resect", "simulate", "compare", "bundle"}) {
     const CliRun run = RunCli(command + " --help", dir);
     ASSERT_EQ(run.exit_code, 0) << run.err;
     std::istringstream help(run.out);

@@ -1,4 +1,5 @@
-// End-to-end tests of `photopose resect` and `photopose simulate`: the executable as a user runs it.
+// End-to-end tests of `photopose resect` (datasets made with `photopose simulate`): the executable
+// as a user runs it.
 #include <gtest/gtest.h>
 
 #include <array>
@@ -19,6 +20,7 @@ namespace {
 using testing::CliRun;
 using testing::CountLines;
 using testing::ReadFile;
+using testing::ReadFrames;
 using testing::RunCli;
 using testing::ScratchDir;
 using testing::SharedDataPath;
@@ -28,18 +30,6 @@ using testing::WriteFile;
 std::string ExampleArgs() {
   return "--cameras=" + SourcePath("examples/cameras.csv") + " --points=" +
          SourcePath("examples/points.csv") + " --marks=" + SourcePath("examples/marks.csv");
-}
-
-std::map<std::string, FrameRecord> ReadFrames(const std::string& path,
-                                              RotationConvention convention = RotationConvention::kSeed) {
-  std::vector<FrameRecord> frames;
-  FramesTableOptions options;
-  options.convention = convention;
-  const Status status = ReadFramesTable(path, options, &frames);
-  EXPECT_TRUE(status.ok()) << status.message();
-  std::map<std::string, FrameRecord> by_raster;
-  for (auto& frame : frames) by_raster[frame.raster] = frame;
-  return by_raster;
 }
 
 TEST(ResectCommand, ResectsTheBundledExampleToItsTruth) {
@@ -151,8 +141,26 @@ TEST(ResectCommand, EverySolverAndJacobianAgreesFromApproximateFrames) {
     EXPECT_NE(resect.out.find("(from --frames)"), std::string::npos);
     results[variant] = ReadFrames(dir + "/out.csv");
   }
-  const auto& reference = results.begin()->second.begin()->second.eo.parameters;
+  // The oblique scenario is one image; every variant wrote it.
+  constexpr char kReferenceVariant[] = "--solver=ceres --jacobian=analytic --loss=none";
+  ASSERT_EQ(results.size(), 4u);
+  for (const auto& [variant, frames] : results) ASSERT_EQ(frames.size(), 1u) << variant;
+  const FrameRecord& solved = results.at(kReferenceVariant).begin()->second;
+  const Vector6d& reference = solved.eo.parameters;
+  // The reference itself is a solution, not the approximate frame handed in: near the truth
+  // (0.3 px noise on one oblique image: centimetres), far from the start (up to 5 m and 2 degrees
+  // off per axis: the simulate defaults).
+  const auto truth = ReadFrames(dir + "/truth/frames.csv");
+  const auto start = ReadFrames(dir + "/frames_approx.csv");
+  ASSERT_EQ(truth.count(solved.raster), 1u);
+  ASSERT_EQ(start.count(solved.raster), 1u);
+  const Vector6d error = reference - truth.at(solved.raster).eo.parameters;
+  EXPECT_LT(error.head<3>().norm(), 0.5);
+  EXPECT_LT(error.tail<3>().norm(), DegreesToRadians(0.1));
+  EXPECT_GT((reference - start.at(solved.raster).eo.parameters).head<3>().norm(),
+            10.0 * error.head<3>().norm());
   for (const auto& [variant, frames] : results) {
+    if (variant == kReferenceVariant) continue;
     const Vector6d difference = frames.begin()->second.eo.parameters - reference;
     if (variant == "--solver=taylor_as_printed") {
       // The printed eq. 21 biases the solution on noisy data; it must still converge nearby.
@@ -615,20 +623,6 @@ TEST(ResectCommand, AcceptsAFlagfile) {
   const CliRun run = RunCli("resect --flagfile=" + dir + "/flags", dir);
   EXPECT_EQ(run.exit_code, 0) << run.err;
   EXPECT_TRUE(std::filesystem::exists(dir + "/o.csv"));
-}
-
-TEST(SimulateCommand, SameSeedSameDatasetAndTruthKeptApart) {
-  const std::string dir = ScratchDir();
-  ASSERT_EQ(RunCli("simulate --scenario=nadir --seed=5 --out_dir=" + dir + "/a", dir).exit_code, 0);
-  ASSERT_EQ(RunCli("simulate --scenario=nadir --seed=5 --out_dir=" + dir + "/b", dir).exit_code, 0);
-  ASSERT_EQ(RunCli("simulate --scenario=nadir --seed=6 --out_dir=" + dir + "/c", dir).exit_code, 0);
-  EXPECT_EQ(ReadFile(dir + "/a/marks.csv"), ReadFile(dir + "/b/marks.csv"));
-  EXPECT_NE(ReadFile(dir + "/a/marks.csv"), ReadFile(dir + "/c/marks.csv"));
-  for (const char* file : {"cameras.csv", "points.csv", "marks.csv", "frames_approx.csv",
-                           "truth/frames.csv", "truth/outliers.csv"})
-    EXPECT_TRUE(std::filesystem::exists(dir + "/a/" + file)) << file;
-  EXPECT_EQ(RunCli("simulate --scenario=mars --out_dir=" + dir, dir).exit_code, 2);
-  EXPECT_EQ(RunCli("simulate --outlier_fraction=1.5 --out_dir=" + dir, dir).exit_code, 2);
 }
 
 }  // namespace

@@ -1,0 +1,45 @@
+#include "core/status.h"
+
+#include <gtest/gtest.h>
+
+#include <string>
+
+namespace photopose {
+namespace {
+
+TEST(Status, OkAndErrorCarryTheirOutcomeAndMessage) {
+  EXPECT_TRUE(Status().ok());
+  EXPECT_TRUE(Status::Ok().ok());
+  EXPECT_EQ(Status::Ok().message(), "");
+  const Status error = Status::Error("points.csv:3: X: is missing");
+  EXPECT_FALSE(error.ok());
+  EXPECT_EQ(error.message(), "points.csv:3: X: is missing");
+  // An error without words is still an error: success is not read from the message.
+  EXPECT_FALSE(Status::Error("").ok());
+}
+
+// Counts how far it got: 1 after the first step, 2 after the second.
+Status TwoSteps(const Status& first, const Status& second, int* steps) {
+  *steps = 0;
+  PHOTOPOSE_RETURN_IF_ERROR(first);
+  *steps = 1;
+  PHOTOPOSE_RETURN_IF_ERROR(second);
+  *steps = 2;
+  return Status::Ok();
+}
+
+TEST(Status, ReturnIfErrorStopsAtTheFirstErrorAndPassesItOn) {
+  int steps = -1;
+  EXPECT_TRUE(TwoSteps(Status::Ok(), Status::Ok(), &steps).ok());
+  EXPECT_EQ(steps, 2);
+  const Status first = TwoSteps(Status::Error("first"), Status::Error("second"), &steps);
+  EXPECT_FALSE(first.ok());
+  EXPECT_EQ(first.message(), "first");
+  EXPECT_EQ(steps, 0);
+  const Status second = TwoSteps(Status::Ok(), Status::Error("second"), &steps);
+  EXPECT_EQ(second.message(), "second");
+  EXPECT_EQ(steps, 1);
+}
+
+}  // namespace
+}  // namespace photopose

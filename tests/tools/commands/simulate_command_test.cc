@@ -1,0 +1,166 @@
+// End-to-end tests of `photopose simulate`: the executable as a user runs it.
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <map>
+#include <string>
+#include <vector>
+
+#include "core/io/tables.h"
+#include "core/rotation.h"
+#include "core/simulation/synthetic_scene.h"
+#include "tests/tools/cli_test_util.h"
+
+namespace photopose {
+namespace {
+
+using testing::CliRun;
+using testing::CountLines;
+using testing::ReadFile;
+using testing::ReadFrames;
+using testing::RunCli;
+using testing::ScratchDir;
+
+// Numbers are written as the shortest text that reads back exactly (core/io/csv.cc); angles go
+// through degrees and back (~1e-15 rad). 1e-9 px / m / rad is far above both.
+constexpr double kWrittenTolerance = 1e-9;
+
+TEST(SimulateCommand, SameSeedSameDatasetAndTruthKeptApart) {
+  const std::string dir = ScratchDir();
+  ASSERT_EQ(RunCli("simulate --scenario=nadir --seed=5 --out_dir=" + dir + "/a", dir).exit_code, 0);
+  ASSERT_EQ(RunCli("simulate --scenario=nadir --seed=5 --out_dir=" + dir + "/b", dir).exit_code, 0);
+  ASSERT_EQ(RunCli("simulate --scenario=nadir --seed=6 --out_dir=" + dir + "/c", dir).exit_code, 0);
+  EXPECT_EQ(ReadFile(dir + "/a/marks.csv"), ReadFile(dir + "/b/marks.csv"));
+  EXPECT_NE(ReadFile(dir + "/a/marks.csv"), ReadFile(dir + "/c/marks.csv"));
+  for (const char* file : {"cameras.csv", "points.csv", "marks.csv", "frames_approx.csv",
+                           "truth/frames.csv", "truth/outliers.csv"})
+    EXPECT_TRUE(std::filesystem::exists(dir + "/a/" + file)) << file;
+  EXPECT_EQ(RunCli("simulate --scenario=mars --out_dir=" + dir, dir).exit_code, 2);
+  EXPECT_EQ(RunCli("simulate --outlier_fraction=1.5 --out_dir=" + dir, dir).exit_code, 2);
+}
+
+TEST(SimulateCommand, WritesTheLibrarysSceneForTheSameFlags) {
+  const std::string dir = ScratchDir();
+  const CliRun run = RunCli(
+      "simulate --scenario=oblique --seed=11 --noise_px=0.4 "
+      "--outlier_fraction=0.2 --control_points=12 --check_points=3 --out_dir=" +
+          dir + "/d",
+      dir);
+  ASSERT_EQ(run.exit_code, 0) << run.err;
+  SyntheticSceneOptions options;
+  options.scenario = Scenario::kOblique;
+  options.seed = 11;
+  options.noise_px = 0.4;
+  options.outlier_fraction = 0.2;
+  options.num_control_points = 12;
+  options.num_check_points = 3;
+  SyntheticScene scene;
+  ASSERT_TRUE(MakeSyntheticScene(options, &scene).ok());
+  // One image sees its 12 + 3 points once each.
+  ASSERT_EQ(scene.marks.size(), 15u);
+  EXPECT_NE(run.out.find("1 images, 15 points, 15 marks"), std::string::npos) << run.out;
+
+  std::vector<ImageMark> marks;
+  ASSERT_TRUE(ReadImageMarks(dir + "/d/marks.csv", &marks).ok());
+  ASSERT_EQ(marks.size(), scene.marks.size());
+  for (size_t i = 0; i < marks.size(); ++i) {
+    EXPECT_EQ(marks[i].raster, scene.marks[i].raster);
+    EXPECT_EQ(marks[i].point_id, scene.marks[i].point_id);
+    ASSERT_TRUE(marks[i].column_row.has_value());
+    EXPECT_LT((*marks[i].column_row - *scene.marks[i].column_row).norm(), kWrittenTolerance) << i;
+  }
+  const auto truth = ReadFrames(dir + "/d/truth/frames.csv");
+  const auto start = ReadFrames(dir + "/d/frames_approx.csv");
+  const std::string& raster = scene.true_frames[0].raster;
+  ASSERT_EQ(truth.size(), 1u);
+  ASSERT_EQ(start.size(), 1u);
+  ASSERT_EQ(truth.count(raster), 1u);
+  ASSERT_EQ(start.count(raster), 1u);
+  EXPECT_LT((truth.at(raster).eo.parameters - scene.true_frames[0].eo.parameters).norm(),
+            kWrittenTolerance);
+  EXPECT_LT((start.at(raster).eo.parameters - scene.approximate_frames[0].eo.parameters).norm(),
+            kWrittenTolerance);
+  // truth/outliers.csv: a header and one row per mark, Outlier as the scene drew it (20 % of 15
+  // is 3).
+  const std::string outliers = ReadFile(dir + "/d/truth/outliers.csv");
+  ASSERT_EQ(CountLines(outliers), 16);
+  int flagged = 0;
+  for (size_t i = 0; i < scene.marks.size(); ++i) {
+    const std::string row = scene.marks[i].raster + "," + scene.marks[i].point_id + "," +
+                            (scene.mark_is_outlier[i] ? "1" : "0") + "\n";
+    EXPECT_NE(outliers.find(row), std::string::npos) << row;
+    flagged += scene.mark_is_outlier[i];
+  }
+  EXPECT_EQ(flagged, 3);
+}
+
+TEST(SimulateCommand, TheRotationFlagChangesTheWordsNotThePoses) {
+  const std::string dir = ScratchDir();
+  ASSERT_EQ(
+      RunCli("simulate --scenario=oblique --seed=3 --out_dir=" + dir + "/seed", dir).exit_code, 0);
+  ASSERT_EQ(
+      RunCli("simulate --scenario=oblique --seed=3 --rotation=opk --out_dir=" + dir + "/opk", dir)
+          .exit_code,
+      0);
+  // Written in two conventions, the angles differ; read each in its own, the pose is the same.
+  EXPECT_NE(ReadFile(dir + "/seed/truth/frames.csv"), ReadFile(dir + "/opk/truth/frames.csv"));
+  const auto seed = ReadFrames(dir + "/seed/truth/frames.csv");
+  const auto opk = ReadFrames(dir + "/opk/truth/frames.csv", RotationConvention::kOpk);
+  ASSERT_EQ(seed.size(), 1u);
+  ASSERT_EQ(opk.size(), 1u);
+  const Eigen::Vector3d seed_angles = seed.begin()->second.eo.angles_seed_rad();
+  const Eigen::Vector3d opk_angles = opk.begin()->second.eo.angles_seed_rad();
+  EXPECT_LT((RotationFromAngles(RotationConvention::kSeed, seed_angles) -
+             RotationFromAngles(RotationConvention::kSeed, opk_angles))
+                .cwiseAbs()
+                .maxCoeff(),
+            kWrittenTolerance);
+  EXPECT_EQ(RunCli("simulate --rotation=xyz --out_dir=" + dir + "/x", dir).exit_code, 2);
+}
+
+TEST(SimulateCommand, BlockScenarioWritesTheBlockItsTruthAndColmap) {
+  const std::string dir = ScratchDir();
+  const CliRun run = RunCli(
+      "simulate --scenario=block --lines=2 --images_per_line=3 --seed=4 "
+      "--tie_blunders=2 --colmap --out_dir=" +
+          dir + "/b",
+      dir);
+  ASSERT_EQ(run.exit_code, 0) << run.err;
+  // 2 lines x 3 images; two tie blunders.
+  EXPECT_NE(run.out.find("6 images"), std::string::npos) << run.out;
+  EXPECT_NE(run.out.find(" 2 blunders"), std::string::npos) << run.out;
+  EXPECT_EQ(ReadFrames(dir + "/b/truth/frames.csv").size(), 6u);
+  // The measured positions (GNSS, on by default) with their accuracy, one row per image.
+  const auto measured = ReadFrames(dir + "/b/frames.csv");
+  ASSERT_EQ(measured.size(), 6u);
+  for (const auto& [raster, frame] : measured)
+    EXPECT_TRUE(frame.center_accuracy_m.has_value()) << raster;
+  // truth/blunders.csv: a header and one row per blunder.
+  EXPECT_EQ(CountLines(ReadFile(dir + "/b/truth/blunders.csv")), 3);
+  for (const char* file : {"cameras.txt", "images.txt", "points3D.txt"})
+    EXPECT_TRUE(std::filesystem::exists(dir + "/b/colmap/" + file)) << file;
+}
+
+TEST(SimulateCommand, BadUsageIsRefusedWithItsReason) {
+  const std::string dir = ScratchDir();
+  struct Refusal {
+    std::string flags;
+    std::string reason;
+  };
+  for (const Refusal& refusal : std::vector<Refusal>{
+           {"--scenario=nadir", "--out_dir is required"},
+           {"--scenario=mars --out_dir=" + dir + "/x", "--scenario must be"},
+           {"--scenario=block --outlier_fraction=0.1 --out_dir=" + dir + "/x",
+            "--outlier_fraction is for the single-image scenarios"},
+           {"--scenario=block --gnss_blunders=1 --nognss --out_dir=" + dir + "/x",
+            "--gnss_blunders needs --gnss"},
+       }) {
+    const CliRun run = RunCli("simulate " + refusal.flags, dir);
+    EXPECT_EQ(run.exit_code, 2) << refusal.flags;
+    EXPECT_NE(run.err.find(refusal.reason), std::string::npos) << refusal.flags << ": " << run.err;
+    EXPECT_FALSE(std::filesystem::exists(dir + "/x")) << refusal.flags;
+  }
+}
+
+}  // namespace
+}  // namespace photopose
