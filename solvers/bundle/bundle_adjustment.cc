@@ -19,7 +19,6 @@ namespace photopose {
 namespace {
 
 using Clock = std::chrono::steady_clock;
-using internal::BundleGroup;
 using internal::BundlePlan;
 using internal::BundleRound;
 using internal::BundleState;
@@ -119,27 +118,21 @@ void AddSolverTimes(const ceres::Solver::Summary& ceres_summary, BundleAdjustmen
   summary->schur_structure = ceres_summary.schur_structure_used;
 }
 
-int GroupIndex(const std::string& name) {
-  for (int g = 0; g < internal::kNumBundleGroups; ++g)
-    if (name == internal::kBundleGroupNames[g]) return g;
-  return -1;
-}
-
 // Removes one observation found by data snooping: a mark, or the whole prior of a control point,
 // camera position or attitude.
 void RemoveObservation(const BundleObservationDiagnostics& d, BundlePlan* plan) {
-  switch (GroupIndex(d.group)) {
-    case internal::kTieMarks:
-    case internal::kControlMarks:
+  switch (d.group) {
+    case kTieMarks:
+    case kControlMarks:
       plan->mark_used[d.item] = 0;
       break;
-    case internal::kControlPoints:
+    case kControlPoints:
       plan->point_prior[d.item] = 0;
       break;
-    case internal::kCameraPositions:
+    case kCameraPositions:
       plan->image_prior[d.item] = 0;
       break;
-    case internal::kAttitudes:
+    case kAttitudes:
       plan->image_attitude[d.item] = 0;
       break;
     default:
@@ -150,18 +143,18 @@ void RemoveObservation(const BundleObservationDiagnostics& d, BundlePlan* plan) 
 // Scales every sigma of group g by `factor`.
 void ScaleGroup(int g, double factor, BundlePlan* plan) {
   switch (g) {
-    case internal::kTieMarks:
-    case internal::kControlMarks:
+    case kTieMarks:
+    case kControlMarks:
       for (size_t m = 0; m < plan->mark_sigma.size(); ++m)
         if (plan->mark_group[m] == g) plan->mark_sigma[m] *= factor;
       break;
-    case internal::kControlPoints:
+    case kControlPoints:
       for (auto& sigma : plan->point_sigma) sigma *= factor;
       break;
-    case internal::kCameraPositions:
+    case kCameraPositions:
       for (auto& sigma : plan->image_prior_sigma) sigma *= factor;
       break;
-    case internal::kAttitudes:
+    case kAttitudes:
       for (auto& sigma : plan->image_attitude_sigma) sigma *= factor;
       break;
     default:
@@ -170,42 +163,6 @@ void ScaleGroup(int g, double factor, BundlePlan* plan) {
 }
 
 }  // namespace
-
-std::optional<BundleLinearSolver> ParseBundleLinearSolver(const std::string& name) {
-  if (name == "sparse_schur") return BundleLinearSolver::kSparseSchur;
-  if (name == "dense_schur") return BundleLinearSolver::kDenseSchur;
-  if (name == "iterative_schur" || name == "iterative_schur_jacobi")
-    return BundleLinearSolver::kIterativeSchurJacobi;
-  if (name == "iterative_schur_cluster_jacobi")
-    return BundleLinearSolver::kIterativeSchurClusterJacobi;
-  return std::nullopt;
-}
-
-const char* BundleLinearSolverName(BundleLinearSolver solver) {
-  switch (solver) {
-    case BundleLinearSolver::kSparseSchur:
-      return "sparse_schur";
-    case BundleLinearSolver::kDenseSchur:
-      return "dense_schur";
-    case BundleLinearSolver::kIterativeSchurJacobi:
-      return "iterative_schur_jacobi";
-    case BundleLinearSolver::kIterativeSchurClusterJacobi:
-      return "iterative_schur_cluster_jacobi";
-  }
-  return "?";
-}
-
-const char* BundleTerminationName(BundleTermination termination) {
-  switch (termination) {
-    case BundleTermination::kConverged:
-      return "converged";
-    case BundleTermination::kNoConvergence:
-      return "no_convergence";
-    case BundleTermination::kFailure:
-      return "failure";
-  }
-  return "?";
-}
 
 bool BundleAdjustmentOptions::IsValid(std::string* why) const {
   auto fail = [why](const std::string& text) {
@@ -219,6 +176,9 @@ bool BundleAdjustmentOptions::IsValid(std::string* why) const {
       !positive(a.camera_m.minCoeff()) || !a.camera_m.allFinite())
     return fail("every accuracy must be positive and finite");
   if (a.attitude_deg && !positive(*a.attitude_deg)) return fail("the attitude accuracy must be positive");
+  if (!IsBundleTieLoss(tie_loss))
+    return fail("the tie loss must be " + EnumNameList(kBundleTieLosses) + ", not " +
+                EnumName(tie_loss));
   if (!positive(tie_loss_scale_sigmas)) return fail("the tie loss scale must be positive");
   if (!(rejection_threshold >= 0.0) || !std::isfinite(rejection_threshold))
     return fail("the rejection threshold must be >= 0 (0: no rejection)");
@@ -265,7 +225,7 @@ Status BundleAdjustmentConfig::FromCalibrationNames(const Block& block,
 
 std::string BundleAdjustmentSummary::BriefReport() const {
   std::ostringstream os;
-  os << BundleTerminationName(termination) << ": " << num_images << " images, " << num_points
+  os << EnumName(termination) << ": " << num_images << " images, " << num_points
      << " points, " << num_marks << " marks, " << rounds << " round" << (rounds == 1 ? "" : "s")
      << ", " << iterations << " iterations, cost " << initial_cost << " -> " << final_cost
      << ", sigma0 " << sigma0 << " (redundancy " << redundancy << ")";
@@ -290,7 +250,7 @@ std::string BundleAdjustmentResult::FullReport(const Block& block) const {
   os << "Datum: " << summary.datum_description << "\n";
   os << "Groups (count, stated, RMS, RMS/stated, redundancy share):\n";
   for (const BundleGroupStatistics& g : groups) {
-    os << "  " << g.name << ": " << g.count << ", " << FormatNumber3(g.stated_accuracy.x()) << " "
+    os << "  " << EnumName(g.group) << ": " << g.count << ", " << FormatNumber3(g.stated_accuracy.x()) << " "
        << g.unit << ", " << FormatNumber3(g.rms_total) << " " << g.unit << ", "
        << FormatNumber3(g.ratio) << ", " << FormatNumber3(g.redundancy_share)
        << (g.overfit ? "  OVERFIT" : "") << "\n";
@@ -298,15 +258,15 @@ std::string BundleAdjustmentResult::FullReport(const Block& block) const {
   }
   for (const BundleGroupStatistics& g : groups) {
     if (std::isfinite(g.estimated_accuracy.x())) {
-      os << "  " << g.name << " accuracy estimated from the data: " << FormatNumber3(g.estimated_accuracy.x())
+      os << "  " << EnumName(g.group) << " accuracy estimated from the data: " << FormatNumber3(g.estimated_accuracy.x())
          << " " << g.unit << " (stated " << FormatNumber3(g.stated_accuracy.x()) << ", relative standard error "
          << FormatNumber3(g.estimated_accuracy_standard_error) << ")\n";
     } else if (!g.estimation_message.empty()) {
-      os << "  " << g.name << ": " << g.estimation_message << "\n";
+      os << "  " << EnumName(g.group) << ": " << g.estimation_message << "\n";
     }
   }
   for (const BundleSnoopingStep& step : snooping)
-    os << "Snooping removed " << step.group << " #" << step.item << " axis " << step.axis
+    os << "Snooping removed " << EnumName(step.group) << " #" << step.item << " axis " << step.axis
        << ": |w| = " << FormatNumber3(step.normalized) << "\n";
   if (num_control_points > 0)
     os << "Control points: " << num_control_points << ", RMSE " << control_rmse_total_m << " m\n";
@@ -357,8 +317,8 @@ Status BundleAdjust(const BundleAdjustmentOptions& options, const BundleAdjustme
   for (const BlockCamera& camera : block->cameras) state.cameras.push_back(camera.params);
   if (options.lever_arm_m) state.lever = *options.lever_arm_m;
   // Variance component estimation rescales each group's sigmas by group_scale.
-  double group_scale[internal::kNumBundleGroups] = {1.0, 1.0, 1.0, 1.0, 1.0};
-  bool group_estimable[internal::kNumBundleGroups] = {};
+  double group_scale[kNumBundleGroups] = {1.0, 1.0, 1.0, 1.0, 1.0};
+  bool group_estimable[kNumBundleGroups] = {};
 
   // Rounds: adjust; then remove blunders (rejection rounds or data snooping, one at a time) or
   // rescale the groups (variance component estimation) and adjust again, until neither changes.
@@ -436,8 +396,8 @@ Status BundleAdjust(const BundleAdjustmentOptions& options, const BundleAdjustme
     summary.redundancy = redundancy;
     if (ceres_summary.termination_type != ceres::CONVERGENCE) {
       summary.termination = ceres_summary.termination_type == ceres::NO_CONVERGENCE
-                                ? BundleTermination::kNoConvergence
-                                : BundleTermination::kFailure;
+                                ? SolverTermination::kNoConvergence
+                                : SolverTermination::kFailure;
       summary.message = "round " + std::to_string(r) + ": " + ceres_summary.message;
       // What the round adjusted (the statistics, which count them otherwise, are not computed).
       summary.num_images = static_cast<int>(block->images.size());
@@ -476,7 +436,8 @@ Status BundleAdjust(const BundleAdjustmentOptions& options, const BundleAdjustme
           plan = std::move(trial);
           removed = true;
         } else {
-          summary.message = "data snooping stopped: removing " + worst->group + " #" +
+          summary.message = "data snooping stopped: removing " +
+                            std::string(EnumName(worst->group)) + " #" +
                             std::to_string(worst->item) + " would leave " + still.message();
         }
       }
@@ -487,8 +448,8 @@ Status BundleAdjust(const BundleAdjustmentOptions& options, const BundleAdjustme
       double limit = options.rejection_threshold;
       if (!result->observations.empty()) {
         for (const BundleObservationDiagnostics& d : result->observations) {
-          const int g = GroupIndex(d.group);
-          if (g != internal::kTieMarks && g != internal::kControlMarks) continue;
+          const int g = d.group;
+          if (g != kTieMarks && g != kControlMarks) continue;
           if (std::isfinite(d.normalized))
             score[d.item] = std::max(score[d.item], std::abs(d.normalized));
         }
@@ -519,7 +480,7 @@ Status BundleAdjust(const BundleAdjustmentOptions& options, const BundleAdjustme
       if (!rejected.empty()) {
         const Status still = internal::RecheckBundlePlan(config, *block, &trial);
         if (!still.ok()) {
-          summary.termination = BundleTermination::kFailure;
+          summary.termination = SolverTermination::kFailure;
           summary.message = "after rejecting " + std::to_string(rejected.size()) +
                             " marks as blunders, " + still.message();
           summary.time_seconds = SecondsSince(start);
@@ -540,9 +501,9 @@ Status BundleAdjust(const BundleAdjustmentOptions& options, const BundleAdjustme
       }
       // Each estimable group's factor; stop when all are 1 within the tolerance (the reported
       // adjustment is then the one whose weights produced them), else rescale and adjust again.
-      double factors[internal::kNumBundleGroups];
+      double factors[kNumBundleGroups];
       bool changed = false;
-      for (int g = 0; g < internal::kNumBundleGroups; ++g) {
+      for (int g = 0; g < kNumBundleGroups; ++g) {
         group_estimable[g] = variance.scalar_rows[g] > 0 &&
                              variance.redundancy[g] >= options.min_variance_redundancy;
         factors[g] = group_estimable[g] ? variance.whitened_ssq[g] / variance.redundancy[g] : 1.0;
@@ -555,7 +516,7 @@ Status BundleAdjust(const BundleAdjustmentOptions& options, const BundleAdjustme
                           std::to_string(result->variance_iterations) + " iterations";
         break;
       }
-      for (int g = 0; g < internal::kNumBundleGroups; ++g) {
+      for (int g = 0; g < kNumBundleGroups; ++g) {
         if (!group_estimable[g]) continue;
         group_scale[g] *= std::sqrt(factors[g]);
         ScaleGroup(g, std::sqrt(factors[g]), &plan);
@@ -564,13 +525,13 @@ Status BundleAdjust(const BundleAdjustmentOptions& options, const BundleAdjustme
     }
     break;
   }
-  summary.termination = BundleTermination::kConverged;
+  summary.termination = SolverTermination::kConverged;
   summary.num_rejected_marks = static_cast<int>(result->rejected_marks.size());
 
   // Estimated accuracies per group.
   if (options.estimate_accuracies) {
     for (BundleGroupStatistics& group : result->groups) {
-      const int g = GroupIndex(group.name);
+      const int g = group.group;
       const double r = variance.redundancy[g];
       if (group_estimable[g]) {
         group.estimated_accuracy = group.stated_accuracy;  // the sigmas in use are the estimates
@@ -613,7 +574,7 @@ Status CrossValidateControlPoints(const BundleAdjustmentOptions& options,
   for (const BundleRejectedMark& r : full.rejected_marks)
     if (r.mark >= 0 && r.mark < static_cast<int>(rejected.size())) rejected[r.mark] = 1;
   for (const BundleSnoopingStep& s : full.snooping)
-    if ((s.group == "tie_marks" || s.group == "control_marks") && s.item >= 0 &&
+    if ((s.group == kTieMarks || s.group == kControlMarks) && s.item >= 0 &&
         s.item < static_cast<int>(rejected.size()))
       rejected[s.item] = 1;
   Block base = adjusted;
@@ -621,12 +582,12 @@ Status CrossValidateControlPoints(const BundleAdjustmentOptions& options,
   // a tie point here, a rejected camera position or attitude no prior.
   for (const BundleSnoopingStep& s : full.snooping) {
     if (s.item < 0) continue;
-    if (s.group == "control_points" && s.item < static_cast<int>(base.points.size())) {
+    if (s.group == kControlPoints && s.item < static_cast<int>(base.points.size())) {
       base.points[s.item].role = PointRole::kTie;
       base.points[s.item].surveyed_m.reset();
-    } else if (s.group == "camera_positions" && s.item < static_cast<int>(base.images.size())) {
+    } else if (s.group == kCameraPositions && s.item < static_cast<int>(base.images.size())) {
       base.images[s.item].measured_center_m.reset();
-    } else if (s.group == "attitudes" && s.item < static_cast<int>(base.images.size())) {
+    } else if (s.group == kAttitudes && s.item < static_cast<int>(base.images.size())) {
       base.images[s.item].measured_angles_rad.reset();
     }
   }

@@ -9,14 +9,12 @@
 #include <thread>
 
 #include "cost_functions/exterior_orientation_manifold.h"
+#include "cost_functions/losses.h"
 #include "cost_functions/priors.h"
 #include "solvers/bundle/check_points.h"
 #include "solvers/bundle/triangulation.h"
 
 namespace photopose::internal {
-
-const char* const kBundleGroupNames[kNumBundleGroups] = {
-    "tie_marks", "control_marks", "control_points", "camera_positions", "attitudes"};
 
 namespace {
 
@@ -314,25 +312,6 @@ Status RecheckBundlePlan(const BundleAdjustmentConfig& config, const Block& bloc
   return Status::Ok();
 }
 
-namespace {
-
-ceres::LossFunction* MakeTieLoss(const BundleAdjustmentOptions& options) {
-  const double s = options.tie_loss_scale_sigmas;
-  switch (options.tie_loss) {
-    case BundleAdjustmentOptions::TieLoss::kNone:
-      return nullptr;
-    case BundleAdjustmentOptions::TieLoss::kHuber:
-      return new ceres::HuberLoss(s);
-    case BundleAdjustmentOptions::TieLoss::kCauchy:
-      return new ceres::CauchyLoss(s);
-    case BundleAdjustmentOptions::TieLoss::kSoftL1:
-      return new ceres::SoftLOneLoss(s);
-  }
-  return nullptr;
-}
-
-}  // namespace
-
 void BuildBundleRound(const BundleAdjustmentOptions& options, const BundleAdjustmentConfig& config,
                       const Block& block, const BundlePlan& plan, BundleState* state,
                       BundleRound* round) {
@@ -344,7 +323,7 @@ void BuildBundleRound(const BundleAdjustmentOptions& options, const BundleAdjust
   problem_options.enable_fast_removal = false;
   round->problem = std::make_unique<ceres::Problem>(problem_options);
   ceres::Problem& problem = *round->problem;
-  round->tie_loss.reset(MakeTieLoss(options));
+  round->tie_loss.reset(MakeLoss(options.tie_loss, options.tie_loss_scale_sigmas));
 
   // Exterior orientations with their manifold (one shared; the relative gauge's second image
   // gets one with a fixed coordinate).

@@ -308,7 +308,7 @@ void ComputeBundleStatistics(const BundleAdjustmentOptions& options, const Block
       BundleImageResult& image = result->images[mark.image];
       ++image.num_marks;
       image_ssq[mark.image] += residual.squaredNorm();
-      image.unit = mark.unit == MarkUnit::kFilm ? "um" : "px";
+      image.unit = EnumName(mark.unit);
       ++result->points[mark.point].num_observations;
       ++summary.num_marks;
       continue;
@@ -407,7 +407,7 @@ void ComputeBundleStatistics(const BundleAdjustmentOptions& options, const Block
       if (!diagnostics) continue;
       for (int row = 0; row < info.rows; ++row) {
         BundleObservationDiagnostics d;
-        d.group = kBundleGroupNames[info.group];
+        d.group = info.group;
         d.item = info.item;
         d.axis = info.first_axis + row;
         const double scale = row_scale(info, row);
@@ -499,7 +499,7 @@ void ComputeBundleStatistics(const BundleAdjustmentOptions& options, const Block
     const Sums& s = sums[g];
     if (s.count == 0) continue;
     BundleGroupStatistics group;
-    group.name = kBundleGroupNames[g];
+    group.group = static_cast<BundleGroup>(g);
     group.count = s.count;
     group.unit = s.unit;
     group.num_axes = (g == kTieMarks || g == kControlMarks) ? 2 : 3;
@@ -515,7 +515,7 @@ void ComputeBundleStatistics(const BundleAdjustmentOptions& options, const Block
                   (share_known && group.redundancy_share < options.overfit_redundancy_share))) {
       group.overfit = true;
       std::ostringstream message;
-      message << group.name << " over-fitted: residual RMS " << Format3(group.ratio)
+      message << EnumName(group.group) << " over-fitted: residual RMS " << Format3(group.ratio)
               << " of the stated accuracy";
       if (share_known) message << ", redundancy share " << Format3(group.redundancy_share);
       message << ". The adjustment bends to these priors: too few or too weak tie points, or a "
@@ -538,7 +538,7 @@ void ComputeBundleStatistics(const BundleAdjustmentOptions& options, const Block
     // out of the RMSE (it is reported as removed).
     bool prior_kept = true;
     for (const BundleSnoopingStep& step : result->snooping)
-      if (step.group == "control_points" && step.item == static_cast<int>(p)) prior_kept = false;
+      if (step.group == kControlPoints && step.item == static_cast<int>(p)) prior_kept = false;
     if (point.role == PointRole::kControl && out.error_m && prior_kept) {
       ++result->num_control_points;
       control_ssq += out.error_m->cwiseAbs2();

@@ -121,7 +121,7 @@ Status CheckSupported(const BundleAdjustmentConfig& config, const Block& block) 
     const BlockCamera& camera = block.cameras[image.camera];
     if (camera.model != CameraModelType::kFrame) {
       return Status::Error("camera " + Quoted(camera.camera_id) + " is a " +
-                           CameraModelTypeName(camera.model) +
+                           EnumName(camera.model) +
                            " model: the Taylor bundle adjustment takes the ArcGIS frame model "
                            "(FRAME) only; use the Ceres adjustment");
     }
@@ -875,11 +875,11 @@ std::string BehindMessage(const Block& block, const Normal& normal, const std::s
   return os.str();
 }
 
-// Gauss-Newton (eqs. 9-16) of one round from *state. On kConvergence *state is the solution and
+// Gauss-Newton (eqs. 9-16) of one round from *state. On kConverged *state is the solution and
 // *normal its linearisation; otherwise *message says why it stopped.
-TaylorTerminationType RunRound(const Context& ctx, int round, Layout* layout, State* state,
-                               Normal* normal, Reduction* reduction, TaylorBundleResult* result,
-                               std::string* message) {
+SolverTermination RunRound(const Context& ctx, int round, Layout* layout, State* state,
+                           Normal* normal, Reduction* reduction, TaylorBundleResult* result,
+                           std::string* message) {
   const TaylorBundleOptions& options = ctx.options;
   TaylorBundleSummary& summary = result->summary;
   const int redundancy = layout->num_observations - layout->num_unknowns;
@@ -899,7 +899,7 @@ TaylorTerminationType RunRound(const Context& ctx, int round, Layout* layout, St
         normal->behind_mark >= 0
             ? BehindMessage(ctx.block, *normal, "at the start of round " + std::to_string(round))
             : "the residuals at the start are not finite";
-    return TaylorTerminationType::kFailure;
+    return SolverTermination::kFailure;
   }
   if (round == 1) summary.initial_cost = 0.5 * normal->weighted_ssr;
   summary.final_cost = 0.5 * normal->weighted_ssr;
@@ -914,14 +914,14 @@ TaylorTerminationType RunRound(const Context& ctx, int round, Layout* layout, St
     if (singular_point >= 0) {
       *message = PointName(ctx.block, singular_point) +
                  " is not determined by its rays (its 3 x 3 normal block is singular)" + at;
-      return TaylorTerminationType::kFailure;
+      return SolverTermination::kFailure;
     }
     const int weightless = WriteScaled(ctx.plan, layout, reduction);
     if (weightless >= 0) {
       *message = "image " + Quoted(ctx.block.images[layout->free_images[weightless / 6]].name) +
                  ": parameter " + std::to_string(weightless % 6 + 1) +
                  " of its exterior orientation has no weight" + at;
-      return TaylorTerminationType::kFailure;
+      return SolverTermination::kFailure;
     }
     if (!Factorize(options.min_pivot_ratio, *layout, reduction)) {
       *message = Format("the reduced normal matrix is singular (pivot ratio %.3g)",
@@ -929,7 +929,7 @@ TaylorTerminationType RunRound(const Context& ctx, int round, Layout* layout, St
                  at +
                  ": a datum defect (too few control points and camera positions, or all on one "
                  "line) or an image its marks do not determine";
-      return TaylorTerminationType::kFailure;
+      return SolverTermination::kFailure;
     }
     SolveCorrections(ctx.plan, *layout, *normal, *reduction, &d_e, &d_p);
     // Eqs. 9-14: unknown = approximation - correction.
@@ -950,14 +950,14 @@ TaylorTerminationType RunRound(const Context& ctx, int round, Layout* layout, St
     summary.last_angle_correction_rad = max_angle;
     if (!std::isfinite(step_squared)) {
       *message = "the correction is not finite" + at;
-      return TaylorTerminationType::kFailure;
+      return SolverTermination::kFailure;
     }
     for (const int i : layout->free_images) {
       const double distance = state->eo[i].head<3>().norm();
       if (!(distance <= divergence_m)) {
         *message = "diverged" + at + ": image " + Quoted(ctx.block.images[i].name) +
                    Format(" moved %.3g m from the block's centroid", distance);
-        return TaylorTerminationType::kFailure;
+        return SolverTermination::kFailure;
       }
     }
     for (const int p : layout->free_points) {
@@ -965,7 +965,7 @@ TaylorTerminationType RunRound(const Context& ctx, int round, Layout* layout, St
       if (!(distance <= divergence_m)) {
         *message = "diverged" + at + ": " + PointName(ctx.block, p) +
                    Format(" moved %.3g m from the block's centroid", distance);
-        return TaylorTerminationType::kFailure;
+        return SolverTermination::kFailure;
       }
     }
     const bool converged =
@@ -976,7 +976,7 @@ TaylorTerminationType RunRound(const Context& ctx, int round, Layout* layout, St
                      ? BehindMessage(ctx.block, *normal,
                                      "after iteration " + std::to_string(iteration) + " (diverged)")
                      : "the residuals are not finite after iteration " + std::to_string(iteration);
-      return TaylorTerminationType::kFailure;
+      return SolverTermination::kFailure;
     }
     summary.final_cost = 0.5 * normal->weighted_ssr;
     const double seconds = SecondsSince(iteration_start);
@@ -994,7 +994,7 @@ TaylorTerminationType RunRound(const Context& ctx, int round, Layout* layout, St
     }
     if (converged) {
       *message = Format("corrections below tolerance (%.3g m, %.3g rad)", max_position, max_angle);
-      return TaylorTerminationType::kConvergence;
+      return SolverTermination::kConverged;
     }
   }
   std::ostringstream os;
@@ -1002,7 +1002,7 @@ TaylorTerminationType RunRound(const Context& ctx, int round, Layout* layout, St
      << " (last correction " << summary.last_position_correction_m << " m, "
      << summary.last_angle_correction_rad << " rad)";
   *message = os.str();
-  return TaylorTerminationType::kNoConvergence;
+  return SolverTermination::kNoConvergence;
 }
 
 // The blocks of S^-1 the statistics need, unscaled (the whitened system's inverse): per camera
@@ -1051,21 +1051,9 @@ void Covariances(const Block& block, const Plan& plan, const Layout& layout, con
   }
 }
 
-BundleTermination ToBundleTermination(TaylorTerminationType type) {
-  switch (type) {
-    case TaylorTerminationType::kConvergence:
-      return BundleTermination::kConverged;
-    case TaylorTerminationType::kNoConvergence:
-      return BundleTermination::kNoConvergence;
-    case TaylorTerminationType::kFailure:
-      return BundleTermination::kFailure;
-  }
-  return BundleTermination::kFailure;
-}
-
 // BundleAdjust's summary, from the Taylor one (the single source of these numbers).
 void FillBundleSummary(const TaylorBundleSummary& taylor, BundleAdjustmentSummary* out) {
-  out->termination = ToBundleTermination(taylor.termination_type);
+  out->termination = taylor.termination_type;
   out->message = taylor.message;
   out->datum = taylor.datum;
   out->datum_description = taylor.datum_description;
@@ -1118,7 +1106,7 @@ bool TaylorBundleOptions::IsValid(std::string* why) const {
 
 Status TaylorBundleOptionsFromBundleOptions(const BundleAdjustmentOptions& ceres,
                                             TaylorPartials partials, TaylorBundleOptions* options) {
-  if (ceres.tie_loss != BundleAdjustmentOptions::TieLoss::kNone) {
+  if (ceres.tie_loss != LossType::kNone) {
     return Status::Error(
         "the Taylor bundle adjustment is plain least squares: a robust tie loss is done by the "
         "Ceres adjustment");
@@ -1140,8 +1128,8 @@ Status TaylorBundleOptionsFromBundleOptions(const BundleAdjustmentOptions& ceres
 
 std::string TaylorBundleSummary::BriefReport() const {
   std::ostringstream os;
-  os << "Taylor bundle adjustment (" << TaylorPartialsName(partials) << " partials), "
-     << TaylorTerminationTypeName(termination_type) << ": " << num_images << " images, "
+  os << "Taylor bundle adjustment (" << EnumName(partials) << " partials), "
+     << EnumName(termination_type) << ": " << num_images << " images, "
      << num_points << " points, " << num_marks << " marks, " << rounds << " round"
      << (rounds == 1 ? "" : "s") << ", " << iterations << " iterations, cost " << initial_cost
      << " -> " << final_cost << ", sigma0 " << sigma0 << " (redundancy " << redundancy << ")";
@@ -1152,7 +1140,7 @@ std::string TaylorBundleSummary::BriefReport() const {
 }
 
 bool TaylorBundleSummary::IsSolutionUsable() const {
-  return termination_type == TaylorTerminationType::kConvergence;
+  return termination_type == SolverTermination::kConverged;
 }
 
 bool TaylorMarkPartials(TaylorPartials partials, const ExteriorOrientation& eo,
@@ -1303,7 +1291,7 @@ Status TaylorBundleAdjust(const TaylorBundleOptions& options, const BundleAdjust
   const Frame frame = MakeFrame(options, *block, plan, &state);
   const Context context{options, *block, plan, frame, start};
   BundleAdjustmentResult& out = result->adjustment;
-  auto finish = [&](TaylorTerminationType type, const std::string& message) {
+  auto finish = [&](SolverTermination type, const std::string& message) {
     summary.termination_type = type;
     summary.message = message;
     summary.time_seconds = SecondsSince(start);
@@ -1329,9 +1317,9 @@ Status TaylorBundleAdjust(const TaylorBundleOptions& options, const BundleAdjust
     summary.reduced_nonzeros = static_cast<int>(layout.S.nonZeros());
     reduction = std::make_unique<Reduction>();
     std::string message;
-    const TaylorTerminationType type =
+    const SolverTermination type =
         RunRound(context, round, &layout, &state, &normal, reduction.get(), result, &message);
-    if (type != TaylorTerminationType::kConvergence) {
+    if (type != SolverTermination::kConverged) {
       summary.sigma0 = kNaN;
       return finish(type, "round " + std::to_string(round) + ": " + message);
     }
@@ -1368,7 +1356,7 @@ Status TaylorBundleAdjust(const TaylorBundleOptions& options, const BundleAdjust
     int count = 0;
     const int weak = ImageWithTooFewMarks(*block, plan, &count);
     if (weak >= 0) {
-      return finish(TaylorTerminationType::kFailure,
+      return finish(SolverTermination::kFailure,
                     "after rejecting " + std::to_string(out.rejected_marks.size()) +
                         " marks as blunders, image " + Quoted(block->images[weak].name) +
                         " keeps " + std::to_string(count) + " marks: too few to orient it");
@@ -1394,7 +1382,7 @@ Status TaylorBundleAdjust(const TaylorBundleOptions& options, const BundleAdjust
     BundleImageResult& image = out.images[mark.image];
     ++image.num_marks;
     image_ssq[mark.image] += residual.squaredNorm();
-    image.unit = mark.unit == MarkUnit::kFilm ? "um" : "px";
+    image.unit = EnumName(mark.unit);
     ++out.points[mark.point].num_observations;
   }
   for (size_t i = 0; i < num_images; ++i) {
@@ -1453,7 +1441,7 @@ Status TaylorBundleAdjust(const TaylorBundleOptions& options, const BundleAdjust
   TabulateControlAndCheckPoints(*block, options.accuracies, variance_factor, &out);
   if (frame.use_lever) out.lever_arm_m = frame.lever;
   summary.statistics_seconds = SecondsSince(statistics_start);
-  return finish(TaylorTerminationType::kConvergence, summary.message);
+  return finish(SolverTermination::kConverged, summary.message);
 }
 
 Status BundleAdjustWithSolver(PoseSolver solver, const BundleAdjustmentOptions& options,

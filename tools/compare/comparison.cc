@@ -309,7 +309,7 @@ std::string SettingTitle(const SweepSetting& s, int trials, int images) {
   std::snprintf(buffer, sizeof(buffer),
                 "%s: noise %g px, outliers %g%%, %d control points, initial error +-%g m +-%g deg "
                 "(%s; %d trials x %d image%s)",
-                ScenarioName(s.scenario), s.noise_px, 100.0 * s.outlier_fraction, s.control_points,
+                EnumName(s.scenario), s.noise_px, 100.0 * s.outlier_fraction, s.control_points,
                 s.initial_error.position_m, s.initial_error.angle_deg, s.axis.c_str(), trials,
                 images, images == 1 ? "" : "s");
   return buffer;
@@ -330,8 +330,8 @@ std::string CsvField(const std::string& text) {
 // ------------------------------------------------------------------ solver variants
 
 std::string SolverVariant::Name() const {
-  if (solver != PoseSolver::kCeres) return PoseSolverName(solver);
-  return std::string("ceres_") + JacobianTypeName(jacobian) + "/" + LossTypeName(loss);
+  if (solver != PoseSolver::kCeres) return EnumName(solver);
+  return std::string("ceres_") + EnumName(jacobian) + "/" + EnumName(loss);
 }
 
 ResectionOptions SolverVariant::ApplyTo(const ResectionOptions& base) const {
@@ -348,16 +348,13 @@ Status ParseSolverVariants(const std::string& solvers, const std::string& losses
   std::vector<LossType> loss_types;
   for (const std::string& name : SplitCommaList(losses)) {
     if (name == "all") {
-      for (LossType loss : {LossType::kNone, LossType::kHuber, LossType::kSoftL1, LossType::kCauchy,
-                            LossType::kArctan, LossType::kTukey})
-        loss_types.push_back(loss);
+      for (const EnumNameEntry<LossType>& entry : kLossTypeNames) loss_types.push_back(entry.value);
       continue;
     }
-    const auto loss = ParseLossType(name);
-    if (!loss)
-      return Status::Error("unknown loss '" + name +
-                           "' (none, huber, softl1, cauchy, arctan, tukey or all)");
-    loss_types.push_back(*loss);
+    LossType loss;
+    if (!ParseEnum(name, &loss))
+      return Status::Error("unknown loss '" + name + "' (" + EnumChoices<LossType>() + " or all)");
+    loss_types.push_back(loss);
   }
   std::vector<std::string> names;
   for (const std::string& name : SplitCommaList(solvers)) {
@@ -370,10 +367,9 @@ Status ParseSolverVariants(const std::string& solvers, const std::string& losses
   }
   for (const std::string& name : names) {
     std::vector<SolverVariant> add;
-    if (name == "taylor_as_printed" || name == "taylor") {
-      SolverVariant v;
-      v.solver = *ParsePoseSolver(name);
-      add.push_back(v);
+    SolverVariant taylor;
+    if ((name == "taylor_as_printed" || name == "taylor") && ParseEnum(name, &taylor.solver)) {
+      add.push_back(taylor);
     } else if (name == "ceres_analytic" || name == "ceres_autodiff") {
       if (loss_types.empty()) return Status::Error("the Ceres solvers need at least one loss");
       for (LossType loss : loss_types) {
@@ -447,12 +443,6 @@ double NormalizedEstimationErrorSquared(const ExteriorOrientation& estimate,
 }
 
 // ------------------------------------------------------------------ Monte-Carlo mode
-
-const char* SweepTypeName(SweepType type) { return type == SweepType::kAxes ? "axes" : "grid"; }
-
-const char* InitialValuesName(InitialValues initial) {
-  return initial == InitialValues::kApproximateFrames ? "frames" : "ransac";
-}
 
 Status ParseInitialErrors(const std::string& text, std::vector<InitialError>* errors) {
   errors->clear();
@@ -930,7 +920,7 @@ std::string MonteCarloCsv(const MonteCarloResult& result) {
   for (const SettingResult& setting : result.settings) {
     const SweepSetting& x = setting.setting;
     for (const SolverStatistics& s : setting.solvers) {
-      csv << ScenarioName(x.scenario) << "," << x.axis << "," << Full(x.noise_px) << ","
+      csv << EnumName(x.scenario) << "," << x.axis << "," << Full(x.noise_px) << ","
           << Full(x.outlier_fraction) << "," << x.control_points << ","
           << Full(x.initial_error.position_m) << "," << Full(x.initial_error.angle_deg) << ","
           << setting.images_per_trial << "," << CsvField(s.solver) << "," << s.samples << ","
@@ -995,7 +985,7 @@ std::vector<TextTable> DatasetTables(const DatasetComparisonResult& result) {
 
   TextTable images;
   images.title = std::string("Per image (angles in degrees, ") +
-                 RotationConventionName(result.rotation) + " convention)";
+                 EnumName(result.rotation) + " convention)";
   images.header = {"image",    "solver",  "status", "X_m",    "Y_m",     "Z_m",
                    "omega",    "phi",     "kappa",  "sigma0", "inliers", "rms_px",
                    "check_px", "chk_out", "iter",   "t_us",   "d_pos_m", "d_rot_as"};
@@ -1047,7 +1037,7 @@ std::string DatasetCsv(const DatasetComparisonResult& result) {
     if (s.success) {
       for (int k = 0; k < 3; ++k) csv << Full(s.eo.parameters[k]) << ",";
       for (int k = 0; k < 3; ++k) csv << Full(s.angles_deg[k]) << ",";
-      csv << RotationConventionName(result.rotation) << ",";
+      csv << EnumName(result.rotation) << ",";
       for (int k = 0; k < 3; ++k) csv << Full(s.standard_deviations[k]) << ",";
       for (int k = 3; k < 6; ++k) csv << Full(RadiansToDegrees(s.standard_deviations[k])) << ",";
       csv << Full(s.sigma0) << "," << s.num_observations << "," << s.num_inliers << ","

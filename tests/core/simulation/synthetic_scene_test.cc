@@ -45,7 +45,7 @@ TEST(SyntheticScene, NoiseFreeMarksAreExactProjectionsInsideTheImage) {
       Eigen::Vector2d projected;
       ASSERT_TRUE(ProjectGroundPoint(camera, poses.at(mark.raster), points.at(mark.point_id),
                                      PixelOrigin::kCorner, &projected).ok());
-      EXPECT_LE((projected - *mark.column_row).norm(), 1e-9) << ScenarioName(scenario);
+      EXPECT_LE((projected - *mark.column_row).norm(), 1e-9) << EnumName(scenario);
       EXPECT_GE(mark.column_row->x(), 0.0);
       EXPECT_LE(mark.column_row->y(), camera.n_rows);
     }
@@ -101,8 +101,8 @@ TEST(SyntheticScene, RejectsInvalidOptions) {
   options = SyntheticSceneOptions();
   options.num_control_points = options.num_check_points = 0;
   EXPECT_FALSE(MakeSyntheticScene(options, &scene).ok());
-  EXPECT_EQ(ParseScenario("uav_block"), Scenario::kUavBlock);
-  EXPECT_FALSE(ParseScenario("satellite").has_value());
+  EXPECT_EQ(ParseEnum<Scenario>("uav_block"), Scenario::kUavBlock);
+  EXPECT_FALSE(ParseEnum<Scenario>("satellite").has_value());
 }
 
 TEST(SyntheticScene, HugePointCountsAreRefusedWithoutOverflow) {
