@@ -53,7 +53,7 @@ Status CheckBlock(const Block& block) {
     if (static_cast<int>(camera.params.size()) != expected) {
       return Status::Error("camera '" + camera.camera_id + "' has " +
                            std::to_string(camera.params.size()) + " parameters; the " +
-                           CameraModelTypeName(camera.model) + " model has " +
+                           EnumName(camera.model) + " model has " +
                            std::to_string(expected));
     }
     for (const double value : camera.params)

@@ -24,6 +24,7 @@
 
 #include "core/camera.h"
 #include "core/camera_models.h"
+#include "core/enum_names.h"
 #include "core/fiducials.h"
 #include "core/rotation.h"
 #include "core/status.h"
@@ -90,6 +91,12 @@ enum class MarkUnit {
   kPixel,  // Column/Row, pixels ((0, 0) the top-left corner of the image unless stated otherwise)
   kFilm,   // FilmX/FilmY, micrometres in the camera's FilmCoordinateSystem
 };
+// The unit's symbol in reports and messages: "px", "um".
+inline constexpr EnumNameEntry<MarkUnit> kMarkUnitNames[] = {{MarkUnit::kPixel, "px"},
+                                                            {MarkUnit::kFilm, "um"}};
+constexpr EnumNameTable<MarkUnit> EnumNames(MarkUnit) {
+  return EnumNameTable<MarkUnit>(kMarkUnitNames);
+}
 
 // One measurement of a point in an image.
 struct BlockMark {

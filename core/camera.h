@@ -19,6 +19,7 @@
 #include <utility>
 #include <vector>
 
+#include "core/enum_names.h"
 #include "core/rotation.h"
 #include "core/status.h"
 
@@ -33,7 +34,13 @@ enum class FilmCoordinateSystem : int {
 
 enum class DistortionType { kDistortionModel, kDistortionTable };
 enum class OrientationType { kOpk, kMatrix };
+// Where pixel (0, 0) is: the top-left corner of the top-left pixel, or its centre.
 enum class PixelOrigin { kCorner, kCenter };
+inline constexpr EnumNameEntry<PixelOrigin> kPixelOriginNames[] = {{PixelOrigin::kCorner, "corner"},
+                                                                  {PixelOrigin::kCenter, "center"}};
+constexpr EnumNameTable<PixelOrigin> EnumNames(PixelOrigin) {
+  return EnumNameTable<PixelOrigin>(kPixelOriginNames);
+}
 
 // One row of the camera table. Units in every name; defaults as the schema gives them.
 struct FrameCamera {

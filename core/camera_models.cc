@@ -26,22 +26,22 @@ std::string Upper(std::string text) {
   return text;
 }
 
+// The parameters of each model (their names are in kCameraModelTypeNames).
 struct ModelInfo {
   CameraModelType type;
-  const char* name;
   std::vector<std::string> params;
 };
 
 const std::vector<ModelInfo>& Models() {
   static const auto* const kModels = new std::vector<ModelInfo>{
-      {CameraModelType::kFrame, "FRAME",
+      {CameraModelType::kFrame,
        {"FocalLength", "PrincipalX", "PrincipalY", "K0", "K1", "K2", "K3", "P1", "P2", "Affinity",
         "Skew"}},
-      {CameraModelType::kSimplePinhole, "SIMPLE_PINHOLE", {"f", "cx", "cy"}},
-      {CameraModelType::kPinhole, "PINHOLE", {"fx", "fy", "cx", "cy"}},
-      {CameraModelType::kSimpleRadial, "SIMPLE_RADIAL", {"f", "cx", "cy", "k"}},
-      {CameraModelType::kRadial, "RADIAL", {"f", "cx", "cy", "k1", "k2"}},
-      {CameraModelType::kOpenCv, "OPENCV", {"fx", "fy", "cx", "cy", "k1", "k2", "p1", "p2"}},
+      {CameraModelType::kSimplePinhole, {"f", "cx", "cy"}},
+      {CameraModelType::kPinhole, {"fx", "fy", "cx", "cy"}},
+      {CameraModelType::kSimpleRadial, {"f", "cx", "cy", "k"}},
+      {CameraModelType::kRadial, {"f", "cx", "cy", "k1", "k2"}},
+      {CameraModelType::kOpenCv, {"fx", "fy", "cx", "cy", "k1", "k2", "p1", "p2"}},
   };
   return *kModels;
 }
@@ -61,15 +61,6 @@ Eigen::Vector2d Residual(CameraModelType type, const double* params, const Camer
 }
 
 }  // namespace
-
-const char* CameraModelTypeName(CameraModelType type) { return Info(type).name; }
-
-std::optional<CameraModelType> ParseCameraModelType(const std::string& name) {
-  const std::string upper = Upper(name);
-  for (const ModelInfo& info : Models())
-    if (upper == info.name) return info.type;
-  return std::nullopt;
-}
 
 int CameraModelNumParams(CameraModelType type) {
   return static_cast<int>(Info(type).params.size());
@@ -105,7 +96,7 @@ Status CalibrationParamIndices(CameraModelType type, const std::string& name,
     }
   }
   if (indices->empty()) {
-    return Status::Error("the " + std::string(CameraModelTypeName(type)) +
+    return Status::Error("the " + std::string(EnumName(type)) +
                          " camera model has no parameter '" + name + "'");
   }
   return Status::Ok();

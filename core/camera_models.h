@@ -54,6 +54,7 @@
 #include <string>
 #include <vector>
 
+#include "core/enum_names.h"
 #include "core/status.h"
 
 namespace photopose {
@@ -69,10 +70,17 @@ enum class CameraModelType {
   kOpenCv,         // COLMAP OPENCV
 };
 
-// "FRAME", "SIMPLE_PINHOLE", "PINHOLE", "SIMPLE_RADIAL", "RADIAL", "OPENCV" (COLMAP's names).
-const char* CameraModelTypeName(CameraModelType type);
-// The names above, case-insensitive; nullopt otherwise.
-std::optional<CameraModelType> ParseCameraModelType(const std::string& name);
+// COLMAP's names (FRAME is photopose's own); case is ignored when parsing (core/enum_names.h).
+inline constexpr EnumNameEntry<CameraModelType> kCameraModelTypeNames[] = {
+    {CameraModelType::kFrame, "FRAME"},
+    {CameraModelType::kSimplePinhole, "SIMPLE_PINHOLE"},
+    {CameraModelType::kPinhole, "PINHOLE"},
+    {CameraModelType::kSimpleRadial, "SIMPLE_RADIAL"},
+    {CameraModelType::kRadial, "RADIAL"},
+    {CameraModelType::kOpenCv, "OPENCV"}};
+constexpr EnumNameTable<CameraModelType> EnumNames(CameraModelType) {
+  return EnumNameTable<CameraModelType>(kCameraModelTypeNames, NameMatch::kIgnoreCase);
+}
 
 // Number of parameters of each model, and the largest.
 int CameraModelNumParams(CameraModelType type);

@@ -31,30 +31,6 @@ Eigen::Vector3d SeedAnglesFromMatrix(const Eigen::Matrix3d& R) {
 
 }  // namespace
 
-std::optional<RotationConvention> ParseRotationConvention(const std::string& name) {
-  std::string lower(name);
-  std::transform(lower.begin(), lower.end(), lower.begin(),
-                 [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
-  if (lower == "rxryrz" || lower == "seed") return RotationConvention::kSeed;
-  if (lower == "opk") return RotationConvention::kOpk;
-  if (lower == "pok") return RotationConvention::kPok;
-  return std::nullopt;
-}
-
-const char* RotationConventionName(RotationConvention convention) {
-  switch (convention) {
-    case RotationConvention::kSeed:
-      return "rxryrz";
-    case RotationConvention::kOpk:
-      return "opk";
-    case RotationConvention::kPok:
-      return "pok";
-  }
-  return "?";
-}
-
-const char* RotationConventionChoices() { return "rxryrz (alias seed), opk or pok"; }
-
 Eigen::Matrix3d RotationFromAngles(RotationConvention convention, const Eigen::Vector3d& angles) {
   const double omega = angles[0], phi = angles[1], kappa = angles[2];
   switch (convention) {

@@ -13,6 +13,7 @@
 #include <optional>
 #include <string>
 
+#include "core/enum_names.h"
 #include "core/status.h"
 
 namespace photopose {
@@ -31,12 +32,16 @@ enum class RotationConvention {
   kPok,
 };
 
-// "rxryrz" (alias "seed"), "opk", "pok" (case-insensitive) -> convention; nullopt otherwise.
-std::optional<RotationConvention> ParseRotationConvention(const std::string& name);
-// "rxryrz", "opk", "pok": the names every output prints.
-const char* RotationConventionName(RotationConvention convention);
-// The accepted names for messages and --help: "rxryrz (alias seed), opk or pok".
-const char* RotationConventionChoices();
+// "rxryrz", "opk", "pok": the names every output prints; "seed" is accepted for "rxryrz"; case is
+// ignored when parsing (core/enum_names.h).
+inline constexpr EnumNameEntry<RotationConvention> kRotationConventionNames[] = {
+    {RotationConvention::kSeed, "rxryrz"},
+    {RotationConvention::kOpk, "opk"},
+    {RotationConvention::kPok, "pok"},
+    {RotationConvention::kSeed, "seed"}};
+constexpr EnumNameTable<RotationConvention> EnumNames(RotationConvention) {
+  return EnumNameTable<RotationConvention>(kRotationConventionNames, NameMatch::kIgnoreCase);
+}
 
 // Elementary rotations (active, right-handed), templated for Ceres Jets.
 template <typename T>

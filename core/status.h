@@ -1,13 +1,14 @@
 #pragma once
 // A data-dependent outcome: success, or failure with a one-line reason. The library returns a Status
-// wherever input data can be wrong; CHECK is reserved for programmer errors.
+// wherever input data can be wrong; CHECK is reserved for programmer errors. [[nodiscard]]: a
+// returned Status must be looked at; where dropping one is right, `(void)` with a comment says why.
 
 #include <string>
 #include <utility>
 
 namespace photopose {
 
-class Status {
+class [[nodiscard]] Status {
  public:
   Status() = default;
   static Status Ok() { return Status(); }

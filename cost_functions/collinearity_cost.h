@@ -30,8 +30,11 @@ namespace photopose {
 // The one switch for the derivative path, used by the library, the CLI and the comparison tool.
 enum class JacobianType { kAnalytic, kAutodiff };
 
-std::optional<JacobianType> ParseJacobianType(const std::string& name);
-const char* JacobianTypeName(JacobianType type);
+inline constexpr EnumNameEntry<JacobianType> kJacobianTypeNames[] = {
+    {JacobianType::kAnalytic, "analytic"}, {JacobianType::kAutodiff, "autodiff"}};
+constexpr EnumNameTable<JacobianType> EnumNames(JacobianType) {
+  return EnumNameTable<JacobianType>(kJacobianTypeNames);
+}
 
 // ------------------------------------------------------------------ resection (pose only)
 
@@ -187,16 +190,6 @@ class CollinearityCostAnalytic final
 ceres::CostFunction* CreateCollinearityCost(JacobianType type, const CollinearityFunctor& data);
 
 // ------------------------------------------------------------------ inline definitions
-
-inline std::optional<JacobianType> ParseJacobianType(const std::string& name) {
-  if (name == "analytic") return JacobianType::kAnalytic;
-  if (name == "autodiff") return JacobianType::kAutodiff;
-  return std::nullopt;
-}
-
-inline const char* JacobianTypeName(JacobianType type) {
-  return type == JacobianType::kAnalytic ? "analytic" : "autodiff";
-}
 
 namespace internal {
 template <int kNumParams>

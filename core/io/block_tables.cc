@@ -65,7 +65,7 @@ Status ToTableRecords(const Block& block, const BlockTableWriteOptions& options,
   for (const BlockCamera& camera : block.cameras) {
     if (camera.model != CameraModelType::kFrame) {
       return Status::Error("camera '" + camera.camera_id + "' is a " +
-                           CameraModelTypeName(camera.model) +
+                           EnumName(camera.model) +
                            " camera: the camera table holds frame cameras only (write the block "
                            "as a COLMAP model instead)");
     }

@@ -97,8 +97,8 @@ Status ReadCameras(const std::string& path, Block* block, IdIndex* camera_of_id)
     std::string_view model_name;
     PHOTOPOSE_RETURN_IF_ERROR(scanner->IntegerIn("CAMERA_ID", 0, kMaxColmapId, &id));
     PHOTOPOSE_RETURN_IF_ERROR(scanner->Word("MODEL", &model_name));
-    const std::optional<CameraModelType> model = ParseCameraModelType(std::string(model_name));
-    if (!model || *model == CameraModelType::kFrame) {
+    CameraModelType model = CameraModelType::kFrame;  // not a COLMAP model: refused below
+    if (!ParseEnum(model_name, &model) || model == CameraModelType::kFrame) {
       return scanner->Error("MODEL", "camera model '" + std::string(model_name) +
                                          "' is not supported (supported: SIMPLE_PINHOLE, PINHOLE, "
                                          "SIMPLE_RADIAL, RADIAL, OPENCV)");
@@ -108,13 +108,13 @@ Status ReadCameras(const std::string& path, Block* block, IdIndex* camera_of_id)
     PHOTOPOSE_RETURN_IF_ERROR(scanner->IntegerIn("HEIGHT", 1, kMaxSize, &height));
     BlockCamera camera;
     camera.camera_id = std::to_string(id);
-    camera.model = *model;
+    camera.model = model;
     camera.table.camera_id = camera.camera_id;
     camera.table.n_columns = static_cast<int>(width);
     camera.table.n_rows = static_cast<int>(height);
-    const int num_params = CameraModelNumParams(*model);
+    const int num_params = CameraModelNumParams(model);
     camera.params.resize(num_params);
-    const std::vector<std::string> names = CameraModelParamNames(*model);
+    const std::vector<std::string> names = CameraModelParamNames(model);
     for (int k = 0; k < num_params; ++k)
       PHOTOPOSE_RETURN_IF_ERROR(scanner->Number("PARAMS " + names[k], &camera.params[k]));
     if (!scanner->AtEnd()) {
@@ -518,7 +518,7 @@ Status FormatColmapModel(const Block& block, const ColmapModelExtras* extras,
     }
     AppendInteger(camera_ids[c], &cameras_text);
     cameras_text += ' ';
-    cameras_text += CameraModelTypeName(model);
+    cameras_text += EnumName(model);
     cameras_text += ' ';
     AppendInteger(camera.table.n_columns, &cameras_text);
     cameras_text += ' ';

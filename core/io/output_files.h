@@ -3,7 +3,7 @@
 // touched (docs/formats.md, "How files are written").
 //
 //   OutputFiles outputs;
-//   outputs.AddInput("--points", points_path);                          // before any work:
+//   PHOTOPOSE_RETURN_IF_ERROR(outputs.AddInput("--points", points_path));  // before any work:
 //   PHOTOPOSE_RETURN_IF_ERROR(outputs.AddOutput("--out", out_path));    // the pre-flight check
 //   ... read, solve ...
 //   PHOTOPOSE_RETURN_IF_ERROR(outputs.Stage(out_path, text));

@@ -635,7 +635,7 @@ Status SyntheticBlockOptions::IsValid() const {
     if (static_cast<int>(camera_params.size()) != CameraModelNumParams(camera_model)) {
       return Invalid("camera_params must have the " +
                      std::to_string(CameraModelNumParams(camera_model)) + " parameters of " +
-                     CameraModelTypeName(camera_model));
+                     EnumName(camera_model));
     }
     for (const double p : camera_params)
       if (!std::isfinite(p)) return Invalid("camera_params must be finite");

@@ -59,25 +59,6 @@ bool InsideImage(const FrameCamera& camera, const Eigen::Vector2d& column_row) {
 
 }  // namespace
 
-std::optional<Scenario> ParseScenario(const std::string& name) {
-  if (name == "nadir") return Scenario::kNadir;
-  if (name == "oblique") return Scenario::kOblique;
-  if (name == "uav_block") return Scenario::kUavBlock;
-  return std::nullopt;
-}
-
-const char* ScenarioName(Scenario scenario) {
-  switch (scenario) {
-    case Scenario::kNadir:
-      return "nadir";
-    case Scenario::kOblique:
-      return "oblique";
-    case Scenario::kUavBlock:
-      return "uav_block";
-  }
-  return "?";
-}
-
 Status SyntheticSceneOptions::IsValid() const {
   if (!(noise_px >= 0.0) || !std::isfinite(noise_px)) return Status::Error("noise_px must be >= 0");
   if (!(outlier_fraction >= 0.0 && outlier_fraction < 1.0))

@@ -13,6 +13,7 @@
 #include "core/block.h"
 #include "core/io/block_tables.h"
 #include "core/camera.h"
+#include "core/enum_names.h"
 #include "core/status.h"
 #include "core/io/tables.h"
 
@@ -24,8 +25,13 @@ enum class Scenario {
   kUavBlock,  // 3 x 4 images of a UAV block at 100 m, 8.8 mm lens, 2.41 um pixels, radial distortion
 };
 
-std::optional<Scenario> ParseScenario(const std::string& name);
-const char* ScenarioName(Scenario scenario);
+inline constexpr EnumNameEntry<Scenario> kScenarioNames[] = {
+    {Scenario::kNadir, "nadir"},
+    {Scenario::kOblique, "oblique"},
+    {Scenario::kUavBlock, "uav_block"}};
+constexpr EnumNameTable<Scenario> EnumNames(Scenario) {
+  return EnumNameTable<Scenario>(kScenarioNames);
+}
 
 struct SyntheticSceneOptions {
   Scenario scenario = Scenario::kNadir;

@@ -24,7 +24,6 @@ namespace photopose {
 namespace {
 
 using Clock = std::chrono::steady_clock;
-using internal::BundleGroup;
 using internal::BundlePlan;
 using internal::BundleRound;
 using internal::BundleState;
@@ -124,27 +123,21 @@ void AddSolverTimes(const ceres::Solver::Summary& ceres_summary, BundleAdjustmen
   summary->schur_structure = ceres_summary.schur_structure_used;
 }
 
-int GroupIndex(const std::string& name) {
-  for (int g = 0; g < internal::kNumBundleGroups; ++g)
-    if (name == internal::kBundleGroupNames[g]) return g;
-  return -1;
-}
-
 // Removes one observation found by data snooping: a mark, or the whole prior of a control point,
 // camera position or attitude.
 void RemoveObservation(const BundleObservationDiagnostics& d, BundlePlan* plan) {
-  switch (GroupIndex(d.group)) {
-    case internal::kTieMarks:
-    case internal::kControlMarks:
+  switch (d.group) {
+    case kTieMarks:
+    case kControlMarks:
       plan->mark_used[d.item] = 0;
       break;
-    case internal::kControlPoints:
+    case kControlPoints:
       plan->point_prior[d.item] = 0;
       break;
-    case internal::kCameraPositions:
+    case kCameraPositions:
       plan->image_prior[d.item] = 0;
       break;
-    case internal::kAttitudes:
+    case kAttitudes:
       plan->image_attitude[d.item] = 0;
       break;
     default:
@@ -155,18 +148,18 @@ void RemoveObservation(const BundleObservationDiagnostics& d, BundlePlan* plan) 
 // Scales every sigma of group g by `factor`.
 void ScaleGroup(int g, double factor, BundlePlan* plan) {
   switch (g) {
-    case internal::kTieMarks:
-    case internal::kControlMarks:
+    case kTieMarks:
+    case kControlMarks:
       for (size_t m = 0; m < plan->mark_sigma.size(); ++m)
         if (plan->mark_group[m] == g) plan->mark_sigma[m] *= factor;
       break;
-    case internal::kControlPoints:
+    case kControlPoints:
       for (auto& sigma : plan->point_sigma) sigma *= factor;
       break;
-    case internal::kCameraPositions:
+    case kCameraPositions:
       for (auto& sigma : plan->image_prior_sigma) sigma *= factor;
       break;
-    case internal::kAttitudes:
+    case kAttitudes:
       for (auto& sigma : plan->image_attitude_sigma) sigma *= factor;
       break;
     default:
@@ -175,42 +168,6 @@ void ScaleGroup(int g, double factor, BundlePlan* plan) {
 }
 
 }  // namespace
-
-std::optional<BundleLinearSolver> ParseBundleLinearSolver(const std::string& name) {
-  if (name == "sparse_schur") return BundleLinearSolver::kSparseSchur;
-  if (name == "dense_schur") return BundleLinearSolver::kDenseSchur;
-  if (name == "iterative_schur" || name == "iterative_schur_jacobi")
-    return BundleLinearSolver::kIterativeSchurJacobi;
-  if (name == "iterative_schur_cluster_jacobi")
-    return BundleLinearSolver::kIterativeSchurClusterJacobi;
-  return std::nullopt;
-}
-
-const char* BundleLinearSolverName(BundleLinearSolver solver) {
-  switch (solver) {
-    case BundleLinearSolver::kSparseSchur:
-      return "sparse_schur";
-    case BundleLinearSolver::kDenseSchur:
-      return "dense_schur";
-    case BundleLinearSolver::kIterativeSchurJacobi:
-      return "iterative_schur_jacobi";
-    case BundleLinearSolver::kIterativeSchurClusterJacobi:
-      return "iterative_schur_cluster_jacobi";
-  }
-  return "?";
-}
-
-const char* BundleTerminationName(BundleTermination termination) {
-  switch (termination) {
-    case BundleTermination::kConverged:
-      return "converged";
-    case BundleTermination::kNoConvergence:
-      return "no_convergence";
-    case BundleTermination::kFailure:
-      return "failure";
-  }
-  return "?";
-}
 
 bool BundleAdjustmentOptions::IsValid(std::string* why) const {
   auto fail = [why](const std::string& text) {
@@ -224,6 +181,9 @@ bool BundleAdjustmentOptions::IsValid(std::string* why) const {
       !positive(a.camera_m.minCoeff()) || !a.camera_m.allFinite())
     return fail("every accuracy must be positive and finite");
   if (a.attitude_deg && !positive(*a.attitude_deg)) return fail("the attitude accuracy must be positive");
+  if (!IsBundleTieLoss(tie_loss))
+    return fail("the tie loss must be " + EnumNameList(kBundleTieLosses) + ", not " +
+                EnumName(tie_loss));
   if (!positive(tie_loss_scale_sigmas)) return fail("the tie loss scale must be positive");
   if (!(rejection_threshold >= 0.0) || !std::isfinite(rejection_threshold))
     return fail("the rejection threshold must be >= 0 (0: no rejection)");
@@ -270,7 +230,7 @@ Status BundleAdjustmentConfig::FromCalibrationNames(const Block& block,
 
 std::string BundleAdjustmentSummary::BriefReport() const {
   std::ostringstream os;
-  os << BundleTerminationName(termination) << ": " << num_images << " images, " << num_points
+  os << EnumName(termination) << ": " << num_images << " images, " << num_points
      << " points, " << num_marks << " marks, " << rounds << " round" << (rounds == 1 ? "" : "s")
      << ", " << iterations << " iterations, cost " << initial_cost << " -> " << final_cost
      << ", sigma0 " << sigma0 << " (redundancy " << redundancy << ")";
@@ -295,7 +255,7 @@ std::string BundleAdjustmentResult::FullReport(const Block& block) const {
   os << "Datum: " << summary.datum_description << "\n";
   os << "Groups (count, stated, RMS, RMS/stated, redundancy share):\n";
   for (const BundleGroupStatistics& g : groups) {
-    os << "  " << g.name << ": " << g.count << ", " << FormatNumber3(g.stated_accuracy.x()) << " "
+    os << "  " << EnumName(g.group) << ": " << g.count << ", " << FormatNumber3(g.stated_accuracy.x()) << " "
        << g.unit << ", " << FormatNumber3(g.rms_total) << " " << g.unit << ", "
        << FormatNumber3(g.ratio) << ", " << FormatNumber3(g.redundancy_share)
        << (g.overfit ? "  OVERFIT" : "") << "\n";
@@ -303,15 +263,15 @@ std::string BundleAdjustmentResult::FullReport(const Block& block) const {
   }
   for (const BundleGroupStatistics& g : groups) {
     if (std::isfinite(g.estimated_accuracy.x())) {
-      os << "  " << g.name << " accuracy estimated from the data: " << FormatNumber3(g.estimated_accuracy.x())
+      os << "  " << EnumName(g.group) << " accuracy estimated from the data: " << FormatNumber3(g.estimated_accuracy.x())
          << " " << g.unit << " (stated " << FormatNumber3(g.stated_accuracy.x()) << ", relative standard error "
          << FormatNumber3(g.estimated_accuracy_standard_error) << ")\n";
     } else if (!g.estimation_message.empty()) {
-      os << "  " << g.name << ": " << g.estimation_message << "\n";
+      os << "  " << EnumName(g.group) << ": " << g.estimation_message << "\n";
     }
   }
   for (const BundleSnoopingStep& step : snooping)
-    os << "Snooping removed " << step.group << " #" << step.item << " axis " << step.axis
+    os << "Snooping removed " << EnumName(step.group) << " #" << step.item << " axis " << step.axis
        << ": |w| = " << FormatNumber3(step.normalized) << "\n";
   if (num_control_points > 0)
     os << "Control points: " << num_control_points << ", RMSE " << control_rmse_total_m << " m\n";
@@ -346,8 +306,8 @@ struct Adjustment {
   BundleRound round;
   internal::GroupVariance variance;
   // Variance component estimation rescales each group's sigmas by group_scale.
-  double group_scale[internal::kNumBundleGroups] = {1.0, 1.0, 1.0, 1.0, 1.0};
-  bool group_estimable[internal::kNumBundleGroups] = {};
+  double group_scale[kNumBundleGroups] = {1.0, 1.0, 1.0, 1.0, 1.0};
+  bool group_estimable[kNumBundleGroups] = {};
   int rejections_done = 0;
 };
 
@@ -459,8 +419,8 @@ void SolveRound(Adjustment* a, int r, ceres::Solver::Summary* ceres_summary) {
 void EndWithFailedRound(const Adjustment& a, int r, const ceres::Solver::Summary& ceres_summary) {
   BundleAdjustmentSummary& summary = a.result->summary;
   summary.termination = ceres_summary.termination_type == ceres::NO_CONVERGENCE
-                            ? BundleTermination::kNoConvergence
-                            : BundleTermination::kFailure;
+                            ? SolverTermination::kNoConvergence
+                            : SolverTermination::kFailure;
   summary.message = "round " + std::to_string(r) + ": " + ceres_summary.message;
   summary.num_images = static_cast<int>(a.block->images.size());
   summary.num_points = static_cast<int>(
@@ -488,7 +448,7 @@ bool SnoopOne(Adjustment* a) {
   RemoveObservation(*worst, &trial);
   const Status still = internal::RecheckBundlePlan(a->config, *a->block, &trial);
   if (!still.ok()) {
-    result->summary.message = "data snooping stopped: removing " + worst->group + " #" +
+    result->summary.message = "data snooping stopped: removing " + std::string(EnumName(worst->group)) + " #" +
                               std::to_string(worst->item) + " would leave " + still.message();
     return false;
   }
@@ -506,8 +466,8 @@ std::vector<double> RejectionScores(const Adjustment& a, double* limit) {
   *limit = a.options.rejection_threshold;
   if (!a.result->observations.empty()) {
     for (const BundleObservationDiagnostics& d : a.result->observations) {
-      const int g = GroupIndex(d.group);
-      if (g != internal::kTieMarks && g != internal::kControlMarks) continue;
+      const int g = d.group;
+      if (g != kTieMarks && g != kControlMarks) continue;
       if (std::isfinite(d.normalized)) score[d.item] = std::max(score[d.item], std::abs(d.normalized));
     }
     return score;
@@ -549,7 +509,7 @@ Rejection RejectMarks(Adjustment* a, int r) {
   const Status still = internal::RecheckBundlePlan(a->config, block, &trial);
   if (!still.ok()) {
     BundleAdjustmentSummary& summary = a->result->summary;
-    summary.termination = BundleTermination::kFailure;
+    summary.termination = SolverTermination::kFailure;
     summary.message = "after rejecting " + std::to_string(rejected.size()) +
                       " marks as blunders, " + still.message();
     summary.time_seconds = SecondsSince(a->start);
@@ -572,9 +532,9 @@ bool RescaleGroups(Adjustment* a) {
     result->summary.message = "accuracies not estimated: the covariance was not computed";
     return false;
   }
-  double factors[internal::kNumBundleGroups];
+  double factors[kNumBundleGroups];
   bool changed = false;
-  for (int g = 0; g < internal::kNumBundleGroups; ++g) {
+  for (int g = 0; g < kNumBundleGroups; ++g) {
     a->group_estimable[g] = variance.scalar_rows[g] > 0 &&
                             variance.redundancy[g] >= options.min_variance_redundancy;
     factors[g] = a->group_estimable[g] ? variance.whitened_ssq[g] / variance.redundancy[g] : 1.0;
@@ -587,7 +547,7 @@ bool RescaleGroups(Adjustment* a) {
                               std::to_string(result->variance_iterations) + " iterations";
     return false;
   }
-  for (int g = 0; g < internal::kNumBundleGroups; ++g) {
+  for (int g = 0; g < kNumBundleGroups; ++g) {
     if (!a->group_estimable[g]) continue;
     a->group_scale[g] *= std::sqrt(factors[g]);
     ScaleGroup(g, std::sqrt(factors[g]), &a->plan);
@@ -599,7 +559,7 @@ bool RescaleGroups(Adjustment* a) {
 // accuracy stays what the user stated.
 void ReportEstimatedAccuracies(const Adjustment& a) {
   for (BundleGroupStatistics& group : a.result->groups) {
-    const int g = GroupIndex(group.name);
+    const int g = group.group;
     const double r = a.variance.redundancy[g];
     if (a.group_estimable[g]) {
       group.estimated_accuracy = group.stated_accuracy;
@@ -677,7 +637,7 @@ Status BundleAdjust(const BundleAdjustmentOptions& options, const BundleAdjustme
     if (options.estimate_accuracies && RescaleGroups(&a)) continue;
     break;
   }
-  summary.termination = BundleTermination::kConverged;
+  summary.termination = SolverTermination::kConverged;
   summary.num_rejected_marks = static_cast<int>(result->rejected_marks.size());
   if (options.estimate_accuracies) ReportEstimatedAccuracies(a);
   WriteBack(a.plan, a.state, block);
@@ -698,18 +658,18 @@ Block CrossValidationBase(const Block& adjusted, const BundleAdjustmentResult& f
   for (const BundleRejectedMark& r : full.rejected_marks)
     if (r.mark >= 0 && r.mark < static_cast<int>(rejected->size())) (*rejected)[r.mark] = 1;
   for (const BundleSnoopingStep& s : full.snooping)
-    if ((s.group == "tie_marks" || s.group == "control_marks") && s.item >= 0 &&
+    if ((s.group == kTieMarks || s.group == kControlMarks) && s.item >= 0 &&
         s.item < static_cast<int>(rejected->size()))
       (*rejected)[s.item] = 1;
   Block base = adjusted;
   for (const BundleSnoopingStep& s : full.snooping) {
     if (s.item < 0) continue;
-    if (s.group == "control_points" && s.item < static_cast<int>(base.points.size())) {
+    if (s.group == kControlPoints && s.item < static_cast<int>(base.points.size())) {
       base.points[s.item].role = PointRole::kTie;
       base.points[s.item].surveyed_m.reset();
-    } else if (s.group == "camera_positions" && s.item < static_cast<int>(base.images.size())) {
+    } else if (s.group == kCameraPositions && s.item < static_cast<int>(base.images.size())) {
       base.images[s.item].measured_center_m.reset();
-    } else if (s.group == "attitudes" && s.item < static_cast<int>(base.images.size())) {
+    } else if (s.group == kAttitudes && s.item < static_cast<int>(base.images.size())) {
       base.images[s.item].measured_angles_rad.reset();
     }
   }

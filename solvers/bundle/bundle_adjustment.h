@@ -38,9 +38,12 @@
 #include <vector>
 
 #include "core/block.h"
+#include "core/enum_names.h"
 #include "core/status.h"
+#include "core/termination.h"
 #include "core/types.h"
 #include "cost_functions/collinearity_cost.h"
+#include "cost_functions/losses.h"
 
 namespace photopose {
 
@@ -71,8 +74,16 @@ enum class BundleLinearSolver {
   kIterativeSchurJacobi,         // ITERATIVE_SCHUR with SCHUR_JACOBI
   kIterativeSchurClusterJacobi,  // ITERATIVE_SCHUR with CLUSTER_JACOBI
 };
-std::optional<BundleLinearSolver> ParseBundleLinearSolver(const std::string& name);
-const char* BundleLinearSolverName(BundleLinearSolver solver);
+// "iterative_schur" is accepted for "iterative_schur_jacobi".
+inline constexpr EnumNameEntry<BundleLinearSolver> kBundleLinearSolverNames[] = {
+    {BundleLinearSolver::kSparseSchur, "sparse_schur"},
+    {BundleLinearSolver::kDenseSchur, "dense_schur"},
+    {BundleLinearSolver::kIterativeSchurJacobi, "iterative_schur_jacobi"},
+    {BundleLinearSolver::kIterativeSchurClusterJacobi, "iterative_schur_cluster_jacobi"},
+    {BundleLinearSolver::kIterativeSchurJacobi, "iterative_schur"}};
+constexpr EnumNameTable<BundleLinearSolver> EnumNames(BundleLinearSolver) {
+  return EnumNameTable<BundleLinearSolver>(kBundleLinearSolverNames);
+}
 
 // One line of progress, after every iteration (the CLI prints it on stderr).
 struct BundleIterationInfo {
@@ -97,12 +108,23 @@ struct BundleIterationInfo {
   double iteration_seconds = 0.0;
 };
 
+// The robust losses the adjustment offers on tie marks, the ones its tests and `photopose compare`
+// cover. Not tukey: it gives a mark beyond its scale zero weight, and a tie point whose marks all
+// lie beyond it is left undetermined; nor arctan, not validated on blocks.
+inline constexpr LossType kBundleTieLosses[] = {LossType::kNone, LossType::kHuber,
+                                                LossType::kCauchy, LossType::kSoftL1};
+inline bool IsBundleTieLoss(LossType loss) {
+  for (const LossType offered : kBundleTieLosses)
+    if (loss == offered) return true;
+  return false;
+}
+
 struct BundleAdjustmentOptions {
   BundleAccuracies accuracies;
   JacobianType jacobian = JacobianType::kAnalytic;  // derivative path of the collinearity costs
-  // Robust loss on tie marks (kNone: plain least squares), scale in sigmas of the mark.
-  // Control marks and priors are never robustified.
-  enum class TieLoss { kNone, kHuber, kCauchy, kSoftL1 } tie_loss = TieLoss::kNone;
+  // Robust loss on tie marks (kNone: plain least squares; one of kBundleTieLosses), scale in
+  // sigmas of the mark. Control marks and priors are never robustified.
+  LossType tie_loss = LossType::kNone;
   double tie_loss_scale_sigmas = 3.0;
   // After convergence, marks whose normalized residual exceeds this are rejected and the block
   // adjusted again, at most max_rejection_rounds times (0 disables rejection). The normalized
@@ -194,18 +216,39 @@ struct BundleAdjustmentConfig {
                                      BundleAdjustmentConfig* config);
 };
 
-enum class BundleTermination { kConverged, kNoConvergence, kFailure };
-const char* BundleTerminationName(BundleTermination termination);
-
 // How the adjustment is tied to the ground.
 enum class BundleDatum {
   kControl,   // control points and/or camera positions fix all seven similarity parameters
   kRelative,  // neither: COLMAP's convention (first image fixed, one coordinate of the second)
 };
+inline constexpr EnumNameEntry<BundleDatum> kBundleDatumNames[] = {
+    {BundleDatum::kControl, "absolute"}, {BundleDatum::kRelative, "relative"}};
+constexpr EnumNameTable<BundleDatum> EnumNames(BundleDatum) {
+  return EnumNameTable<BundleDatum>(kBundleDatumNames);
+}
+
+// The groups of observations in the objective, in report order; an index into per-group arrays.
+enum BundleGroup : int {
+  kTieMarks = 0,     // image marks of tie points
+  kControlMarks,     // image marks of control points
+  kControlPoints,    // surveyed coordinates of control points (priors)
+  kCameraPositions,  // measured camera centres (priors)
+  kAttitudes,        // measured attitudes (priors)
+};
+constexpr int kNumBundleGroups = 5;
+inline constexpr EnumNameEntry<BundleGroup> kBundleGroupNames[] = {
+    {kTieMarks, "tie_marks"},
+    {kControlMarks, "control_marks"},
+    {kControlPoints, "control_points"},
+    {kCameraPositions, "camera_positions"},
+    {kAttitudes, "attitudes"}};
+constexpr EnumNameTable<BundleGroup> EnumNames(BundleGroup) {
+  return EnumNameTable<BundleGroup>(kBundleGroupNames);
+}
 
 // The statistics of one group of the objective.
 struct BundleGroupStatistics {
-  std::string name;  // tie_marks | control_marks | control_points | camera_positions | attitudes
+  BundleGroup group = kTieMarks;
   int count = 0;     // observations (marks, points, cameras)
   std::string unit;  // px, um, m or deg
   // Stated accuracy: mean over the group per axis (unit above).
@@ -230,7 +273,7 @@ struct BundleGroupStatistics {
 
 // The diagnostics of one scalar observation (observation_diagnostics).
 struct BundleObservationDiagnostics {
-  std::string group;       // as BundleGroupStatistics::name
+  BundleGroup group = kTieMarks;
   int item = -1;           // mark (marks), point (control_points) or image (priors) index
   int axis = 0;            // marks: 0 x, 1 y; priors: 0..2 (X, Y, Z or omega, phi, kappa)
   double residual = 0.0;   // observed - computed (marks: px or um; points, cameras: m; deg)
@@ -244,7 +287,7 @@ struct BundleObservationDiagnostics {
 
 // One step of data snooping.
 struct BundleSnoopingStep {
-  std::string group;
+  BundleGroup group = kTieMarks;
   int item = -1;
   int axis = 0;
   double normalized = 0.0;  // |w| of the removed observation
@@ -292,7 +335,7 @@ struct BundleRejectedMark {
 };
 
 struct BundleAdjustmentSummary {
-  BundleTermination termination = BundleTermination::kFailure;
+  SolverTermination termination = SolverTermination::kFailure;
   std::string message;
   BundleDatum datum = BundleDatum::kControl;
   std::string datum_description;  // in words, for the report
@@ -322,7 +365,7 @@ struct BundleAdjustmentSummary {
   // dynamic, the slower generic path): "2,3,6" when every image block has 6 free parameters.
   std::string schur_structure;
 
-  bool IsSolutionUsable() const { return termination == BundleTermination::kConverged; }
+  bool IsSolutionUsable() const { return termination == SolverTermination::kConverged; }
   std::string BriefReport() const;
 };
 

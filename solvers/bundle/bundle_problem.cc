@@ -9,12 +9,10 @@
 
 #include "core/parallel.h"
 #include "cost_functions/exterior_orientation_manifold.h"
+#include "cost_functions/losses.h"
 #include "cost_functions/priors.h"
 
 namespace photopose::internal {
-
-const char* const kBundleGroupNames[kNumBundleGroups] = {
-    "tie_marks", "control_marks", "control_points", "camera_positions", "attitudes"};
 
 namespace {
 
@@ -377,25 +375,6 @@ Status RecheckBundlePlan(const BundleAdjustmentConfig& config, const Block& bloc
 
 namespace {
 
-ceres::LossFunction* MakeTieLoss(const BundleAdjustmentOptions& options) {
-  const double s = options.tie_loss_scale_sigmas;
-  switch (options.tie_loss) {
-    case BundleAdjustmentOptions::TieLoss::kNone:
-      return nullptr;
-    case BundleAdjustmentOptions::TieLoss::kHuber:
-      return new ceres::HuberLoss(s);
-    case BundleAdjustmentOptions::TieLoss::kCauchy:
-      return new ceres::CauchyLoss(s);
-    case BundleAdjustmentOptions::TieLoss::kSoftL1:
-      return new ceres::SoftLOneLoss(s);
-  }
-  return nullptr;
-}
-
-}  // namespace
-
-namespace {
-
 // Exterior orientations with their manifold (one shared; the relative gauge's second image gets
 // one with a fixed coordinate).
 void AddOrientationBlocks(const BundleAdjustmentConfig& config, const Block& block,
@@ -559,7 +538,7 @@ void BuildBundleRound(const BundleAdjustmentOptions& options, const BundleAdjust
   problem_options.loss_function_ownership = ceres::DO_NOT_TAKE_OWNERSHIP;
   problem_options.enable_fast_removal = false;
   round->problem = std::make_unique<ceres::Problem>(problem_options);
-  round->tie_loss.reset(MakeTieLoss(options));
+  round->tie_loss.reset(MakeLoss(options.tie_loss, options.tie_loss_scale_sigmas));
   AddOrientationBlocks(config, block, plan, state, round);
   AddCameraBlocks(options, block, plan, state, round);
   AddPointBlocks(config, block, plan, state, round);

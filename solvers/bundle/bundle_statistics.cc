@@ -300,7 +300,7 @@ void TabulateResiduals(const Block& block, const BundlePlan& plan, const BundleS
       BundleImageResult& image = result->images[mark.image];
       ++image.num_marks;
       image_ssq[mark.image] += residual.squaredNorm();
-      image.unit = mark.unit == MarkUnit::kFilm ? "um" : "px";
+      image.unit = EnumName(mark.unit);
       ++result->points[mark.point].num_observations;
       ++result->summary.num_marks;
       continue;
@@ -405,7 +405,7 @@ BundleObservationDiagnostics RowDiagnostics(const BundleAdjustmentResult& result
                                             const CentreColumns& centres,
                                             const Eigen::VectorXd& shift) {
   BundleObservationDiagnostics d;
-  d.group = kBundleGroupNames[info.group];
+  d.group = static_cast<BundleGroup>(info.group);
   d.item = info.item;
   d.axis = info.first_axis + row;
   d.residual = whitened * scale;
@@ -519,7 +519,7 @@ void GroupStatistics(const BundleAdjustmentOptions& options, const GroupSums* su
     const GroupSums& s = sums[g];
     if (s.count == 0) continue;
     BundleGroupStatistics group;
-    group.name = kBundleGroupNames[g];
+    group.group = static_cast<BundleGroup>(g);
     group.count = s.count;
     group.unit = s.unit;
     group.num_axes = (g == kTieMarks || g == kControlMarks) ? 2 : 3;
@@ -535,7 +535,7 @@ void GroupStatistics(const BundleAdjustmentOptions& options, const GroupSums* su
                   (share_known && group.redundancy_share < options.overfit_redundancy_share))) {
       group.overfit = true;
       std::ostringstream message;
-      message << group.name << " over-fitted: residual RMS " << Format3(group.ratio)
+      message << EnumName(group.group) << " over-fitted: residual RMS " << Format3(group.ratio)
               << " of the stated accuracy";
       if (share_known) message << ", redundancy share " << Format3(group.redundancy_share);
       message << ". The adjustment bends to these priors: too few or too weak tie points, or a "

@@ -13,7 +13,7 @@ namespace {
 // Whether data snooping removed the coordinates (the prior) of control point p.
 bool PriorRemoved(const BundleAdjustmentResult& result, int p) {
   for (const BundleSnoopingStep& step : result.snooping)
-    if (step.group == kBundleGroupNames[kControlPoints] && step.item == p) return true;
+    if (step.group == kControlPoints && step.item == p) return true;
   return false;
 }
 

@@ -67,7 +67,7 @@ Status CheckSupported(const BundleAdjustmentConfig& config, const Block& block) 
     const BlockCamera& camera = block.cameras[image.camera];
     if (camera.model != CameraModelType::kFrame) {
       return Status::Error("camera " + Quoted(camera.camera_id) + " is a " +
-                           CameraModelTypeName(camera.model) +
+                           EnumName(camera.model) +
                            " model: the Taylor bundle adjustment takes the ArcGIS frame model "
                            "(FRAME) only; use the Ceres adjustment");
     }
@@ -271,9 +271,9 @@ bool Diverged(const Context& ctx, const Layout& layout, const State& state, doub
 
 // Gauss-Newton (eqs. 9-16) of one round from *state. On kConvergence *state is the solution and
 // *normal its linearisation; otherwise *message says why it stopped.
-TaylorTerminationType RunRound(const Context& ctx, int round, Layout* layout, State* state,
-                               Normal* normal, Reduction* reduction, TaylorBundleResult* result,
-                               std::string* message) {
+SolverTermination RunRound(const Context& ctx, int round, Layout* layout, State* state,
+                           Normal* normal, Reduction* reduction, TaylorBundleResult* result,
+                           std::string* message) {
   const TaylorBundleOptions& options = ctx.options;
   TaylorBundleSummary& summary = result->summary;
   const int redundancy = layout->num_observations - layout->num_unknowns;
@@ -293,7 +293,7 @@ TaylorTerminationType RunRound(const Context& ctx, int round, Layout* layout, St
         normal->behind_mark >= 0
             ? BehindMessage(ctx.block, *normal, "at the start of round " + std::to_string(round))
             : "the residuals at the start are not finite";
-    return TaylorTerminationType::kFailure;
+    return SolverTermination::kFailure;
   }
   if (round == 1) summary.initial_cost = 0.5 * normal->weighted_ssr;
   summary.final_cost = 0.5 * normal->weighted_ssr;
@@ -305,7 +305,7 @@ TaylorTerminationType RunRound(const Context& ctx, int round, Layout* layout, St
     const double cost = 0.5 * normal->weighted_ssr;
     const std::string at = " at iteration " + std::to_string(iteration);
     if (!SolveStep(ctx, at, *normal, layout, reduction, &d_e, &d_p, message))
-      return TaylorTerminationType::kFailure;
+      return SolverTermination::kFailure;
     double max_position = 0.0, max_angle = 0.0, step_squared = 0.0;
     ApplyCorrections(*layout, d_e, d_p, state, &max_position, &max_angle, &step_squared);
     summary.iterations += 1;
@@ -313,10 +313,10 @@ TaylorTerminationType RunRound(const Context& ctx, int round, Layout* layout, St
     summary.last_angle_correction_rad = max_angle;
     if (!std::isfinite(step_squared)) {
       *message = "the correction is not finite" + at;
-      return TaylorTerminationType::kFailure;
+      return SolverTermination::kFailure;
     }
     if (Diverged(ctx, *layout, *state, divergence_m, at, message))
-      return TaylorTerminationType::kFailure;
+      return SolverTermination::kFailure;
     const bool converged =
         max_position <= position_tolerance_m && max_angle <= options.angle_tolerance_rad;
     if (!Linearize(options.partials, ctx.block, ctx.plan, *layout, ctx.frame, *state, normal,
@@ -325,7 +325,7 @@ TaylorTerminationType RunRound(const Context& ctx, int round, Layout* layout, St
                      ? BehindMessage(ctx.block, *normal,
                                      "after iteration " + std::to_string(iteration) + " (diverged)")
                      : "the residuals are not finite after iteration " + std::to_string(iteration);
-      return TaylorTerminationType::kFailure;
+      return SolverTermination::kFailure;
     }
     summary.final_cost = 0.5 * normal->weighted_ssr;
     const double seconds = SecondsSince(iteration_start);
@@ -343,7 +343,7 @@ TaylorTerminationType RunRound(const Context& ctx, int round, Layout* layout, St
     }
     if (converged) {
       *message = Format("corrections below tolerance (%.3g m, %.3g rad)", max_position, max_angle);
-      return TaylorTerminationType::kConvergence;
+      return SolverTermination::kConverged;
     }
   }
   std::ostringstream os;
@@ -351,7 +351,7 @@ TaylorTerminationType RunRound(const Context& ctx, int round, Layout* layout, St
      << " (last correction " << summary.last_position_correction_m << " m, "
      << summary.last_angle_correction_rad << " rad)";
   *message = os.str();
-  return TaylorTerminationType::kNoConvergence;
+  return SolverTermination::kNoConvergence;
 }
 
 // The round's counts in the summary.
@@ -470,21 +470,9 @@ void WriteBack(const Plan& plan, const State& state, const Frame& frame, Block* 
     if (plan.point_in_problem[p]) block->points[p].position_m = state.points[p] + frame.centroid;
 }
 
-BundleTermination ToBundleTermination(TaylorTerminationType type) {
-  switch (type) {
-    case TaylorTerminationType::kConvergence:
-      return BundleTermination::kConverged;
-    case TaylorTerminationType::kNoConvergence:
-      return BundleTermination::kNoConvergence;
-    case TaylorTerminationType::kFailure:
-      return BundleTermination::kFailure;
-  }
-  return BundleTermination::kFailure;
-}
-
 // BundleAdjust's summary, from the Taylor one (the single source of these numbers).
 void FillBundleSummary(const TaylorBundleSummary& taylor, BundleAdjustmentSummary* out) {
-  out->termination = ToBundleTermination(taylor.termination_type);
+  out->termination = taylor.termination_type;
   out->message = taylor.message;
   out->datum = taylor.datum;
   out->datum_description = taylor.datum_description;
@@ -537,7 +525,7 @@ bool TaylorBundleOptions::IsValid(std::string* why) const {
 
 Status TaylorBundleOptionsFromBundleOptions(const BundleAdjustmentOptions& ceres,
                                             TaylorPartials partials, TaylorBundleOptions* options) {
-  if (ceres.tie_loss != BundleAdjustmentOptions::TieLoss::kNone) {
+  if (ceres.tie_loss != LossType::kNone) {
     return Status::Error(
         "the Taylor bundle adjustment is plain least squares: a robust tie loss is done by the "
         "Ceres adjustment");
@@ -559,8 +547,8 @@ Status TaylorBundleOptionsFromBundleOptions(const BundleAdjustmentOptions& ceres
 
 std::string TaylorBundleSummary::BriefReport() const {
   std::ostringstream os;
-  os << "Taylor bundle adjustment (" << TaylorPartialsName(partials) << " partials), "
-     << TaylorTerminationTypeName(termination_type) << ": " << num_images << " images, "
+  os << "Taylor bundle adjustment (" << EnumName(partials) << " partials), "
+     << EnumName(termination_type) << ": " << num_images << " images, "
      << num_points << " points, " << num_marks << " marks, " << rounds << " round"
      << (rounds == 1 ? "" : "s") << ", " << iterations << " iterations, cost " << initial_cost
      << " -> " << final_cost << ", sigma0 " << sigma0 << " (redundancy " << redundancy << ")";
@@ -571,7 +559,7 @@ std::string TaylorBundleSummary::BriefReport() const {
 }
 
 bool TaylorBundleSummary::IsSolutionUsable() const {
-  return termination_type == TaylorTerminationType::kConvergence;
+  return termination_type == SolverTermination::kConverged;
 }
 
 bool TaylorMarkPartials(TaylorPartials partials, const ExteriorOrientation& eo,
@@ -723,7 +711,7 @@ Status TaylorBundleAdjust(const TaylorBundleOptions& options, const BundleAdjust
   const Frame frame = MakeFrame(options, *block, plan, &state);
   const Context context{options, *block, plan, frame, start};
   BundleAdjustmentResult& out = result->adjustment;
-  auto finish = [&](TaylorTerminationType type, const std::string& message) {
+  auto finish = [&](SolverTermination type, const std::string& message) {
     summary.termination_type = type;
     summary.message = message;
     summary.time_seconds = SecondsSince(start);
@@ -741,9 +729,9 @@ Status TaylorBundleAdjust(const TaylorBundleOptions& options, const BundleAdjust
     SummarizeRound(*block, plan, layout, round, &summary);
     reduction = std::make_unique<Reduction>();
     std::string message;
-    const TaylorTerminationType type =
+    const SolverTermination type =
         RunRound(context, round, &layout, &state, &normal, reduction.get(), result, &message);
-    if (type != TaylorTerminationType::kConvergence) {
+    if (type != SolverTermination::kConverged) {
       summary.sigma0 = kNaN;
       return finish(type, "round " + std::to_string(round) + ": " + message);
     }
@@ -756,7 +744,7 @@ Status TaylorBundleAdjust(const TaylorBundleOptions& options, const BundleAdjust
       break;
     const Status still = internal::RecheckBundlePlan(config, *block, &plan);
     if (!still.ok()) {
-      return finish(TaylorTerminationType::kFailure,
+      return finish(SolverTermination::kFailure,
                     "after rejecting " + std::to_string(out.rejected_marks.size()) +
                         " marks as blunders, " + still.message());
     }
@@ -782,7 +770,7 @@ Status TaylorBundleAdjust(const TaylorBundleOptions& options, const BundleAdjust
   TabulateControlAndCheckPoints(*block, options.accuracies, variance_factor, &out);
   if (frame.use_lever) out.lever_arm_m = frame.lever;
   summary.statistics_seconds = SecondsSince(statistics_start);
-  return finish(TaylorTerminationType::kConvergence, summary.message);
+  return finish(SolverTermination::kConverged, summary.message);
 }
 
 Status BundleAdjustWithSolver(PoseSolver solver, const BundleAdjustmentOptions& options,

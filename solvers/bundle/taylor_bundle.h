@@ -122,7 +122,7 @@ struct TaylorBundleIteration {
 };
 
 struct TaylorBundleSummary {
-  TaylorTerminationType termination_type = TaylorTerminationType::kFailure;
+  SolverTermination termination_type = SolverTermination::kFailure;
   std::string message;  // why it stopped (one line)
   TaylorPartials partials = TaylorPartials::kCorrected;
   BundleDatum datum = BundleDatum::kControl;
@@ -150,7 +150,7 @@ struct TaylorBundleSummary {
 
   // One line: variant, termination, rounds, iterations, costs, sigma0, time, message.
   std::string BriefReport() const;
-  // True only for kConvergence.
+  // True only for kConverged.
   bool IsSolutionUsable() const;
 };
 

@@ -167,7 +167,7 @@ double RobustCost(const ceres::LossFunction* loss, const std::vector<double>& s)
 // TinySolver, wrapped in iteratively reweighted least squares when there is a loss. Returns
 // kFailure with the reason, kNoConvergence when the reweighting rounds ran out (the caller may
 // finish with ceres::Solve), or kConverged.
-PoseRefinementTermination RefineWithTinySolver(const PoseRefinementOptions& options,
+SolverTermination RefineWithTinySolver(const PoseRefinementOptions& options,
                                                const CentredProblem& problem,
                                                const ceres::LossFunction* loss,
                                                Vector6d* eo_centred,
@@ -176,7 +176,7 @@ PoseRefinementTermination RefineWithTinySolver(const PoseRefinementOptions& opti
   std::vector<double> s;
   if (!SquaredNorms(problem, eo_centred->data(), &s)) {
     summary->message = "Ceres: a control point is behind the camera at the initial pose";
-    return PoseRefinementTermination::kFailure;
+    return SolverTermination::kFailure;
   }
   summary->initial_cost = RobustCost(loss, s);
   std::vector<double> sqrt_weights(problem.costs.size(), 1.0);
@@ -185,10 +185,10 @@ PoseRefinementTermination RefineWithTinySolver(const PoseRefinementOptions& opti
     for (size_t i = 0; i < s.size(); ++i) sqrt_weights[i] = std::sqrt(LossWeight(loss, s[i]));
     if (round == 0 && *std::max_element(sqrt_weights.begin(), sqrt_weights.end()) == 0.0) {
       summary->message = std::string("Ceres: every residual is beyond the ") +
-                         LossTypeName(options.loss) +
+                         EnumName(options.loss) +
                          " loss at the initial pose, so nothing pulls the pose; give a larger "
                          "loss scale or better initial values";
-      return PoseRefinementTermination::kFailure;
+      return SolverTermination::kFailure;
     }
     StackedPoseFunction function(problem, sqrt_weights);
     ceres::TinySolver<StackedPoseFunction> solver;
@@ -203,7 +203,7 @@ PoseRefinementTermination RefineWithTinySolver(const PoseRefinementOptions& opti
     if (!eo_centred->allFinite() || !SquaredNorms(problem, eo_centred->data(), &s)) {
       summary->message =
           "Ceres TinySolver: the pose left the valid region (a point behind the camera)";
-      return PoseRefinementTermination::kFailure;
+      return SolverTermination::kFailure;
     }
     // Converged when no (reweighted) Gauss-Newton step of consequence is left, whatever stopped
     // TinySolver: its own tolerances can stop it a hair short (a cost change below its function
@@ -212,11 +212,11 @@ PoseRefinementTermination RefineWithTinySolver(const PoseRefinementOptions& opti
         PolishToTolerance(problem, loss, ceres_options.step_tolerance_sigmas, eo_centred);
     if (!SquaredNorms(problem, eo_centred->data(), &s)) {
       summary->message = "Ceres TinySolver: a control point is behind the camera at the solution";
-      return PoseRefinementTermination::kFailure;
+      return SolverTermination::kFailure;
     }
     summary->final_cost = RobustCost(loss, s);
     if (remaining <= ceres_options.step_tolerance_sigmas)
-      return PoseRefinementTermination::kConverged;
+      return SolverTermination::kConverged;
     if (loss == nullptr) {
       const bool limit = tiny.status == ceres::TinySolver<StackedPoseFunction>::HIT_MAX_ITERATIONS;
       summary->message =
@@ -224,12 +224,12 @@ PoseRefinementTermination RefineWithTinySolver(const PoseRefinementOptions& opti
                        std::to_string(ceres_options.max_iterations) + " iterations"
                  : std::string("Ceres TinySolver: stopped short of the minimum")) +
           " (a step of " + Format("%.3g", remaining) + " standard deviations remains)";
-      return PoseRefinementTermination::kNoConvergence;
+      return SolverTermination::kNoConvergence;
     }
   }
   summary->message = "Ceres TinySolver: reweighting did not settle in " +
                      std::to_string(rounds) + " rounds";
-  return PoseRefinementTermination::kNoConvergence;
+  return SolverTermination::kNoConvergence;
 }
 
 // Stops ceres::Solve once the remaining Gauss-Newton step is below the tolerance (the parameters
@@ -256,7 +256,7 @@ class StepInSigmasCallback : public ceres::IterationCallback {
   double tolerance_;
 };
 
-PoseRefinementTermination RefineWithCeresProblem(const PoseRefinementOptions& options,
+SolverTermination RefineWithCeresProblem(const PoseRefinementOptions& options,
                                                  CentredProblem* problem_data,
                                                  Vector6d* eo_centred, int* iterations,
                                                  double* initial_cost, double* final_cost,
@@ -292,13 +292,13 @@ PoseRefinementTermination RefineWithCeresProblem(const PoseRefinementOptions& op
   *final_cost = summary.final_cost;
   if (!summary.IsSolutionUsable() || !eo_centred->allFinite()) {
     *message = "Ceres: " + summary.message;
-    return PoseRefinementTermination::kFailure;
+    return SolverTermination::kFailure;
   }
-  if (remaining <= ceres_options.step_tolerance_sigmas) return PoseRefinementTermination::kConverged;
+  if (remaining <= ceres_options.step_tolerance_sigmas) return SolverTermination::kConverged;
   *message = "Ceres: " + summary.message + " (a step of " + Format("%.3g", remaining) +
              " standard deviations remains)";
-  return summary.termination_type == ceres::NO_CONVERGENCE ? PoseRefinementTermination::kNoConvergence
-                                                           : PoseRefinementTermination::kFailure;
+  return summary.termination_type == ceres::NO_CONVERGENCE ? SolverTermination::kNoConvergence
+                                                           : SolverTermination::kFailure;
 }
 
 bool RefineWithCeres(const PoseRefinementOptions& options,
@@ -310,18 +310,18 @@ bool RefineWithCeres(const PoseRefinementOptions& options,
       MakeCentredProblem(options.jacobian, image_plane, points, sigmas, focal, indices);
   Vector6d eo_centred = eo->parameters;
   eo_centred.head<3>() -= problem.origin;
-  PoseRefinementTermination termination;
+  SolverTermination termination;
   if (options.ceres.minimizer == CeresMinimizer::kTinySolver) {
     const std::unique_ptr<ceres::LossFunction> loss(MakeLoss(options.loss, options.loss_scale));
     const Vector6d start = eo_centred;
     termination = RefineWithTinySolver(options, problem, loss.get(), &eo_centred, summary);
-    if (termination == PoseRefinementTermination::kNoConvergence && loss != nullptr) {
+    if (termination == SolverTermination::kNoConvergence && loss != nullptr) {
       // Reweighting still creeping (a loss with many points near its scale): let ceres::Solve
       // finish from where it got, with the loss applied exactly.
       double initial_cost = 0.0;
       termination = RefineWithCeresProblem(options, &problem, &eo_centred, &summary->iterations,
                                            &initial_cost, &summary->final_cost, &summary->message);
-      if (termination != PoseRefinementTermination::kConverged) eo_centred = start;
+      if (termination != SolverTermination::kConverged) eo_centred = start;
     }
   } else {
     termination = RefineWithCeresProblem(options, &problem, &eo_centred, &summary->iterations,
@@ -329,7 +329,7 @@ bool RefineWithCeres(const PoseRefinementOptions& options,
                                          &summary->message);
   }
   summary->termination = termination;
-  if (termination != PoseRefinementTermination::kConverged) return false;
+  if (termination != SolverTermination::kConverged) return false;
   summary->message.clear();
   eo->parameters = eo_centred;
   eo->parameters.head<3>() += problem.origin;
@@ -365,59 +365,18 @@ bool RefineWithTaylor(const PoseRefinementOptions& options,
   summary->initial_cost = taylor.summary.initial_cost;
   summary->final_cost = taylor.summary.final_cost;
   if (!status.ok() || !taylor.summary.IsSolutionUsable()) {
-    summary->termination = taylor.summary.termination_type == TaylorTerminationType::kNoConvergence
-                               ? PoseRefinementTermination::kNoConvergence
-                               : PoseRefinementTermination::kFailure;
+    summary->termination = taylor.summary.termination_type == SolverTermination::kNoConvergence
+                               ? SolverTermination::kNoConvergence
+                               : SolverTermination::kFailure;
     summary->message = "Taylor: " + (status.ok() ? taylor.summary.message : status.message());
     return false;
   }
-  summary->termination = PoseRefinementTermination::kConverged;
+  summary->termination = SolverTermination::kConverged;
   *eo = taylor.eo;
   return true;
 }
 
 }  // namespace
-
-std::optional<PoseSolver> ParsePoseSolver(const std::string& name) {
-  if (name == "ceres") return PoseSolver::kCeres;
-  if (name == "taylor") return PoseSolver::kTaylor;
-  if (name == "taylor_as_printed") return PoseSolver::kTaylorAsPrinted;
-  return std::nullopt;
-}
-
-const char* PoseSolverName(PoseSolver solver) {
-  switch (solver) {
-    case PoseSolver::kCeres:
-      return "ceres";
-    case PoseSolver::kTaylor:
-      return "taylor";
-    case PoseSolver::kTaylorAsPrinted:
-      return "taylor_as_printed";
-  }
-  return "?";
-}
-
-std::optional<CeresMinimizer> ParseCeresMinimizer(const std::string& name) {
-  if (name == "tiny_solver") return CeresMinimizer::kTinySolver;
-  if (name == "problem") return CeresMinimizer::kProblem;
-  return std::nullopt;
-}
-
-const char* CeresMinimizerName(CeresMinimizer minimizer) {
-  return minimizer == CeresMinimizer::kTinySolver ? "tiny_solver" : "problem";
-}
-
-const char* PoseRefinementTerminationName(PoseRefinementTermination termination) {
-  switch (termination) {
-    case PoseRefinementTermination::kConverged:
-      return "converged";
-    case PoseRefinementTermination::kNoConvergence:
-      return "no_convergence";
-    case PoseRefinementTermination::kFailure:
-      return "failure";
-  }
-  return "?";
-}
 
 bool CeresPoseOptions::IsValid(std::string* why) const {
   auto fail = [why](const char* text) {

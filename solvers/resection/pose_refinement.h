@@ -15,6 +15,8 @@
 #include <string>
 #include <vector>
 
+#include "core/enum_names.h"
+#include "core/termination.h"
 #include "core/types.h"
 #include "cost_functions/collinearity_cost.h"
 #include "cost_functions/losses.h"
@@ -28,8 +30,13 @@ enum class PoseSolver {
   kTaylor,           // the seed's Taylor linearisation, corrected partials (solvers/resection/taylor_resection.h)
   kTaylorAsPrinted,  // the same with the partial derivatives exactly as printed in the seed
 };
-std::optional<PoseSolver> ParsePoseSolver(const std::string& name);  // ceres|taylor|taylor_as_printed
-const char* PoseSolverName(PoseSolver solver);
+inline constexpr EnumNameEntry<PoseSolver> kPoseSolverNames[] = {
+    {PoseSolver::kCeres, "ceres"},
+    {PoseSolver::kTaylor, "taylor"},
+    {PoseSolver::kTaylorAsPrinted, "taylor_as_printed"}};
+constexpr EnumNameTable<PoseSolver> EnumNames(PoseSolver) {
+  return EnumNameTable<PoseSolver>(kPoseSolverNames);
+}
 
 // How Ceres minimises one image's problem. Both use the same cost functions
 // (cost_functions/collinearity_cost.h) and Ceres loss functions, on coordinates centred on the
@@ -42,8 +49,11 @@ enum class CeresMinimizer {
   // (2) ceres::Problem + ceres::Solve: trust-region LM, DENSE_QR, loss applied by Ceres.
   kProblem,
 };
-std::optional<CeresMinimizer> ParseCeresMinimizer(const std::string& name);  // tiny_solver|problem
-const char* CeresMinimizerName(CeresMinimizer minimizer);
+inline constexpr EnumNameEntry<CeresMinimizer> kCeresMinimizerNames[] = {
+    {CeresMinimizer::kTinySolver, "tiny_solver"}, {CeresMinimizer::kProblem, "problem"}};
+constexpr EnumNameTable<CeresMinimizer> EnumNames(CeresMinimizer) {
+  return EnumNameTable<CeresMinimizer>(kCeresMinimizerNames);
+}
 
 struct CeresPoseOptions {
   CeresMinimizer minimizer = CeresMinimizer::kTinySolver;
@@ -79,21 +89,14 @@ struct PoseRefinementOptions {
   bool IsValid(std::string* why) const;
 };
 
-enum class PoseRefinementTermination {
-  kConverged,      // a step below the tolerance: the pose is the minimum
-  kNoConvergence,  // the iteration limit was reached first; no pose
-  kFailure,        // a point behind the camera, a singular problem, invalid input; no pose
-};
-const char* PoseRefinementTerminationName(PoseRefinementTermination termination);
-
 struct PoseRefinementSummary {
-  PoseRefinementTermination termination = PoseRefinementTermination::kFailure;
+  SolverTermination termination = SolverTermination::kFailure;
   std::string message;  // why it did not converge (numbers included), empty otherwise
   int iterations = 0;   // solver iterations (all rounds)
   // 1/2 sum rho(|whitened residual|^2) at the start and at the end (unitless).
   double initial_cost = 0.0;
   double final_cost = 0.0;
-  bool converged() const { return termination == PoseRefinementTermination::kConverged; }
+  bool converged() const { return termination == SolverTermination::kConverged; }
 };
 
 // Refines *eo on the observations listed in `indices` (into image_plane, points_in_ground and

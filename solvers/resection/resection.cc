@@ -36,7 +36,6 @@ std::string Number(double value) {
   return buffer;
 }
 
-const char* UnitName(MarkUnit unit) { return unit == MarkUnit::kFilm ? "um" : "px"; }
 
 // The marks' data in the form the stages need.
 struct Marks {
@@ -95,9 +94,9 @@ bool Adjust(const ResectionOptions& options, const ResectionInput& input,
     summary->final_cost = refinement.final_cost;
     if (!ok) {
       summary->message = refinement.message;
-      summary->termination = refinement.termination == PoseRefinementTermination::kNoConvergence
-                                 ? ResectionTermination::kNoConvergence
-                                 : ResectionTermination::kFailure;
+      summary->termination = refinement.termination == SolverTermination::kNoConvergence
+                                 ? SolverTermination::kNoConvergence
+                                 : SolverTermination::kFailure;
       return false;
     }
     if (!(input.earth_radius_m > 0.0) ||
@@ -143,33 +142,9 @@ bool ResectionOptions::IsValid(std::string* why) const {
   return consensus.ransac.IsValid(why) && test.IsValid(why) && refinement.IsValid(why);
 }
 
-const char* ResectionTerminationName(ResectionTermination termination) {
-  switch (termination) {
-    case ResectionTermination::kConverged:
-      return "converged";
-    case ResectionTermination::kNoConvergence:
-      return "no_convergence";
-    case ResectionTermination::kFailure:
-      return "failure";
-  }
-  return "?";
-}
-
-const char* MarkStatusName(MarkStatus status) {
-  switch (status) {
-    case MarkStatus::kAccepted:
-      return "accepted";
-    case MarkStatus::kConsensusOutlier:
-      return "outlier";
-    case MarkStatus::kRejected:
-      return "rejected";
-  }
-  return "?";
-}
-
 std::string ResectionSummary::BriefReport() const {
   std::ostringstream os;
-  os << ResectionTerminationName(termination) << ", "
+  os << EnumName(termination) << ", "
      << (used_approximate ? "approximate pose given"
                           : (ransac_exhaustive ? "consensus of every minimal sample" : "RANSAC"))
      << ", trials " << ransac_trials << ", adjustments " << adjustments << ", iterations "
@@ -184,8 +159,8 @@ ResectionResult ResectImage(const ResectionOptions& options, const ResectionInpu
   ResectionResult result;
   ResectionSummary& summary = result.summary;
   auto fail = [&](const std::string& message) {
-    if (summary.termination == ResectionTermination::kConverged)
-      summary.termination = ResectionTermination::kFailure;
+    if (summary.termination == SolverTermination::kConverged)
+      summary.termination = SolverTermination::kFailure;
     summary.message = message;
     summary.total_seconds = SecondsSince(start);
     result.success = false;
@@ -314,7 +289,7 @@ ResectionResult ResectImage(const ResectionOptions& options, const ResectionInpu
       if (candidate[i]) continue;
       const double residual = stats.whitened_residuals[i].norm() * marks.weights[i] / marks.per_unit[i];
       text += std::string(text.empty() ? "" : ", ") + marks.name(i) + " (" +
-              (stats.in_front[i] ? Number(residual) + " " + UnitName(marks.units[i]) : "behind") +
+              (stats.in_front[i] ? Number(residual) + " " + EnumName(marks.units[i]) : "behind") +
               ")";
     }
     return text;
@@ -396,7 +371,7 @@ ResectionResult ResectImage(const ResectionOptions& options, const ResectionInpu
                                           : MarkStatus::kConsensusOutlier;
   }
   result.success = true;
-  summary.termination = ResectionTermination::kConverged;
+  summary.termination = SolverTermination::kConverged;
   summary.message.clear();
   summary.total_seconds = SecondsSince(start);
   return result;

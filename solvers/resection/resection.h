@@ -35,7 +35,9 @@
 #include <vector>
 
 #include "core/block.h"
+#include "core/enum_names.h"
 #include "core/status.h"
+#include "core/termination.h"
 #include "core/types.h"
 #include "cost_functions/collinearity_cost.h"
 #include "solvers/resection/absolute_pose.h"
@@ -63,12 +65,8 @@ struct ResectionOptions {
   bool IsValid(std::string* why) const;
 };
 
-enum class ResectionTermination { kConverged, kNoConvergence, kFailure };
-// "converged", "no_convergence", "failure".
-const char* ResectionTerminationName(ResectionTermination termination);
-
 struct ResectionSummary {
-  ResectionTermination termination = ResectionTermination::kFailure;
+  SolverTermination termination = SolverTermination::kFailure;
   std::string message;            // why it failed (with its numbers), empty on success
   bool used_approximate = false;  // initial pose from the caller, not the consensus
   int ransac_trials = 0;          // minimal samples tried
@@ -81,7 +79,7 @@ struct ResectionSummary {
   double refinement_seconds = 0.0;
   double total_seconds = 0.0;
   std::string BriefReport() const;
-  bool IsSolutionUsable() const { return termination == ResectionTermination::kConverged; }
+  bool IsSolutionUsable() const { return termination == SolverTermination::kConverged; }
 };
 
 // One image: its marks as ideal image-plane points with their control points (MakeResectionInput
@@ -116,7 +114,13 @@ enum class MarkStatus {
   kConsensusOutlier,  // beyond the threshold of the consensus and of every adjustment
   kRejected,          // rejected by data snooping / the tau test
 };
-const char* MarkStatusName(MarkStatus status);  // "accepted", "outlier", "rejected"
+inline constexpr EnumNameEntry<MarkStatus> kMarkStatusNames[] = {
+    {MarkStatus::kAccepted, "accepted"},
+    {MarkStatus::kConsensusOutlier, "outlier"},
+    {MarkStatus::kRejected, "rejected"}};
+constexpr EnumNameTable<MarkStatus> EnumNames(MarkStatus) {
+  return EnumNameTable<MarkStatus>(kMarkStatusNames);
+}
 
 struct ResectionResult {
   bool success = false;

@@ -261,39 +261,6 @@ double ElapsedSeconds(std::chrono::steady_clock::time_point start) {
 
 }  // namespace
 
-const char* TaylorPartialsName(TaylorPartials partials) {
-  switch (partials) {
-    case TaylorPartials::kCorrected:
-      return "corrected";
-    case TaylorPartials::kAsPrinted:
-      return "as_printed";
-  }
-  return "?";
-}
-
-std::optional<TaylorPartials> ParseTaylorPartials(const std::string& name) {
-  std::string lower(name);
-  std::transform(lower.begin(), lower.end(), lower.begin(),
-                 [](unsigned char ch) { return static_cast<char>(std::tolower(ch)); });
-  if (lower == "corrected") return TaylorPartials::kCorrected;
-  if (lower == "as_printed" || lower == "as-printed" || lower == "printed") {
-    return TaylorPartials::kAsPrinted;
-  }
-  return std::nullopt;
-}
-
-const char* TaylorTerminationTypeName(TaylorTerminationType type) {
-  switch (type) {
-    case TaylorTerminationType::kConvergence:
-      return "CONVERGENCE";
-    case TaylorTerminationType::kNoConvergence:
-      return "NO_CONVERGENCE";
-    case TaylorTerminationType::kFailure:
-      return "FAILURE";
-  }
-  return "?";
-}
-
 bool TaylorResectionOptions::IsValid(std::string* why) const {
   auto fail = [why](const char* reason) {
     if (why != nullptr) *why = reason;
@@ -326,14 +293,14 @@ std::string TaylorResectionSummary::BriefReport() const {
   std::snprintf(buffer, sizeof(buffer),
                 "Taylor resection (%s partials), %s: %d points, %d iterations, cost %.6e -> %.6e, "
                 "sigma0 %.6g, dof %d, time %.1f us. ",
-                TaylorPartialsName(partials), TaylorTerminationTypeName(termination_type),
+                EnumName(partials), EnumName(termination_type),
                 num_points, iterations, initial_cost, final_cost, sigma0, degrees_of_freedom,
                 time_seconds * 1e6);
   return buffer + message;
 }
 
 bool TaylorResectionSummary::IsSolutionUsable() const {
-  return termination_type == TaylorTerminationType::kConvergence;
+  return termination_type == SolverTermination::kConverged;
 }
 
 bool TaylorFunctions(const ExteriorOrientation& eo, const Eigen::Vector3d& point_in_ground,
@@ -410,14 +377,14 @@ Status TaylorResection(const TaylorResectionOptions& options,
   result->covariance.setConstant(kNaN);
   result->residuals_um.clear();
 
-  auto finish = [&](TaylorTerminationType type, const std::string& message) {
+  auto finish = [&](SolverTermination type, const std::string& message) {
     summary.termination_type = type;
     summary.message = message;
     summary.time_seconds = ElapsedSeconds(start);
-    return type == TaylorTerminationType::kConvergence ? Status::Ok() : Status::Error(message);
+    return type == SolverTermination::kConverged ? Status::Ok() : Status::Error(message);
   };
   auto fail = [&](const std::string& message) {
-    return finish(TaylorTerminationType::kFailure, message);
+    return finish(SolverTermination::kFailure, message);
   };
 
   // ---------------------------------------------------------------- input checks
@@ -549,7 +516,7 @@ Status TaylorResection(const TaylorResectionOptions& options,
     os << "no convergence in " << options.max_iterations << " iterations (last correction "
        << summary.last_position_correction_m << " m, " << summary.last_angle_correction_rad
        << " rad)";
-    return finish(TaylorTerminationType::kNoConvergence, os.str());
+    return finish(SolverTermination::kNoConvergence, os.str());
   }
 
   // ---------------------------------------------------------------- residuals and precision
@@ -576,7 +543,7 @@ Status TaylorResection(const TaylorResectionOptions& options,
   char message[128];
   std::snprintf(message, sizeof(message), "corrections below tolerance (%.3g m, %.3g rad)",
                 summary.last_position_correction_m, summary.last_angle_correction_rad);
-  return finish(TaylorTerminationType::kConvergence, message);
+  return finish(SolverTermination::kConverged, message);
 }
 
 Status ApproximateVerticalOrientation(const std::vector<Eigen::Vector2d>& image_plane_um,

@@ -31,7 +31,9 @@
 #include <string>
 #include <vector>
 
+#include "core/enum_names.h"
 #include "core/status.h"
+#include "core/termination.h"
 #include "core/types.h"
 
 namespace photopose {
@@ -49,10 +51,15 @@ enum class TaylorPartials {
   kAsPrinted,
 };
 
-// "corrected" / "as_printed".
-const char* TaylorPartialsName(TaylorPartials partials);
-// "corrected", "as_printed" (also "as-printed", "printed"; case-insensitive) -> variant.
-std::optional<TaylorPartials> ParseTaylorPartials(const std::string& name);
+// "corrected" / "as_printed" (parsed also from "as-printed" and "printed"; case is ignored).
+inline constexpr EnumNameEntry<TaylorPartials> kTaylorPartialsNames[] = {
+    {TaylorPartials::kCorrected, "corrected"},
+    {TaylorPartials::kAsPrinted, "as_printed"},
+    {TaylorPartials::kAsPrinted, "as-printed"},
+    {TaylorPartials::kAsPrinted, "printed"}};
+constexpr EnumNameTable<TaylorPartials> EnumNames(TaylorPartials) {
+  return EnumNameTable<TaylorPartials>(kTaylorPartialsNames, NameMatch::kIgnoreCase);
+}
 
 struct TaylorResectionOptions {
   // Partial derivatives used in the normal equations.
@@ -85,17 +92,8 @@ struct TaylorResectionOptions {
   bool IsValid(std::string* why) const;
 };
 
-enum class TaylorTerminationType {
-  kConvergence,    // corrections fell below the tolerances; the pose is returned
-  kNoConvergence,  // max_iterations corrections without meeting the tolerances; no pose
-  kFailure,        // invalid input, degenerate geometry, point behind the camera, NaN, divergence
-};
-
-// "CONVERGENCE", "NO_CONVERGENCE", "FAILURE".
-const char* TaylorTerminationTypeName(TaylorTerminationType type);
-
 struct TaylorResectionSummary {
-  TaylorTerminationType termination_type = TaylorTerminationType::kFailure;
+  SolverTermination termination_type = SolverTermination::kFailure;
   // Why the solver stopped (one line).
   std::string message;
   TaylorPartials partials = TaylorPartials::kCorrected;
@@ -121,7 +119,7 @@ struct TaylorResectionSummary {
 
   // One line: termination, iterations, costs, sigma0, time.
   std::string BriefReport() const;
-  // True only for kConvergence.
+  // True only for kConverged.
   bool IsSolutionUsable() const;
 };
 

@@ -20,13 +20,13 @@ TEST(CameraModels, NamesRoundTrip) {
   for (CameraModelType type :
        {CameraModelType::kFrame, CameraModelType::kSimplePinhole, CameraModelType::kPinhole,
         CameraModelType::kSimpleRadial, CameraModelType::kRadial, CameraModelType::kOpenCv}) {
-    const auto parsed = ParseCameraModelType(CameraModelTypeName(type));
+    const auto parsed = ParseEnum<CameraModelType>(EnumName(type));
     ASSERT_TRUE(parsed.has_value());
     EXPECT_EQ(*parsed, type);
     EXPECT_EQ(static_cast<int>(CameraModelParamNames(type).size()), CameraModelNumParams(type));
   }
-  EXPECT_EQ(ParseCameraModelType("simple_radial"), CameraModelType::kSimpleRadial);
-  EXPECT_FALSE(ParseCameraModelType("FISHEYE").has_value());
+  EXPECT_EQ(ParseEnum<CameraModelType>("simple_radial"), CameraModelType::kSimpleRadial);
+  EXPECT_FALSE(ParseEnum<CameraModelType>("FISHEYE").has_value());
   EXPECT_EQ(CameraModelNumParams(CameraModelType::kFrame), kFrameNumParams);
 }
 
@@ -105,7 +105,7 @@ TEST(CameraModels, InversionsRoundTripForEveryModel) {
         {CameraModelType::kOpenCv, {3000.0, 3010.0, 2000.0, 1500.0, -0.08, 0.01, 1e-3, -2e-3}, {}},
     };
     for (const Case& c : cases) {
-      SCOPED_TRACE(CameraModelTypeName(c.type));
+      SCOPED_TRACE(EnumName(c.type));
       Eigen::Vector2d observation, back;
       ASSERT_TRUE(ObservationFromNormalized(c.type, c.params.data(), c.data, ab, &observation).ok());
       // The observation reproduces the ray: zero residual.

@@ -87,7 +87,7 @@ TEST(Rotation, RoundTripsForEveryConvention) {
       EXPECT_TRUE(CheckRotationMatrix(R).ok());
       const Eigen::Vector3d back = AnglesFromRotation(convention, R);
       EXPECT_LE((back - angles).cwiseAbs().maxCoeff(), kAngleTolerance)
-          << RotationConventionName(convention);
+          << EnumName(convention);
       // Through the internal seed angles and back, as the tables do.
       const Eigen::Vector3d seed = AnglesFromRotation(RotationConvention::kSeed, R);
       const Eigen::Matrix3d again = RotationFromAngles(RotationConvention::kSeed, seed);
@@ -104,7 +104,7 @@ TEST(Rotation, GimbalLockGivesTheSameMatrix) {
       if (convention == RotationConvention::kPok) angles = Eigen::Vector3d(middle, 0.4, -0.3);
       const Eigen::Matrix3d R = RotationFromAngles(convention, angles);
       const Eigen::Matrix3d back = RotationFromAngles(convention, AnglesFromRotation(convention, R));
-      EXPECT_LE((back - R).cwiseAbs().maxCoeff(), 1e-12) << RotationConventionName(convention);
+      EXPECT_LE((back - R).cwiseAbs().maxCoeff(), 1e-12) << EnumName(convention);
     }
   }
 }
@@ -136,12 +136,12 @@ TEST(Rotation, AngleDirectionNegatesOnlyForCounterclockwise) {
 }
 
 TEST(Rotation, ParsesNamesAndRejectsOthers) {
-  EXPECT_EQ(ParseRotationConvention("OPK"), RotationConvention::kOpk);
-  EXPECT_EQ(ParseRotationConvention("rxryrz"), RotationConvention::kSeed);
-  EXPECT_EQ(ParseRotationConvention("seed"), RotationConvention::kSeed);  // the alias
-  EXPECT_STREQ(RotationConventionName(RotationConvention::kSeed), "rxryrz");
-  EXPECT_EQ(ParseRotationConvention("pok"), RotationConvention::kPok);
-  EXPECT_FALSE(ParseRotationConvention("kpo").has_value());
+  EXPECT_EQ(ParseEnum<RotationConvention>("OPK"), RotationConvention::kOpk);
+  EXPECT_EQ(ParseEnum<RotationConvention>("rxryrz"), RotationConvention::kSeed);
+  EXPECT_EQ(ParseEnum<RotationConvention>("seed"), RotationConvention::kSeed);  // the alias
+  EXPECT_STREQ(EnumName(RotationConvention::kSeed), "rxryrz");
+  EXPECT_EQ(ParseEnum<RotationConvention>("pok"), RotationConvention::kPok);
+  EXPECT_FALSE(ParseEnum<RotationConvention>("kpo").has_value());
 }
 
 // The one boundary conversion: the angles of the convention, AngleDirection applied; its inverse;

@@ -68,7 +68,7 @@ void Evaluate(const Case& c, const double* params, const double* ab, double* res
     case 11:
       return EvaluateCameraModel<11>(c.type, params, ab, obs, data, residual, d_ab, d_params);
   }
-  FAIL() << "no instantiation for " << CameraModelTypeName(c.type);
+  FAIL() << "no instantiation for " << EnumName(c.type);
 }
 
 // The double-only residual, the reference of the derivatives.
@@ -102,13 +102,13 @@ TEST(CameraModelJacobians, EveryModelAgreesWithCentralDifferences) {
   const double ab[2] = {0.12, -0.08};
   for (const Case& c : Cases()) {
     const int n = CameraModelNumParams(c.type);
-    ASSERT_EQ(static_cast<int>(c.params.size()), n) << CameraModelTypeName(c.type);
+    ASSERT_EQ(static_cast<int>(c.params.size()), n) << EnumName(c.type);
     double residual[2], d_ab[4];
     std::vector<double> d_params(2 * n);
     Evaluate(c, c.params.data(), ab, residual, d_ab, d_params.data());
     const Eigen::Vector2d expected = Residual(c, c.params.data(), ab);
-    EXPECT_NEAR(residual[0], expected[0], 1e-9) << CameraModelTypeName(c.type);
-    EXPECT_NEAR(residual[1], expected[1], 1e-9) << CameraModelTypeName(c.type);
+    EXPECT_NEAR(residual[0], expected[0], 1e-9) << EnumName(c.type);
+    EXPECT_NEAR(residual[1], expected[1], 1e-9) << EnumName(c.type);
     for (int j = 0; j < 2; ++j) {
       double plus[2] = {ab[0], ab[1]}, minus[2] = {ab[0], ab[1]};
       const double h = Step(ab[j]);
@@ -118,7 +118,7 @@ TEST(CameraModelJacobians, EveryModelAgreesWithCentralDifferences) {
           (Residual(c, c.params.data(), plus) - Residual(c, c.params.data(), minus)) / (2.0 * h);
       for (int i = 0; i < 2; ++i)
         EXPECT_NEAR(d_ab[2 * i + j], numeric[i], kNumericTolerance)
-            << CameraModelTypeName(c.type) << " d r" << i << " / d ab" << j;
+            << EnumName(c.type) << " d r" << i << " / d ab" << j;
     }
     for (int j = 0; j < n; ++j) {
       std::vector<double> plus = c.params, minus = c.params;
@@ -131,7 +131,7 @@ TEST(CameraModelJacobians, EveryModelAgreesWithCentralDifferences) {
         // Relative to the size of the derivative too: d r / d K3 is ~1e10 um per mm^-6.
         EXPECT_NEAR(d_params[i * n + j], numeric[i],
                     kNumericTolerance * std::max(1.0, std::abs(numeric[i])))
-            << CameraModelTypeName(c.type) << " d r" << i << " / d param " << j;
+            << EnumName(c.type) << " d r" << i << " / d param " << j;
       }
     }
   }
@@ -146,8 +146,8 @@ TEST(CameraModelJacobians, WithoutParameterDerivativesTheRestIsTheSame) {
     Evaluate(c, c.params.data(), ab, residual, d_ab, d_params.data());
     Evaluate(c, c.params.data(), ab, residual_only, d_ab_only, nullptr);
     for (int i = 0; i < 2; ++i)
-      EXPECT_EQ(residual[i], residual_only[i]) << CameraModelTypeName(c.type);
-    for (int k = 0; k < 4; ++k) EXPECT_EQ(d_ab[k], d_ab_only[k]) << CameraModelTypeName(c.type);
+      EXPECT_EQ(residual[i], residual_only[i]) << EnumName(c.type);
+    for (int k = 0; k < 4; ++k) EXPECT_EQ(d_ab[k], d_ab_only[k]) << EnumName(c.type);
   }
 }
 

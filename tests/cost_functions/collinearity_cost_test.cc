@@ -166,7 +166,7 @@ TEST(CollinearityCost, AnalyticMatchesAutodiffForEveryCameraModel) {
           CreateCollinearityCost(JacobianType::kAnalytic, data));
       std::unique_ptr<ceres::CostFunction> autodiff(
           CreateCollinearityCost(JacobianType::kAutodiff, data));
-      SCOPED_TRACE(CameraModelTypeName(model.type));
+      SCOPED_TRACE(EnumName(model.type));
       ExpectAgreement(*analytic, *autodiff, {view.eo, view.point, model.params.data()});
     }
   }
@@ -229,7 +229,7 @@ TEST(CollinearityCost, PassesCeresGradientCheckerForEveryCameraModel) {
         const double scale = results.numeric_jacobians[b].cwiseAbs().maxCoeff();
         EXPECT_LE((results.jacobians[b] - results.numeric_jacobians[b]).cwiseAbs().maxCoeff(),
                   1e-7 * scale)
-            << CameraModelTypeName(model.type) << " block " << b;
+            << EnumName(model.type) << " block " << b;
       }
     }
   }
@@ -243,7 +243,7 @@ TEST(PoseCost, PointBehindCameraFailsInBothPaths) {
     std::unique_ptr<ceres::CostFunction> cost(CreatePoseCost(type, data));
     Eigen::Vector2d residual;
     std::vector<Eigen::VectorXd> jacobians;
-    EXPECT_FALSE(Evaluate(*cost, {eo}, &residual, &jacobians)) << JacobianTypeName(type);
+    EXPECT_FALSE(Evaluate(*cost, {eo}, &residual, &jacobians)) << EnumName(type);
   }
   const double point[3] = {10.0, 10.0, 1000.0};  // on the camera plane: w = 0
   double frame_params[kFrameNumParams] = {1e5};

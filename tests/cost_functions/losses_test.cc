@@ -55,9 +55,9 @@ TEST(Losses, DerivativesAgreeWithCentralDifferences) {
       const Eigen::Vector3d rho = Rho(type, s);
       const Eigen::Vector3d plus = Rho(type, s + kStep), minus = Rho(type, s - kStep);
       EXPECT_NEAR(rho[1], (plus[0] - minus[0]) / (2.0 * kStep), kDerivativeTolerance)
-          << LossTypeName(type) << " s = " << s;
+          << EnumName(type) << " s = " << s;
       EXPECT_NEAR(rho[2], (plus[1] - minus[1]) / (2.0 * kStep), kDerivativeTolerance)
-          << LossTypeName(type) << " s = " << s;
+          << EnumName(type) << " s = " << s;
     }
   }
 }
@@ -66,27 +66,27 @@ TEST(Losses, TheScaleIsInStandardDeviations) {
   for (const LossType type : kRobustLosses) {
     // At zero every loss is least squares: rho = 0, rho' = 1.
     const Eigen::Vector3d zero = Rho(type, 0.0);
-    EXPECT_EQ(zero[0], 0.0) << LossTypeName(type);
-    EXPECT_NEAR(zero[1], 1.0, 1e-15) << LossTypeName(type);
+    EXPECT_EQ(zero[0], 0.0) << EnumName(type);
+    EXPECT_NEAR(zero[1], 1.0, 1e-15) << EnumName(type);
     // A residual of a tenth of the scale keeps (almost) its full weight: rho'((0.2)^2) is 1
     // (Huber), 0.995 (soft L1), 0.990 (Cauchy), 0.9999 (arctan), 0.980 (Tukey).
-    EXPECT_GT(Rho(type, std::pow(0.1 * kScale, 2))[1], 0.97) << LossTypeName(type);
+    EXPECT_GT(Rho(type, std::pow(0.1 * kScale, 2))[1], 0.97) << EnumName(type);
     // Three times the scale is down-weighted: rho'(36) is 1/3 (Huber), 0.32 (soft L1), 0.1
     // (Cauchy), 1/82 (arctan), 0 (Tukey).
-    EXPECT_LT(Rho(type, std::pow(3.0 * kScale, 2))[1], 0.5) << LossTypeName(type);
+    EXPECT_LT(Rho(type, std::pow(3.0 * kScale, 2))[1], 0.5) << EnumName(type);
   }
 }
 
 TEST(Losses, NamesRoundTrip) {
   for (const LossType type : {LossType::kNone, LossType::kHuber, LossType::kSoftL1,
                               LossType::kCauchy, LossType::kArctan, LossType::kTukey}) {
-    const std::string name = LossTypeName(type);
-    ASSERT_EQ(ParseLossType(name), type) << name;
-    EXPECT_NE(std::string(LossTypeChoices()).find(name), std::string::npos) << name;
+    const std::string name = EnumName(type);
+    ASSERT_EQ(ParseEnum<LossType>(name), type) << name;
+    EXPECT_NE(std::string(EnumChoices<LossType>()).find(name), std::string::npos) << name;
   }
-  EXPECT_EQ(std::string(LossTypeName(LossType::kSoftL1)), "softl1");
-  EXPECT_FALSE(ParseLossType("l1").has_value());
-  EXPECT_FALSE(ParseLossType("").has_value());
+  EXPECT_EQ(std::string(EnumName(LossType::kSoftL1)), "softl1");
+  EXPECT_FALSE(ParseEnum<LossType>("l1").has_value());
+  EXPECT_FALSE(ParseEnum<LossType>("").has_value());
 }
 
 }  // namespace

@@ -152,11 +152,8 @@ int RunBundle(int argc, char** argv) {
   BundleReportContext context;
   context.command_line = command_line;
   context.input_kind = tables ? "tables" : !FLAGS_bundle_colmap_model.empty() ? "colmap" : "bal";
-  const auto rotation = ParseRotationConvention(FLAGS_bundle_rotation);
-  if (!rotation)
-    return BadInput(kCommand, std::string("--rotation must be ") + RotationConventionChoices() +
-                                  ", not '" + FLAGS_bundle_rotation + "'");
-  context.rotation = *rotation;
+  if (!ParseEnum(FLAGS_bundle_rotation, &context.rotation))
+    return BadInput(kCommand, EnumFlagError<RotationConvention>("--rotation", FLAGS_bundle_rotation));
 
   BundleAdjustmentOptions options;
   BundleAccuracies& acc = options.accuracies;
@@ -177,24 +174,12 @@ int RunBundle(int argc, char** argv) {
     options.lever_arm_m = lever;
   }
   options.estimate_lever_arm = FLAGS_bundle_estimate_lever_arm;
-  const auto jacobian = ParseJacobianType(FLAGS_bundle_jacobian);
-  if (!jacobian) return BadInput(kCommand, "--jacobian must be analytic or autodiff, not '" + FLAGS_bundle_jacobian + "'");
-  options.jacobian = *jacobian;
-  const auto linear_solver = ParseBundleLinearSolver(FLAGS_bundle_linear_solver);
-  if (!linear_solver)
-    return BadInput(kCommand, "--linear_solver must be sparse_schur, dense_schur, iterative_schur_jacobi or iterative_schur_cluster_jacobi, not '" + FLAGS_bundle_linear_solver + "'");
-  options.linear_solver = *linear_solver;
-  if (FLAGS_bundle_loss == "none") {
-    options.tie_loss = BundleAdjustmentOptions::TieLoss::kNone;
-  } else if (FLAGS_bundle_loss == "huber") {
-    options.tie_loss = BundleAdjustmentOptions::TieLoss::kHuber;
-  } else if (FLAGS_bundle_loss == "cauchy") {
-    options.tie_loss = BundleAdjustmentOptions::TieLoss::kCauchy;
-  } else if (FLAGS_bundle_loss == "softl1") {
-    options.tie_loss = BundleAdjustmentOptions::TieLoss::kSoftL1;
-  } else {
-    return BadInput(kCommand, "--loss must be none, huber, cauchy or softl1, not '" + FLAGS_bundle_loss + "'");
-  }
+  if (!ParseEnum(FLAGS_bundle_jacobian, &options.jacobian))
+    return BadInput(kCommand, EnumFlagError<JacobianType>("--jacobian", FLAGS_bundle_jacobian));
+  if (!ParseEnum(FLAGS_bundle_linear_solver, &options.linear_solver))
+    return BadInput(kCommand, EnumFlagError<BundleLinearSolver>("--linear_solver", FLAGS_bundle_linear_solver));
+  if (!ParseEnum(FLAGS_bundle_loss, &options.tie_loss) || !IsBundleTieLoss(options.tie_loss))
+    return BadInput(kCommand, "--loss must be " + EnumNameList(kBundleTieLosses) + ", not '" + FLAGS_bundle_loss + "'");
   options.tie_loss_scale_sigmas = FLAGS_bundle_loss_scale / FLAGS_bundle_tie_accuracy;
   options.max_iterations = FLAGS_bundle_max_iterations;
   options.rejection_threshold = FLAGS_bundle_rejection_threshold;
@@ -232,9 +217,10 @@ int RunBundle(int argc, char** argv) {
   for (const std::string& name : SplitCommaList(FLAGS_bundle_calibrate))
     if (!name.empty()) calibrate.push_back(name);
   context.calibrate = calibrate;
-  const auto solver = ParsePoseSolver(FLAGS_bundle_solver);
-  if (!solver) return BadInput(kCommand, "--solver must be ceres, taylor or taylor_as_printed, not '" + FLAGS_bundle_solver + "'");
-  if (*solver != PoseSolver::kCeres && (options.snoop || options.estimate_accuracies || FLAGS_bundle_cross_validate))
+  PoseSolver solver = PoseSolver::kCeres;
+  if (!ParseEnum(FLAGS_bundle_solver, &solver))
+    return BadInput(kCommand, EnumFlagError<PoseSolver>("--solver", FLAGS_bundle_solver));
+  if (solver != PoseSolver::kCeres && (options.snoop || options.estimate_accuracies || FLAGS_bundle_cross_validate))
     return BadInput(kCommand, "--solver=" + FLAGS_bundle_solver + " adjusts without snooping, accuracy estimation or cross-validation; use --solver=ceres for those");
 
   // Outputs: checked before any work (never an input, never each other), written all or nothing.
@@ -261,7 +247,10 @@ int RunBundle(int argc, char** argv) {
       context.inputs.push_back(path);
     }
   }
-  for (const std::string& flag_file : parsed.flag_files) outputs.AddInput("--flagfile", flag_file);
+  for (const std::string& flag_file : parsed.flag_files) {
+    const Status input = outputs.AddInput("--flagfile", flag_file);
+    if (!input.ok()) return BadInput(kCommand, input.message());
+  }
   std::vector<std::pair<std::string, std::string>> written;  // (label, path)
   for (const auto& [label, path] : {std::pair<const char*, const std::string&>{"--out", FLAGS_bundle_out},
                                     {"--out_points", FLAGS_bundle_out_points},
@@ -291,7 +280,7 @@ int RunBundle(int argc, char** argv) {
     files.marks = FLAGS_bundle_marks;
     files.points = FLAGS_bundle_points;
     files.frames = FLAGS_bundle_frames;
-    files.rotation = *rotation;
+    files.rotation = context.rotation;
     files.pixel_origin = FLAGS_bundle_pixel_center_origin ? PixelOrigin::kCenter : PixelOrigin::kCorner;
     const Status read = ReadBlock(files, &block);
     if (!read.ok()) return BadInput(kCommand, read.message());
@@ -335,7 +324,7 @@ int RunBundle(int argc, char** argv) {
       }
     }
     if (!FLAGS_bundle_quiet) std::cerr << "photopose bundle: initial values: " << initialization.BriefReport() << "\n";
-    const Status adjusted = BundleAdjustWithSolver(*solver, options, config, &block, &result);
+    const Status adjusted = BundleAdjustWithSolver(solver, options, config, &block, &result);
     if (!adjusted.ok()) return BadInput(kCommand, adjusted.message());
     if (tables && result.summary.datum == BundleDatum::kRelative) {
       return BadInput(kCommand, "no datum: the block has no control points and no camera positions, so it has no ground coordinates to write; give --points with control points or --frames with camera positions");
@@ -376,7 +365,7 @@ int RunBundle(int argc, char** argv) {
     if (status.ok() && !FLAGS_bundle_out.empty()) {
       status = final_outputs.StageWith(FLAGS_bundle_out, [&](const std::string& path) {
         FramesTableOptions frames_options;
-        frames_options.convention = *rotation;
+        frames_options.convention = context.rotation;
         std::vector<FrameCamera> cameras;
         for (const BlockCamera& camera : block.cameras) cameras.push_back(camera.table);
         frames_options.cameras = &cameras;

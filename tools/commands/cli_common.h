@@ -7,6 +7,7 @@
 #include <utility>
 #include <vector>
 
+#include "core/enum_names.h"
 #include "core/status.h"
 
 namespace photopose::cli {
@@ -89,6 +90,13 @@ void PrintHelp(const std::string& usage, const CommandFlags& flags);
 // The items of a comma-separated flag value, each trimmed of blanks; an empty item stays as an empty
 // string so that callers can name it ("a,,b" -> "a", "", "b").
 std::vector<std::string> SplitCommaList(const std::string& text);
+
+// The refusal of an enumerated flag's value, naming the accepted ones from the enum's table
+// (core/enum_names.h): "--rotation must be rxryrz (alias seed), opk or pok, not 'x'".
+template <typename Enum>
+std::string EnumFlagError(const std::string& flag, const std::string& value) {
+  return flag + " must be " + EnumChoices<Enum>() + ", not '" + value + "'";
+}
 
 // Prints "photopose <subcommand>: <message>" on stderr as one line (control characters and bytes
 // that are not UTF-8 escaped) and returns kExitBadInput.

@@ -361,11 +361,11 @@ int RunMonteCarloMode(const std::vector<SolverVariant>& solvers, const Resection
   options.scenarios.clear();
   std::stringstream names(FLAGS_compare_scenarios);
   for (std::string name; std::getline(names, name, ',');) {
-    const auto scenario = ParseScenario(name);
-    if (!scenario)
-      return BadInput(kCommand,
-                      "--scenarios: unknown scenario '" + name + "' (nadir, oblique or uav_block)");
-    options.scenarios.push_back(*scenario);
+    Scenario scenario;
+    if (!ParseEnum(name, &scenario))
+      return BadInput(kCommand, "--scenarios: unknown scenario '" + name + "' (" +
+                                    EnumChoices<Scenario>() + ")");
+    options.scenarios.push_back(scenario);
   }
   if (options.scenarios.empty()) return BadInput(kCommand, "--scenarios is empty");
   if (options.scenarios.size() > kMaxListItems)
@@ -390,21 +390,10 @@ int RunMonteCarloMode(const std::vector<SolverVariant>& solvers, const Resection
     if (!kAngleErrorItem.Contains(error.angle_deg))
       return BadInput(kCommand, kAngleErrorItem.Refusal(FormatNumber(error.angle_deg)));
   }
-  if (FLAGS_compare_sweep == "axes") {
-    options.sweep = SweepType::kAxes;
-  } else if (FLAGS_compare_sweep == "grid") {
-    options.sweep = SweepType::kGrid;
-  } else {
-    return BadInput(kCommand, "--sweep must be axes or grid, not '" + FLAGS_compare_sweep + "'");
-  }
-  if (FLAGS_compare_initial == "frames") {
-    options.initial = InitialValues::kApproximateFrames;
-  } else if (FLAGS_compare_initial == "ransac") {
-    options.initial = InitialValues::kRansac;
-  } else {
-    return BadInput(kCommand,
-                    "--initial must be frames or ransac, not '" + FLAGS_compare_initial + "'");
-  }
+  if (!ParseEnum(FLAGS_compare_sweep, &options.sweep))
+    return BadInput(kCommand, EnumFlagError<SweepType>("--sweep", FLAGS_compare_sweep));
+  if (!ParseEnum(FLAGS_compare_initial, &options.initial))
+    return BadInput(kCommand, EnumFlagError<InitialValues>("--initial", FLAGS_compare_initial));
   options.check_points = FLAGS_compare_check_points;
   options.trials = FLAGS_compare_trials;
   options.seed = FLAGS_compare_seed;
@@ -479,11 +468,8 @@ int RunDatasetMode(const std::vector<SolverVariant>& solvers, const ResectionOpt
   if (!FLAGS_compare_gcp_list.empty() &&
       (!FLAGS_compare_points.empty() || !FLAGS_compare_marks.empty()))
     return BadInput(kCommand, "--gcp_list replaces --points and --marks; give one or the other");
-  const auto rotation = ParseRotationConvention(FLAGS_compare_rotation);
-  if (!rotation)
-    return BadInput(kCommand, std::string("--rotation must be ") + RotationConventionChoices() +
-                                  ", not '" + FLAGS_compare_rotation + "'");
-  job.files.rotation = *rotation;
+  if (!ParseEnum(FLAGS_compare_rotation, &job.files.rotation))
+    return BadInput(kCommand, EnumFlagError<RotationConvention>("--rotation", FLAGS_compare_rotation));
   if (!(FLAGS_compare_default_accuracy >= 0.0) || !std::isfinite(FLAGS_compare_default_accuracy))
     return BadInput(kCommand, "--default_accuracy must be positive (or 0 for none)");
   std::string why;
@@ -599,9 +585,9 @@ int RunBlockDatasetMode(const std::string& command_line, const ParsedFlags& pars
     return BadInput(kCommand, "give --colmap_model or the tables (--cameras, --marks), not both");
   if (!colmap && (FLAGS_compare_cameras.empty() || FLAGS_compare_marks.empty()))
     return BadInput(kCommand, "a block needs --cameras and --marks (or --colmap_model)");
-  const auto rotation = ParseRotationConvention(FLAGS_compare_rotation);
-  if (!rotation)
-    return BadInput(kCommand, std::string("--rotation must be ") + RotationConventionChoices());
+  RotationConvention rotation = RotationConvention::kSeed;
+  if (!ParseEnum(FLAGS_compare_rotation, &rotation))
+    return BadInput(kCommand, EnumFlagError<RotationConvention>("--rotation", FLAGS_compare_rotation));
   OutputFiles outputs;
   std::vector<std::pair<std::string, std::string>> inputs = {
       {"--cameras", FLAGS_compare_cameras}, {"--points", FLAGS_compare_points},
@@ -624,7 +610,7 @@ int RunBlockDatasetMode(const std::string& command_line, const ParsedFlags& pars
     files.points = FLAGS_compare_points;
     files.marks = FLAGS_compare_marks;
     files.frames = FLAGS_compare_frames;
-    files.rotation = *rotation;
+    files.rotation = rotation;
     files.pixel_origin =
         FLAGS_compare_pixel_center_origin ? PixelOrigin::kCenter : PixelOrigin::kCorner;
     const Status read = ReadBlock(files, &block);
@@ -695,11 +681,9 @@ int RunCompare(int argc, char** argv) {
       ParseSolverVariants(FLAGS_compare_solvers, FLAGS_compare_losses, &solvers);
   if (!variants.ok()) return BadInput(kCommand, "--solvers/--losses: " + variants.message());
   ResectionOptions resection;
-  const auto minimizer = ParseCeresMinimizer(FLAGS_compare_ceres_minimizer);
-  if (!minimizer)
-    return BadInput(kCommand, "--ceres_minimizer must be tiny_solver or problem, not '" +
-                                  FLAGS_compare_ceres_minimizer + "'");
-  resection.refinement.ceres.minimizer = *minimizer;
+  if (!ParseEnum(FLAGS_compare_ceres_minimizer, &resection.refinement.ceres.minimizer))
+    return BadInput(kCommand, EnumFlagError<CeresMinimizer>("--ceres_minimizer",
+                                                            FLAGS_compare_ceres_minimizer));
   resection.refinement.loss_scale = FLAGS_compare_loss_scale;
   resection.test.confidence = FLAGS_compare_confidence;
   resection.refinement.ceres.max_iterations = FLAGS_compare_max_iterations;

@@ -104,31 +104,26 @@ int RunResect(int argc, char** argv) {
   if (!FLAGS_gcp_list.empty() && (!FLAGS_points.empty() || !FLAGS_marks.empty()))
     return BadInput("resect", "--gcp_list replaces --points and --marks; give one or the other");
   if (FLAGS_out.empty()) return BadInput("resect", "--out is required");
-  const auto rotation = ParseRotationConvention(FLAGS_rotation);
-  if (!rotation)
-    return BadInput("resect", std::string("--rotation must be ") + RotationConventionChoices() +
-                                  ", not '" + FLAGS_rotation + "'");
-  files.rotation = *rotation;
-  const auto solver = ParsePoseSolver(FLAGS_solver);
-  if (!solver) return BadInput("resect", "--solver must be ceres, taylor or taylor_as_printed, not '" + FLAGS_solver + "'");
-  const auto jacobian = ParseJacobianType(FLAGS_jacobian);
-  if (!jacobian) return BadInput("resect", "--jacobian must be analytic or autodiff, not '" + FLAGS_jacobian + "'");
-  const auto loss = ParseLossType(FLAGS_loss);
-  if (!loss) return BadInput("resect", std::string("--loss must be ") + LossTypeChoices() + ", not '" + FLAGS_loss + "'");
-  const auto minimizer = ParseCeresMinimizer(FLAGS_ceres_minimizer);
-  if (!minimizer) return BadInput("resect", "--ceres_minimizer must be tiny_solver or problem, not '" + FLAGS_ceres_minimizer + "'");
+  if (!ParseEnum(FLAGS_rotation, &files.rotation))
+    return BadInput("resect", EnumFlagError<RotationConvention>("--rotation", FLAGS_rotation));
+  ResectionOptions& options = job.resection;
+  PoseRefinementOptions& refinement = options.refinement;
+  if (!ParseEnum(FLAGS_solver, &refinement.solver))
+    return BadInput("resect", EnumFlagError<PoseSolver>("--solver", FLAGS_solver));
+  if (!ParseEnum(FLAGS_jacobian, &refinement.jacobian))
+    return BadInput("resect", EnumFlagError<JacobianType>("--jacobian", FLAGS_jacobian));
+  if (!ParseEnum(FLAGS_loss, &refinement.loss))
+    return BadInput("resect", EnumFlagError<LossType>("--loss", FLAGS_loss));
+  if (!ParseEnum(FLAGS_ceres_minimizer, &refinement.ceres.minimizer))
+    return BadInput("resect",
+                    EnumFlagError<CeresMinimizer>("--ceres_minimizer", FLAGS_ceres_minimizer));
   if (!(FLAGS_default_accuracy >= 0.0) || !std::isfinite(FLAGS_default_accuracy))
     return BadInput("resect", "--default_accuracy must be positive (or 0 for none)");
   if (!(FLAGS_max_fiducial_residual > 0.0) || !std::isfinite(FLAGS_max_fiducial_residual))
     return BadInput("resect", "--max_fiducial_residual must be a positive number of micrometres");
   if (FLAGS_threads < 0) return BadInput("resect", "--threads must be >= 0");
 
-  ResectionOptions& options = job.resection;
-  options.refinement.solver = *solver;
-  options.refinement.jacobian = *jacobian;
-  options.refinement.loss = *loss;
-  options.refinement.loss_scale = FLAGS_loss_scale;
-  options.refinement.ceres.minimizer = *minimizer;
+  refinement.loss_scale = FLAGS_loss_scale;
   options.test.confidence = FLAGS_confidence;
   options.consensus.ransac.seed = FLAGS_seed;
   options.allow_no_redundancy = FLAGS_allow_no_redundancy;
@@ -147,7 +142,10 @@ int RunResect(int argc, char** argv) {
     const Status input = outputs.AddInput(label, path);
     if (!input.ok()) return BadInput("resect", input.message());
   }
-  for (const std::string& flag_file : parsed.flag_files) outputs.AddInput("--flagfile", flag_file);
+  for (const std::string& flag_file : parsed.flag_files) {
+    const Status input = outputs.AddInput("--flagfile", flag_file);
+    if (!input.ok()) return BadInput("resect", input.message());
+  }
   for (const auto& [label, path] : {std::pair<const char*, const std::string&>{"--out", FLAGS_out},
                                     {"--report", FLAGS_report}}) {
     if (path.empty()) continue;
@@ -182,7 +180,7 @@ int RunResect(int argc, char** argv) {
     const std::string unit = Sigma0Unit(prepared, i, r);
     std::printf("%s: X=%.4f Y=%.4f Z=%.4f m  %s omega=%.6f phi=%.6f kappa=%.6f deg  ",
                 raster.c_str(), r.eo.parameters[0], r.eo.parameters[1], r.eo.parameters[2],
-                RotationConventionName(files.rotation), angles[0], angles[1], angles[2]);
+                EnumName(files.rotation), angles[0], angles[1], angles[2]);
     if (r.degrees_of_freedom > 0) {
       std::printf("sigma0=%.3f%s%s  ", r.sigma0, unit.empty() ? "" : " ", unit.c_str());
     } else {

@@ -9,8 +9,6 @@
 namespace photopose::cli {
 namespace {
 
-const char* UnitName(MarkUnit unit) { return unit == MarkUnit::kFilm ? "um" : "px"; }
-
 const BlockCamera& CameraOf(const ResectionJob& job, size_t input) {
   return job.block.cameras[job.block.images[job.images[input]].camera];
 }
@@ -82,7 +80,7 @@ std::string Sigma0Unit(const ResectionJob& job, size_t input, const ResectionRes
   if (units.empty()) return "px";
   for (const MarkUnit unit : units)
     if (unit != units.front()) return "mark units";
-  return UnitName(units.front());
+  return EnumName(units.front());
 }
 
 Status WriteResectionFrames(const std::string& path, const ResectionJobOptions& options,
@@ -123,20 +121,20 @@ Status WriteResectionReport(const std::string& path, const ResectionJobOptions& 
   const Block& block = job.block;
   json report;
   report["options"] = {
-      {"solver", PoseSolverName(o.refinement.solver)},
-      {"jacobian", JacobianTypeName(o.refinement.jacobian)},
-      {"loss", LossTypeName(o.refinement.loss)},
+      {"solver", EnumName(o.refinement.solver)},
+      {"jacobian", EnumName(o.refinement.jacobian)},
+      {"loss", EnumName(o.refinement.loss)},
       {"loss_scale_sigmas", o.refinement.loss_scale},
-      {"ceres_minimizer", CeresMinimizerName(o.refinement.ceres.minimizer)},
+      {"ceres_minimizer", EnumName(o.refinement.ceres.minimizer)},
       {"confidence", o.test.confidence},
       {"consensus_threshold_sigmas", MarkThresholdSigmas(o.test.confidence)},
       {"ransac_seed", o.consensus.ransac.seed},
       {"max_exhaustive_samples", o.consensus.ransac.max_exhaustive_samples},
       {"allow_no_redundancy", o.allow_no_redundancy},
-      {"rotation", RotationConventionName(rotation)},
+      {"rotation", EnumName(rotation)},
       {"default_accuracy", options.input.default_accuracy > 0.0 ? json(options.input.default_accuracy)
                                                                 : json(nullptr)},
-      {"pixel_origin", options.files.pixel_origin == PixelOrigin::kCorner ? "corner" : "center"}};
+      {"pixel_origin", EnumName(options.files.pixel_origin)}};
   json images = json::array();
   int solved = 0;
   for (size_t i = 0; i < results.size(); ++i) {
@@ -147,7 +145,7 @@ Status WriteResectionReport(const std::string& path, const ResectionJobOptions& 
                   {"camera_id", CameraOf(job, i).camera_id},
                   {"success", r.success},
                   {"message", s.message},
-                  {"termination", ResectionTerminationName(s.termination)},
+                  {"termination", EnumName(s.termination)},
                   {"initial_values", s.used_approximate ? "frames" : "consensus"},
                   {"consensus", {{"trials", s.ransac_trials}, {"exhaustive", s.ransac_exhaustive}}},
                   {"adjustments", s.adjustments},
@@ -181,7 +179,7 @@ Status WriteResectionReport(const std::string& path, const ResectionJobOptions& 
                        {"omega_deg", angles[0]},
                        {"phi_deg", angles[1]},
                        {"kappa_deg", angles[2]},
-                       {"convention", RotationConventionName(rotation)},
+                       {"convention", EnumName(rotation)},
                        {"angle_direction", CameraOf(job, i).table.angle_direction}};
       image["seed_angles_rad"] = {r.eo.parameters[3], r.eo.parameters[4], r.eo.parameters[5]};
       const std::optional<Eigen::Vector3d> angle_sigmas = OutputAngleSigmasDeg(job, i, rotation, r);
@@ -213,11 +211,11 @@ Status WriteResectionReport(const std::string& path, const ResectionJobOptions& 
         const double w = r.normalized_residuals[k];
         marks.push_back({{"point_id", block.points[mark.point].id},
                          {"line", mark.line},
-                         {"status", MarkStatusName(r.mark_status[k])},
+                         {"status", EnumName(r.mark_status[k])},
                          {"inlier", static_cast<bool>(r.inliers[k])},
                          {"residual_x", r.residuals[k].x()},
                          {"residual_y", r.residuals[k].y()},
-                         {"unit", UnitName(mark.unit)},
+                         {"unit", EnumName(mark.unit)},
                          {"normalized_residual", std::isfinite(w) ? json(w) : json(nullptr)},
                          {"redundancy", r.redundancy_numbers[k]}});
       }
@@ -230,7 +228,7 @@ Status WriteResectionReport(const std::string& path, const ResectionJobOptions& 
                           {"residual_x", c.residual.x()},
                           {"residual_y", c.residual.y()},
                           {"residual", c.residual.norm()},
-                          {"unit", UnitName(mark.unit)}});
+                          {"unit", EnumName(mark.unit)}});
       }
       image["check_points"] = checks;
     }

@@ -212,15 +212,18 @@ int RunSimulate(int argc, char** argv) {
     PrintHelp(kUsage, SimulateFlags());
     return kExitSuccess;
   }
-  const auto rotation = ParseRotationConvention(FLAGS_sim_rotation);
-  if (!rotation)
-    return BadInput("simulate", std::string("--rotation must be ") + RotationConventionChoices());
+  RotationConvention rotation = RotationConvention::kSeed;
+  if (!ParseEnum(FLAGS_sim_rotation, &rotation))
+    return BadInput("simulate", EnumFlagError<RotationConvention>("--rotation", FLAGS_sim_rotation));
   if (FLAGS_out_dir.empty()) return BadInput("simulate", "--out_dir is required");
-  if (FLAGS_scenario == "block") return RunSimulateBlock(parsed, *rotation);
-  const auto scenario = ParseScenario(FLAGS_scenario);
-  if (!scenario)
-    return BadInput("simulate", "--scenario must be nadir, oblique, uav_block or block, not '" +
-                                    FLAGS_scenario + "'");
+  if (FLAGS_scenario == "block") return RunSimulateBlock(parsed, rotation);
+  Scenario scenario = Scenario::kNadir;
+  if (!ParseEnum(FLAGS_scenario, &scenario)) {
+    std::string choices;  // the single-image scenarios, then block
+    for (const EnumNameEntry<Scenario>& entry : kScenarioNames) choices += std::string(entry.name) + ", ";
+    choices.replace(choices.size() - 2, 2, " or block");
+    return BadInput("simulate", "--scenario must be " + choices + ", not '" + FLAGS_scenario + "'");
+  }
   // The dataset's files, for the pre-flight check of the folder before any work.
   std::vector<FolderFile> files = {{"cameras.csv", ""},      {"points.csv", ""},
                                    {"marks.csv", ""},        {"frames_approx.csv", ""},
@@ -241,7 +244,7 @@ int RunSimulate(int argc, char** argv) {
   }
 
   SyntheticSceneOptions options;
-  options.scenario = *scenario;
+  options.scenario = scenario;
   options.seed = FLAGS_sim_seed;
   options.noise_px = FLAGS_noise_px;
   options.outlier_fraction = FLAGS_outlier_fraction;
@@ -254,7 +257,7 @@ int RunSimulate(int argc, char** argv) {
   if (!status.ok()) return BadInput("simulate", status.message());
 
   FramesTableOptions frames_options;
-  frames_options.convention = *rotation;
+  frames_options.convention = rotation;
   frames_options.cameras = &scene.cameras;
   std::string outliers = "Raster,PointID,Outlier\n";
   for (size_t i = 0; i < scene.marks.size(); ++i)
@@ -274,7 +277,7 @@ int RunSimulate(int argc, char** argv) {
   files[5].contents = std::move(outliers);
   const Status written = WriteFolderAtomically("--out_dir", FLAGS_out_dir, files);
   if (!written.ok()) return BadInput("simulate", written.message());
-  std::cout << "simulate: " << ScenarioName(*scenario) << ", seed " << FLAGS_sim_seed << ": "
+  std::cout << "simulate: " << EnumName(scenario) << ", seed " << FLAGS_sim_seed << ": "
             << scene.true_frames.size() << " images, " << scene.points.size() << " points, "
             << scene.marks.size() << " marks written to " << FLAGS_out_dir << "\n";
   return kExitSuccess;

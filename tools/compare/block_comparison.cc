@@ -5,6 +5,7 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <iterator>
 #include <limits>
 #include <mutex>
 #include <sstream>
@@ -23,19 +24,6 @@ namespace {
 constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
 using Clock = std::chrono::steady_clock;
 
-const char* LossName(BundleAdjustmentOptions::TieLoss loss) {
-  switch (loss) {
-    case BundleAdjustmentOptions::TieLoss::kNone:
-      return "none";
-    case BundleAdjustmentOptions::TieLoss::kHuber:
-      return "huber";
-    case BundleAdjustmentOptions::TieLoss::kCauchy:
-      return "cauchy";
-    case BundleAdjustmentOptions::TieLoss::kSoftL1:
-      return "softl1";
-  }
-  return "?";
-}
 
 // What one solver gave on one block.
 struct TrialOutcome {
@@ -108,47 +96,29 @@ TrialOutcome SolveBlock(const BlockSolverVariant& variant, const Block& start,
 }  // namespace
 
 std::string BlockSolverVariant::Name() const {
-  switch (solver) {
-    case PoseSolver::kTaylor:
-      return "taylor";
-    case PoseSolver::kTaylorAsPrinted:
-      return "taylor_as_printed";
-    case PoseSolver::kCeres:
-      break;
-  }
-  return std::string(jacobian == JacobianType::kAnalytic ? "ceres_analytic/" : "ceres_autodiff/") +
-         LossName(loss);
+  if (solver != PoseSolver::kCeres) return EnumName(solver);
+  return std::string("ceres_") + EnumName(jacobian) + "/" + EnumName(loss);
 }
 
 Status ParseBlockSolverVariants(const std::string& solvers, const std::string& losses,
                                 std::vector<BlockSolverVariant>* variants) {
   variants->clear();
-  std::vector<BundleAdjustmentOptions::TieLoss> loss_list;
+  std::vector<LossType> loss_list;
   for (const std::string& name : SplitCommaList(losses)) {
     if (name.empty()) continue;
-    const std::vector<std::string> names =
-        name == "all" ? std::vector<std::string>{"none", "huber", "cauchy", "softl1"}
-                      : std::vector<std::string>{name};
-    for (const std::string& n : names) {
-      BundleAdjustmentOptions::TieLoss loss;
-      if (n == "none") {
-        loss = BundleAdjustmentOptions::TieLoss::kNone;
-      } else if (n == "huber") {
-        loss = BundleAdjustmentOptions::TieLoss::kHuber;
-      } else if (n == "cauchy") {
-        loss = BundleAdjustmentOptions::TieLoss::kCauchy;
-      } else if (n == "softl1") {
-        loss = BundleAdjustmentOptions::TieLoss::kSoftL1;
-      } else {
-        return Status::Error("--losses: '" + n +
-                             "' is not a tie-mark loss of the block solvers (none, huber, cauchy, "
-                             "softl1)");
-      }
+    std::vector<LossType> add(std::begin(kBundleTieLosses), std::end(kBundleTieLosses));
+    if (name != "all") {
+      add.resize(1);
+      if (!ParseEnum(name, &add[0]) || !IsBundleTieLoss(add[0]))
+        return Status::Error("--losses: '" + name +
+                             "' is not a tie-mark loss of the block solvers (" +
+                             EnumNameList(kBundleTieLosses) + ")");
+    }
+    for (const LossType loss : add)
       if (std::find(loss_list.begin(), loss_list.end(), loss) == loss_list.end())
         loss_list.push_back(loss);
-    }
   }
-  if (loss_list.empty()) loss_list.push_back(BundleAdjustmentOptions::TieLoss::kNone);
+  if (loss_list.empty()) loss_list.push_back(LossType::kNone);
   for (const std::string& name : SplitCommaList(solvers)) {
     if (name.empty()) continue;
     const std::vector<std::string> names =
@@ -158,10 +128,9 @@ Status ParseBlockSolverVariants(const std::string& solvers, const std::string& l
             : std::vector<std::string>{name};
     for (const std::string& n : names) {
       std::vector<BlockSolverVariant> add;
-      if (n == "taylor" || n == "taylor_as_printed") {
-        BlockSolverVariant v;
-        v.solver = n == "taylor" ? PoseSolver::kTaylor : PoseSolver::kTaylorAsPrinted;
-        add.push_back(v);
+      BlockSolverVariant taylor;
+      if ((n == "taylor" || n == "taylor_as_printed") && ParseEnum(n, &taylor.solver)) {
+        add.push_back(taylor);
       } else if (n == "ceres_analytic" || n == "ceres_autodiff") {
         for (const auto loss : loss_list) {
           BlockSolverVariant v;

@@ -21,7 +21,7 @@ namespace photopose::cli {
 struct BlockSolverVariant {
   PoseSolver solver = PoseSolver::kCeres;
   JacobianType jacobian = JacobianType::kAnalytic;                    // Ceres only
-  BundleAdjustmentOptions::TieLoss loss = BundleAdjustmentOptions::TieLoss::kNone;  // Ceres only
+  LossType loss = LossType::kNone;  // Ceres only; one of kBundleTieLosses
   // "taylor_as_printed", "taylor", "ceres_analytic/none", "ceres_autodiff/huber", ...
   std::string Name() const;
 };

@@ -273,7 +273,7 @@ std::string SweepSettingTitle(const SweepSetting& s, int trials, int images) {
   std::snprintf(buffer, sizeof(buffer),
                 "%s: noise %g px, outliers %g%%, %d control points, initial error +-%g m +-%g deg "
                 "(%s; %d trials x %d image%s)",
-                ScenarioName(s.scenario), s.noise_px, 100.0 * s.outlier_fraction, s.control_points,
+                EnumName(s.scenario), s.noise_px, 100.0 * s.outlier_fraction, s.control_points,
                 s.initial_error.position_m, s.initial_error.angle_deg, s.axis.c_str(), trials,
                 images, images == 1 ? "" : "s");
   return buffer;
@@ -288,8 +288,8 @@ size_t ReferenceSolverIndex(const std::vector<std::string>& names) {
 // ------------------------------------------------------------------ solver variants
 
 std::string SolverVariant::Name() const {
-  if (solver != PoseSolver::kCeres) return PoseSolverName(solver);
-  return std::string("ceres_") + JacobianTypeName(jacobian) + "/" + LossTypeName(loss);
+  if (solver != PoseSolver::kCeres) return EnumName(solver);
+  return std::string("ceres_") + EnumName(jacobian) + "/" + EnumName(loss);
 }
 
 ResectionOptions SolverVariant::ApplyTo(const ResectionOptions& base) const {
@@ -306,16 +306,13 @@ Status ParseSolverVariants(const std::string& solvers, const std::string& losses
   std::vector<LossType> loss_types;
   for (const std::string& name : SplitCommaList(losses)) {
     if (name == "all") {
-      for (LossType loss : {LossType::kNone, LossType::kHuber, LossType::kSoftL1, LossType::kCauchy,
-                            LossType::kArctan, LossType::kTukey})
-        loss_types.push_back(loss);
+      for (const EnumNameEntry<LossType>& entry : kLossTypeNames) loss_types.push_back(entry.value);
       continue;
     }
-    const auto loss = ParseLossType(name);
-    if (!loss)
-      return Status::Error("unknown loss '" + name +
-                           "' (none, huber, softl1, cauchy, arctan, tukey or all)");
-    loss_types.push_back(*loss);
+    LossType loss;
+    if (!ParseEnum(name, &loss))
+      return Status::Error("unknown loss '" + name + "' (" + EnumChoices<LossType>() + " or all)");
+    loss_types.push_back(loss);
   }
   std::vector<std::string> names;
   for (const std::string& name : SplitCommaList(solvers)) {
@@ -328,10 +325,9 @@ Status ParseSolverVariants(const std::string& solvers, const std::string& losses
   }
   for (const std::string& name : names) {
     std::vector<SolverVariant> add;
-    if (name == "taylor_as_printed" || name == "taylor") {
-      SolverVariant v;
-      v.solver = *ParsePoseSolver(name);
-      add.push_back(v);
+    SolverVariant taylor;
+    if ((name == "taylor_as_printed" || name == "taylor") && ParseEnum(name, &taylor.solver)) {
+      add.push_back(taylor);
     } else if (name == "ceres_analytic" || name == "ceres_autodiff") {
       if (loss_types.empty()) return Status::Error("the Ceres solvers need at least one loss");
       for (LossType loss : loss_types) {
@@ -405,12 +401,6 @@ double NormalizedEstimationErrorSquared(const ExteriorOrientation& estimate,
 }
 
 // ------------------------------------------------------------------ Monte-Carlo mode
-
-const char* SweepTypeName(SweepType type) { return type == SweepType::kAxes ? "axes" : "grid"; }
-
-const char* InitialValuesName(InitialValues initial) {
-  return initial == InitialValues::kApproximateFrames ? "frames" : "ransac";
-}
 
 Status ParseInitialErrors(const std::string& text, std::vector<InitialError>* errors) {
   errors->clear();

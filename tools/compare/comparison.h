@@ -37,6 +37,7 @@
 #include <utility>
 #include <vector>
 
+#include "core/enum_names.h"
 #include "core/status.h"
 #include "core/simulation/synthetic_scene.h"
 #include "core/types.h"
@@ -97,6 +98,11 @@ enum class InitialValues {
   kApproximateFrames,  // the scene's approximate frames (the initial-value error of the sweep)
   kRansac,             // LO-RANSAC per image, seeded by the trial: the same start for every solver
 };
+inline constexpr EnumNameEntry<InitialValues> kInitialValuesNames[] = {
+    {InitialValues::kApproximateFrames, "frames"}, {InitialValues::kRansac, "ransac"}};
+constexpr EnumNameTable<InitialValues> EnumNames(InitialValues) {
+  return EnumNameTable<InitialValues>(kInitialValuesNames);
+}
 
 // How the per-axis value lists combine into settings.
 enum class SweepType {
@@ -106,6 +112,11 @@ enum class SweepType {
   // Every combination (prod n_i settings per scenario).
   kGrid,
 };
+inline constexpr EnumNameEntry<SweepType> kSweepTypeNames[] = {{SweepType::kAxes, "axes"},
+                                                              {SweepType::kGrid, "grid"}};
+constexpr EnumNameTable<SweepType> EnumNames(SweepType) {
+  return EnumNameTable<SweepType>(kSweepTypeNames);
+}
 
 // Error of the approximate frames: uniform in +- position_m per axis and +- angle_deg per angle.
 struct InitialError {
@@ -380,8 +391,5 @@ std::string SweepSettingTitle(const SweepSetting& setting, int trials, int image
 // Index of the solver the differences and time ratios refer to: "taylor" when present, otherwise
 // the first.
 size_t ReferenceSolverIndex(const std::vector<std::string>& names);
-
-const char* SweepTypeName(SweepType type);
-const char* InitialValuesName(InitialValues initial);
 
 }  // namespace photopose::cli

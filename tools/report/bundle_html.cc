@@ -178,7 +178,7 @@ std::string GroupsHtml(const Block& block, const BundleAdjustmentResult& result,
   std::ostringstream html;
   std::vector<std::vector<std::string>> rows;
   for (const BundleGroupStatistics& g : result.groups) {
-    rows.push_back({g.name, std::to_string(g.count), F(g.stated_accuracy.x()) + " " + g.unit,
+    rows.push_back({EnumName(g.group), std::to_string(g.count), F(g.stated_accuracy.x()) + " " + g.unit,
                     F(g.rms_total) + " " + g.unit, F(g.ratio), F(g.redundancy_share),
                     std::isfinite(g.estimated_accuracy.x())
                         ? F(g.estimated_accuracy.x()) + " " + g.unit
@@ -201,17 +201,17 @@ std::string GroupsHtml(const Block& block, const BundleAdjustmentResult& result,
   std::map<std::string, std::vector<double>> by_group;
   std::map<std::string, std::string> units;
   if (!result.observations.empty()) {
-    for (const BundleObservationDiagnostics& d : result.observations) by_group[d.group].push_back(d.residual);
+    for (const BundleObservationDiagnostics& d : result.observations) by_group[EnumName(d.group)].push_back(d.residual);
   } else {
     for (size_t m = 0; m < block.marks.size() && m < result.mark_residuals.size(); ++m) {
       if (!result.mark_residuals[m].allFinite()) continue;
-      const std::string group =
-          block.points[block.marks[m].point].role == PointRole::kControl ? "control_marks" : "tie_marks";
+      const std::string group = EnumName(
+          block.points[block.marks[m].point].role == PointRole::kControl ? kControlMarks : kTieMarks);
       by_group[group].push_back(result.mark_residuals[m].x());
       by_group[group].push_back(result.mark_residuals[m].y());
     }
   }
-  for (const BundleGroupStatistics& g : result.groups) units[g.name] = g.unit;
+  for (const BundleGroupStatistics& g : result.groups) units[EnumName(g.group)] = g.unit;
   html << "<h2>Residuals</h2>\n";
   for (const auto& [group, values] : by_group)
     html << Histogram(group, "residual (" + units[group] + ")", values) << "\n";
@@ -263,7 +263,7 @@ std::string CalibrationAndSnoopingHtml(const Block& block, const BundleAdjustmen
         calibration_rows.push_back(
             {c.names[k], F(c.values[k], "%.8g"), k < c.sigmas.size() ? F(c.sigmas[k]) : ""});
       html << HtmlTable("Camera '" + block.cameras[c.camera].camera_id + "' (" +
-                            CameraModelTypeName(block.cameras[c.camera].model) + ")",
+                            EnumName(block.cameras[c.camera].model) + ")",
                         {"parameter", "value", "sigma"}, calibration_rows, c.high_correlations);
     }
   }
@@ -271,7 +271,7 @@ std::string CalibrationAndSnoopingHtml(const Block& block, const BundleAdjustmen
     std::vector<std::vector<std::string>> snooping_rows;
     for (size_t k = 0; k < result.snooping.size(); ++k) {
       const BundleSnoopingStep& step = result.snooping[k];
-      snooping_rows.push_back({std::to_string(k + 1), step.group, std::to_string(step.item),
+      snooping_rows.push_back({std::to_string(k + 1), EnumName(step.group), std::to_string(step.item),
                                F(step.normalized), F(step.residual)});
     }
     html << "<h2>Data snooping</h2>\n"
@@ -289,7 +289,7 @@ std::string ReliabilityHtml(const Block& block, const BundleAdjustmentResult& re
     // Redundancy numbers per group as a distribution.
     std::map<std::string, std::vector<double>> redundancy;
     for (const BundleObservationDiagnostics& d : result.observations)
-      redundancy[d.group].push_back(d.redundancy);
+      redundancy[EnumName(d.group)].push_back(d.redundancy);
     html << "<h2>Reliability</h2>\n<p>" << result.num_uncontrolled
          << " observations have a redundancy number below "
          << F(context.options.uncontrolled_redundancy)

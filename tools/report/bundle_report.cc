@@ -59,23 +59,23 @@ void ReportedAngles(const BlockCamera& camera, const ExteriorOrientation& eo,
 std::string PointName(const Block& block, int p) { return block.points[p].id; }
 
 // The item a diagnostic refers to, in words.
-std::string ItemName(const Block& block, const std::string& group, int item) {
-  if (group == "tie_marks" || group == "control_marks") {
+std::string ItemName(const Block& block, BundleGroup group, int item) {
+  if (group == kTieMarks || group == kControlMarks) {
     const BlockMark& mark = block.marks[item];
     return "mark of '" + block.points[mark.point].id + "' in '" + block.images[mark.image].name + "'";
   }
-  if (group == "control_points") return "control point '" + block.points[item].id + "'";
-  if (group == "camera_positions") return "camera position of '" + block.images[item].name + "'";
-  if (group == "attitudes") return "attitude of '" + block.images[item].name + "'";
-  return group + " #" + std::to_string(item);
+  if (group == kControlPoints) return "control point '" + block.points[item].id + "'";
+  if (group == kCameraPositions) return "camera position of '" + block.images[item].name + "'";
+  if (group == kAttitudes) return "attitude of '" + block.images[item].name + "'";
+  return EnumName(group) + std::string(" #") + std::to_string(item);
 }
 
-const char* AxisName(const std::string& group, int axis) {
+const char* AxisName(BundleGroup group, int axis) {
   static const char* const kMark[] = {"x", "y"};
   static const char* const kXyz[] = {"X", "Y", "Z"};
   static const char* const kAngles[] = {"omega", "phi", "kappa"};
-  if (group == "tie_marks" || group == "control_marks") return kMark[std::clamp(axis, 0, 1)];
-  if (group == "attitudes") return kAngles[std::clamp(axis, 0, 2)];
+  if (group == kTieMarks || group == kControlMarks) return kMark[std::clamp(axis, 0, 1)];
+  if (group == kAttitudes) return kAngles[std::clamp(axis, 0, 2)];
   return kXyz[std::clamp(axis, 0, 2)];
 }
 
@@ -86,7 +86,7 @@ json BundleReportJson(const Block& block, const BundleAdjustmentResult& result,
   const BundleAdjustmentSummary& s = result.summary;
   const BundleAdjustmentOptions& o = context.options;
   json report;
-  report["summary"] = {{"termination", BundleTerminationName(s.termination)},
+  report["summary"] = {{"termination", EnumName(s.termination)},
                        {"message", s.message},
                        {"sigma0", Number(s.sigma0)},
                        {"redundancy", s.redundancy},
@@ -109,11 +109,11 @@ json BundleReportJson(const Block& block, const BundleAdjustmentResult& result,
                        {"num_rejected_marks", s.num_rejected_marks},
                        {"tie_points_left_out", s.tie_points_left_out},
                        {"num_images_initialized", context.num_images_initialized},
-                       {"datum", s.datum == BundleDatum::kControl ? "absolute" : "relative"},
+                       {"datum", EnumName(s.datum)},
                        {"datum_description", s.datum_description}};
   json groups = json::array();
   for (const BundleGroupStatistics& g : result.groups) {
-    json group = {{"name", g.name},
+    json group = {{"name", EnumName(g.group)},
                   {"count", g.count},
                   {"unit", g.unit},
                   {"stated_accuracy", g.num_axes == 2 ? Number(g.stated_accuracy.x())
@@ -185,7 +185,7 @@ json BundleReportJson(const Block& block, const BundleAdjustmentResult& result,
                      {"omega_deg", angles[0]},
                      {"phi_deg", angles[1]},
                      {"kappa_deg", angles[2]},
-                     {"convention", RotationConventionName(context.rotation)}};
+                     {"convention", EnumName(context.rotation)}};
       if (r.has_covariance) {
         row["sigma"] = {{"X", std::sqrt(r.covariance(0, 0))},
                         {"Y", std::sqrt(r.covariance(1, 1))},
@@ -214,7 +214,7 @@ json BundleReportJson(const Block& block, const BundleAdjustmentResult& result,
                         {"sigma", k < c.sigmas.size() ? Number(c.sigmas[k]) : json(nullptr)}});
     }
     calibration.push_back({{"camera_id", block.cameras[c.camera].camera_id},
-                           {"model", CameraModelTypeName(block.cameras[c.camera].model)},
+                           {"model", EnumName(block.cameras[c.camera].model)},
                            {"parameters", values},
                            {"correlation", correlation},
                            {"high_correlations", c.high_correlations}});
@@ -239,7 +239,7 @@ json BundleReportJson(const Block& block, const BundleAdjustmentResult& result,
     std::vector<double> image_mdb(block.images.size(), 0.0);
     std::vector<double> image_external(block.images.size(), 0.0);
     for (const BundleObservationDiagnostics& d : result.observations) {
-      const json row = {{"group", d.group},
+      const json row = {{"group", EnumName(d.group)},
                         {"item", ItemName(block, d.group, d.item)},
                         {"axis", AxisName(d.group, d.axis)},
                         {"residual", Number(d.residual)},
@@ -250,7 +250,7 @@ json BundleReportJson(const Block& block, const BundleAdjustmentResult& result,
                         {"external_m", Number(d.external_m)}};
       if (d.rejected) flagged.push_back(row);
       if (d.redundancy < o.uncontrolled_redundancy) uncontrolled.push_back(row);
-      if (d.group == "tie_marks" || d.group == "control_marks") {
+      if (d.group == kTieMarks || d.group == kControlMarks) {
         const int image = block.marks[d.item].image;
         image_mdb[image] = std::max(image_mdb[image], d.mdb);
         image_external[image] = std::max(image_external[image], d.external_m);
@@ -267,7 +267,7 @@ json BundleReportJson(const Block& block, const BundleAdjustmentResult& result,
       if (block.points[p].role != PointRole::kControl) continue;
       Eigen::Vector3d mdb = Eigen::Vector3d::Constant(kNaN);
       for (const BundleObservationDiagnostics& d : result.observations)
-        if (d.group == "control_points" && d.item == static_cast<int>(p)) mdb[d.axis] = d.mdb;
+        if (d.group == kControlPoints && d.item == static_cast<int>(p)) mdb[d.axis] = d.mdb;
       per_control.push_back({{"point_id", block.points[p].id}, {"mdb_m", Vector3(mdb)}});
     }
     report["diagnostics"] = {{"critical_value", result.critical_value},
@@ -286,7 +286,7 @@ json BundleReportJson(const Block& block, const BundleAdjustmentResult& result,
   if (!result.snooping.empty() || o.snoop) {
     json steps = json::array();
     for (const BundleSnoopingStep& step : result.snooping) {
-      steps.push_back({{"group", step.group},
+      steps.push_back({{"group", EnumName(step.group)},
                        {"item", ItemName(block, step.group, step.item)},
                        {"axis", AxisName(step.group, step.axis)},
                        {"normalized_residual", step.normalized},
@@ -317,9 +317,9 @@ json BundleReportJson(const Block& block, const BundleAdjustmentResult& result,
   }
   const BundleAccuracies& a = o.accuracies;
   report["options"] = {{"input", context.input_kind},
-                       {"rotation", RotationConventionName(context.rotation)},
-                       {"jacobian", JacobianTypeName(o.jacobian)},
-                       {"linear_solver", BundleLinearSolverName(o.linear_solver)},
+                       {"rotation", EnumName(context.rotation)},
+                       {"jacobian", EnumName(o.jacobian)},
+                       {"linear_solver", EnumName(o.linear_solver)},
                        {"tie_accuracy_px", a.tie_px},
                        {"marker_projection_accuracy_px", a.marker_projection_px},
                        {"tie_accuracy_film_um", a.tie_film_um},
@@ -407,7 +407,7 @@ std::vector<std::string> BundleConsoleLines(const Block& block, const BundleAdju
   lines.push_back("datum: " + s.datum_description);
   for (const BundleGroupStatistics& g : result.groups) {
     std::ostringstream line;
-    line << g.name << ": " << g.count << ", stated " << Format(g.stated_accuracy.x()) << " "
+    line << EnumName(g.group) << ": " << g.count << ", stated " << Format(g.stated_accuracy.x()) << " "
          << g.unit << ", RMS " << Format(g.rms_total) << " " << g.unit << ", RMS/stated "
          << Format(g.ratio) << ", redundancy share " << Format(g.redundancy_share)
          << (g.overfit ? "  OVERFIT" : "");
@@ -426,21 +426,21 @@ std::vector<std::string> BundleConsoleLines(const Block& block, const BundleAdju
                     " (report: summary.tie_points_left_out)");
   }
   // Advice from the estimated accuracies.
-  static const std::pair<const char*, const char*> kFlags[] = {
-      {"tie_marks", "--tie_accuracy"},
-      {"control_marks", "--marker_projection_accuracy"},
-      {"control_points", "--marker_accuracy"},
-      {"camera_positions", "--camera_accuracy"},
-      {"attitudes", "--attitude_accuracy"}};
+  static const std::pair<BundleGroup, const char*> kFlags[] = {
+      {kTieMarks, "--tie_accuracy"},
+      {kControlMarks, "--marker_projection_accuracy"},
+      {kControlPoints, "--marker_accuracy"},
+      {kCameraPositions, "--camera_accuracy"},
+      {kAttitudes, "--attitude_accuracy"}};
   for (const BundleGroupStatistics& g : result.groups) {
     if (!std::isfinite(g.estimated_accuracy.x())) {
-      if (!g.estimation_message.empty()) lines.push_back(g.name + " accuracy " + g.estimation_message);
+      if (!g.estimation_message.empty()) lines.push_back(EnumName(g.group) + std::string(" accuracy ") + g.estimation_message);
       continue;
     }
-    for (const auto& [name, flag] : kFlags) {
-      if (g.name != name) continue;
+    for (const auto& [group, flag] : kFlags) {
+      if (g.group != group) continue;
       std::ostringstream line;
-      line << g.name << ": " << Format(g.stated_accuracy.x()) << " " << g.unit << " stated, "
+      line << EnumName(g.group) << ": " << Format(g.stated_accuracy.x()) << " " << g.unit << " stated, "
            << Format(g.estimated_accuracy.x()) << " " << g.unit << " estimated (+-"
            << Format(100.0 * g.estimated_accuracy_standard_error, "%.0f") << " %): set " << flag
            << "=" << Format(g.estimated_accuracy.x(), "%.2g");

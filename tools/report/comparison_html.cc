@@ -36,8 +36,8 @@ std::string MonteCarloHtml(const MonteCarloOptions& options, const MonteCarloRes
   const std::string title = "photopose compare: Monte-Carlo comparison of the pose solvers";
   html << HtmlPageOpen(title, title);
   html << "<p>Command: <code>" << HtmlEscape(command_line) << "</code></p>\n";
-  html << "<p>" << options.trials << " trials per setting, sweep " << SweepTypeName(options.sweep)
-       << ", initial values " << InitialValuesName(options.initial) << ", wall time "
+  html << "<p>" << options.trials << " trials per setting, sweep " << EnumName(options.sweep)
+       << ", initial values " << EnumName(options.initial) << ", wall time "
        << ReportFixed(result.wall_seconds, 1) << " s. Solvers: ";
   for (size_t s = 0; s < result.solver_names.size(); ++s)
     html << (s ? ", " : "") << "<code>" << HtmlEscape(result.solver_names[s]) << "</code>";
@@ -48,7 +48,7 @@ std::string MonteCarloHtml(const MonteCarloOptions& options, const MonteCarloRes
 
   const std::vector<TextTable> tables = MonteCarloTables(options, result);
   for (Scenario scenario : options.scenarios) {
-    html << "<h2>Scenario " << ScenarioName(scenario) << "</h2>\n<div class=\"plots\">\n";
+    html << "<h2>Scenario " << EnumName(scenario) << "</h2>\n<div class=\"plots\">\n";
     // Metric of a solver in a setting, for the plots.
     struct Metric {
       const char* name;
@@ -86,7 +86,7 @@ std::string MonteCarloHtml(const MonteCarloOptions& options, const MonteCarloRes
       if (along.empty()) continue;
       for (const Metric& metric : metrics) {
         LinePlot plot;
-        plot.title = std::string(ScenarioName(scenario)) + ": " + metric.name + " vs " +
+        plot.title = std::string(EnumName(scenario)) + ": " + metric.name + " vs " +
                      (axis == "initial" ? "initial error" : axis);
         plot.x_label = AxisLabel(axis);
         if (axis == "initial") {
@@ -129,11 +129,11 @@ std::string MonteCarloHtml(const MonteCarloOptions& options, const MonteCarloRes
     for (const SettingResult& setting : result.settings) {
       if (setting.setting.scenario != scenario) continue;
       BarPlot bars;
-      bars.title = std::string(ScenarioName(scenario)) + ": median time per solve (" +
+      bars.title = std::string(EnumName(scenario)) + ": median time per solve (" +
                    setting.setting.axis + " setting)";
       bars.value_label = "microseconds per image (ResectImage wall time)";
       BarPlot refinement = bars;
-      refinement.title = std::string(ScenarioName(scenario)) + ": median refinement time (" +
+      refinement.title = std::string(EnumName(scenario)) + ": median refinement time (" +
                          setting.setting.axis + " setting)";
       refinement.value_label = "microseconds per image (the solver's own iterations)";
       for (const SolverStatistics& s : setting.solvers) {

@@ -162,7 +162,7 @@ std::string MonteCarloCsv(const MonteCarloResult& result) {
   for (const SettingResult& setting : result.settings) {
     const SweepSetting& x = setting.setting;
     for (const SolverStatistics& s : setting.solvers) {
-      csv << ScenarioName(x.scenario) << "," << x.axis << "," << Full(x.noise_px) << ","
+      csv << EnumName(x.scenario) << "," << x.axis << "," << Full(x.noise_px) << ","
           << Full(x.outlier_fraction) << "," << x.control_points << ","
           << Full(x.initial_error.position_m) << "," << Full(x.initial_error.angle_deg) << ","
           << setting.images_per_trial << "," << CsvField(s.solver) << "," << s.samples << ","
@@ -227,7 +227,7 @@ std::vector<TextTable> DatasetTables(const DatasetComparisonResult& result) {
 
   TextTable images;
   images.title = std::string("Per image (angles in degrees, ") +
-                 RotationConventionName(result.rotation) + " convention)";
+                 EnumName(result.rotation) + " convention)";
   images.header = {"image",    "solver",  "status", "X_m",    "Y_m",     "Z_m",
                    "omega",    "phi",     "kappa",  "sigma0", "inliers", "rms_px",
                    "check_px", "chk_out", "iter",   "t_us",   "d_pos_m", "d_rot_as"};
@@ -279,7 +279,7 @@ std::string DatasetCsv(const DatasetComparisonResult& result) {
     if (s.success) {
       for (int k = 0; k < 3; ++k) csv << Full(s.eo.parameters[k]) << ",";
       for (int k = 0; k < 3; ++k) csv << Full(s.angles_deg[k]) << ",";
-      csv << RotationConventionName(result.rotation) << ",";
+      csv << EnumName(result.rotation) << ",";
       for (int k = 0; k < 3; ++k) csv << Full(s.standard_deviations[k]) << ",";
       for (int k = 3; k < 6; ++k) csv << Full(RadiansToDegrees(s.standard_deviations[k])) << ",";
       csv << Full(s.sigma0) << "," << s.num_observations << "," << s.num_inliers << ","

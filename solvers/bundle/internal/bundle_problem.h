@@ -18,17 +18,6 @@
 
 namespace photopose::internal {
 
-// The groups of the objective, in report order.
-enum BundleGroup : int {
-  kTieMarks = 0,
-  kControlMarks,
-  kControlPoints,
-  kCameraPositions,
-  kAttitudes,
-  kNumBundleGroups
-};
-extern const char* const kBundleGroupNames[kNumBundleGroups];
-
 // An image needs at least this many marks for its six unknowns.
 constexpr int kMinMarksPerImage = 3;
 

@@ -259,8 +259,10 @@ Block FramePinholeBlock() {
       double ab[2];
       ProjectToNormalized(block.images[i].eo->data(), block.points[p].position_m->data(), ab);
       Eigen::Vector2d film;
-      ObservationFromNormalized(CameraModelType::kFrame, block.cameras[0].params.data(),
-                                block.cameras[0].data(), {ab[0], ab[1]}, &film);
+      EXPECT_TRUE(ObservationFromNormalized(CameraModelType::kFrame,
+                                            block.cameras[0].params.data(),
+                                            block.cameras[0].data(), {ab[0], ab[1]}, &film)
+                      .ok());
       mark.unit = MarkUnit::kFilm;
       mark.measured = film + Eigen::Vector2d(0.3, -0.2);  // 0.09 px of error
       mark.observation = mark.measured;

@@ -479,11 +479,11 @@ TEST_F(TablesTest, FramesRoundTripEveryConventionAndAngleDirection) {
   }
   for (const RotationConvention convention :
        {RotationConvention::kSeed, RotationConvention::kOpk, RotationConvention::kPok}) {
-    SCOPED_TRACE(RotationConventionName(convention));
+    SCOPED_TRACE(EnumName(convention));
     FramesTableOptions options;
     options.convention = convention;
     options.cameras = &cameras;
-    const std::string path = Path(std::string("frames_") + RotationConventionName(convention));
+    const std::string path = Path(std::string("frames_") + EnumName(convention));
     const Status written = WriteFramesTable(path, options, frames);
     ASSERT_TRUE(written.ok()) << written.message();
     std::vector<FrameRecord> back;
@@ -512,7 +512,7 @@ TEST_F(TablesTest, FramesAnglesAreConvertedFromTheFileConvention) {
   const std::vector<FrameCamera> cameras = {SimpleCamera("cw", -1), SimpleCamera("ccw", +1)};
   for (const RotationConvention convention :
        {RotationConvention::kSeed, RotationConvention::kOpk, RotationConvention::kPok}) {
-    SCOPED_TRACE(RotationConventionName(convention));
+    SCOPED_TRACE(EnumName(convention));
     FramesTableOptions options;
     options.convention = convention;
     options.cameras = &cameras;

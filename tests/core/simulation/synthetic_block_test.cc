@@ -98,7 +98,7 @@ TEST(SyntheticBlock, NoiseFreeMarksReprojectExactly) {
     double worst = 0.0;
     for (size_t m = 0; m < block.marks.size(); ++m)
       worst = std::max(worst, TrueResidualPx(block, truth, static_cast<int>(m)).norm());
-    EXPECT_LT(worst, kNoiseFreePx) << CameraModelTypeName(model);
+    EXPECT_LT(worst, kNoiseFreePx) << EnumName(model);
     // Every mark inside its image.
     for (const BlockMark& mark : block.marks) {
       ASSERT_GE(mark.measured.x(), 0.0);

@@ -47,7 +47,7 @@ TEST(SyntheticScene, NoiseFreeMarksAreExactProjectionsInsideTheImage) {
       ASSERT_EQ(scene.true_frames.size(), 12u);
     } else {
       ASSERT_EQ(scene.true_frames.size(), 1u);
-      ASSERT_EQ(scene.marks.size(), 25u) << ScenarioName(scenario);
+      ASSERT_EQ(scene.marks.size(), 25u) << EnumName(scenario);
     }
     std::map<std::string, int> marks_per_image;
     for (const ImageMark& mark : scene.marks) {
@@ -56,14 +56,14 @@ TEST(SyntheticScene, NoiseFreeMarksAreExactProjectionsInsideTheImage) {
       Eigen::Vector2d projected;
       ASSERT_TRUE(ProjectGroundPoint(camera, poses.at(mark.raster), points.at(mark.point_id),
                                      PixelOrigin::kCorner, &projected).ok());
-      EXPECT_LE((projected - *mark.column_row).norm(), 1e-9) << ScenarioName(scenario);
+      EXPECT_LE((projected - *mark.column_row).norm(), 1e-9) << EnumName(scenario);
       // Inside the image: column in [0, n_columns], row in [0, n_rows] (pixel corners).
       EXPECT_GE(mark.column_row->x(), 0.0);
       EXPECT_LE(mark.column_row->x(), camera.n_columns);
       EXPECT_GE(mark.column_row->y(), 0.0);
       EXPECT_LE(mark.column_row->y(), camera.n_rows);
     }
-    EXPECT_EQ(marks_per_image.size(), scene.true_frames.size()) << ScenarioName(scenario);
+    EXPECT_EQ(marks_per_image.size(), scene.true_frames.size()) << EnumName(scenario);
     for (const auto& [raster, count] : marks_per_image) EXPECT_GE(count, 6) << raster;
   }
 }
@@ -117,8 +117,8 @@ TEST(SyntheticScene, RejectsInvalidOptions) {
   options = SyntheticSceneOptions();
   options.num_control_points = options.num_check_points = 0;
   EXPECT_FALSE(MakeSyntheticScene(options, &scene).ok());
-  EXPECT_EQ(ParseScenario("uav_block"), Scenario::kUavBlock);
-  EXPECT_FALSE(ParseScenario("satellite").has_value());
+  EXPECT_EQ(ParseEnum<Scenario>("uav_block"), Scenario::kUavBlock);
+  EXPECT_FALSE(ParseEnum<Scenario>("satellite").has_value());
 }
 
 TEST(SyntheticScene, HugePointCountsAreRefusedWithoutOverflow) {

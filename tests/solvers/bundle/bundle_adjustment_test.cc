@@ -216,7 +216,7 @@ TEST(BundleAdjustment, NoisyBlockHasSigma0NearOneAndHonestGroups) {
   // Redundancy shares sum to the redundancy.
   double total = 0.0;
   for (const BundleGroupStatistics& g : result.groups) {
-    ASSERT_TRUE(std::isfinite(g.redundancy_share)) << g.name;
+    ASSERT_TRUE(std::isfinite(g.redundancy_share)) << EnumName(g.group);
     total += g.redundancy_share * g.count * g.num_axes;
   }
   EXPECT_NEAR(total, result.summary.redundancy, 1e-6 * result.summary.redundancy);
@@ -236,10 +236,9 @@ TEST(BundleAdjustment, AnalyticAndAutodiffGiveTheSameAdjustment) {
     EXPECT_LT((a.block.images[i].eo->parameters - b.block.images[i].eo->parameters).norm(), 1e-7);
 }
 
-const BundleGroupStatistics* FindGroup(const BundleAdjustmentResult& result,
-                                       const std::string& name) {
+const BundleGroupStatistics* FindGroup(const BundleAdjustmentResult& result, BundleGroup group) {
   for (const BundleGroupStatistics& g : result.groups)
-    if (g.name == name) return &g;
+    if (g.group == group) return &g;
   return nullptr;
 }
 
@@ -254,7 +253,7 @@ TEST(BundleAdjustment, FewTiePointsFlagTheCameraPositionsAsOverfitted) {
     BundleAdjustmentResult result;
     ASSERT_TRUE(BundleAdjust(QuietOptions(), BundleAdjustmentConfig(), &data.block, &result).ok());
     ASSERT_TRUE(result.summary.IsSolutionUsable()) << result.summary.BriefReport();
-    const BundleGroupStatistics* cameras = FindGroup(result, "camera_positions");
+    const BundleGroupStatistics* cameras = FindGroup(result, kCameraPositions);
     ASSERT_NE(cameras, nullptr);
     EXPECT_EQ(cameras->overfit, grid == 3) << result.FullReport(data.block);
     EXPECT_EQ(cameras->message.empty(), grid != 3);
@@ -645,8 +644,8 @@ TEST(BundleDiagnostics, VarianceComponentsRecoverTheTrueAccuracies) {
     BundleAdjustmentResult result;
     ASSERT_TRUE(BundleAdjust(options, BundleAdjustmentConfig(), &data.block, &result).ok());
     ASSERT_TRUE(result.summary.IsSolutionUsable()) << result.summary.BriefReport();
-    const BundleGroupStatistics* tie = FindGroup(result, "tie_marks");
-    const BundleGroupStatistics* cameras = FindGroup(result, "camera_positions");
+    const BundleGroupStatistics* tie = FindGroup(result, kTieMarks);
+    const BundleGroupStatistics* cameras = FindGroup(result, kCameraPositions);
     ASSERT_TRUE(tie != nullptr && cameras != nullptr);
     ASSERT_TRUE(std::isfinite(tie->estimated_accuracy.x())) << tie->estimation_message;
     ASSERT_TRUE(std::isfinite(cameras->estimated_accuracy.x())) << cameras->estimation_message;
@@ -682,9 +681,9 @@ TEST(BundleDiagnostics, DataSnoopingFindsEveryInjectedBlunder) {
   std::set<int> found_marks;
   bool found_control = false, found_gnss = false;
   for (const BundleSnoopingStep& step : result.snooping) {
-    if (step.group == "tie_marks" || step.group == "control_marks") found_marks.insert(step.item);
-    if (step.group == "control_points" && step.item == data.blunder_control) found_control = true;
-    if (step.group == "camera_positions" && step.item == data.blunder_image) found_gnss = true;
+    if (step.group == kTieMarks || step.group == kControlMarks) found_marks.insert(step.item);
+    if (step.group == kControlPoints && step.item == data.blunder_control) found_control = true;
+    if (step.group == kCameraPositions && step.item == data.blunder_image) found_gnss = true;
   }
   ASSERT_EQ(data.blunder_marks.size(), 8u);  // o.tie_blunders: every one was placed
   for (const int m : data.blunder_marks) EXPECT_TRUE(found_marks.count(m)) << "mark " << m;

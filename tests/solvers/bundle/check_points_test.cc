@@ -89,7 +89,7 @@ TEST(CheckPoints, OneRayIsReportedNotCountedAndRemovedControlLeavesTheRmse) {
   BundleAdjustmentResult result;
   result.points.assign(data.block.points.size(), BundlePointResult());
   result.points[control].error_m = Eigen::Vector3d(1.0, 0.0, 0.0);
-  result.snooping.push_back({"control_points", control, 0, 5.0, 1.0});
+  result.snooping.push_back({kControlPoints, control, 0, 5.0, 1.0});
   TabulateControlAndCheckPoints(data.block, BundleAccuracies(), 1.0, &result);
   const BundlePointResult& row = result.points[check];
   EXPECT_FALSE(row.error_m.has_value());

@@ -285,7 +285,7 @@ Agreement CompareWithCeres(const FixtureBlock& data, const BundleAdjustmentOptio
   EXPECT_EQ(taylor.summary.num_marks, ceres.summary.num_marks);
   EXPECT_EQ(taylor.summary.num_points, ceres.summary.num_points);
   EXPECT_EQ(taylor.summary.datum, ceres.summary.datum);
-  EXPECT_EQ(taylor.adjustment.summary.termination, BundleTermination::kConverged);
+  EXPECT_EQ(taylor.adjustment.summary.termination, SolverTermination::kConverged);
   EXPECT_EQ(taylor.adjustment.num_check_points, ceres.num_check_points);
   for (size_t i = 0; i < data.block.images.size(); ++i) {
     const ExteriorOrientation& a = *ceres_block.images[i].eo;
@@ -618,7 +618,7 @@ TEST(TaylorBundle, FailsCleanly) {
     TaylorBundleResult result;
     ASSERT_TRUE(
         TaylorBundleAdjust(TaylorOptions(), BundleAdjustmentConfig(), &block, &result).ok());
-    EXPECT_EQ(result.summary.termination_type, TaylorTerminationType::kFailure);
+    EXPECT_EQ(result.summary.termination_type, SolverTermination::kFailure);
     EXPECT_NE(result.summary.message.find("not in front of the camera"), std::string::npos)
         << result.summary.message;
     ExpectUntouched(before, block, result);
@@ -630,8 +630,8 @@ TEST(TaylorBundle, FailsCleanly) {
     options.max_iterations = 1;
     TaylorBundleResult result;
     ASSERT_TRUE(TaylorBundleAdjust(options, BundleAdjustmentConfig(), &block, &result).ok());
-    EXPECT_EQ(result.summary.termination_type, TaylorTerminationType::kNoConvergence);
-    EXPECT_EQ(result.adjustment.summary.termination, BundleTermination::kNoConvergence);
+    EXPECT_EQ(result.summary.termination_type, SolverTermination::kNoConvergence);
+    EXPECT_EQ(result.adjustment.summary.termination, SolverTermination::kNoConvergence);
     ExpectUntouched(data.block, block, result);
   }
   {
@@ -644,7 +644,7 @@ TEST(TaylorBundle, FailsCleanly) {
     TaylorBundleResult result;
     ASSERT_TRUE(
         TaylorBundleAdjust(TaylorOptions(), BundleAdjustmentConfig(), &block, &result).ok());
-    EXPECT_EQ(result.summary.termination_type, TaylorTerminationType::kFailure);
+    EXPECT_EQ(result.summary.termination_type, SolverTermination::kFailure);
     EXPECT_NE(result.summary.message.find("singular"), std::string::npos) << result.summary.message;
     ExpectUntouched(two.block, block, result);
   }
@@ -710,7 +710,7 @@ TEST(TaylorBundle, RefusesWhatItDoesNotDo) {
   }
   {
     BundleAdjustmentOptions ceres;
-    ceres.tie_loss = BundleAdjustmentOptions::TieLoss::kHuber;
+    ceres.tie_loss = LossType::kHuber;
     TaylorBundleOptions options;
     EXPECT_FALSE(
         TaylorBundleOptionsFromBundleOptions(ceres, TaylorPartials::kCorrected, &options).ok());
@@ -933,7 +933,7 @@ TEST(TaylorBundle, BundleAdjustWithSolverDispatches) {
   const BundleAdjustmentOptions options = CeresOptions();
   for (const PoseSolver solver :
        {PoseSolver::kCeres, PoseSolver::kTaylor, PoseSolver::kTaylorAsPrinted}) {
-    SCOPED_TRACE(PoseSolverName(solver));
+    SCOPED_TRACE(EnumName(solver));
     Block via_switch = data.block, direct = data.block;
     BundleAdjustmentResult result;
     TaylorBundleResult taylor;
@@ -960,7 +960,7 @@ TEST(TaylorBundle, BundleAdjustWithSolverDispatches) {
       EXPECT_EQ(via_switch.images[i].eo->parameters, direct.images[i].eo->parameters);
   }
   BundleAdjustmentOptions huber = options;
-  huber.tie_loss = BundleAdjustmentOptions::TieLoss::kHuber;
+  huber.tie_loss = LossType::kHuber;
   Block block = data.block;
   BundleAdjustmentResult result;
   EXPECT_FALSE(

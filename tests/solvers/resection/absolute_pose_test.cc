@@ -282,7 +282,7 @@ TEST_P(AbsolutePoseRansacTest, RecoversPoseAndOutliers) {
   const Vector6d error = PoseError(eo, c.truth);
   for (int k = 0; k < 6; ++k)
     EXPECT_LE(std::abs(error[k]), kSigmas * sigma[k]) << "parameter " << k;
-  std::printf("[ RANSAC ] %s, %.0f %% outliers: %s\n", ScenarioName(scenario),
+  std::printf("[ RANSAC ] %s, %.0f %% outliers: %s\n", EnumName(scenario),
               100 * outlier_fraction, summary.BriefReport().c_str());
   std::printf(
       "[ RANSAC ] centre error %.3f m (sigma %.3f), angle errors %.2f %.2f %.2f arcsec "
@@ -300,7 +300,7 @@ INSTANTIATE_TEST_SUITE_P(Scenes, AbsolutePoseRansacTest,
                          ::testing::Combine(::testing::Values(Scenario::kNadir, Scenario::kOblique),
                                             ::testing::Values(0.3, 0.6)),
                          [](const ::testing::TestParamInfo<std::tuple<Scenario, double>>& info) {
-                           return std::string(ScenarioName(std::get<0>(info.param))) + "_" +
+                           return std::string(EnumName(std::get<0>(info.param))) + "_" +
                                   std::to_string(static_cast<int>(
                                       std::lround(100 * std::get<1>(info.param)))) +
                                   "pct_outliers";

@@ -81,7 +81,7 @@ TEST(PoseRefinement, IterationLimitIsNoConvergenceAndLeavesThePose) {
     const ExteriorOrientation start = eo;
     PoseRefinementSummary summary;
     EXPECT_FALSE(Refine(options, p, &eo, &summary));
-    EXPECT_EQ(summary.termination, PoseRefinementTermination::kNoConvergence) << summary.message;
+    EXPECT_EQ(summary.termination, SolverTermination::kNoConvergence) << summary.message;
     EXPECT_FALSE(summary.message.empty());
     EXPECT_EQ(eo.parameters, start.parameters);
   }

@@ -133,8 +133,8 @@ TEST(Resection, NoiseFreeRecoversTheTruthOnEveryPathAndScenario) {
             ASSERT_TRUE(results[i].success) << results[i].summary.message;
             const Vector6d error = PoseError(results[i].eo, scene.true_frames[i].eo);
             // Noise-free: only rounding remains (mm-scale scenes, 1e-6 m is generous).
-            EXPECT_LT(error.head<3>().norm(), 1e-6) << ScenarioName(scenario);
-            EXPECT_LT(error.tail<3>().norm(), 1e-9) << ScenarioName(scenario);
+            EXPECT_LT(error.head<3>().norm(), 1e-6) << EnumName(scenario);
+            EXPECT_LT(error.tail<3>().norm(), 1e-9) << EnumName(scenario);
           }
         }
       }
@@ -153,12 +153,12 @@ TEST(Resection, TinySolverAndCeresProblemAgreeForEveryLoss) {
     problem.refinement.ceres.minimizer = CeresMinimizer::kProblem;
     const ResectionResult a = ResectImage(tiny, inputs.inputs[0]);
     const ResectionResult b = ResectImage(problem, inputs.inputs[0]);
-    ASSERT_EQ(a.success, b.success) << LossTypeName(loss) << a.summary.message << b.summary.message;
+    ASSERT_EQ(a.success, b.success) << EnumName(loss) << a.summary.message << b.summary.message;
     if (!a.success) continue;
-    EXPECT_EQ(a.inliers, b.inliers) << LossTypeName(loss);
+    EXPECT_EQ(a.inliers, b.inliers) << EnumName(loss);
     // The same minimum: both stop within 1e-6 standard deviations of it.
-    EXPECT_LT((a.eo.parameters - b.eo.parameters).head<3>().norm(), 1e-4) << LossTypeName(loss);
-    EXPECT_LT((a.eo.parameters - b.eo.parameters).tail<3>().norm(), 1e-7) << LossTypeName(loss);
+    EXPECT_LT((a.eo.parameters - b.eo.parameters).head<3>().norm(), 1e-4) << EnumName(loss);
+    EXPECT_LT((a.eo.parameters - b.eo.parameters).tail<3>().norm(), 1e-7) << EnumName(loss);
   }
 }
 
@@ -254,12 +254,12 @@ TEST(Resection, DegenerateConfigurationsFailWithAReason) {
 
 TEST(Resection, ParsersRoundTripNames) {
   for (const char* name : {"ceres", "taylor", "taylor_as_printed"})
-    EXPECT_STREQ(PoseSolverName(*ParsePoseSolver(name)), name);
+    EXPECT_STREQ(EnumName(*ParseEnum<PoseSolver>(name)), name);
   for (const char* name : {"none", "huber", "softl1", "cauchy", "arctan", "tukey"})
-    EXPECT_STREQ(LossTypeName(*ParseLossType(name)), name);
+    EXPECT_STREQ(EnumName(*ParseEnum<LossType>(name)), name);
   for (const char* name : {"tiny_solver", "problem"})
-    EXPECT_STREQ(CeresMinimizerName(*ParseCeresMinimizer(name)), name);
-  EXPECT_FALSE(ParsePoseSolver("lm").has_value());
+    EXPECT_STREQ(EnumName(*ParseEnum<CeresMinimizer>(name)), name);
+  EXPECT_FALSE(ParseEnum<PoseSolver>("lm").has_value());
 }
 
 // ------------------------------------------------------------------ few control points
@@ -410,8 +410,8 @@ TEST(Resection, TheCleanImageThatReachedTheIterationLimitConverges) {
       options.refinement.loss = loss;
       options.refinement.ceres.minimizer = minimizer;
       const ResectionResult r = ResectImage(options, inputs.inputs[0]);
-      EXPECT_TRUE(r.success) << LossTypeName(loss) << ": " << r.summary.message;
-      EXPECT_EQ(r.summary.termination, ResectionTermination::kConverged);
+      EXPECT_TRUE(r.success) << EnumName(loss) << ": " << r.summary.message;
+      EXPECT_EQ(r.summary.termination, SolverTermination::kConverged);
     }
   }
 }
@@ -439,7 +439,7 @@ TEST(Resection, NoConvergenceIsReportedAsSuch) {
   options.refinement.ceres.max_iterations = 1;
   const ResectionResult r = ResectImage(options, inputs.inputs[0]);
   EXPECT_FALSE(r.success);
-  EXPECT_EQ(r.summary.termination, ResectionTermination::kNoConvergence) << r.summary.message;
+  EXPECT_EQ(r.summary.termination, SolverTermination::kNoConvergence) << r.summary.message;
   EXPECT_EQ(r.summary.message.find('#'), std::string::npos) << r.summary.message;
 }
 

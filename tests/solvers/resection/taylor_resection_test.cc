@@ -362,11 +362,11 @@ TEST(TaylorResectionOptions, Validation) {
   options = TaylorResectionOptions();
   options.angle_tolerance_rad = -1.0;
   EXPECT_FALSE(options.IsValid(&why));
-  EXPECT_EQ(ParseTaylorPartials("As-Printed"), TaylorPartials::kAsPrinted);
-  EXPECT_EQ(ParseTaylorPartials("corrected"), TaylorPartials::kCorrected);
-  EXPECT_FALSE(ParseTaylorPartials("autodiff").has_value());
-  EXPECT_STREQ(TaylorPartialsName(TaylorPartials::kAsPrinted), "as_printed");
-  EXPECT_STREQ(TaylorTerminationTypeName(TaylorTerminationType::kNoConvergence), "NO_CONVERGENCE");
+  EXPECT_EQ(ParseEnum<TaylorPartials>("As-Printed"), TaylorPartials::kAsPrinted);
+  EXPECT_EQ(ParseEnum<TaylorPartials>("corrected"), TaylorPartials::kCorrected);
+  EXPECT_FALSE(ParseEnum<TaylorPartials>("autodiff").has_value());
+  EXPECT_STREQ(EnumName(TaylorPartials::kAsPrinted), "as_printed");
+  EXPECT_STREQ(EnumName(SolverTermination::kNoConvergence), "no_convergence");
 }
 
 // ------------------------------------------------------------------ Wolf & Dewitt textbook data
@@ -518,7 +518,7 @@ TEST_F(WolfDewittTest, KappaBasinOfConvergence) {
   for (const TaylorPartials partials : {TaylorPartials::kCorrected, TaylorPartials::kAsPrinted}) {
     TaylorResectionOptions options;
     options.partials = partials;
-    std::printf("  %-10s kappa offset (deg): iterations", TaylorPartialsName(partials));
+    std::printf("  %-10s kappa offset (deg): iterations", EnumName(partials));
     for (int offset_deg = -180; offset_deg <= 180; offset_deg += 10) {
       ExteriorOrientation start = poor;
       start.parameters[5] = truth_kappa_seed + DegreesToRadians(offset_deg);
@@ -531,7 +531,7 @@ TEST_F(WolfDewittTest, KappaBasinOfConvergence) {
         std::printf(" %d:%d", offset_deg, result.summary.iterations);
       } else {
         ASSERT_FALSE(status.ok()) << offset_deg;
-        EXPECT_EQ(result.summary.termination_type, TaylorTerminationType::kFailure);
+        EXPECT_EQ(result.summary.termination_type, SolverTermination::kFailure);
         // Either a point goes behind the camera or the camera runs away: both are "diverged".
         EXPECT_NE(status.message().find("diverged"), std::string::npos) << status.message();
         EXPECT_TRUE(result.eo.parameters.array().isNaN().all());
@@ -802,7 +802,7 @@ TEST(TaylorResectionSynthetic, NoisyDataAsPrintedIsNotLeastSquares) {
 // Random poses with omega, phi in +-60 deg and kappa anywhere, noise-free, started 5 m / 3 deg off:
 // the corrected variant always converges in a few iterations. For some poses the true solution
 // repels the as-printed iteration (rate >= 1); it then does not converge, or worse, stops at a
-// spurious fixed point (A~^T F = 0 with F != 0) and reports CONVERGENCE at a wrong pose,
+// spurious fixed point (A~^T F = 0 with F != 0) and reports converged at a wrong pose,
 // recognisable only by its sigma0. Measured over these 1000 poses: rate >= 1 for 25, no convergence
 // in 50 iterations for 65, one spurious "convergence" 85 m off with sigma0 = 1101 um.
 TEST(TaylorResectionSynthetic, RandomObliquePosesAsPrintedSometimesFails) {
@@ -848,7 +848,7 @@ TEST(TaylorResectionSynthetic, RandomObliquePosesAsPrintedSometimesFails) {
       ASSERT_TRUE(
           Solve(TaylorPartials::kCorrected, scene, scene.image_um, printed.eo, &rescued).ok());
       EXPECT_LE(PositionError(rescued.eo, scene.truth), kNoiseFreePositionTolerance);
-    } else if (printed.summary.termination_type == TaylorTerminationType::kNoConvergence) {
+    } else if (printed.summary.termination_type == SolverTermination::kNoConvergence) {
       ++printed_not_converged;
     } else {
       ++printed_failed;
@@ -960,7 +960,7 @@ class TaylorResectionFailureTest : public ::testing::Test {
                             const std::vector<double>& sigmas, double focal,
                             const ExteriorOrientation& initial,
                             const TaylorResectionOptions& options = TaylorResectionOptions(),
-                            TaylorTerminationType type = TaylorTerminationType::kFailure) {
+                            SolverTermination type = SolverTermination::kFailure) {
     TaylorResectionResult result;
     const Status status = TaylorResection(options, image, ground, sigmas, focal, initial, &result);
     EXPECT_FALSE(status.ok());
@@ -1058,7 +1058,7 @@ TEST_F(TaylorResectionFailureTest, NoConvergenceWithinMaxIterations) {
   options.max_iterations = 2;
   const std::string message =
       ExpectFailure(scene_.image_um, scene_.ground_m, {}, kFocalUm, initial_, options,
-                    TaylorTerminationType::kNoConvergence);
+                    SolverTermination::kNoConvergence);
   EXPECT_NE(message.find("no convergence in 2 iterations"), std::string::npos) << message;
 }
 

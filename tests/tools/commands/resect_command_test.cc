@@ -379,7 +379,7 @@ TEST(ResectCommand, ConsoleReportAndTableShowTheSameAnglesForEveryConventionAndF
           const size_t at = line.find("omega=");
           ASSERT_NE(at, std::string::npos) << line;
           ASSERT_EQ(std::sscanf(line.c_str() + at, "omega=%lf phi=%lf kappa=%lf", &omega, &phi, &kappa), 3);
-          EXPECT_NE(line.find(std::string(" ") + RotationConventionName(*ParseRotationConvention(rotation)) + " omega="),
+          EXPECT_NE(line.find(std::string(" ") + EnumName(*ParseEnum<RotationConvention>(rotation)) + " omega="),
                     std::string::npos) << line;
           const auto& json_pose = [&]() -> const nlohmann::json& {
             for (const auto& image : report["images"])

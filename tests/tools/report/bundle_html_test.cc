@@ -62,7 +62,7 @@ TEST_F(BundleHtmlTest, PageHasTheKitHeadVerdictsPlotsAndTables) {
 }
 
 TEST_F(BundleHtmlTest, AFailedAdjustmentSaysSoFirst) {
-  result_.summary.termination = BundleTermination::kFailure;
+  result_.summary.termination = SolverTermination::kFailure;
   result_.summary.message = "the normal matrix is <singular>";
   const std::string html = BundleReportHtml(block_, result_, context_);
   const size_t failed = html.find("<b>Not adjusted:</b> the normal matrix is &lt;singular&gt;");
