@@ -53,10 +53,93 @@ double FocalPx(const SyntheticBlockOptions& o) {
   return o.focal_length_mm * 1000.0 / o.pixel_size_um;
 }
 
-struct Geometry {
-  double footprint_width_m, footprint_height_m;
-  double forward_m, side_m;
+// A rectangle on the ground relative to an image's nominal centre (m): X in [x0, x1], Y in
+// [y0, y1].
+struct GroundBox {
+  double x0 = std::numeric_limits<double>::infinity(), x1 = -x0;
+  double y0 = x0, y1 = -x0;
+  void Include(double x, double y) {
+    x0 = std::min(x0, x);
+    x1 = std::max(x1, x);
+    y0 = std::min(y0, y);
+    y1 = std::max(y1, y);
+  }
+  void Include(const GroundBox& b) {
+    Include(b.x0, b.y0);
+    Include(b.x1, b.y1);
+  }
+  void Widen(double m) {
+    x0 -= m;
+    x1 += m;
+    y0 -= m;
+    y1 += m;
+  }
 };
+
+struct Geometry {
+  double footprint_width_m, footprint_height_m;  // of a nadir image at the mean terrain
+  double forward_m, side_m;
+  GroundBox footprint;  // the nominal footprint at the mean terrain (over the lines' headings)
+  GroundBox reach;      // where a ground point an image sees can lie (jitter, tilt, relief)
+  bool rays_reach_ground = true;  // false: a tilted corner ray is too close to the horizon
+};
+
+// A corner ray must descend at least this much per unit of length (about 84 deg from the
+// vertical): flatter ones reach the ground too far away for a block.
+constexpr double kMinCornerRayDescent = 0.1;
+// Widening of a tilted image's reach, relative to its size: the corner rays are taken through a
+// centred pinhole; principal-point offsets and distortion move them by less than this.
+constexpr double kTiltedReachSlack = 0.05;
+
+bool Tilted(const SyntheticBlockOptions& o) { return !o.nominal_angles_deg.isZero(); }
+
+// The box of the four corner rays of an image with seed angles `angles_rad`, its centre `depth_m`
+// above a plane; false when a ray is too flat (kMinCornerRayDescent).
+bool CornerRaysBox(const SyntheticBlockOptions& o, double f_px, const Eigen::Vector3d& angles_rad,
+                   double depth_m, GroundBox* box) {
+  // Ray of image point (x, y) in the camera frame: (x, y, -c) (core/collinearity.h), to ground
+  // by R_camera_from_ground^T.
+  const Eigen::Matrix3d R_ground_from_camera =
+      RotationFromAngles(RotationConvention::kSeed, angles_rad).transpose();
+  for (const double sx : {-0.5, 0.5}) {
+    for (const double sy : {-0.5, 0.5}) {
+      const Eigen::Vector3d ray =
+          R_ground_from_camera *
+          Eigen::Vector3d(sx * o.image_width_px, sy * o.image_height_px, -f_px);
+      if (!(-ray.z() >= kMinCornerRayDescent * ray.norm())) return false;
+      const double t = depth_m / -ray.z();
+      box->Include(t * ray.x(), t * ray.y());
+    }
+  }
+  return true;
+}
+
+// The footprint and reach of tilted images: corner rays at the nominal angles of each heading
+// flown (kappa 0, and 180 on lines flown back), and for the reach at the nominal +- the jitter
+// per angle, from the highest and the lowest camera above the terrain.
+void TiltedFootprint(const SyntheticBlockOptions& o, Geometry* g) {
+  const double f_px = FocalPx(o);
+  const Eigen::Vector3d nominal_rad = o.nominal_angles_deg / kDegreesPerRadian;
+  const double jitter_rad = DegreesToRadians(o.attitude_jitter_deg);
+  const double vertical_slack_m = 0.5 * o.terrain_relief_m + o.position_jitter_m;
+  std::vector<double> headings = {0.0};
+  if (o.serpentine && o.num_lines > 1) headings.push_back(kPi);
+  for (const double heading : headings) {
+    const Eigen::Vector3d base = nominal_rad + Eigen::Vector3d(0.0, 0.0, heading);
+    g->rays_reach_ground &= CornerRaysBox(o, f_px, base, o.flying_height_m, &g->footprint);
+    for (int combo = 0; combo < 27; ++combo) {
+      const Eigen::Vector3d step((combo % 3) - 1, (combo / 3 % 3) - 1, (combo / 9) - 1);
+      for (const double depth :
+           {o.flying_height_m - vertical_slack_m, o.flying_height_m + vertical_slack_m}) {
+        g->rays_reach_ground &= CornerRaysBox(o, f_px, base + jitter_rad * step, depth, &g->reach);
+      }
+    }
+  }
+  if (!g->rays_reach_ground) return;
+  g->reach.Widen(o.position_jitter_m + 1.0 +
+                 kTiltedReachSlack *
+                     std::max(g->reach.x1 - g->reach.x0, g->reach.y1 - g->reach.y0));
+}
 
 Geometry FlightGeometry(const SyntheticBlockOptions& o) {
   Geometry g;
@@ -66,7 +149,29 @@ Geometry FlightGeometry(const SyntheticBlockOptions& o) {
   g.forward_m = o.forward_spacing_m > 0.0 ? o.forward_spacing_m
                                           : (1.0 - o.forward_overlap) * g.footprint_height_m;
   g.side_m = o.side_spacing_m > 0.0 ? o.side_spacing_m : (1.0 - o.side_overlap) * g.footprint_width_m;
+  if (Tilted(o)) {
+    TiltedFootprint(o, &g);
+    return g;
+  }
+  // Nadir: the footprint centred on the image; jitter, tilt and relief can move it by the margin.
+  g.footprint.Include(-0.5 * g.footprint_width_m, -0.5 * g.footprint_height_m);
+  g.footprint.Include(0.5 * g.footprint_width_m, 0.5 * g.footprint_height_m);
+  const double margin =
+      o.position_jitter_m +
+      o.flying_height_m * std::tan(DegreesToRadians(o.attitude_jitter_deg)) * 1.5 +
+      o.terrain_relief_m + 1.0;
+  g.reach = g.footprint;
+  g.reach.Widen(margin);
   return g;
+}
+
+// The control points asked: the explicit layout's, else num_control_points.
+int NumControlPoints(const SyntheticBlockOptions& o) {
+  return o.control_layout.empty() ? o.num_control_points
+                                  : static_cast<int>(o.control_layout.size());
+}
+int NumCheckPoints(const SyntheticBlockOptions& o) {
+  return o.check_layout.empty() ? o.num_check_points : static_cast<int>(o.check_layout.size());
 }
 
 BlockCamera MakeCamera(const SyntheticBlockOptions& o) {
@@ -159,18 +264,22 @@ class Flight {
   double LineX(int line) const { return o_.origin_m.x() + line * g_.side_m; }
   double ExposureY(int k) const { return o_.origin_m.y() + k * g_.forward_m; }
   bool FlownBack(int line) const { return o_.serpentine && line % 2 == 1; }
-  // Grid ranges of the images that may see ground point (x, y) (nominal centre within half a
-  // footprint plus `margin`); empty ranges when none.
-  void Candidates(double x, double y, double margin, int* line0, int* line1, int* k0,
-                  int* k1) const {
-    const double half_w = 0.5 * g_.footprint_width_m + margin;
-    const double half_h = 0.5 * g_.footprint_height_m + margin;
-    *line0 = std::max(0, static_cast<int>(std::ceil((x - half_w - o_.origin_m.x()) / g_.side_m)));
+  // Grid position of image `index`.
+  void GridPosition(int index, int* line, int* k) const {
+    *line = index / o_.images_per_line;
+    const int j = index % o_.images_per_line;
+    *k = FlownBack(*line) ? o_.images_per_line - 1 - j : j;
+  }
+  // Grid ranges of the images that may see ground point (x, y) (the point within the reach of
+  // their nominal centre); empty ranges when none.
+  void Candidates(double x, double y, int* line0, int* line1, int* k0, int* k1) const {
+    const GroundBox& r = g_.reach;
+    *line0 = std::max(0, static_cast<int>(std::ceil((x - r.x1 - o_.origin_m.x()) / g_.side_m)));
     *line1 = std::min(o_.num_lines - 1,
-                      static_cast<int>(std::floor((x + half_w - o_.origin_m.x()) / g_.side_m)));
-    *k0 = std::max(0, static_cast<int>(std::ceil((y - half_h - o_.origin_m.y()) / g_.forward_m)));
+                      static_cast<int>(std::floor((x - r.x0 - o_.origin_m.x()) / g_.side_m)));
+    *k0 = std::max(0, static_cast<int>(std::ceil((y - r.y1 - o_.origin_m.y()) / g_.forward_m)));
     *k1 = std::min(o_.images_per_line - 1,
-                   static_cast<int>(std::floor((y + half_h - o_.origin_m.y()) / g_.forward_m)));
+                   static_cast<int>(std::floor((y - r.y0 - o_.origin_m.y()) / g_.forward_m)));
   }
 
  private:
@@ -297,6 +406,15 @@ void PlaceImages(const SyntheticBlockOptions& o, const Flight& flight, Block* bl
                               random.Uniform(-jitter_rad, jitter_rad),
                               WrapAngle((flight.FlownBack(line) ? kPi : 0.0) +
                                         random.Uniform(-jitter_rad, jitter_rad))});
+      // Tilts draw nothing: the poses' stream is the same with or without them.
+      Eigen::Vector3d tilt_deg = o.nominal_angles_deg;
+      for (const auto& [image, extra_deg] : o.extra_angles_deg)
+        if (image == index) tilt_deg += extra_deg;
+      if (!tilt_deg.isZero()) {
+        Eigen::Vector3d angles = eo.angles_seed_rad() + tilt_deg / kDegreesPerRadian;
+        angles.z() = WrapAngle(angles.z());
+        eo.set_angles_seed_rad(angles);
+      }
       t->eo[index] = eo;
       BlockImage& image = block->images[index];
       image.name = Numbered("L", line + 1, line_digits) + Numbered("_", j + 1, image_digits);
@@ -306,29 +424,29 @@ void PlaceImages(const SyntheticBlockOptions& o, const Flight& flight, Block* bl
 }
 
 // The true views of ground points: the candidate images of the flight grid whose frame a point
-// projects into.
+// projects into, then the images with extra angles outside those candidates.
 class ViewFinder {
  public:
   ViewFinder(const SyntheticBlockOptions& o, const Flight& flight, const Projector& projector,
              const std::vector<ExteriorOrientation>& eo)
-      : flight_(flight),
-        projector_(projector),
-        eo_(eo),
-        // Jitter, tilt and relief can move a footprint by this much (m).
-        margin_(o.position_jitter_m +
-                o.flying_height_m * std::tan(DegreesToRadians(o.attitude_jitter_deg)) * 1.5 +
-                o.terrain_relief_m + 1.0) {}
+      : flight_(flight), projector_(projector), eo_(eo) {
+    for (const auto& extra : o.extra_angles_deg) extra_images_.push_back(extra.first);
+    std::sort(extra_images_.begin(), extra_images_.end());
+    extra_images_.erase(std::unique(extra_images_.begin(), extra_images_.end()),
+                        extra_images_.end());
+  }
   // Finds the views of ground point X (index point_index); returns their number.
   int Look(const Eigen::Vector3d& X, int point_index) {
     views_.clear();
     int l0, l1, k0, k1;
-    flight_.Candidates(X.x(), X.y(), margin_, &l0, &l1, &k0, &k1);
+    flight_.Candidates(X.x(), X.y(), &l0, &l1, &k0, &k1);
     for (int line = l0; line <= l1; ++line) {
-      for (int k = k0; k <= k1; ++k) {
-        const int image = flight_.Image(line, k);
-        Eigen::Vector2d pixel;
-        if (projector_.Pixel(eo_[image], X, &pixel)) views_.push_back({image, point_index, pixel});
-      }
+      for (int k = k0; k <= k1; ++k) TryImage(flight_.Image(line, k), X, point_index);
+    }
+    for (const int image : extra_images_) {
+      int line, k;
+      flight_.GridPosition(image, &line, &k);
+      if (line < l0 || line > l1 || k < k0 || k > k1) TryImage(image, X, point_index);
     }
     return static_cast<int>(views_.size());
   }
@@ -336,20 +454,33 @@ class ViewFinder {
   const std::vector<View>& views() const { return views_; }
 
  private:
+  void TryImage(int image, const Eigen::Vector3d& X, int point_index) {
+    Eigen::Vector2d pixel;
+    if (projector_.Pixel(eo_[image], X, &pixel)) views_.push_back({image, point_index, pixel});
+  }
+
   const Flight& flight_;
   const Projector& projector_;
   const std::vector<ExteriorOrientation>& eo_;
-  const double margin_;
+  std::vector<int> extra_images_;  // sorted, distinct
   std::vector<View> views_;
 };
 
-// The rectangle control and check points are placed on: the image centres' (on one line or one
-// exposure per line: the middle half of the footprint across it).
+// A rectangle on the ground (m): low corner and size.
 struct SurveyRectangle {
   double x0, y0, span_x, span_y;
 };
 
+// The rectangle the nominal footprints cover at the mean terrain: where tie points are drawn.
+SurveyRectangle CoveredArea(const SyntheticBlockOptions& o, const Geometry& g) {
+  return {o.origin_m.x() + g.footprint.x0, o.origin_m.y() + g.footprint.y0,
+          (o.num_lines - 1) * g.side_m + (g.footprint.x1 - g.footprint.x0),
+          (o.images_per_line - 1) * g.forward_m + (g.footprint.y1 - g.footprint.y0)};
+}
+
+// The rectangle control and check points are placed on (SyntheticBlockOptions::survey_area).
 SurveyRectangle SurveyedArea(const SyntheticBlockOptions& o, const Geometry& g) {
+  if (o.survey_area == SyntheticBlockOptions::SurveyArea::kFootprints) return CoveredArea(o, g);
   SurveyRectangle r{o.origin_m.x(), o.origin_m.y(), (o.num_lines - 1) * g.side_m,
                     (o.images_per_line - 1) * g.forward_m};
   if (r.span_x <= 0.0) {
@@ -363,9 +494,10 @@ SurveyRectangle SurveyedArea(const SyntheticBlockOptions& o, const Geometry& g) 
   return r;
 }
 
-// Control points at ControlLayout() (then uniform), check points one per cell of a grid as square
-// as the rectangle allows (cells chosen at random when there are more cells than points, inset by
-// 5% of a cell); every one must be seen by an image.
+// Control points at the explicit layout, else at ControlLayout() (then uniform); check points at
+// theirs, else one per cell of a grid as square as the rectangle allows (cells chosen at random
+// when there are more cells than points, inset by 5% of a cell); every one must be seen by an
+// image.
 Status PlaceSurveyedPoints(const SyntheticBlockOptions& o, const Geometry& g,
                            const Terrain& terrain, ViewFinder* finder, Block* block,
                            SyntheticBlockTruth* t, std::vector<View>* views) {
@@ -379,15 +511,23 @@ Status PlaceSurveyedPoints(const SyntheticBlockOptions& o, const Geometry& g,
     block->points.push_back(point);
     t->points_m.emplace_back(x, y, terrain.Height(x, y));
   };
-  const int control_digits = std::max(3, Digits(o.num_control_points));
-  for (int c = 0; c < o.num_control_points; ++c) {
-    const Eigen::Vector2d unit = c < static_cast<int>(ControlLayout().size())
+  const int num_control = NumControlPoints(o);
+  const int control_digits = std::max(3, Digits(num_control));
+  for (int c = 0; c < num_control; ++c) {
+    const Eigen::Vector2d unit = !o.control_layout.empty() ? o.control_layout[c]
+                                 : c < static_cast<int>(ControlLayout().size())
                                      ? ControlLayout()[c]
                                      : Eigen::Vector2d(random.Uniform01(), random.Uniform01());
     add(Numbered("C", c + 1, control_digits), PointRole::kControl, unit.x(), unit.y());
   }
   const int n = o.num_check_points;
-  if (n > 0) {
+  if (!o.check_layout.empty()) {
+    const int check_digits = std::max(3, Digits(NumCheckPoints(o)));
+    for (int c = 0; c < NumCheckPoints(o); ++c) {
+      add(Numbered("K", c + 1, check_digits), PointRole::kCheck, o.check_layout[c].x(),
+          o.check_layout[c].y());
+    }
+  } else if (n > 0) {
     const int gx = std::max(1, static_cast<int>(std::round(std::sqrt(n * r.span_x / r.span_y))));
     const int gy = (n + gx - 1) / gx;
     std::vector<int> cells(static_cast<size_t>(gx) * gy);
@@ -415,10 +555,11 @@ Status PlaceSurveyedPoints(const SyntheticBlockOptions& o, const Geometry& g,
 Status PlaceTiePoints(const SyntheticBlockOptions& o, const Geometry& g, const Terrain& terrain,
                       ViewFinder* finder, Block* block, SyntheticBlockTruth* t,
                       std::vector<View>* views) {
-  const double left = o.origin_m.x() - 0.5 * g.footprint_width_m;
-  const double bottom = o.origin_m.y() - 0.5 * g.footprint_height_m;
-  const double width = (o.num_lines - 1) * g.side_m + g.footprint_width_m;
-  const double height = (o.images_per_line - 1) * g.forward_m + g.footprint_height_m;
+  const SurveyRectangle covered = CoveredArea(o, g);
+  const double left = covered.x0, bottom = covered.y0;
+  const double width = covered.span_x, height = covered.span_y;
+  t->covered_low_m = {left, bottom};
+  t->covered_size_m = {width, height};
   t->covered_area_m2 = width * height;
   const bool by_count = o.num_tie_points > 0;
   const long long candidates = by_count
@@ -552,7 +693,7 @@ Status AddBlunders(const SyntheticBlockOptions& o, const Projector& projector, B
     }
   }
   if (o.num_control_blunders > 0) {
-    std::vector<int> control(o.num_control_points);
+    std::vector<int> control(NumControlPoints(o));
     std::iota(control.begin(), control.end(), 0);  // control points come first
     t->blunder_control_points = Choose(std::move(control), o.num_control_blunders, &random);
     for (const int p : t->blunder_control_points)
@@ -624,6 +765,11 @@ Status SyntheticBlockOptions::IsValid() const {
   if (!NonNegative(position_jitter_m)) return Invalid("position_jitter_m must be >= 0");
   if (!(NonNegative(attitude_jitter_deg) && attitude_jitter_deg < 30.0))
     return Invalid("attitude_jitter_deg must be in [0, 30)");
+  if (!nominal_angles_deg.allFinite()) return Invalid("nominal_angles_deg must be finite");
+  for (const auto& [image, extra_deg] : extra_angles_deg) {
+    if (image < 0 || image >= num_images || !extra_deg.allFinite())
+      return Invalid("extra_angles_deg: image indices in [0, number of images), finite angles");
+  }
   if (!std::isfinite(ground_height_m)) return Invalid("ground_height_m must be finite");
   if (!(NonNegative(terrain_relief_m) &&
         0.5 * terrain_relief_m + position_jitter_m < 0.5 * flying_height_m))
@@ -646,6 +792,11 @@ Status SyntheticBlockOptions::IsValid() const {
   const Geometry g = FlightGeometry(*this);
   if (!Positive(g.forward_m) || !Positive(g.side_m))
     return Invalid("the spacings derived from the overlaps must be > 0");
+  if (!g.rays_reach_ground) {
+    return Invalid(
+        "nominal_angles_deg (with the attitude jitter) tilts an image corner's ray to within 6 deg "
+        "of the horizon");
+  }
   if (num_tie_points < 0 || num_tie_points > kMaxIndex)
     return Invalid("num_tie_points must be in [0, " + std::to_string(kMaxIndex) + "]");
   if (!NonNegative(tie_point_density_per_m2))
@@ -653,6 +804,12 @@ Status SyntheticBlockOptions::IsValid() const {
   if (min_tie_views < 1) return Invalid("min_tie_views must be >= 1");
   if (num_control_points < 0 || num_check_points < 0)
     return Invalid("the control and check point counts must be >= 0");
+  for (const auto* layout : {&control_layout, &check_layout}) {
+    for (const Eigen::Vector2d& at : *layout) {
+      if (!(at.minCoeff() >= 0.0 && at.maxCoeff() <= 1.0))
+        return Invalid("control_layout and check_layout fractions must be in [0, 1]");
+    }
+  }
   if (!NonNegative(control_sigma_m) || !NonNegative(control_accuracy_m))
     return Invalid("control_sigma_m and control_accuracy_m must be >= 0");
   if (!NonNegative(mark_sigma_px) || !NonNegative(mark_accuracy_px))
@@ -665,7 +822,7 @@ Status SyntheticBlockOptions::IsValid() const {
     return Invalid("attitude_sigma_deg and attitude_accuracy_deg must be >= 0");
   if (num_tie_blunders < 0 || !NonNegative(tie_blunder_px))
     return Invalid("num_tie_blunders and tie_blunder_px must be >= 0");
-  if (num_control_blunders < 0 || num_control_blunders > num_control_points ||
+  if (num_control_blunders < 0 || num_control_blunders > NumControlPoints(*this) ||
       !NonNegative(control_blunder_m))
     return Invalid("num_control_blunders must be in [0, num_control_points], control_blunder_m >= 0");
   if (num_gnss_blunders < 0 || num_gnss_blunders > num_images || !NonNegative(gnss_blunder_m))
@@ -676,16 +833,16 @@ Status SyntheticBlockOptions::IsValid() const {
     return Invalid("the start errors must be >= 0");
 
   // Sizes, in floating point (no overflow): points and marks must fit 32-bit indices.
-  const double width_m = (num_lines - 1) * g.side_m + g.footprint_width_m;
-  const double height_m = (images_per_line - 1) * g.forward_m + g.footprint_height_m;
-  const double candidates = num_tie_points > 0 ? static_cast<double>(num_tie_points)
-                                               : tie_point_density_per_m2 * width_m * height_m;
-  const double points =
-      candidates + static_cast<double>(num_control_points) + static_cast<double>(num_check_points);
+  const SurveyRectangle covered = CoveredArea(*this, g);
+  const double candidates = num_tie_points > 0
+                                ? static_cast<double>(num_tie_points)
+                                : tie_point_density_per_m2 * covered.span_x * covered.span_y;
+  const double points = candidates + static_cast<double>(NumControlPoints(*this)) +
+                        static_cast<double>(NumCheckPoints(*this));
   const double views = std::min(static_cast<double>(num_lines),
-                                g.footprint_width_m / g.side_m + 1.0) *
+                                (g.footprint.x1 - g.footprint.x0) / g.side_m + 1.0) *
                        std::min(static_cast<double>(images_per_line),
-                                g.footprint_height_m / g.forward_m + 1.0);
+                                (g.footprint.y1 - g.footprint.y0) / g.forward_m + 1.0);
   if (!(points <= static_cast<double>(kMaxIndex)) ||
       !(points * views <= static_cast<double>(kMaxIndex))) {
     return Invalid("the block would have about " + std::to_string(points) + " points and " +

@@ -10,7 +10,10 @@
 // first image centre; lines are flown alternately north and south (kappa 0 and 180 deg) unless
 // `serpentine` is false. The image width lies across the lines and the height along them: a
 // nadir image with seed angles (0, 0, 0) has film x east and film y north. Ground footprint of an
-// image: width_px / f_px x height_px / f_px times the flying height.
+// image: width_px / f_px x height_px / f_px times the flying height. Oblique blocks
+// (nominal_angles_deg): the footprints move and widen, and the tie-point rectangle and the search
+// for views follow them; images tilted on their own (extra_angles_deg) are searched apart. These
+// options draw no random numbers: left at their defaults they change nothing, bit for bit.
 //
 // Reproducible: the same options and seed give the same block, bit for bit, with any standard
 // library (core/simulation/portable_random.h); each kind of draw has its own random stream, so that e.g.
@@ -23,6 +26,7 @@
 #include <Eigen/Core>
 #include <cstdint>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "core/block.h"
@@ -48,6 +52,14 @@ struct SyntheticBlockOptions {
   bool serpentine = true;           // alternate lines flown back (kappa 180 deg)
   double position_jitter_m = 1.0;   // true centres: nominal + uniform in +- this, per axis (m)
   double attitude_jitter_deg = 2.0; // true omega, phi, kappa: nominal + uniform in +- this (deg)
+  // Oblique blocks: added to every image's seed angles omega, phi, kappa (deg), a camera tilted in
+  // the aircraft (so on lines flown back it looks the other way). The optical axis then makes
+  // acos(cos omega cos phi) with the vertical; the corner rays must stay below the horizon.
+  Eigen::Vector3d nominal_angles_deg{0.0, 0.0, 0.0};
+  // Extra seed angles (deg) for chosen images (index in the block, i.e. in flight order), on top
+  // of the nominal ones and the jitter: e.g. one oblique image in a nadir block. Every image with
+  // extra angles is looked at for every point, wherever its footprint went.
+  std::vector<std::pair<int, Eigen::Vector3d>> extra_angles_deg;
 
   // ---- terrain: Z = ground_height_m + relief / 2 * h(X, Y), h smooth with |h| <= 1 (hills a
   // few hundred metres across, phases from the seed)
@@ -72,6 +84,17 @@ struct SyntheticBlockOptions {
   int min_tie_views = 2;            // a tie point is kept only when seen in this many images
   int num_control_points = 8;       // corners first, then edge midpoints, centre, interior
   int num_check_points = 6;         // spread over the block (one per cell of a grid)
+  // Explicit layouts: control / check points at these fractions (0..1 in X and Y) of the survey
+  // area, in this order, in place of num_control_points / num_check_points and their default
+  // layouts (when not empty).
+  std::vector<Eigen::Vector2d> control_layout;
+  std::vector<Eigen::Vector2d> check_layout;
+  // The rectangle control and check points are laid out on: the image centres' (on one line or
+  // one exposure per line: the middle half of the footprint across it), or the union of the
+  // nominal footprints at the mean terrain (the tie-point area), for oblique blocks whose images
+  // look away from their centres.
+  enum class SurveyArea { kImageCentres, kFootprints };
+  SurveyArea survey_area = SurveyArea::kImageCentres;
   double control_sigma_m = 0.0;     // Gaussian error of surveyed control/check coordinates (m)
   double control_accuracy_m = 0.0;  // stated AccuracyX/Y/Z of control/check points (m); 0: the
                                     // sigma, left unset when that is 0 too (adjustment default)
@@ -123,9 +146,13 @@ struct SyntheticBlockTruth {
   // Derived geometry, for reports.
   double forward_spacing_m = 0.0;            // as used
   double side_spacing_m = 0.0;
-  double footprint_width_m = 0.0;            // across the lines, at the mean terrain
-  double footprint_height_m = 0.0;           // along the lines
-  double covered_area_m2 = 0.0;              // the rectangle the footprints cover
+  double footprint_width_m = 0.0;            // across the lines, at the mean terrain (nadir)
+  double footprint_height_m = 0.0;           // along the lines (nadir)
+  // The rectangle the nominal footprints cover at the mean terrain (nominal angles, no jitter;
+  // the tie points are drawn in it): X, Y of its low corner and its size (m).
+  Eigen::Vector2d covered_low_m{0.0, 0.0};
+  Eigen::Vector2d covered_size_m{0.0, 0.0};
+  double covered_area_m2 = 0.0;              // its area
 };
 
 // Where WriteSyntheticBlockTruth writes the truth; an empty path leaves that file out.

@@ -13,6 +13,8 @@
 #include <benchmark/benchmark.h>
 
 #include <cmath>
+#include <cstdio>
+#include <cstdlib>
 #include <functional>
 #include <map>
 #include <utility>
@@ -20,28 +22,50 @@
 
 #include "solvers/bundle/bundle_adjustment.h"
 #include "solvers/bundle/taylor_bundle.h"
-#include "tests/block_fixture.h"
+#include "core/simulation/synthetic_block.h"
 
 namespace photopose {
 namespace {
 
-// Block sizes: strips x images per strip, tie-point grid (points per side).
+// Block sizes: lines x images per line, tie points.
 struct BlockSize {
-  int strips, images_per_strip, tie_grid;
+  int lines, images_per_line, tie_points;
 };
-const BlockSize kBlockSizes[] = {{3, 4, 12}, {6, 10, 40}, {10, 15, 70}};
+const BlockSize kBlockSizes[] = {{3, 4, 144}, {6, 10, 1600}, {10, 15, 4900}};
 
-const testing::FixtureBlock& BenchBlock(int size_index) {
-  static std::map<int, testing::FixtureBlock> cache;
+// A simulated block and its truth.
+struct BenchData {
+  Block block;
+  SyntheticBlockTruth truth;
+};
+
+// The generator's nadir block (core/simulation/synthetic_block.h: 24 mm / 4 um / 6000 x 4000 at
+// 100 m over 10 m of relief, lines flown alternately, 1 m / 2 deg jitter, its perturbed start) at
+// 20 m forward and 30 m side spacing; five control points (the corners and the centre of the
+// camera-centre rectangle, 5 mm) and two check points; 0.5 px marks, 3 cm GNSS.
+const BenchData& BenchBlock(int size_index) {
+  static std::map<int, BenchData> cache;
   auto found = cache.find(size_index);
   if (found != cache.end()) return found->second;
-  testing::FixtureBlockOptions o;
-  o.strips = kBlockSizes[size_index].strips;
-  o.images_per_strip = kBlockSizes[size_index].images_per_strip;
-  o.tie_grid = kBlockSizes[size_index].tie_grid;
-  o.control_at = {{0, 0}, {1, 0}, {0, 1}, {1, 1}, {0.5, 0.5}};
+  SyntheticBlockOptions o;
   o.seed = 2026;
-  return cache.emplace(size_index, testing::MakeFixtureBlock(o)).first->second;
+  o.num_lines = kBlockSizes[size_index].lines;
+  o.images_per_line = kBlockSizes[size_index].images_per_line;
+  o.num_tie_points = kBlockSizes[size_index].tie_points;
+  o.forward_spacing_m = 20.0;
+  o.side_spacing_m = 30.0;
+  o.control_layout = {{0, 0}, {1, 0}, {0, 1}, {1, 1}, {0.5, 0.5}};
+  o.num_check_points = 2;
+  o.control_sigma_m = 0.005;
+  o.mark_sigma_px = 0.5;
+  o.gnss_sigma_m = Eigen::Vector3d::Constant(0.03);
+  BenchData data;
+  const Status status = MakeSyntheticBlock(o, &data.block, &data.truth);
+  if (!status.ok()) {
+    std::fprintf(stderr, "bundle benchmark: %s\n", status.message().c_str());
+    std::abort();
+  }
+  return cache.emplace(size_index, std::move(data)).first->second;
 }
 
 // Per-iteration timing from a progress callback's elapsed times.
@@ -55,10 +79,10 @@ struct IterationClock {
   }
 };
 
-double CentreRmseMm(const testing::FixtureBlock& data, const Block& adjusted) {
+double CentreRmseMm(const BenchData& data, const Block& adjusted) {
   double ssq = 0.0;
   for (size_t i = 0; i < adjusted.images.size(); ++i)
-    ssq += (adjusted.images[i].eo->center_in_ground() - data.true_eo[i].center_in_ground())
+    ssq += (adjusted.images[i].eo->center_in_ground() - data.truth.eo[i].center_in_ground())
                .squaredNorm();
   return 1e3 * std::sqrt(ssq / adjusted.images.size());
 }
@@ -66,7 +90,7 @@ double CentreRmseMm(const testing::FixtureBlock& data, const Block& adjusted) {
 // Times `adjust(block, progress) -> (iterations, converged)` on fresh copies of the block; the
 // copy is outside the timing.
 template <typename Adjust>
-void TimeAdjustment(benchmark::State& state, const testing::FixtureBlock& data, Adjust adjust) {
+void TimeAdjustment(benchmark::State& state, const BenchData& data, Adjust adjust) {
   IterationClock clock;
   const std::function<void(const BundleIterationInfo&)> progress =
       [&clock](const BundleIterationInfo& info) { clock.Add(info); };
@@ -92,7 +116,7 @@ void TimeAdjustment(benchmark::State& state, const testing::FixtureBlock& data, 
 }
 
 void BM_BundleTaylor(benchmark::State& state, TaylorPartials partials) {
-  const testing::FixtureBlock& data = BenchBlock(static_cast<int>(state.range(0)));
+  const BenchData& data = BenchBlock(static_cast<int>(state.range(0)));
   TaylorBundleOptions options;
   options.partials = partials;
   options.rejection_threshold = 0.0;
@@ -101,8 +125,9 @@ void BM_BundleTaylor(benchmark::State& state, TaylorPartials partials) {
   TaylorBundleResult result;
   TimeAdjustment(state, data, [&](Block* block, const auto& progress) {
     options.progress = progress;
-    TaylorBundleAdjust(options, BundleAdjustmentConfig(), block, &result);
-    return std::make_pair(result.summary.iterations, result.summary.IsSolutionUsable());
+    const Status adjusted = TaylorBundleAdjust(options, BundleAdjustmentConfig(), block, &result);
+    return std::make_pair(result.summary.iterations,
+                          adjusted.ok() && result.summary.IsSolutionUsable());
   });
 }
 BENCHMARK_CAPTURE(BM_BundleTaylor, corrected, TaylorPartials::kCorrected)
@@ -113,7 +138,7 @@ BENCHMARK_CAPTURE(BM_BundleTaylor, as_printed, TaylorPartials::kAsPrinted)
     ->Unit(benchmark::kMillisecond);
 
 void BM_BundleCeres(benchmark::State& state, JacobianType jacobian, int threads) {
-  const testing::FixtureBlock& data = BenchBlock(static_cast<int>(state.range(0)));
+  const BenchData& data = BenchBlock(static_cast<int>(state.range(0)));
   BundleAdjustmentOptions options;
   options.jacobian = jacobian;
   options.num_threads = threads;
@@ -122,8 +147,9 @@ void BM_BundleCeres(benchmark::State& state, JacobianType jacobian, int threads)
   BundleAdjustmentResult result;
   TimeAdjustment(state, data, [&](Block* block, const auto& progress) {
     options.progress = progress;
-    BundleAdjust(options, BundleAdjustmentConfig(), block, &result);
-    return std::make_pair(result.summary.iterations, result.summary.IsSolutionUsable());
+    const Status adjusted = BundleAdjust(options, BundleAdjustmentConfig(), block, &result);
+    return std::make_pair(result.summary.iterations,
+                          adjusted.ok() && result.summary.IsSolutionUsable());
   });
 }
 BENCHMARK_CAPTURE(BM_BundleCeres, analytic, JacobianType::kAnalytic, 1)

@@ -2,6 +2,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <random>
 #include <set>
@@ -13,6 +14,7 @@
 #include "core/simulation/portable_random.h"
 #include "core/io/csv.h"
 #include "core/io/tables.h"
+#include "core/rotation.h"
 #include "tests/support/block_expect.h"
 #include "tests/support/temp_dir.h"
 
@@ -297,6 +299,202 @@ TEST(SyntheticBlock, IssueTenGeometryGivesItsSizes) {
   EXPECT_LT(marks_per_point, 3.0 * 6.2);
 }
 
+// ------------------------------------------------------------------ oblique blocks, layouts
+
+// The angle (deg) between an image's optical axis and the vertical: the camera's -z axis in the
+// ground is R_camera_from_ground^T (0, 0, -1).
+double OffNadirDeg(const ExteriorOrientation& eo) {
+  const Eigen::Matrix3d R = RotationFromAngles(RotationConvention::kSeed, eo.angles_seed_rad());
+  const Eigen::Vector3d axis = R.transpose() * Eigen::Vector3d(0.0, 0.0, -1.0);
+  return std::acos(std::clamp(-axis.z(), -1.0, 1.0)) * kDegreesPerRadian;
+}
+
+// Whether point p projects inside image i's frame (the generator's own test of a view, done
+// here for every image and point, without the flight grid's candidates).
+bool InFrame(const Block& block, const SyntheticBlockTruth& truth, int i, int p) {
+  const BlockCamera& camera = block.cameras[block.images[i].camera];
+  double ab[2];
+  Eigen::Vector2d film, pixel;
+  if (!ProjectToNormalized(truth.eo[i].data(), truth.points_m[p].data(), ab)) return false;
+  if (!ObservationFromNormalized(camera.model, camera.params.data(), camera.data(), {ab[0], ab[1]},
+                                 &film)
+           .ok() ||
+      !PixelFromFilm(camera.table, film, PixelOrigin::kCorner, &pixel).ok())
+    return false;
+  return pixel.x() >= 0.0 && pixel.y() >= 0.0 && pixel.x() <= camera.table.n_columns &&
+         pixel.y() <= camera.table.n_rows;
+}
+
+// Every view of every point was found: each point has a mark in exactly the images whose frame
+// it projects into.
+void ExpectEveryViewFound(const Block& block, const SyntheticBlockTruth& truth) {
+  int missed = 0, extra = 0;
+  for (size_t p = 0; p < block.points.size(); ++p) {
+    std::set<int> marked;
+    for (const int m : block.marks_of_point[p]) marked.insert(block.marks[m].image);
+    for (size_t i = 0; i < block.images.size(); ++i) {
+      const bool seen = InFrame(block, truth, static_cast<int>(i), static_cast<int>(p));
+      missed += seen && !marked.count(static_cast<int>(i));
+      extra += !seen && marked.count(static_cast<int>(i));
+    }
+  }
+  EXPECT_EQ(missed, 0);
+  EXPECT_EQ(extra, 0);
+}
+
+// A block looking obliquely: 35 and 55 deg in omega, with and without attitude jitter and
+// serpentine lines.
+TEST(SyntheticBlock, NominalTiltIsAppliedAndItsFootprintsCovered) {
+  for (const double tilt_deg : {35.0, 55.0}) {
+    for (const bool jitter : {false, true}) {
+      SCOPED_TRACE(std::to_string(tilt_deg) + (jitter ? " deg, jittered" : " deg"));
+      SyntheticBlockOptions o = SmallOptions();
+      o.num_tie_points = 300;
+      o.mark_sigma_px = 0.0;
+      o.nominal_angles_deg = Eigen::Vector3d(tilt_deg, 0.0, 0.0);
+      // At 55 deg the images see the ground 75 to 340 m ahead (lines flown north look south and
+      // the others north): the centre rectangle's corners and the middle of the covered one are
+      // seen by none, so the surveyed points go inside the footprints, in the two bands.
+      o.survey_area = SyntheticBlockOptions::SurveyArea::kFootprints;
+      o.control_layout = {{0.25, 0.25}, {0.75, 0.25}, {0.25, 0.75}, {0.75, 0.75}};
+      o.check_layout = {{0.5, 0.2}, {0.5, 0.8}};
+      if (!jitter) {
+        o.attitude_jitter_deg = 0.0;
+        o.position_jitter_m = 0.0;
+      }
+      Block block;
+      SyntheticBlockTruth truth;
+      const Status status = MakeSyntheticBlock(o, &block, &truth);
+      ASSERT_TRUE(status.ok()) << status.message();
+      // The optical axes make the stated angle with the vertical (kappa, 0 or 180 deg on lines
+      // flown back, does not change it); the jitter of +- 2 deg per angle moves it by less than
+      // 2 sqrt(2) deg.
+      for (const ExteriorOrientation& eo : truth.eo)
+        EXPECT_NEAR(OffNadirDeg(eo), tilt_deg, jitter ? 2.0 * std::sqrt(2.0) : 1e-9);
+      // The tie points: all asked for, over the covered rectangle, each seen twice or more, and
+      // every view of every point found by the flight grid's candidates.
+      int ties = 0;
+      for (size_t p = 0; p < block.points.size(); ++p) {
+        if (block.points[p].role != PointRole::kTie) continue;
+        ++ties;
+        EXPECT_GE(block.marks_of_point[p].size(), 2u);
+        const Eigen::Vector2d u =
+            (truth.points_m[p].head<2>() - truth.covered_low_m).cwiseQuotient(truth.covered_size_m);
+        EXPECT_TRUE(u.minCoeff() >= 0.0 && u.maxCoeff() <= 1.0) << block.points[p].id;
+      }
+      EXPECT_EQ(ties, o.num_tie_points);
+      ExpectEveryViewFound(block, truth);
+      if (jitter) continue;
+      // Without jitter the covered rectangle is the union of the footprints at the mean terrain:
+      // every corner ray meets that plane inside it, and the rectangle touches those points.
+      const Eigen::Vector2d low = truth.covered_low_m, high = low + truth.covered_size_m;
+      Eigen::Vector2d corner_low = Eigen::Vector2d::Constant(1e300), corner_high = -corner_low;
+      for (const ExteriorOrientation& eo : truth.eo) {
+        for (const Eigen::Vector2d pixel :
+             {Eigen::Vector2d(0, 0), Eigen::Vector2d(o.image_width_px, 0),
+              Eigen::Vector2d(0, o.image_height_px),
+              Eigen::Vector2d(o.image_width_px, o.image_height_px)}) {
+          Eigen::Vector3d ground;
+          ASSERT_TRUE(IntersectRayWithPlane(block.cameras[0].table, eo, pixel, PixelOrigin::kCorner,
+                                            o.ground_height_m, &ground)
+                          .ok());
+          corner_low = corner_low.cwiseMin(ground.head<2>());
+          corner_high = corner_high.cwiseMax(ground.head<2>());
+        }
+      }
+      EXPECT_LT((corner_low - low).cwiseAbs().maxCoeff(), 1e-6);
+      EXPECT_LT((corner_high - high).cwiseAbs().maxCoeff(), 1e-6);
+      // The tilt moves the footprints along the lines by about H tan(tilt) (serpentine: both ways).
+      EXPECT_GT(truth.covered_size_m.y() - (o.images_per_line - 1) * truth.forward_spacing_m,
+                2.0 * o.flying_height_m * std::tan(DegreesToRadians(tilt_deg)));
+    }
+  }
+}
+
+TEST(SyntheticBlock, ExtraAnglesTiltOnlyTheChosenImages) {
+  SyntheticBlockOptions o = SmallOptions();
+  o.attitude_jitter_deg = 0.0;
+  o.mark_sigma_px = 0.0;
+  Block level, block;
+  SyntheticBlockTruth level_truth, truth;
+  ASSERT_TRUE(MakeSyntheticBlock(o, &level, &level_truth).ok());
+  const int chosen = o.images_per_line + 2;
+  o.extra_angles_deg = {{chosen, Eigen::Vector3d(30.0, 0.0, 0.0)},
+                        {chosen, Eigen::Vector3d(0.0, 10.0, 0.0)}};  // both are added
+  ASSERT_TRUE(MakeSyntheticBlock(o, &block, &truth).ok());
+  for (size_t i = 0; i < truth.eo.size(); ++i) {
+    // Centres as they were (the tilt draws nothing); angles only of the chosen image.
+    EXPECT_EQ(truth.eo[i].center_in_ground(), level_truth.eo[i].center_in_ground());
+    if (static_cast<int>(i) != chosen) {
+      EXPECT_EQ(truth.eo[i].parameters, level_truth.eo[i].parameters);
+      EXPECT_NEAR(OffNadirDeg(truth.eo[i]), 0.0, 1e-6);
+    }
+  }
+  EXPECT_NEAR(OffNadirDeg(truth.eo[chosen]),
+              std::acos(std::cos(DegreesToRadians(30.0)) * std::cos(DegreesToRadians(10.0))) *
+                  kDegreesPerRadian,
+              1e-9);
+  // Its footprint went 58 m away from its centre, beyond the neighbours' reach: its views are
+  // found all the same.
+  EXPECT_GT(block.marks_of_image[chosen].size(), 20u);
+  ExpectEveryViewFound(block, truth);
+}
+
+TEST(SyntheticBlock, ExplicitLayoutsInTheCentreRectangleOrTheFootprints) {
+  const std::vector<Eigen::Vector2d> control = {{0.2, 0.2}, {0.8, 0.2}, {0.2, 0.8}, {0.8, 0.8},
+                                                {0.5, 0.5}};
+  const std::vector<Eigen::Vector2d> check = {{0.35, 0.65}, {0.65, 0.35}};
+  for (const bool oblique : {false, true}) {
+    SCOPED_TRACE(oblique ? "oblique 35 deg, in the footprints" : "nadir, centre rectangle");
+    SyntheticBlockOptions o = SmallOptions();
+    o.control_layout = control;
+    o.check_layout = check;
+    o.num_control_blunders = 5;  // counted on the layout, not num_control_points
+    if (oblique) {
+      o.nominal_angles_deg = Eigen::Vector3d(35.0, 0.0, 0.0);
+      o.survey_area = SyntheticBlockOptions::SurveyArea::kFootprints;
+    }
+    Block block;
+    SyntheticBlockTruth truth;
+    const Status status = MakeSyntheticBlock(o, &block, &truth);
+    ASSERT_TRUE(status.ok()) << status.message();
+    const Eigen::Vector2d low =
+        oblique ? truth.covered_low_m : Eigen::Vector2d(o.origin_m.x(), o.origin_m.y());
+    const Eigen::Vector2d size =
+        oblique ? truth.covered_size_m
+                : Eigen::Vector2d((o.num_lines - 1) * truth.side_spacing_m,
+                                  (o.images_per_line - 1) * truth.forward_spacing_m);
+    const size_t n = control.size() + check.size();
+    ASSERT_GE(block.points.size(), n);
+    for (size_t p = 0; p < n; ++p) {
+      const bool is_control = p < control.size();
+      const Eigen::Vector2d at = is_control ? control[p] : check[p - control.size()];
+      EXPECT_EQ(block.points[p].role, is_control ? PointRole::kControl : PointRole::kCheck);
+      const size_t number = is_control ? p + 1 : p + 1 - control.size();
+      EXPECT_EQ(block.points[p].id, (is_control ? "C00" : "K00") + std::to_string(number));
+      EXPECT_LT((truth.points_m[p].head<2>() - (low + at.cwiseProduct(size))).norm(), 1e-6);
+      // Inside the footprints: seen by an image (the oblique ones see the ground 30 to 135 m from
+      // their centres).
+      EXPECT_GE(block.marks_of_point[p].size(), 1u) << block.points[p].id;
+    }
+    EXPECT_EQ(truth.blunder_control_points.size(), control.size());
+  }
+}
+
+TEST(SyntheticBlock, LayoutOfTheDefaultPointsGivesTheDefaultBlock) {
+  // The explicit layout of the default's first four control points draws nothing that the
+  // default does not: the same block, bit for bit.
+  SyntheticBlockOptions o = SmallOptions();
+  o.num_control_points = 4;
+  SyntheticBlockOptions explicit_layout = o;
+  explicit_layout.num_control_points = 0;  // ignored once a layout is given
+  explicit_layout.control_layout = {{0, 0}, {1, 0}, {1, 1}, {0, 1}};
+  Block a, b;
+  ASSERT_TRUE(MakeSyntheticBlock(o, &a, nullptr).ok());
+  ASSERT_TRUE(MakeSyntheticBlock(explicit_layout, &b, nullptr).ok());
+  ExpectSameBlock(a, b);
+}
+
 struct InvalidCase {
   const char* name;
   void (*change)(SyntheticBlockOptions*);
@@ -352,7 +550,24 @@ INSTANTIATE_TEST_SUITE_P(
                     },
                     "needs gnss"},
         InvalidCase{"NegativeNoise", [](SyntheticBlockOptions* o) { o->mark_sigma_px = -1.0; },
-                    "mark_sigma_px"}),
+                    "mark_sigma_px"},
+        InvalidCase{"TiltToTheHorizon",
+                    [](SyntheticBlockOptions* o) { o->nominal_angles_deg = {70.0, 0.0, 0.0}; },
+                    "horizon"},
+        InvalidCase{"ExtraAnglesOfNoImage",
+                    [](SyntheticBlockOptions* o) {
+                      o->extra_angles_deg = {{40, Eigen::Vector3d(10.0, 0.0, 0.0)}};
+                    },
+                    "extra_angles_deg"},
+        InvalidCase{"LayoutOutside",
+                    [](SyntheticBlockOptions* o) { o->check_layout = {{0.5, 1.5}}; },
+                    "check_layout"},
+        InvalidCase{"BlundersBeyondTheLayout",
+                    [](SyntheticBlockOptions* o) {
+                      o->control_layout = {{0.0, 0.0}, {1.0, 1.0}};
+                      o->num_control_blunders = 3;
+                    },
+                    "num_control_blunders"}),
     [](const ::testing::TestParamInfo<InvalidCase>& info) { return std::string(info.param.name); });
 
 TEST(SyntheticBlock, TooFewViewsForTheCountIsAClearError) {

@@ -5,13 +5,13 @@
 #include <cmath>
 
 #include "solvers/bundle/triangulation.h"
-#include "tests/block_fixture.h"
+#include "tests/support/exact_block.h"
 
 namespace photopose {
 namespace {
 
-using testing::FixtureBlock;
-using testing::MakeExactFixtureBlock;
+using testing::ExactBlock;
+using testing::MakeExactBlock;
 
 // Noise-free marks, true orientations and an exact survey: a check point's intersection error is
 // the Gauss-Newton stop and rounding only.
@@ -25,7 +25,9 @@ std::vector<int> PointsOfRole(const Block& block, PointRole role) {
 }
 
 TEST(CheckPoints, ExactBlockHasNoCheckErrorAndItsControlErrorsAsGiven) {
-  const FixtureBlock data = MakeExactFixtureBlock();
+  SyntheticBlockOptions options;
+  options.num_check_points = 2;
+  const ExactBlock data = MakeExactBlock(options);
   const std::vector<int> checks = PointsOfRole(data.block, PointRole::kCheck);
   const std::vector<int> controls = PointsOfRole(data.block, PointRole::kControl);
   ASSERT_EQ(checks.size(), 2u);
@@ -62,7 +64,7 @@ TEST(CheckPoints, ExactBlockHasNoCheckErrorAndItsControlErrorsAsGiven) {
 }
 
 TEST(CheckPoints, MarksWithoutAccuracyTakeTheMarkerProjectionDefault) {
-  FixtureBlock data = MakeExactFixtureBlock();
+  ExactBlock data = MakeExactBlock();
   for (BlockMark& mark : data.block.marks) mark.accuracy.reset();
   const int p = PointsOfRole(data.block, PointRole::kCheck)[0];
   BundleAccuracies accuracies;
@@ -79,7 +81,7 @@ TEST(CheckPoints, MarksWithoutAccuracyTakeTheMarkerProjectionDefault) {
 }
 
 TEST(CheckPoints, OneRayIsReportedNotCountedAndRemovedControlLeavesTheRmse) {
-  FixtureBlock data = MakeExactFixtureBlock();
+  ExactBlock data = MakeExactBlock();
   const int check = PointsOfRole(data.block, PointRole::kCheck)[0];
   const int control = PointsOfRole(data.block, PointRole::kControl)[0];
   // Every image but the first of the check point's marks loses its orientation.

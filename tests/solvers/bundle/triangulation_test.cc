@@ -4,13 +4,13 @@
 
 #include <vector>
 
-#include "tests/block_fixture.h"
+#include "tests/support/exact_block.h"
 
 namespace photopose {
 namespace {
 
-using testing::FixtureBlock;
-using testing::MakeExactFixtureBlock;
+using testing::ExactBlock;
+using testing::MakeExactBlock;
 
 // Noise-free marks from the true orientations: the intersection is the true point to the
 // Gauss-Newton stop (1e-9 of the distance, 0.1 um at 100 m) and the rounding of the film points.
@@ -23,7 +23,7 @@ int FirstPointWithRays(const Block& block, size_t at_least) {
 }
 
 TEST(Triangulation, NoiseFreeRaysMeetAtTheTruePoint) {
-  const FixtureBlock data = MakeExactFixtureBlock();
+  const ExactBlock data = MakeExactBlock();
   const int p = FirstPointWithRays(data.block, 3);
   ASSERT_GE(p, 0);
   const std::vector<RayObservation> rays = PointRays(data.block, p, MarkSigmaDefaults());
@@ -32,7 +32,7 @@ TEST(Triangulation, NoiseFreeRaysMeetAtTheTruePoint) {
   for (const RayObservation& ray : rays) EXPECT_NEAR(ray.sigma, 2.0, 1e-12);
   TriangulationResult result;
   ASSERT_TRUE(TriangulatePoint(TriangulationOptions(), rays, &result).ok());
-  EXPECT_LT((result.point_m - data.true_points[p]).norm(), kExactPointM);
+  EXPECT_LT((result.point_m - data.truth.points_m[p]).norm(), kExactPointM);
   EXPECT_LT(result.rms_whitened, 1e-3);
   EXPECT_GT(result.max_intersection_angle_rad, TriangulationOptions().min_intersection_angle_rad);
   // A-priori covariance: symmetric, positive, and depth (Z) the weakest axis of a vertical block.
@@ -42,7 +42,7 @@ TEST(Triangulation, NoiseFreeRaysMeetAtTheTruePoint) {
 }
 
 TEST(Triangulation, PointRaysLeaveOutSkippedMarksAndImagesWithoutOrientation) {
-  FixtureBlock data = MakeExactFixtureBlock();
+  ExactBlock data = MakeExactBlock();
   const int p = FirstPointWithRays(data.block, 3);
   ASSERT_GE(p, 0);
   const std::vector<int>& marks = data.block.marks_of_point[p];
@@ -56,7 +56,7 @@ TEST(Triangulation, PointRaysLeaveOutSkippedMarksAndImagesWithoutOrientation) {
 }
 
 TEST(Triangulation, FailsCleanlyWithTooFewOrParallelRays) {
-  const FixtureBlock data = MakeExactFixtureBlock();
+  const ExactBlock data = MakeExactBlock();
   const int p = FirstPointWithRays(data.block, 2);
   ASSERT_GE(p, 0);
   std::vector<RayObservation> rays = PointRays(data.block, p, MarkSigmaDefaults());
