@@ -3,11 +3,13 @@
 #include <Eigen/Dense>
 #include <Eigen/Geometry>
 #include <algorithm>
+#include <cmath>
 #include <limits>
 
 #include "core/collinearity.h"
 #include "core/io/csv.h"
 #include "core/rotation.h"
+#include "core/io/tables.h"
 #include "core/io/text_scanner.h"
 
 namespace photopose {
@@ -65,17 +67,33 @@ BlockPoint TiePoint(long long index, const Eigen::Vector3d& position, int line) 
   return point;
 }
 
-Status Vector3(TokenScanner* scanner, const char* field, Eigen::Vector3d* v) {
-  for (int k = 0; k < 3; ++k) PHOTOPOSE_RETURN_IF_ERROR(scanner->Number(field, &(*v)[k]));
+// Three numbers of magnitude at most `max_magnitude`.
+Status Vector3(TokenScanner* scanner, const char* field, double max_magnitude, const char* unit,
+               Eigen::Vector3d* v) {
+  for (int k = 0; k < 3; ++k)
+    PHOTOPOSE_RETURN_IF_ERROR(scanner->NumberWithin(field, max_magnitude, unit, &(*v)[k]));
+  return Status::Ok();
+}
+
+// A BAL focal length: at least kMinFocalLengthPx and at most kMaxCoordinate in magnitude.
+Status FocalLength(TokenScanner* scanner, double* f) {
+  PHOTOPOSE_RETURN_IF_ERROR(scanner->NumberWithin("f", kMaxCoordinate, "px", f));
+  if (!(std::abs(*f) >= kMinFocalLengthPx)) {
+    return scanner->Error("f", FormatNumber(*f) + " is no focal length: its magnitude must be at least " +
+                                   FormatNumber(kMinFocalLengthPx) + " px");
+  }
   return Status::Ok();
 }
 
 }  // namespace
 
 Status ReadBalProblem(const std::string& path, Block* block) {
-  TextFile file;
-  PHOTOPOSE_RETURN_IF_ERROR(file.Open(path));
-  const std::string_view text = file.text();
+  std::string text;
+  PHOTOPOSE_RETURN_IF_ERROR(ReadTextFile(path, &text));
+  return ParseBalProblem(text, InputName(path), block);
+}
+
+Status ParseBalProblem(std::string_view text, const std::string& path, Block* block) {
   TokenScanner scanner(text, path, 1);
   long long num_cameras = 0, num_points = 0, num_observations = 0;
   PHOTOPOSE_RETURN_IF_ERROR(scanner.IntegerIn("num_cameras", 1, kMaxCount, &num_cameras));
@@ -95,26 +113,29 @@ Status ReadBalProblem(const std::string& path, Block* block) {
     double x = 0.0, y = 0.0;
     PHOTOPOSE_RETURN_IF_ERROR(scanner.IntegerIn("camera", 0, num_cameras - 1, &camera));
     PHOTOPOSE_RETURN_IF_ERROR(scanner.IntegerIn("point", 0, num_points - 1, &point));
-    PHOTOPOSE_RETURN_IF_ERROR(scanner.Number("x", &x));
-    PHOTOPOSE_RETURN_IF_ERROR(scanner.Number("y", &y));
+    PHOTOPOSE_RETURN_IF_ERROR(scanner.NumberWithin("x", kMaxCoordinate, "px", &x));
+    PHOTOPOSE_RETURN_IF_ERROR(scanner.NumberWithin("y", kMaxCoordinate, "px", &y));
     AddMark(static_cast<int>(camera), static_cast<int>(point), x, y, line, &result);
   }
-  const char* const kParams[] = {"r1", "r2", "r3", "t1", "t2", "t3", "f", "k1", "k2"};
   for (long long c = 0; c < num_cameras; ++c) {
-    double p[9];
-    for (int k = 0; k < 9; ++k) PHOTOPOSE_RETURN_IF_ERROR(scanner.Number(kParams[k], &p[k]));
-    const Eigen::Vector3d r(p[0], p[1], p[2]);
+    Eigen::Vector3d r, t;
+    double f = 0.0, k1 = 0.0, k2 = 0.0;
+    PHOTOPOSE_RETURN_IF_ERROR(Vector3(&scanner, "r", kMaxRotationVectorRad, "rad", &r));
+    PHOTOPOSE_RETURN_IF_ERROR(Vector3(&scanner, "t", kMaxCoordinate, "", &t));
+    PHOTOPOSE_RETURN_IF_ERROR(FocalLength(&scanner, &f));
+    PHOTOPOSE_RETURN_IF_ERROR(scanner.Number("k1", &k1));
+    PHOTOPOSE_RETURN_IF_ERROR(scanner.Number("k2", &k2));
     const double angle = r.norm();
     const Eigen::Matrix3d R =
         angle > 0.0 ? Eigen::AngleAxisd(angle, r / angle).toRotationMatrix()
                     : Eigen::Matrix3d::Identity();
-    AddCamera(std::to_string(c), R, {p[3], p[4], p[5]}, p[6], p[7], p[8], &result);
+    AddCamera(std::to_string(c), R, t, f, k1, k2, &result);
   }
   result.points.reserve(static_cast<size_t>(num_points));
   for (long long j = 0; j < num_points; ++j) {
     const int line = scanner.line();
     Eigen::Vector3d X;
-    PHOTOPOSE_RETURN_IF_ERROR(Vector3(&scanner, "point coordinate", &X));
+    PHOTOPOSE_RETURN_IF_ERROR(Vector3(&scanner, "point coordinate", kMaxCoordinate, "", &X));
     result.points.push_back(TiePoint(j, X, line));
   }
   if (!scanner.AtEnd()) return scanner.Error("", "unexpected text after the last point");
@@ -125,9 +146,9 @@ Status ReadBalProblem(const std::string& path, Block* block) {
 }
 
 Status ReadBundlerFile(const std::string& path, Block* block, int* num_unregistered) {
-  TextFile file;
-  PHOTOPOSE_RETURN_IF_ERROR(file.Open(path));
-  const std::string_view text = file.text();
+  std::string contents;
+  PHOTOPOSE_RETURN_IF_ERROR(ReadTextFile(path, &contents));
+  const std::string_view text = contents;
   // The header line, then a token stream.
   const size_t first_end = text.find('\n');
   const std::string_view header =
@@ -152,11 +173,11 @@ Status ReadBundlerFile(const std::string& path, Block* block, int* num_unregiste
     Eigen::Matrix3d M;
     for (int row = 0; row < 3; ++row) {
       Eigen::Vector3d r;
-      PHOTOPOSE_RETURN_IF_ERROR(Vector3(&scanner, "R", &r));
+      PHOTOPOSE_RETURN_IF_ERROR(Vector3(&scanner, "R", kMaxCoordinate, "", &r));
       M.row(row) = r.transpose();
     }
     Eigen::Vector3d t;
-    PHOTOPOSE_RETURN_IF_ERROR(Vector3(&scanner, "t", &t));
+    PHOTOPOSE_RETURN_IF_ERROR(Vector3(&scanner, "t", kMaxCoordinate, "", &t));
     if (f == 0.0) {
       ++unregistered;
       continue;
@@ -171,7 +192,7 @@ Status ReadBundlerFile(const std::string& path, Block* block, int* num_unregiste
   for (long long j = 0; j < num_points; ++j) {
     const int line = scanner.line();
     Eigen::Vector3d X;
-    PHOTOPOSE_RETURN_IF_ERROR(Vector3(&scanner, "position", &X));
+    PHOTOPOSE_RETURN_IF_ERROR(Vector3(&scanner, "position", kMaxCoordinate, "", &X));
     for (int k = 0; k < 3; ++k) {
       long long colour = 0;
       PHOTOPOSE_RETURN_IF_ERROR(scanner.IntegerIn("colour", 0, 255, &colour));
@@ -184,8 +205,8 @@ Status ReadBundlerFile(const std::string& path, Block* block, int* num_unregiste
       double x = 0.0, y = 0.0;
       PHOTOPOSE_RETURN_IF_ERROR(scanner.IntegerIn("camera", 0, num_cameras - 1, &camera));
       PHOTOPOSE_RETURN_IF_ERROR(scanner.Integer("key", &key));
-      PHOTOPOSE_RETURN_IF_ERROR(scanner.Number("x", &x));
-      PHOTOPOSE_RETURN_IF_ERROR(scanner.Number("y", &y));
+      PHOTOPOSE_RETURN_IF_ERROR(scanner.NumberWithin("x", kMaxCoordinate, "px", &x));
+      PHOTOPOSE_RETURN_IF_ERROR(scanner.NumberWithin("y", kMaxCoordinate, "px", &y));
       if (image_of_camera[camera] < 0) {
         return TextError(path, view_line, "camera",
                          "camera " + std::to_string(camera) + " has f = 0 (not reconstructed)");

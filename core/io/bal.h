@@ -29,13 +29,20 @@
 // Errors read "file:line: field: what". Reading is linear in the file size (no string per number).
 
 #include <string>
+#include <string_view>
 
 #include "core/block.h"
 #include "core/status.h"
 
 namespace photopose {
 
+// Values are refused at their line, before any work, when absurd: observations and coordinates
+// (t, points) beyond kMaxCoordinate in magnitude, a rotation vector component beyond
+// kMaxRotationVectorRad, a focal length below kMinFocalLengthPx or above kMaxCoordinate in
+// magnitude (core/io/tables.h; docs/formats.md, "Limits and refusals").
 Status ReadBalProblem(const std::string& path, Block* block);
+// The same for the text of a BAL problem; `path` names it in messages.
+Status ParseBalProblem(std::string_view text, const std::string& path, Block* block);
 
 // `num_unregistered`, when not null, receives the number of cameras left out (f = 0).
 Status ReadBundlerFile(const std::string& path, Block* block, int* num_unregistered = nullptr);

@@ -24,7 +24,8 @@ const Eigen::Matrix3d& SeedFromColmapCamera() {
   return kFlip;
 }
 
-// Quaternions are normalised as COLMAP does; one whose norm is below this is no rotation at all.
+// Quaternions are normalised as COLMAP does; one whose norm is below this is no rotation at all,
+// one whose norm is above its inverse is refused too (its square overflows long before 1e300).
 constexpr double kMinQuaternionNorm = 1e-12;
 // A kFrame camera is a pinhole in COLMAP's pixels when its film -> pixel mapping has no rotation
 // or shear: off-diagonal terms below this fraction of the diagonal ones (pixel sizes are given
@@ -91,15 +92,31 @@ class IdIndex {
   bool is_dense_ = false;
 };
 
-Status ReadCameras(const std::string& path, Block* block, IdIndex* camera_of_id) {
-  return ForEachRecordLineOfFile(path, /*comma_separates=*/false, [&](TokenScanner* scanner) {
+// A COLMAP camera parameter: focal lengths in [kMinFocalLengthPx, kMaxCoordinate], the principal
+// point within kMaxCoordinate, the distortion coefficients any finite number.
+Status CameraParam(TokenScanner* scanner, const std::string& name, double* value) {
+  const std::string field = "PARAMS " + name;
+  if (name == "cx" || name == "cy")
+    return scanner->NumberWithin(field, kMaxCoordinate, "px", value);
+  if (name != "f" && name != "fx" && name != "fy") return scanner->Number(field, value);
+  PHOTOPOSE_RETURN_IF_ERROR(scanner->NumberWithin(field, kMaxCoordinate, "px", value));
+  if (!(*value >= kMinFocalLengthPx)) {
+    return scanner->Error(field, FormatNumber(*value) + " is no focal length: it must be at least " +
+                                     FormatNumber(kMinFocalLengthPx) + " px");
+  }
+  return Status::Ok();
+}
+
+Status ReadCameras(std::string_view text, const std::string& path, Block* block,
+                   IdIndex* camera_of_id) {
+  return ForEachRecordLine(text, path, /*comma_separates=*/false, [&](TokenScanner* scanner) {
     long long id = 0, width = 0, height = 0;
     std::string_view model_name;
     PHOTOPOSE_RETURN_IF_ERROR(scanner->IntegerIn("CAMERA_ID", 0, kMaxColmapId, &id));
     PHOTOPOSE_RETURN_IF_ERROR(scanner->Word("MODEL", &model_name));
     CameraModelType model = CameraModelType::kFrame;  // not a COLMAP model: refused below
     if (!ParseEnum(model_name, &model) || model == CameraModelType::kFrame) {
-      return scanner->Error("MODEL", "camera model '" + std::string(model_name) +
+      return scanner->Error("MODEL", "camera model '" + TokenForMessage(model_name) +
                                          "' is not supported (supported: SIMPLE_PINHOLE, PINHOLE, "
                                          "SIMPLE_RADIAL, RADIAL, OPENCV)");
     }
@@ -116,7 +133,7 @@ Status ReadCameras(const std::string& path, Block* block, IdIndex* camera_of_id)
     camera.params.resize(num_params);
     const std::vector<std::string> names = CameraModelParamNames(model);
     for (int k = 0; k < num_params; ++k)
-      PHOTOPOSE_RETURN_IF_ERROR(scanner->Number("PARAMS " + names[k], &camera.params[k]));
+      PHOTOPOSE_RETURN_IF_ERROR(CameraParam(scanner, names[k], &camera.params[k]));
     if (!scanner->AtEnd()) {
       return scanner->Error("PARAMS", "more than the " + std::to_string(num_params) +
                                           " parameters of the " + std::string(model_name) +
@@ -138,11 +155,9 @@ struct TrackEntry {
 };
 constexpr long long kMaxImageId = 0xffffffffLL;
 
-Status ReadPoints(const std::string& path, Block* block, ColmapModelExtras* extras,
-                  IdIndex* point_of_id, std::vector<TrackEntry>* tracks) {
-  TextFile file;
-  PHOTOPOSE_RETURN_IF_ERROR(file.Open(path));
-  const std::string_view text = file.text();
+Status ReadPoints(std::string_view text, const std::string& path, Block* block,
+                  ColmapModelExtras* extras, IdIndex* point_of_id,
+                  std::vector<TrackEntry>* tracks) {
   // A point per line at most; about a track entry per 12 characters (an estimate: the vector
   // grows past it when needed).
   block->points.reserve(static_cast<size_t>(std::count(text.begin(), text.end(), '\n')) + 1);
@@ -151,9 +166,9 @@ Status ReadPoints(const std::string& path, Block* block, ColmapModelExtras* extr
     long long id = 0;
     PHOTOPOSE_RETURN_IF_ERROR(scanner->IntegerIn("POINT3D_ID", 0, kMaxColmapId, &id));
     Eigen::Vector3d position;
-    PHOTOPOSE_RETURN_IF_ERROR(scanner->Number("X", &position.x()));
-    PHOTOPOSE_RETURN_IF_ERROR(scanner->Number("Y", &position.y()));
-    PHOTOPOSE_RETURN_IF_ERROR(scanner->Number("Z", &position.z()));
+    PHOTOPOSE_RETURN_IF_ERROR(scanner->NumberWithin("X", kMaxCoordinate, "m", &position.x()));
+    PHOTOPOSE_RETURN_IF_ERROR(scanner->NumberWithin("Y", kMaxCoordinate, "m", &position.y()));
+    PHOTOPOSE_RETURN_IF_ERROR(scanner->NumberWithin("Z", kMaxCoordinate, "m", &position.z()));
     std::array<unsigned char, 3> rgb;
     const char* const kColour[] = {"R", "G", "B"};
     for (int k = 0; k < 3; ++k) {
@@ -187,12 +202,11 @@ Status ReadPoints(const std::string& path, Block* block, ColmapModelExtras* extr
   });
 }
 
-Status ReadImages(const std::string& path, const IdIndex& camera_of_id, const IdIndex& point_of_id,
-                  Block* block, ColmapModelExtras* extras, IdIndex* image_of_id,
-                  std::vector<long long>* keypoint_offset, std::vector<int>* mark_of_keypoint) {
-  TextFile file;
-  PHOTOPOSE_RETURN_IF_ERROR(file.Open(path));
-  TextLines lines(file.text());
+Status ReadImages(std::string_view text, const std::string& path, const IdIndex& camera_of_id,
+                  const IdIndex& point_of_id, Block* block, ColmapModelExtras* extras,
+                  IdIndex* image_of_id, std::vector<long long>* keypoint_offset,
+                  std::vector<int>* mark_of_keypoint) {
+  TextLines lines(text);
   std::string_view line;
   int line_number = 0;
   keypoint_offset->assign(1, 0);
@@ -207,15 +221,22 @@ Status ReadImages(const std::string& path, const IdIndex& camera_of_id, const Id
     PHOTOPOSE_RETURN_IF_ERROR(scanner.Number("QX", &qx));
     PHOTOPOSE_RETURN_IF_ERROR(scanner.Number("QY", &qy));
     PHOTOPOSE_RETURN_IF_ERROR(scanner.Number("QZ", &qz));
-    PHOTOPOSE_RETURN_IF_ERROR(scanner.Number("TX", &t.x()));
-    PHOTOPOSE_RETURN_IF_ERROR(scanner.Number("TY", &t.y()));
-    PHOTOPOSE_RETURN_IF_ERROR(scanner.Number("TZ", &t.z()));
+    PHOTOPOSE_RETURN_IF_ERROR(scanner.NumberWithin("TX", kMaxCoordinate, "m", &t.x()));
+    PHOTOPOSE_RETURN_IF_ERROR(scanner.NumberWithin("TY", kMaxCoordinate, "m", &t.y()));
+    PHOTOPOSE_RETURN_IF_ERROR(scanner.NumberWithin("TZ", kMaxCoordinate, "m", &t.z()));
     PHOTOPOSE_RETURN_IF_ERROR(scanner.IntegerIn("CAMERA_ID", 0, kMaxColmapId, &camera_id));
     const std::string_view name = scanner.Rest();
     if (name.empty()) return scanner.Error("NAME", "is missing");
     Eigen::Quaterniond q(qw, qx, qy, qz);
-    if (!(q.norm() > kMinQuaternionNorm))
+    const double q_norm = q.coeffs().stableNorm();  // no overflow: 1e300 is named as such
+    if (!(q_norm > kMinQuaternionNorm))
       return scanner.Error("QW", "the quaternion (QW, QX, QY, QZ) is zero");
+    if (!(q_norm < 1.0 / kMinQuaternionNorm)) {
+      return scanner.Error("QW", "the quaternion (QW, QX, QY, QZ) has norm " + FormatNumber(q_norm) +
+                                     "; COLMAP's is a unit quaternion (one with a norm between " +
+                                     FormatNumber(kMinQuaternionNorm) + " and " +
+                                     FormatNumber(1.0 / kMinQuaternionNorm) + " is normalised)");
+    }
     q.normalize();
     const int camera = camera_of_id.Find(camera_id);
     if (camera < 0) {
@@ -241,8 +262,8 @@ Status ReadImages(const std::string& path, const IdIndex& camera_of_id, const Id
     while (!points.AtEnd()) {
       Eigen::Vector2d xy;
       long long point_id = 0;
-      PHOTOPOSE_RETURN_IF_ERROR(points.Number("POINTS2D X", &xy.x()));
-      PHOTOPOSE_RETURN_IF_ERROR(points.Number("POINTS2D Y", &xy.y()));
+      PHOTOPOSE_RETURN_IF_ERROR(points.NumberWithin("POINTS2D X", kMaxCoordinate, "px", &xy.x()));
+      PHOTOPOSE_RETURN_IF_ERROR(points.NumberWithin("POINTS2D Y", kMaxCoordinate, "px", &xy.y()));
       PHOTOPOSE_RETURN_IF_ERROR(points.IntegerIn("POINTS2D POINT3D_ID", -1, kMaxColmapId, &point_id));
       if (point_id < 0) {
         mark_of_keypoint->push_back(-1);
@@ -316,7 +337,8 @@ Status CheckTracks(const std::string& points_path, const std::vector<TrackEntry>
       const BlockMark& mark = block.marks[m];
       return TextError(points_path, block.points[mark.point].line, "TRACK",
                        "point " + block.points[mark.point].id + " is observed in image '" +
-                           block.images[mark.image].name + "' but that is not in its track");
+                           TokenForMessage(block.images[mark.image].name) +
+                           "' but that is not in its track");
     }
   }
   return Status::Ok();
@@ -371,7 +393,13 @@ void AppendSpaceNumber(double value, std::string* text) {
 
 // ------------------------------------------------------------------ public
 
-Status ReadColmapModel(const std::string& directory, Block* block, ColmapModelExtras* extras) {
+namespace {
+
+// The model from its three texts: `text_of(file name, &text)` gives each in turn (cameras.txt,
+// points3D.txt, images.txt), valid until the next call; `directory` names them in messages.
+template <typename TextOf>
+Status ColmapModelFromTexts(const std::string& directory, TextOf text_of, Block* block,
+                            ColmapModelExtras* extras) {
   Block result;
   ColmapModelExtras result_extras;
   ColmapModelExtras* kept = extras != nullptr ? &result_extras : nullptr;
@@ -379,17 +407,21 @@ Status ReadColmapModel(const std::string& directory, Block* block, ColmapModelEx
   std::vector<TrackEntry> tracks;
   std::vector<long long> keypoint_offset;
   std::vector<int> mark_of_keypoint;
-  const std::string points_path = Path(directory, "points3D.txt");
-  PHOTOPOSE_RETURN_IF_ERROR(ReadCameras(Path(directory, "cameras.txt"), &result, &camera_of_id));
+  std::string_view text;
+  PHOTOPOSE_RETURN_IF_ERROR(text_of("cameras.txt", &text));
+  PHOTOPOSE_RETURN_IF_ERROR(ReadCameras(text, Path(directory, "cameras.txt"), &result, &camera_of_id));
   camera_of_id.Freeze();
-  PHOTOPOSE_RETURN_IF_ERROR(ReadPoints(points_path, &result, kept, &point_of_id, &tracks));
+  const std::string points_path = Path(directory, "points3D.txt");
+  PHOTOPOSE_RETURN_IF_ERROR(text_of("points3D.txt", &text));
+  PHOTOPOSE_RETURN_IF_ERROR(ReadPoints(text, points_path, &result, kept, &point_of_id, &tracks));
   point_of_id.Freeze();
   // A consistent model has one mark per track entry.
   result.marks.reserve(tracks.size());
   mark_of_keypoint.reserve(tracks.size());
   if (kept != nullptr) kept->mark_keypoint_index.reserve(tracks.size());
   const std::string images_path = Path(directory, "images.txt");
-  PHOTOPOSE_RETURN_IF_ERROR(ReadImages(images_path, camera_of_id, point_of_id, &result, kept,
+  PHOTOPOSE_RETURN_IF_ERROR(text_of("images.txt", &text));
+  PHOTOPOSE_RETURN_IF_ERROR(ReadImages(text, images_path, camera_of_id, point_of_id, &result, kept,
                                        &image_of_id, &keypoint_offset, &mark_of_keypoint));
   image_of_id.Freeze();
   PHOTOPOSE_RETURN_IF_ERROR(
@@ -400,6 +432,29 @@ Status ReadColmapModel(const std::string& directory, Block* block, ColmapModelEx
   *block = std::move(result);
   if (extras != nullptr) *extras = std::move(result_extras);
   return Status::Ok();
+}
+
+}  // namespace
+
+Status ReadColmapModel(const std::string& directory, Block* block, ColmapModelExtras* extras) {
+  // One file in memory at a time: each is parsed before the next is read into the same buffer.
+  std::string buffer;
+  const auto read = [&](const char* name, std::string_view* text) {
+    PHOTOPOSE_RETURN_IF_ERROR(ReadTextFile(Path(directory, name), &buffer));
+    *text = buffer;
+    return Status::Ok();
+  };
+  return ColmapModelFromTexts(directory, read, block, extras);
+}
+
+Status ParseColmapModel(const ColmapModelText& text, const std::string& directory, Block* block,
+                        ColmapModelExtras* extras) {
+  const auto view = [&](const char* name, std::string_view* view) {
+    const std::string_view file = name;
+    *view = file == "cameras.txt" ? text.cameras : file == "images.txt" ? text.images : text.points3D;
+    return Status::Ok();
+  };
+  return ColmapModelFromTexts(directory, view, block, extras);
 }
 
 Status ColmapCameraFromBlockCamera(const BlockCamera& camera, CameraModelType* model,
@@ -492,10 +547,34 @@ void MeanReprojectionErrors(const Block& block, std::vector<double>* point_error
     (*point_error_px)[p] = count[p] > 0 && std::isfinite(sum[p]) ? sum[p] / count[p] : -1.0;
 }
 
-Status FormatColmapModel(const Block& block, const ColmapModelExtras* extras,
-                         ColmapModelText* text) {
+Status CheckColmapModelWritable(const Block& block, const ColmapModelExtras* extras) {
   PHOTOPOSE_RETURN_IF_ERROR(CheckBlock(block));
   if (extras != nullptr) PHOTOPOSE_RETURN_IF_ERROR(CheckExtras(block, *extras));
+  for (const BlockCamera& camera : block.cameras) {
+    CameraModelType model;
+    std::vector<double> params;
+    PHOTOPOSE_RETURN_IF_ERROR(ColmapCameraFromBlockCamera(camera, &model, &params));
+    if (camera.table.n_columns <= 0 || camera.table.n_rows <= 0) {
+      return Status::Error("camera '" + camera.camera_id +
+                           "' has no image size (NColumns, NRows), which COLMAP needs");
+    }
+  }
+  for (const BlockImage& image : block.images) {
+    if (!image.eo) {
+      return Status::Error("image '" + image.name +
+                           "' has no exterior orientation: a COLMAP model holds oriented images "
+                           "only");
+    }
+    if (image.name.empty() || image.name.find_first_of("\n\r") != std::string::npos ||
+        image.name.front() == ' ' || image.name.back() == ' ')
+      return Status::Error("image '" + image.name + "' has a name COLMAP cannot hold");
+  }
+  return Status::Ok();
+}
+
+Status FormatColmapModel(const Block& block, const ColmapModelExtras* extras,
+                         ColmapModelText* text) {
+  PHOTOPOSE_RETURN_IF_ERROR(CheckColmapModelWritable(block, extras));
   const size_t num_images = block.images.size();
   const size_t num_points = block.points.size();
 
@@ -512,10 +591,6 @@ Status FormatColmapModel(const Block& block, const ColmapModelExtras* extras,
     CameraModelType model;
     std::vector<double> params;
     PHOTOPOSE_RETURN_IF_ERROR(ColmapCameraFromBlockCamera(camera, &model, &params));
-    if (camera.table.n_columns <= 0 || camera.table.n_rows <= 0) {
-      return Status::Error("camera '" + camera.camera_id +
-                           "' has no image size (NColumns, NRows), which COLMAP needs");
-    }
     AppendInteger(camera_ids[c], &cameras_text);
     cameras_text += ' ';
     cameras_text += EnumName(model);
@@ -616,14 +691,6 @@ Status FormatColmapModel(const Block& block, const ColmapModelExtras* extras,
   std::vector<long long> image_ids(num_images);
   for (size_t i = 0; i < num_images; ++i) {
     const BlockImage& image = block.images[i];
-    if (!image.eo) {
-      return Status::Error("image '" + image.name +
-                           "' has no exterior orientation: a COLMAP model holds oriented images "
-                           "only");
-    }
-    if (image.name.empty() || image.name.find_first_of("\n\r") != std::string::npos ||
-        image.name.front() == ' ' || image.name.back() == ' ')
-      return Status::Error("image '" + image.name + "' has a name COLMAP cannot hold");
     image_ids[i] = extras != nullptr ? extras->image_ids[i] : static_cast<long long>(i) + 1;
     Eigen::Quaterniond q;
     Eigen::Vector3d t;

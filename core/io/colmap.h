@@ -62,7 +62,12 @@ struct ColmapModelExtras {
 };
 
 // Reads directory/cameras.txt, images.txt and points3D.txt into *block (replacing it; index
-// built) and, when `extras` is not null, *extras. Errors read "file:line: field: what".
+// built) and, when `extras` is not null, *extras. Errors read "file:line: field: what". Each file
+// is read under ReadTextFile's rules (core/io/csv.h), and absurd values are refused at their line
+// before any work: a focal length (f, fx, fy) below kMinFocalLengthPx or above kMaxCoordinate, a
+// principal point, POINTS2D entry, translation or point coordinate beyond kMaxCoordinate in
+// magnitude, a quaternion of norm 0 or above 1e12 (core/io/tables.h; docs/formats.md, "Limits and
+// refusals").
 Status ReadColmapModel(const std::string& directory, Block* block,
                        ColmapModelExtras* extras = nullptr);
 
@@ -89,6 +94,13 @@ struct ColmapModelText {
 };
 Status FormatColmapModel(const Block& block, const ColmapModelExtras* extras,
                          ColmapModelText* text);
+// Whether FormatColmapModel can write the block's cameras and images (the errors it would give
+// for them, at the cost of a look at each camera and image): to refuse an output before the work
+// that would fill it.
+Status CheckColmapModelWritable(const Block& block, const ColmapModelExtras* extras);
+// ReadColmapModel on the three texts of a model; `directory` names them in messages.
+Status ParseColmapModel(const ColmapModelText& text, const std::string& directory, Block* block,
+                        ColmapModelExtras* extras = nullptr);
 
 // The COLMAP camera (model and parameters, pixels with COLMAP's conventions) of a block camera:
 // COLMAP models unchanged; a kFrame camera as described for WriteColmapModel, else an error.

@@ -39,7 +39,7 @@ std::vector<std::string_view> SplitOn(std::string_view text, char separator) {
   }
 }
 
-std::string Quoted(std::string_view text) { return "'" + EscapeForMessage(text) + "'"; }
+std::string Quoted(std::string_view text) { return "'" + TokenForMessage(text) + "'"; }
 
 // Length of the UTF-8 sequence that starts at text[i] (1 to 4), or 0 when the bytes there are not
 // well-formed UTF-8 (RFC 3629: no overlong forms, no surrogates, nothing above U+10FFFF).
@@ -84,17 +84,22 @@ const char* NodeKind(mode_t mode) {
   return "not a regular file";
 }
 
-// Reads everything from `fd` up to limit + 1 bytes (one more than allowed shows the excess).
+// Reads everything from `fd` into *text, up to limit + 1 bytes (one more than allowed shows the
+// excess), straight into the string: `expected` (the size fstat gave, 0 when unknown) is read in one
+// piece, and a file that shrinks or grows meanwhile is read as it is then, never past the limit.
 // Waits on a non-blocking descriptor instead of spinning.
-bool ReadAtMost(int fd, size_t limit, std::string* text, int* error_number) {
-  char buffer[1 << 16];
-  while (text->size() <= limit) {
-    const size_t want = std::min(sizeof(buffer), limit + 1 - text->size());
-    const ssize_t n = read(fd, buffer, want);
+bool ReadAtMost(int fd, size_t limit, size_t expected, std::string* text, int* error_number) {
+  constexpr size_t kChunk = size_t{1} << 16;
+  size_t size = 0;
+  text->clear();
+  while (size <= limit) {
+    if (size == text->size())
+      text->resize(std::min(limit + 1, std::max({size + kChunk, 2 * size, expected + 1})));
+    const ssize_t n = read(fd, text->data() + size, text->size() - size);
     if (n > 0) {
-      text->append(buffer, static_cast<size_t>(n));
+      size += static_cast<size_t>(n);
     } else if (n == 0) {
-      return true;
+      break;
     } else if (errno == EINTR) {
       continue;
     } else if (errno == EAGAIN || errno == EWOULDBLOCK) {
@@ -105,6 +110,7 @@ bool ReadAtMost(int fd, size_t limit, std::string* text, int* error_number) {
       return false;
     }
   }
+  text->resize(size);
   return true;
 }
 
@@ -256,7 +262,7 @@ Status CsvReader::ParseRecord(bool header) {
 }
 
 std::string CsvReader::ColumnName(bool header, size_t index) const {
-  if (!header && index < header_.header().size()) return header_.header()[index];
+  if (!header && index < header_.header().size()) return TokenForMessage(header_.header()[index]);
   return "field " + std::to_string(index + 1);
 }
 
@@ -453,10 +459,11 @@ Status ReadTextFile(const std::string& path, std::string* text) {
                                 " bytes, the largest input photopose reads";
   if (S_ISREG(info.st_mode) && static_cast<uint64_t>(info.st_size) > kMaxInputBytes)
     return finish(Status::Error(too_large));
-  // One allocation for a regular file (a large table is read without regrowing the buffer).
-  if (S_ISREG(info.st_mode) && info.st_size > 0) text->reserve(static_cast<size_t>(info.st_size) + 1);
+  // Read, not mapped: a file that shrinks while it is read gives a shorter text, where a mapping
+  // would die of SIGBUS at the first page past the new end.
+  const size_t expected = S_ISREG(info.st_mode) ? static_cast<size_t>(info.st_size) : 0;
   int error_number = 0;
-  if (!ReadAtMost(fd, kMaxInputBytes, text, &error_number))
+  if (!ReadAtMost(fd, kMaxInputBytes, expected, text, &error_number))
     return finish(Status::Error(name + ": cannot read: " + std::strerror(error_number)));
   if (text->size() > kMaxInputBytes) return finish(Status::Error(too_large));
   return finish(Status::Ok());
@@ -516,29 +523,40 @@ Status CheckTextInput(std::string_view text, const std::string& file_name) {
   return Status::Ok();
 }
 
+namespace {
+
+// Appends the character at text[i] to *escaped as EscapeForMessage writes it; returns the number
+// of bytes it takes in `text`.
+size_t AppendEscapedCharacter(std::string_view text, size_t i, std::string* escaped) {
+  const unsigned char c = static_cast<unsigned char>(text[i]);
+  if (c == '\t' || c == '\n' || c == '\r') {
+    *escaped += c == '\t' ? "\\t" : c == '\n' ? "\\n" : "\\r";
+    return 1;
+  }
+  const size_t length = c < 0x20 || c == 0x7F ? 0 : Utf8SequenceLength(text, i);
+  if (length == 0) {
+    *escaped += "\\x" + HexByte(c).substr(2);
+    return 1;
+  }
+  escaped->append(text.substr(i, length));
+  return length;
+}
+
+}  // namespace
+
 std::string EscapeForMessage(std::string_view text) {
   std::string escaped;
   escaped.reserve(text.size());
+  for (size_t i = 0; i < text.size();) i += AppendEscapedCharacter(text, i, &escaped);
+  return escaped;
+}
+
+std::string TokenForMessage(std::string_view token) {
+  std::string escaped;
   size_t i = 0;
-  while (i < text.size()) {
-    const unsigned char c = static_cast<unsigned char>(text[i]);
-    if (c == '\t' || c == '\n' || c == '\r') {
-      escaped += c == '\t' ? "\\t" : c == '\n' ? "\\n" : "\\r";
-      ++i;
-    } else if (c < 0x20 || c == 0x7F) {
-      escaped += "\\x" + HexByte(c).substr(2);
-      ++i;
-    } else {
-      const size_t length = Utf8SequenceLength(text, i);
-      if (length == 0) {
-        escaped += "\\x" + HexByte(c).substr(2);
-        ++i;
-      } else {
-        escaped.append(text.substr(i, length));
-        i += length;
-      }
-    }
-  }
+  for (size_t characters = 0; i < token.size() && characters < kMaxEchoedCharacters; ++characters)
+    i += AppendEscapedCharacter(token, i, &escaped);
+  if (i < token.size()) escaped += "\u2026(" + std::to_string(token.size()) + " bytes)";
   return escaped;
 }
 

@@ -239,8 +239,11 @@ Status CsvReader::ForEachRow(ReadRow read_row) {
 }
 
 // Reads a whole input into *text: a regular file, or standard input for "-". Anything else (a
-// folder, a device such as /dev/zero, a FIFO, a socket) is refused without reading, and so is an
-// input of more than kMaxInputBytes. Errors: "path: cannot open: <system reason>",
+// folder, a device such as /dev/zero, a FIFO, a socket) is refused without reading or waiting (it
+// is opened non-blocking and checked on the open descriptor), and so is an input of more than
+// kMaxInputBytes, by its size or by what it holds when read. The file is read, never mapped: one
+// that shrinks or grows while it is read gives the text it held then (a mapping would die of
+// SIGBUS). Every reader of core/io gets its files here. Errors: "path: cannot open: <system reason>",
 // "path: cannot read: <system reason>", "path: is a character device, not a regular file ...",
 // "path: is larger than 268435456 bytes ...". Messages name standard input "<stdin>".
 Status ReadTextFile(const std::string& path, std::string* text);
@@ -257,6 +260,13 @@ Status CheckTextInput(std::string_view text, const std::string& file_name);
 // written as \xHH (tab, line feed and carriage return as \t, \n, \r); everything else is kept.
 // Escaping an escaped text changes nothing.
 std::string EscapeForMessage(std::string_view text);
+// Most characters of a token (a field, a word of a file) that a message repeats.
+constexpr size_t kMaxEchoedCharacters = 40;
+// A token of the input as a message repeats it: escaped as EscapeForMessage does, and cut after
+// kMaxEchoedCharacters characters with "…(N bytes)" giving its whole size, so that a message
+// stays a line however long the token ("0000000000000000000000000000000000000000…(1048576
+// bytes)").
+std::string TokenForMessage(std::string_view token);
 
 // Parses a whole field as a finite decimal number (C locale, a leading '+' allowed). On failure
 // returns false and sets *why to a phrase about the text ("'abc' is not a number",

@@ -142,7 +142,7 @@ const ValueRange* RangeOf(std::string_view column) {
       {"FilmFiducials", kFilmCoordinate},
       {"RadialDistortions", kFilmCoordinate},
       {"RadialDistances", {0.0, kMaxCoordinate, false, false, "um"}},
-      {"FocalLength", {0.0, kMaxCoordinate, true, false, "um"}},
+      {"FocalLength", {kMinFocalLengthUm, kMaxCoordinate, false, false, "um"}},
       {"PixelSize", {kMinPixelSizeUm, kMaxPixelSizeUm, true, true, "um"}},
       {"A0", kAffine},
       {"A1", kAffine},
@@ -1675,13 +1675,13 @@ Status CheckMarkInsideImage(const std::string& marks_path, const ImageMark& mark
 
 namespace {
 
-// Maps the file at `path` (or reads standard input for "-") and hands its text and its name for
-// messages to `parse`: a table of a hundred megabytes is parsed in place, not copied.
+// Reads the file at `path` (or standard input for "-"; ReadTextFile's rules) and hands its text
+// and its name for messages to `parse`.
 template <typename Parse>
 Status ReadAndParse(const std::string& path, Parse parse) {
-  TextFile file;
-  PHOTOPOSE_RETURN_IF_ERROR(file.OpenInput(path));
-  return parse(file.text(), InputName(path));
+  std::string text;
+  PHOTOPOSE_RETURN_IF_ERROR(ReadTextFile(path, &text));
+  return parse(text, InputName(path));
 }
 
 }  // namespace

@@ -37,6 +37,14 @@ namespace photopose {
 // Largest magnitude of a ground coordinate (m), a pixel coordinate (px) and a film coordinate or
 // camera length (um): far beyond any survey, sensor or lens, still exact in a double to 1e-8.
 constexpr double kMaxCoordinate = 1e8;
+// Smallest FocalLength of a camera table (um): a thousand times below the shortest lens of any
+// camera; a focal length near 0 makes every ray parallel and every adjustment fail unnamed.
+constexpr double kMinFocalLengthUm = 1.0;
+// Smallest focal length of a COLMAP or BAL camera (px; also of a camera in normalised image
+// coordinates, f = 1).
+constexpr double kMinFocalLengthPx = 1e-3;
+// Largest component of a BAL rotation vector (rad): a hundred and fifty turns.
+constexpr double kMaxRotationVectorRad = 1e3;
 // PixelSize (um) lies strictly between these; so does the pixel size an affine implies.
 constexpr double kMinPixelSizeUm = 1e-3;
 constexpr double kMaxPixelSizeUm = 1e3;

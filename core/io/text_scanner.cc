@@ -1,13 +1,7 @@
 #include "core/io/text_scanner.h"
 
-#include <fcntl.h>
-#include <sys/mman.h>
-#include <sys/stat.h>
-#include <unistd.h>
-
-#include <cerrno>
 #include <charconv>
-#include <cstring>
+#include <cmath>
 
 #include "core/io/csv.h"
 
@@ -68,6 +62,21 @@ Status TokenScanner::IntegerIn(std::string_view field, long long min, long long 
   return Status::Ok();
 }
 
+Status TokenScanner::NumberWithin(std::string_view field, double max_magnitude,
+                                  std::string_view unit, double* value) {
+  std::string_view word;
+  PHOTOPOSE_RETURN_IF_ERROR(Word(field, &word));
+  std::string why;
+  if (!ParseFiniteNumber(word, value, &why)) return Error(field, why);
+  if (!(std::abs(*value) <= max_magnitude)) {
+    return Error(field, "'" + TokenForMessage(word) + "' is outside [" +
+                            FormatPlainNumber(-max_magnitude) + ", " +
+                            FormatPlainNumber(max_magnitude) + "]" + (unit.empty() ? "" : " ") +
+                            std::string(unit));
+  }
+  return Status::Ok();
+}
+
 Status TokenScanner::Error(std::string_view field, std::string_view what) {
   return TextError(file_, line_, field, what);
 }
@@ -81,53 +90,7 @@ Status TextError(const std::string& file, int line, std::string_view field, std:
     message += ": ";
   }
   message += what;
-  return Status::Error(std::move(message));
-}
-
-TextFile::~TextFile() { Close(); }
-
-void TextFile::Close() {
-  if (map_ != nullptr) munmap(map_, map_size_);
-  map_ = nullptr;
-  map_size_ = 0;
-  read_.clear();
-  text_ = std::string_view();
-}
-
-bool TextFile::Map(int fd, size_t size) {
-  void* map = mmap(nullptr, size, PROT_READ, MAP_PRIVATE, fd, 0);
-  if (map == MAP_FAILED) return false;
-  madvise(map, size, MADV_SEQUENTIAL);
-  map_ = map;
-  map_size_ = size;
-  text_ = std::string_view(static_cast<const char*>(map_), map_size_);
-  return true;
-}
-
-Status TextFile::Open(const std::string& path) { return OpenFile(path, /*as_input=*/false); }
-
-Status TextFile::OpenInput(const std::string& path) { return OpenFile(path, /*as_input=*/true); }
-
-Status TextFile::OpenFile(const std::string& path, bool as_input) {
-  Close();
-  // As an input, O_NONBLOCK: opening a FIFO must not wait for a writer (ReadTextFile refuses it).
-  const int flags = O_RDONLY | O_CLOEXEC | (as_input ? O_NONBLOCK | O_NOCTTY : 0);
-  const int fd = as_input && path == "-" ? -1 : open(path.c_str(), flags);
-  if (fd < 0 && !as_input) return Status::Error(path + ": cannot open: " + std::strerror(errno));
-  if (fd >= 0) {
-    struct stat info;
-    const bool mapped =
-        fstat(fd, &info) == 0 && S_ISREG(info.st_mode) && info.st_size > 0 &&
-        (!as_input || static_cast<uint64_t>(info.st_size) <= kMaxInputBytes) &&
-        Map(fd, static_cast<size_t>(info.st_size));
-    close(fd);
-    if (mapped) return Status::Ok();
-  }
-  // Standard input, not a regular file, empty, too large or not mappable: read it, or refuse it,
-  // with ReadTextFile's messages.
-  PHOTOPOSE_RETURN_IF_ERROR(ReadTextFile(path, &read_));
-  text_ = read_;
-  return Status::Ok();
+  return Status::Error(EscapeForMessage(message));
 }
 
 bool IsBlankOrComment(std::string_view line) {

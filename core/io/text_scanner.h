@@ -1,14 +1,17 @@
 #pragma once
 // Fast reading and writing of the whitespace-separated text formats of other tools (COLMAP text
-// models, BAL problems, Bundler .out files, DBAT lists): the whole file is read once, lines and
+// models, BAL problems, Bundler .out files, DBAT lists): the whole file is read once (ReadTextFile
+// of core/io/csv.h: regular files only, at most kMaxInputBytes), lines and
 // tokens are views into it (no string per row), numbers are parsed and printed with
 // std::from_chars / std::to_chars (shortest text that reads back as the same double). Every parse
-// error is a Status whose message reads "file:line: field: what is wrong".
+// error is a Status whose message reads "file:line: field: what is wrong", escaped, with the tokens
+// it repeats cut (TokenForMessage).
 
 #include <cstdint>
 #include <string>
 #include <string_view>
 
+#include "core/io/csv.h"
 #include "core/status.h"
 
 namespace photopose {
@@ -64,6 +67,10 @@ class TokenScanner {
   Status Integer(std::string_view field, long long* value);
   // A whole number in [min, max].
   Status IntegerIn(std::string_view field, long long min, long long max, long long* value);
+  // A finite number in [-max_magnitude, max_magnitude] ("'1e+300' is outside [-100000000,
+  // 100000000] m", `unit` after the range when not empty).
+  Status NumberWithin(std::string_view field, double max_magnitude, std::string_view unit,
+                      double* value);
 
   // "file:line: field: what" at the current line (field left out when empty).
   Status Error(std::string_view field, std::string_view what);
@@ -92,35 +99,6 @@ class TokenScanner {
 // Whether a line holds nothing but blanks, or a comment ('#' as its first non-blank character).
 bool IsBlankOrComment(std::string_view line);
 
-// The contents of a file, memory-mapped read-only when it is a regular file (no copy, no fresh
-// memory: a 100 MB model is parsed straight from the page cache), else read into memory. Errors
-// as core/io/csv.h's ReadTextFile: "path: cannot open: <reason>", "path: cannot read: <reason>".
-class TextFile {
- public:
-  TextFile() = default;
-  ~TextFile();
-  TextFile(const TextFile&) = delete;
-  TextFile& operator=(const TextFile&) = delete;
-
-  Status Open(const std::string& path);
-  // The same under the rules of core/io/csv.h's ReadTextFile for photopose's own inputs (the
-  // tables): "-" is standard input (read), anything but a regular file is refused, and so is a
-  // file of more than kMaxInputBytes; messages as ReadTextFile's ("<stdin>" for "-").
-  Status OpenInput(const std::string& path);
-  std::string_view text() const { return text_; }
-
- private:
-  void Close();
-  // Open (as_input false) or OpenInput (true).
-  Status OpenFile(const std::string& path, bool as_input);
-  // Maps `size` bytes of the open file `fd`; false when it cannot.
-  bool Map(int fd, size_t size);
-  void* map_ = nullptr;
-  size_t map_size_ = 0;
-  std::string read_;
-  std::string_view text_;
-};
-
 // Calls `row(TokenScanner*)` for every line of `text` that is neither blank nor a comment, with a
 // scanner of that line (commas separate too when `comma_separates`); `path` names the text in
 // messages. Stops at the first error `row` returns.
@@ -130,9 +108,9 @@ Status ForEachRecordLine(std::string_view text, const std::string& path, bool co
 // The same for the file at `path`.
 template <typename Row>
 Status ForEachRecordLineOfFile(const std::string& path, bool comma_separates, Row row) {
-  TextFile file;
-  PHOTOPOSE_RETURN_IF_ERROR(file.Open(path));
-  return ForEachRecordLine(file.text(), path, comma_separates, row);
+  std::string text;
+  PHOTOPOSE_RETURN_IF_ERROR(ReadTextFile(path, &text));
+  return ForEachRecordLine(text, InputName(path), comma_separates, row);
 }
 
 // Appends the shortest decimal text that reads back as exactly `value` (std::to_chars).

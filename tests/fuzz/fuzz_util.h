@@ -15,4 +15,11 @@ inline void CheckMessage(const Status& status) {
   if (message.empty() || EscapeForMessage(message) != message) std::abort();
 }
 
+// An error message repeats no more than a few dozen characters of any token of the input: it
+// stays short however long the input (file names and fixed text fill the rest).
+inline void CheckMessageLength(const Status& status) {
+  constexpr size_t kMaxMessageBytes = 1000;
+  if (!status.ok() && status.message().size() > kMaxMessageBytes) std::abort();
+}
+
 }  // namespace photopose::fuzz

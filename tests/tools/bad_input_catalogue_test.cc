@@ -490,6 +490,106 @@ TEST_F(BadInputCatalogue, AbsurdCamerasAndMarksAreRefusedWithTheirLine) {
                 "(at most 5% of the image size is allowed)");
 }
 
+// ------------------------------------------------------------------ readers of other tools
+
+// A BAL problem of one camera, one point and one observation, and a COLMAP model of one image.
+constexpr char kBal[] = "1 1 1\n0 0 1 2\n0 0 0 0 0 -10 100 0 0\n1 2 3\n";
+constexpr char kColmapCameras[] = "1 SIMPLE_RADIAL 100 80 100 50 40 0.01\n";
+constexpr char kColmapImages[] = "1 1 0 0 0 0 0 0 1 a.jpg\n60 60 3\n";
+constexpr char kColmapPoints[] = "3 1 2 10 10 20 30 0.5 1 0\n";
+
+TEST_F(BadInputCatalogue, FifosAndHugeFilesGivenAsBalOrColmapAreRefusedAtOnce) {
+  ASSERT_EQ(mkfifo((work_ + "/fifo.txt").c_str(), 0644), 0);
+  ExpectRefused("bundle --bal=fifo.txt --report=r.json", 2,
+                "photopose bundle: fifo.txt: is a FIFO (named pipe), not a regular file; "
+                "photopose reads regular files, or standard input for '-'");
+  fs::create_directory(work_ + "/model");
+  WriteFile(work_ + "/model/cameras.txt", kColmapCameras);
+  WriteFile(work_ + "/model/images.txt", kColmapImages);
+  ASSERT_EQ(mkfifo((work_ + "/model/points3D.txt").c_str(), 0644), 0);
+  ExpectRefused("bundle --colmap_model=model --report=r.json", 2,
+                "photopose bundle: model/points3D.txt: is a FIFO (named pipe), not a regular file; "
+                "photopose reads regular files, or standard input for '-'");
+  // 280 MB, sparse (no disk used), outside the work folder (whose snapshot reads every file).
+  const std::string big = root_ + "/big.txt";
+  WriteFile(big, kBal);
+  fs::resize_file(big, uint64_t{280} << 20);
+  ExpectRefused("bundle --bal=" + big + " --report=r.json", 2,
+                "photopose bundle: " + big +
+                    ": is larger than 268435456 bytes, the largest input photopose reads");
+}
+
+TEST_F(BadInputCatalogue, LongTokensAndBinaryAreEchoedCutToAFewDozenCharacters) {
+  WriteFile(work_ + "/token.txt", std::string(1 << 20, '7') + "x 1 1\n");
+  ExpectRefused("bundle --bal=token.txt --report=r.json", 2,
+                "photopose bundle: token.txt:1: num_cameras: '" + std::string(40, '7') +
+                    "\u2026(1048577 bytes)' is not a number");
+  WriteFile(work_ + "/binary.txt", std::string(2 << 20, '\xff'));
+  std::string escaped;
+  for (int i = 0; i < 40; ++i) escaped += "\\xFF";
+  ExpectRefused("bundle --bal=binary.txt --report=r.json", 2,
+                "photopose bundle: binary.txt:1: num_cameras: '" + escaped +
+                    "\u2026(2097152 bytes)' is not a number");
+}
+
+TEST_F(BadInputCatalogue, AbsurdValuesAreRefusedAtTheReaderWithFileLineAndField) {
+  WriteFile(work_ + "/p.txt", "1 1 1\n0 0 1 2\n0 0 0 0 0 -10 100 0 0\n1 2 -1e300\n");
+  ExpectRefused("bundle --bal=p.txt --report=r.json", 2,
+                "photopose bundle: p.txt:4: point coordinate: '-1e300' is outside [-100000000, "
+                "100000000]");
+  fs::create_directory(work_ + "/model");
+  WriteFile(work_ + "/model/cameras.txt", "1 SIMPLE_RADIAL 100 80 -6000 50 40 0.01\n");
+  WriteFile(work_ + "/model/images.txt", kColmapImages);
+  WriteFile(work_ + "/model/points3D.txt", kColmapPoints);
+  ExpectRefused("bundle --colmap_model=model --report=r.json", 2,
+                "photopose bundle: model/cameras.txt:1: PARAMS f: -6000 is no focal length: it "
+                "must be at least 0.001 px");
+  WriteFile(work_ + "/model/cameras.txt", kColmapCameras);
+  WriteFile(work_ + "/model/images.txt", "1 1e300 0 0 0 0 0 0 1 a.jpg\n60 60 3\n");
+  ExpectRefused("bundle --colmap_model=model --report=r.json", 2,
+                "photopose bundle: model/images.txt:1: QW: the quaternion (QW, QX, QY, QZ) has "
+                "norm 1e+300; COLMAP's is a unit quaternion (one with a norm between 1e-12 and "
+                "1000000000000 is normalised)");
+  const std::string cameras = ReadFile(work_ + "/cameras.csv");
+  const size_t focal = cameras.find(",8800,");
+  ASSERT_NE(focal, std::string::npos);
+  WriteFile(work_ + "/cameras.csv", cameras.substr(0, focal) + ",1e-300," + cameras.substr(focal + 6));
+  ExpectRefused(Resect("--out=frames.csv"), 2,
+                "photopose resect: cameras.csv:2: FocalLength: '1e-300' is outside [1, 100000000] "
+                "um");
+}
+
+TEST_F(BadInputCatalogue, BundleRefusesInputsItDoesNotReadAndOutputsItCannotWriteBeforeAnyWork) {
+  WriteFile(work_ + "/p.txt", kBal);
+  ExpectRefused("bundle --bal=p.txt --points=points.csv --report=r.json", 2,
+                "photopose bundle: --points is read with the tables (--cameras and --marks) only; "
+                "--bal holds its own points and poses: leave --points out");
+  ExpectRefused("bundle --colmap_model=model --frames=missing.csv --report=r.json", 2,
+                "photopose bundle: --frames is read with the tables (--cameras and --marks) only; "
+                "--colmap_model holds its own points and poses: leave --frames out");
+  ExpectRefused("bundle --bal=p.txt --out_colmap=model --report=r.json", 2,
+                "photopose bundle: --out_colmap: a BAL problem has no image size and counts "
+                "pixels from the image centre, which a COLMAP model cannot hold; write --out, "
+                "--out_points or --report");
+  ExpectRefused("bundle --bal=p.txt --out_cameras=c.csv --report=r.json", 2,
+                "photopose bundle: --out_cameras writes a camera table of frame cameras; with "
+                "--colmap_model or --bal use --out_colmap");
+  // A camera with distortion is no COLMAP camera: refused after reading, before the adjustment
+  // (no iteration line on stderr).
+  const Snapshot before = Take(work_);
+  const CliRun run = Run("bundle --cameras=cameras.csv --marks=marks.csv --points=points.csv "
+                         "--out_colmap=../model --report=r.json");
+  EXPECT_EQ(run.exit_code, 2) << run.err;
+  EXPECT_EQ(run.err.find("iteration"), std::string::npos) << run.err;
+  EXPECT_NE(run.err.find("photopose bundle: --out_colmap: camera 'UAV_8.8mm' has K1 = -0.00012: "
+                         "only a frame camera without distortion, affinity and skew is a COLMAP "
+                         "pinhole camera\n"),
+            std::string::npos)
+      << run.err;
+  EXPECT_EQ(Take(work_), before);
+  EXPECT_TRUE(fs::is_empty(root_ + "/model"));
+}
+
 // ------------------------------------------------------------------ guard
 
 TEST_F(BadInputCatalogue, RunningOutOfMemoryIsOneLineNotAnAbort) {

@@ -148,6 +148,17 @@ int RunBundle(int argc, char** argv) {
     return BadInput(kCommand, "nothing to write: give --out, --out_colmap or --report");
   if (!FLAGS_bundle_out_cameras.empty() && !tables)
     return BadInput(kCommand, "--out_cameras writes a camera table of frame cameras; with --colmap_model or --bal use --out_colmap");
+  // The tables' other inputs: a COLMAP model or a BAL problem holds its own points and poses.
+  if (!tables) {
+    const std::string source = !FLAGS_bundle_colmap_model.empty() ? "--colmap_model" : "--bal";
+    for (const auto& [flag, path] : {std::pair<const char*, const std::string&>{"--points", FLAGS_bundle_points},
+                                     {"--frames", FLAGS_bundle_frames}}) {
+      if (!path.empty())
+        return BadInput(kCommand, std::string(flag) + " is read with the tables (--cameras and --marks) only; " + source + " holds its own points and poses: leave " + flag + " out");
+    }
+  }
+  if (!FLAGS_bundle_bal.empty() && !FLAGS_bundle_out_colmap.empty())
+    return BadInput(kCommand, "--out_colmap: a BAL problem has no image size and counts pixels from the image centre, which a COLMAP model cannot hold; write --out, --out_points or --report");
 
   BundleReportContext context;
   context.command_line = command_line;
@@ -324,6 +335,12 @@ int RunBundle(int argc, char** argv) {
       }
     }
     if (!FLAGS_bundle_quiet) std::cerr << "photopose bundle: initial values: " << initialization.BriefReport() << "\n";
+    // A model the block cannot be written as is refused now, not after the adjustment.
+    if (!FLAGS_bundle_out_colmap.empty()) {
+      const Status writable = CheckColmapModelWritable(
+          block, FLAGS_bundle_colmap_model.empty() ? nullptr : &colmap_extras);
+      if (!writable.ok()) return BadInput(kCommand, "--out_colmap: " + writable.message());
+    }
     const Status adjusted = BundleAdjustWithSolver(solver, options, config, &block, &result);
     if (!adjusted.ok()) return BadInput(kCommand, adjusted.message());
     if (tables && result.summary.datum == BundleDatum::kRelative) {

@@ -1,5 +1,7 @@
 #include "core/io/colmap.h"
 
+#include <sys/stat.h>
+
 #include <gtest/gtest.h>
 
 #include <Eigen/Geometry>
@@ -386,8 +388,64 @@ INSTANTIATE_TEST_SUITE_P(
         BadModel{"ColourOutOfRange", kCamera, kImage, "3 1 2 10 300 20 30 0.5 1 0\n",
                  "points3D.txt:1: R: 300 is out of range [0, 255]"},
         BadModel{"ZeroQuaternion", kCamera, "1 0 0 0 0 0 0 0 1 a.jpg\n\n", kPoint,
-                 "images.txt:1: QW: the quaternion (QW, QX, QY, QZ) is zero"}),
+                 "images.txt:1: QW: the quaternion (QW, QX, QY, QZ) is zero"},
+        // Absurd values: refused at their line, before any work (issue 20).
+        BadModel{"HugeQuaternion", kCamera, "1 1e300 0 0 0 0 0 0 1 a.jpg\n\n", kPoint,
+                 "images.txt:1: QW: the quaternion (QW, QX, QY, QZ) has norm 1e+300; COLMAP's is "
+                 "a unit quaternion (one with a norm between 1e-12 and 1000000000000 is "
+                 "normalised)"},
+        BadModel{"NegativeFocalLength", "1 SIMPLE_RADIAL 100 80 -6000 50 40 0.01\n", kImage,
+                 kPoint, "cameras.txt:1: PARAMS f: -6000 is no focal length: it must be at least "
+                 "0.001 px"},
+        BadModel{"HugeFocalLength", "1 PINHOLE 100 80 100 1e300 50 40\n", kImage, kPoint,
+                 "cameras.txt:1: PARAMS fy: '1e300' is outside [-100000000, 100000000] px"},
+        BadModel{"HugePrincipalPoint", "1 PINHOLE 100 80 100 100 50 -4e8\n", kImage, kPoint,
+                 "cameras.txt:1: PARAMS cy: '-4e8' is outside [-100000000, 100000000] px"},
+        BadModel{"HugeTranslation", kCamera, "1 1 0 0 0 0 1e300 0 1 a.jpg\n\n", kPoint,
+                 "images.txt:1: TY: '1e300' is outside [-100000000, 100000000] m"},
+        BadModel{"HugeKeypoint", kCamera, "1 1 0 0 0 0 0 0 1 a.jpg\n60 1e10 3\n", kPoint,
+                 "images.txt:2: POINTS2D Y: '1e10' is outside [-100000000, 100000000] px"},
+        BadModel{"HugePoint", kCamera, kImage, "3 1 2e300 10 10 20 30 0.5 1 0\n",
+                 "points3D.txt:1: Y: '2e300' is outside [-100000000, 100000000] m"},
+        // A long token is echoed cut, and escaped.
+        BadModel{"LongModelName",
+                 "1 \x1b[2J_ABCDEFGHIJKLMNOPQRSTUVWXYZ_ABCDEFGHIJKLMNOPQRSTUVWXYZ 100 80 1 2 3\n",
+                 kImage, kPoint,
+                 "cameras.txt:1: MODEL: camera model '\\x1B[2J_ABCDEFGHIJKLMNOPQRSTUVWXYZ_ABCDEFGH"
+                 "\u2026(58 bytes)' is not supported (supported: SIMPLE_PINHOLE, PINHOLE, "
+                 "SIMPLE_RADIAL, RADIAL, OPENCV)"}),
     [](const ::testing::TestParamInfo<BadModel>& info) { return std::string(info.param.name); });
+
+TEST(ColmapIo, AFifoOrAFileOverTheLimitIsRefusedWithoutWaitingOrReading) {
+  ScopedTempDir dir;
+  ASSERT_TRUE(dir.ok());
+  dir.Write("cameras.txt", kCamera);
+  dir.Write("points3D.txt", kPoint);
+  ASSERT_EQ(mkfifo(dir.Path("images.txt").c_str(), 0644), 0);
+  Block block;
+  EXPECT_EQ(ReadColmapModel(dir.path(), &block).message(),
+            dir.Path("images.txt") +
+                ": is a FIFO (named pipe), not a regular file; photopose reads regular files, or "
+                "standard input for '-'");
+  std::filesystem::remove(dir.Path("images.txt"));
+  dir.Write("images.txt", kImage);
+  std::filesystem::resize_file(dir.Path("points3D.txt"), kMaxInputBytes + 1);  // sparse
+  EXPECT_EQ(ReadColmapModel(dir.path(), &block).message(),
+            dir.Path("points3D.txt") +
+                ": is larger than 268435456 bytes, the largest input photopose reads");
+}
+
+TEST(ColmapIo, ParseColmapModelReadsTheTextsAsReadColmapModelReadsTheFiles) {
+  ColmapModelText text{kCamera, kImage, kPoint};
+  Block block;
+  ASSERT_TRUE(ParseColmapModel(text, "m", &block).ok());
+  EXPECT_EQ(block.images.size(), 1u);
+  EXPECT_EQ(block.marks.size(), 1u);
+  text.points3D = "3 1 2 10 10 20 30 0.5\n";
+  EXPECT_EQ(ParseColmapModel(text, "m", &block).message(),
+            "m/points3D.txt:1: TRACK: point 3 is observed in image 'a.jpg' but that is not in its "
+            "track");
+}
 
 TEST(ColmapIo, MissingFileIsAnError) {
   ScopedTempDir dir;

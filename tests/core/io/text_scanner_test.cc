@@ -169,21 +169,42 @@ TEST(AppendNumber, ShortestTextThatReadsBackExactly) {
   EXPECT_EQ(text, "x=0.1-9007199254740993");
 }
 
-TEST(TextFile, ReadsAFileAndNamesAMissingOne) {
+TEST(ForEachRecordLineOfFile, ReadsAFileUnderTheInputRules) {
   const testing::ScopedTempDir dir;
   ASSERT_TRUE(dir.ok());
-  TextFile file;
-  ASSERT_TRUE(file.Open(dir.Write("a.txt", "1 2\n3 4\n")).ok());
-  EXPECT_EQ(file.text(), "1 2\n3 4\n");
-  // An empty file is read (not mapped): empty text.
-  ASSERT_TRUE(file.Open(dir.Write("empty.txt", "")).ok());
-  EXPECT_TRUE(file.text().empty());
-  const Status missing = file.Open(dir.Path("none.txt"));
-  ASSERT_FALSE(missing.ok());
+  std::vector<std::string> words;
+  const auto collect = [&](TokenScanner* scanner) {
+    std::string_view word;
+    while (!scanner->AtEnd()) {
+      PHOTOPOSE_RETURN_IF_ERROR(scanner->Word("word", &word));
+      words.emplace_back(word);
+    }
+    return Status::Ok();
+  };
+  ASSERT_TRUE(ForEachRecordLineOfFile(dir.Write("a.txt", "1 2\n# note\n3 4\n"), false, collect).ok());
+  EXPECT_EQ(words, (std::vector<std::string>{"1", "2", "3", "4"}));
+  const Status missing = ForEachRecordLineOfFile(dir.Path("none.txt"), false, collect);
   EXPECT_EQ(missing.message().rfind(dir.Path("none.txt") + ": cannot open: ", 0), 0u)
       << missing.message();
-  // As an input, a folder is refused (only regular files and standard input are read).
-  EXPECT_FALSE(file.OpenInput(dir.path()).ok());
+  // A folder is refused (only regular files and standard input are read).
+  EXPECT_EQ(ForEachRecordLineOfFile(dir.path(), false, collect).message(),
+            dir.path() +
+                ": is a folder, not a regular file; photopose reads regular files, or standard "
+                "input for '-'");
+}
+
+TEST(TokenScannerTest, NumbersBeyondTheirBoundAreRefusedAndLongTokensCut) {
+  const std::string file = "f.txt";
+  const std::string text = "12 -1e300 " + std::string(1 << 20, '7') + "x";
+  TokenScanner scanner(text, file, 3);
+  double value = 0.0;
+  ASSERT_TRUE(scanner.NumberWithin("a", 100.0, "m", &value).ok());
+  EXPECT_EQ(value, 12.0);
+  EXPECT_EQ(scanner.NumberWithin("b", 100.0, "m", &value).message(),
+            "f.txt:3: b: '-1e300' is outside [-100, 100] m");
+  // A megabyte token is echoed as 40 characters and its size.
+  EXPECT_EQ(scanner.NumberWithin("c", 100.0, "", &value).message(),
+            "f.txt:3: c: '" + std::string(40, '7') + "\u2026(1048577 bytes)' is not a number");
 }
 
 }  // namespace
