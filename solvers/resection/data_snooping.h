@@ -62,7 +62,7 @@ double PredictedCriticalValue(double confidence, int redundancy);
 // Critical value of Omega with known sigma: the chi-square(r) quantile at `confidence`.
 double GlobalTestCriticalValue(double confidence, int redundancy);
 // delta0 of the 2-D test of a mark (above): sqrt of the non-centrality lambda with
-// P(chi-square(2, lambda) > SnoopingCriticalValue(confidence)) = power; 4.67 at 0.999 and 0.8.
+// P(chi-square(2, lambda) > SnoopingCriticalValue(confidence)) = power; 4.434 at 0.999 and 0.8.
 double DetectableBiasSigmas(double confidence, double power);
 // Omega > GlobalTestCriticalValue, without computing the quantile when Omega is below r - 1 (a
 // quantile at confidence >= 0.5 never is).

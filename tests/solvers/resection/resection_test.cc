@@ -515,6 +515,41 @@ TEST(Resection, TwoPosesThatFitAreAmbiguousNotSolved) {
   EXPECT_GT(ambiguous, 0);  // the configuration occurs: the search is exercised
 }
 
+// Reliability in the verdict: every accepted mark has its MDB (px) and pose shift; a pose beyond
+// weak_pose_shift_sigmas is flagged weak with a warning, and refused under refuse_weak (--strict).
+TEST(Resection, WeakPosesAreFlaggedAndRefusedWhenStrict) {
+  ResectionOptions strict;
+  strict.refuse_weak = true;
+  int weak = 0, strong = 0;
+  for (const int n : {5, 30}) {
+    for (uint64_t seed = 1; seed <= 10; ++seed) {
+      const SyntheticScene scene = Scene(Scenario::kNadir, 1.0, 0.0, 31000 + 100 * n + seed, n, 0);
+      const Inputs inputs = InputsOf(scene, false);
+      const ResectionResult r = ResectImage(ResectionOptions(), inputs.inputs[0]);
+      if (!r.success) continue;
+      double largest = 0.0;
+      for (size_t k = 0; k < r.inliers.size(); ++k) {
+        if (!r.inliers[k]) continue;
+        // At least delta0 sigma (1 px): the MDB of a mark every other mark checks fully.
+        EXPECT_GE(r.minimal_detectable_blunders[k], DetectableBiasSigmas(0.999, 0.8));
+        largest = std::max(largest, r.pose_shifts_sigmas[k]);
+      }
+      EXPECT_EQ(largest, r.max_pose_shift_sigmas);
+      EXPECT_EQ(r.weak, r.max_pose_shift_sigmas > ResectionOptions().weak_pose_shift_sigmas);
+      const ResectionResult s = ResectImage(strict, inputs.inputs[0]);
+      EXPECT_EQ(s.success, !r.weak);
+      if (r.weak) {
+        ++weak;
+        EXPECT_NE(s.summary.message.find("weak: an undetectable blunder"), std::string::npos);
+      } else {
+        ++strong;
+      }
+    }
+  }
+  EXPECT_GT(weak, 0);    // five points: weak
+  EXPECT_GT(strong, 0);  // thirty points: not
+}
+
 // Thousands of random few-point images, with and without a blunder: no pose reported solved (and
 // not flagged weak) lies more than kWrongPoseSigmas from the truth.
 TEST(Resection, NoFewPointImageIsReportedSolvedFarFromTheTruth) {
