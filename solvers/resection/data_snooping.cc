@@ -1,6 +1,7 @@
 #include "solvers/resection/data_snooping.h"
 
 #include <Eigen/Dense>
+#include <algorithm>
 #include <array>
 #include <cmath>
 #include <limits>
@@ -82,6 +83,34 @@ double GlobalTestCriticalValue(double confidence, int redundancy) {
   return value;
 }
 
+double DetectableBiasSigmas(double confidence, double power) {
+  const double critical = SnoopingCriticalValue(confidence);
+  // P(chi-square(2, lambda) <= x) = sum_j Poisson(j; lambda / 2) P(chi-square(2 + 2 j) <= x), and
+  // P(chi-square(2 + 2 j) > x) = e^(-x/2) sum_{m <= j} (x/2)^m / m!; the terms are summed until
+  // the Poisson tail is negligible. Power grows with lambda: bisection.
+  const auto power_at = [critical](double lambda) {
+    const double half = 0.5 * lambda, x = 0.5 * critical;
+    double poisson = std::exp(-half), term = std::exp(-x), tail = term, exceed = 0.0, mass = 0.0;
+    for (int j = 0; j < 2000 && mass < 1.0 - 1e-15; ++j) {
+      if (j > 0) {
+        poisson *= half / j;
+        term *= x / j;
+        tail += term;
+      }
+      exceed += poisson * std::min(tail, 1.0);
+      mass += poisson;
+    }
+    return exceed;
+  };
+  double lo = 0.0, hi = 1.0;
+  while (power_at(hi) < power) hi *= 2.0;
+  for (int k = 0; k < 100; ++k) {
+    const double mid = 0.5 * (lo + hi);
+    (power_at(mid) < power ? lo : hi) = mid;
+  }
+  return std::sqrt(0.5 * (lo + hi));
+}
+
 bool FailsGlobalTest(double omega, double confidence, int redundancy) {
   // A quantile above the median is above r - 2/3 (> r - 1); the exact quantile (a few hundred
   // evaluations of the incomplete gamma function) is needed only beyond that.
@@ -100,6 +129,8 @@ Status ComputePoseAdjustmentStatistics(const std::vector<Eigen::Vector2d>& image
   s.redundancy_numbers.assign(n, 0.0);
   s.test_statistics.assign(n, 0.0);
   s.in_front.assign(n, 0);
+  s.detectable_blunder_per_delta.assign(n, 0.0);
+  s.pose_shift_per_delta.assign(n, 0.0);
   std::vector<Eigen::Matrix<double, 2, 6, Eigen::RowMajor>> jacobians(n);
   const SeedProjector projector(eo.data(), focal);
   for (size_t i = 0; i < n; ++i) {
@@ -131,6 +162,21 @@ Status ComputePoseAdjustmentStatistics(const std::vector<Eigen::Vector2d>& image
         const Eigen::Matrix2d Qvv = Eigen::Matrix2d::Identity() - H;
         s.redundancy_numbers[i] = 0.5 * Qvv.trace();
         s.test_statistics[i] = PseudoInverseQuadraticForm(Qvv, s.whitened_residuals[i]);
+        const double q_min = Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d>(
+                                 Qvv, Eigen::EigenvaluesOnly).eigenvalues()[0];
+        if (!(q_min > kMinCofactorEigenvalue)) {
+          s.detectable_blunder_per_delta[i] = std::numeric_limits<double>::infinity();
+          s.pose_shift_per_delta[i] = std::numeric_limits<double>::infinity();
+          continue;
+        }
+        s.detectable_blunder_per_delta[i] = 1.0 / std::sqrt(q_min);
+        const Eigen::Matrix2d Qvv_inverse = Qvv.inverse();
+        const Eigen::Matrix<double, 2, 6> G = jacobians[i] * s.cofactor;  // column k: A_i Q e_k
+        for (int k = 0; k < 6; ++k) {
+          const Eigen::Vector2d g = G.col(k);
+          s.pose_shift_per_delta[i] = std::max(
+              s.pose_shift_per_delta[i], std::sqrt(g.dot(Qvv_inverse * g) / s.cofactor(k, k)));
+        }
       } else {
         s.test_statistics[i] = PseudoInverseQuadraticForm(Eigen::Matrix2d::Identity() + H,
                                                           s.whitened_residuals[i]);

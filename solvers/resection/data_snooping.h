@@ -19,6 +19,17 @@
 //     e_i, chi-square(2) with known sigma; with s0 of the marks used, T_i / s0^2 is 2 F(2, r);
 //   - global test (known sigma): Omega ~ chi-square(r).
 // With four marks (r = 2) every T_i equals Omega: a blunder can be detected but not localised.
+//
+// Reliability (Baarda 1968; Foerstner, "Reliability analysis of parameter estimation in linear
+// models with applications to mensuration problems in computer vision", CVGIP 1987), for the 2-D
+// test of a used mark at level alpha and power beta0: a blunder b (whitened 2-vector) on mark i
+// is found with probability beta0 when b^T Qvv_i b >= delta0^2, delta0^2 the non-centrality of
+// chi-square(2) that exceeds the test's critical value with probability beta0.
+//   - internal reliability: the largest blunder not found (the minimal detectable blunder, MDB)
+//     lies along Qvv_i's smallest eigenvalue q_min: |b| = delta0 / sqrt(q_min) standard deviations;
+//   - external reliability: such a blunder moves parameter k by Q A_i^T b, at most
+//     delta0 sqrt(g^T Qvv_i^-1 g) with g = A_i Q e_k, that is delta0 sqrt(g^T Qvv_i^-1 g / Q_kk) of
+//     its own standard deviation; the mark's value is the largest over the six parameters.
 
 #include <Eigen/Core>
 #include <string>
@@ -50,6 +61,9 @@ double TauCriticalValue(double confidence, int redundancy);
 double PredictedCriticalValue(double confidence, int redundancy);
 // Critical value of Omega with known sigma: the chi-square(r) quantile at `confidence`.
 double GlobalTestCriticalValue(double confidence, int redundancy);
+// delta0 of the 2-D test of a mark (above): sqrt of the non-centrality lambda with
+// P(chi-square(2, lambda) > SnoopingCriticalValue(confidence)) = power; 4.434 at 0.999 and 0.8.
+double DetectableBiasSigmas(double confidence, double power);
 // Omega > GlobalTestCriticalValue, without computing the quantile when Omega is below r - 1 (a
 // quantile at confidence >= 0.5 never is).
 bool FailsGlobalTest(double omega, double confidence, int redundancy);
@@ -68,6 +82,12 @@ struct PoseAdjustmentStatistics {
   std::vector<double> redundancy_numbers;
   std::vector<double> test_statistics;
   std::vector<char> in_front;
+  // Per used mark, for delta0 = 1 (multiply by DetectableBiasSigmas): the minimal detectable
+  // blunder in the mark's standard deviations, 1 / sqrt(q_min), and the largest shift of one pose
+  // parameter it causes in that parameter's standard deviations (sigma0 = 1). Infinite for a mark
+  // the others do not check (q_min ~ 0), 0 for marks not used.
+  std::vector<double> detectable_blunder_per_delta;
+  std::vector<double> pose_shift_per_delta;
 };
 
 // The statistics of the pose `eo` for observations image_plane[i] of points_in_ground[i] with

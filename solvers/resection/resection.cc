@@ -7,10 +7,13 @@
 #include <cmath>
 #include <cstdio>
 #include <limits>
+#include <set>
 #include <sstream>
 
 #include "core/collinearity.h"
+#include "core/mark_weight.h"
 #include "core/parallel.h"
+#include "core/simulation/portable_random.h"
 #include "solvers/resection/p3p.h"
 #include "solvers/resection/point_configuration.h"
 
@@ -136,9 +139,160 @@ std::vector<int> Indices(const std::vector<char>& mask) {
   return indices;
 }
 
+
+// Largest |a - b| over the six parameters in the standard deviations `sigmas` (angles wrapped).
+double PoseDistanceSigmas(const ExteriorOrientation& a, const ExteriorOrientation& b,
+                          const Vector6d& sigmas) {
+  double largest = 0.0;
+  for (int k = 0; k < 6; ++k) {
+    const double d = k < 3 ? a.parameters[k] - b.parameters[k]
+                           : WrapAngle(a.parameters[k] - b.parameters[k]);
+    largest = std::max(largest, std::abs(d) / sigmas[k]);
+  }
+  return largest;
+}
+
+// Whether the marks in `set` (stated accuracy) fit one pose: their least squares from *eo (written
+// back) passes the global test and, with five or more and `snoop`, no mark's test statistic
+// exceeds the snooping value.
+bool SetFitsItsAccuracy(const ResectionOptions& options, const ResectionInput& input,
+                        const std::vector<double>& weights, const std::vector<char>& set,
+                        bool snoop, ExteriorOrientation* eo) {
+  const double confidence = options.test.confidence;
+  ResectionSummary ignored;
+  std::vector<Eigen::Vector3d> points;
+  PoseAdjustmentStatistics stats;
+  if (!Adjust(options, input, weights, Indices(set), eo, &points, &ignored) ||
+      !ComputePoseAdjustmentStatistics(input.image_plane, points, weights, input.focal_length,
+                                       *eo, set, &stats)
+           .ok() ||
+      !stats.determined || FailsGlobalTest(stats.omega, confidence, stats.redundancy))
+    return false;
+  if (!snoop || stats.num_used < 5) return true;
+  for (size_t i = 0; i < set.size(); ++i)
+    if (set[i] && stats.test_statistics[i] > SnoopingCriticalValue(confidence)) return false;
+  return true;
+}
+
+// A pose supported by a competing consensus set: its marks and the least squares over them.
+struct CompetingPose {
+  ExteriorOrientation eo;
+  std::vector<char> inliers;
+  double distance_sigmas = 0.0;  // from the accepted pose, in its standard deviations
+};
+
+// Marks within `threshold` whitened units of the pose `eo` (in front of the camera).
+std::vector<char> ConsensusAt(const ResectionInput& input, const std::vector<double>& weights,
+                              const ExteriorOrientation& eo, double threshold) {
+  const std::vector<Eigen::Vector3d> points = CameraPoints(input, eo.center_in_ground());
+  const SeedProjector projector(eo.data(), input.focal_length);
+  std::vector<char> fits(points.size(), 0);
+  for (size_t i = 0; i < points.size(); ++i) {
+    double xy[2];
+    if (!projector.Project(points[i].data(), xy, nullptr, nullptr, nullptr)) continue;
+    fits[i] = (input.image_plane[i] - Eigen::Vector2d(xy[0], xy[1])).norm() / weights[i] <=
+              threshold;
+  }
+  return fits;
+}
+
+// Looks for a consensus set other than `accepted`, at least as large, that passes the tests the
+// accepted set passed (global test, no mark beyond the snooping value) and whose least-squares
+// pose lies more than options.ambiguous_pose_sigmas of `sigmas` from `eo`. Hypotheses: P3P on
+// triples with a mark outside `accepted` (any competitor has one), all of them or a seeded random
+// max_exhaustive_samples; each hypothesis's marks within twice the threshold (a three-point pose
+// carries the noise of three marks) are adjusted, then the marks within the threshold of that
+// adjustment, until the set settles.
+bool FindCompetingPose(const ResectionOptions& options, const ResectionInput& input,
+                       const std::vector<double>& weights, const std::vector<char>& accepted,
+                       const ExteriorOrientation& eo, const Vector6d& sigmas,
+                       CompetingPose* competitor) {
+  const int n = static_cast<int>(accepted.size());
+  const int size = static_cast<int>(std::count(accepted.begin(), accepted.end(), 1));
+  std::vector<int> outside;
+  for (int i = 0; i < n; ++i)
+    if (!accepted[i]) outside.push_back(i);
+  if (outside.empty() || size < 4) return false;
+  const double confidence = options.test.confidence;
+  const double threshold = MarkThresholdSigmas(confidence);
+  constexpr int kMaxSettlingPasses = 4;
+
+  std::vector<std::array<int, 3>> triples;
+  const auto has_outside = [&](int i, int j, int k) { return !accepted[i] || !accepted[j] || !accepted[k]; };
+  const long long all = static_cast<long long>(n) * (n - 1) * (n - 2) / 6;
+  const int limit = options.consensus.ransac.max_exhaustive_samples;
+  if (all <= limit) {
+    for (int i = 0; i < n; ++i)
+      for (int j = i + 1; j < n; ++j)
+        for (int k = j + 1; k < n; ++k)
+          if (has_outside(i, j, k)) triples.push_back({i, j, k});
+  } else {
+    PortableRandom random(options.consensus.ransac.seed, /*stream=*/0xA3B1);
+    while (static_cast<int>(triples.size()) < limit) {
+      const int i = outside[random.Below(outside.size())];
+      const int j = static_cast<int>(random.Below(n));
+      const int k = static_cast<int>(random.Below(n));
+      if (i != j && j != k && i != k) triples.push_back({i, j, k});
+    }
+  }
+  std::set<std::vector<char>> tried = {accepted};
+  for (const std::array<int, 3>& triple : triples) {
+    std::array<Eigen::Vector3d, 3> bearings, points;
+    for (int t = 0; t < 3; ++t) {
+      const Eigen::Vector2d& xy = input.image_plane[triple[t]];
+      bearings[t] = Eigen::Vector3d(xy.x(), xy.y(), -input.focal_length);
+      points[t] = input.points_in_ground[triple[t]];
+    }
+    std::vector<PoseCandidate> solutions;
+    SolveP3P(bearings, points, &solutions);
+    for (const PoseCandidate& solution : solutions) {
+      ExteriorOrientation hypothesis;
+      hypothesis.set_center_in_ground(solution.center_in_ground);
+      hypothesis.set_angles_seed_rad(
+          AnglesFromRotation(RotationConvention::kSeed, solution.R_camera_from_ground));
+      std::vector<char> set = ConsensusAt(input, weights, hypothesis, 2.0 * threshold);
+      bool settled = false;
+      for (int pass = 0; pass < kMaxSettlingPasses && !settled; ++pass) {
+        if (std::count(set.begin(), set.end(), 1) < size || !tried.insert(set).second) break;
+        ResectionSummary ignored;
+        std::vector<Eigen::Vector3d> adjusted_points;
+        if (!Adjust(options, input, weights, Indices(set), &hypothesis, &adjusted_points, &ignored))
+          break;
+        const std::vector<char> next = ConsensusAt(input, weights, hypothesis, threshold);
+        settled = next == set;
+        if (!settled) set = next;
+      }
+      if (!settled || !SetFitsItsAccuracy(options, input, weights, set, /*snoop=*/true, &hypothesis)) continue;
+      const double distance = PoseDistanceSigmas(hypothesis, eo, sigmas);
+      if (!(distance > options.ambiguous_pose_sigmas)) continue;
+      // Both sets together passing the global test: the competition is a mark at the margin of
+      // the snooping (a false alarm), not two poses; a blunder absorbed by one of the sets makes
+      // the union fail.
+      std::vector<char> both = set;
+      for (int i = 0; i < n; ++i) both[i] = both[i] || accepted[i];
+      ExteriorOrientation joint = eo;
+      if (!SetFitsItsAccuracy(options, input, weights, both, /*snoop=*/false, &joint)) {
+        competitor->eo = hypothesis;
+        competitor->inliers = set;
+        competitor->distance_sigmas = distance;
+        return true;
+      }
+    }
+  }
+  return false;
+}
+
 }  // namespace
 
 bool ResectionOptions::IsValid(std::string* why) const {
+  if (!(ambiguous_pose_sigmas > 0.0) || !(weak_pose_shift_sigmas > 0.0)) {
+    if (why != nullptr) *why = "ambiguous_pose_sigmas and weak_pose_shift_sigmas must be positive";
+    return false;
+  }
+  if (!(detection_power > 0.0 && detection_power < 1.0)) {
+    if (why != nullptr) *why = "the detection power must be in (0, 1)";
+    return false;
+  }
   return consensus.ransac.IsValid(why) && test.IsValid(why) && refinement.IsValid(why);
 }
 
@@ -222,6 +376,16 @@ ResectionResult ResectImage(const ResectionOptions& options, const ResectionInpu
     if (!status.ok()) return fail("no initial pose: " + status.message());
     // Four marks and no stated accuracy: the data cannot say which would not fit; all are taken.
     if (!marks.stated && n == 4) candidate.assign(n, 1);
+    // The pose of a minimal sample carries the noise of three marks, so a good mark may lie
+    // beyond the threshold there and also beyond the prediction of the few marks kept; when every
+    // mark fits the least squares of all, all are kept.
+    ExteriorOrientation all_marks = eo;
+    if (marks.stated && n >= 4 && std::count(candidate.begin(), candidate.end(), 1) < static_cast<long>(n) &&
+        SetFitsItsAccuracy(options, input, marks.weights, std::vector<char>(n, 1),
+                           /*snoop=*/true, &all_marks)) {
+      candidate.assign(n, 1);
+      eo = all_marks;
+    }
   }
 
   // 2. Adjust, take back what fits, reject what the test rejects; until nothing changes.
@@ -282,6 +446,11 @@ ResectionResult ResectImage(const ResectionOptions& options, const ResectionInpu
 
   // 3. The verdict.
   const int accepted = stats.num_used;
+  result.eo = eo;
+  result.inliers = candidate;
+  result.num_inliers = accepted;
+  result.degrees_of_freedom = stats.redundancy;
+  result.sigma0 = stats.redundancy > 0 ? std::sqrt(s0_squared) : 0.0;
   // Each mark left out, with its residual, for messages.
   const auto left_out = [&]() {
     std::string text;
@@ -292,6 +461,12 @@ ResectionResult ResectImage(const ResectionOptions& options, const ResectionInpu
               (stats.in_front[i] ? Number(residual) + " " + EnumName(marks.units[i]) : "behind") +
               ")";
     }
+    return text;
+  };
+  const auto names = [&](const std::vector<char>& set) {
+    std::string text;
+    for (size_t i = 0; i < n; ++i)
+      if (set[i]) text += std::string(text.empty() ? "" : ", ") + marks.name(i);
     return text;
   };
   for (size_t i = 0; i < n; ++i) {
@@ -316,31 +491,26 @@ ResectionResult ResectImage(const ResectionOptions& options, const ResectionInpu
     }
     result.warnings.push_back("no redundancy: " + what + "; the pose has no standard deviations");
   }
-  if (accepted == 4 && marks.stated) {
-    const double critical = GlobalTestCriticalValue(confidence, 2);
-    if (FailsGlobalTest(stats.omega, confidence, 2))
-      return fail("the 4 accepted marks do not fit their stated accuracy (sum of squared "
-                  "normalized residuals " + Number(stats.omega) + " > " + Number(critical) +
-                  ", chi-square(2) at " + percent() + "): one of them is a blunder, and four marks "
-                  "cannot show which" + (n > 4 ? " (left out: " + left_out() + ")" : ""));
+  if (accepted >= 4 && marks.stated && FailsGlobalTest(stats.omega, confidence, stats.redundancy)) {
+    result.accuracy_disagrees = true;
+    const double critical = GlobalTestCriticalValue(confidence, stats.redundancy);
+    return fail("sigma0 = " + Number(result.sigma0) + ": the " + std::to_string(accepted) +
+                " accepted marks do not fit their stated accuracy (sum of squared normalized "
+                "residuals " + Number(stats.omega) + " > " + Number(critical) + ", chi-square(" +
+                std::to_string(stats.redundancy) + ") at " + percent() + "; sigma0 up to " +
+                Number(std::sqrt(critical / stats.redundancy)) + " passes): " +
+                (accepted == 4 ? "one of them is a blunder, and four marks cannot show which"
+                               : "a blunder the tests cannot isolate, or marks less accurate "
+                                 "than stated") +
+                (n > static_cast<size_t>(accepted) ? " (left out: " + left_out() + ")" : ""));
   }
   if (accepted == 4 && !marks.stated) {
     result.warnings.push_back(
         "4 marks without a stated accuracy: a blunder among them cannot be detected (redundancy "
         "2); state their Accuracy to test them");
   }
-  if (accepted >= 5 && marks.stated && FailsGlobalTest(stats.omega, confidence, stats.redundancy)) {
-    result.warnings.push_back(
-        "sigma0 = " + Number(std::sqrt(s0_squared)) +
-        ": the accepted marks fit worse than their stated accuracy (global test at " + percent() +
-        "); the Accuracy values may be too optimistic");
-  }
 
   // 4. Statistics.
-  result.eo = eo;
-  result.num_inliers = accepted;
-  result.degrees_of_freedom = stats.redundancy;
-  result.sigma0 = stats.redundancy > 0 ? std::sqrt(s0_squared) : 0.0;
   if (!stats.determined)
     return fail("the normal matrix is singular: the pose is not determined by these points");
   if (stats.redundancy > 0) {
@@ -356,8 +526,12 @@ ResectionResult ResectImage(const ResectionOptions& options, const ResectionInpu
   result.residuals.resize(n);
   result.normalized_residuals.assign(n, kNaN);
   result.redundancy_numbers = stats.redundancy_numbers;
+  result.minimal_detectable_blunders.assign(n, 0.0);
+  result.pose_shifts_sigmas.assign(n, 0.0);
   result.mark_status.resize(n);
-  result.inliers = candidate;
+  // The marks' standard deviation in their own unit: stated, or sigma0 times the unit weight.
+  const double scale = marks.stated ? 1.0 : (stats.redundancy > 0 ? std::sqrt(s0_squared) : kNaN);
+  const double delta0 = DetectableBiasSigmas(confidence, options.detection_power);
   for (size_t i = 0; i < n; ++i) {
     result.residuals[i] = stats.whitened_residuals[i] * marks.weights[i] / marks.per_unit[i];
     const bool testable = candidate[i] ? stats.redundancy_numbers[i] > 1e-6 : true;
@@ -369,6 +543,48 @@ ResectionResult ResectImage(const ResectionOptions& options, const ResectionInpu
     result.mark_status[i] = candidate[i] ? MarkStatus::kAccepted
                             : rejected[i] ? MarkStatus::kRejected
                                           : MarkStatus::kConsensusOutlier;
+    if (!candidate[i] || stats.redundancy == 0) continue;
+    result.minimal_detectable_blunders[i] = delta0 * stats.detectable_blunder_per_delta[i] *
+                                            scale * marks.weights[i] / marks.per_unit[i];
+    result.pose_shifts_sigmas[i] = delta0 * stats.pose_shift_per_delta[i];
+    if (!(result.pose_shifts_sigmas[i] <= result.max_pose_shift_sigmas)) {
+      result.max_pose_shift_sigmas = result.pose_shifts_sigmas[i];
+      result.weakest_mark = static_cast<int>(i);
+    }
+  }
+
+  // Ambiguity: another consensus set, as large, fits a pose beyond a few of this one's sigmas.
+  if (marks.stated && result.has_covariance) {
+    CompetingPose competitor;
+    if (FindCompetingPose(options, input, marks.weights, candidate, eo,
+                          result.standard_deviations, &competitor)) {
+      result.ambiguous = true;
+      result.competing_eo = competitor.eo;
+      result.competing_inliers = competitor.inliers;
+      const Eigen::Vector3d apart = competitor.eo.center_in_ground() - eo.center_in_ground();
+      return fail("ambiguous: two poses fit as many marks each: " + names(candidate) +
+                  " give one, " + names(competitor.inliers) + " another " + Number(apart.norm()) +
+                  " m away (" + Number(competitor.distance_sigmas) +
+                  " standard deviations); one of the marks is a blunder that the others cannot "
+                  "single out: check the marks, or add control points");
+    }
+  }
+
+  // Reliability: an undetected blunder of MDB size on the weakest mark moves the pose by
+  // max_pose_shift_sigmas of its standard deviations.
+  if (stats.redundancy == 0) {
+    result.weak = true;
+  } else if (result.max_pose_shift_sigmas > options.weak_pose_shift_sigmas) {
+    result.weak = true;
+    const size_t w = static_cast<size_t>(result.weakest_mark);
+    const std::string why =
+        "an undetectable blunder of " + Number(result.minimal_detectable_blunders[w]) + " " +
+        std::string(EnumName(marks.units[w])) + " on mark " + marks.name(w) + " (redundancy number " +
+        Number(stats.redundancy_numbers[w]) + ") would move the pose by " +
+        Number(result.max_pose_shift_sigmas) + " standard deviations (more than " +
+        Number(options.weak_pose_shift_sigmas) + ")";
+    if (options.refuse_weak) return fail("weak: " + why);
+    result.warnings.push_back("weak: " + why + "; more control points make it checkable");
   }
   result.success = true;
   summary.termination = SolverTermination::kConverged;
@@ -409,6 +625,10 @@ Status MakeResectionInput(const Block& block, int image, const ResectionInputOpt
   result.approximate = block_image.eo;
   if (camera.model == CameraModelType::kFrame && camera.table.apply_ecc)
     result.earth_radius_m = camera.table.earth_radius_m;
+  MarkSigmaDefaults defaults;
+  defaults.pixel_px = options.default_accuracy;
+  defaults.film_um = options.default_film_accuracy_um;
+  defaults.film_from_pixel_size = false;  // a film default in um, whatever the PixelSize
   std::vector<int> used;
   for (const int m : block.marks_of_image[image]) {
     const BlockMark& mark = block.marks[m];
@@ -426,7 +646,11 @@ Status MakeResectionInput(const Block& block, int image, const ResectionInputOpt
     }
     result.image_plane.push_back(focal * ab);
     result.points_in_ground.push_back(tie_with_position ? *point.position_m : *point.surveyed_m);
-    result.sigma.push_back(mark.accuracy.value_or(options.default_accuracy));
+    // MarkSigma gives image-plane units; the input keeps each mark's own unit.
+    result.sigma.push_back(
+        options.default_accuracy > 0.0
+            ? MarkSigma(mark, camera, defaults) / mark.observation_units_per_unit
+            : mark.accuracy.value_or(0.0));
     result.observation_units_per_unit.push_back(mark.observation_units_per_unit);
     result.units.push_back(mark.unit);
     result.point_ids.push_back(point.id);

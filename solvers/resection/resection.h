@@ -15,12 +15,29 @@
 //      redundancy numbers (solvers/resection/data_snooping.h: Baarda's data snooping with the stated
 //      accuracy, Pope's tau test with sigma0 from the data when none is stated) reject the worst
 //      mark if the test rejects it, one at a time, each followed by a new adjustment.
-//   3. Verdict: three marks left (no redundancy) is not a solution (unless allow_no_redundancy,
-//      and never when P3P leaves several poses); four marks with stated accuracy must pass the
-//      global test (a blunder among four can be detected but not localised); every marked control
-//      point, kept or not, must lie in front of the camera at the solution.
-//   4. Statistics: per mark its residual (in its own unit), normalized residual, redundancy number
-//      and status; sigma0 and the covariance sigma0^2 N^-1 over the accepted marks.
+//   3. Verdict, in this order; each refusal says why with its numbers:
+//      - three marks left (no redundancy) is not a solution (unless allow_no_redundancy, and never
+//        when P3P leaves several poses); every marked control point, kept or not, must lie in
+//        front of the camera at the solution;
+//      - with stated accuracy, the accepted marks must pass the global test (Omega against
+//        chi-square(r) at the test confidence): marks that disagree with their accuracy are not a
+//        solution, whatever their number (sigma0 says by how much);
+//      - ambiguity (stated accuracy): a competing consensus set, at least as large as the
+//        accepted one and with a mark outside it, that passes the same tests and gives a pose more
+//        than ambiguous_pose_sigmas of the accepted pose's standard deviations away, makes the
+//        image ambiguous: not solved, both poses and their marks in the result. The competitors
+//        come from P3P on every triple with a mark outside the accepted set (a random
+//        consensus.ransac.max_exhaustive_samples of them when there are more);
+//      - reliability: per accepted mark its minimal detectable blunder (MDB, the mark's unit) and
+//        the largest pose shift such a blunder causes unseen (data_snooping.h); a pose that the
+//        MDB of some mark moves by more than weak_pose_shift_sigmas is weak: reported with a
+//        warning, or refused under refuse_weak.
+//   4. Statistics: per mark its residual (in its own unit), normalized residual, redundancy number,
+//      MDB and status; sigma0 (for every image that reached an adjustment, solved or not) and the
+//      covariance sigma0^2 N^-1 over the accepted marks.
+// Without stated accuracy (sigma = 0: the block initialization's initial values only; photopose
+// resect always states one) sigma0 comes from the data, with Pope's tau test, and there is no
+// global test and no ambiguity search: a blunder then inflates sigma0 and may hide itself.
 // The final estimate is least squares over the accepted marks by default; a robust loss is an
 // option of the refinement. Data-dependent failures return success = false with a reason (numbers
 // included), never a pose.
@@ -61,6 +78,17 @@ struct ResectionOptions {
   // Report a pose whose accepted marks leave no redundancy (three points), without covariance.
   // Off: nothing checks such a pose, and P3P may fit three points with up to four poses.
   bool allow_no_redundancy = false;
+  // A competing pose farther than this many of the accepted pose's standard deviations (largest
+  // over the six parameters) makes the image ambiguous. Below it the two are one pose in the
+  // noise.
+  double ambiguous_pose_sigmas = 3.0;
+  // Power of the tests for the minimal detectable blunder (Baarda's beta0 = 0.8).
+  double detection_power = 0.8;
+  // A pose that an undetected blunder of MDB size could move by more than this many of its
+  // standard deviations (one parameter) is weak.
+  double weak_pose_shift_sigmas = 3.0;
+  // Refuse weak poses (photopose resect --strict) instead of reporting them with a warning.
+  bool refuse_weak = false;
 
   bool IsValid(std::string* why) const;
 };
@@ -134,20 +162,38 @@ struct ResectionResult {
   bool accuracy_stated = false;
   // A-posteriori sigma0 = sqrt(Omega / r): unitless with stated accuracies (1 = as stated), in the
   // marks' own unit when none was stated (then it estimates their accuracy). 0 without redundancy.
+  // Set whenever an adjustment was reached, also for an image that is not solved.
   double sigma0 = 0.0;
   int degrees_of_freedom = 0;  // 2 accepted - 6
   int num_inliers = 0;         // accepted marks
   // Per mark (input order): observed minus computed on the ideal image plane (x right, y up) in the
   // mark's own unit; normalized residual, the square root of its test statistic in standard
   // deviations (known sigma) or in units of sigma0 (estimated), NaN where it cannot be tested;
-  // redundancy number (0 for marks left out); status; accepted flag.
+  // redundancy number (0 for marks left out); minimal detectable blunder (the mark's unit; 0 for
+  // marks left out, infinite for a mark the others do not check) and the largest shift of a pose
+  // parameter it causes unseen (that parameter's standard deviations); status; accepted flag.
   std::vector<Eigen::Vector2d> residuals;
   std::vector<double> normalized_residuals;
   std::vector<double> redundancy_numbers;
+  std::vector<double> minimal_detectable_blunders;
+  std::vector<double> pose_shifts_sigmas;
   std::vector<MarkStatus> mark_status;
   std::vector<char> inliers;
   // The normalized residual beyond which the test rejects (NaN with four marks or fewer).
   double critical_normalized_residual = 0.0;
+  // The largest of pose_shifts_sigmas and its mark (-1: none); weak when above
+  // ResectionOptions::weak_pose_shift_sigmas or without redundancy.
+  double max_pose_shift_sigmas = 0.0;
+  int weakest_mark = -1;
+  bool weak = false;
+  // The accepted marks failed the global test with their stated accuracy (not solved; sigma0 and
+  // degrees_of_freedom say by how much).
+  bool accuracy_disagrees = false;
+  // Not solved because another consensus set fits a materially different pose: eo and inliers
+  // hold the first pose and its marks, these the competitor.
+  bool ambiguous = false;
+  ExteriorOrientation competing_eo;
+  std::vector<char> competing_inliers;
   // Findings that do not stop the solution, one sentence each (stated accuracy too optimistic,
   // four marks that cannot be tested, no redundancy allowed).
   std::vector<std::string> warnings;
@@ -165,9 +211,12 @@ std::vector<ResectionResult> ResectImages(const ResectionOptions& options,
 // ------------------------------------------------------------------ from a block
 
 struct ResectionInputOptions {
-  // Standard deviation of marks without an Accuracy, in their own unit (pixels for pixel marks, um
-  // for film marks); 0: not stated, so the tests estimate it from the data.
-  double default_accuracy = 0.0;
+  // Standard deviation of marks without an Accuracy (MarkSigma, core/mark_weight.h, with
+  // film_from_pixel_size off): pixel marks take default_accuracy (px), film marks
+  // default_film_accuracy_um (um). default_accuracy 0: nothing stated, the tests take sigma0 from
+  // the data (the block initialization's initial values; not offered by photopose resect).
+  double default_accuracy = 1.0;
+  double default_film_accuracy_um = 5.0;
   // Also marks of tie points that have coordinates (position_m: intersected or approximate), as
   // if they were control points: the block initialization orients images from them.
   bool include_tie_points_with_positions = false;

@@ -29,7 +29,9 @@ DEFINE_string(loss, "none", "Loss of the Ceres solver: none (least squares over 
 DEFINE_string(ceres_minimizer, "tiny_solver", "How Ceres minimises each image: tiny_solver (ceres::TinySolver with an iteratively reweighted loss, fast for one image) or problem (ceres::Problem and ceres::Solve).");
 DEFINE_double(loss_scale, 2.0, "Scale of the robust loss in standard deviations of the marks: residuals beyond it are down-weighted.");
 DEFINE_double(confidence, 0.999, "Confidence of the outlier decisions, between 0 and 1: the consensus threshold is the square root of the chi-square(2) quantile at it (3.72 standard deviations at 0.999), and data snooping rejects a mark whose test statistic exceeds the quantile.");
-DEFINE_double(default_accuracy, 0.0, "Accuracy (one sigma) of marks without an Accuracy value, in the mark's own unit (pixels for Column/Row, micrometres for FilmX/FilmY); 0 leaves it unstated, and the tests then take sigma0 from the data.");
+DEFINE_double(default_accuracy, 1.0, "Accuracy (one sigma) of pixel marks (Column/Row) without an Accuracy value, in pixels; every test (global test, data snooping, consensus threshold) and the loss scale use it.");
+DEFINE_double(default_film_accuracy, 5.0, "Accuracy (one sigma) of film marks (FilmX/FilmY) without an Accuracy value, in micrometres.");
+DEFINE_bool(strict, false, "Refuse weak poses (an undetectable blunder of the minimal detectable size could move them by more than 3 of their standard deviations) instead of reporting them flagged weak.");
 DEFINE_bool(allow_no_redundancy, false, "Also report poses whose accepted marks leave no redundancy (three points), without standard deviations and with a warning; otherwise such an image is not solved.");
 DEFINE_uint64(seed, 0, "Seed of the random sampling of the consensus when an image has too many marks to try every minimal sample; the same seed gives the same result.");
 DEFINE_int32(threads, 0, "Number of images resected in parallel; 0 uses all cores.");
@@ -42,16 +44,20 @@ constexpr char kUsage[] =
     "photopose resect: space resection of every image that has marks.\n\n"
     "Usage: photopose resect --cameras=C.csv --points=P.csv --marks=M.csv --out=frames.csv\n"
     "                        [--frames=approx.csv] [--report=report.json] [--rotation=rxryrz|opk|pok]\n"
-    "                        [--fiducials=F.csv] [--default_accuracy=A] [--confidence=0.999]\n"
+    "                        [--fiducials=F.csv] [--default_accuracy=1] [--default_film_accuracy=5]\n"
+    "                        [--strict] [--confidence=0.999]\n"
     "                        [--allow_no_redundancy] [--solver=ceres|taylor|taylor_as_printed]\n"
     "                        [--jacobian=analytic|autodiff] [--loss=none ...] [--threads=N]\n"
     "   or: photopose resect --cameras=C.csv --gcp_list=gcp_list.txt --out=frames.csv ...\n\n"
     "Without --frames the initial values come from a consensus of minimal samples (every sample\n"
     "when there are few, LO-RANSAC over P3P and the DLT otherwise); least squares then refines\n"
-    "every pose over the marks that fit, and data snooping rejects blunders one at a time. Marks'\n"
-    "accuracies set the thresholds; without them sigma0 comes from the data. A pose that no\n"
-    "redundant mark checks is not reported. Exit status: 0 every image resected, 1 some image\n"
-    "could not be (each says why), 2 bad input or usage.\n";
+    "every pose over the marks that fit, and data snooping rejects blunders one at a time. Marks\n"
+    "without an Accuracy take --default_accuracy (1 px) or --default_film_accuracy (5 um); an\n"
+    "image whose marks fail the global test at that accuracy, or that two poses fit, is not\n"
+    "solved; a pose an undetectable blunder could move by more than 3 sigma is flagged weak\n"
+    "(refused with --strict). A pose that no redundant mark checks is not reported. Nothing is\n"
+    "written when no image is resected. Exit status: 0 every image resected, 1 some image could\n"
+    "not be (each says why), 2 bad input or usage.\n";
 
 // Every numeric flag's range (docs/formats.md, "Limits and refusals").
 const CommandFlags& ResectFlags() {
@@ -62,7 +68,8 @@ const CommandFlags& ResectFlags() {
                        {},
                        {{"loss_scale", 0.0, 1000.0, true, false, "standard deviations"},
                         {"confidence", 0.5, 1.0, false, true},
-                        {"default_accuracy", 0.0, 1e6, false, false, "px or um (the mark's unit)"},
+                        {"default_accuracy", 0.0, 1e6, true, false, "px"},
+                        {"default_film_accuracy", 0.0, 1e6, true, false, "um"},
                         {"max_fiducial_residual", 0.0, 1e6, true, false, "um"},
                         {"seed", 0.0, 18446744073709551615.0},
                         {"threads", 0.0, 1024.0}}};
@@ -98,6 +105,7 @@ int RunResect(int argc, char** argv) {
   files.max_fiducial_residual_um = FLAGS_max_fiducial_residual;
   files.pixel_origin = FLAGS_pixel_center_origin ? PixelOrigin::kCenter : PixelOrigin::kCorner;
   job.input.default_accuracy = FLAGS_default_accuracy;
+  job.input.default_film_accuracy_um = FLAGS_default_film_accuracy;
   if (FLAGS_cameras.empty()) return BadInput("resect", "--cameras is required");
   if (FLAGS_gcp_list.empty() && (FLAGS_points.empty() || FLAGS_marks.empty()))
     return BadInput("resect", "--points and --marks (or --gcp_list) are required");
@@ -117,8 +125,10 @@ int RunResect(int argc, char** argv) {
   if (!ParseEnum(FLAGS_ceres_minimizer, &refinement.ceres.minimizer))
     return BadInput("resect",
                     EnumFlagError<CeresMinimizer>("--ceres_minimizer", FLAGS_ceres_minimizer));
-  if (!(FLAGS_default_accuracy >= 0.0) || !std::isfinite(FLAGS_default_accuracy))
-    return BadInput("resect", "--default_accuracy must be positive (or 0 for none)");
+  if (!(FLAGS_default_accuracy > 0.0) || !std::isfinite(FLAGS_default_accuracy))
+    return BadInput("resect", "--default_accuracy must be a positive number of pixels");
+  if (!(FLAGS_default_film_accuracy > 0.0) || !std::isfinite(FLAGS_default_film_accuracy))
+    return BadInput("resect", "--default_film_accuracy must be a positive number of micrometres");
   if (!(FLAGS_max_fiducial_residual > 0.0) || !std::isfinite(FLAGS_max_fiducial_residual))
     return BadInput("resect", "--max_fiducial_residual must be a positive number of micrometres");
   if (FLAGS_threads < 0) return BadInput("resect", "--threads must be >= 0");
@@ -127,6 +137,7 @@ int RunResect(int argc, char** argv) {
   options.test.confidence = FLAGS_confidence;
   options.consensus.ransac.seed = FLAGS_seed;
   options.allow_no_redundancy = FLAGS_allow_no_redundancy;
+  options.refuse_weak = FLAGS_strict;
   std::string why;
   if (!options.IsValid(&why)) return BadInput("resect", why);
 
@@ -171,7 +182,11 @@ int RunResect(int argc, char** argv) {
     const std::string& raster = prepared.inputs[i].raster;
     if (!r.success) {
       failed.push_back(raster);
-      std::cerr << "photopose resect: " << raster << ": not resected: " << r.summary.message << "\n";
+      std::cerr << "photopose resect: " << raster << ": not resected: " << r.summary.message;
+      if (r.accuracy_disagrees || r.ambiguous)
+        std::cerr << "; state the marks' accuracy in their Accuracy column, or with "
+                     "--default_accuracy (px) / --default_film_accuracy (um)";
+      std::cerr << "\n";
       continue;
     }
     for (const std::string& warning : r.warnings)
@@ -186,8 +201,15 @@ int RunResect(int argc, char** argv) {
     } else {
       std::printf("sigma0=none (no redundancy)  ");
     }
-    std::printf("inliers=%d/%zu  %s\n", r.num_inliers, r.inliers.size(),
-                r.summary.used_approximate ? "(from --frames)" : "(consensus)");
+    std::printf("inliers=%d/%zu  %s%s\n", r.num_inliers, r.inliers.size(),
+                r.summary.used_approximate ? "(from --frames)" : "(consensus)",
+                r.weak ? "  WEAK" : "");
+  }
+  // Nothing solved: nothing written (an older output stays), exit 1 with the reason.
+  if (failed.size() == results.size()) {
+    std::cerr << "photopose resect: no image was resected (" << NameList(failed)
+              << "); nothing written\n";
+    return kExitSomeFailed;
   }
 
   std::vector<std::string> written = {FLAGS_out};

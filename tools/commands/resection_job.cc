@@ -2,6 +2,7 @@
 #include "tools/commands/resection_job.h"
 
 #include <cmath>
+#include <cstdio>
 #include <nlohmann/json.hpp>
 
 #include "core/io/tables.h"
@@ -74,6 +75,13 @@ std::optional<Eigen::Vector3d> OutputAngleSigmasDeg(const ResectionJob& job, siz
   return Eigen::Vector3d(covariance.diagonal().cwiseMax(0.0).cwiseSqrt() * kDegreesPerRadian);
 }
 
+const char* ResectionVerdictName(const ResectionResult& result) {
+  if (result.success) return result.weak ? "weak" : "solved";
+  if (result.ambiguous) return "ambiguous";
+  if (result.accuracy_disagrees) return "accuracy_disagrees";
+  return "not_solved";
+}
+
 std::string Sigma0Unit(const ResectionJob& job, size_t input, const ResectionResult& result) {
   if (result.accuracy_stated) return "";
   const std::vector<MarkUnit>& units = job.inputs[input].units;
@@ -103,7 +111,20 @@ Status WriteResectionFrames(const std::string& path, const ResectionJobOptions& 
       frame.sigma0 = r.sigma0;
     }
     frame.extra_columns = {{"NumObservations", std::to_string(r.inliers.size())},
-                           {"NumInliers", std::to_string(r.num_inliers)}};
+                           {"NumInliers", std::to_string(r.num_inliers)},
+                           {"Reliability", r.weak ? "weak" : "ok"}};
+    // The input frame's measured centre and its accuracy, kept apart from the adjusted
+    // PerspectiveX/Y/Z: AccuracyX/Y/Z are the accuracies of MeasuredX/Y/Z.
+    const BlockImage& block_image = job.block.images[job.images[i]];
+    if (block_image.measured_center_m) {
+      const Eigen::Vector3d& m = *block_image.measured_center_m;
+      char text[64];
+      for (int k = 0; k < 3; ++k) {
+        std::snprintf(text, sizeof(text), "%.4f", m[k]);
+        frame.extra_columns.push_back({std::string("Measured") + "XYZ"[k], text});
+      }
+      frame.center_accuracy_m = block_image.center_accuracy_m;
+    }
     frames.push_back(std::move(frame));
   }
   FramesTableOptions frames_options;
@@ -134,6 +155,11 @@ Status WriteResectionReport(const std::string& path, const ResectionJobOptions& 
       {"rotation", EnumName(rotation)},
       {"default_accuracy", options.input.default_accuracy > 0.0 ? json(options.input.default_accuracy)
                                                                 : json(nullptr)},
+      {"default_film_accuracy_um", options.input.default_film_accuracy_um},
+      {"strict", o.refuse_weak},
+      {"weak_pose_shift_sigmas", o.weak_pose_shift_sigmas},
+      {"ambiguous_pose_sigmas", o.ambiguous_pose_sigmas},
+      {"detection_power", o.detection_power},
       {"pixel_origin", EnumName(options.files.pixel_origin)}};
   json images = json::array();
   int solved = 0;
@@ -154,7 +180,23 @@ Status WriteResectionReport(const std::string& path, const ResectionJobOptions& 
                   {"final_cost", s.final_cost},
                   {"time_seconds", s.total_seconds},
                   {"accuracy", r.accuracy_stated ? "stated" : "estimated"},
+                  {"verdict", ResectionVerdictName(r)},
+                  {"sigma0", r.sigma0},
+                  {"degrees_of_freedom", r.degrees_of_freedom},
                   {"warnings", r.warnings}};
+    if (r.ambiguous) {
+      const auto pose = [&](const ExteriorOrientation& eo, const std::vector<char>& inliers) {
+        json ids = json::array();
+        for (size_t k = 0; k < inliers.size(); ++k)
+          if (inliers[k]) ids.push_back(job.inputs[i].point_ids[k]);
+        const Eigen::Vector3d angles = OutputAnglesDeg(job, i, rotation, eo);
+        return json{{"X", eo.parameters[0]},      {"Y", eo.parameters[1]},
+                    {"Z", eo.parameters[2]},      {"omega_deg", angles[0]},
+                    {"phi_deg", angles[1]},       {"kappa_deg", angles[2]},
+                    {"point_ids", ids}};
+      };
+      image["ambiguous_poses"] = {pose(r.eo, r.inliers), pose(r.competing_eo, r.competing_inliers)};
+    }
     if (block_image.fiducial_fit) {
       const FiducialFit& fit = *block_image.fiducial_fit;
       json residuals = json::array();
@@ -198,14 +240,17 @@ Status WriteResectionReport(const std::string& path, const ResectionJobOptions& 
         image["covariance_seed"] = nullptr;
         image["standard_deviations"] = nullptr;
       }
-      image["sigma0"] = r.sigma0;
       image["sigma0_unit"] = Sigma0Unit(job, i, r);
-      image["degrees_of_freedom"] = r.degrees_of_freedom;
       image["num_inliers"] = r.num_inliers;
+      image["weak"] = r.weak;
+      image["max_pose_shift_sigmas"] = std::isfinite(r.max_pose_shift_sigmas)
+                                           ? json(r.max_pose_shift_sigmas)
+                                           : json(nullptr);
       image["critical_normalized_residual"] =
           std::isfinite(r.critical_normalized_residual) ? json(r.critical_normalized_residual)
                                                         : json(nullptr);
       json marks = json::array();
+      const auto finite_or_null = [](double v) { return std::isfinite(v) ? json(v) : json(nullptr); };
       for (size_t k = 0; k < job.input_marks[i].size(); ++k) {
         const BlockMark& mark = block.marks[job.input_marks[i][k]];
         const double w = r.normalized_residuals[k];
@@ -217,7 +262,9 @@ Status WriteResectionReport(const std::string& path, const ResectionJobOptions& 
                          {"residual_y", r.residuals[k].y()},
                          {"unit", EnumName(mark.unit)},
                          {"normalized_residual", std::isfinite(w) ? json(w) : json(nullptr)},
-                         {"redundancy", r.redundancy_numbers[k]}});
+                         {"redundancy", r.redundancy_numbers[k]},
+                         {"mdb", finite_or_null(r.minimal_detectable_blunders[k])},
+                         {"pose_shift_sigmas", finite_or_null(r.pose_shifts_sigmas[k])}});
       }
       image["marks"] = marks;
       json checks = json::array();

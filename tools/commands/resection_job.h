@@ -53,6 +53,10 @@ std::optional<Eigen::Vector3d> OutputAngleSigmasDeg(const ResectionJob& job, siz
                                                     RotationConvention rotation,
                                                     const ResectionResult& result);
 
+// "solved", "weak" (solved, flagged), "ambiguous", "accuracy_disagrees" (the global test) or
+// "not_solved" (any other reason; the message says it).
+const char* ResectionVerdictName(const ResectionResult& result);
+
 // The unit of sigma0 of a result: "" when the accuracy was stated (unitless), else the marks'.
 std::string Sigma0Unit(const ResectionJob& job, size_t input, const ResectionResult& result);
 

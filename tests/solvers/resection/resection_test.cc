@@ -329,14 +329,16 @@ TEST(Resection, FewPointsWithOneGrossErrorFlagItOrAreNotSolved) {
   }
 }
 
-// Without a stated accuracy the tests take sigma0 from the data (Pope's tau test); a gross error
-// among six or eight marks is still found.
+// With nothing stated (default_accuracy 0, the block initialization's mode) the tests take sigma0
+// from the data (Pope's tau test); a gross error among six or eight marks is still found.
 TEST(Resection, WithoutStatedAccuracyAGrossErrorAmongSixIsFlagged) {
+  ResectionInputOptions unstated;
+  unstated.default_accuracy = 0.0;
   for (const int n : {6, 8}) {
     for (uint64_t scene_seed = 1; scene_seed <= 10; ++scene_seed) {
       SyntheticScene scene = Scene(Scenario::kNadir, 1.0, 1.0 / n, 300 * n + scene_seed, n, 0);
       for (ImageMark& mark : scene.marks) mark.accuracy_px.reset();
-      const Inputs inputs = InputsOf(scene, false);
+      const Inputs inputs = InputsOf(SceneBlockTables(scene), false, unstated);
       const ResectionResult r = ResectImage(ResectionOptions(), inputs.inputs[0]);
       ASSERT_TRUE(r.success) << r.summary.message;
       EXPECT_FALSE(r.accuracy_stated);
@@ -394,6 +396,187 @@ TEST(Resection, FourMarksWithAStatedAccuracyMustPassTheGlobalTest) {
   }
 }
 
+// ------------------------------------------------------------------ issue 20: data as users bring it
+
+// A reported pose farther than this many of its own standard deviations (any parameter) from the
+// truth is wrong: with Gaussian noise a correct pose lies beyond 5 sigma in one of six parameters
+// with probability ~3e-6.
+constexpr double kWrongPoseSigmas = 5.0;
+// The size of the blunders of the issue (px), against 1 px noise.
+constexpr double kBlunderPx = 40.0;
+
+// In the pose's reported standard deviations; with sigma0 from the data (the former default), in
+// those of the noise's 1 px (sigma0 divided out), which is what a blunder inflating sigma0 hides.
+double DistanceSigmas(const ResectionResult& r, const ExteriorOrientation& truth) {
+  const Vector6d error = PoseError(r.eo, truth);
+  const double unit = r.accuracy_stated ? 1.0 : r.sigma0;
+  return (error.array().abs() * unit / r.standard_deviations.array()).maxCoeff();
+}
+
+// One image of n control points with 1 px noise and no Accuracy column; `blunders` of its marks
+// shifted by kBlunderPx in a random direction.
+Inputs FewPointImage(Scenario scenario, int n, int blunders, uint64_t seed,
+                     const ResectionInputOptions& options = ResectionInputOptions()) {
+  SyntheticScene scene = Scene(scenario, 1.0, 0.0, seed, n, 0);
+  std::mt19937_64 random(seed);
+  std::uniform_real_distribution<double> angle(0.0, 2.0 * M_PI);
+  for (ImageMark& mark : scene.marks) mark.accuracy_px.reset();
+  for (int b = 0; b < blunders && b < static_cast<int>(scene.marks.size()); ++b) {
+    const double a = angle(random);
+    *scene.marks[b].column_row += kBlunderPx * Eigen::Vector2d(std::cos(a), std::sin(a));
+  }
+  Inputs inputs = InputsOf(SceneBlockTables(scene), false, options);
+  return inputs;
+}
+
+// wrong: solved, not flagged weak, beyond kWrongPoseSigmas; far: solved beyond it, weak or not.
+struct Tally {
+  int images = 0, solved = 0, weak = 0, wrong = 0, far = 0, ambiguous = 0;
+};
+
+Tally Resect(Scenario scenario, int n, int blunders, uint64_t first_seed, int images,
+             const ResectionInputOptions& input_options, const ResectionOptions& options) {
+  Tally tally;
+  for (int k = 0; k < images; ++k) {
+    const uint64_t seed = first_seed + k;
+    SyntheticScene scene = Scene(scenario, 1.0, 0.0, seed, n, 0);
+    const Inputs inputs = FewPointImage(scenario, n, blunders, seed, input_options);
+    if (inputs.inputs[0].image_plane.size() != static_cast<size_t>(n)) continue;
+    ++tally.images;
+    const ResectionResult r = ResectImage(options, inputs.inputs[0]);
+    tally.ambiguous += r.ambiguous;
+    if (!r.success) continue;
+    ++tally.solved;
+    tally.weak += r.weak;
+    const bool far = DistanceSigmas(r, scene.true_frames[0].eo) > kWrongPoseSigmas;
+    tally.far += far;
+    tally.wrong += far && !r.weak;
+  }
+  return tally;
+}
+
+// The issue's images with 4-8 control points and one 40 px blunder each, no Accuracy column: a
+// pose is flagged weak or not solved, never wrong without the flag (sigma0 from the data, the
+// former default, put 30 of 30 four-point and 22 of 30 five-point poses beyond 5 sigma).
+TEST(Resection, OneFortyPixelBlunderWithoutAccuracyIsNeverAWrongPose) {
+  ResectionInputOptions estimated;  // the former default: sigma0 from the data
+  estimated.default_accuracy = 0.0;
+  for (const int n : {4, 5, 6, 8}) {
+    const Tally now = Resect(Scenario::kNadir, n, 1, 5000 + 100 * n, 30, {}, ResectionOptions());
+    const Tally before = Resect(Scenario::kNadir, n, 1, 5000 + 100 * n, 30, estimated, ResectionOptions());
+    std::printf("%d points, one 40 px blunder: %d images; default 1 px: %d solved (%d weak), %d "
+                "wrong, %d far (weak), %d ambiguous; sigma0 from the data: %d solved, %d far\n",
+                n, now.images, now.solved, now.weak, now.wrong, now.far, now.ambiguous,
+                before.solved, before.far);
+    EXPECT_EQ(now.wrong, 0) << n << " points";
+    // Four points: a blunder along the direction the fourth cannot check passes the global test
+    // (5 of these 30 images); no four-point pose is reported without the weak flag.
+    if (n == 4) EXPECT_EQ(now.weak, now.solved);
+  }
+}
+
+// The issue's 6 oblique images of 60 points with 40% gross errors and no Accuracy column.
+TEST(Resection, FortyPercentOutliersOnObliqueImagesWithoutAccuracy) {
+  int solved = 0;
+  for (uint64_t seed = 1; seed <= 6; ++seed) {
+    SyntheticScene scene = Scene(Scenario::kOblique, 1.0, 0.4, 7000 + seed, 60, 0);
+    for (ImageMark& mark : scene.marks) mark.accuracy_px.reset();
+    const Inputs inputs = InputsOf(SceneBlockTables(scene), false);
+    const ResectionResult r = ResectImage(ResectionOptions(), inputs.inputs[0]);
+    if (!r.success) continue;
+    ++solved;
+    EXPECT_LT(r.sigma0, 2.0) << "scene " << seed;  // the stated 1 px, not the blunders' 1000 px
+    EXPECT_LE(DistanceSigmas(r, scene.true_frames[0].eo), kWrongPoseSigmas) << "scene " << seed;
+    const std::vector<char> outliers = OutliersOf(scene, inputs, 0);
+    for (size_t k = 0; k < outliers.size(); ++k)
+      if (outliers[k]) EXPECT_FALSE(r.inliers[k]) << "scene " << seed << " mark " << k;
+  }
+  EXPECT_EQ(solved, 6);
+}
+
+// Five points, one blunder: where four marks with the blunder fit one pose and the four good ones
+// another, the image is ambiguous, with both poses and their marks; never solved at either.
+TEST(Resection, TwoPosesThatFitAreAmbiguousNotSolved) {
+  int ambiguous = 0;
+  for (uint64_t seed = 1; seed <= 300; ++seed) {
+    SyntheticScene scene = Scene(Scenario::kOblique, 1.0, 0.0, 9000 + seed, 5, 0);
+    const Inputs inputs = FewPointImage(Scenario::kOblique, 5, 1, 9000 + seed);
+    const ResectionResult r = ResectImage(ResectionOptions(), inputs.inputs[0]);
+    if (!r.ambiguous) continue;
+    ++ambiguous;
+    EXPECT_FALSE(r.success);
+    EXPECT_NE(r.summary.message.find("ambiguous"), std::string::npos) << r.summary.message;
+    EXPECT_NE(r.competing_inliers, r.inliers);
+    const int first = static_cast<int>(std::count(r.inliers.begin(), r.inliers.end(), 1));
+    EXPECT_GE(std::count(r.competing_inliers.begin(), r.competing_inliers.end(), 1), first);
+    EXPECT_GT(PoseError(r.eo, r.competing_eo).head<3>().norm(), 0.0);
+  }
+  std::printf("five points, one 40 px blunder, 300 oblique images: %d ambiguous\n", ambiguous);
+  EXPECT_GT(ambiguous, 0);  // the configuration occurs: the search is exercised
+}
+
+// Reliability in the verdict: every accepted mark has its MDB (px) and pose shift; a pose beyond
+// weak_pose_shift_sigmas is flagged weak with a warning, and refused under refuse_weak (--strict).
+TEST(Resection, WeakPosesAreFlaggedAndRefusedWhenStrict) {
+  ResectionOptions strict;
+  strict.refuse_weak = true;
+  int weak = 0, strong = 0;
+  for (const int n : {5, 30}) {
+    for (uint64_t seed = 1; seed <= 10; ++seed) {
+      const SyntheticScene scene = Scene(Scenario::kNadir, 1.0, 0.0, 31000 + 100 * n + seed, n, 0);
+      const Inputs inputs = InputsOf(scene, false);
+      const ResectionResult r = ResectImage(ResectionOptions(), inputs.inputs[0]);
+      if (!r.success) continue;
+      double largest = 0.0;
+      for (size_t k = 0; k < r.inliers.size(); ++k) {
+        if (!r.inliers[k]) continue;
+        // At least delta0 sigma (1 px): the MDB of a mark every other mark checks fully.
+        EXPECT_GE(r.minimal_detectable_blunders[k], DetectableBiasSigmas(0.999, 0.8));
+        largest = std::max(largest, r.pose_shifts_sigmas[k]);
+      }
+      EXPECT_EQ(largest, r.max_pose_shift_sigmas);
+      EXPECT_EQ(r.weak, r.max_pose_shift_sigmas > ResectionOptions().weak_pose_shift_sigmas);
+      const ResectionResult s = ResectImage(strict, inputs.inputs[0]);
+      EXPECT_EQ(s.success, !r.weak);
+      if (r.weak) {
+        ++weak;
+        EXPECT_NE(s.summary.message.find("weak: an undetectable blunder"), std::string::npos);
+      } else {
+        ++strong;
+      }
+    }
+  }
+  EXPECT_GT(weak, 0);    // five points: weak
+  EXPECT_GT(strong, 0);  // thirty points: not
+}
+
+// Thousands of random few-point images, with and without a blunder: no pose reported solved (and
+// not flagged weak) lies more than kWrongPoseSigmas from the truth.
+TEST(Resection, NoFewPointImageIsReportedSolvedFarFromTheTruth) {
+  Tally total;
+  uint64_t seed = 20000;
+  for (const Scenario scenario : {Scenario::kNadir, Scenario::kOblique}) {
+    for (const int n : {4, 5, 6, 7, 8}) {
+      for (const int blunders : {0, 1, 2}) {
+        const Tally t = Resect(scenario, n, blunders, seed, 100, {}, ResectionOptions());
+        seed += 1000;
+        total.images += t.images;
+        total.solved += t.solved;
+        total.weak += t.weak;
+        total.wrong += t.wrong;
+        total.far += t.far;
+        total.ambiguous += t.ambiguous;
+        EXPECT_EQ(t.wrong, 0) << EnumName(scenario) << ", " << n << " points, " << blunders
+                              << " blunders";
+      }
+    }
+  }
+  std::printf("%d random few-point images: %d solved (%d weak), %d wrong, %d far (weak), %d "
+              "ambiguous\n", total.images, total.solved, total.weak, total.wrong, total.far,
+              total.ambiguous);
+  EXPECT_GT(total.images, 2500);
+}
+
 // ------------------------------------------------------------------ honest convergence
 
 // The 5000-image clean run of the issue: nadir, 10 control points, 1 px noise, default options;
@@ -416,18 +599,21 @@ TEST(Resection, TheCleanImageThatReachedTheIterationLimitConverges) {
   }
 }
 
-TEST(Resection, FiveThousandCleanImagesAreAllSolved) {
-  int failures = 0;
+// Every clean image is solved but for the global test's false alarms: the stated 1 px is the
+// noise's, so sigma0 exceeds the chi-square(14) quantile at 0.999 once in a thousand images.
+TEST(Resection, FiveThousandCleanImagesAreSolvedButTheGlobalTestsFalseAlarms) {
+  // Binomial(5000, 0.001): mean 5; more than 15 has probability ~1e-4.
+  constexpr int kMaxFalseAlarms = 15;
+  int false_alarms = 0;
   for (uint64_t seed = 1; seed <= 5000; ++seed) {
     const SyntheticScene scene = Scene(Scenario::kNadir, 1.0, 0.0, seed, 10, 5);
     const Inputs inputs = InputsOf(scene, false);
     const ResectionResult r = ResectImage(ResectionOptions(), inputs.inputs[0]);
-    if (!r.success) {
-      ++failures;
-      ADD_FAILURE() << "scene " << seed << ": " << r.summary.message;
-    }
+    if (r.success) continue;
+    ++false_alarms;
+    EXPECT_TRUE(r.accuracy_disagrees) << "scene " << seed << ": " << r.summary.message;
   }
-  EXPECT_EQ(failures, 0);
+  EXPECT_LE(false_alarms, kMaxFalseAlarms);
 }
 
 TEST(Resection, NoConvergenceIsReportedAsSuch) {
@@ -489,12 +675,13 @@ class ResectionRealData : public ::testing::Test {
   }
   // Every image of a block, resected with several RANSAC seeds: the results must not depend on it.
   std::vector<ResectionResult> ResectWithSeeds(const Block& block, std::vector<ResectionInput>* inputs,
-                                               std::vector<std::vector<int>>* lines = nullptr) {
+                                               std::vector<std::vector<int>>* lines = nullptr,
+                                               const ResectionInputOptions& options = {}) {
     inputs->clear();
     for (size_t i = 0; i < block.images.size(); ++i) {
       ResectionInput input;
       std::vector<int> marks;
-      EXPECT_TRUE(MakeResectionInput(block, static_cast<int>(i), {}, &input, &marks).ok());
+      EXPECT_TRUE(MakeResectionInput(block, static_cast<int>(i), options, &input, &marks).ok());
       inputs->push_back(input);
       if (lines == nullptr) continue;
       lines->emplace_back();
@@ -527,8 +714,11 @@ class ResectionRealData : public ::testing::Test {
   std::filesystem::path dir_;
 };
 
-// OpenDroneMap's integer gcp_list: images with three targets are not solved (no redundancy) instead
-// of the 40-60 m wrong poses of before; IMG_5356 keeps all four targets; nothing depends on the seed.
+// OpenDroneMap's integer gcp_list at the default accuracy (1 px: the list has none): images with
+// three targets are not solved (no redundancy) instead of the 40-60 m wrong poses of before;
+// IMG_5356 keeps all four targets; IMG_5357's five integer picks do not fit 1 px together (three
+// agree, HV17 and HV19 lie 8-10 px off their pose), so it is not solved; nothing depends on the
+// seed.
 TEST_F(ResectionRealData, OdmIntegerList) {
   const Block block = OdmBlock("gcp_list.txt");
   std::vector<ResectionInput> inputs;
@@ -538,7 +728,7 @@ TEST_F(ResectionRealData, OdmIntegerList) {
     const ResectionInput& input = inputs[i];
     if (!results[i].success) {
       const std::string& message = results[i].summary.message;
-      if (input.image_plane.size() == 3) {
+      if (input.image_plane.size() >= 3) {
         EXPECT_NE(message.find("no redundancy"), std::string::npos) << input.raster << message;
       } else {
         EXPECT_NE(message.find("at least three"), std::string::npos) << input.raster << message;
@@ -554,39 +744,53 @@ TEST_F(ResectionRealData, OdmIntegerList) {
     // 75 m above ~890 m targets, near nadir (the survey's flight).
     EXPECT_NEAR(results[i].eo.parameters[2], 963.0, 5.0) << input.raster;
   }
-  EXPECT_EQ(solved, (std::set<std::string>{"IMG_5356.JPG", "IMG_5357.JPG"}));
+  EXPECT_EQ(solved, (std::set<std::string>{"IMG_5356.JPG"}));
 }
 
-// The float list: every image with three or more targets is solved near the least squares of its
-// good targets (the blunders, found by the tests, named here), whatever the seed.
+// The float list at the default 1 px and stated at 2 px. Its picks scatter by 1-2 px, so some
+// images are refused (their good targets do not fit one pose at that accuracy, or two subsets fit
+// poses apart); whatever is solved never keeps a gross blunder and lies near the least squares of
+// the good targets; nothing depends on the seed.
 TEST_F(ResectionRealData, OdmFloatList) {
+  // At 75 m with f ~ 2904 px a 1 px disagreement among 4-8 targets moves the centre by decimetres;
+  // the blunders of 8.8 and 13.7 px, 4-9 sigma at these accuracies, may pull it by up to ~0.5 m.
+  constexpr double kNearGoodLeastSquaresM = 0.6;
   const Block block = OdmBlock("odm_gcp_br_gcp_list_floatxy_raw.txt");
-  std::vector<ResectionInput> inputs;
-  std::vector<std::vector<int>> lines;
-  const std::vector<ResectionResult> results = ResectWithSeeds(block, &inputs, &lines);
-  // Blunders of the list, by line: 39 HV09 in IMG_5351 (8.8 px from the pose of the others, 7
-  // sigma); 51 the first of the two marks of HV11 in IMG_5352 (642 px; the second, line 52, fits);
-  // 56 HV12 in IMG_5352 (13.7 px); 70 HV14 in IMG_5358 (1199 px).
+  // Blunders of the list, by line: 39 HV09 in IMG_5351 (8.8 px from the pose of the others);
+  // 51 the first of the two marks of HV11 in IMG_5352 (642 px; the second, line 52, fits);
+  // 56 HV12 in IMG_5352 (13.7 px); 70 HV14 in IMG_5358 (1199 px). 51 and 70 are gross.
   const std::set<int> blunders = {39, 51, 56, 70};
-  int solved = 0;
-  for (size_t i = 0; i < results.size(); ++i) {
-    const ResectionInput& input = inputs[i];
-    if (input.image_plane.size() < 3) {
-      EXPECT_FALSE(results[i].success);
-      continue;
+  const std::set<int> gross = {51, 70};
+  for (const double accuracy_px : {1.0, 2.0}) {
+    ResectionInputOptions stated;
+    stated.default_accuracy = accuracy_px;
+    std::vector<ResectionInput> inputs;
+    std::vector<std::vector<int>> lines;
+    const std::vector<ResectionResult> results = ResectWithSeeds(block, &inputs, &lines, stated);
+    int solved = 0;
+    for (size_t i = 0; i < results.size(); ++i) {
+      const ResectionInput& input = inputs[i];
+      if (!results[i].success) {
+        EXPECT_FALSE(results[i].summary.message.empty());
+        continue;
+      }
+      ++solved;
+      std::vector<int> good;
+      for (size_t k = 0; k < input.image_plane.size(); ++k) {
+        if (gross.count(lines[i][k]) > 0) EXPECT_FALSE(results[i].inliers[k]) << input.raster;
+        if (blunders.count(lines[i][k]) == 0) good.push_back(static_cast<int>(k));
+      }
+      // At 1 px the good targets of IMG_5353 and IMG_5358 do not all fit: the pose of the subset
+      // that does lies up to 2.4 m from the least squares of all of them, so only 2 px is compared.
+      if (accuracy_px < 2.0) continue;
+      const ExteriorOrientation lsq = LeastSquaresPose(input, good, results[i].eo);
+      EXPECT_LT(PoseError(results[i].eo, lsq).head<3>().norm(), kNearGoodLeastSquaresM)
+          << input.raster << " at " << accuracy_px << " px";
     }
-    ASSERT_TRUE(results[i].success) << input.raster << ": " << results[i].summary.message;
-    ++solved;
-    std::vector<int> good;
-    for (size_t k = 0; k < input.image_plane.size(); ++k) {
-      const bool blunder = blunders.count(lines[i][k]) > 0;
-      EXPECT_EQ(results[i].inliers[k] == 0, blunder) << input.raster << " " << input.point_ids[k];
-      if (!blunder) good.push_back(static_cast<int>(k));
-    }
-    const ExteriorOrientation lsq = LeastSquaresPose(input, good, results[i].eo);
-    EXPECT_LT(PoseError(results[i].eo, lsq).head<3>().norm(), 1e-4) << input.raster;
+    EXPECT_GE(solved, 5) << accuracy_px << " px";
+    std::printf("ODM float list at %g px: %d of %zu images solved\n", accuracy_px, solved,
+                results.size());
   }
-  EXPECT_EQ(solved, 8);
 }
 
 // Wolf & Dewitt's resection from film coordinates with a schema-minimal camera table
@@ -618,8 +822,9 @@ TEST_F(ResectionRealData, WolfDewittTextbookWithTheMinimalCameraTable) {
   EXPECT_NEAR(RadiansToDegrees(opk[0]), -0.4109, 5e-5);
   EXPECT_NEAR(RadiansToDegrees(opk[1]), 1.2101, 5e-5);
   EXPECT_NEAR(RadiansToDegrees(opk[2]), 102.8003, 5e-5);
-  EXPECT_NEAR(r.sigma0, 3.3, 0.05);  // um: s0 = 0.0033 mm with 2 degrees of freedom
-  EXPECT_FALSE(r.accuracy_stated);
+  // s0 = 0.0033 mm with 2 degrees of freedom, against the default film accuracy of 5 um.
+  EXPECT_NEAR(r.sigma0, 3.3 / 5.0, 0.01);
+  EXPECT_TRUE(r.accuracy_stated);
   // PixelSize means nothing for film marks: another value changes nothing.
   files.cameras = Write("cameras1.csv", "ObjectID,CameraID,FocalLength,PixelSize\n1,RC,152916,7\n");
   Block other;
@@ -655,7 +860,7 @@ TEST_F(ResectionRealData, DewittResectSampleWithFivePoints) {
   EXPECT_NEAR(RadiansToDegrees(opk[0]), -0.4109, 5e-5);
   EXPECT_NEAR(RadiansToDegrees(opk[1]), 1.2108, 5e-5);
   EXPECT_NEAR(RadiansToDegrees(opk[2]), 102.8003, 5e-5);
-  EXPECT_NEAR(r.sigma0, 2.8, 0.05);  // um
+  EXPECT_NEAR(r.sigma0, 2.8 / 5.0, 0.01);  // the published 2.8 um against the 5 um default
 }
 
 }  // namespace

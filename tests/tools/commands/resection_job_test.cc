@@ -153,9 +153,18 @@ TEST(ResectionJob, TheFramesTableHasTheSolvedImagesOnly) {
   ASSERT_EQ(frames.size(), 1u);
   EXPECT_EQ(frames[0].raster, job.inputs[0].raster);
   EXPECT_LT((frames[0].eo.parameters - results[0].eo.parameters).norm(), 1e-9);
-  const std::vector<std::pair<std::string, std::string>> extra = {{"NumObservations", "20"},
-                                                                  {"NumInliers", "18"}};
-  EXPECT_EQ(frames[0].extra_columns, extra);
+  // The verdict, and the input frame's measured centre beside the adjusted one.
+  ASSERT_GE(frames[0].extra_columns.size(), 6u);
+  const std::vector<std::pair<std::string, std::string>> extra = {
+      {"NumObservations", "20"}, {"NumInliers", "18"}, {"Reliability", "ok"}};
+  const std::vector<std::pair<std::string, std::string>> first_three(
+      frames[0].extra_columns.begin(), frames[0].extra_columns.begin() + 3);
+  EXPECT_EQ(first_three, extra);
+  const Eigen::Vector3d measured = *job.block.images[job.images[0]].measured_center_m;
+  for (int k = 0; k < 3; ++k) {
+    EXPECT_EQ(frames[0].extra_columns[3 + k].first, std::string("Measured") + "XYZ"[k]);
+    EXPECT_NEAR(std::stod(frames[0].extra_columns[3 + k].second), measured[k], 1e-4);
+  }
 }
 
 }  // namespace
