@@ -1,6 +1,6 @@
 #pragma once
 // Robust losses of the pose refinement and of the bundle adjustment's tie marks
-// (BundleAdjustmentOptions::tie_loss), beside the cost functions they weight. The residuals they
+// (BundleRobustnessOptions::tie_loss), beside the cost functions they weight. The residuals they
 // act on are whitened (one unit = one standard deviation of the mark, cost_functions/
 // collinearity_cost.h), so a loss scale is in standard deviations.
 

@@ -62,7 +62,7 @@ class ProgressCallback final : public ceres::IterationCallback {
     info.step_successful = summary.step_is_successful;
     info.linear_solver_seconds = summary.step_solver_time_in_seconds;
     info.iteration_seconds = summary.iteration_time_in_seconds;
-    options_.progress(info);
+    options_.solver.progress(info);
     return ceres::SOLVER_CONTINUE;
   }
 
@@ -169,46 +169,67 @@ void ScaleGroup(int g, double factor, BundlePlan* plan) {
 
 }  // namespace
 
-bool BundleAdjustmentOptions::IsValid(std::string* why) const {
-  auto fail = [why](const std::string& text) {
-    if (why != nullptr) *why = text;
-    return false;
-  };
-  auto positive = [](double v) { return v > 0.0 && std::isfinite(v); };
-  const BundleAccuracies& a = accuracies;
-  if (!positive(a.tie_px) || !positive(a.marker_projection_px) || !positive(a.tie_film_um) ||
-      !positive(a.marker_projection_film_um) || !positive(a.marker_m) ||
-      !positive(a.camera_m.minCoeff()) || !a.camera_m.allFinite())
-    return fail("every accuracy must be positive and finite");
-  if (a.attitude_deg && !positive(*a.attitude_deg)) return fail("the attitude accuracy must be positive");
+namespace {
+
+bool Fail(std::string* why, const std::string& text) {
+  if (why != nullptr) *why = text;
+  return false;
+}
+
+bool Positive(double v) { return v > 0.0 && std::isfinite(v); }
+
+}  // namespace
+
+bool BundleRobustnessOptions::IsValid(std::string* why) const {
   if (!IsBundleTieLoss(tie_loss))
-    return fail("the tie loss must be " + EnumNameList(kBundleTieLosses) + ", not " +
-                EnumName(tie_loss));
-  if (!positive(tie_loss_scale_sigmas)) return fail("the tie loss scale must be positive");
+    return Fail(why, "the tie loss must be " + EnumNameList(kBundleTieLosses) + ", not " +
+                         EnumName(tie_loss));
+  if (!Positive(tie_loss_scale_sigmas)) return Fail(why, "the tie loss scale must be positive");
   if (!(rejection_threshold >= 0.0) || !std::isfinite(rejection_threshold))
-    return fail("the rejection threshold must be >= 0 (0: no rejection)");
-  if (max_rejection_rounds < 0) return fail("max_rejection_rounds must be >= 0");
-  if (max_iterations < 1) return fail("max_iterations must be >= 1");
-  if (!positive(function_tolerance) || !positive(parameter_tolerance) ||
-      !(gradient_tolerance >= 0.0))
-    return fail("tolerances must be positive");
-  if (num_threads < 0) return fail("num_threads must be >= 0");
-  if (lever_arm_m && !lever_arm_m->allFinite()) return fail("the lever arm must be finite");
-  if (max_covariance_parameters < 0) return fail("max_covariance_parameters must be >= 0");
-  if (!(overfit_ratio > 0.0 && overfit_ratio < 1.0)) return fail("overfit_ratio must be in (0, 1)");
-  if (!(overfit_redundancy_share >= 0.0 && overfit_redundancy_share < 1.0))
-    return fail("overfit_redundancy_share must be in [0, 1)");
-  if (!(high_correlation > 0.0 && high_correlation < 1.0))
-    return fail("high_correlation must be in (0, 1)");
-  if (max_variance_iterations < 1) return fail("max_variance_iterations must be >= 1");
-  if (!positive(variance_tolerance)) return fail("variance_tolerance must be positive");
-  if (!(min_variance_redundancy >= 0.0)) return fail("min_variance_redundancy must be >= 0");
-  if (!(snooping_alpha > 0.0 && snooping_alpha < 0.5)) return fail("snooping_alpha must be in (0, 0.5)");
-  if (!(snooping_power > 0.0 && snooping_power < 1.0)) return fail("snooping_power must be in (0, 1)");
-  if (!(uncontrolled_redundancy >= 0.0 && uncontrolled_redundancy < 1.0))
-    return fail("uncontrolled_redundancy must be in [0, 1)");
-  if (max_snooping_removals < 0) return fail("max_snooping_removals must be >= 0");
+    return Fail(why, "the rejection threshold must be >= 0 (0: no rejection)");
+  if (max_rejection_rounds < 0) return Fail(why, "max_rejection_rounds must be >= 0");
+  if (max_snooping_removals < 0) return Fail(why, "max_snooping_removals must be >= 0");
   return true;
+}
+
+bool BundleStatisticsOptions::IsValid(std::string* why) const {
+  if (max_covariance_parameters < 0) return Fail(why, "max_covariance_parameters must be >= 0");
+  if (!(overfit_ratio > 0.0 && overfit_ratio < 1.0))
+    return Fail(why, "overfit_ratio must be in (0, 1)");
+  if (!(overfit_redundancy_share >= 0.0 && overfit_redundancy_share < 1.0))
+    return Fail(why, "overfit_redundancy_share must be in [0, 1)");
+  if (!(high_correlation > 0.0 && high_correlation < 1.0))
+    return Fail(why, "high_correlation must be in (0, 1)");
+  if (max_variance_iterations < 1) return Fail(why, "max_variance_iterations must be >= 1");
+  if (!Positive(variance_tolerance)) return Fail(why, "variance_tolerance must be positive");
+  if (!(min_variance_redundancy >= 0.0)) return Fail(why, "min_variance_redundancy must be >= 0");
+  if (!(snooping_alpha > 0.0 && snooping_alpha < 0.5))
+    return Fail(why, "snooping_alpha must be in (0, 0.5)");
+  if (!(snooping_power > 0.0 && snooping_power < 1.0))
+    return Fail(why, "snooping_power must be in (0, 1)");
+  if (!(uncontrolled_redundancy >= 0.0 && uncontrolled_redundancy < 1.0))
+    return Fail(why, "uncontrolled_redundancy must be in [0, 1)");
+  return true;
+}
+
+bool BundleSolverOptions::IsValid(std::string* why) const {
+  if (max_iterations < 1) return Fail(why, "max_iterations must be >= 1");
+  if (!Positive(function_tolerance) || !Positive(parameter_tolerance) ||
+      !(gradient_tolerance >= 0.0))
+    return Fail(why, "tolerances must be positive");
+  if (num_threads < 0) return Fail(why, "num_threads must be >= 0");
+  return true;
+}
+
+bool BundleAdjustmentOptions::IsValid(std::string* why) const {
+  const BundleAccuracies& a = accuracies;
+  if (!Positive(a.tie_px) || !Positive(a.marker_projection_px) || !Positive(a.tie_film_um) ||
+      !Positive(a.marker_projection_film_um) || !Positive(a.marker_m) ||
+      !Positive(a.camera_m.minCoeff()) || !a.camera_m.allFinite())
+    return Fail(why, "every accuracy must be positive and finite");
+  if (a.attitude_deg && !Positive(*a.attitude_deg))
+    return Fail(why, "the attitude accuracy must be positive");
+  return robustness.IsValid(why) && solver.IsValid(why) && statistics.IsValid(why);
 }
 
 Status BundleAdjustmentConfig::FromCalibrationNames(const Block& block,
@@ -315,6 +336,9 @@ Status CheckInputs(const BundleAdjustmentOptions& options, const BundleAdjustmen
                    Block* block) {
   std::string why;
   if (!options.IsValid(&why)) return Status::Error("invalid options: " + why);
+  // The lever arm moved from the options to the config; its message stays the one it had.
+  if (config.lever_arm_m && !config.lever_arm_m->allFinite())
+    return Status::Error("invalid options: the lever arm must be finite");
   PHOTOPOSE_RETURN_IF_ERROR(CheckBlock(*block));
   block->BuildIndex();
   for (const int i : config.constant_images)
@@ -328,7 +352,7 @@ Status CheckInputs(const BundleAdjustmentOptions& options, const BundleAdjustmen
 
 // The values the adjustment starts from: the block's orientations, points (tie points from their
 // coordinates, control points from their survey) and cameras, and the given lever arm.
-BundleState StartState(const BundleAdjustmentOptions& options, const Block& block) {
+BundleState StartState(const BundleAdjustmentConfig& config, const Block& block) {
   BundleState state;
   for (const BlockImage& image : block.images) state.eo.push_back(image.eo->parameters);
   for (const BlockPoint& point : block.points) {
@@ -337,15 +361,15 @@ BundleState StartState(const BundleAdjustmentOptions& options, const Block& bloc
                                               : Eigen::Vector3d::Zero());
   }
   for (const BlockCamera& camera : block.cameras) state.cameras.push_back(camera.params);
-  if (options.lever_arm_m) state.lever = *options.lever_arm_m;
+  if (config.lever_arm_m) state.lever = *config.lever_arm_m;
   return state;
 }
 
 // Runs Ceres on the round's problem, with the progress callback when asked.
 void Solve(Adjustment* a, int r, bool free_gauge, ceres::Solver::Summary* ceres_summary) {
-  ceres::Solver::Options solver_options = internal::BundleSolverOptions(a->options, a->round);
+  ceres::Solver::Options solver_options = internal::CeresSolverOptions(a->options, a->round);
   std::unique_ptr<ProgressCallback> callback;
-  if (a->options.progress) {
+  if (a->options.solver.progress) {
     callback = std::make_unique<ProgressCallback>(a->options, r, a->round.redundancy(), a->start);
     callback->set_free_gauge(free_gauge);
     solver_options.callbacks.push_back(callback.get());
@@ -396,7 +420,7 @@ void SolveRound(Adjustment* a, int r, ceres::Solver::Summary* ceres_summary) {
   bool solved = false;      // the round's solve is done (the free-gauge solve converged)
   int free_iterations = 0;  // iterations of the free-gauge solve
   if (r == 1 && a->plan.datum == BundleDatum::kRelative &&
-      a->options.free_gauge_for_relative_blocks) {
+      a->options.solver.free_gauge_for_relative_blocks) {
     solved = SolveInFreeGaugeFirst(a, r, ceres_summary, &free_iterations);
   } else {
     const Clock::time_point build_start = Clock::now();
@@ -442,7 +466,7 @@ bool SnoopOne(Adjustment* a) {
     if (worst == nullptr || std::abs(d.normalized) > std::abs(worst->normalized)) worst = &d;
   }
   if (worst == nullptr ||
-      static_cast<int>(result->snooping.size()) >= a->options.max_snooping_removals)
+      static_cast<int>(result->snooping.size()) >= a->options.robustness.max_snooping_removals)
     return false;
   BundlePlan trial = a->plan;
   RemoveObservation(*worst, &trial);
@@ -463,7 +487,7 @@ bool SnoopOne(Adjustment* a) {
 std::vector<double> RejectionScores(const Adjustment& a, double* limit) {
   const Block& block = *a.block;
   std::vector<double> score(block.marks.size(), 0.0);
-  *limit = a.options.rejection_threshold;
+  *limit = a.options.robustness.rejection_threshold;
   if (!a.result->observations.empty()) {
     for (const BundleObservationDiagnostics& d : a.result->observations) {
       const int g = d.group;
@@ -536,13 +560,13 @@ bool RescaleGroups(Adjustment* a) {
   bool changed = false;
   for (int g = 0; g < kNumBundleGroups; ++g) {
     a->group_estimable[g] = variance.scalar_rows[g] > 0 &&
-                            variance.redundancy[g] >= options.min_variance_redundancy;
+                            variance.redundancy[g] >= options.statistics.min_variance_redundancy;
     factors[g] = a->group_estimable[g] ? variance.whitened_ssq[g] / variance.redundancy[g] : 1.0;
-    if (std::abs(factors[g] - 1.0) > options.variance_tolerance) changed = true;
+    if (std::abs(factors[g] - 1.0) > options.statistics.variance_tolerance) changed = true;
   }
   ++result->variance_iterations;
   if (!changed) return false;
-  if (result->variance_iterations >= options.max_variance_iterations) {
+  if (result->variance_iterations >= options.statistics.max_variance_iterations) {
     result->summary.message = "variance components did not settle in " +
                               std::to_string(result->variance_iterations) + " iterations";
     return false;
@@ -569,7 +593,7 @@ void ReportEstimatedAccuracies(const Adjustment& a) {
     } else {
       std::ostringstream message;
       message << "not estimated: the rest of the block checks it too little (redundancy "
-              << FormatNumber3(r) << " < " << FormatNumber3(a.options.min_variance_redundancy)
+              << FormatNumber3(r) << " < " << FormatNumber3(a.options.statistics.min_variance_redundancy)
               << ")";
       group.estimation_message = message.str();
     }
@@ -597,19 +621,19 @@ Status BundleAdjust(const BundleAdjustmentOptions& options, const BundleAdjustme
   BundleAdjustmentSummary& summary = result->summary;
   PHOTOPOSE_RETURN_IF_ERROR(CheckInputs(options, config, block));
   PHOTOPOSE_RETURN_IF_ERROR(
-      internal::MakeBundlePlan(internal::PlanOptionsOf(options), config, *block, &a.plan));
+      internal::MakeBundlePlan(internal::PlanOptionsOf(options, config), config, *block, &a.plan));
   summary.datum = a.plan.datum;
   summary.datum_description = a.plan.datum_description;
   for (const int p : a.plan.tie_points_left_out)
     summary.tie_points_left_out.push_back(block->points[p].id);
-  a.state = StartState(options, *block);
+  a.state = StartState(config, *block);
 
   // Rounds: adjust; then remove blunders (rejection rounds or data snooping, one at a time) or
   // rescale the groups (variance component estimation) and adjust again, until neither changes.
   const int rejection_rounds =
-      options.snoop || options.rejection_threshold <= 0.0 ? 0 : options.max_rejection_rounds;
-  const int max_rounds = 1 + rejection_rounds + (options.snoop ? options.max_snooping_removals : 0) +
-                         (options.estimate_accuracies ? options.max_variance_iterations : 0);
+      options.robustness.snoop || options.robustness.rejection_threshold <= 0.0 ? 0 : options.robustness.max_rejection_rounds;
+  const int max_rounds = 1 + rejection_rounds + (options.robustness.snoop ? options.robustness.max_snooping_removals : 0) +
+                         (options.statistics.estimate_accuracies ? options.statistics.max_variance_iterations : 0);
   for (int r = 1;; ++r) {
     ceres::Solver::Summary ceres_summary;
     SolveRound(&a, r, &ceres_summary);
@@ -626,7 +650,7 @@ Status BundleAdjust(const BundleAdjustmentOptions& options, const BundleAdjustme
     summary.statistics_seconds += SecondsSince(statistics_start);
     if (r >= max_rounds) break;
     // 1. Blunders.
-    if (options.snoop) {
+    if (options.robustness.snoop) {
       if (SnoopOne(&a)) continue;
     } else if (a.rejections_done < rejection_rounds) {
       const Rejection rejection = RejectMarks(&a, r);
@@ -634,12 +658,12 @@ Status BundleAdjust(const BundleAdjustmentOptions& options, const BundleAdjustme
       if (rejection == Rejection::kRemoved) continue;
     }
     // 2. Variance components.
-    if (options.estimate_accuracies && RescaleGroups(&a)) continue;
+    if (options.statistics.estimate_accuracies && RescaleGroups(&a)) continue;
     break;
   }
   summary.termination = SolverTermination::kConverged;
   summary.num_rejected_marks = static_cast<int>(result->rejected_marks.size());
-  if (options.estimate_accuracies) ReportEstimatedAccuracies(a);
+  if (options.statistics.estimate_accuracies) ReportEstimatedAccuracies(a);
   WriteBack(a.plan, a.state, block);
   summary.time_seconds = SecondsSince(a.start);
   return Status::Ok();
@@ -730,6 +754,8 @@ Status CrossValidateControlPoints(const BundleAdjustmentOptions& options,
   *result = BundleCrossValidationResult();
   std::string why;
   if (!options.IsValid(&why)) return Status::Error("invalid options: " + why);
+  if (config.lever_arm_m && !config.lever_arm_m->allFinite())
+    return Status::Error("invalid options: the lever arm must be finite");
   std::vector<char> rejected;
   const Block base = CrossValidationBase(adjusted, full, &rejected);
   std::vector<int> controls;
@@ -738,17 +764,17 @@ Status CrossValidateControlPoints(const BundleAdjustmentOptions& options,
       controls.push_back(static_cast<int>(p));
   result->points.assign(controls.size(), BundleCrossValidationPoint());
   // The normalized error of a point is chi-square with 3 degrees of freedom.
-  result->threshold = ChiSquaredQuantile(1.0 - options.snooping_alpha, 3.0);
+  result->threshold = ChiSquaredQuantile(1.0 - options.statistics.snooping_alpha, 3.0);
 
   // One adjustment per left-out point, single-threaded (the points run in parallel), without
   // blunder removal (the full adjustment's removals are applied above) or diagnostics.
   BundleAdjustmentOptions one = options;
-  one.num_threads = 1;
-  one.progress = nullptr;
-  one.snoop = false;
-  one.estimate_accuracies = false;
-  one.rejection_threshold = 0.0;
-  one.observation_diagnostics = false;
+  one.solver.num_threads = 1;
+  one.solver.progress = nullptr;
+  one.robustness.snoop = false;
+  one.statistics.estimate_accuracies = false;
+  one.robustness.rejection_threshold = 0.0;
+  one.statistics.observation_diagnostics = false;
   ParallelFor(controls.size(), num_threads, [&](size_t k) {
     result->points[k] = LeaveOneOut(one, config, base, rejected, adjusted,
                                     options.accuracies.marker_m, result->threshold, controls[k]);

@@ -22,7 +22,7 @@
 // The note's warning is part of the result: when tie points are too few or too weak the solution
 // bends to the priors, whose residual RMS then falls well below the stated accuracy and whose
 // redundancy share (how much of each prior the rest of the block checks) is small. Each prior group
-// is flagged `overfit` when either falls below its limit (BundleAdjustmentOptions::overfit_ratio,
+// is flagged `overfit` when either falls below its limit (BundleStatisticsOptions::overfit_ratio,
 // overfit_redundancy_share).
 //
 // Data-dependent failures (no datum, disconnected block, an image with too few marks, a point
@@ -93,7 +93,7 @@ struct BundleIterationInfo {
   double sigma0 = 0.0;     // sqrt(2 cost / redundancy)
   double step_norm = 0.0;  // |step| of the iteration (parameter units)
   double elapsed_seconds = 0.0;
-  // A relative block's first solve, without a gauge (BundleAdjustmentOptions::
+  // A relative block's first solve, without a gauge (BundleSolverOptions::
   // free_gauge_for_relative_blocks); its sigma0 counts the 7 free directions as unknowns.
   bool free_gauge = false;
   // Levenberg-Marquardt state (Ceres solver only; NaN for the Taylor solver): the trust region
@@ -119,23 +119,86 @@ inline bool IsBundleTieLoss(LossType loss) {
   return false;
 }
 
-struct BundleAdjustmentOptions {
-  BundleAccuracies accuracies;
-  JacobianType jacobian = JacobianType::kAnalytic;  // derivative path of the collinearity costs
+// What the adjustment does with observations that do not fit: a robust loss on tie marks, the
+// rejection rounds of marks, and data snooping (which uses the w-test of BundleStatisticsOptions).
+struct BundleRobustnessOptions {
   // Robust loss on tie marks (kNone: plain least squares; one of kBundleTieLosses), scale in
-  // sigmas of the mark. Control marks and priors are never robustified.
+  // sigmas of the mark (unitless). Control marks and priors are never robustified.
   LossType tie_loss = LossType::kNone;
   double tie_loss_scale_sigmas = 3.0;
-  // After convergence, marks whose normalized residual exceeds this are rejected and the block
-  // adjusted again, at most max_rejection_rounds times (0 disables rejection). The normalized
-  // residual of a mark is the larger of |w_x|, |w_y| (see observation_diagnostics) when the
-  // diagnostics are computed, otherwise |v| / (max(1, s0) sigma) (the whitened residual, 2-D).
-  // Control marks are tested like tie marks; per point and round its worst mark above the
-  // threshold goes (a blunder raises the other marks of its track too).
+  // After convergence, marks whose normalized residual exceeds this (unitless) are rejected and the
+  // block adjusted again, at most max_rejection_rounds times (count; 0 disables rejection). The
+  // normalized residual of a mark is the larger of |w_x|, |w_y| (see
+  // BundleStatisticsOptions::observation_diagnostics) when the diagnostics are computed, otherwise
+  // |v| / (max(1, s0) sigma) (the whitened residual, 2-D). Control marks are tested like tie marks;
+  // per point and round its worst mark above the threshold goes (a blunder raises the other marks
+  // of its track too).
   double rejection_threshold = 4.5;
   int max_rejection_rounds = 3;
-  // Levenberg-Marquardt.
-  int max_iterations = 100;             // per round (count)
+  // Data snooping: while the largest |w_i| exceeds k(alpha) (BundleStatisticsOptions::
+  // snooping_alpha), remove that observation (a mark, or the whole prior of a control point, camera
+  // position or attitude) and adjust again, one at a time, at most max_snooping_removals times
+  // (count). Replaces the rejection rounds above.
+  bool snoop = false;
+  int max_snooping_removals = 200;
+
+  bool IsValid(std::string* why) const;
+};
+
+// What the adjustment computes after convergence, and the thresholds of its verdicts: posterior
+// covariances, over-fitting, correlations, per-observation diagnostics with their w-test, and the
+// variance component estimation.
+struct BundleStatisticsOptions {
+  // Posterior covariances and redundancy shares (the normal matrix reduced to the cameras,
+  // inverted densely): skipped for blocks with more parameters than this after point elimination
+  // (count).
+  int max_covariance_parameters = 12000;
+  // A prior group is flagged `overfit` when its RMS / stated accuracy is below overfit_ratio
+  // (unitless, the note's "well below"), or its redundancy share below overfit_redundancy_share
+  // (unitless: the tie points check less than a fifth of it, the solution follows the priors). A
+  // share near 0.4 is normal when the priors are as accurate as the block itself.
+  double overfit_ratio = 0.5;
+  double overfit_redundancy_share = 0.2;
+  // Camera-model parameters whose |correlation| exceeds this are named (unitless, DBAT's 0.95).
+  double high_correlation = 0.95;
+
+  // Per-observation diagnostics (Baarda, Foerstner), computed with the covariance: redundancy
+  // number r_i, normalized residual w_i = v_i / (s sigma_i sqrt(r_i)) with s = max(1, sigma0) (the
+  // stated accuracy, or Pope's tau-test with the a-posteriori sigma0 when that is larger: never more
+  // sensitive than the stated accuracies allow), the smallest detectable error (internal reliability)
+  // nabla_i = delta0 sigma_i / sqrt(r_i) with delta0 = k(alpha) + k(beta), and its largest effect on
+  // a camera centre (external reliability). Marks per coordinate, priors per axis.
+  bool observation_diagnostics = true;
+  double snooping_alpha = 0.001;  // two-sided significance of the w-test (unitless)
+  // snooping_alpha is the block's (family-wise): each observation is tested at alpha / n, n the
+  // number of scalar observations (Bonferroni), so that a block of 30 000 observations gives about
+  // alpha false alarms, not 30. false: alpha per observation (Baarda's classical alpha_0).
+  bool snooping_family_wise = true;
+  double snooping_power = 0.8;    // power of the test behind the smallest detectable error (unitless)
+  // Observations with r_i below this (unitless) are listed as uncontrolled (a blunder there cannot
+  // be seen).
+  double uncontrolled_redundancy = 0.1;
+
+  // Variance component estimation (Helmert / Foerstner): after the adjustment, every group's
+  // variance factor s_g^2 = (its whitened residuals' sum of squares) / (its redundancy, the sum of
+  // its redundancy numbers) rescales the group's accuracies, and the block is adjusted again, until
+  // every estimated factor is 1 within variance_tolerance or max_variance_iterations is reached.
+  // Needs the covariance (max_covariance_parameters). A group whose redundancy is below
+  // min_variance_redundancy is not estimated (its accuracy stays as stated, and says why).
+  bool estimate_accuracies = false;
+  int max_variance_iterations = 20;     // count
+  double variance_tolerance = 0.01;     // |s_g^2 - 1| (unitless)
+  double min_variance_redundancy = 5.0; // summed redundancy numbers (unitless)
+
+  bool IsValid(std::string* why) const;
+};
+
+// How the minimum is found: the derivative path, Levenberg-Marquardt's limits and linear solver,
+// the gauge of a relative block's first solve, threads and progress. None of it changes the
+// minimum (within the tolerances).
+struct BundleSolverOptions {
+  JacobianType jacobian = JacobianType::kAnalytic;  // derivative path of the collinearity costs
+  int max_iterations = 100;             // Levenberg-Marquardt iterations per round (count)
   double function_tolerance = 1e-10;    // relative cost change (unitless)
   // Relative step (unitless): Ceres compares the step with the norm of ALL parameters, which map
   // coordinates make huge (a 1000-image block in UTM: ~2.5e9 m), so 1e-10 would stop 0.25 m short
@@ -150,66 +213,40 @@ struct BundleAdjustmentOptions {
   // approximate attitude is off (the gauge turns the whole block about it). false: solved in
   // COLMAP's gauge from the start.
   bool free_gauge_for_relative_blocks = true;
-  int num_threads = 0;                  // 0: all cores
-  // GNSS lever arm: antenna offset from the projection centre in the camera frame (u, v, w; m).
-  std::optional<Eigen::Vector3d> lever_arm_m;
-  bool estimate_lever_arm = false;  // estimate it (starting from lever_arm_m or zero)
-  // Posterior covariances and redundancy shares (the normal matrix reduced to the cameras,
-  // inverted densely): skipped for blocks with more parameters than this after point elimination.
-  int max_covariance_parameters = 12000;
-  // A prior group is flagged `overfit` when its RMS / stated accuracy is below overfit_ratio
-  // (unitless, the note's "well below"), or its redundancy share below overfit_redundancy_share
-  // (the tie points check less than a fifth of it: the solution follows the priors). A share near
-  // 0.4 is normal when the priors are as accurate as the block itself.
-  double overfit_ratio = 0.5;
-  double overfit_redundancy_share = 0.2;
-  // Camera-model parameters whose |correlation| exceeds this are named (unitless, DBAT's 0.95).
-  double high_correlation = 0.95;
-
-  // Variance component estimation (Helmert / Foerstner): after the adjustment, every group's
-  // variance factor s_g^2 = (its whitened residuals' sum of squares) / (its redundancy, the sum of
-  // its redundancy numbers) rescales the group's accuracies, and the block is adjusted again, until
-  // every estimated factor is 1 within variance_tolerance or max_variance_iterations is reached.
-  // Needs the covariance (max_covariance_parameters). A group whose redundancy is below
-  // min_variance_redundancy is not estimated (its accuracy stays as stated, and says why).
-  bool estimate_accuracies = false;
-  int max_variance_iterations = 20;     // count
-  double variance_tolerance = 0.01;     // |s_g^2 - 1| (unitless)
-  double min_variance_redundancy = 5.0; // summed redundancy numbers (unitless)
-
-  // Per-observation diagnostics (Baarda, Foerstner), computed with the covariance: redundancy
-  // number r_i, normalized residual w_i = v_i / (s sigma_i sqrt(r_i)) with s = max(1, sigma0) (the
-  // stated accuracy, or Pope's tau-test with the a-posteriori sigma0 when that is larger: never more
-  // sensitive than the stated accuracies allow), the smallest detectable error (internal reliability)
-  // nabla_i = delta0 sigma_i / sqrt(r_i) with delta0 = k(alpha) + k(beta), and its largest effect on
-  // a camera centre (external reliability). Marks per coordinate, priors per axis.
-  bool observation_diagnostics = true;
-  double snooping_alpha = 0.001;  // two-sided significance of the w-test (unitless)
-  // snooping_alpha is the block's (family-wise): each observation is tested at alpha / n, n the
-  // number of scalar observations (Bonferroni), so that a block of 30 000 observations gives about
-  // alpha false alarms, not 30. false: alpha per observation (Baarda's classical alpha_0).
-  bool snooping_family_wise = true;
-  double snooping_power = 0.8;    // power of the test behind the smallest detectable error
-  // Observations with r_i below this are listed as uncontrolled (a blunder there cannot be seen).
-  double uncontrolled_redundancy = 0.1;
-  // Data snooping: while the largest |w_i| exceeds k(alpha), remove that observation (a mark, or
-  // the whole prior of a control point, camera position or attitude) and adjust again, one at a
-  // time, at most max_snooping_removals times. Replaces the rejection rounds above.
-  bool snoop = false;
-  int max_snooping_removals = 200;
+  int num_threads = 0;                  // 0: all cores (count)
   // Progress callback after every iteration (may be empty).
   std::function<void(const BundleIterationInfo&)> progress;
 
   bool IsValid(std::string* why) const;
 };
 
-// What the adjustment holds constant (in the manner of COLMAP's BundleAdjustmentConfig).
+// The options of BundleAdjust, composed of named parts as PoseLib composes its options. What the
+// block holds constant or estimates (datum, self-calibration, the GNSS lever arm) is
+// BundleAdjustmentConfig, not an option.
+struct BundleAdjustmentOptions {
+  BundleAccuracies accuracies;         // the weights of the objective's groups
+  BundleRobustnessOptions robustness;  // robust loss, rejection rounds, data snooping
+  BundleStatisticsOptions statistics;  // covariances, verdicts, diagnostics, variance components
+  BundleSolverOptions solver;          // how the minimum is found
+
+  // Checks every part (the accuracies here, the others by their own IsValid).
+  bool IsValid(std::string* why) const;
+};
+
+// What the adjustment holds constant or estimates about the block (in the manner of COLMAP's
+// BundleAdjustmentConfig).
 struct BundleAdjustmentConfig {
   // Per camera (index into Block::cameras): the parameter indices to estimate (self-calibration).
   // Cameras not listed are held constant.
   std::vector<std::vector<int>> calibrated_params;
   std::set<int> constant_images;  // exterior orientations held fixed
   std::set<int> constant_points;  // points held fixed (e.g. control points taken as error-free)
+  // GNSS lever arm: antenna offset from the projection centre in the camera frame (u, v, w; m).
+  // It lives here, not in the options, because it is data about the camera rig, held constant or
+  // estimated like the calibrated parameters above; not in the Block because no table carries it
+  // (it is given on the command line) and a Block is what the readers build from the files.
+  std::optional<Eigen::Vector3d> lever_arm_m;
+  bool estimate_lever_arm = false;  // estimate it (starting from lever_arm_m or zero)
   // Parses `photopose bundle --calibrate` names (core/camera_models.h) for every camera of the
   // block; an error names a parameter a camera's model lacks.
   static Status FromCalibrationNames(const Block& block, const std::vector<std::string>& names,

@@ -316,10 +316,11 @@ MarkSigmaDefaults GroupMarkDefaults(const BundleAccuracies& accuracies, BundleGr
   return defaults;
 }
 
-BundlePlanOptions PlanOptionsOf(const BundleAdjustmentOptions& options) {
+BundlePlanOptions PlanOptionsOf(const BundleAdjustmentOptions& options,
+                                const BundleAdjustmentConfig& config) {
   BundlePlanOptions plan_options;
   plan_options.accuracies = options.accuracies;
-  plan_options.use_lever = options.lever_arm_m.has_value() || options.estimate_lever_arm;
+  plan_options.use_lever = config.lever_arm_m.has_value() || config.estimate_lever_arm;
   plan_options.refuse_weak_datum = true;
   return plan_options;
 }
@@ -406,7 +407,7 @@ void AddOrientationBlocks(const BundleAdjustmentConfig& config, const Block& blo
 }
 
 // Camera parameters: constant except the calibrated ones; the lever arm when used.
-void AddCameraBlocks(const BundleAdjustmentOptions& options, const Block& block,
+void AddCameraBlocks(const BundleAdjustmentConfig& config, const Block& block,
                      const BundlePlan& plan, BundleState* state, BundleRound* round) {
   ceres::Problem& problem = *round->problem;
   for (size_t c = 0; c < block.cameras.size(); ++c) {
@@ -431,7 +432,7 @@ void AddCameraBlocks(const BundleAdjustmentOptions& options, const Block& block,
   double* lever = state->lever.data();
   if (plan.use_lever) {
     problem.AddParameterBlock(lever, 3);
-    if (options.estimate_lever_arm) {
+    if (config.estimate_lever_arm) {
       round->e_blocks.push_back(lever);
       round->e_sizes.push_back(3);
     } else {
@@ -471,7 +472,7 @@ void AddMarkResiduals(const BundleAdjustmentOptions& options, const Block& block
     const int camera_index = block.images[mark.image].camera;
     const BlockCamera& camera = block.cameras[camera_index];
     ceres::CostFunction* cost = CreateCollinearityCost(
-        options.jacobian, CollinearityFunctor(camera.model, mark.observation, camera.data(),
+        options.solver.jacobian, CollinearityFunctor(camera.model, mark.observation, camera.data(),
                                               1.0 / plan.mark_sigma[m]));
     ceres::LossFunction* loss = plan.mark_group[m] == kTieMarks ? round->tie_loss.get() : nullptr;
     const ceres::ResidualBlockId id =
@@ -538,9 +539,9 @@ void BuildBundleRound(const BundleAdjustmentOptions& options, const BundleAdjust
   problem_options.loss_function_ownership = ceres::DO_NOT_TAKE_OWNERSHIP;
   problem_options.enable_fast_removal = false;
   round->problem = std::make_unique<ceres::Problem>(problem_options);
-  round->tie_loss.reset(MakeLoss(options.tie_loss, options.tie_loss_scale_sigmas));
+  round->tie_loss.reset(MakeLoss(options.robustness.tie_loss, options.robustness.tie_loss_scale_sigmas));
   AddOrientationBlocks(config, block, plan, state, round);
-  AddCameraBlocks(options, block, plan, state, round);
+  AddCameraBlocks(config, block, plan, state, round);
   AddPointBlocks(config, block, plan, state, round);
   AddMarkResiduals(options, block, plan, state, round);
   AddPriorResiduals(block, plan, state, round);
@@ -572,17 +573,17 @@ void ApplyRelativeGauge(const BundlePlan& plan, BundleState* state, BundleRound*
   for (const int size : round->e_sizes) round->num_free_parameters += size;
 }
 
-ceres::Solver::Options BundleSolverOptions(const BundleAdjustmentOptions& options,
-                                     const BundleRound& round) {
+ceres::Solver::Options CeresSolverOptions(const BundleAdjustmentOptions& options,
+                                          const BundleRound& round) {
   ceres::Solver::Options solver;
-  solver.max_num_iterations = options.max_iterations;
-  solver.function_tolerance = options.function_tolerance;
-  solver.parameter_tolerance = options.parameter_tolerance;
-  solver.gradient_tolerance = options.gradient_tolerance;
-  solver.num_threads = ResolveThreadCount(options.num_threads);
+  solver.max_num_iterations = options.solver.max_iterations;
+  solver.function_tolerance = options.solver.function_tolerance;
+  solver.parameter_tolerance = options.solver.parameter_tolerance;
+  solver.gradient_tolerance = options.solver.gradient_tolerance;
+  solver.num_threads = ResolveThreadCount(options.solver.num_threads);
   solver.logging_type = ceres::SILENT;
   solver.minimizer_progress_to_stdout = false;
-  switch (options.linear_solver) {
+  switch (options.solver.linear_solver) {
     case BundleLinearSolver::kSparseSchur:
       solver.linear_solver_type = ceres::SPARSE_SCHUR;
       solver.sparse_linear_algebra_library_type = ceres::SUITE_SPARSE;

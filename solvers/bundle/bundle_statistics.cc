@@ -332,12 +332,12 @@ void SetTestLevel(const BundleAdjustmentOptions& options, const GroupVariance& v
                   BundleAdjustmentResult* result) {
   int num_tested = 0;
   for (int g = 0; g < kNumBundleGroups; ++g) num_tested += variance.scalar_rows[g];
-  const double alpha_each = options.snooping_family_wise
-                                ? options.snooping_alpha / std::max(1, num_tested)
-                                : options.snooping_alpha;
+  const double alpha_each = options.statistics.snooping_family_wise
+                                ? options.statistics.snooping_alpha / std::max(1, num_tested)
+                                : options.statistics.snooping_alpha;
   result->alpha_per_observation = alpha_each;
   result->critical_value = NormalQuantile(1.0 - 0.5 * alpha_each);
-  result->delta0 = result->critical_value + NormalQuantile(options.snooping_power);
+  result->delta0 = result->critical_value + NormalQuantile(options.statistics.snooping_power);
 }
 
 // Exterior orientations, in the ambient (Euler) parameters (P C P^T), and control points.
@@ -455,7 +455,7 @@ void ObservationDiagnostics(const BundleAdjustmentOptions& options, const Block&
       const BundleObservationDiagnostics d =
           RowDiagnostics(*result, info, row, rows.residuals[row],
                          RowScale(block, plan, info, row), h[row], s0, centres, shifts[row]);
-      if (d.redundancy < options.uncontrolled_redundancy) ++result->num_uncontrolled;
+      if (d.redundancy < options.statistics.uncontrolled_redundancy) ++result->num_uncontrolled;
       result->observations.push_back(d);
     }
   }
@@ -500,7 +500,7 @@ void CalibrationResults(const BundleAdjustmentOptions& options, const Block& blo
       for (int a = 0; a < n; ++a) {
         for (int b = 0; b < n; ++b) {
           calibration.correlation(a, b) = C(a, b) / (calibration.sigmas[a] * calibration.sigmas[b]);
-          if (b > a && std::abs(calibration.correlation(a, b)) > options.high_correlation) {
+          if (b > a && std::abs(calibration.correlation(a, b)) > options.statistics.high_correlation) {
             calibration.high_correlations.push_back(calibration.names[a] + "~" +
                                                     calibration.names[b] + ": " +
                                                     Format3(calibration.correlation(a, b)));
@@ -531,8 +531,8 @@ void GroupStatistics(const BundleAdjustmentOptions& options, const GroupSums* su
     group.redundancy_share = variance.redundancy[g] / rows;
     const bool prior = g == kControlPoints || g == kCameraPositions || g == kAttitudes;
     const bool share_known = std::isfinite(group.redundancy_share);
-    if (prior && (group.ratio < options.overfit_ratio ||
-                  (share_known && group.redundancy_share < options.overfit_redundancy_share))) {
+    if (prior && (group.ratio < options.statistics.overfit_ratio ||
+                  (share_known && group.redundancy_share < options.statistics.overfit_redundancy_share))) {
       group.overfit = true;
       std::ostringstream message;
       message << EnumName(group.group) << " over-fitted: residual RMS " << Format3(group.ratio)
@@ -636,13 +636,13 @@ void ComputeBundleStatistics(const BundleAdjustmentOptions& options, const Block
   ReducedNormals reduced;
   int e_size = 0;
   for (const int size : round.e_sizes) e_size += size;
-  const bool asked = e_size <= options.max_covariance_parameters;
+  const bool asked = e_size <= options.statistics.max_covariance_parameters;
   if (asked) BuildReducedNormals(round, &reduced);
   SetTestLevel(options, *variance, result);
   if (reduced.ok) {
     OrientationAndPointCovariances(block, state, round, reduced, variance_factor, result);
     ObservationDiagnostics(options, block, plan, state, round, reduced,
-                           options.observation_diagnostics, sums, result, variance);
+                           options.statistics.observation_diagnostics, sums, result, variance);
     CalibrationResults(options, block, plan, state, &reduced, variance_factor, result);
   } else {
     for (int g = 0; g < kNumBundleGroups; ++g) variance->redundancy[g] = kNaN;
@@ -650,7 +650,7 @@ void ComputeBundleStatistics(const BundleAdjustmentOptions& options, const Block
     summary.message = asked ? "the normal matrix is singular: no covariances"
                             : "covariances skipped (" + std::to_string(e_size) +
                                   " parameters after point elimination, more than " +
-                                  std::to_string(options.max_covariance_parameters) + ")";
+                                  std::to_string(options.statistics.max_covariance_parameters) + ")";
   }
   if (plan.use_lever) result->lever_arm_m = state.lever;
   GroupStatistics(options, sums, *variance, result);

@@ -56,6 +56,10 @@ double SecondsSince(Clock::time_point start) {
 std::string Quoted(const std::string& name) { return "'" + name + "'"; }
 
 Status CheckSupported(const BundleAdjustmentConfig& config, const Block& block) {
+  if (config.estimate_lever_arm) {
+    return Status::Error(
+        "the Taylor bundle adjustment applies a given lever arm but does not estimate it");
+  }
   for (const std::vector<int>& params : config.calibrated_params) {
     if (!params.empty()) {
       return Status::Error(
@@ -89,7 +93,7 @@ Status MakePlan(const TaylorBundleOptions& options, const BundleAdjustmentConfig
                 const Block& block, Plan* plan) {
   internal::BundlePlanOptions plan_options;
   plan_options.accuracies = options.accuracies;
-  plan_options.use_lever = options.lever_arm_m.has_value();
+  plan_options.use_lever = config.lever_arm_m.has_value();
   plan_options.refuse_weak_datum = false;
   PHOTOPOSE_RETURN_IF_ERROR(internal::MakeBundlePlan(plan_options, config, block, plan));
   plan->image_constant.assign(block.images.size(), 0);
@@ -114,7 +118,7 @@ Status MakePlan(const TaylorBundleOptions& options, const BundleAdjustmentConfig
 
 // ------------------------------------------------------------------ set-up shared by both entries
 
-Frame MakeFrame(const TaylorBundleOptions& options, const Block& block, const Plan& plan,
+Frame MakeFrame(const BundleAdjustmentConfig& config, const Block& block, const Plan& plan,
                 State* state) {
   Frame frame;
   state->eo.clear();
@@ -150,8 +154,8 @@ Frame MakeFrame(const TaylorBundleOptions& options, const Block& block, const Pl
       frame.measured[i] = *block.images[i].measured_center_m - frame.centroid;
     frame.focal_um[i] = block.cameras[block.images[i].camera].params[kFrameFocal];
   }
-  frame.use_lever = options.lever_arm_m.has_value();
-  if (frame.use_lever) frame.lever = *options.lever_arm_m;
+  frame.use_lever = config.lever_arm_m.has_value();
+  if (frame.use_lever) frame.lever = *config.lever_arm_m;
   return frame;
 }
 
@@ -159,6 +163,9 @@ Status Prepare(const TaylorBundleOptions& options, const BundleAdjustmentConfig&
                const Block& block, Plan* plan) {
   std::string why;
   if (!options.IsValid(&why)) return Status::Error("invalid options: " + why);
+  // The lever arm moved from the options to the config; its message stays the one it had.
+  if (config.lever_arm_m && !config.lever_arm_m->allFinite())
+    return Status::Error("invalid options: the lever arm must be finite");
   PHOTOPOSE_RETURN_IF_ERROR(CheckBlock(block));
   PHOTOPOSE_RETURN_IF_ERROR(CheckSupported(config, block));
   for (const BlockCamera& camera : block.cameras)
@@ -506,7 +513,6 @@ bool TaylorBundleOptions::IsValid(std::string* why) const {
   objective.accuracies = accuracies;
   std::string accuracy_why;
   if (!objective.IsValid(&accuracy_why)) return fail(accuracy_why);
-  if (lever_arm_m && !lever_arm_m->allFinite()) return fail("the lever arm must be finite");
   if (!(rejection_threshold >= 0.0) || !std::isfinite(rejection_threshold))
     return fail("the rejection threshold must be >= 0 (0: no rejection)");
   if (max_rejection_rounds < 0) return fail("max_rejection_rounds must be >= 0");
@@ -525,23 +531,18 @@ bool TaylorBundleOptions::IsValid(std::string* why) const {
 
 Status TaylorBundleOptionsFromBundleOptions(const BundleAdjustmentOptions& ceres,
                                             TaylorPartials partials, TaylorBundleOptions* options) {
-  if (ceres.tie_loss != LossType::kNone) {
+  if (ceres.robustness.tie_loss != LossType::kNone) {
     return Status::Error(
         "the Taylor bundle adjustment is plain least squares: a robust tie loss is done by the "
         "Ceres adjustment");
   }
-  if (ceres.estimate_lever_arm) {
-    return Status::Error(
-        "the Taylor bundle adjustment applies a given lever arm but does not estimate it");
-  }
   *options = TaylorBundleOptions();
   options->partials = partials;
   options->accuracies = ceres.accuracies;
-  options->lever_arm_m = ceres.lever_arm_m;
-  options->rejection_threshold = ceres.rejection_threshold;
-  options->max_rejection_rounds = ceres.max_rejection_rounds;
-  options->max_covariance_parameters = ceres.max_covariance_parameters;
-  options->progress = ceres.progress;
+  options->rejection_threshold = ceres.robustness.rejection_threshold;
+  options->max_rejection_rounds = ceres.robustness.max_rejection_rounds;
+  options->max_covariance_parameters = ceres.statistics.max_covariance_parameters;
+  options->progress = ceres.solver.progress;
   return Status::Ok();
 }
 
@@ -608,7 +609,7 @@ Status LinearizeTaylorBundle(const TaylorBundleOptions& options,
   Plan plan;
   PHOTOPOSE_RETURN_IF_ERROR(Prepare(options, config, block, &plan));
   State state;
-  const Frame frame = MakeFrame(options, block, plan, &state);
+  const Frame frame = MakeFrame(config, block, plan, &state);
   Layout layout;
   BuildLayout(block, plan, &layout);
 
@@ -708,7 +709,7 @@ Status TaylorBundleAdjust(const TaylorBundleOptions& options, const BundleAdjust
   summary.message.clear();
 
   State state;
-  const Frame frame = MakeFrame(options, *block, plan, &state);
+  const Frame frame = MakeFrame(config, *block, plan, &state);
   const Context context{options, *block, plan, frame, start};
   BundleAdjustmentResult& out = result->adjustment;
   auto finish = [&](SolverTermination type, const std::string& message) {

@@ -67,9 +67,6 @@ struct TaylorBundleOptions {
   TaylorPartials partials = TaylorPartials::kCorrected;
   // The objective's accuracies, defaults and per-row overrides exactly as BundleAdjust takes them.
   BundleAccuracies accuracies;
-  // GNSS lever arm: antenna offset from the projection centre in the camera frame (u, v, w; m),
-  // applied to every camera-position prior (not estimated).
-  std::optional<Eigen::Vector3d> lever_arm_m;
   // After convergence, marks whose whitened residual |v| / sigma exceeds rejection_threshold *
   // max(1, sigma0) (unitless) are rejected and the block adjusted again, at most
   // max_rejection_rounds times (BundleAdjust's rule). 0 disables rejection.
@@ -105,9 +102,11 @@ struct TaylorBundleOptions {
   bool IsValid(std::string* why) const;
 };
 
-// The Taylor options that minimise the same objective as `ceres` (accuracies, lever arm, rejection,
-// covariance limit, progress). Errors name what the Taylor path does not do: a robust tie loss or
-// an estimated lever arm.
+// The Taylor options that minimise the same objective as `ceres` (accuracies, rejection, covariance
+// limit, progress; the lever arm is the config's, BundleAdjustmentConfig::lever_arm_m). Errors name
+// what the Taylor path does not do: a robust tie loss (an estimated lever arm, a config matter, is
+// refused by TaylorBundleAdjust). The Taylor options keep their own flat fields rather than
+// BundleAdjustmentOptions' parts: they take only a few fields of each part (and refuse the rest).
 Status TaylorBundleOptionsFromBundleOptions(const BundleAdjustmentOptions& ceres,
                                             TaylorPartials partials, TaylorBundleOptions* options);
 
@@ -183,7 +182,7 @@ Status TaylorBundleAdjust(const TaylorBundleOptions& options, const BundleAdjust
 
 // The block adjustment that `photopose bundle --solver=ceres|taylor|taylor_as_printed` and the
 // block mode of `photopose compare` run, selected by the same PoseSolver switch as resection:
-// kCeres calls BundleAdjust(options, ...) (its derivative path from options.jacobian); kTaylor and
+// kCeres calls BundleAdjust(options, ...) (its derivative path from options.solver.jacobian); kTaylor and
 // kTaylorAsPrinted call TaylorBundleAdjust with TaylorBundleOptionsFromBundleOptions(options) and
 // return its result in BundleAdjust's shape (taylor_result, when not null, receives the whole
 // Taylor result: its summary and iteration history). Errors as the solver called returns them,

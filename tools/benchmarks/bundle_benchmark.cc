@@ -140,13 +140,13 @@ BENCHMARK_CAPTURE(BM_BundleTaylor, as_printed, TaylorPartials::kAsPrinted)
 void BM_BundleCeres(benchmark::State& state, JacobianType jacobian, int threads) {
   const BenchData& data = BenchBlock(static_cast<int>(state.range(0)));
   BundleAdjustmentOptions options;
-  options.jacobian = jacobian;
-  options.num_threads = threads;
-  options.rejection_threshold = 0.0;
-  options.max_covariance_parameters = 0;
+  options.solver.jacobian = jacobian;
+  options.solver.num_threads = threads;
+  options.robustness.rejection_threshold = 0.0;
+  options.statistics.max_covariance_parameters = 0;
   BundleAdjustmentResult result;
   TimeAdjustment(state, data, [&](Block* block, const auto& progress) {
-    options.progress = progress;
+    options.solver.progress = progress;
     const Status adjusted = BundleAdjust(options, BundleAdjustmentConfig(), block, &result);
     return std::make_pair(result.summary.iterations,
                           adjusted.ok() && result.summary.IsSolutionUsable());

@@ -123,50 +123,79 @@ bool ParseTriple(const std::string& text, bool allow_one, Eigen::Vector3d* value
   return false;
 }
 
-}  // namespace
+// What RunBundle's steps hand on to each other.
+struct BundleRun {
+  bool tables = false;  // the input is the tables (not --colmap_model or --bal)
+  BundleAdjustmentOptions options;
+  // The lever arm from the flags; the calibrated parameters once the block is read.
+  BundleAdjustmentConfig config;
+  std::vector<std::string> calibrate;  // --calibrate names
+  PoseSolver solver = PoseSolver::kCeres;
+  BundleReportContext context;
+  std::vector<std::pair<std::string, std::string>> written;  // (label, path) of the outputs
+  Block block;
+  ColmapModelExtras colmap_extras;
+  BundleAdjustmentResult result;
+  BundleCrossValidationResult cross_validation;
+  int exit_code = kExitSuccess;  // kExitSomeFailed once an image could not be oriented
+};
 
-int RunBundle(int argc, char** argv) {
-  const char* const kCommand = "bundle";
-  ParsedFlags parsed;
-  if (!ParseFlags(argc, argv, BundleFlags(), &parsed)) return kExitBadInput;
-  if (parsed.help) {
-    PrintHelp(kUsage, BundleFlags());
-    return kExitSuccess;
-  }
-  std::string command_line = "photopose bundle";
-  for (int i = 0; i < argc; ++i) command_line += std::string(" ") + argv[i];
+// A step's "go on" (any other value is the exit status to return).
+constexpr int kGoOn = -1;
 
-  // Which input.
+// Which input, and the outputs that fit it.
+int CheckInputChoice(const char* command, BundleRun* run) {
   const int sources = (!FLAGS_bundle_colmap_model.empty()) + (!FLAGS_bundle_bal.empty()) +
                       (!FLAGS_bundle_marks.empty() || !FLAGS_bundle_cameras.empty());
   if (sources != 1)
-    return BadInput(kCommand, "give the tables (--cameras and --marks), --colmap_model or --bal: one of them");
-  const bool tables = FLAGS_bundle_colmap_model.empty() && FLAGS_bundle_bal.empty();
-  if (tables && (FLAGS_bundle_cameras.empty() || FLAGS_bundle_marks.empty()))
-    return BadInput(kCommand, "--cameras and --marks are both required with the tables");
+    return BadInput(command, "give the tables (--cameras and --marks), --colmap_model or --bal: one of them");
+  run->tables = FLAGS_bundle_colmap_model.empty() && FLAGS_bundle_bal.empty();
+  if (run->tables && (FLAGS_bundle_cameras.empty() || FLAGS_bundle_marks.empty()))
+    return BadInput(command, "--cameras and --marks are both required with the tables");
   if (FLAGS_bundle_out.empty() && FLAGS_bundle_out_colmap.empty() && FLAGS_bundle_report.empty())
-    return BadInput(kCommand, "nothing to write: give --out, --out_colmap or --report");
-  if (!FLAGS_bundle_out_cameras.empty() && !tables)
-    return BadInput(kCommand, "--out_cameras writes a camera table of frame cameras; with --colmap_model or --bal use --out_colmap");
+    return BadInput(command, "nothing to write: give --out, --out_colmap or --report");
+  if (!FLAGS_bundle_out_cameras.empty() && !run->tables)
+    return BadInput(command, "--out_cameras writes a camera table of frame cameras; with --colmap_model or --bal use --out_colmap");
   // The tables' other inputs: a COLMAP model or a BAL problem holds its own points and poses.
-  if (!tables) {
+  if (!run->tables) {
     const std::string source = !FLAGS_bundle_colmap_model.empty() ? "--colmap_model" : "--bal";
     for (const auto& [flag, path] : {std::pair<const char*, const std::string&>{"--points", FLAGS_bundle_points},
                                      {"--frames", FLAGS_bundle_frames}}) {
       if (!path.empty())
-        return BadInput(kCommand, std::string(flag) + " is read with the tables (--cameras and --marks) only; " + source + " holds its own points and poses: leave " + flag + " out");
+        return BadInput(command, std::string(flag) + " is read with the tables (--cameras and --marks) only; " + source + " holds its own points and poses: leave " + flag + " out");
     }
   }
   if (!FLAGS_bundle_bal.empty() && !FLAGS_bundle_out_colmap.empty())
-    return BadInput(kCommand, "--out_colmap: a BAL problem has no image size and counts pixels from the image centre, which a COLMAP model cannot hold; write --out, --out_points or --report");
+    return BadInput(command, "--out_colmap: a BAL problem has no image size and counts pixels from the image centre, which a COLMAP model cannot hold; write --out, --out_points or --report");
+  run->context.input_kind = run->tables ? "tables" : !FLAGS_bundle_colmap_model.empty() ? "colmap" : "bal";
+  if (!ParseEnum(FLAGS_bundle_rotation, &run->context.rotation))
+    return BadInput(command, EnumFlagError<RotationConvention>("--rotation", FLAGS_bundle_rotation));
+  return kGoOn;
+}
 
-  BundleReportContext context;
-  context.command_line = command_line;
-  context.input_kind = tables ? "tables" : !FLAGS_bundle_colmap_model.empty() ? "colmap" : "bal";
-  if (!ParseEnum(FLAGS_bundle_rotation, &context.rotation))
-    return BadInput(kCommand, EnumFlagError<RotationConvention>("--rotation", FLAGS_bundle_rotation));
+// The progress line of every iteration, on stderr.
+void PrintProgress(const BundleIterationInfo& info) {
+  std::string lm;
+  if (std::isfinite(info.trust_region_radius)) {
+    char buffer[128];
+    std::snprintf(buffer, sizeof(buffer), "  %s quality %.2f radius %.2g  solve %.2f of %.2f s",
+                  info.step_successful ? "taken" : "REJECTED", info.step_quality,
+                  info.trust_region_radius, info.linear_solver_seconds,
+                  info.iteration_seconds);
+    lm = buffer;
+  }
+  std::fprintf(stderr,
+               "photopose bundle: round %d%s iteration %3d: cost %.6g  sigma0 %.4f  step %.3g%s  "
+               "%.1f s\n",
+               info.round, info.free_gauge ? " (free gauge)" : "", info.iteration, info.cost,
+               info.sigma0, info.step_norm, lm.c_str(),
+               info.elapsed_seconds);
+}
 
-  BundleAdjustmentOptions options;
+// The flags -> the options (accuracies, robustness, statistics, solver), the lever arm of the
+// config, the --calibrate names and the block solver.
+int OptionsFromFlags(const char* command, BundleRun* run) {
+  BundleAdjustmentOptions& options = run->options;
   BundleAccuracies& acc = options.accuracies;
   acc.tie_px = FLAGS_bundle_tie_accuracy;
   acc.marker_projection_px = FLAGS_bundle_marker_projection_accuracy;
@@ -175,214 +204,197 @@ int RunBundle(int argc, char** argv) {
   acc.marker_m = FLAGS_bundle_marker_accuracy;
   if (!FLAGS_bundle_camera_accuracy.empty()) {
     if (!ParseTriple(FLAGS_bundle_camera_accuracy, true, &acc.camera_m) || !(acc.camera_m.minCoeff() > 0.0))
-      return BadInput(kCommand, "--camera_accuracy must be one positive number or three (X,Y,Z) in metres, not '" + FLAGS_bundle_camera_accuracy + "'");
+      return BadInput(command, "--camera_accuracy must be one positive number or three (X,Y,Z) in metres, not '" + FLAGS_bundle_camera_accuracy + "'");
   }
   if (FLAGS_bundle_attitude_accuracy > 0.0) acc.attitude_deg = FLAGS_bundle_attitude_accuracy;
   if (!FLAGS_bundle_lever_arm.empty()) {
     Eigen::Vector3d lever;
     if (!ParseTriple(FLAGS_bundle_lever_arm, false, &lever) || lever.cwiseAbs().maxCoeff() > 100.0)
-      return BadInput(kCommand, "--lever_arm must be three numbers X,Y,Z in metres (at most 100 m each), not '" + FLAGS_bundle_lever_arm + "'");
-    options.lever_arm_m = lever;
+      return BadInput(command, "--lever_arm must be three numbers X,Y,Z in metres (at most 100 m each), not '" + FLAGS_bundle_lever_arm + "'");
+    run->config.lever_arm_m = lever;
   }
-  options.estimate_lever_arm = FLAGS_bundle_estimate_lever_arm;
-  if (!ParseEnum(FLAGS_bundle_jacobian, &options.jacobian))
-    return BadInput(kCommand, EnumFlagError<JacobianType>("--jacobian", FLAGS_bundle_jacobian));
-  if (!ParseEnum(FLAGS_bundle_linear_solver, &options.linear_solver))
-    return BadInput(kCommand, EnumFlagError<BundleLinearSolver>("--linear_solver", FLAGS_bundle_linear_solver));
-  if (!ParseEnum(FLAGS_bundle_loss, &options.tie_loss) || !IsBundleTieLoss(options.tie_loss))
-    return BadInput(kCommand, "--loss must be " + EnumNameList(kBundleTieLosses) + ", not '" + FLAGS_bundle_loss + "'");
-  options.tie_loss_scale_sigmas = FLAGS_bundle_loss_scale / FLAGS_bundle_tie_accuracy;
-  options.max_iterations = FLAGS_bundle_max_iterations;
-  options.rejection_threshold = FLAGS_bundle_rejection_threshold;
-  options.max_rejection_rounds = FLAGS_bundle_max_rejection_rounds;
-  options.estimate_accuracies = FLAGS_bundle_estimate_accuracies;
-  options.snoop = FLAGS_bundle_snoop;
-  options.snooping_alpha = FLAGS_bundle_alpha;
-  options.max_covariance_parameters = FLAGS_bundle_max_covariance_parameters;
-  options.num_threads = FLAGS_bundle_threads;
+  run->config.estimate_lever_arm = FLAGS_bundle_estimate_lever_arm;
+  BundleSolverOptions& solver = options.solver;
+  if (!ParseEnum(FLAGS_bundle_jacobian, &solver.jacobian))
+    return BadInput(command, EnumFlagError<JacobianType>("--jacobian", FLAGS_bundle_jacobian));
+  if (!ParseEnum(FLAGS_bundle_linear_solver, &solver.linear_solver))
+    return BadInput(command, EnumFlagError<BundleLinearSolver>("--linear_solver", FLAGS_bundle_linear_solver));
+  BundleRobustnessOptions& robustness = options.robustness;
+  if (!ParseEnum(FLAGS_bundle_loss, &robustness.tie_loss) || !IsBundleTieLoss(robustness.tie_loss))
+    return BadInput(command, "--loss must be " + EnumNameList(kBundleTieLosses) + ", not '" + FLAGS_bundle_loss + "'");
+  robustness.tie_loss_scale_sigmas = FLAGS_bundle_loss_scale / FLAGS_bundle_tie_accuracy;
+  solver.max_iterations = FLAGS_bundle_max_iterations;
+  robustness.rejection_threshold = FLAGS_bundle_rejection_threshold;
+  robustness.max_rejection_rounds = FLAGS_bundle_max_rejection_rounds;
+  options.statistics.estimate_accuracies = FLAGS_bundle_estimate_accuracies;
+  robustness.snoop = FLAGS_bundle_snoop;
+  options.statistics.snooping_alpha = FLAGS_bundle_alpha;
+  options.statistics.max_covariance_parameters = FLAGS_bundle_max_covariance_parameters;
+  solver.num_threads = FLAGS_bundle_threads;
   if (FLAGS_bundle_relative_gauge != "free" && FLAGS_bundle_relative_gauge != "fixed")
-    return BadInput(kCommand, "--relative_gauge must be free or fixed, not '" + FLAGS_bundle_relative_gauge + "'");
-  options.free_gauge_for_relative_blocks = FLAGS_bundle_relative_gauge == "free";
-  if (!FLAGS_bundle_quiet) {
-    options.progress = [](const BundleIterationInfo& info) {
-      std::string lm;
-      if (std::isfinite(info.trust_region_radius)) {
-        char buffer[128];
-        std::snprintf(buffer, sizeof(buffer), "  %s quality %.2f radius %.2g  solve %.2f of %.2f s",
-                      info.step_successful ? "taken" : "REJECTED", info.step_quality,
-                      info.trust_region_radius, info.linear_solver_seconds,
-                      info.iteration_seconds);
-        lm = buffer;
-      }
-      std::fprintf(stderr,
-                   "photopose bundle: round %d%s iteration %3d: cost %.6g  sigma0 %.4f  step %.3g%s  "
-                   "%.1f s\n",
-                   info.round, info.free_gauge ? " (free gauge)" : "", info.iteration, info.cost,
-                   info.sigma0, info.step_norm, lm.c_str(),
-                   info.elapsed_seconds);
-    };
-  }
+    return BadInput(command, "--relative_gauge must be free or fixed, not '" + FLAGS_bundle_relative_gauge + "'");
+  solver.free_gauge_for_relative_blocks = FLAGS_bundle_relative_gauge == "free";
+  if (!FLAGS_bundle_quiet) solver.progress = PrintProgress;
   std::string why;
-  if (!options.IsValid(&why)) return BadInput(kCommand, why);
-  std::vector<std::string> calibrate;
+  if (!options.IsValid(&why)) return BadInput(command, why);
   for (const std::string& name : SplitCommaList(FLAGS_bundle_calibrate))
-    if (!name.empty()) calibrate.push_back(name);
-  context.calibrate = calibrate;
-  PoseSolver solver = PoseSolver::kCeres;
-  if (!ParseEnum(FLAGS_bundle_solver, &solver))
-    return BadInput(kCommand, EnumFlagError<PoseSolver>("--solver", FLAGS_bundle_solver));
-  if (solver != PoseSolver::kCeres && (options.snoop || options.estimate_accuracies || FLAGS_bundle_cross_validate))
-    return BadInput(kCommand, "--solver=" + FLAGS_bundle_solver + " adjusts without snooping, accuracy estimation or cross-validation; use --solver=ceres for those");
+    if (!name.empty()) run->calibrate.push_back(name);
+  run->context.calibrate = run->calibrate;
+  if (!ParseEnum(FLAGS_bundle_solver, &run->solver))
+    return BadInput(command, EnumFlagError<PoseSolver>("--solver", FLAGS_bundle_solver));
+  if (run->solver != PoseSolver::kCeres && (robustness.snoop || options.statistics.estimate_accuracies || FLAGS_bundle_cross_validate))
+    return BadInput(command, "--solver=" + FLAGS_bundle_solver + " adjusts without snooping, accuracy estimation or cross-validation; use --solver=ceres for those");
+  return kGoOn;
+}
 
-  // Outputs: checked before any work (never an input, never each other), written all or nothing.
+// Outputs: checked before any work (never an input, never each other), written all or nothing.
+int DeclareFiles(const char* command, const ParsedFlags& parsed, BundleRun* run,
+                 OutputFiles* outputs) {
   if (!FLAGS_bundle_out_colmap.empty()) {
     // The model's folder is created when missing (an empty folder is all a failed run leaves).
     std::error_code error;
     std::filesystem::create_directories(FLAGS_bundle_out_colmap, error);
     if (error)
-      return BadInput(kCommand, "--out_colmap=" + FLAGS_bundle_out_colmap + ": cannot create the folder: " + error.message());
+      return BadInput(command, "--out_colmap=" + FLAGS_bundle_out_colmap + ": cannot create the folder: " + error.message());
   }
-  OutputFiles outputs;
   for (const auto& [label, path] : {std::pair<const char*, const std::string&>{"--cameras", FLAGS_bundle_cameras},
                                     {"--marks", FLAGS_bundle_marks}, {"--points", FLAGS_bundle_points},
                                     {"--frames", FLAGS_bundle_frames}, {"--bal", FLAGS_bundle_bal}}) {
-    const Status input = outputs.AddInput(label, path);
-    if (!input.ok()) return BadInput(kCommand, input.message());
-    if (!path.empty()) context.inputs.push_back(path);
+    const Status input = outputs->AddInput(label, path);
+    if (!input.ok()) return BadInput(command, input.message());
+    if (!path.empty()) run->context.inputs.push_back(path);
   }
   if (!FLAGS_bundle_colmap_model.empty()) {
     for (const char* name : {"cameras.txt", "images.txt", "points3D.txt"}) {
       const std::string path = FLAGS_bundle_colmap_model + "/" + name;
-      const Status input = outputs.AddInput("--colmap_model", path);
-      if (!input.ok()) return BadInput(kCommand, input.message());
-      context.inputs.push_back(path);
+      const Status input = outputs->AddInput("--colmap_model", path);
+      if (!input.ok()) return BadInput(command, input.message());
+      run->context.inputs.push_back(path);
     }
   }
   for (const std::string& flag_file : parsed.flag_files) {
-    const Status input = outputs.AddInput("--flagfile", flag_file);
-    if (!input.ok()) return BadInput(kCommand, input.message());
+    const Status input = outputs->AddInput("--flagfile", flag_file);
+    if (!input.ok()) return BadInput(command, input.message());
   }
-  std::vector<std::pair<std::string, std::string>> written;  // (label, path)
   for (const auto& [label, path] : {std::pair<const char*, const std::string&>{"--out", FLAGS_bundle_out},
                                     {"--out_points", FLAGS_bundle_out_points},
                                     {"--out_cameras", FLAGS_bundle_out_cameras},
                                     {"--report", FLAGS_bundle_report}, {"--html", FLAGS_bundle_html}}) {
     if (path.empty()) continue;
-    const Status declared = outputs.AddOutput(label, path);
-    if (!declared.ok()) return BadInput(kCommand, declared.message());
-    written.push_back({label, path});
+    const Status declared = outputs->AddOutput(label, path);
+    if (!declared.ok()) return BadInput(command, declared.message());
+    run->written.push_back({label, path});
   }
   if (!FLAGS_bundle_out_colmap.empty()) {
     for (const char* name : {"cameras.txt", "images.txt", "points3D.txt"}) {
       const std::string path = FLAGS_bundle_out_colmap + "/" + name;
-      const Status declared = outputs.AddOutput("--out_colmap", path);
-      if (!declared.ok()) return BadInput(kCommand, declared.message());
-      written.push_back({"--out_colmap", path});
+      const Status declared = outputs->AddOutput("--out_colmap", path);
+      if (!declared.ok()) return BadInput(command, declared.message());
+      run->written.push_back({"--out_colmap", path});
     }
   }
+  return kGoOn;
+}
 
-  // Read.
-  Block block;
-  ColmapModelExtras colmap_extras;
-  std::vector<FrameCamera> table_cameras;
-  if (tables) {
+// Reads the block (tables, COLMAP model or BAL problem) and the calibrated parameters.
+int ReadBundleBlock(const char* command, BundleRun* run) {
+  Block& block = run->block;
+  if (run->tables) {
     BlockFiles files;
     files.cameras = FLAGS_bundle_cameras;
     files.marks = FLAGS_bundle_marks;
     files.points = FLAGS_bundle_points;
     files.frames = FLAGS_bundle_frames;
-    files.rotation = context.rotation;
+    files.rotation = run->context.rotation;
     files.pixel_origin = FLAGS_bundle_pixel_center_origin ? PixelOrigin::kCenter : PixelOrigin::kCorner;
     const Status read = ReadBlock(files, &block);
-    if (!read.ok()) return BadInput(kCommand, read.message());
+    if (!read.ok()) return BadInput(command, read.message());
     // Measured centres are priors when an accuracy is known: per row, --camera_accuracy, or the
     // default when a frames table was given.
-    acc.camera_positions_are_priors = !FLAGS_bundle_camera_accuracy.empty() || !FLAGS_bundle_frames.empty();
+    run->options.accuracies.camera_positions_are_priors = !FLAGS_bundle_camera_accuracy.empty() || !FLAGS_bundle_frames.empty();
   } else if (!FLAGS_bundle_colmap_model.empty()) {
-    const Status read = ReadColmapModel(FLAGS_bundle_colmap_model, &block, &colmap_extras);
-    if (!read.ok()) return BadInput(kCommand, read.message());
+    const Status read = ReadColmapModel(FLAGS_bundle_colmap_model, &block, &run->colmap_extras);
+    if (!read.ok()) return BadInput(command, read.message());
   } else {
     const Status read = ReadBalProblem(FLAGS_bundle_bal, &block);
-    if (!read.ok()) return BadInput(kCommand, read.message());
+    if (!read.ok()) return BadInput(command, read.message());
   }
-  if (block.images.empty()) return BadInput(kCommand, "the block has no image with marks");
-  BundleAdjustmentConfig config;
-  const Status calibration = BundleAdjustmentConfig::FromCalibrationNames(block, calibrate, &config);
-  if (!calibration.ok()) return BadInput(kCommand, "--calibrate: " + calibration.message());
+  if (block.images.empty()) return BadInput(command, "the block has no image with marks");
+  const Status calibration = BundleAdjustmentConfig::FromCalibrationNames(block, run->calibrate, &run->config);
+  if (!calibration.ok()) return BadInput(command, "--calibrate: " + calibration.message());
+  return kGoOn;
+}
 
-  int exit_code = kExitSuccess;
-  BundleAdjustmentResult result;
-  BundleCrossValidationResult cross_validation;
-  {
-    const ScopedSolving solving;
-    // Initial values where they are missing.
-    BlockInitializationSummary initialization;
-    const Status initialized = InitializeBlock(BlockInitializationOptions(), &block, &initialization);
-    if (!initialized.ok()) return BadInput(kCommand, initialized.message());
-    context.num_images_initialized = initialization.images_resected;
-    for (const auto& [image, reason] : initialization.not_oriented) {
-      std::cerr << "photopose bundle: " << block.images[image].name << ": not oriented: " << reason << "\n";
-      exit_code = kExitSomeFailed;
-    }
-    if (!initialization.not_oriented.empty()) {
-      std::cerr << "photopose bundle: " << initialization.not_oriented.size()
-                << " images could not be oriented; the adjustment goes on without them\n";
-      RemoveImages(initialization.not_oriented, &block);
-      if (block.images.empty()) {
-        std::cerr << "photopose bundle: no image could be oriented: give control points (--points) "
-                     "or initial values (--frames); nothing written\n";
-        return kExitSomeFailed;
-      }
-    }
-    if (!FLAGS_bundle_quiet) std::cerr << "photopose bundle: initial values: " << initialization.BriefReport() << "\n";
-    // A model the block cannot be written as is refused now, not after the adjustment.
-    if (!FLAGS_bundle_out_colmap.empty()) {
-      const Status writable = CheckColmapModelWritable(
-          block, FLAGS_bundle_colmap_model.empty() ? nullptr : &colmap_extras);
-      if (!writable.ok()) return BadInput(kCommand, "--out_colmap: " + writable.message());
-    }
-    const Status adjusted = BundleAdjustWithSolver(solver, options, config, &block, &result);
-    if (!adjusted.ok()) return BadInput(kCommand, adjusted.message());
-    if (tables && result.summary.datum == BundleDatum::kRelative) {
-      return BadInput(kCommand, "no datum: the block has no control points and no camera positions, so it has no ground coordinates to write; give --points with control points or --frames with camera positions");
-    }
-    if (result.summary.IsSolutionUsable() && FLAGS_bundle_cross_validate) {
-      const Status cv = CrossValidateControlPoints(options, config, block, result, FLAGS_bundle_threads, &cross_validation);
-      if (!cv.ok()) return BadInput(kCommand, cv.message());
-      context.cross_validation = &cross_validation;
+// Initial values where they are missing; images that cannot be oriented leave the block.
+int InitializeBundleBlock(const char* command, BundleRun* run) {
+  Block& block = run->block;
+  BlockInitializationSummary initialization;
+  const Status initialized = InitializeBlock(BlockInitializationOptions(), &block, &initialization);
+  if (!initialized.ok()) return BadInput(command, initialized.message());
+  run->context.num_images_initialized = initialization.images_resected;
+  for (const auto& [image, reason] : initialization.not_oriented) {
+    std::cerr << "photopose bundle: " << block.images[image].name << ": not oriented: " << reason << "\n";
+    run->exit_code = kExitSomeFailed;
+  }
+  if (!initialization.not_oriented.empty()) {
+    std::cerr << "photopose bundle: " << initialization.not_oriented.size()
+              << " images could not be oriented; the adjustment goes on without them\n";
+    RemoveImages(initialization.not_oriented, &block);
+    if (block.images.empty()) {
+      std::cerr << "photopose bundle: no image could be oriented: give control points (--points) "
+                   "or initial values (--frames); nothing written\n";
+      return kExitSomeFailed;
     }
   }
-  for (const auto& [label, path] : written) context.outputs.push_back(path);
-  context.options = options;
+  if (!FLAGS_bundle_quiet) std::cerr << "photopose bundle: initial values: " << initialization.BriefReport() << "\n";
+  return kGoOn;
+}
 
-  const bool usable = result.summary.IsSolutionUsable();
-  for (const std::string& line : BundleConsoleLines(block, result, context)) std::cout << line << "\n";
-  if (!usable) {
-    std::cerr << "photopose bundle: not adjusted: " << result.summary.message << "\n";
-    exit_code = kExitSomeFailed;
+// The adjustment, then the cross-validation when asked.
+int AdjustBundleBlock(const char* command, BundleRun* run) {
+  BundleAdjustmentResult& result = run->result;
+  // A model the block cannot be written as is refused now, not after the adjustment.
+  if (!FLAGS_bundle_out_colmap.empty()) {
+    const Status writable = CheckColmapModelWritable(
+        run->block, FLAGS_bundle_colmap_model.empty() ? nullptr : &run->colmap_extras);
+    if (!writable.ok()) return BadInput(command, "--out_colmap: " + writable.message());
   }
+  const Status adjusted = BundleAdjustWithSolver(run->solver, run->options, run->config, &run->block, &result);
+  if (!adjusted.ok()) return BadInput(command, adjusted.message());
+  if (run->tables && result.summary.datum == BundleDatum::kRelative) {
+    return BadInput(command, "no datum: the block has no control points and no camera positions, so it has no ground coordinates to write; give --points with control points or --frames with camera positions");
+  }
+  if (result.summary.IsSolutionUsable() && FLAGS_bundle_cross_validate) {
+    const Status cv = CrossValidateControlPoints(run->options, run->config, run->block, result, FLAGS_bundle_threads, &run->cross_validation);
+    if (!cv.ok()) return BadInput(command, cv.message());
+    run->context.cross_validation = &run->cross_validation;
+  }
+  return kGoOn;
+}
 
-  // Outputs: the report and the page always (they say why when it failed); tables and models only
-  // for an adjustment that converged. The ones written are declared again in the transaction that
-  // writes them (the pre-flight one is dropped unstaged: nothing of it is written).
-  outputs.Abort();
+// Outputs: the report and the page always (they say why when it failed); tables and models only
+// for an adjustment that converged. The ones written are declared again in the transaction that
+// writes them (the pre-flight one is dropped unstaged: nothing of it is written).
+Status WriteBundleOutputs(const BundleRun& run, bool usable) {
+  const Block& block = run.block;
+  const BundleAdjustmentResult& result = run.result;
   OutputFiles final_outputs;
   Status status = Status::Ok();
-  for (const auto& [label, path] : written) {
+  for (const auto& [label, path] : run.written) {
     if (!usable && label != "--report" && label != "--html") continue;
     if (status.ok()) status = final_outputs.AddOutput(label, path);
   }
-  if (!status.ok()) return BadInput(kCommand, status.message());
+  if (!status.ok()) return status;
   auto stage = [&](const std::string& path, const std::string& text) {
     if (status.ok() && !path.empty()) status = final_outputs.Stage(path, text);
   };
-  stage(FLAGS_bundle_report, BundleReportJson(block, result, context).dump(2) + "\n");
-  stage(FLAGS_bundle_html, BundleReportHtml(block, result, context));
+  stage(FLAGS_bundle_report, BundleReportJson(block, result, run.context).dump(2) + "\n");
+  stage(FLAGS_bundle_html, BundleReportHtml(block, result, run.context));
   if (usable) {
     if (status.ok() && !FLAGS_bundle_out.empty()) {
       status = final_outputs.StageWith(FLAGS_bundle_out, [&](const std::string& path) {
         FramesTableOptions frames_options;
-        frames_options.convention = context.rotation;
+        frames_options.convention = run.context.rotation;
         std::vector<FrameCamera> cameras;
         for (const BlockCamera& camera : block.cameras) cameras.push_back(camera.table);
         frames_options.cameras = &cameras;
@@ -403,30 +415,75 @@ int RunBundle(int argc, char** argv) {
     }
     if (status.ok() && !FLAGS_bundle_out_colmap.empty()) {
       ColmapModelText model;
-      status = FormatColmapModel(block, FLAGS_bundle_colmap_model.empty() ? nullptr : &colmap_extras, &model);
+      status = FormatColmapModel(block, FLAGS_bundle_colmap_model.empty() ? nullptr : &run.colmap_extras, &model);
       stage(FLAGS_bundle_out_colmap + "/cameras.txt", model.cameras);
       stage(FLAGS_bundle_out_colmap + "/images.txt", model.images);
       stage(FLAGS_bundle_out_colmap + "/points3D.txt", model.points3D);
     }
   }
   if (status.ok()) status = final_outputs.Commit();
-  if (!status.ok()) return BadInput(kCommand, status.message());
+  return status;
+}
 
-  // Closing summary.
+// The closing line: images adjusted, sigma0, check RMSE, files written.
+void PrintClosingSummary(const BundleRun& run, bool usable) {
+  const BundleAdjustmentResult& result = run.result;
   std::cout << "bundle: " << (usable ? "adjusted " : "not adjusted: ") << result.summary.num_images
             << " images";
   if (std::isfinite(result.summary.sigma0)) std::cout << ", sigma0 " << result.summary.sigma0;
   if (result.num_check_points > 0) std::cout << ", check RMSE " << result.check_rmse_total_m << " m";
   std::cout << "; wrote";
   bool any = false;
-  for (const auto& [label, path] : written) {
+  for (const auto& [label, path] : run.written) {
     if (!usable && label != "--report" && label != "--html") continue;
     std::cout << (any ? ", " : " ") << path;
     any = true;
   }
   if (!any) std::cout << " nothing";
   std::cout << "\n";
-  return exit_code;
+}
+
+}  // namespace
+
+int RunBundle(int argc, char** argv) {
+  const char* const kCommand = "bundle";
+  ParsedFlags parsed;
+  if (!ParseFlags(argc, argv, BundleFlags(), &parsed)) return kExitBadInput;
+  if (parsed.help) {
+    PrintHelp(kUsage, BundleFlags());
+    return kExitSuccess;
+  }
+  BundleRun run;
+  run.context.command_line = "photopose bundle";
+  for (int i = 0; i < argc; ++i) run.context.command_line += std::string(" ") + argv[i];
+
+  OutputFiles outputs;
+  int code = CheckInputChoice(kCommand, &run);
+  if (code == kGoOn) code = OptionsFromFlags(kCommand, &run);
+  if (code == kGoOn) code = DeclareFiles(kCommand, parsed, &run, &outputs);
+  if (code == kGoOn) code = ReadBundleBlock(kCommand, &run);
+  if (code != kGoOn) return code;
+  {
+    const ScopedSolving solving;
+    code = InitializeBundleBlock(kCommand, &run);
+    if (code == kGoOn) code = AdjustBundleBlock(kCommand, &run);
+    if (code != kGoOn) return code;
+  }
+  for (const auto& [label, path] : run.written) run.context.outputs.push_back(path);
+  run.context.options = run.options;
+  run.context.config = run.config;
+
+  const bool usable = run.result.summary.IsSolutionUsable();
+  for (const std::string& line : BundleConsoleLines(run.block, run.result, run.context)) std::cout << line << "\n";
+  if (!usable) {
+    std::cerr << "photopose bundle: not adjusted: " << run.result.summary.message << "\n";
+    run.exit_code = kExitSomeFailed;
+  }
+  outputs.Abort();
+  const Status written = WriteBundleOutputs(run, usable);
+  if (!written.ok()) return BadInput(kCommand, written.message());
+  PrintClosingSummary(run, usable);
+  return run.exit_code;
 }
 
 }  // namespace photopose::cli

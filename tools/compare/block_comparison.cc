@@ -45,12 +45,12 @@ TrialOutcome SolveBlock(const BlockSolverVariant& variant, const Block& start,
   TrialOutcome out;
   Block block = start;
   BundleAdjustmentOptions options;
-  options.num_threads = 1;
-  options.jacobian = variant.jacobian;
-  options.tie_loss = variant.loss;
+  options.solver.num_threads = 1;
+  options.solver.jacobian = variant.jacobian;
+  options.robustness.tie_loss = variant.loss;
   // Covariances yes (NEES); per-observation tests no, so that both solvers reject marks by the same
   // rule (whitened residual beyond 4.5 max(1, sigma0)).
-  options.observation_diagnostics = false;
+  options.statistics.observation_diagnostics = false;
   BundleAdjustmentResult result;
   const Clock::time_point begin = Clock::now();
   const Status status =
@@ -463,10 +463,10 @@ Status RunBlockDatasetComparison(const BlockDatasetOptions& options, const Block
     summary.name = variant.Name();
     Block copy = block;
     BundleAdjustmentOptions adjustment;
-    adjustment.num_threads = options.num_threads;
-    adjustment.jacobian = variant.jacobian;
-    adjustment.tie_loss = variant.loss;
-    adjustment.observation_diagnostics = false;
+    adjustment.solver.num_threads = options.num_threads;
+    adjustment.solver.jacobian = variant.jacobian;
+    adjustment.robustness.tie_loss = variant.loss;
+    adjustment.statistics.observation_diagnostics = false;
     BundleAdjustmentResult adjusted;
     const Clock::time_point begin = Clock::now();
     const Status status = BundleAdjustWithSolver(variant.solver, adjustment,

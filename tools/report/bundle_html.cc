@@ -194,8 +194,8 @@ std::string GroupsHtml(const Block& block, const BundleAdjustmentResult& result,
               {"redundancy share: the group's summed redundancy numbers over its observations, "
                "how much of it the rest of the block checks",
                "over-fitted: a prior group whose RMS / stated is below " +
-                   F(context.options.overfit_ratio) + " or whose redundancy share is below " +
-                   F(context.options.overfit_redundancy_share)});
+                   F(context.options.statistics.overfit_ratio) + " or whose redundancy share is below " +
+                   F(context.options.statistics.overfit_redundancy_share)});
 
   // Histograms.
   std::map<std::string, std::vector<double>> by_group;
@@ -292,7 +292,7 @@ std::string ReliabilityHtml(const Block& block, const BundleAdjustmentResult& re
       redundancy[EnumName(d.group)].push_back(d.redundancy);
     html << "<h2>Reliability</h2>\n<p>" << result.num_uncontrolled
          << " observations have a redundancy number below "
-         << F(context.options.uncontrolled_redundancy)
+         << F(context.options.statistics.uncontrolled_redundancy)
          << ": a blunder there cannot be seen. Smallest detectable errors use delta0 = "
          << F(result.delta0) << ".</p>\n";
     for (const auto& [group, values] : redundancy)

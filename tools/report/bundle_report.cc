@@ -125,7 +125,7 @@ json BundleReportJson(const Block& block, const BundleAdjustmentResult& result,
                   {"redundancy_share", Number(g.redundancy_share)},
                   {"overfit", g.overfit},
                   {"message", g.message}};
-    if (o.estimate_accuracies) {
+    if (o.statistics.estimate_accuracies) {
       group["estimated_accuracy"] = g.num_axes == 2 ? Number(g.estimated_accuracy.x())
                                                     : Vector3(g.estimated_accuracy);
       group["estimated_accuracy_relative_standard_error"] =
@@ -249,7 +249,7 @@ json BundleReportJson(const Block& block, const BundleAdjustmentResult& result,
                         {"mdb", Number(d.mdb)},
                         {"external_m", Number(d.external_m)}};
       if (d.rejected) flagged.push_back(row);
-      if (d.redundancy < o.uncontrolled_redundancy) uncontrolled.push_back(row);
+      if (d.redundancy < o.statistics.uncontrolled_redundancy) uncontrolled.push_back(row);
       if (d.group == kTieMarks || d.group == kControlMarks) {
         const int image = block.marks[d.item].image;
         image_mdb[image] = std::max(image_mdb[image], d.mdb);
@@ -272,10 +272,10 @@ json BundleReportJson(const Block& block, const BundleAdjustmentResult& result,
     }
     report["diagnostics"] = {{"critical_value", result.critical_value},
                              {"delta0", result.delta0},
-                             {"alpha", o.snooping_alpha},
+                             {"alpha", o.statistics.snooping_alpha},
                              {"alpha_per_observation", result.alpha_per_observation},
-                             {"family_wise", o.snooping_family_wise},
-                             {"power", o.snooping_power},
+                             {"family_wise", o.statistics.snooping_family_wise},
+                             {"power", o.statistics.snooping_power},
                              {"num_observations", result.observations.size()},
                              {"num_uncontrolled", result.num_uncontrolled},
                              {"rejected", flagged},
@@ -283,7 +283,7 @@ json BundleReportJson(const Block& block, const BundleAdjustmentResult& result,
                              {"images", per_image},
                              {"control_points", per_control}};
   }
-  if (!result.snooping.empty() || o.snoop) {
+  if (!result.snooping.empty() || o.robustness.snoop) {
     json steps = json::array();
     for (const BundleSnoopingStep& step : result.snooping) {
       steps.push_back({{"group", EnumName(step.group)},
@@ -318,8 +318,8 @@ json BundleReportJson(const Block& block, const BundleAdjustmentResult& result,
   const BundleAccuracies& a = o.accuracies;
   report["options"] = {{"input", context.input_kind},
                        {"rotation", EnumName(context.rotation)},
-                       {"jacobian", EnumName(o.jacobian)},
-                       {"linear_solver", EnumName(o.linear_solver)},
+                       {"jacobian", EnumName(o.solver.jacobian)},
+                       {"linear_solver", EnumName(o.solver.linear_solver)},
                        {"tie_accuracy_px", a.tie_px},
                        {"marker_projection_accuracy_px", a.marker_projection_px},
                        {"tie_accuracy_film_um", a.tie_film_um},
@@ -328,15 +328,15 @@ json BundleReportJson(const Block& block, const BundleAdjustmentResult& result,
                        {"camera_accuracy_m", Vector3(a.camera_m)},
                        {"camera_positions_are_priors", a.camera_positions_are_priors},
                        {"attitude_accuracy_deg", a.attitude_deg ? json(*a.attitude_deg) : json(nullptr)},
-                       {"lever_arm_m", o.lever_arm_m ? Vector3(*o.lever_arm_m) : json(nullptr)},
-                       {"estimate_lever_arm", o.estimate_lever_arm},
+                       {"lever_arm_m", context.config.lever_arm_m ? Vector3(*context.config.lever_arm_m) : json(nullptr)},
+                       {"estimate_lever_arm", context.config.estimate_lever_arm},
                        {"calibrate", context.calibrate},
-                       {"rejection_threshold", o.rejection_threshold},
-                       {"estimate_accuracies", o.estimate_accuracies},
-                       {"snoop", o.snoop},
-                       {"snooping_alpha", o.snooping_alpha},
-                       {"max_iterations", o.max_iterations},
-                       {"num_threads", o.num_threads}};
+                       {"rejection_threshold", o.robustness.rejection_threshold},
+                       {"estimate_accuracies", o.statistics.estimate_accuracies},
+                       {"snoop", o.robustness.snoop},
+                       {"snooping_alpha", o.statistics.snooping_alpha},
+                       {"max_iterations", o.solver.max_iterations},
+                       {"num_threads", o.solver.num_threads}};
   report["inputs"] = context.inputs;
   report["outputs"] = context.outputs;
   report["command_line"] = context.command_line;
@@ -465,7 +465,7 @@ std::vector<std::string> BundleConsoleLines(const Block& block, const BundleAdju
   if (result.num_uncontrolled > 0)
     lines.push_back(std::to_string(result.num_uncontrolled) +
                     " observations are uncontrolled (redundancy number below " +
-                    Format(context.options.uncontrolled_redundancy) +
+                    Format(context.options.statistics.uncontrolled_redundancy) +
                     "): a blunder there cannot be seen; add images or points around them");
   if (context.cross_validation != nullptr) {
     const BundleCrossValidationResult& cv = *context.cross_validation;

@@ -24,6 +24,7 @@ struct BundleReportContext {
   std::vector<std::string> outputs;                         // files written (besides the report)
   std::string input_kind;  // "tables", "colmap" or "bal"
   BundleAdjustmentOptions options;
+  BundleAdjustmentConfig config;  // what was held constant or estimated (e.g. the lever arm)
   std::vector<std::string> calibrate;  // --calibrate names
   const BundleCrossValidationResult* cross_validation = nullptr;  // when run
   int num_images_initialized = 0;      // images oriented by the initialisation

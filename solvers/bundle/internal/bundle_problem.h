@@ -87,7 +87,8 @@ struct BundlePlan {
 Status MakeBundlePlan(const BundlePlanOptions& options, const BundleAdjustmentConfig& config,
                       const Block& block, BundlePlan* plan);
 // BundleAdjust's options for the plan.
-BundlePlanOptions PlanOptionsOf(const BundleAdjustmentOptions& options);
+BundlePlanOptions PlanOptionsOf(const BundleAdjustmentOptions& options,
+                                const BundleAdjustmentConfig& config);
 // After observations were removed: tie points left with one ray leave, every image keeps three
 // marks, and the datum still holds (plan->datum unchanged). An error says which fails.
 Status RecheckBundlePlan(const BundleAdjustmentConfig& config, const Block& block,
@@ -118,7 +119,7 @@ void BuildBundleRound(const BundleAdjustmentOptions& options, const BundleAdjust
 // gauge of `plan` (kRelative): holds the first image and one coordinate of the second, without
 // building the problem again.
 void ApplyRelativeGauge(const BundlePlan& plan, BundleState* state, BundleRound* round);
-ceres::Solver::Options BundleSolverOptions(const BundleAdjustmentOptions& options,
-                                           const BundleRound& round);
+ceres::Solver::Options CeresSolverOptions(const BundleAdjustmentOptions& options,
+                                          const BundleRound& round);
 
 }  // namespace photopose::internal

@@ -44,7 +44,7 @@ TEST(BlockInitialization, OrientsImagesAndIntersectsTiePointsNearTheTruth) {
   // Initial values, not a solution (points intersected from start values metres off): what they
   // are for is a bundle adjustment that converges to the truth from them.
   BundleAdjustmentOptions options;
-  options.num_threads = 1;
+  options.solver.num_threads = 1;
   BundleAdjustmentResult result;
   ASSERT_TRUE(BundleAdjust(options, BundleAdjustmentConfig(), &block, &result).ok());
   ASSERT_TRUE(result.summary.IsSolutionUsable()) << result.summary.BriefReport();

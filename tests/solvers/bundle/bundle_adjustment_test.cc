@@ -187,7 +187,7 @@ SmallBlock MakeSmallBlock(const SmallBlockOptions& o) {
 
 BundleAdjustmentOptions QuietOptions() {
   BundleAdjustmentOptions options;
-  options.num_threads = 1;
+  options.solver.num_threads = 1;
   return options;
 }
 
@@ -229,7 +229,7 @@ TEST(BundleAdjustment, AnalyticAndAutodiffGiveTheSameAdjustment) {
   BundleAdjustmentOptions options = QuietOptions();
   BundleAdjustmentResult ra, rb;
   ASSERT_TRUE(BundleAdjust(options, BundleAdjustmentConfig(), &a.block, &ra).ok());
-  options.jacobian = JacobianType::kAutodiff;
+  options.solver.jacobian = JacobianType::kAutodiff;
   ASSERT_TRUE(BundleAdjust(options, BundleAdjustmentConfig(), &b.block, &rb).ok());
   ASSERT_TRUE(ra.summary.IsSolutionUsable() && rb.summary.IsSolutionUsable());
   for (size_t i = 0; i < a.block.images.size(); ++i)
@@ -338,14 +338,14 @@ TEST(BundleAdjustment, RelativeBlockSolvedFreeLandsInColmapsGauge) {
   o.start_position_error_m = 6.0;
   const SmallBlock data = MakeSmallBlock(o);
   BundleAdjustmentOptions options = QuietOptions();
-  options.rejection_threshold = 0.0;
+  options.robustness.rejection_threshold = 0.0;
   Block fixed_block = data.block, free_block = data.block;
   BundleAdjustmentResult fixed, free;
-  options.free_gauge_for_relative_blocks = false;
+  options.solver.free_gauge_for_relative_blocks = false;
   ASSERT_TRUE(BundleAdjust(options, BundleAdjustmentConfig(), &fixed_block, &fixed).ok());
-  options.free_gauge_for_relative_blocks = true;
+  options.solver.free_gauge_for_relative_blocks = true;
   std::vector<BundleIterationInfo> progress;
-  options.progress = [&progress](const BundleIterationInfo& info) { progress.push_back(info); };
+  options.solver.progress = [&progress](const BundleIterationInfo& info) { progress.push_back(info); };
   ASSERT_TRUE(BundleAdjust(options, BundleAdjustmentConfig(), &free_block, &free).ok());
   ASSERT_TRUE(fixed.summary.IsSolutionUsable()) << fixed.summary.BriefReport();
   ASSERT_TRUE(free.summary.IsSolutionUsable()) << free.summary.BriefReport();
@@ -424,7 +424,7 @@ TEST(BundleAdjustment, ColmapAr7ReachesColmapsCost) {
   BundleAdjustmentConfig config;
   ASSERT_TRUE(BundleAdjustmentConfig::FromCalibrationNames(block, {"FocalLength", "K1"}, &config).ok());
   BundleAdjustmentOptions options = QuietOptions();
-  options.rejection_threshold = 0.0;  // COLMAP keeps every observation
+  options.robustness.rejection_threshold = 0.0;  // COLMAP keeps every observation
   BundleAdjustmentResult result;
   ASSERT_TRUE(BundleAdjust(options, config, &block, &result).ok());
   ASSERT_TRUE(result.summary.IsSolutionUsable()) << result.summary.BriefReport();
@@ -496,8 +496,8 @@ TEST(BundleAdjustment, BalProblemsReachTheIndependentMinimum) {
     double initial = 0.0;
     ASSERT_TRUE(ReprojectionCost(block, &initial).ok());
     BundleAdjustmentOptions options = QuietOptions();
-    options.rejection_threshold = 0.0;
-    options.function_tolerance = options.parameter_tolerance = 1e-14;
+    options.robustness.rejection_threshold = 0.0;
+    options.solver.function_tolerance = options.solver.parameter_tolerance = 1e-14;
     BundleAdjustmentResult result;
     ASSERT_TRUE(BundleAdjust(options, BundleAdjustmentConfig(), &block, &result).ok());
     ASSERT_TRUE(result.summary.IsSolutionUsable()) << result.summary.BriefReport();
@@ -547,7 +547,7 @@ TEST(BundleAdjustment, DbatC4040zSelfCalibrationReproduced) {
   for (size_t p = 0; p < block.points.size(); ++p)
     if (block.points[p].role == PointRole::kControl) config.constant_points.insert(int(p));
   BundleAdjustmentOptions options = QuietOptions();
-  options.rejection_threshold = 0.0;  // DBAT keeps every mark
+  options.robustness.rejection_threshold = 0.0;  // DBAT keeps every mark
   BundleAdjustmentResult result;
   const Status status = BundleAdjust(options, config, &block, &result);
   ASSERT_TRUE(status.ok()) << status.message();
@@ -640,7 +640,7 @@ TEST(BundleDiagnostics, VarianceComponentsRecoverTheTrueAccuracies) {
     o.stated_gnss_m = 0.10;
     SmallBlock data = MakeSmallBlock(o);
     BundleAdjustmentOptions options = QuietOptions();
-    options.estimate_accuracies = true;
+    options.statistics.estimate_accuracies = true;
     BundleAdjustmentResult result;
     ASSERT_TRUE(BundleAdjust(options, BundleAdjustmentConfig(), &data.block, &result).ok());
     ASSERT_TRUE(result.summary.IsSolutionUsable()) << result.summary.BriefReport();
@@ -674,7 +674,7 @@ TEST(BundleDiagnostics, DataSnoopingFindsEveryInjectedBlunder) {
   o.gnss_blunder_m = 1.0;
   SmallBlock data = MakeSmallBlock(o);
   BundleAdjustmentOptions options = QuietOptions();
-  options.snoop = true;
+  options.robustness.snoop = true;
   BundleAdjustmentResult result;
   ASSERT_TRUE(BundleAdjust(options, BundleAdjustmentConfig(), &data.block, &result).ok());
   ASSERT_TRUE(result.summary.IsSolutionUsable()) << result.summary.BriefReport();
@@ -755,7 +755,7 @@ TEST(BundleDiagnostics, CrossValidationAfterSnoopingKeepsTheRemovedPriorsOut) {
   o.gnss_blunder_m = 1.0;
   SmallBlock data = MakeSmallBlock(o);
   BundleAdjustmentOptions options = QuietOptions();
-  options.snoop = true;
+  options.robustness.snoop = true;
   BundleAdjustmentResult full;
   ASSERT_TRUE(BundleAdjust(options, BundleAdjustmentConfig(), &data.block, &full).ok());
   ASSERT_TRUE(full.summary.IsSolutionUsable()) << full.summary.BriefReport();

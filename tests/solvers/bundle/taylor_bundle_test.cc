@@ -44,8 +44,8 @@ constexpr double kReductionRelativeTolerance = 1e-9;
 
 BundleAdjustmentOptions CeresOptions() {
   BundleAdjustmentOptions options;
-  options.num_threads = 1;
-  options.rejection_threshold = 0.0;
+  options.solver.num_threads = 1;
+  options.robustness.rejection_threshold = 0.0;
   return options;
 }
 
@@ -249,10 +249,11 @@ TEST(TaylorBundlePartials, AntennaPartialsMatchCentralDifferences) {
 // The reduction (points eliminated 3 x 3 at a time, pairs accumulated into the sparse S, the sparse
 // LDL^T and the back-substitution) against the plain full normal equations of the same dense
 // Jacobian, on a small block with every kind of observation equation.
-void CheckReductionAgainstFullSystem(const TestBlock& data, const TaylorBundleOptions& options) {
+void CheckReductionAgainstFullSystem(
+    const TestBlock& data, const TaylorBundleOptions& options,
+    const BundleAdjustmentConfig& config = BundleAdjustmentConfig()) {
   TaylorBundleLinearSystem system;
-  const Status status =
-      LinearizeTaylorBundle(options, BundleAdjustmentConfig(), data.block, &system);
+  const Status status = LinearizeTaylorBundle(options, config, data.block, &system);
   ASSERT_TRUE(status.ok()) << status.message();
   const Eigen::MatrixXd& A = system.jacobian;
   const Eigen::MatrixXd N = A.transpose() * A;
@@ -299,9 +300,9 @@ TEST(TaylorBundleNormalEquations, ReducedEqualTheFullOnes) {
     data.block.images[i].measured_angles_rad = data.truth.eo[i].angles_seed_rad();
     data.block.images[i].attitude_accuracy_rad = Eigen::Vector3d::Constant(1e-3);
   }
-  TaylorBundleOptions options = TaylorOptions();
-  options.lever_arm_m = Eigen::Vector3d(0.1, 0.2, 0.3);
-  CheckReductionAgainstFullSystem(data, options);
+  BundleAdjustmentConfig lever_config;
+  lever_config.lever_arm_m = Eigen::Vector3d(0.1, 0.2, 0.3);
+  CheckReductionAgainstFullSystem(data, TaylorOptions(), lever_config);
   // A relative block: the first image fixed, one coordinate of the second.
   o.gnss = false;
   o.num_control_points = 0;
@@ -325,15 +326,14 @@ struct Agreement {
 
 // Adjusts copies of the block with Ceres and with the Taylor solver; both must converge.
 Agreement CompareWithCeres(const TestBlock& data, const BundleAdjustmentOptions& ceres_options,
-                           const TaylorBundleOptions& taylor_options) {
+                           const TaylorBundleOptions& taylor_options,
+                           const BundleAdjustmentConfig& config = BundleAdjustmentConfig()) {
   Agreement agreement;
   Block ceres_block = data.block, taylor_block = data.block;
   BundleAdjustmentResult ceres;
   TaylorBundleResult taylor;
-  const Status ceres_status =
-      BundleAdjust(ceres_options, BundleAdjustmentConfig(), &ceres_block, &ceres);
-  const Status taylor_status =
-      TaylorBundleAdjust(taylor_options, BundleAdjustmentConfig(), &taylor_block, &taylor);
+  const Status ceres_status = BundleAdjust(ceres_options, config, &ceres_block, &ceres);
+  const Status taylor_status = TaylorBundleAdjust(taylor_options, config, &taylor_block, &taylor);
   EXPECT_TRUE(ceres_status.ok()) << ceres_status.message();
   EXPECT_TRUE(taylor_status.ok()) << taylor_status.message();
   EXPECT_TRUE(ceres.summary.IsSolutionUsable()) << ceres.summary.BriefReport();
@@ -452,6 +452,7 @@ TEST(TaylorBundleVsCeres, SameMinimumOnSimulatedBlocks) {
         MakeTestBlock(scenario.noise_free ? NoiseFree(scenario.block) : scenario.block);
     BundleAdjustmentOptions ceres = CeresOptions();
     TaylorBundleOptions taylor = TaylorOptions();
+    BundleAdjustmentConfig config;
     if (scenario.attitudes) {
       std::mt19937_64 rng(7);
       std::normal_distribution<double> gauss(0.0, 1.0);
@@ -473,10 +474,9 @@ TEST(TaylorBundleVsCeres, SameMinimumOnSimulatedBlocks) {
                                        data.truth.eo[i].center_in_ground();
         *data.block.images[i].measured_center_m += offset;
       }
-      ceres.lever_arm_m = lever;
-      taylor.lever_arm_m = lever;
+      config.lever_arm_m = lever;
     }
-    const Agreement a = CompareWithCeres(data, ceres, taylor);
+    const Agreement a = CompareWithCeres(data, ceres, taylor, config);
     std::printf("  %-34s %10.2e %10.2e %10.2e %10.2e %9.2e %9.2e %3d/%d\n", scenario.name,
                 a.centre_m / data.size_m, a.angle_rad, a.point_m, a.check_m, a.sigma0_relative,
                 a.covariance_relative, a.taylor_iterations, a.ceres_iterations);
@@ -589,7 +589,7 @@ TEST(TaylorBundle, RejectionRoundsMatchCeresOnTheCleanedBlock) {
                             &mark.observation)
                   .ok());
   BundleAdjustmentOptions with_rejection = CeresOptions();
-  with_rejection.rejection_threshold = 4.5;
+  with_rejection.robustness.rejection_threshold = 4.5;
   TaylorBundleOptions taylor_options;
   ASSERT_TRUE(TaylorBundleOptionsFromBundleOptions(with_rejection, TaylorPartials::kCorrected,
                                                    &taylor_options)
@@ -772,14 +772,20 @@ TEST(TaylorBundle, RefusesWhatItDoesNotDo) {
   }
   {
     BundleAdjustmentOptions ceres;
-    ceres.tie_loss = LossType::kHuber;
+    ceres.robustness.tie_loss = LossType::kHuber;
     TaylorBundleOptions options;
     EXPECT_FALSE(
         TaylorBundleOptionsFromBundleOptions(ceres, TaylorPartials::kCorrected, &options).ok());
-    ceres = BundleAdjustmentOptions();
-    ceres.estimate_lever_arm = true;
-    EXPECT_FALSE(
-        TaylorBundleOptionsFromBundleOptions(ceres, TaylorPartials::kCorrected, &options).ok());
+    // An estimated lever arm is the config's: TaylorBundleAdjust refuses it.
+    BundleAdjustmentConfig estimate_lever;
+    estimate_lever.estimate_lever_arm = true;
+    Block block = data.block;
+    TaylorBundleResult result;
+    EXPECT_FALSE(TaylorBundleAdjust(TaylorOptions(), estimate_lever, &block, &result).ok());
+    BundleAdjustmentResult adjustment;
+    EXPECT_FALSE(BundleAdjustWithSolver(PoseSolver::kTaylor, BundleAdjustmentOptions(),
+                                        estimate_lever, &block, &adjustment)
+                     .ok());
     ceres = BundleAdjustmentOptions();
     ceres.accuracies.camera_m = Eigen::Vector3d(1.0, 2.0, 3.0);
     ASSERT_TRUE(
@@ -1014,7 +1020,7 @@ TEST(TaylorBundle, BundleAdjustWithSolverDispatches) {
       EXPECT_EQ(via_switch.images[i].eo->parameters, direct.images[i].eo->parameters);
   }
   BundleAdjustmentOptions huber = options;
-  huber.tie_loss = LossType::kHuber;
+  huber.robustness.tie_loss = LossType::kHuber;
   Block block = data.block;
   BundleAdjustmentResult result;
   EXPECT_FALSE(

@@ -24,7 +24,7 @@ class BundleHtmlTest : public ::testing::Test {
     o.control_sigma_m = 0.01;
     ASSERT_TRUE(MakeSyntheticBlock(o, &block_, nullptr).ok());
     context_.command_line = "photopose bundle --frames=<f>.txt";
-    context_.options.num_threads = 1;
+    context_.options.solver.num_threads = 1;
     ASSERT_TRUE(BundleAdjust(context_.options, BundleAdjustmentConfig(), &block_, &result_).ok());
     ASSERT_TRUE(result_.summary.IsSolutionUsable()) << result_.summary.BriefReport();
   }
