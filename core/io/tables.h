@@ -6,6 +6,9 @@
 //  - ground points (PointID, X, Y, Z, AccuracyX/Y/Z, Role),
 //  - image marks (Raster, PointID, Column/Row in pixels or FilmX/FilmY in um, Accuracy, CameraID),
 //  - OpenDroneMap's gcp_list.txt.
+// One header for the five, one definition file per format: camera_table.cc, frames_table.cc,
+// points_marks_tables.cc (points, marks and their consistency), gcp_list.cc, and tables.cc (the
+// file wrappers); the column machinery they share is core/io/internal/table_fields.h.
 // CSV header names are case-insensitive. Every reader reports a problem as a Status whose message is
 // "file:line: column: what is wrong" and never crashes on bad input: inputs are bounded (core/io/csv.h)
 // and every number must lie in its column's physical range (the limits below). Each Read* reads a

@@ -308,289 +308,371 @@ std::string ResectionSummary::BriefReport() const {
   return os.str();
 }
 
-ResectionResult ResectImage(const ResectionOptions& options, const ResectionInput& input) {
-  const Clock::time_point start = Clock::now();
-  ResectionResult result;
-  ResectionSummary& summary = result.summary;
-  auto fail = [&](const std::string& message) {
+namespace {
+
+// The steps of ResectImage (solvers/resection/resection.h, 1-4), over one image. Each step returns
+// false when the image is not solved, with the reason in the summary (Fail).
+class ImageResection {
+ public:
+  ImageResection(const ResectionOptions& options, const ResectionInput& input)
+      : options_(options), input_(input), n_(input.image_plane.size()), start_(Clock::now()) {}
+
+  // The input's sizes, finiteness and control configuration; the marks' weights.
+  bool CheckInput();
+  // 1. Initial values and the candidate marks: the approximate pose, or the consensus.
+  bool InitialValues();
+  // 2. Adjust, take back what fits, reject what the test rejects; until nothing changes.
+  bool DecideMarks();
+  // 3. The verdict: in front, redundancy, the global test.
+  bool Verdict();
+  // 4. Statistics per mark: residuals, tests, redundancy numbers, MDB and pose shifts.
+  bool Statistics();
+  // Another consensus set, as large, that fits a pose beyond a few of this one's sigmas.
+  bool NotAmbiguous();
+  // An undetected blunder of MDB size on the weakest mark moves the pose by
+  // max_pose_shift_sigmas of its standard deviations: weak beyond weak_pose_shift_sigmas.
+  bool Reliability();
+  ResectionResult Solved();
+  ResectionResult Failed() { return std::move(result_); }
+
+ private:
+  bool Fail(const std::string& message) {
+    ResectionSummary& summary = result_.summary;
     if (summary.termination == SolverTermination::kConverged)
       summary.termination = SolverTermination::kFailure;
     summary.message = message;
-    summary.total_seconds = SecondsSince(start);
-    result.success = false;
-    return result;
-  };
-  std::string why;
-  if (!options.IsValid(&why)) return fail("invalid options: " + why);
-  const size_t n = input.image_plane.size();
-  const auto sized = [n](size_t size) { return size == 0 || size == n; };
-  if (input.points_in_ground.size() != n || !sized(input.sigma.size()) ||
-      !sized(input.observation_units_per_unit.size()) || !sized(input.units.size()))
-    return fail("observations, points, accuracies and units differ in number");
-  if (!(input.focal_length > 0.0) || !std::isfinite(input.focal_length))
-    return fail("the focal length must be positive");
-  for (size_t i = 0; i < n; ++i) {
-    if (!input.image_plane[i].allFinite()) return fail("an image observation is not finite");
-    if (!input.sigma.empty() && !(input.sigma[i] >= 0.0 && std::isfinite(input.sigma[i])))
-      return fail("an observation accuracy is negative or not finite");
-    if (!input.observation_units_per_unit.empty() &&
-        !(input.observation_units_per_unit[i] > 0.0 &&
-          std::isfinite(input.observation_units_per_unit[i])))
-      return fail("an observation unit scale is not positive");
+    summary.total_seconds = SecondsSince(start_);
+    result_.success = false;
+    return false;
   }
-  const Status configuration = CheckControlConfiguration(input.points_in_ground);
-  if (!configuration.ok()) return fail(configuration.message());
-  const Marks marks = MarksOf(input);
-  result.accuracy_stated = marks.stated;
-  const double confidence = options.test.confidence;
-  const double threshold = MarkThresholdSigmas(confidence);  // sigmas
-  const auto percent = [confidence]() { return Number(100.0 * confidence) + "%"; };
+  std::string Percent() const { return Number(100.0 * options_.test.confidence) + "%"; }
+  // The marks left out, each with its residual, for messages.
+  std::string LeftOut() const;
+  // The names of the marks of a set.
+  std::string Names(const std::vector<char>& set) const;
+  // A mark's test value: its statistic with stated accuracy, over sigma0^2 otherwise.
+  double TestValue(size_t i) const {
+    return marks_.stated ? stats_.test_statistics[i] : stats_.test_statistics[i] / s0_squared_;
+  }
+  bool Readmit();
+  bool RejectWorst();
 
-  // 1. Initial values and the candidate marks.
-  ExteriorOrientation eo;
-  std::vector<char> candidate(n, 1);
-  if (input.approximate.has_value()) {
-    eo = *input.approximate;
+  const ResectionOptions& options_;
+  const ResectionInput& input_;
+  const size_t n_;
+  const Clock::time_point start_;
+  ResectionResult result_;
+  Marks marks_;
+  double threshold_ = 0.0;  // sigmas
+  ExteriorOrientation eo_;
+  std::vector<char> candidate_;
+  std::vector<char> rejected_;
+  std::vector<Eigen::Vector3d> points_;
+  PoseAdjustmentStatistics stats_;
+  double s0_squared_ = kNaN;
+};
+
+bool ImageResection::CheckInput() {
+  std::string why;
+  if (!options_.IsValid(&why)) return Fail("invalid options: " + why);
+  const size_t n = n_;
+  const auto sized = [n](size_t size) { return size == 0 || size == n; };
+  if (input_.points_in_ground.size() != n || !sized(input_.sigma.size()) ||
+      !sized(input_.observation_units_per_unit.size()) || !sized(input_.units.size()))
+    return Fail("observations, points, accuracies and units differ in number");
+  if (!(input_.focal_length > 0.0) || !std::isfinite(input_.focal_length))
+    return Fail("the focal length must be positive");
+  for (size_t i = 0; i < n; ++i) {
+    if (!input_.image_plane[i].allFinite()) return Fail("an image observation is not finite");
+    if (!input_.sigma.empty() && !(input_.sigma[i] >= 0.0 && std::isfinite(input_.sigma[i])))
+      return Fail("an observation accuracy is negative or not finite");
+    if (!input_.observation_units_per_unit.empty() &&
+        !(input_.observation_units_per_unit[i] > 0.0 &&
+          std::isfinite(input_.observation_units_per_unit[i])))
+      return Fail("an observation unit scale is not positive");
+  }
+  const Status configuration = CheckControlConfiguration(input_.points_in_ground);
+  if (!configuration.ok()) return Fail(configuration.message());
+  marks_ = MarksOf(input_);
+  result_.accuracy_stated = marks_.stated;
+  threshold_ = MarkThresholdSigmas(options_.test.confidence);
+  return true;
+}
+
+bool ImageResection::InitialValues() {
+  ResectionSummary& summary = result_.summary;
+  const size_t n = n_;
+  candidate_.assign(n, 1);
+  if (input_.approximate.has_value()) {
+    eo_ = *input_.approximate;
     summary.used_approximate = true;
-    if (!eo.parameters.allFinite()) return fail("the approximate pose is not finite");
-    const std::vector<Eigen::Vector3d> points = CameraPoints(input, eo.center_in_ground());
-    const SeedProjector projector(eo.data(), input.focal_length);
+    if (!eo_.parameters.allFinite()) return Fail("the approximate pose is not finite");
+    const std::vector<Eigen::Vector3d> points = CameraPoints(input_, eo_.center_in_ground());
+    const SeedProjector projector(eo_.data(), input_.focal_length);
     for (size_t i = 0; i < n; ++i) {
       double xy[2];
       if (!projector.Project(points[i].data(), xy, nullptr, nullptr, nullptr))
-        return fail("control point " + marks.name(i) +
+        return Fail("control point " + marks_.name(i) +
                     " is behind the camera at the approximate pose");
     }
-  } else {
-    const Clock::time_point ransac_start = Clock::now();
-    AbsolutePoseRansacOptions consensus = options.consensus;
-    consensus.inlier_threshold = threshold;
-    consensus.score = marks.stated ? ConsensusScore::kMsac : ConsensusScore::kLeastMedian;
-    RansacSummary ransac;
-    const Status status =
-        EstimateAbsolutePoseRansac(consensus, input.image_plane, input.points_in_ground,
-                                   marks.weights, input.focal_length, &eo, &candidate, &ransac);
-    summary.ransac_trials = ransac.num_trials;
-    summary.ransac_exhaustive = ransac.exhaustive;
-    summary.ransac_seconds = SecondsSince(ransac_start);
-    if (!status.ok()) return fail("no initial pose: " + status.message());
-    // Four marks and no stated accuracy: the data cannot say which would not fit; all are taken.
-    if (!marks.stated && n == 4) candidate.assign(n, 1);
-    // The pose of a minimal sample carries the noise of three marks, so a good mark may lie
-    // beyond the threshold there and also beyond the prediction of the few marks kept; when every
-    // mark fits the least squares of all, all are kept.
-    ExteriorOrientation all_marks = eo;
-    if (marks.stated && n >= 4 && std::count(candidate.begin(), candidate.end(), 1) < static_cast<long>(n) &&
-        SetFitsItsAccuracy(options, input, marks.weights, std::vector<char>(n, 1),
-                           /*snoop=*/true, &all_marks)) {
-      candidate.assign(n, 1);
-      eo = all_marks;
+    return true;
+  }
+  const Clock::time_point ransac_start = Clock::now();
+  AbsolutePoseRansacOptions consensus = options_.consensus;
+  consensus.inlier_threshold = threshold_;
+  consensus.score = marks_.stated ? ConsensusScore::kMsac : ConsensusScore::kLeastMedian;
+  RansacSummary ransac;
+  const Status status =
+      EstimateAbsolutePoseRansac(consensus, input_.image_plane, input_.points_in_ground,
+                                 marks_.weights, input_.focal_length, &eo_, &candidate_, &ransac);
+  summary.ransac_trials = ransac.num_trials;
+  summary.ransac_exhaustive = ransac.exhaustive;
+  summary.ransac_seconds = SecondsSince(ransac_start);
+  if (!status.ok()) return Fail("no initial pose: " + status.message());
+  // Four marks and no stated accuracy: the data cannot say which would not fit; all are taken.
+  if (!marks_.stated && n == 4) candidate_.assign(n, 1);
+  // The pose of a minimal sample carries the noise of three marks, so a good mark may lie
+  // beyond the threshold there and also beyond the prediction of the few marks kept; when every
+  // mark fits the least squares of all, all are kept.
+  ExteriorOrientation all_marks = eo_;
+  if (marks_.stated && n >= 4 &&
+      std::count(candidate_.begin(), candidate_.end(), 1) < static_cast<long>(n) &&
+      SetFitsItsAccuracy(options_, input_, marks_.weights, std::vector<char>(n, 1),
+                         /*snoop=*/true, &all_marks)) {
+    candidate_.assign(n, 1);
+    eo_ = all_marks;
+  }
+  return true;
+}
+
+// Marks left out that fit this solution come back: their predicted residuals pass the test (so
+// when every mark fits the least-squares solution of all, all are kept).
+bool ImageResection::Readmit() {
+  const double confidence = options_.test.confidence;
+  const double critical = marks_.stated ? threshold_ * threshold_
+                                        : PredictedCriticalValue(confidence, stats_.redundancy);
+  bool readmitted = false;
+  for (size_t i = 0; i < n_; ++i) {
+    if (candidate_[i] || rejected_[i] || !stats_.in_front[i] || !stats_.determined) continue;
+    if (TestValue(i) <= critical) {
+      candidate_[i] = 1;
+      readmitted = true;
     }
   }
+  return readmitted;
+}
 
-  // 2. Adjust, take back what fits, reject what the test rejects; until nothing changes.
+// The test of the worst accepted mark; true when it rejected one.
+bool ImageResection::RejectWorst() {
+  if (stats_.num_used < 5 || !stats_.determined) return false;
+  const double confidence = options_.test.confidence;
+  const double critical = marks_.stated ? SnoopingCriticalValue(confidence)
+                                        : TauCriticalValue(confidence, stats_.redundancy);
+  int worst = -1;
+  double worst_value = 0.0;
+  for (size_t i = 0; i < n_; ++i) {
+    if (!candidate_[i]) continue;
+    if (TestValue(i) > worst_value) {
+      worst = static_cast<int>(i);
+      worst_value = TestValue(i);
+    }
+  }
+  if (worst < 0 || !(worst_value > critical)) return false;
+  candidate_[worst] = 0;
+  rejected_[worst] = 1;
+  return true;
+}
+
+bool ImageResection::DecideMarks() {
   const Clock::time_point refine_start = Clock::now();
-  std::vector<char> rejected(n, 0);
-  std::vector<Eigen::Vector3d> points;
-  PoseAdjustmentStatistics stats;
-  double s0_squared = kNaN;
-  const int max_rounds = 3 * static_cast<int>(n) + 3;
+  rejected_.assign(n_, 0);
+  const int max_rounds = 3 * static_cast<int>(n_) + 3;
   for (int round = 0;; ++round) {
-    if (round == max_rounds) return fail("the outlier decisions did not settle");
-    if (!Adjust(options, input, marks.weights, Indices(candidate), &eo, &points, &summary))
-      return fail(summary.message);
+    if (round == max_rounds) return Fail("the outlier decisions did not settle");
+    if (!Adjust(options_, input_, marks_.weights, Indices(candidate_), &eo_, &points_,
+                &result_.summary))
+      return Fail(result_.summary.message);
     const Status computed = ComputePoseAdjustmentStatistics(
-        input.image_plane, points, marks.weights, input.focal_length, eo, candidate, &stats);
-    if (!computed.ok()) return fail(computed.message());
-    s0_squared = stats.redundancy > 0 ? stats.omega / stats.redundancy : kNaN;
-    // Marks left out that fit this solution come back: their predicted residuals pass the test
-    // (so when every mark fits the least-squares solution of all, all are kept).
-    bool readmitted = false;
-    const double readmit_critical = marks.stated
-                                        ? threshold * threshold
-                                        : PredictedCriticalValue(confidence, stats.redundancy);
-    for (size_t i = 0; i < n; ++i) {
-      if (candidate[i] || rejected[i] || !stats.in_front[i] || !stats.determined) continue;
-      const double value =
-          marks.stated ? stats.test_statistics[i] : stats.test_statistics[i] / s0_squared;
-      if (value <= readmit_critical) {
-        candidate[i] = 1;
-        readmitted = true;
-      }
-    }
-    if (readmitted) continue;
-    // The test of the worst accepted mark.
-    if (stats.num_used >= 5 && stats.determined) {
-      const double critical = marks.stated ? SnoopingCriticalValue(confidence)
-                                           : TauCriticalValue(confidence, stats.redundancy);
-      int worst = -1;
-      double worst_value = 0.0;
-      for (size_t i = 0; i < n; ++i) {
-        if (!candidate[i]) continue;
-        const double value =
-            marks.stated ? stats.test_statistics[i] : stats.test_statistics[i] / s0_squared;
-        if (value > worst_value) {
-          worst = static_cast<int>(i);
-          worst_value = value;
-        }
-      }
-      if (worst >= 0 && worst_value > critical) {
-        candidate[worst] = 0;
-        rejected[worst] = 1;
-        continue;
-      }
-    }
+        input_.image_plane, points_, marks_.weights, input_.focal_length, eo_, candidate_, &stats_);
+    if (!computed.ok()) return Fail(computed.message());
+    s0_squared_ = stats_.redundancy > 0 ? stats_.omega / stats_.redundancy : kNaN;
+    if (Readmit()) continue;
+    if (RejectWorst()) continue;
     break;
   }
-  summary.refinement_seconds = SecondsSince(refine_start);
+  result_.summary.refinement_seconds = SecondsSince(refine_start);
+  return true;
+}
 
-  // 3. The verdict.
-  const int accepted = stats.num_used;
-  result.eo = eo;
-  result.inliers = candidate;
-  result.num_inliers = accepted;
-  result.degrees_of_freedom = stats.redundancy;
-  result.sigma0 = stats.redundancy > 0 ? std::sqrt(s0_squared) : 0.0;
-  // Each mark left out, with its residual, for messages.
-  const auto left_out = [&]() {
-    std::string text;
-    for (size_t i = 0; i < n; ++i) {
-      if (candidate[i]) continue;
-      const double residual = stats.whitened_residuals[i].norm() * marks.weights[i] / marks.per_unit[i];
-      text += std::string(text.empty() ? "" : ", ") + marks.name(i) + " (" +
-              (stats.in_front[i] ? Number(residual) + " " + EnumName(marks.units[i]) : "behind") +
-              ")";
-    }
-    return text;
-  };
-  const auto names = [&](const std::vector<char>& set) {
-    std::string text;
-    for (size_t i = 0; i < n; ++i)
-      if (set[i]) text += std::string(text.empty() ? "" : ", ") + marks.name(i);
-    return text;
-  };
+std::string ImageResection::LeftOut() const {
+  std::string text;
+  for (size_t i = 0; i < n_; ++i) {
+    if (candidate_[i]) continue;
+    const double residual =
+        stats_.whitened_residuals[i].norm() * marks_.weights[i] / marks_.per_unit[i];
+    text += std::string(text.empty() ? "" : ", ") + marks_.name(i) + " (" +
+            (stats_.in_front[i] ? Number(residual) + " " + EnumName(marks_.units[i]) : "behind") +
+            ")";
+  }
+  return text;
+}
+
+std::string ImageResection::Names(const std::vector<char>& set) const {
+  std::string text;
+  for (size_t i = 0; i < n_; ++i)
+    if (set[i]) text += std::string(text.empty() ? "" : ", ") + marks_.name(i);
+  return text;
+}
+
+bool ImageResection::Verdict() {
+  const size_t n = n_;
+  const int accepted = stats_.num_used;
+  result_.eo = eo_;
+  result_.inliers = candidate_;
+  result_.num_inliers = accepted;
+  result_.degrees_of_freedom = stats_.redundancy;
+  result_.sigma0 = stats_.redundancy > 0 ? std::sqrt(s0_squared_) : 0.0;
   for (size_t i = 0; i < n; ++i) {
-    if (!stats.in_front[i])
-      return fail("control point " + marks.name(i) +
+    if (!stats_.in_front[i])
+      return Fail("control point " + marks_.name(i) +
                   " lies behind the camera at the solution: the pose cannot have seen it");
   }
   if (accepted == 3) {
-    const std::string dropped = left_out();
     const std::string what =
         n == 3 ? std::string("three control points determine the pose exactly and nothing checks it")
-               : "only 3 of the " + std::to_string(n) + " marks agree (left out: " + dropped +
+               : "only 3 of the " + std::to_string(n) + " marks agree (left out: " + LeftOut() +
                      ") and nothing checks the pose they give";
-    if (!options.allow_no_redundancy)
-      return fail("no redundancy: " + what + "; add control points, or allow it explicitly");
-    if (!input.approximate.has_value()) {
-      const int poses = CountP3PPoses(input, Indices(candidate));
+    if (!options_.allow_no_redundancy)
+      return Fail("no redundancy: " + what + "; add control points, or allow it explicitly");
+    if (!input_.approximate.has_value()) {
+      const int poses = CountP3PPoses(input_, Indices(candidate_));
       if (poses > 1)
-        return fail("ambiguous: " + std::to_string(poses) +
+        return Fail("ambiguous: " + std::to_string(poses) +
                     " poses fit the three accepted marks exactly; give approximate values to "
                     "choose one");
     }
-    result.warnings.push_back("no redundancy: " + what + "; the pose has no standard deviations");
+    result_.warnings.push_back("no redundancy: " + what + "; the pose has no standard deviations");
   }
-  if (accepted >= 4 && marks.stated && FailsGlobalTest(stats.omega, confidence, stats.redundancy)) {
-    result.accuracy_disagrees = true;
-    const double critical = GlobalTestCriticalValue(confidence, stats.redundancy);
-    return fail("sigma0 = " + Number(result.sigma0) + ": the " + std::to_string(accepted) +
+  const double confidence = options_.test.confidence;
+  if (accepted >= 4 && marks_.stated && FailsGlobalTest(stats_.omega, confidence, stats_.redundancy)) {
+    result_.accuracy_disagrees = true;
+    const double critical = GlobalTestCriticalValue(confidence, stats_.redundancy);
+    return Fail("sigma0 = " + Number(result_.sigma0) + ": the " + std::to_string(accepted) +
                 " accepted marks do not fit their stated accuracy (sum of squared normalized "
-                "residuals " + Number(stats.omega) + " > " + Number(critical) + ", chi-square(" +
-                std::to_string(stats.redundancy) + ") at " + percent() + "; sigma0 up to " +
-                Number(std::sqrt(critical / stats.redundancy)) + " passes): " +
+                "residuals " + Number(stats_.omega) + " > " + Number(critical) + ", chi-square(" +
+                std::to_string(stats_.redundancy) + ") at " + Percent() + "; sigma0 up to " +
+                Number(std::sqrt(critical / stats_.redundancy)) + " passes): " +
                 (accepted == 4 ? "one of them is a blunder, and four marks cannot show which"
                                : "a blunder the tests cannot isolate, or marks less accurate "
                                  "than stated") +
-                (n > static_cast<size_t>(accepted) ? " (left out: " + left_out() + ")" : ""));
+                (n > static_cast<size_t>(accepted) ? " (left out: " + LeftOut() + ")" : ""));
   }
-  if (accepted == 4 && !marks.stated) {
-    result.warnings.push_back(
+  if (accepted == 4 && !marks_.stated) {
+    result_.warnings.push_back(
         "4 marks without a stated accuracy: a blunder among them cannot be detected (redundancy "
         "2); state their Accuracy to test them");
   }
+  return true;
+}
 
-  // 4. Statistics.
-  if (!stats.determined)
-    return fail("the normal matrix is singular: the pose is not determined by these points");
-  if (stats.redundancy > 0) {
-    result.has_covariance = true;
-    result.covariance = s0_squared * stats.cofactor;
-    result.standard_deviations = result.covariance.diagonal().cwiseSqrt();
+bool ImageResection::Statistics() {
+  if (!stats_.determined)
+    return Fail("the normal matrix is singular: the pose is not determined by these points");
+  const size_t n = n_;
+  const double confidence = options_.test.confidence;
+  if (stats_.redundancy > 0) {
+    result_.has_covariance = true;
+    result_.covariance = s0_squared_ * stats_.cofactor;
+    result_.standard_deviations = result_.covariance.diagonal().cwiseSqrt();
   }
-  const double critical = accepted >= 5 ? (marks.stated ? SnoopingCriticalValue(confidence)
-                                                        : TauCriticalValue(confidence,
-                                                                           stats.redundancy))
-                                        : kNaN;
-  result.critical_normalized_residual = std::sqrt(critical);
-  result.residuals.resize(n);
-  result.normalized_residuals.assign(n, kNaN);
-  result.redundancy_numbers = stats.redundancy_numbers;
-  result.minimal_detectable_blunders.assign(n, 0.0);
-  result.pose_shifts_sigmas.assign(n, 0.0);
-  result.mark_status.resize(n);
+  const double critical =
+      stats_.num_used >= 5
+          ? (marks_.stated ? SnoopingCriticalValue(confidence)
+                           : TauCriticalValue(confidence, stats_.redundancy))
+          : kNaN;
+  result_.critical_normalized_residual = std::sqrt(critical);
+  result_.residuals.resize(n);
+  result_.normalized_residuals.assign(n, kNaN);
+  result_.redundancy_numbers = stats_.redundancy_numbers;
+  result_.minimal_detectable_blunders.assign(n, 0.0);
+  result_.pose_shifts_sigmas.assign(n, 0.0);
+  result_.mark_status.resize(n);
   // The marks' standard deviation in their own unit: stated, or sigma0 times the unit weight.
-  const double scale = marks.stated ? 1.0 : (stats.redundancy > 0 ? std::sqrt(s0_squared) : kNaN);
-  const double delta0 = DetectableBiasSigmas(confidence, options.detection_power);
+  const double scale =
+      marks_.stated ? 1.0 : (stats_.redundancy > 0 ? std::sqrt(s0_squared_) : kNaN);
+  const double delta0 = DetectableBiasSigmas(confidence, options_.detection_power);
   for (size_t i = 0; i < n; ++i) {
-    result.residuals[i] = stats.whitened_residuals[i] * marks.weights[i] / marks.per_unit[i];
-    const bool testable = candidate[i] ? stats.redundancy_numbers[i] > 1e-6 : true;
-    if (testable && stats.redundancy > (marks.stated ? 0 : 2)) {
-      const double value =
-          marks.stated ? stats.test_statistics[i] : stats.test_statistics[i] / s0_squared;
-      result.normalized_residuals[i] = std::sqrt(value);
-    }
-    result.mark_status[i] = candidate[i] ? MarkStatus::kAccepted
-                            : rejected[i] ? MarkStatus::kRejected
-                                          : MarkStatus::kConsensusOutlier;
-    if (!candidate[i] || stats.redundancy == 0) continue;
-    result.minimal_detectable_blunders[i] = delta0 * stats.detectable_blunder_per_delta[i] *
-                                            scale * marks.weights[i] / marks.per_unit[i];
-    result.pose_shifts_sigmas[i] = delta0 * stats.pose_shift_per_delta[i];
-    if (!(result.pose_shifts_sigmas[i] <= result.max_pose_shift_sigmas)) {
-      result.max_pose_shift_sigmas = result.pose_shifts_sigmas[i];
-      result.weakest_mark = static_cast<int>(i);
+    result_.residuals[i] = stats_.whitened_residuals[i] * marks_.weights[i] / marks_.per_unit[i];
+    const bool testable = candidate_[i] ? stats_.redundancy_numbers[i] > 1e-6 : true;
+    if (testable && stats_.redundancy > (marks_.stated ? 0 : 2))
+      result_.normalized_residuals[i] = std::sqrt(TestValue(i));
+    result_.mark_status[i] = candidate_[i]  ? MarkStatus::kAccepted
+                             : rejected_[i] ? MarkStatus::kRejected
+                                            : MarkStatus::kConsensusOutlier;
+    if (!candidate_[i] || stats_.redundancy == 0) continue;
+    result_.minimal_detectable_blunders[i] = delta0 * stats_.detectable_blunder_per_delta[i] *
+                                             scale * marks_.weights[i] / marks_.per_unit[i];
+    result_.pose_shifts_sigmas[i] = delta0 * stats_.pose_shift_per_delta[i];
+    if (!(result_.pose_shifts_sigmas[i] <= result_.max_pose_shift_sigmas)) {
+      result_.max_pose_shift_sigmas = result_.pose_shifts_sigmas[i];
+      result_.weakest_mark = static_cast<int>(i);
     }
   }
+  return true;
+}
 
-  // Ambiguity: another consensus set, as large, fits a pose beyond a few of this one's sigmas.
-  if (marks.stated && result.has_covariance) {
-    CompetingPose competitor;
-    if (FindCompetingPose(options, input, marks.weights, candidate, eo,
-                          result.standard_deviations, &competitor)) {
-      result.ambiguous = true;
-      result.competing_eo = competitor.eo;
-      result.competing_inliers = competitor.inliers;
-      const Eigen::Vector3d apart = competitor.eo.center_in_ground() - eo.center_in_ground();
-      return fail("ambiguous: two poses fit as many marks each: " + names(candidate) +
-                  " give one, " + names(competitor.inliers) + " another " + Number(apart.norm()) +
-                  " m away (" + Number(competitor.distance_sigmas) +
-                  " standard deviations); one of the marks is a blunder that the others cannot "
-                  "single out: check the marks, or add control points");
-    }
-  }
+bool ImageResection::NotAmbiguous() {
+  if (!marks_.stated || !result_.has_covariance) return true;
+  CompetingPose competitor;
+  if (!FindCompetingPose(options_, input_, marks_.weights, candidate_, eo_,
+                         result_.standard_deviations, &competitor))
+    return true;
+  result_.ambiguous = true;
+  result_.competing_eo = competitor.eo;
+  result_.competing_inliers = competitor.inliers;
+  const Eigen::Vector3d apart = competitor.eo.center_in_ground() - eo_.center_in_ground();
+  return Fail("ambiguous: two poses fit as many marks each: " + Names(candidate_) + " give one, " +
+              Names(competitor.inliers) + " another " + Number(apart.norm()) + " m away (" +
+              Number(competitor.distance_sigmas) +
+              " standard deviations); one of the marks is a blunder that the others cannot "
+              "single out: check the marks, or add control points");
+}
 
-  // Reliability: an undetected blunder of MDB size on the weakest mark moves the pose by
-  // max_pose_shift_sigmas of its standard deviations.
-  if (stats.redundancy == 0) {
-    result.weak = true;
-  } else if (result.max_pose_shift_sigmas > options.weak_pose_shift_sigmas) {
-    result.weak = true;
-    const size_t w = static_cast<size_t>(result.weakest_mark);
-    const std::string why =
-        "an undetectable blunder of " + Number(result.minimal_detectable_blunders[w]) + " " +
-        std::string(EnumName(marks.units[w])) + " on mark " + marks.name(w) + " (redundancy number " +
-        Number(stats.redundancy_numbers[w]) + ") would move the pose by " +
-        Number(result.max_pose_shift_sigmas) + " standard deviations (more than " +
-        Number(options.weak_pose_shift_sigmas) + ")";
-    if (options.refuse_weak) return fail("weak: " + why);
-    result.warnings.push_back("weak: " + why + "; more control points make it checkable");
+bool ImageResection::Reliability() {
+  if (stats_.redundancy == 0) {
+    result_.weak = true;
+    return true;
   }
-  result.success = true;
-  summary.termination = SolverTermination::kConverged;
-  summary.message.clear();
-  summary.total_seconds = SecondsSince(start);
-  return result;
+  if (!(result_.max_pose_shift_sigmas > options_.weak_pose_shift_sigmas)) return true;
+  result_.weak = true;
+  const size_t w = static_cast<size_t>(result_.weakest_mark);
+  const std::string why =
+      "an undetectable blunder of " + Number(result_.minimal_detectable_blunders[w]) + " " +
+      std::string(EnumName(marks_.units[w])) + " on mark " + marks_.name(w) +
+      " (redundancy number " + Number(stats_.redundancy_numbers[w]) +
+      ") would move the pose by " + Number(result_.max_pose_shift_sigmas) +
+      " standard deviations (more than " + Number(options_.weak_pose_shift_sigmas) + ")";
+  if (options_.refuse_weak) return Fail("weak: " + why);
+  result_.warnings.push_back("weak: " + why + "; more control points make it checkable");
+  return true;
+}
+
+ResectionResult ImageResection::Solved() {
+  result_.success = true;
+  result_.summary.termination = SolverTermination::kConverged;
+  result_.summary.message.clear();
+  result_.summary.total_seconds = SecondsSince(start_);
+  return std::move(result_);
+}
+
+}  // namespace
+
+ResectionResult ResectImage(const ResectionOptions& options, const ResectionInput& input) {
+  ImageResection image(options, input);
+  if (!image.CheckInput() || !image.InitialValues() || !image.DecideMarks() || !image.Verdict() ||
+      !image.Statistics() || !image.NotAmbiguous() || !image.Reliability())
+    return image.Failed();
+  return image.Solved();
 }
 
 std::vector<ResectionResult> ResectImages(const ResectionOptions& options,

@@ -139,10 +139,12 @@ DEFINE_string(compare_reference, "",
 DEFINE_string(compare_rotation, "rxryrz",
               "Dataset: angle convention of the frames tables read and of the angles printed: "
               "rxryrz (alias seed), opk or pok; the camera's AngleDirection applies.");
-DEFINE_double(compare_default_accuracy, 0.0,
-              "Dataset: accuracy (one sigma) of marks without an Accuracy value, in the mark's "
-              "own unit (pixels, or micrometres for film marks); 0 leaves it unstated and sigma0 "
-              "comes from the data.");
+DEFINE_double(compare_default_accuracy, 1.0,
+              "Dataset: accuracy (one sigma) of pixel marks without an Accuracy value, in pixels "
+              "(as photopose resect: the global test holds every image to it).");
+DEFINE_double(compare_default_film_accuracy, 5.0,
+              "Dataset: accuracy (one sigma) of film marks without an Accuracy value, in "
+              "micrometres (as photopose resect).");
 DEFINE_bool(compare_pixel_center_origin, false,
             "Dataset: read Column/Row with (0,0) at the centre of the first pixel instead of the "
             "top-left corner.");
@@ -181,6 +183,7 @@ const char* const kMonteCarloFlags[] = {"scenarios",      "noise_px",     "outli
                                         "success_sigmas", "tie_blunders", "tie_points",
                                         "gnss_sigma",     "block_lines",  "block_images"};
 const char* const kDatasetFlags[] = {"frames", "reference", "rotation", "default_accuracy",
+                                     "default_film_accuracy",
                                      "pixel_center_origin"};
 
 // Every numeric flag's range; the comma-separated lists are checked item by item against the
@@ -201,7 +204,8 @@ const CommandFlags& CompareFlags() {
                         {"success_sigmas", 0.0, 1e6, true, false},
                         {"block_lines", 1.0, 100.0},
                         {"block_images", 2.0, 100.0},
-                        {"default_accuracy", 0.0, 1e6, false, false, "px or um (the mark's unit)"}}};
+                        {"default_accuracy", 0.0, 1e6, true, false, "px"},
+                        {"default_film_accuracy", 0.0, 1e6, true, false, "um"}}};
   return *kFlags;
 }
 
@@ -456,6 +460,7 @@ int RunDatasetMode(const std::vector<SolverVariant>& solvers, const ResectionOpt
   job.files.gcp_list = FLAGS_compare_gcp_list;
   job.files.frames = FLAGS_compare_frames;
   job.input.default_accuracy = FLAGS_compare_default_accuracy;
+  job.input.default_film_accuracy_um = FLAGS_compare_default_film_accuracy;
   job.files.pixel_origin =
       FLAGS_compare_pixel_center_origin ? PixelOrigin::kCenter : PixelOrigin::kCorner;
   job.resection = resection;
@@ -470,8 +475,11 @@ int RunDatasetMode(const std::vector<SolverVariant>& solvers, const ResectionOpt
     return BadInput(kCommand, "--gcp_list replaces --points and --marks; give one or the other");
   if (!ParseEnum(FLAGS_compare_rotation, &job.files.rotation))
     return BadInput(kCommand, EnumFlagError<RotationConvention>("--rotation", FLAGS_compare_rotation));
-  if (!(FLAGS_compare_default_accuracy >= 0.0) || !std::isfinite(FLAGS_compare_default_accuracy))
-    return BadInput(kCommand, "--default_accuracy must be positive (or 0 for none)");
+  if (!(FLAGS_compare_default_accuracy > 0.0) || !std::isfinite(FLAGS_compare_default_accuracy))
+    return BadInput(kCommand, "--default_accuracy must be a positive number of pixels");
+  if (!(FLAGS_compare_default_film_accuracy > 0.0) ||
+      !std::isfinite(FLAGS_compare_default_film_accuracy))
+    return BadInput(kCommand, "--default_film_accuracy must be a positive number of micrometres");
   std::string why;
   if (!options.IsValid(&why)) return BadInput(kCommand, why);
   OutputFiles outputs;
