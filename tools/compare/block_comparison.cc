@@ -9,8 +9,8 @@
 #include <limits>
 #include <mutex>
 #include <sstream>
-#include <thread>
 
+#include "core/parallel.h"
 #include "core/simulation/synthetic_block.h"
 #include "core/statistics.h"
 #include "solvers/bundle/taylor_bundle.h"
@@ -230,46 +230,37 @@ Status RunBlockComparison(const BlockComparisonOptions& options, BlockComparison
   // [job][solver]
   std::vector<std::vector<TrialOutcome>> outcomes(jobs);
   std::vector<std::string> errors(jobs);
-  std::atomic<size_t> next{0}, done{0};
+  std::atomic<size_t> done{0};
   std::mutex progress_mutex;
-  auto worker = [&]() {
-    for (size_t job = next++; job < jobs; job = next++) {
-      const BlockSetting& setting = result->settings[job / options.trials];
-      const int trial = static_cast<int>(job % options.trials);
-      SyntheticBlockOptions o;
-      o.seed = options.seed + static_cast<uint64_t>(trial);
-      o.num_lines = options.lines;
-      o.images_per_line = options.images_per_line;
-      o.num_tie_points = setting.tie_points;
-      o.mark_sigma_px = setting.noise_px;
-      o.mark_accuracy_px = std::max(setting.noise_px, 0.05);  // stated = true (0 noise: 0.05)
-      o.gnss_sigma_m = Eigen::Vector3d(setting.gnss_sigma_m, setting.gnss_sigma_m,
-                                       2.0 * setting.gnss_sigma_m);
-      o.num_tie_blunders = setting.tie_blunders;
-      o.control_sigma_m = 0.005;
-      Block block;
-      SyntheticBlockTruth truth;
-      const Status made = MakeSyntheticBlock(o, &block, &truth);
-      if (!made.ok()) {
-        errors[job] = setting.Label() + ", trial " + std::to_string(trial) + ": " + made.message();
-      } else {
-        for (const BlockSolverVariant& variant : options.solvers)
-          outcomes[job].push_back(SolveBlock(variant, block, truth));
-      }
-      const size_t finished = ++done;
-      if (options.progress) {
-        const std::lock_guard<std::mutex> lock(progress_mutex);
-        options.progress(finished, jobs);
-      }
+  ParallelFor(jobs, options.num_threads, [&](size_t job) {
+    const BlockSetting& setting = result->settings[job / options.trials];
+    const int trial = static_cast<int>(job % options.trials);
+    SyntheticBlockOptions o;
+    o.seed = options.seed + static_cast<uint64_t>(trial);
+    o.num_lines = options.lines;
+    o.images_per_line = options.images_per_line;
+    o.num_tie_points = setting.tie_points;
+    o.mark_sigma_px = setting.noise_px;
+    o.mark_accuracy_px = std::max(setting.noise_px, 0.05);  // stated = true (0 noise: 0.05)
+    o.gnss_sigma_m = Eigen::Vector3d(setting.gnss_sigma_m, setting.gnss_sigma_m,
+                                     2.0 * setting.gnss_sigma_m);
+    o.num_tie_blunders = setting.tie_blunders;
+    o.control_sigma_m = 0.005;
+    Block block;
+    SyntheticBlockTruth truth;
+    const Status made = MakeSyntheticBlock(o, &block, &truth);
+    if (!made.ok()) {
+      errors[job] = setting.Label() + ", trial " + std::to_string(trial) + ": " + made.message();
+    } else {
+      for (const BlockSolverVariant& variant : options.solvers)
+        outcomes[job].push_back(SolveBlock(variant, block, truth));
     }
-  };
-  const int threads = options.num_threads > 0
-                          ? options.num_threads
-                          : std::max(1, static_cast<int>(std::thread::hardware_concurrency()));
-  std::vector<std::thread> pool;
-  for (int t = 1; t < std::min<int>(threads, static_cast<int>(jobs)); ++t) pool.emplace_back(worker);
-  worker();
-  for (std::thread& thread : pool) thread.join();
+    const size_t finished = ++done;
+    if (options.progress) {
+      const std::lock_guard<std::mutex> lock(progress_mutex);
+      options.progress(finished, jobs);
+    }
+  });
   for (const std::string& error : errors)
     if (!error.empty()) return Status::Error(error);
 
