@@ -1,4 +1,4 @@
-// OpenDroneMap's gcp_list.txt: read (core/io/tables.h).
+// OpenDroneMap's gcp_list.txt and geo.txt: read (core/io/tables.h).
 #include "core/io/tables.h"
 
 
@@ -38,6 +38,34 @@ bool IsGcpCrs(std::string_view crs) {
   return lower.rfind("+proj=", 0) == 0 || lower.rfind("wgs84utm", 0) == 0;
 }
 
+// The first line of gcp_list.txt and geo.txt: the CRS, its words joined by one space.
+Status ReadCrsLine(const std::vector<std::string_view>& words, const std::string& file_name,
+                   std::string* crs) {
+  crs->clear();
+  for (size_t i = 0; i < words.size(); ++i) *crs += (i ? " " : "") + std::string(words[i]);
+  if (IsGcpCrs(*crs)) return Status::Ok();
+  return Status::Error(EscapeForMessage(
+      Where(file_name, 1) +
+      "CRS: the first line must name the coordinate system (EPSG:<code>, WGS84 UTM <zone><N|S>, "
+      "or a +proj=... string), got " +
+      Quoted(*crs)));
+}
+
+// The lines of a text after its first, split into words; blank and '#' lines skipped.
+template <typename Visit>
+Status ForEachDataLine(std::string_view text, Visit visit) {
+  size_t start = 0;
+  for (int line = 1; start < text.size() || line == 1; ++line) {
+    size_t end = text.find('\n', start);
+    if (end == std::string_view::npos) end = text.size();
+    std::string_view content(text.data() + start, end - start);
+    start = end + 1;
+    const std::vector<std::string_view> words = SplitWords(content);
+    if (line > 1 && (words.empty() || words[0].front() == '#')) continue;
+    PHOTOPOSE_RETURN_IF_ERROR(visit(line, words));
+  }
+  return Status::Ok();
+}
 
 }  // namespace
 
@@ -54,27 +82,10 @@ Status ParseGcpList(std::string_view text, const std::string& file_name, GcpList
   // A point measured twice in one image is kept as two marks: ODM accepts it, and the real
   // dataset of tests/core/io/tables_test.cc has such a pair. The marks table rejects it.
   std::map<std::string, size_t> point_index;  // name -> index in result.points
-  size_t start = 0;
-  for (int line = 1; start < text.size() || line == 1; ++line) {
-    size_t end = text.find('\n', start);
-    if (end == std::string_view::npos) end = text.size();
-    std::string_view content(text.data() + start, end - start);
-    start = end + 1;
-    const std::vector<std::string_view> words = SplitWords(content);
-    if (line == 1) {
-      result.crs.clear();
-      for (size_t i = 0; i < words.size(); ++i)
-        result.crs += (i ? " " : "") + std::string(words[i]);
-      if (!IsGcpCrs(result.crs)) {
-        return error(1, "CRS",
-                     "the first line must name the coordinate system (EPSG:<code>, WGS84 UTM "
-                     "<zone><N|S>, or a +proj=... string), got " +
-                         Quoted(result.crs));
-      }
-      continue;
-    }
-    if (words.empty() || words[0].front() == '#') continue;
-    if (words.size() != 6 && words.size() != 7) {
+  PHOTOPOSE_RETURN_IF_ERROR(ForEachDataLine(text, [&](int line, const std::vector<std::string_view>& words) -> Status {
+    if (line == 1) return ReadCrsLine(words, file_name, &result.crs);
+    // ODM allows extra fields after the name; they are not read.
+    if (words.size() < 6) {
       return error(
           line, "",
           "expected 'X Y Z px py image [name]', got " + std::to_string(words.size()) + " fields");
@@ -93,7 +104,7 @@ Status ParseGcpList(std::string_view text, const std::string& file_name, GcpList
     }
     const Eigen::Vector3d position(numbers[0], numbers[1], numbers[2]);
     const std::string image(words[5]);
-    const std::string name = words.size() == 7
+    const std::string name = words.size() >= 7
                                  ? std::string(words[6])
                                  : FormatNumber(numbers[0]) + "_" + FormatNumber(numbers[1]) + "_" +
                                        FormatNumber(numbers[2]);
@@ -118,8 +129,70 @@ Status ParseGcpList(std::string_view text, const std::string& file_name, GcpList
     mark.column_row = Eigen::Vector2d(numbers[3], numbers[4]);
     mark.line = line;
     result.marks.push_back(std::move(mark));
-  }
+    return Status::Ok();
+  }));
   *gcp_list = std::move(result);
+  return Status::Ok();
+}
+
+// ------------------------------------------------------------------ geo.txt
+
+Status ParseGeoTxt(std::string_view text, const std::string& file_name, GeoTxt* geo) {
+  PHOTOPOSE_RETURN_IF_ERROR(CheckTextInput(text, file_name));
+  const auto error = [&file_name](int line, std::string_view column, const std::string& what) {
+    return Status::Error(EscapeForMessage(
+        Where(file_name, line) + (column.empty() ? "" : std::string(column) + ": ") + what));
+  };
+  GeoTxt result;
+  std::map<std::string, int> line_of_image;
+  PHOTOPOSE_RETURN_IF_ERROR(ForEachDataLine(text, [&](int line, const std::vector<std::string_view>& words) -> Status {
+    if (line == 1) return ReadCrsLine(words, file_name, &result.crs);
+    const size_t n = words.size();
+    if (n < 4 || n == 5 || n == 6 || n == 8) {
+      return error(line, "",
+                   "expected 'image x y z [yaw pitch roll] [horizontal_accuracy "
+                   "vertical_accuracy]', got " + std::to_string(n) + " fields" +
+                       (n == 3 ? " (the height z is missing)" : ""));
+    }
+    static const char* const kNames[9] = {"image", "x", "y", "z", "yaw", "pitch", "roll",
+                                          "horizontal_accuracy", "vertical_accuracy"};
+    double numbers[9] = {0};
+    for (size_t i = 1; i < std::min<size_t>(n, 9); ++i) {
+      std::string why;
+      if (!ParseFiniteNumber(words[i], &numbers[i], &why)) return error(line, kNames[i], why);
+    }
+    for (int i = 1; i <= 3; ++i) {
+      const ValueRange& range = *RangeOf(i == 1 ? "X" : i == 2 ? "Y" : "Z");
+      if (!InRange(numbers[i], range))
+        return error(line, kNames[i], Quoted(words[i]) + " is outside " + RangeText(range));
+    }
+    GeoTxtRecord record;
+    record.image = std::string(words[0]);
+    record.position = Eigen::Vector3d(numbers[1], numbers[2], numbers[3]);
+    record.line = line;
+    if (n >= 7) {
+      for (int i = 4; i <= 6; ++i) {
+        if (std::abs(numbers[i]) > 360.0)
+          return error(line, kNames[i], Quoted(words[i]) + " is not an angle in degrees (at most 360 in magnitude)");
+      }
+      record.yaw_pitch_roll_deg = Eigen::Vector3d(numbers[4], numbers[5], numbers[6]);
+    }
+    if (n >= 9) {
+      for (int i = 7; i <= 8; ++i) {
+        if (!(numbers[i] > 0.0 && numbers[i] <= 1e6))
+          return error(line, kNames[i], Quoted(words[i]) + " must be a positive accuracy in metres (at most 1e6)");
+      }
+      record.horizontal_accuracy_m = numbers[7];
+      record.vertical_accuracy_m = numbers[8];
+    }
+    const auto [it, inserted] = line_of_image.emplace(record.image, line);
+    if (!inserted) {
+      return error(line, "image", Quoted(record.image) + " is already on line " + std::to_string(it->second));
+    }
+    result.records.push_back(std::move(record));
+    return Status::Ok();
+  }));
+  *geo = std::move(result);
   return Status::Ok();
 }
 

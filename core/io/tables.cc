@@ -66,6 +66,12 @@ Status ReadGcpList(const std::string& path, GcpList* gcp_list) {
   });
 }
 
+Status ReadGeoTxt(const std::string& path, GeoTxt* geo) {
+  return ReadAndParse(path, [&](std::string_view text, const std::string& name) {
+    return ParseGeoTxt(text, name, geo);
+  });
+}
+
 Status WriteCameraTable(const std::string& path, const std::vector<FrameCamera>& cameras) {
   std::string text;
   PHOTOPOSE_RETURN_IF_ERROR(FormatCameraTable(cameras, path, &text));

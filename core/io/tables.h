@@ -198,6 +198,28 @@ struct GcpList {
 Status ReadGcpList(const std::string& path, GcpList* gcp_list);
 Status ParseGcpList(std::string_view text, const std::string& file_name, GcpList* gcp_list);
 
+// ------------------------------------------------------------------ OpenDroneMap geo.txt
+// Camera positions. First line: the CRS (as in gcp_list.txt); then per line
+//   image x y z [yaw pitch roll] [horizontal_accuracy vertical_accuracy] [extras...]
+// x, y in the CRS's GIS order (easting or longitude first, as ODM writes them, even for
+// EPSG:4326), z in metres; yaw, pitch, roll in degrees; accuracies in metres (one sigma). A line
+// with 5, 6 or 8 fields is refused (yaw pitch roll come as three, the accuracies as two); further
+// fields after the ninth are ODM's extras and are not read. An image named twice is refused.
+struct GeoTxtRecord {
+  std::string image;
+  Eigen::Vector3d position = Eigen::Vector3d::Zero();
+  std::optional<Eigen::Vector3d> yaw_pitch_roll_deg;
+  std::optional<double> horizontal_accuracy_m;
+  std::optional<double> vertical_accuracy_m;
+  int line = 0;
+};
+struct GeoTxt {
+  std::string crs;
+  std::vector<GeoTxtRecord> records;
+};
+Status ReadGeoTxt(const std::string& path, GeoTxt* geo);
+Status ParseGeoTxt(std::string_view text, const std::string& file_name, GeoTxt* geo);
+
 // ------------------------------------------------------------------ consistency
 // Checks that every mark names a known point. Messages name the file and line of the mark. (Cameras
 // and rasters are resolved, with the same kind of message, when the resection inputs are built.)

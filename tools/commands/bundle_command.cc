@@ -16,6 +16,7 @@
 #include "solvers/bundle/block_initialization.h"
 #include "solvers/bundle/bundle_adjustment.h"
 #include "solvers/bundle/taylor_bundle.h"
+#include "solvers/georeference/georeference.h"
 #include "tools/report/bundle_report.h"
 #include "tools/commands/cli_common.h"
 #include "tools/commands/commands.h"
@@ -26,6 +27,11 @@ DEFINE_string(bundle_points, "", "Ground points (CSV: PointID, X, Y, Z in metres
 DEFINE_string(bundle_frames, "", "Frames table: PerspectiveX/Y/Z are the measured camera positions (priors with --camera_accuracy or per-row AccuracyX/Y/Z, otherwise initial values only) and Omega/Phi/Kappa initial values (priors with --attitude_accuracy or per-row AccuracyOmega/Phi/Kappa). Images without a row are oriented by resection.");
 DEFINE_string(bundle_colmap_model, "", "A COLMAP text model folder (cameras.txt, images.txt, points3D.txt) to adjust instead of the tables.");
 DEFINE_string(bundle_bal, "", "A BAL problem file to adjust instead of the tables.");
+DEFINE_string(bundle_geo, "", "With --colmap_model: camera positions as an OpenDroneMap geo.txt (first line the CRS; then image x y z [yaw pitch roll] [horizontal vertical accuracy]; x = easting or longitude). The model is georeferenced: aligned by a robust similarity, then adjusted with the positions as priors.");
+DEFINE_string(bundle_gcp_list, "", "With --colmap_model: ground control as an OpenDroneMap gcp_list.txt (first line the CRS; X Y Z px py image [name]); points named in --check_points are check points.");
+DEFINE_string(bundle_crs, "", "With --colmap_model: the CRS of --points and --frames (EPSG:<code>, a +proj string, WKT; X = easting or longitude first).");
+DEFINE_string(bundle_out_crs, "", "CRS of the outputs of a georeferenced model (--out, --out_points); default: the control's CRS, else the positions' CRS when projected, else the WGS84 UTM zone of the block's centre.");
+DEFINE_string(bundle_check_points, "", "Comma list of --gcp_list point names used as check points (held out of the adjustment, compared with it).");
 DEFINE_string(bundle_out, "", "Output frames table (CSV) of the adjusted images with SigmaX..SigmaKappa, Sigma0, NumObservations and RmsResidual.");
 DEFINE_string(bundle_out_points, "", "Output points table (CSV): PointID, X, Y, Z, SigmaX/Y/Z, Role, NumObservations, ErrorX/Y/Z.");
 DEFINE_string(bundle_out_cameras, "", "Output camera table (CSV) with the calibrated interior orientation (frame cameras).");
@@ -135,6 +141,10 @@ struct BundleRun {
   std::vector<std::pair<std::string, std::string>> written;  // (label, path) of the outputs
   Block block;
   ColmapModelExtras colmap_extras;
+  // A model georeferenced with positions and/or control (--geo, --gcp_list, --frames, --points).
+  bool georeference = false;
+  GeoreferenceResult georeferenced;
+  size_t model_points = 0, model_marks = 0;  // the model's own, before control joined it
   BundleAdjustmentResult result;
   BundleCrossValidationResult cross_validation;
   int exit_code = kExitSuccess;  // kExitSomeFailed once an image could not be oriented
@@ -145,26 +155,47 @@ constexpr int kGoOn = -1;
 
 // Which input, and the outputs that fit it.
 int CheckInputChoice(const char* command, BundleRun* run) {
+  // With a COLMAP model, --marks are the control points' marks (georeferencing).
+  const bool table_marks = !FLAGS_bundle_marks.empty() && FLAGS_bundle_colmap_model.empty();
   const int sources = (!FLAGS_bundle_colmap_model.empty()) + (!FLAGS_bundle_bal.empty()) +
-                      (!FLAGS_bundle_marks.empty() || !FLAGS_bundle_cameras.empty());
+                      (table_marks || !FLAGS_bundle_cameras.empty());
   if (sources != 1)
     return BadInput(command, "give the tables (--cameras and --marks), --colmap_model or --bal: one of them");
   run->tables = FLAGS_bundle_colmap_model.empty() && FLAGS_bundle_bal.empty();
+  if (!FLAGS_bundle_bal.empty() && !FLAGS_bundle_marks.empty())
+    return BadInput(command, "--marks: a BAL problem holds its own observations");
   if (run->tables && (FLAGS_bundle_cameras.empty() || FLAGS_bundle_marks.empty()))
     return BadInput(command, "--cameras and --marks are both required with the tables");
   if (FLAGS_bundle_out.empty() && FLAGS_bundle_out_colmap.empty() && FLAGS_bundle_report.empty())
     return BadInput(command, "nothing to write: give --out, --out_colmap or --report");
   if (!FLAGS_bundle_out_cameras.empty() && !run->tables)
     return BadInput(command, "--out_cameras writes a camera table of frame cameras; with --colmap_model or --bal use --out_colmap");
-  // The tables' other inputs: a COLMAP model or a BAL problem holds its own points and poses.
-  if (!run->tables) {
-    const std::string source = !FLAGS_bundle_colmap_model.empty() ? "--colmap_model" : "--bal";
-    for (const auto& [flag, path] : {std::pair<const char*, const std::string&>{"--points", FLAGS_bundle_points},
-                                     {"--frames", FLAGS_bundle_frames}}) {
-      if (!path.empty())
-        return BadInput(command, std::string(flag) + " is read with the tables (--cameras and --marks) only; " + source + " holds its own points and poses: leave " + flag + " out");
-    }
+  // A COLMAP model is georeferenced with positions and control; a BAL problem takes nothing else.
+  const bool measurements = !FLAGS_bundle_geo.empty() || !FLAGS_bundle_gcp_list.empty() ||
+                            !FLAGS_bundle_points.empty() || !FLAGS_bundle_frames.empty();
+  if (!FLAGS_bundle_bal.empty() && measurements)
+    return BadInput(command, "--bal holds its own points and poses: --geo, --gcp_list, --points and --frames are read with the tables or --colmap_model");
+  if (run->tables && (!FLAGS_bundle_geo.empty() || !FLAGS_bundle_gcp_list.empty()))
+    return BadInput(command, "--geo and --gcp_list georeference a --colmap_model; with the tables give --frames and --points");
+  if (run->tables && (!FLAGS_bundle_crs.empty() || !FLAGS_bundle_out_crs.empty()))
+    return BadInput(command, "--crs and --out_crs georeference a --colmap_model; the tables are adjusted in their own ground frame");
+  run->georeference = !FLAGS_bundle_colmap_model.empty() && measurements;
+  if (!FLAGS_bundle_colmap_model.empty()) {
+    if (!FLAGS_bundle_gcp_list.empty() && !FLAGS_bundle_points.empty())
+      return BadInput(command, "give the control as --gcp_list or as --points with --marks, not both");
+    if (!FLAGS_bundle_points.empty() && FLAGS_bundle_marks.empty())
+      return BadInput(command, "--points with --colmap_model needs --marks (the control points' image marks)");
+    if (!FLAGS_bundle_geo.empty() && !FLAGS_bundle_frames.empty())
+      return BadInput(command, "give the camera positions as --geo or as --frames, not both");
+    if ((!FLAGS_bundle_points.empty() || !FLAGS_bundle_frames.empty()) && FLAGS_bundle_crs.empty())
+      return BadInput(command, "--crs is needed: --points and --frames carry no coordinate system (e.g. --crs=EPSG:32632)");
+    if (!FLAGS_bundle_crs.empty() && FLAGS_bundle_points.empty() && FLAGS_bundle_frames.empty())
+      return BadInput(command, "--crs names the CRS of --points and --frames, and neither is given (geo.txt and gcp_list.txt name their own)");
+    if (!FLAGS_bundle_out_crs.empty() && !run->georeference)
+      return BadInput(command, "--out_crs: nothing is georeferenced; give --geo, --gcp_list, --frames or --points with the model");
   }
+  if (!FLAGS_bundle_check_points.empty() && FLAGS_bundle_gcp_list.empty())
+    return BadInput(command, "--check_points names points of --gcp_list (a points table says Role=check itself)");
   if (!FLAGS_bundle_bal.empty() && !FLAGS_bundle_out_colmap.empty())
     return BadInput(command, "--out_colmap: a BAL problem has no image size and counts pixels from the image centre, which a COLMAP model cannot hold; write --out, --out_points or --report");
   run->context.input_kind = run->tables ? "tables" : !FLAGS_bundle_colmap_model.empty() ? "colmap" : "bal";
@@ -259,7 +290,8 @@ int DeclareFiles(const char* command, const ParsedFlags& parsed, BundleRun* run,
   }
   for (const auto& [label, path] : {std::pair<const char*, const std::string&>{"--cameras", FLAGS_bundle_cameras},
                                     {"--marks", FLAGS_bundle_marks}, {"--points", FLAGS_bundle_points},
-                                    {"--frames", FLAGS_bundle_frames}, {"--bal", FLAGS_bundle_bal}}) {
+                                    {"--frames", FLAGS_bundle_frames}, {"--bal", FLAGS_bundle_bal},
+                                    {"--geo", FLAGS_bundle_geo}, {"--gcp_list", FLAGS_bundle_gcp_list}}) {
     const Status input = outputs->AddInput(label, path);
     if (!input.ok()) return BadInput(command, input.message());
     if (!path.empty()) run->context.inputs.push_back(path);
@@ -286,12 +318,108 @@ int DeclareFiles(const char* command, const ParsedFlags& parsed, BundleRun* run,
     run->written.push_back({label, path});
   }
   if (!FLAGS_bundle_out_colmap.empty()) {
-    for (const char* name : {"cameras.txt", "images.txt", "points3D.txt"}) {
+    std::vector<std::string> names = {"cameras.txt", "images.txt", "points3D.txt"};
+    // A georeferenced model is written in the local frame, with that frame beside it.
+    if (run->georeference) names.push_back("georeference.json");
+    for (const std::string& name : names) {
       const std::string path = FLAGS_bundle_out_colmap + "/" + name;
       const Status declared = outputs->AddOutput("--out_colmap", path);
       if (!declared.ok()) return BadInput(command, declared.message());
       run->written.push_back({"--out_colmap", path});
     }
+  }
+  return kGoOn;
+}
+
+// The camera positions and control of a georeferenced model, as files give them.
+int ReadGeoreferenceInputs(const char* command, GeoreferenceInputs* inputs) {
+  if (!FLAGS_bundle_geo.empty()) {
+    GeoTxt geo;
+    const Status read = ReadGeoTxt(FLAGS_bundle_geo, &geo);
+    if (!read.ok()) return BadInput(command, read.message());
+    inputs->positions_crs = geo.crs;
+    inputs->positions_source = FLAGS_bundle_geo;
+    int with_attitude = 0;
+    for (const GeoTxtRecord& record : geo.records) {
+      CameraPositionMeasurement m;
+      m.image = record.image;
+      m.position = record.position;
+      if (record.horizontal_accuracy_m)
+        m.accuracy_m = Eigen::Vector3d(*record.horizontal_accuracy_m, *record.horizontal_accuracy_m, *record.vertical_accuracy_m);
+      m.line = record.line;
+      inputs->positions.push_back(m);
+      with_attitude += record.yaw_pitch_roll_deg.has_value();
+    }
+    if (with_attitude > 0 && !FLAGS_bundle_quiet)
+      std::cerr << "photopose bundle: " << FLAGS_bundle_geo << ": yaw/pitch/roll of " << with_attitude
+                << " images read and not used (their axes are the drone's, not the camera's; the model gives the attitudes)\n";
+  } else if (!FLAGS_bundle_frames.empty()) {
+    std::vector<FrameRecord> frames;
+    FramesTableOptions frames_options;
+    const Status read = ReadFramesTable(FLAGS_bundle_frames, frames_options, &frames);
+    if (!read.ok()) return BadInput(command, read.message());
+    inputs->positions_crs = FLAGS_bundle_crs;
+    inputs->positions_source = FLAGS_bundle_frames;
+    for (const FrameRecord& frame : frames) {
+      CameraPositionMeasurement m;
+      m.image = frame.raster;
+      m.position = frame.eo.center_in_ground();
+      m.accuracy_m = frame.center_accuracy_m;
+      m.line = frame.line;
+      inputs->positions.push_back(m);
+    }
+    if (!FLAGS_bundle_quiet)
+      std::cerr << "photopose bundle: " << FLAGS_bundle_frames << ": PerspectiveX/Y/Z read as camera positions; Omega/Phi/Kappa not used (the model gives the attitudes)\n";
+  }
+  if (!FLAGS_bundle_gcp_list.empty()) {
+    GcpList gcp;
+    const Status read = ReadGcpList(FLAGS_bundle_gcp_list, &gcp);
+    if (!read.ok()) return BadInput(command, read.message());
+    inputs->control_crs = gcp.crs;
+    inputs->control_source = FLAGS_bundle_gcp_list;
+    inputs->control_points = gcp.points;
+    inputs->control_marks = gcp.marks;
+    std::vector<std::string> checks;
+    for (const std::string& id : SplitCommaList(FLAGS_bundle_check_points))
+      if (!id.empty()) checks.push_back(id);
+    for (const std::string& id : checks) {
+      auto it = std::find_if(inputs->control_points.begin(), inputs->control_points.end(),
+                             [&](const GroundPoint& p) { return p.point_id == id; });
+      if (it == inputs->control_points.end())
+        return BadInput(command, "--check_points: '" + id + "' is not a point of " + FLAGS_bundle_gcp_list);
+      it->role = PointRole::kCheck;
+    }
+  } else if (!FLAGS_bundle_points.empty()) {
+    const Status points = ReadGroundPoints(FLAGS_bundle_points, &inputs->control_points);
+    if (!points.ok()) return BadInput(command, points.message());
+    const Status marks = ReadImageMarks(FLAGS_bundle_marks, &inputs->control_marks);
+    if (!marks.ok()) return BadInput(command, marks.message());
+    inputs->control_crs = FLAGS_bundle_crs;
+    inputs->control_source = FLAGS_bundle_points;
+  }
+  return kGoOn;
+}
+
+// Moves the model into the local frame of its positions and control (PrepareGeoreference).
+int GeoreferenceModel(const char* command, BundleRun* run) {
+  GeoreferenceInputs inputs;
+  const int code = ReadGeoreferenceInputs(command, &inputs);
+  if (code != kGoOn) return code;
+  GeoreferenceOptions options;
+  options.out_crs = FLAGS_bundle_out_crs;
+  const Status prepared = PrepareGeoreference(options, inputs, &run->block, &run->georeferenced);
+  if (!prepared.ok()) return BadInput(command, prepared.message());
+  const GeoreferenceResult& g = run->georeferenced;
+  if (!inputs.positions.empty()) run->options.accuracies.camera_positions_are_priors = true;
+  if (!FLAGS_bundle_quiet) {
+    std::cerr << "photopose bundle: georeference: output CRS " << g.out_crs << " (" << g.out_crs_info.name
+              << ", " << g.out_crs_reason << "); " << g.positions_matched << " camera positions matched";
+    if (!g.positions_unmatched.empty()) std::cerr << ", " << g.positions_unmatched.size() << " name no image of the model (first: '" << g.positions_unmatched[0] << "')";
+    std::cerr << "; " << g.control_marks_matched << " control marks";
+    if (!g.control_marks_unmatched.empty()) std::cerr << ", " << g.control_marks_unmatched.size() << " on images the model does not have (first: " << g.control_marks_unmatched[0] << ")";
+    std::cerr << "\nphotopose bundle: similarity: scale " << g.model_to_local.scale << ", " << g.similarity.num_inliers
+              << " of " << g.similarity.residual_m.size() << " pairs inliers; control RMSE after it "
+              << g.control_after_similarity.total_m << " m, check RMSE " << g.check_after_similarity.total_m << " m\n";
   }
   return kGoOn;
 }
@@ -315,6 +443,12 @@ int ReadBundleBlock(const char* command, BundleRun* run) {
   } else if (!FLAGS_bundle_colmap_model.empty()) {
     const Status read = ReadColmapModel(FLAGS_bundle_colmap_model, &block, &run->colmap_extras);
     if (!read.ok()) return BadInput(command, read.message());
+    run->model_points = block.points.size();
+    run->model_marks = block.marks.size();
+    if (run->georeference) {
+      const int code = GeoreferenceModel(command, run);
+      if (code != kGoOn) return code;
+    }
   } else {
     const Status read = ReadBalProblem(FLAGS_bundle_bal, &block);
     if (!read.ok()) return BadInput(command, read.message());
@@ -350,19 +484,34 @@ int InitializeBundleBlock(const char* command, BundleRun* run) {
   return kGoOn;
 }
 
+// The block as the COLMAP model it was read from holds it: without the control points and marks
+// a georeferencing added (they follow the model's own, see PrepareGeoreference).
+Block ModelPart(const BundleRun& run) {
+  if (!run.georeference) return run.block;
+  Block model = run.block;
+  model.points.resize(run.model_points);
+  model.marks.resize(run.model_marks);
+  model.BuildIndex();
+  return model;
+}
+
 // The adjustment, then the cross-validation when asked.
 int AdjustBundleBlock(const char* command, BundleRun* run) {
   BundleAdjustmentResult& result = run->result;
   // A model the block cannot be written as is refused now, not after the adjustment.
   if (!FLAGS_bundle_out_colmap.empty()) {
     const Status writable = CheckColmapModelWritable(
-        run->block, FLAGS_bundle_colmap_model.empty() ? nullptr : &run->colmap_extras);
+        ModelPart(*run), FLAGS_bundle_colmap_model.empty() ? nullptr : &run->colmap_extras);
     if (!writable.ok()) return BadInput(command, "--out_colmap: " + writable.message());
   }
   const Status adjusted = BundleAdjustWithSolver(run->solver, run->options, run->config, &run->block, &result);
   if (!adjusted.ok()) return BadInput(command, adjusted.message());
   if (run->tables && result.summary.datum == BundleDatum::kRelative) {
     return BadInput(command, "no datum: the block has no control points and no camera positions, so it has no ground coordinates to write; give --points with control points or --frames with camera positions");
+  }
+  if (run->georeference && result.summary.IsSolutionUsable()) {
+    const Status evaluated = EvaluateGeoreference(run->block, result, &run->georeferenced);
+    if (!evaluated.ok()) return BadInput(command, evaluated.message());
   }
   if (result.summary.IsSolutionUsable() && FLAGS_bundle_cross_validate) {
     const Status cv = CrossValidateControlPoints(run->options, run->config, run->block, result, FLAGS_bundle_threads, &run->cross_validation);
@@ -398,10 +547,16 @@ Status WriteBundleOutputs(const BundleRun& run, bool usable) {
         std::vector<FrameCamera> cameras;
         for (const BlockCamera& camera : block.cameras) cameras.push_back(camera.table);
         frames_options.cameras = &cameras;
-        return WriteFramesTable(path, frames_options, BundleFrames(block, result));
+        std::vector<FrameRecord> frames = BundleFrames(block, result);
+        if (run.georeference) PHOTOPOSE_RETURN_IF_ERROR(GeoreferencedFrames(run.georeferenced, &frames));
+        return WriteFramesTable(path, frames_options, frames);
       });
     }
-    stage(FLAGS_bundle_out_points, BundlePointsCsv(block, result));
+    if (status.ok() && !FLAGS_bundle_out_points.empty()) {
+      std::string points;
+      status = FormatBundlePoints(block, result, run.georeference ? &run.georeferenced : nullptr, &points);
+      stage(FLAGS_bundle_out_points, points);
+    }
     if (status.ok() && !FLAGS_bundle_out_cameras.empty()) {
       std::vector<FrameCamera> cameras;
       for (const BlockCamera& camera : block.cameras) {
@@ -415,10 +570,20 @@ Status WriteBundleOutputs(const BundleRun& run, bool usable) {
     }
     if (status.ok() && !FLAGS_bundle_out_colmap.empty()) {
       ColmapModelText model;
-      status = FormatColmapModel(block, FLAGS_bundle_colmap_model.empty() ? nullptr : &run.colmap_extras, &model);
+      status = FormatColmapModel(ModelPart(run), FLAGS_bundle_colmap_model.empty() ? nullptr : &run.colmap_extras, &model);
       stage(FLAGS_bundle_out_colmap + "/cameras.txt", model.cameras);
       stage(FLAGS_bundle_out_colmap + "/images.txt", model.images);
       stage(FLAGS_bundle_out_colmap + "/points3D.txt", model.points3D);
+      if (run.georeference) {
+        const GeoreferenceResult& g = run.georeferenced;
+        const nlohmann::json frame = {
+            {"frame", "local East-North-Up (m) of this model's coordinates"},
+            {"local_to_epsg4979_proj_pipeline_inverse", g.frame.definition()},
+            {"origin_lon_lat_h", {g.frame.origin_lon_lat_h().x(), g.frame.origin_lon_lat_h().y(), g.frame.origin_lon_lat_h().z()}},
+            {"note", "the PROJ pipeline maps EPSG:4979 (longitude, latitude in degrees, ellipsoidal height in m) to this frame; run it inverted (e.g. cs2cs/cct -I) to get geographic coordinates, then to any CRS"},
+            {"out_crs", g.out_crs}};
+        stage(FLAGS_bundle_out_colmap + "/georeference.json", frame.dump(2) + "\n");
+      }
     }
   }
   if (status.ok()) status = final_outputs.Commit();
@@ -432,6 +597,13 @@ void PrintClosingSummary(const BundleRun& run, bool usable) {
             << " images";
   if (std::isfinite(result.summary.sigma0)) std::cout << ", sigma0 " << result.summary.sigma0;
   if (result.num_check_points > 0) std::cout << ", check RMSE " << result.check_rmse_total_m << " m";
+  if (run.georeference && run.georeferenced.evaluated) {
+    const GeoreferenceResult& g = run.georeferenced;
+    std::cout << "; georeferenced in " << g.out_crs << ": control RMSE " << g.control_after_similarity.total_m
+              << " m after the similarity, " << g.control_after_adjustment.total_m << " m after the adjustment";
+    if (g.check_after_adjustment.count > 0)
+      std::cout << "; check RMSE " << g.check_after_similarity.total_m << " m -> " << g.check_after_adjustment.total_m << " m";
+  }
   std::cout << "; wrote";
   bool any = false;
   for (const auto& [label, path] : run.written) {
@@ -471,6 +643,7 @@ int RunBundle(int argc, char** argv) {
   }
   for (const auto& [label, path] : run.written) run.context.outputs.push_back(path);
   run.context.options = run.options;
+  if (run.georeference) run.context.georeference = &run.georeferenced;
   run.context.config = run.config;
 
   const bool usable = run.result.summary.IsSolutionUsable();

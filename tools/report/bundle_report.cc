@@ -81,6 +81,59 @@ const char* AxisName(BundleGroup group, int axis) {
 
 }  // namespace
 
+namespace {
+
+json RmseJson(const GeoreferenceRmse& rmse) {
+  return {{"count", rmse.count},
+          {"rmse_m", {rmse.rmse_m.x(), rmse.rmse_m.y(), rmse.rmse_m.z()}},
+          {"rmse_total_m", rmse.total_m}};
+}
+
+// The "georeference" section: CRSs, the local frame, matching, the similarity and the control /
+// check errors after it and after the adjustment (m, along the output CRS's level axes).
+json GeoreferenceJson(const Block& block, const GeoreferenceResult& g) {
+  json similarity = {{"scale", g.model_to_local.scale},
+                     {"rotation_local_from_model", json::array()},
+                     {"translation_m", {g.model_to_local.translation.x(), g.model_to_local.translation.y(), g.model_to_local.translation.z()}},
+                     {"num_pairs", g.similarity.residual_m.size()},
+                     {"num_inliers", g.similarity.num_inliers},
+                     {"pairs", json::array()}};
+  for (int r = 0; r < 3; ++r)
+    similarity["rotation_local_from_model"].push_back({g.model_to_local.R_target_from_source(r, 0), g.model_to_local.R_target_from_source(r, 1), g.model_to_local.R_target_from_source(r, 2)});
+  for (size_t k = 0; k < g.similarity.residual_m.size() && k < g.similarity_labels.size(); ++k)
+    similarity["pairs"].push_back({{"pair", g.similarity_labels[k]}, {"residual_m", g.similarity.residual_m[k]}, {"inlier", g.similarity.inlier[k] != 0}});
+  json points = json::array();
+  for (const GeoreferencePointError& e : g.point_errors) {
+    auto vec = [](const std::optional<Eigen::Vector3d>& v) { return v ? json({v->x(), v->y(), v->z()}) : json(nullptr); };
+    points.push_back({{"id", block.points[e.point].id},
+                      {"role", RoleName(block.points[e.point].role)},
+                      {"error_after_similarity_m", vec(e.after_similarity_m)},
+                      {"error_after_adjustment_m", vec(e.after_adjustment_m)}});
+  }
+  return {{"out_crs", g.out_crs},
+          {"out_crs_name", g.out_crs_info.name},
+          {"out_crs_reason", g.out_crs_reason},
+          {"error_axes", g.out_crs_info.projected ? "grid east, grid north, up (m)" : "east, north, up (m)"},
+          {"local_frame", {{"definition", g.frame.definition()},
+                           {"origin_lon_lat_h", {g.frame.origin_lon_lat_h().x(), g.frame.origin_lon_lat_h().y(), g.frame.origin_lon_lat_h().z()}},
+                           {"note", "the other sections of this report (images, points, groups) are in this local East-North-Up frame (m)"}}},
+          {"heights", g.heights_notes},
+          {"positions_matched", g.positions_matched},
+          {"positions_unmatched", g.positions_unmatched},
+          {"images_without_position", g.images_without_position},
+          {"control_marks_matched", g.control_marks_matched},
+          {"control_marks_unmatched", g.control_marks_unmatched},
+          {"control_points_without_marks", g.control_points_without_marks},
+          {"similarity", similarity},
+          {"control_after_similarity", RmseJson(g.control_after_similarity)},
+          {"check_after_similarity", RmseJson(g.check_after_similarity)},
+          {"control_after_adjustment", g.evaluated ? RmseJson(g.control_after_adjustment) : json(nullptr)},
+          {"check_after_adjustment", g.evaluated ? RmseJson(g.check_after_adjustment) : json(nullptr)},
+          {"points", points}};
+}
+
+}  // namespace
+
 json BundleReportJson(const Block& block, const BundleAdjustmentResult& result,
                       const BundleReportContext& context) {
   const BundleAdjustmentSummary& s = result.summary;
@@ -340,32 +393,70 @@ json BundleReportJson(const Block& block, const BundleAdjustmentResult& result,
   report["inputs"] = context.inputs;
   report["outputs"] = context.outputs;
   report["command_line"] = context.command_line;
+  if (context.georeference != nullptr) report["georeference"] = GeoreferenceJson(block, *context.georeference);
   return report;
 }
 
-std::string BundlePointsCsv(const Block& block, const BundleAdjustmentResult& result) {
-  std::string csv = CsvLine({"PointID", "X", "Y", "Z", "SigmaX", "SigmaY", "SigmaZ", "Role",
-                             "NumObservations", "ErrorX", "ErrorY", "ErrorZ"});
+Status FormatBundlePoints(const Block& block, const BundleAdjustmentResult& result,
+                          const GeoreferenceResult* georeference, std::string* csv) {
+  // Rows: every point with an estimate or a survey; estimate, survey and level axes per row.
+  std::vector<int> rows;
+  std::vector<Eigen::Vector3d> estimate, surveyed;  // block frame; NaN where there is none
+  const Eigen::Vector3d none = Eigen::Vector3d::Constant(std::numeric_limits<double>::quiet_NaN());
   for (size_t p = 0; p < block.points.size(); ++p) {
     const BlockPoint& point = block.points[p];
     const BundlePointResult* r = p < result.points.size() ? &result.points[p] : nullptr;
-    const std::optional<Eigen::Vector3d> position =
-        point.role == PointRole::kCheck ? point.surveyed_m : point.position_m;
-    if (!position) continue;  // a tie point that was not adjusted
-    std::vector<std::string> fields = {point.id, FormatNumber(position->x()),
-                                       FormatNumber(position->y()), FormatNumber(position->z())};
-    for (int k = 0; k < 3; ++k) {
-      fields.push_back(r != nullptr && r->has_covariance
-                           ? FormatNumber(std::sqrt(std::max(r->covariance(k, k), 0.0)))
-                           : std::string());
+    std::optional<Eigen::Vector3d> value = point.position_m;
+    if (point.role == PointRole::kCheck)
+      value = (r != nullptr && r->error_m && point.surveyed_m) ? std::optional<Eigen::Vector3d>(*point.surveyed_m + *r->error_m) : std::nullopt;
+    if (!value && !point.surveyed_m) continue;  // a tie point that was not adjusted
+    rows.push_back(static_cast<int>(p));
+    estimate.push_back(value ? *value : none);
+    surveyed.push_back(point.surveyed_m ? *point.surveyed_m : none);
+  }
+  std::vector<Eigen::Matrix3d> R_level(rows.size(), Eigen::Matrix3d::Identity());
+  std::vector<Eigen::Vector3d> estimate_out = estimate, surveyed_out = surveyed;
+  if (georeference != nullptr) {
+    // PROJ needs finite points: transform the present ones.
+    auto transform = [&](std::vector<Eigen::Vector3d>* points) -> Status {
+      std::vector<Eigen::Vector3d> present;
+      for (const Eigen::Vector3d& x : *points) if (x.allFinite()) present.push_back(x);
+      PHOTOPOSE_RETURN_IF_ERROR(ToOutputCrs(*georeference, &present));
+      size_t k = 0;
+      for (Eigen::Vector3d& x : *points) if (x.allFinite()) x = present[k++];
+      return Status::Ok();
+    };
+    std::vector<Eigen::Vector3d> where(rows.size());
+    for (size_t k = 0; k < rows.size(); ++k) where[k] = surveyed[k].allFinite() ? surveyed[k] : estimate[k];
+    PHOTOPOSE_RETURN_IF_ERROR(LevelAxes(*georeference, where, &R_level));
+    PHOTOPOSE_RETURN_IF_ERROR(transform(&estimate_out));
+    PHOTOPOSE_RETURN_IF_ERROR(transform(&surveyed_out));
+  }
+  std::string text = CsvLine({"PointID", "X", "Y", "Z", "SigmaX", "SigmaY", "SigmaZ", "Role",
+                              "NumObservations", "SurveyedX", "SurveyedY", "SurveyedZ", "ErrorX",
+                              "ErrorY", "ErrorZ"});
+  auto triple = [](const Eigen::Vector3d& x, std::vector<std::string>* fields) {
+    for (int k = 0; k < 3; ++k) fields->push_back(std::isfinite(x[k]) ? FormatNumber(x[k]) : std::string());
+  };
+  for (size_t k = 0; k < rows.size(); ++k) {
+    const BlockPoint& point = block.points[rows[k]];
+    const BundlePointResult* r = rows[k] < static_cast<int>(result.points.size()) ? &result.points[rows[k]] : nullptr;
+    std::vector<std::string> fields = {point.id};
+    triple(estimate_out[k], &fields);
+    if (r != nullptr && r->has_covariance) {
+      const Eigen::Matrix3d covariance = R_level[k] * r->covariance * R_level[k].transpose();
+      triple(covariance.diagonal().cwiseMax(0.0).cwiseSqrt(), &fields);
+    } else {
+      triple(none, &fields);
     }
     fields.push_back(RoleName(point.role));
     fields.push_back(std::to_string(r != nullptr ? r->num_observations : 0));
-    for (int k = 0; k < 3; ++k)
-      fields.push_back(r != nullptr && r->error_m ? FormatNumber((*r->error_m)[k]) : std::string());
-    csv += CsvLine(fields);
+    triple(surveyed_out[k], &fields);
+    triple(r != nullptr && r->error_m && point.role != PointRole::kTie ? Eigen::Vector3d(R_level[k] * *r->error_m) : none, &fields);
+    text += CsvLine(fields);
   }
-  return csv;
+  *csv = std::move(text);
+  return Status::Ok();
 }
 
 std::vector<FrameRecord> BundleFrames(const Block& block, const BundleAdjustmentResult& result) {

@@ -13,6 +13,7 @@
 #include "core/rotation.h"
 #include "core/io/tables.h"
 #include "solvers/bundle/bundle_adjustment.h"
+#include "solvers/georeference/georeference.h"
 
 namespace photopose::cli {
 
@@ -28,6 +29,7 @@ struct BundleReportContext {
   std::vector<std::string> calibrate;  // --calibrate names
   const BundleCrossValidationResult* cross_validation = nullptr;  // when run
   int num_images_initialized = 0;      // images oriented by the initialisation
+  const GeoreferenceResult* georeference = nullptr;  // a georeferenced model (its section)
 };
 
 // The JSON report; every key is documented in docs/formats.md.
@@ -41,10 +43,14 @@ nlohmann::json BundleReportJson(const Block& block, const BundleAdjustmentResult
 std::string BundleReportHtml(const Block& block, const BundleAdjustmentResult& result,
                              const BundleReportContext& context);
 
-// The points table: PointID, X, Y, Z, SigmaX, SigmaY, SigmaZ (m), Role, NumObservations, ErrorX,
-// ErrorY, ErrorZ (m; control: adjusted - surveyed, check: intersected - surveyed). Control points
-// are reported at their adjusted coordinates, check points at their surveyed ones.
-std::string BundlePointsCsv(const Block& block, const BundleAdjustmentResult& result);
+// The points table: PointID, X, Y, Z (the estimate of every point: adjusted tie and control
+// points, intersected check points; empty for a check point that could not be intersected),
+// SigmaX, SigmaY, SigmaZ (m), Role, NumObservations, SurveyedX, SurveyedY, SurveyedZ (control and
+// check points, as surveyed), ErrorX, ErrorY, ErrorZ (m; estimate - surveyed). With `georeference`
+// the coordinates are in its output CRS and the sigmas and errors along its level axes (m);
+// without, in the block's ground frame.
+Status FormatBundlePoints(const Block& block, const BundleAdjustmentResult& result,
+                          const GeoreferenceResult* georeference, std::string* csv);
 
 // The frames records of the adjusted images: eo, covariance, Sigma0, NumObservations (marks
 // used) and RmsResidual (their RMS, in the marks' unit) as extra columns.

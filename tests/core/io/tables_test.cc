@@ -1165,7 +1165,6 @@ TEST_F(TablesTest, GcpListErrors) {
        "1: CRS: the first line must name the coordinate system (EPSG:<code>, WGS84 UTM "
        "<zone><N|S>, or a +proj=... string), got 'EPSG:'"},
       {"EPSG:32722\n1 2 3 4 5\n", "2: expected 'X Y Z px py image [name]', got 5 fields"},
-      {"EPSG:32722\n1 2 3 4 5 a b c\n", "2: expected 'X Y Z px py image [name]', got 8 fields"},
       {"EPSG:32722\n1 2 3 4 5 a\n\n1 2 z 4 5 a\n", "4: Z: 'z' is not a number"},
       {"EPSG:32722\n1 2 3 4 nan a\n", "2: py: 'nan' is not a finite number"},
       {"EPSG:32722\n1 2 3 4 5 a P\n1 2 4 4 5 b P\n",
@@ -1180,6 +1179,68 @@ TEST_F(TablesTest, GcpListErrors) {
     const std::string path = Write("gcp_list.txt", c.text);
     GcpList gcp;
     EXPECT_EQ(ReadGcpList(path, &gcp).message(), path + ":" + c.expected) << c.text;
+  }
+}
+
+TEST_F(TablesTest, GcpListExtraFieldsAfterTheNameAreOdmsExtrasAndNotRead) {
+  const std::string path = Write("gcp_list.txt", "WGS84 UTM 32N\n1 2 3 4 5 a.jpg P extra1 extra2\n");
+  GcpList gcp;
+  ASSERT_TRUE(ReadGcpList(path, &gcp).ok());
+  ASSERT_EQ(gcp.points.size(), 1u);
+  EXPECT_EQ(gcp.points[0].point_id, "P");
+  EXPECT_EQ(gcp.crs, "WGS84 UTM 32N");
+}
+
+TEST_F(TablesTest, GeoTxtReadsPositionsAttitudesAndAccuracies) {
+  const std::string path = Write("geo.txt",
+                                 "EPSG:4326\n"
+                                 "a.jpg 11.5 48.1 520.25\n"
+                                 "# comment\n"
+                                 "b.jpg 11.6 48.2 521 10 -2 3\n"
+                                 "c.jpg 11.7 48.3 522 10 -2 3 0.02 0.05 extra\n");
+  GeoTxt geo;
+  ASSERT_TRUE(ReadGeoTxt(path, &geo).ok());
+  EXPECT_EQ(geo.crs, "EPSG:4326");
+  ASSERT_EQ(geo.records.size(), 3u);
+  EXPECT_EQ(geo.records[0].image, "a.jpg");
+  EXPECT_EQ(geo.records[0].position, Eigen::Vector3d(11.5, 48.1, 520.25));
+  EXPECT_FALSE(geo.records[0].yaw_pitch_roll_deg.has_value());
+  EXPECT_FALSE(geo.records[0].horizontal_accuracy_m.has_value());
+  ASSERT_TRUE(geo.records[1].yaw_pitch_roll_deg.has_value());
+  EXPECT_EQ(*geo.records[1].yaw_pitch_roll_deg, Eigen::Vector3d(10, -2, 3));
+  EXPECT_EQ(geo.records[1].line, 4);
+  ASSERT_TRUE(geo.records[2].vertical_accuracy_m.has_value());
+  EXPECT_EQ(*geo.records[2].horizontal_accuracy_m, 0.02);
+  EXPECT_EQ(*geo.records[2].vertical_accuracy_m, 0.05);
+}
+
+TEST_F(TablesTest, GeoTxtWithMissingOrBrokenFieldsIsRefusedAtItsLine) {
+  struct Case {
+    std::string text;
+    std::string expected;
+  };
+  const std::vector<Case> cases = {
+      {"a.jpg 1 2 3\n",
+       "1: CRS: the first line must name the coordinate system (EPSG:<code>, WGS84 UTM "
+       "<zone><N|S>, or a +proj=... string), got 'a.jpg 1 2 3'"},
+      {"EPSG:4326\na.jpg 1 2\n",
+       "2: expected 'image x y z [yaw pitch roll] [horizontal_accuracy vertical_accuracy]', got 3 "
+       "fields (the height z is missing)"},
+      {"EPSG:4326\na.jpg 1 2 3 4 5\n",
+       "2: expected 'image x y z [yaw pitch roll] [horizontal_accuracy vertical_accuracy]', got 6 "
+       "fields"},
+      {"EPSG:4326\na.jpg 1 2 3 4 5 6 7\n",
+       "2: expected 'image x y z [yaw pitch roll] [horizontal_accuracy vertical_accuracy]', got 8 "
+       "fields"},
+      {"EPSG:4326\na.jpg 1 2 x\n", "2: z: 'x' is not a number"},
+      {"EPSG:4326\na.jpg 1 2 3 4 5 6 0 1\n",
+       "2: horizontal_accuracy: '0' must be a positive accuracy in metres (at most 1e6)"},
+      {"EPSG:4326\na.jpg 1 2 3\na.jpg 1 2 3\n", "3: image: 'a.jpg' is already on line 2"},
+  };
+  for (const Case& c : cases) {
+    const std::string path = Write("geo.txt", c.text);
+    GeoTxt geo;
+    EXPECT_EQ(ReadGeoTxt(path, &geo).message(), path + ":" + c.expected) << c.text;
   }
 }
 

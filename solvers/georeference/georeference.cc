@@ -1,0 +1,398 @@
+#include "solvers/georeference/georeference.h"
+
+#include <Eigen/Dense>
+#include <algorithm>
+#include <cmath>
+#include <map>
+#include <unordered_map>
+
+#include "core/rotation.h"
+#include "solvers/bundle/triangulation.h"
+
+namespace photopose {
+namespace {
+
+constexpr char kGeographic3d[] = "EPSG:4979";
+
+std::string FileNameOf(const std::string& name) {
+  const size_t slash = name.find_last_of("/\\");
+  return slash == std::string::npos ? name : name.substr(slash + 1);
+}
+
+// Image lookup by name: exact, else by the file name without folders when that is unique.
+class ImageMatcher {
+ public:
+  explicit ImageMatcher(const Block& block) : block_(block) {
+    for (size_t i = 0; i < block.images.size(); ++i) {
+      const std::string file = FileNameOf(block.images[i].name);
+      auto [it, inserted] = by_file_.emplace(file, static_cast<int>(i));
+      if (!inserted) it->second = -2;  // ambiguous
+    }
+  }
+  int Find(const std::string& name) const {
+    const int exact = block_.FindImage(name);
+    if (exact >= 0) return exact;
+    const auto it = by_file_.find(FileNameOf(name));
+    return it == by_file_.end() || it->second < 0 ? -1 : it->second;
+  }
+
+ private:
+  const Block& block_;
+  std::unordered_map<std::string, int> by_file_;
+};
+
+GeoreferenceRmse Rmse(const Block& block, const std::vector<GeoreferencePointError>& errors,
+                      PointRole role, bool after_adjustment) {
+  GeoreferenceRmse rmse;
+  Eigen::Vector3d sum = Eigen::Vector3d::Zero();
+  for (const GeoreferencePointError& e : errors) {
+    if (block.points[e.point].role != role) continue;
+    const std::optional<Eigen::Vector3d>& error = after_adjustment ? e.after_adjustment_m : e.after_similarity_m;
+    if (!error) continue;
+    sum += error->cwiseAbs2();
+    ++rmse.count;
+  }
+  if (rmse.count > 0) {
+    rmse.rmse_m = (sum / rmse.count).cwiseSqrt();
+    rmse.total_m = std::sqrt(sum.sum() / rmse.count);
+  }
+  return rmse;
+}
+
+std::string HeightsNote(const std::string& what, const std::string& crs) {
+  CrsInfo info;
+  if (!ResolveCrs(crs, &info).ok()) return what + " (" + crs + "): unknown CRS";
+  if (info.heights_as_given)
+    return what + " (" + crs + ", " + info.name + "): heights taken as given (the CRS has no vertical axis; they are used as heights above the ellipsoid and come back unchanged)";
+  return what + " (" + crs + ", " + info.name + "): heights transformed by PROJ as the CRS defines them";
+}
+
+// The mean longitude, latitude and height (EPSG:4979) of the measurements: the local frame's origin.
+Status MeasurementCentre(const GeoreferenceInputs& inputs, Eigen::Vector3d* centre) {
+  Eigen::Vector3d sum = Eigen::Vector3d::Zero();
+  int count = 0;
+  double control_height_sum = 0.0;
+  int control_count = 0;
+  auto add = [&](const std::string& crs, std::vector<Eigen::Vector3d> points, bool control) -> Status {
+    if (points.empty()) return Status::Ok();
+    CrsTransform to_geographic;
+    PHOTOPOSE_RETURN_IF_ERROR(CrsTransform::Create(crs, kGeographic3d, &to_geographic));
+    PHOTOPOSE_RETURN_IF_ERROR(to_geographic.Forward(&points));
+    for (const Eigen::Vector3d& p : points) {
+      sum += p;
+      ++count;
+      if (control) {
+        control_height_sum += p.z();
+        ++control_count;
+      }
+    }
+    return Status::Ok();
+  };
+  std::vector<Eigen::Vector3d> positions, control;
+  for (const CameraPositionMeasurement& m : inputs.positions) positions.push_back(m.position);
+  for (const GroundPoint& p : inputs.control_points) control.push_back(p.position);
+  PHOTOPOSE_RETURN_IF_ERROR(add(inputs.positions_crs, positions, false));
+  PHOTOPOSE_RETURN_IF_ERROR(add(inputs.control_crs, control, true));
+  if (count == 0) return Status::Error("georeferencing needs camera positions or control points");
+  *centre = sum / count;
+  // On the ground when control is known (heights of the local frame stay small).
+  if (control_count > 0) centre->z() = control_height_sum / control_count;
+  return Status::Ok();
+}
+
+Status ChooseOutputCrs(const GeoreferenceOptions& options, const GeoreferenceInputs& inputs,
+                       const Eigen::Vector3d& centre_lon_lat_h, GeoreferenceResult* result) {
+  if (!options.out_crs.empty()) {
+    result->out_crs = options.out_crs;
+    result->out_crs_reason = "asked (--out_crs)";
+  } else if (!inputs.control_points.empty()) {
+    result->out_crs = inputs.control_crs;
+    result->out_crs_reason = "the control's CRS";
+  } else {
+    CrsInfo positions;
+    PHOTOPOSE_RETURN_IF_ERROR(ResolveCrs(inputs.positions_crs, &positions));
+    if (positions.projected) {
+      result->out_crs = inputs.positions_crs;
+      result->out_crs_reason = "the camera positions' CRS (projected)";
+    } else {
+      result->out_crs = UtmCrsFor(centre_lon_lat_h.x(), centre_lon_lat_h.y());
+      result->out_crs_reason = "the WGS84 UTM zone of the block's centre (the positions' CRS is not projected)";
+    }
+  }
+  PHOTOPOSE_RETURN_IF_ERROR(ResolveCrs(result->out_crs, &result->out_crs_info));
+  if (result->out_crs_info.geocentric)
+    return Status::Error("output CRS '" + result->out_crs + "' is geocentric: give a geographic or projected CRS");
+  return Status::Ok();
+}
+
+// The model-frame intersection of a point from its marks (model poses), or nothing.
+std::optional<Eigen::Vector3d> IntersectInModel(const Block& block, int point) {
+  const std::vector<RayObservation> rays = PointRays(block, point, MarkSigmaDefaults());
+  if (rays.size() < 2) return std::nullopt;
+  TriangulationOptions options;
+  options.min_intersection_angle_rad = 0.0;  // a model's scale is arbitrary; only rays matter
+  TriangulationResult triangulated;
+  if (!TriangulatePoint(options, rays, &triangulated).ok()) return std::nullopt;
+  return triangulated.point_m;
+}
+
+// Moves the block's images and tie points by the similarity (model -> local).
+void MoveBlock(const Similarity3& s, Block* block) {
+  for (BlockImage& image : block->images) {
+    if (!image.eo) continue;
+    const Eigen::Matrix3d R_camera_from_model =
+        RotationFromAngles(RotationConvention::kSeed, image.eo->angles_seed_rad());
+    image.eo->set_center_in_ground(s.Apply(image.eo->center_in_ground()));
+    image.eo->set_angles_seed_rad(AnglesFromRotation(
+        RotationConvention::kSeed, R_camera_from_model * s.R_target_from_source.transpose()));
+  }
+  for (BlockPoint& point : block->points) {
+    if (point.role == PointRole::kTie && point.position_m) point.position_m = s.Apply(*point.position_m);
+  }
+}
+
+}  // namespace
+
+Status PrepareGeoreference(const GeoreferenceOptions& options, const GeoreferenceInputs& inputs,
+                           Block* block, GeoreferenceResult* result) {
+  GeoreferenceResult out;
+  if (inputs.positions.empty() && inputs.control_points.empty())
+    return Status::Error("georeferencing needs camera positions or control points");
+  for (size_t i = 0; i < block->images.size(); ++i) {
+    if (!block->images[i].eo)
+      return Status::Error("image '" + block->images[i].name + "' of the model has no pose; georeferencing moves a reconstructed model");
+  }
+  // 1. CRSs, the local frame, the measurements in it.
+  Eigen::Vector3d centre;
+  PHOTOPOSE_RETURN_IF_ERROR(MeasurementCentre(inputs, &centre));
+  PHOTOPOSE_RETURN_IF_ERROR(ChooseOutputCrs(options, inputs, centre, &out));
+  PHOTOPOSE_RETURN_IF_ERROR(LocalFrame::Create(kGeographic3d, centre, &out.frame));
+  std::vector<Eigen::Vector3d> positions_local, control_local;
+  for (const CameraPositionMeasurement& m : inputs.positions) positions_local.push_back(m.position);
+  for (const GroundPoint& p : inputs.control_points) control_local.push_back(p.position);
+  if (!positions_local.empty()) {
+    const Status moved = out.frame.ToLocal(inputs.positions_crs, &positions_local);
+    if (!moved.ok()) return Status::Error(inputs.positions_source + ": " + moved.message());
+    out.heights_notes.push_back(HeightsNote("camera positions", inputs.positions_crs));
+  }
+  if (!control_local.empty()) {
+    const Status moved = out.frame.ToLocal(inputs.control_crs, &control_local);
+    if (!moved.ok()) return Status::Error(inputs.control_source + ": " + moved.message());
+    out.heights_notes.push_back(HeightsNote("control", inputs.control_crs));
+  }
+  out.heights_notes.push_back(HeightsNote("outputs", out.out_crs));
+
+  // 2. Matching; control points and marks join a copy of the block.
+  Block work = *block;
+  const ImageMatcher matcher(work);
+  std::vector<int> position_image(inputs.positions.size(), -1);
+  std::vector<char> has_position(work.images.size(), 0);
+  for (size_t k = 0; k < inputs.positions.size(); ++k) {
+    const int image = matcher.Find(inputs.positions[k].image);
+    if (image < 0) {
+      out.positions_unmatched.push_back(inputs.positions[k].image);
+      continue;
+    }
+    if (has_position[image]) {
+      return Status::Error(inputs.positions_source + ":" + std::to_string(inputs.positions[k].line) +
+                           ": image '" + inputs.positions[k].image + "' has a position already");
+    }
+    has_position[image] = 1;
+    position_image[k] = image;
+    ++out.positions_matched;
+    BlockImage& target = work.images[image];
+    target.measured_center_m = positions_local[k];
+    target.center_accuracy_m = inputs.positions[k].accuracy_m;
+  }
+  out.images_without_position = static_cast<int>(std::count(has_position.begin(), has_position.end(), 0));
+  if (!inputs.positions.empty() && out.positions_matched == 0) {
+    return Status::Error(inputs.positions_source + ": none of its " + std::to_string(inputs.positions.size()) +
+                         " image names matches an image of the model (e.g. '" + inputs.positions[0].image +
+                         "' vs '" + (work.images.empty() ? std::string() : work.images[0].name) + "')");
+  }
+  const int first_control = static_cast<int>(work.points.size());
+  for (size_t k = 0; k < inputs.control_points.size(); ++k) {
+    const GroundPoint& gp = inputs.control_points[k];
+    if (work.FindPoint(gp.point_id) >= 0) {
+      return Status::Error(inputs.control_source + ":" + std::to_string(gp.line) + ": point '" + gp.point_id +
+                           "': the model has a point of that id; rename the control point");
+    }
+    BlockPoint point;
+    point.id = gp.point_id;
+    point.role = gp.role;
+    point.surveyed_m = control_local[k];
+    point.accuracy_m = gp.accuracy_m;
+    if (gp.role == PointRole::kTie) point.position_m = control_local[k];
+    point.line = gp.line;
+    work.points.push_back(point);
+    work.BuildIndex();  // FindPoint of the next ones
+  }
+  for (const ImageMark& mark : inputs.control_marks) {
+    const int image = matcher.Find(mark.raster);
+    const int point = work.FindPoint(mark.point_id);
+    if (point < first_control) {
+      return Status::Error(inputs.control_source + ":" + std::to_string(mark.line) + ": mark of point '" +
+                           mark.point_id + "', which is not a control or check point");
+    }
+    if (image < 0) {
+      out.control_marks_unmatched.push_back(mark.raster + " (line " + std::to_string(mark.line) + ")");
+      continue;
+    }
+    const BlockCamera& camera = work.cameras[work.images[image].camera];
+    if (!mark.column_row || camera.model == CameraModelType::kFrame) {
+      return Status::Error(inputs.control_source + ":" + std::to_string(mark.line) +
+                           ": control marks of a model are pixels (Column/Row) on a COLMAP-model camera");
+    }
+    PHOTOPOSE_RETURN_IF_ERROR(CheckMarkInsideImage(inputs.control_source, mark, camera.table, PixelOrigin::kCorner));
+    BlockMark block_mark;
+    block_mark.image = image;
+    block_mark.point = point;
+    block_mark.unit = MarkUnit::kPixel;
+    block_mark.measured = *mark.column_row;
+    block_mark.observation = *mark.column_row;
+    block_mark.accuracy = mark.accuracy_px;
+    block_mark.line = mark.line;
+    work.marks.push_back(block_mark);
+    ++out.control_marks_matched;
+  }
+  work.BuildIndex();
+  for (size_t p = first_control; p < work.points.size(); ++p) {
+    if (work.marks_of_point[p].empty()) out.control_points_without_marks.push_back(work.points[p].id);
+  }
+
+  // 3. The similarity: camera centres <-> positions (group 0), control intersected in the model
+  // <-> surveyed (group 1).
+  std::vector<SimilarityCorrespondence> pairs;
+  for (size_t k = 0; k < inputs.positions.size(); ++k) {
+    if (position_image[k] < 0) continue;
+    SimilarityCorrespondence pair;
+    pair.source = work.images[position_image[k]].eo->center_in_ground();
+    pair.target = positions_local[k];
+    pair.sigma_m = inputs.positions[k].accuracy_m ? inputs.positions[k].accuracy_m->mean() : 1.0;
+    pair.group = 0;
+    pairs.push_back(pair);
+    out.similarity_labels.push_back("position " + work.images[position_image[k]].name);
+  }
+  std::vector<std::optional<Eigen::Vector3d>> in_model(work.points.size());
+  for (size_t p = first_control; p < work.points.size(); ++p) {
+    in_model[p] = IntersectInModel(work, static_cast<int>(p));
+    if (!in_model[p] || work.points[p].role != PointRole::kControl) continue;
+    SimilarityCorrespondence pair;
+    pair.source = *in_model[p];
+    pair.target = *work.points[p].surveyed_m;
+    pair.sigma_m = work.points[p].accuracy_m ? work.points[p].accuracy_m->mean() : 1.0;
+    pair.group = out.positions_matched > 0 ? 1 : 0;
+    pairs.push_back(pair);
+    out.similarity_labels.push_back("control " + work.points[p].id);
+  }
+  const Status aligned = RobustSimilarity(options.similarity, pairs, &out.model_to_local, &out.similarity);
+  if (!aligned.ok()) {
+    return Status::Error("cannot align the model with the measurements (" + std::to_string(pairs.size()) +
+                         " pairs of camera positions and control points intersected in the model): " +
+                         aligned.message());
+  }
+  MoveBlock(out.model_to_local, &work);
+
+  // Errors after the similarity, along the output CRS's level axes at each point.
+  std::vector<Eigen::Vector3d> surveyed;
+  std::vector<int> surveyed_points;
+  for (size_t p = first_control; p < work.points.size(); ++p) {
+    if (work.points[p].role == PointRole::kTie) continue;
+    surveyed.push_back(*work.points[p].surveyed_m);
+    surveyed_points.push_back(static_cast<int>(p));
+  }
+  std::vector<Eigen::Matrix3d> R_level;
+  PHOTOPOSE_RETURN_IF_ERROR(LevelAxes(out, surveyed, &R_level));
+  for (size_t k = 0; k < surveyed_points.size(); ++k) {
+    const int p = surveyed_points[k];
+    GeoreferencePointError error;
+    error.point = p;
+    if (in_model[p]) error.after_similarity_m = R_level[k] * (out.model_to_local.Apply(*in_model[p]) - surveyed[k]);
+    out.point_errors.push_back(error);
+  }
+  out.control_after_similarity = Rmse(work, out.point_errors, PointRole::kControl, false);
+  out.check_after_similarity = Rmse(work, out.point_errors, PointRole::kCheck, false);
+  work.crs = "local ENU (" + out.frame.definition() + ")";
+  *block = std::move(work);
+  *result = std::move(out);
+  return Status::Ok();
+}
+
+Status EvaluateGeoreference(const Block& block, const BundleAdjustmentResult& adjustment,
+                            GeoreferenceResult* result) {
+  std::vector<Eigen::Vector3d> surveyed;
+  for (const GeoreferencePointError& e : result->point_errors) surveyed.push_back(*block.points[e.point].surveyed_m);
+  std::vector<Eigen::Matrix3d> R_level;
+  PHOTOPOSE_RETURN_IF_ERROR(LevelAxes(*result, surveyed, &R_level));
+  for (size_t k = 0; k < result->point_errors.size(); ++k) {
+    GeoreferencePointError& e = result->point_errors[k];
+    e.after_adjustment_m.reset();
+    if (e.point < static_cast<int>(adjustment.points.size()) && adjustment.points[e.point].error_m)
+      e.after_adjustment_m = R_level[k] * *adjustment.points[e.point].error_m;
+  }
+  result->control_after_adjustment = Rmse(block, result->point_errors, PointRole::kControl, true);
+  result->check_after_adjustment = Rmse(block, result->point_errors, PointRole::kCheck, true);
+  result->evaluated = true;
+  return Status::Ok();
+}
+
+Status GeoreferenceBlock(const GeoreferenceOptions& options, const GeoreferenceInputs& inputs,
+                         const BundleAdjustmentOptions& bundle_options,
+                         const BundleAdjustmentConfig& config, Block* block,
+                         GeoreferenceResult* result, BundleAdjustmentResult* adjustment) {
+  PHOTOPOSE_RETURN_IF_ERROR(PrepareGeoreference(options, inputs, block, result));
+  BundleAdjustmentOptions adjusted_options = bundle_options;
+  if (!inputs.positions.empty()) adjusted_options.accuracies.camera_positions_are_priors = true;
+  PHOTOPOSE_RETURN_IF_ERROR(BundleAdjust(adjusted_options, config, block, adjustment));
+  if (!adjustment->summary.IsSolutionUsable()) return Status::Ok();
+  return EvaluateGeoreference(*block, *adjustment, result);
+}
+
+Status ToOutputCrs(const GeoreferenceResult& result, std::vector<Eigen::Vector3d>* points) {
+  return result.frame.FromLocal(result.out_crs, points);
+}
+
+Status LevelAxes(const GeoreferenceResult& result, const std::vector<Eigen::Vector3d>& points_local,
+                 std::vector<Eigen::Matrix3d>* R_level_from_local) {
+  return result.frame.LevelFrames(result.out_crs, points_local, R_level_from_local);
+}
+
+Status GeoreferencedFrames(const GeoreferenceResult& result, std::vector<FrameRecord>* frames) {
+  std::vector<Eigen::Vector3d> centres;
+  for (const FrameRecord& frame : *frames) centres.push_back(frame.eo.center_in_ground());
+  std::vector<Eigen::Matrix3d> R_level;
+  PHOTOPOSE_RETURN_IF_ERROR(LevelAxes(result, centres, &R_level));
+  std::vector<Eigen::Vector3d> out = centres;
+  PHOTOPOSE_RETURN_IF_ERROR(ToOutputCrs(result, &out));
+  for (size_t i = 0; i < frames->size(); ++i) {
+    FrameRecord& frame = (*frames)[i];
+    const Eigen::Vector3d angles = frame.eo.angles_seed_rad();
+    // Attitude relative to the level frame: R_camera_from_level = R_camera_from_local R_local_from_level.
+    auto level_angles = [&](const Eigen::Vector3d& a) {
+      return AnglesFromRotation(RotationConvention::kSeed,
+                                RotationFromAngles(RotationConvention::kSeed, a) * R_level[i].transpose());
+    };
+    const Eigen::Vector3d new_angles = level_angles(angles);
+    if (frame.covariance) {
+      // J = d(new parameters) / d(local parameters): the centre rotates, the angles numerically.
+      Matrix6d J = Matrix6d::Zero();
+      J.topLeftCorner<3, 3>() = R_level[i];
+      constexpr double kStep = 1e-7;
+      for (int k = 0; k < 3; ++k) {
+        Eigen::Vector3d plus = angles, minus = angles;
+        plus[k] += kStep;
+        minus[k] -= kStep;
+        Eigen::Vector3d difference = level_angles(plus) - level_angles(minus);
+        for (int r = 0; r < 3; ++r) difference[r] = std::remainder(difference[r], 2.0 * M_PI);
+        J.block<3, 1>(3, 3 + k) = difference / (2.0 * kStep);
+      }
+      frame.covariance = J * *frame.covariance * J.transpose();
+    }
+    frame.eo.set_center_in_ground(out[i]);
+    frame.eo.set_angles_seed_rad(new_angles);
+    frame.srs = result.out_crs_info.definition;  // what PROJ was given: "EPSG:32632" for ODM's "WGS84 UTM 32N"
+  }
+  return Status::Ok();
+}
+
+}  // namespace photopose

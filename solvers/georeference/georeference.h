@@ -1,0 +1,134 @@
+#pragma once
+// Georeferencing an SfM reconstruction: a block in an arbitrary frame (a COLMAP or OpenSfM model)
+// tied to measured camera positions (GNSS: a frames table, an ODM geo.txt) and surveyed ground
+// control (an ODM gcp_list.txt, or points + marks tables), each in its own CRS, then adjusted
+// with the weighted bundle adjustment and handed back in an output CRS.
+//
+// The chain (docs/conventions.md, "Georeferenced blocks"):
+//  1. CRSs resolved by PROJ; a local topocentric East-North-Up frame (core/geodesy/crs.h) at the
+//     centre of the measurements; every measurement transformed into it.
+//  2. Matching by image name (exactly, else by the file name without folders when that is unique);
+//     names matching no image are counted and listed, never dropped silently. Control points
+//     join the block as control / check points with their marks as new observations.
+//  3. A robust similarity from the model frame to the local frame (solvers/georeference/
+//     similarity.h) on camera centres <-> positions and on control points intersected in the
+//     model <-> surveyed, each group with its own robust scale; the whole block is moved by it and
+//     the errors of control and check points after it are recorded.
+//  4. (the caller) the bundle adjustment of the block in the local frame, camera positions as
+//     priors, control as weighted observations, check points held out.
+//  5. The errors of control and check points after the adjustment; every output in the output
+//     CRS (GeoreferencedFrames, GeoreferencedPoints) with errors and sigmas along the output
+//     CRS's level axes (east / north / up, or grid east / grid north / up), in metres.
+// GeoreferenceBlock runs 1-5 in one call; the CLI runs 1-3 (PrepareGeoreference), its usual
+// adjustment, then 5 (EvaluateGeoreference).
+
+#include <Eigen/Core>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "core/block.h"
+#include "core/geodesy/crs.h"
+#include "core/io/tables.h"
+#include "core/status.h"
+#include "solvers/bundle/bundle_adjustment.h"
+#include "solvers/georeference/similarity.h"
+
+namespace photopose {
+
+// A measured projection centre (GNSS) of an image named as the block names it.
+struct CameraPositionMeasurement {
+  std::string image;
+  Eigen::Vector3d position = Eigen::Vector3d::Zero();  // in GeoreferenceInputs::positions_crs
+  std::optional<Eigen::Vector3d> accuracy_m;           // one sigma per axis (E, N, Up), m
+  int line = 0;                                        // source line, for messages
+};
+
+struct GeoreferenceInputs {
+  std::string positions_crs;
+  std::string positions_source;  // file name, for messages and reports
+  std::vector<CameraPositionMeasurement> positions;
+  std::string control_crs;
+  std::string control_source;
+  std::vector<GroundPoint> control_points;  // control / check as their role says
+  std::vector<ImageMark> control_marks;     // pixels, (0, 0) the top-left corner of the image
+};
+
+struct GeoreferenceOptions {
+  // Output CRS; empty: the control's CRS, else the positions' CRS when it is projected, else the
+  // WGS84 UTM zone of the block's centre.
+  std::string out_crs;
+  RobustSimilarityOptions similarity;
+};
+
+// Errors of one surveyed point (estimate - surveyed), along the output CRS's level axes at the
+// point (m).
+struct GeoreferencePointError {
+  int point = -1;  // index into Block::points
+  std::optional<Eigen::Vector3d> after_similarity_m;  // intersected in the model, moved
+  std::optional<Eigen::Vector3d> after_adjustment_m;  // adjusted (control) or intersected (check)
+};
+
+// Per-axis RMSE (m) over the points of one role that have the error.
+struct GeoreferenceRmse {
+  int count = 0;
+  Eigen::Vector3d rmse_m = Eigen::Vector3d::Zero();
+  double total_m = 0.0;
+};
+
+struct GeoreferenceResult {
+  std::string out_crs;  // as resolved (never empty after PrepareGeoreference)
+  CrsInfo out_crs_info;
+  std::string out_crs_reason;  // why this output CRS ("--out_crs", "the control's CRS", ...)
+  LocalFrame frame;            // the local ENU frame the block is adjusted in
+  std::vector<std::string> heights_notes;  // per input CRS: how its heights were treated
+
+  // Matching.
+  int positions_matched = 0;
+  std::vector<std::string> positions_unmatched;  // names that match no image
+  int images_without_position = 0;
+  int control_marks_matched = 0;
+  std::vector<std::string> control_marks_unmatched;  // "image (line N)" of marks on no image
+  std::vector<std::string> control_points_without_marks;
+
+  // The similarity model -> local frame and its pairs ("position <image>", "control <id>").
+  Similarity3 model_to_local;
+  RobustSimilaritySummary similarity;
+  std::vector<std::string> similarity_labels;
+
+  std::vector<GeoreferencePointError> point_errors;
+  GeoreferenceRmse control_after_similarity, check_after_similarity;
+  GeoreferenceRmse control_after_adjustment, check_after_adjustment;
+  bool evaluated = false;  // EvaluateGeoreference ran
+};
+
+// Steps 1-3: `block` (a model in its own frame, every image with an exterior orientation) is moved
+// into the local frame, gets the camera positions as measured centres (accuracy per row, else
+// `default_camera_accuracy_m` when given, else the bundle's default) and the control points and
+// marks. Fails (nothing changed) on unknown CRSs, fewer than three usable pairs, pairs on a line,
+// a control point id that a model point already has, or marks outside their images.
+Status PrepareGeoreference(const GeoreferenceOptions& options, const GeoreferenceInputs& inputs,
+                           Block* block, GeoreferenceResult* result);
+
+// Step 5: the control and check errors after the adjustment (from the adjusted block and its
+// result), along the level axes of the output CRS.
+Status EvaluateGeoreference(const Block& block, const BundleAdjustmentResult& adjustment,
+                            GeoreferenceResult* result);
+
+// Steps 1-5 in one call: PrepareGeoreference, BundleAdjust, EvaluateGeoreference.
+Status GeoreferenceBlock(const GeoreferenceOptions& options, const GeoreferenceInputs& inputs,
+                         const BundleAdjustmentOptions& bundle_options,
+                         const BundleAdjustmentConfig& config, Block* block,
+                         GeoreferenceResult* result, BundleAdjustmentResult* adjustment);
+
+// The frames of BundleFrames (tools) or any frames in the local frame, moved into the output CRS:
+// PerspectiveX/Y/Z in the output CRS, attitudes relative to its level frame at each camera (the
+// seed convention, R_camera_from_level), covariances rotated into it; SRS = the output CRS.
+Status GeoreferencedFrames(const GeoreferenceResult& result, std::vector<FrameRecord>* frames);
+
+// Points of the local frame -> output CRS coordinates, and the rotations to the level axes there.
+Status ToOutputCrs(const GeoreferenceResult& result, std::vector<Eigen::Vector3d>* points);
+Status LevelAxes(const GeoreferenceResult& result, const std::vector<Eigen::Vector3d>& points_local,
+                 std::vector<Eigen::Matrix3d>* R_level_from_local);
+
+}  // namespace photopose

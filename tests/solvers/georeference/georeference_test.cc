@@ -1,0 +1,126 @@
+#include "solvers/georeference/georeference.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+#include "tests/support/georeference_scene.h"
+
+namespace photopose {
+namespace {
+
+using testing::GeoreferenceScene;
+using testing::MakeGeoreferenceScene;
+
+// The RMS distance (m) of the block's camera centres from the truth, through EPSG:4979.
+double CentreRms(const GeoreferenceScene& scene, const Block& block, const GeoreferenceResult& result) {
+  std::vector<Eigen::Vector3d> centres;
+  for (const BlockImage& image : block.images) centres.push_back(image.eo->center_in_ground());
+  EXPECT_TRUE(result.frame.FromLocal("EPSG:4979", &centres).ok());
+  EXPECT_TRUE(scene.truth_frame.ToLocal("EPSG:4979", &centres).ok());
+  double sum = 0.0;
+  for (size_t i = 0; i < centres.size(); ++i) sum += (centres[i] - scene.true_centres_local[i]).squaredNorm();
+  return std::sqrt(sum / centres.size());
+}
+
+TEST(Georeference, DomedModelWithGnssAndControlReachesTheNoiseAfterTheAdjustment) {
+  GeoreferenceScene scene = MakeGeoreferenceScene(2.0);
+  Block block = scene.model;
+  GeoreferenceResult result;
+  BundleAdjustmentResult adjustment;
+  BundleAdjustmentOptions options;
+  options.solver.progress = nullptr;
+  const Status status = GeoreferenceBlock(GeoreferenceOptions(), scene.inputs, options,
+                                          BundleAdjustmentConfig(), &block, &result, &adjustment);
+  ASSERT_TRUE(status.ok()) << status.message();
+  ASSERT_TRUE(adjustment.summary.IsSolutionUsable()) << adjustment.summary.message;
+  EXPECT_EQ(result.out_crs, "EPSG:32632");  // the control's
+  EXPECT_EQ(result.positions_matched, 24);
+  EXPECT_TRUE(result.positions_unmatched.empty());
+  EXPECT_NEAR(result.model_to_local.scale, 20.0, 0.2);
+  ASSERT_EQ(result.check_after_similarity.count, 4);
+  ASSERT_EQ(result.check_after_adjustment.count, 4);
+  // The dome (2 m at the edge) survives the similarity; the adjustment removes it down to the noise
+  // (0.3 px marks at a 1.3 cm ground pixel, 3-5 cm GNSS, 5 mm control).
+  EXPECT_GT(result.check_after_similarity.total_m, 0.1);
+  EXPECT_LT(result.check_after_adjustment.total_m, 0.03);
+  EXPECT_LT(result.check_after_adjustment.rmse_m.z(), 0.03);
+  EXPECT_LT(CentreRms(scene, block, result), 0.03);
+}
+
+TEST(Georeference, FramesComeOutInTheOutputCrsWithAttitudesToItsGrid) {
+  GeoreferenceScene scene = MakeGeoreferenceScene(0.0);
+  Block block = scene.model;
+  GeoreferenceResult result;
+  GeoreferenceOptions options;
+  options.out_crs = "EPSG:32632";
+  ASSERT_TRUE(PrepareGeoreference(options, scene.inputs, &block, &result).ok());
+  std::vector<FrameRecord> frames(1);
+  frames[0].eo = *block.images[0].eo;
+  ASSERT_TRUE(GeoreferencedFrames(result, &frames).ok());
+  EXPECT_EQ(frames[0].srs, "EPSG:32632");
+  // The centre: the truth in UTM within the GNSS noise.
+  std::vector<Eigen::Vector3d> truth = {scene.true_centres_local[0]};
+  ASSERT_TRUE(scene.truth_frame.FromLocal("EPSG:32632", &truth).ok());
+  EXPECT_LT((frames[0].eo.center_in_ground() - truth[0]).norm(), 0.15);
+  // The optical axis of a near-nadir image stays near-nadir in the grid's level frame.
+  const Eigen::Matrix3d R = RotationFromAngles(RotationConvention::kSeed, frames[0].eo.angles_seed_rad());
+  EXPECT_GT(std::abs(R(2, 2)), 0.99);
+}
+
+TEST(Georeference, NamesMatchingNoImageAreCountedNotDropped) {
+  GeoreferenceScene scene = MakeGeoreferenceScene(0.0);
+  CameraPositionMeasurement stray = scene.inputs.positions[0];
+  stray.image = "not_in_model.jpg";
+  scene.inputs.positions.push_back(stray);
+  ImageMark ghost = scene.inputs.control_marks[0];
+  ghost.raster = "ghost.jpg";
+  scene.inputs.control_marks.push_back(ghost);
+  // Folders in the model's names do not stop a match on the file name.
+  scene.inputs.positions[1].image = "flight/" + scene.inputs.positions[1].image;
+  Block block = scene.model;
+  GeoreferenceResult result;
+  ASSERT_TRUE(PrepareGeoreference(GeoreferenceOptions(), scene.inputs, &block, &result).ok());
+  EXPECT_EQ(result.positions_matched, 24);
+  ASSERT_EQ(result.positions_unmatched.size(), 1u);
+  EXPECT_EQ(result.positions_unmatched[0], "not_in_model.jpg");
+  ASSERT_EQ(result.control_marks_unmatched.size(), 1u);
+  EXPECT_EQ(result.control_marks_unmatched[0].rfind("ghost.jpg", 0), 0u);
+}
+
+TEST(Georeference, BadCrsCollidingIdsAndALineOfPositionsAreRefusedLeavingTheBlock) {
+  GeoreferenceScene scene = MakeGeoreferenceScene(0.0);
+  const Block before = scene.model;
+  GeoreferenceResult result;
+  {
+    GeoreferenceInputs inputs = scene.inputs;
+    inputs.control_crs = "EPSG:999999";
+    Block block = before;
+    const Status status = PrepareGeoreference(GeoreferenceOptions(), inputs, &block, &result);
+    ASSERT_FALSE(status.ok());
+    EXPECT_NE(status.message().find("EPSG:999999"), std::string::npos) << status.message();
+    EXPECT_EQ(block.points.size(), before.points.size());
+  }
+  {
+    GeoreferenceInputs inputs = scene.inputs;
+    inputs.control_points[0].point_id = before.points[0].id;
+    Block block = before;
+    const Status status = PrepareGeoreference(GeoreferenceOptions(), inputs, &block, &result);
+    EXPECT_NE(status.message().find("the model has a point of that id"), std::string::npos) << status.message();
+  }
+  {
+    // One flight line, no control: the roll about the line is not determined.
+    GeoreferenceInputs inputs = scene.inputs;
+    inputs.control_points.clear();
+    inputs.control_marks.clear();
+    inputs.positions.resize(8);
+    const Eigen::Vector3d first = inputs.positions[0].position, last = inputs.positions[7].position;
+    for (int k = 0; k < 8; ++k) inputs.positions[k].position = first + (last - first) * (k / 7.0);
+    Block block = before;
+    const Status status = PrepareGeoreference(GeoreferenceOptions(), inputs, &block, &result);
+    EXPECT_NE(status.message().find("lie on a line"), std::string::npos) << "[" << status.message() << "]";
+  }
+}
+
+}  // namespace
+}  // namespace photopose
