@@ -2,6 +2,7 @@
 
 #include <Eigen/Dense>
 #include <algorithm>
+#include <chrono>
 #include <cmath>
 #include <map>
 #include <unordered_map>
@@ -155,6 +156,7 @@ void MoveBlock(const Similarity3& s, Block* block) {
 
 Status PrepareGeoreference(const GeoreferenceOptions& options, const GeoreferenceInputs& inputs,
                            Block* block, GeoreferenceResult* result) {
+  const auto start = std::chrono::steady_clock::now();
   GeoreferenceResult out;
   if (inputs.positions.empty() && inputs.control_points.empty())
     return Status::Error("georeferencing needs camera positions or control points");
@@ -313,6 +315,7 @@ Status PrepareGeoreference(const GeoreferenceOptions& options, const Georeferenc
   out.control_after_similarity = Rmse(work, out.point_errors, PointRole::kControl, false);
   out.check_after_similarity = Rmse(work, out.point_errors, PointRole::kCheck, false);
   work.crs = "local ENU (" + out.frame.definition() + ")";
+  out.prepare_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   *block = std::move(work);
   *result = std::move(out);
   return Status::Ok();
@@ -320,6 +323,7 @@ Status PrepareGeoreference(const GeoreferenceOptions& options, const Georeferenc
 
 Status EvaluateGeoreference(const Block& block, const BundleAdjustmentResult& adjustment,
                             GeoreferenceResult* result) {
+  const auto start = std::chrono::steady_clock::now();
   std::vector<Eigen::Vector3d> surveyed;
   for (const GeoreferencePointError& e : result->point_errors) surveyed.push_back(*block.points[e.point].surveyed_m);
   std::vector<Eigen::Matrix3d> R_level;
@@ -333,6 +337,7 @@ Status EvaluateGeoreference(const Block& block, const BundleAdjustmentResult& ad
   result->control_after_adjustment = Rmse(block, result->point_errors, PointRole::kControl, true);
   result->check_after_adjustment = Rmse(block, result->point_errors, PointRole::kCheck, true);
   result->evaluated = true;
+  result->evaluate_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   return Status::Ok();
 }
 

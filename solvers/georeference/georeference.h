@@ -100,6 +100,10 @@ struct GeoreferenceResult {
   GeoreferenceRmse control_after_similarity, check_after_similarity;
   GeoreferenceRmse control_after_adjustment, check_after_adjustment;
   bool evaluated = false;  // EvaluateGeoreference ran
+  // Wall time of the georeferencing's own work (s): PrepareGeoreference (CRSs, matching,
+  // intersections, similarity) and EvaluateGeoreference.
+  double prepare_seconds = 0.0;
+  double evaluate_seconds = 0.0;
 };
 
 // Steps 1-3: `block` (a model in its own frame, every image with an exterior orientation) is moved

@@ -102,6 +102,18 @@ void FuzzGcpList(std::string_view text) {
   for (const photopose::ImageMark& mark : gcp.marks) Require(mark.column_row->allFinite());
 }
 
+void FuzzGeoTxt(std::string_view text) {
+  photopose::GeoTxt geo;
+  const Status status = photopose::ParseGeoTxt(text, "geo.txt", &geo);
+  CheckMessage(status);
+  if (!status.ok()) return;
+  for (const photopose::GeoTxtRecord& record : geo.records) {
+    Require(record.position.allFinite() && record.position.cwiseAbs().maxCoeff() <= photopose::kMaxCoordinate);
+    Require(record.horizontal_accuracy_m.has_value() == record.vertical_accuracy_m.has_value());
+    Require(!record.horizontal_accuracy_m || *record.horizontal_accuracy_m > 0.0);
+  }
+}
+
 }  // namespace
 
 extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
@@ -112,5 +124,6 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   if (table == "points") FuzzPoints(text);
   if (table == "marks") FuzzMarks(text);
   if (table == "gcp_list") FuzzGcpList(text);
+  if (table == "geo_txt") FuzzGeoTxt(text);
   return 0;
 }

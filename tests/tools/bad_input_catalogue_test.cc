@@ -562,11 +562,15 @@ TEST_F(BadInputCatalogue, AbsurdValuesAreRefusedAtTheReaderWithFileLineAndField)
 TEST_F(BadInputCatalogue, BundleRefusesInputsItDoesNotReadAndOutputsItCannotWriteBeforeAnyWork) {
   WriteFile(work_ + "/p.txt", kBal);
   ExpectRefused("bundle --bal=p.txt --points=points.csv --report=r.json", 2,
-                "photopose bundle: --points is read with the tables (--cameras and --marks) only; "
-                "--bal holds its own points and poses: leave --points out");
+                "photopose bundle: --bal holds its own points and poses: --geo, --gcp_list, "
+                "--points and --frames are read with the tables or --colmap_model");
+  // With a COLMAP model, --frames are camera positions to georeference it with: in a stated CRS.
   ExpectRefused("bundle --colmap_model=model --frames=missing.csv --report=r.json", 2,
-                "photopose bundle: --frames is read with the tables (--cameras and --marks) only; "
-                "--colmap_model holds its own points and poses: leave --frames out");
+                "photopose bundle: --crs is needed: --points and --frames carry no coordinate "
+                "system (e.g. --crs=EPSG:32632)");
+  ExpectRefused("bundle --cameras=c.csv --marks=m.csv --geo=geo.txt --report=r.json", 2,
+                "photopose bundle: --geo and --gcp_list georeference a --colmap_model; with the "
+                "tables give --frames and --points");
   ExpectRefused("bundle --bal=p.txt --out_colmap=model --report=r.json", 2,
                 "photopose bundle: --out_colmap: a BAL problem has no image size and counts "
                 "pixels from the image centre, which a COLMAP model cannot hold; write --out, "

@@ -1,6 +1,7 @@
 // photopose bundle: the weighted bundle adjustment of a block (solvers/bundle/bundle_adjustment.h).
 #include <gflags/gflags.h>
 
+#include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
@@ -653,8 +654,15 @@ int RunBundle(int argc, char** argv) {
     run.exit_code = kExitSomeFailed;
   }
   outputs.Abort();
+  const auto write_start = std::chrono::steady_clock::now();
   const Status written = WriteBundleOutputs(run, usable);
   if (!written.ok()) return BadInput(kCommand, written.message());
+  if (run.georeference && !FLAGS_bundle_quiet) {
+    const double write_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - write_start).count();
+    std::cerr << "photopose bundle: georeference: " << run.georeferenced.prepare_seconds << " s to prepare (CRSs, matching, similarity), "
+              << run.georeferenced.evaluate_seconds << " s to evaluate; outputs (in " << run.georeferenced.out_crs << ") written in "
+              << write_seconds << " s\n";
+  }
   PrintClosingSummary(run, usable);
   return run.exit_code;
 }

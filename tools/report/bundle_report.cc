@@ -129,7 +129,8 @@ json GeoreferenceJson(const Block& block, const GeoreferenceResult& g) {
           {"check_after_similarity", RmseJson(g.check_after_similarity)},
           {"control_after_adjustment", g.evaluated ? RmseJson(g.control_after_adjustment) : json(nullptr)},
           {"check_after_adjustment", g.evaluated ? RmseJson(g.check_after_adjustment) : json(nullptr)},
-          {"points", points}};
+          {"points", points},
+          {"time_seconds", {{"prepare", g.prepare_seconds}, {"evaluate", g.evaluate_seconds}}}};
 }
 
 }  // namespace

@@ -1407,8 +1407,17 @@ TEST_F(TablesTest, EveryExampleOfTheFormatsPageReads) {
     const std::string header = body.substr(0, body.find('\n'));
     Status status;
     if (language == "text") {
-      GcpList gcp;
-      status = ReadGcpList(path, &gcp);
+      // gcp_list.txt lines start with a coordinate, geo.txt lines with an image name.
+      const std::string second = body.substr(body.find('\n') + 1);
+      double number = 0.0;
+      std::string why;
+      if (ParseFiniteNumber(second.substr(0, second.find(' ')), &number, &why)) {
+        GcpList gcp;
+        status = ReadGcpList(path, &gcp);
+      } else {
+        GeoTxt geo;
+        status = ReadGeoTxt(path, &geo);
+      }
     } else if (header.find("CameraID,FocalLength") != std::string::npos) {
       std::vector<FrameCamera> cameras;
       status = ReadCameraTable(path, &cameras);
@@ -1429,7 +1438,7 @@ TEST_F(TablesTest, EveryExampleOfTheFormatsPageReads) {
     }
     EXPECT_TRUE(status.ok()) << status.message() << "\n" << body;
   }
-  EXPECT_EQ(examples, 9);
+  EXPECT_EQ(examples, 10);
 }
 
 TEST_F(TablesTest, FailedTableWriteLeavesNoFile) {
