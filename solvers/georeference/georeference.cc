@@ -270,7 +270,7 @@ Status PrepareGeoreference(const GeoreferenceOptions& options, const Georeferenc
     SimilarityCorrespondence pair;
     pair.source = work.images[position_image[k]].eo->center_in_ground();
     pair.target = positions_local[k];
-    pair.sigma_m = inputs.positions[k].accuracy_m ? inputs.positions[k].accuracy_m->mean() : 1.0;
+    pair.sigma_m = inputs.positions[k].accuracy_m ? inputs.positions[k].accuracy_m->mean() : options.default_camera_accuracy_m;
     pair.group = 0;
     pairs.push_back(pair);
     out.similarity_labels.push_back("position " + work.images[position_image[k]].name);
@@ -282,7 +282,7 @@ Status PrepareGeoreference(const GeoreferenceOptions& options, const Georeferenc
     SimilarityCorrespondence pair;
     pair.source = *in_model[p];
     pair.target = *work.points[p].surveyed_m;
-    pair.sigma_m = work.points[p].accuracy_m ? work.points[p].accuracy_m->mean() : 1.0;
+    pair.sigma_m = work.points[p].accuracy_m ? work.points[p].accuracy_m->mean() : options.default_marker_accuracy_m;
     pair.group = out.positions_matched > 0 ? 1 : 0;
     pairs.push_back(pair);
     out.similarity_labels.push_back("control " + work.points[p].id);
@@ -345,7 +345,10 @@ Status GeoreferenceBlock(const GeoreferenceOptions& options, const GeoreferenceI
                          const BundleAdjustmentOptions& bundle_options,
                          const BundleAdjustmentConfig& config, Block* block,
                          GeoreferenceResult* result, BundleAdjustmentResult* adjustment) {
-  PHOTOPOSE_RETURN_IF_ERROR(PrepareGeoreference(options, inputs, block, result));
+  GeoreferenceOptions aligned = options;
+  aligned.default_camera_accuracy_m = bundle_options.accuracies.camera_m.mean();
+  aligned.default_marker_accuracy_m = bundle_options.accuracies.marker_m;
+  PHOTOPOSE_RETURN_IF_ERROR(PrepareGeoreference(aligned, inputs, block, result));
   BundleAdjustmentOptions adjusted_options = bundle_options;
   if (!inputs.positions.empty()) adjusted_options.accuracies.camera_positions_are_priors = true;
   PHOTOPOSE_RETURN_IF_ERROR(BundleAdjust(adjusted_options, config, block, adjustment));

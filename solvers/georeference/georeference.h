@@ -59,6 +59,11 @@ struct GeoreferenceOptions {
   // WGS84 UTM zone of the block's centre.
   std::string out_crs;
   RobustSimilarityOptions similarity;
+  // The accuracies of positions and control points that state none (m, one sigma): they weigh
+  // the pairs of the similarity as the bundle adjustment will weigh them (BundleAccuracies'
+  // camera_m and marker_m: Metashape's 10 m and 5 mm by default).
+  double default_camera_accuracy_m = 10.0;
+  double default_marker_accuracy_m = 0.005;
 };
 
 // Errors of one surveyed point (estimate - surveyed), along the output CRS's level axes at the

@@ -19,6 +19,7 @@
 
 #include "tests/test_devices.h"
 #include "tests/tools/cli_test_util.h"
+#include "tools/compare/comparison.h"
 
 // AddressSanitizer builds (gcc and clang spell it differently).
 #if defined(__SANITIZE_ADDRESS__)
@@ -163,6 +164,11 @@ TEST_F(BadInputCatalogue, TwoOutputsInOneFileAreRefused) {
   ExpectRefused(Resect("--out=x.csv --report=./x.csv"), 2,
                 "photopose resect: --report=./x.csv is the same file as --out=x.csv; every output "
                 "needs a file of its own");
+  // 'block' is a scenario of its own kind: named with others it is explained, not "unknown".
+  ExpectRefused("compare --trials=1 --scenarios=block,nadir --csv=r.csv", 2,
+                "photopose compare: --scenarios: 'block' compares the block solvers and runs alone "
+                "(--scenarios=block); the single-image scenarios (" + std::string(EnumChoices<Scenario>()) +
+                ") go in another run");
   ExpectRefused("compare --trials=1 --scenarios=nadir --csv=r.txt --markdown=r.txt", 2,
                 "photopose compare: --markdown=r.txt is the same file as --csv=r.txt; every output "
                 "needs a file of its own");

@@ -408,6 +408,8 @@ int GeoreferenceModel(const char* command, BundleRun* run) {
   if (code != kGoOn) return code;
   GeoreferenceOptions options;
   options.out_crs = FLAGS_bundle_out_crs;
+  options.default_camera_accuracy_m = run->options.accuracies.camera_m.mean();
+  options.default_marker_accuracy_m = run->options.accuracies.marker_m;
   const Status prepared = PrepareGeoreference(options, inputs, &run->block, &run->georeferenced);
   if (!prepared.ok()) return BadInput(command, prepared.message());
   const GeoreferenceResult& g = run->georeferenced;

@@ -366,6 +366,9 @@ int RunMonteCarloMode(const std::vector<SolverVariant>& solvers, const Resection
   std::stringstream names(FLAGS_compare_scenarios);
   for (std::string name; std::getline(names, name, ',');) {
     Scenario scenario;
+    if (name == "block")
+      return BadInput(kCommand, "--scenarios: 'block' compares the block solvers and runs alone (--scenarios=block); the single-image scenarios (" +
+                                    EnumChoices<Scenario>() + ") go in another run");
     if (!ParseEnum(name, &scenario))
       return BadInput(kCommand, "--scenarios: unknown scenario '" + name + "' (" +
                                     EnumChoices<Scenario>() + ")");
