@@ -482,8 +482,10 @@ bool SnoopOne(Adjustment* a) {
   return true;
 }
 
-// The rejection score of every mark: its normalized residual when known, else its whitened
-// residual, with the limit it is held against.
+// The rejection score of every tie mark: its normalized residual when known, else its whitened
+// residual, with the limit it is held against. Control and check marks score 0: they are a
+// surveyor's own measurements and are tested and reported (diagnostics), removed only by data
+// snooping (--snoop), never by the automatic rejection.
 std::vector<double> RejectionScores(const Adjustment& a, double* limit) {
   const Block& block = *a.block;
   std::vector<double> score(block.marks.size(), 0.0);
@@ -491,7 +493,7 @@ std::vector<double> RejectionScores(const Adjustment& a, double* limit) {
   if (!a.result->observations.empty()) {
     for (const BundleObservationDiagnostics& d : a.result->observations) {
       const int g = d.group;
-      if (g != kTieMarks && g != kControlMarks) continue;
+      if (g != kTieMarks) continue;
       if (std::isfinite(d.normalized)) score[d.item] = std::max(score[d.item], std::abs(d.normalized));
     }
     return score;
@@ -499,6 +501,7 @@ std::vector<double> RejectionScores(const Adjustment& a, double* limit) {
   *limit *= std::max(1.0, a.result->summary.sigma0);
   for (size_t m = 0; m < block.marks.size(); ++m) {
     if (!a.plan.mark_used[m] || !a.result->mark_residuals[m].allFinite()) continue;
+    if (block.points[block.marks[m].point].role != PointRole::kTie) continue;
     score[m] = a.result->mark_residuals[m].norm() * block.marks[m].observation_units_per_unit /
                a.plan.mark_sigma[m];
   }

@@ -130,9 +130,10 @@ struct BundleRobustnessOptions {
   // block adjusted again, at most max_rejection_rounds times (count; 0 disables rejection). The
   // normalized residual of a mark is the larger of |w_x|, |w_y| (see
   // BundleStatisticsOptions::observation_diagnostics) when the diagnostics are computed, otherwise
-  // |v| / (max(1, s0) sigma) (the whitened residual, 2-D). Control marks are tested like tie marks;
-  // per point and round its worst mark above the threshold goes (a blunder raises the other marks
-  // of its track too).
+  // |v| / (max(1, s0) sigma) (the whitened residual, 2-D). Only tie marks are rejected: control
+  // and check marks are a surveyor's measurements, tested and reported in the diagnostics and
+  // removed only by data snooping. Per point and round its worst mark above the threshold goes (a
+  // blunder raises the other marks of its track too).
   double rejection_threshold = 4.5;
   int max_rejection_rounds = 3;
   // Data snooping: while the largest |w_i| exceeds k(alpha) (BundleStatisticsOptions::
