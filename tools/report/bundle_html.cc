@@ -25,16 +25,110 @@ constexpr size_t kMaxTieDots = 4000;
 // Numbers on the page: three significant digits unless a format is given; "n/a" when not finite.
 std::string F(double value, const char* format = "%.3g") { return ReportNumber(value, format); }
 
-// The plan view: tie points, cameras with 1-sigma error ellipses, control and check points with
-// their residual vectors, each exaggerated by a stated factor.
-std::string PlanView(const Block& block, const BundleAdjustmentResult& result) {
-  std::vector<Eigen::Vector2d> all;
-  for (const BlockImage& image : block.images)
-    if (image.eo) all.push_back(image.eo->center_in_ground().head<2>());
-  for (const BlockPoint& point : block.points) {
-    if (point.role != PointRole::kTie && point.surveyed_m) all.push_back(point.surveyed_m->head<2>());
-    else if (point.position_m) all.push_back(point.position_m->head<2>());
+// What the plan view draws, in one horizontal frame (m): the block's ground frame, or the grid of
+// a projected output CRS for a georeferenced model.
+struct PlanData {
+  struct Camera {
+    std::string name;
+    Eigen::Vector2d xy = Eigen::Vector2d::Zero();
+    std::optional<Eigen::Matrix2d> covariance;  // m^2
+  };
+  struct Surveyed {
+    std::string id;
+    bool control = true;
+    Eigen::Vector2d xy = Eigen::Vector2d::Zero();
+    std::optional<Eigen::Vector2d> error;  // m
+  };
+  std::vector<Camera> cameras;
+  std::vector<Eigen::Vector2d> ties;  // at most kMaxTieDots of them
+  std::vector<Surveyed> surveyed;
+  std::string caption;  // the frame, when it is not the block's own
+};
+
+PlanData PlanDataOf(const Block& block, const BundleAdjustmentResult& result) {
+  PlanData data;
+  for (size_t i = 0; i < block.images.size(); ++i) {
+    const BlockImage& image = block.images[i];
+    if (!image.eo) continue;
+    PlanData::Camera camera{image.name, image.eo->center_in_ground().head<2>(), std::nullopt};
+    if (i < result.images.size() && result.images[i].has_covariance)
+      camera.covariance = result.images[i].covariance.topLeftCorner<2, 2>();
+    data.cameras.push_back(camera);
   }
+  std::vector<const BlockPoint*> ties;
+  for (const BlockPoint& point : block.points)
+    if (point.role == PointRole::kTie && point.position_m) ties.push_back(&point);
+  const size_t step = std::max<size_t>(1, ties.size() / kMaxTieDots);
+  for (size_t k = 0; k < ties.size(); k += step) data.ties.push_back(ties[k]->position_m->head<2>());
+  for (size_t p = 0; p < block.points.size(); ++p) {
+    const BlockPoint& point = block.points[p];
+    if (point.role == PointRole::kTie || !point.surveyed_m) continue;
+    PlanData::Surveyed s{point.id, point.role == PointRole::kControl, point.surveyed_m->head<2>(), std::nullopt};
+    if (p < result.points.size() && result.points[p].error_m) s.error = result.points[p].error_m->head<2>();
+    data.surveyed.push_back(s);
+  }
+  return data;
+}
+
+// The plan data of a georeferenced model in the grid of its projected output CRS: coordinates
+// through PROJ, ellipses and vectors turned to the grid's level axes. Left in the local frame (and
+// said so) for a geographic output CRS, whose degrees are no plan.
+PlanData GeoreferencedPlanData(const Block& block, const BundleAdjustmentResult& result,
+                               const GeoreferenceResult& g) {
+  PlanData data = PlanDataOf(block, result);
+  if (!g.out_crs_info.projected) {
+    data.caption = "Local East-North-Up frame of the adjustment (m), origin " +
+                   F(g.frame.origin_lon_lat_h().x(), "%.6f") + " E, " + F(g.frame.origin_lon_lat_h().y(), "%.6f") +
+                   " N; the output CRS " + g.out_crs + " is geographic.";
+    return data;
+  }
+  std::vector<Eigen::Vector3d> local;
+  for (size_t i = 0; i < block.images.size(); ++i)
+    if (block.images[i].eo) local.push_back(block.images[i].eo->center_in_ground());
+  const size_t num_cameras = local.size();
+  std::vector<const BlockPoint*> surveyed;
+  for (const BlockPoint& point : block.points)
+    if (point.role != PointRole::kTie && point.surveyed_m) {
+      local.push_back(*point.surveyed_m);
+      surveyed.push_back(&point);
+    }
+  std::vector<const BlockPoint*> ties;
+  for (const BlockPoint& point : block.points)
+    if (point.role == PointRole::kTie && point.position_m) ties.push_back(&point);
+  const size_t step = std::max<size_t>(1, ties.size() / kMaxTieDots);
+  for (size_t k = 0; k < ties.size(); k += step) local.push_back(*ties[k]->position_m);
+  std::vector<Eigen::Vector3d> grid = local;
+  std::vector<Eigen::Matrix3d> R;
+  if (!ToOutputCrs(g, &grid).ok() || !LevelAxes(g, std::vector<Eigen::Vector3d>(local.begin(), local.begin() + num_cameras + surveyed.size()), &R).ok()) {
+    data.caption = "Local East-North-Up frame of the adjustment (m): PROJ could not map it into " + g.out_crs + ".";
+    return data;
+  }
+  for (size_t k = 0; k < num_cameras; ++k) {
+    data.cameras[k].xy = grid[k].head<2>();
+    if (data.cameras[k].covariance) {
+      Eigen::Matrix3d C = Eigen::Matrix3d::Zero();
+      C.topLeftCorner<2, 2>() = *data.cameras[k].covariance;
+      data.cameras[k].covariance = (R[k] * C * R[k].transpose()).topLeftCorner<2, 2>();
+    }
+  }
+  for (size_t k = 0; k < surveyed.size(); ++k) {
+    data.surveyed[k].xy = grid[num_cameras + k].head<2>();
+    if (data.surveyed[k].error) {
+      const Eigen::Vector3d e(data.surveyed[k].error->x(), data.surveyed[k].error->y(), 0.0);
+      data.surveyed[k].error = (R[num_cameras + k] * e).head<2>();
+    }
+  }
+  for (size_t k = 0; k < data.ties.size(); ++k) data.ties[k] = grid[num_cameras + surveyed.size() + k].head<2>();
+  data.caption = "Grid of " + g.out_crs_info.name + " (" + g.out_crs + "): easting and northing (m).";
+  return data;
+}
+
+// The plan view: tie points, cameras with 1-sigma error ellipses, control and check points with
+// their residual vectors, each exaggerated by a stated factor; the corner coordinates written.
+std::string PlanView(const PlanData& data) {
+  std::vector<Eigen::Vector2d> all = data.ties;
+  for (const PlanData::Camera& camera : data.cameras) all.push_back(camera.xy);
+  for (const PlanData::Surveyed& point : data.surveyed) all.push_back(point.xy);
   if (all.empty()) return "<p>Nothing to draw.</p>";
   Eigen::Vector2d lo = all.front(), hi = all.front();
   for (const auto& p : all) {
@@ -50,35 +144,25 @@ std::string PlanView(const Block& block, const BundleAdjustmentResult& result) {
 
   // Exaggerations: the largest ellipse and vector drawn about 4 % of the extent.
   double largest_sigma = 0.0, largest_error = 0.0;
-  for (const BundleImageResult& r : result.images) {
-    if (!r.has_covariance) continue;
-    largest_sigma = std::max(largest_sigma, std::sqrt(r.covariance.topLeftCorner<2, 2>().trace()));
-  }
-  for (const BundlePointResult& r : result.points)
-    if (r.error_m) largest_error = std::max(largest_error, r.error_m->head<2>().norm());
+  for (const PlanData::Camera& camera : data.cameras)
+    if (camera.covariance) largest_sigma = std::max(largest_sigma, std::sqrt(camera.covariance->trace()));
+  for (const PlanData::Surveyed& point : data.surveyed)
+    if (point.error) largest_error = std::max(largest_error, point.error->norm());
   const double ellipse_factor = largest_sigma > 0.0 ? NiceAtMost(0.04 * extent / largest_sigma) : 1.0;
   const double vector_factor = largest_error > 0.0 ? NiceAtMost(0.04 * extent / largest_error) : 1.0;
 
   std::ostringstream svg;
   svg << SvgOpen(kPlanWidth, kPlanHeight, "plan view") << "\n";
   // Tie points.
-  std::vector<const BlockPoint*> ties;
-  for (const BlockPoint& point : block.points)
-    if (point.role == PointRole::kTie && point.position_m) ties.push_back(&point);
-  const size_t step = std::max<size_t>(1, ties.size() / kMaxTieDots);
   svg << "<g fill=\"#999\">";
-  for (size_t k = 0; k < ties.size(); k += step)
-    svg << "<circle cx=\"" << F(X(ties[k]->position_m->x()), "%.1f") << "\" cy=\""
-        << F(Y(ties[k]->position_m->y()), "%.1f") << "\" r=\"0.8\"/>";
+  for (const Eigen::Vector2d& tie : data.ties)
+    svg << "<circle cx=\"" << F(X(tie.x()), "%.1f") << "\" cy=\"" << F(Y(tie.y()), "%.1f") << "\" r=\"0.8\"/>";
   svg << "</g>\n";
   // Cameras and their ellipses.
-  for (size_t i = 0; i < block.images.size(); ++i) {
-    const BlockImage& image = block.images[i];
-    if (!image.eo) continue;
-    const double cx = X(image.eo->parameters[0]), cy = Y(image.eo->parameters[1]);
-    if (i < result.images.size() && result.images[i].has_covariance) {
-      const Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d> eigen(
-          result.images[i].covariance.topLeftCorner<2, 2>());
+  for (const PlanData::Camera& camera : data.cameras) {
+    const double cx = X(camera.xy.x()), cy = Y(camera.xy.y());
+    if (camera.covariance) {
+      const Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d> eigen(*camera.covariance);
       const Eigen::Vector2d axes = eigen.eigenvalues().cwiseMax(0.0).cwiseSqrt() * ellipse_factor * scale;
       const Eigen::Vector2d major = eigen.eigenvectors().col(1);
       const double angle = -std::atan2(major.y(), major.x()) * 180.0 / kPi;
@@ -88,18 +172,16 @@ std::string PlanView(const Block& block, const BundleAdjustmentResult& result) {
           << F(cy, "%.1f") << ")\" fill=\"none\" stroke=\"#0072B2\" stroke-width=\"1\"/>";
     }
     svg << "<rect x=\"" << F(cx - 2.5, "%.1f") << "\" y=\"" << F(cy - 2.5, "%.1f")
-        << "\" width=\"5\" height=\"5\" fill=\"#0072B2\"><title>" << HtmlEscape(image.name)
+        << "\" width=\"5\" height=\"5\" fill=\"#0072B2\"><title>" << HtmlEscape(camera.name)
         << "</title></rect>\n";
   }
   // Control and check points with their residual vectors.
-  for (size_t p = 0; p < block.points.size(); ++p) {
-    const BlockPoint& point = block.points[p];
-    if (point.role == PointRole::kTie || !point.surveyed_m) continue;
-    const double px = X(point.surveyed_m->x()), py = Y(point.surveyed_m->y());
-    const bool control = point.role == PointRole::kControl;
+  for (const PlanData::Surveyed& point : data.surveyed) {
+    const double px = X(point.xy.x()), py = Y(point.xy.y());
+    const bool control = point.control;
     const char* color = control ? "#D55E00" : "#009E73";
-    if (p < result.points.size() && result.points[p].error_m) {
-      const Eigen::Vector3d& e = *result.points[p].error_m;
+    if (point.error) {
+      const Eigen::Vector2d& e = *point.error;
       svg << "<line x1=\"" << F(px, "%.1f") << "\" y1=\"" << F(py, "%.1f") << "\" x2=\""
           << F(px + e.x() * vector_factor * scale, "%.1f") << "\" y2=\""
           << F(py - e.y() * vector_factor * scale, "%.1f") << "\" stroke=\"" << color
@@ -127,7 +209,10 @@ std::string PlanView(const Block& block, const BundleAdjustmentResult& result) {
       << "; red triangles: control, green dots: check, vectors x" << F(vector_factor, "%g")
       << "; grey: tie points</text>\n";
   svg << "</svg>";
-  return svg.str();
+  std::string caption = data.caption.empty() ? std::string() : HtmlEscape(data.caption) + " ";
+  caption += "Lower left " + F(lo.x(), "%.2f") + ", " + F(lo.y(), "%.2f") + "; upper right " +
+             F(hi.x(), "%.2f") + ", " + F(hi.y(), "%.2f") + ".";
+  return svg.str() + "\n<p>" + caption + "</p>";
 }
 
 // A histogram of a group's values, the axis titled with the quantity and unit.
@@ -330,7 +415,10 @@ std::string BundleReportHtml(const Block& block, const BundleAdjustmentResult& r
   html << VerdictsHtml(result, context);
   html << "<p>" << HtmlEscape(s.BriefReport()) << "<br>Datum: " << HtmlEscape(s.datum_description)
        << "</p>\n";
-  html << "<h2>Plan view</h2>\n" << PlanView(block, result) << "\n";
+  const PlanData plan = context.georeference != nullptr
+                             ? GeoreferencedPlanData(block, result, *context.georeference)
+                             : PlanDataOf(block, result);
+  html << "<h2>Plan view</h2>\n" << PlanView(plan) << "\n";
   html << GroupsHtml(block, result, context) << PointsHtml(block, result)
        << CalibrationAndSnoopingHtml(block, result) << ReliabilityHtml(block, result, context);
   html << "<h2>Run</h2>\n<p><code>" << HtmlEscape(context.command_line) << "</code></p>\n";

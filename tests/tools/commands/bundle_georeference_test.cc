@@ -54,7 +54,7 @@ TEST(BundleGeoreference, DomedColmapModelWithGeoTxtAndGcpListComesOutInUtm) {
   const std::string checks = WriteScene(scene, dir);
   const CliRun run = RunCli("bundle --colmap_model=" + dir + "/model --geo=" + dir + "/geo.txt --gcp_list=" + dir +
                                 "/gcp_list.txt --check_points=" + checks + " --out=" + dir + "/frames.csv --out_points=" +
-                                dir + "/points.csv --out_colmap=" + dir + "/out --report=" + dir + "/report.json --quiet",
+                                dir + "/points.csv --out_colmap=" + dir + "/out --report=" + dir + "/report.json --html=" + dir + "/report.html --quiet",
                             dir);
   ASSERT_EQ(run.exit_code, 0) << run.err << run.out;
   EXPECT_NE(run.out.find("georeferenced in WGS84 UTM 32N"), std::string::npos) << run.out;
@@ -91,6 +91,9 @@ TEST(BundleGeoreference, DomedColmapModelWithGeoTxtAndGcpListComesOutInUtm) {
   EXPECT_EQ(checks_seen, 4);
   EXPECT_NE(ReadFile(dir + "/frames.csv").find("EPSG:32632"), std::string::npos);
   EXPECT_NE(ReadFile(dir + "/out/georeference.json").find("+proj=topocentric"), std::string::npos);
+  // The page's plan view is drawn in the grid, its corners in UTM coordinates.
+  const std::string html = ReadFile(dir + "/report.html");
+  EXPECT_NE(html.find("Grid of WGS 84 / UTM zone 32N (WGS84 UTM 32N): easting and northing (m). Lower left 66"), std::string::npos);
   Block written;
   ASSERT_TRUE(ReadColmapModel(dir + "/out", &written).ok());
   EXPECT_EQ(written.points.size(), scene.model.points.size());  // the model's points, no control added
