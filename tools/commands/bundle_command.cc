@@ -52,7 +52,7 @@ DEFINE_string(bundle_lever_arm, "", "GNSS antenna offset from the projection cen
 DEFINE_bool(bundle_estimate_lever_arm, false, "Estimate the lever arm (starting from --lever_arm or zero).");
 DEFINE_string(bundle_calibrate, "", "Self-calibration: a comma list of FocalLength, PrincipalX, PrincipalY, K0, K1, K2, K3, P1, P2, Affinity, Skew (for COLMAP models: f, cx, cy, k1, k2, p1, p2); the rest held constant.");
 DEFINE_string(bundle_loss, "none", "Robust loss on tie marks: none, huber, cauchy or softl1.");
-DEFINE_double(bundle_loss_scale, 3.0, "Scale of the robust loss on tie marks, in pixels.");
+DEFINE_double(bundle_loss_scale, 3.0, "Scale of the robust loss on tie marks, in standard deviations of each mark's own accuracy (its Accuracy, else --tie_accuracy or --film_tie_accuracy), as in resect.");
 DEFINE_string(bundle_jacobian, "analytic", "Derivative path of the collinearity cost: analytic or autodiff.");
 DEFINE_string(bundle_linear_solver, "sparse_schur", "Linear solver: sparse_schur (SuiteSparse), dense_schur, iterative_schur_jacobi or iterative_schur_cluster_jacobi.");
 DEFINE_int32(bundle_max_iterations, 100, "Largest number of Levenberg-Marquardt iterations per adjustment round.");
@@ -100,7 +100,7 @@ const CommandFlags& BundleFlags() {
        {"film_marker_projection_accuracy", 0.0, 1e5, true, false, "um"},
        {"marker_accuracy", 0.0, 1e6, true, false, "m"},
        {"attitude_accuracy", 0.0, 180.0, false, false, "degrees"},
-       {"loss_scale", 0.0, 1000.0, true, false, "px"},
+       {"loss_scale", 0.0, 1000.0, true, false, "standard deviations"},
        {"max_iterations", 1.0, 100000.0},
        {"rejection_threshold", 0.0, 1000.0},
        {"max_rejection_rounds", 0.0, 100.0},
@@ -254,7 +254,7 @@ int OptionsFromFlags(const char* command, BundleRun* run) {
   BundleRobustnessOptions& robustness = options.robustness;
   if (!ParseEnum(FLAGS_bundle_loss, &robustness.tie_loss) || !IsBundleTieLoss(robustness.tie_loss))
     return BadInput(command, "--loss must be " + EnumNameList(kBundleTieLosses) + ", not '" + FLAGS_bundle_loss + "'");
-  robustness.tie_loss_scale_sigmas = FLAGS_bundle_loss_scale / FLAGS_bundle_tie_accuracy;
+  robustness.tie_loss_scale_sigmas = FLAGS_bundle_loss_scale;
   solver.max_iterations = FLAGS_bundle_max_iterations;
   robustness.rejection_threshold = FLAGS_bundle_rejection_threshold;
   robustness.max_rejection_rounds = FLAGS_bundle_max_rejection_rounds;
