@@ -1,11 +1,13 @@
 // photopose bundle: the weighted bundle adjustment of a block (solvers/bundle/bundle_adjustment.h).
 #include <gflags/gflags.h>
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
 #include <iostream>
+#include <sstream>
 
 #include "core/io/bal.h"
 #include "core/block.h"
@@ -66,6 +68,7 @@ DEFINE_int32(bundle_max_covariance_parameters, 3000, "Covariances, redundancy nu
 DEFINE_string(bundle_relative_gauge, "free", "Relative blocks (no control points, no camera positions): free solves without a gauge and then moves the result into COLMAP's gauge (the first image as given, one coordinate of the second), the same minimum in far fewer iterations; fixed holds COLMAP's gauge from the start.");
 DEFINE_int32(bundle_threads, 0, "Threads of the linear algebra and of the cross-validation; 0 uses all cores.");
 DEFINE_bool(bundle_quiet, false, "No progress lines on stderr.");
+DEFINE_bool(bundle_force, false, "Write the outputs of an adjustment whose sigma0 stays above 3 after the search for gross errors (the run still exits 1 and the report says the check failed).");
 DEFINE_bool(bundle_pixel_center_origin, false, "Read Column/Row with (0,0) at the centre of the first pixel instead of the top-left corner of the image.");
 
 namespace photopose::cli {
@@ -498,6 +501,72 @@ Block ModelPart(const BundleRun& run) {
   return model;
 }
 
+// sigma0 far above 1 is no small misstatement of accuracies but gross errors (issue 20): above
+// this bound the block is searched for them in every group (data snooping: marks, control points,
+// camera positions) and, when sigma0 stays above it, the adjustment fails naming the groups and
+// the observations to blame (outputs only with --force).
+constexpr double kSigma0Bound = 3.0;
+constexpr int kSearchRemovals = 50;
+
+int CheckSigma0(const char* command, BundleRun* run) {
+  BundleAdjustmentResult& result = run->result;
+  if (!result.summary.IsSolutionUsable() || !(result.summary.sigma0 > kSigma0Bound)) return kGoOn;
+  if (!run->options.robustness.snoop && run->solver == PoseSolver::kCeres) {
+    std::cerr << "photopose bundle: sigma0 " << result.summary.sigma0 << " is above " << kSigma0Bound
+              << ": the block disagrees with its stated accuracies by more than noise; searching every group for gross errors (data snooping, at most "
+              << kSearchRemovals << " removals)\n";
+    BundleAdjustmentOptions search = run->options;
+    search.robustness.snoop = true;
+    search.robustness.max_snooping_removals = kSearchRemovals;
+    BundleAdjustmentResult searched;
+    Block block = run->block;
+    const Status again = BundleAdjust(search, run->config, &block, &searched);
+    if (again.ok() && searched.summary.IsSolutionUsable()) {
+      run->block = std::move(block);
+      result = std::move(searched);
+      run->options = search;
+    }
+  }
+  if (!(result.summary.sigma0 > kSigma0Bound)) return kGoOn;
+  // The groups whose residuals are furthest beyond their stated accuracy, and the worst observations.
+  std::vector<const BundleGroupStatistics*> groups;
+  for (const BundleGroupStatistics& g : result.groups)
+    if (g.count > 0 && g.ratio > kSigma0Bound) groups.push_back(&g);
+  std::sort(groups.begin(), groups.end(), [](const auto* a, const auto* b) { return a->ratio > b->ratio; });
+  std::ostringstream why;
+  why << "sigma0 " << result.summary.sigma0 << " stays above " << kSigma0Bound
+      << " after the search for gross errors: the stated accuracies do not describe these data";
+  for (size_t k = 0; k < groups.size(); ++k)
+    why << (k == 0 ? "; groups to blame: " : ", ") << EnumName(groups[k]->group) << " (RMS/stated " << groups[k]->ratio << ")";
+  std::vector<const BundleObservationDiagnostics*> worst;
+  for (const BundleObservationDiagnostics& d : result.observations)
+    if (std::isfinite(d.normalized)) worst.push_back(&d);
+  std::sort(worst.begin(), worst.end(), [](const auto* a, const auto* b) { return std::abs(a->normalized) > std::abs(b->normalized); });
+  for (size_t k = 0; k < worst.size() && k < 3; ++k) {
+    const BundleObservationDiagnostics& d = *worst[k];
+    std::string item;
+    if (d.group == kTieMarks || d.group == kControlMarks) {
+      const BlockMark& mark = run->block.marks[d.item];
+      item = "mark of point '" + run->block.points[mark.point].id + "' in image '" + run->block.images[mark.image].name + "'";
+    } else if (d.group == kControlPoints) {
+      item = "control point '" + run->block.points[d.item].id + "'";
+    } else {
+      item = std::string(EnumName(d.group)) + " of image '" + run->block.images[d.item].name + "'";
+    }
+    why << (k == 0 ? "; worst: " : ", ") << item << " |w| " << std::abs(d.normalized);
+  }
+  why << (FLAGS_bundle_force ? " (outputs written because of --force)" : "; check them, state other accuracies, or give --force to write the outputs anyway");
+  std::cerr << "photopose bundle: " << why.str() << "\n";
+  run->exit_code = kExitSomeFailed;
+  if (!FLAGS_bundle_force) {
+    result.summary.termination = SolverTermination::kFailure;
+    result.summary.message = why.str();
+  } else {
+    result.summary.message = "FAILED the sigma0 check, written because of --force: " + why.str();
+  }
+  return kGoOn;
+}
+
 // The adjustment, then the cross-validation when asked.
 int AdjustBundleBlock(const char* command, BundleRun* run) {
   BundleAdjustmentResult& result = run->result;
@@ -509,6 +578,8 @@ int AdjustBundleBlock(const char* command, BundleRun* run) {
   }
   const Status adjusted = BundleAdjustWithSolver(run->solver, run->options, run->config, &run->block, &result);
   if (!adjusted.ok()) return BadInput(command, adjusted.message());
+  const int checked = CheckSigma0(command, run);
+  if (checked != kGoOn) return checked;
   if (run->tables && result.summary.datum == BundleDatum::kRelative) {
     return BadInput(command, "no datum: the block has no control points and no camera positions, so it has no ground coordinates to write; give --points with control points or --frames with camera positions");
   }

@@ -213,5 +213,30 @@ TEST(BundleCommand, ABlockWithNothingToOrientItFromIsRefusedWithTheReason) {
   EXPECT_FALSE(std::filesystem::exists(dir + "/frames.csv"));
 }
 
+// Accuracies stated 10 times too optimistic: sigma0 near 10, no gross error to find. The search
+// (snooping in every group) runs, sigma0 stays above 3: not adjusted, the group to blame named,
+// only the report written; with --force every output, still exit 1.
+TEST(BundleCommand, Sigma0FarAboveOneAfterTheSearchIsAFailureNamingTheGroup) {
+  const std::string dir = ScratchDir();
+  const std::string block = SimulateBlock(dir);
+  const std::string common = "bundle --colmap_model=" + block + "/colmap --tie_accuracy=0.05 --out=" + dir +
+                             "/frames.csv --report=" + dir + "/report.json --quiet";
+  const CliRun run = RunCli(common, dir);
+  EXPECT_EQ(run.exit_code, 1) << run.err;
+  EXPECT_NE(run.err.find("searching every group for gross errors"), std::string::npos) << run.err;
+  EXPECT_NE(run.err.find("after the search for gross errors"), std::string::npos) << run.err;
+  EXPECT_NE(run.err.find("groups to blame: tie_marks (RMS/stated "), std::string::npos) << run.err;
+  EXPECT_FALSE(std::filesystem::exists(dir + "/frames.csv"));
+  const nlohmann::json report = nlohmann::json::parse(ReadFile(dir + "/report.json"));
+  EXPECT_EQ(report["summary"]["termination"], "failure");
+  EXPECT_TRUE(report["options"]["snoop"].get<bool>());
+
+  const CliRun forced = RunCli(common + " --force", dir);
+  EXPECT_EQ(forced.exit_code, 1) << forced.err;
+  EXPECT_TRUE(std::filesystem::exists(dir + "/frames.csv"));
+  const nlohmann::json forced_report = nlohmann::json::parse(ReadFile(dir + "/report.json"));
+  EXPECT_EQ(forced_report["summary"]["message"].get<std::string>().rfind("FAILED the sigma0 check", 0), 0u);
+}
+
 }  // namespace
 }  // namespace photopose
