@@ -1,5 +1,7 @@
 // Binary COLMAP models (core/io/colmap_binary.cc, through the public API of core/io/colmap.h):
 // byte layout, round trips with the text format, refusals, and COLMAP's own tools as the peer.
+#include <sys/stat.h>
+
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -14,6 +16,7 @@
 #include <vector>
 
 #include "core/io/colmap.h"
+#include "core/io/csv.h"
 #include "tests/support/temp_dir.h"
 #include "tests/test_data.h"
 
@@ -341,6 +344,26 @@ TEST(ColmapBinary, EmptyFileIsTruncatedAtItsCount) {
   EXPECT_EQ(ParseColmapModel(model.Files(), "m", &block).message(),
             "m/points3D.bin: byte 0: number of points: the file ends inside it (0 bytes left, 8 "
             "needed)");
+}
+
+TEST(ColmapBinary, AFifoOrAFileOverTheLimitIsRefusedWithoutWaitingOrReading) {
+  ScopedTempDir dir;
+  ASSERT_TRUE(dir.ok());
+  const SmallModel model;
+  dir.Write("cameras.bin", model.cameras);
+  dir.Write("points3D.bin", model.points);
+  ASSERT_EQ(mkfifo(dir.Path("images.bin").c_str(), 0644), 0);
+  Block block;
+  EXPECT_EQ(ReadColmapModel(dir.path(), &block).message(),
+            dir.Path("images.bin") +
+                ": is a FIFO (named pipe), not a regular file; photopose reads regular files, or "
+                "standard input for '-'");
+  std::filesystem::remove(dir.Path("images.bin"));
+  dir.Write("images.bin", model.images);
+  std::filesystem::resize_file(dir.Path("points3D.bin"), kMaxInputBytes + 1);  // sparse
+  EXPECT_EQ(ReadColmapModel(dir.path(), &block).message(),
+            dir.Path("points3D.bin") +
+                ": is larger than 268435456 bytes, the largest input photopose reads");
 }
 
 // ------------------------------------------------------------------ COLMAP itself as the peer
