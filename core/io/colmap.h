@@ -131,6 +131,7 @@ struct ColmapWriteOptions {
 // without a position is left out of points3D and its marks are written with POINT3D_ID -1.
 // Roles (control / check) and accuracies have no place in a COLMAP model and are not written.
 // Binary ids: a CAMERA_ID above 2^32 - 1 (possible in text) makes all cameras numbered 1..n.
+// The other format's files in the folder are left as they are (binary ones are read first).
 Status WriteColmapModel(const std::string& directory, const Block& block,
                         const ColmapModelExtras* extras = nullptr,
                         const ColmapWriteOptions& options = ColmapWriteOptions());

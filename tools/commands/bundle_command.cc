@@ -297,6 +297,10 @@ int DeclareFiles(const char* command, const ParsedFlags& parsed, BundleRun* run,
     run->colmap_out_format = run->colmap_in_format;
     if (!FLAGS_bundle_out_colmap_format.empty() && !ParseEnum(FLAGS_bundle_out_colmap_format, &run->colmap_out_format))
       return BadInput(command, EnumFlagError<ColmapFormat>("--out_colmap_format", FLAGS_bundle_out_colmap_format));
+    // A binary model left in the folder would be read (by COLMAP too) instead of the text written.
+    ColmapFormat there = ColmapFormat::kText;
+    if (run->colmap_out_format == ColmapFormat::kText && DetectColmapFormat(FLAGS_bundle_out_colmap, &there).ok() && there == ColmapFormat::kBinary)
+      return BadInput(command, "--out_colmap=" + FLAGS_bundle_out_colmap + " holds a binary COLMAP model (cameras.bin, images.bin, points3D.bin), which COLMAP and photopose read instead of the text model written here: remove it, or give --out_colmap_format=binary");
     for (const char* name : ColmapFileNames(run->colmap_out_format)) {
       const std::string path = FLAGS_bundle_out_colmap + "/" + name;
       const Status declared = outputs->AddOutput("--out_colmap", path);

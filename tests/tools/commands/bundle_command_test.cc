@@ -207,6 +207,18 @@ TEST(BundleCommand, BinaryColmapModelInBinaryOutUnlessAsked) {
               1e-8);
   }
 
+  // Text over a binary model: the binary files would be read instead, so it is refused.
+  run = RunCli("bundle --colmap_model=" + dir + "/bin --out_colmap=" + dir +
+                   "/out_bin --out_colmap_format=text --quiet",
+               dir);
+  EXPECT_EQ(run.exit_code, 2);
+  EXPECT_NE(run.err.find("--out_colmap=" + dir +
+                         "/out_bin holds a binary COLMAP model (cameras.bin, images.bin, "
+                         "points3D.bin), which COLMAP and photopose read instead of the text model "
+                         "written here"),
+            std::string::npos)
+      << run.err;
+  EXPECT_FALSE(std::filesystem::exists(dir + "/out_bin/points3D.txt"));
   run = RunCli("bundle --colmap_model=" + dir + "/bin --out_colmap=" + dir +
                    "/out_x --out_colmap_format=ply --quiet",
                dir);
