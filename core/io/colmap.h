@@ -110,7 +110,7 @@ Status ReadColmapModel(const std::string& directory, Block* block,
 
 // How a block is written as a COLMAP model.
 struct ColmapWriteOptions {
-  ColmapFormat format = ColmapFormat::kText;
+  ColmapFormat format = ColmapFormat::kText;  // the three .txt files, or the three .bin files
   // Per Block::marks (or empty): the marks to leave out of the tracks (e.g. those a bundle
   // adjustment rejected). Each is written as a keypoint without a 3D point (POINT3D_ID -1) at its
   // POINT2D index, so that the indices of the others stay; a point that loses a mark this way and

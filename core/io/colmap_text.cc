@@ -2,6 +2,7 @@
 // to and from the records of core/io/internal/colmap_records.h. Only the syntax is checked here
 // (numbers, whole numbers of their type, the parameter count of the model); the values and the
 // references between records are checked where the block is built (colmap.cc).
+#include <algorithm>
 #include <limits>
 #include <string>
 
