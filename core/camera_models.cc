@@ -80,7 +80,13 @@ Status CalibrationParamIndices(CameraModelType type, const std::string& name,
     const bool two_focals = type == CameraModelType::kPinhole || type == CameraModelType::kOpenCv;
     const int cx = two_focals ? 2 : 1;
     const int n = CameraModelNumParams(type);
-    if (upper == "FOCALLENGTH") {
+    // COLMAP's own names of the model's parameters (fx, cx, k, ...) first; then photopose's
+    // names, and f for the focal length(s) of every model.
+    const std::vector<std::string>& own = Info(type).params;
+    for (int i = 0; i < n; ++i)
+      if (Upper(own[i]) == upper) indices->push_back(i);
+    if (!indices->empty()) return Status::Ok();
+    if (upper == "FOCALLENGTH" || upper == "F") {
       indices->push_back(0);
       if (two_focals) indices->push_back(1);
     } else if (upper == "PRINCIPALX") {

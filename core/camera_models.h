@@ -110,7 +110,9 @@ std::vector<std::string> CameraModelParamNames(CameraModelType type);
 // The parameters a self-calibration name selects (the names of `photopose bundle --calibrate`):
 // FocalLength, PrincipalX, PrincipalY, K0, K1, K2, K3, P1, P2, Affinity, Skew (case-insensitive).
 // For the COLMAP models FocalLength is f (or fx and fy), PrincipalX/Y are cx/cy, K1 is k1 (k for
-// SIMPLE_RADIAL), K2 k2, P1 p1, P2 p2. A name the model lacks is an error naming it and the model.
+// SIMPLE_RADIAL), K2 k2, P1 p1, P2 p2; COLMAP's own names of the model's parameters
+// (CameraModelParamNames: f, fx, fy, cx, cy, k, k1, k2, p1, p2) select themselves, and f selects
+// fx and fy of PINHOLE and OPENCV. A name the model lacks is an error naming it and the model.
 Status CalibrationParamIndices(CameraModelType type, const std::string& name,
                                std::vector<int>* indices);
 

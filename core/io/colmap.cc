@@ -2,6 +2,7 @@
 
 #include <Eigen/Geometry>
 #include <algorithm>
+#include <climits>
 #include <cmath>
 #include <filesystem>
 #include <limits>
@@ -11,12 +12,85 @@
 #include "core/camera.h"
 #include "core/collinearity.h"
 #include "core/io/csv.h"
-#include "core/rotation.h"
+#include "core/io/internal/colmap_records.h"
+#include "core/io/output_files.h"
 #include "core/io/tables.h"
 #include "core/io/text_scanner.h"
+#include "core/rotation.h"
 
 namespace photopose {
+
+// ------------------------------------------------------------------ shared by both formats
+
+namespace colmap_io {
+
+const std::vector<ModelName>& ColmapModelNames() {
+  static const auto* const kNames = new std::vector<ModelName>{{0, "SIMPLE_PINHOLE"},
+                                                               {1, "PINHOLE"},
+                                                               {2, "SIMPLE_RADIAL"},
+                                                               {3, "RADIAL"},
+                                                               {4, "OPENCV"},
+                                                               {5, "OPENCV_FISHEYE"},
+                                                               {6, "FULL_OPENCV"},
+                                                               {7, "FOV"},
+                                                               {8, "SIMPLE_RADIAL_FISHEYE"},
+                                                               {9, "RADIAL_FISHEYE"},
+                                                               {10, "THIN_PRISM_FISHEYE"}};
+  return *kNames;
+}
+
+bool ModelOfName(std::string_view name, CameraModelType* model) {
+  for (const ModelName& entry : ColmapModelNames()) {
+    // The supported ones are those core/camera_models.h names (kFrame is no COLMAP model).
+    if (ParseEnum(name, model) && EnumName(*model) == std::string_view(entry.name)) return true;
+  }
+  return false;
+}
+
+bool ModelOfId(long long id, CameraModelType* model) {
+  for (const ModelName& entry : ColmapModelNames())
+    if (entry.id == id) return ModelOfName(entry.name, model);
+  return false;
+}
+
+int ModelId(CameraModelType model) {
+  for (const ModelName& entry : ColmapModelNames())
+    if (EnumName(model) == std::string_view(entry.name)) return entry.id;
+  return -1;
+}
+
+std::string SupportedModels() {
+  std::string list;
+  CameraModelType model;
+  for (const ModelName& entry : ColmapModelNames()) {
+    if (!ModelOfName(entry.name, &model)) continue;
+    if (!list.empty()) list += ", ";
+    list += entry.name;
+  }
+  return list;
+}
+
+Status RecordError(const ModelPaths& paths, const std::string& path, Place place,
+                   std::string_view field, std::string_view what, size_t entry,
+                   size_t entry_bytes) {
+  if (paths.format == ColmapFormat::kText)
+    return TextError(path, static_cast<int>(place), field, what);
+  return Status::Error(
+      path + ": byte " +
+      std::to_string(static_cast<unsigned long long>(place) + entry * entry_bytes) + ": " +
+      std::string(field) + ": " + std::string(what));
+}
+
+}  // namespace colmap_io
+
+using colmap_io::Place;
+using colmap_io::RecordError;
+
 namespace {
+
+// Binary entry sizes of the lists, for the byte offsets of messages (colmap_binary.cc's layout).
+constexpr size_t kPoint2DEntryBytes = 24;
+constexpr size_t kTrackEntryBytes = 8;
 
 // COLMAP's camera frame (x right, y down, z forward) -> the seed's (u, v, w) = (x, -y, -z).
 const Eigen::Matrix3d& SeedFromColmapCamera() {
@@ -33,8 +107,8 @@ constexpr double kMinQuaternionNorm = 1e-12;
 constexpr double kPinholeShearTolerance = 1e-12;
 // Pixels are square (SIMPLE_PINHOLE rather than PINHOLE) when fx and fy agree to this fraction.
 constexpr double kSquarePixelTolerance = 1e-15;
-
-constexpr long long kMaxColmapId = std::numeric_limits<long long>::max();
+// COLMAP's camera_t and image_t are 32-bit (the binary files hold them so).
+constexpr long long kMaxBinaryId = 0xffffffffLL;
 
 ExteriorOrientation EoFromColmapPose(const Eigen::Quaterniond& q, const Eigen::Vector3d& t) {
   const Eigen::Matrix3d R_colmap = q.toRotationMatrix();
@@ -58,7 +132,12 @@ std::string Path(const std::string& directory, const char* name) {
   return (std::filesystem::path(directory) / name).string();
 }
 
-// ------------------------------------------------------------------ reading
+colmap_io::ModelPaths PathsOf(const std::string& directory, ColmapFormat format) {
+  const std::array<const char*, 3> names = ColmapFileNames(format);
+  return {format, Path(directory, names[0]), Path(directory, names[1]), Path(directory, names[2])};
+}
+
+// ------------------------------------------------------------------ records -> block
 
 // The index of each COLMAP id (>= 0): a hash map while reading, then a plain table when the ids
 // are dense enough (COLMAP numbers from 1), so that the million lookups of the observations are
@@ -92,264 +171,294 @@ class IdIndex {
   bool is_dense_ = false;
 };
 
-// A COLMAP camera parameter: focal lengths in [kMinFocalLengthPx, kMaxCoordinate], the principal
-// point within kMaxCoordinate, the distortion coefficients any finite number.
-Status CameraParam(TokenScanner* scanner, const std::string& name, double* value) {
-  const std::string field = "PARAMS " + name;
-  if (name == "cx" || name == "cy")
-    return scanner->NumberWithin(field, kMaxCoordinate, "px", value);
-  if (name != "f" && name != "fx" && name != "fy") return scanner->Number(field, value);
-  PHOTOPOSE_RETURN_IF_ERROR(scanner->NumberWithin(field, kMaxCoordinate, "px", value));
-  if (!(*value >= kMinFocalLengthPx)) {
-    return scanner->Error(field, FormatNumber(*value) + " is no focal length: it must be at least " +
-                                     FormatNumber(kMinFocalLengthPx) + " px");
+// "1e+300 is outside [-100000000, 100000000] m", or "" when |value| <= max_magnitude.
+std::string OutsideMessage(double value, double max_magnitude, std::string_view unit) {
+  if (std::abs(value) <= max_magnitude) return std::string();
+  if (!std::isfinite(value)) return FormatNumber(value) + " is not a finite number";
+  return FormatNumber(value) + " is outside [" + FormatPlainNumber(-max_magnitude) + ", " +
+         FormatPlainNumber(max_magnitude) + "]" + (unit.empty() ? "" : " ") + std::string(unit);
+}
+
+// What BlockFromRecords checks and builds, one file after the other.
+class ModelBuilder {
+ public:
+  ModelBuilder(const colmap_io::Records& records, const colmap_io::ModelPaths& paths, Block* block,
+               ColmapModelExtras* extras)
+      : r_(records), paths_(paths), block_(*block), extras_(extras) {}
+
+  Status Cameras();
+  Status Points();
+  Status Images();
+  Status Tracks() const;
+
+ private:
+  // The file name of one of the three files ("cameras.txt"), for messages naming the other file.
+  const char* FileName(int file) const { return ColmapFileNames(paths_.format)[file]; }
+  // The line of a record for the block's messages (0 in a binary file: it has no lines).
+  int LineOf(Place place) const {
+    return paths_.format == ColmapFormat::kText ? static_cast<int>(place) : 0;
   }
+  Status CameraError(const colmap_io::CameraRecord& c, std::string_view field,
+                     std::string_view what) const {
+    return RecordError(paths_, paths_.cameras, c.place, field, what);
+  }
+
+  const colmap_io::Records& r_;
+  const colmap_io::ModelPaths& paths_;
+  Block& block_;
+  ColmapModelExtras* extras_;
+  IdIndex camera_of_id_, point_of_id_, image_of_id_;
+  // Per POINTS2D entry of all images (in record order): its mark, or -1.
+  std::vector<int> mark_of_point2D_;
+};
+
+// A camera parameter: focal lengths in [kMinFocalLengthPx, kMaxCoordinate], the principal point
+// within kMaxCoordinate, the distortion coefficients any finite number.
+Status ModelBuilder::Cameras() {
+  for (const colmap_io::CameraRecord& c : r_.cameras) {
+    constexpr long long kMaxSize = INT_MAX;
+    for (const auto& [field, size] :
+         {std::pair<const char*, long long>{"WIDTH", c.width}, {"HEIGHT", c.height}}) {
+      if (size < 1 || size > kMaxSize) {
+        return CameraError(
+            c, field,
+            std::to_string(size) + " is out of range [1, " + std::to_string(kMaxSize) + "]");
+      }
+    }
+    const std::vector<std::string> names = CameraModelParamNames(c.model);
+    for (size_t k = 0; k < names.size(); ++k) {
+      const std::string field = "PARAMS " + names[k];
+      const double value = c.params[k];
+      const bool focal = names[k] == "f" || names[k] == "fx" || names[k] == "fy";
+      const bool principal = names[k] == "cx" || names[k] == "cy";
+      const std::string outside = OutsideMessage(
+          value, focal || principal ? kMaxCoordinate : std::numeric_limits<double>::max(), "px");
+      if (!outside.empty()) return CameraError(c, field, outside);
+      if (focal && !(value >= kMinFocalLengthPx)) {
+        return CameraError(c, field,
+                           FormatNumber(value) + " is no focal length: it must be at least " +
+                               FormatNumber(kMinFocalLengthPx) + " px");
+      }
+    }
+    if (!camera_of_id_.Insert(c.id, static_cast<int>(block_.cameras.size())))
+      return CameraError(c, "CAMERA_ID", "camera " + std::to_string(c.id) + " is listed twice");
+    BlockCamera camera;
+    camera.camera_id = std::to_string(c.id);
+    camera.model = c.model;
+    camera.table.camera_id = camera.camera_id;
+    camera.table.n_columns = static_cast<int>(c.width);
+    camera.table.n_rows = static_cast<int>(c.height);
+    camera.params = c.params;
+    block_.cameras.push_back(std::move(camera));
+  }
+  camera_of_id_.Freeze();
   return Status::Ok();
 }
 
-Status ReadCameras(std::string_view text, const std::string& path, Block* block,
-                   IdIndex* camera_of_id) {
-  return ForEachRecordLine(text, path, /*comma_separates=*/false, [&](TokenScanner* scanner) {
-    long long id = 0, width = 0, height = 0;
-    std::string_view model_name;
-    PHOTOPOSE_RETURN_IF_ERROR(scanner->IntegerIn("CAMERA_ID", 0, kMaxColmapId, &id));
-    PHOTOPOSE_RETURN_IF_ERROR(scanner->Word("MODEL", &model_name));
-    CameraModelType model = CameraModelType::kFrame;  // not a COLMAP model: refused below
-    if (!ParseEnum(model_name, &model) || model == CameraModelType::kFrame) {
-      return scanner->Error("MODEL", "camera model '" + TokenForMessage(model_name) +
-                                         "' is not supported (supported: SIMPLE_PINHOLE, PINHOLE, "
-                                         "SIMPLE_RADIAL, RADIAL, OPENCV)");
-    }
-    constexpr long long kMaxSize = std::numeric_limits<int>::max();
-    PHOTOPOSE_RETURN_IF_ERROR(scanner->IntegerIn("WIDTH", 1, kMaxSize, &width));
-    PHOTOPOSE_RETURN_IF_ERROR(scanner->IntegerIn("HEIGHT", 1, kMaxSize, &height));
-    BlockCamera camera;
-    camera.camera_id = std::to_string(id);
-    camera.model = model;
-    camera.table.camera_id = camera.camera_id;
-    camera.table.n_columns = static_cast<int>(width);
-    camera.table.n_rows = static_cast<int>(height);
-    const int num_params = CameraModelNumParams(model);
-    camera.params.resize(num_params);
-    const std::vector<std::string> names = CameraModelParamNames(model);
-    for (int k = 0; k < num_params; ++k)
-      PHOTOPOSE_RETURN_IF_ERROR(CameraParam(scanner, names[k], &camera.params[k]));
-    if (!scanner->AtEnd()) {
-      return scanner->Error("PARAMS", "more than the " + std::to_string(num_params) +
-                                          " parameters of the " + std::string(model_name) +
-                                          " model");
-    }
-    if (!camera_of_id->Insert(id, static_cast<int>(block->cameras.size())))
-      return scanner->Error("CAMERA_ID", "camera " + std::to_string(id) + " is listed twice");
-    block->cameras.push_back(std::move(camera));
-    return Status::Ok();
-  });
-}
-
-// A points3D.txt TRACK entry, checked once the images are read (12 bytes: a model has millions;
-// the line is the point's).
-struct TrackEntry {
-  uint32_t image_id;  // COLMAP's image_t is 32-bit
-  int keypoint;
-  int point;
-};
-constexpr long long kMaxImageId = 0xffffffffLL;
-
-Status ReadPoints(std::string_view text, const std::string& path, Block* block,
-                  ColmapModelExtras* extras, IdIndex* point_of_id,
-                  std::vector<TrackEntry>* tracks) {
-  // A point per line at most; about a track entry per 12 characters (an estimate: the vector
-  // grows past it when needed).
-  block->points.reserve(static_cast<size_t>(std::count(text.begin(), text.end(), '\n')) + 1);
-  tracks->reserve(text.size() / 12);
-  return ForEachRecordLine(text, path, /*comma_separates=*/false, [&](TokenScanner* scanner) {
-    long long id = 0;
-    PHOTOPOSE_RETURN_IF_ERROR(scanner->IntegerIn("POINT3D_ID", 0, kMaxColmapId, &id));
-    Eigen::Vector3d position;
-    PHOTOPOSE_RETURN_IF_ERROR(scanner->NumberWithin("X", kMaxCoordinate, "m", &position.x()));
-    PHOTOPOSE_RETURN_IF_ERROR(scanner->NumberWithin("Y", kMaxCoordinate, "m", &position.y()));
-    PHOTOPOSE_RETURN_IF_ERROR(scanner->NumberWithin("Z", kMaxCoordinate, "m", &position.z()));
-    std::array<unsigned char, 3> rgb;
-    const char* const kColour[] = {"R", "G", "B"};
+Status ModelBuilder::Points() {
+  block_.points.reserve(r_.points.size());
+  for (const colmap_io::PointRecord& p : r_.points) {
+    const auto error = [&](std::string_view field, std::string_view what) {
+      return RecordError(paths_, paths_.points3D, p.place, field, what);
+    };
+    const char* const kAxis[] = {"X", "Y", "Z"};
     for (int k = 0; k < 3; ++k) {
-      long long value = 0;
-      PHOTOPOSE_RETURN_IF_ERROR(scanner->IntegerIn(kColour[k], 0, 255, &value));
-      rgb[k] = static_cast<unsigned char>(value);
+      const std::string outside = OutsideMessage(p.xyz[k], kMaxCoordinate, "m");
+      if (!outside.empty()) return error(kAxis[k], outside);
     }
-    double error = 0.0;
-    PHOTOPOSE_RETURN_IF_ERROR(scanner->Number("ERROR", &error));
-    const int index = static_cast<int>(block->points.size());
-    if (!point_of_id->Insert(id, index))
-      return scanner->Error("POINT3D_ID", "point " + std::to_string(id) + " is listed twice");
-    while (!scanner->AtEnd()) {
-      long long image_id = 0, keypoint = 0;
-      PHOTOPOSE_RETURN_IF_ERROR(scanner->IntegerIn("TRACK IMAGE_ID", 0, kMaxImageId, &image_id));
-      PHOTOPOSE_RETURN_IF_ERROR(
-          scanner->IntegerIn("TRACK POINT2D_IDX", 0, std::numeric_limits<int>::max(), &keypoint));
-      tracks->push_back({static_cast<uint32_t>(image_id), static_cast<int>(keypoint), index});
-    }
+    if (!std::isfinite(p.error))
+      return error("ERROR", FormatNumber(p.error) + " is not a finite number");
+    const int index = static_cast<int>(block_.points.size());
+    if (!point_of_id_.Insert(p.id, index))
+      return error("POINT3D_ID", "point " + std::to_string(p.id) + " is listed twice");
     BlockPoint point;
-    point.id = std::to_string(id);
+    point.id = std::to_string(p.id);
     point.role = PointRole::kTie;
-    point.position_m = position;
-    point.line = scanner->line();
-    block->points.push_back(std::move(point));
-    if (extras != nullptr) {
-      extras->point_rgb.push_back(rgb);
-      extras->point_error_px.push_back(error);
-    }
-    return Status::Ok();
-  });
-}
-
-Status ReadImages(std::string_view text, const std::string& path, const IdIndex& camera_of_id,
-                  const IdIndex& point_of_id, Block* block, ColmapModelExtras* extras,
-                  IdIndex* image_of_id, std::vector<long long>* keypoint_offset,
-                  std::vector<int>* mark_of_keypoint) {
-  TextLines lines(text);
-  std::string_view line;
-  int line_number = 0;
-  keypoint_offset->assign(1, 0);
-  while (lines.Next(&line, &line_number)) {
-    if (IsBlankOrComment(line)) continue;
-    TokenScanner scanner(line, path, line_number);
-    long long id = 0, camera_id = 0;
-    double qw, qx, qy, qz;
-    Eigen::Vector3d t;
-    PHOTOPOSE_RETURN_IF_ERROR(scanner.IntegerIn("IMAGE_ID", 0, kMaxImageId, &id));
-    PHOTOPOSE_RETURN_IF_ERROR(scanner.Number("QW", &qw));
-    PHOTOPOSE_RETURN_IF_ERROR(scanner.Number("QX", &qx));
-    PHOTOPOSE_RETURN_IF_ERROR(scanner.Number("QY", &qy));
-    PHOTOPOSE_RETURN_IF_ERROR(scanner.Number("QZ", &qz));
-    PHOTOPOSE_RETURN_IF_ERROR(scanner.NumberWithin("TX", kMaxCoordinate, "m", &t.x()));
-    PHOTOPOSE_RETURN_IF_ERROR(scanner.NumberWithin("TY", kMaxCoordinate, "m", &t.y()));
-    PHOTOPOSE_RETURN_IF_ERROR(scanner.NumberWithin("TZ", kMaxCoordinate, "m", &t.z()));
-    PHOTOPOSE_RETURN_IF_ERROR(scanner.IntegerIn("CAMERA_ID", 0, kMaxColmapId, &camera_id));
-    const std::string_view name = scanner.Rest();
-    if (name.empty()) return scanner.Error("NAME", "is missing");
-    Eigen::Quaterniond q(qw, qx, qy, qz);
-    const double q_norm = q.coeffs().stableNorm();  // no overflow: 1e300 is named as such
-    if (!(q_norm > kMinQuaternionNorm))
-      return scanner.Error("QW", "the quaternion (QW, QX, QY, QZ) is zero");
-    if (!(q_norm < 1.0 / kMinQuaternionNorm)) {
-      return scanner.Error("QW", "the quaternion (QW, QX, QY, QZ) has norm " + FormatNumber(q_norm) +
-                                     "; COLMAP's is a unit quaternion (one with a norm between " +
-                                     FormatNumber(kMinQuaternionNorm) + " and " +
-                                     FormatNumber(1.0 / kMinQuaternionNorm) + " is normalised)");
-    }
-    q.normalize();
-    const int camera = camera_of_id.Find(camera_id);
-    if (camera < 0) {
-      return scanner.Error("CAMERA_ID", "camera " + std::to_string(camera_id) +
-                                            " is not in cameras.txt");
-    }
-    const int image_index = static_cast<int>(block->images.size());
-    if (!image_of_id->Insert(id, image_index))
-      return scanner.Error("IMAGE_ID", "image " + std::to_string(id) + " is listed twice");
-    BlockImage image;
-    image.name = std::string(name);
-    image.camera = camera;
-    image.eo = EoFromColmapPose(q, t);
-    image.line = line_number;
-    block->images.push_back(std::move(image));
-
-    // POINTS2D: the next physical line, even when empty (an image without keypoints).
-    std::string_view points_line;
-    int points_line_number = line_number;
-    if (!lines.Next(&points_line, &points_line_number)) points_line = std::string_view();
-    TokenScanner points(points_line, path, points_line_number);
-    int keypoint = 0;
-    while (!points.AtEnd()) {
-      Eigen::Vector2d xy;
-      long long point_id = 0;
-      PHOTOPOSE_RETURN_IF_ERROR(points.NumberWithin("POINTS2D X", kMaxCoordinate, "px", &xy.x()));
-      PHOTOPOSE_RETURN_IF_ERROR(points.NumberWithin("POINTS2D Y", kMaxCoordinate, "px", &xy.y()));
-      PHOTOPOSE_RETURN_IF_ERROR(points.IntegerIn("POINTS2D POINT3D_ID", -1, kMaxColmapId, &point_id));
-      if (point_id < 0) {
-        mark_of_keypoint->push_back(-1);
-        if (extras != nullptr) extras->unmatched.push_back({image_index, keypoint, xy});
-      } else {
-        const int point = point_of_id.Find(point_id);
-        if (point < 0) {
-          return points.Error("POINTS2D POINT3D_ID", "point " + std::to_string(point_id) +
-                                                         " is not in points3D.txt");
-        }
-        mark_of_keypoint->push_back(static_cast<int>(block->marks.size()));
-        BlockMark mark;
-        mark.image = image_index;
-        mark.point = point;
-        mark.unit = MarkUnit::kPixel;
-        mark.measured = xy;
-        mark.observation = xy;
-        mark.line = points_line_number;
-        block->marks.push_back(mark);
-        if (extras != nullptr) extras->mark_keypoint_index.push_back(keypoint);
-      }
-      if (keypoint == std::numeric_limits<int>::max())
-        return points.Error("POINTS2D", "too many entries");
-      ++keypoint;
-    }
-    keypoint_offset->push_back(static_cast<long long>(mark_of_keypoint->size()));
-    if (extras != nullptr) {
-      extras->image_ids.push_back(id);
-      extras->num_keypoints.push_back(keypoint);
+    point.position_m = Eigen::Vector3d(p.xyz[0], p.xyz[1], p.xyz[2]);
+    point.line = LineOf(p.place);
+    block_.points.push_back(std::move(point));
+    if (extras_ != nullptr) {
+      extras_->point_rgb.push_back(p.rgb);
+      extras_->point_error_px.push_back(p.error);
     }
   }
+  point_of_id_.Freeze();
+  return Status::Ok();
+}
+
+Status ModelBuilder::Images() {
+  // A consistent model has one mark per track entry.
+  block_.marks.reserve(r_.tracks.size());
+  if (extras_ != nullptr) extras_->mark_keypoint_index.reserve(r_.tracks.size());
+  mark_of_point2D_.assign(r_.points2D.size(), -1);
+  block_.images.reserve(r_.images.size());
+  for (const colmap_io::ImageRecord& im : r_.images) {
+    const auto error = [&](std::string_view field, std::string_view what) {
+      return RecordError(paths_, paths_.images, im.place, field, what);
+    };
+    const char* const kQ[] = {"QW", "QX", "QY", "QZ"};
+    for (int k = 0; k < 4; ++k) {
+      if (!std::isfinite(im.q[k]))
+        return error(kQ[k], FormatNumber(im.q[k]) + " is not a finite number");
+    }
+    const char* const kT[] = {"TX", "TY", "TZ"};
+    for (int k = 0; k < 3; ++k) {
+      const std::string outside = OutsideMessage(im.t[k], kMaxCoordinate, "m");
+      if (!outside.empty()) return error(kT[k], outside);
+    }
+    if (im.name.empty()) return error("NAME", "is missing");
+    Eigen::Quaterniond q(im.q[0], im.q[1], im.q[2], im.q[3]);
+    const double q_norm = q.coeffs().stableNorm();  // no overflow: 1e300 is named as such
+    if (!(q_norm > kMinQuaternionNorm))
+      return error("QW", "the quaternion (QW, QX, QY, QZ) is zero");
+    if (!(q_norm < 1.0 / kMinQuaternionNorm)) {
+      return error("QW", "the quaternion (QW, QX, QY, QZ) has norm " + FormatNumber(q_norm) +
+                             "; COLMAP's is a unit quaternion (one with a norm between " +
+                             FormatNumber(kMinQuaternionNorm) + " and " +
+                             FormatNumber(1.0 / kMinQuaternionNorm) + " is normalised)");
+    }
+    q.normalize();
+    const int camera = camera_of_id_.Find(im.camera_id);
+    if (camera < 0) {
+      return error("CAMERA_ID",
+                   "camera " + std::to_string(im.camera_id) + " is not in " + FileName(0));
+    }
+    const int image_index = static_cast<int>(block_.images.size());
+    if (!image_of_id_.Insert(im.id, image_index))
+      return error("IMAGE_ID", "image " + std::to_string(im.id) + " is listed twice");
+    if (im.num_points2D > static_cast<size_t>(INT_MAX))
+      return error("POINTS2D", "too many entries");
+    BlockImage image;
+    image.name = im.name;
+    image.camera = camera;
+    image.eo = EoFromColmapPose(q, Eigen::Vector3d(im.t[0], im.t[1], im.t[2]));
+    image.line = LineOf(im.place);
+    block_.images.push_back(std::move(image));
+
+    for (size_t k = 0; k < im.num_points2D; ++k) {
+      const colmap_io::Point2DRecord& entry = r_.points2D[im.points2D_begin + k];
+      const auto entry_error = [&](std::string_view field, std::string_view what) {
+        return RecordError(paths_, paths_.images, im.points2D_place, field, what, k,
+                           kPoint2DEntryBytes);
+      };
+      const Eigen::Vector2d xy(entry.x, entry.y);
+      for (int axis = 0; axis < 2; ++axis) {
+        const std::string outside = OutsideMessage(xy[axis], kMaxCoordinate, "px");
+        if (!outside.empty()) return entry_error(axis == 0 ? "POINTS2D X" : "POINTS2D Y", outside);
+      }
+      if (entry.point3D_id < 0) {
+        if (extras_ != nullptr)
+          extras_->unmatched.push_back({image_index, static_cast<int>(k), xy});
+        continue;
+      }
+      const int point = point_of_id_.Find(entry.point3D_id);
+      if (point < 0) {
+        return entry_error("POINTS2D POINT3D_ID", "point " + std::to_string(entry.point3D_id) +
+                                                      " is not in " + FileName(2));
+      }
+      mark_of_point2D_[im.points2D_begin + k] = static_cast<int>(block_.marks.size());
+      BlockMark mark;
+      mark.image = image_index;
+      mark.point = point;
+      mark.unit = MarkUnit::kPixel;
+      mark.measured = xy;
+      mark.observation = xy;
+      mark.line = LineOf(im.points2D_place);
+      block_.marks.push_back(mark);
+      if (extras_ != nullptr) extras_->mark_keypoint_index.push_back(static_cast<int>(k));
+    }
+    if (extras_ != nullptr) {
+      extras_->image_ids.push_back(im.id);
+      extras_->num_keypoints.push_back(static_cast<int>(im.num_points2D));
+    }
+  }
+  image_of_id_.Freeze();
   return Status::Ok();
 }
 
 // Every TRACK entry names a POINTS2D entry of its point, and every mark is in exactly one track.
-Status CheckTracks(const std::string& points_path, const std::vector<TrackEntry>& tracks,
-                   const IdIndex& image_of_id,
-                   const std::vector<long long>& keypoint_offset,
-                   const std::vector<int>& mark_of_keypoint, const Block& block) {
-  std::vector<char> seen(block.marks.size(), 0);
-  for (const TrackEntry& entry : tracks) {
-    // Built only for a message: no string per entry on the way.
-    const auto where = [&entry] {
-      return "(" + std::to_string(entry.image_id) + ", " + std::to_string(entry.keypoint) + ")";
-    };
-    const int image = image_of_id.Find(entry.image_id);
-    if (image < 0) {
-      return TextError(points_path, block.points[entry.point].line, "TRACK",
-                       "entry " + where() + ": image " + std::to_string(entry.image_id) +
-                           " is not in images.txt");
+Status ModelBuilder::Tracks() const {
+  std::vector<char> seen(block_.marks.size(), 0);
+  for (size_t p = 0; p < r_.points.size(); ++p) {
+    const colmap_io::PointRecord& point = r_.points[p];
+    for (size_t k = 0; k < point.track_length; ++k) {
+      const colmap_io::TrackRecord& entry = r_.tracks[point.track_begin + k];
+      // Built only for a message: no string per entry on the way.
+      const auto error = [&](std::string_view what) {
+        return RecordError(paths_, paths_.points3D, point.track_place, "TRACK",
+                           "entry (" + std::to_string(entry.image_id) + ", " +
+                               std::to_string(entry.point2D_idx) + ")" + std::string(what),
+                           k, kTrackEntryBytes);
+      };
+      const int image = image_of_id_.Find(entry.image_id);
+      if (image < 0) {
+        return error(": image " + std::to_string(entry.image_id) + " is not in " + FileName(1));
+      }
+      const colmap_io::ImageRecord& im = r_.images[image];
+      if (entry.point2D_idx >= im.num_points2D) {
+        return error(": the image has " + std::to_string(im.num_points2D) + " POINTS2D entries");
+      }
+      const int mark = mark_of_point2D_[im.points2D_begin + entry.point2D_idx];
+      if (mark < 0 || block_.marks[mark].point != static_cast<int>(p))
+        return error(": that POINTS2D entry does not name this point");
+      if (seen[mark]) return error(" is listed twice");
+      seen[mark] = 1;
     }
-    const long long begin = keypoint_offset[image];
-    const long long count = keypoint_offset[image + 1] - begin;
-    if (entry.keypoint >= count) {
-      return TextError(points_path, block.points[entry.point].line, "TRACK",
-                       "entry " + where() + ": the image has " + std::to_string(count) +
-                           " POINTS2D entries");
-    }
-    const int mark = mark_of_keypoint[begin + entry.keypoint];
-    if (mark < 0 || block.marks[mark].point != entry.point) {
-      return TextError(points_path, block.points[entry.point].line, "TRACK",
-                       "entry " + where() + ": that POINTS2D entry does not name this point");
-    }
-    if (seen[mark]) {
-      return TextError(points_path, block.points[entry.point].line, "TRACK", "entry " + where() + " is listed twice");
-    }
-    seen[mark] = 1;
   }
   for (size_t m = 0; m < seen.size(); ++m) {
     if (!seen[m]) {
-      const BlockMark& mark = block.marks[m];
-      return TextError(points_path, block.points[mark.point].line, "TRACK",
-                       "point " + block.points[mark.point].id + " is observed in image '" +
-                           TokenForMessage(block.images[mark.image].name) +
-                           "' but that is not in its track");
+      const BlockMark& mark = block_.marks[m];
+      return RecordError(paths_, paths_.points3D, r_.points[mark.point].place, "TRACK",
+                         "point " + block_.points[mark.point].id + " is observed in image '" +
+                             TokenForMessage(block_.images[mark.image].name) +
+                             "' but that is not in its track");
     }
   }
   return Status::Ok();
 }
 
-// ------------------------------------------------------------------ writing
+// The block of a model's records (every check of both formats), replacing *block and *extras
+// only when all is well.
+Status BlockFromRecords(const colmap_io::Records& records, const colmap_io::ModelPaths& paths,
+                        Block* block, ColmapModelExtras* extras) {
+  Block result;
+  ColmapModelExtras result_extras;
+  ModelBuilder builder(records, paths, &result, extras != nullptr ? &result_extras : nullptr);
+  PHOTOPOSE_RETURN_IF_ERROR(builder.Cameras());
+  PHOTOPOSE_RETURN_IF_ERROR(builder.Points());
+  PHOTOPOSE_RETURN_IF_ERROR(builder.Images());
+  PHOTOPOSE_RETURN_IF_ERROR(builder.Tracks());
+  result.pixel_origin = PixelOrigin::kCorner;
+  result.marks_source = paths.images;
+  result.BuildIndex();
+  *block = std::move(result);
+  if (extras != nullptr) *extras = std::move(result_extras);
+  return Status::Ok();
+}
 
-// Integer ids: the items' own when every one is a whole number >= 0 written plainly (so that it
-// reads back as the same text) and they are unique, else 1..n.
+// Parses the three files, each given in turn by `bytes_of(file name, &bytes)` (valid until the
+// next call), and builds the block.
+template <typename BytesOf>
+Status ColmapModelFromFiles(const colmap_io::ModelPaths& paths, BytesOf bytes_of, Block* block,
+                            ColmapModelExtras* extras) {
+  colmap_io::Records records;
+  using colmap_io::ModelFile;
+  for (const ModelFile file : {ModelFile::kCameras, ModelFile::kPoints3D, ModelFile::kImages}) {
+    std::string_view bytes;
+    PHOTOPOSE_RETURN_IF_ERROR(bytes_of(file, &bytes));
+    PHOTOPOSE_RETURN_IF_ERROR(paths.format == ColmapFormat::kText
+                                  ? colmap_io::ParseTextFile(file, bytes, paths, &records)
+                                  : colmap_io::ParseBinaryFile(file, bytes, paths, &records));
+  }
+  return BlockFromRecords(records, paths, block, extras);
+}
+
+// ------------------------------------------------------------------ block -> records
+
+// Integer ids: the items' own when every one is a whole number in [0, max_id] written plainly (so
+// that it reads back as the same text) and they are unique, else 1..n.
 template <typename Items, typename TextOf>
-std::vector<long long> NumericIds(const Items& items, TextOf text_of) {
+std::vector<long long> NumericIds(const Items& items, TextOf text_of, long long max_id) {
   std::vector<long long> ids(items.size());
   std::unordered_map<long long, int> used;
   used.reserve(items.size());
@@ -359,7 +468,7 @@ std::vector<long long> NumericIds(const Items& items, TextOf text_of) {
     long long id = 0;
     std::string why;
     own = !text.empty() && text.find_first_not_of("0123456789") == std::string::npos &&
-          ParseWholeNumber(text, &id, &why) && std::to_string(id) == text &&
+          ParseWholeNumber(text, &id, &why) && std::to_string(id) == text && id <= max_id &&
           used.emplace(id, 0).second;
     ids[k] = id;
   }
@@ -381,80 +490,275 @@ Status CheckExtras(const Block& block, const ColmapModelExtras& extras) {
     if (keypoint.image < 0 || keypoint.image >= static_cast<int>(block.images.size()))
       return Status::Error("the COLMAP extras name an unmatched keypoint of no image");
   }
+  for (const long long id : extras.image_ids) {
+    if (id < 0 || id > kMaxBinaryId)
+      return Status::Error("the COLMAP extras hold an IMAGE_ID outside [0, 2^32 - 1]");
+  }
   return Status::Ok();
 }
 
-void AppendSpaceNumber(double value, std::string* text) {
-  text->push_back(' ');
-  AppendNumber(value, text);
+// Per point, the mean reprojection error of its marks that are not left out (`left_out`: per
+// mark, or empty for none); -1 when any of them has none or it has none.
+void MeanErrorsOfKeptMarks(const Block& block, const std::vector<char>& left_out,
+                           std::vector<double>* point_error_px) {
+  std::vector<double> mark_error;
+  MarkReprojectionErrors(block, &mark_error);
+  std::vector<double> sum(block.points.size(), 0.0);
+  std::vector<int> count(block.points.size(), 0);
+  for (size_t m = 0; m < block.marks.size(); ++m) {
+    if (!left_out.empty() && left_out[m]) continue;
+    const int p = block.marks[m].point;
+    sum[p] += mark_error[m];  // NaN propagates: the point then has no error
+    ++count[p];
+  }
+  point_error_px->resize(block.points.size());
+  for (size_t p = 0; p < sum.size(); ++p)
+    (*point_error_px)[p] = count[p] > 0 && std::isfinite(sum[p]) ? sum[p] / count[p] : -1.0;
+}
+
+// Per image, the POINT2D index of every mark and unmatched keypoint: `slot` holds, per image from
+// offset[image], m >= 0 for mark m and -1 - k for unmatched keypoint k; keypoint_of_mark the index
+// of each mark.
+Status KeypointSlots(const Block& block, const ColmapModelExtras* extras,
+                     std::vector<long long>* offset, std::vector<long long>* slot,
+                     std::vector<int>* keypoint_of_mark) {
+  const size_t num_images = block.images.size();
+  offset->assign(num_images + 1, 0);
+  if (extras != nullptr) {
+    for (size_t i = 0; i < num_images; ++i)
+      (*offset)[i + 1] = (*offset)[i] + extras->num_keypoints[i];
+  } else {
+    for (const BlockMark& mark : block.marks) ++(*offset)[mark.image + 1];
+    for (size_t i = 0; i < num_images; ++i) (*offset)[i + 1] += (*offset)[i];
+  }
+  constexpr long long kEmpty = std::numeric_limits<long long>::min();
+  slot->assign(static_cast<size_t>((*offset)[num_images]), kEmpty);
+  keypoint_of_mark->resize(block.marks.size());
+  std::vector<long long> next(offset->begin(), offset->end() - 1);
+  for (size_t m = 0; m < block.marks.size(); ++m) {
+    const int image = block.marks[m].image;
+    long long index;
+    if (extras != nullptr) {
+      index = extras->mark_keypoint_index[m];
+      if (index < 0 || index >= extras->num_keypoints[image] ||
+          (*slot)[(*offset)[image] + index] != kEmpty) {
+        return Status::Error("the COLMAP extras give mark " + std::to_string(m + 1) +
+                             " a keypoint index that is out of range or taken");
+      }
+    } else {
+      index = next[image]++ - (*offset)[image];
+    }
+    (*slot)[(*offset)[image] + index] = static_cast<long long>(m);
+    (*keypoint_of_mark)[m] = static_cast<int>(index);
+  }
+  if (extras == nullptr) return Status::Ok();
+  for (size_t k = 0; k < extras->unmatched.size(); ++k) {
+    const ColmapKeypoint& keypoint = extras->unmatched[k];
+    if (keypoint.index < 0 || keypoint.index >= extras->num_keypoints[keypoint.image] ||
+        (*slot)[(*offset)[keypoint.image] + keypoint.index] != kEmpty) {
+      return Status::Error("the COLMAP extras give an unmatched keypoint of image '" +
+                           block.images[keypoint.image].name +
+                           "' an index that is out of range or taken");
+    }
+    (*slot)[(*offset)[keypoint.image] + keypoint.index] = -1 - static_cast<long long>(k);
+  }
+  for (size_t i = 0; i < num_images; ++i) {
+    for (long long s = (*offset)[i]; s < (*offset)[i + 1]; ++s) {
+      if ((*slot)[s] == kEmpty) {
+        return Status::Error("the COLMAP extras leave POINT2D index " +
+                             std::to_string(s - (*offset)[i]) + " of image '" +
+                             block.images[i].name + "' empty");
+      }
+    }
+  }
+  return Status::Ok();
+}
+
+// The records of a block (checked by CheckColmapModelWritable first).
+Status RecordsFromBlock(const Block& block, const ColmapModelExtras* extras,
+                        const ColmapWriteOptions& options, colmap_io::Records* records) {
+  const size_t num_images = block.images.size();
+  const size_t num_points = block.points.size();
+  const std::vector<char>& left_out = options.marks_left_out;
+  if (!left_out.empty() && left_out.size() != block.marks.size()) {
+    return Status::Error("ColmapWriteOptions::marks_left_out has " +
+                         std::to_string(left_out.size()) + " entries for " +
+                         std::to_string(block.marks.size()) + " marks");
+  }
+  const auto kept = [&](size_t m) { return left_out.empty() || !left_out[m]; };
+
+  const std::vector<long long> camera_ids = NumericIds(
+      block.cameras, [](const BlockCamera& c) -> const std::string& { return c.camera_id; },
+      options.format == ColmapFormat::kBinary ? kMaxBinaryId
+                                              : std::numeric_limits<long long>::max());
+  records->cameras.resize(block.cameras.size());
+  for (size_t c = 0; c < block.cameras.size(); ++c) {
+    colmap_io::CameraRecord& camera = records->cameras[c];
+    PHOTOPOSE_RETURN_IF_ERROR(
+        ColmapCameraFromBlockCamera(block.cameras[c], &camera.model, &camera.params));
+    camera.id = camera_ids[c];
+    camera.width = block.cameras[c].table.n_columns;
+    camera.height = block.cameras[c].table.n_rows;
+  }
+
+  std::vector<long long> offset, slot;
+  std::vector<int> keypoint_of_mark;
+  PHOTOPOSE_RETURN_IF_ERROR(KeypointSlots(block, extras, &offset, &slot, &keypoint_of_mark));
+
+  // The points written: with a position, and, when one of their marks is left out, with at least
+  // two kept.
+  std::vector<int> num_kept(num_points, 0), num_left_out(num_points, 0);
+  for (size_t m = 0; m < block.marks.size(); ++m)
+    ++(kept(m) ? num_kept : num_left_out)[block.marks[m].point];
+  std::vector<char> written(num_points, 0);
+  for (size_t p = 0; p < num_points; ++p)
+    written[p] = block.points[p].position_m && (num_left_out[p] == 0 || num_kept[p] >= 2);
+  const auto in_track = [&](size_t m) { return kept(m) && written[block.marks[m].point]; };
+
+  const std::vector<long long> point_ids = NumericIds(
+      block.points, [](const BlockPoint& p) -> const std::string& { return p.id; },
+      std::numeric_limits<long long>::max());
+
+  // Images with their POINTS2D: marks in pixels (a frame camera's film observations mapped to its
+  // pixels), unmatched keypoints as they were.
+  records->images.resize(num_images);
+  records->points2D.resize(slot.size());
+  for (size_t i = 0; i < num_images; ++i) {
+    const BlockImage& image = block.images[i];
+    colmap_io::ImageRecord& record = records->images[i];
+    record.id = extras != nullptr ? extras->image_ids[i] : static_cast<long long>(i) + 1;
+    Eigen::Quaterniond q;
+    Eigen::Vector3d t;
+    ColmapPoseFromEo(*image.eo, &q, &t);
+    record.q = {q.w(), q.x(), q.y(), q.z()};
+    record.t = {t.x(), t.y(), t.z()};
+    record.camera_id = camera_ids[image.camera];
+    record.name = image.name;
+    record.points2D_begin = static_cast<size_t>(offset[i]);
+    record.num_points2D = static_cast<size_t>(offset[i + 1] - offset[i]);
+    const BlockCamera& camera = block.cameras[image.camera];
+    for (long long s = offset[i]; s < offset[i + 1]; ++s) {
+      colmap_io::Point2DRecord& entry = records->points2D[static_cast<size_t>(s)];
+      if (slot[s] < 0) {
+        const ColmapKeypoint& keypoint = extras->unmatched[static_cast<size_t>(-1 - slot[s])];
+        entry = {keypoint.xy.x(), keypoint.xy.y(), -1};
+        continue;
+      }
+      const size_t m = static_cast<size_t>(slot[s]);
+      const BlockMark& mark = block.marks[m];
+      Eigen::Vector2d pixel = mark.observation;
+      if (camera.model == CameraModelType::kFrame) {
+        const Status status =
+            PixelFromFilm(camera.table, mark.observation, PixelOrigin::kCorner, &pixel);
+        if (!status.ok())
+          return Status::Error("mark " + std::to_string(m + 1) + ": " + status.message());
+      }
+      entry = {pixel.x(), pixel.y(), in_track(m) ? point_ids[mark.point] : -1};
+    }
+  }
+
+  // Points with their tracks, in block mark order per point.
+  std::vector<double> point_error;
+  MeanErrorsOfKeptMarks(block, left_out, &point_error);
+  std::vector<size_t> track_offset(num_points + 1, 0);
+  for (size_t m = 0; m < block.marks.size(); ++m)
+    if (in_track(m)) ++track_offset[block.marks[m].point + 1];
+  for (size_t p = 0; p < num_points; ++p) track_offset[p + 1] += track_offset[p];
+  records->tracks.resize(track_offset[num_points]);
+  {
+    std::vector<size_t> next(track_offset.begin(), track_offset.end() - 1);
+    for (size_t m = 0; m < block.marks.size(); ++m) {
+      if (!in_track(m)) continue;
+      const BlockMark& mark = block.marks[m];
+      records->tracks[next[mark.point]++] = {static_cast<uint32_t>(records->images[mark.image].id),
+                                             static_cast<uint32_t>(keypoint_of_mark[m])};
+    }
+  }
+  records->points.clear();
+  for (size_t p = 0; p < num_points; ++p) {
+    if (!written[p]) continue;
+    colmap_io::PointRecord point;
+    point.id = point_ids[p];
+    const Eigen::Vector3d& position = *block.points[p].position_m;
+    point.xyz = {position.x(), position.y(), position.z()};
+    point.rgb = extras != nullptr ? extras->point_rgb[p] : std::array<unsigned char, 3>{0, 0, 0};
+    point.error = point_error[p];
+    point.track_begin = track_offset[p];
+    point.track_length = track_offset[p + 1] - track_offset[p];
+    records->points.push_back(point);
+  }
+  return Status::Ok();
 }
 
 }  // namespace
 
 // ------------------------------------------------------------------ public
 
-namespace {
+std::array<const char*, 3> ColmapFileNames(ColmapFormat format) {
+  if (format == ColmapFormat::kBinary) return {"cameras.bin", "images.bin", "points3D.bin"};
+  return {"cameras.txt", "images.txt", "points3D.txt"};
+}
 
-// The model from its three texts: `text_of(file name, &text)` gives each in turn (cameras.txt,
-// points3D.txt, images.txt), valid until the next call; `directory` names them in messages.
-template <typename TextOf>
-Status ColmapModelFromTexts(const std::string& directory, TextOf text_of, Block* block,
-                            ColmapModelExtras* extras) {
-  Block result;
-  ColmapModelExtras result_extras;
-  ColmapModelExtras* kept = extras != nullptr ? &result_extras : nullptr;
-  IdIndex camera_of_id, point_of_id, image_of_id;
-  std::vector<TrackEntry> tracks;
-  std::vector<long long> keypoint_offset;
-  std::vector<int> mark_of_keypoint;
-  std::string_view text;
-  PHOTOPOSE_RETURN_IF_ERROR(text_of("cameras.txt", &text));
-  PHOTOPOSE_RETURN_IF_ERROR(ReadCameras(text, Path(directory, "cameras.txt"), &result, &camera_of_id));
-  camera_of_id.Freeze();
-  const std::string points_path = Path(directory, "points3D.txt");
-  PHOTOPOSE_RETURN_IF_ERROR(text_of("points3D.txt", &text));
-  PHOTOPOSE_RETURN_IF_ERROR(ReadPoints(text, points_path, &result, kept, &point_of_id, &tracks));
-  point_of_id.Freeze();
-  // A consistent model has one mark per track entry.
-  result.marks.reserve(tracks.size());
-  mark_of_keypoint.reserve(tracks.size());
-  if (kept != nullptr) kept->mark_keypoint_index.reserve(tracks.size());
-  const std::string images_path = Path(directory, "images.txt");
-  PHOTOPOSE_RETURN_IF_ERROR(text_of("images.txt", &text));
-  PHOTOPOSE_RETURN_IF_ERROR(ReadImages(text, images_path, camera_of_id, point_of_id, &result, kept,
-                                       &image_of_id, &keypoint_offset, &mark_of_keypoint));
-  image_of_id.Freeze();
-  PHOTOPOSE_RETURN_IF_ERROR(
-      CheckTracks(points_path, tracks, image_of_id, keypoint_offset, mark_of_keypoint, result));
-  result.pixel_origin = PixelOrigin::kCorner;
-  result.marks_source = images_path;
-  result.BuildIndex();
-  *block = std::move(result);
-  if (extras != nullptr) *extras = std::move(result_extras);
+Status DetectColmapFormat(const std::string& directory, ColmapFormat* format) {
+  std::error_code error;
+  if (!std::filesystem::is_directory(directory, error)) {
+    return Status::Error(EscapeForMessage(directory) +
+                         ": is no folder; a COLMAP model is a folder with cameras, images and "
+                         "points3D files (.bin or .txt)");
+  }
+  std::vector<std::string> missing_binary, missing_text;
+  for (const ColmapFormat candidate : {ColmapFormat::kBinary, ColmapFormat::kText}) {
+    std::vector<std::string>& missing =
+        candidate == ColmapFormat::kBinary ? missing_binary : missing_text;
+    for (const char* name : ColmapFileNames(candidate)) {
+      // A FIFO or a device counts: it is refused by name when read.
+      if (!std::filesystem::exists(Path(directory, name), error)) missing.push_back(name);
+    }
+    if (missing.empty()) {
+      *format = candidate;
+      return Status::Ok();
+    }
+  }
+  // Name the files missing from the set that is closer to complete (text on a tie).
+  const std::vector<std::string>& closer =
+      missing_text.size() <= missing_binary.size() ? missing_text : missing_binary;
+  std::string list;
+  for (const std::string& name : closer) list += (list.empty() ? "" : ", ") + name;
+  return Status::Error(EscapeForMessage(directory) +
+                       ": no complete COLMAP model (cameras, images and points3D, all .bin or all "
+                       ".txt): " +
+                       list + " missing");
+}
+
+Status ReadColmapModel(const std::string& directory, Block* block, ColmapModelExtras* extras,
+                       ColmapFormat* format) {
+  ColmapFormat found = ColmapFormat::kText;
+  PHOTOPOSE_RETURN_IF_ERROR(DetectColmapFormat(directory, &found));
+  const colmap_io::ModelPaths paths = PathsOf(directory, found);
+  // One file in memory at a time: each is parsed before the next is read into the same buffer.
+  std::string buffer;
+  const auto read = [&](colmap_io::ModelFile file, std::string_view* bytes) {
+    const std::string& path = file == colmap_io::ModelFile::kCameras  ? paths.cameras
+                              : file == colmap_io::ModelFile::kImages ? paths.images
+                                                                      : paths.points3D;
+    PHOTOPOSE_RETURN_IF_ERROR(ReadTextFile(path, &buffer));
+    *bytes = buffer;
+    return Status::Ok();
+  };
+  PHOTOPOSE_RETURN_IF_ERROR(ColmapModelFromFiles(paths, read, block, extras));
+  if (format != nullptr) *format = found;
   return Status::Ok();
 }
 
-}  // namespace
-
-Status ReadColmapModel(const std::string& directory, Block* block, ColmapModelExtras* extras) {
-  // One file in memory at a time: each is parsed before the next is read into the same buffer.
-  std::string buffer;
-  const auto read = [&](const char* name, std::string_view* text) {
-    PHOTOPOSE_RETURN_IF_ERROR(ReadTextFile(Path(directory, name), &buffer));
-    *text = buffer;
-    return Status::Ok();
-  };
-  return ColmapModelFromTexts(directory, read, block, extras);
-}
-
-Status ParseColmapModel(const ColmapModelText& text, const std::string& directory, Block* block,
+Status ParseColmapModel(const ColmapModelFiles& files, const std::string& directory, Block* block,
                         ColmapModelExtras* extras) {
-  const auto view = [&](const char* name, std::string_view* view) {
-    const std::string_view file = name;
-    *view = file == "cameras.txt" ? text.cameras : file == "images.txt" ? text.images : text.points3D;
+  const auto view = [&](colmap_io::ModelFile file, std::string_view* bytes) {
+    *bytes = file == colmap_io::ModelFile::kCameras  ? files.cameras
+             : file == colmap_io::ModelFile::kImages ? files.images
+                                                     : files.points3D;
     return Status::Ok();
   };
-  return ColmapModelFromTexts(directory, view, block, extras);
+  return ColmapModelFromFiles(PathsOf(directory, files.format), view, block, extras);
 }
 
 Status ColmapCameraFromBlockCamera(const BlockCamera& camera, CameraModelType* model,
@@ -468,8 +772,8 @@ Status ColmapCameraFromBlockCamera(const BlockCamera& camera, CameraModelType* m
   const std::vector<double>& p = camera.params;
   for (int k = kFrameK0; k <= kFrameSkew; ++k) {
     if (p[k] != 0.0) {
-      return Status::Error(name + " has " + CameraModelParamNames(camera.model)[k] +
-                           " = " + FormatNumber(p[k]) +
+      return Status::Error(name + " has " + CameraModelParamNames(camera.model)[k] + " = " +
+                           FormatNumber(p[k]) +
                            ": only a frame camera without distortion, affinity and skew is a "
                            "COLMAP pinhole camera");
     }
@@ -533,24 +837,13 @@ void MarkReprojectionErrors(const Block& block, std::vector<double>* error_px) {
 }
 
 void MeanReprojectionErrors(const Block& block, std::vector<double>* point_error_px) {
-  std::vector<double> mark_error;
-  MarkReprojectionErrors(block, &mark_error);
-  std::vector<double> sum(block.points.size(), 0.0);
-  std::vector<int> count(block.points.size(), 0);
-  for (size_t m = 0; m < block.marks.size(); ++m) {
-    const int p = block.marks[m].point;
-    sum[p] += mark_error[m];  // NaN propagates: the point then has no error
-    ++count[p];
-  }
-  point_error_px->resize(block.points.size());
-  for (size_t p = 0; p < sum.size(); ++p)
-    (*point_error_px)[p] = count[p] > 0 && std::isfinite(sum[p]) ? sum[p] / count[p] : -1.0;
+  MeanErrorsOfKeptMarks(block, {}, point_error_px);
 }
 
-Status CheckColmapModelWritable(const Block& block, const ColmapModelExtras* extras) {
-  PHOTOPOSE_RETURN_IF_ERROR(CheckBlock(block));
-  if (extras != nullptr) PHOTOPOSE_RETURN_IF_ERROR(CheckExtras(block, *extras));
-  for (const BlockCamera& camera : block.cameras) {
+Status CheckColmapCamerasWritable(const Block& block,
+                                  const std::vector<std::vector<int>>& calibrated_params) {
+  for (size_t c = 0; c < block.cameras.size(); ++c) {
+    const BlockCamera& camera = block.cameras[c];
     CameraModelType model;
     std::vector<double> params;
     PHOTOPOSE_RETURN_IF_ERROR(ColmapCameraFromBlockCamera(camera, &model, &params));
@@ -558,233 +851,68 @@ Status CheckColmapModelWritable(const Block& block, const ColmapModelExtras* ext
       return Status::Error("camera '" + camera.camera_id +
                            "' has no image size (NColumns, NRows), which COLMAP needs");
     }
+    if (camera.model != CameraModelType::kFrame || c >= calibrated_params.size()) continue;
+    for (const int k : calibrated_params[c]) {
+      if (k >= kFrameK0 && k <= kFrameSkew) {
+        return Status::Error("camera '" + camera.camera_id + "': calibrating " +
+                             CameraModelParamNames(camera.model)[k] +
+                             " would make it no COLMAP pinhole camera (a frame camera is written "
+                             "to COLMAP without distortion, affinity and skew)");
+      }
+    }
   }
+  return Status::Ok();
+}
+
+Status CheckColmapModelWritable(const Block& block, const ColmapModelExtras* extras) {
+  PHOTOPOSE_RETURN_IF_ERROR(CheckBlock(block));
+  if (extras != nullptr) PHOTOPOSE_RETURN_IF_ERROR(CheckExtras(block, *extras));
+  PHOTOPOSE_RETURN_IF_ERROR(CheckColmapCamerasWritable(block, {}));
   for (const BlockImage& image : block.images) {
     if (!image.eo) {
       return Status::Error("image '" + image.name +
                            "' has no exterior orientation: a COLMAP model holds oriented images "
                            "only");
     }
-    if (image.name.empty() || image.name.find_first_of("\n\r") != std::string::npos ||
-        image.name.front() == ' ' || image.name.back() == ' ')
-      return Status::Error("image '" + image.name + "' has a name COLMAP cannot hold");
+    // A name must survive a text model too: the rest of a line, its blanks around it trimmed.
+    if (image.name.empty() ||
+        image.name.find_first_of(std::string_view("\n\r\0", 3)) != std::string::npos ||
+        std::string_view(" \t\v\f").find(image.name.front()) != std::string_view::npos ||
+        std::string_view(" \t\v\f").find(image.name.back()) != std::string_view::npos)
+      return Status::Error("image '" + TokenForMessage(image.name) +
+                           "' has a name COLMAP cannot hold");
   }
   return Status::Ok();
 }
 
 Status FormatColmapModel(const Block& block, const ColmapModelExtras* extras,
-                         ColmapModelText* text) {
+                         const ColmapWriteOptions& options, ColmapModelFiles* files) {
   PHOTOPOSE_RETURN_IF_ERROR(CheckColmapModelWritable(block, extras));
-  const size_t num_images = block.images.size();
-  const size_t num_points = block.points.size();
-
-  // cameras.txt
-  std::string cameras_text =
-      "# Camera list with one line of data per camera:\n"
-      "#   CAMERA_ID, MODEL, WIDTH, HEIGHT, PARAMS[]\n"
-      "# Number of cameras: " +
-      std::to_string(block.cameras.size()) + "\n";
-  const std::vector<long long> camera_ids =
-      NumericIds(block.cameras, [](const BlockCamera& c) -> const std::string& { return c.camera_id; });
-  for (size_t c = 0; c < block.cameras.size(); ++c) {
-    const BlockCamera& camera = block.cameras[c];
-    CameraModelType model;
-    std::vector<double> params;
-    PHOTOPOSE_RETURN_IF_ERROR(ColmapCameraFromBlockCamera(camera, &model, &params));
-    AppendInteger(camera_ids[c], &cameras_text);
-    cameras_text += ' ';
-    cameras_text += EnumName(model);
-    cameras_text += ' ';
-    AppendInteger(camera.table.n_columns, &cameras_text);
-    cameras_text += ' ';
-    AppendInteger(camera.table.n_rows, &cameras_text);
-    for (const double value : params) AppendSpaceNumber(value, &cameras_text);
-    cameras_text += '\n';
-  }
-
-  // Keypoint slots: per image, its marks at their POINT2D index (or in block order) and the
-  // unmatched keypoints; -1 - k in a slot is unmatched keypoint k, m >= 0 mark m.
-  std::vector<long long> offset(num_images + 1, 0);
-  if (extras != nullptr) {
-    for (size_t i = 0; i < num_images; ++i) offset[i + 1] = offset[i] + extras->num_keypoints[i];
+  colmap_io::Records records;
+  PHOTOPOSE_RETURN_IF_ERROR(RecordsFromBlock(block, extras, options, &records));
+  if (options.format == ColmapFormat::kBinary) {
+    colmap_io::FormatBinary(records, files);
   } else {
-    for (const BlockMark& mark : block.marks) ++offset[mark.image + 1];
-    for (size_t i = 0; i < num_images; ++i) offset[i + 1] += offset[i];
+    colmap_io::FormatText(records, files);
   }
-  constexpr long long kEmpty = std::numeric_limits<long long>::min();
-  std::vector<long long> slot(static_cast<size_t>(offset[num_images]), kEmpty);
-  std::vector<int> keypoint_of_mark(block.marks.size());
-  {
-    std::vector<long long> next(offset.begin(), offset.end() - 1);
-    for (size_t m = 0; m < block.marks.size(); ++m) {
-      const int image = block.marks[m].image;
-      long long index;
-      if (extras != nullptr) {
-        index = extras->mark_keypoint_index[m];
-        if (index < 0 || index >= extras->num_keypoints[image] ||
-            slot[offset[image] + index] != kEmpty) {
-          return Status::Error("the COLMAP extras give mark " + std::to_string(m + 1) +
-                               " a keypoint index that is out of range or taken");
-        }
-      } else {
-        index = next[image]++ - offset[image];
-      }
-      slot[offset[image] + index] = static_cast<long long>(m);
-      keypoint_of_mark[m] = static_cast<int>(index);
-    }
-    if (extras != nullptr) {
-      for (size_t k = 0; k < extras->unmatched.size(); ++k) {
-        const ColmapKeypoint& keypoint = extras->unmatched[k];
-        if (keypoint.index < 0 || keypoint.index >= extras->num_keypoints[keypoint.image] ||
-            slot[offset[keypoint.image] + keypoint.index] != kEmpty) {
-          return Status::Error("the COLMAP extras give an unmatched keypoint of image '" +
-                               block.images[keypoint.image].name +
-                               "' an index that is out of range or taken");
-        }
-        slot[offset[keypoint.image] + keypoint.index] = -1 - static_cast<long long>(k);
-      }
-      for (size_t i = 0; i < num_images; ++i) {
-        for (long long s = offset[i]; s < offset[i + 1]; ++s) {
-          if (slot[s] == kEmpty) {
-            return Status::Error("the COLMAP extras leave POINT2D index " +
-                                 std::to_string(s - offset[i]) + " of image '" +
-                                 block.images[i].name + "' empty");
-          }
-        }
-      }
-    }
-  }
-
-  // Pixel positions of the marks (a frame camera's film observations mapped to its pixels).
-  std::vector<Eigen::Vector2d> pixel(block.marks.size());
-  for (size_t m = 0; m < block.marks.size(); ++m) {
-    const BlockMark& mark = block.marks[m];
-    const BlockCamera& camera = block.cameras[block.images[mark.image].camera];
-    if (camera.model != CameraModelType::kFrame) {
-      pixel[m] = mark.observation;
-      continue;
-    }
-    const Status status =
-        PixelFromFilm(camera.table, mark.observation, PixelOrigin::kCorner, &pixel[m]);
-    if (!status.ok()) return Status::Error("mark " + std::to_string(m + 1) + ": " + status.message());
-  }
-
-  const std::vector<long long> point_ids =
-      NumericIds(block.points, [](const BlockPoint& p) -> const std::string& { return p.id; });
-  std::vector<double> point_error;
-  MeanReprojectionErrors(block, &point_error);
-
-  // images.txt
-  size_t num_observations = 0;
-  for (const BlockMark& mark : block.marks)
-    if (block.points[mark.point].position_m) ++num_observations;
-  std::string images_text;
-  images_text.reserve(200 * num_images + 40 * slot.size());
-  images_text +=
-      "# Image list with two lines of data per image:\n"
-      "#   IMAGE_ID, QW, QX, QY, QZ, TX, TY, TZ, CAMERA_ID, NAME\n"
-      "#   POINTS2D[] as (X, Y, POINT3D_ID)\n"
-      "# Number of images: " +
-      std::to_string(num_images) + ", mean observations per image: " +
-      FormatNumber(num_images > 0 ? static_cast<double>(num_observations) / num_images : 0.0) +
-      "\n";
-  std::vector<long long> image_ids(num_images);
-  for (size_t i = 0; i < num_images; ++i) {
-    const BlockImage& image = block.images[i];
-    image_ids[i] = extras != nullptr ? extras->image_ids[i] : static_cast<long long>(i) + 1;
-    Eigen::Quaterniond q;
-    Eigen::Vector3d t;
-    ColmapPoseFromEo(*image.eo, &q, &t);
-    AppendInteger(image_ids[i], &images_text);
-    for (const double value : {q.w(), q.x(), q.y(), q.z(), t.x(), t.y(), t.z()})
-      AppendSpaceNumber(value, &images_text);
-    images_text += ' ';
-    AppendInteger(camera_ids[image.camera], &images_text);
-    images_text += ' ';
-    images_text += image.name;
-    images_text += '\n';
-    for (long long s = offset[i]; s < offset[i + 1]; ++s) {
-      if (s > offset[i]) images_text += ' ';
-      if (slot[s] >= 0) {
-        const size_t m = static_cast<size_t>(slot[s]);
-        AppendNumber(pixel[m].x(), &images_text);
-        AppendSpaceNumber(pixel[m].y(), &images_text);
-        images_text += ' ';
-        const int p = block.marks[m].point;
-        AppendInteger(block.points[p].position_m ? point_ids[p] : -1, &images_text);
-      } else {
-        const ColmapKeypoint& keypoint = extras->unmatched[static_cast<size_t>(-1 - slot[s])];
-        AppendNumber(keypoint.xy.x(), &images_text);
-        AppendSpaceNumber(keypoint.xy.y(), &images_text);
-        images_text += " -1";
-      }
-    }
-    images_text += '\n';
-  }
-
-  // points3D.txt: tracks in block mark order per point.
-  std::vector<size_t> track_offset(num_points + 1, 0);
-  for (const BlockMark& mark : block.marks) ++track_offset[mark.point + 1];
-  for (size_t p = 0; p < num_points; ++p) track_offset[p + 1] += track_offset[p];
-  std::vector<int> track(block.marks.size());
-  {
-    std::vector<size_t> next(track_offset.begin(), track_offset.end() - 1);
-    for (size_t m = 0; m < block.marks.size(); ++m)
-      track[next[block.marks[m].point]++] = static_cast<int>(m);
-  }
-  size_t num_written_points = 0;
-  for (const BlockPoint& point : block.points)
-    if (point.position_m) ++num_written_points;
-  std::string points_text;
-  points_text.reserve(100 * num_points + 16 * block.marks.size());
-  points_text +=
-      "# 3D point list with one line of data per point:\n"
-      "#   POINT3D_ID, X, Y, Z, R, G, B, ERROR, TRACK[] as (IMAGE_ID, POINT2D_IDX)\n"
-      "# Number of points: " +
-      std::to_string(num_written_points) + ", mean track length: " +
-      FormatNumber(num_written_points > 0
-                       ? static_cast<double>(num_observations) / num_written_points
-                       : 0.0) +
-      "\n";
-  for (size_t p = 0; p < num_points; ++p) {
-    const BlockPoint& point = block.points[p];
-    if (!point.position_m) continue;
-    AppendInteger(point_ids[p], &points_text);
-    for (int k = 0; k < 3; ++k) AppendSpaceNumber((*point.position_m)[k], &points_text);
-    const std::array<unsigned char, 3> rgb =
-        extras != nullptr ? extras->point_rgb[p] : std::array<unsigned char, 3>{0, 0, 0};
-    for (int k = 0; k < 3; ++k) {
-      points_text += ' ';
-      AppendInteger(rgb[k], &points_text);
-    }
-    AppendSpaceNumber(point_error[p], &points_text);
-    for (size_t k = track_offset[p]; k < track_offset[p + 1]; ++k) {
-      const int m = track[k];
-      points_text += ' ';
-      AppendInteger(image_ids[block.marks[m].image], &points_text);
-      points_text += ' ';
-      AppendInteger(keypoint_of_mark[m], &points_text);
-    }
-    points_text += '\n';
-  }
-
-  text->cameras = std::move(cameras_text);
-  text->images = std::move(images_text);
-  text->points3D = std::move(points_text);
   return Status::Ok();
 }
 
 Status WriteColmapModel(const std::string& directory, const Block& block,
-                        const ColmapModelExtras* extras) {
-  ColmapModelText text;
-  PHOTOPOSE_RETURN_IF_ERROR(FormatColmapModel(block, extras, &text));
+                        const ColmapModelExtras* extras, const ColmapWriteOptions& options) {
+  ColmapModelFiles files;
+  PHOTOPOSE_RETURN_IF_ERROR(FormatColmapModel(block, extras, options, &files));
   std::error_code error;
   std::filesystem::create_directories(directory, error);
   if (error) return Status::Error(directory + ": cannot create the folder: " + error.message());
-  PHOTOPOSE_RETURN_IF_ERROR(WriteFileAtomically(Path(directory, "cameras.txt"), text.cameras));
-  PHOTOPOSE_RETURN_IF_ERROR(WriteFileAtomically(Path(directory, "images.txt"), text.images));
-  PHOTOPOSE_RETURN_IF_ERROR(WriteFileAtomically(Path(directory, "points3D.txt"), text.points3D));
-  return Status::Ok();
+  const colmap_io::ModelPaths paths = PathsOf(directory, options.format);
+  OutputFiles outputs;
+  for (const std::string* path : {&paths.cameras, &paths.images, &paths.points3D})
+    PHOTOPOSE_RETURN_IF_ERROR(outputs.AddOutput("", *path));
+  PHOTOPOSE_RETURN_IF_ERROR(outputs.Stage(paths.cameras, files.cameras));
+  PHOTOPOSE_RETURN_IF_ERROR(outputs.Stage(paths.images, files.images));
+  PHOTOPOSE_RETURN_IF_ERROR(outputs.Stage(paths.points3D, files.points3D));
+  return outputs.Commit();
 }
 
 }  // namespace photopose

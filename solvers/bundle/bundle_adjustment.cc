@@ -263,6 +263,17 @@ std::string BundleAdjustmentSummary::BriefReport() const {
   return os.str();
 }
 
+std::vector<char> BundleAdjustmentResult::RemovedMarks(size_t num_marks) const {
+  std::vector<char> removed(num_marks, 0);
+  for (const BundleRejectedMark& r : rejected_marks)
+    if (r.mark >= 0 && static_cast<size_t>(r.mark) < num_marks) removed[r.mark] = 1;
+  for (const BundleSnoopingStep& s : snooping)
+    if ((s.group == kTieMarks || s.group == kControlMarks) && s.item >= 0 &&
+        static_cast<size_t>(s.item) < num_marks)
+      removed[s.item] = 1;
+  return removed;
+}
+
 std::string BundleAdjustmentResult::FullReport(const Block& block) const {
   std::ostringstream os;
   os << "Bundle adjustment: " << summary.BriefReport() << "\n";
@@ -681,13 +692,7 @@ namespace {
 // position or attitude no prior.
 Block CrossValidationBase(const Block& adjusted, const BundleAdjustmentResult& full,
                           std::vector<char>* rejected) {
-  rejected->assign(adjusted.marks.size(), 0);
-  for (const BundleRejectedMark& r : full.rejected_marks)
-    if (r.mark >= 0 && r.mark < static_cast<int>(rejected->size())) (*rejected)[r.mark] = 1;
-  for (const BundleSnoopingStep& s : full.snooping)
-    if ((s.group == kTieMarks || s.group == kControlMarks) && s.item >= 0 &&
-        s.item < static_cast<int>(rejected->size()))
-      (*rejected)[s.item] = 1;
+  *rejected = full.RemovedMarks(adjusted.marks.size());
   Block base = adjusted;
   for (const BundleSnoopingStep& s : full.snooping) {
     if (s.item < 0) continue;

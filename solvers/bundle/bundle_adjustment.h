@@ -441,6 +441,9 @@ struct BundleAdjustmentResult {
 
   // A multi-line report: summary, groups with their verdicts, images, points, calibration.
   std::string FullReport(const Block& block) const;
+  // Per mark of the block adjusted (num_marks of them): 1 for those the adjustment left out of
+  // its final round, rejected (rejected_marks) or removed by data snooping (either axis), else 0.
+  std::vector<char> RemovedMarks(size_t num_marks) const;
 };
 
 // Adjusts the block in place: on success the images' eo, the points' position_m and the cameras'

@@ -167,5 +167,35 @@ TEST(CameraModels, CalibrationNamesPerModel) {
   EXPECT_FALSE(CalibrationParamIndices(CameraModelType::kFrame, "k", &indices).ok());
 }
 
+TEST(CameraModels, CalibrationTakesColmapsOwnParameterNames) {
+  // COLMAP's names of each model's parameters (CameraModelParamNames), any case; f is both focal
+  // lengths of the models that have two.
+  struct Case {
+    CameraModelType model;
+    const char* name;
+    std::vector<int> indices;
+  };
+  const Case cases[] = {{CameraModelType::kSimpleRadial, "f", {0}},
+                        {CameraModelType::kSimpleRadial, "K", {3}},
+                        {CameraModelType::kSimplePinhole, "cy", {2}},
+                        {CameraModelType::kRadial, "k2", {4}},
+                        {CameraModelType::kPinhole, "F", {0, 1}},
+                        {CameraModelType::kPinhole, "fy", {1}},
+                        {CameraModelType::kOpenCv, "fx", {0}},
+                        {CameraModelType::kOpenCv, "cx", {2}},
+                        {CameraModelType::kOpenCv, "p1", {6}}};
+  for (const Case& c : cases) {
+    std::vector<int> indices;
+    const Status status = CalibrationParamIndices(c.model, c.name, &indices);
+    ASSERT_TRUE(status.ok()) << EnumName(c.model) << " " << c.name << ": " << status.message();
+    EXPECT_EQ(indices, c.indices) << EnumName(c.model) << " " << c.name;
+  }
+  std::vector<int> indices;
+  EXPECT_EQ(CalibrationParamIndices(CameraModelType::kRadial, "k", &indices).message(),
+            "the RADIAL camera model has no parameter 'k'");
+  EXPECT_EQ(CalibrationParamIndices(CameraModelType::kSimplePinhole, "fx", &indices).message(),
+            "the SIMPLE_PINHOLE camera model has no parameter 'fx'");
+}
+
 }  // namespace
 }  // namespace photopose

@@ -32,7 +32,7 @@ std::string_view NextPart(std::string_view* rest) {
 
 extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   std::string_view rest(reinterpret_cast<const char*>(data), size);
-  photopose::ColmapModelText text;
+  photopose::ColmapModelFiles text;
   text.cameras = std::string(NextPart(&rest));
   text.images = std::string(NextPart(&rest));
   text.points3D = std::string(rest);
@@ -42,15 +42,10 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   photopose::fuzz::CheckMessage(status);
   photopose::fuzz::CheckMessageLength(status);
   if (!status.ok()) return 0;
-  for (const photopose::BlockCamera& camera : block.cameras)
-    Require(camera.params[0] >= photopose::kMinFocalLengthPx &&
-            camera.params[0] <= photopose::kMaxCoordinate);
-  for (const photopose::BlockImage& image : block.images)
-    Require(image.eo && image.eo->parameters.allFinite());
-  for (const photopose::BlockPoint& point : block.points)
-    Require(point.position_m->cwiseAbs().maxCoeff() <= photopose::kMaxCoordinate);
-  photopose::ColmapModelText written;
-  if (!photopose::FormatColmapModel(block, &extras, &written).ok()) return 0;
+  photopose::fuzz::CheckColmapBlockLimits(block);
+  photopose::ColmapModelFiles written;
+  if (!photopose::FormatColmapModel(block, &extras, photopose::ColmapWriteOptions(), &written).ok())
+    return 0;
   photopose::Block again;
   Require(photopose::ParseColmapModel(written, "model", &again).ok());
   Require(again.images.size() == block.images.size() &&

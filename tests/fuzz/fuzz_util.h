@@ -3,7 +3,9 @@
 #include <cstdlib>
 #include <string>
 
+#include "core/block.h"
 #include "core/io/csv.h"
+#include "core/io/tables.h"
 #include "core/status.h"
 
 namespace photopose::fuzz {
@@ -20,6 +22,19 @@ inline void CheckMessage(const Status& status) {
 inline void CheckMessageLength(const Status& status) {
   constexpr size_t kMaxMessageBytes = 1000;
   if (!status.ok() && status.message().size() > kMaxMessageBytes) std::abort();
+}
+
+// A block a COLMAP reader accepted is inside the documented limits (core/io/colmap.h): focal
+// lengths, finite poses, point coordinates.
+inline void CheckColmapBlockLimits(const Block& block) {
+  for (const BlockCamera& camera : block.cameras) {
+    if (!(camera.params[0] >= kMinFocalLengthPx && camera.params[0] <= kMaxCoordinate))
+      std::abort();
+  }
+  for (const BlockImage& image : block.images)
+    if (!image.eo || !image.eo->parameters.allFinite()) std::abort();
+  for (const BlockPoint& point : block.points)
+    if (!(point.position_m->cwiseAbs().maxCoeff() <= kMaxCoordinate)) std::abort();
 }
 
 }  // namespace photopose::fuzz

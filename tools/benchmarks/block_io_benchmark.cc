@@ -1,7 +1,7 @@
 // Block I/O at scale (docs/performance.md, issue 10 section 2): generates issue 10's synthetic
 // block (25 lines x 40 images of a 24 mm / 4 um / 6000 x 4000 camera at 100 m, 13 m forward and
 // 30 m side spacing, 120 000 tie points: about 1.8 million marks), writes it as the project's
-// tables and as a COLMAP text model, reads both back (the tables one by one, then assembled into a
+// tables and as a COLMAP text and binary model, reads them back (the tables one by one, then assembled into a
 // block, then all at once with ReadBlock as `photopose bundle` does), and times every step (wall
 // clock, one run each) with the step's peak resident memory (and how far above the memory at its
 // start that peak is). When `colmap` is on the PATH, its own text reader runs on the same model in
@@ -10,6 +10,7 @@
 //   cameras.csv points.csv marks.csv frames.csv     the block's tables (perturbed start, GNSS)
 //   truth/frames.csv truth/points.csv truth/blunders.csv
 //   colmap/{cameras,images,points3D}.txt             the same block as a COLMAP model
+//   colmap_binary/{cameras,images,points3D}.bin      and as a binary one
 //
 // Usage: photopose_block_io_benchmark --out_dir=DIR [--lines=25] [--images_per_line=40]
 //            [--forward_spacing_m=13] [--side_spacing_m=30] [--tie_points=120000] [--seed=1]
@@ -173,6 +174,14 @@ int Run(int argc, char** argv) {
   std::printf("  sizes: marks.csv %.1f MB, images.txt %.1f MB, points3D.txt %.1f MB\n",
               FileMb(files.marks), FileMb(colmap_dir + "/images.txt"),
               FileMb(colmap_dir + "/points3D.txt"));
+  const std::string binary_dir = out_dir + "/colmap_binary";
+  ColmapWriteOptions binary;
+  binary.format = ColmapFormat::kBinary;
+  if (!Timed("write COLMAP binary (WriteColmapModel)",
+             [&] { return WriteColmapModel(binary_dir, block, nullptr, binary); }, &t))
+    return 1;
+  std::printf("  sizes: images.bin %.1f MB, points3D.bin %.1f MB\n",
+              FileMb(binary_dir + "/images.bin"), FileMb(binary_dir + "/points3D.bin"));
   const size_t num_marks = block.marks.size();
   block = Block();
   truth = SyntheticBlockTruth();
@@ -183,6 +192,15 @@ int Run(int argc, char** argv) {
     return 1;
   if (again.marks.size() != num_marks) {
     std::fprintf(stderr, "read %zu marks, wrote %zu\n", again.marks.size(), num_marks);
+    return 1;
+  }
+  again = Block();
+  if (!Timed("read COLMAP binary (ReadColmapModel)",
+             [&] { return ReadColmapModel(binary_dir, &again); }, &t))
+    return 1;
+  if (again.marks.size() != num_marks) {
+    std::fprintf(stderr, "read %zu marks from the binary model, wrote %zu\n", again.marks.size(),
+                 num_marks);
     return 1;
   }
   again = Block();

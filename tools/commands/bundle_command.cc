@@ -28,7 +28,7 @@ DEFINE_string(bundle_cameras, "", "Camera table (CSV, ArcGIS frame-camera schema
 DEFINE_string(bundle_marks, "", "Image marks (CSV: Raster, PointID, Column and Row in pixels or FilmX and FilmY in micrometres, optional Accuracy in the mark's own unit and CameraID). A point with marks but no row in --points is a tie point.");
 DEFINE_string(bundle_points, "", "Ground points (CSV: PointID, X, Y, Z in metres, optional AccuracyX/Y/Z in metres and Role control|check|tie). Optional for a block held by camera positions.");
 DEFINE_string(bundle_frames, "", "Frames table: PerspectiveX/Y/Z are the measured camera positions (priors with --camera_accuracy or per-row AccuracyX/Y/Z, otherwise initial values only) and Omega/Phi/Kappa initial values (priors with --attitude_accuracy or per-row AccuracyOmega/Phi/Kappa). Images without a row are oriented by resection.");
-DEFINE_string(bundle_colmap_model, "", "A COLMAP text model folder (cameras.txt, images.txt, points3D.txt) to adjust instead of the tables.");
+DEFINE_string(bundle_colmap_model, "", "A COLMAP model folder to adjust instead of the tables: binary (cameras.bin, images.bin, points3D.bin) when all three are there, else text (cameras.txt, images.txt, points3D.txt).");
 DEFINE_string(bundle_bal, "", "A BAL problem file to adjust instead of the tables.");
 DEFINE_string(bundle_geo, "", "With --colmap_model: camera positions as an OpenDroneMap geo.txt (first line the CRS; then image x y z [yaw pitch roll] [horizontal vertical accuracy]; x = easting or longitude). The model is georeferenced: aligned by a robust similarity, then adjusted with the positions as priors.");
 DEFINE_string(bundle_gcp_list, "", "With --colmap_model: ground control as an OpenDroneMap gcp_list.txt (first line the CRS; X Y Z px py image [name]); points named in --check_points are check points.");
@@ -38,7 +38,8 @@ DEFINE_string(bundle_check_points, "", "Comma list of --gcp_list point names use
 DEFINE_string(bundle_out, "", "Output frames table (CSV) of the adjusted images with SigmaX..SigmaKappa, Sigma0, NumObservations and RmsResidual.");
 DEFINE_string(bundle_out_points, "", "Output points table (CSV): PointID, X, Y, Z, SigmaX/Y/Z, Role, NumObservations, ErrorX/Y/Z.");
 DEFINE_string(bundle_out_cameras, "", "Output camera table (CSV) with the calibrated interior orientation (frame cameras).");
-DEFINE_string(bundle_out_colmap, "", "Output COLMAP text model folder of the adjusted block.");
+DEFINE_string(bundle_out_colmap, "", "Output COLMAP model folder of the adjusted block; marks the adjustment rejected are written as keypoints without a 3D point.");
+DEFINE_string(bundle_out_colmap_format, "", "Format of --out_colmap: text or binary. Empty: the format of --colmap_model when it is given, else text.");
 DEFINE_string(bundle_report, "", "JSON report: summary, groups with their over-fitting verdict, control and check points, images, calibration, diagnostics, options (docs/formats.md).");
 DEFINE_string(bundle_html, "", "Self-contained HTML page of the adjustment: verdicts, plan view, residual histograms, tables.");
 DEFINE_string(bundle_rotation, "rxryrz", "Angle convention of the frames tables read and written: rxryrz (R = Rx(omega) Ry(phi) Rz(kappa) maps ground to camera; 'seed' is an alias), opk or pok (see docs/conventions.md).");
@@ -52,7 +53,7 @@ DEFINE_string(bundle_camera_accuracy, "", "Accuracy of the measured camera posit
 DEFINE_double(bundle_attitude_accuracy, 0.0, "Accuracy of the measured attitudes without per-row accuracies, in degrees per angle; 0: no attitude prior.");
 DEFINE_string(bundle_lever_arm, "", "GNSS antenna offset from the projection centre in the camera frame (x right, y up, z towards the viewer), in metres: X,Y,Z.");
 DEFINE_bool(bundle_estimate_lever_arm, false, "Estimate the lever arm (starting from --lever_arm or zero).");
-DEFINE_string(bundle_calibrate, "", "Self-calibration: a comma list of FocalLength, PrincipalX, PrincipalY, K0, K1, K2, K3, P1, P2, Affinity, Skew (for COLMAP models: f, cx, cy, k1, k2, p1, p2); the rest held constant.");
+DEFINE_string(bundle_calibrate, "", "Self-calibration: a comma list of FocalLength, PrincipalX, PrincipalY, K0, K1, K2, K3, P1, P2, Affinity, Skew (for COLMAP models also COLMAP's own names of the model's parameters: f, fx, fy, cx, cy, k, k1, k2, p1, p2; f names fx and fy together); the rest held constant.");
 DEFINE_string(bundle_loss, "none", "Robust loss on tie marks: none, huber, cauchy or softl1.");
 DEFINE_double(bundle_loss_scale, 3.0, "Scale of the robust loss on tie marks, in standard deviations of each mark's own accuracy (its Accuracy, else --tie_accuracy or --film_tie_accuracy), as in resect.");
 DEFINE_string(bundle_jacobian, "analytic", "Derivative path of the collinearity cost: analytic or autodiff.");
@@ -83,7 +84,8 @@ constexpr char kUsage[] =
     "                        [--camera_accuracy=M or X,Y,Z] [--attitude_accuracy=DEG]\n"
     "                        [--lever_arm=X,Y,Z] [--calibrate=LIST] [--estimate_accuracies]\n"
     "                        [--snoop] [--cross_validate] [--threads=N] [--quiet]\n"
-    "   or: photopose bundle --colmap_model=DIR [--out_colmap=DIR] [--calibrate=LIST] ...\n"
+    "   or: photopose bundle --colmap_model=DIR [--out_colmap=DIR] [--out_colmap_format=text|binary]\n"
+    "                        [--calibrate=LIST] ...\n"
     "   or: photopose bundle --bal=problem.txt ...\n\n"
     "Minimises reprojection errors^2 / tie accuracy^2 + control residuals^2 / marker accuracy^2 +\n"
     "camera position residuals^2 / camera accuracy^2 (Metashape's reference settings) and reports,\n"
@@ -149,6 +151,8 @@ struct BundleRun {
   bool georeference = false;
   GeoreferenceResult georeferenced;
   size_t model_points = 0, model_marks = 0;  // the model's own, before control joined it
+  ColmapFormat colmap_in_format = ColmapFormat::kText;   // of --colmap_model
+  ColmapFormat colmap_out_format = ColmapFormat::kText;  // of --out_colmap
   BundleAdjustmentResult result;
   BundleCrossValidationResult cross_validation;
   int exit_code = kExitSuccess;  // kExitSomeFailed once an image could not be oriented
@@ -200,6 +204,8 @@ int CheckInputChoice(const char* command, BundleRun* run) {
   }
   if (!FLAGS_bundle_check_points.empty() && FLAGS_bundle_gcp_list.empty())
     return BadInput(command, "--check_points names points of --gcp_list (a points table says Role=check itself)");
+  if (!FLAGS_bundle_out_colmap_format.empty() && FLAGS_bundle_out_colmap.empty())
+    return BadInput(command, "--out_colmap_format is the format of --out_colmap: give --out_colmap too");
   if (!FLAGS_bundle_bal.empty() && !FLAGS_bundle_out_colmap.empty())
     return BadInput(command, "--out_colmap: a BAL problem has no image size and counts pixels from the image centre, which a COLMAP model cannot hold; write --out, --out_points or --report");
   run->context.input_kind = run->tables ? "tables" : !FLAGS_bundle_colmap_model.empty() ? "colmap" : "bal";
@@ -301,7 +307,9 @@ int DeclareFiles(const char* command, const ParsedFlags& parsed, BundleRun* run,
     if (!path.empty()) run->context.inputs.push_back(path);
   }
   if (!FLAGS_bundle_colmap_model.empty()) {
-    for (const char* name : {"cameras.txt", "images.txt", "points3D.txt"}) {
+    const Status detected = DetectColmapFormat(FLAGS_bundle_colmap_model, &run->colmap_in_format);
+    if (!detected.ok()) return BadInput(command, "--colmap_model: " + detected.message());
+    for (const char* name : ColmapFileNames(run->colmap_in_format)) {
       const std::string path = FLAGS_bundle_colmap_model + "/" + name;
       const Status input = outputs->AddInput("--colmap_model", path);
       if (!input.ok()) return BadInput(command, input.message());
@@ -322,7 +330,15 @@ int DeclareFiles(const char* command, const ParsedFlags& parsed, BundleRun* run,
     run->written.push_back({label, path});
   }
   if (!FLAGS_bundle_out_colmap.empty()) {
-    std::vector<std::string> names = {"cameras.txt", "images.txt", "points3D.txt"};
+    run->colmap_out_format = run->colmap_in_format;
+    if (!FLAGS_bundle_out_colmap_format.empty() && !ParseEnum(FLAGS_bundle_out_colmap_format, &run->colmap_out_format))
+      return BadInput(command, EnumFlagError<ColmapFormat>("--out_colmap_format", FLAGS_bundle_out_colmap_format));
+    // A binary model left in the folder would be read (by COLMAP too) instead of the text written.
+    ColmapFormat there = ColmapFormat::kText;
+    if (run->colmap_out_format == ColmapFormat::kText && DetectColmapFormat(FLAGS_bundle_out_colmap, &there).ok() && there == ColmapFormat::kBinary)
+      return BadInput(command, "--out_colmap=" + FLAGS_bundle_out_colmap + " holds a binary COLMAP model (cameras.bin, images.bin, points3D.bin), which COLMAP and photopose read instead of the text model written here: remove it, or give --out_colmap_format=binary");
+    std::vector<std::string> names;
+    for (const char* name : ColmapFileNames(run->colmap_out_format)) names.push_back(name);
     // A georeferenced model is written in the local frame, with that frame beside it.
     if (run->georeference) names.push_back("georeference.json");
     for (const std::string& name : names) {
@@ -447,7 +463,7 @@ int ReadBundleBlock(const char* command, BundleRun* run) {
     // default when a frames table was given.
     run->options.accuracies.camera_positions_are_priors = !FLAGS_bundle_camera_accuracy.empty() || !FLAGS_bundle_frames.empty();
   } else if (!FLAGS_bundle_colmap_model.empty()) {
-    const Status read = ReadColmapModel(FLAGS_bundle_colmap_model, &block, &run->colmap_extras);
+    const Status read = ReadColmapModel(FLAGS_bundle_colmap_model, &block, &run->colmap_extras, &run->colmap_in_format);
     if (!read.ok()) return BadInput(command, read.message());
     run->model_points = block.points.size();
     run->model_marks = block.marks.size();
@@ -462,6 +478,11 @@ int ReadBundleBlock(const char* command, BundleRun* run) {
   if (block.images.empty()) return BadInput(command, "the block has no image with marks");
   const Status calibration = BundleAdjustmentConfig::FromCalibrationNames(block, run->calibrate, &run->config);
   if (!calibration.ok()) return BadInput(command, "--calibrate: " + calibration.message());
+  // Cameras a COLMAP model could not hold after the self-calibration: refused before any work.
+  if (!FLAGS_bundle_out_colmap.empty()) {
+    const Status writable = CheckColmapCamerasWritable(block, run->config.calibrated_params);
+    if (!writable.ok()) return BadInput(command, "--out_colmap: " + writable.message());
+  }
   return kGoOn;
 }
 
@@ -643,11 +664,20 @@ Status WriteBundleOutputs(const BundleRun& run, bool usable) {
                                    [&](const std::string& path) { return WriteCameraTable(path, cameras); });
     }
     if (status.ok() && !FLAGS_bundle_out_colmap.empty()) {
-      ColmapModelText model;
-      status = FormatColmapModel(ModelPart(run), FLAGS_bundle_colmap_model.empty() ? nullptr : &run.colmap_extras, &model);
-      stage(FLAGS_bundle_out_colmap + "/cameras.txt", model.cameras);
-      stage(FLAGS_bundle_out_colmap + "/images.txt", model.images);
-      stage(FLAGS_bundle_out_colmap + "/points3D.txt", model.points3D);
+      // Marks the adjustment left out leave the tracks (kept as keypoints, their indices stay).
+      ColmapWriteOptions colmap_options;
+      colmap_options.format = run.colmap_out_format;
+      // A georeferenced model without the control it was given (ModelPart): the model's own marks
+      // come first, so the removed ones among them are the first entries.
+      const Block model_part = ModelPart(run);
+      colmap_options.marks_left_out = result.RemovedMarks(block.marks.size());
+      colmap_options.marks_left_out.resize(model_part.marks.size());
+      ColmapModelFiles model;
+      status = FormatColmapModel(model_part, FLAGS_bundle_colmap_model.empty() ? nullptr : &run.colmap_extras, colmap_options, &model);
+      const std::array<const char*, 3> names = ColmapFileNames(run.colmap_out_format);
+      stage(FLAGS_bundle_out_colmap + "/" + names[0], model.cameras);
+      stage(FLAGS_bundle_out_colmap + "/" + names[1], model.images);
+      stage(FLAGS_bundle_out_colmap + "/" + names[2], model.points3D);
       if (run.georeference) {
         const GeoreferenceResult& g = run.georeferenced;
         const nlohmann::json frame = {

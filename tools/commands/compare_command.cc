@@ -102,7 +102,7 @@ DEFINE_string(compare_gnss_sigma, "0.03,0.3",
               "metres horizontally (twice that vertically), also the stated accuracy; the first is "
               "the baseline.");
 DEFINE_string(compare_colmap_model, "",
-              "Dataset, --scenarios=block: a COLMAP text model folder to compare the block solvers "
+              "Dataset, --scenarios=block: a COLMAP model folder (binary or text) to compare the block solvers "
               "on (or give the tables: --cameras, --marks, --points, --frames).");
 DEFINE_int32(compare_block_lines, 3, "Monte-Carlo, --scenarios=block: flight lines per block.");
 DEFINE_int32(compare_block_images, 8,

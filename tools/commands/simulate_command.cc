@@ -179,8 +179,8 @@ int RunSimulateBlock(const ParsedFlags& parsed, RotationConvention rotation) {
   files[5].contents = std::move(truth_text.points);
   files[6].contents = std::move(truth_text.blunders);
   if (FLAGS_colmap) {
-    ColmapModelText model;
-    status = FormatColmapModel(block, nullptr, &model);
+    ColmapModelFiles model;
+    status = FormatColmapModel(block, nullptr, ColmapWriteOptions(), &model);
     if (!status.ok()) return BadInput("simulate", status.message());
     files[7].contents = std::move(model.cameras);
     files[8].contents = std::move(model.images);

@@ -334,6 +334,66 @@ TEST(ColmapIo, PointWithoutPositionIsWrittenAsUnmatched) {
   EXPECT_EQ(extras.unmatched.size(), 2u);
 }
 
+TEST(ColmapIo, MarksLeftOutBecomeKeypointsAndTheirPointsGoWhenTooFewStay) {
+  // Three points seen by both images; leave out the mark of T0 in image 0 (T0 keeps one mark:
+  // it goes, its other mark a keypoint too) and none of T1, T2.
+  const Block block = FramePinholeBlock();
+  ColmapWriteOptions options;
+  options.marks_left_out.assign(block.marks.size(), 0);
+  options.marks_left_out[0] = 1;  // image 0, T0
+  ScopedTempDir dir;
+  ASSERT_TRUE(dir.ok());
+  const Status status = WriteColmapModel(dir.path(), block, nullptr, options);
+  ASSERT_TRUE(status.ok()) << status.message();
+  Block again;
+  ColmapModelExtras extras;
+  ASSERT_TRUE(ReadColmapModel(dir.path(), &again, &extras).ok());
+  ASSERT_EQ(again.points.size(), 2u);
+  EXPECT_EQ(again.points[0].id, "2");  // T1 (ids 1..n of the block's points)
+  EXPECT_EQ(again.marks.size(), 4u);
+  // Every keypoint stays, at its index: mark 0 (T0) was keypoint 0 of image 0.
+  EXPECT_EQ(extras.num_keypoints, (std::vector<int>{3, 3}));
+  ASSERT_EQ(extras.unmatched.size(), 2u);
+  EXPECT_EQ(extras.unmatched[0].image, 0);
+  EXPECT_EQ(extras.unmatched[0].index, 0);
+  EXPECT_EQ(extras.unmatched[1].image, 1);
+  EXPECT_EQ(extras.unmatched[1].index, 0);
+
+  options.marks_left_out.pop_back();
+  EXPECT_EQ(WriteColmapModel(dir.path(), block, nullptr, options).message(),
+            "ColmapWriteOptions::marks_left_out has 5 entries for 6 marks");
+}
+
+TEST(ColmapIo, ErrorColumnLeavesTheMarksLeftOutOut) {
+  Block block = FramePinholeBlock();
+  block.marks[3].observation += Eigen::Vector2d(80.0, 0.0);  // image 1, T0: 20 px off
+  block.marks[3].measured = block.marks[3].observation;
+  ColmapWriteOptions options;
+  options.marks_left_out.assign(block.marks.size(), 0);
+  ColmapModelFiles with, without;
+  ASSERT_TRUE(FormatColmapModel(block, nullptr, options, &with).ok());
+  options.marks_left_out[3] = 1;
+  ASSERT_TRUE(FormatColmapModel(block, nullptr, options, &without).ok());
+  ColmapModelExtras with_extras, without_extras;
+  Block read;
+  ASSERT_TRUE(ParseColmapModel(with, "m", &read, &with_extras).ok());
+  ASSERT_TRUE(ParseColmapModel(without, "m", &read, &without_extras).ok());
+  // T0 went (one mark left); T1 and T2 keep their 0.09 px.
+  EXPECT_GT(with_extras.point_error_px[0], 10.0);
+  ASSERT_EQ(without_extras.point_error_px.size(), 2u);
+  EXPECT_NEAR(without_extras.point_error_px[0], std::hypot(0.3, 0.2) / 4.0, 1e-6);
+}
+
+TEST(ColmapIo, CalibratingAFrameCamerasDistortionIsRefusedForAColmapOutput) {
+  const Block block = FramePinholeBlock();
+  EXPECT_TRUE(CheckColmapCamerasWritable(block, {}).ok());
+  EXPECT_TRUE(CheckColmapCamerasWritable(block, {{kFrameFocal, kFramePrincipalX}}).ok());
+  EXPECT_EQ(CheckColmapCamerasWritable(block, {{kFrameFocal, kFrameK1}}).message(),
+            "camera 'frame': calibrating K1 would make it no COLMAP pinhole camera (a frame "
+            "camera is written to COLMAP without distortion, affinity and skew)");
+  EXPECT_FALSE(CheckColmapCamerasWritable(block, {{kFrameSkew}}).ok());
+}
+
 struct BadModel {
   const char* name;
   const char* cameras;
@@ -398,15 +458,15 @@ INSTANTIATE_TEST_SUITE_P(
                  kPoint, "cameras.txt:1: PARAMS f: -6000 is no focal length: it must be at least "
                  "0.001 px"},
         BadModel{"HugeFocalLength", "1 PINHOLE 100 80 100 1e300 50 40\n", kImage, kPoint,
-                 "cameras.txt:1: PARAMS fy: '1e300' is outside [-100000000, 100000000] px"},
+                 "cameras.txt:1: PARAMS fy: 1e+300 is outside [-100000000, 100000000] px"},
         BadModel{"HugePrincipalPoint", "1 PINHOLE 100 80 100 100 50 -4e8\n", kImage, kPoint,
-                 "cameras.txt:1: PARAMS cy: '-4e8' is outside [-100000000, 100000000] px"},
+                 "cameras.txt:1: PARAMS cy: -400000000 is outside [-100000000, 100000000] px"},
         BadModel{"HugeTranslation", kCamera, "1 1 0 0 0 0 1e300 0 1 a.jpg\n\n", kPoint,
-                 "images.txt:1: TY: '1e300' is outside [-100000000, 100000000] m"},
+                 "images.txt:1: TY: 1e+300 is outside [-100000000, 100000000] m"},
         BadModel{"HugeKeypoint", kCamera, "1 1 0 0 0 0 0 0 1 a.jpg\n60 1e10 3\n", kPoint,
-                 "images.txt:2: POINTS2D Y: '1e10' is outside [-100000000, 100000000] px"},
+                 "images.txt:2: POINTS2D Y: 10000000000 is outside [-100000000, 100000000] px"},
         BadModel{"HugePoint", kCamera, kImage, "3 1 2e300 10 10 20 30 0.5 1 0\n",
-                 "points3D.txt:1: Y: '2e300' is outside [-100000000, 100000000] m"},
+                 "points3D.txt:1: Y: 2e+300 is outside [-100000000, 100000000] m"},
         // A long token is echoed cut, and escaped.
         BadModel{"LongModelName",
                  "1 \x1b[2J_ABCDEFGHIJKLMNOPQRSTUVWXYZ_ABCDEFGHIJKLMNOPQRSTUVWXYZ 100 80 1 2 3\n",
@@ -436,7 +496,7 @@ TEST(ColmapIo, AFifoOrAFileOverTheLimitIsRefusedWithoutWaitingOrReading) {
 }
 
 TEST(ColmapIo, ParseColmapModelReadsTheTextsAsReadColmapModelReadsTheFiles) {
-  ColmapModelText text{kCamera, kImage, kPoint};
+  ColmapModelFiles text{ColmapFormat::kText, kCamera, kImage, kPoint};
   Block block;
   ASSERT_TRUE(ParseColmapModel(text, "m", &block).ok());
   EXPECT_EQ(block.images.size(), 1u);
@@ -453,7 +513,10 @@ TEST(ColmapIo, MissingFileIsAnError) {
   Block block;
   const Status status = ReadColmapModel(dir.path(), &block);
   ASSERT_FALSE(status.ok());
-  EXPECT_EQ(status.message(), dir.path() + "/cameras.txt: cannot open: No such file or directory");
+  EXPECT_EQ(status.message(), dir.path() +
+                                  ": no complete COLMAP model (cameras, images and points3D, all "
+                                  ".bin or all .txt): cameras.txt, images.txt, points3D.txt "
+                                  "missing");
 }
 
 }  // namespace

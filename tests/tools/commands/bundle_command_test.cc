@@ -126,7 +126,15 @@ TEST(BundleCommand, TaylorAndCeresSolversReachTheSamePoses) {
   EXPECT_GT(largest_turn_rad, DegreesToRadians(0.1));
 }
 
-TEST(BundleCommand, ColmapModelInColmapModelOut) {
+// The marks of each image of a block by point id, to compare models across a run.
+std::set<std::pair<std::string, std::string>> ImagePointPairs(const Block& block) {
+  std::set<std::pair<std::string, std::string>> pairs;
+  for (const BlockMark& mark : block.marks)
+    pairs.insert({block.images[mark.image].name, block.points[mark.point].id});
+  return pairs;
+}
+
+TEST(BundleCommand, ColmapModelInColmapModelOutWithoutTheRejectedMarks) {
   const std::string dir = ScratchDir();
   const std::string block = SimulateBlock(dir);
   const CliRun run = RunCli("bundle --colmap_model=" + block + "/colmap --out_colmap=" + dir +
@@ -134,14 +142,137 @@ TEST(BundleCommand, ColmapModelInColmapModelOut) {
                             dir);
   ASSERT_EQ(run.exit_code, 0) << run.err;
   Block in, out;
-  ASSERT_TRUE(ReadColmapModel(block + "/colmap", &in).ok());
-  const Status read = ReadColmapModel(dir + "/adjusted", &out);
-  ASSERT_TRUE(read.ok()) << read.message();
+  ColmapModelExtras in_extras, out_extras;
+  ASSERT_TRUE(ReadColmapModel(block + "/colmap", &in, &in_extras).ok());
+  ASSERT_TRUE(ReadColmapModel(dir + "/adjusted", &out, &out_extras).ok());
   EXPECT_EQ(out.images.size(), in.images.size());
-  EXPECT_GE(out.marks.size(), in.marks.size() - 10);  // rejected marks are written unmatched
   const nlohmann::json report = nlohmann::json::parse(ReadFile(dir + "/report.json"));
   EXPECT_EQ(report["summary"]["termination"], "converged");
   EXPECT_EQ(report["summary"]["datum"], "relative");
+  ASSERT_GE(report["rejected_marks"].size(), 4u);  // the 4 blunders at least
+  const auto in_pairs = ImagePointPairs(in), out_pairs = ImagePointPairs(out);
+  for (const auto& rejected : report["rejected_marks"]) {
+    const std::pair<std::string, std::string> pair{rejected["raster"], rejected["point_id"]};
+    EXPECT_EQ(in_pairs.count(pair), 1u);
+    EXPECT_EQ(out_pairs.count(pair), 0u) << pair.first << " " << pair.second;
+  }
+  // Every keypoint is still there, at its index: rejected marks became keypoints without a point.
+  EXPECT_EQ(out_extras.num_keypoints, in_extras.num_keypoints);
+  EXPECT_EQ(out.marks.size() + out_extras.unmatched.size(),
+            in.marks.size() + in_extras.unmatched.size());
+  EXPECT_LE(out.marks.size(), in.marks.size() - report["rejected_marks"].size());
+  // What is left is consistent: no point with fewer than 2 marks, none far from its projection
+  // (the blunders were tens of pixels off).
+  for (size_t p = 0; p < out.points.size(); ++p) EXPECT_GE(out.marks_of_point[p].size(), 2u);
+  std::vector<double> errors;
+  MarkReprojectionErrors(out, &errors);
+  EXPECT_LT(*std::max_element(errors.begin(), errors.end()), 5.0);
+}
+
+TEST(BundleCommand, BinaryColmapModelInBinaryOutUnlessAsked) {
+  const std::string dir = ScratchDir();
+  const std::string block = SimulateBlock(dir);
+  Block model;
+  ColmapModelExtras extras;
+  ASSERT_TRUE(ReadColmapModel(block + "/colmap", &model, &extras).ok());
+  ColmapWriteOptions binary;
+  binary.format = ColmapFormat::kBinary;
+  ASSERT_TRUE(WriteColmapModel(dir + "/bin", model, &extras, binary).ok());
+
+  CliRun run = RunCli("bundle --colmap_model=" + dir + "/bin --out_colmap=" + dir +
+                          "/out_bin --quiet",
+                      dir);
+  ASSERT_EQ(run.exit_code, 0) << run.err;
+  EXPECT_TRUE(std::filesystem::exists(dir + "/out_bin/points3D.bin"));
+  EXPECT_FALSE(std::filesystem::exists(dir + "/out_bin/points3D.txt"));
+  Block from_binary;
+  ASSERT_TRUE(ReadColmapModel(dir + "/out_bin", &from_binary).ok());
+
+  run = RunCli("bundle --colmap_model=" + dir + "/bin --out_colmap=" + dir +
+                   "/out_txt --out_colmap_format=text --quiet",
+               dir);
+  ASSERT_EQ(run.exit_code, 0) << run.err;
+  EXPECT_TRUE(std::filesystem::exists(dir + "/out_txt/points3D.txt"));
+  Block from_text;
+  ColmapFormat format = ColmapFormat::kBinary;
+  ASSERT_TRUE(ReadColmapModel(dir + "/out_txt", &from_text, nullptr, &format).ok());
+  EXPECT_EQ(format, ColmapFormat::kText);
+  // The same adjustment either way (to the rounding of sums in another order by the threads of
+  // the linear algebra: 1e-10 m here, at UTM coordinates of 5e5 m).
+  ASSERT_EQ(from_text.images.size(), from_binary.images.size());
+  for (size_t i = 0; i < from_text.images.size(); ++i) {
+    EXPECT_LT((from_text.images[i].eo->parameters - from_binary.images[i].eo->parameters)
+                  .cwiseAbs()
+                  .maxCoeff(),
+              1e-8);
+  }
+
+  // Text over a binary model: the binary files would be read instead, so it is refused.
+  run = RunCli("bundle --colmap_model=" + dir + "/bin --out_colmap=" + dir +
+                   "/out_bin --out_colmap_format=text --quiet",
+               dir);
+  EXPECT_EQ(run.exit_code, 2);
+  EXPECT_NE(run.err.find("--out_colmap=" + dir +
+                         "/out_bin holds a binary COLMAP model (cameras.bin, images.bin, "
+                         "points3D.bin), which COLMAP and photopose read instead of the text model "
+                         "written here"),
+            std::string::npos)
+      << run.err;
+  EXPECT_FALSE(std::filesystem::exists(dir + "/out_bin/points3D.txt"));
+  run = RunCli("bundle --colmap_model=" + dir + "/bin --out_colmap=" + dir +
+                   "/out_x --out_colmap_format=ply --quiet",
+               dir);
+  EXPECT_EQ(run.exit_code, 2);
+  EXPECT_NE(run.err.find("--out_colmap_format"), std::string::npos) << run.err;
+  run = RunCli("bundle --colmap_model=" + dir + "/nowhere --out_colmap=" + dir + "/out_y --quiet",
+               dir);
+  EXPECT_EQ(run.exit_code, 2);
+  EXPECT_NE(run.err.find("--colmap_model: " + dir + "/nowhere: is no folder"), std::string::npos)
+      << run.err;
+}
+
+TEST(BundleCommand, CalibrateTakesColmapsParameterNames) {
+  const std::string dir = ScratchDir();
+  // colmap_ar7 is one SIMPLE_RADIAL camera: f, cx, cy, k.
+  const CliRun run = RunCli("bundle --colmap_model=" + SharedDataPath("colmap_ar7") +
+                                " --calibrate=f,K --report=" + dir + "/report.json --quiet",
+                            dir);
+  ASSERT_EQ(run.exit_code, 0) << run.err;
+  const nlohmann::json report = nlohmann::json::parse(ReadFile(dir + "/report.json"));
+  ASSERT_EQ(report["calibration"].size(), 1u);
+  const nlohmann::json& parameters = report["calibration"][0]["parameters"];
+  ASSERT_EQ(parameters.size(), 2u) << parameters.dump();
+  EXPECT_EQ(parameters[0]["name"], "f");
+  EXPECT_EQ(parameters[1]["name"], "k");
+  const CliRun bad = RunCli("bundle --colmap_model=" + SharedDataPath("colmap_ar7") +
+                                " --calibrate=k2 --report=" + dir + "/r2.json --quiet",
+                            dir);
+  EXPECT_EQ(bad.exit_code, 2);
+  EXPECT_NE(bad.err.find("the SIMPLE_RADIAL camera model has no parameter 'k2'"),
+            std::string::npos)
+      << bad.err;
+}
+
+TEST(BundleCommand, SelfCalibratedDistortionForAColmapOutputIsRefusedBeforeAnyWork) {
+  const std::string dir = ScratchDir();
+  const std::string block = SimulateBlock(dir);
+  const CliRun run = RunCli("bundle " + TableArgs(block) + " --calibrate=FocalLength,K1 --out=" +
+                                dir + "/frames.csv --out_colmap=" + dir + "/colmap",
+                            dir);
+  EXPECT_EQ(run.exit_code, 2) << run.out << run.err;
+  EXPECT_NE(run.err.find("--out_colmap: camera '"), std::string::npos) << run.err;
+  EXPECT_NE(run.err.find("': calibrating K1 would make it no COLMAP pinhole camera"),
+            std::string::npos)
+      << run.err;
+  EXPECT_EQ(run.err.find("iteration"), std::string::npos) << run.err;       // no adjustment
+  EXPECT_EQ(run.err.find("initial values"), std::string::npos) << run.err;  // nor its start
+  EXPECT_FALSE(std::filesystem::exists(dir + "/frames.csv"));
+  // The focal length alone keeps it a pinhole: no refusal.
+  const CliRun focal = RunCli("bundle " + TableArgs(block) + " --calibrate=FocalLength --out=" +
+                                  dir + "/frames.csv --out_colmap=" + dir + "/colmap --quiet",
+                              dir);
+  EXPECT_EQ(focal.exit_code, 0) << focal.err;
+  EXPECT_TRUE(std::filesystem::exists(dir + "/colmap/cameras.txt"));
 }
 
 TEST(BundleCommand, BalProblemIsAdjusted) {
