@@ -7,15 +7,17 @@
 // the image (the centre of the first pixel is (0.5, 0.5)), x right (Column), y down (Row).
 //
 // The block sees them as follows (exactly, no approximation):
-//  - exterior orientation (seed, core/types.h): centre X0 = -R(q)^T t, and the seed's camera frame
-//    (u, v, w) = (x_cam, -y_cam, -z_cam), so R_camera_from_ground = diag(1, -1, -1) R(q) and
-//    (omega, phi, kappa) = AnglesFromRotation(kSeed, that matrix); writing inverts both steps
-//    (the quaternion written has QW >= 0). A read-write round trip keeps R and the centre to
+//  - exterior orientation (seed, core/types.h): EoFromComputerVisionPose(R(q), t) of
+//    core/rotation.h: centre X0 = -R(q)^T t, and the seed's camera frame (u, v, w) = (x_cam,
+//    -y_cam, -z_cam), so R_camera_from_ground = diag(1, -1, -1) R(q) and (omega, phi, kappa) =
+//    AnglesFromRotation(kSeed, that matrix); writing inverts both steps (the quaternion written has
+//    QW >= 0). A read-write round trip keeps R and the centre to
 //    1e-12 and more (tests/core/io/colmap_test.cc).
 //  - cameras: CAMERA_ID MODEL WIDTH HEIGHT PARAMS[] -> BlockCamera {camera_id = CAMERA_ID as text,
 //    the COLMAP model of core/camera_models.h with its parameters in COLMAP's order, table.n_columns
-//    = WIDTH, table.n_rows = HEIGHT}. SIMPLE_PINHOLE, PINHOLE, SIMPLE_RADIAL, RADIAL and OPENCV are
-//    read; any other model (FISHEYE, FULL_OPENCV, ...) is an error naming file, line and model.
+//    = WIDTH, table.n_rows = HEIGHT}. SIMPLE_PINHOLE, PINHOLE, SIMPLE_RADIAL, RADIAL, OPENCV,
+//    FULL_OPENCV and OPENCV_FISHEYE are read; any other model (FISHEYE, ...) is an error naming
+//    file, line and model.
 //  - images: IMAGE_ID ... CAMERA_ID NAME -> BlockImage {name = NAME (the rest of the line), eo};
 //    their POINTS2D[] as (X, Y, POINT3D_ID): every entry with a POINT3D_ID becomes a BlockMark in
 //    pixels (unit kPixel, observation = measured = (X, Y), no accuracy; line = the line of the
