@@ -88,6 +88,17 @@ Status CheckBlock(const Block& block) {
   return Status::Ok();
 }
 
+BlockMark MakePixelMark(int image, int point, const Eigen::Vector2d& pixel_px, int line) {
+  BlockMark mark;
+  mark.image = image;
+  mark.point = point;
+  mark.unit = MarkUnit::kPixel;
+  mark.measured = pixel_px;
+  mark.observation = pixel_px;
+  mark.line = line;
+  return mark;
+}
+
 FrameCamera PixelToFilmCamera(const Block& block, int image) {
   const BlockImage& i = block.images[image];
   const FrameCamera& camera = block.cameras[i.camera].table;

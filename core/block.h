@@ -1,10 +1,10 @@
 #pragma once
 // A photogrammetric block: the cameras, images, ground points and image marks that resection and
 // bundle adjustment work on, in one model. It is assembled once from the tables (ReadBlock /
-// AssembleBlock, core/io/block_tables.h), from a COLMAP model or a BAL / Bundler problem
-// (core/io/colmap.h, core/io/bal.h), or built in memory (core/simulation/); every consumer (resect,
-// bundle, compare, the benchmarks, the tests) starts from it instead of pairing marks with points
-// itself.
+// AssembleBlock, core/io/block_tables.h), from a COLMAP model, an OpenSfM reconstruction or a
+// BAL / Bundler problem (core/io/colmap.h, core/io/opensfm.h, core/io/bal.h), or built in memory
+// (core/simulation/); every consumer (resect, bundle, compare, the benchmarks, the tests) starts
+// from it instead of pairing marks with points itself.
 //
 // Frames and units: the ground frame of the points (metres, Z up); exterior orientations in the
 // seed convention (core/types.h); each camera's measurements in the observation unit of its camera
@@ -136,6 +136,10 @@ struct Block {
   int FindImage(const std::string& name) const;
   int FindPoint(const std::string& id) const;
 };
+
+// A mark measured in pixels of a camera whose observation unit is the pixel (the COLMAP models):
+// unit kPixel, measured = observation = pixel_px, no accuracy; `line` of the file it came from.
+BlockMark MakePixelMark(int image, int point, const Eigen::Vector2d& pixel_px, int line);
 
 // The camera-table row that turns this image's pixels into film: its camera's row, with the image's
 // fiducial affine when it has one. kFrame cameras only.

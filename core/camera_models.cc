@@ -3,6 +3,7 @@
 #include <Eigen/Dense>
 #include <algorithm>
 #include <cctype>
+#include <initializer_list>
 
 #include "core/camera.h"
 
@@ -42,6 +43,9 @@ const std::vector<ModelInfo>& Models() {
       {CameraModelType::kSimpleRadial, {"f", "cx", "cy", "k"}},
       {CameraModelType::kRadial, {"f", "cx", "cy", "k1", "k2"}},
       {CameraModelType::kOpenCv, {"fx", "fy", "cx", "cy", "k1", "k2", "p1", "p2"}},
+      {CameraModelType::kFullOpenCv,
+       {"fx", "fy", "cx", "cy", "k1", "k2", "p1", "p2", "k3", "k4", "k5", "k6"}},
+      {CameraModelType::kOpenCvFisheye, {"fx", "fy", "cx", "cy", "k1", "k2", "k3", "k4"}},
   };
   return *kModels;
 }
@@ -77,29 +81,27 @@ Status CalibrationParamIndices(CameraModelType type, const std::string& name,
     for (size_t i = 0; i < names.size(); ++i)
       if (Upper(names[i]) == upper) indices->push_back(static_cast<int>(i));
   } else {
-    const bool two_focals = type == CameraModelType::kPinhole || type == CameraModelType::kOpenCv;
-    const int cx = two_focals ? 2 : 1;
-    const int n = CameraModelNumParams(type);
-    // COLMAP's own names of the model's parameters (fx, cx, k, ...) first; then photopose's
-    // names, and f for the focal length(s) of every model.
-    const std::vector<std::string>& own = Info(type).params;
-    for (int i = 0; i < n; ++i)
-      if (Upper(own[i]) == upper) indices->push_back(i);
-    if (!indices->empty()) return Status::Ok();
-    if (upper == "FOCALLENGTH" || upper == "F") {
-      indices->push_back(0);
-      if (two_focals) indices->push_back(1);
-    } else if (upper == "PRINCIPALX") {
-      indices->push_back(cx);
-    } else if (upper == "PRINCIPALY") {
-      indices->push_back(cx + 1);
-    } else if (upper == "K1" && n > cx + 2) {
-      indices->push_back(cx + 2);
-    } else if (upper == "K2" && (type == CameraModelType::kRadial || type == CameraModelType::kOpenCv)) {
-      indices->push_back(cx + 3);
-    } else if ((upper == "P1" || upper == "P2") && type == CameraModelType::kOpenCv) {
-      indices->push_back(upper == "P1" ? 6 : 7);
-    }
+    // The calibration name -> the COLMAP parameter names it selects; a name the model lacks
+    // selects nothing.
+    const std::vector<std::string>& names = Info(type).params;
+    const auto select = [&](std::initializer_list<const char*> wanted) {
+      for (const char* name : wanted)
+        for (size_t i = 0; i < names.size(); ++i)
+          if (names[i] == name) indices->push_back(static_cast<int>(i));
+    };
+    // f (COLMAP's name) and FocalLength select every focal length of the model.
+    if (upper == "FOCALLENGTH" || upper == "F") select({"f", "fx", "fy"});
+    if (upper == "PRINCIPALX") select({"cx"});
+    if (upper == "PRINCIPALY") select({"cy"});
+    if (upper == "K1") select({"k", "k1"});
+    if (upper == "K2") select({"k2"});
+    if (upper == "K3") select({"k3"});
+    if (upper == "P1") select({"p1"});
+    if (upper == "P2") select({"p2"});
+    // The model's own parameter names select themselves ("fx", "k4").
+    if (indices->empty())
+      for (size_t i = 0; i < names.size(); ++i)
+        if (Upper(names[i]) == upper) indices->push_back(static_cast<int>(i));
   }
   if (indices->empty()) {
     return Status::Error("the " + std::string(EnumName(type)) +
@@ -175,7 +177,7 @@ Status NormalizedFromObservation(CameraModelType type, const double* params,
   }
   // Forward models: observed = f D(u, v) + c; solve D(u, v) = (observed - c) / f by Newton with a
   // central-difference Jacobian (as COLMAP undistorts).
-  const bool two_focals = type == CameraModelType::kPinhole || type == CameraModelType::kOpenCv;
+  const bool two_focals = ColmapModelHasTwoFocals(type);
   const int cx = two_focals ? 2 : 1;
   const double fx = params[0], fy = two_focals ? params[1] : params[0];
   if (!(fx != 0.0) || !(fy != 0.0)) return Status::Error("the focal length is zero");
@@ -251,8 +253,7 @@ Status ObservationFromNormalized(CameraModelType type, const double* params,
 }
 
 double CameraModelFocal(CameraModelType type, const double* params) {
-  if (type == CameraModelType::kPinhole || type == CameraModelType::kOpenCv)
-    return 0.5 * (params[0] + params[1]);
+  if (ColmapModelHasTwoFocals(type)) return 0.5 * (params[0] + params[1]);
   return params[0];
 }
 

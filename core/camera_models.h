@@ -40,8 +40,13 @@
 //      SIMPLE_PINHOLE f, cx, cy                  PINHOLE fx, fy, cx, cy
 //      SIMPLE_RADIAL  f, cx, cy, k               RADIAL  f, cx, cy, k1, k2
 //      OPENCV         fx, fy, cx, cy, k1, k2, p1, p2
-//    with u = a, v = -b, r2 = u^2 + v^2, radial = k1 r2 + k2 r2^2 and
-//      du = u radial + 2 p1 u v + p2 (r2 + 2 u^2),  dv = v radial + 2 p2 u v + p1 (r2 + 2 v^2).
+//      FULL_OPENCV    fx, fy, cx, cy, k1, k2, p1, p2, k3, k4, k5, k6
+//      OPENCV_FISHEYE fx, fy, cx, cy, k1, k2, k3, k4
+//    with u = a, v = -b, r2 = u^2 + v^2, radial = k1 r2 + k2 r2^2 (OPENCV) or
+//    (1 + k1 r2 + k2 r2^2 + k3 r2^3) / (1 + k4 r2 + k5 r2^2 + k6 r2^3) - 1 (FULL_OPENCV) and
+//      du = u radial + 2 p1 u v + p2 (r2 + 2 u^2),  dv = v radial + 2 p2 u v + p1 (r2 + 2 v^2);
+//    OPENCV_FISHEYE (equidistant): theta = atan(r), theta_d = theta (1 + k1 theta^2 + k2 theta^4
+//    + k3 theta^6 + k4 theta^8), (ud, vd) = (u, v) theta_d / r ((u, v) itself at r = 0).
 //
 // The two families are not the same polynomial with another sign: a backward model corrects a
 // measured point, a forward model distorts an ideal one. photopose keeps each as it is defined;
@@ -68,6 +73,8 @@ enum class CameraModelType {
   kSimpleRadial,   // COLMAP SIMPLE_RADIAL
   kRadial,         // COLMAP RADIAL
   kOpenCv,         // COLMAP OPENCV
+  kFullOpenCv,     // COLMAP FULL_OPENCV
+  kOpenCvFisheye,  // COLMAP OPENCV_FISHEYE
 };
 
 // COLMAP's names (FRAME is photopose's own); case is ignored when parsing (core/enum_names.h).
@@ -77,7 +84,9 @@ inline constexpr EnumNameEntry<CameraModelType> kCameraModelTypeNames[] = {
     {CameraModelType::kPinhole, "PINHOLE"},
     {CameraModelType::kSimpleRadial, "SIMPLE_RADIAL"},
     {CameraModelType::kRadial, "RADIAL"},
-    {CameraModelType::kOpenCv, "OPENCV"}};
+    {CameraModelType::kOpenCv, "OPENCV"},
+    {CameraModelType::kFullOpenCv, "FULL_OPENCV"},
+    {CameraModelType::kOpenCvFisheye, "OPENCV_FISHEYE"}};
 constexpr EnumNameTable<CameraModelType> EnumNames(CameraModelType) {
   return EnumNameTable<CameraModelType>(kCameraModelTypeNames, NameMatch::kIgnoreCase);
 }
@@ -85,7 +94,13 @@ constexpr EnumNameTable<CameraModelType> EnumNames(CameraModelType) {
 // Number of parameters of each model, and the largest.
 int CameraModelNumParams(CameraModelType type);
 constexpr int kFrameNumParams = 11;
-constexpr int kMaxCameraModelParams = 11;
+constexpr int kMaxCameraModelParams = 12;
+
+// Whether a COLMAP model has two focal lengths (fx, fy, then cx, cy) rather than one (f, cx, cy).
+constexpr bool ColmapModelHasTwoFocals(CameraModelType type) {
+  return type == CameraModelType::kPinhole || type == CameraModelType::kOpenCv ||
+         type == CameraModelType::kFullOpenCv || type == CameraModelType::kOpenCvFisheye;
+}
 
 // Indices of the kFrame parameters.
 enum FrameParam : int {
@@ -104,15 +119,16 @@ enum FrameParam : int {
 
 // The parameter names of a model, in parameter order (kFrame: "FocalLength", "PrincipalX",
 // "PrincipalY", "K0", "K1", "K2", "K3", "P1", "P2", "Affinity", "Skew"; COLMAP models: "f", "fx",
-// "fy", "cx", "cy", "k", "k1", "k2", "p1", "p2").
+// "fy", "cx", "cy", "k", "k1" ... "k6", "p1", "p2").
 std::vector<std::string> CameraModelParamNames(CameraModelType type);
 
 // The parameters a self-calibration name selects (the names of `photopose bundle --calibrate`):
 // FocalLength, PrincipalX, PrincipalY, K0, K1, K2, K3, P1, P2, Affinity, Skew (case-insensitive).
 // For the COLMAP models FocalLength is f (or fx and fy), PrincipalX/Y are cx/cy, K1 is k1 (k for
-// SIMPLE_RADIAL), K2 k2, P1 p1, P2 p2; COLMAP's own names of the model's parameters
-// (CameraModelParamNames: f, fx, fy, cx, cy, k, k1, k2, p1, p2) select themselves, and f selects
-// fx and fy of PINHOLE and OPENCV. A name the model lacks is an error naming it and the model.
+// SIMPLE_RADIAL), K2 k2, K3 k3, P1 p1, P2 p2; each of the model's own parameter names
+// (CameraModelParamNames: f, fx, fy, cx, cy, k, k1 ... k6, p1, p2) selects that parameter, and f
+// selects fx and fy of the models with two focal lengths. A name the model lacks is an error naming
+// it and the model.
 Status CalibrationParamIndices(CameraModelType type, const std::string& name,
                                std::vector<int>* indices);
 
@@ -220,11 +236,36 @@ void ColmapDistort(CameraModelType type, const T* p, const T& u, const T& v, T* 
       *vd = v + v * radial;
       return;
     }
-    case CameraModelType::kOpenCv: {
+    case CameraModelType::kOpenCv:
+    case CameraModelType::kFullOpenCv: {
       const T uu = u * u, vv = v * v, uv = u * v, r2 = uu + vv;
-      const T radial = r2 * (p[4] + p[5] * r2);
+      T radial = r2 * (p[4] + p[5] * r2);
+      if (type == CameraModelType::kFullOpenCv) {
+        radial = (T(1.0) + r2 * (p[4] + r2 * (p[5] + r2 * p[8]))) /
+                     (T(1.0) + r2 * (p[9] + r2 * (p[10] + r2 * p[11]))) -
+                 T(1.0);
+      }
       *ud = u + u * radial + 2.0 * p[6] * uv + p[7] * (r2 + 2.0 * uu);
       *vd = v + v * radial + 2.0 * p[7] * uv + p[6] * (r2 + 2.0 * vv);
+      return;
+    }
+    case CameraModelType::kOpenCvFisheye: {
+      const T r2 = u * u + v * v;
+      // Below this r^2 theta_d / r = 1 - r^2 / 3 + ... is 1 to double precision (as COLMAP).
+      if (!(r2 > T(1e-32))) {
+        *ud = u;
+        *vd = v;
+        return;
+      }
+      using std::atan;
+      using std::sqrt;
+      const T r = sqrt(r2);
+      const T theta = atan(r);
+      const T t2 = theta * theta;
+      const T theta_d = theta * (T(1.0) + t2 * (p[4] + t2 * (p[5] + t2 * (p[6] + t2 * p[7]))));
+      const T scale = theta_d / r;
+      *ud = u * scale;
+      *vd = v * scale;
       return;
     }
     default:
@@ -251,7 +292,7 @@ void CameraModelResidual(CameraModelType type, const T* p, const T* ab, const do
   const T v = -ab[1];
   T ud, vd;
   ColmapDistort(type, p, u, v, &ud, &vd);
-  const bool two_focals = type == CameraModelType::kPinhole || type == CameraModelType::kOpenCv;
+  const bool two_focals = ColmapModelHasTwoFocals(type);
   const int cx = two_focals ? 2 : 1;
   const T& fx = p[0];
   const T& fy = two_focals ? p[1] : p[0];

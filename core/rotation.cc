@@ -115,6 +115,42 @@ Eigen::Matrix3d ConventionFromSeedJacobian(RotationConvention convention, const 
   return J;
 }
 
+namespace {
+// The computer-vision camera frame (x right, y down, z forward) -> the seed's (u, v, w) = (x, -y,
+// -z).
+const Eigen::Matrix3d& SeedFromComputerVisionCamera() {
+  static const Eigen::Matrix3d kFlip = Eigen::Vector3d(1.0, -1.0, -1.0).asDiagonal();
+  return kFlip;
+}
+}  // namespace
+
+ExteriorOrientation EoFromComputerVisionPose(const Eigen::Matrix3d& R_cv_camera_from_world,
+                                             const Eigen::Vector3d& t) {
+  ExteriorOrientation eo;
+  eo.set_center_in_ground(-R_cv_camera_from_world.transpose() * t);
+  eo.set_angles_seed_rad(AnglesFromRotation(
+      RotationConvention::kSeed, SeedFromComputerVisionCamera() * R_cv_camera_from_world));
+  return eo;
+}
+
+void ComputerVisionPoseFromEo(const ExteriorOrientation& eo,
+                              Eigen::Matrix3d* R_cv_camera_from_world, Eigen::Vector3d* t) {
+  *R_cv_camera_from_world = SeedFromComputerVisionCamera() *
+                            RotationFromAngles(RotationConvention::kSeed, eo.angles_seed_rad());
+  *t = -*R_cv_camera_from_world * eo.center_in_ground();
+}
+
+Eigen::Matrix3d RotationFromRotationVector(const Eigen::Vector3d& rotation_vector_rad) {
+  const double angle = rotation_vector_rad.norm();
+  if (!(angle > 0.0)) return Eigen::Matrix3d::Identity();
+  return Eigen::AngleAxisd(angle, rotation_vector_rad / angle).toRotationMatrix();
+}
+
+Eigen::Vector3d RotationVectorFromRotation(const Eigen::Matrix3d& R) {
+  const Eigen::AngleAxisd angle_axis(R);
+  return angle_axis.angle() * angle_axis.axis();
+}
+
 Status CheckRotationMatrix(const Eigen::Matrix3d& R, double tolerance) {
   if (!R.allFinite()) return Status::Error("rotation matrix has a non-finite element");
   const double orthogonality = (R * R.transpose() - Eigen::Matrix3d::Identity()).cwiseAbs().maxCoeff();

@@ -15,6 +15,7 @@
 
 #include "core/enum_names.h"
 #include "core/status.h"
+#include "core/types.h"
 
 namespace photopose {
 
@@ -103,6 +104,23 @@ Eigen::Vector3d SeedAnglesFromConvention(RotationConvention convention, const An
 // 1e-6 rad, differences wrapped to (-pi, pi]): propagates covariances to the angles written.
 Eigen::Matrix3d ConventionFromSeedJacobian(RotationConvention convention, const AngleFlags& flags,
                                            const Eigen::Vector3d& seed_angles_rad);
+
+// ------------------------------------------------------------------ computer-vision poses
+// COLMAP, OpenSfM and OpenCV give an image's pose as the world -> camera rigid transformation
+// x_camera = R_cv_camera_from_world X + t, in a camera frame x right, y down, z forward (the
+// optical axis). The seed's camera frame is (u, v, w) = (x, -y, -z), so R_camera_from_ground =
+// diag(1, -1, -1) R_cv_camera_from_world and the centre X0 = -R_cv_camera_from_world^T t. Every
+// reader and writer of such a format converts through these two functions (exactly; a round trip
+// keeps R and the centre to 1e-12).
+ExteriorOrientation EoFromComputerVisionPose(const Eigen::Matrix3d& R_cv_camera_from_world,
+                                             const Eigen::Vector3d& t);
+void ComputerVisionPoseFromEo(const ExteriorOrientation& eo,
+                              Eigen::Matrix3d* R_cv_camera_from_world, Eigen::Vector3d* t);
+
+// A rotation vector (angle-axis: the axis times the angle, rad; BAL, OpenSfM) and its matrix.
+// RotationVectorFromRotation returns the angle in [0, pi].
+Eigen::Matrix3d RotationFromRotationVector(const Eigen::Vector3d& rotation_vector_rad);
+Eigen::Vector3d RotationVectorFromRotation(const Eigen::Matrix3d& R);
 
 // Checks that a 3x3 matrix is a proper rotation (orthonormal to `tolerance`, determinant +1).
 Status CheckRotationMatrix(const Eigen::Matrix3d& R, double tolerance = 1e-6);

@@ -214,6 +214,8 @@ inline ceres::CostFunction* CreateCollinearityCost(JacobianType type,
       return internal::MakeCollinearityCost<5>(type, data);
     case 8:
       return internal::MakeCollinearityCost<8>(type, data);
+    case 12:
+      return internal::MakeCollinearityCost<12>(type, data);
     default:
       return internal::MakeCollinearityCost<kFrameNumParams>(type, data);
   }

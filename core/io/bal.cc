@@ -48,14 +48,7 @@ void AddCamera(const std::string& name, const Eigen::Matrix3d& R, const Eigen::V
 }
 
 void AddMark(int image, int point, double x, double y, int line, Block* block) {
-  BlockMark mark;
-  mark.image = image;
-  mark.point = point;
-  mark.unit = MarkUnit::kPixel;
-  mark.measured = Eigen::Vector2d(x, -y);
-  mark.observation = mark.measured;
-  mark.line = line;
-  block->marks.push_back(mark);
+  block->marks.push_back(MakePixelMark(image, point, Eigen::Vector2d(x, -y), line));
 }
 
 BlockPoint TiePoint(long long index, const Eigen::Vector3d& position, int line) {
@@ -125,11 +118,7 @@ Status ParseBalProblem(std::string_view text, const std::string& path, Block* bl
     PHOTOPOSE_RETURN_IF_ERROR(FocalLength(&scanner, &f));
     PHOTOPOSE_RETURN_IF_ERROR(scanner.Number("k1", &k1));
     PHOTOPOSE_RETURN_IF_ERROR(scanner.Number("k2", &k2));
-    const double angle = r.norm();
-    const Eigen::Matrix3d R =
-        angle > 0.0 ? Eigen::AngleAxisd(angle, r / angle).toRotationMatrix()
-                    : Eigen::Matrix3d::Identity();
-    AddCamera(std::to_string(c), R, t, f, k1, k2, &result);
+    AddCamera(std::to_string(c), RotationFromRotationVector(r), t, f, k1, k2, &result);
   }
   result.points.reserve(static_cast<size_t>(num_points));
   for (long long j = 0; j < num_points; ++j) {

@@ -92,12 +92,6 @@ namespace {
 constexpr size_t kPoint2DEntryBytes = 24;
 constexpr size_t kTrackEntryBytes = 8;
 
-// COLMAP's camera frame (x right, y down, z forward) -> the seed's (u, v, w) = (x, -y, -z).
-const Eigen::Matrix3d& SeedFromColmapCamera() {
-  static const Eigen::Matrix3d kFlip = Eigen::Vector3d(1.0, -1.0, -1.0).asDiagonal();
-  return kFlip;
-}
-
 // Quaternions are normalised as COLMAP does; one whose norm is below this is no rotation at all,
 // one whose norm is above its inverse is refused too (its square overflows long before 1e300).
 constexpr double kMinQuaternionNorm = 1e-12;
@@ -110,22 +104,17 @@ constexpr double kSquarePixelTolerance = 1e-15;
 // COLMAP's camera_t and image_t are 32-bit (the binary files hold them so).
 constexpr long long kMaxBinaryId = 0xffffffffLL;
 
+// COLMAP's pose is a computer-vision pose (core/rotation.h) with its rotation as a quaternion.
 ExteriorOrientation EoFromColmapPose(const Eigen::Quaterniond& q, const Eigen::Vector3d& t) {
-  const Eigen::Matrix3d R_colmap = q.toRotationMatrix();
-  ExteriorOrientation eo;
-  eo.set_center_in_ground(-R_colmap.transpose() * t);
-  eo.set_angles_seed_rad(
-      AnglesFromRotation(RotationConvention::kSeed, SeedFromColmapCamera() * R_colmap));
-  return eo;
+  return EoFromComputerVisionPose(q.toRotationMatrix(), t);
 }
 
 void ColmapPoseFromEo(const ExteriorOrientation& eo, Eigen::Quaterniond* q, Eigen::Vector3d* t) {
-  const Eigen::Matrix3d R_colmap =
-      SeedFromColmapCamera() * RotationFromAngles(RotationConvention::kSeed, eo.angles_seed_rad());
+  Eigen::Matrix3d R_colmap;
+  ComputerVisionPoseFromEo(eo, &R_colmap, t);
   *q = Eigen::Quaterniond(R_colmap);
   q->normalize();
   if (q->w() < 0.0) q->coeffs() *= -1.0;
-  *t = -R_colmap * eo.center_in_ground();
 }
 
 std::string Path(const std::string& directory, const char* name) {

@@ -16,7 +16,8 @@
 //  - cameras: CAMERA_ID MODEL WIDTH HEIGHT PARAMS[] -> BlockCamera {camera_id = CAMERA_ID as text,
 //    the COLMAP model of core/camera_models.h with its parameters in COLMAP's order,
 //    table.n_columns = WIDTH, table.n_rows = HEIGHT}. The models core/camera_models.h has are read
-//    (SIMPLE_PINHOLE, PINHOLE, SIMPLE_RADIAL, RADIAL, OPENCV); any other (OPENCV_FISHEYE, FOV, ...)
+//    (SIMPLE_PINHOLE, PINHOLE, SIMPLE_RADIAL, RADIAL, OPENCV, OPENCV_FISHEYE, FULL_OPENCV); any
+//    other (FOV, THIN_PRISM_FISHEYE, ...)
 //    is an error naming file, line (byte) and model.
 //  - images: IMAGE_ID ... CAMERA_ID NAME -> BlockImage {name = NAME (the rest of the line), eo};
 //    their POINTS2D[] as (X, Y, POINT3D_ID): every entry with a POINT3D_ID becomes a BlockMark in

@@ -223,8 +223,11 @@ BlockCamera MakeCamera(const SyntheticBlockOptions& o) {
     case CameraModelType::kRadial:
       camera.params = {f, cx, cy, 0.0, 0.0};
       break;
-    default:
-      camera.params = {f, f, cx, cy, 0.0, 0.0, 0.0, 0.0};
+    default:  // fx, fy, cx, cy and no distortion
+      camera.params.assign(CameraModelNumParams(o.camera_model), 0.0);
+      camera.params[0] = camera.params[1] = f;
+      camera.params[2] = cx;
+      camera.params[3] = cy;
       break;
   }
   return camera;

@@ -67,7 +67,8 @@ struct SyntheticBlockOptions {
   double terrain_relief_m = 10.0;   // peak-to-peak height range (m), >= 0
 
   // ---- camera: core/camera_models.h's kFrame (marks in pixels, PixelSize, FCS 1, Polarity -1)
-  // or a COLMAP model (SIMPLE_PINHOLE, PINHOLE, SIMPLE_RADIAL, RADIAL, OPENCV; marks in pixels)
+  // or a COLMAP model (SIMPLE_PINHOLE, PINHOLE, SIMPLE_RADIAL, RADIAL, OPENCV, FULL_OPENCV,
+  // OPENCV_FISHEYE; marks in pixels)
   CameraModelType camera_model = CameraModelType::kFrame;
   double focal_length_mm = 24.0;    // lens focal length (mm)
   double pixel_size_um = 4.0;       // pixel pitch (um)

@@ -51,6 +51,18 @@ TEST(Block, IndexListsTheMarksOfEveryImageAndPointInMarksOrder) {
   EXPECT_EQ(block.marks_of_point[1], (std::vector<int>{1, 2}));
 }
 
+TEST(Block, APixelMarkIsMeasuredAndObservedInPixels) {
+  const BlockMark mark = MakePixelMark(2, 5, Eigen::Vector2d(10.5, -3.25), 7);
+  EXPECT_EQ(mark.image, 2);
+  EXPECT_EQ(mark.point, 5);
+  EXPECT_EQ(mark.unit, MarkUnit::kPixel);
+  EXPECT_EQ(mark.measured, Eigen::Vector2d(10.5, -3.25));
+  EXPECT_EQ(mark.observation, mark.measured);
+  EXPECT_EQ(mark.observation_units_per_unit, 1.0);
+  EXPECT_FALSE(mark.accuracy.has_value());
+  EXPECT_EQ(mark.line, 7);
+}
+
 TEST(Block, FindsByNameOrMinusOne) {
   const Block block = TwoImageBlock();
   EXPECT_EQ(block.FindCamera("cam"), 0);

@@ -2,6 +2,7 @@
 
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <random>
 
 #include "core/camera.h"
@@ -19,7 +20,8 @@ constexpr double kExact = 1e-9;
 TEST(CameraModels, NamesRoundTrip) {
   for (CameraModelType type :
        {CameraModelType::kFrame, CameraModelType::kSimplePinhole, CameraModelType::kPinhole,
-        CameraModelType::kSimpleRadial, CameraModelType::kRadial, CameraModelType::kOpenCv}) {
+        CameraModelType::kSimpleRadial, CameraModelType::kRadial, CameraModelType::kOpenCv,
+        CameraModelType::kFullOpenCv, CameraModelType::kOpenCvFisheye}) {
     const auto parsed = ParseEnum<CameraModelType>(EnumName(type));
     ASSERT_TRUE(parsed.has_value());
     EXPECT_EQ(*parsed, type);
@@ -27,6 +29,7 @@ TEST(CameraModels, NamesRoundTrip) {
   }
   EXPECT_EQ(ParseEnum<CameraModelType>("simple_radial"), CameraModelType::kSimpleRadial);
   EXPECT_FALSE(ParseEnum<CameraModelType>("FISHEYE").has_value());
+  EXPECT_EQ(CameraModelNumParams(CameraModelType::kFullOpenCv), kMaxCameraModelParams);
   EXPECT_EQ(CameraModelNumParams(CameraModelType::kFrame), kFrameNumParams);
 }
 
@@ -42,6 +45,46 @@ TEST(CameraModels, SimpleRadialNominalCase) {
                       residual);
   EXPECT_NEAR(residual[0], 1.0, kExact);
   EXPECT_NEAR(residual[1], 0.5, kExact);
+}
+
+TEST(CameraModels, FullOpenCvNominalCase) {
+  // COLMAP's FULL_OPENCV, computed by hand: (a, b) = (0.2, 0.1) is (u, v) = (0.2, -0.1), r2 = 0.05.
+  // k1 = 0.1, k2 = 0.2, k3 = 0.4, k4 = 0.2, k5 = k6 = 0: radial factor
+  // (1 + 0.005 + 0.0005 + 0.00005) / (1 + 0.01) = 1.00555 / 1.01; p1 = 0.01, p2 = -0.02:
+  // du = 2 p1 u v + p2 (r2 + 2 u^2) = -0.0004 - 0.0026 = -0.003,
+  // dv = 2 p2 u v + p1 (r2 + 2 v^2) = 0.0008 + 0.0007 = 0.0015.
+  // fx = 1000, fy = 1100, principal point (500, 400).
+  const double params[] = {1000.0, 1100.0, 500.0, 400.0, 0.1, 0.2, 0.01, -0.02, 0.4, 0.2, 0.0, 0.0};
+  const double ab[] = {0.2, 0.1};
+  const double zero[] = {0.0, 0.0};
+  double residual[2];
+  CameraModelResidual(CameraModelType::kFullOpenCv, params, ab, zero, CameraModelData(), residual);
+  const double factor = 1.00555 / 1.01;
+  EXPECT_NEAR(-residual[0], 500.0 + 1000.0 * (0.2 * factor - 0.003), kExact);
+  EXPECT_NEAR(-residual[1], 400.0 + 1100.0 * (-0.1 * factor + 0.0015), kExact);
+}
+
+TEST(CameraModels, OpenCvFisheyeNominalCase) {
+  // COLMAP's OPENCV_FISHEYE by hand: (u, v) = (0.3, -0.4), r = 0.5, theta = atan(0.5),
+  // theta_d = theta (1 + k1 theta^2 + k2 theta^4 + k3 theta^6 + k4 theta^8), point (u, v) theta_d /
+  // r.
+  const double params[] = {800.0, 810.0, 320.0, 240.0, 0.05, -0.01, 0.002, -0.0005};
+  const double ab[] = {0.3, 0.4};
+  const double zero[] = {0.0, 0.0};
+  double residual[2];
+  CameraModelResidual(CameraModelType::kOpenCvFisheye, params, ab, zero, CameraModelData(),
+                      residual);
+  const double theta = std::atan(0.5), t2 = theta * theta;
+  const double theta_d = theta * (1.0 + 0.05 * t2 - 0.01 * t2 * t2 + 0.002 * t2 * t2 * t2 -
+                                  0.0005 * t2 * t2 * t2 * t2);
+  EXPECT_NEAR(-residual[0], 320.0 + 800.0 * 0.3 * theta_d / 0.5, kExact);
+  EXPECT_NEAR(-residual[1], 240.0 - 810.0 * 0.4 * theta_d / 0.5, kExact);
+  // On the axis the model is the identity (no 0 / 0).
+  const double centre[] = {0.0, 0.0};
+  CameraModelResidual(CameraModelType::kOpenCvFisheye, params, centre, zero, CameraModelData(),
+                      residual);
+  EXPECT_EQ(-residual[0], 320.0);
+  EXPECT_EQ(-residual[1], 240.0);
 }
 
 TEST(CameraModels, FrameNominalCase) {
@@ -103,6 +146,12 @@ TEST(CameraModels, InversionsRoundTripForEveryModel) {
         {CameraModelType::kSimpleRadial, {3000.0, 2000.0, 1500.0, -0.08}, {}},
         {CameraModelType::kRadial, {3000.0, 2000.0, 1500.0, -0.08, 0.01}, {}},
         {CameraModelType::kOpenCv, {3000.0, 3010.0, 2000.0, 1500.0, -0.08, 0.01, 1e-3, -2e-3}, {}},
+        {CameraModelType::kFullOpenCv,
+         {3000.0, 3010.0, 2000.0, 1500.0, -0.08, 0.01, 1e-3, -2e-3, 0.002, 0.01, -0.003, 0.0005},
+         {}},
+        {CameraModelType::kOpenCvFisheye,
+         {3000.0, 3010.0, 2000.0, 1500.0, 0.03, -0.01, 0.002, -0.0003},
+         {}},
     };
     for (const Case& c : cases) {
       SCOPED_TRACE(EnumName(c.type));
@@ -160,6 +209,19 @@ TEST(CameraModels, CalibrationNamesPerModel) {
   EXPECT_EQ(indices, std::vector<int>{3});
   ASSERT_TRUE(CalibrationParamIndices(CameraModelType::kOpenCv, "P2", &indices).ok());
   EXPECT_EQ(indices, std::vector<int>{7});
+  ASSERT_TRUE(CalibrationParamIndices(CameraModelType::kFullOpenCv, "K3", &indices).ok());
+  EXPECT_EQ(indices, std::vector<int>{8});
+  ASSERT_TRUE(CalibrationParamIndices(CameraModelType::kOpenCvFisheye, "k3", &indices).ok());
+  EXPECT_EQ(indices, std::vector<int>{6});
+  ASSERT_TRUE(
+      CalibrationParamIndices(CameraModelType::kOpenCvFisheye, "PrincipalY", &indices).ok());
+  EXPECT_EQ(indices, std::vector<int>{3});
+  EXPECT_FALSE(CalibrationParamIndices(CameraModelType::kOpenCvFisheye, "P1", &indices).ok());
+  ASSERT_TRUE(CalibrationParamIndices(CameraModelType::kFullOpenCv, "k5", &indices).ok());
+  EXPECT_EQ(indices, std::vector<int>{10});
+  ASSERT_TRUE(CalibrationParamIndices(CameraModelType::kRadial, "f", &indices).ok());
+  EXPECT_EQ(indices, std::vector<int>{0});
+  EXPECT_FALSE(CalibrationParamIndices(CameraModelType::kOpenCv, "K3", &indices).ok());
   const Status missing = CalibrationParamIndices(CameraModelType::kSimpleRadial, "K2", &indices);
   ASSERT_FALSE(missing.ok());
   EXPECT_EQ(missing.message(), "the SIMPLE_RADIAL camera model has no parameter 'K2'");

@@ -167,7 +167,8 @@ TEST(EnumNames, PrintedNamesAndAliasesAreThoseOfTheFormats) {
             "tie_marks, control_marks, control_points, camera_positions or attitudes");
   EXPECT_EQ(EnumChoices<BundleDatum>(), "absolute or relative");
   EXPECT_EQ(EnumChoices<CameraModelType>(),
-            "FRAME, SIMPLE_PINHOLE, PINHOLE, SIMPLE_RADIAL, RADIAL or OPENCV");
+            "FRAME, SIMPLE_PINHOLE, PINHOLE, SIMPLE_RADIAL, RADIAL, OPENCV, FULL_OPENCV or "
+            "OPENCV_FISHEYE");
   EXPECT_EQ(EnumChoices<MarkStatus>(), "accepted, outlier or rejected");
   EXPECT_EQ(EnumChoices<MarkUnit>(), "px or um");
   EXPECT_EQ(EnumChoices<PixelOrigin>(), "corner or center");

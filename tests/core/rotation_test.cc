@@ -187,6 +187,47 @@ TEST(Rotation, BoundaryConversionRoundTripsForEveryConventionAndAngleDirection) 
             1e-15);
 }
 
+TEST(Rotation, ComputerVisionPoseByHand) {
+  // The identity pose of COLMAP / OpenSfM looks along +z with y down: the seed's camera (u, v, w)
+  // = (x, -y, -z) is Rx(pi), omega = pi; t = (1, 2, 3) puts the centre at -(1, 2, 3).
+  const ExteriorOrientation eo =
+      EoFromComputerVisionPose(Eigen::Matrix3d::Identity(), Eigen::Vector3d(1.0, 2.0, 3.0));
+  EXPECT_NEAR((eo.center_in_ground() - Eigen::Vector3d(-1.0, -2.0, -3.0)).norm(), 0.0,
+              kElementTolerance);
+  const Eigen::Matrix3d R = RotationFromAngles(RotationConvention::kSeed, eo.angles_seed_rad());
+  EXPECT_LT(
+      (R - Eigen::Vector3d(1.0, -1.0, -1.0).asDiagonal().toDenseMatrix()).cwiseAbs().maxCoeff(),
+      kElementTolerance);
+  // And back, for random poses.
+  std::mt19937_64 rng(5);
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  for (int trial = 0; trial < 100; ++trial) {
+    const Eigen::Vector3d r(3.0 * u(rng), 3.0 * u(rng), 3.0 * u(rng));
+    const Eigen::Vector3d t(100.0 * u(rng), 100.0 * u(rng), 100.0 * u(rng));
+    const Eigen::Matrix3d R_cv = RotationFromRotationVector(r);
+    Eigen::Matrix3d R_back;
+    Eigen::Vector3d t_back;
+    ComputerVisionPoseFromEo(EoFromComputerVisionPose(R_cv, t), &R_back, &t_back);
+    EXPECT_LT((R_back - R_cv).cwiseAbs().maxCoeff(), 1e-12);
+    EXPECT_LT((t_back - t).norm(), 1e-12 * 100.0);
+  }
+}
+
+TEST(Rotation, RotationVectorByHandAndBack) {
+  // A quarter turn about z takes x to y.
+  const Eigen::Matrix3d R = RotationFromRotationVector(Eigen::Vector3d(0.0, 0.0, 0.5 * kPi));
+  EXPECT_LT((R * Eigen::Vector3d::UnitX() - Eigen::Vector3d::UnitY()).norm(), kElementTolerance);
+  EXPECT_EQ(RotationFromRotationVector(Eigen::Vector3d::Zero()), Eigen::Matrix3d::Identity());
+  EXPECT_LT(RotationVectorFromRotation(Eigen::Matrix3d::Identity()).norm(), kElementTolerance);
+  std::mt19937_64 rng(9);
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  for (int trial = 0; trial < 100; ++trial) {
+    const Eigen::Vector3d r =
+        Eigen::Vector3d(u(rng), u(rng), u(rng)).normalized() * 3.0 * std::abs(u(rng));
+    EXPECT_LT((RotationVectorFromRotation(RotationFromRotationVector(r)) - r).norm(), 1e-12);
+  }
+}
+
 TEST(Rotation, CheckRotationMatrixRejectsReflectionsAndScaling) {
   EXPECT_TRUE(CheckRotationMatrix(Eigen::Matrix3d::Identity()).ok());
   EXPECT_FALSE(CheckRotationMatrix(-Eigen::Matrix3d::Identity()).ok());

@@ -48,6 +48,12 @@ std::vector<Case> Cases() {
       {CameraModelType::kOpenCv,
        {3000.0, 3010.0, 2000.0, 1500.0, -0.05, 0.01, 1e-3, -2e-3},
        {2300.0, 1800.0}},
+      {CameraModelType::kFullOpenCv,
+       {3000.0, 3010.0, 2000.0, 1500.0, -0.05, 0.01, 1e-3, -2e-3, 0.002, 0.01, -0.003, 0.0005},
+       {2300.0, 1800.0}},
+      {CameraModelType::kOpenCvFisheye,
+       {3000.0, 3010.0, 2000.0, 1500.0, 0.03, -0.01, 0.002, -0.0003},
+       {2300.0, 1800.0}},
   };
 }
 
@@ -67,6 +73,8 @@ void Evaluate(const Case& c, const double* params, const double* ab, double* res
       return EvaluateCameraModel<8>(c.type, params, ab, obs, data, residual, d_ab, d_params);
     case 11:
       return EvaluateCameraModel<11>(c.type, params, ab, obs, data, residual, d_ab, d_params);
+    case 12:
+      return EvaluateCameraModel<12>(c.type, params, ab, obs, data, residual, d_ab, d_params);
   }
   FAIL() << "no instantiation for " << EnumName(c.type);
 }

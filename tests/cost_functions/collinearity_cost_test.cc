@@ -152,6 +152,16 @@ std::vector<ModelCase> ModelCases(const RandomView& view, std::mt19937_64* rng,
     table_data.table_size = static_cast<int>(table_r->size());
     cases.push_back({CameraModelType::kFrame, cases.back().params, table_data, view.film_um});
   }
+  cases.push_back({CameraModelType::kFullOpenCv,
+                   {f, f * 0.99, cx, cy, 0.05 * u(*rng), 0.01 * u(*rng), 1e-3 * u(*rng),
+                    1e-3 * u(*rng), 1e-3 * u(*rng), 0.01 * u(*rng), 1e-3 * u(*rng), 1e-4 * u(*rng)},
+                   {},
+                   pixel});
+  cases.push_back(
+      {CameraModelType::kOpenCvFisheye,
+       {f, f * 1.01, cx, cy, 0.05 * u(*rng), 0.01 * u(*rng), 1e-3 * u(*rng), 1e-4 * u(*rng)},
+       {},
+       pixel});
   return cases;
 }
 

@@ -1,8 +1,9 @@
 // Block I/O at scale (docs/performance.md, issue 10 section 2): generates issue 10's synthetic
 // block (25 lines x 40 images of a 24 mm / 4 um / 6000 x 4000 camera at 100 m, 13 m forward and
 // 30 m side spacing, 120 000 tie points: about 1.8 million marks), writes it as the project's
-// tables and as a COLMAP text and binary model, reads them back (the tables one by one, then assembled into a
-// block, then all at once with ReadBlock as `photopose bundle` does), and times every step (wall
+// tables and as a COLMAP text and binary model, reads them back (the tables one by one, then
+// assembled into a block, then all at once with ReadBlock as `photopose bundle` does; the COLMAP
+// model is also written and read as an OpenSfM reconstruction), and times every step (wall
 // clock, one run each) with the step's peak resident memory (and how far above the memory at its
 // start that peak is). When `colmap` is on the PATH, its own text reader runs on the same model in
 // the same run (`colmap model_converter` text -> binary, and binary -> text for its writer) as the
@@ -11,6 +12,7 @@
 //   truth/frames.csv truth/points.csv truth/blunders.csv
 //   colmap/{cameras,images,points3D}.txt             the same block as a COLMAP model
 //   colmap_binary/{cameras,images,points3D}.bin      and as a binary one
+//   opensfm/{reconstruction.json,tracks.csv}         and as an OpenSfM reconstruction
 //
 // Usage: photopose_block_io_benchmark --out_dir=DIR [--lines=25] [--images_per_line=40]
 //            [--forward_spacing_m=13] [--side_spacing_m=30] [--tie_points=120000] [--seed=1]
@@ -32,6 +34,7 @@
 #include "core/block.h"
 #include "core/io/block_tables.h"
 #include "core/io/colmap.h"
+#include "core/io/opensfm.h"
 #include "core/simulation/synthetic_block.h"
 #include "core/io/tables.h"
 
@@ -192,6 +195,22 @@ int Run(int argc, char** argv) {
     return 1;
   if (again.marks.size() != num_marks) {
     std::fprintf(stderr, "read %zu marks, wrote %zu\n", again.marks.size(), num_marks);
+    return 1;
+  }
+  // The same block (its COLMAP pinhole camera) as an OpenSfM reconstruction.
+  const std::string opensfm_dir = out_dir + "/opensfm";
+  std::filesystem::create_directories(opensfm_dir);
+  if (!Timed("write OpenSfM (WriteOpenSfmReconstruction)",
+             [&] { return WriteOpenSfmReconstruction(opensfm_dir, again); }, &t))
+    return 1;
+  std::printf("  sizes: reconstruction.json %.1f MB, tracks.csv %.1f MB\n",
+              FileMb(opensfm_dir + "/reconstruction.json"), FileMb(opensfm_dir + "/tracks.csv"));
+  again = Block();
+  if (!Timed("read OpenSfM (ReadOpenSfmReconstruction)",
+             [&] { return ReadOpenSfmReconstruction(opensfm_dir, &again); }, &t))
+    return 1;
+  if (again.marks.size() != num_marks) {
+    std::fprintf(stderr, "read %zu OpenSfM marks, wrote %zu\n", again.marks.size(), num_marks);
     return 1;
   }
   again = Block();

@@ -308,9 +308,10 @@ INSTANTIATE_TEST_SUITE_P(
         BadBinary{"HugeTrack", 2, 0, 51, U64(1000), "",
                   "points3D.bin: byte 51: track length: 1000 records of at least 8 bytes do not "
                   "fit in the 8 bytes left in the file"},
-        BadBinary{"UnsupportedModel", 0, 0, 12, U32(5), "",
-                  "cameras.bin: byte 12: MODEL_ID: camera model 5 (OPENCV_FISHEYE) is not "
-                  "supported (supported: SIMPLE_PINHOLE, PINHOLE, SIMPLE_RADIAL, RADIAL, OPENCV)"},
+        BadBinary{"UnsupportedModel", 0, 0, 12, U32(7), "",
+                  "cameras.bin: byte 12: MODEL_ID: camera model 7 (FOV) is not supported "
+                  "(supported: SIMPLE_PINHOLE, PINHOLE, SIMPLE_RADIAL, RADIAL, OPENCV, "
+                  "OPENCV_FISHEYE, FULL_OPENCV)"},
         BadBinary{"UnknownModel", 0, 0, 12, U32(0xffffffff), "",
                   "cameras.bin: byte 12: MODEL_ID: -1 is no COLMAP camera model"},
         BadBinary{"NameWithoutNul", 1, 72, 0, "", "abcdefghijklmnopqrstu",

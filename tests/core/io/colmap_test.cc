@@ -426,7 +426,8 @@ INSTANTIATE_TEST_SUITE_P(
     ::testing::Values(
         BadModel{"Fisheye", "# c\n# c\n\n4 FISHEYE 100 80 100 50 40 0.1\n", kImage, kPoint,
                  "cameras.txt:4: MODEL: camera model 'FISHEYE' is not supported (supported: "
-                 "SIMPLE_PINHOLE, PINHOLE, SIMPLE_RADIAL, RADIAL, OPENCV)"},
+                 "SIMPLE_PINHOLE, PINHOLE, SIMPLE_RADIAL, RADIAL, OPENCV, OPENCV_FISHEYE, "
+                 "FULL_OPENCV)"},
         BadModel{"MissingParameter", "1 RADIAL 100 80 100 50 40 0.1\n", kImage, kPoint,
                  "cameras.txt:1: PARAMS k2: is missing"},
         BadModel{"NotANumber", kCamera, "1 1 0 abc 0 0 0 0 1 a.jpg\n\n", kPoint,
@@ -473,7 +474,7 @@ INSTANTIATE_TEST_SUITE_P(
                  kImage, kPoint,
                  "cameras.txt:1: MODEL: camera model '\\x1B[2J_ABCDEFGHIJKLMNOPQRSTUVWXYZ_ABCDEFGH"
                  "\u2026(58 bytes)' is not supported (supported: SIMPLE_PINHOLE, PINHOLE, "
-                 "SIMPLE_RADIAL, RADIAL, OPENCV)"}),
+                 "SIMPLE_RADIAL, RADIAL, OPENCV, OPENCV_FISHEYE, FULL_OPENCV)"}),
     [](const ::testing::TestParamInfo<BadModel>& info) { return std::string(info.param.name); });
 
 TEST(ColmapIo, AFifoOrAFileOverTheLimitIsRefusedWithoutWaitingOrReading) {
