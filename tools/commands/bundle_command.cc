@@ -13,6 +13,7 @@
 #include "core/block.h"
 #include "core/io/block_tables.h"
 #include "core/io/colmap.h"
+#include "core/io/opensfm.h"
 #include "core/io/csv.h"
 #include "core/io/output_files.h"
 #include "core/io/tables.h"
@@ -30,6 +31,8 @@ DEFINE_string(bundle_points, "", "Ground points (CSV: PointID, X, Y, Z in metres
 DEFINE_string(bundle_frames, "", "Frames table: PerspectiveX/Y/Z are the measured camera positions (priors with --camera_accuracy or per-row AccuracyX/Y/Z, otherwise initial values only) and Omega/Phi/Kappa initial values (priors with --attitude_accuracy or per-row AccuracyOmega/Phi/Kappa). Images without a row are oriented by resection.");
 DEFINE_string(bundle_colmap_model, "", "A COLMAP model folder to adjust instead of the tables: binary (cameras.bin, images.bin, points3D.bin) when all three are there, else text (cameras.txt, images.txt, points3D.txt).");
 DEFINE_string(bundle_bal, "", "A BAL problem file to adjust instead of the tables.");
+DEFINE_string(bundle_opensfm, "", "An OpenSfM / OpenDroneMap reconstruction to adjust instead of the tables: reconstruction.json or the folder holding it (ODM: <project>/opensfm), tracks.csv beside it. Georeferenced like --colmap_model with --geo, --gcp_list, --frames, --points or --model_gps.");
+DEFINE_bool(bundle_model_gps, false, "With --opensfm: the shots' GNSS positions the reconstruction holds (gps_position in its topocentric frame at reference_lla, accuracy gps_dop) are the camera positions to georeference with.");
 DEFINE_string(bundle_geo, "", "With --colmap_model: camera positions as an OpenDroneMap geo.txt (first line the CRS; then image x y z [yaw pitch roll] [horizontal vertical accuracy]; x = easting or longitude). The model is georeferenced: aligned by a robust similarity, then adjusted with the positions as priors.");
 DEFINE_string(bundle_gcp_list, "", "With --colmap_model: ground control as an OpenDroneMap gcp_list.txt (first line the CRS; X Y Z px py image [name]); points named in --check_points are check points.");
 DEFINE_string(bundle_crs, "", "With --colmap_model: the CRS of --points and --frames (EPSG:<code>, a +proj string, WKT; X = easting or longitude first).");
@@ -86,6 +89,9 @@ constexpr char kUsage[] =
     "                        [--snoop] [--cross_validate] [--threads=N] [--quiet]\n"
     "   or: photopose bundle --colmap_model=DIR [--out_colmap=DIR] [--out_colmap_format=text|binary]\n"
     "                        [--calibrate=LIST] ...\n"
+    "   or: photopose bundle --colmap_model=DIR | --opensfm=DIR [--geo=geo.txt | --frames=F.csv --crs=EPSG:N\n"
+    "                        | --model_gps] [--gcp_list=gcp_list.txt [--check_points=A,B] | --points=P.csv\n"
+    "                        --marks=M.csv --crs=EPSG:N] [--out_crs=EPSG:N] --out=F.csv ...   (georeferencing)\n"
     "   or: photopose bundle --bal=problem.txt ...\n\n"
     "Minimises reprojection errors^2 / tie accuracy^2 + control residuals^2 / marker accuracy^2 +\n"
     "camera position residuals^2 / camera accuracy^2 (Metashape's reference settings) and reports,\n"
@@ -147,6 +153,7 @@ struct BundleRun {
   std::vector<std::pair<std::string, std::string>> written;  // (label, path) of the outputs
   Block block;
   ColmapModelExtras colmap_extras;
+  OpenSfmExtras opensfm_extras;  // of --opensfm
   // A model georeferenced with positions and/or control (--geo, --gcp_list, --frames, --points).
   bool georeference = false;
   GeoreferenceResult georeferenced;
@@ -163,13 +170,18 @@ constexpr int kGoOn = -1;
 
 // Which input, and the outputs that fit it.
 int CheckInputChoice(const char* command, BundleRun* run) {
-  // With a COLMAP model, --marks are the control points' marks (georeferencing).
-  const bool table_marks = !FLAGS_bundle_marks.empty() && FLAGS_bundle_colmap_model.empty();
-  const int sources = (!FLAGS_bundle_colmap_model.empty()) + (!FLAGS_bundle_bal.empty()) +
-                      (table_marks || !FLAGS_bundle_cameras.empty());
+  // With a model (COLMAP, OpenSfM), --marks are the control points' marks (georeferencing).
+  const bool model = !FLAGS_bundle_colmap_model.empty() || !FLAGS_bundle_opensfm.empty();
+  const bool table_marks = !FLAGS_bundle_marks.empty() && !model;
+  const int sources = (!FLAGS_bundle_colmap_model.empty()) + (!FLAGS_bundle_opensfm.empty()) +
+                      (!FLAGS_bundle_bal.empty()) + (table_marks || !FLAGS_bundle_cameras.empty());
   if (sources != 1)
-    return BadInput(command, "give the tables (--cameras and --marks), --colmap_model or --bal: one of them");
-  run->tables = FLAGS_bundle_colmap_model.empty() && FLAGS_bundle_bal.empty();
+    return BadInput(command, "give the tables (--cameras and --marks), --colmap_model, --opensfm or --bal: one of them");
+  run->tables = !model && FLAGS_bundle_bal.empty();
+  if (FLAGS_bundle_model_gps && FLAGS_bundle_opensfm.empty())
+    return BadInput(command, "--model_gps takes the GNSS positions an OpenSfM reconstruction holds: give --opensfm");
+  if (FLAGS_bundle_model_gps && (!FLAGS_bundle_geo.empty() || !FLAGS_bundle_frames.empty()))
+    return BadInput(command, "give the camera positions once: --model_gps, --geo or --frames");
   if (!FLAGS_bundle_bal.empty() && !FLAGS_bundle_marks.empty())
     return BadInput(command, "--marks: a BAL problem holds its own observations");
   if (run->tables && (FLAGS_bundle_cameras.empty() || FLAGS_bundle_marks.empty()))
@@ -180,15 +192,16 @@ int CheckInputChoice(const char* command, BundleRun* run) {
     return BadInput(command, "--out_cameras writes a camera table of frame cameras; with --colmap_model or --bal use --out_colmap");
   // A COLMAP model is georeferenced with positions and control; a BAL problem takes nothing else.
   const bool measurements = !FLAGS_bundle_geo.empty() || !FLAGS_bundle_gcp_list.empty() ||
-                            !FLAGS_bundle_points.empty() || !FLAGS_bundle_frames.empty();
+                            !FLAGS_bundle_points.empty() || !FLAGS_bundle_frames.empty() ||
+                            FLAGS_bundle_model_gps;
   if (!FLAGS_bundle_bal.empty() && measurements)
     return BadInput(command, "--bal holds its own points and poses: --geo, --gcp_list, --points and --frames are read with the tables or --colmap_model");
   if (run->tables && (!FLAGS_bundle_geo.empty() || !FLAGS_bundle_gcp_list.empty()))
     return BadInput(command, "--geo and --gcp_list georeference a --colmap_model; with the tables give --frames and --points");
   if (run->tables && (!FLAGS_bundle_crs.empty() || !FLAGS_bundle_out_crs.empty()))
     return BadInput(command, "--crs and --out_crs georeference a --colmap_model; the tables are adjusted in their own ground frame");
-  run->georeference = !FLAGS_bundle_colmap_model.empty() && measurements;
-  if (!FLAGS_bundle_colmap_model.empty()) {
+  run->georeference = model && measurements;
+  if (model) {
     if (!FLAGS_bundle_gcp_list.empty() && !FLAGS_bundle_points.empty())
       return BadInput(command, "give the control as --gcp_list or as --points with --marks, not both");
     if (!FLAGS_bundle_points.empty() && FLAGS_bundle_marks.empty())
@@ -208,7 +221,7 @@ int CheckInputChoice(const char* command, BundleRun* run) {
     return BadInput(command, "--out_colmap_format is the format of --out_colmap: give --out_colmap too");
   if (!FLAGS_bundle_bal.empty() && !FLAGS_bundle_out_colmap.empty())
     return BadInput(command, "--out_colmap: a BAL problem has no image size and counts pixels from the image centre, which a COLMAP model cannot hold; write --out, --out_points or --report");
-  run->context.input_kind = run->tables ? "tables" : !FLAGS_bundle_colmap_model.empty() ? "colmap" : "bal";
+  run->context.input_kind = run->tables ? "tables" : !FLAGS_bundle_colmap_model.empty() ? "colmap" : !FLAGS_bundle_opensfm.empty() ? "opensfm" : "bal";
   if (!ParseEnum(FLAGS_bundle_rotation, &run->context.rotation))
     return BadInput(command, EnumFlagError<RotationConvention>("--rotation", FLAGS_bundle_rotation));
   return kGoOn;
@@ -298,10 +311,15 @@ int DeclareFiles(const char* command, const ParsedFlags& parsed, BundleRun* run,
     if (error)
       return BadInput(command, "--out_colmap=" + FLAGS_bundle_out_colmap + ": cannot create the folder: " + error.message());
   }
+  // The reconstruction when named as a file (a folder holds no output anyway).
+  std::error_code no_error;
+  const std::string opensfm_file =
+      std::filesystem::is_regular_file(FLAGS_bundle_opensfm, no_error) ? FLAGS_bundle_opensfm : std::string();
   for (const auto& [label, path] : {std::pair<const char*, const std::string&>{"--cameras", FLAGS_bundle_cameras},
                                     {"--marks", FLAGS_bundle_marks}, {"--points", FLAGS_bundle_points},
                                     {"--frames", FLAGS_bundle_frames}, {"--bal", FLAGS_bundle_bal},
-                                    {"--geo", FLAGS_bundle_geo}, {"--gcp_list", FLAGS_bundle_gcp_list}}) {
+                                    {"--geo", FLAGS_bundle_geo}, {"--gcp_list", FLAGS_bundle_gcp_list},
+                                    {"--opensfm", opensfm_file}}) {
     const Status input = outputs->AddInput(label, path);
     if (!input.ok()) return BadInput(command, input.message());
     if (!path.empty()) run->context.inputs.push_back(path);
@@ -352,8 +370,36 @@ int DeclareFiles(const char* command, const ParsedFlags& parsed, BundleRun* run,
 }
 
 // The camera positions and control of a georeferenced model, as files give them.
-int ReadGeoreferenceInputs(const char* command, GeoreferenceInputs* inputs) {
-  if (!FLAGS_bundle_geo.empty()) {
+int ReadGeoreferenceInputs(const char* command, const BundleRun& run, GeoreferenceInputs* inputs) {
+  if (FLAGS_bundle_model_gps) {
+    // The shots' GNSS, in the reconstruction's topocentric frame at reference_lla: to EPSG:4979.
+    const OpenSfmExtras& extras = run.opensfm_extras;
+    if (!extras.reference_lla)
+      return BadInput(command, "--model_gps: " + FLAGS_bundle_opensfm + " has no reference_lla (nor a reference_lla.json beside it): its GNSS positions have no place on Earth");
+    LocalFrame frame;
+    const Status made = LocalFrame::Create("EPSG:4979", Eigen::Vector3d(extras.reference_lla->longitude_deg, extras.reference_lla->latitude_deg, extras.reference_lla->altitude_m), &frame);
+    if (!made.ok()) return BadInput(command, "--model_gps: " + made.message());
+    std::vector<Eigen::Vector3d> positions;
+    std::vector<int> images;
+    for (size_t i = 0; i < run.block.images.size() && i < extras.gps_position_m.size(); ++i) {
+      if (!extras.gps_position_m[i]) continue;
+      positions.push_back(*extras.gps_position_m[i]);
+      images.push_back(static_cast<int>(i));
+    }
+    if (positions.empty()) return BadInput(command, "--model_gps: no shot of " + FLAGS_bundle_opensfm + " has a gps_position");
+    const Status moved = frame.FromLocal("EPSG:4979", &positions);
+    if (!moved.ok()) return BadInput(command, "--model_gps: " + moved.message());
+    inputs->positions_crs = "EPSG:4979";
+    inputs->positions_source = FLAGS_bundle_opensfm;
+    for (size_t k = 0; k < positions.size(); ++k) {
+      CameraPositionMeasurement m;
+      m.image = run.block.images[images[k]].name;
+      m.position = positions[k];
+      const std::optional<double>& dop = run.opensfm_extras.gps_dop_m[images[k]];
+      if (dop && *dop > 0.0) m.accuracy_m = Eigen::Vector3d::Constant(*dop);
+      inputs->positions.push_back(m);
+    }
+  } else if (!FLAGS_bundle_geo.empty()) {
     GeoTxt geo;
     const Status read = ReadGeoTxt(FLAGS_bundle_geo, &geo);
     if (!read.ok()) return BadInput(command, read.message());
@@ -423,7 +469,7 @@ int ReadGeoreferenceInputs(const char* command, GeoreferenceInputs* inputs) {
 // Moves the model into the local frame of its positions and control (PrepareGeoreference).
 int GeoreferenceModel(const char* command, BundleRun* run) {
   GeoreferenceInputs inputs;
-  const int code = ReadGeoreferenceInputs(command, &inputs);
+  const int code = ReadGeoreferenceInputs(command, *run, &inputs);
   if (code != kGoOn) return code;
   GeoreferenceOptions options;
   options.out_crs = FLAGS_bundle_out_crs;
@@ -467,6 +513,27 @@ int ReadBundleBlock(const char* command, BundleRun* run) {
     if (!read.ok()) return BadInput(command, read.message());
     run->model_points = block.points.size();
     run->model_marks = block.marks.size();
+    if (run->georeference) {
+      const int code = GeoreferenceModel(command, run);
+      if (code != kGoOn) return code;
+    }
+  } else if (!FLAGS_bundle_opensfm.empty()) {
+    OpenSfmExtras extras;
+    const Status read = ReadOpenSfmReconstruction(FLAGS_bundle_opensfm, &block, &extras);
+    if (!read.ok()) return BadInput(command, read.message());
+    if (!FLAGS_bundle_quiet) {
+      std::cerr << "photopose bundle: " << FLAGS_bundle_opensfm << ": " << block.images.size() << " shots, "
+                << block.points.size() << " points, " << block.marks.size() << " marks";
+      if (extras.further_reconstructions > 0)
+        std::cerr << "; " << extras.further_reconstructions << " further reconstructions in the file not read (the first, OpenSfM's largest, is adjusted)";
+      if (extras.tracks_of_other_images + extras.tracks_of_other_points > 0)
+        std::cerr << "; tracks.csv entries left out: " << extras.tracks_of_other_images << " of images and "
+                  << extras.tracks_of_other_points << " of points the reconstruction does not have";
+      std::cerr << "\n";
+    }
+    run->model_points = block.points.size();
+    run->model_marks = block.marks.size();
+    run->opensfm_extras = std::move(extras);
     if (run->georeference) {
       const int code = GeoreferenceModel(command, run);
       if (code != kGoOn) return code;

@@ -3,10 +3,12 @@
 #include <gtest/gtest.h>
 
 #include <cstdio>
+#include <filesystem>
 #include <nlohmann/json.hpp>
 #include <sstream>
 
 #include "core/io/colmap.h"
+#include "core/io/opensfm.h"
 #include "core/io/csv.h"
 #include "tests/support/georeference_scene.h"
 #include "tests/tools/cli_test_util.h"
@@ -125,6 +127,52 @@ TEST(BundleGeoreference, RefusesWhatItCannotUseBeforeAnyWork) {
     EXPECT_NE(run.err.find(c.message), std::string::npos) << c.arguments << "\n" << run.err;
     EXPECT_FALSE(std::filesystem::exists(dir + "/f.csv")) << c.arguments;
   }
+}
+
+// An ODM reconstruction: its shots' GNSS (in its topocentric frame at reference_lla) as the
+// positions, a gcp_list.txt as the control.
+TEST(BundleGeoreference, OpenSfmReconstructionWithItsOwnGpsAndAGcpList) {
+  const testing::GeoreferenceScene scene = testing::MakeGeoreferenceScene(2.0);
+  const std::string dir = ScratchDir();
+  const std::string checks = WriteScene(scene, dir);
+  // Extras of the right sizes: write the model plain, read it back with them.
+  std::filesystem::create_directories(dir + "/plain");
+  ASSERT_TRUE(WriteOpenSfmReconstruction(dir + "/plain", scene.model).ok());
+  Block plain;
+  OpenSfmExtras extras;
+  ASSERT_TRUE(ReadOpenSfmReconstruction(dir + "/plain", &plain, &extras).ok());
+  extras.gps_position_m.clear();
+  extras.gps_dop_m.clear();
+  extras.reference_lla = OpenSfmReferenceLla{47.79, 11.19, 480.0};
+  LocalFrame reference;
+  ASSERT_TRUE(LocalFrame::Create("EPSG:4979", Eigen::Vector3d(11.19, 47.79, 480.0), &reference).ok());
+  std::vector<Eigen::Vector3d> gps;
+  for (const CameraPositionMeasurement& m : scene.inputs.positions) gps.push_back(m.position);
+  ASSERT_TRUE(reference.ToLocal("EPSG:4326", &gps).ok());
+  for (size_t i = 0; i < gps.size(); ++i) {
+    extras.gps_position_m.push_back(gps[i]);
+    extras.gps_dop_m.push_back(0.05);
+  }
+  std::filesystem::create_directories(dir + "/opensfm");
+  std::filesystem::create_directories(dir + "/bare");
+  const Status written = WriteOpenSfmReconstruction(dir + "/opensfm", scene.model, &extras);
+  ASSERT_TRUE(written.ok()) << written.message();
+  const CliRun run = RunCli("bundle --opensfm=" + dir + "/opensfm --model_gps --gcp_list=" + dir +
+                                "/gcp_list.txt --check_points=" + checks + " --out=" + dir +
+                                "/frames.csv --report=" + dir + "/report.json --quiet",
+                            dir);
+  ASSERT_EQ(run.exit_code, 0) << run.err << run.out;
+  const nlohmann::json g = nlohmann::json::parse(ReadFile(dir + "/report.json")).at("georeference");
+  EXPECT_EQ(g.at("positions_matched"), 24);
+  EXPECT_LT(g.at("check_after_adjustment").at("rmse_total_m").get<double>(), 0.03);
+  // Without a reference_lla the GNSS has no place on Earth: refused.
+  OpenSfmExtras no_reference = extras;
+  no_reference.reference_lla.reset();
+  const Status bare_written = WriteOpenSfmReconstruction(dir + "/bare", scene.model, &no_reference);
+  ASSERT_TRUE(bare_written.ok()) << bare_written.message();
+  const CliRun bare = RunCli("bundle --opensfm=" + dir + "/bare --model_gps --out=" + dir + "/f2.csv --quiet", dir);
+  EXPECT_EQ(bare.exit_code, 2);
+  EXPECT_NE(bare.err.find("has no reference_lla"), std::string::npos) << bare.err;
 }
 
 }  // namespace
