@@ -9,6 +9,8 @@
 //       reads DIR/cameras.csv, points.csv, marks.csv, frames.csv; times BundleAdjust (default
 //       options, THREADS threads) on a fresh copy of the block REPEATS times; writes the adjusted
 //       poses of the last run to OUT.
+//   photopose_python_benchmark_peer bundle_no_diagnostics DIR THREADS REPEATS OUT
+//       the same without the per-observation diagnostics (observation_diagnostics off).
 // Prints "seconds: t1 t2 ..." (each run's time of the call alone). OUT has one line per image:
 // its index and X0 Y0 Z0 omega phi kappa (m, rad, seed) with 17 significant digits, or "nan".
 
@@ -52,7 +54,7 @@ bool WritePoses(const std::string& path, const std::vector<std::optional<photopo
 }  // namespace
 
 int main(int argc, char** argv) {
-  if (argc != 6) return Fail("usage: resect|bundle DIR THREADS REPEATS OUT");
+  if (argc != 6) return Fail("usage: resect|bundle|bundle_no_diagnostics DIR THREADS REPEATS OUT");
   const std::string mode = argv[1], dir = argv[2], out = argv[5];
   const int threads = std::atoi(argv[3]), repeats = std::atoi(argv[4]);
   if (threads < 0 || repeats < 1) return Fail("THREADS must be >= 0 and REPEATS >= 1");
@@ -61,7 +63,8 @@ int main(int argc, char** argv) {
   files.cameras = dir + "/cameras.csv";
   files.points = dir + "/points.csv";
   files.marks = dir + "/marks.csv";
-  if (mode == "bundle") files.frames = dir + "/frames.csv";
+  const bool bundle = mode == "bundle" || mode == "bundle_no_diagnostics";
+  if (bundle) files.frames = dir + "/frames.csv";
   photopose::Block block;
   const photopose::Status read = photopose::ReadBlock(files, &block);
   if (!read.ok()) return Fail(read.message());
@@ -88,9 +91,10 @@ int main(int argc, char** argv) {
     }
     for (size_t k = 0; k < images.size(); ++k)
       if (results[k].success) poses[images[k]] = results[k].eo;
-  } else if (mode == "bundle") {
+  } else if (bundle) {
     photopose::BundleAdjustmentOptions options;
     options.solver.num_threads = threads;
+    options.statistics.observation_diagnostics = mode == "bundle";
     photopose::Block adjusted;
     for (int r = 0; r < repeats; ++r) {
       adjusted = block;
@@ -104,7 +108,7 @@ int main(int argc, char** argv) {
     }
     for (size_t i = 0; i < adjusted.images.size(); ++i) poses[i] = adjusted.images[i].eo;
   } else {
-    return Fail("unknown mode '" + mode + "': resect or bundle");
+    return Fail("unknown mode '" + mode + "': resect, bundle or bundle_no_diagnostics");
   }
   if (!WritePoses(out, poses)) return Fail("cannot write " + out);
   std::printf("seconds:");
