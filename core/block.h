@@ -71,6 +71,12 @@ struct BlockImage {
 
 // The role of a ground point (the points table's Role column).
 enum class PointRole { kControl, kCheck, kTie };
+// "control", "check", "tie": the points table's Role values (core/enum_names.h).
+inline constexpr EnumNameEntry<PointRole> kPointRoleNames[] = {
+    {PointRole::kControl, "control"}, {PointRole::kCheck, "check"}, {PointRole::kTie, "tie"}};
+constexpr EnumNameTable<PointRole> EnumNames(PointRole) {
+  return EnumNameTable<PointRole>(kPointRoleNames);
+}
 
 // One ground point.
 struct BlockPoint {

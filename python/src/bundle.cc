@@ -1,0 +1,435 @@
+// The bundle adjustment (solvers/bundle/bundle_adjustment.h) with its composed options, config and
+// result (statistics, check points, diagnostics), its progress as a Python callback; the block's
+// initial values (solvers/bundle/block_initialization.h); control-point cross-validation.
+
+#include <exception>
+
+#include "common.h"
+#include "solvers/bundle/block_initialization.h"
+#include "solvers/bundle/bundle_adjustment.h"
+
+namespace photopose::python {
+namespace {
+
+// A Python progress callback, called from the adjustment's thread with the GIL taken. The first
+// exception it raises stops further calls (the C++ adjustment cannot be interrupted from its
+// progress hook) and is raised again when the adjustment returns.
+class ProgressRelay {
+ public:
+  explicit ProgressRelay(py::object callback) : callback_(std::move(callback)) {}
+  ~ProgressRelay() {
+    py::gil_scoped_acquire acquire;
+    callback_ = py::object();
+  }
+
+  std::function<void(const BundleIterationInfo&)> Function() {
+    if (callback_.is_none()) return {};
+    return [this](const BundleIterationInfo& info) {
+      py::gil_scoped_acquire acquire;
+      if (error_) return;
+      try {
+        callback_(info);
+      } catch (py::error_already_set& e) {
+        error_ = std::make_unique<py::error_already_set>(std::move(e));
+      }
+    };
+  }
+  // Raises the callback's exception, if any (with the GIL held).
+  void Rethrow() {
+    if (error_) throw std::move(*error_);
+  }
+
+ private:
+  py::object callback_;
+  std::unique_ptr<py::error_already_set> error_;
+};
+
+py::dict ObservationColumns(const BundleAdjustmentResult& r) {
+  const size_t n = r.observations.size();
+  std::vector<int> group(n), item(n), axis(n);
+  std::vector<double> residual(n), sigma(n), redundancy(n), normalized(n), mdb(n), external(n);
+  py::array_t<bool> rejected(static_cast<py::ssize_t>(n));
+  for (size_t i = 0; i < n; ++i) {
+    const BundleObservationDiagnostics& o = r.observations[i];
+    group[i] = static_cast<int>(o.group);
+    item[i] = o.item;
+    axis[i] = o.axis;
+    residual[i] = o.residual;
+    sigma[i] = o.sigma;
+    redundancy[i] = o.redundancy;
+    normalized[i] = o.normalized;
+    mdb[i] = o.mdb;
+    external[i] = o.external_m;
+    rejected.mutable_data()[i] = o.rejected;
+  }
+  py::dict d;
+  d["group"] = ToArray(group);
+  d["item"] = ToArray(item);
+  d["axis"] = ToArray(axis);
+  d["residual"] = ToArray(residual);
+  d["sigma"] = ToArray(sigma);
+  d["redundancy"] = ToArray(redundancy);
+  d["normalized"] = ToArray(normalized);
+  d["mdb"] = ToArray(mdb);
+  d["external_m"] = ToArray(external);
+  d["rejected"] = rejected;
+  return d;
+}
+
+std::string SummaryRepr(const BundleAdjustmentSummary& s) {
+  return "BundleAdjustmentSummary(" + s.BriefReport() + ")";
+}
+
+}  // namespace
+
+void BindBundle(py::module_& m) {
+  // ---------------------------------------------------------------- options
+  auto acc = BindStruct<BundleAccuracies>(m, "BundleAccuracies", R"doc(
+The stated accuracies of the objective's groups (one sigma; Metashape's reference settings by
+default). A per-row accuracy of the tables overrides its row's default.)doc");
+  acc.def_readwrite("tie_px", &BundleAccuracies::tie_px, "px")
+      .def_readwrite("marker_projection_px", &BundleAccuracies::marker_projection_px, "px")
+      .def_readwrite("tie_film_um", &BundleAccuracies::tie_film_um, "um")
+      .def_readwrite("marker_projection_film_um", &BundleAccuracies::marker_projection_film_um, "um")
+      .def_readwrite("marker_m", &BundleAccuracies::marker_m, "m, per axis")
+      .def_readwrite("camera_m", &BundleAccuracies::camera_m, "m, X, Y, Z")
+      .def_readwrite("camera_positions_are_priors", &BundleAccuracies::camera_positions_are_priors)
+      .def_readwrite("attitude_deg", &BundleAccuracies::attitude_deg, "deg per angle, or None");
+
+  auto rob = BindStruct<BundleRobustnessOptions>(m, "BundleRobustnessOptions",
+                                                 "Robust loss on tie marks, rejection rounds, data snooping.");
+  rob.def_readwrite("tie_loss", &BundleRobustnessOptions::tie_loss, "'none', 'huber', 'cauchy', 'softl1'")
+      .def_readwrite("tie_loss_scale_sigmas", &BundleRobustnessOptions::tie_loss_scale_sigmas, "sigmas")
+      .def_readwrite("rejection_threshold", &BundleRobustnessOptions::rejection_threshold, "unitless")
+      .def_readwrite("max_rejection_rounds", &BundleRobustnessOptions::max_rejection_rounds, "count")
+      .def_readwrite("snoop", &BundleRobustnessOptions::snoop)
+      .def_readwrite("max_snooping_removals", &BundleRobustnessOptions::max_snooping_removals, "count");
+  DefValidate(rob, "BundleRobustnessOptions");
+
+  auto stats = BindStruct<BundleStatisticsOptions>(m, "BundleStatisticsOptions",
+                                                   "Covariances, verdicts, diagnostics, variance components.");
+  stats.def_readwrite("max_covariance_parameters", &BundleStatisticsOptions::max_covariance_parameters)
+      .def_readwrite("overfit_ratio", &BundleStatisticsOptions::overfit_ratio)
+      .def_readwrite("overfit_redundancy_share", &BundleStatisticsOptions::overfit_redundancy_share)
+      .def_readwrite("high_correlation", &BundleStatisticsOptions::high_correlation)
+      .def_readwrite("observation_diagnostics", &BundleStatisticsOptions::observation_diagnostics)
+      .def_readwrite("snooping_alpha", &BundleStatisticsOptions::snooping_alpha)
+      .def_readwrite("snooping_family_wise", &BundleStatisticsOptions::snooping_family_wise)
+      .def_readwrite("snooping_power", &BundleStatisticsOptions::snooping_power)
+      .def_readwrite("uncontrolled_redundancy", &BundleStatisticsOptions::uncontrolled_redundancy)
+      .def_readwrite("estimate_accuracies", &BundleStatisticsOptions::estimate_accuracies)
+      .def_readwrite("max_variance_iterations", &BundleStatisticsOptions::max_variance_iterations)
+      .def_readwrite("variance_tolerance", &BundleStatisticsOptions::variance_tolerance)
+      .def_readwrite("min_variance_redundancy", &BundleStatisticsOptions::min_variance_redundancy);
+  DefValidate(stats, "BundleStatisticsOptions");
+
+  auto solver = BindStruct<BundleSolverOptions>(m, "BundleSolverOptions", R"doc(
+How the minimum is found. The progress hook is bundle_adjust's `progress` argument.)doc");
+  solver.def_readwrite("jacobian", &BundleSolverOptions::jacobian, "'analytic' or 'autodiff'")
+      .def_readwrite("max_iterations", &BundleSolverOptions::max_iterations, "per round")
+      .def_readwrite("function_tolerance", &BundleSolverOptions::function_tolerance)
+      .def_readwrite("parameter_tolerance", &BundleSolverOptions::parameter_tolerance)
+      .def_readwrite("gradient_tolerance", &BundleSolverOptions::gradient_tolerance)
+      .def_readwrite("linear_solver", &BundleSolverOptions::linear_solver)
+      .def_readwrite("free_gauge_for_relative_blocks", &BundleSolverOptions::free_gauge_for_relative_blocks)
+      .def_readwrite("num_threads", &BundleSolverOptions::num_threads, "0: all cores");
+  DefValidate(solver, "BundleSolverOptions");
+
+  auto options = BindStruct<BundleAdjustmentOptions>(m, "BundleAdjustmentOptions", R"doc(
+The options of bundle_adjust, composed as in C++: accuracies, robustness, statistics, solver.)doc");
+  options.def_readwrite("accuracies", &BundleAdjustmentOptions::accuracies)
+      .def_readwrite("robustness", &BundleAdjustmentOptions::robustness)
+      .def_readwrite("statistics", &BundleAdjustmentOptions::statistics)
+      .def_readwrite("solver", &BundleAdjustmentOptions::solver);
+  DefValidate(options, "BundleAdjustmentOptions");
+
+  auto config = BindStruct<BundleAdjustmentConfig>(m, "BundleAdjustmentConfig", R"doc(
+What the adjustment holds constant or estimates: per camera the parameter indices to calibrate,
+constant images and points, the GNSS lever arm (camera frame u, v, w; m).)doc");
+  config.def_readwrite("calibrated_params", &BundleAdjustmentConfig::calibrated_params)
+      .def_readwrite("constant_images", &BundleAdjustmentConfig::constant_images)
+      .def_readwrite("constant_points", &BundleAdjustmentConfig::constant_points)
+      .def_readwrite("lever_arm_m", &BundleAdjustmentConfig::lever_arm_m)
+      .def_readwrite("estimate_lever_arm", &BundleAdjustmentConfig::estimate_lever_arm);
+  config.def_static("from_calibration_names", [](const PythonBlock& block, const std::vector<std::string>& names) {
+    BundleAdjustmentConfig out;
+    ThrowIfError(BundleAdjustmentConfig::FromCalibrationNames(block.block, names, &out));
+    return out;
+  }, py::arg("block"), py::arg("names"),
+     "Self-calibration of every camera by name ('FocalLength', 'PrincipalX', 'K1', ...: "
+     "`photopose bundle --calibrate`).");
+
+  // ---------------------------------------------------------------- result
+  py::class_<BundleIterationInfo> info(m, "BundleIterationInfo", "One iteration, as progress reports it.");
+  info.def_readonly("round", &BundleIterationInfo::round)
+      .def_readonly("iteration", &BundleIterationInfo::iteration)
+      .def_readonly("cost", &BundleIterationInfo::cost)
+      .def_readonly("sigma0", &BundleIterationInfo::sigma0)
+      .def_readonly("step_norm", &BundleIterationInfo::step_norm)
+      .def_readonly("elapsed_seconds", &BundleIterationInfo::elapsed_seconds)
+      .def_readonly("free_gauge", &BundleIterationInfo::free_gauge)
+      .def_readonly("trust_region_radius", &BundleIterationInfo::trust_region_radius)
+      .def_readonly("step_quality", &BundleIterationInfo::step_quality)
+      .def_readonly("step_successful", &BundleIterationInfo::step_successful)
+      .def_readonly("linear_solver_seconds", &BundleIterationInfo::linear_solver_seconds)
+      .def_readonly("iteration_seconds", &BundleIterationInfo::iteration_seconds)
+      .def("__repr__", [](const py::object& self) { return PropertiesRepr(self); });
+
+  py::class_<BundleAdjustmentSummary> summary(m, "BundleAdjustmentSummary");
+  summary.def_readonly("termination", &BundleAdjustmentSummary::termination)
+      .def_readonly("message", &BundleAdjustmentSummary::message)
+      .def_readonly("datum", &BundleAdjustmentSummary::datum, "'absolute' or 'relative'")
+      .def_readonly("datum_description", &BundleAdjustmentSummary::datum_description)
+      .def_readonly("rounds", &BundleAdjustmentSummary::rounds)
+      .def_readonly("iterations", &BundleAdjustmentSummary::iterations)
+      .def_readonly("initial_cost", &BundleAdjustmentSummary::initial_cost)
+      .def_readonly("final_cost", &BundleAdjustmentSummary::final_cost)
+      .def_readonly("sigma0", &BundleAdjustmentSummary::sigma0)
+      .def_readonly("redundancy", &BundleAdjustmentSummary::redundancy)
+      .def_readonly("num_images", &BundleAdjustmentSummary::num_images)
+      .def_readonly("num_points", &BundleAdjustmentSummary::num_points)
+      .def_readonly("num_marks", &BundleAdjustmentSummary::num_marks)
+      .def_readonly("num_rejected_marks", &BundleAdjustmentSummary::num_rejected_marks)
+      .def_readonly("tie_points_left_out", &BundleAdjustmentSummary::tie_points_left_out)
+      .def_readonly("time_seconds", &BundleAdjustmentSummary::time_seconds)
+      .def_readonly("statistics_seconds", &BundleAdjustmentSummary::statistics_seconds)
+      .def_readonly("problem_build_seconds", &BundleAdjustmentSummary::problem_build_seconds)
+      .def_readonly("solver_preprocessing_seconds", &BundleAdjustmentSummary::solver_preprocessing_seconds)
+      .def_readonly("residual_evaluation_seconds", &BundleAdjustmentSummary::residual_evaluation_seconds)
+      .def_readonly("jacobian_evaluation_seconds", &BundleAdjustmentSummary::jacobian_evaluation_seconds)
+      .def_readonly("linear_solver_seconds", &BundleAdjustmentSummary::linear_solver_seconds)
+      .def_readonly("schur_structure", &BundleAdjustmentSummary::schur_structure)
+      .def("is_solution_usable", &BundleAdjustmentSummary::IsSolutionUsable)
+      .def("brief_report", &BundleAdjustmentSummary::BriefReport)
+      .def("__repr__", &SummaryRepr);
+
+  py::class_<BundleImageResult>(m, "BundleImageResult")
+      .def_readonly("adjusted", &BundleImageResult::adjusted)
+      .def_readonly("message", &BundleImageResult::message)
+      .def_property_readonly("covariance", [](const BundleImageResult& r) { return Matrix6d(r.covariance); },
+                             "6 x 6 (m, rad; seed)")
+      .def_readonly("has_covariance", &BundleImageResult::has_covariance)
+      .def_readonly("num_marks", &BundleImageResult::num_marks)
+      .def_readonly("rms_residual", &BundleImageResult::rms_residual)
+      .def_readonly("unit", &BundleImageResult::unit)
+      .def("__repr__", [](const py::object& self) { return PropertiesRepr(self); });
+
+  py::class_<BundlePointResult>(m, "BundlePointResult")
+      .def_readonly("num_observations", &BundlePointResult::num_observations)
+      .def_property_readonly("covariance", [](const BundlePointResult& r) { return Eigen::Matrix3d(r.covariance); },
+                             "3 x 3 (m^2)")
+      .def_readonly("has_covariance", &BundlePointResult::has_covariance)
+      .def_readonly("error_m", &BundlePointResult::error_m, "adjusted or intersected - surveyed (m)")
+      .def_readonly("message", &BundlePointResult::message)
+      .def("__repr__", [](const py::object& self) { return PropertiesRepr(self); });
+
+  py::class_<BundleGroupStatistics>(m, "BundleGroupStatistics", "One group of the objective.")
+      .def_readonly("group", &BundleGroupStatistics::group)
+      .def_readonly("count", &BundleGroupStatistics::count)
+      .def_readonly("unit", &BundleGroupStatistics::unit)
+      .def_readonly("stated_accuracy", &BundleGroupStatistics::stated_accuracy)
+      .def_readonly("num_axes", &BundleGroupStatistics::num_axes)
+      .def_readonly("rms", &BundleGroupStatistics::rms)
+      .def_readonly("rms_total", &BundleGroupStatistics::rms_total)
+      .def_readonly("ratio", &BundleGroupStatistics::ratio)
+      .def_readonly("redundancy_share", &BundleGroupStatistics::redundancy_share)
+      .def_readonly("overfit", &BundleGroupStatistics::overfit)
+      .def_readonly("message", &BundleGroupStatistics::message)
+      .def_readonly("estimated_accuracy", &BundleGroupStatistics::estimated_accuracy)
+      .def_readonly("estimated_accuracy_standard_error", &BundleGroupStatistics::estimated_accuracy_standard_error)
+      .def_readonly("estimation_message", &BundleGroupStatistics::estimation_message)
+      .def("__repr__", [](const py::object& self) { return PropertiesRepr(self); });
+
+  py::class_<BundleCalibrationResult>(m, "BundleCalibrationResult")
+      .def_readonly("camera", &BundleCalibrationResult::camera)
+      .def_readonly("names", &BundleCalibrationResult::names)
+      .def_readonly("indices", &BundleCalibrationResult::indices)
+      .def_readonly("values", &BundleCalibrationResult::values)
+      .def_readonly("sigmas", &BundleCalibrationResult::sigmas)
+      .def_readonly("correlation", &BundleCalibrationResult::correlation)
+      .def_readonly("high_correlations", &BundleCalibrationResult::high_correlations)
+      .def("__repr__", [](const py::object& self) { return PropertiesRepr(self); });
+
+  py::class_<BundleRejectedMark>(m, "BundleRejectedMark")
+      .def_readonly("mark", &BundleRejectedMark::mark)
+      .def_readonly("round", &BundleRejectedMark::round)
+      .def_readonly("whitened_residual", &BundleRejectedMark::whitened_residual)
+      .def("__repr__", [](const py::object& self) { return PropertiesRepr(self); });
+
+  py::class_<BundleSnoopingStep>(m, "BundleSnoopingStep")
+      .def_readonly("group", &BundleSnoopingStep::group)
+      .def_readonly("item", &BundleSnoopingStep::item)
+      .def_readonly("axis", &BundleSnoopingStep::axis)
+      .def_readonly("normalized", &BundleSnoopingStep::normalized)
+      .def_readonly("residual", &BundleSnoopingStep::residual)
+      .def("__repr__", [](const py::object& self) { return PropertiesRepr(self); });
+
+  py::class_<BundleAdjustmentResult> result(m, "BundleAdjustmentResult", R"doc(
+The adjustment's result: summary (termination, sigma0, redundancy, timings), per image and per
+point results, the groups' statistics and over-fitting verdicts, calibration, rejected marks,
+check- and control-point RMSE, mark residuals, per-observation diagnostics. The block passed to
+bundle_adjust holds the adjusted values.)doc");
+  result.def_readonly("summary", &BundleAdjustmentResult::summary)
+      .def_readonly("images", &BundleAdjustmentResult::images)
+      .def_readonly("points", &BundleAdjustmentResult::points)
+      .def_readonly("groups", &BundleAdjustmentResult::groups)
+      .def_readonly("calibration", &BundleAdjustmentResult::calibration)
+      .def_readonly("rejected_marks", &BundleAdjustmentResult::rejected_marks)
+      .def_readonly("lever_arm_m", &BundleAdjustmentResult::lever_arm_m)
+      .def_readonly("num_check_points", &BundleAdjustmentResult::num_check_points)
+      .def_readonly("check_rmse_m", &BundleAdjustmentResult::check_rmse_m)
+      .def_readonly("check_rmse_total_m", &BundleAdjustmentResult::check_rmse_total_m)
+      .def_readonly("num_control_points", &BundleAdjustmentResult::num_control_points)
+      .def_readonly("control_rmse_m", &BundleAdjustmentResult::control_rmse_m)
+      .def_readonly("control_rmse_total_m", &BundleAdjustmentResult::control_rmse_total_m)
+      .def_property_readonly("mark_residuals", [](const BundleAdjustmentResult& r) { return ToArray(r.mark_residuals); },
+                             "M x 2 observed - computed (the mark's unit); NaN rows: not used.")
+      .def_readonly("variance_iterations", &BundleAdjustmentResult::variance_iterations)
+      .def_property_readonly("observations", &ObservationColumns, R"doc(
+Per-observation diagnostics as columns (dict of equal-length arrays): group (0 tie marks, 1
+control marks, 2 control points, 3 camera positions, 4 attitudes), item, axis, residual, sigma,
+redundancy, normalized, mdb, external_m, rejected. Empty arrays when not computed.)doc")
+      .def_readonly("critical_value", &BundleAdjustmentResult::critical_value)
+      .def_readonly("alpha_per_observation", &BundleAdjustmentResult::alpha_per_observation)
+      .def_readonly("delta0", &BundleAdjustmentResult::delta0)
+      .def_readonly("num_uncontrolled", &BundleAdjustmentResult::num_uncontrolled)
+      .def_readonly("snooping", &BundleAdjustmentResult::snooping)
+      .def_property_readonly("image_adjusted", [](const BundleAdjustmentResult& r) {
+        py::array_t<bool> out(static_cast<py::ssize_t>(r.images.size()));
+        for (size_t i = 0; i < r.images.size(); ++i) out.mutable_data()[i] = r.images[i].adjusted;
+        return out;
+      })
+      .def_property_readonly("image_covariances", [](const BundleAdjustmentResult& r) {
+        return StackOrNaN(r.images.size(), 6, 6, [&](size_t i) -> std::optional<Matrix6d> {
+          if (!r.images[i].has_covariance) return std::nullopt;
+          return r.images[i].covariance;
+        });
+      }, "N x 6 x 6 (m, rad; seed); NaN without covariance.")
+      .def_property_readonly("image_standard_deviations", [](const BundleAdjustmentResult& r) {
+        py::array_t<double> out({static_cast<py::ssize_t>(r.images.size()), py::ssize_t(6)});
+        for (size_t i = 0; i < r.images.size(); ++i)
+          for (int k = 0; k < 6; ++k)
+            out.mutable_at(i, k) = r.images[i].has_covariance ? std::sqrt(r.images[i].covariance(k, k)) : NaN();
+        return out;
+      }, "N x 6 (m, rad; seed); NaN without covariance.")
+      .def_property_readonly("point_errors_m", [](const BundleAdjustmentResult& r) {
+        py::array_t<double> out({static_cast<py::ssize_t>(r.points.size()), py::ssize_t(3)});
+        for (size_t i = 0; i < r.points.size(); ++i)
+          for (int k = 0; k < 3; ++k)
+            out.mutable_at(i, k) = r.points[i].error_m ? (*r.points[i].error_m)[k] : NaN();
+        return out;
+      }, "N x 3 adjusted (control) or intersected (check) - surveyed (m); NaN for tie points.")
+      .def("full_report", [](const BundleAdjustmentResult& r, const PythonBlock& b) { return r.FullReport(b.block); },
+           py::arg("block"), "The multi-line report: summary, groups and verdicts, images, points, calibration.")
+      .def("__repr__", [](const BundleAdjustmentResult& r) {
+        return "BundleAdjustmentResult(" + r.summary.BriefReport() + ")";
+      });
+
+  // ---------------------------------------------------------------- calls
+  m.def("bundle_adjust",
+        [](PythonBlock& block, std::optional<BundleAdjustmentOptions> options,
+           std::optional<BundleAdjustmentConfig> config, const py::object& progress) {
+          BundleAdjustmentOptions o = options.value_or(BundleAdjustmentOptions());
+          const BundleAdjustmentConfig c = config.value_or(BundleAdjustmentConfig());
+          if (!progress.is_none() && !PyCallable_Check(progress.ptr()))
+            throw py::type_error("progress: expected a callable taking a BundleIterationInfo");
+          ProgressRelay relay(progress);
+          o.solver.progress = relay.Function();
+          BundleAdjustmentResult result;
+          Status status;
+          {
+            py::gil_scoped_release release;
+            status = BundleAdjust(o, c, &block.block, &result);
+          }
+          relay.Rethrow();
+          ThrowIfError(status);
+          return result;
+        },
+        py::arg("block"), py::arg("options") = py::none(), py::arg("config") = py::none(),
+        py::kw_only(), py::arg("progress") = py::none(), R"doc(
+Adjusts the block in place (BundleAdjust): on success its images' orientations, points' positions
+and cameras' parameters hold the adjusted values. Every image needs an orientation and every tie
+point a position (initialize_block). Raises photopose.Error for invalid options or a block the
+adjustment cannot use; a failed or unconverged adjustment is result.summary.termination with the
+block unchanged. progress(info: BundleIterationInfo) is called after every iteration (from the
+adjusting thread, with the GIL); an exception it raises is raised when the adjustment returns.)doc");
+
+  auto init_options = BindStruct<BlockInitializationOptions>(m, "BlockInitializationOptions",
+                                                             "Initial values of a block: resection and intersection.");
+  init_options.def_readwrite("resection", &BlockInitializationOptions::resection)
+      .def_readwrite("min_marks_for_resection", &BlockInitializationOptions::min_marks_for_resection)
+      .def_readwrite("min_intersection_angle_rad", &BlockInitializationOptions::min_intersection_angle_rad, "rad")
+      .def_readwrite("max_ray_misfit_rad", &BlockInitializationOptions::max_ray_misfit_rad, "rad")
+      .def_readwrite("default_sigma_px", &BlockInitializationOptions::default_sigma_px, "px")
+      .def_readwrite("default_sigma_um", &BlockInitializationOptions::default_sigma_um, "um")
+      .def_readwrite("max_rounds", &BlockInitializationOptions::max_rounds);
+
+  py::class_<BlockInitializationSummary>(m, "BlockInitializationSummary")
+      .def_readonly("images_given", &BlockInitializationSummary::images_given)
+      .def_readonly("images_resected", &BlockInitializationSummary::images_resected)
+      .def_readonly("points_given", &BlockInitializationSummary::points_given)
+      .def_readonly("points_triangulated", &BlockInitializationSummary::points_triangulated)
+      .def_readonly("rounds", &BlockInitializationSummary::rounds)
+      .def_readonly("not_oriented", &BlockInitializationSummary::not_oriented, "[(image, reason)]")
+      .def_readonly("points_not_triangulated", &BlockInitializationSummary::points_not_triangulated)
+      .def("brief_report", &BlockInitializationSummary::BriefReport)
+      .def("__repr__", [](const BlockInitializationSummary& s) {
+        return "BlockInitializationSummary(" + s.BriefReport() + ")";
+      });
+
+  m.def("initialize_block",
+        [](PythonBlock& block, std::optional<BlockInitializationOptions> options) {
+          const BlockInitializationOptions o = options.value_or(BlockInitializationOptions());
+          BlockInitializationSummary summary;
+          Status status;
+          {
+            py::gil_scoped_release release;
+            status = InitializeBlock(o, &block.block, &summary);
+          }
+          ThrowIfError(status);
+          return summary;
+        },
+        py::arg("block"), py::arg("options") = py::none(),
+        "Fills in missing orientations (resection) and tie-point positions (intersection) in "
+        "place (InitializeBlock); images it cannot orient are listed in the summary.");
+
+  py::class_<BundleCrossValidationPoint>(m, "BundleCrossValidationPoint")
+      .def_readonly("point", &BundleCrossValidationPoint::point)
+      .def_readonly("ok", &BundleCrossValidationPoint::ok)
+      .def_readonly("message", &BundleCrossValidationPoint::message)
+      .def_readonly("error_m", &BundleCrossValidationPoint::error_m)
+      .def_readonly("num_images", &BundleCrossValidationPoint::num_images)
+      .def_readonly("normalized", &BundleCrossValidationPoint::normalized)
+      .def_readonly("stands_out", &BundleCrossValidationPoint::stands_out)
+      .def("__repr__", [](const py::object& self) { return PropertiesRepr(self); });
+  py::class_<BundleCrossValidationResult>(m, "BundleCrossValidationResult")
+      .def_readonly("points", &BundleCrossValidationResult::points)
+      .def_readonly("count", &BundleCrossValidationResult::count)
+      .def_readonly("rmse_m", &BundleCrossValidationResult::rmse_m)
+      .def_readonly("rmse_total_m", &BundleCrossValidationResult::rmse_total_m)
+      .def_readonly("threshold", &BundleCrossValidationResult::threshold)
+      .def_readonly("time_seconds", &BundleCrossValidationResult::time_seconds)
+      .def("__repr__", [](const py::object& self) { return PropertiesRepr(self); });
+  m.def("cross_validate_control_points",
+        [](const PythonBlock& adjusted, const BundleAdjustmentResult& full,
+           std::optional<BundleAdjustmentOptions> options, std::optional<BundleAdjustmentConfig> config,
+           int num_threads) {
+          const BundleAdjustmentOptions o = options.value_or(BundleAdjustmentOptions());
+          const BundleAdjustmentConfig c = config.value_or(BundleAdjustmentConfig());
+          if (num_threads < 0) throw py::value_error("num_threads must be >= 0 (0: all cores)");
+          BundleCrossValidationResult out;
+          Status status;
+          {
+            py::gil_scoped_release release;
+            status = CrossValidateControlPoints(o, c, adjusted.block, full, num_threads, &out);
+          }
+          ThrowIfError(status);
+          return out;
+        },
+        py::arg("adjusted"), py::arg("full"), py::arg("options") = py::none(),
+        py::arg("config") = py::none(), py::arg("num_threads") = 0,
+        "Leave-one-out: each control point of the adjusted block in turn as a check point "
+        "(CrossValidateControlPoints), with the options and config of the full adjustment.");
+}
+
+}  // namespace photopose::python

@@ -1,0 +1,155 @@
+"""The bundle adjustment from Python (python/src/bundle.cc) gives the C++ library's block: the
+same adjusted poses as the photopose executable on the shared COLMAP model and on a synthetic
+block's tables, to 1e-10; options, config, result statistics, progress, errors."""
+
+import numpy as np
+import pytest
+
+import photopose as pp
+
+POSE_TOLERANCE = 1e-10
+
+
+def cli_options():
+    """The library's defaults as `photopose bundle` sets them without flags."""
+    options = pp.BundleAdjustmentOptions()
+    options.statistics.max_covariance_parameters = 3000
+    return options
+
+
+def test_colmap_model_same_poses_as_the_cli(cli, shared_data, tmp_path):
+    model = shared_data / "colmap_ar7"
+    out = tmp_path / "adjusted"
+    cli("bundle", f"--colmap_model={model}", f"--out_colmap={out}", "--quiet")
+    block = pp.read_colmap_model(model)
+    assert block.num_images == 7 and block.num_cameras >= 1
+    pp.initialize_block(block)
+    result = pp.bundle_adjust(block, cli_options())
+    assert result.summary.termination == "converged"
+    assert result.summary.datum == "relative"
+    expected = pp.read_colmap_model(out)
+    np.testing.assert_allclose(block.image_parameters, expected.image_parameters, rtol=0,
+                               atol=POSE_TOLERANCE)
+    np.testing.assert_allclose(block.point_positions, expected.point_positions, rtol=0,
+                               atol=POSE_TOLERANCE)
+    # Written back from Python: the CLI's files (ids, keypoints, colours kept), token by token,
+    # numbers to 1e-9 (the two runs agree to rounding, not bit for bit: Ceres' threads).
+    pp.write_colmap_model(block, tmp_path / "python")
+    for name in ("cameras.txt", "images.txt", "points3D.txt"):
+        ours = (tmp_path / "python" / name).read_text().split("\n")
+        theirs = (out / name).read_text().split("\n")
+        assert len(ours) == len(theirs), name
+        for line, (a, b) in enumerate(zip(ours, theirs)):
+            a, b = a.split(), b.split()
+            assert len(a) == len(b), f"{name}:{line + 1}"
+            for x, y in zip(a, b):
+                try:
+                    assert float(x) == pytest.approx(float(y), rel=1e-9, abs=1e-9), f"{name}:{line + 1}"
+                except ValueError:
+                    assert x == y, f"{name}:{line + 1}"
+
+
+def synthetic_tables(directory, **options):
+    block, truth = pp.simulate_block(seed=5, num_lines=3, images_per_line=6, **options)
+    pp.write_block_tables(block, cameras=directory / "cameras.csv", points=directory / "points.csv",
+                          marks=directory / "marks.csv", frames=directory / "frames.csv")
+    return block, truth
+
+
+def test_tables_same_poses_as_the_cli(cli, tmp_path):
+    synthetic_tables(tmp_path, num_tie_blunders=3)
+    out = tmp_path / "adjusted.csv"
+    cli("bundle", f"--cameras={tmp_path / 'cameras.csv'}", f"--points={tmp_path / 'points.csv'}",
+        f"--marks={tmp_path / 'marks.csv'}", f"--frames={tmp_path / 'frames.csv'}", f"--out={out}",
+        "--quiet")
+    block = pp.read_block(tmp_path / "cameras.csv", tmp_path / "points.csv", tmp_path / "marks.csv",
+                          frames=tmp_path / "frames.csv")
+    pp.initialize_block(block)
+    result = pp.bundle_adjust(block, cli_options())
+    assert result.summary.is_solution_usable()
+    assert result.summary.num_rejected_marks >= 1
+    frames = {f.raster: f for f in pp.read_frames_table(out)}
+    assert len(frames) == block.num_images
+    for i, name in enumerate(block.image_names):
+        np.testing.assert_allclose(block.image_parameters[i, :3], frames[name].eo.center_in_ground,
+                                   rtol=0, atol=POSE_TOLERANCE * 1e3, err_msg=name)  # m at 4e6 m
+        np.testing.assert_allclose(block.image_parameters[i, 3:], frames[name].eo.angles_seed_rad,
+                                   rtol=0, atol=POSE_TOLERANCE, err_msg=name)
+
+
+def test_result_statistics_as_numpy(tmp_path):
+    block, truth = pp.simulate_block(seed=2, num_lines=3, images_per_line=6, num_check_points=4)
+    infos = []
+    result = pp.bundle_adjust(block, progress=infos.append)
+    summary = result.summary
+    assert summary.termination == "converged" and summary.datum == "absolute"
+    assert 0.5 < summary.sigma0 < 1.5 and summary.redundancy > 0
+    assert infos and infos[-1].iteration >= 1 and all(isinstance(i, pp.BundleIterationInfo) for i in infos)
+    assert result.num_check_points == 4 and 0 < result.check_rmse_total_m < 0.2
+    n = block.num_images
+    assert result.image_covariances.shape == (n, 6, 6) and result.image_adjusted.all()
+    sd = result.image_standard_deviations
+    np.testing.assert_allclose(sd ** 2, np.diagonal(result.image_covariances, axis1=1, axis2=2))
+    # The adjusted block is within a few standard deviations of the truth.
+    error = block.image_parameters - truth.image_parameters
+    assert np.all(np.abs(error) < 6 * sd)
+    errors = result.point_errors_m
+    check = np.array([r == "check" for r in block.point_roles])
+    assert np.isfinite(errors[check]).all()
+    np.testing.assert_allclose(np.sqrt(np.mean(errors[check] ** 2, axis=0)), result.check_rmse_m)
+    groups = {g.group: g for g in result.groups}
+    assert groups["tie_marks"].count > 0 and groups["tie_marks"].unit == "px"
+    columns = result.observations
+    assert set(columns) >= {"group", "item", "axis", "residual", "redundancy", "normalized", "rejected"}
+    assert len({len(v) for v in columns.values()}) == 1 and len(columns["residual"]) > 0
+    assert result.mark_residuals.shape == (block.num_marks, 2)
+    report = result.full_report(block)
+    assert "tie_marks" in report or "tie marks" in report
+    assert repr(result).startswith("BundleAdjustmentResult(")
+
+
+def test_options_config_and_errors():
+    block, _ = pp.simulate_block(seed=3, num_lines=2, images_per_line=5)
+    options = pp.BundleAdjustmentOptions(
+        accuracies=pp.BundleAccuracies(tie_px=0.5, camera_m=[0.05, 0.05, 0.1]),
+        robustness=pp.BundleRobustnessOptions(tie_loss="huber"))
+    options.solver.linear_solver = "dense_schur"
+    assert options.accuracies.tie_px == 0.5 and options.robustness.tie_loss == "huber"
+    np.testing.assert_array_equal(options.accuracies.camera_m, [0.05, 0.05, 0.1])
+    with pytest.raises(ValueError, match="unknown name 'welsch': expected none, huber"):
+        options.robustness.tie_loss = "welsch"
+    config = pp.BundleAdjustmentConfig.from_calibration_names(block, ["FocalLength"])
+    assert config.calibrated_params == [[0]]
+    with pytest.raises(pp.Error, match="Q9"):
+        pp.BundleAdjustmentConfig.from_calibration_names(block, ["Q9"])
+    result = pp.bundle_adjust(block, options, config)
+    assert result.summary.termination == "converged"
+    assert [c.names for c in result.calibration] == [["FocalLength"]]
+    bad = pp.BundleAdjustmentOptions()
+    bad.robustness.max_rejection_rounds = -1
+    with pytest.raises(pp.Error):
+        pp.bundle_adjust(block, bad)
+    with pytest.raises(TypeError, match="progress: expected a callable"):
+        pp.bundle_adjust(block, progress=3)
+    with pytest.raises(TypeError):
+        pp.bundle_adjust(None)
+
+
+def test_progress_exception_is_raised_after_the_adjustment():
+    block, _ = pp.simulate_block(seed=4, num_lines=2, images_per_line=5)
+    calls = []
+
+    def stop(info):
+        calls.append(info.iteration)
+        raise KeyboardInterrupt("stop")
+
+    with pytest.raises(KeyboardInterrupt, match="stop"):
+        pp.bundle_adjust(block, progress=stop)
+    assert len(calls) == 1  # not called again after it raised
+
+
+def test_bundle_adjust_releases_the_gil(assert_releases_gil):
+    block, _ = pp.simulate_block(seed=6, num_lines=4, images_per_line=12)
+    options = pp.BundleAdjustmentOptions()
+    options.solver.num_threads = 1
+    assert_releases_gil(lambda: pp.bundle_adjust(block, options))
