@@ -185,7 +185,9 @@ struct BundleStatisticsOptions {
   // stated accuracy, or Pope's tau-test with the a-posteriori sigma0 when that is larger: never more
   // sensitive than the stated accuracies allow), the smallest detectable error (internal reliability)
   // nabla_i = delta0 sigma_i / sqrt(r_i) with delta0 = k(alpha) + k(beta), and its largest effect on
-  // a camera centre (external reliability). Marks per coordinate, priors per axis.
+  // the centre of an image the observation bears on (external reliability: the images of its point,
+  // or a prior's own image, whose covariances with it lie on the reduced system's pattern). Marks
+  // per coordinate, priors per axis.
   bool observation_diagnostics = true;
   double snooping_alpha = 0.001;  // two-sided significance of the w-test (unitless)
   // snooping_alpha is the block's (family-wise): each observation is tested at alpha / n, n the
@@ -336,7 +338,9 @@ struct BundleObservationDiagnostics {
   double redundancy = 0.0; // r_i in [0, 1]
   double normalized = 0.0; // w_i (unitless); NaN when r_i is below 1e-6
   double mdb = 0.0;        // smallest detectable error, same unit as residual; inf when r_i ~ 0
-  double external_m = 0.0; // largest shift of a camera centre caused by an error of size mdb (m)
+  // Largest shift of the centre of an image it bears on (its point's images; a prior's own image)
+  // caused by an error of size mdb (m).
+  double external_m = 0.0;
   bool rejected = false;   // |w_i| > k(alpha)
 };
 

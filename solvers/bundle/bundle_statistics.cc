@@ -129,7 +129,7 @@ void BuildReducedNormals(const BundleRound& round, const SelectedInversionOption
       for (int l = 0; l < num_parts; ++l) {
         const int a = rows.e_blocks[k], b = rows.e_blocks[l];
         if (a > b) continue;
-        pair(a, b) += rows.J_e.middleCols(column[k], column[k + 1] - column[k]).transpose() *
+        pair(a, b).noalias() += rows.J_e.middleCols(column[k], column[k + 1] - column[k]).transpose() *
                       rows.J_e.middleCols(column[l], column[l + 1] - column[l]);
       }
     }
@@ -173,7 +173,7 @@ void BuildReducedNormals(const BundleRound& round, const SelectedInversionOption
     const Eigen::MatrixXd WV = W * reduced->V_inverse[p];
     for (size_t k = 0; k < reduced->W_blocks[p].size(); ++k) {
       for (size_t l = k; l < reduced->W_blocks[p].size(); ++l) {
-        pair(reduced->W_blocks[p][k], reduced->W_blocks[p][l]) -=
+        pair(reduced->W_blocks[p][k], reduced->W_blocks[p][l]).noalias() -=
             WV.middleRows(start[k], start[k + 1] - start[k]) *
             W.middleRows(start[l], start[l + 1] - start[l]).transpose();
       }

@@ -22,6 +22,73 @@ double SecondsSince(Clock::time_point start) {
   return std::chrono::duration<double>(Clock::now() - start).count();
 }
 
+using RowMatrix = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>;
+
+// The Takahashi recursion for columns j0 .. j1 - 1 of the simplicial factor (Lp, Li, Lx), whose
+// columns after j1 - 1 are done in z: one block of S, dense on its diagonal, every column with
+// the rows of the block below it and then the same rows R. (A panel of one column is the scalar
+// recursion.) `position` is -1 everywhere on entry and exit.
+void TakahashiPanel(int j0, int j1, const int* Lp, const int* Li, const double* Lx,
+                    std::vector<int>* position, std::vector<double>* z_values) {
+  const int s = j1 - j0;
+  const int* R = Li + Lp[j1 - 1] + 1;
+  const int m = Lp[j1] - Lp[j1 - 1] - 1;
+  for (int c = 0; c < s; ++c) {
+    // Column j0 + c: rows j0 + c .. j1 - 1, then R.
+    const int start = Lp[j0 + c];
+    bool same = Lp[j0 + c + 1] - start == s - c + m;
+    for (int r = 0; same && r < s - c; ++r) same = Li[start + r] == j0 + c + r;
+    for (int a = 0; same && a < m; ++a) same = Li[start + s - c + a] == R[a];
+    if (!same) {
+      // Not one pattern (never seen with CHOLMOD's factors): column by column.
+      for (int j = j1 - 1; j >= j0; --j) TakahashiPanel(j, j + 1, Lp, Li, Lx, position, z_values);
+      return;
+    }
+  }
+  std::vector<double>& z = *z_values;
+  RowMatrix L_RJ(m, s);
+  Eigen::MatrixXd L_JJ = Eigen::MatrixXd::Zero(s, s);
+  for (int c = 0; c < s; ++c) {
+    const int start = Lp[j0 + c];
+    for (int r = c; r < s; ++r) L_JJ(r, c) = Lx[start + r - c];
+    for (int a = 0; a < m; ++a) L_RJ(a, c) = Lx[start + s - c + a];
+  }
+  // Y = Z_RR L_RJ.
+  RowMatrix Y = RowMatrix::Zero(m, s);
+  for (int a = 0; a < m; ++a) (*position)[R[a]] = a;
+  for (int a = 0; a < m; ++a) {
+    const int i = R[a];
+    double* y_a = Y.row(a).data();
+    const double* l_a = L_RJ.row(a).data();
+    const double z_ii = z[Lp[i]];
+    for (int c = 0; c < s; ++c) y_a[c] += z_ii * l_a[c];
+    for (int u = Lp[i] + 1; u < Lp[i + 1]; ++u) {
+      const int b = (*position)[Li[u]];
+      if (b < 0) continue;
+      const double z_ki = z[u];
+      double* y_b = Y.row(b).data();
+      const double* l_b = L_RJ.row(b).data();
+      for (int c = 0; c < s; ++c) {
+        y_a[c] += z_ki * l_b[c];
+        y_b[c] += z_ki * l_a[c];
+      }
+    }
+  }
+  for (int a = 0; a < m; ++a) (*position)[R[a]] = -1;
+  // Z_RJ = -Y L_JJ^-1; Z_JJ = L_JJ^-T L_JJ^-1 - Z_RJ^T L_RJ L_JJ^-1.
+  Eigen::MatrixXd Z_RJ = -Y;
+  L_JJ.triangularView<Eigen::Lower>().solveInPlace<Eigen::OnTheRight>(Z_RJ);
+  const Eigen::MatrixXd L_inverse =
+      L_JJ.triangularView<Eigen::Lower>().solve(Eigen::MatrixXd::Identity(s, s));
+  Eigen::MatrixXd Z_JJ =
+      L_inverse.transpose() * L_inverse - (Z_RJ.transpose() * L_RJ) * L_inverse;
+  for (int c = 0; c < s; ++c) {
+    const int start = Lp[j0 + c];
+    for (int r = c; r < s; ++r) z[start + r - c] = 0.5 * (Z_JJ(r, c) + Z_JJ(c, r));
+    for (int a = 0; a < m; ++a) z[start + s - c + a] = Z_RJ(a, c);
+  }
+}
+
 }  // namespace
 
 // The factor A = P^T L L^T P (simplicial, packed, each column's rows ascending with the diagonal
@@ -216,40 +283,27 @@ Status SelectedInverse::Compute(const SparseMatrix& S_upper, const std::vector<i
   if (!(smallest > options.min_pivot_ratio * largest))
     return Status::Error("the reduced normal matrix is singular");
 
-  // Takahashi, backwards. For column j with rows R below the diagonal, the sums need Z_ik for i, k
-  // in R; they lie in the columns i of R (L's pattern is closed: R is a clique of the filled
-  // graph), found by walking each such column with R marked.
+  // Takahashi, backwards, one block of S (a panel of columns J with one pattern R below it) at a
+  // time: Z_RJ = -Z_RR L_RJ L_JJ^-1 and Z_JJ = (L_JJ^-T - Z_RJ^T L_RJ) L_JJ^-1. The products need
+  // Z_ik for i, k in R; they lie in the columns i of R (L's pattern is closed: R is a clique of
+  // the filled graph), found by walking each such column once per panel with R marked.
   const Clock::time_point inversion_start = Clock::now();
-  std::vector<double>& z = sparse->z;
-  z.assign(static_cast<size_t>(Lp[n]), 0.0);
+  sparse->z.assign(static_cast<size_t>(Lp[n]), 0.0);
   std::vector<int> position(n, -1);
-  std::vector<double> sum;
-  for (int j = n - 1; j >= 0; --j) {
-    const int begin = Lp[j] + 1, end = Lp[j + 1], m = end - begin;
-    const double Ljj = Lx[Lp[j]];
-    sum.assign(m, 0.0);
-    for (int a = 0; a < m; ++a) position[Li[begin + a]] = a;
-    for (int a = 0; a < m; ++a) {
-      const int i = Li[begin + a];
-      const double l_i = Lx[begin + a];
-      sum[a] += z[Lp[i]] * l_i;
-      for (int u = Lp[i] + 1; u < Lp[i + 1]; ++u) {
-        const int b = position[Li[u]];
-        if (b < 0) continue;
-        sum[a] += z[u] * Lx[begin + b];
-        sum[b] += z[u] * l_i;
-      }
-    }
-    double diagonal = 1.0 / Ljj;
-    for (int a = 0; a < m; ++a) {
-      z[begin + a] = -sum[a] / Ljj;
-      diagonal -= Lx[begin + a] * z[begin + a];
-      position[Li[begin + a]] = -1;
-    }
-    z[Lp[j]] = diagonal / Ljj;
+  std::vector<int> panel_end(n, 0);  // per first column of a block: one past its last
+  for (int b = 0; b < num_blocks; ++b) {
+    const int first = sparse->first[b];
+    panel_end[first] = first + block_size(b);
+  }
+  int j1 = n;
+  while (j1 > 0) {
+    int j0 = j1 - 1;
+    while (panel_end[j0] == 0) --j0;  // the block's first column
+    TakahashiPanel(j0, j1, Lp, Li, Lx, &position, &sparse->z);
+    j1 = j0;
   }
   inversion_seconds_ = SecondsSince(inversion_start);
-  for (const double value : z)
+  for (const double value : sparse->z)
     if (!std::isfinite(value)) return Status::Error("the reduced normal matrix is singular");
   sparse_ = std::move(sparse);
   return Status::Ok();
@@ -269,6 +323,7 @@ bool SelectedInverse::Block(int a, int b, Eigen::MatrixXd* out) const {
   const int rows = block_size(row_block), cols = block_size(col_block);
   const int row0 = sparse_->first[row_block], col0 = sparse_->first[col_block];
   Eigen::MatrixXd Z(rows, cols);
+  int64_t first_at = -1;
   for (int c = 0; c < cols; ++c) {
     if (row_block == col_block) {
       // Diagonal block: rows c.. of column c; the rest by symmetry.
@@ -276,8 +331,20 @@ bool SelectedInverse::Block(int a, int b, Eigen::MatrixXd* out) const {
       if (at < 0) return false;
       for (int r = c; r < rows; ++r) Z(r, c) = Z(c, r) = sparse_->z[at + r - c];
     } else {
-      const int64_t at = sparse_->Run(row0, col0 + c, rows);
+      // The block's columns share their pattern below it: where the rows sit in the first
+      // column, less one per column, is where they sit in the others (checked; else searched).
+      const int* Lp = sparse_->p();
+      const int* Li = sparse_->i();
+      int64_t at = -1;
+      if (c > 0 && first_at >= 0) {
+        const int64_t guess = Lp[col0 + c] + (first_at - Lp[col0]) - c;
+        if (guess + rows <= Lp[col0 + c + 1] && Li[guess] == row0 &&
+            Li[guess + rows - 1] == row0 + rows - 1)
+          at = guess;
+      }
+      if (at < 0) at = sparse_->Run(row0, col0 + c, rows);
       if (at < 0) return false;
+      if (c == 0) first_at = at;
       for (int r = 0; r < rows; ++r) Z(r, c) = sparse_->z[at + r];
     }
   }
@@ -312,9 +379,15 @@ Eigen::MatrixXd SelectedInverse::Solve(const Eigen::MatrixXd& rhs) const {
   const int n = size();
   cholmod_common* c = &sparse_->common;
   cholmod_dense* B = cholmod_allocate_dense(n, rhs.cols(), n, CHOLMOD_REAL, c);
+  if (B == nullptr)  // out of memory: no figure rather than an abort
+    return Eigen::MatrixXd::Constant(n, rhs.cols(), std::numeric_limits<double>::quiet_NaN());
   Eigen::Map<Eigen::MatrixXd>(static_cast<double*>(B->x), n, rhs.cols()) =
       scale_.asDiagonal() * rhs;
   cholmod_dense* X = cholmod_solve(CHOLMOD_A, sparse_->factor, B, c);
+  if (X == nullptr) {
+    cholmod_free_dense(&B, c);
+    return Eigen::MatrixXd::Constant(n, rhs.cols(), std::numeric_limits<double>::quiet_NaN());
+  }
   Eigen::MatrixXd result =
       scale_.asDiagonal() * Eigen::Map<const Eigen::MatrixXd>(static_cast<double*>(X->x), n,
                                                                rhs.cols());

@@ -55,7 +55,8 @@ class SelectedInverse {
   // together). False when a pair of them lies off the filled pattern.
   bool Blocks(const std::vector<int>& blocks, Eigen::MatrixXd* out) const;
   // C rhs, through the factor (or the dense inverse): what lies off the pattern, e.g. a check
-  // point's images that share no tie point.
+  // point's images that share no tie point. NaN when out of memory. Uses CHOLMOD's workspace: one
+  // thread at a time (Block and Blocks are safe to call concurrently).
   Eigen::MatrixXd Solve(const Eigen::MatrixXd& rhs) const;
 
   int size() const { return static_cast<int>(scale_.size()); }

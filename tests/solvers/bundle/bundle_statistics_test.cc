@@ -193,6 +193,10 @@ TEST(BundleStatistics, HundredImageBlockEqualsTheDenseOracle) {
   CompareWithOracle({"gnss 100 images", 5, 20, Datum::kGnss});
 }
 
+TEST(BundleStatistics, ThreeHundredImageBlockEqualsTheDenseOracle) {
+  CompareWithOracle({"control only 300 images", 10, 30, Datum::kControlOnly});
+}
+
 TEST(BundleStatistics, TaylorCovariancesEqualTheDenseOracle) {
   Block block;
   SyntheticBlockTruth truth;
