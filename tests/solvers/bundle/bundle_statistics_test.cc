@@ -15,7 +15,8 @@ namespace photopose {
 namespace {
 
 // Selected and dense inverses agree to rounding; every figure derived from them to this,
-// relative (the bound; measured: ~1e-12).
+// relative (the bound; measured on these blocks: covariances within 5e-11, redundancy
+// numbers 2e-12 absolute, w, nabla and external reliability 6e-11 where r >= 1e-4).
 constexpr double kRelative = 1e-8;
 // The redundancy numbers add up to n - u to this, relative.
 constexpr double kRedundancySum = 1e-6;
