@@ -508,7 +508,7 @@ class BundleRobustnessOptions:
 class BundleStatisticsOptions:
     """Covariances, verdicts, diagnostics, variance components."""
     def __init__(self, **kwargs: Any) -> None: ...
-    max_covariance_parameters: int
+    covariances: str  # 'full' (selected inversion), 'dense' (the test oracle) or 'none'
     overfit_ratio: float
     overfit_redundancy_share: float
     high_correlation: float

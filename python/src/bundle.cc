@@ -108,7 +108,7 @@ default). A per-row accuracy of the tables overrides its row's default.)doc");
 
   auto stats = BindStruct<BundleStatisticsOptions>(m, "BundleStatisticsOptions",
                                                    "Covariances, verdicts, diagnostics, variance components.");
-  stats.def_readwrite("max_covariance_parameters", &BundleStatisticsOptions::max_covariance_parameters)
+  stats.def_readwrite("covariances", &BundleStatisticsOptions::covariances, "'full' (selected inversion), 'dense' (the test oracle) or 'none'")
       .def_readwrite("overfit_ratio", &BundleStatisticsOptions::overfit_ratio)
       .def_readwrite("overfit_redundancy_share", &BundleStatisticsOptions::overfit_redundancy_share)
       .def_readwrite("high_correlation", &BundleStatisticsOptions::high_correlation)

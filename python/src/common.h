@@ -191,6 +191,7 @@ PHOTOPOSE_PYTHON_ENUM(photopose::MarkStatus)
 PHOTOPOSE_PYTHON_ENUM(photopose::BundleLinearSolver)
 PHOTOPOSE_PYTHON_ENUM(photopose::BundleDatum)
 PHOTOPOSE_PYTHON_ENUM(photopose::BundleGroup)
+PHOTOPOSE_PYTHON_ENUM(photopose::BundleCovarianceMethod)
 
 #undef PHOTOPOSE_PYTHON_ENUM
 

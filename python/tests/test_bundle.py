@@ -13,7 +13,7 @@ POSE_TOLERANCE = 1e-10
 def cli_options():
     """The library's defaults as `photopose bundle` sets them without flags."""
     options = pp.BundleAdjustmentOptions()
-    options.statistics.max_covariance_parameters = 3000
+    options.statistics.covariances = "full"
     return options
 
 

@@ -193,7 +193,6 @@ bool BundleRobustnessOptions::IsValid(std::string* why) const {
 }
 
 bool BundleStatisticsOptions::IsValid(std::string* why) const {
-  if (max_covariance_parameters < 0) return Fail(why, "max_covariance_parameters must be >= 0");
   if (!(overfit_ratio > 0.0 && overfit_ratio < 1.0))
     return Fail(why, "overfit_ratio must be in (0, 1)");
   if (!(overfit_redundancy_share >= 0.0 && overfit_redundancy_share < 1.0))

@@ -30,6 +30,7 @@
 
 #include <Eigen/Core>
 #include <cmath>
+#include <cstdint>
 #include <functional>
 #include <limits>
 #include <optional>
@@ -146,14 +147,31 @@ struct BundleRobustnessOptions {
   bool IsValid(std::string* why) const;
 };
 
+// How the posterior covariances (and all that follows from them: redundancy numbers, reliability,
+// variance components, calibration correlations) are computed from the reduced camera system S.
+enum class BundleCovarianceMethod {
+  // The entries of S^-1 on the pattern of S's sparse Cholesky factor (selected inversion,
+  // solvers/bundle/internal/selected_inversion.h): every block size, memory ~ the factor's.
+  kSelectedInversion,
+  // S inverted densely: the tests' oracle. n^2 memory and n^3 time in the reduced parameters.
+  kDenseInverse,
+  kNone,  // not computed: group RMS and check points only
+};
+inline constexpr EnumNameEntry<BundleCovarianceMethod> kBundleCovarianceMethodNames[] = {
+    {BundleCovarianceMethod::kSelectedInversion, "full"},
+    {BundleCovarianceMethod::kDenseInverse, "dense"},
+    {BundleCovarianceMethod::kNone, "none"}};
+constexpr EnumNameTable<BundleCovarianceMethod> EnumNames(BundleCovarianceMethod) {
+  return EnumNameTable<BundleCovarianceMethod>(kBundleCovarianceMethodNames);
+}
+
 // What the adjustment computes after convergence, and the thresholds of its verdicts: posterior
 // covariances, over-fitting, correlations, per-observation diagnostics with their w-test, and the
 // variance component estimation.
 struct BundleStatisticsOptions {
-  // Posterior covariances and redundancy shares (the normal matrix reduced to the cameras,
-  // inverted densely): skipped for blocks with more parameters than this after point elimination
-  // (count).
-  int max_covariance_parameters = 12000;
+  // Posterior covariances, redundancy numbers and everything that needs them, at every block size
+  // (kNone: not computed).
+  BundleCovarianceMethod covariances = BundleCovarianceMethod::kSelectedInversion;
   // A prior group is flagged `overfit` when its RMS / stated accuracy is below overfit_ratio
   // (unitless, the note's "well below"), or its redundancy share below overfit_redundancy_share
   // (unitless: the tie points check less than a fifth of it, the solution follows the priors). A
@@ -168,7 +186,9 @@ struct BundleStatisticsOptions {
   // stated accuracy, or Pope's tau-test with the a-posteriori sigma0 when that is larger: never more
   // sensitive than the stated accuracies allow), the smallest detectable error (internal reliability)
   // nabla_i = delta0 sigma_i / sqrt(r_i) with delta0 = k(alpha) + k(beta), and its largest effect on
-  // a camera centre (external reliability). Marks per coordinate, priors per axis.
+  // the centre of an image the observation bears on (external reliability: the images of its point,
+  // or a prior's own image, whose covariances with it lie on the reduced system's pattern). Marks
+  // per coordinate, priors per axis.
   bool observation_diagnostics = true;
   double snooping_alpha = 0.001;  // two-sided significance of the w-test (unitless)
   // snooping_alpha is the block's (family-wise): each observation is tested at alpha / n, n the
@@ -184,7 +204,7 @@ struct BundleStatisticsOptions {
   // variance factor s_g^2 = (its whitened residuals' sum of squares) / (its redundancy, the sum of
   // its redundancy numbers) rescales the group's accuracies, and the block is adjusted again, until
   // every estimated factor is 1 within variance_tolerance or max_variance_iterations is reached.
-  // Needs the covariance (max_covariance_parameters). A group whose redundancy is below
+  // Needs the covariances (not kNone). A group whose redundancy is below
   // min_variance_redundancy is not estimated (its accuracy stays as stated, and says why).
   bool estimate_accuracies = false;
   int max_variance_iterations = 20;     // count
@@ -319,7 +339,9 @@ struct BundleObservationDiagnostics {
   double redundancy = 0.0; // r_i in [0, 1]
   double normalized = 0.0; // w_i (unitless); NaN when r_i is below 1e-6
   double mdb = 0.0;        // smallest detectable error, same unit as residual; inf when r_i ~ 0
-  double external_m = 0.0; // largest shift of a camera centre caused by an error of size mdb (m)
+  // Largest shift of the centre of an image it bears on (its point's images; a prior's own image)
+  // caused by an error of size mdb (m).
+  double external_m = 0.0;
   bool rejected = false;   // |w_i| > k(alpha)
 };
 
@@ -389,7 +411,14 @@ struct BundleAdjustmentSummary {
   // intersected: rays too close to parallel or marks that do not meet), by PointID.
   std::vector<std::string> tie_points_left_out;
   double time_seconds = 0.0;
-  double statistics_seconds = 0.0;  // covariances and redundancy shares
+  double statistics_seconds = 0.0;  // covariances and redundancy shares, all of the statistics
+  // Of the last round's statistics: the factorisation of the reduced camera system and the
+  // selected inversion on its pattern (s; part of statistics_seconds), the entries of its inverse
+  // computed (count) and the bytes they and the factor held.
+  double factorization_seconds = 0.0;
+  double inversion_seconds = 0.0;
+  int64_t covariance_entries = 0;
+  int64_t covariance_memory_bytes = 0;
   // Where the adjustment's time went, over all rounds (s): building the Ceres problems; Ceres'
   // preprocessing (program, ordering, Schur structure, symbolic factorisation); residual and
   // Jacobian evaluation; the linear solves of the Levenberg-Marquardt steps (Schur elimination,

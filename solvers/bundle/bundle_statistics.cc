@@ -4,12 +4,15 @@
 #include "solvers/bundle/internal/bundle_statistics.h"
 
 #include <Eigen/Dense>
+#include <Eigen/SparseCore>
 #include <algorithm>
 #include <cmath>
 #include <limits>
 #include <memory>
 #include <sstream>
+#include <unordered_map>
 
+#include "core/parallel.h"
 #include "core/rotation.h"
 #include "core/statistics.h"
 #include "solvers/bundle/triangulation.h"
@@ -22,9 +25,6 @@ constexpr double kInfinity = std::numeric_limits<double>::infinity();
 // A redundancy number below this is zero in all but rounding: the observation is not checked at
 // all and its normalized residual is undefined.
 constexpr double kZeroRedundancy = 1e-6;
-// The smallest pivot of the Jacobi-scaled reduced normal matrix relative to its largest below
-// which the matrix is treated as singular (a datum defect in all but name).
-constexpr double kSingularPivot = 1e-12;
 
 std::string Format3(double value) {
   std::ostringstream os;
@@ -32,22 +32,6 @@ std::string Format3(double value) {
   os << value;
   return os.str();
 }
-
-// Sparse vector in e space.
-struct SparseE {
-  std::vector<int> index;
-  std::vector<double> value;
-  void Add(int i, double v) {
-    for (size_t k = 0; k < index.size(); ++k) {
-      if (index[k] == i) {
-        value[k] += v;
-        return;
-      }
-    }
-    index.push_back(i);
-    value.push_back(v);
-  }
-};
 
 }  // namespace
 
@@ -73,6 +57,7 @@ bool EvaluateBlockRows(const BundleRound& round, const ReducedNormals& reduced,
     return false;
   out->rows = num_residuals;
   out->e_columns.clear();
+  out->e_blocks.clear();
   out->point = -1;
   out->J_p.resize(0, 3);
   std::vector<std::pair<int, int>> e_parts;  // (parameter k, tangent size)
@@ -82,6 +67,7 @@ bool EvaluateBlockRows(const BundleRound& round, const ReducedNormals& reduced,
     const auto e = reduced.e_index.find(parameters[k]);
     if (e != reduced.e_index.end()) {
       for (int c = 0; c < tangent; ++c) out->e_columns.push_back(reduced.e_offset[e->second] + c);
+      out->e_blocks.push_back(e->second);
       e_parts.push_back({static_cast<int>(k), tangent});
     } else {
       const auto p = reduced.point_index.find(parameters[k]);
@@ -101,123 +87,201 @@ bool EvaluateBlockRows(const BundleRound& round, const ReducedNormals& reduced,
   return true;
 }
 
-void BuildReducedNormals(const BundleRound& round, ReducedNormals* reduced) {
+void BuildReducedNormals(const BundleRound& round, const SelectedInversionOptions& options,
+                         ReducedNormals* reduced) {
   *reduced = ReducedNormals();
+  const int num_blocks = static_cast<int>(round.e_blocks.size());
   int offset = 0;
-  for (size_t b = 0; b < round.e_blocks.size(); ++b) {
-    reduced->e_index[round.e_blocks[b]] = static_cast<int>(b);
+  std::vector<int> block_start;
+  for (int b = 0; b < num_blocks; ++b) {
+    reduced->e_index[round.e_blocks[b]] = b;
     reduced->e_offset.push_back(offset);
+    block_start.push_back(offset);
     offset += round.e_sizes[b];
   }
+  block_start.push_back(offset);
   reduced->size = offset;
   for (size_t p = 0; p < round.point_blocks.size(); ++p)
     reduced->point_index[round.point_blocks[p]] = static_cast<int>(p);
   const size_t num_points = round.point_blocks.size();
+  // S block by block: (a, b), a <= b, the blocks of e blocks that share an observation or a point.
+  std::unordered_map<int64_t, int> pair_index;
+  std::vector<Eigen::MatrixXd> pair_value;
+  const auto pair = [&](int a, int b) -> Eigen::MatrixXd& {
+    const auto [it, inserted] =
+        pair_index.emplace(static_cast<int64_t>(a) * num_blocks + b, static_cast<int>(pair_value.size()));
+    if (inserted) pair_value.push_back(Eigen::MatrixXd::Zero(round.e_sizes[a], round.e_sizes[b]));
+    return pair_value[it->second];
+  };
   std::vector<Eigen::Matrix3d> V(num_points, Eigen::Matrix3d::Zero());
-  std::vector<std::map<int, Eigen::RowVector3d>> W_rows(num_points);
-  Eigen::MatrixXd S = Eigen::MatrixXd::Zero(offset, offset);
+  // Per point: (e block, its rows of J_e^T J_p), few per point.
+  std::vector<std::vector<std::pair<int, Eigen::MatrixXd>>> W_parts(num_points);
   BlockRows rows;
   for (const ResidualInfo& info : round.residuals) {
-    if (!EvaluateBlockRows(round, *reduced, info, &rows)) return;
-    const int ne = static_cast<int>(rows.e_columns.size());
-    if (ne > 0) {
-      const Eigen::MatrixXd JtJ = rows.J_e.transpose() * rows.J_e;
-      for (int a = 0; a < ne; ++a)
-        for (int b = 0; b < ne; ++b) S(rows.e_columns[a], rows.e_columns[b]) += JtJ(a, b);
+    if (!EvaluateBlockRows(round, *reduced, info, &rows)) {
+      reduced->message = "a residual could not be evaluated at the solution";
+      return;
     }
-    if (rows.point >= 0) {
-      V[rows.point] += rows.J_p.transpose() * rows.J_p;
-      if (ne > 0) {
-        const Eigen::MatrixXd JeJp = rows.J_e.transpose() * rows.J_p;
-        for (int a = 0; a < ne; ++a) {
-          auto [it, inserted] = W_rows[rows.point].emplace(rows.e_columns[a], JeJp.row(a));
-          if (!inserted) it->second += JeJp.row(a);
-        }
+    const int num_parts = static_cast<int>(rows.e_blocks.size());
+    std::vector<int> column(num_parts + 1, 0);
+    for (int k = 0; k < num_parts; ++k) column[k + 1] = column[k] + round.e_sizes[rows.e_blocks[k]];
+    for (int k = 0; k < num_parts; ++k) {
+      for (int l = 0; l < num_parts; ++l) {
+        const int a = rows.e_blocks[k], b = rows.e_blocks[l];
+        if (a > b) continue;
+        pair(a, b).noalias() += rows.J_e.middleCols(column[k], column[k + 1] - column[k]).transpose() *
+                      rows.J_e.middleCols(column[l], column[l + 1] - column[l]);
       }
+    }
+    if (rows.point < 0) continue;
+    V[rows.point] += rows.J_p.transpose() * rows.J_p;
+    for (int k = 0; k < num_parts; ++k) {
+      const Eigen::MatrixXd part =
+          rows.J_e.middleCols(column[k], column[k + 1] - column[k]).transpose() * rows.J_p;
+      auto& parts = W_parts[rows.point];
+      auto found = std::find_if(parts.begin(), parts.end(),
+                                [&](const auto& e) { return e.first == rows.e_blocks[k]; });
+      if (found == parts.end())
+        parts.emplace_back(rows.e_blocks[k], part);
+      else
+        found->second += part;
     }
   }
   reduced->V_inverse.resize(num_points);
-  reduced->W_columns.resize(num_points);
+  reduced->W_blocks.resize(num_points);
   reduced->W.resize(num_points);
   for (size_t p = 0; p < num_points; ++p) {
     const Eigen::LDLT<Eigen::Matrix3d> ldlt(V[p]);
-    if (ldlt.info() != Eigen::Success || !(ldlt.vectorD().minCoeff() > 0.0)) return;
-    reduced->V_inverse[p] = ldlt.solve(Eigen::Matrix3d::Identity());
-    const int k = static_cast<int>(W_rows[p].size());
-    reduced->W_columns[p].reserve(k);
-    reduced->W[p].resize(k, 3);
-    int row = 0;
-    for (const auto& [column, values] : W_rows[p]) {
-      reduced->W_columns[p].push_back(column);
-      reduced->W[p].row(row++) = values;
+    if (ldlt.info() != Eigen::Success || !(ldlt.vectorD().minCoeff() > 0.0)) {
+      reduced->message = "a point is not determined by its rays";
+      return;
     }
-    const Eigen::MatrixXd update =
-        reduced->W[p] * reduced->V_inverse[p] * reduced->W[p].transpose();
-    for (int a = 0; a < k; ++a)
-      for (int b = 0; b < k; ++b)
-        S(reduced->W_columns[p][a], reduced->W_columns[p][b]) -= update(a, b);
+    reduced->V_inverse[p] = ldlt.solve(Eigen::Matrix3d::Identity());
+    auto& parts = W_parts[p];
+    std::sort(parts.begin(), parts.end(),
+              [](const auto& x, const auto& y) { return x.first < y.first; });
+    std::vector<int> start(parts.size() + 1, 0);
+    for (size_t k = 0; k < parts.size(); ++k) {
+      reduced->W_blocks[p].push_back(parts[k].first);
+      start[k + 1] = start[k] + static_cast<int>(parts[k].second.rows());
+    }
+    Eigen::MatrixXd& W = reduced->W[p];
+    W.resize(start.back(), 3);
+    for (size_t k = 0; k < parts.size(); ++k)
+      W.middleRows(start[k], parts[k].second.rows()) = parts[k].second;
+    std::vector<std::pair<int, Eigen::MatrixXd>>().swap(parts);
+    const Eigen::MatrixXd WV = W * reduced->V_inverse[p];
+    for (size_t k = 0; k < reduced->W_blocks[p].size(); ++k) {
+      for (size_t l = k; l < reduced->W_blocks[p].size(); ++l) {
+        pair(reduced->W_blocks[p][k], reduced->W_blocks[p][l]).noalias() -=
+            WV.middleRows(start[k], start[k + 1] - start[k]) *
+            W.middleRows(start[l], start[l + 1] - start[l]).transpose();
+      }
+    }
   }
   if (offset == 0) {
     reduced->ok = true;
     return;
   }
-  // Jacobi scaling first: camera parameters in mixed units (um next to mm^-6) give diagonals
-  // twenty orders of magnitude apart, which would hide a real rank defect or fake one.
-  const Eigen::VectorXd d = S.diagonal();
-  if (!(d.minCoeff() > 0.0)) return;
-  const Eigen::VectorXd scale = d.cwiseSqrt().cwiseInverse();
-  const Eigen::MatrixXd scaled = scale.asDiagonal() * S * scale.asDiagonal();
-  S.resize(0, 0);
-  const Eigen::LDLT<Eigen::MatrixXd> ldlt(scaled);
-  if (ldlt.info() != Eigen::Success || !(ldlt.vectorD().minCoeff() > 0.0)) return;
-  if (!(ldlt.vectorD().minCoeff() > kSingularPivot * ldlt.vectorD().maxCoeff())) return;
-  reduced->C = scale.asDiagonal() * ldlt.solve(Eigen::MatrixXd::Identity(offset, offset)) *
-               scale.asDiagonal();
-  reduced->ok = reduced->C.allFinite();
+  std::vector<Eigen::Triplet<double, int>> entries;
+  for (const auto& [key, index] : pair_index) {
+    const int a = static_cast<int>(key / num_blocks), b = static_cast<int>(key % num_blocks);
+    const Eigen::MatrixXd& value = pair_value[index];
+    for (int r = 0; r < value.rows(); ++r)
+      for (int c = 0; c < value.cols(); ++c)
+        entries.emplace_back(block_start[a] + r, block_start[b] + c, value(r, c));
+  }
+  std::vector<Eigen::MatrixXd>().swap(pair_value);
+  SelectedInverse::SparseMatrix S(offset, offset);
+  S.setFromTriplets(entries.begin(), entries.end());
+  std::vector<Eigen::Triplet<double, int>>().swap(entries);
+  reduced->S_nonzeros = 2 * S.nonZeros() - offset;
+  const Status status = reduced->C.Compute(S, block_start, options);
+  if (!status.ok()) {
+    reduced->message = status.message();
+    return;
+  }
+  reduced->ok = true;
 }
 
-Eigen::Matrix3d PointCovariance(const ReducedNormals& reduced, int p) {
-  const std::vector<int>& cols = reduced.W_columns[p];
-  const int k = static_cast<int>(cols.size());
-  Eigen::MatrixXd C_sub(k, k);
-  for (int a = 0; a < k; ++a)
-    for (int b = 0; b < k; ++b) C_sub(a, b) = reduced.C(cols[a], cols[b]);
-  const Eigen::Matrix3d& Vi = reduced.V_inverse[p];
-  const Eigen::MatrixXd WV = reduced.W[p] * Vi;  // k x 3
-  return Vi + WV.transpose() * C_sub * WV;
+int SupportCovariance::Offset(int e_block) const {
+  const auto found = std::lower_bound(blocks.begin(), blocks.end(), e_block);
+  if (found == blocks.end() || *found != e_block) return -1;
+  return block_offset[found - blocks.begin()];
 }
 
-// With `shift`, also C_rows g_i per row: the shift of the parameters in the rows of C_rows (the
-// camera-centre rows of C: the external reliability needs no others) per unit whitened error.
-Eigen::VectorXd Leverages(const ReducedNormals& reduced, const BlockRows& rows,
-                          const Eigen::MatrixXd* C_rows, std::vector<Eigen::VectorXd>* shift) {
-  // h_i = g_i^T C g_i + J_p,i V^-1 J_p,i^T with g_i = J_e,i^T - W V^-1 J_p,i^T (e space): the
-  // point's own part and its elimination folded into one sparse vector per row.
+bool MakeSupportCovariance(const ReducedNormals& reduced, int p, const std::vector<int>& blocks,
+                           SupportCovariance* support) {
+  support->blocks = p >= 0 ? reduced.W_blocks[p] : blocks;
+  std::sort(support->blocks.begin(), support->blocks.end());
+  support->block_offset.assign(support->blocks.size(), 0);
+  int k = 0;
+  for (size_t b = 0; b < support->blocks.size(); ++b) {
+    support->block_offset[b] = k;
+    k += reduced.C.block_size(support->blocks[b]);
+  }
+  if (!reduced.C.Blocks(support->blocks, &support->C)) return false;
+  if (p >= 0) {
+    support->WV = reduced.W[p] * reduced.V_inverse[p];
+    support->T = support->C * support->WV;
+    support->Q = support->WV.transpose() * support->T;
+  } else {
+    support->WV.resize(k, 0);
+    support->T.resize(k, 0);
+    support->Q.setZero();
+  }
+  return true;
+}
+
+Eigen::Matrix3d PointCovariance(const ReducedNormals& reduced, const SupportCovariance& support,
+                                int p) {
+  return reduced.V_inverse[p] + support.Q;
+}
+
+// h_i = g_i^T C g_i + J_p,i V^-1 J_p,i^T with g_i = E_i - W V^-1 J_p,i^T in the support's
+// columns (E_i: the row's own e part): the point's own part and its elimination folded in. With
+// T = C W V^-1 and Q = V^-1 W^T C W V^-1 once per point, g^T C g = E^T C E - 2 E^T T q + q^T Q q
+// (q = J_p,i^T) costs a row only its own columns; C g = C E - T q is the parameters' response.
+Eigen::VectorXd Leverages(const ReducedNormals& reduced, const SupportCovariance& support,
+                          const BlockRows& rows, const std::vector<int>* centres,
+                          Eigen::VectorXd* largest_shift) {
+  // The support positions of the row's own columns.
+  std::vector<int> own;
+  own.reserve(rows.e_columns.size());
+  for (const int b : rows.e_blocks) {
+    const int at = support.Offset(b);
+    for (int c = 0; c < reduced.C.block_size(b); ++c) own.push_back(at + c);
+  }
+  const int ne = static_cast<int>(own.size());
+  const int k = static_cast<int>(support.C.rows());
+  Eigen::MatrixXd C_own(ne, ne);
+  for (int a = 0; a < ne; ++a)
+    for (int b = 0; b < ne; ++b) C_own(a, b) = support.C(own[a], own[b]);
+  const bool with_point = rows.point >= 0;
   Eigen::VectorXd h(rows.rows);
-  if (shift != nullptr) shift->assign(rows.rows, Eigen::VectorXd());
+  if (largest_shift != nullptr) largest_shift->resize(rows.rows);
   for (int r = 0; r < rows.rows; ++r) {
-    SparseE g;
-    for (size_t a = 0; a < rows.e_columns.size(); ++a) g.Add(rows.e_columns[a], rows.J_e(r, a));
-    double point_part = 0.0;
-    if (rows.point >= 0) {
-      const Eigen::Vector3d Jp = rows.J_p.row(r).transpose();
-      const Eigen::Vector3d VJ = reduced.V_inverse[rows.point] * Jp;
-      point_part = Jp.dot(VJ);
-      const Eigen::VectorXd WVJ = reduced.W[rows.point] * VJ;
-      for (size_t a = 0; a < reduced.W_columns[rows.point].size(); ++a)
-        g.Add(reduced.W_columns[rows.point][a], -WVJ[a]);
+    const Eigen::VectorXd e = rows.J_e.row(r).transpose();
+    double value = e.dot(C_own * e);
+    Eigen::Vector3d q = Eigen::Vector3d::Zero();
+    if (with_point) {
+      q = rows.J_p.row(r).transpose();
+      double e_Tq = 0.0;
+      const Eigen::VectorXd Tq = support.T * q;
+      for (int a = 0; a < ne; ++a) e_Tq += e[a] * Tq[own[a]];
+      value += -2.0 * e_Tq + q.dot(support.Q * q) + q.dot(reduced.V_inverse[rows.point] * q);
     }
-    double quadratic = 0.0;
-    for (size_t a = 0; a < g.index.size(); ++a) {
-      for (size_t b = 0; b < g.index.size(); ++b)
-        quadratic += g.value[a] * reduced.C(g.index[a], g.index[b]) * g.value[b];
+    h[r] = value;
+    if (largest_shift == nullptr) continue;
+    Eigen::VectorXd Cg = Eigen::VectorXd::Zero(k);
+    for (int a = 0; a < ne; ++a) Cg += support.C.col(own[a]) * e[a];
+    if (with_point) Cg -= support.T * q;
+    double largest = 0.0;
+    for (size_t b = 0; b < support.blocks.size(); ++b) {
+      const int count = (*centres)[support.blocks[b]];
+      if (count > 0) largest = std::max(largest, Cg.segment(support.block_offset[b], count).norm());
     }
-    h[r] = quadratic + point_part;
-    if (shift != nullptr) {
-      Eigen::VectorXd& s = (*shift)[r];
-      s = Eigen::VectorXd::Zero(C_rows->rows());
-      for (size_t b = 0; b < g.index.size(); ++b) s += C_rows->col(g.index[b]) * g.value[b];
-    }
+    (*largest_shift)[r] = largest;
   }
   return h;
 }
@@ -344,66 +408,49 @@ void SetTestLevel(const BundleAdjustmentOptions& options, const GroupVariance& v
 void OrientationAndPointCovariances(const Block& block, const BundleState& state,
                                     const BundleRound& round, const ReducedNormals& reduced,
                                     double variance_factor, BundleAdjustmentResult* result) {
+  Eigen::MatrixXd C;
   for (size_t i = 0; i < block.images.size(); ++i) {
     const double* eo = state.eo[i].data();
     const auto found = reduced.e_index.find(eo);
     if (found == reduced.e_index.end()) continue;
-    const int offset = reduced.e_offset[found->second];
     const int tangent = round.e_sizes[found->second];
     Eigen::Matrix<double, 6, Eigen::Dynamic, Eigen::RowMajor> P(6, tangent);
     round.problem->GetManifold(const_cast<double*>(eo))->PlusJacobian(eo, P.data());
-    const Eigen::MatrixXd C = reduced.C.block(offset, offset, tangent, tangent);
+    if (!reduced.C.Block(found->second, found->second, &C)) continue;  // diagonal: always known
     result->images[i].covariance = variance_factor * P * C * P.transpose();
     result->images[i].has_covariance = true;
   }
+  SupportCovariance support;
   for (const auto& [block_ptr, index] : reduced.point_index) {
     const int p = round.point_of_block[index];
     if (block.points[p].role != PointRole::kControl) continue;
-    result->points[p].covariance = variance_factor * PointCovariance(reduced, index);
+    if (!MakeSupportCovariance(reduced, index, {}, &support)) continue;
+    result->points[p].covariance = variance_factor * PointCovariance(reduced, support, index);
     result->points[p].has_covariance = true;
   }
 }
 
-// The camera-centre columns of the e space (tangent components 0..2 of each image block; the
-// relative gauge's scale image has one of them held), for the external reliability, with C
-// restricted to those rows (C is symmetric: its columns), so that the shifts cost half the full
-// products (measured: 58.6 s of statistics at 300 images before).
-struct CentreColumns {
-  struct Image {
-    int offset;  // first row in `C_rows`
-    int count;
-  };
-  std::vector<Image> images;
-  Eigen::MatrixXd C_rows;
-};
-
-CentreColumns MakeCentreColumns(const Block& block, const BundlePlan& plan,
-                                const BundleState& state, const ReducedNormals& reduced,
-                                bool with_rows) {
-  CentreColumns centres;
-  std::vector<int> rows;
+// Per e block, the camera-centre components leading its tangent space (0..2; the relative
+// gauge's scale image has one of them held), 0 for blocks that are not images: the rows of the
+// external reliability.
+std::vector<int> CentreComponents(const Block& block, const BundlePlan& plan,
+                                  const BundleState& state, const ReducedNormals& reduced) {
+  std::vector<int> centres(reduced.e_offset.size(), 0);
   for (size_t i = 0; i < block.images.size(); ++i) {
     const auto found = reduced.e_index.find(state.eo[i].data());
     if (found == reduced.e_index.end()) continue;
-    const int count = static_cast<int>(i) == plan.relative_scale_image ? 2 : 3;
-    centres.images.push_back({static_cast<int>(rows.size()), count});
-    for (int k = 0; k < count; ++k) rows.push_back(reduced.e_offset[found->second] + k);
-  }
-  if (with_rows) {
-    centres.C_rows.resize(static_cast<Eigen::Index>(rows.size()), reduced.size);
-    for (size_t r = 0; r < rows.size(); ++r)
-      centres.C_rows.row(static_cast<Eigen::Index>(r)) = reduced.C.col(rows[r]).transpose();
+    centres[found->second] = static_cast<int>(i) == plan.relative_scale_image ? 2 : 3;
   }
   return centres;
 }
 
 // The diagnostics of one row: redundancy number, normalized residual (w-test against the
-// critical value), smallest detectable error and its largest camera-centre shift.
+// critical value), smallest detectable error and its largest camera-centre shift (`shift`: per
+// unit whitened error, from Leverages).
 BundleObservationDiagnostics RowDiagnostics(const BundleAdjustmentResult& result,
                                             const ResidualInfo& info, int row, double whitened,
                                             double scale, double leverage, double s0,
-                                            const CentreColumns& centres,
-                                            const Eigen::VectorXd& shift) {
+                                            double shift) {
   BundleObservationDiagnostics d;
   d.group = static_cast<BundleGroup>(info.group);
   d.item = info.item;
@@ -415,11 +462,7 @@ BundleObservationDiagnostics RowDiagnostics(const BundleAdjustmentResult& result
     d.normalized = whitened / (s0 * std::sqrt(d.redundancy));
     d.mdb = result.delta0 * scale / std::sqrt(d.redundancy);
     // The largest camera-centre shift from a whitened error mdb / sigma in this row.
-    const double delta = result.delta0 / std::sqrt(d.redundancy);
-    double largest = 0.0;
-    for (const CentreColumns::Image& centre : centres.images)
-      largest = std::max(largest, shift.segment(centre.offset, centre.count).norm());
-    d.external_m = largest * delta;
+    d.external_m = shift * result.delta0 / std::sqrt(d.redundancy);
     d.rejected = std::abs(d.normalized) > result.critical_value;
   } else {
     d.normalized = kNaN;
@@ -432,29 +475,102 @@ BundleObservationDiagnostics RowDiagnostics(const BundleAdjustmentResult& result
 // Leverages per group (variance->redundancy) and, with `diagnostics`, every observation's
 // diagnostics. Without them the tie marks' share is the remainder (the sum of all redundancy
 // numbers is the redundancy), which spares their rows.
+//
+// The rows are taken point by point (a point's rows share one SupportCovariance), the points in
+// chunks: each chunk's residual blocks are evaluated on one thread (Ceres' problem is not
+// evaluated concurrently), then its points run in parallel. The results land in per-row arrays,
+// summed and listed afterwards in the round's order, so the figures do not depend on the threads.
 void ObservationDiagnostics(const BundleAdjustmentOptions& options, const Block& block,
                             const BundlePlan& plan, const BundleState& state,
                             const BundleRound& round, const ReducedNormals& reduced,
                             bool diagnostics, GroupSums* sums, BundleAdjustmentResult* result,
                             GroupVariance* variance) {
-  const CentreColumns centres = MakeCentreColumns(block, plan, state, reduced, diagnostics);
+  const std::vector<int> centres = CentreComponents(block, plan, state, reduced);
   // The yardstick of the normalized residuals: the stated accuracies (sigma0 = 1), or the
   // a-posteriori sigma0 when the data say they were optimistic (Pope's tau-test then).
   const double sigma0 = result->summary.sigma0;
   const double s0 = std::isfinite(sigma0) ? std::max(1.0, sigma0) : 1.0;
-  BlockRows rows;
-  std::vector<Eigen::VectorXd> shifts;
-  for (const ResidualInfo& info : round.residuals) {
-    if (!diagnostics && info.group == kTieMarks) continue;  // its share is the remainder
-    if (!EvaluateBlockRows(round, reduced, info, &rows)) continue;
-    const Eigen::VectorXd h =
-        Leverages(reduced, rows, &centres.C_rows, diagnostics ? &shifts : nullptr);
-    for (int row = 0; row < info.rows; ++row) sums[info.group].leverage += h[row];
-    if (!diagnostics) continue;
+  // Which residual blocks, their first row, and their groups: one per point block, then one per
+  // residual block without a point.
+  const size_t num_residuals = round.residuals.size();
+  std::vector<int64_t> first_row(num_residuals + 1, 0);
+  std::vector<int> group_of(num_residuals, -1);
+  const int num_point_groups = static_cast<int>(reduced.V_inverse.size());
+  int num_groups = num_point_groups;
+  std::vector<double*> parameters;
+  for (size_t r = 0; r < num_residuals; ++r) {
+    const ResidualInfo& info = round.residuals[r];
+    const bool wanted = diagnostics || info.group != kTieMarks;
+    first_row[r + 1] = first_row[r] + (wanted ? info.rows : 0);
+    if (!wanted) continue;
+    round.problem->GetParameterBlocksForResidualBlock(info.id, &parameters);
+    for (double* block_ptr : parameters) {
+      const auto p = reduced.point_index.find(block_ptr);
+      if (p != reduced.point_index.end()) group_of[r] = p->second;
+    }
+    if (group_of[r] < 0) group_of[r] = num_groups++;
+  }
+  std::vector<std::vector<int>> members(num_groups);
+  for (size_t r = 0; r < num_residuals; ++r)
+    if (group_of[r] >= 0) members[group_of[r]].push_back(static_cast<int>(r));
+  std::vector<int>().swap(group_of);
+  std::vector<double> leverage(first_row.back(), kNaN);
+  std::vector<double> shift(diagnostics ? first_row.back() : 0, kNaN);
+  std::vector<double> whitened(diagnostics ? first_row.back() : 0, kNaN);
+  std::vector<char> evaluated(num_residuals, 0);
+
+  constexpr int kGroupsPerChunk = 4096;
+  std::vector<BlockRows> rows;
+  for (int chunk = 0; chunk < num_groups; chunk += kGroupsPerChunk) {
+    const int end = std::min(num_groups, chunk + kGroupsPerChunk);
+    std::vector<int> residuals_of_chunk;
+    for (int g = chunk; g < end; ++g)
+      residuals_of_chunk.insert(residuals_of_chunk.end(), members[g].begin(), members[g].end());
+    rows.resize(residuals_of_chunk.size());
+    std::vector<size_t> start_of_group(end - chunk + 1, 0);
+    for (int g = chunk; g < end; ++g)
+      start_of_group[g - chunk + 1] = start_of_group[g - chunk] + members[g].size();
+    for (size_t k = 0; k < residuals_of_chunk.size(); ++k) {
+      const int r = residuals_of_chunk[k];
+      evaluated[r] = EvaluateBlockRows(round, reduced, round.residuals[r], &rows[k]);
+      // Only the first info.rows rows are observations (a control point's Z prior block has a
+      // zero row beside it).
+      if (evaluated[r] && diagnostics)
+        std::copy_n(rows[k].residuals.begin(), round.residuals[r].rows,
+                    whitened.begin() + first_row[r]);
+    }
+    ParallelFor(end - chunk, options.solver.num_threads, [&](size_t local) {
+      const int g = chunk + static_cast<int>(local);
+      const std::vector<int>& own = members[g];
+      if (own.empty()) return;
+      const size_t first = start_of_group[local];
+      const int point = g < num_point_groups ? g : -1;
+      SupportCovariance support;
+      if (!MakeSupportCovariance(reduced, point, rows[first].e_blocks, &support)) return;
+      Eigen::VectorXd largest;
+      for (size_t m = 0; m < own.size(); ++m) {
+        const int r = own[m];
+        if (!evaluated[r]) continue;
+        const Eigen::VectorXd h = Leverages(reduced, support, rows[first + m],
+                                            diagnostics ? &centres : nullptr,
+                                            diagnostics ? &largest : nullptr);
+        for (int row = 0; row < round.residuals[r].rows; ++row) {
+          leverage[first_row[r] + row] = h[row];
+          if (diagnostics) shift[first_row[r] + row] = largest[row];
+        }
+      }
+    });
+  }
+  for (size_t r = 0; r < num_residuals; ++r) {
+    const ResidualInfo& info = round.residuals[r];
+    if (first_row[r + 1] == first_row[r] || !evaluated[r]) continue;
     for (int row = 0; row < info.rows; ++row) {
+      const int64_t at = first_row[r] + row;
+      sums[info.group].leverage += leverage[at];
+      if (!diagnostics) continue;
       const BundleObservationDiagnostics d =
-          RowDiagnostics(*result, info, row, rows.residuals[row],
-                         RowScale(block, plan, info, row), h[row], s0, centres, shifts[row]);
+          RowDiagnostics(*result, info, row, whitened[at], RowScale(block, plan, info, row),
+                         leverage[at], s0, shift[at]);
       if (d.redundancy < options.statistics.uncontrolled_redundancy) ++result->num_uncontrolled;
       result->observations.push_back(d);
     }
@@ -478,11 +594,11 @@ void CalibrationResults(const BundleAdjustmentOptions& options, const Block& blo
                         BundleAdjustmentResult* result) {
   for (size_t c = 0; c < block.cameras.size(); ++c) {
     if (plan.calibrated[c].empty()) continue;
-    int offset = -1;
+    int e_block = -1;
     if (reduced != nullptr) {
       const auto found = reduced->e_index.find(state.cameras[c].data());
       if (found == reduced->e_index.end()) continue;
-      offset = reduced->e_offset[found->second];
+      e_block = found->second;
     }
     const int n = static_cast<int>(plan.calibrated[c].size());
     BundleCalibrationResult calibration;
@@ -494,7 +610,9 @@ void CalibrationResults(const BundleAdjustmentOptions& options, const Block& blo
       calibration.values.push_back(state.cameras[c][index]);
     }
     if (reduced != nullptr) {
-      const Eigen::MatrixXd C = variance_factor * reduced->C.block(offset, offset, n, n);
+      Eigen::MatrixXd C;
+      if (!reduced->C.Block(e_block, e_block, &C)) C = Eigen::MatrixXd::Constant(n, n, kNaN);
+      C = variance_factor * C.topLeftCorner(n, n);
       for (int a = 0; a < n; ++a) calibration.sigmas.push_back(std::sqrt(std::max(C(a, a), 0.0)));
       calibration.correlation.resize(n, n);
       for (int a = 0; a < n; ++a) {
@@ -594,7 +712,9 @@ Eigen::Matrix3d PropagatedCheckPointCovariance(const Block& block, const BundleS
   }
   const Eigen::Matrix3d N_inverse = N.ldlt().solve(Eigen::Matrix3d::Identity());
   const Eigen::MatrixXd A = N_inverse * B;
-  return N_inverse + A * reduced.C * A.transpose();
+  // Its images need not share a tie point (check marks are not in the adjustment): C A^T
+  // through the factor, three solves.
+  return N_inverse + A * reduced.C.Solve(A.transpose());
 }
 
 // Control and check points: the shared table (internal/bundle_statistics.h), check points
@@ -634,10 +754,17 @@ void ComputeBundleStatistics(const BundleAdjustmentOptions& options, const Block
 
   // Covariances and redundancy numbers from the reduced normal matrix.
   ReducedNormals reduced;
-  int e_size = 0;
-  for (const int size : round.e_sizes) e_size += size;
-  const bool asked = e_size <= options.statistics.max_covariance_parameters;
-  if (asked) BuildReducedNormals(round, &reduced);
+  const BundleCovarianceMethod method = options.statistics.covariances;
+  const bool asked = method != BundleCovarianceMethod::kNone;
+  if (asked) {
+    SelectedInversionOptions inversion;
+    inversion.dense = method == BundleCovarianceMethod::kDenseInverse;
+    BuildReducedNormals(round, inversion, &reduced);
+  }
+  summary.covariance_entries = reduced.ok ? reduced.C.num_entries() : 0;
+  summary.covariance_memory_bytes = reduced.ok ? reduced.C.memory_bytes() : 0;
+  summary.factorization_seconds = reduced.ok ? reduced.C.factorization_seconds() : 0.0;
+  summary.inversion_seconds = reduced.ok ? reduced.C.inversion_seconds() : 0.0;
   SetTestLevel(options, *variance, result);
   if (reduced.ok) {
     OrientationAndPointCovariances(block, state, round, reduced, variance_factor, result);
@@ -647,10 +774,8 @@ void ComputeBundleStatistics(const BundleAdjustmentOptions& options, const Block
   } else {
     for (int g = 0; g < kNumBundleGroups; ++g) variance->redundancy[g] = kNaN;
     CalibrationResults(options, block, plan, state, nullptr, variance_factor, result);
-    summary.message = asked ? "the normal matrix is singular: no covariances"
-                            : "covariances skipped (" + std::to_string(e_size) +
-                                  " parameters after point elimination, more than " +
-                                  std::to_string(options.statistics.max_covariance_parameters) + ")";
+    summary.message = asked ? "no covariances: " + reduced.message
+                            : "covariances not computed (statistics turned off)";
   }
   if (plan.use_lever) result->lever_arm_m = state.lever;
   GroupStatistics(options, sums, *variance, result);

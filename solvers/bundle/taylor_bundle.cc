@@ -437,9 +437,8 @@ void SolutionCovariances(const TaylorBundleOptions& options, const Block& block,
                          const Normal& normal, double variance_factor, Layout* layout,
                          Reduction* reduction, BundleAdjustmentResult* out, std::string* message) {
   const int num_blocks = static_cast<int>(layout->free_images.size());
-  if (6 * num_blocks > options.max_covariance_parameters) {
-    *message += "; covariances skipped (more than " +
-                std::to_string(options.max_covariance_parameters) + " camera unknowns)";
+  if (options.covariances == BundleCovarianceMethod::kNone) {
+    *message += "; covariances not computed (statistics turned off)";
     return;
   }
   if (!(Reduce(normal, *layout, reduction) < 0 && WriteScaled(plan, layout, reduction) < 0 &&
@@ -450,7 +449,16 @@ void SolutionCovariances(const TaylorBundleOptions& options, const Block& block,
   std::vector<Matrix6d> cameras;
   std::vector<Eigen::Matrix3d> points;
   std::vector<char> has_point;
-  Covariances(block, plan, *layout, normal, *reduction, &cameras, &points, &has_point);
+  internal::SelectedInversionOptions inversion;
+  inversion.dense = options.covariances == BundleCovarianceMethod::kDenseInverse;
+  inversion.min_pivot_ratio = options.min_pivot_ratio;
+  const Status status = Covariances(block, plan, *layout, normal, *reduction, inversion, &cameras,
+                                    &points, &has_point);
+  if (!status.ok()) {
+    *message += "; the normal matrix at the solution is singular: no covariances (" +
+                status.message() + ")";
+    return;
+  }
   for (int b = 0; b < num_blocks; ++b) {
     BundleImageResult& image = out->images[layout->free_images[b]];
     image.covariance = variance_factor * cameras[b];
@@ -525,7 +533,6 @@ bool TaylorBundleOptions::IsValid(std::string* why) const {
     return fail("divergence_distance_factor must be finite and greater than 1");
   if (!(min_pivot_ratio >= 0.0 && min_pivot_ratio < 1.0))
     return fail("min_pivot_ratio must be in [0, 1)");
-  if (max_covariance_parameters < 0) return fail("max_covariance_parameters must be >= 0");
   return true;
 }
 
@@ -541,7 +548,7 @@ Status TaylorBundleOptionsFromBundleOptions(const BundleAdjustmentOptions& ceres
   options->accuracies = ceres.accuracies;
   options->rejection_threshold = ceres.robustness.rejection_threshold;
   options->max_rejection_rounds = ceres.robustness.max_rejection_rounds;
-  options->max_covariance_parameters = ceres.statistics.max_covariance_parameters;
+  options->covariances = ceres.statistics.covariances;
   options->progress = ceres.solver.progress;
   return Status::Ok();
 }

@@ -92,9 +92,10 @@ struct TaylorBundleOptions {
   // pivot of the LDL^T of its Jacobi-scaled form is at most this fraction of the largest
   // (unitless; the threshold BundleAdjust's statistics use).
   double min_pivot_ratio = 1e-12;
-  // Posterior covariances (the reduced normal matrix inverted densely through its factorisation)
-  // are skipped for blocks with more camera unknowns than this (count).
-  int max_covariance_parameters = 12000;
+  // Posterior covariances of the orientations and control points: the entries of the inverse of
+  // the reduced normal matrix on the pattern of its sparse factor (selected inversion, at every
+  // block size; kDenseInverse: the dense inverse, the tests' oracle; kNone: not computed).
+  BundleCovarianceMethod covariances = BundleCovarianceMethod::kSelectedInversion;
   // Called after every Gauss-Newton correction (may be empty); the fields as BundleAdjust fills
   // them (round, iteration, cost, sigma0, step_norm = |d| over all unknowns, elapsed).
   std::function<void(const BundleIterationInfo&)> progress;

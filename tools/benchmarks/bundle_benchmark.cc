@@ -120,7 +120,7 @@ void BM_BundleTaylor(benchmark::State& state, TaylorPartials partials) {
   TaylorBundleOptions options;
   options.partials = partials;
   options.rejection_threshold = 0.0;
-  options.max_covariance_parameters = 0;
+  options.covariances = BundleCovarianceMethod::kNone;
   if (partials == TaylorPartials::kAsPrinted) options.max_iterations = 200;
   TaylorBundleResult result;
   TimeAdjustment(state, data, [&](Block* block, const auto& progress) {
@@ -143,7 +143,7 @@ void BM_BundleCeres(benchmark::State& state, JacobianType jacobian, int threads)
   options.solver.jacobian = jacobian;
   options.solver.num_threads = threads;
   options.robustness.rejection_threshold = 0.0;
-  options.statistics.max_covariance_parameters = 0;
+  options.statistics.covariances = BundleCovarianceMethod::kNone;
   BundleAdjustmentResult result;
   TimeAdjustment(state, data, [&](Block* block, const auto& progress) {
     options.solver.progress = progress;

@@ -4,6 +4,8 @@
 #
 #   tools/benchmarks/bundle_scaling.sh variants   # the settings compared on the 1000-image block
 #   tools/benchmarks/bundle_scaling.sh growth     # 100, 300, 1000 and 3000 images, default settings
+#   tools/benchmarks/bundle_scaling.sh statistics # 100, 300, 1000 (SIZES=...) images with
+#                                                 # --statistics=full and none: their time and memory
 #   tools/benchmarks/bundle_scaling.sh all
 #
 # Every run is a whole `photopose bundle --colmap_model` process on a block written by
@@ -56,6 +58,38 @@ if [ "$MODE" = growth ] || [ "$MODE" = all ]; then
   block b1000 25 40
   block b3000 50 60
   for n in 100 300 1000 3000; do run "growth$n" "b$n"; done
+fi
+if [ "$MODE" = statistics ]; then
+  # The statistics (selected inversion, redundancy numbers, reliability) beside the adjustment:
+  # the same block with them (full) and without (none); the adjustment's peak memory is none's.
+  for n in ${SIZES:-100 300 1000}; do
+    case $n in 100) block b100 10 10 ;; 300) block b300 15 20 ;; 1000) block b1000 25 40 ;;
+      3000) block b3000 50 60 ;; esac
+    run "stats_full$n" "b$n" --statistics=full
+    run "stats_none$n" "b$n" --statistics=none
+  done
+  python3 - "$WORK" <<'EOF2'
+import json, os, re, sys
+work = sys.argv[1]
+def peak(label):
+    text = open(os.path.join(work, label + ".time")).read()
+    return int(re.search(r"Maximum resident set size \(kbytes\): (\d+)", text).group(1)) / 1024
+print("| images | marks | adjustment (s) | statistics (s) | of which factorisation / selected inversion (s) "
+      "| inverse entries | peak with / without statistics (MiB) | ratio |")
+print("|" + "---|" * 8)
+for n in os.environ.get("SIZES", "100 300 1000").split():
+    if not os.path.exists(os.path.join(work, f"stats_full{n}.json")):
+        continue
+    full = json.load(open(os.path.join(work, f"stats_full{n}.json")))["summary"]
+    none = json.load(open(os.path.join(work, f"stats_none{n}.json")))["summary"]
+    st = full["statistics"]
+    adjustment = none["time_seconds"] - none["statistics_seconds"]
+    with_stats, without = peak(f"stats_full{n}"), peak(f"stats_none{n}")
+    print(f"| {n} | {full['num_marks']} | {adjustment:.3g} | {full['statistics_seconds']:.3g} "
+          f"| {st['factorization_seconds']:.3g} / {st['inversion_seconds']:.3g} | {st['inverse_entries']} "
+          f"| {with_stats:.0f} / {without:.0f} | {with_stats / without:.2f} |")
+EOF2
+  exit 0
 fi
 
 python3 - "$WORK" <<'EOF'

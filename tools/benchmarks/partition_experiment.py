@@ -30,7 +30,7 @@ simulator's image names (L<line>_<image>).
 
 Every adjustment keeps all marks (--rejection_threshold=0: the simulated block has no blunders,
 and the same observations must enter every run) and skips the covariances
-(--max_covariance_parameters=0: only the adjustment is timed), one thread per process.
+(--statistics=none: only the adjustment is timed), one thread per process.
 """
 
 import argparse
@@ -210,7 +210,7 @@ def bundle_args(photopose, tables, out, threads):
     return [photopose, "bundle", f"--cameras={tables['cameras']}", f"--marks={tables['marks']}",
             f"--points={tables['points']}", f"--frames={tables['frames']}",
             f"--out={out}/frames.csv", f"--out_points={out}/points.csv", f"--report={out}/report.json",
-            "--rejection_threshold=0", "--max_covariance_parameters=0", f"--threads={threads}", "--quiet"]
+            "--rejection_threshold=0", "--statistics=none", f"--threads={threads}", "--quiet"]
 
 
 # Runs argv[2:] and writes its peak resident memory (kB) and CPU seconds to argv[1]. On Linux a

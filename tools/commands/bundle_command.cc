@@ -68,7 +68,7 @@ DEFINE_bool(bundle_estimate_accuracies, false, "Estimate every group's accuracy 
 DEFINE_bool(bundle_snoop, false, "Data snooping: remove the most significant rejected observation (marks, control points, camera positions), adjust again, repeat.");
 DEFINE_double(bundle_alpha, 0.001, "Significance level of the w-test per observation (two-sided).");
 DEFINE_bool(bundle_cross_validate, false, "Leave each control point out in turn and report its error as a check point.");
-DEFINE_int32(bundle_max_covariance_parameters, 3000, "Covariances, redundancy numbers and diagnostics are computed when the reduced camera system has at most this many parameters (3000: blocks of up to 500 images; they take a dense inverse, which on 1000 images outlasts the adjustment itself by minutes).");
+DEFINE_string(bundle_statistics, "full", "Posterior covariances, redundancy numbers, reliability and the verdicts that need them: full (at every block size, by selected inversion of the reduced camera system's sparse factor), none (group RMS and check points only), or dense (the dense inverse, for comparison; n^2 memory in the reduced parameters).");
 DEFINE_string(bundle_relative_gauge, "free", "Relative blocks (no control points, no camera positions): free solves without a gauge and then moves the result into COLMAP's gauge (the first image as given, one coordinate of the second), the same minimum in far fewer iterations; fixed holds COLMAP's gauge from the start.");
 DEFINE_int32(bundle_threads, 0, "Threads of the linear algebra and of the cross-validation; 0 uses all cores.");
 DEFINE_bool(bundle_quiet, false, "No progress lines on stderr.");
@@ -116,7 +116,6 @@ const CommandFlags& BundleFlags() {
        {"rejection_threshold", 0.0, 1000.0},
        {"max_rejection_rounds", 0.0, 100.0},
        {"alpha", 0.0, 0.5, true, true},
-       {"max_covariance_parameters", 0.0, 100000.0},
        {"threads", 0.0, 1024.0}}};
   return *kFlags;
 }
@@ -283,7 +282,8 @@ int OptionsFromFlags(const char* command, BundleRun* run) {
   options.statistics.estimate_accuracies = FLAGS_bundle_estimate_accuracies;
   robustness.snoop = FLAGS_bundle_snoop;
   options.statistics.snooping_alpha = FLAGS_bundle_alpha;
-  options.statistics.max_covariance_parameters = FLAGS_bundle_max_covariance_parameters;
+  if (!ParseEnum(FLAGS_bundle_statistics, &options.statistics.covariances))
+    return BadInput(command, EnumFlagError<BundleCovarianceMethod>("--statistics", FLAGS_bundle_statistics));
   solver.num_threads = FLAGS_bundle_threads;
   if (FLAGS_bundle_relative_gauge != "free" && FLAGS_bundle_relative_gauge != "fixed")
     return BadInput(command, "--relative_gauge must be free or fixed, not '" + FLAGS_bundle_relative_gauge + "'");

@@ -5,35 +5,45 @@
 
 #include <Eigen/Core>
 #include <functional>
+#include <cstdint>
 #include <map>
+#include <string>
 #include <vector>
 
 #include "core/block.h"
 #include "solvers/bundle/bundle_adjustment.h"
 #include "solvers/bundle/internal/bundle_problem.h"
+#include "solvers/bundle/internal/selected_inversion.h"
 #include "solvers/bundle/triangulation.h"
 
 namespace photopose::internal {
 
 // The reduced normal matrix S (e blocks; points eliminated 3 x 3 at a time) of the whitened
-// problem, its inverse C and what the statistics need of the point blocks.
+// problem, the entries of its inverse C the statistics need (internal/selected_inversion.h) and
+// what they need of the point blocks. Memory: the point data grow with the marks, C with the
+// nonzeros of S's sparse factor; nothing is n^2 (unless `dense`, the test oracle).
 struct ReducedNormals {
   int size = 0;                                 // number of e columns
-  std::vector<int> e_offset;                    // per e block
+  std::vector<int> e_offset;                    // per e block, its first column
   std::map<const double*, int> e_index;         // e block -> index
   std::map<const double*, int> point_index;     // point block -> index into the point data
   std::vector<Eigen::Matrix3d> V_inverse;       // per point block
-  std::vector<std::vector<int>> W_columns;      // per point block: e columns it touches
-  std::vector<Eigen::MatrixXd> W;               // per point block: (columns x 3) of J_e^T J_p
-  Eigen::MatrixXd C;                            // S^-1 (unscaled)
+  std::vector<std::vector<int>> W_blocks;       // per point block: e blocks it touches, ascending
+  std::vector<Eigen::MatrixXd> W;               // per point block: (their columns x 3) of J_e^T J_p
+  SelectedInverse C;                            // S^-1 (unscaled) on the filled pattern
+  int64_t S_nonzeros = 0;                       // stored entries of S (both triangles)
   bool ok = false;
+  std::string message;                          // why not ok
 };
-void BuildReducedNormals(const BundleRound& round, ReducedNormals* reduced);
+// With options.dense, C is S inverted densely (the oracle of the tests).
+void BuildReducedNormals(const BundleRound& round, const SelectedInversionOptions& options,
+                         ReducedNormals* reduced);
 
 // The tangent-space Jacobian rows of one residual block: e columns (global) and point columns.
 struct BlockRows {
   int rows = 0;
   std::vector<double> residuals;                 // whitened
+  std::vector<int> e_blocks;                     // e blocks, their columns in this order in J_e
   std::vector<int> e_columns;
   Eigen::MatrixXd J_e;                           // rows x e_columns
   Eigen::Matrix<double, Eigen::Dynamic, 3> J_p;  // rows x 3, when `point` >= 0
@@ -42,14 +52,35 @@ struct BlockRows {
 bool EvaluateBlockRows(const BundleRound& round, const ReducedNormals& reduced,
                        const ResidualInfo& info, BlockRows* rows);
 
-// Unscaled covariance of point block p: V^-1 + V^-1 W^T C W V^-1.
-Eigen::Matrix3d PointCovariance(const ReducedNormals& reduced, int p);
-// The diagonal of the hat matrix J C J^T of a block's rows (unscaled C), and, when `shift` is not
-// null, for each row i the vector C_rows J_i^T (the part of the points eliminated folded in): the
-// response of the parameters in the rows of C_rows (rows of C, global e columns) to a unit
-// whitened error in that row.
-Eigen::VectorXd Leverages(const ReducedNormals& reduced, const BlockRows& rows,
-                          const Eigen::MatrixXd* C_rows, std::vector<Eigen::VectorXd>* shift);
+// What the rows of one point (or of a prior on e blocks alone) need of C: its submatrix on the e
+// blocks they touch (a point's: every pair of its images, which share it, so on the pattern of
+// S) and its products with the point's elimination W V^-1.
+struct SupportCovariance {
+  std::vector<int> blocks;        // e blocks, ascending
+  std::vector<int> block_offset;  // their first row in `C`
+  Eigen::MatrixXd C;              // k x k
+  Eigen::MatrixXd WV;             // k x 3: W V^-1 (a point; else k x 0)
+  Eigen::MatrixXd T;              // C WV
+  Eigen::Matrix3d Q = Eigen::Matrix3d::Zero();  // WV^T C WV
+  int Offset(int e_block) const;  // row of an e block in `C`, or -1
+};
+// For point block p (blocks: its W_blocks) or, with p = -1, the given e blocks. False when C is
+// not known on them.
+bool MakeSupportCovariance(const ReducedNormals& reduced, int p, const std::vector<int>& blocks,
+                           SupportCovariance* support);
+
+// Unscaled covariance of point block p: V^-1 + V^-1 W^T C W V^-1 (support: MakeSupportCovariance
+// of p).
+Eigen::Matrix3d PointCovariance(const ReducedNormals& reduced, const SupportCovariance& support,
+                                int p);
+// The diagonal of the hat matrix J C J^T of a block's rows (unscaled C; support: of its point, or
+// of its own e blocks), and, when `centres` is not null, per row the largest shift of the centre
+// of an image in the support per unit whitened error in that row (the external reliability's
+// factor; centres[b] the number of centre components leading e block b's tangent space, 0 for a
+// block that is not an image).
+Eigen::VectorXd Leverages(const ReducedNormals& reduced, const SupportCovariance& support,
+                          const BlockRows& rows, const std::vector<int>* centres,
+                          Eigen::VectorXd* largest_shift);
 
 // Per group, what variance component estimation needs: the whitened sum of squares and the
 // redundancy (sum of redundancy numbers; NaN when not computed).

@@ -14,7 +14,9 @@
 #include <vector>
 
 #include "core/block.h"
+#include "core/status.h"
 #include "solvers/bundle/internal/bundle_problem.h"
+#include "solvers/bundle/internal/selected_inversion.h"
 #include "solvers/bundle/taylor_bundle.h"
 
 namespace photopose::internal::taylor {
@@ -167,10 +169,15 @@ void SolveCorrections(const Plan& plan, const Layout& layout, const Normal& norm
                       const Reduction& reduction, Eigen::VectorXd* d_e,
                       std::vector<Eigen::Vector3d>* d_p);
 
-// The blocks of S^-1 the statistics need, unscaled: per camera block its 6 x 6 diagonal block,
-// and per free control point its 3 x 3 covariance (has_point).
-void Covariances(const Block& block, const Plan& plan, const Layout& layout, const Normal& normal,
-                 const Reduction& reduction, std::vector<Matrix6d>* cameras,
-                 std::vector<Eigen::Matrix3d>* points, std::vector<char>* has_point);
+// The blocks of S^-1 the statistics need, unscaled, by selected inversion of the scaled S
+// (internal/selected_inversion.h; the pairs of images of a control point share it, so they lie on
+// the pattern): per camera block its 6 x 6 diagonal block (fixed components: zero), and per free
+// control point its 3 x 3 covariance (has_point). An error when S is singular.
+[[nodiscard]] Status Covariances(const Block& block, const Plan& plan, const Layout& layout,
+                                 const Normal& normal, const Reduction& reduction,
+                                 const SelectedInversionOptions& inversion,
+                                 std::vector<Matrix6d>* cameras,
+                                 std::vector<Eigen::Matrix3d>* points,
+                                 std::vector<char>* has_point);
 
 }  // namespace photopose::internal::taylor

@@ -1,0 +1,411 @@
+// Selected inversion (solvers/bundle/internal/selected_inversion.h): CHOLMOD's factor, the
+// Takahashi recursion on its pattern, and the lookups of blocks of the inverse.
+#include "solvers/bundle/internal/selected_inversion.h"
+
+#include <cholmod.h>
+
+#include <Eigen/Dense>
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <limits>
+#include <numeric>
+#include <string>
+#include <tuple>
+#include <utility>
+
+namespace photopose::internal {
+namespace {
+
+using Clock = std::chrono::steady_clock;
+double SecondsSince(Clock::time_point start) {
+  return std::chrono::duration<double>(Clock::now() - start).count();
+}
+
+using RowMatrix = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>;
+
+// The Takahashi recursion for columns j0 .. j1 - 1 of the simplicial factor (Lp, Li, Lx), whose
+// columns after j1 - 1 are done in z: one block of S, dense on its diagonal, every column with
+// the rows of the block below it and then the same rows R. (A panel of one column is the scalar
+// recursion.) `position` is -1 everywhere on entry and exit.
+void TakahashiPanel(int j0, int j1, const int* Lp, const int* Li, const double* Lx,
+                    std::vector<int>* position, std::vector<double>* z_values) {
+  const int s = j1 - j0;
+  const int* R = Li + Lp[j1 - 1] + 1;
+  const int m = Lp[j1] - Lp[j1 - 1] - 1;
+  for (int c = 0; c < s; ++c) {
+    // Column j0 + c: rows j0 + c .. j1 - 1, then R.
+    const int start = Lp[j0 + c];
+    bool same = Lp[j0 + c + 1] - start == s - c + m;
+    for (int r = 0; same && r < s - c; ++r) same = Li[start + r] == j0 + c + r;
+    for (int a = 0; same && a < m; ++a) same = Li[start + s - c + a] == R[a];
+    if (!same) {
+      // Not one pattern (never seen with CHOLMOD's factors): column by column.
+      for (int j = j1 - 1; j >= j0; --j) TakahashiPanel(j, j + 1, Lp, Li, Lx, position, z_values);
+      return;
+    }
+  }
+  std::vector<double>& z = *z_values;
+  RowMatrix L_RJ(m, s);
+  Eigen::MatrixXd L_JJ = Eigen::MatrixXd::Zero(s, s);
+  for (int c = 0; c < s; ++c) {
+    const int start = Lp[j0 + c];
+    for (int r = c; r < s; ++r) L_JJ(r, c) = Lx[start + r - c];
+    for (int a = 0; a < m; ++a) L_RJ(a, c) = Lx[start + s - c + a];
+  }
+  // Y = Z_RR L_RJ.
+  RowMatrix Y = RowMatrix::Zero(m, s);
+  for (int a = 0; a < m; ++a) (*position)[R[a]] = a;
+  for (int a = 0; a < m; ++a) {
+    const int i = R[a];
+    double* y_a = Y.row(a).data();
+    const double* l_a = L_RJ.row(a).data();
+    const double z_ii = z[Lp[i]];
+    for (int c = 0; c < s; ++c) y_a[c] += z_ii * l_a[c];
+    for (int u = Lp[i] + 1; u < Lp[i + 1]; ++u) {
+      const int b = (*position)[Li[u]];
+      if (b < 0) continue;
+      const double z_ki = z[u];
+      double* y_b = Y.row(b).data();
+      const double* l_b = L_RJ.row(b).data();
+      for (int c = 0; c < s; ++c) {
+        y_a[c] += z_ki * l_b[c];
+        y_b[c] += z_ki * l_a[c];
+      }
+    }
+  }
+  for (int a = 0; a < m; ++a) (*position)[R[a]] = -1;
+  // Z_RJ = -Y L_JJ^-1; Z_JJ = L_JJ^-T L_JJ^-1 - Z_RJ^T L_RJ L_JJ^-1.
+  Eigen::MatrixXd Z_RJ = -Y;
+  L_JJ.triangularView<Eigen::Lower>().solveInPlace<Eigen::OnTheRight>(Z_RJ);
+  const Eigen::MatrixXd L_inverse =
+      L_JJ.triangularView<Eigen::Lower>().solve(Eigen::MatrixXd::Identity(s, s));
+  Eigen::MatrixXd Z_JJ =
+      L_inverse.transpose() * L_inverse - (Z_RJ.transpose() * L_RJ) * L_inverse;
+  for (int c = 0; c < s; ++c) {
+    const int start = Lp[j0 + c];
+    for (int r = c; r < s; ++r) z[start + r - c] = 0.5 * (Z_JJ(r, c) + Z_JJ(c, r));
+    for (int a = 0; a < m; ++a) z[start + s - c + a] = Z_RJ(a, c);
+  }
+}
+
+}  // namespace
+
+// The factor A = P^T L L^T P (simplicial, packed, each column's rows ascending with the diagonal
+// first) and Z = A^-1 on the pattern of L, in the permuted order; `first` maps a block of S to
+// its first permuted column (its columns stay together and in order).
+struct SelectedInverse::Sparse {
+  cholmod_common common;
+  cholmod_factor* factor = nullptr;
+  std::vector<double> z;      // aligned with factor->i
+  std::vector<int> first;     // per block of S: first permuted column
+  Sparse() {
+    cholmod_start(&common);
+    common.print = 0;  // a singular matrix is a result here, not a message on stderr
+  }
+  ~Sparse() {
+    if (factor != nullptr) cholmod_free_factor(&factor, &common);
+    cholmod_finish(&common);
+  }
+  const int* p() const { return static_cast<const int*>(factor->p); }
+  const int* i() const { return static_cast<const int*>(factor->i); }
+  const double* x() const { return static_cast<const double*>(factor->x); }
+  // Position in z of permuted (row, column), row >= column, of the first of `count` consecutive
+  // rows; -1 when any of them is off the pattern.
+  int64_t Run(int row, int column, int count) const {
+    const int* begin = i() + p()[column];
+    const int* end = i() + p()[column + 1];
+    const int* found = std::lower_bound(begin, end, row);
+    if (end - found < count) return -1;
+    if (found[count - 1] != row + count - 1) return -1;  // sorted and unique: all present
+    return found - i();
+  }
+};
+
+SelectedInverse::SelectedInverse() = default;
+SelectedInverse::~SelectedInverse() = default;
+SelectedInverse::SelectedInverse(SelectedInverse&&) noexcept = default;
+SelectedInverse& SelectedInverse::operator=(SelectedInverse&&) noexcept = default;
+
+Status SelectedInverse::Compute(const SparseMatrix& S_upper, const std::vector<int>& block_start,
+                                const SelectedInversionOptions& options) {
+  sparse_.reset();
+  dense_.resize(0, 0);
+  factorization_seconds_ = inversion_seconds_ = 0.0;
+  const int n = static_cast<int>(S_upper.cols());
+  if (S_upper.rows() != n || block_start.empty() || block_start.front() != 0 ||
+      block_start.back() != n)
+    return Status::Error("selected inversion: the blocks do not partition the matrix");
+  block_start_ = block_start;
+  const int num_blocks = static_cast<int>(block_start.size()) - 1;
+  // Jacobi scaling first: camera parameters in mixed units (um next to mm^-6) give diagonals
+  // twenty orders of magnitude apart, which would hide a real rank defect or fake one.
+  scale_.resize(n);
+  for (int c = 0; c < n; ++c) {
+    const double d = S_upper.coeff(c, c);
+    if (!(d > 0.0) || !std::isfinite(d))
+      return Status::Error("the reduced normal matrix has a column without weight");
+    scale_[c] = 1.0 / std::sqrt(d);
+  }
+  const Clock::time_point start = Clock::now();
+  if (options.dense) {
+    Eigen::MatrixXd A = Eigen::MatrixXd::Zero(n, n);
+    for (int col = 0; col < n; ++col) {
+      for (SparseMatrix::InnerIterator it(S_upper, col); it; ++it) {
+        if (it.row() > col) continue;
+        A(it.row(), col) = A(col, it.row()) = scale_[it.row()] * it.value() * scale_[col];
+      }
+    }
+    const Eigen::LDLT<Eigen::MatrixXd> ldlt(A);
+    if (ldlt.info() != Eigen::Success || !(ldlt.vectorD().minCoeff() > 0.0) ||
+        !(ldlt.vectorD().minCoeff() > options.min_pivot_ratio * ldlt.vectorD().maxCoeff()))
+      return Status::Error("the reduced normal matrix is singular");
+    factorization_seconds_ = SecondsSince(start);
+    dense_ = scale_.asDiagonal() * ldlt.solve(Eigen::MatrixXd::Identity(n, n)) *
+             scale_.asDiagonal();
+    inversion_seconds_ = SecondsSince(start) - factorization_seconds_;
+    if (!dense_.allFinite()) return Status::Error("the reduced normal matrix is singular");
+    return Status::Ok();
+  }
+
+  auto sparse = std::make_unique<Sparse>();
+  cholmod_common* c = &sparse->common;
+  // The scaled upper triangle, every stored entry kept (a block's structural zeros too, so that
+  // its columns share one pattern in L).
+  int64_t nnz = 0;
+  for (int col = 0; col < n; ++col)
+    for (SparseMatrix::InnerIterator it(S_upper, col); it; ++it) nnz += it.row() <= col;
+  cholmod_sparse* A = cholmod_allocate_sparse(n, n, nnz, 1, 1, 1, CHOLMOD_REAL, c);
+  if (A == nullptr) return Status::Error("selected inversion: out of memory");
+  {
+    int* Ap = static_cast<int*>(A->p);
+    int* Ai = static_cast<int*>(A->i);
+    double* Ax = static_cast<double*>(A->x);
+    int64_t k = 0;
+    for (int col = 0; col < n; ++col) {
+      Ap[col] = static_cast<int>(k);
+      for (SparseMatrix::InnerIterator it(S_upper, col); it; ++it) {
+        if (it.row() > col) continue;
+        Ai[k] = it.row();
+        Ax[k++] = scale_[it.row()] * it.value() * scale_[col];
+      }
+    }
+    Ap[n] = static_cast<int>(k);
+  }
+  // Approximate minimum degree on the block graph, expanded block by block.
+  std::vector<int> block_of(n);
+  for (int b = 0; b < num_blocks; ++b)
+    for (int col = block_start[b]; col < block_start[b + 1]; ++col) block_of[col] = b;
+  std::vector<std::vector<int>> block_rows(num_blocks);
+  for (int col = 0; col < n; ++col) {
+    for (SparseMatrix::InnerIterator it(S_upper, col); it; ++it) {
+      if (it.row() > col) continue;
+      const int a = block_of[it.row()], b = block_of[col];
+      if (block_rows[b].empty() || block_rows[b].back() != a) block_rows[b].push_back(a);
+    }
+  }
+  int64_t block_nnz = 0;
+  for (std::vector<int>& rows : block_rows) {
+    std::sort(rows.begin(), rows.end());
+    rows.erase(std::unique(rows.begin(), rows.end()), rows.end());
+    block_nnz += static_cast<int64_t>(rows.size());
+  }
+  cholmod_sparse* B =
+      cholmod_allocate_sparse(num_blocks, num_blocks, block_nnz, 1, 1, 1, CHOLMOD_PATTERN, c);
+  std::vector<int> block_order(num_blocks);
+  bool ordered = B != nullptr;
+  if (ordered) {
+    int* Bp = static_cast<int*>(B->p);
+    int* Bi = static_cast<int*>(B->i);
+    int64_t k = 0;
+    for (int b = 0; b < num_blocks; ++b) {
+      Bp[b] = static_cast<int>(k);
+      for (const int a : block_rows[b]) Bi[k++] = a;
+    }
+    Bp[num_blocks] = static_cast<int>(k);
+    ordered = cholmod_amd(B, nullptr, 0, block_order.data(), c) != 0;
+    cholmod_free_sparse(&B, c);
+  }
+  block_rows.clear();
+  block_rows.shrink_to_fit();
+  if (!ordered) {
+    cholmod_free_sparse(&A, c);
+    return Status::Error("selected inversion: CHOLMOD's ordering failed");
+  }
+  std::vector<int> permutation;
+  permutation.reserve(n);
+  sparse->first.assign(num_blocks, 0);
+  for (const int b : block_order) {
+    sparse->first[b] = static_cast<int>(permutation.size());
+    for (int col = block_start[b]; col < block_start[b + 1]; ++col) permutation.push_back(col);
+  }
+  // Exactly this order (no postordering, which could interleave blocks); a supernodal
+  // factorisation, turned into a simplicial LL^T for the recursion.
+  c->nmethods = 1;
+  c->method[0].ordering = CHOLMOD_GIVEN;
+  c->postorder = 0;
+  c->supernodal = CHOLMOD_AUTO;
+  c->final_asis = 0;
+  c->final_super = 0;
+  c->final_ll = 1;
+  c->final_pack = 1;
+  c->final_monotonic = 1;
+  sparse->factor = cholmod_analyze_p(A, permutation.data(), nullptr, 0, c);
+  const bool factored =
+      sparse->factor != nullptr && cholmod_factorize(A, sparse->factor, c) != 0;
+  cholmod_free_sparse(&A, c);
+  if (!factored || c->status == CHOLMOD_NOT_POSDEF ||
+      static_cast<int>(sparse->factor->minor) < n)
+    return Status::Error("the reduced normal matrix is singular (not positive definite)");
+  if (sparse->factor->is_super || !sparse->factor->is_ll)
+    return Status::Error("selected inversion: CHOLMOD did not give a simplicial LL^T factor");
+  factorization_seconds_ = SecondsSince(start);
+
+  // Each column's rows ascending, the diagonal first (CHOLMOD keeps them so; sorted here if not).
+  int* Lp = static_cast<int*>(sparse->factor->p);
+  int* Li = static_cast<int*>(sparse->factor->i);
+  double* Lx = static_cast<double*>(sparse->factor->x);
+  double smallest = std::numeric_limits<double>::infinity(), largest = 0.0;
+  for (int col = 0; col < n; ++col) {
+    if (Li[Lp[col]] != col)
+      return Status::Error("selected inversion: unexpected factor layout (diagonal not first)");
+    if (!std::is_sorted(Li + Lp[col], Li + Lp[col + 1])) {
+      std::vector<std::pair<int, double>> entries;
+      for (int t = Lp[col]; t < Lp[col + 1]; ++t) entries.emplace_back(Li[t], Lx[t]);
+      std::sort(entries.begin(), entries.end());
+      for (int t = Lp[col]; t < Lp[col + 1]; ++t)
+        std::tie(Li[t], Lx[t]) = entries[t - Lp[col]];
+    }
+    const double pivot = Lx[Lp[col]] * Lx[Lp[col]];  // the D of LDL^T
+    smallest = std::min(smallest, pivot);
+    largest = std::max(largest, pivot);
+  }
+  if (!(smallest > options.min_pivot_ratio * largest))
+    return Status::Error("the reduced normal matrix is singular");
+
+  // Takahashi, backwards, one block of S (a panel of columns J with one pattern R below it) at a
+  // time: Z_RJ = -Z_RR L_RJ L_JJ^-1 and Z_JJ = (L_JJ^-T - Z_RJ^T L_RJ) L_JJ^-1. The products need
+  // Z_ik for i, k in R; they lie in the columns i of R (L's pattern is closed: R is a clique of
+  // the filled graph), found by walking each such column once per panel with R marked.
+  const Clock::time_point inversion_start = Clock::now();
+  sparse->z.assign(static_cast<size_t>(Lp[n]), 0.0);
+  std::vector<int> position(n, -1);
+  std::vector<int> panel_end(n, 0);  // per first column of a block: one past its last
+  for (int b = 0; b < num_blocks; ++b) {
+    const int first = sparse->first[b];
+    panel_end[first] = first + block_size(b);
+  }
+  int j1 = n;
+  while (j1 > 0) {
+    int j0 = j1 - 1;
+    while (panel_end[j0] == 0) --j0;  // the block's first column
+    TakahashiPanel(j0, j1, Lp, Li, Lx, &position, &sparse->z);
+    j1 = j0;
+  }
+  inversion_seconds_ = SecondsSince(inversion_start);
+  for (const double value : sparse->z)
+    if (!std::isfinite(value)) return Status::Error("the reduced normal matrix is singular");
+  sparse_ = std::move(sparse);
+  return Status::Ok();
+}
+
+bool SelectedInverse::Block(int a, int b, Eigen::MatrixXd* out) const {
+  const int na = block_size(a), nb = block_size(b);
+  const int ra = block_start_[a], cb = block_start_[b];
+  if (sparse_ == nullptr) {
+    if (dense_.size() == 0) return false;
+    *out = dense_.block(ra, cb, na, nb);
+    return true;
+  }
+  // Read from the lower triangle of Z: rows of the later block in the columns of the earlier.
+  const bool transpose = sparse_->first[a] < sparse_->first[b];
+  const int row_block = transpose ? b : a, col_block = transpose ? a : b;
+  const int rows = block_size(row_block), cols = block_size(col_block);
+  const int row0 = sparse_->first[row_block], col0 = sparse_->first[col_block];
+  Eigen::MatrixXd Z(rows, cols);
+  int64_t first_at = -1;
+  for (int c = 0; c < cols; ++c) {
+    if (row_block == col_block) {
+      // Diagonal block: rows c.. of column c; the rest by symmetry.
+      const int64_t at = sparse_->Run(row0 + c, col0 + c, rows - c);
+      if (at < 0) return false;
+      for (int r = c; r < rows; ++r) Z(r, c) = Z(c, r) = sparse_->z[at + r - c];
+    } else {
+      // The block's columns share their pattern below it: where the rows sit in the first
+      // column, less one per column, is where they sit in the others (checked; else searched).
+      const int* Lp = sparse_->p();
+      const int* Li = sparse_->i();
+      int64_t at = -1;
+      if (c > 0 && first_at >= 0) {
+        const int64_t guess = Lp[col0 + c] + (first_at - Lp[col0]) - c;
+        if (guess + rows <= Lp[col0 + c + 1] && Li[guess] == row0 &&
+            Li[guess + rows - 1] == row0 + rows - 1)
+          at = guess;
+      }
+      if (at < 0) at = sparse_->Run(row0, col0 + c, rows);
+      if (at < 0) return false;
+      if (c == 0) first_at = at;
+      for (int r = 0; r < rows; ++r) Z(r, c) = sparse_->z[at + r];
+    }
+  }
+  const Eigen::VectorXd s_row = scale_.segment(block_start_[row_block], rows);
+  const Eigen::VectorXd s_col = scale_.segment(block_start_[col_block], cols);
+  Z = s_row.asDiagonal() * Z * s_col.asDiagonal();
+  if (transpose)
+    *out = Z.transpose();
+  else
+    *out = std::move(Z);
+  return true;
+}
+
+bool SelectedInverse::Blocks(const std::vector<int>& blocks, Eigen::MatrixXd* out) const {
+  std::vector<int> offset(blocks.size() + 1, 0);
+  for (size_t k = 0; k < blocks.size(); ++k) offset[k + 1] = offset[k] + block_size(blocks[k]);
+  Eigen::MatrixXd C(offset.back(), offset.back());
+  Eigen::MatrixXd part;
+  for (size_t k = 0; k < blocks.size(); ++k) {
+    for (size_t l = k; l < blocks.size(); ++l) {
+      if (!Block(blocks[l], blocks[k], &part)) return false;
+      C.block(offset[l], offset[k], part.rows(), part.cols()) = part;
+      if (l != k) C.block(offset[k], offset[l], part.cols(), part.rows()) = part.transpose();
+    }
+  }
+  *out = std::move(C);
+  return true;
+}
+
+Eigen::MatrixXd SelectedInverse::Solve(const Eigen::MatrixXd& rhs) const {
+  if (sparse_ == nullptr) return dense_ * rhs;
+  const int n = size();
+  cholmod_common* c = &sparse_->common;
+  cholmod_dense* B = cholmod_allocate_dense(n, rhs.cols(), n, CHOLMOD_REAL, c);
+  if (B == nullptr)  // out of memory: no figure rather than an abort
+    return Eigen::MatrixXd::Constant(n, rhs.cols(), std::numeric_limits<double>::quiet_NaN());
+  Eigen::Map<Eigen::MatrixXd>(static_cast<double*>(B->x), n, rhs.cols()) =
+      scale_.asDiagonal() * rhs;
+  cholmod_dense* X = cholmod_solve(CHOLMOD_A, sparse_->factor, B, c);
+  if (X == nullptr) {
+    cholmod_free_dense(&B, c);
+    return Eigen::MatrixXd::Constant(n, rhs.cols(), std::numeric_limits<double>::quiet_NaN());
+  }
+  Eigen::MatrixXd result =
+      scale_.asDiagonal() * Eigen::Map<const Eigen::MatrixXd>(static_cast<double*>(X->x), n,
+                                                               rhs.cols());
+  cholmod_free_dense(&B, c);
+  cholmod_free_dense(&X, c);
+  return result;
+}
+
+int64_t SelectedInverse::num_entries() const {
+  if (sparse_ != nullptr) return static_cast<int64_t>(sparse_->z.size());
+  return static_cast<int64_t>(dense_.size());
+}
+
+int64_t SelectedInverse::memory_bytes() const {
+  if (sparse_ == nullptr) return static_cast<int64_t>(dense_.size()) * 8;
+  const int64_t nnz = static_cast<int64_t>(sparse_->z.size());
+  // L's column pointers and rows, its values and Z's.
+  return (size() + 1 + nnz) * 4 + 2 * nnz * 8 + static_cast<int64_t>(sparse_->first.size()) * 4;
+}
+
+}  // namespace photopose::internal
