@@ -261,7 +261,9 @@ Eigen::VectorXd Leverages(const ReducedNormals& reduced, const SupportCovariance
   Eigen::VectorXd h(rows.rows);
   if (largest_shift != nullptr) largest_shift->resize(rows.rows);
   for (int r = 0; r < rows.rows; ++r) {
-    const Eigen::VectorXd e = rows.J_e.row(r).transpose();
+    // A row with no camera columns (a control point's prior) has an empty J_e: no row view of it
+    // (Eigen would offset a null pointer).
+    const Eigen::VectorXd e = rows.J_e.cols() > 0 ? Eigen::VectorXd(rows.J_e.row(r).transpose()) : Eigen::VectorXd();
     double value = e.dot(C_own * e);
     Eigen::Vector3d q = Eigen::Vector3d::Zero();
     if (with_point) {

@@ -77,7 +77,9 @@ void TakahashiPanel(int j0, int j1, const int* Lp, const int* Li, const double* 
   for (int a = 0; a < m; ++a) (*position)[R[a]] = -1;
   // Z_RJ = -Y L_JJ^-1; Z_JJ = L_JJ^-T L_JJ^-1 - Z_RJ^T L_RJ L_JJ^-1.
   Eigen::MatrixXd Z_RJ = -Y;
-  L_JJ.triangularView<Eigen::Lower>().solveInPlace<Eigen::OnTheRight>(Z_RJ);
+  // The last panels have no rows below them (m = 0): Eigen's triangular solve must not see an
+  // empty right-hand side (it takes a reference to its first coefficient).
+  if (m > 0) L_JJ.triangularView<Eigen::Lower>().solveInPlace<Eigen::OnTheRight>(Z_RJ);
   const Eigen::MatrixXd L_inverse =
       L_JJ.triangularView<Eigen::Lower>().solve(Eigen::MatrixXd::Identity(s, s));
   Eigen::MatrixXd Z_JJ =
