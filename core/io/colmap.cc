@@ -346,14 +346,7 @@ Status ModelBuilder::Images() {
                                                       " is not in " + FileName(2));
       }
       mark_of_point2D_[im.points2D_begin + k] = static_cast<int>(block_.marks.size());
-      BlockMark mark;
-      mark.image = image_index;
-      mark.point = point;
-      mark.unit = MarkUnit::kPixel;
-      mark.measured = xy;
-      mark.observation = xy;
-      mark.line = LineOf(im.points2D_place);
-      block_.marks.push_back(mark);
+      block_.marks.push_back(MakePixelMark(image_index, point, xy, LineOf(im.points2D_place)));
       if (extras_ != nullptr) extras_->mark_keypoint_index.push_back(static_cast<int>(k));
     }
     if (extras_ != nullptr) {

@@ -213,9 +213,12 @@ Status PrepareGeoreference(const GeoreferenceOptions& options, const Georeferenc
                          "' vs '" + (work.images.empty() ? std::string() : work.images[0].name) + "')");
   }
   const int first_control = static_cast<int>(work.points.size());
+  // Point ids looked up by hash (Block::FindPoint scans): the model's, then the control's.
+  std::unordered_map<std::string, int> point_of_id;
+  for (int p = 0; p < first_control; ++p) point_of_id.emplace(work.points[p].id, p);
   for (size_t k = 0; k < inputs.control_points.size(); ++k) {
     const GroundPoint& gp = inputs.control_points[k];
-    if (work.FindPoint(gp.point_id) >= 0) {
+    if (!point_of_id.emplace(gp.point_id, static_cast<int>(work.points.size())).second) {
       return Status::Error(inputs.control_source + ":" + std::to_string(gp.line) + ": point '" + gp.point_id +
                            "': the model has a point of that id; rename the control point");
     }
@@ -227,11 +230,11 @@ Status PrepareGeoreference(const GeoreferenceOptions& options, const Georeferenc
     if (gp.role == PointRole::kTie) point.position_m = control_local[k];
     point.line = gp.line;
     work.points.push_back(point);
-    work.BuildIndex();  // FindPoint of the next ones
   }
   for (const ImageMark& mark : inputs.control_marks) {
     const int image = matcher.Find(mark.raster);
-    const int point = work.FindPoint(mark.point_id);
+    const auto found = point_of_id.find(mark.point_id);
+    const int point = found == point_of_id.end() ? -1 : found->second;
     if (point < first_control) {
       return Status::Error(inputs.control_source + ":" + std::to_string(mark.line) + ": mark of point '" +
                            mark.point_id + "', which is not a control or check point");
@@ -246,14 +249,8 @@ Status PrepareGeoreference(const GeoreferenceOptions& options, const Georeferenc
                            ": control marks of a model are pixels (Column/Row) on a COLMAP-model camera");
     }
     PHOTOPOSE_RETURN_IF_ERROR(CheckMarkInsideImage(inputs.control_source, mark, camera.table, PixelOrigin::kCorner));
-    BlockMark block_mark;
-    block_mark.image = image;
-    block_mark.point = point;
-    block_mark.unit = MarkUnit::kPixel;
-    block_mark.measured = *mark.column_row;
-    block_mark.observation = *mark.column_row;
+    BlockMark block_mark = MakePixelMark(image, point, *mark.column_row, mark.line);
     block_mark.accuracy = mark.accuracy_px;
-    block_mark.line = mark.line;
     work.marks.push_back(block_mark);
     ++out.control_marks_matched;
   }
