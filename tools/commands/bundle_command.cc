@@ -15,6 +15,7 @@
 #include "core/io/colmap.h"
 #include "core/io/opensfm.h"
 #include "core/io/csv.h"
+#include "core/io/exif_gps.h"
 #include "core/io/output_files.h"
 #include "core/io/tables.h"
 #include "solvers/bundle/block_initialization.h"
@@ -34,6 +35,8 @@ DEFINE_string(bundle_bal, "", "A BAL problem file to adjust instead of the table
 DEFINE_string(bundle_opensfm, "", "An OpenSfM / OpenDroneMap reconstruction to adjust instead of the tables: reconstruction.json or the folder holding it (ODM: <project>/opensfm), tracks.csv beside it. Georeferenced like --colmap_model with --geo, --gcp_list, --frames, --points or --model_gps.");
 DEFINE_bool(bundle_model_gps, false, "With --opensfm: the shots' GNSS positions the reconstruction holds (gps_position in its topocentric frame at reference_lla, accuracy gps_dop) are the camera positions to georeference with.");
 DEFINE_string(bundle_geo, "", "With --colmap_model: camera positions as an OpenDroneMap geo.txt (first line the CRS; then image x y z [yaw pitch roll] [horizontal vertical accuracy]; x = easting or longitude). The model is georeferenced: aligned by a robust similarity, then adjusted with the positions as priors.");
+DEFINE_string(bundle_images, "", "With --colmap_model or --opensfm: the folder of the images (names as the model gives them); their EXIF GPS tags (or DJI's XMP drone-dji tags) are the camera positions, DJI's RtkStdLon/RtkStdLat/RtkStdHgt their accuracies where present.");
+DEFINE_string(bundle_exif_crs, "", "With --images: the CRS of the images' GPS positions. Default EPSG:4979 (WGS84, heights above the ellipsoid); EPSG:4326+5773 takes the heights as EGM96 (sea level, as the EXIF standard defines GPSAltitude). Which one a camera writes depends on its make and firmware.");
 DEFINE_string(bundle_gcp_list, "", "With --colmap_model: ground control as an OpenDroneMap gcp_list.txt (first line the CRS; X Y Z px py image [name]); points named in --check_points are check points.");
 DEFINE_string(bundle_crs, "", "With --colmap_model: the CRS of --points and --frames (EPSG:<code>, a +proj string, WKT; X = easting or longitude first).");
 DEFINE_string(bundle_out_crs, "", "CRS of the outputs of a georeferenced model (--out, --out_points); default: the control's CRS, else the positions' CRS when projected, else the WGS84 UTM zone of the block's centre.");
@@ -90,7 +93,7 @@ constexpr char kUsage[] =
     "   or: photopose bundle --colmap_model=DIR [--out_colmap=DIR] [--out_colmap_format=text|binary]\n"
     "                        [--calibrate=LIST] ...\n"
     "   or: photopose bundle --colmap_model=DIR | --opensfm=DIR [--geo=geo.txt | --frames=F.csv --crs=EPSG:N\n"
-    "                        | --model_gps] [--gcp_list=gcp_list.txt [--check_points=A,B] | --points=P.csv\n"
+    "                        | --images=DIR [--exif_crs=EPSG:N] | --model_gps] [--gcp_list=gcp_list.txt [--check_points=A,B] | --points=P.csv\n"
     "                        --marks=M.csv --crs=EPSG:N] [--out_crs=EPSG:N] --out=F.csv ...   (georeferencing)\n"
     "   or: photopose bundle --bal=problem.txt ...\n\n"
     "Minimises reprojection errors^2 / tie accuracy^2 + control residuals^2 / marker accuracy^2 +\n"
@@ -179,8 +182,12 @@ int CheckInputChoice(const char* command, BundleRun* run) {
   run->tables = !model && FLAGS_bundle_bal.empty();
   if (FLAGS_bundle_model_gps && FLAGS_bundle_opensfm.empty())
     return BadInput(command, "--model_gps takes the GNSS positions an OpenSfM reconstruction holds: give --opensfm");
-  if (FLAGS_bundle_model_gps && (!FLAGS_bundle_geo.empty() || !FLAGS_bundle_frames.empty()))
-    return BadInput(command, "give the camera positions once: --model_gps, --geo or --frames");
+  if (FLAGS_bundle_model_gps + !FLAGS_bundle_geo.empty() + !FLAGS_bundle_frames.empty() + !FLAGS_bundle_images.empty() > 1)
+    return BadInput(command, "give the camera positions once: --model_gps, --geo, --frames or --images");
+  if (!FLAGS_bundle_images.empty() && !model)
+    return BadInput(command, "--images reads the camera positions of --colmap_model or --opensfm from the images' GPS tags; with the tables give --frames");
+  if (!FLAGS_bundle_exif_crs.empty() && FLAGS_bundle_images.empty())
+    return BadInput(command, "--exif_crs is the CRS of the GPS tags of --images: give --images too");
   if (!FLAGS_bundle_bal.empty() && !FLAGS_bundle_marks.empty())
     return BadInput(command, "--marks: a BAL problem holds its own observations");
   if (run->tables && (FLAGS_bundle_cameras.empty() || FLAGS_bundle_marks.empty()))
@@ -190,7 +197,7 @@ int CheckInputChoice(const char* command, BundleRun* run) {
   if (!FLAGS_bundle_out_cameras.empty() && !run->tables)
     return BadInput(command, "--out_cameras writes a camera table of frame cameras; with --colmap_model or --bal use --out_colmap");
   // A COLMAP model is georeferenced with positions and control; a BAL problem takes nothing else.
-  const bool measurements = !FLAGS_bundle_geo.empty() || !FLAGS_bundle_gcp_list.empty() ||
+  const bool measurements = !FLAGS_bundle_geo.empty() || !FLAGS_bundle_gcp_list.empty() || !FLAGS_bundle_images.empty() ||
                             !FLAGS_bundle_points.empty() || !FLAGS_bundle_frames.empty() ||
                             FLAGS_bundle_model_gps;
   if (!FLAGS_bundle_bal.empty() && measurements)
@@ -205,8 +212,6 @@ int CheckInputChoice(const char* command, BundleRun* run) {
       return BadInput(command, "give the control as --gcp_list or as --points with --marks, not both");
     if (!FLAGS_bundle_points.empty() && FLAGS_bundle_marks.empty())
       return BadInput(command, "--points with --colmap_model needs --marks (the control points' image marks)");
-    if (!FLAGS_bundle_geo.empty() && !FLAGS_bundle_frames.empty())
-      return BadInput(command, "give the camera positions as --geo or as --frames, not both");
     if ((!FLAGS_bundle_points.empty() || !FLAGS_bundle_frames.empty()) && FLAGS_bundle_crs.empty())
       return BadInput(command, "--crs is needed: --points and --frames carry no coordinate system (e.g. --crs=EPSG:32632)");
     if (!FLAGS_bundle_crs.empty() && FLAGS_bundle_points.empty() && FLAGS_bundle_frames.empty())
@@ -399,6 +404,37 @@ int ReadGeoreferenceInputs(const char* command, const BundleRun& run, Georeferen
       if (dop && *dop > 0.0) m.accuracy_m = Eigen::Vector3d::Constant(*dop);
       inputs->positions.push_back(m);
     }
+  } else if (!FLAGS_bundle_images.empty()) {
+    std::vector<std::string> names;
+    for (const BlockImage& image : run.block.images) names.push_back(image.name);
+    std::vector<std::optional<ExifGps>> gps;
+    std::vector<std::string> missing;
+    const Status read = ReadExifGpsOfImages(FLAGS_bundle_images, names, &gps, &missing);
+    if (!read.ok()) return BadInput(command, "--images: " + read.message());
+    if (missing.size() == names.size())
+      return BadInput(command, "--images: no image in " + FLAGS_bundle_images + " has GPS tags (EXIF GPSLatitude/GPSLongitude or DJI XMP GpsLatitude/GpsLongitude)");
+    inputs->positions_crs = FLAGS_bundle_exif_crs.empty() ? "EPSG:4979" : FLAGS_bundle_exif_crs;
+    inputs->positions_source = FLAGS_bundle_images + " (GPS tags)";
+    int with_rtk = 0;
+    for (size_t i = 0; i < names.size(); ++i) {
+      if (!gps[i]) continue;
+      CameraPositionMeasurement m;
+      m.image = names[i];
+      m.position = gps[i]->lon_lat_height;
+      m.accuracy_m = gps[i]->rtk_sigma_enu_m;
+      with_rtk += m.accuracy_m.has_value();
+      inputs->positions.push_back(m);
+    }
+    if (!FLAGS_bundle_quiet) {
+      std::cerr << "photopose bundle: --images: " << inputs->positions.size() << " camera positions from GPS tags ("
+                << with_rtk << " with DJI RTK accuracies), heights as " << inputs->positions_crs << " defines them\n";
+      if (!missing.empty()) {
+        std::cerr << "photopose bundle: --images: " << missing.size() << (missing.size() == 1 ? " image" : " images")
+                  << " without GPS tags, adjusted without a position:";
+        for (size_t k = 0; k < missing.size() && k < 5; ++k) std::cerr << " " << missing[k];
+        std::cerr << (missing.size() > 5 ? " ...\n" : "\n");
+      }
+    }
   } else if (!FLAGS_bundle_geo.empty()) {
     GeoTxt geo;
     const Status read = ReadGeoTxt(FLAGS_bundle_geo, &geo);
@@ -486,8 +522,10 @@ int GeoreferenceModel(const char* command, BundleRun* run) {
     std::cerr << "; " << g.control_marks_matched << " control marks";
     if (!g.control_marks_unmatched.empty()) std::cerr << ", " << g.control_marks_unmatched.size() << " on images the model does not have (first: " << g.control_marks_unmatched[0] << ")";
     std::cerr << "\nphotopose bundle: similarity: scale " << g.model_to_local.scale << ", " << g.similarity.num_inliers
-              << " of " << g.similarity.residual_m.size() << " pairs inliers; control RMSE after it "
-              << g.control_after_similarity.total_m << " m, check RMSE " << g.check_after_similarity.total_m << " m\n";
+              << " of " << g.similarity.residual_m.size() << " pairs inliers";
+    if (g.control_after_similarity.count > 0) std::cerr << "; control RMSE after it " << g.control_after_similarity.total_m << " m";
+    if (g.check_after_similarity.count > 0) std::cerr << "; check RMSE after it " << g.check_after_similarity.total_m << " m";
+    std::cerr << "\n";
   }
   return kGoOn;
 }
@@ -770,8 +808,12 @@ void PrintClosingSummary(const BundleRun& run, bool usable) {
   if (result.num_check_points > 0) std::cout << ", check RMSE " << result.check_rmse_total_m << " m";
   if (run.georeference && run.georeferenced.evaluated) {
     const GeoreferenceResult& g = run.georeferenced;
-    std::cout << "; georeferenced in " << g.out_crs << ": control RMSE " << g.control_after_similarity.total_m
-              << " m after the similarity, " << g.control_after_adjustment.total_m << " m after the adjustment";
+    std::cout << "; georeferenced in " << g.out_crs;
+    if (g.control_after_adjustment.count > 0)
+      std::cout << ": control RMSE " << g.control_after_similarity.total_m << " m after the similarity, "
+                << g.control_after_adjustment.total_m << " m after the adjustment";
+    else
+      std::cout << " by the camera positions alone (no control point)";
     if (g.check_after_adjustment.count > 0)
       std::cout << "; check RMSE " << g.check_after_similarity.total_m << " m -> " << g.check_after_adjustment.total_m << " m";
   }

@@ -10,7 +10,9 @@
 #include "core/io/colmap.h"
 #include "core/io/opensfm.h"
 #include "core/io/csv.h"
+#include "core/io/tables.h"
 #include "tests/support/georeference_scene.h"
+#include "tests/support/geotagged_jpeg.h"
 #include "tests/tools/cli_test_util.h"
 
 namespace photopose {
@@ -115,11 +117,15 @@ TEST(BundleGeoreference, RefusesWhatItCannotUseBeforeAnyWork) {
   const std::vector<Case> cases = {
       {model + " --frames=" + dir + "/frames.csv", "--crs is needed"},
       {model + " --geo=" + dir + "/bad_geo.txt", "CRS 'EPSG:999999'"},
-      {model + " --geo=" + dir + "/geo.txt --frames=" + dir + "/frames.csv --crs=EPSG:4326", "not both"},
+      {model + " --geo=" + dir + "/geo.txt --frames=" + dir + "/frames.csv --crs=EPSG:4326", "give the camera positions once"},
       {model + " --out_crs=EPSG:32632", "nothing is georeferenced"},
       {model + " --geo=" + dir + "/geo.txt --check_points=GCP_1", "--check_points names points of --gcp_list"},
       {model + " --gcp_list=" + dir + "/gcp_list.txt --check_points=nope", "'nope' is not a point of"},
       {model + " --crs=EPSG:4326", "neither is given"},
+      {model + " --images=" + dir + " --geo=" + dir + "/geo.txt", "give the camera positions once"},
+      {model + " --geo=" + dir + "/geo.txt --exif_crs=EPSG:4979", "--exif_crs is the CRS of the GPS tags of --images"},
+      {model + " --images=" + dir + "/no_such_folder", "no_such_folder: not a directory"},
+      {model + " --images=" + dir, "no such image file"},
   };
   for (const Case& c : cases) {
     const CliRun run = RunCli("bundle" + c.arguments + " --quiet", dir);
@@ -127,6 +133,56 @@ TEST(BundleGeoreference, RefusesWhatItCannotUseBeforeAnyWork) {
     EXPECT_NE(run.err.find(c.message), std::string::npos) << c.arguments << "\n" << run.err;
     EXPECT_FALSE(std::filesystem::exists(dir + "/f.csv")) << c.arguments;
   }
+}
+
+// The camera positions from the images' own GPS tags (EXIF, with DJI's RTK accuracies) give the
+// same adjustment as the same positions in a geo.txt; an image without tags is adjusted without.
+TEST(BundleGeoreference, ImagesGpsTagsServeAsCameraPositionsLikeAGeoTxt) {
+  const testing::GeoreferenceScene scene = testing::MakeGeoreferenceScene(2.0);
+  const std::string dir = ScratchDir();
+  const std::string checks = WriteScene(scene, dir);
+  for (size_t k = 0; k < scene.inputs.positions.size(); ++k) {
+    const CameraPositionMeasurement& m = scene.inputs.positions[k];
+    testing::GeotagOptions tags;
+    tags.exif_lon_lat_height = m.position;  // EPSG:4326 and ellipsoidal heights, as EPSG:4979
+    tags.rtk_sigma_enu_m = m.accuracy_m;
+    tags.rtk_flag = 50;
+    testing::WriteGeotaggedJpeg(dir + "/images/" + m.image, tags);
+  }
+  const std::string common = "bundle --colmap_model=" + dir + "/model --gcp_list=" + dir + "/gcp_list.txt --check_points=" +
+                             checks + " --quiet --report=";
+  const CliRun with_geo = RunCli(common + dir + "/geo.json --geo=" + dir + "/geo.txt --out=" + dir + "/geo.csv", dir);
+  ASSERT_EQ(with_geo.exit_code, 0) << with_geo.err;
+  const CliRun with_images = RunCli(common + dir + "/exif.json --images=" + dir + "/images --out=" + dir + "/exif.csv", dir);
+  ASSERT_EQ(with_images.exit_code, 0) << with_images.err;
+  const nlohmann::json geo = nlohmann::json::parse(ReadFile(dir + "/geo.json")).at("georeference");
+  const nlohmann::json exif = nlohmann::json::parse(ReadFile(dir + "/exif.json")).at("georeference");
+  EXPECT_EQ(exif.at("positions_matched"), 24);
+  EXPECT_NEAR(exif.at("check_after_adjustment").at("rmse_total_m").get<double>(),
+              geo.at("check_after_adjustment").at("rmse_total_m").get<double>(), 1e-4);
+  const auto centres = [](const std::string& path) {
+    std::vector<FrameRecord> frames;
+    const Status read = ReadFramesTable(path, FramesTableOptions(), &frames);
+    EXPECT_TRUE(read.ok()) << read.message();
+    std::vector<Eigen::Vector3d> out;
+    for (const FrameRecord& f : frames) out.push_back(f.eo.center_in_ground());
+    return out;
+  };
+  const std::vector<Eigen::Vector3d> geo_centres = centres(dir + "/geo.csv"), exif_centres = centres(dir + "/exif.csv");
+  ASSERT_EQ(geo_centres.size(), 24u);
+  ASSERT_EQ(exif_centres.size(), 24u);
+  for (size_t i = 0; i < geo_centres.size(); ++i)  // metres of the UTM grid
+    EXPECT_LT((geo_centres[i] - exif_centres[i]).norm(), 1e-3) << i;
+
+  // Without the tags of one image: adjusted without its position, and said so.
+  testing::WriteGeotaggedJpeg(dir + "/images/" + scene.inputs.positions[0].image, testing::GeotagOptions());
+  const CliRun one_missing = RunCli("bundle --colmap_model=" + dir + "/model --images=" + dir + "/images --report=" +
+                                        dir + "/missing.json --out=" + dir + "/missing.csv",
+                                    dir);
+  ASSERT_EQ(one_missing.exit_code, 0) << one_missing.err;
+  EXPECT_NE(one_missing.err.find("1 image without GPS tags, adjusted without a position: " + scene.inputs.positions[0].image),
+            std::string::npos) << one_missing.err;
+  EXPECT_EQ(nlohmann::json::parse(ReadFile(dir + "/missing.json")).at("georeference").at("positions_matched"), 23);
 }
 
 // An ODM reconstruction: its shots' GNSS (in its topocentric frame at reference_lla) as the

@@ -1,0 +1,130 @@
+#include "core/io/exif_gps.h"
+
+#include <gtest/gtest.h>
+
+#include "tests/support/geotagged_jpeg.h"
+#include "tests/support/temp_dir.h"
+
+namespace photopose {
+namespace {
+
+using testing::GeotagOptions;
+using testing::ScopedTempDir;
+using testing::WriteGeotaggedJpeg;
+
+TEST(ExifGps, ReadsTheExifGpsTagsWithTheirHemispheresAndAltitudeReference) {
+  ScopedTempDir dir;
+  ASSERT_TRUE(dir.ok());
+  GeotagOptions tags;
+  tags.exif_lon_lat_height = Eigen::Vector3d(-71.1234567, -33.4567891, -12.3456);  // W, S, below
+  WriteGeotaggedJpeg(dir.Path("a.jpg"), tags);
+  ExifGps gps;
+  const Status read = ReadExifGps(dir.Path("a.jpg"), &gps);
+  ASSERT_TRUE(read.ok()) << read.message();
+  EXPECT_EQ(gps.source, ExifGpsSource::kExif);
+  EXPECT_NEAR(gps.lon_lat_height.x(), -71.1234567, 1e-9);  // 1e-6 arc seconds written
+  EXPECT_NEAR(gps.lon_lat_height.y(), -33.4567891, 1e-9);
+  EXPECT_NEAR(gps.lon_lat_height.z(), -12.3456, 1e-9);
+  EXPECT_FALSE(gps.rtk_sigma_enu_m.has_value());
+  EXPECT_FALSE(gps.rtk_flag.has_value());
+}
+
+TEST(ExifGps, ExifWinsOverDjiXmpAndRtkAccuraciesAreReadAlongEastNorthUp) {
+  ScopedTempDir dir;
+  GeotagOptions tags;
+  tags.exif_lon_lat_height = Eigen::Vector3d(11.2, 47.8, 612.5);
+  tags.dji_lon_lat_height = Eigen::Vector3d(11.3, 47.9, 600.0);
+  tags.rtk_sigma_enu_m = Eigen::Vector3d(0.011, 0.012, 0.025);
+  tags.rtk_flag = 50;
+  WriteGeotaggedJpeg(dir.Path("a.jpg"), tags);
+  ExifGps gps;
+  ASSERT_TRUE(ReadExifGps(dir.Path("a.jpg"), &gps).ok());
+  EXPECT_EQ(gps.source, ExifGpsSource::kExif);
+  EXPECT_NEAR(gps.lon_lat_height.x(), 11.2, 1e-9);
+  EXPECT_NEAR(gps.lon_lat_height.z(), 612.5, 1e-9);
+  ASSERT_TRUE(gps.rtk_sigma_enu_m.has_value());
+  EXPECT_DOUBLE_EQ(gps.rtk_sigma_enu_m->x(), 0.011);
+  EXPECT_DOUBLE_EQ(gps.rtk_sigma_enu_m->y(), 0.012);
+  EXPECT_DOUBLE_EQ(gps.rtk_sigma_enu_m->z(), 0.025);
+  EXPECT_EQ(gps.rtk_flag, 50);
+}
+
+TEST(ExifGps, FallsBackToDjiXmpIncludingItsMisspeltLongitude) {
+  ScopedTempDir dir;
+  GeotagOptions tags;
+  tags.dji_lon_lat_height = Eigen::Vector3d(8.5432109876, 47.3765432109, 488.123);
+  tags.dji_misspelt_longitude = true;
+  tags.rtk_sigma_enu_m = Eigen::Vector3d(0.0, 0.0, 0.0);  // no RTK solution: no accuracy
+  WriteGeotaggedJpeg(dir.Path("dji.jpg"), tags);
+  ExifGps gps;
+  const Status read = ReadExifGps(dir.Path("dji.jpg"), &gps);
+  ASSERT_TRUE(read.ok()) << read.message();
+  EXPECT_EQ(gps.source, ExifGpsSource::kDjiXmp);
+  EXPECT_NEAR(gps.lon_lat_height.x(), 8.5432109876, 1e-10);
+  EXPECT_NEAR(gps.lon_lat_height.y(), 47.3765432109, 1e-10);
+  EXPECT_NEAR(gps.lon_lat_height.z(), 488.123, 1e-10);
+  EXPECT_FALSE(gps.rtk_sigma_enu_m.has_value());
+}
+
+TEST(ExifGps, ImagesWithoutGpsAreListedOtherFailuresAreErrors) {
+  ScopedTempDir dir;
+  GeotagOptions tagged;
+  tagged.exif_lon_lat_height = Eigen::Vector3d(11.2, 47.8, 500.0);
+  WriteGeotaggedJpeg(dir.Path("sub/a.jpg"), tagged);
+  WriteGeotaggedJpeg(dir.Path("b.jpg"), GeotagOptions());
+  std::vector<std::optional<ExifGps>> positions;
+  std::vector<std::string> missing;
+  const Status read = ReadExifGpsOfImages(dir.path(), {"sub/a.jpg", "b.jpg"}, &positions, &missing);
+  ASSERT_TRUE(read.ok()) << read.message();
+  ASSERT_EQ(positions.size(), 2u);
+  EXPECT_TRUE(positions[0].has_value());
+  EXPECT_FALSE(positions[1].has_value());
+  EXPECT_EQ(missing, std::vector<std::string>{"b.jpg"});
+
+  ExifGps gps;
+  const Status none = ReadExifGps(dir.Path("b.jpg"), &gps);
+  EXPECT_FALSE(none.ok());
+  EXPECT_NE(none.message().find("no GPS position"), std::string::npos) << none.message();
+
+  const Status absent = ReadExifGpsOfImages(dir.path(), {"c.jpg"}, &positions, &missing);
+  EXPECT_FALSE(absent.ok());
+  EXPECT_NE(absent.message().find("c.jpg: no such image file"), std::string::npos) << absent.message();
+}
+
+TEST(ExifGps, GarbageAndMalformedTagsAreErrorsNamingFileAndTag) {
+  ScopedTempDir dir;
+  const std::string garbage = dir.Write("garbage.jpg", std::string("\xff\xd8\xff\xe1\x00\x10" "Exif\0\0II*\0\x08\0\0\0\xff\xff", 22));
+  ExifGps gps;
+  const Status g = ReadExifGps(garbage, &gps);
+  EXPECT_FALSE(g.ok());
+  EXPECT_NE(g.message().find("garbage.jpg"), std::string::npos) << g.message();
+  const std::string text = dir.Write("notes.jpg", "not an image at all\n");
+  EXPECT_FALSE(ReadExifGps(text, &gps).ok());
+
+  // A latitude of 95 degrees.
+  GeotagOptions tags;
+  tags.exif_lon_lat_height = Eigen::Vector3d(11.2, 95.0, 500.0);
+  WriteGeotaggedJpeg(dir.Path("polar.jpg"), tags);
+  const Status polar = ReadExifGps(dir.Path("polar.jpg"), &gps);
+  EXPECT_FALSE(polar.ok());
+  EXPECT_NE(polar.message().find("Exif.GPSInfo.GPSLatitude"), std::string::npos) << polar.message();
+
+  // A DJI latitude that is not a number.
+  GeotagOptions dji;
+  dji.dji_lon_lat_height = Eigen::Vector3d(11.2, 47.8, 500.0);
+  WriteGeotaggedJpeg(dir.Path("dji.jpg"), dji);
+  {
+    auto image = Exiv2::ImageFactory::open(dir.Path("dji.jpg"));
+    image->readMetadata();
+    Exiv2::XmpData xmp = image->xmpData();
+    xmp["Xmp.drone-dji.GpsLatitude"] = "47.8N";
+    image->setXmpData(xmp);
+    image->writeMetadata();
+  }
+  const Status bad = ReadExifGps(dir.Path("dji.jpg"), &gps);
+  EXPECT_FALSE(bad.ok());
+  EXPECT_NE(bad.message().find("Xmp.drone-dji.GpsLatitude: not a number: '47.8N'"), std::string::npos) << bad.message();
+}
+
+}  // namespace
+}  // namespace photopose
