@@ -11,39 +11,6 @@
 namespace photopose::python {
 namespace {
 
-// A Python progress callback, called from the adjustment's thread with the GIL taken. The first
-// exception it raises stops further calls (the C++ adjustment cannot be interrupted from its
-// progress hook) and is raised again when the adjustment returns.
-class ProgressRelay {
- public:
-  explicit ProgressRelay(py::object callback) : callback_(std::move(callback)) {}
-  ~ProgressRelay() {
-    py::gil_scoped_acquire acquire;
-    callback_ = py::object();
-  }
-
-  std::function<void(const BundleIterationInfo&)> Function() {
-    if (callback_.is_none()) return {};
-    return [this](const BundleIterationInfo& info) {
-      py::gil_scoped_acquire acquire;
-      if (error_) return;
-      try {
-        callback_(info);
-      } catch (py::error_already_set& e) {
-        error_ = std::make_unique<py::error_already_set>(std::move(e));
-      }
-    };
-  }
-  // Raises the callback's exception, if any (with the GIL held).
-  void Rethrow() {
-    if (error_) throw std::move(*error_);
-  }
-
- private:
-  py::object callback_;
-  std::unique_ptr<py::error_already_set> error_;
-};
-
 py::dict ObservationColumns(const BundleAdjustmentResult& r) {
   const size_t n = r.observations.size();
   std::vector<int> group(n), item(n), axis(n);

@@ -15,6 +15,8 @@
 #include <pybind11/stl.h>
 
 #include <Eigen/Core>
+#include <functional>
+#include <memory>
 #include <optional>
 #include <stdexcept>
 #include <string>
@@ -141,11 +143,46 @@ struct PythonBlock {
   std::optional<ColmapModelExtras> colmap;
 };
 
+// ------------------------------------------------------------------ progress
+// A Python progress callback, called from the adjustment's thread with the GIL taken. The first
+// exception it raises stops further calls (the C++ adjustment cannot be interrupted from its
+// progress hook) and is raised again when the adjustment returns.
+class ProgressRelay {
+ public:
+  explicit ProgressRelay(py::object callback) : callback_(std::move(callback)) {}
+  ~ProgressRelay() {
+    py::gil_scoped_acquire acquire;
+    callback_ = py::object();
+  }
+
+  std::function<void(const BundleIterationInfo&)> Function() {
+    if (callback_.is_none()) return {};
+    return [this](const BundleIterationInfo& info) {
+      py::gil_scoped_acquire acquire;
+      if (error_) return;
+      try {
+        callback_(info);
+      } catch (py::error_already_set& e) {
+        error_ = std::make_unique<py::error_already_set>(std::move(e));
+      }
+    };
+  }
+  // Raises the callback's exception, if any (with the GIL held).
+  void Rethrow() {
+    if (error_) throw std::move(*error_);
+  }
+
+ private:
+  py::object callback_;
+  std::unique_ptr<py::error_already_set> error_;
+};
+
 // ------------------------------------------------------------------ the areas of the module
 void BindGeometry(py::module_& m);
 void BindResection(py::module_& m);
 void BindBlock(py::module_& m);
 void BindBundle(py::module_& m);
+void BindGeoreference(py::module_& m);
 
 }  // namespace photopose::python
 

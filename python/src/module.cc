@@ -229,4 +229,5 @@ PYBIND11_MODULE(_photopose, m) {
   pp::BindResection(m);
   pp::BindBlock(m);
   pp::BindBundle(m);
+  pp::BindGeoreference(m);
 }

@@ -1,0 +1,86 @@
+"""Georeferencing from Python: the inputs (geo.txt, gcp_list.txt, arrays, GPS tags), the call, its
+result in the output CRS, and the same answer as `photopose bundle --colmap_model --geo`."""
+
+import numpy as np
+import pytest
+
+import photopose as pp
+from test_examples import georeference_model
+
+
+def write_geo_txt(path, names, xyz, sigma):
+    path.write_text("EPSG:32633\n" + "".join(
+        f"{n} {x:.4f} {y:.4f} {z:.4f} 0 0 0 {sigma[0]} {sigma[2]}\n" for n, (x, y, z) in zip(names, xyz)))
+
+
+@pytest.fixture
+def scene(tmp_path):
+    block, truth = georeference_model(tmp_path, seed=7)
+    rng = np.random.default_rng(3)
+    measured = truth.image_parameters[:, :3] + rng.normal(0.0, 0.03, (block.num_images, 3))
+    write_geo_txt(tmp_path / "geo.txt", block.image_names, measured, (0.03, 0.03, 0.05))
+    return block, truth, measured
+
+
+def test_geo_txt_and_arrays_give_the_same_inputs(scene, tmp_path):
+    block, _, measured = scene
+    geo = pp.read_geo_txt(tmp_path / "geo.txt")
+    assert geo.crs == "EPSG:32633" and len(geo.records) == 24
+    assert geo.records[0].yaw_pitch_roll_deg is not None and geo.records[0].horizontal_accuracy_m == 0.03
+    from_file = pp.GeoreferenceInputs()
+    from_file.set_positions_from_geo_txt(geo)
+    from_arrays = pp.GeoreferenceInputs()
+    sigma = np.tile([0.03, 0.03, 0.05], (24, 1))
+    from_arrays.set_positions("EPSG:32633", block.image_names, np.round(measured, 4), sigma)
+    assert from_file.positions_crs == from_arrays.positions_crs
+    for a, b in zip(from_file.positions, from_arrays.positions):
+        assert a.image == b.image
+        np.testing.assert_allclose(a.position, b.position, atol=1e-9)
+        np.testing.assert_allclose(a.accuracy_m, b.accuracy_m)
+
+
+def test_same_poses_as_the_cli(scene, tmp_path, cli):
+    block, truth, _ = scene
+    inputs = pp.GeoreferenceInputs()
+    inputs.set_positions_from_geo_txt(pp.read_geo_txt(tmp_path / "geo.txt"))
+    calls = []
+    geo, result = pp.georeference_block(block, inputs, progress=calls.append)
+    assert calls and result.summary.termination == "converged"
+    assert geo.out_crs == "EPSG:32633" and geo.positions_matched == 24 and geo.evaluated
+    assert "projected" in geo.out_crs_reason or "positions" in geo.out_crs_reason, geo.out_crs_reason
+    assert 0.09 < geo.similarity_scale < 0.11 or 9.0 < geo.similarity_scale < 11.0
+    poses = geo.output_poses(block)
+    assert poses.shape == (24, 6)
+    assert np.abs(poses[:, :3] - truth.image_parameters[:, :3]).max() < 0.08
+
+    cli("bundle", f"--colmap_model={tmp_path / 'model'}", f"--geo={tmp_path / 'geo.txt'}",
+        f"--out={tmp_path / 'cli.csv'}", "--quiet")
+    frames = {f.raster: f for f in pp.read_frames_table(tmp_path / "cli.csv")}
+    for i, name in enumerate(block.image_names):
+        np.testing.assert_allclose(frames[name].eo.center_in_ground, poses[i, :3], atol=2e-4)
+        np.testing.assert_allclose(frames[name].eo.angles_seed_rad, poses[i, 3:], atol=1e-6)
+    # Local frame <-> output CRS: the block's centres, moved out, are the output poses' centres.
+    np.testing.assert_allclose(geo.to_output_crs(block.image_centers), poses[:, :3], atol=1e-6)
+    assert "out_crs='EPSG:32633'" in repr(geo)
+
+
+def test_bad_inputs_raise_with_the_library_message(scene, tmp_path):
+    block, _, measured = scene
+    inputs = pp.GeoreferenceInputs()
+    inputs.set_positions("EPSG:999999", block.image_names, measured)
+    with pytest.raises(pp.Error, match="EPSG:999999"):
+        pp.georeference_block(block.copy(), inputs)
+    with pytest.raises(ValueError, match="positions: 3 rows for 24 images"):
+        inputs.set_positions("EPSG:32633", block.image_names, measured[:3])
+    with pytest.raises(ValueError, match="positions"):
+        inputs.set_positions("EPSG:32633", block.image_names, measured[:, :2])
+    with pytest.raises(pp.Error, match="'nope' is not a point"):
+        inputs.set_control_from_gcp_list(pp.GcpList(crs="EPSG:32633"), check_points=["nope"])
+    (tmp_path / "not_an_image.jpg").write_text("hello\n")
+    with pytest.raises(pp.Error, match="not_an_image.jpg"):
+        pp.read_image_gps(tmp_path / "not_an_image.jpg")
+    with pytest.raises(pp.Error, match="not a directory"):
+        pp.read_images_gps(tmp_path / "nowhere", ["a.jpg"])
+    with pytest.raises(pp.Error, match="geo.txt"):
+        (tmp_path / "bad_geo.txt").write_text("EPSG:32633\na.jpg 1 2\n")
+        pp.read_geo_txt(tmp_path / "bad_geo.txt")
