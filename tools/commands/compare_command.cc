@@ -439,7 +439,7 @@ int RunMonteCarloMode(const std::vector<SolverVariant>& solvers, const Resection
   const std::vector<TextTable> tables = MonteCarloTables(options, result);
   for (const TextTable& table : tables) std::cout << RenderText(table) << "\n";
   const std::vector<std::string> notes = MonteCarloNotes(options);
-  for (const std::string& note : notes) std::cout << note << "\n";
+  for (const std::string& note : notes) std::cout << WrapText(note, "", "  ");
   const Status written = WriteOutputs(MonteCarloCsv(result),
                                       MonteCarloHtml(options, result, command_line), tables, notes,
                                       &outputs);
