@@ -681,10 +681,19 @@ std::string CalibrationHtml(const Block& block, const BundleAdjustmentResult& re
   for (const BundleCalibrationResult& c : result.calibration) {
     const BlockCamera& camera = block.cameras[c.camera];
     std::vector<std::vector<std::string>> rows;
-    for (size_t k = 0; k < c.names.size(); ++k)
-      rows.push_back({c.names[k], FormatSignificant(c.values[k], 8),
-                      k < c.sigmas.size() ? FormatSignificant(c.sigmas[k], 3) : "n/a",
-                      ParamUnit(camera.model, c.names[k])});
+    for (size_t k = 0; k < c.names.size(); ++k) {
+      // Small coefficients (K1 ~ 1e-4 mm^-2, K2 ~ 1e-7 mm^-4) in a power of ten named in the
+      // unit, so that value and sigma keep their digits without an exponent.
+      const double sigma = k < c.sigmas.size() ? c.sigmas[k] : std::nan("");
+      const double magnitude = std::max(std::abs(c.values[k]), std::isfinite(sigma) ? sigma : 0.0);
+      const int exponent =
+          magnitude > 0.0 && magnitude < 1e-3 ? static_cast<int>(std::floor(std::log10(magnitude))) : 0;
+      const double scale = std::pow(10.0, -exponent);
+      std::string unit = ParamUnit(camera.model, c.names[k]);
+      if (exponent != 0) unit = "10^" + std::to_string(exponent) + " " + unit;
+      rows.push_back({c.names[k], FormatSignificant(c.values[k] * scale, 6),
+                      FormatSignificant(sigma * scale, 3), unit});
+    }
     html << HtmlTable("Camera '" + camera.camera_id + "' (" + EnumName(camera.model) + ")",
                       {"parameter", "value", "sigma", "unit"}, rows, c.high_correlations);
     if (c.correlation.rows() == static_cast<Eigen::Index>(c.names.size()) && !c.names.empty()) {
@@ -743,14 +752,17 @@ std::string ImageResidualPlot(const Block& block, const BundleAdjustmentResult& 
   PlotAxis x_axis, y_axis;
   x_axis.lo = lo.x(), x_axis.hi = hi.x();
   y_axis.lo = lo.y(), y_axis.hi = hi.y();
-  const double cell = std::min(frame.width / kCols, frame.height / kRows);
-  const double factor = largest > 0.0 ? NiceAtMost(0.45 * cell / largest) : 1.0;
   const bool frame_model = block.cameras[cam].model == CameraModelType::kFrame;
   const std::string title = "mean residuals, camera " + block.cameras[cam].camera_id;
   std::ostringstream svg;
   svg << SvgOpen(kWidth, kHeight, title)
       << SvgText(kWidth / 2, 20, title, "middle", " font-size=\"14\" font-weight=\"bold\"");
-  svg << SvgAxes(frame, nullptr, nullptr, frame_model ? "film x (um)" : "column (px)",
+  const double cell = std::min(frame.width / kCols, frame.height / kRows);
+  const double factor = largest > 0.0 ? NiceAtMost(0.45 * cell / largest) : 1.0;
+  const std::string exaggeration = "; vectors x" + FormatSignificant(factor, 3);
+  // Ticks along x; along y only for film (y up like the plot; pixel rows grow down).
+  svg << SvgAxes(frame, &x_axis, frame_model ? &y_axis : nullptr,
+                 (frame_model ? "film x (um)" : "column (px)") + exaggeration,
                  frame_model ? "film y (um)" : "row (px)");
   for (int r = 0; r < kRows; ++r)
     for (int c = 0; c < kCols; ++c) {
@@ -770,8 +782,6 @@ std::string ImageResidualPlot(const Block& block, const BundleAdjustmentResult& 
           << "<circle cx=\"" << ReportNumber(x, "%.1f") << "\" cy=\"" << ReportNumber(y, "%.1f")
           << "\" r=\"1.5\" fill=\"#555\"/>";
     }
-  svg << SvgText(frame.left + frame.width, frame.top - 4,
-                 "vectors x" + FormatSignificant(factor, 3), "end", " fill=\"#555\"");
   svg << "</svg>";
   return svg.str();
 }
