@@ -394,6 +394,14 @@ struct BundleRejectedMark {
   double whitened_residual = 0.0;  // |v| / (sigma sigma0) when rejected
 };
 
+// A mark of a check point rejected by the w-test of its intersection (solvers/bundle/check_points.h).
+struct BundleRejectedCheckMark {
+  int mark = -1;            // index into Block::marks
+  double normalized = 0.0;  // the larger |w| of its x and y (unitless)
+  // observed - computed at the intersection that still held it (the mark's unit, px or um).
+  Eigen::Vector2d residual = Eigen::Vector2d::Zero();
+};
+
 struct BundleAdjustmentSummary {
   SolverTermination termination = SolverTermination::kFailure;
   std::string message;
@@ -443,6 +451,8 @@ struct BundleAdjustmentResult {
   std::vector<BundleGroupStatistics> groups;
   std::vector<BundleCalibrationResult> calibration;
   std::vector<BundleRejectedMark> rejected_marks;
+  // Check marks rejected by the w-test of their point's intersection, in order of rejection.
+  std::vector<BundleRejectedCheckMark> rejected_check_marks;
   std::optional<Eigen::Vector3d> lever_arm_m;  // estimated (or applied) lever arm
   // Check points intersected and compared: RMSE per axis and total (m); count.
   int num_check_points = 0;

@@ -1,14 +1,23 @@
 #include "solvers/bundle/check_points.h"
 
+#include <Eigen/Dense>
+#include <algorithm>
 #include <cmath>
+#include <memory>
 #include <vector>
 
+#include "core/statistics.h"
+#include "cost_functions/collinearity_cost.h"
 #include "solvers/bundle/internal/bundle_statistics.h"
 #include "solvers/bundle/triangulation.h"
 
 namespace photopose {
 namespace internal {
 namespace {
+
+// Coordinates with a smaller redundancy number (unitless) are not tested: a blunder there does not
+// show in the residuals (the bundle's diagnostics leave w undefined below the same 1e-6).
+constexpr double kMinTestedRedundancy = 1e-6;
 
 // Whether data snooping removed the coordinates (the prior) of control point p.
 bool PriorRemoved(const BundleAdjustmentResult& result, int p) {
@@ -17,12 +26,46 @@ bool PriorRemoved(const BundleAdjustmentResult& result, int p) {
   return false;
 }
 
-// The check point's row of the table: its intersection against its surveyed coordinates. False
-// (with the reason in table->message) when it cannot be intersected.
+// The whitened residuals of the rays at `point_m` (2 per ray: observed - computed over the ray's
+// sigma, unitless) and their redundancy numbers r = 1 - diag(A (A^T A)^-1 A^T), A the whitened
+// Jacobian by the point (the images and cameras held fixed, as in the intersection). False when a
+// ray cannot be evaluated or A^T A is singular.
+bool IntersectionResiduals(const std::vector<RayObservation>& rays, const Eigen::Vector3d& point_m,
+                           Eigen::VectorXd* whitened, Eigen::VectorXd* redundancy) {
+  const Eigen::Index rows = 2 * static_cast<Eigen::Index>(rays.size());
+  Eigen::MatrixXd A(rows, 3);
+  whitened->resize(rows);
+  for (size_t i = 0; i < rays.size(); ++i) {
+    const RayObservation& ray = rays[i];
+    const std::unique_ptr<ceres::CostFunction> cost(CreateCollinearityCost(
+        JacobianType::kAnalytic, CollinearityFunctor(ray.camera->model, ray.observation,
+                                                     ray.camera->data(), 1.0 / ray.sigma)));
+    const double* parameters[] = {ray.eo.data(), point_m.data(), ray.camera->params.data()};
+    double residual[2];
+    Eigen::Matrix<double, 2, 3, Eigen::RowMajor> J;
+    double* jacobians[] = {nullptr, J.data(), nullptr};
+    if (!cost->Evaluate(parameters, residual, jacobians)) return false;
+    A.middleRows<2>(2 * i) = J;
+    (*whitened)(2 * i) = residual[0];
+    (*whitened)(2 * i + 1) = residual[1];
+  }
+  const Eigen::LDLT<Eigen::Matrix3d> normal(A.transpose() * A);
+  if (normal.info() != Eigen::Success || !(normal.vectorD().minCoeff() > 0.0)) return false;
+  const Eigen::MatrixXd NinvAt = normal.solve(A.transpose());
+  *redundancy = Eigen::VectorXd::Ones(rows) - (A.cwiseProduct(NinvAt.transpose())).rowwise().sum();
+  return true;
+}
+
+// The check point's row of the table: its intersection against its surveyed coordinates, after
+// the w-test of its marks. While the largest |w| = |v| / (s sigma sqrt(r)) of a mark's coordinate
+// (s = max(1, sqrt(variance_factor)), the rule of the block's observations) exceeds `critical`,
+// that mark is rejected (appended to `rejected`) and the point intersected again from the rest.
+// False (with the reason in table->message) when it cannot be intersected.
 bool TabulateCheckPoint(const Block& block, int p, const std::vector<const Vector6d*>& eo,
                         const std::vector<BlockCamera>& cameras,
-                        const MarkSigmaDefaults& defaults, double variance_factor,
-                        const CheckPointCovariance& covariance, BundlePointResult* table) {
+                        const MarkSigmaDefaults& defaults, double variance_factor, double critical,
+                        const CheckPointCovariance& covariance, BundlePointResult* table,
+                        std::vector<BundleRejectedCheckMark>* rejected) {
   std::vector<RayObservation> rays;
   std::vector<int> marks;
   for (const int m : block.marks_of_point[p]) {
@@ -36,12 +79,37 @@ bool TabulateCheckPoint(const Block& block, int p, const std::vector<const Vecto
     rays.push_back(ray);
     marks.push_back(m);
   }
-  table->num_observations = static_cast<int>(rays.size());
+  const double scale = std::max(1.0, std::sqrt(variance_factor));
+  int num_rejected = 0;
   TriangulationResult intersection;
-  const Status status = TriangulatePoint(TriangulationOptions(), rays, &intersection);
-  if (!status.ok()) {
-    table->message = "not intersected: " + status.message();
-    return false;
+  while (true) {
+    table->num_observations = static_cast<int>(rays.size());
+    const Status status = TriangulatePoint(TriangulationOptions(), rays, &intersection);
+    if (!status.ok()) {
+      table->message = num_rejected == 0 ? "not intersected: " + status.message()
+                                         : "not intersected after the w-test rejected " +
+                                               std::to_string(num_rejected) + " of its marks: " +
+                                               status.message();
+      return false;
+    }
+    Eigen::VectorXd whitened, redundancy;
+    if (!IntersectionResiduals(rays, intersection.point_m, &whitened, &redundancy)) break;
+    int worst = -1;
+    double worst_w = critical;
+    for (Eigen::Index k = 0; k < whitened.size(); ++k) {
+      if (!(redundancy(k) > kMinTestedRedundancy)) continue;
+      const double w = std::abs(whitened(k)) / (scale * std::sqrt(redundancy(k)));
+      if (w > worst_w) worst_w = w, worst = static_cast<int>(k / 2);
+    }
+    if (worst < 0) break;
+    BundleRejectedCheckMark mark;
+    mark.mark = marks[worst];
+    mark.normalized = worst_w;
+    mark.residual = whitened.segment<2>(2 * worst) * rays[worst].sigma;
+    rejected->push_back(mark);
+    ++num_rejected;
+    rays.erase(rays.begin() + worst);
+    marks.erase(marks.begin() + worst);
   }
   table->error_m = intersection.point_m - *block.points[p].surveyed_m;
   table->covariance = covariance ? covariance(rays, marks, intersection) : intersection.covariance;
@@ -58,6 +126,18 @@ void TabulateControlAndCheckPoints(const Block& block, const std::vector<const V
                                    const CheckPointCovariance& covariance,
                                    BundleAdjustmentResult* result) {
   const MarkSigmaDefaults defaults = GroupMarkDefaults(accuracies, kControlMarks);
+  // The w-test's critical value: the block's (its family-wise level over all its observations)
+  // when its diagnostics set one, else the default level over the check marks' coordinates.
+  double critical = result->critical_value;
+  if (!(critical > 0.0)) {
+    int num_check_coordinates = 0;
+    for (size_t p = 0; p < block.points.size(); ++p)
+      if (block.points[p].role == PointRole::kCheck)
+        num_check_coordinates += 2 * static_cast<int>(block.marks_of_point[p].size());
+    critical = NormalQuantile(1.0 - 0.5 * BundleStatisticsOptions().snooping_alpha /
+                                        std::max(1, num_check_coordinates));
+  }
+  result->rejected_check_marks.clear();
   Eigen::Vector3d control_ssq = Eigen::Vector3d::Zero(), check_ssq = Eigen::Vector3d::Zero();
   result->num_control_points = result->num_check_points = 0;
   for (size_t p = 0; p < block.points.size(); ++p) {
@@ -72,7 +152,7 @@ void TabulateControlAndCheckPoints(const Block& block, const std::vector<const V
     }
     if (point.role != PointRole::kCheck) continue;
     if (!TabulateCheckPoint(block, static_cast<int>(p), eo, cameras, defaults, variance_factor,
-                            covariance, &table))
+                            critical, covariance, &table, &result->rejected_check_marks))
       continue;
     ++result->num_check_points;
     check_ssq += table.error_m->cwiseAbs2();

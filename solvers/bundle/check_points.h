@@ -17,7 +17,13 @@ namespace photopose {
 //  - per check point: the intersection of its marks (sigmas by core/mark_weight.h with the
 //    marker-projection defaults) against its surveyed coordinates, error_m = intersected -
 //    surveyed (m), covariance = variance_factor times the intersection's a-priori covariance
-//    (m^2), num_observations; or a message when it cannot be intersected;
+//    (m^2), num_observations (marks kept); or a message when it cannot be intersected;
+//  - its marks tested like the block's observations: the w-test w = v / (s sigma sqrt(r)) of each
+//    mark coordinate on the intersection (r its redundancy number there, s = max(1, sigma0)), the
+//    worst mark above the critical value rejected and the point intersected again until none is
+//    (result->rejected_check_marks; a point left with too few rays says so in its message). The
+//    critical value is result->critical_value when the diagnostics set it, else k(alpha) for the
+//    default snooping_alpha over the check marks' coordinates (Bonferroni);
 //  - num_control_points and the control RMSE from the control points whose error_m the adjustment
 //    has set (adjusted - surveyed; not those whose coordinates data snooping removed), and num_check_points and the check RMSE (m, per axis and
 //    total).

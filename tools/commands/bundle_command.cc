@@ -23,6 +23,7 @@
 #include "solvers/bundle/taylor_bundle.h"
 #include "solvers/georeference/georeference.h"
 #include "tools/report/bundle_report.h"
+#include "tools/report/html_kit.h"
 #include "tools/commands/cli_common.h"
 #include "tools/commands/commands.h"
 
@@ -802,10 +803,12 @@ Status WriteBundleOutputs(const BundleRun& run, bool usable) {
 // The closing line: images adjusted, sigma0, check RMSE, files written.
 void PrintClosingSummary(const BundleRun& run, bool usable) {
   const BundleAdjustmentResult& result = run.result;
-  std::cout << "bundle: " << (usable ? "adjusted " : "not adjusted: ") << result.summary.num_images
-            << " images";
-  if (std::isfinite(result.summary.sigma0)) std::cout << ", sigma0 " << result.summary.sigma0;
-  if (result.num_check_points > 0) std::cout << ", check RMSE " << result.check_rmse_total_m << " m";
+  std::cout << "bundle: " << (usable ? "adjusted " : "not adjusted: ")
+            << FormatCount(result.summary.num_images, "image");
+  if (std::isfinite(result.summary.sigma0))
+    std::cout << ", sigma0 " << FormatUnitless(result.summary.sigma0, 3) << " (unitless)";
+  if (result.num_check_points > 0)
+    std::cout << ", check RMSE " << FormatLengthWithUnit(result.check_rmse_total_m);
   if (run.georeference && run.georeferenced.evaluated) {
     const GeoreferenceResult& g = run.georeferenced;
     std::cout << "; georeferenced in " << g.out_crs;

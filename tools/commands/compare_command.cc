@@ -32,6 +32,7 @@
 #include "tools/commands/commands.h"
 #include "tools/compare/comparison.h"
 #include "tools/report/comparison_html.h"
+#include "tools/report/html_kit.h"
 
 // Both modes.
 DEFINE_string(compare_solvers, "taylor_as_printed,taylor,ceres_analytic,ceres_autodiff",
@@ -439,14 +440,16 @@ int RunMonteCarloMode(const std::vector<SolverVariant>& solvers, const Resection
   const std::vector<TextTable> tables = MonteCarloTables(options, result);
   for (const TextTable& table : tables) std::cout << RenderText(table) << "\n";
   const std::vector<std::string> notes = MonteCarloNotes(options);
-  for (const std::string& note : notes) std::cout << note << "\n";
+  for (const std::string& note : notes) std::cout << WrapText(note, "", "  ");
   const Status written = WriteOutputs(MonteCarloCsv(result),
                                       MonteCarloHtml(options, result, command_line), tables, notes,
                                       &outputs);
   if (!written.ok()) return BadInput(kCommand, written.message());
-  std::cout << "compare: " << result.settings.size() << " settings x " << options.trials
-            << " trials x " << result.solver_names.size() << " solvers in " << result.wall_seconds
-            << " s; " << WrittenFiles() << "\n";
+  std::cout << WrapText("compare: " + FormatCount(result.settings.size(), "setting") + " x " +
+                            FormatCount(options.trials, "trial") + " x " +
+                            FormatCount(result.solver_names.size(), "solver") + " in " +
+                            FormatSignificant(result.wall_seconds, 3) + " s; " + WrittenFiles(),
+                        "", "  ");
   return kExitSuccess;
 }
 
@@ -511,8 +514,10 @@ int RunDatasetMode(const std::vector<SolverVariant>& solvers, const ResectionOpt
       WriteOutputs(DatasetCsv(result), DatasetHtml(result, command_line), tables, {}, &outputs);
   if (!written.ok()) return BadInput(kCommand, written.message());
   const size_t images = result.summaries.empty() ? 0 : result.summaries.front().images;
-  std::cout << "compare: " << images << " images x " << result.solver_names.size()
-            << " solvers; " << WrittenFiles() << "\n";
+  std::cout << WrapText("compare: " + FormatCount(images, "image") + " x " +
+                            FormatCount(result.solver_names.size(), "solver") + "; " +
+                            WrittenFiles(),
+                        "", "  ");
   return kExitSuccess;
 }
 
@@ -579,9 +584,11 @@ int RunBlockMode(const std::string& command_line, const ParsedFlags& parsed) {
                                       BlockComparisonHtml(options, result, command_line), tables,
                                       {}, &outputs);
   if (!written.ok()) return BadInput(kCommand, written.message());
-  std::cout << "compare: " << result.settings.size() << " settings x " << options.trials
-            << " blocks x " << result.solver_names.size() << " solvers in " << result.wall_seconds
-            << " s; " << WrittenFiles() << "\n";
+  std::cout << WrapText("compare: " + FormatCount(result.settings.size(), "setting") + " x " +
+                            FormatCount(options.trials, "block") + " x " +
+                            FormatCount(result.solver_names.size(), "solver") + " in " +
+                            FormatSignificant(result.wall_seconds, 3) + " s; " + WrittenFiles(),
+                        "", "  ");
   return kExitSuccess;
 }
 // --scenarios=block with a dataset: the block solvers on one given block.

@@ -372,8 +372,16 @@ std::vector<TextTable> MonteCarloTables(const MonteCarloOptions& options,
                                         const MonteCarloResult& result);
 std::vector<TextTable> DatasetTables(const DatasetComparisonResult& result);
 
-// Right-aligned numeric columns, left-aligned first column, title and notes.
+// The terminal's width the console tables keep to (characters).
+constexpr size_t kConsoleWidth = 100;
+// Right-aligned numeric columns, left-aligned first column (first two for per-image tables),
+// title and notes; columns that do not fit in kConsoleWidth go to further blocks under the first,
+// each repeating the naming columns; title and notes word-wrapped to kConsoleWidth.
 std::string RenderText(const TextTable& table);
+// `text` word-wrapped to `width` characters: the first line after `first_indent`, the others
+// after `indent`; a final newline.
+std::string WrapText(const std::string& text, const std::string& first_indent,
+                     const std::string& indent, size_t width = kConsoleWidth);
 std::string RenderMarkdown(const TextTable& table);
 
 // One row per (scenario, setting, solver), full precision, units in the header names.

@@ -1,13 +1,18 @@
 // The HTML page of `photopose bundle` (tools/report/bundle_report.h): one self-contained file,
-// inline CSS and SVG, no script; page head, tables, histograms and SVG primitives from
-// tools/report/html_kit.h.
+// inline CSS and SVG, no script; page head, tables, number formats, plots and SVG primitives from
+// tools/report/html_kit.h. Sections in the order a surveyor reads them: overview, verdicts,
+// control and check points, cameras, calibration, residuals, rejected observations, diagnostics.
 #include <Eigen/Eigenvalues>
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <ctime>
 #include <limits>
 #include <map>
 #include <sstream>
+
+#include "core/camera_models.h"
+#include "core/statistics.h"
 
 #include "tools/report/bundle_report.h"
 #include "tools/report/html_kit.h"
@@ -203,11 +208,12 @@ std::string PlanView(const PlanData& data) {
   svg << "<line x1=\"" << kPlanMargin << "\" y1=\"" << bar_y << "\" x2=\""
       << F(kPlanMargin + bar * scale, "%.1f") << "\" y2=\"" << bar_y
       << "\" stroke=\"#222\" stroke-width=\"2\"/><text x=\"" << F(kPlanMargin + bar * scale + 6, "%.1f")
-      << "\" y=\"" << bar_y + 4 << "\">" << F(bar, "%g") << " m</text>\n";
+      << "\" y=\"" << bar_y + 4 << "\" class=\"" << kAxisLabelClass << "\">"
+      << FormatSignificant(bar, 3) << " m (plan: east right, north up)</text>\n";
   svg << "<text x=\"" << kPlanWidth - 10 << "\" y=\"16\" text-anchor=\"end\">"
-      << "blue squares: cameras, ellipses 1-sigma x" << F(ellipse_factor, "%g")
-      << "; red triangles: control, green dots: check, vectors x" << F(vector_factor, "%g")
-      << "; grey: tie points</text>\n";
+      << "blue squares: cameras, ellipses 1-sigma x" << FormatSignificant(ellipse_factor, 3)
+      << "; red triangles: control, green dots: check, vectors x"
+      << FormatSignificant(vector_factor, 3) << "; grey: tie points</text>\n";
   svg << "</svg>";
   std::string caption = data.caption.empty() ? std::string() : HtmlEscape(data.caption) + " ";
   caption += "Lower left " + F(lo.x(), "%.2f") + ", " + F(lo.y(), "%.2f") + "; upper right " +
@@ -215,39 +221,253 @@ std::string PlanView(const PlanData& data) {
   return svg.str() + "\n<p>" + caption + "</p>";
 }
 
-// A histogram of a group's values, the axis titled with the quantity and unit.
-std::string Histogram(const std::string& title, const std::string& x_label,
-                      const std::vector<double>& values) {
-  HistogramPlot plot;
-  plot.title = title;
-  plot.x_label = x_label;
-  plot.values = values;
-  return RenderHistogramSvg(plot);
+// ------------------------------------------------------------------ helpers
+
+// A key-value table (two columns, no header row).
+std::string FactsTable(const std::string& title,
+                       const std::vector<std::pair<std::string, std::string>>& facts) {
+  std::vector<std::vector<std::string>> rows;
+  for (const auto& [key, value] : facts) rows.push_back({key, value});
+  return HtmlTable(title, {"item", "value"}, rows);
 }
 
-// The verdicts, first on the page: not adjusted, over-fitted groups, the check points.
-std::string VerdictsHtml(const BundleAdjustmentResult& result, const BundleReportContext& context) {
+// The largest magnitude of a set of lengths (m), for the unit of their column.
+double LargestMagnitude(const std::vector<double>& values) {
+  double largest = 0.0;
+  for (const double v : values)
+    if (std::isfinite(v)) largest = std::max(largest, std::abs(v));
+  return largest;
+}
+
+// The area (m^2) of the convex hull of plan points (Andrew's monotone chain).
+double HullArea(std::vector<Eigen::Vector2d> points) {
+  if (points.size() < 3) return 0.0;
+  std::sort(points.begin(), points.end(), [](const Eigen::Vector2d& a, const Eigen::Vector2d& b) {
+    return a.x() < b.x() || (a.x() == b.x() && a.y() < b.y());
+  });
+  auto cross = [](const Eigen::Vector2d& o, const Eigen::Vector2d& a, const Eigen::Vector2d& b) {
+    return (a.x() - o.x()) * (b.y() - o.y()) - (a.y() - o.y()) * (b.x() - o.x());
+  };
+  std::vector<Eigen::Vector2d> hull(2 * points.size());
+  size_t k = 0;
+  for (size_t i = 0; i < points.size(); ++i) {
+    while (k >= 2 && cross(hull[k - 2], hull[k - 1], points[i]) <= 0) --k;
+    hull[k++] = points[i];
+  }
+  for (size_t i = points.size() - 1, t = k + 1; i-- > 0;) {
+    while (k >= t && cross(hull[k - 2], hull[k - 1], points[i]) <= 0) --k;
+    hull[k++] = points[i];
+  }
+  double area = 0.0;
+  for (size_t i = 0; i + 1 < k; ++i)
+    area += hull[i].x() * hull[i + 1].y() - hull[i + 1].x() * hull[i].y();
+  return 0.5 * std::abs(area);
+}
+
+std::string FormatArea(double area_m2) {
+  if (area_m2 >= 1e5) return FormatSignificant(area_m2 / 1e6, 3) + " km\u00b2";
+  return FormatSignificant(area_m2, 3) + " m\u00b2";
+}
+
+std::string UtcNow() {
+  const std::time_t now = std::time(nullptr);
+  std::tm utc{};
+  gmtime_r(&now, &utc);
+  char buffer[32];
+  std::strftime(buffer, sizeof(buffer), "%Y-%m-%d %H:%M UTC", &utc);
+  return buffer;
+}
+
+// Chi-square(3) level above which a check point's error e^T C^-1 e stands out (0.1 %).
+constexpr double kCheckPointLevel = 0.999;
+// A group whose RMS / stated lies outside [1 / kWeightFactor, kWeightFactor] has a stated accuracy
+// that the data contradict (unitless): said in the verdicts, with the estimate when there is one.
+constexpr double kWeightFactor = 2.0;
+
+// A check point's normalized error e^T C^-1 e (chi-square(3) when the covariance is honest); NaN
+// without a covariance.
+double NormalizedError(const BundlePointResult& r) {
+  if (!r.error_m || !r.has_covariance) return std::nan("");
+  const Eigen::LDLT<Eigen::Matrix3d> ldlt(r.covariance);
+  if (ldlt.info() != Eigen::Success || !(ldlt.vectorD().minCoeff() > 0.0)) return std::nan("");
+  return r.error_m->dot(ldlt.solve(*r.error_m));
+}
+
+// ------------------------------------------------------------------ 1. overview
+
+std::string OverviewHtml(const Block& block, const BundleAdjustmentResult& result,
+                         const BundleReportContext& context) {
+  const BundleAdjustmentSummary& s = result.summary;
+  int num_tie = 0, num_control = 0, num_check = 0;
+  std::vector<Eigen::Vector2d> ground_plan;
+  std::vector<double> ground_z, images_per_tie;
+  for (size_t p = 0; p < block.points.size(); ++p) {
+    const BlockPoint& point = block.points[p];
+    if (point.role == PointRole::kTie) ++num_tie;
+    if (point.role == PointRole::kControl) ++num_control;
+    if (point.role == PointRole::kCheck) ++num_check;
+    if (point.role == PointRole::kTie && point.position_m)
+      images_per_tie.push_back(static_cast<double>(block.marks_of_point[p].size()));
+    // The ground: every point with coordinates (adjusted, else surveyed).
+    const std::optional<Eigen::Vector3d>& xyz = point.position_m ? point.position_m : point.surveyed_m;
+    if (xyz) {
+      ground_plan.push_back(xyz->head<2>());
+      ground_z.push_back(xyz->z());
+    }
+  }
+  double camera_z = 0.0, gsd_m = 0.0;
+  int num_oriented = 0, num_gsd = 0;
+  std::sort(ground_z.begin(), ground_z.end());
+  const double median_ground_z = ground_z.empty() ? std::nan("") : ground_z[ground_z.size() / 2];
+  for (const BlockImage& image : block.images) {
+    if (!image.eo) continue;
+    ++num_oriented;
+    camera_z += image.eo->center_in_ground().z();
+    // Ground sample distance: height above the median ground point times pixel over focal length.
+    const BlockCamera& camera = block.cameras[image.camera];
+    const double focal = CameraModelFocal(camera.model, camera.params.data());
+    const double pixel = camera.model == CameraModelType::kFrame ? camera.table.pixel_size_um : 1.0;
+    const double height = image.eo->center_in_ground().z() - median_ground_z;
+    if (focal > 0.0 && pixel > 0.0 && std::isfinite(height)) {
+      gsd_m += std::abs(height) * pixel / focal;
+      ++num_gsd;
+    }
+  }
+  const double height =
+      num_oriented > 0 ? camera_z / num_oriented - median_ground_z : std::nan("");
+  std::sort(images_per_tie.begin(), images_per_tie.end());
+  double mean_per_tie = 0.0;
+  for (const double n : images_per_tie) mean_per_tie += n;
+  mean_per_tie = images_per_tie.empty() ? std::nan("") : mean_per_tie / images_per_tie.size();
+
+  std::vector<std::pair<std::string, std::string>> facts = {
+      {"Date", UtcNow()},
+      {"Software", std::string("photopose ") + PHOTOPOSE_VERSION},
+      {"Images adjusted", FormatCount(s.num_images, "image") + " of " +
+                              FormatCount(static_cast<long long>(block.images.size()), "image")},
+      {"Cameras", FormatCount(static_cast<long long>(block.cameras.size()), "camera")},
+      {"Points", FormatCount(num_tie, "tie point") + ", " +
+                     FormatCount(num_control, "control point") + ", " +
+                     FormatCount(num_check, "check point")},
+      {"Marks used", FormatCount(s.num_marks, "mark") + " (" +
+                         FormatCount(static_cast<long long>(result.rejected_marks.size() +
+                                                            result.rejected_check_marks.size()),
+                                     "mark") +
+                         " rejected, see Rejected observations)"},
+      {"Mean flying height above the median ground point",
+       std::isfinite(height) ? FormatSignificant(height, 4) + " m" : "n/a (no ground points)"},
+      {"Ground sample distance (mean over images)",
+       num_gsd > 0 ? FormatLengthWithUnit(gsd_m / num_gsd) + " per pixel"
+                   : "n/a (no pixel size or no ground points)"},
+      {"Images per tie point (mean, median)",
+       images_per_tie.empty()
+           ? "n/a (no tie points)"
+           : FormatUnitless(mean_per_tie, 1) + ", " +
+                 FormatSignificant(images_per_tie[images_per_tie.size() / 2], 3)},
+      {"Area covered by the ground points (convex hull)", FormatArea(HullArea(ground_plan))},
+      {"Datum", s.datum_description},
+      {"sigma0 (unitless, 1 when the stated accuracies hold)", FormatUnitless(s.sigma0, 3)},
+      {"Redundancy", FormatCount(s.redundancy, "observation") + " more than unknowns"},
+      {"Adjustment time", FormatSignificant(s.time_seconds, 3) + " s (" +
+                              FormatCount(s.rounds, "round") + ", " +
+                              FormatCount(s.iterations, "iteration") + ")"},
+  };
+  std::ostringstream html;
+  html << "<h2>1. Survey overview</h2>\n" << FactsTable("", facts);
+  const PlanData plan = context.georeference != nullptr
+                            ? GeoreferencedPlanData(block, result, *context.georeference)
+                            : PlanDataOf(block, result);
+  html << PlanView(plan) << "\n";
+  return html.str();
+}
+
+// ------------------------------------------------------------------ 2. verdicts
+
+std::string VerdictsHtml(const Block& block, const BundleAdjustmentResult& result,
+                         const BundleReportContext& context) {
   const BundleAdjustmentSummary& s = result.summary;
   std::ostringstream html;
-  std::vector<std::string> overfit;
-  for (const BundleGroupStatistics& g : result.groups)
-    if (g.overfit) overfit.push_back(g.message);
+  html << "<h2>2. Verdicts</h2>\n";
   if (!s.IsSolutionUsable()) {
-    html << "<div class=\"verdict bad\"><b>Not adjusted:</b> " << HtmlEscape(s.message) << "</div>\n";
+    html << "<div class=\"verdict bad\"><b>Not adjusted:</b> " << HtmlEscape(s.message)
+         << "</div>\n";
+  }
+  // Over-fitting of the priors.
+  std::vector<std::string> overfit, weights;
+  for (const BundleGroupStatistics& g : result.groups) {
+    if (g.overfit) overfit.push_back(g.message);
+    if (g.count == 0 || !(g.ratio > 0.0)) continue;
+    if (g.ratio < 1.0 / kWeightFactor || g.ratio > kWeightFactor) {
+      std::string line = std::string(EnumName(g.group)) + ": RMS / stated " +
+                         FormatUnitless(g.ratio) + ", the stated " +
+                         FormatMarkValue(g.stated_accuracy.x(), g.unit) + " looks " +
+                         FormatUnitless(g.ratio < 1.0 ? 1.0 / g.ratio : g.ratio, 1) + " times too " +
+                         (g.ratio < 1.0 ? "pessimistic" : "optimistic");
+      if (std::isfinite(g.estimated_accuracy.x()))
+        line += "; estimated from the data: " + FormatMarkValue(g.estimated_accuracy.x(), g.unit);
+      weights.push_back(line + ".");
+    }
   }
   if (overfit.empty()) {
     html << "<div class=\"verdict good\"><b>No prior group is over-fitted:</b> each is checked "
-            "by the tie points and fits within its stated accuracy.</div>\n";
+            "by the tie points (redundancy share at least "
+         << FormatUnitless(context.options.statistics.overfit_redundancy_share)
+         << ") and fits within its stated accuracy (RMS / stated at least "
+         << FormatUnitless(context.options.statistics.overfit_ratio) << ").</div>\n";
   } else {
-    html << "<div class=\"verdict bad\"><b>Over-fitted:</b><ul>";
+    html << "<div class=\"verdict bad\"><b>Over-fitted prior groups</b> (the solution follows "
+            "them rather than the images, so their residuals say little about their accuracy):<ul>";
     for (const std::string& m : overfit) html << "<li>" << HtmlEscape(m) << "</li>";
     html << "</ul></div>\n";
   }
-  if (result.num_check_points > 0) {
-    html << "<div class=\"verdict note\"><b>Check points:</b> " << result.num_check_points
-         << ", RMSE X " << F(result.check_rmse_m.x()) << " m, Y " << F(result.check_rmse_m.y())
-         << " m, Z " << F(result.check_rmse_m.z()) << " m, total " << F(result.check_rmse_total_m)
-         << " m</div>\n";
+  if (!weights.empty()) {
+    html << "<div class=\"verdict note\"><b>Stated accuracies the data contradict</b> (RMS / "
+            "stated outside "
+         << FormatUnitless(1.0 / kWeightFactor) << " to " << FormatUnitless(kWeightFactor)
+         << "; set them to the estimate, e.g. with --estimate_accuracies):<ul>";
+    for (const std::string& w : weights) html << "<li>" << HtmlEscape(w) << "</li>";
+    html << "</ul></div>\n";
+  }
+  // Check points.
+  if (result.num_check_points > 0 || !result.rejected_check_marks.empty()) {
+    const double level = ChiSquaredQuantile(kCheckPointLevel, 3.0);
+    std::vector<std::string> out_of_tolerance, not_intersected;
+    for (size_t p = 0; p < block.points.size() && p < result.points.size(); ++p) {
+      if (block.points[p].role != PointRole::kCheck) continue;
+      const BundlePointResult& r = result.points[p];
+      if (!r.error_m) {
+        not_intersected.push_back(block.points[p].id + " " + r.message);
+        continue;
+      }
+      const double normalized = NormalizedError(r);
+      if (normalized > level)
+        out_of_tolerance.push_back(
+            block.points[p].id + " misses by " + FormatLengthWithUnit(r.error_m->norm()) +
+            " where its sigma is " + FormatLengthWithUnit(std::sqrt(r.covariance.trace())) +
+            " (e^T C^-1 e = " + FormatUnitless(normalized, 1) + " > " + FormatUnitless(level, 1) +
+            "): check its surveyed coordinates and its marks");
+    }
+    const bool bad = !out_of_tolerance.empty() || !not_intersected.empty();
+    html << "<div class=\"verdict " << (bad ? "bad" : "good") << "\"><b>Check points:</b> "
+         << FormatCount(result.num_check_points, "point") << " intersected, RMSE X "
+         << FormatLengthWithUnit(result.check_rmse_m.x()) << ", Y "
+         << FormatLengthWithUnit(result.check_rmse_m.y()) << ", Z "
+         << FormatLengthWithUnit(result.check_rmse_m.z()) << ", total "
+         << FormatLengthWithUnit(result.check_rmse_total_m) << ".";
+    if (!bad)
+      html << " Every error is within what its covariance allows (chi-square(3) at "
+           << FormatUnitless(100.0 * kCheckPointLevel, 1) << " %).";
+    if (!result.rejected_check_marks.empty())
+      html << " " << FormatCount(static_cast<long long>(result.rejected_check_marks.size()),
+                                 "check mark")
+           << " rejected by the w-test before intersecting (see Rejected observations).";
+    if (bad) {
+      html << "<ul>";
+      for (const std::string& m : out_of_tolerance) html << "<li>" << HtmlEscape(m) << "</li>";
+      for (const std::string& m : not_intersected) html << "<li>" << HtmlEscape(m) << "</li>";
+      html << "</ul>";
+    }
+    html << "</div>\n";
   } else {
     html << "<div class=\"verdict note\"><b>No check points:</b> nothing independent measures the "
             "block's accuracy"
@@ -257,148 +477,510 @@ std::string VerdictsHtml(const BundleAdjustmentResult& result, const BundleRepor
   return html.str();
 }
 
-// The groups of the objective against their stated accuracies, and their residuals' histograms.
-std::string GroupsHtml(const Block& block, const BundleAdjustmentResult& result,
-                       const BundleReportContext& context) {
-  std::ostringstream html;
-  std::vector<std::vector<std::string>> rows;
-  for (const BundleGroupStatistics& g : result.groups) {
-    rows.push_back({EnumName(g.group), std::to_string(g.count), F(g.stated_accuracy.x()) + " " + g.unit,
-                    F(g.rms_total) + " " + g.unit, F(g.ratio), F(g.redundancy_share),
-                    std::isfinite(g.estimated_accuracy.x())
-                        ? F(g.estimated_accuracy.x()) + " " + g.unit
-                        : (g.estimation_message.empty() ? "" : "not estimated"),
-                    g.overfit ? "OVERFIT" : ""});
-  }
-  html << "<h2>Groups of the objective</h2>\n"
-       << HtmlTable(
-              "Residuals against the stated accuracies",
-              {"group", "count", "stated", "RMS", "RMS / stated", "redundancy share",
-               "estimated accuracy", "verdict"},
-              rows,
-              {"redundancy share: the group's summed redundancy numbers over its observations, "
-               "how much of it the rest of the block checks",
-               "over-fitted: a prior group whose RMS / stated is below " +
-                   F(context.options.statistics.overfit_ratio) + " or whose redundancy share is below " +
-                   F(context.options.statistics.overfit_redundancy_share)});
+// ------------------------------------------------------------------ 3. control and check points
 
-  // Histograms.
-  std::map<std::string, std::vector<double>> by_group;
-  std::map<std::string, std::string> units;
-  if (!result.observations.empty()) {
-    for (const BundleObservationDiagnostics& d : result.observations) by_group[EnumName(d.group)].push_back(d.residual);
-  } else {
-    for (size_t m = 0; m < block.marks.size() && m < result.mark_residuals.size(); ++m) {
-      if (!result.mark_residuals[m].allFinite()) continue;
-      const std::string group = EnumName(
-          block.points[block.marks[m].point].role == PointRole::kControl ? kControlMarks : kTieMarks);
-      by_group[group].push_back(result.mark_residuals[m].x());
-      by_group[group].push_back(result.mark_residuals[m].y());
-    }
-  }
-  for (const BundleGroupStatistics& g : result.groups) units[EnumName(g.group)] = g.unit;
-  html << "<h2>Residuals</h2>\n";
-  for (const auto& [group, values] : by_group)
-    html << Histogram(group, "residual (" + units[group] + ")", values) << "\n";
-
-  return html.str();
+// RMSE per axis, horizontal and total over a set of errors (m).
+std::vector<std::string> RmseRow(const std::string& name, const std::vector<Eigen::Vector3d>& e,
+                                 LengthUnit unit) {
+  Eigen::Vector3d ssq = Eigen::Vector3d::Zero();
+  for (const Eigen::Vector3d& v : e) ssq += v.cwiseAbs2();
+  const double n = std::max<double>(1.0, e.size());
+  std::vector<std::string> row = {name, std::to_string(e.size())};
+  for (int a = 0; a < 3; ++a) row.push_back(FormatLength(std::sqrt(ssq[a] / n), unit));
+  row.push_back(FormatLength(std::sqrt((ssq.x() + ssq.y()) / n), unit));
+  row.push_back(FormatLength(std::sqrt(ssq.sum() / n), unit));
+  if (e.empty()) row = {name, "0", "", "", "", "", ""};
+  return row;
 }
 
-// The control and check points: adjusted (or intersected) minus surveyed.
 std::string PointsHtml(const Block& block, const BundleAdjustmentResult& result) {
-  std::ostringstream html;
-  auto point_rows = [&](PointRole role) {
+  std::vector<double> magnitudes;
+  for (size_t p = 0; p < block.points.size() && p < result.points.size(); ++p) {
+    const BundlePointResult& r = result.points[p];
+    if (block.points[p].role == PointRole::kTie) continue;
+    if (r.error_m) magnitudes.push_back(r.error_m->norm());
+    if (r.has_covariance) magnitudes.push_back(std::sqrt(r.covariance.trace()));
+  }
+  const LengthUnit unit = LengthUnitFor(LargestMagnitude(magnitudes));
+  const std::string u = LengthUnitName(unit);
+  std::vector<Eigen::Vector3d> control_errors, check_errors;
+  ScatterPlot vertical;
+  vertical.title = "vertical errors";
+  vertical.x_label = "point (row of the tables: control, then check)";
+  vertical.y_label = "error Z (" + u + ")";
+  auto point_rows = [&](PointRole role, std::vector<Eigen::Vector3d>* errors) {
     std::vector<std::vector<std::string>> out;
-    for (size_t p = 0; p < block.points.size(); ++p) {
+    for (size_t p = 0; p < block.points.size() && p < result.points.size(); ++p) {
       const BlockPoint& point = block.points[p];
-      if (point.role != role || p >= result.points.size()) continue;
+      if (point.role != role) continue;
       const BundlePointResult& r = result.points[p];
-      if (r.error_m) {
-        out.push_back({point.id, std::to_string(r.num_observations), F(r.error_m->x()),
-                       F(r.error_m->y()), F(r.error_m->z()), F(r.error_m->norm()),
-                       r.has_covariance ? F(std::sqrt(r.covariance.trace())) : ""});
-      } else {
-        out.push_back({point.id, std::to_string(r.num_observations), "", "", "", "",
+      if (!r.error_m) {
+        out.push_back({point.id, std::to_string(r.num_observations), "", "", "", "", "",
                        r.message.empty() ? "not in the adjustment" : r.message});
+        continue;
       }
+      errors->push_back(*r.error_m);
+      vertical.x.push_back(static_cast<double>(vertical.x.size() + 1));
+      vertical.y.push_back(LengthIn(r.error_m->z(), unit));
+      vertical.labels.push_back(point.id);
+      out.push_back({point.id, std::to_string(r.num_observations), FormatLength(r.error_m->x(), unit),
+                     FormatLength(r.error_m->y(), unit), FormatLength(r.error_m->z(), unit),
+                     FormatLength(r.error_m->norm(), unit),
+                     r.has_covariance ? FormatLength(std::sqrt(r.covariance.trace()), unit) : "n/a",
+                     r.has_covariance ? FormatUnitless(NormalizedError(r), 1) : "n/a"});
     }
     return out;
   };
-  const std::vector<std::string> point_header = {"point", "images", "error X (m)", "error Y (m)",
-                                                 "error Z (m)", "|error| (m)", "sigma (m)"};
-  html << "<h2>Control points</h2>\n"
-       << HtmlTable("Adjusted minus surveyed; RMSE " + F(result.control_rmse_total_m) + " m",
-                    point_header, point_rows(PointRole::kControl))
-       << "<h2>Check points</h2>\n"
-       << HtmlTable("Intersected from the adjusted images minus surveyed; RMSE " +
-                        F(result.check_rmse_total_m) + " m",
-                    point_header, point_rows(PointRole::kCheck));
-
+  const std::vector<std::string> header = {"point", "marks", "error X (" + u + ")",
+                                           "error Y (" + u + ")", "error Z (" + u + ")",
+                                           "|error| (" + u + ")", "sigma (" + u + ")",
+                                           "e^T C^-1 e"};
+  std::ostringstream html;
+  html << "<h2>3. Control and check points</h2>\n";
+  const auto control_rows = point_rows(PointRole::kControl, &control_errors);
+  const auto check_rows = point_rows(PointRole::kCheck, &check_errors);
+  html << HtmlTable("Root mean square errors",
+                    {"points", "count", "X (" + u + ")", "Y (" + u + ")", "Z (" + u + ")",
+                     "XY (" + u + ")", "total (" + u + ")"},
+                    {RmseRow("control (adjusted - surveyed)", control_errors, unit),
+                     RmseRow("check (intersected - surveyed)", check_errors, unit)},
+                    {"control points take part in the adjustment, so their errors are small by "
+                     "construction; check points do not, and measure the block's accuracy"});
+  html << HtmlTable("Control points: adjusted minus surveyed", header, control_rows);
+  html << HtmlTable("Check points: intersected from the adjusted images minus surveyed", header,
+                    check_rows,
+                    {"sigma: square root of the trace of the point's covariance (sigma0-scaled)",
+                     "e^T C^-1 e: the error against its covariance, chi-square with 3 degrees of "
+                     "freedom when both are honest (above " +
+                         FormatUnitless(ChiSquaredQuantile(kCheckPointLevel, 3.0), 1) +
+                         " in 0.1 % of cases)"});
+  if (!vertical.x.empty()) html << "<div class=\"plots\">" << RenderScatterPlotSvg(vertical) << "</div>\n";
   return html.str();
 }
 
-// Self-calibration and data snooping, when there were any.
-std::string CalibrationAndSnoopingHtml(const Block& block, const BundleAdjustmentResult& result) {
-  std::ostringstream html;
-  if (!result.calibration.empty()) {
-    html << "<h2>Self-calibration</h2>\n";
-    for (const BundleCalibrationResult& c : result.calibration) {
-      std::vector<std::vector<std::string>> calibration_rows;
-      for (size_t k = 0; k < c.names.size(); ++k)
-        calibration_rows.push_back(
-            {c.names[k], F(c.values[k], "%.8g"), k < c.sigmas.size() ? F(c.sigmas[k]) : ""});
-      html << HtmlTable("Camera '" + block.cameras[c.camera].camera_id + "' (" +
-                            EnumName(block.cameras[c.camera].model) + ")",
-                        {"parameter", "value", "sigma"}, calibration_rows, c.high_correlations);
+// ------------------------------------------------------------------ 4. cameras
+
+std::string CamerasHtml(const Block& block, const BundleAdjustmentResult& result) {
+  std::vector<double> sigmas, errors;
+  for (size_t i = 0; i < block.images.size() && i < result.images.size(); ++i) {
+    const BundleImageResult& r = result.images[i];
+    if (r.has_covariance)
+      for (int a = 0; a < 3; ++a) sigmas.push_back(std::sqrt(r.covariance(a, a)));
+    const BlockImage& image = block.images[i];
+    if (image.eo && image.measured_center_m)
+      errors.push_back((image.eo->center_in_ground() - *image.measured_center_m).norm());
+  }
+  const LengthUnit sigma_unit = LengthUnitFor(LargestMagnitude(sigmas));
+  const LengthUnit error_unit = LengthUnitFor(LargestMagnitude(errors));
+  const std::string su = LengthUnitName(sigma_unit), eu = LengthUnitName(error_unit);
+  std::vector<std::vector<std::string>> rows;
+  for (size_t i = 0; i < block.images.size(); ++i) {
+    const BlockImage& image = block.images[i];
+    const BundleImageResult* r = i < result.images.size() ? &result.images[i] : nullptr;
+    if (!image.eo || r == nullptr || !r->adjusted) {
+      rows.push_back({image.name, "", "", "", "", "", "", "", "", "", "", "", "",
+                      r != nullptr && !r->message.empty() ? r->message : "not adjusted"});
+      continue;
     }
+    const Eigen::Vector3d c = image.eo->center_in_ground();
+    std::vector<std::string> row = {image.name, std::to_string(r->num_marks),
+                                    FormatMarkValue(r->rms_residual, r->unit),
+                                    FormatCoordinate(c.x()), FormatCoordinate(c.y()),
+                                    FormatCoordinate(c.z())};
+    for (int a = 0; a < 3; ++a)
+      row.push_back(r->has_covariance ? FormatLength(std::sqrt(r->covariance(a, a)), sigma_unit)
+                                      : "n/a");
+    for (int a = 3; a < 6; ++a)
+      row.push_back(r->has_covariance
+                        ? FormatArcSeconds(std::sqrt(r->covariance(a, a)) * kDegreesPerRadian)
+                        : "n/a");
+    if (image.measured_center_m) {
+      const Eigen::Vector3d e = c - *image.measured_center_m;
+      row.push_back(FormatLength(e.x(), error_unit) + " / " + FormatLength(e.y(), error_unit) +
+                    " / " + FormatLength(e.z(), error_unit));
+    } else {
+      row.push_back("no measured centre");
+    }
+    rows.push_back(row);
+  }
+  std::ostringstream html;
+  html << "<h2>4. Cameras</h2>\n"
+       << HtmlTable("Adjusted projection centres and their precision",
+                    {"image", "marks", "RMS residual", "X (m)", "Y (m)", "Z (m)",
+                     "sigma X (" + su + ")", "sigma Y (" + su + ")", "sigma Z (" + su + ")",
+                     "sigma omega (\")", "sigma phi (\")", "sigma kappa (\")",
+                     "adjusted - measured X / Y / Z (" + eu + ")"},
+                    rows,
+                    {"sigmas: sigma0-scaled, from the posterior covariance; angles in arc seconds "
+                     "(\"), seed angles",
+                     "measured: the frames table's projection centre (GNSS), when given"});
+  return html.str();
+}
+
+// ------------------------------------------------------------------ 5. calibration
+
+// The unit of a camera parameter (core/camera_models.h).
+std::string ParamUnit(CameraModelType model, const std::string& name) {
+  if (model == CameraModelType::kFrame) {
+    if (name == "FocalLength" || name == "PrincipalX" || name == "PrincipalY") return "um";
+    if (name == "K1") return "mm^-2";
+    if (name == "K2") return "mm^-4";
+    if (name == "K3") return "mm^-6";
+    if (name == "P1" || name == "P2") return "mm^-1";
+    return "unitless";
+  }
+  if (name == "f" || name == "fx" || name == "fy" || name == "cx" || name == "cy") return "px";
+  return "unitless";
+}
+
+// Radial distortion of a camera along the image's x axis: the measurement of each ray against
+// the same camera without its distortion (model unit), out to the image corner.
+std::string DistortionPlot(const BlockCamera& camera) {
+  const CameraModelData data = camera.data();
+  std::vector<double> ideal_params = camera.params;
+  const bool frame = camera.model == CameraModelType::kFrame;
+  const size_t first_distortion = frame ? kFrameK0 : (ColmapModelHasTwoFocals(camera.model) ? 4 : 3);
+  for (size_t k = first_distortion; k < ideal_params.size(); ++k) ideal_params[k] = 0.0;
+  const double focal = CameraModelFocal(camera.model, camera.params.data());
+  double half_diagonal = 0.0;  // model unit
+  if (frame && camera.table.pixel_size_um > 0.0 && camera.table.n_columns > 0)
+    half_diagonal = 0.5 * camera.table.pixel_size_um *
+                    std::hypot(camera.table.n_columns, camera.table.n_rows);
+  else if (!frame)
+    half_diagonal = std::hypot(camera.params[ColmapModelHasTwoFocals(camera.model) ? 2 : 1],
+                               camera.params[ColmapModelHasTwoFocals(camera.model) ? 3 : 2]);
+  if (!(focal > 0.0) || !(half_diagonal > 0.0)) return "";
+  LinePlot plot;
+  plot.title = "radial distortion, camera " + camera.camera_id;
+  plot.x_label = frame ? "radius from the principal point (mm)" : "radius (px)";
+  plot.y_label = frame ? "distortion (um)" : "distortion (px)";
+  PlotSeries series;
+  series.label = "along x";
+  constexpr int kSteps = 40;
+  for (int k = 0; k <= kSteps; ++k) {
+    const double radius = half_diagonal * k / kSteps;
+    const Eigen::Vector2d ab(radius / focal, 0.0);
+    Eigen::Vector2d with, without;
+    if (!ObservationFromNormalized(camera.model, camera.params.data(), data, ab, &with).ok() ||
+        !ObservationFromNormalized(camera.model, ideal_params.data(), data, ab, &without).ok())
+      continue;
+    series.x.push_back(frame ? radius / 1000.0 : radius);
+    series.y.push_back((with - without).norm());
+  }
+  if (series.x.size() < 2) return "";
+  plot.series.push_back(series);
+  return RenderLinePlotSvg(plot);
+}
+
+std::string CalibrationHtml(const Block& block, const BundleAdjustmentResult& result) {
+  std::ostringstream html;
+  html << "<h2>5. Camera calibration</h2>\n";
+  if (result.calibration.empty()) {
+    html << "<p>Not estimated: the cameras were held as given.</p>\n";
+  }
+  for (const BundleCalibrationResult& c : result.calibration) {
+    const BlockCamera& camera = block.cameras[c.camera];
+    std::vector<std::vector<std::string>> rows;
+    for (size_t k = 0; k < c.names.size(); ++k) {
+      // Small coefficients (K1 ~ 1e-4 mm^-2, K2 ~ 1e-7 mm^-4) in a power of ten named in the
+      // unit, so that value and sigma keep their digits without an exponent.
+      const double sigma = k < c.sigmas.size() ? c.sigmas[k] : std::nan("");
+      const double magnitude = std::max(std::abs(c.values[k]), std::isfinite(sigma) ? sigma : 0.0);
+      const int exponent =
+          magnitude > 0.0 && magnitude < 1e-3 ? static_cast<int>(std::floor(std::log10(magnitude))) : 0;
+      const double scale = std::pow(10.0, -exponent);
+      std::string unit = ParamUnit(camera.model, c.names[k]);
+      if (exponent != 0) unit = "10^" + std::to_string(exponent) + " " + unit;
+      rows.push_back({c.names[k], FormatSignificant(c.values[k] * scale, 6),
+                      FormatSignificant(sigma * scale, 3), unit});
+    }
+    html << HtmlTable("Camera '" + camera.camera_id + "' (" + EnumName(camera.model) + ")",
+                      {"parameter", "value", "sigma", "unit"}, rows, c.high_correlations);
+    if (c.correlation.rows() == static_cast<Eigen::Index>(c.names.size()) && !c.names.empty()) {
+      std::vector<std::string> header = {""};
+      for (const std::string& n : c.names) header.push_back(n);
+      std::vector<std::vector<std::string>> corr;
+      for (size_t i = 0; i < c.names.size(); ++i) {
+        std::vector<std::string> row = {c.names[i]};
+        for (size_t j = 0; j < c.names.size(); ++j)
+          row.push_back(j <= i ? FormatUnitless(c.correlation(i, j)) : "");
+        corr.push_back(row);
+      }
+      html << HtmlTable("Correlations of the estimated parameters (unitless)", header, corr,
+                        {"above 0.9 in magnitude: the data cannot tell the two apart"});
+    }
+  }
+  std::string plots;
+  for (const BlockCamera& camera : block.cameras) plots += DistortionPlot(camera);
+  if (!plots.empty()) html << "<div class=\"plots\">" << plots << "</div>\n";
+  return html.str();
+}
+
+// ------------------------------------------------------------------ 6. residuals
+
+// Mean mark residual vectors over the image format of a camera (8 x 6 cells of the marks'
+// extent), exaggerated by a stated factor.
+std::string ImageResidualPlot(const Block& block, const BundleAdjustmentResult& result, int cam,
+                              const std::string& unit) {
+  constexpr int kCols = 8, kRows = 6;
+  constexpr double kWidth = 340.0, kHeight = 260.0;
+  Eigen::Vector2d lo = Eigen::Vector2d::Constant(std::numeric_limits<double>::infinity());
+  Eigen::Vector2d hi = -lo;
+  std::vector<int> marks;
+  for (size_t m = 0; m < block.marks.size() && m < result.mark_residuals.size(); ++m) {
+    if (block.images[block.marks[m].image].camera != cam || !result.mark_residuals[m].allFinite())
+      continue;
+    marks.push_back(static_cast<int>(m));
+    lo = lo.cwiseMin(block.marks[m].observation);
+    hi = hi.cwiseMax(block.marks[m].observation);
+  }
+  if (marks.size() < 10) return "";
+  std::vector<Eigen::Vector2d> sum(kCols * kRows, Eigen::Vector2d::Zero());
+  std::vector<int> count(kCols * kRows, 0);
+  const Eigen::Vector2d span = (hi - lo).cwiseMax(1e-9);
+  for (const int m : marks) {
+    const Eigen::Vector2d f = (block.marks[m].observation - lo).cwiseQuotient(span);
+    const int cx = std::clamp(static_cast<int>(f.x() * kCols), 0, kCols - 1);
+    const int cy = std::clamp(static_cast<int>(f.y() * kRows), 0, kRows - 1);
+    sum[cy * kCols + cx] += result.mark_residuals[m];
+    ++count[cy * kCols + cx];
+  }
+  double largest = 0.0;
+  for (int k = 0; k < kCols * kRows; ++k)
+    if (count[k] > 0) largest = std::max(largest, (sum[k] / count[k]).norm());
+  const PlotFrame frame = SmallPlotFrame(kWidth, kHeight);
+  PlotAxis x_axis, y_axis;
+  x_axis.lo = lo.x(), x_axis.hi = hi.x();
+  y_axis.lo = lo.y(), y_axis.hi = hi.y();
+  const bool frame_model = block.cameras[cam].model == CameraModelType::kFrame;
+  const std::string title = "mean residuals, camera " + block.cameras[cam].camera_id;
+  std::ostringstream svg;
+  svg << SvgOpen(kWidth, kHeight, title)
+      << SvgText(kWidth / 2, 20, title, "middle", " font-size=\"14\" font-weight=\"bold\"");
+  const double cell = std::min(frame.width / kCols, frame.height / kRows);
+  const double factor = largest > 0.0 ? NiceAtMost(0.45 * cell / largest) : 1.0;
+  const std::string exaggeration = "; vectors x" + FormatSignificant(factor, 3);
+  // Ticks along x; along y only for film (y up like the plot; pixel rows grow down).
+  svg << SvgAxes(frame, &x_axis, frame_model ? &y_axis : nullptr,
+                 (frame_model ? "film x (um)" : "column (px)") + exaggeration,
+                 frame_model ? "film y (um)" : "row (px)");
+  for (int r = 0; r < kRows; ++r)
+    for (int c = 0; c < kCols; ++c) {
+      const int k = r * kCols + c;
+      if (count[k] == 0) continue;
+      const Eigen::Vector2d mean = sum[k] / count[k];
+      const double x = frame.left + (c + 0.5) * frame.width / kCols;
+      // Film y grows up, pixel rows down: draw each as its image shows it.
+      const double y = frame_model ? frame.top + frame.height - (r + 0.5) * frame.height / kRows
+                                   : frame.top + (r + 0.5) * frame.height / kRows;
+      const double dy = (frame_model ? -1.0 : 1.0) * mean.y() * factor;
+      svg << "<line x1=\"" << ReportNumber(x, "%.1f") << "\" y1=\"" << ReportNumber(y, "%.1f")
+          << "\" x2=\"" << ReportNumber(x + mean.x() * factor, "%.1f") << "\" y2=\""
+          << ReportNumber(y + dy, "%.1f") << "\" stroke=\"" << PlotColor(1)
+          << "\" stroke-width=\"2\"><title>" << count[k] << " marks, mean "
+          << FormatMarkValue(mean.norm(), unit) << "</title></line>"
+          << "<circle cx=\"" << ReportNumber(x, "%.1f") << "\" cy=\"" << ReportNumber(y, "%.1f")
+          << "\" r=\"1.5\" fill=\"#555\"/>";
+    }
+  svg << "</svg>";
+  return svg.str();
+}
+
+std::string ResidualsHtml(const Block& block, const BundleAdjustmentResult& result) {
+  std::map<std::string, std::string> units;
+  for (const BundleGroupStatistics& g : result.groups) units[EnumName(g.group)] = g.unit;
+  // Per group and axis: (group, axis) -> values.
+  std::map<std::pair<std::string, std::string>, std::vector<double>> by_axis;
+  if (!result.observations.empty()) {
+    for (const BundleObservationDiagnostics& d : result.observations)
+      by_axis[{EnumName(d.group), BundleAxisName(d.group, d.axis)}].push_back(d.residual);
+  } else {
+    for (size_t m = 0; m < block.marks.size() && m < result.mark_residuals.size(); ++m) {
+      if (!result.mark_residuals[m].allFinite()) continue;
+      const BundleGroup group =
+          block.points[block.marks[m].point].role == PointRole::kControl ? kControlMarks : kTieMarks;
+      by_axis[{EnumName(group), "x"}].push_back(result.mark_residuals[m].x());
+      by_axis[{EnumName(group), "y"}].push_back(result.mark_residuals[m].y());
+    }
+  }
+  std::ostringstream html;
+  html << "<h2>6. Residuals</h2>\n";
+  std::string current;
+  for (const auto& [key, values] : by_axis) {
+    const auto& [group, axis] = key;
+    if (group != current) {
+      if (!current.empty()) html << "</div>\n";
+      html << "<h3>" << HtmlEscape(group) << "</h3>\n<div class=\"plots\">";
+      current = group;
+    }
+    HistogramPlot plot;
+    plot.title = group + ", " + axis;
+    plot.x_label = "residual " + axis + " (" + units[group] + ")";
+    plot.values = values;
+    html << RenderHistogramSvg(plot);
+  }
+  if (!current.empty()) html << "</div>\n";
+  std::string vectors;
+  for (size_t c = 0; c < block.cameras.size(); ++c)
+    vectors += ImageResidualPlot(block, result, static_cast<int>(c), units[EnumName(kTieMarks)]);
+  if (!vectors.empty())
+    html << "<h3>Over the image format</h3>\n<div class=\"plots\">" << vectors
+         << "</div>\n<p>Mean residual of the marks in each of 8 x 6 cells of the measured extent; "
+            "a pattern left there is distortion the camera model does not take up.</p>\n";
+  return html.str();
+}
+
+// ------------------------------------------------------------------ 7. rejected
+
+std::string RejectedHtml(const Block& block, const BundleAdjustmentResult& result) {
+  std::ostringstream html;
+  html << "<h2>7. Rejected observations</h2>\n";
+  bool any = false;
+  if (!result.rejected_marks.empty()) {
+    any = true;
+    std::vector<std::vector<std::string>> rows;
+    for (const BundleRejectedMark& r : result.rejected_marks) {
+      const BlockMark& mark = block.marks[r.mark];
+      rows.push_back({block.points[mark.point].id, block.images[mark.image].name,
+                      std::to_string(mark.line), std::to_string(r.round),
+                      FormatUnitless(r.whitened_residual, 1)});
+    }
+    html << HtmlTable("Tie marks rejected after a round (|v| / (sigma sigma0) above the threshold)",
+                      {"point", "image", "marks file line", "round", "|v| / (sigma sigma0)"}, rows);
+  }
+  if (!result.rejected_check_marks.empty()) {
+    any = true;
+    std::vector<std::vector<std::string>> rows;
+    for (const BundleRejectedCheckMark& r : result.rejected_check_marks) {
+      const BlockMark& mark = block.marks[r.mark];
+      rows.push_back({block.points[mark.point].id, block.images[mark.image].name,
+                      std::to_string(mark.line), FormatUnitless(r.normalized, 1),
+                      FormatSignificant(r.residual.x(), 3), FormatSignificant(r.residual.y(), 3)});
+    }
+    html << HtmlTable(
+        "Check marks rejected by the w-test of their point's intersection (|w| above " +
+            FormatUnitless(result.critical_value > 0.0 ? result.critical_value : std::nan(""), 2) +
+            ")",
+        {"point", "image", "marks file line", "|w|", "residual x", "residual y"}, rows,
+        {"residuals in the camera model's unit (px, or um on film), at the intersection that "
+         "still held the mark"});
   }
   if (!result.snooping.empty()) {
-    std::vector<std::vector<std::string>> snooping_rows;
+    any = true;
+    std::vector<std::vector<std::string>> rows;
     for (size_t k = 0; k < result.snooping.size(); ++k) {
       const BundleSnoopingStep& step = result.snooping[k];
-      snooping_rows.push_back({std::to_string(k + 1), EnumName(step.group), std::to_string(step.item),
-                               F(step.normalized), F(step.residual)});
+      rows.push_back({std::to_string(k + 1), EnumName(step.group),
+                      BundleItemName(block, step.group, step.item), BundleAxisName(step.group, step.axis),
+                      FormatUnitless(step.normalized, 1), FormatSignificant(step.residual, 3)});
     }
-    html << "<h2>Data snooping</h2>\n"
-         << HtmlTable("Observations removed, in order (|w| > " + F(result.critical_value) + ")",
-                      {"step", "group", "item", "|w|", "residual"}, snooping_rows);
+    html << HtmlTable("Data snooping: observations removed, in order (|w| above " +
+                          FormatUnitless(result.critical_value) + ")",
+                      {"step", "group", "observation", "axis", "|w|", "residual"}, rows);
   }
+  if (!result.summary.tie_points_left_out.empty()) {
+    any = true;
+    std::vector<std::vector<std::string>> rows;
+    for (const std::string& id : result.summary.tie_points_left_out) rows.push_back({id});
+    html << HtmlTable("Tie points left out (no initial coordinates: rays too close to parallel)",
+                      {"point"}, rows);
+  }
+  if (!any) html << "<p>None: every mark and prior was kept.</p>\n";
   return html.str();
 }
 
-// Reliability (redundancy numbers) and the leave-one-out control points, when computed.
-std::string ReliabilityHtml(const Block& block, const BundleAdjustmentResult& result,
+// ------------------------------------------------------------------ 8. diagnostics
+
+std::string DiagnosticsHtml(const Block& block, const BundleAdjustmentResult& result,
                             const BundleReportContext& context) {
   std::ostringstream html;
+  html << "<h2>8. Diagnostics</h2>\n";
+  std::vector<std::vector<std::string>> rows;
+  for (const BundleGroupStatistics& g : result.groups) {
+    const bool prior = g.group == kControlPoints || g.group == kCameraPositions ||
+                       g.group == kAttitudes;
+    std::string verdict = "fits";
+    if (g.overfit) {
+      verdict = "OVER-FITTED";
+    } else if (!prior) {
+      verdict = g.ratio > kWeightFactor || g.ratio < 1.0 / kWeightFactor ? "weight off" : "fits";
+    }
+    rows.push_back({EnumName(g.group), std::to_string(g.count),
+                    FormatMarkValue(g.stated_accuracy.x(), g.unit),
+                    FormatMarkValue(g.rms_total, g.unit), FormatUnitless(g.ratio),
+                    std::isfinite(g.redundancy_share) ? FormatUnitless(g.redundancy_share) : "n/a",
+                    std::isfinite(g.estimated_accuracy.x())
+                        ? FormatMarkValue(g.estimated_accuracy.x(), g.unit)
+                        : (g.estimation_message.empty() ? "not asked" : "not estimated"),
+                    verdict});
+  }
+  html << HtmlTable(
+      "Groups of the objective: residuals against the stated accuracies",
+      {"group", "count", "stated", "RMS", "RMS / stated", "redundancy share",
+       "estimated accuracy", "verdict"},
+      rows,
+      {"redundancy share: the group's summed redundancy numbers over its observations, how much "
+       "of it the rest of the block checks (0 to 1)",
+       "over-fitted: a prior group whose RMS / stated is below " +
+           FormatUnitless(context.options.statistics.overfit_ratio) +
+           " or whose redundancy share is below " +
+           FormatUnitless(context.options.statistics.overfit_redundancy_share),
+       "weight off: RMS / stated outside " + FormatUnitless(1.0 / kWeightFactor) + " to " +
+           FormatUnitless(kWeightFactor)});
   if (!result.observations.empty()) {
-    // Redundancy numbers per group as a distribution.
     std::map<std::string, std::vector<double>> redundancy;
     for (const BundleObservationDiagnostics& d : result.observations)
       redundancy[EnumName(d.group)].push_back(d.redundancy);
-    html << "<h2>Reliability</h2>\n<p>" << result.num_uncontrolled
-         << " observations have a redundancy number below "
-         << F(context.options.statistics.uncontrolled_redundancy)
-         << ": a blunder there cannot be seen. Smallest detectable errors use delta0 = "
-         << F(result.delta0) << ".</p>\n";
-    for (const auto& [group, values] : redundancy)
-      html << Histogram("redundancy numbers, " + group, "redundancy number", values) << "\n";
+    html << "<p>" << FormatCount(result.num_uncontrolled, "observation")
+         << " with a redundancy number below "
+         << FormatUnitless(context.options.statistics.uncontrolled_redundancy)
+         << ": a blunder there cannot be seen. The w-test's critical value is "
+         << FormatUnitless(result.critical_value) << "; smallest detectable errors use delta0 = "
+         << FormatUnitless(result.delta0) << ".</p>\n<div class=\"plots\">";
+    for (const auto& [group, values] : redundancy) {
+      HistogramPlot plot;
+      plot.title = "redundancy numbers, " + group;
+      plot.x_label = "redundancy number r (unitless, 0 to 1)";
+      plot.values = values;
+      plot.lo = 0.0;
+      plot.hi = 1.0;
+      html << RenderHistogramSvg(plot);
+    }
+    html << "</div>\n";
   }
   if (context.cross_validation != nullptr) {
     const BundleCrossValidationResult& cv = *context.cross_validation;
+    std::vector<double> magnitudes;
+    for (const BundleCrossValidationPoint& p : cv.points)
+      if (p.ok) magnitudes.push_back(p.error_m.norm());
+    const LengthUnit unit = LengthUnitFor(LargestMagnitude(magnitudes));
+    const std::string u = LengthUnitName(unit);
     std::vector<std::vector<std::string>> cv_rows;
     for (const BundleCrossValidationPoint& p : cv.points) {
-      cv_rows.push_back({block.points[p.point].id, p.ok ? F(p.error_m.x()) : "",
-                         p.ok ? F(p.error_m.y()) : "", p.ok ? F(p.error_m.z()) : "",
-                         p.ok ? F(p.normalized) : "", p.stands_out ? "STANDS OUT" : p.message});
+      cv_rows.push_back({block.points[p.point].id, p.ok ? FormatLength(p.error_m.x(), unit) : "",
+                         p.ok ? FormatLength(p.error_m.y(), unit) : "",
+                         p.ok ? FormatLength(p.error_m.z(), unit) : "",
+                         p.ok ? FormatUnitless(p.normalized, 1) : "",
+                         p.stands_out ? "STANDS OUT" : (p.ok ? "fits" : p.message)});
     }
-    html << "<h2>Leave-one-out control points</h2>\n"
-         << HtmlTable(
-                "Each control point adjusted as a check point; RMSE X " + F(cv.rmse_m.x()) +
-                    ", Y " + F(cv.rmse_m.y()) + ", Z " + F(cv.rmse_m.z()) + " m",
-                {"point", "error X (m)", "error Y (m)", "error Z (m)", "normalized", "verdict"},
-                cv_rows,
-                {"normalized: e^T C^-1 e, chi-square(3); stands out above " + F(cv.threshold)});
+    html << HtmlTable("Leave-one-out control points: each adjusted as a check point; RMSE X " +
+                          FormatLength(cv.rmse_m.x(), unit) + ", Y " +
+                          FormatLength(cv.rmse_m.y(), unit) + ", Z " +
+                          FormatLength(cv.rmse_m.z(), unit) + " " + u,
+                      {"point", "error X (" + u + ")", "error Y (" + u + ")",
+                       "error Z (" + u + ")", "e^T C^-1 e", "verdict"},
+                      cv_rows,
+                      {"e^T C^-1 e: chi-square(3); stands out above " +
+                       FormatUnitless(cv.threshold, 1)});
   }
+  const BundleAdjustmentSummary& s = result.summary;
+  html << "<h3>Run</h3>\n<p>" << HtmlEscape(EnumName(s.termination)) << ": "
+       << FormatCount(s.rounds, "round") << ", " << FormatCount(s.iterations, "iteration")
+       << ", cost (half the sum of squared whitened residuals) "
+       << FormatSignificant(s.initial_cost, 6) << " to " << FormatSignificant(s.final_cost, 6)
+       << ", " << FormatSignificant(s.time_seconds, 3) << " s (statistics "
+       << FormatSignificant(s.statistics_seconds, 3) << " s).</p>\n<p><code>"
+       << HtmlEscape(context.command_line) << "</code></p>\n";
   return html.str();
 }
 
@@ -408,20 +990,14 @@ std::string BundleReportHtml(const Block& block, const BundleAdjustmentResult& r
                              const BundleReportContext& context) {
   const BundleAdjustmentSummary& s = result.summary;
   std::ostringstream html;
-  html << HtmlPageOpen("photopose bundle", "photopose bundle: " + std::to_string(s.num_images) +
-                                               " images, " + std::to_string(s.num_points) +
-                                               " points, " + std::to_string(s.num_marks) +
-                                               " marks");
-  html << VerdictsHtml(result, context);
-  html << "<p>" << HtmlEscape(s.BriefReport()) << "<br>Datum: " << HtmlEscape(s.datum_description)
-       << "</p>\n";
-  const PlanData plan = context.georeference != nullptr
-                             ? GeoreferencedPlanData(block, result, *context.georeference)
-                             : PlanDataOf(block, result);
-  html << "<h2>Plan view</h2>\n" << PlanView(plan) << "\n";
-  html << GroupsHtml(block, result, context) << PointsHtml(block, result)
-       << CalibrationAndSnoopingHtml(block, result) << ReliabilityHtml(block, result, context);
-  html << "<h2>Run</h2>\n<p><code>" << HtmlEscape(context.command_line) << "</code></p>\n";
+  html << HtmlPageOpen("photopose bundle adjustment report", "Bundle adjustment report");
+  html << "<p class=\"meta\">" << FormatCount(s.num_images, "image") << ", "
+       << FormatCount(s.num_points, "point") << ", " << FormatCount(s.num_marks, "mark")
+       << "; photopose " << PHOTOPOSE_VERSION << "</p>\n";
+  html << OverviewHtml(block, result, context) << VerdictsHtml(block, result, context)
+       << PointsHtml(block, result) << CamerasHtml(block, result)
+       << CalibrationHtml(block, result) << ResidualsHtml(block, result)
+       << RejectedHtml(block, result) << DiagnosticsHtml(block, result, context);
   html << HtmlPageClose();
   return html.str();
 }

@@ -58,8 +58,10 @@ void ReportedAngles(const BlockCamera& camera, const ExteriorOrientation& eo,
 
 std::string PointName(const Block& block, int p) { return block.points[p].id; }
 
+}  // namespace
+
 // The item a diagnostic refers to, in words.
-std::string ItemName(const Block& block, BundleGroup group, int item) {
+std::string BundleItemName(const Block& block, BundleGroup group, int item) {
   if (group == kTieMarks || group == kControlMarks) {
     const BlockMark& mark = block.marks[item];
     return "mark of '" + block.points[mark.point].id + "' in '" + block.images[mark.image].name + "'";
@@ -70,7 +72,7 @@ std::string ItemName(const Block& block, BundleGroup group, int item) {
   return EnumName(group) + std::string(" #") + std::to_string(item);
 }
 
-const char* AxisName(BundleGroup group, int axis) {
+const char* BundleAxisName(BundleGroup group, int axis) {
   static const char* const kMark[] = {"x", "y"};
   static const char* const kXyz[] = {"X", "Y", "Z"};
   static const char* const kAngles[] = {"omega", "phi", "kappa"};
@@ -78,8 +80,6 @@ const char* AxisName(BundleGroup group, int axis) {
   if (group == kAttitudes) return kAngles[std::clamp(axis, 0, 2)];
   return kXyz[std::clamp(axis, 0, 2)];
 }
-
-}  // namespace
 
 namespace {
 
@@ -291,6 +291,15 @@ json BundleReportJson(const Block& block, const BundleAdjustmentResult& result,
                         {"normalized_residual", Number(r.whitened_residual)}});
   }
   report["rejected_marks"] = rejected;
+  json rejected_check = json::array();
+  for (const BundleRejectedCheckMark& r : result.rejected_check_marks) {
+    const BlockMark& mark = block.marks[r.mark];
+    rejected_check.push_back({{"raster", block.images[mark.image].name},
+                              {"point_id", block.points[mark.point].id},
+                              {"normalized_residual", Number(r.normalized)},
+                              {"residual", {Number(r.residual.x()), Number(r.residual.y())}}});
+  }
+  report["rejected_check_marks"] = rejected_check;
 
   // Diagnostics (observation_diagnostics): the rejected, the uncontrolled and the reliability
   // per image and control point.
@@ -300,8 +309,8 @@ json BundleReportJson(const Block& block, const BundleAdjustmentResult& result,
     std::vector<double> image_external(block.images.size(), 0.0);
     for (const BundleObservationDiagnostics& d : result.observations) {
       const json row = {{"group", EnumName(d.group)},
-                        {"item", ItemName(block, d.group, d.item)},
-                        {"axis", AxisName(d.group, d.axis)},
+                        {"item", BundleItemName(block, d.group, d.item)},
+                        {"axis", BundleAxisName(d.group, d.axis)},
                         {"residual", Number(d.residual)},
                         {"sigma", Number(d.sigma)},
                         {"redundancy", Number(d.redundancy)},
@@ -347,8 +356,8 @@ json BundleReportJson(const Block& block, const BundleAdjustmentResult& result,
     json steps = json::array();
     for (const BundleSnoopingStep& step : result.snooping) {
       steps.push_back({{"group", EnumName(step.group)},
-                       {"item", ItemName(block, step.group, step.item)},
-                       {"axis", AxisName(step.group, step.axis)},
+                       {"item", BundleItemName(block, step.group, step.item)},
+                       {"axis", BundleAxisName(step.group, step.axis)},
                        {"normalized_residual", step.normalized},
                        {"residual", step.residual}});
     }
@@ -557,9 +566,15 @@ std::vector<std::string> BundleConsoleLines(const Block& block, const BundleAdju
   if (!result.rejected_marks.empty())
     lines.push_back(std::to_string(result.rejected_marks.size()) +
                     " marks rejected as blunders (listed in the report)");
+  for (const BundleRejectedCheckMark& r : result.rejected_check_marks) {
+    const BlockMark& mark = block.marks[r.mark];
+    lines.push_back("check mark of '" + PointName(block, mark.point) + "' on image '" +
+                    block.images[mark.image].name + "' rejected by the w-test (|w| = " +
+                    Format(r.normalized) + "): check its measurement");
+  }
   for (const BundleSnoopingStep& step : result.snooping)
-    lines.push_back("snooping removed the " + ItemName(block, step.group, step.item) + " (" +
-                    AxisName(step.group, step.axis) + ", |w| = " + Format(step.normalized) + ")");
+    lines.push_back("snooping removed the " + BundleItemName(block, step.group, step.item) + " (" +
+                    BundleAxisName(step.group, step.axis) + ", |w| = " + Format(step.normalized) + ")");
   if (result.num_uncontrolled > 0)
     lines.push_back(std::to_string(result.num_uncontrolled) +
                     " observations are uncontrolled (redundancy number below " +

@@ -32,6 +32,11 @@ struct BundleReportContext {
   const GeoreferenceResult* georeference = nullptr;  // a georeferenced model (its section)
 };
 
+// An observation of a group in words ("mark of 'P1' in 'img_2'", "control point 'C3'", "attitude
+// of 'img_4'") and the name of its axis (x, y; X, Y, Z; omega, phi, kappa), for every report.
+std::string BundleItemName(const Block& block, BundleGroup group, int item);
+const char* BundleAxisName(BundleGroup group, int axis);
+
 // The JSON report; every key is documented in docs/formats.md.
 nlohmann::json BundleReportJson(const Block& block, const BundleAdjustmentResult& result,
                                 const BundleReportContext& context);

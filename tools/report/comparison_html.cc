@@ -24,21 +24,248 @@ double PlotX(const SweepSetting& setting, const std::string& axis) {
   return axis == "outliers" ? 100.0 * value : value;
 }
 
+// Value columns of one HTML table at most; wider tables are split into blocks (RenderHtmlTable).
+constexpr size_t kMaxHtmlValueColumns = 10;
+
+// Solvers within this fraction of the best position RMSE tie for the most accurate: with tens of
+// trials the RMSE itself is uncertain by several per cent (unitless).
+constexpr double kTieFraction = 0.05;
+
+// "a, b and c" of the names at `indices`, each in <b>.
+std::string NameList(const std::vector<std::string>& names, const std::vector<size_t>& indices) {
+  std::string out;
+  for (size_t k = 0; k < indices.size(); ++k) {
+    out += (k == 0 ? "" : (k + 1 == indices.size() ? " and " : ", ")) + std::string("<b>") +
+           HtmlEscape(names[indices[k]]) + "</b>";
+  }
+  return out.empty() ? "none" : out;
+}
+
+// The fastest of `indices` by `seconds`.
+size_t Fastest(const std::vector<double>& seconds, const std::vector<size_t>& indices) {
+  size_t best = indices.front();
+  for (const size_t k : indices)
+    if (seconds[k] < seconds[best]) best = k;
+  return best;
+}
+
+// The verdict of one scenario of a Monte-Carlo run.
+std::string ScenarioVerdict(const MonteCarloOptions& options, const MonteCarloResult& result,
+                            Scenario scenario) {
+  const SettingResult* baseline = nullptr;
+  const SettingResult* most_outliers = nullptr;
+  for (const SettingResult& setting : result.settings) {
+    if (setting.setting.scenario != scenario) continue;
+    if (baseline == nullptr) baseline = &setting;
+    if (setting.setting.outlier_fraction > baseline->setting.outlier_fraction &&
+        (most_outliers == nullptr ||
+         setting.setting.outlier_fraction > most_outliers->setting.outlier_fraction))
+      most_outliers = &setting;
+  }
+  std::ostringstream html;
+  if (baseline == nullptr) return "";
+  const std::vector<SolverStatistics>& base = baseline->solvers;
+  // Accuracy among the solvers with the best success rate (within one sample).
+  double best_success = 0.0;
+  for (const SolverStatistics& s : base) best_success = std::max(best_success, s.success_rate);
+  const double one_sample = 1.0 / std::max(1, base.empty() ? 1 : base.front().samples);
+  std::vector<double> rmse, seconds;
+  for (const SolverStatistics& s : base) {
+    rmse.push_back(s.solved > 0 && s.success_rate >= best_success - one_sample - 1e-12
+                       ? s.position_rmse_m
+                       : kNaN);
+    seconds.push_back(s.median_seconds);
+  }
+  const std::vector<size_t> tied = TiedBest(rmse, kTieFraction);
+  if (tied.empty()) {
+    html << "<div class=\"verdict bad\"><b>" << EnumName(scenario)
+         << ":</b> no solver returned a pose at the baseline ("
+         << HtmlEscape(SweepSettingTitle(baseline->setting, options.trials,
+                                         baseline->images_per_trial))
+         << ").</div>\n";
+    return html.str();
+  }
+  const size_t fastest = Fastest(seconds, tied);
+  html << "<div class=\"verdict good\"><b>" << EnumName(scenario) << ": use "
+       << HtmlEscape(result.solver_names[fastest]) << ".</b> At the baseline ("
+       << HtmlEscape(SweepSettingTitle(baseline->setting, options.trials,
+                                       baseline->images_per_trial))
+       << ") " << NameList(result.solver_names, tied)
+       << (tied.size() > 1 ? " tie for the most accurate" : " is the most accurate")
+       << " (position RMSE " << FormatLengthWithUnit(base[tied.front()].position_rmse_m);
+  if (tied.size() > 1) html << " within " << FormatUnitless(100.0 * kTieFraction, 0) << " %";
+  html << ", success " << FormatUnitless(100.0 * base[fastest].success_rate, 0) << " %)";
+  if (tied.size() > 1)
+    html << "; " << HtmlEscape(result.solver_names[fastest]) << " is the fastest of them ("
+         << FormatSignificant(1e6 * base[fastest].median_seconds, 3) << " us per image)";
+  html << ".";
+  // Honest covariances.
+  std::vector<size_t> honest, optimistic;
+  for (size_t k = 0; k < base.size(); ++k) {
+    if (base[k].nees_count == 0 || !std::isfinite(base[k].mean_nees_apriori)) continue;
+    (base[k].nees_interval_99.Contains(base[k].mean_nees_apriori) ? honest : optimistic)
+        .push_back(k);
+  }
+  if (!honest.empty() || !optimistic.empty())
+    html << " Honest covariance (mean NEES inside its 99 % interval): "
+         << NameList(result.solver_names, honest) << (optimistic.empty() ? "" : "; not: ")
+         << (optimistic.empty() ? "" : NameList(result.solver_names, optimistic)) << ".";
+  if (most_outliers != nullptr) {
+    std::vector<double> failure;
+    for (const SolverStatistics& s : most_outliers->solvers) failure.push_back(1.0 - s.success_rate);
+    double best = 1.0;
+    for (const double f : failure) best = std::min(best, f);
+    std::vector<size_t> robust;
+    for (size_t k = 0; k < failure.size(); ++k)
+      if (failure[k] <= best + one_sample + 1e-12) robust.push_back(k);
+    html << " With " << FormatUnitless(100.0 * most_outliers->setting.outlier_fraction, 0)
+         << " % outliers the best success rate ("
+         << FormatUnitless(100.0 * (1.0 - best), 0) << " %) is "
+         << NameList(result.solver_names, robust) << "'s.";
+  }
+  html << "</div>\n";
+  return html.str();
+}
+
+// The verdict of a dataset comparison: who solves every image, who ties for the smallest residuals
+// of the check marks (else of the inliers), the fastest of them.
+std::string DatasetVerdict(const DatasetComparisonResult& result) {
+  std::vector<double> residual, seconds;
+  int most_solved = 0;
+  for (const DatasetSolverSummary& s : result.summaries) most_solved = std::max(most_solved, s.solved);
+  bool by_check = false;
+  for (const DatasetSolverSummary& s : result.summaries)
+    by_check = by_check || (s.solved > 0 && s.check_rmse_px > 0.0);
+  for (const DatasetSolverSummary& s : result.summaries) {
+    residual.push_back(s.solved == most_solved && s.solved > 0
+                           ? (by_check ? s.check_rmse_px : s.rms_px)
+                           : kNaN);
+    seconds.push_back(s.median_seconds);
+  }
+  const std::vector<size_t> tied = TiedBest(residual, kTieFraction);
+  std::ostringstream html;
+  if (tied.empty())
+    return "<div class=\"verdict bad\"><b>No solver oriented an image</b> (see the per-image "
+           "table for the reasons).</div>\n";
+  const size_t fastest = Fastest(seconds, tied);
+  const DatasetSolverSummary& best = result.summaries[fastest];
+  html << "<div class=\"verdict " << (most_solved == best.images ? "good" : "note")
+       << "\"><b>Use " << HtmlEscape(best.solver) << ".</b> " << NameList(result.solver_names, tied)
+       << (tied.size() > 1 ? " tie" : " is best") << " for the smallest "
+       << (by_check ? "check-mark" : "inlier") << " residuals ("
+       << FormatPixels(by_check ? best.check_rmse_px : best.rms_px) << " px RMS"
+       << (tied.size() > 1 ? " within " + FormatUnitless(100.0 * kTieFraction, 0) + " %" : "")
+       << ") among those orienting the most images (" << most_solved << " of " << best.images
+       << ")";
+  if (tied.size() > 1)
+    html << "; " << HtmlEscape(best.solver) << " is the fastest of them ("
+         << FormatSignificant(1e6 * best.median_seconds, 3) << " us per image)";
+  html << ".";
+  if (most_solved < best.images)
+    html << " " << FormatCount(best.images - most_solved, "image")
+         << " could not be oriented by any solver (see the per-image table).";
+  html << "</div>\n";
+  return html.str();
+}
+
 }  // namespace
 
+std::vector<size_t> TiedBest(const std::vector<double>& values, double relative) {
+  double best = std::numeric_limits<double>::infinity();
+  for (const double v : values)
+    if (std::isfinite(v)) best = std::min(best, v);
+  std::vector<size_t> tied;
+  if (!std::isfinite(best)) return tied;
+  for (size_t k = 0; k < values.size(); ++k)
+    if (std::isfinite(values[k]) && values[k] <= best + relative * std::abs(best)) tied.push_back(k);
+  return tied;
+}
+
+std::string ComparisonGlossaryHtml() {
+  static const std::vector<std::pair<std::string, std::string>> kTerms = {
+      {"taylor_as_printed",
+       "The seed note's Taylor linearisation solved by Gauss-Newton, with the partial derivatives "
+       "exactly as printed in the note (its eq. 21 included, which has an error); kept to show "
+       "what the printed equations give."},
+      {"taylor", "The same Gauss-Newton with the corrected partial derivatives."},
+      {"ceres_analytic",
+       "Levenberg-Marquardt in Ceres on the collinearity cost with hand-derived (analytic) "
+       "Jacobians."},
+      {"ceres_autodiff",
+       "The same with Jacobians by automatic differentiation; it should agree with ceres_analytic "
+       "to rounding."},
+      {"/none, /huber, /cauchy, /softl1",
+       "The loss on the marks' residuals: none is plain least squares; the robust losses weigh "
+       "large residuals down so that outliers pull less."},
+      {"success", "A pose was returned and its centre is within the stated number of design "
+                  "sigmas of the truth."},
+      {"position RMSE (pos_rmse_m), camera RMSE",
+       "Root mean square of the distance between the estimated and the true camera centre."},
+      {"rot_rmse_as", "Root mean square of the rotation error, in arc seconds."},
+      {"d_ref", "RMS of the differences to the reference solver (taylor when compared) on the "
+                "same data and start."},
+      {"check_px, reproj_px", "RMS image residual of the check marks, and of the control marks, "
+                              "in pixels."},
+      {"t_us, refine_us, t/ref, time",
+       "Median time of one solve in microseconds, its refinement part, and its ratio to the "
+       "reference solver's."},
+      {"NEES", "Normalised estimation error squared: the error against the solver's own "
+               "covariance, e^T C^-1 e. Its mean is the number of parameters (6 for a pose, 3 for "
+               "a camera centre) when the covariance is honest; above means too optimistic."},
+      {"nees_ap, E[nees], 99% int, cov",
+       "NEES with sigma0 = 1 (a-priori), its expectation with sigma0 estimated, the interval its "
+       "mean falls in 99 % of the time when honest, and the verdict (ok, HIGH: too optimistic, "
+       "low: too pessimistic)."},
+  };
+  std::ostringstream html;
+  html << "<dl class=\"glossary\">\n";
+  for (const auto& [term, meaning] : kTerms)
+    html << "<dt>" << HtmlEscape(term) << "</dt><dd>" << HtmlEscape(meaning) << "</dd>\n";
+  html << "</dl>\n";
+  return html.str();
+}
+
 std::string RenderHtmlTable(const TextTable& table) {
-  return HtmlTable(table.title, table.header, table.rows, table.notes);
+  // Naming columns, repeated in every block: the first (first two for per-image tables).
+  const size_t num_keys = std::min<size_t>(
+      table.header.size(), !table.header.empty() && table.header[0] == "image" ? 2 : 1);
+  const size_t num_values = table.header.size() - num_keys;
+  if (num_values <= kMaxHtmlValueColumns)
+    return HtmlTable(table.title, table.header, table.rows, table.notes);
+  // Wider tables in blocks of columns of about equal width, one under the other: an A4 page
+  // holds them at a readable size.
+  const size_t num_blocks = (num_values + kMaxHtmlValueColumns - 1) / kMaxHtmlValueColumns;
+  const size_t per_block = (num_values + num_blocks - 1) / num_blocks;
+  std::string html;
+  for (size_t b = 0; b < num_blocks; ++b) {
+    const size_t first = num_keys + b * per_block;
+    const size_t last = std::min(table.header.size(), first + per_block);
+    auto pick = [&](const std::vector<std::string>& cells) {
+      std::vector<std::string> out;
+      for (size_t c = 0; c < num_keys; ++c) out.push_back(c < cells.size() ? cells[c] : "");
+      for (size_t c = first; c < last; ++c) out.push_back(c < cells.size() ? cells[c] : "");
+      return out;
+    };
+    std::vector<std::vector<std::string>> rows;
+    for (const auto& row : table.rows) rows.push_back(pick(row));
+    html += HtmlTable(b == 0 ? table.title : table.title + " (continued)", pick(table.header),
+                      rows, b + 1 == num_blocks ? table.notes : std::vector<std::string>());
+  }
+  return html;
 }
 
 std::string MonteCarloHtml(const MonteCarloOptions& options, const MonteCarloResult& result,
                            const std::string& command_line) {
   std::ostringstream html;
   const std::string title = "photopose compare: Monte-Carlo comparison of the pose solvers";
-  html << HtmlPageOpen(title, title);
-  html << "<p>Command: <code>" << HtmlEscape(command_line) << "</code></p>\n";
-  html << "<p>" << options.trials << " trials per setting, sweep " << EnumName(options.sweep)
-       << ", initial values " << EnumName(options.initial) << ", wall time "
-       << ReportFixed(result.wall_seconds, 1) << " s. Solvers: ";
+  html << HtmlPageOpen(title, "Which pose solver to use: a Monte-Carlo comparison");
+  html << "<h2>Verdict</h2>\n";
+  for (Scenario scenario : options.scenarios) html << ScenarioVerdict(options, result, scenario);
+  html << "<h2>Glossary</h2>\n" << ComparisonGlossaryHtml();
+  html << "<h2>Run</h2>\n<p>Command: <code>" << HtmlEscape(command_line) << "</code></p>\n";
+  html << "<p>" << FormatCount(options.trials, "trial") << " per setting, sweep "
+       << EnumName(options.sweep) << ", initial values " << EnumName(options.initial)
+       << ", wall time " << FormatSignificant(result.wall_seconds, 3) << " s. Solvers: ";
   for (size_t s = 0; s < result.solver_names.size(); ++s)
     html << (s ? ", " : "") << "<code>" << HtmlEscape(result.solver_names[s]) << "</code>";
   html << ".</p>\n<ul class=\"notes\">\n";
@@ -48,7 +275,7 @@ std::string MonteCarloHtml(const MonteCarloOptions& options, const MonteCarloRes
 
   const std::vector<TextTable> tables = MonteCarloTables(options, result);
   for (Scenario scenario : options.scenarios) {
-    html << "<h2>Scenario " << EnumName(scenario) << "</h2>\n<div class=\"plots\">\n";
+    html << "<h2>Scenario " << EnumName(scenario) << "</h2>\n";
     // Metric of a solver in a setting, for the plots.
     struct Metric {
       const char* name;
@@ -89,14 +316,6 @@ std::string MonteCarloHtml(const MonteCarloOptions& options, const MonteCarloRes
         plot.title = std::string(EnumName(scenario)) + ": " + metric.name + " vs " +
                      (axis == "initial" ? "initial error" : axis);
         plot.x_label = AxisLabel(axis);
-        if (axis == "initial") {
-          plot.x_label += "; position +-";
-          for (size_t k = 0; k < along.size(); ++k)
-            plot.x_label +=
-                (k ? "/" : "") +
-                ReportNumber(result.settings[along[k]].setting.initial_error.position_m, "%g");
-          plot.x_label += " m";
-        }
         plot.y_label = metric.unit_label;
         plot.log_y = metric.log_y;
         if (metric.rate) plot.y_min = 0.0, plot.y_max = 1.0;
@@ -122,7 +341,15 @@ std::string MonteCarloHtml(const MonteCarloOptions& options, const MonteCarloRes
           }
           plot.series.push_back(series);
         }
-        html << RenderLinePlotSvg(plot) << "\n";
+        html << "<h3>" << HtmlEscape(plot.title) << "</h3>\n";
+        if (axis == "initial") {
+          html << "<p>Initial position error +-";
+          for (size_t k = 0; k < along.size(); ++k)
+            html << (k ? "/" : "")
+                 << FormatSignificant(result.settings[along[k]].setting.initial_error.position_m, 3);
+          html << " m with the angle errors.</p>\n";
+        }
+        html << "<div class=\"plots\">" << RenderSmallMultiplesSvg(plot) << "</div>\n";
       }
     }
     // Time per solve at the scenario's baseline setting (the first of the scenario).
@@ -142,10 +369,10 @@ std::string MonteCarloHtml(const MonteCarloOptions& options, const MonteCarloRes
         refinement.labels.push_back(s.solver);
         refinement.values.push_back(s.median_refinement_seconds * 1e6);
       }
-      html << RenderBarPlotSvg(bars) << "\n" << RenderBarPlotSvg(refinement) << "\n";
+      html << "<div class=\"plots\">" << RenderBarPlotSvg(bars) << "\n"
+           << RenderBarPlotSvg(refinement) << "</div>\n";
       break;
     }
-    html << "</div>\n";
     for (size_t k = 0; k < result.settings.size(); ++k)
       if (result.settings[k].setting.scenario == scenario) {
         html << RenderHtmlTable(tables[k]);
@@ -158,8 +385,10 @@ std::string MonteCarloHtml(const MonteCarloOptions& options, const MonteCarloRes
 std::string DatasetHtml(const DatasetComparisonResult& result, const std::string& command_line) {
   std::ostringstream html;
   const std::string title = "photopose compare: the pose solvers on a dataset";
-  html << HtmlPageOpen(title, title);
-  html << "<p>Command: <code>" << HtmlEscape(command_line) << "</code></p>\n";
+  html << HtmlPageOpen(title, "Which pose solver to use on this dataset");
+  html << "<h2>Verdict</h2>\n" << DatasetVerdict(result);
+  html << "<h2>Glossary</h2>\n" << ComparisonGlossaryHtml();
+  html << "<h2>Run</h2>\n<p>Command: <code>" << HtmlEscape(command_line) << "</code></p>\n";
   const std::vector<TextTable> tables = DatasetTables(result);
   html << "<div class=\"plots\">\n";
   BarPlot time;
@@ -167,10 +396,10 @@ std::string DatasetHtml(const DatasetComparisonResult& result, const std::string
   time.value_label = "microseconds per image (ResectImage wall time)";
   BarPlot difference;
   difference.title = "RMS position difference to " + result.reference_solver;
-  difference.value_label = "metres (n/a: the solver itself or none solved)";
+  difference.value_label = "RMS position difference (m; n/a: the solver itself or none solved)";
   BarPlot reference = difference;
   reference.title = "RMS position difference to the reference frames";
-  reference.value_label = "metres";
+  reference.value_label = "RMS position difference (m)";
   for (const DatasetSolverSummary& s : result.summaries) {
     time.labels.push_back(s.solver);
     time.values.push_back(s.median_seconds * 1e6);

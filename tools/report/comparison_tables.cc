@@ -7,6 +7,7 @@
 #include <sstream>
 
 #include "tools/compare/comparison.h"
+#include "tools/report/html_kit.h"
 
 namespace photopose::cli {
 namespace {
@@ -21,15 +22,11 @@ std::string Format(const char* format, double value) {
   return buffer;
 }
 
-// Three significant digits, plain notation between 1e-3 and 1e5.
+// Three significant digits in plain notation (the kit's rule: at most 6 decimals, never an
+// exponent); "-" when not finite.
 std::string Sig(double value) {
   if (!std::isfinite(value)) return "-";
-  const double magnitude = std::abs(value);
-  if (magnitude != 0.0 && (magnitude < 1e-3 || magnitude >= 1e5)) return Format("%.2e", value);
-  if (magnitude >= 100.0) return Format("%.0f", value);
-  if (magnitude >= 10.0) return Format("%.1f", value);
-  if (magnitude >= 1.0) return Format("%.2f", value);
-  return Format("%.3g", value);
+  return FormatSignificant(value, 3);
 }
 
 std::string Percent(double fraction) { return Format("%.0f%%", 100.0 * fraction); }
@@ -297,32 +294,73 @@ std::string DatasetCsv(const DatasetComparisonResult& result) {
   return csv.str();
 }
 
+std::string WrapText(const std::string& text, const std::string& first_indent,
+                     const std::string& indent, size_t width) {
+  std::string out, line = first_indent;
+  bool line_empty = true;
+  std::istringstream words(text);
+  std::string word;
+  while (words >> word) {
+    if (!line_empty && line.size() + 1 + word.size() > width) {
+      out += line + "\n";
+      line = indent;
+      line_empty = true;
+    }
+    line += (line_empty ? "" : " ") + word;
+    line_empty = false;
+  }
+  if (!line_empty) out += line + "\n";
+  return out;
+}
+
 std::string RenderText(const TextTable& table) {
-  std::vector<size_t> width(table.header.size(), 0);
-  for (size_t c = 0; c < table.header.size(); ++c) width[c] = table.header[c].size();
+  const size_t num_columns = table.header.size();
+  std::vector<size_t> width(num_columns, 0);
+  for (size_t c = 0; c < num_columns; ++c) width[c] = table.header[c].size();
   for (const auto& row : table.rows)
     for (size_t c = 0; c < row.size() && c < width.size(); ++c)
       width[c] = std::max(width[c], row[c].size());
+  // The first columns name things (left-aligned, repeated in every block); the rest are numbers
+  // (right-aligned), in as many blocks of columns under one another as kConsoleWidth needs.
+  const size_t num_keys = std::min<size_t>(num_columns, table.header.empty()           ? 0
+                                                         : table.header[0] == "image" ? 2
+                                                                                       : 1);
+  size_t key_width = 0;
+  for (size_t c = 0; c < num_keys; ++c) key_width += width[c] + (c == 0 ? 0 : 2);
+  std::vector<std::vector<size_t>> blocks;
+  for (size_t c = num_keys; c < num_columns; ++c) {
+    size_t used = key_width;
+    if (!blocks.empty())
+      for (size_t k : blocks.back()) used += width[k] + 2;
+    if (blocks.empty() || used + 2 + width[c] > kConsoleWidth) blocks.emplace_back();
+    blocks.back().push_back(c);
+  }
+  if (blocks.empty()) blocks.emplace_back();
   std::ostringstream out;
-  if (!table.title.empty()) out << table.title << "\n";
-  auto line = [&](const std::vector<std::string>& cells) {
-    std::string text;
-    for (size_t c = 0; c < width.size(); ++c) {
-      const std::string cell = c < cells.size() ? cells[c] : "";
-      const std::string pad(width[c] - std::min(width[c], cell.size()), ' ');
-      // The first columns name things (left-aligned); the rest are numbers (right-aligned).
-      const bool left = c == 0 || (c == 1 && table.header[0] == "image");
-      text += (c == 0 ? "" : "  ") + (left ? cell + pad : pad + cell);
-    }
-    while (!text.empty() && text.back() == ' ') text.pop_back();
-    out << text << "\n";
-  };
-  line(table.header);
-  size_t total = 0;
-  for (size_t c = 0; c < width.size(); ++c) total += width[c] + (c == 0 ? 0 : 2);
-  out << std::string(total, '-') << "\n";
-  for (const auto& row : table.rows) line(row);
-  for (const std::string& note : table.notes) out << "  " << note << "\n";
+  if (!table.title.empty()) out << WrapText(table.title, "", "  ", kConsoleWidth);
+  for (size_t b = 0; b < blocks.size(); ++b) {
+    std::vector<size_t> columns;
+    for (size_t c = 0; c < num_keys; ++c) columns.push_back(c);
+    columns.insert(columns.end(), blocks[b].begin(), blocks[b].end());
+    auto line = [&](const std::vector<std::string>& cells) {
+      std::string text;
+      for (size_t k = 0; k < columns.size(); ++k) {
+        const size_t c = columns[k];
+        const std::string cell = c < cells.size() ? cells[c] : "";
+        const std::string pad(width[c] - std::min(width[c], cell.size()), ' ');
+        text += (k == 0 ? "" : "  ") + (c < num_keys ? cell + pad : pad + cell);
+      }
+      while (!text.empty() && text.back() == ' ') text.pop_back();
+      out << text << "\n";
+    };
+    if (b > 0) out << "\n";
+    line(table.header);
+    size_t total = 0;
+    for (size_t k = 0; k < columns.size(); ++k) total += width[columns[k]] + (k == 0 ? 0 : 2);
+    out << std::string(total, '-') << "\n";
+    for (const auto& row : table.rows) line(row);
+  }
+  for (const std::string& note : table.notes) out << WrapText(note, "  ", "    ", kConsoleWidth);
   return out.str();
 }
 

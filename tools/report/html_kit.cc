@@ -25,6 +25,9 @@ const char* const kColors[kNumPlotColors] = {"#0072B2", "#D55E00", "#009E73", "#
 // plot or table row split across pages.
 const char kStyle[] =
     "body{font-family:sans-serif;margin:2em auto;max-width:1400px;color:#222;padding:0 1em}"
+    "p.meta{color:#555;margin-top:-0.5em}"
+    "dl.glossary{font-size:0.85em}dl.glossary dt{font-weight:bold;margin-top:0.4em}"
+    "dl.glossary dd{margin-left:1.5em}"
     "h1{font-size:1.5em}h2{font-size:1.25em;margin-top:2em;border-bottom:1px solid #ccc}"
     "table{border-collapse:collapse;margin:1em 0;font-size:0.85em}"
     "caption{text-align:left;font-weight:bold;padding:0.3em 0}"
@@ -38,7 +41,11 @@ const char kStyle[] =
     ".note{background:#eef3fa;border:1px solid #0072b2}"
     "code,pre{background:#f6f6f6;padding:0.1em 0.3em;white-space:pre-wrap}";
 const char kPrintStyle[] =
-    "body{margin:0;max-width:none;padding:0}.plots{display:block}"
+    "@page{size:A4;margin:12mm}"
+    "body{margin:0;max-width:none;padding:0;font-size:9pt}"
+    "svg{max-width:100%;height:auto;box-sizing:border-box}.plots{gap:0.5em}"
+    "table{font-size:7pt;max-width:100%}th,td{white-space:normal;padding:0.1em 0.2em}th{overflow-wrap:anywhere}"
+    "code,pre{word-break:break-all}"
     "svg,tr,.verdict{break-inside:avoid}h2{break-after:avoid}";
 
 std::string Coordinate(double value) { return ReportNumber(value, "%.1f"); }
@@ -85,16 +92,10 @@ void LinePlotAxes(const LinePlot& plot, PlotAxis* x_axis, PlotAxis* y_axis, bool
   }
 }
 
-// Series `s` of a line plot: its polylines (broken at non-finite values) and markers.
-std::string LineSeriesSvg(const LinePlot& plot, size_t s, const PlotFrame& frame,
-                          const PlotAxis& x_axis, const PlotAxis& y_axis) {
-  const PlotSeries& series = plot.series[s];
-  const size_t num_series = plot.series.size();
-  const char* color = PlotColor(s);
-  const char* dash = (s / kNumPlotColors) % 2 == 1 ? " stroke-dasharray=\"4 3\"" : "";
-  // Earlier series are drawn wider, so that series with equal values still show underneath.
-  const double line_width =
-      1.5 + 3.5 * static_cast<double>(num_series - 1 - s) / std::max<size_t>(1, num_series - 1);
+// The polylines of a series (broken at non-finite values) in one colour and width.
+std::string SeriesPolylines(const PlotSeries& series, const PlotFrame& frame,
+                            const PlotAxis& x_axis, const PlotAxis& y_axis, const char* color,
+                            double line_width, const char* dash) {
   std::ostringstream svg;
   std::string points;
   auto flush = [&]() {
@@ -113,14 +114,43 @@ std::string LineSeriesSvg(const LinePlot& plot, size_t s, const PlotFrame& frame
               Coordinate(frame.Y(y_axis, series.y[k])) + " ";
   }
   flush();
+  return svg.str();
+}
+
+// The markers of series `s`, each with its values as a tooltip.
+std::string SeriesMarkers(const PlotSeries& series, size_t s, const PlotFrame& frame,
+                          const PlotAxis& x_axis, const PlotAxis& y_axis, double r) {
+  std::ostringstream svg;
+  const size_t n = std::min(series.x.size(), series.y.size());
   for (size_t k = 0; k < n; ++k) {
     if (!std::isfinite(series.x[k]) || !std::isfinite(series.y[k])) continue;
-    svg << SvgMarker(s, frame.X(x_axis, series.x[k]), frame.Y(y_axis, series.y[k]),
-                     1.0 + line_width, color)
-        << "<title>" << HtmlEscape(series.label) << ": " << ReportNumber(series.x[k], "%g") << ", "
-        << ReportNumber(series.y[k], "%.4g") << "</title></path>";
+    svg << SvgMarker(s, frame.X(x_axis, series.x[k]), frame.Y(y_axis, series.y[k]), r,
+                     PlotColor(s))
+        << "<title>" << HtmlEscape(series.label) << ": " << FormatSignificant(series.x[k], 4)
+        << ", " << FormatSignificant(series.y[k], 4) << "</title></path>";
   }
   return svg.str();
+}
+
+// Series `s` of a line plot: its polylines (broken at non-finite values) and markers.
+std::string LineSeriesSvg(const LinePlot& plot, size_t s, const PlotFrame& frame,
+                          const PlotAxis& x_axis, const PlotAxis& y_axis) {
+  const size_t num_series = plot.series.size();
+  const char* dash = (s / kNumPlotColors) % 2 == 1 ? " stroke-dasharray=\"4 3\"" : "";
+  // Earlier series are drawn wider, so that series with equal values still show underneath.
+  const double line_width =
+      1.5 + 3.5 * static_cast<double>(num_series - 1 - s) / std::max<size_t>(1, num_series - 1);
+  return SeriesPolylines(plot.series[s], frame, x_axis, y_axis, PlotColor(s), line_width, dash) +
+         SeriesMarkers(plot.series[s], s, frame, x_axis, y_axis, 1.0 + line_width);
+}
+
+// The dashed reference line of a plot, with its label.
+std::string ReferenceLine(const LinePlot& plot, const PlotFrame& frame, const PlotAxis& y_axis) {
+  if (!std::isfinite(plot.reference_y)) return "";
+  const double y = frame.Y(y_axis, plot.reference_y);
+  return SvgLine(frame.left, y, frame.left + frame.width, y,
+                 "stroke=\"#555\" stroke-dasharray=\"6 4\"") +
+         SvgText(frame.left + 4, y - 4, plot.reference_label, "start", " fill=\"#555\"");
 }
 
 std::string PlotTitle(double x, const std::string& title) {
@@ -178,6 +208,77 @@ std::string ReportFixed(double value, int digits) {
   return buffer;
 }
 
+LengthUnit LengthUnitFor(double largest_magnitude_m) {
+  const double m = std::abs(largest_magnitude_m);
+  if (!(m >= 0.1)) return LengthUnit::kMillimetre;  // NaN too
+  if (m < 10.0) return LengthUnit::kCentimetre;
+  return LengthUnit::kMetre;
+}
+
+const char* LengthUnitName(LengthUnit unit) {
+  switch (unit) {
+    case LengthUnit::kMillimetre:
+      return "mm";
+    case LengthUnit::kCentimetre:
+      return "cm";
+    default:
+      return "m";
+  }
+}
+
+double LengthIn(double value_m, LengthUnit unit) {
+  switch (unit) {
+    case LengthUnit::kMillimetre:
+      return 1000.0 * value_m;
+    case LengthUnit::kCentimetre:
+      return 100.0 * value_m;
+    default:
+      return value_m;
+  }
+}
+
+std::string FormatLength(double value_m, LengthUnit unit) {
+  return ReportFixed(LengthIn(value_m, unit), unit == LengthUnit::kMetre ? 3 : 1);
+}
+
+std::string FormatLengthWithUnit(double value_m) {
+  if (!std::isfinite(value_m)) return "n/a";
+  const LengthUnit unit = LengthUnitFor(value_m);
+  return FormatLength(value_m, unit) + " " + LengthUnitName(unit);
+}
+
+std::string FormatCoordinate(double value_m) { return ReportFixed(value_m, 3); }
+std::string FormatPixels(double value_px) { return ReportFixed(value_px, 2); }
+std::string FormatFilm(double value_um) { return ReportFixed(value_um, 2); }
+
+std::string FormatMarkValue(double value, const std::string& unit) {
+  if (!std::isfinite(value)) return "n/a";
+  return ReportFixed(value, 2) + " " + unit;
+}
+
+std::string FormatDegrees(double value_deg) { return ReportFixed(value_deg, 4); }
+std::string FormatArcSeconds(double value_deg) { return ReportFixed(3600.0 * value_deg, 1); }
+std::string FormatUnitless(double value, int decimals) { return ReportFixed(value, decimals); }
+
+std::string FormatSignificant(double value, int significant) {
+  if (!std::isfinite(value)) return "n/a";
+  if (value == 0.0) return "0";
+  const int magnitude = static_cast<int>(std::floor(std::log10(std::abs(value))));
+  const int decimals = std::clamp(significant - 1 - magnitude, 0, 6);
+  std::string text = ReportFixed(value, decimals);
+  // Trailing zeros of the decimals say nothing.
+  if (text.find('.') != std::string::npos) {
+    while (text.back() == '0') text.pop_back();
+    if (text.back() == '.') text.pop_back();
+  }
+  return text == "-0" ? "0" : text;
+}
+
+std::string FormatCount(long long count, const std::string& singular, const std::string& plural) {
+  return std::to_string(count) + " " +
+         (count == 1 ? singular : (plural.empty() ? singular + "s" : plural));
+}
+
 std::string HtmlTable(const std::string& title, const std::vector<std::string>& header,
                       const std::vector<std::vector<std::string>>& rows,
                       const std::vector<std::string>& notes) {
@@ -206,7 +307,7 @@ const char* PlotColor(size_t index) { return kColors[index % kNumPlotColors]; }
 std::string SvgOpen(double width, double height, const std::string& title) {
   std::ostringstream out;
   out << "<svg xmlns=\"http://www.w3.org/2000/svg\" viewBox=\"0 0 " << width << " " << height
-      << "\" width=\"" << width << "\" height=\"" << height << "\" role=\"img\" aria-label=\""
+      << "\" width=\"" << width << "\" height=\"" << height << "\" class=\"plot\" role=\"img\" aria-label=\""
       << HtmlEscape(title) << "\" font-family=\"sans-serif\" font-size=\"12\">"
       << "<rect width=\"100%\" height=\"100%\" fill=\"#ffffff\"/>";
   return out.str();
@@ -304,9 +405,17 @@ PlotAxis LinearPlotAxis(double lo, double hi, bool from_zero) {
 
 std::string TickLabel(double value) {
   if (value == 0.0) return "0";
-  const double magnitude = std::abs(value);
-  if (magnitude < 1e-3 || magnitude >= 1e5) return ReportNumber(value, "%.0e");
-  return ReportNumber(value, "%g");
+  return FormatSignificant(value, 6);
+}
+
+PlotFrame SmallPlotFrame(double width, double height) {
+  PlotFrame frame;
+  frame.left = 58.0;
+  frame.top = 30.0;
+  frame.width = width - frame.left - 14.0;
+  frame.height = height - frame.top - 52.0;
+  frame.svg_height = height;
+  return frame;
 }
 
 std::string SvgAxes(const PlotFrame& frame, const PlotAxis* x_axis, const PlotAxis* y_axis,
@@ -330,11 +439,13 @@ std::string SvgAxes(const PlotFrame& frame, const PlotAxis* x_axis, const PlotAx
   svg << "<rect x=\"" << frame.left << "\" y=\"" << frame.top << "\" width=\"" << frame.width
       << "\" height=\"" << frame.height << "\" fill=\"none\" stroke=\"#888\"/>";
   if (!x_title.empty())
-    svg << SvgText(frame.left + frame.width / 2, frame.svg_height - 12, x_title);
+    svg << SvgText(frame.left + frame.width / 2, frame.svg_height - 12, x_title, "middle",
+                   std::string(" class=\"") + kAxisLabelClass + "\"");
   if (!y_title.empty()) {
     const std::string middle = Coordinate(frame.top + frame.height / 2);
     svg << SvgText(16, frame.top + frame.height / 2, y_title, "middle",
-                   " transform=\"rotate(-90 16 " + middle + ")\"");
+                   std::string(" class=\"") + kAxisLabelClass + "\" transform=\"rotate(-90 16 " +
+                       middle + ")\"");
   }
   return svg.str();
 }
@@ -364,12 +475,7 @@ std::string RenderLinePlotSvg(const LinePlot& plot) {
   svg << SvgOpen(kLineWidth, kLineHeight, plot.title);
   svg << PlotTitle(frame.left + frame.width / 2, plot.title);
   svg << SvgAxes(frame, &x_axis, &y_axis, plot.x_label, plot.y_label);
-  if (std::isfinite(plot.reference_y)) {
-    const double y = frame.Y(y_axis, plot.reference_y);
-    svg << SvgLine(frame.left, y, frame.left + frame.width, y,
-                   "stroke=\"#555\" stroke-dasharray=\"6 4\"");
-    svg << SvgText(frame.left + 4, y - 4, plot.reference_label, "start", " fill=\"#555\"");
-  }
+  svg << ReferenceLine(plot, frame, y_axis);
   if (empty) svg << SvgText(frame.left + frame.width / 2, frame.top + frame.height / 2, "no data");
   // Series, then the legend.
   for (size_t s = 0; s < plot.series.size(); ++s) {
@@ -379,6 +485,29 @@ std::string RenderLinePlotSvg(const LinePlot& plot) {
                           dash);
   }
   svg << "</svg>";
+  return svg.str();
+}
+
+std::string RenderSmallMultiplesSvg(const LinePlot& plot) {
+  constexpr double kWidth = 300.0, kHeight = 220.0;
+  PlotAxis x_axis, y_axis;
+  bool empty = false;
+  LinePlotAxes(plot, &x_axis, &y_axis, &empty);
+  const PlotFrame frame = SmallPlotFrame(kWidth, kHeight);
+  std::ostringstream svg;
+  for (size_t s = 0; s < plot.series.size(); ++s) {
+    const std::string title = plot.series[s].label;
+    svg << SvgOpen(kWidth, kHeight, plot.title + ": " + title)
+        << SvgText(kWidth / 2, 18, title, "middle", " font-size=\"13\" font-weight=\"bold\"");
+    svg << SvgAxes(frame, &x_axis, &y_axis, plot.x_label, plot.y_label);
+    svg << ReferenceLine(plot, frame, y_axis);
+    if (empty) svg << SvgText(frame.left + frame.width / 2, frame.top + frame.height / 2, "no data");
+    for (size_t other = 0; other < plot.series.size(); ++other)
+      if (other != s)
+        svg << SeriesPolylines(plot.series[other], frame, x_axis, y_axis, "#cccccc", 1.0, "");
+    svg << SeriesPolylines(plot.series[s], frame, x_axis, y_axis, PlotColor(s), 2.0, "")
+        << SeriesMarkers(plot.series[s], s, frame, x_axis, y_axis, 3.0) << "</svg>";
+  }
   return svg.str();
 }
 
@@ -413,9 +542,9 @@ std::string RenderBarPlotSvg(const BarPlot& plot) {
     const double w = std::max(0.5, axis.Fraction(v) * frame.width);
     svg << "<rect x=\"" << kLabelWidth << "\" y=\"" << Coordinate(y) << "\" width=\""
         << Coordinate(w) << "\" height=\"" << kBarHeight << "\" fill=\"" << PlotColor(k)
-        << "\"><title>" << HtmlEscape(plot.labels[k]) << ": " << ReportNumber(v, "%.4g")
+        << "\"><title>" << HtmlEscape(plot.labels[k]) << ": " << FormatSignificant(v, 4)
         << "</title></rect>";
-    svg << SvgText(kLabelWidth + w + 4, text_y, ReportNumber(v, "%.3g"), "start");
+    svg << SvgText(kLabelWidth + w + 4, text_y, FormatSignificant(v, 3), "start");
   }
   svg << "</svg>";
   return svg.str();
@@ -433,24 +562,24 @@ std::string RenderHistogramSvg(const HistogramPlot& plot) {
   if (finite.empty()) return svg.str() + "</svg>";
   std::vector<double> sorted = finite;
   std::sort(sorted.begin(), sorted.end());
-  const double low = sorted[static_cast<size_t>(0.0025 * (sorted.size() - 1))];
-  const double high = sorted[static_cast<size_t>(0.9975 * (sorted.size() - 1))];
-  const double half = std::max({std::abs(low), std::abs(high), 1e-12});
+  double range_lo = plot.lo, range_hi = plot.hi;
+  if (!(std::isfinite(range_lo) && std::isfinite(range_hi) && range_hi > range_lo)) {
+    const double low = sorted[static_cast<size_t>(0.0025 * (sorted.size() - 1))];
+    const double high = sorted[static_cast<size_t>(0.9975 * (sorted.size() - 1))];
+    const double half = std::max({std::abs(low), std::abs(high), 1e-12});
+    range_lo = -half;
+    range_hi = half;
+  }
   std::vector<int> counts(kBins, 0);
   for (const double v : finite) {
-    const int bin = static_cast<int>(std::floor((v + half) / (2.0 * half) * kBins));
+    const int bin = static_cast<int>(std::floor((v - range_lo) / (range_hi - range_lo) * kBins));
     ++counts[std::clamp(bin, 0, kBins - 1)];
   }
   const int top = *std::max_element(counts.begin(), counts.end());
-  PlotFrame frame;
-  frame.left = 52.0;
-  frame.top = 30.0;
-  frame.width = kWidth - frame.left - 12.0;
-  frame.height = kHeight - frame.top - 52.0;
-  frame.svg_height = kHeight;
+  const PlotFrame frame = SmallPlotFrame(kWidth, kHeight);
   PlotAxis x_axis;
-  x_axis.lo = -half;
-  x_axis.hi = half;
+  x_axis.lo = range_lo;
+  x_axis.hi = range_hi;
   const PlotAxis y_axis = LinearPlotAxis(0.0, top, true);
   svg << SvgAxes(frame, &x_axis, &y_axis, plot.x_label, "count");
   const double bar_width = frame.width / kBins;
@@ -459,6 +588,42 @@ std::string RenderHistogramSvg(const HistogramPlot& plot) {
     svg << "<rect x=\"" << Coordinate(frame.left + b * bar_width) << "\" y=\"" << Coordinate(y)
         << "\" width=\"" << Coordinate(bar_width - 1) << "\" height=\""
         << Coordinate(frame.top + frame.height - y) << "\" fill=\"" << PlotColor(0) << "\"/>";
+  }
+  svg << "</svg>";
+  return svg.str();
+}
+
+std::string RenderScatterPlotSvg(const ScatterPlot& plot) {
+  constexpr double kWidth = 340.0, kHeight = 240.0;
+  double x_lo = std::numeric_limits<double>::infinity(), x_hi = -x_lo, y_lo = x_lo, y_hi = -x_lo;
+  const size_t n = std::min(plot.x.size(), plot.y.size());
+  for (size_t k = 0; k < n; ++k) {
+    if (!std::isfinite(plot.x[k]) || !std::isfinite(plot.y[k])) continue;
+    x_lo = std::min(x_lo, plot.x[k]), x_hi = std::max(x_hi, plot.x[k]);
+    y_lo = std::min(y_lo, plot.y[k]), y_hi = std::max(y_hi, plot.y[k]);
+  }
+  const bool empty = !std::isfinite(x_lo);
+  if (empty) x_lo = y_lo = 0.0, x_hi = y_hi = 1.0;
+  if (plot.zero_line) y_lo = std::min(y_lo, 0.0), y_hi = std::max(y_hi, 0.0);
+  // Symmetric about 0 when the zero line is drawn: over and under read alike.
+  if (plot.zero_line) y_hi = std::max(std::abs(y_lo), std::abs(y_hi)), y_lo = -y_hi;
+  const PlotAxis x_axis = LinearPlotAxis(x_lo, x_hi, false);
+  const PlotAxis y_axis = LinearPlotAxis(y_lo, y_hi, false);
+  const PlotFrame frame = SmallPlotFrame(kWidth, kHeight);
+  std::ostringstream svg;
+  svg << SvgOpen(kWidth, kHeight, plot.title) << PlotTitle(kWidth / 2, plot.title);
+  svg << SvgAxes(frame, &x_axis, &y_axis, plot.x_label, plot.y_label);
+  if (plot.zero_line) {
+    const double y = frame.Y(y_axis, 0.0);
+    svg << SvgLine(frame.left, y, frame.left + frame.width, y,
+                   "stroke=\"#555\" stroke-dasharray=\"6 4\"");
+  }
+  if (empty) svg << SvgText(frame.left + frame.width / 2, frame.top + frame.height / 2, "no data");
+  for (size_t k = 0; k < n; ++k) {
+    if (!std::isfinite(plot.x[k]) || !std::isfinite(plot.y[k])) continue;
+    svg << SvgMarker(0, frame.X(x_axis, plot.x[k]), frame.Y(y_axis, plot.y[k]), 3.5, PlotColor(0))
+        << "<title>" << HtmlEscape(k < plot.labels.size() ? plot.labels[k] : std::string()) << ": "
+        << FormatSignificant(plot.y[k], 4) << "</title></path>";
   }
   svg << "</svg>";
   return svg.str();

@@ -3,7 +3,9 @@
 // bundle`, the block comparison): the page head (doctype, charset, title, the one stylesheet and a
 // print stylesheet), HTML escaping, number formatting for pages, tables, and the SVG plots (axes
 // with labelled ticks and axis titles, lines with markers, bars, histogram bars, legend). Pages are
-// self-contained: inline CSS and SVG, no script, no external resource.
+// self-contained: inline CSS and SVG, no script, no external resource. Numbers on pages go
+// through one formatter per quantity kind (fixed units: mm/cm for errors, um for film, px for
+// marks, degrees and arc seconds for angles), never an exponent.
 //
 // Coordinates are SVG user units (1 unit = 1 CSS px at 100 %); y grows downwards.
 
@@ -17,7 +19,9 @@ namespace photopose::cli {
 // ------------------------------------------------------------------ page
 
 // "<!DOCTYPE html>" ... "<body>" and the page's <h1>: the one stylesheet (classes: .plots for a row
-// of plots, ul.notes, .verdict with .good / .bad / .note) and its print variant.
+// of plots, ul.notes, .verdict with .good / .bad / .note, dl.glossary, p.meta for the line under
+// the heading) and its print variant (A4 pages, 12 mm margins: 186 mm = 703 CSS px of content;
+// plots and tables shrink to it, no plot or table row split across pages).
 std::string HtmlPageOpen(const std::string& title, const std::string& heading);
 // "</body></html>" and a final newline.
 std::string HtmlPageClose();
@@ -26,10 +30,44 @@ std::string HtmlPageClose();
 std::string HtmlEscape(const std::string& text);
 
 // Numbers on pages and in report tables: `value` printed with a printf `format` for one double;
-// "n/a" when it is not finite.
+// "n/a" when it is not finite. For SVG coordinates; page text uses the formatters below.
 std::string ReportNumber(double value, const char* format = "%.3g");
 // `value` with `digits` decimals; "n/a" when it is not finite.
 std::string ReportFixed(double value, int digits);
+
+// ------------------------------------------------------------------ numbers a surveyor reads
+// One formatter per quantity kind, all in fixed notation (never an exponent), "n/a" when not
+// finite. Lengths that are errors or sigmas take the unit their magnitude calls for; a table
+// column picks one unit for all its rows (LengthUnitFor of its largest magnitude) and names it in
+// its header.
+enum class LengthUnit { kMillimetre, kCentimetre, kMetre };
+// mm below 0.1 m, cm below 10 m, m from there (of the largest magnitude, m).
+LengthUnit LengthUnitFor(double largest_magnitude_m);
+const char* LengthUnitName(LengthUnit unit);  // "mm", "cm", "m"
+// The value (m) in `unit` as a number (for plots).
+double LengthIn(double value_m, LengthUnit unit);
+// The value (m) in `unit` without the unit: mm and cm with one decimal, m with three.
+std::string FormatLength(double value_m, LengthUnit unit);
+// The value (m) in the unit its own magnitude calls for, with the unit: "6.9 mm", "1.24 m".
+std::string FormatLengthWithUnit(double value_m);
+// A ground coordinate or a camera position (m) to the millimetre: "1234.567".
+std::string FormatCoordinate(double value_m);
+// Image measurements: pixels (px) and film coordinates (um), two decimals.
+std::string FormatPixels(double value_px);
+std::string FormatFilm(double value_um);
+// A value in a mark group's unit ("px", "um" or "px or um"): two decimals and the unit.
+std::string FormatMarkValue(double value, const std::string& unit);
+// Angles: degrees with four decimals, arc seconds (of a value in degrees) with one.
+std::string FormatDegrees(double value_deg);
+std::string FormatArcSeconds(double value_deg);
+// A unitless figure (sigma0, ratios, w, correlations) with `decimals` decimals.
+std::string FormatUnitless(double value, int decimals = 2);
+// `value` with `significant` significant digits in fixed notation (at most 6 decimals): times,
+// counts per second, calibration values.
+std::string FormatSignificant(double value, int significant = 3);
+// "1 image", "12 images".
+std::string FormatCount(long long count, const std::string& singular,
+                        const std::string& plural = "");
 
 // A <table> with a <caption> (the title, left out when empty) and the notes as a list under it;
 // every cell escaped.
@@ -84,10 +122,17 @@ struct PlotFrame {
     return top + (1.0 - axis.Fraction(value)) * height;
   }
 };
+// The data rectangle of a small plot (histogram, scatter plot, small multiple) of width x height:
+// room for the title above, tick labels and the axis titles left and below.
+PlotFrame SmallPlotFrame(double width, double height);
 // Grid lines and labelled ticks of both axes, the frame, the x-axis title under the ticks and the
 // y-axis title turned along the left edge. A null axis draws neither its ticks nor its grid.
 std::string SvgAxes(const PlotFrame& frame, const PlotAxis* x_axis, const PlotAxis* y_axis,
                     const std::string& x_title, const std::string& y_title);
+// Plot convention (checked by the browser test, tests/tools/report/render_pages_test.py): every
+// <svg> of a page carries class "plot" and at least one <text class="axis-label"> naming an axis
+// with its unit (SvgAxes writes them; a plot without axes, like the plan view, writes its own).
+constexpr char kAxisLabelClass[] = "axis-label";
 // Legend entry `index` (its colour, line and marker) at row `index` from (x, top).
 std::string SvgLegendEntry(size_t index, double x, double top, const std::string& label,
                            const char* dash = "");
@@ -124,17 +169,37 @@ struct BarPlot {
   std::vector<double> values;  // non-finite values are drawn as "n/a"
 };
 
-// A histogram of values, symmetric about 0: 24 bins over +- the larger magnitude of the 0.25 % and
-// 99.75 % quantiles (a blunder does not squash the rest; values beyond go to the end bins).
+// A histogram of values: 24 bins over [lo, hi] when both are finite (e.g. 0 and 1 for redundancy
+// numbers), else symmetric about 0 over +- the larger magnitude of the 0.25 % and 99.75 %
+// quantiles (a blunder does not squash the rest); values beyond go to the end bins. The y axis
+// counts, with ticks.
 struct HistogramPlot {
   std::string title;           // the count of finite values is appended
   std::string x_label;         // with its unit
   std::vector<double> values;  // non-finite values are left out
+  double lo = std::numeric_limits<double>::quiet_NaN();
+  double hi = std::numeric_limits<double>::quiet_NaN();
+};
+
+// Points of a scatter plot (x, y) with a label each (its <title>), e.g. vertical errors by point.
+struct ScatterPlot {
+  std::string title;
+  std::string x_label;  // with its unit
+  std::string y_label;  // with its unit
+  std::vector<double> x, y;
+  std::vector<std::string> labels;
+  bool zero_line = true;  // a dashed line at y = 0
 };
 
 // <svg> elements (no XML prolog): line plots 680 x 380, bar plots 680 wide, histograms 360 x 220.
 std::string RenderLinePlotSvg(const LinePlot& plot);
 std::string RenderBarPlotSvg(const BarPlot& plot);
+// Small multiples of a line plot instead of overlapping lines: one 300 x 220 <svg> per series, its
+// label the panel's title, the same axes (and reference line) in every panel, the other series
+// drawn thin and grey behind the panel's own for comparison.
+std::string RenderSmallMultiplesSvg(const LinePlot& plot);
 std::string RenderHistogramSvg(const HistogramPlot& plot);
+// 340 x 240: a small multiple (several side by side in a .plots row).
+std::string RenderScatterPlotSvg(const ScatterPlot& plot);
 
 }  // namespace photopose::cli

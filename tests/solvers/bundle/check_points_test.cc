@@ -102,5 +102,49 @@ TEST(CheckPoints, OneRayIsReportedNotCountedAndRemovedControlLeavesTheRmse) {
   EXPECT_EQ(result.control_rmse_total_m, 0.0);
 }
 
+// A check mark 40 um (10 px) off: the w-test of the intersection rejects it (and only it), the point is
+// intersected from the rest and its error is back to the exact one; the others stay untouched.
+TEST(CheckPoints, ABlunderedCheckMarkIsRejectedByTheWTest) {
+  ExactBlock data = MakeExactBlock();
+  const int check = PointsOfRole(data.block, PointRole::kCheck)[0];
+  const std::vector<int> marks = data.block.marks_of_point[check];
+  ASSERT_GE(marks.size(), 4u);  // redundancy enough to tell which mark is wrong
+  const int blunder = marks[1];
+  data.block.marks[blunder].observation.x() += 40.0;
+  BundleAdjustmentResult result;
+  result.points.assign(data.block.points.size(), BundlePointResult());
+  TabulateControlAndCheckPoints(data.block, BundleAccuracies(), 1.0, &result);
+  ASSERT_EQ(result.rejected_check_marks.size(), 1u);
+  EXPECT_EQ(result.rejected_check_marks[0].mark, blunder);
+  EXPECT_GT(result.rejected_check_marks[0].normalized, 10.0);
+  // Its residual is most of the blunder (the rest went into the intersection that still held it).
+  EXPECT_GT(std::abs(result.rejected_check_marks[0].residual.x()), 20.0);
+  const BundlePointResult& row = result.points[check];
+  ASSERT_TRUE(row.error_m.has_value()) << row.message;
+  EXPECT_EQ(row.num_observations, static_cast<int>(marks.size()) - 1);
+  EXPECT_LT(row.error_m->norm(), kExactPointM);
+  EXPECT_LT(result.check_rmse_total_m, kExactPointM);
+}
+
+// Two rays cannot tell which of them is wrong: the point is listed as not intersected, with the
+// w-test as the reason, and stays out of the RMSE. The blunder has a part across the epipolar
+// line (one along it only slides the intersection and cannot be seen with two rays).
+TEST(CheckPoints, TwoDisagreeingRaysLeaveThePointUnintersectedWithTheReason) {
+  ExactBlock data = MakeExactBlock();
+  const int check = PointsOfRole(data.block, PointRole::kCheck)[0];
+  const std::vector<int> marks = data.block.marks_of_point[check];
+  ASSERT_GE(marks.size(), 3u);
+  for (size_t k = 2; k < marks.size(); ++k)
+    data.block.images[data.block.marks[marks[k]].image].eo.reset();
+  data.block.marks[marks[0]].observation += Eigen::Vector2d(40.0, 40.0);
+  BundleAdjustmentResult result;
+  result.points.assign(data.block.points.size(), BundlePointResult());
+  TabulateControlAndCheckPoints(data.block, BundleAccuracies(), 1.0, &result);
+  const BundlePointResult& row = result.points[check];
+  EXPECT_FALSE(row.error_m.has_value());
+  EXPECT_EQ(result.rejected_check_marks.size(), 1u);
+  EXPECT_NE(row.message.find("w-test rejected 1"), std::string::npos) << row.message;
+}
+
 }  // namespace
 }  // namespace photopose

@@ -6,13 +6,13 @@
 #include <string>
 #include <vector>
 
+#include "tests/support/text_count.h"
+
 namespace photopose::cli {
 namespace {
 
 size_t Count(const std::string& text, const std::string& what) {
-  size_t count = 0;
-  for (size_t at = text.find(what); at != std::string::npos; at = text.find(what, at + 1)) ++count;
-  return count;
+  return testing::CountOccurrences(text, what);
 }
 
 TEST(HtmlKit, EscapesTheFiveSpecialCharacters) {
@@ -122,6 +122,88 @@ TEST(HtmlKit, BarPlotAndHistogram) {
   HistogramPlot empty;
   empty.title = "none";
   EXPECT_NE(RenderHistogramSvg(empty).find(">none (0)</text>"), std::string::npos);
+}
+
+TEST(HtmlKit, LengthsTakeTheUnitTheirMagnitudeCallsFor) {
+  EXPECT_EQ(LengthUnitFor(0.0123), LengthUnit::kMillimetre);
+  EXPECT_EQ(LengthUnitFor(0.25), LengthUnit::kCentimetre);
+  EXPECT_EQ(LengthUnitFor(12.0), LengthUnit::kMetre);
+  EXPECT_EQ(LengthUnitFor(std::nan("")), LengthUnit::kMillimetre);
+  EXPECT_EQ(FormatLength(-6.97e-05, LengthUnit::kMillimetre), "-0.1");
+  EXPECT_EQ(FormatLength(0.0267, LengthUnit::kCentimetre), "2.7");
+  EXPECT_EQ(FormatLength(1.2345, LengthUnit::kMetre), "1.234");  // 1.2345 is below it in binary
+  EXPECT_EQ(FormatLengthWithUnit(0.0069), "6.9 mm");
+  EXPECT_EQ(FormatLengthWithUnit(1.24), "124.0 cm");
+  EXPECT_EQ(FormatLengthWithUnit(std::nan("")), "n/a");
+  EXPECT_DOUBLE_EQ(LengthIn(0.5, LengthUnit::kCentimetre), 50.0);
+}
+
+TEST(HtmlKit, NumbersNeverTakeAnExponent) {
+  EXPECT_EQ(FormatSignificant(0.000697, 3), "0.000697");
+  EXPECT_EQ(FormatSignificant(6.97e-05, 3), "0.00007");  // at most six decimals
+  EXPECT_EQ(FormatSignificant(2.45e-09, 3), "0");
+  EXPECT_EQ(FormatSignificant(1234567.0, 3), "1234567");
+  EXPECT_EQ(FormatSignificant(0.5, 3), "0.5");
+  EXPECT_EQ(FormatSignificant(-12.345, 3), "-12.3");
+  EXPECT_EQ(FormatArcSeconds(1.0 / 3600.0), "1.0");
+  EXPECT_EQ(FormatDegrees(12.3456789), "12.3457");
+  EXPECT_EQ(FormatPixels(0.456), "0.46");
+  EXPECT_EQ(FormatMarkValue(0.5, "px"), "0.50 px");
+  EXPECT_EQ(FormatUnitless(0.0839), "0.08");
+  EXPECT_EQ(TickLabel(0.0001), "0.0001");
+  EXPECT_EQ(TickLabel(200000.0), "200000");
+  EXPECT_EQ(FormatCount(1, "image"), "1 image");
+  EXPECT_EQ(FormatCount(12, "image"), "12 images");
+  EXPECT_EQ(FormatCount(2, "check mark"), "2 check marks");
+}
+
+TEST(HtmlKit, HistogramOverAFixedRangeAndScatterPlot) {
+  HistogramPlot redundancy;
+  redundancy.title = "r";
+  redundancy.x_label = "redundancy number";
+  redundancy.values = {0.1, 0.5, 0.55, 0.9, 1.0};
+  redundancy.lo = 0.0;
+  redundancy.hi = 1.0;
+  const std::string svg = RenderHistogramSvg(redundancy);
+  // The x axis runs from 0 to 1, not symmetric about 0.
+  EXPECT_NE(svg.find(">0</text>"), std::string::npos);
+  EXPECT_NE(svg.find(">1</text>"), std::string::npos);
+  EXPECT_EQ(svg.find(">-1</text>"), std::string::npos);
+  EXPECT_NE(svg.find(">count</text>"), std::string::npos);
+  EXPECT_EQ(Count(svg, "class=\"axis-label\""), 2u);
+
+  ScatterPlot scatter;
+  scatter.title = "vertical errors";
+  scatter.x_label = "point";
+  scatter.y_label = "error Z (mm)";
+  scatter.x = {1, 2, 3};
+  scatter.y = {-4.0, 2.0, std::nan("")};
+  scatter.labels = {"A", "B", "C"};
+  const std::string points = RenderScatterPlotSvg(scatter);
+  EXPECT_EQ(Count(points, "<title>"), 2u);  // the NaN is left out
+  EXPECT_NE(points.find("<title>A: -4</title>"), std::string::npos);
+  EXPECT_NE(points.find(">error Z (mm)</text>"), std::string::npos);
+  EXPECT_EQ(Count(points, "class=\"axis-label\""), 2u);
+  EXPECT_NE(points.find("class=\"plot\""), std::string::npos);
+  EXPECT_NE(points.find("stroke-dasharray"), std::string::npos);  // the zero line
+}
+
+TEST(HtmlKit, SmallMultiplesDrawOnePanelPerSeriesOnSharedAxes) {
+  LinePlot plot;
+  plot.title = "RMSE vs noise";
+  plot.x_label = "noise (px)";
+  plot.y_label = "RMSE (m)";
+  plot.series = {{"a", {0, 1, 2}, {0.1, 0.2, 0.3}}, {"b", {0, 1, 2}, {0.1, 0.4, 0.9}}};
+  const std::string svg = RenderSmallMultiplesSvg(plot);
+  EXPECT_EQ(Count(svg, "<svg"), 2u);
+  EXPECT_EQ(Count(svg, "</svg>"), 2u);
+  // Each panel: its own series in colour, the other in grey behind; both panels with the same
+  // y ticks (the axis covers the larger series).
+  EXPECT_EQ(Count(svg, "stroke=\"#cccccc\""), 2u);
+  EXPECT_EQ(Count(svg, ">0.8</text>"), 2u);  // a y tick (x ticks: 0 to 2 by 0.5)
+  EXPECT_EQ(Count(svg, ">RMSE (m)</text>"), 2u);
+  EXPECT_EQ(Count(svg, "class=\"axis-label\""), 4u);
+  EXPECT_NE(svg.find("aria-label=\"RMSE vs noise: b\""), std::string::npos);
 }
 
 }  // namespace

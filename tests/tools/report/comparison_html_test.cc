@@ -1,0 +1,56 @@
+// The comparison pages' rules (tools/report/comparison_html.cc): which solvers tie, wide tables
+// split into blocks of columns, the glossary of every term the pages use.
+#include "tools/report/comparison_html.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <string>
+
+#include "tests/support/text_count.h"
+
+namespace photopose::cli {
+namespace {
+
+size_t Count(const std::string& text, const std::string& what) {
+  return testing::CountOccurrences(text, what);
+}
+
+TEST(ComparisonHtml, SolversWithinTheFractionTieForTheBest) {
+  EXPECT_EQ(TiedBest({0.100, 0.104, 0.106, std::nan("")}, 0.05), (std::vector<size_t>{0, 1}));
+  EXPECT_EQ(TiedBest({0.2, 0.1, 0.1}, 0.0), (std::vector<size_t>{1, 2}));
+  EXPECT_TRUE(TiedBest({std::nan(""), INFINITY}, 0.05).empty());
+}
+
+TEST(ComparisonHtml, WideTablesSplitIntoBlocksRepeatingTheNamingColumns) {
+  TextTable table;
+  table.title = "per image";
+  table.header = {"image", "solver"};
+  for (int c = 0; c < 14; ++c) table.header.push_back("c" + std::to_string(c));
+  std::vector<std::string> row = {"img_1", "taylor"};
+  for (int c = 0; c < 14; ++c) row.push_back(std::to_string(c));
+  table.rows = {row};
+  table.notes = {"a note"};
+  const std::string html = RenderHtmlTable(table);
+  EXPECT_EQ(Count(html, "<table>"), 2u);
+  EXPECT_EQ(Count(html, "<td>img_1</td><td>taylor</td>"), 2u);
+  EXPECT_NE(html.find("<caption>per image (continued)</caption>"), std::string::npos);
+  EXPECT_EQ(Count(html, "<li>a note</li>"), 1u);
+  // 14 value columns in two blocks of 7.
+  EXPECT_LT(html.find("<th>c6</th>"), html.find("(continued)"));
+  EXPECT_GT(html.find("<th>c7</th>"), html.find("(continued)"));
+  // A narrow table stays one.
+  table.header.resize(5);
+  EXPECT_EQ(Count(RenderHtmlTable(table), "<table>"), 1u);
+}
+
+TEST(ComparisonHtml, TheGlossaryExplainsEveryTermThePagesUse) {
+  const std::string glossary = ComparisonGlossaryHtml();
+  for (const char* term : {"taylor_as_printed", "taylor", "ceres_analytic", "ceres_autodiff",
+                           "huber", "NEES", "nees_ap", "t/ref", "eq. 21", "success"})
+    EXPECT_NE(glossary.find(term), std::string::npos) << term;
+  EXPECT_EQ(glossary.rfind("<dl class=\"glossary\">", 0), 0u);
+}
+
+}  // namespace
+}  // namespace photopose::cli

@@ -1,0 +1,213 @@
+#!/usr/bin/env python3
+"""Renders every HTML page of photopose in headless Chromium (Debian's `chromium`) and checks what
+a reader would notice: the bundle report of the bundled example (README's main command) and the
+three comparison pages from short `photopose compare` runs (Monte-Carlo, block, dataset).
+
+Per page:
+  - it loads without a console message (the pages carry no script, so every CONSOLE line on
+    Chromium's stderr is the browser's complaint: an SVG attribute it cannot parse, ...);
+  - every <svg> has class "plot" and a <text class="axis-label"> (tools/report/html_kit.h);
+  - no number in the rendered text is in scientific notation;
+  - printed, it is A4 (every page's MediaBox 595 x 842 pt) and, with the print stylesheet applied
+    at the A4 content width (186 mm = 703 CSS px), no element reaches past the right edge;
+  - a screenshot (1280 px wide) is kept under <build>/report_screenshots/NAME.png for review.
+
+Exits 77 (ctest SKIP_RETURN_CODE) when chromium is not installed.
+"""
+import argparse
+import html.parser
+import os
+import re
+import shutil
+import subprocess
+import sys
+
+SKIP = 77
+# A4 content width in CSS px: 210 mm - 2 x 12 mm margins (the kit's @page) at 96 px per inch.
+A4_CONTENT_PX = 703
+CHROMIUM_FLAGS = ["--headless=new", "--no-sandbox", "--disable-gpu", "--hide-scrollbars",
+                  "--virtual-time-budget=5000", "--no-pdf-header-footer"]
+
+# Run after load under ?printcheck (injected into a copy of the page, never into the page itself):
+# the print stylesheet applied to the screen, every element's right edge against the viewport.
+PRINT_CHECK = """<script>
+addEventListener('load', function () {
+  document.querySelectorAll('style[media=print]').forEach(function (s) { s.media = 'all'; });
+  var width = document.documentElement.clientWidth, wide = [];
+  document.querySelectorAll('body *').forEach(function (e) {
+    var r = e.getBoundingClientRect();
+    if (r.right > width + 1) wide.push(e.tagName + ' ' + (e.getAttribute('aria-label') ||
+        (e.textContent || '').slice(0, 40)) + ' right=' + Math.round(r.right));
+  });
+  var out = document.createElement('pre');
+  out.id = 'printcheck';
+  out.textContent = 'viewport=' + width + ' scroll=' + document.documentElement.scrollWidth +
+      ' wide=' + wide.length + (wide.length ? ': ' + wide.slice(0, 5).join(' | ') : '');
+  document.body.appendChild(out);
+});
+</script>"""
+
+
+class PageText(html.parser.HTMLParser):
+    """The rendered text (no style or script) and, per <svg>, its class and axis labels."""
+
+    def __init__(self):
+        super().__init__()
+        self.text = []
+        self.skip = 0
+        self.svgs = []  # [class, number of axis-label texts, aria-label]
+
+    def handle_starttag(self, tag, attrs):
+        a = dict(attrs)
+        if tag in ("style", "script"):
+            self.skip += 1
+        if tag == "svg":
+            self.svgs.append([a.get("class", ""), 0, a.get("aria-label", "")])
+        if tag == "text" and self.svgs and "axis-label" in (a.get("class") or "").split():
+            self.svgs[-1][1] += 1
+
+    def handle_endtag(self, tag):
+        if tag in ("style", "script"):
+            self.skip -= 1
+
+    def handle_data(self, data):
+        if not self.skip:
+            self.text.append(data)
+
+
+def chromium(binary, args, timeout=60):
+    return subprocess.run([binary] + CHROMIUM_FLAGS + args, capture_output=True, text=True,
+                          timeout=timeout)
+
+
+def print_overflow(binary, path, work, name):
+    """The print check's report for the page at `path`: None when it did not run."""
+    with open(path, encoding="utf-8") as f:
+        source = f.read()
+    probe = os.path.join(work, name + "_printcheck.html")
+    with open(probe, "w", encoding="utf-8") as f:
+        f.write(source.replace("</body>", PRINT_CHECK + "\n</body>"))
+    run = chromium(binary, ["--window-size=%d,1200" % A4_CONTENT_PX, "--dump-dom",
+                            "file://" + probe + "?printcheck"])
+    found = re.search(r'<pre id="printcheck">([^<]*)</pre>', run.stdout)
+    return found.group(1) if found else None
+
+
+def check_page(binary, name, path, shots, work):
+    errors = []
+    url = "file://" + os.path.abspath(path)
+    run = chromium(binary, ["--enable-logging=stderr", "--v=0", "--dump-dom", url])
+    for line in run.stderr.splitlines():
+        if ":CONSOLE" in line:
+            errors.append("console: " + line.strip())
+    if run.returncode != 0 or "<body" not in run.stdout:
+        errors.append("chromium could not render the page (exit %d)" % run.returncode)
+        return errors
+    page = PageText()
+    page.feed(run.stdout)
+    if not page.svgs:
+        errors.append("no plot on the page")
+    for cls, labels, title in page.svgs:
+        if "plot" not in cls.split():
+            errors.append("an <svg> without class plot: %r" % title)
+        if labels == 0:
+            errors.append("a plot without an axis label: %r" % title)
+    text = " ".join(page.text)
+    for match in re.finditer(r"[0-9.][eE][+-]?[0-9]", text):
+        errors.append("scientific notation: %r" % text[max(0, match.start() - 30):match.end() + 10])
+        break
+    # Screenshot for review.
+    shot = os.path.join(shots, name + ".png")
+    run = chromium(binary, ["--window-size=1280,4000", "--screenshot=" + shot, url])
+    if not os.path.isfile(shot):
+        errors.append("no screenshot: " + run.stderr[-300:])
+    # Printed: A4 pages.
+    pdf = os.path.join(work, name + ".pdf")
+    run = chromium(binary, ["--print-to-pdf=" + pdf, url], timeout=90)
+    if not os.path.isfile(pdf):
+        errors.append("no PDF printed")
+    else:
+        with open(pdf, "rb") as f:
+            boxes = re.findall(rb"/MediaBox\s*\[\s*0\s+0\s+([0-9.]+)\s+([0-9.]+)\s*\]", f.read())
+        if not boxes:
+            errors.append("the PDF has no MediaBox")
+        for w, h in set(boxes):
+            if round(float(w)) != 595 or round(float(h)) != 842:
+                errors.append("a printed page is %s x %s pt, not A4 (595 x 842)" %
+                              (w.decode(), h.decode()))
+    # Printed: nothing wider than the A4 content width.
+    report = print_overflow(binary, path, work, name)
+    if report is None:
+        errors.append("the print check did not run")
+    else:
+        viewport = int(re.search(r"viewport=(\d+)", report).group(1))
+        if abs(viewport - A4_CONTENT_PX) > 20:
+            errors.append("print check viewport %d px, not the A4 content width" % viewport)
+        if "wide=0" not in report:
+            errors.append("wider than A4 in print: " + report)
+    return errors
+
+
+def main():
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--cli", required=True, help="the photopose executable")
+    parser.add_argument("--source", required=True, help="the source tree (for examples/)")
+    parser.add_argument("--screenshots", required=True, help="where the screenshots go")
+    parser.add_argument("--work", required=True, help="scratch directory")
+    args = parser.parse_args()
+    binary = shutil.which("chromium") or shutil.which("chromium-browser")
+    if binary is None:
+        print("SKIP: chromium is not installed (Debian package chromium; .ci/install-deps "
+              "installs it with CI=true)")
+        return SKIP
+    os.makedirs(args.screenshots, exist_ok=True)
+    os.makedirs(args.work, exist_ok=True)
+    ex = os.path.join(args.source, "examples")
+    w = args.work
+    pages = {
+        "bundle": [args.cli, "bundle", "--cameras=" + ex + "/cameras.csv",
+                   "--points=" + ex + "/points.csv", "--marks=" + ex + "/marks.csv",
+                   "--frames=" + ex + "/frames_approx.csv", "--out=" + w + "/frames.csv",
+                   "--html=" + w + "/bundle.html"],
+        "compare_monte_carlo": [args.cli, "compare", "--scenarios=nadir,oblique", "--trials=10",
+                                "--html=" + w + "/compare_monte_carlo.html"],
+        "compare_block": [args.cli, "compare", "--scenarios=block", "--trials=2",
+                          "--html=" + w + "/compare_block.html"],
+        "compare_dataset": [args.cli, "compare", "--cameras=" + ex + "/cameras.csv",
+                            "--points=" + ex + "/points.csv", "--marks=" + ex + "/marks.csv",
+                            "--html=" + w + "/compare_dataset.html"],
+    }
+    failures = 0
+    # The print check must see a table wider than A4: a bundle page with one added (a regression
+    # of the check itself would otherwise pass every page).
+    bundle = subprocess.run(pages["bundle"], capture_output=True, text=True, timeout=120)
+    if bundle.returncode == 0:
+        wide = os.path.join(w, "too_wide.html")
+        with open(os.path.join(w, "bundle.html"), encoding="utf-8") as f:
+            source = f.read()
+        cells = "".join("<td>%d.%03d</td>" % (k, k) for k in range(60))
+        with open(wide, "w", encoding="utf-8") as f:
+            f.write(source.replace("</body>", "<table><tr>" + cells + "</tr></table></body>"))
+        report = print_overflow(binary, wide, w, "too_wide")
+        if report is None or "wide=0" in report:
+            print("FAIL print check: a 60-column table passed as fitting A4: %s" % report)
+            failures += 1
+    for name, command in pages.items():
+        run = subprocess.run(command, capture_output=True, text=True, timeout=120)
+        path = os.path.join(w, name + ".html")
+        if run.returncode != 0 or not os.path.isfile(path):
+            print("FAIL %s: %s exited %d: %s" % (name, " ".join(command[1:3]), run.returncode,
+                                                  run.stderr[-500:]))
+            failures += 1
+            continue
+        errors = check_page(binary, name, path, args.screenshots, w)
+        for e in errors:
+            print("FAIL %s: %s" % (name, e))
+        if not errors:
+            print("ok   %s (screenshot %s)" % (name, os.path.join(args.screenshots, name + ".png")))
+        failures += bool(errors)
+    return 1 if failures else 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
