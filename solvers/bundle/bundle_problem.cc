@@ -471,17 +471,16 @@ void AddMarkResiduals(const BundleAdjustmentOptions& options, const Block& block
   const size_t num_used = std::count(plan.mark_used.begin(), plan.mark_used.end(), 1);
   round->residuals.reserve(num_used + 2 * block.points.size() + 2 * block.images.size());
   round->costs.reserve(num_used + 2 * block.points.size() + 2 * block.images.size());
-  // Sized once: the costs point into it.
-  round->mark_inverse_sigma.assign(block.marks.size(), 0.0);
+  round->mark_functor.assign(block.marks.size(), nullptr);
   for (size_t m = 0; m < block.marks.size(); ++m) {
     if (!plan.mark_used[m]) continue;
     const BlockMark& mark = block.marks[m];
     const int camera_index = block.images[mark.image].camera;
     const CollinearityCamera& camera = round->cameras[camera_index];
-    round->mark_inverse_sigma[m] = 1.0 / plan.mark_sigma[m];
     round->costs.emplace_back(CreateCollinearityMarkCost(
         options.solver.jacobian,
-        CollinearityMarkFunctor(&camera, mark.observation, &round->mark_inverse_sigma[m])));
+        CollinearityMarkFunctor(&camera, mark.observation, 1.0 / plan.mark_sigma[m]),
+        &round->mark_functor[m]));
     ceres::LossFunction* loss = plan.mark_group[m] == kTieMarks ? round->tie_loss.get() : nullptr;
     double* eo = state->eo[mark.image].data();
     double* point = state->points[mark.point].data();
@@ -576,7 +575,7 @@ bool UpdateBundleRound(const BundlePlan& plan, BundleRound* round) {
       case kTieMarks:
       case kControlMarks:
         if (plan.mark_used[info.item] &&
-            round->mark_inverse_sigma[info.item] != 1.0 / plan.mark_sigma[info.item])
+            round->mark_functor[info.item]->inverse_sigma != 1.0 / plan.mark_sigma[info.item])
           return false;
         break;
       case kControlPoints:
@@ -595,7 +594,7 @@ bool UpdateBundleRound(const BundlePlan& plan, BundleRound* round) {
   const auto switched_off = [&](const ResidualInfo& info) {
     if (info.group != kTieMarks && info.group != kControlMarks) return false;
     if (plan.mark_used[info.item]) return false;
-    round->mark_inverse_sigma[info.item] = 0.0;
+    round->mark_functor[info.item]->inverse_sigma = 0.0;
     return true;
   };
   round->residuals.erase(

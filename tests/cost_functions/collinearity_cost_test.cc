@@ -207,7 +207,7 @@ TEST(CollinearityMarkCost, MatchesTheMeasurementCostWithAndWithoutTheCameraBlock
         camera.model = model.type;
         camera.data = model.data;
         camera.constant_params = camera_block ? nullptr : model.params.data();
-        const CollinearityMarkFunctor mark(&camera, model.observation, &inverse_sigma);
+        const CollinearityMarkFunctor mark(&camera, model.observation, inverse_sigma);
         const std::unique_ptr<ceres::CostFunction> analytic(
             CreateCollinearityMarkCost(JacobianType::kAnalytic, mark));
         const std::unique_ptr<ceres::CostFunction> autodiff(
@@ -233,8 +233,8 @@ TEST(CollinearityMarkCost, MatchesTheMeasurementCostWithAndWithoutTheCameraBlock
   }
 }
 
-// A zero weight switches the mark off: zero residual and Jacobians, through the pointer the cost
-// reads (a bundle adjustment rejects marks so without building its problem again).
+// A zero weight switches the mark off: zero residual and Jacobians, set in the functor inside the
+// cost (a bundle adjustment rejects marks so without building its problem again).
 TEST(CollinearityMarkCost, ZeroWeightSwitchesTheMarkOff) {
   std::mt19937_64 rng(13);
   RandomView view = MakeRandomView(&rng);
@@ -242,18 +242,19 @@ TEST(CollinearityMarkCost, ZeroWeightSwitchesTheMarkOff) {
     CollinearityCamera camera;
     camera.model = model.type;
     camera.data = model.data;
-    double inverse_sigma = 1.0;
     const Eigen::Vector2d off_by(5.0, -3.0);
-    const CollinearityMarkFunctor mark(&camera, model.observation + off_by, &inverse_sigma);
+    const CollinearityMarkFunctor mark(&camera, model.observation + off_by, 1.0);
     for (const JacobianType type : {JacobianType::kAnalytic, JacobianType::kAutodiff}) {
-      const std::unique_ptr<ceres::CostFunction> cost(CreateCollinearityMarkCost(type, mark));
+      CollinearityMarkFunctor* inside = nullptr;
+      const std::unique_ptr<ceres::CostFunction> cost(
+          CreateCollinearityMarkCost(type, mark, &inside));
+      ASSERT_NE(inside, nullptr);
       const std::vector<const double*> parameters = {view.eo, view.point, model.params.data()};
       Eigen::Vector2d r;
       std::vector<Eigen::VectorXd> j;
-      inverse_sigma = 1.0;
       ASSERT_TRUE(Evaluate(*cost, parameters, &r, &j));
       EXPECT_GT(r.norm(), 1.0);
-      inverse_sigma = 0.0;
+      inside->inverse_sigma = 0.0;
       ASSERT_TRUE(Evaluate(*cost, parameters, &r, &j));
       EXPECT_EQ(r.norm(), 0.0);
       for (size_t b = 0; b < j.size(); ++b) EXPECT_EQ(j[b].norm(), 0.0) << "block " << b;

@@ -104,7 +104,7 @@ struct BundleRound {
   std::vector<std::unique_ptr<ceres::Manifold>> manifolds;
   std::unique_ptr<ceres::LossFunction> tie_loss;
   std::vector<CollinearityCamera> cameras;  // per camera: what its marks' costs share
-  std::vector<double> mark_inverse_sigma;   // per mark (block order): its costs' weight, 0 = off
+  std::vector<CollinearityMarkFunctor*> mark_functor;  // per mark (block order): inside its cost
   std::vector<std::unique_ptr<ceres::CostFunction>> costs;
   std::unique_ptr<ceres::Problem> problem;
   // The residual blocks in use (switched-off marks are not listed).
