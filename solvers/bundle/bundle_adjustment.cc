@@ -340,6 +340,9 @@ struct Adjustment {
   double group_scale[kNumBundleGroups] = {1.0, 1.0, 1.0, 1.0, 1.0};
   bool group_estimable[kNumBundleGroups] = {};
   int rejections_done = 0;
+  // The last change of the plan removed marks only (rejection, or snooping a mark): the round's
+  // problem is updated in place instead of built again.
+  bool marks_removed_only = false;
 };
 
 Status CheckInputs(const BundleAdjustmentOptions& options, const BundleAdjustmentConfig& config,
@@ -427,6 +430,7 @@ bool SolveInFreeGaugeFirst(Adjustment* a, int r, ceres::Solver::Summary* ceres_s
 // Builds and solves round r; the summary's iteration counts, costs and redundancy follow.
 void SolveRound(Adjustment* a, int r, ceres::Solver::Summary* ceres_summary) {
   BundleAdjustmentSummary& summary = a->result->summary;
+  const Clock::time_point round_start = Clock::now();
   bool solved = false;      // the round's solve is done (the free-gauge solve converged)
   int free_iterations = 0;  // iterations of the free-gauge solve
   if (r == 1 && a->plan.datum == BundleDatum::kRelative &&
@@ -434,7 +438,8 @@ void SolveRound(Adjustment* a, int r, ceres::Solver::Summary* ceres_summary) {
     solved = SolveInFreeGaugeFirst(a, r, ceres_summary, &free_iterations);
   } else {
     const Clock::time_point build_start = Clock::now();
-    internal::BuildBundleRound(a->options, a->config, *a->block, a->plan, &a->state, &a->round);
+    if (!(r > 1 && a->marks_removed_only && internal::UpdateBundleRound(a->plan, &a->round)))
+      internal::BuildBundleRound(a->options, a->config, *a->block, a->plan, &a->state, &a->round);
     summary.problem_build_seconds += SecondsSince(build_start);
   }
   if (!solved) {
@@ -446,6 +451,7 @@ void SolveRound(Adjustment* a, int r, ceres::Solver::Summary* ceres_summary) {
   summary.rounds = r;
   summary.final_cost = ceres_summary->final_cost;
   summary.redundancy = a->round.redundancy();
+  summary.round_seconds.push_back(SecondsSince(round_start));
 }
 
 // A round that did not converge ends the adjustment: the summary says so, with what the round
@@ -640,6 +646,7 @@ Status BundleAdjust(const BundleAdjustmentOptions& options, const BundleAdjustme
   for (const int p : a.plan.tie_points_left_out)
     summary.tie_points_left_out.push_back(block->points[p].id);
   a.state = StartState(config, *block);
+  summary.plan_seconds = SecondsSince(a.start);
 
   // Rounds: adjust; then remove blunders (rejection rounds or data snooping, one at a time) or
   // rescale the groups (variance component estimation) and adjust again, until neither changes.
@@ -663,14 +670,18 @@ Status BundleAdjust(const BundleAdjustmentOptions& options, const BundleAdjustme
     summary.statistics_seconds += SecondsSince(statistics_start);
     if (r >= max_rounds) break;
     // 1. Blunders.
+    a.marks_removed_only = true;
     if (options.robustness.snoop) {
       if (SnoopOne(&a)) continue;
     } else if (a.rejections_done < rejection_rounds) {
+      const Clock::time_point rejection_start = Clock::now();
       const Rejection rejection = RejectMarks(&a, r);
+      summary.rejection_seconds += SecondsSince(rejection_start);
       if (rejection == Rejection::kFailed) return Status::Ok();
       if (rejection == Rejection::kRemoved) continue;
     }
     // 2. Variance components.
+    a.marks_removed_only = false;
     if (options.statistics.estimate_accuracies && RescaleGroups(&a)) continue;
     break;
   }

@@ -433,6 +433,14 @@ struct BundleAdjustmentSummary {
   // factorisation of the reduced camera system, back-substitution).
   double problem_build_seconds = 0.0;
   double solver_preprocessing_seconds = 0.0;
+  // Before any round: the checks of the inputs, the plan and the start values (s).
+  double plan_seconds = 0.0;
+  // Per round: its problem (built, or updated in place after a rejection) and Ceres' solve, wall
+  // clock (s); the statistics are not part of it.
+  std::vector<double> round_seconds;
+  // Choosing the marks to reject and checking that the block still holds without them, over all
+  // rounds (s).
+  double rejection_seconds = 0.0;
   double residual_evaluation_seconds = 0.0;
   double jacobian_evaluation_seconds = 0.0;
   double linear_solver_seconds = 0.0;

@@ -410,15 +410,19 @@ void AddOrientationBlocks(const BundleAdjustmentConfig& config, const Block& blo
 void AddCameraBlocks(const BundleAdjustmentConfig& config, const Block& block,
                      const BundlePlan& plan, BundleState* state, BundleRound* round) {
   ceres::Problem& problem = *round->problem;
+  round->cameras.assign(block.cameras.size(), CollinearityCamera());
   for (size_t c = 0; c < block.cameras.size(); ++c) {
     double* params = state->cameras[c].data();
     const int n = static_cast<int>(state->cameras[c].size());
-    problem.AddParameterBlock(params, n);
     const std::vector<int>& free = plan.calibrated[c];
+    round->cameras[c].model = block.cameras[c].model;
+    round->cameras[c].data = block.cameras[c].data();
     if (free.empty()) {
-      problem.SetParameterBlockConstant(params);
+      // Held constant: data of its marks' costs, not a parameter block.
+      round->cameras[c].constant_params = params;
       continue;
     }
+    problem.AddParameterBlock(params, n);
     if (static_cast<int>(free.size()) < n) {
       std::vector<int> constant;
       for (int k = 0; k < n; ++k)
@@ -464,39 +468,51 @@ void AddPointBlocks(const BundleAdjustmentConfig& config, const Block& block,
 void AddMarkResiduals(const BundleAdjustmentOptions& options, const Block& block,
                       const BundlePlan& plan, BundleState* state, BundleRound* round) {
   ceres::Problem& problem = *round->problem;
-  round->residuals.reserve(std::count(plan.mark_used.begin(), plan.mark_used.end(), 1) +
-                           2 * block.points.size() + 2 * block.images.size());
+  const size_t num_used = std::count(plan.mark_used.begin(), plan.mark_used.end(), 1);
+  round->residuals.reserve(num_used + 2 * block.points.size() + 2 * block.images.size());
+  round->costs.reserve(num_used + 2 * block.points.size() + 2 * block.images.size());
+  round->mark_functor.assign(block.marks.size(), nullptr);
   for (size_t m = 0; m < block.marks.size(); ++m) {
     if (!plan.mark_used[m]) continue;
     const BlockMark& mark = block.marks[m];
     const int camera_index = block.images[mark.image].camera;
-    const BlockCamera& camera = block.cameras[camera_index];
-    ceres::CostFunction* cost = CreateCollinearityCost(
-        options.solver.jacobian, CollinearityFunctor(camera.model, mark.observation, camera.data(),
-                                              1.0 / plan.mark_sigma[m]));
+    const CollinearityCamera& camera = round->cameras[camera_index];
+    round->costs.emplace_back(CreateCollinearityMarkCost(
+        options.solver.jacobian,
+        CollinearityMarkFunctor(&camera, mark.observation, 1.0 / plan.mark_sigma[m]),
+        &round->mark_functor[m]));
     ceres::LossFunction* loss = plan.mark_group[m] == kTieMarks ? round->tie_loss.get() : nullptr;
+    double* eo = state->eo[mark.image].data();
+    double* point = state->points[mark.point].data();
     const ceres::ResidualBlockId id =
-        problem.AddResidualBlock(cost, loss, state->eo[mark.image].data(),
-                                 state->points[mark.point].data(),
-                                 state->cameras[camera_index].data());
+        camera.constant_params != nullptr
+            ? problem.AddResidualBlock(round->costs.back().get(), loss, eo, point)
+            : problem.AddResidualBlock(round->costs.back().get(), loss, eo, point,
+                                       state->cameras[camera_index].data());
     round->residuals.push_back({plan.mark_group[m], static_cast<int>(m), 2, 0, id});
   }
+}
+
+// Adds a prior's cost (kept by the round) to the problem.
+ceres::ResidualBlockId AddPrior(ceres::CostFunction* cost, const std::vector<double*>& parameters,
+                                BundleRound* round) {
+  round->costs.emplace_back(cost);
+  return round->problem->AddResidualBlock(cost, nullptr, parameters);
 }
 
 // Control-point priors (two rows at a time: XY, then Z), camera positions and attitudes.
 void AddPriorResiduals(const Block& block, const BundlePlan& plan, BundleState* state,
                        BundleRound* round) {
-  ceres::Problem& problem = *round->problem;
   double* lever = state->lever.data();
   for (size_t p = 0; p < block.points.size(); ++p) {
     if (!plan.point_in_problem[p] || !plan.point_prior[p]) continue;
     double* point = state->points[p].data();
     const Eigen::Vector3d& surveyed = *block.points[p].surveyed_m;
-    const ceres::ResidualBlockId xy = problem.AddResidualBlock(
-        new GroundPointPriorRows(surveyed, plan.point_sigma[p], 0, 1), nullptr, point);
+    const ceres::ResidualBlockId xy =
+        AddPrior(new GroundPointPriorRows(surveyed, plan.point_sigma[p], 0, 1), {point}, round);
     round->residuals.push_back({kControlPoints, static_cast<int>(p), 2, 0, xy});
-    const ceres::ResidualBlockId z = problem.AddResidualBlock(
-        new GroundPointPriorRows(surveyed, plan.point_sigma[p], 2, -1), nullptr, point);
+    const ceres::ResidualBlockId z =
+        AddPrior(new GroundPointPriorRows(surveyed, plan.point_sigma[p], 2, -1), {point}, round);
     round->residuals.push_back({kControlPoints, static_cast<int>(p), 1, 2, z});
   }
   // Camera positions and attitudes.
@@ -508,19 +524,18 @@ void AddPriorResiduals(const Block& block, const BundlePlan& plan, BundleState* 
       std::vector<double*> parameters = {eo};
       if (plan.use_lever) {
         parameters.push_back(lever);
-        id = problem.AddResidualBlock(
-            CameraPositionLeverArmPrior::Create(measured, plan.image_prior_sigma[i]), nullptr,
-            parameters);
+        id = AddPrior(CameraPositionLeverArmPrior::Create(measured, plan.image_prior_sigma[i]),
+                      parameters, round);
       } else {
-        id = problem.AddResidualBlock(new CameraPositionPrior(measured, plan.image_prior_sigma[i]),
-                                      nullptr, parameters);
+        id = AddPrior(new CameraPositionPrior(measured, plan.image_prior_sigma[i]), parameters,
+                      round);
       }
       round->residuals.push_back({kCameraPositions, static_cast<int>(i), 3, 0, id});
     }
     if (plan.image_attitude[i]) {
-      const ceres::ResidualBlockId id = problem.AddResidualBlock(
+      const ceres::ResidualBlockId id = AddPrior(
           new AttitudePrior(*block.images[i].measured_angles_rad, plan.image_attitude_sigma[i]),
-          nullptr, eo);
+          {eo}, round);
       round->residuals.push_back({kAttitudes, static_cast<int>(i), 3, 0, id});
     }
   }
@@ -537,6 +552,7 @@ void BuildBundleRound(const BundleAdjustmentOptions& options, const BundleAdjust
   ceres::Problem::Options problem_options;
   problem_options.manifold_ownership = ceres::DO_NOT_TAKE_OWNERSHIP;
   problem_options.loss_function_ownership = ceres::DO_NOT_TAKE_OWNERSHIP;
+  problem_options.cost_function_ownership = ceres::DO_NOT_TAKE_OWNERSHIP;
   problem_options.enable_fast_removal = false;
   round->problem = std::make_unique<ceres::Problem>(problem_options);
   round->tie_loss.reset(MakeLoss(options.robustness.tie_loss, options.robustness.tie_loss_scale_sigmas));
@@ -549,6 +565,59 @@ void BuildBundleRound(const BundleAdjustmentOptions& options, const BundleAdjust
   for (const int size : round->e_sizes) round->num_free_parameters += size;
   round->num_observations = 0;
   for (const ResidualInfo& info : round->residuals) round->num_observations += info.rows;
+}
+
+bool UpdateBundleRound(const BundlePlan& plan, BundleRound* round) {
+  // Only marks and the tie points they leave behind: a prior removed or a weight changed needs
+  // the problem built again.
+  for (const ResidualInfo& info : round->residuals) {
+    switch (info.group) {
+      case kTieMarks:
+      case kControlMarks:
+        if (plan.mark_used[info.item] &&
+            round->mark_functor[info.item]->inverse_sigma != 1.0 / plan.mark_sigma[info.item])
+          return false;
+        break;
+      case kControlPoints:
+        if (!plan.point_prior[info.item]) return false;
+        break;
+      case kCameraPositions:
+        if (!plan.image_prior[info.item]) return false;
+        break;
+      case kAttitudes:
+        if (!plan.image_attitude[info.item]) return false;
+        break;
+      default:
+        return false;
+    }
+  }
+  const auto switched_off = [&](const ResidualInfo& info) {
+    if (info.group != kTieMarks && info.group != kControlMarks) return false;
+    if (plan.mark_used[info.item]) return false;
+    round->mark_functor[info.item]->inverse_sigma = 0.0;
+    return true;
+  };
+  round->residuals.erase(
+      std::remove_if(round->residuals.begin(), round->residuals.end(), switched_off),
+      round->residuals.end());
+  size_t kept = 0;
+  for (size_t k = 0; k < round->point_blocks.size(); ++k) {
+    const int p = round->point_of_block[k];
+    if (!plan.point_in_problem[p]) {
+      round->problem->SetParameterBlockConstant(round->point_blocks[k]);
+      continue;
+    }
+    round->point_blocks[kept] = round->point_blocks[k];
+    round->point_of_block[kept] = p;
+    ++kept;
+  }
+  round->point_blocks.resize(kept);
+  round->point_of_block.resize(kept);
+  round->num_free_parameters = 3 * static_cast<int>(round->point_blocks.size());
+  for (const int size : round->e_sizes) round->num_free_parameters += size;
+  round->num_observations = 0;
+  for (const ResidualInfo& info : round->residuals) round->num_observations += info.rows;
+  return true;
 }
 
 void ApplyRelativeGauge(const BundlePlan& plan, BundleState* state, BundleRound* round) {

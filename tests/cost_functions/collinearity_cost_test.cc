@@ -15,6 +15,8 @@ namespace {
 // rounding. 1e-9 relative to the Jacobian's largest element (the requirement).
 constexpr double kAgreementTolerance = 1e-9;
 constexpr int kNumRandomPoses = 1000;
+// Two paths through the same functions: only the order of rounding may differ.
+constexpr double kSameArithmetic = 1e-14;
 
 struct RandomView {
   double eo[6];
@@ -178,6 +180,84 @@ TEST(CollinearityCost, AnalyticMatchesAutodiffForEveryCameraModel) {
           CreateCollinearityCost(JacobianType::kAutodiff, data));
       SCOPED_TRACE(EnumName(model.type));
       ExpectAgreement(*analytic, *autodiff, {view.eo, view.point, model.params.data()});
+    }
+  }
+}
+
+// A bundle mark's compact cost is the same residual and Jacobians as the measurement's cost, with
+// the camera as a third parameter block (self-calibration) or held in CollinearityCamera; its
+// autodiff path agrees with the analytic one.
+TEST(CollinearityMarkCost, MatchesTheMeasurementCostWithAndWithoutTheCameraBlock) {
+  std::mt19937_64 rng(11);
+  const std::vector<double> table_r = {1000.0, 3000.0, 6000.0}, table_d = {1.5, -2.0, 4.0};
+  for (int i = 0; i < kNumRandomPoses / 4; ++i) {
+    RandomView view = MakeRandomView(&rng);
+    for (ModelCase& model : ModelCases(view, &rng, &table_r, &table_d)) {
+      SCOPED_TRACE(EnumName(model.type));
+      const double inverse_sigma = 1.0 / 2.4;
+      const std::unique_ptr<ceres::CostFunction> reference(CreateCollinearityCost(
+          JacobianType::kAnalytic,
+          CollinearityFunctor(model.type, model.observation, model.data, inverse_sigma)));
+      Eigen::Vector2d r_reference;
+      std::vector<Eigen::VectorXd> j_reference;
+      ASSERT_TRUE(Evaluate(*reference, {view.eo, view.point, model.params.data()}, &r_reference,
+                           &j_reference));
+      for (const bool camera_block : {true, false}) {
+        CollinearityCamera camera;
+        camera.model = model.type;
+        camera.data = model.data;
+        camera.constant_params = camera_block ? nullptr : model.params.data();
+        const CollinearityMarkFunctor mark(&camera, model.observation, inverse_sigma);
+        const std::unique_ptr<ceres::CostFunction> analytic(
+            CreateCollinearityMarkCost(JacobianType::kAnalytic, mark));
+        const std::unique_ptr<ceres::CostFunction> autodiff(
+            CreateCollinearityMarkCost(JacobianType::kAutodiff, mark));
+        std::vector<const double*> parameters = {view.eo, view.point};
+        if (camera_block) parameters.push_back(model.params.data());
+        ASSERT_EQ(analytic->parameter_block_sizes().size(), parameters.size());
+        Eigen::Vector2d r;
+        std::vector<Eigen::VectorXd> j;
+        ASSERT_TRUE(Evaluate(*analytic, parameters, &r, &j));
+        // The same function of the same values (kSameArithmetic: the Jets of the camera's
+        // derivatives differ in size without the camera block).
+        EXPECT_LE((r - r_reference).cwiseAbs().maxCoeff(),
+                  kSameArithmetic * std::max(1.0, r_reference.cwiseAbs().maxCoeff()));
+        for (size_t b = 0; b < j.size(); ++b) {
+          EXPECT_LE((j[b] - j_reference[b]).cwiseAbs().maxCoeff(),
+                    kSameArithmetic * j_reference[b].cwiseAbs().maxCoeff())
+              << "block " << b;
+        }
+        ExpectAgreement(*analytic, *autodiff, parameters);
+      }
+    }
+  }
+}
+
+// A zero weight switches the mark off: zero residual and Jacobians, set in the functor inside the
+// cost (a bundle adjustment rejects marks so without building its problem again).
+TEST(CollinearityMarkCost, ZeroWeightSwitchesTheMarkOff) {
+  std::mt19937_64 rng(13);
+  RandomView view = MakeRandomView(&rng);
+  for (ModelCase& model : ModelCases(view, &rng)) {
+    CollinearityCamera camera;
+    camera.model = model.type;
+    camera.data = model.data;
+    const Eigen::Vector2d off_by(5.0, -3.0);
+    const CollinearityMarkFunctor mark(&camera, model.observation + off_by, 1.0);
+    for (const JacobianType type : {JacobianType::kAnalytic, JacobianType::kAutodiff}) {
+      CollinearityMarkFunctor* inside = nullptr;
+      const std::unique_ptr<ceres::CostFunction> cost(
+          CreateCollinearityMarkCost(type, mark, &inside));
+      ASSERT_NE(inside, nullptr);
+      const std::vector<const double*> parameters = {view.eo, view.point, model.params.data()};
+      Eigen::Vector2d r;
+      std::vector<Eigen::VectorXd> j;
+      ASSERT_TRUE(Evaluate(*cost, parameters, &r, &j));
+      EXPECT_GT(r.norm(), 1.0);
+      inside->inverse_sigma = 0.0;
+      ASSERT_TRUE(Evaluate(*cost, parameters, &r, &j));
+      EXPECT_EQ(r.norm(), 0.0);
+      for (size_t b = 0; b < j.size(); ++b) EXPECT_EQ(j[b].norm(), 0.0) << "block " << b;
     }
   }
 }

@@ -67,6 +67,14 @@ print(f"photopose bundle: {ours_s:.1f} s wall, peak {ours_mb:.0f} MB, {ours_iter
 print(f"colmap bundle_adjuster: {colmap_s:.1f} s wall, peak {colmap_mb:.0f} MB, "
       f"{len(iterations) - 1} iterations, final cost {colmap_final:.6g} px^2; "
       f"time to photopose's cost: {to_same:.1f} s" + ("" if reached else " (never reached: whole time)"))
+t = report["summary"]["time_breakdown"]
+setup = t["read_seconds"] + t["setup_seconds"]
+print(f"photopose steps: read {t['read_seconds']:.1f} s, plan {t['plan_seconds']:.1f} s, problem "
+      f"{t['problem_build_seconds']:.1f} s, Ceres preprocessing {t['solver_preprocessing_seconds']:.1f} s, "
+      f"rounds {', '.join(f'{r:.1f}' for r in t['round_seconds'])} s, statistics "
+      f"{t['statistics_seconds']:.1f} s, the rest (write, exit) "
+      f"{ours_s - t['read_seconds'] - t['initialization_seconds'] - report['summary']['time_seconds']:.1f} s; "
+      f"setup (read, plan, problem, preprocessing) {setup:.1f} s = {100 * setup / ours_s:.0f} % of the run")
 print(f"ratio photopose / colmap-to-same-cost: {ours_s / to_same:.3f}; final cost ratio "
       f"photopose / colmap: {ours_cost / colmap_final:.6f}; memory ratio {ours_mb / colmap_mb:.2f}")
 EOF

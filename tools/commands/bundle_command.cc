@@ -831,6 +831,10 @@ void PrintClosingSummary(const BundleRun& run, bool usable) {
   std::cout << "\n";
 }
 
+double SecondsSince(std::chrono::steady_clock::time_point start) {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+}
+
 }  // namespace
 
 int RunBundle(int argc, char** argv) {
@@ -849,11 +853,15 @@ int RunBundle(int argc, char** argv) {
   int code = CheckInputChoice(kCommand, &run);
   if (code == kGoOn) code = OptionsFromFlags(kCommand, &run);
   if (code == kGoOn) code = DeclareFiles(kCommand, parsed, &run, &outputs);
+  const auto read_start = std::chrono::steady_clock::now();
   if (code == kGoOn) code = ReadBundleBlock(kCommand, &run);
   if (code != kGoOn) return code;
+  run.context.read_seconds = SecondsSince(read_start);
   {
     const ScopedSolving solving;
+    const auto initialization_start = std::chrono::steady_clock::now();
     code = InitializeBundleBlock(kCommand, &run);
+    run.context.initialization_seconds = SecondsSince(initialization_start);
     if (code == kGoOn) code = AdjustBundleBlock(kCommand, &run);
     if (code != kGoOn) return code;
   }
@@ -872,8 +880,9 @@ int RunBundle(int argc, char** argv) {
   const auto write_start = std::chrono::steady_clock::now();
   const Status written = WriteBundleOutputs(run, usable);
   if (!written.ok()) return BadInput(kCommand, written.message());
+  const double write_seconds = SecondsSince(write_start);
+  if (!FLAGS_bundle_quiet) std::cerr << "photopose bundle: outputs written in " << write_seconds << " s\n";
   if (run.georeference && !FLAGS_bundle_quiet) {
-    const double write_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - write_start).count();
     std::cerr << "photopose bundle: georeference: " << run.georeferenced.prepare_seconds << " s to prepare (CRSs, matching, similarity), "
               << run.georeferenced.evaluate_seconds << " s to evaluate; outputs (in " << run.georeferenced.out_crs << ") written in "
               << write_seconds << " s\n";

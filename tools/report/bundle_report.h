@@ -29,6 +29,8 @@ struct BundleReportContext {
   std::vector<std::string> calibrate;  // --calibrate names
   const BundleCrossValidationResult* cross_validation = nullptr;  // when run
   int num_images_initialized = 0;      // images oriented by the initialisation
+  double read_seconds = 0.0;            // reading the inputs into the block (s)
+  double initialization_seconds = 0.0;  // resection and intersection of what had no start (s)
   const GeoreferenceResult* georeference = nullptr;  // a georeferenced model (its section)
 };
 

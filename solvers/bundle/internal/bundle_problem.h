@@ -14,6 +14,7 @@
 
 #include "core/block.h"
 #include "core/mark_weight.h"
+#include "cost_functions/collinearity_cost.h"
 #include "solvers/bundle/bundle_adjustment.h"
 
 namespace photopose::internal {
@@ -94,12 +95,19 @@ BundlePlanOptions PlanOptionsOf(const BundleAdjustmentOptions& options,
 Status RecheckBundlePlan(const BundleAdjustmentConfig& config, const Block& block,
                          BundlePlan* plan);
 
-// One round's Ceres problem and what it needs to stay alive.
+// The Ceres problem of an adjustment's rounds and what it needs to stay alive. Built once; a
+// rejection round switches the rejected marks off in place (UpdateBundleRound).
 struct BundleRound {
-  // Declared before the problem, which refers to them, so that they outlive it.
+  // Declared before the problem, which refers to them, so that they outlive it. The problem owns
+  // none of them: Ceres keeps an ordered map of the cost functions it owns (48 bytes and a tree
+  // insertion per mark).
   std::vector<std::unique_ptr<ceres::Manifold>> manifolds;
   std::unique_ptr<ceres::LossFunction> tie_loss;
+  std::vector<CollinearityCamera> cameras;  // per camera: what its marks' costs share
+  std::vector<CollinearityMarkFunctor*> mark_functor;  // per mark (block order): inside its cost
+  std::vector<std::unique_ptr<ceres::CostFunction>> costs;
   std::unique_ptr<ceres::Problem> problem;
+  // The residual blocks in use (switched-off marks are not listed).
   std::vector<ResidualInfo> residuals;
   // The variable blocks: exterior orientations, camera parameters, lever arm ("e" blocks, the
   // reduced system) with their tangent sizes, then the points (eliminated).
@@ -115,6 +123,13 @@ struct BundleRound {
 void BuildBundleRound(const BundleAdjustmentOptions& options, const BundleAdjustmentConfig& config,
                       const Block& block, const BundlePlan& plan, BundleState* state,
                       BundleRound* round);
+// Brings a built round up to `plan` after marks were rejected (plan.mark_used cleared; tie points
+// left with too few rays out of plan.point_in_problem), without building the problem again: the
+// marks get a zero weight (their residual blocks stay, with zero residuals and Jacobians, so that
+// Ceres' structure is unchanged), a point that left is held constant, and neither is listed in
+// the round any more. False when the plan changed otherwise (a prior removed): the round must be
+// built again.
+bool UpdateBundleRound(const BundlePlan& plan, BundleRound* round);
 // Turns a round built without a gauge (plan.relative_fixed_image = -1) into one in the relative
 // gauge of `plan` (kRelative): holds the first image and one coordinate of the second, without
 // building the problem again.

@@ -236,6 +236,61 @@ TEST(BundleAdjustment, AnalyticAndAutodiffGiveTheSameAdjustment) {
     EXPECT_LT((a.block.images[i].eo->parameters - b.block.images[i].eo->parameters).norm(), 1e-7);
 }
 
+// Rejection rounds switch the rejected marks off in the problem built for round 1 (a zero weight,
+// the problem not built again): the final round is the adjustment of the block without them, with
+// the same statistics.
+TEST(BundleAdjustment, RejectionRoundsMatchTheBlockWithoutTheRejectedMarks) {
+  SmallBlockOptions o;
+  o.tie_blunders = 6;
+  SmallBlock data = MakeSmallBlock(o);
+  const Block start = data.block;
+  BundleAdjustmentOptions options = QuietOptions();
+  options.robustness.rejection_threshold = 4.5;
+  BundleAdjustmentResult result;
+  ASSERT_TRUE(BundleAdjust(options, BundleAdjustmentConfig(), &data.block, &result).ok());
+  ASSERT_TRUE(result.summary.IsSolutionUsable()) << result.summary.BriefReport();
+  ASSERT_GE(result.summary.rounds, 2);
+  EXPECT_EQ(result.summary.round_seconds.size(), static_cast<size_t>(result.summary.rounds));
+  const std::vector<char> removed = result.RemovedMarks(start.marks.size());
+  for (const int m : data.blunder_marks) EXPECT_TRUE(removed[m]) << "blunder mark " << m;
+
+  Block cleaned = start;
+  std::vector<BlockMark> kept;
+  for (size_t m = 0; m < start.marks.size(); ++m)
+    if (!removed[m]) kept.push_back(start.marks[m]);
+  cleaned.marks = kept;
+  cleaned.BuildIndex();
+  options.robustness.rejection_threshold = 0.0;
+  BundleAdjustmentResult reference;
+  ASSERT_TRUE(BundleAdjust(options, BundleAdjustmentConfig(), &cleaned, &reference).ok());
+  ASSERT_TRUE(reference.summary.IsSolutionUsable());
+
+  // Both converge to the minimum of the same cost from different starts (round 1's solution, the
+  // block's start): they agree to the solver's tolerances, far below the noise (0.5 px, 3 cm).
+  constexpr double kSameMinimumRelative = 1e-6;
+  constexpr double kSameMinimumM = 1e-5;
+  EXPECT_EQ(result.summary.redundancy, reference.summary.redundancy);
+  EXPECT_EQ(result.summary.num_marks, reference.summary.num_marks);
+  EXPECT_NEAR(result.summary.sigma0, reference.summary.sigma0,
+              kSameMinimumRelative * reference.summary.sigma0);
+  ASSERT_EQ(result.images.size(), reference.images.size());
+  for (size_t i = 0; i < start.images.size(); ++i) {
+    EXPECT_LT((data.block.images[i].eo->center_in_ground() - cleaned.images[i].eo->center_in_ground())
+                  .norm(),
+              kSameMinimumM);
+    EXPECT_EQ(result.images[i].num_marks, reference.images[i].num_marks);
+    ASSERT_TRUE(result.images[i].has_covariance && reference.images[i].has_covariance);
+    EXPECT_LT((result.images[i].covariance - reference.images[i].covariance).norm(),
+              kSameMinimumRelative * reference.images[i].covariance.norm());
+  }
+  ASSERT_EQ(result.groups.size(), reference.groups.size());
+  for (size_t g = 0; g < result.groups.size(); ++g) {
+    EXPECT_EQ(result.groups[g].count, reference.groups[g].count);
+    EXPECT_NEAR(result.groups[g].redundancy_share, reference.groups[g].redundancy_share,
+                kSameMinimumRelative);
+  }
+}
+
 const BundleGroupStatistics* FindGroup(const BundleAdjustmentResult& result, BundleGroup group) {
   for (const BundleGroupStatistics& g : result.groups)
     if (g.group == group) return &g;

@@ -150,6 +150,16 @@ TEST(BundleCommand, ColmapModelInColmapModelOutWithoutTheRejectedMarks) {
   EXPECT_EQ(report["summary"]["termination"], "converged");
   EXPECT_EQ(report["summary"]["datum"], "relative");
   ASSERT_GE(report["rejected_marks"].size(), 4u);  // the 4 blunders at least
+  // Every step's time: one entry per round, and the steps within the whole run's time.
+  const nlohmann::json& time = report["summary"]["time_breakdown"];
+  ASSERT_EQ(time["round_seconds"].size(), report["summary"]["rounds"].get<size_t>());
+  double steps = time["plan_seconds"].get<double>() + time["rejection_seconds"].get<double>() +
+                 time["statistics_seconds"].get<double>();
+  for (const auto& round : time["round_seconds"]) steps += round.get<double>();
+  EXPECT_GT(time["read_seconds"].get<double>(), 0.0);
+  EXPECT_GT(time["rejection_seconds"].get<double>(), 0.0);
+  EXPECT_LE(steps, report["summary"]["time_seconds"].get<double>());
+  EXPECT_LE(time["setup_seconds"].get<double>(), report["summary"]["time_seconds"].get<double>());
   const auto in_pairs = ImagePointPairs(in), out_pairs = ImagePointPairs(out);
   for (const auto& rejected : report["rejected_marks"]) {
     const std::pair<std::string, std::string> pair{rejected["raster"], rejected["point_id"]};
