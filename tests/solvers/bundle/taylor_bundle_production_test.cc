@@ -30,33 +30,21 @@ constexpr double kCostAgreement = 1e-6;
 // against a dense LDL^T: rounding only.
 constexpr double kDirectSolveAgreement = 1e-12;
 
-// A block of `lines` x `images_per_line` frame images (24 mm, 4 um pixels, 100 m over 10 m of
-// relief, 20 m / 30 m spacing), tie points, 5 control and 2 check points (5 mm), GNSS (3 cm),
-// 0.5 px marks and the generator's perturbed start (centres 2 m, angles 1 deg, points 0.5 m):
-// the layout of the block benchmarks (tools/benchmarks/bundle_benchmark.cc).
+// The block of the solver benchmarks (SolverBenchmarkBlockOptions: frame images at 100 m, 20 m /
+// 30 m spacing, 5 control and 2 check points, GNSS, 0.5 px marks, the generator's perturbed start).
 struct TestBlock {
   Block block;
   SyntheticBlockTruth truth;
   double size_m = 0.0;
 };
 
-TestBlock MakeBlock(int lines, int images_per_line, int tie_points, uint64_t seed = 2026) {
-  SyntheticBlockOptions o;
-  o.seed = seed;
-  o.num_lines = lines;
-  o.images_per_line = images_per_line;
-  o.num_tie_points = tie_points;
-  o.forward_spacing_m = 20.0;
-  o.side_spacing_m = 30.0;
-  o.control_layout = {{0, 0}, {1, 0}, {0, 1}, {1, 1}, {0.5, 0.5}};
-  o.num_check_points = 2;
-  o.control_sigma_m = 0.005;
-  o.mark_sigma_px = 0.5;
-  o.gnss_sigma_m = Eigen::Vector3d::Constant(0.03);
+TestBlock MakeBlock(int lines, int images_per_line, int tie_points) {
+  const SyntheticBlockOptions o = SolverBenchmarkBlockOptions(lines, images_per_line, tie_points);
   TestBlock out;
   const Status status = MakeSyntheticBlock(o, &out.block, &out.truth);
   EXPECT_TRUE(status.ok()) << status.message();
-  out.size_m = std::hypot(std::hypot((lines - 1) * 30.0, (images_per_line - 1) * 20.0),
+  out.size_m = std::hypot(std::hypot((lines - 1) * o.side_spacing_m,
+                                     (images_per_line - 1) * o.forward_spacing_m),
                           o.flying_height_m);
   return out;
 }
