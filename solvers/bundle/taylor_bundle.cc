@@ -192,6 +192,16 @@ std::string Format(const char* format, double a, double b = 0.0) {
   return buffer;
 }
 
+// The threads worth starting: every ParallelFor starts its threads anew (tens of microseconds),
+// which a small block's whole iteration does not repay; at least kMarksPerThread marks per
+// thread (the 12-image block of the benchmarks, 705 marks, runs on one).
+constexpr int kMarksPerThread = 1000;
+int ThreadsForMarks(int num_threads, const Plan& plan) {
+  const long long marks = std::count(plan.mark_used.begin(), plan.mark_used.end(), 1);
+  return static_cast<int>(std::max<long long>(
+      1, std::min<long long>(ResolveThreadCount(num_threads), marks / kMarksPerThread)));
+}
+
 // What one round needs besides its own structures.
 struct Context {
   const TaylorBundleOptions& options;
@@ -835,7 +845,7 @@ Status TaylorBundleAdjust(const TaylorBundleOptions& options, const BundleAdjust
   State state;
   const Frame frame = MakeFrame(config, *block, plan, &state);
   const Context context{options, *block, plan, frame, start,
-                        ResolveThreadCount(options.num_threads)};
+                        ThreadsForMarks(options.num_threads, plan)};
   summary.damping = options.damping;
   summary.linear_solver = options.linear_solver;
   summary.num_threads = context.num_threads;

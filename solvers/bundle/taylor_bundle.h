@@ -125,7 +125,7 @@ struct TaylorBundleOptions {
   double max_damping = 1e16;
   TaylorLinearSolver linear_solver = TaylorLinearSolver::kCholmodSupernodal;
   // Threads of the linearisation, the elimination and the back-substitution (count; 0: every
-  // core). The result is the same for every count.
+  // core); never more than one per 1000 marks. The result is the same for every count.
   int num_threads = 1;
   // The objective's accuracies, defaults and per-row overrides exactly as BundleAdjust takes them.
   BundleAccuracies accuracies;

@@ -372,9 +372,9 @@ bool EvaluateCost(TaylorPartials partials, const Block& block, const Plan& plan,
     double ssr = 0.0;
     for (const int k : layout.image_marks[i]) {
       const int m = layout.marks[k];
-      double row_u[6], row_v[6], fu, fv, w;
-      if (!pose.Linearize(state.points[block.marks[m].point].data(), plan.ideal_um[m].data(),
-                          row_u, row_v, &fu, &fv, &w)) {
+      double fu, fv, w;
+      if (!pose.Residual(state.points[block.marks[m].point].data(), plan.ideal_um[m].data(), &fu,
+                         &fv, &w)) {
         image_behind[i] = m;
         return;
       }
