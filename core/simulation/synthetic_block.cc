@@ -751,6 +751,22 @@ SyntheticBlockOptions BenchmarkBlockOptions() {
   return options;
 }
 
+SyntheticBlockOptions SolverBenchmarkBlockOptions(int lines, int images_per_line, int tie_points) {
+  SyntheticBlockOptions o;
+  o.seed = 2026;
+  o.num_lines = lines;
+  o.images_per_line = images_per_line;
+  o.num_tie_points = tie_points;
+  o.forward_spacing_m = 20.0;
+  o.side_spacing_m = 30.0;
+  o.control_layout = {{0, 0}, {1, 0}, {0, 1}, {1, 1}, {0.5, 0.5}};
+  o.num_check_points = 2;
+  o.control_sigma_m = 0.005;
+  o.mark_sigma_px = 0.5;
+  o.gnss_sigma_m = Eigen::Vector3d::Constant(0.03);
+  return o;
+}
+
 Status SyntheticBlockOptions::IsValid() const {
   if (num_lines < 1) return Invalid("num_lines must be >= 1");
   if (images_per_line < 1) return Invalid("images_per_line must be >= 1");

@@ -136,6 +136,13 @@ struct SyntheticBlockOptions {
 // points, 12 control and 10 check points: about 1.7 million marks (docs/performance.md).
 SyntheticBlockOptions BenchmarkBlockOptions();
 
+// The block of the solver benchmarks (tools/benchmarks/bundle_benchmark.cc, docs/performance.md)
+// and of the tests that compare solvers on it: `lines` x `images_per_line` images of the default
+// camera at 100 m, 20 m forward and 30 m side spacing, `tie_points` tie points, five control points
+// (the corners and the centre of the camera-centre rectangle, 5 mm) and two check points, 0.5 px
+// marks, 3 cm GNSS, the generator's perturbed start; seed 2026.
+SyntheticBlockOptions SolverBenchmarkBlockOptions(int lines, int images_per_line, int tie_points);
+
 // The truth of a synthetic block, parallel to the block's vectors.
 struct SyntheticBlockTruth {
   std::vector<ExteriorOrientation> eo;       // per image: the true orientation

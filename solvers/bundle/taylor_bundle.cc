@@ -17,6 +17,7 @@
 #include <sstream>
 
 #include "core/camera_models.h"
+#include "core/parallel.h"
 #include "core/rotation.h"
 #include "solvers/bundle/check_points.h"
 #include "solvers/bundle/internal/bundle_problem.h"
@@ -35,9 +36,11 @@ using internal::taylor::Frame;
 using internal::taylor::IsFixed;
 using internal::taylor::Layout;
 using internal::taylor::Linearize;
+using internal::taylor::EvaluateCost;
 using internal::taylor::Normal;
 using internal::taylor::Plan;
 using internal::taylor::PointPartialsFromCentrePartials;
+using internal::taylor::PredictedDecrease;
 using internal::taylor::Reduce;
 using internal::taylor::Reduction;
 using internal::taylor::SolveCorrections;
@@ -48,6 +51,9 @@ constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
 constexpr double kEpsilon = std::numeric_limits<double>::epsilon();
 // Multiple of epsilon times the block's size below which a position correction is rounding noise.
 constexpr double kPositionResolutionFactor = 256.0;
+// A relative change of the cost (a sum of up to millions of rounded squares) below which its
+// change says nothing about a step: Ceres' default function tolerance (unitless).
+constexpr double kCostResolution = 1e-10;
 
 double SecondsSince(Clock::time_point start) {
   return std::chrono::duration<double>(Clock::now() - start).count();
@@ -186,6 +192,16 @@ std::string Format(const char* format, double a, double b = 0.0) {
   return buffer;
 }
 
+// The threads worth starting: every ParallelFor starts its threads anew (tens of microseconds),
+// which a small block's whole iteration does not repay; at least kMarksPerThread marks per
+// thread (the 12-image block of the benchmarks, 705 marks, runs on one).
+constexpr int kMarksPerThread = 1000;
+int ThreadsForMarks(int num_threads, const Plan& plan) {
+  const long long marks = std::count(plan.mark_used.begin(), plan.mark_used.end(), 1);
+  return static_cast<int>(std::max<long long>(
+      1, std::min<long long>(ResolveThreadCount(num_threads), marks / kMarksPerThread)));
+}
+
 // What one round needs besides its own structures.
 struct Context {
   const TaylorBundleOptions& options;
@@ -193,6 +209,7 @@ struct Context {
   const Plan& plan;
   const Frame& frame;
   Clock::time_point start;
+  int num_threads;  // resolved (>= 1)
 };
 
 std::string PointName(const Block& block, int p) { return "point " + Quoted(block.points[p].id); }
@@ -234,23 +251,30 @@ bool SolveStep(const Context& ctx, const std::string& at, const Normal& normal, 
   return true;
 }
 
-// Eqs. 9-14: unknown = approximation - correction; the largest position and angle components of
-// the correction and its squared norm.
-void ApplyCorrections(const Layout& layout, const Eigen::VectorXd& d_e,
-                      const std::vector<Eigen::Vector3d>& d_p, State* state, double* max_position,
-                      double* max_angle, double* step_squared) {
+// The largest position and angle components of a correction and its squared norm.
+void MeasureCorrections(const Layout& layout, const Eigen::VectorXd& d_e,
+                        const std::vector<Eigen::Vector3d>& d_p, double* max_position,
+                        double* max_angle, double* step_squared) {
+  *max_position = *max_angle = 0.0;
   *step_squared = d_e.squaredNorm();
   for (size_t b = 0; b < layout.free_images.size(); ++b) {
     const Vector6d delta = d_e.segment<6>(6 * b);
-    state->eo[layout.free_images[b]] -= delta;
     *max_position = std::max(*max_position, delta.head<3>().cwiseAbs().maxCoeff());
     *max_angle = std::max(*max_angle, delta.tail<3>().cwiseAbs().maxCoeff());
   }
-  for (size_t q = 0; q < layout.free_points.size(); ++q) {
-    state->points[layout.free_points[q]] -= d_p[q];
-    *max_position = std::max(*max_position, d_p[q].cwiseAbs().maxCoeff());
-    *step_squared += d_p[q].squaredNorm();
+  for (const Eigen::Vector3d& delta : d_p) {
+    *max_position = std::max(*max_position, delta.cwiseAbs().maxCoeff());
+    *step_squared += delta.squaredNorm();
   }
+}
+
+// Eqs. 9-14: unknown = approximation - correction.
+void ApplyCorrections(const Layout& layout, const Eigen::VectorXd& d_e,
+                      const std::vector<Eigen::Vector3d>& d_p, State* state) {
+  for (size_t b = 0; b < layout.free_images.size(); ++b)
+    state->eo[layout.free_images[b]] -= d_e.segment<6>(6 * b);
+  for (size_t q = 0; q < layout.free_points.size(); ++q)
+    state->points[layout.free_points[q]] -= d_p[q];
 }
 
 // True, with the message, when an image or point moved farther than divergence_m from the
@@ -276,8 +300,42 @@ bool Diverged(const Context& ctx, const Layout& layout, const State& state, doub
   return false;
 }
 
-// Gauss-Newton (eqs. 9-16) of one round from *state. On kConvergence *state is the solution and
-// *normal its linearisation; otherwise *message says why it stopped.
+// Levenberg-Marquardt's decision on a step solved with damping step_lambda from the
+// linearisation at cost `cost` (1/2 F^T P F): the trial state's cost, the gain ratio, and the
+// next *lambda (and Nielsen's nu). True when the step is taken (*state replaced by the trial).
+bool DecideStep(const Context& ctx, const Layout& layout, const Normal& normal, double cost,
+                double step_lambda, const Eigen::VectorXd& d_e,
+                const std::vector<Eigen::Vector3d>& d_p, State* state, double* lambda, double* nu,
+                double* gain_ratio) {
+  State trial = *state;
+  ApplyCorrections(layout, d_e, d_p, &trial);
+  const double predicted = PredictedDecrease(layout, normal, step_lambda, d_e, d_p);
+  double trial_ssr = 0.0;
+  int behind_mark = -1;
+  const bool valid = EvaluateCost(ctx.options.partials, ctx.block, ctx.plan, layout, ctx.frame,
+                                  trial, ctx.num_threads, &trial_ssr, &behind_mark);
+  *gain_ratio = valid && predicted > 0.0 ? (cost - 0.5 * trial_ssr) / predicted
+                                         : -std::numeric_limits<double>::infinity();
+  // Near the minimum the decrease is below what the sum of the cost resolves and the gain ratio
+  // is rounding noise: the step is taken, as Gauss-Newton would (the linearisation is exact
+  // there).
+  const bool unresolved = valid && predicted >= 0.0 && predicted <= kCostResolution * cost &&
+                          0.5 * trial_ssr <= cost * (1.0 + kCostResolution);
+  if (*gain_ratio > ctx.options.min_gain_ratio || unresolved) {
+    *state = std::move(trial);
+    const double t = 2.0 * *gain_ratio - 1.0;
+    *lambda *= std::max(1.0 / 3.0, 1.0 - t * t * t);
+    *nu = 2.0;
+    return true;
+  }
+  *lambda *= *nu;
+  *nu *= 2.0;
+  return false;
+}
+
+// One round from *state: Gauss-Newton (eqs. 9-16) or Levenberg-Marquardt on the same normal
+// equations (options.damping). On kConvergence *state is the solution and *normal its
+// linearisation; otherwise *message says why it stopped.
 SolverTermination RunRound(const Context& ctx, int round, Layout* layout, State* state,
                            Normal* normal, Reduction* reduction, TaylorBundleResult* result,
                            std::string* message) {
@@ -293,9 +351,15 @@ SolverTermination RunRound(const Context& ctx, int round, Layout* layout, State*
                kPositionResolutionFactor * kEpsilon * (ctx.frame.extent_m + max_norm));
   const double divergence_m =
       options.divergence_distance_factor * std::max(ctx.frame.extent_m, max_norm);
+  const auto below_tolerance = [&](double position, double angle) {
+    return position <= position_tolerance_m && angle <= options.angle_tolerance_rad;
+  };
+  const auto linearize = [&]() {
+    return Linearize(options.partials, ctx.block, ctx.plan, *layout, ctx.frame, *state,
+                     ctx.num_threads, normal, nullptr);
+  };
 
-  if (!Linearize(options.partials, ctx.block, ctx.plan, *layout, ctx.frame, *state, normal,
-                 nullptr)) {
+  if (!linearize()) {
     *message =
         normal->behind_mark >= 0
             ? BehindMessage(ctx.block, *normal, "at the start of round " + std::to_string(round))
@@ -305,16 +369,24 @@ SolverTermination RunRound(const Context& ctx, int round, Layout* layout, State*
   if (round == 1) summary.initial_cost = 0.5 * normal->weighted_ssr;
   summary.final_cost = 0.5 * normal->weighted_ssr;
 
+  const bool damped = options.damping == TaylorDamping::kLevenbergMarquardt;
+  double lambda = damped ? options.initial_damping : 0.0;
+  double nu = 2.0;
   Eigen::VectorXd d_e;
   std::vector<Eigen::Vector3d> d_p;
   for (int iteration = 1; iteration <= options.max_iterations; ++iteration) {
     const Clock::time_point iteration_start = Clock::now();
     const double cost = 0.5 * normal->weighted_ssr;
     const std::string at = " at iteration " + std::to_string(iteration);
+    // The first step of a round is undamped: the datum check Gauss-Newton makes (a singular S
+    // fails the round), and a full step when the start is good.
+    const double step_lambda = damped && iteration > 1 ? lambda : 0.0;
+    reduction->damping = step_lambda;
+    reduction->undamped_at_solution = false;
     if (!SolveStep(ctx, at, *normal, layout, reduction, &d_e, &d_p, message))
       return SolverTermination::kFailure;
     double max_position = 0.0, max_angle = 0.0, step_squared = 0.0;
-    ApplyCorrections(*layout, d_e, d_p, state, &max_position, &max_angle, &step_squared);
+    MeasureCorrections(*layout, d_e, d_p, &max_position, &max_angle, &step_squared);
     summary.iterations += 1;
     summary.last_position_correction_m = max_position;
     summary.last_angle_correction_rad = max_angle;
@@ -322,22 +394,52 @@ SolverTermination RunRound(const Context& ctx, int round, Layout* layout, State*
       *message = "the correction is not finite" + at;
       return SolverTermination::kFailure;
     }
-    if (Diverged(ctx, *layout, *state, divergence_m, at, message))
-      return SolverTermination::kFailure;
-    const bool converged =
-        max_position <= position_tolerance_m && max_angle <= options.angle_tolerance_rad;
-    if (!Linearize(options.partials, ctx.block, ctx.plan, *layout, ctx.frame, *state, normal,
-                   nullptr)) {
+    TaylorBundleIteration record{round, iteration, cost, max_position, max_angle, 0.0,
+                                 step_lambda, 1.0, true};
+    bool converged = below_tolerance(max_position, max_angle);
+    bool relinearize = true;
+    if (damped) {
+      record.taken = DecideStep(ctx, *layout, *normal, cost, step_lambda, d_e, d_p, state,
+                                &lambda, &nu, &record.gain_ratio);
+      relinearize = record.taken;
+      if (!record.taken) summary.refused_steps += 1;
+    } else {
+      ApplyCorrections(*layout, d_e, d_p, state);
+      if (Diverged(ctx, *layout, *state, divergence_m, at, message))
+        return SolverTermination::kFailure;
+    }
+    if (relinearize && !linearize()) {
       *message = normal->behind_mark >= 0
                      ? BehindMessage(ctx.block, *normal,
                                      "after iteration " + std::to_string(iteration) + " (diverged)")
                      : "the residuals are not finite after iteration " + std::to_string(iteration);
       return SolverTermination::kFailure;
     }
+    if (damped && converged && step_lambda > 0.0) {
+      // A damped step can be small because lambda is large: the undamped step at the current
+      // linearisation decides, and checks the datum (a singular S fails as in Gauss-Newton).
+      reduction->damping = 0.0;
+      if (!SolveStep(ctx, at, *normal, layout, reduction, &d_e, &d_p, message))
+        return SolverTermination::kFailure;
+      double gn_position = 0.0, gn_angle = 0.0, gn_squared = 0.0;
+      MeasureCorrections(*layout, d_e, d_p, &gn_position, &gn_angle, &gn_squared);
+      converged = below_tolerance(gn_position, gn_angle);
+      if (converged) {
+        reduction->undamped_at_solution = true;
+        summary.last_position_correction_m = max_position = gn_position;
+        summary.last_angle_correction_rad = max_angle = gn_angle;
+      } else {
+        lambda = std::min(lambda, options.initial_damping);
+        nu = 2.0;
+      }
+    } else if (damped && !(lambda <= options.max_damping)) {
+      *message = Format("no decrease of the cost with damping %.3g", lambda) + at;
+      return SolverTermination::kFailure;
+    }
     summary.final_cost = 0.5 * normal->weighted_ssr;
-    const double seconds = SecondsSince(iteration_start);
-    summary.iteration_seconds += seconds;
-    result->history.push_back({round, iteration, cost, max_position, max_angle, seconds});
+    record.seconds = SecondsSince(iteration_start);
+    summary.iteration_seconds += record.seconds;
+    result->history.push_back(record);
     if (options.progress) {
       BundleIterationInfo info;
       info.round = round;
@@ -441,7 +543,9 @@ void SolutionCovariances(const TaylorBundleOptions& options, const Block& block,
     *message += "; covariances not computed (statistics turned off)";
     return;
   }
-  if (!(Reduce(normal, *layout, reduction) < 0 && WriteScaled(plan, layout, reduction) < 0 &&
+  reduction->damping = 0.0;
+  if (!reduction->undamped_at_solution &&
+      !(Reduce(normal, *layout, reduction) < 0 && WriteScaled(plan, layout, reduction) < 0 &&
         Factorize(options.min_pivot_ratio, *layout, reduction))) {
     *message += "; the normal matrix at the solution is singular: no covariances";
     return;
@@ -525,6 +629,21 @@ bool TaylorBundleOptions::IsValid(std::string* why) const {
     return fail("the rejection threshold must be >= 0 (0: no rejection)");
   if (max_rejection_rounds < 0) return fail("max_rejection_rounds must be >= 0");
   if (max_iterations < 1) return fail("max_iterations must be at least 1");
+  if (damping != TaylorDamping::kNone && damping != TaylorDamping::kLevenbergMarquardt)
+    return fail("damping is not a TaylorDamping value");
+  if (linear_solver != TaylorLinearSolver::kCholmodSupernodal &&
+      linear_solver != TaylorLinearSolver::kEigenLdlt)
+    return fail("linear_solver is not a TaylorLinearSolver value");
+  if (!positive(initial_damping)) return fail("initial_damping must be positive and finite");
+  if (!(min_gain_ratio >= 0.0 && min_gain_ratio < 1.0))
+    return fail("min_gain_ratio must be in [0, 1)");
+  if (!(max_damping > initial_damping) || !std::isfinite(max_damping))
+    return fail("max_damping must be finite and greater than initial_damping");
+  if (num_threads < 0) return fail("num_threads must be >= 0 (0: every core)");
+  if (partials == TaylorPartials::kAsPrinted && damping != TaylorDamping::kNone)
+    return fail(
+        "the as-printed partials are not the derivative of the objective, so Levenberg-Marquardt's "
+        "gain ratio means nothing with them: use damping none (the lecture's Gauss-Newton)");
   if (!positive(position_tolerance_m))
     return fail("position_tolerance_m must be positive and finite");
   if (!positive(angle_tolerance_rad))
@@ -545,17 +664,21 @@ Status TaylorBundleOptionsFromBundleOptions(const BundleAdjustmentOptions& ceres
   }
   *options = TaylorBundleOptions();
   options->partials = partials;
+  options->damping = DefaultTaylorDamping(partials);
   options->accuracies = ceres.accuracies;
   options->rejection_threshold = ceres.robustness.rejection_threshold;
   options->max_rejection_rounds = ceres.robustness.max_rejection_rounds;
   options->covariances = ceres.statistics.covariances;
+  options->num_threads = ceres.solver.num_threads;
   options->progress = ceres.solver.progress;
   return Status::Ok();
 }
 
 std::string TaylorBundleSummary::BriefReport() const {
   std::ostringstream os;
-  os << "Taylor bundle adjustment (" << EnumName(partials) << " partials), "
+  os << "Taylor bundle adjustment (" << EnumName(partials) << " partials, "
+     << EnumName(damping) << ", " << EnumName(linear_solver) << ", " << num_threads
+     << (num_threads == 1 ? " thread), " : " threads), ")
      << EnumName(termination_type) << ": " << num_images << " images, "
      << num_points << " points, " << num_marks << " marks, " << rounds << " round"
      << (rounds == 1 ? "" : "s") << ", " << iterations << " iterations, cost " << initial_cost
@@ -632,7 +755,9 @@ Status LinearizeTaylorBundle(const TaylorBundleOptions& options,
     dense.num_columns += 3;
   }
   Normal normal;
-  if (!Linearize(options.partials, block, plan, layout, frame, state, &normal, &dense)) {
+  const int num_threads = ResolveThreadCount(options.num_threads);
+  if (!Linearize(options.partials, block, plan, layout, frame, state, num_threads, &normal,
+                 &dense)) {
     return Status::Error(normal.behind_mark >= 0 ? BehindMessage(block, normal, "")
                                                  : "the residuals are not finite");
   }
@@ -650,6 +775,8 @@ Status LinearizeTaylorBundle(const TaylorBundleOptions& options,
         system->jacobian.col(dense.image_columns[layout.free_images[b]] + c).setZero();
 
   Reduction reduction;
+  reduction.solver = options.linear_solver;
+  reduction.num_threads = num_threads;
   const int singular_point = Reduce(normal, layout, &reduction);
   if (singular_point >= 0)
     return Status::Error(PointName(block, singular_point) + " is not determined by its rays");
@@ -717,7 +844,11 @@ Status TaylorBundleAdjust(const TaylorBundleOptions& options, const BundleAdjust
 
   State state;
   const Frame frame = MakeFrame(config, *block, plan, &state);
-  const Context context{options, *block, plan, frame, start};
+  const Context context{options, *block, plan, frame, start,
+                        ThreadsForMarks(options.num_threads, plan)};
+  summary.damping = options.damping;
+  summary.linear_solver = options.linear_solver;
+  summary.num_threads = context.num_threads;
   BundleAdjustmentResult& out = result->adjustment;
   auto finish = [&](SolverTermination type, const std::string& message) {
     summary.termination_type = type;
@@ -736,6 +867,8 @@ Status TaylorBundleAdjust(const TaylorBundleOptions& options, const BundleAdjust
     BuildLayout(*block, plan, &layout);
     SummarizeRound(*block, plan, layout, round, &summary);
     reduction = std::make_unique<Reduction>();
+    reduction->solver = options.linear_solver;
+    reduction->num_threads = context.num_threads;
     std::string message;
     const SolverTermination type =
         RunRound(context, round, &layout, &state, &normal, reduction.get(), result, &message);
@@ -783,7 +916,8 @@ Status TaylorBundleAdjust(const TaylorBundleOptions& options, const BundleAdjust
 
 Status BundleAdjustWithSolver(PoseSolver solver, const BundleAdjustmentOptions& options,
                               const BundleAdjustmentConfig& config, Block* block,
-                              BundleAdjustmentResult* result, TaylorBundleResult* taylor_result) {
+                              BundleAdjustmentResult* result, TaylorBundleResult* taylor_result,
+                              std::optional<TaylorDamping> damping) {
   CHECK(result != nullptr);
   if (solver == PoseSolver::kCeres) return BundleAdjust(options, config, block, result);
   TaylorBundleOptions taylor_options;
@@ -792,6 +926,7 @@ Status BundleAdjustWithSolver(PoseSolver solver, const BundleAdjustmentOptions& 
                                       : TaylorPartials::kCorrected;
   PHOTOPOSE_RETURN_IF_ERROR(
       TaylorBundleOptionsFromBundleOptions(options, partials, &taylor_options));
+  if (damping) taylor_options.damping = *damping;
   TaylorBundleResult local;
   TaylorBundleResult& taylor = taylor_result != nullptr ? *taylor_result : local;
   const Status status = TaylorBundleAdjust(taylor_options, config, block, &taylor);

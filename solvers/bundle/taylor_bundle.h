@@ -31,9 +31,24 @@
 //
 //   S = U - sum_p W_p V_p^-1 W_p^T,   r = g_e - sum_p W_p V_p^-1 g_p,
 //
-// S d_e = r is solved by a sparse LDL^T (Eigen::SimplicialLDLT of the Jacobi-scaled S, the images
-// ordered by AMD on the image graph), and the point corrections are back-substituted,
-// d_p = V_p^-1 (g_p - W_p^T d_e). Plain Gauss-Newton, no damping: the lecture's method.
+// S d_e = r is solved by a sparse Cholesky factor of the Jacobi-scaled S, the images ordered by AMD
+// on the image graph (CHOLMOD's supernodal LL^T, the pattern analysed once per round and refactorised
+// per iteration; or Eigen::SimplicialLDLT, the first implementation, kept as the reference), and the
+// point corrections are back-substituted, d_p = V_p^-1 (g_p - W_p^T d_e).
+//
+// Damping: plain Gauss-Newton (kNone) is the lecture's method and diverges from poor starts. The
+// default is Levenberg-Marquardt on the same normal equations: the diagonal of the full normal
+// matrix is scaled by (1 + lambda) before the points are eliminated (U + lambda diag U, V_p + lambda
+// diag V_p), a step is taken when its gain ratio rho = (actual decrease) / (decrease predicted by
+// the linearisation) exceeds min_gain_ratio, and lambda follows Nielsen's rule (taken: lambda *=
+// max(1/3, 1 - (2 rho - 1)^3); refused: lambda *= nu, nu *= 2). A refused step is retried from the
+// same linearisation (only the reduction and the factorisation are redone). When a step is below
+// the tolerances the undamped Gauss-Newton step is solved at that point: the round has converged
+// when it too is below them (it is also the datum check: a singular S fails the round as before).
+//
+// Threads: the linearisation (per image), the elimination of the points (in kReductionChunks fixed
+// chunks whose partial sums are added in chunk order) and the back-substitution (per point) run on
+// num_threads threads; the result does not depend on the thread count, bit for bit.
 //
 // Supported: kFrame cameras with fixed interior orientation (any distortion model or table,
 // affinity, Polarity); control, check and tie points; GNSS camera positions with an applied
@@ -54,6 +69,7 @@
 #include <vector>
 
 #include "core/block.h"
+#include "core/enum_names.h"
 #include "core/status.h"
 #include "core/types.h"
 #include "solvers/bundle/bundle_adjustment.h"
@@ -62,9 +78,55 @@
 
 namespace photopose {
 
+// How a correction is damped (see the header comment).
+enum class TaylorDamping {
+  kNone,                // plain Gauss-Newton: the lecture's method
+  kLevenbergMarquardt,  // the production default
+};
+inline constexpr EnumNameEntry<TaylorDamping> kTaylorDampingNames[] = {
+    {TaylorDamping::kNone, "none"},
+    {TaylorDamping::kLevenbergMarquardt, "levenberg_marquardt"},
+    {TaylorDamping::kNone, "gauss_newton"},
+    {TaylorDamping::kLevenbergMarquardt, "lm"}};
+constexpr EnumNameTable<TaylorDamping> EnumNames(TaylorDamping) {
+  return EnumNameTable<TaylorDamping>(kTaylorDampingNames, NameMatch::kIgnoreCase);
+}
+
+// The factorisation of the reduced camera system.
+enum class TaylorLinearSolver {
+  kCholmodSupernodal,  // CHOLMOD's supernodal LL^T (SuiteSparse): the production default
+  kEigenLdlt,          // Eigen::SimplicialLDLT: the first implementation, kept as the reference
+};
+inline constexpr EnumNameEntry<TaylorLinearSolver> kTaylorLinearSolverNames[] = {
+    {TaylorLinearSolver::kCholmodSupernodal, "cholmod_supernodal"},
+    {TaylorLinearSolver::kEigenLdlt, "eigen_ldlt"}};
+constexpr EnumNameTable<TaylorLinearSolver> EnumNames(TaylorLinearSolver) {
+  return EnumNameTable<TaylorLinearSolver>(kTaylorLinearSolverNames, NameMatch::kIgnoreCase);
+}
+
+// The damping the Taylor path runs with by default: Levenberg-Marquardt with the corrected
+// partials; plain Gauss-Newton, the lecture's method, with the as-printed ones (not the
+// derivative of the objective: a gain ratio against them means nothing).
+constexpr TaylorDamping DefaultTaylorDamping(TaylorPartials partials) {
+  return partials == TaylorPartials::kAsPrinted ? TaylorDamping::kNone
+                                                : TaylorDamping::kLevenbergMarquardt;
+}
+
 struct TaylorBundleOptions {
   // Partial derivatives of the exterior orientation (eqs. 17-28): eq. 21 corrected or as printed.
   TaylorPartials partials = TaylorPartials::kCorrected;
+  // kLevenbergMarquardt needs the corrected partials (IsValid).
+  TaylorDamping damping = TaylorDamping::kLevenbergMarquardt;
+  // Levenberg-Marquardt: lambda at the start of every round (unitless, relative to the diagonal;
+  // Ceres' default trust region radius 1e4 is lambda 1e-4), the smallest gain ratio of a step
+  // taken (unitless), and the lambda beyond which the round fails (unitless).
+  double initial_damping = 1e-4;
+  double min_gain_ratio = 1e-3;
+  double max_damping = 1e16;
+  TaylorLinearSolver linear_solver = TaylorLinearSolver::kCholmodSupernodal;
+  // Threads of the linearisation, the elimination and the back-substitution (count; 0: every
+  // core); never more than one per 1000 marks. The result is the same for every count.
+  int num_threads = 1;
   // The objective's accuracies, defaults and per-row overrides exactly as BundleAdjust takes them.
   BundleAccuracies accuracies;
   // After convergence, marks whose whitened residual |v| / sigma exceeds rejection_threshold *
@@ -72,8 +134,8 @@ struct TaylorBundleOptions {
   // max_rejection_rounds times (BundleAdjust's rule). 0 disables rejection.
   double rejection_threshold = 4.5;
   int max_rejection_rounds = 3;
-  // Gauss-Newton corrections per round (count). With the corrected partials a block converges in
-  // 3-6; the as-printed partials converge linearly and can need several times more.
+  // Corrections per round, taken or refused (count). With the corrected partials a block converges
+  // in 3-6; the as-printed partials converge linearly and can need several times more.
   int max_iterations = 50;
   // Convergence: a round stops after the first correction whose every camera-centre and
   // ground-point component is at most position_tolerance_m (m) and every angle component at most
@@ -104,14 +166,14 @@ struct TaylorBundleOptions {
 };
 
 // The Taylor options that minimise the same objective as `ceres` (accuracies, rejection, covariance
-// limit, progress; the lever arm is the config's, BundleAdjustmentConfig::lever_arm_m). Errors name
+// limit, threads, progress; the lever arm is the config's, BundleAdjustmentConfig::lever_arm_m). Errors name
 // what the Taylor path does not do: a robust tie loss (an estimated lever arm, a config matter, is
 // refused by TaylorBundleAdjust). The Taylor options keep their own flat fields rather than
 // BundleAdjustmentOptions' parts: they take only a few fields of each part (and refuse the rest).
 Status TaylorBundleOptionsFromBundleOptions(const BundleAdjustmentOptions& ceres,
                                             TaylorPartials partials, TaylorBundleOptions* options);
 
-// One Gauss-Newton correction.
+// One correction (Gauss-Newton, or a Levenberg-Marquardt step taken or refused).
 struct TaylorBundleIteration {
   int round = 0;
   int iteration = 0;
@@ -119,6 +181,9 @@ struct TaylorBundleIteration {
   double max_position_correction_m = 0.0;  // camera centres and points (m)
   double max_angle_correction_rad = 0.0;   // rad
   double seconds = 0.0;                    // wall time of this correction (linearise + solve)
+  double damping = 0.0;      // lambda of the step (unitless; 0 for Gauss-Newton)
+  double gain_ratio = 1.0;   // actual / predicted decrease (unitless; 1 for Gauss-Newton)
+  bool taken = true;         // false: refused, the state unchanged
 };
 
 struct TaylorBundleSummary {
@@ -130,7 +195,11 @@ struct TaylorBundleSummary {
   // Tie points seen twice or more without initial coordinates: left out with their marks.
   std::vector<std::string> tie_points_left_out;
   int rounds = 0;      // adjustment rounds (rejections re-adjust)
-  int iterations = 0;  // Gauss-Newton corrections over all rounds (count)
+  int iterations = 0;  // corrections over all rounds, taken or refused (count)
+  int refused_steps = 0;  // Levenberg-Marquardt steps refused (count)
+  TaylorDamping damping = TaylorDamping::kLevenbergMarquardt;
+  TaylorLinearSolver linear_solver = TaylorLinearSolver::kCholmodSupernodal;
+  int num_threads = 1;  // threads used (count)
   // 1/2 sum of squared whitened residuals (unitless, the Ceres cost): at the start of the first
   // round and at the end of the last.
   double initial_cost = 0.0;
@@ -186,12 +255,14 @@ Status TaylorBundleAdjust(const TaylorBundleOptions& options, const BundleAdjust
 // kCeres calls BundleAdjust(options, ...) (its derivative path from options.solver.jacobian); kTaylor and
 // kTaylorAsPrinted call TaylorBundleAdjust with TaylorBundleOptionsFromBundleOptions(options) and
 // return its result in BundleAdjust's shape (taylor_result, when not null, receives the whole
-// Taylor result: its summary and iteration history). Errors as the solver called returns them,
-// plus the options the Taylor path refuses.
+// Taylor result: its summary and iteration history; damping, when given, replaces the Taylor
+// path's default, DefaultTaylorDamping). Errors as the solver called returns them, plus the
+// options the Taylor path refuses.
 Status BundleAdjustWithSolver(PoseSolver solver, const BundleAdjustmentOptions& options,
                               const BundleAdjustmentConfig& config, Block* block,
                               BundleAdjustmentResult* result,
-                              TaylorBundleResult* taylor_result = nullptr);
+                              TaylorBundleResult* taylor_result = nullptr,
+                              std::optional<TaylorDamping> damping = std::nullopt);
 
 // ------------------------------------------------------------------ the linearisation, exposed
 

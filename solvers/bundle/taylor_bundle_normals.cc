@@ -7,6 +7,7 @@
 #include <cmath>
 #include <unordered_map>
 
+#include "core/parallel.h"
 #include "core/rotation.h"
 #include "solvers/resection/taylor_resection.h"
 
@@ -78,6 +79,8 @@ void BuildLayout(const Block& block, const Plan& plan, Layout* layout) {
   for (size_t i = 0; i < block.images.size(); ++i)
     layout->num_observations += 3 * (plan.image_prior[i] + plan.image_attitude[i]);
   layout->point_marks.assign(layout->free_points.size(), {});
+  layout->point_all_marks.assign(layout->free_points.size(), {});
+  layout->image_marks.assign(block.images.size(), {});
   for (size_t m = 0; m < block.marks.size(); ++m) {
     if (!plan.mark_used[m]) continue;
     const int k = static_cast<int>(layout->marks.size());
@@ -87,8 +90,24 @@ void BuildLayout(const Block& block, const Plan& plan, Layout* layout) {
     const int q = layout->point_block[block.marks[m].point];
     layout->mark_block.push_back(b);
     layout->mark_point.push_back(q);
+    layout->image_marks[block.marks[m].image].push_back(k);
+    if (q >= 0) layout->point_all_marks[q].push_back(k);
     if (q >= 0 && b >= 0) layout->point_marks[q].push_back(k);
   }
+  // Chunks of about equal elimination work (a point's is about n^2 for its n marks).
+  double total_work = 0.0;
+  for (const std::vector<int>& marks : layout->point_marks)
+    total_work += 1.0 + static_cast<double>(marks.size()) * marks.size();
+  layout->chunk_start.assign(1, 0);
+  double work = 0.0;
+  for (size_t q = 0; q < layout->point_marks.size(); ++q) {
+    const int chunk = static_cast<int>(layout->chunk_start.size());
+    if (chunk < kReductionChunks && work >= total_work * chunk / kReductionChunks)
+      layout->chunk_start.push_back(static_cast<int>(q));
+    work += 1.0 + static_cast<double>(layout->point_marks[q].size()) * layout->point_marks[q].size();
+  }
+  while (static_cast<int>(layout->chunk_start.size()) <= kReductionChunks)
+    layout->chunk_start.push_back(static_cast<int>(layout->free_points.size()));
 
   // Block pairs: the diagonal, and every two images that see a common free point.
   std::unordered_map<long long, int> pair_index;
@@ -142,73 +161,118 @@ void BuildLayout(const Block& block, const Plan& plan, Layout* layout) {
 
 namespace {
 
-// Marks: eqs. 7-8 with eqs. 17-28 for the camera and dF/dX = -dF/dX0 for the point. False when a
-// point is not in front of its camera (normal->behind_mark says which).
+// Marks: eqs. 7-8 with eqs. 17-28 for the camera and dF/dX = -dF/dX0 for the point, image by
+// image on num_threads threads: each image's camera sums (U, g_e) and its marks' W, g_p parts and
+// F are its own. The point sums (V, g_p) follow point by point over its marks in mark order. False
+// when a point is not in front of its camera (normal->behind_mark: the first such mark).
 bool LinearizeMarks(TaylorPartials partials, const Block& block, const Plan& plan,
-                    const Layout& layout, const Frame& frame, const State& state, Normal* normal,
-                    DenseRows* dense) {
-  std::vector<TaylorPoseLinearization> poses;
-  poses.reserve(block.images.size());
-  for (size_t i = 0; i < block.images.size(); ++i)
-    poses.emplace_back(partials, state.eo[i].data(), frame.focal_um[i]);
-  for (size_t k = 0; k < layout.marks.size(); ++k) {
-    const int m = layout.marks[k];
-    const BlockMark& mark = block.marks[m];
-    double row_u[6], row_v[6], fu, fv, w;
-    if (!poses[mark.image].Linearize(state.points[mark.point].data(), plan.ideal_um[m].data(),
-                                     row_u, row_v, &fu, &fv, &w)) {
-      normal->behind_mark = m;
-      normal->behind_w = w;
-      return false;
+                    const Layout& layout, const Frame& frame, const State& state, int num_threads,
+                    Normal* normal) {
+  const size_t num_images = block.images.size();
+  std::vector<double> image_ssr(num_images, 0.0);
+  std::vector<int> image_behind(num_images, -1);
+  std::vector<double> image_behind_w(num_images, 0.0);
+  ParallelFor(num_images, num_threads, [&](size_t i) {
+    const TaylorPoseLinearization pose(partials, state.eo[i].data(), frame.focal_um[i]);
+    const int b = layout.image_block[i];
+    Matrix6d U = Matrix6d::Zero();
+    Vector6d ge = Vector6d::Zero();
+    double ssr = 0.0;
+    for (const int k : layout.image_marks[i]) {
+      const int m = layout.marks[k];
+      const BlockMark& mark = block.marks[m];
+      double row_u[6], row_v[6], fu, fv, w;
+      if (!pose.Linearize(state.points[mark.point].data(), plan.ideal_um[m].data(), row_u, row_v,
+                          &fu, &fv, &w)) {
+        image_behind[i] = m;
+        image_behind_w[i] = w;
+        return;
+      }
+      const double weight = 1.0 / (plan.mark_sigma[m] * plan.mark_sigma[m]);
+      const Eigen::Vector2d F(fu, fv);
+      normal->f[k] = F;
+      ssr += weight * F.squaredNorm();
+      Matrix26 A_e;
+      for (int c = 0; c < 6; ++c) {
+        A_e(0, c) = row_u[c];
+        A_e(1, c) = row_v[c];
+      }
+      Matrix23 A_p;
+      PointPartialsFromCentrePartials(row_u, row_v, &A_p);
+      const Eigen::Matrix<double, 6, 2> weighted_Ae_T = weight * A_e.transpose();
+      if (b >= 0) {
+        U.noalias() += weighted_Ae_T * A_e;
+        ge.noalias() += weighted_Ae_T * F;
+      }
+      normal->W[k].noalias() = weighted_Ae_T * A_p;
+      normal->gp_mark[k].noalias() = weight * A_p.transpose() * F;
     }
-    const double weight = 1.0 / (plan.mark_sigma[m] * plan.mark_sigma[m]);
-    const Eigen::Vector2d F(fu, fv);
-    normal->f[k] = F;
-    normal->weighted_ssr += weight * F.squaredNorm();
-    Matrix26 A_e;
-    for (int c = 0; c < 6; ++c) {
-      A_e(0, c) = row_u[c];
-      A_e(1, c) = row_v[c];
-    }
-    Matrix23 A_p;
-    PointPartialsFromCentrePartials(row_u, row_v, &A_p);
-    const int b = layout.mark_block[k];
-    const int q = layout.mark_point[k];
     if (b >= 0) {
-      normal->U[b].noalias() += weight * A_e.transpose() * A_e;
-      normal->ge[b].noalias() += weight * A_e.transpose() * F;
+      normal->U[b] = U;
+      normal->ge[b] = ge;
     }
-    if (q >= 0) {
-      normal->V[q].noalias() += weight * A_p.transpose() * A_p;
-      normal->gp[q].noalias() += weight * A_p.transpose() * F;
-    }
-    if (b >= 0 && q >= 0) {
-      normal->W[k].noalias() = weight * A_e.transpose() * A_p;
-    } else {
-      normal->W[k].setZero();
-    }
-    if (dense != nullptr) {
-      const double s = std::sqrt(weight);
-      const double point_u[3] = {A_p(0, 0), A_p(0, 1), A_p(0, 2)};
-      const double point_v[3] = {A_p(1, 0), A_p(1, 1), A_p(1, 2)};
-      dense->Add(mark.image, row_u, mark.point, point_u, s, fu);
-      dense->Add(mark.image, row_v, mark.point, point_v, s, fv);
+    image_ssr[i] = ssr;
+  });
+  for (size_t i = 0; i < num_images; ++i) {
+    if (image_behind[i] >= 0 &&
+        (normal->behind_mark < 0 || image_behind[i] < normal->behind_mark)) {
+      normal->behind_mark = image_behind[i];
+      normal->behind_w = image_behind_w[i];
     }
   }
+  if (normal->behind_mark >= 0) return false;
+  for (size_t i = 0; i < num_images; ++i) normal->weighted_ssr += image_ssr[i];
+  // V_p = sum w A_p^T A_p: A_e's first three columns are -A_p, so it is minus the top of W.
+  ParallelFor(layout.free_points.size(), num_threads, [&](size_t q) {
+    Eigen::Matrix3d V = Eigen::Matrix3d::Zero();
+    Eigen::Vector3d gp = Eigen::Vector3d::Zero();
+    for (const int k : layout.point_all_marks[q]) {
+      V -= normal->W[k].topRows<3>();
+      gp += normal->gp_mark[k];
+    }
+    normal->V[q] = V;
+    normal->gp[q] = gp;
+  });
   return true;
 }
 
+// The dense rows of the marks, in mark order (LinearizeTaylorBundle only: small blocks).
+void DenseMarkRows(TaylorPartials partials, const Block& block, const Plan& plan,
+                   const Layout& layout, const Frame& frame, const State& state,
+                   DenseRows* dense) {
+  for (size_t k = 0; k < layout.marks.size(); ++k) {
+    const int m = layout.marks[k];
+    const BlockMark& mark = block.marks[m];
+    const TaylorPoseLinearization pose(partials, state.eo[mark.image].data(),
+                                       frame.focal_um[mark.image]);
+    double row_u[6], row_v[6], fu, fv, w;
+    if (!pose.Linearize(state.points[mark.point].data(), plan.ideal_um[m].data(), row_u, row_v,
+                        &fu, &fv, &w))
+      continue;  // not reached: LinearizeMarks succeeded at the same values
+    Matrix23 A_p;
+    PointPartialsFromCentrePartials(row_u, row_v, &A_p);
+    const double s = 1.0 / plan.mark_sigma[m];
+    const double point_u[3] = {A_p(0, 0), A_p(0, 1), A_p(0, 2)};
+    const double point_v[3] = {A_p(1, 0), A_p(1, 1), A_p(1, 2)};
+    dense->Add(mark.image, row_u, mark.point, point_u, s, fu);
+    dense->Add(mark.image, row_v, mark.point, point_v, s, fv);
+  }
+}
+
 // Control points: F = X - X_surveyed per axis, A = I.
+// With cost_only, only normal->weighted_ssr is touched (EvaluateCost).
 void LinearizeControlPoints(const Plan& plan, const Layout& layout, const Frame& frame,
-                            const State& state, Normal* normal, DenseRows* dense) {
+                            const State& state, bool cost_only, Normal* normal,
+                            DenseRows* dense) {
   for (size_t q = 0; q < layout.free_points.size(); ++q) {
     const int p = layout.free_points[q];
     if (!plan.point_prior[p]) continue;
     const Eigen::Vector3d F = state.points[p] - frame.surveyed[p];
     const Eigen::Vector3d weight = plan.point_sigma[p].cwiseAbs2().cwiseInverse();
+    normal->weighted_ssr += weight.dot(F.cwiseAbs2());
+    if (cost_only) continue;
     normal->V[q].diagonal() += weight;
     normal->gp[q] += weight.cwiseProduct(F);
-    normal->weighted_ssr += weight.dot(F.cwiseAbs2());
     if (dense != nullptr) {
       for (int axis = 0; axis < 3; ++axis) {
         const Eigen::Vector3d row = Eigen::Vector3d::Unit(axis);
@@ -219,9 +283,9 @@ void LinearizeControlPoints(const Plan& plan, const Layout& layout, const Frame&
 }
 
 // Camera positions: F = X0 + R^T l - X_gnss, A = [I, d(R^T l)/d angles]. Attitudes: F = the
-// angle differences (wrapped), A = [0, I].
+// angle differences (wrapped), A = [0, I]. With cost_only, only normal->weighted_ssr is touched.
 void LinearizeImagePriors(const Block& block, const Plan& plan, const Layout& layout,
-                          const Frame& frame, const State& state, Normal* normal,
+                          const Frame& frame, const State& state, bool cost_only, Normal* normal,
                           DenseRows* dense) {
   for (size_t i = 0; i < block.images.size(); ++i) {
     const int b = layout.image_block[i];
@@ -239,9 +303,11 @@ void LinearizeImagePriors(const Block& block, const Plan& plan, const Layout& la
       }
       const Eigen::Vector3d F = antenna - frame.measured[i];
       const Eigen::Vector3d weight = plan.image_prior_sigma[i].cwiseAbs2().cwiseInverse();
-      normal->U[b].noalias() += A.transpose() * weight.asDiagonal() * A;
-      normal->ge[b].noalias() += A.transpose() * weight.cwiseProduct(F);
       normal->weighted_ssr += weight.dot(F.cwiseAbs2());
+      if (!cost_only) {
+        normal->U[b].noalias() += A.transpose() * weight.asDiagonal() * A;
+        normal->ge[b].noalias() += A.transpose() * weight.cwiseProduct(F);
+      }
       if (dense != nullptr) {
         for (int axis = 0; axis < 3; ++axis) {
           const Vector6d row = A.row(axis).transpose();
@@ -255,9 +321,11 @@ void LinearizeImagePriors(const Block& block, const Plan& plan, const Layout& la
       for (int k = 0; k < 3; ++k)
         F[k] = WrapAngle(state.eo[i][3 + k] - (*block.images[i].measured_angles_rad)[k]);
       const Eigen::Vector3d weight = plan.image_attitude_sigma[i].cwiseAbs2().cwiseInverse();
-      normal->U[b].bottomRightCorner<3, 3>().diagonal() += weight;
-      normal->ge[b].tail<3>() += weight.cwiseProduct(F);
       normal->weighted_ssr += weight.dot(F.cwiseAbs2());
+      if (!cost_only) {
+        normal->U[b].bottomRightCorner<3, 3>().diagonal() += weight;
+        normal->ge[b].tail<3>() += weight.cwiseProduct(F);
+      }
       if (dense != nullptr) {
         for (int axis = 0; axis < 3; ++axis) {
           const Vector6d row = Vector6d::Unit(3 + axis);
@@ -272,7 +340,8 @@ void LinearizeImagePriors(const Block& block, const Plan& plan, const Layout& la
 }  // namespace
 
 bool Linearize(TaylorPartials partials, const Block& block, const Plan& plan, const Layout& layout,
-               const Frame& frame, const State& state, Normal* normal, DenseRows* dense) {
+               const Frame& frame, const State& state, int num_threads, Normal* normal,
+               DenseRows* dense) {
   const size_t num_blocks = layout.free_images.size();
   const size_t num_points = layout.free_points.size();
   normal->U.assign(num_blocks, Matrix6d::Zero());
@@ -280,45 +349,85 @@ bool Linearize(TaylorPartials partials, const Block& block, const Plan& plan, co
   normal->V.assign(num_points, Eigen::Matrix3d::Zero());
   normal->gp.assign(num_points, Eigen::Vector3d::Zero());
   normal->W.resize(layout.marks.size());
+  normal->gp_mark.resize(layout.marks.size());
   normal->f.resize(layout.marks.size());
   normal->weighted_ssr = 0.0;
   normal->behind_mark = -1;
-  if (!LinearizeMarks(partials, block, plan, layout, frame, state, normal, dense)) return false;
-  LinearizeControlPoints(plan, layout, frame, state, normal, dense);
-  LinearizeImagePriors(block, plan, layout, frame, state, normal, dense);
+  if (!LinearizeMarks(partials, block, plan, layout, frame, state, num_threads, normal))
+    return false;
+  if (dense != nullptr) DenseMarkRows(partials, block, plan, layout, frame, state, dense);
+  LinearizeControlPoints(plan, layout, frame, state, false, normal, dense);
+  LinearizeImagePriors(block, plan, layout, frame, state, false, normal, dense);
   return std::isfinite(normal->weighted_ssr);
+}
+
+bool EvaluateCost(TaylorPartials partials, const Block& block, const Plan& plan,
+                  const Layout& layout, const Frame& frame, const State& state, int num_threads,
+                  double* weighted_ssr, int* behind_mark) {
+  const size_t num_images = block.images.size();
+  std::vector<double> image_ssr(num_images, 0.0);
+  std::vector<int> image_behind(num_images, -1);
+  ParallelFor(num_images, num_threads, [&](size_t i) {
+    const TaylorPoseLinearization pose(partials, state.eo[i].data(), frame.focal_um[i]);
+    double ssr = 0.0;
+    for (const int k : layout.image_marks[i]) {
+      const int m = layout.marks[k];
+      double fu, fv, w;
+      if (!pose.Residual(state.points[block.marks[m].point].data(), plan.ideal_um[m].data(), &fu,
+                         &fv, &w)) {
+        image_behind[i] = m;
+        return;
+      }
+      const double weight = 1.0 / (plan.mark_sigma[m] * plan.mark_sigma[m]);
+      ssr += weight * Eigen::Vector2d(fu, fv).squaredNorm();
+    }
+    image_ssr[i] = ssr;
+  });
+  *behind_mark = -1;
+  for (size_t i = 0; i < num_images; ++i)
+    if (image_behind[i] >= 0 && (*behind_mark < 0 || image_behind[i] < *behind_mark))
+      *behind_mark = image_behind[i];
+  if (*behind_mark >= 0) return false;
+  Normal sums;  // only its weighted_ssr
+  for (size_t i = 0; i < num_images; ++i) sums.weighted_ssr += image_ssr[i];
+  LinearizeControlPoints(plan, layout, frame, state, true, &sums, nullptr);
+  LinearizeImagePriors(block, plan, layout, frame, state, true, &sums, nullptr);
+  *weighted_ssr = sums.weighted_ssr;
+  return std::isfinite(*weighted_ssr);
 }
 
 // ------------------------------------------------------------------ the reduced normal equations
 
 
-// Eliminates the points, 3 x 3 at a time:
-//   S = U - sum_p W_p V_p^-1 W_p^T,   r = g_e - sum_p W_p V_p^-1 g_p.
-// Returns the first free point whose block V_p is singular (its rays fix no point), or -1.
-int Reduce(const Normal& normal, const Layout& layout, Reduction* reduction) {
-  const int num_blocks = static_cast<int>(layout.free_images.size());
-  reduction->blocks.assign(layout.pairs.size(), Matrix6d::Zero());
-  reduction->r.resize(6 * num_blocks);
-  for (int b = 0; b < num_blocks; ++b) {
-    reduction->blocks[layout.diagonal_pair[b]] = normal.U[b];
-    reduction->r.segment<6>(6 * b) = normal.ge[b];
-  }
-  reduction->V_inverse.resize(layout.free_points.size());
-  for (size_t q = 0; q < layout.free_points.size(); ++q) {
-    const Eigen::LDLT<Eigen::Matrix3d> ldlt(normal.V[q]);
+namespace {
+
+// The diagonal of a normal block scaled by (1 + lambda).
+template <typename Matrix>
+Matrix Damped(const Matrix& N, double lambda) {
+  Matrix damped = N;
+  if (lambda > 0.0) damped.diagonal() += lambda * N.diagonal();
+  return damped;
+}
+
+// Eliminates the free points first .. last - 1 into (blocks, r), which hold this chunk's sums.
+// Returns the first singular free point, or -1.
+int ReduceChunk(const Normal& normal, const Layout& layout, int first, int last, double lambda,
+                std::vector<Matrix6d>* blocks, Eigen::VectorXd* r, std::vector<Matrix63>* Y,
+                std::vector<Eigen::Matrix3d>* V_inverses) {
+  for (int q = first; q < last; ++q) {
+    const Eigen::LDLT<Eigen::Matrix3d> ldlt(Damped(normal.V[q], lambda));
     const Eigen::Vector3d d = ldlt.vectorD();
     if (ldlt.info() != Eigen::Success || !(d.minCoeff() > kPointPivotRatio * d.maxCoeff()))
-      return layout.free_points[q];
+      return q;
     const Eigen::Matrix3d V_inverse = ldlt.solve(Eigen::Matrix3d::Identity());
-    reduction->V_inverse[q] = V_inverse;
+    (*V_inverses)[q] = V_inverse;
     const std::vector<int>& marks = layout.point_marks[q];
     const std::vector<int>& ids = layout.point_pairs[q];
     const int n = static_cast<int>(marks.size());
-    std::vector<Matrix63>& Y = reduction->Y;
-    Y.resize(n);
+    Y->resize(n);
     for (int a = 0; a < n; ++a) {
-      Y[a].noalias() = normal.W[marks[a]] * V_inverse;
-      reduction->r.segment<6>(6 * layout.mark_block[marks[a]]).noalias() -= Y[a] * normal.gp[q];
+      (*Y)[a].noalias() = normal.W[marks[a]] * V_inverse;
+      r->segment<6>(6 * layout.mark_block[marks[a]]).noalias() -= (*Y)[a] * normal.gp[q];
     }
     for (int a = 0; a < n; ++a) {
       const int ka = marks[a];
@@ -326,8 +435,8 @@ int Reduce(const Normal& normal, const Layout& layout, Reduction* reduction) {
       for (int c = a; c < n; ++c) {
         const int kc = marks[c];
         const int bc = layout.mark_block[kc];
-        Matrix6d& block = reduction->blocks[ids[TriangleIndex(a, c, n)]];
-        const Matrix6d M = Y[a] * normal.W[kc].transpose();  // W_a V^-1 W_c^T
+        Matrix6d& block = (*blocks)[ids[TriangleIndex(a, c, n)]];
+        const Matrix6d M = (*Y)[a] * normal.W[kc].transpose();  // W_a V^-1 W_c^T
         if (a == c || ba < bc) {
           block -= M;
         } else if (ba > bc) {
@@ -339,6 +448,65 @@ int Reduce(const Normal& normal, const Layout& layout, Reduction* reduction) {
     }
   }
   return -1;
+}
+
+}  // namespace
+
+// Eliminates the points, 3 x 3 at a time, in kReductionChunks chunks on num_threads threads:
+//   S = U - sum_p W_p V_p^-1 W_p^T,   r = g_e - sum_p W_p V_p^-1 g_p.
+// Chunk 0 sums into S and r directly, the others into their own copies, added in chunk order.
+// Returns the first free point whose block V_p is singular (its rays fix no point), or -1.
+int Reduce(const Normal& normal, const Layout& layout, Reduction* reduction) {
+  const int num_blocks = static_cast<int>(layout.free_images.size());
+  const double lambda = reduction->damping;
+  reduction->blocks.assign(layout.pairs.size(), Matrix6d::Zero());
+  reduction->r.resize(6 * num_blocks);
+  for (int b = 0; b < num_blocks; ++b) {
+    reduction->blocks[layout.diagonal_pair[b]] = Damped(normal.U[b], lambda);
+    reduction->r.segment<6>(6 * b) = normal.ge[b];
+  }
+  reduction->V_inverse.resize(layout.free_points.size());
+  reduction->chunk_blocks.resize(kReductionChunks - 1);
+  reduction->chunk_r.resize(kReductionChunks - 1);
+  reduction->Y.resize(kReductionChunks);
+  std::vector<int> singular(kReductionChunks, -1);
+  ParallelFor(kReductionChunks, reduction->num_threads, [&](size_t chunk) {
+    std::vector<Matrix6d>* blocks = &reduction->blocks;
+    Eigen::VectorXd* r = &reduction->r;
+    if (chunk > 0) {
+      blocks = &reduction->chunk_blocks[chunk - 1];
+      r = &reduction->chunk_r[chunk - 1];
+      blocks->assign(layout.pairs.size(), Matrix6d::Zero());
+      r->setZero(6 * num_blocks);
+    }
+    singular[chunk] = ReduceChunk(normal, layout, layout.chunk_start[chunk],
+                                  layout.chunk_start[chunk + 1], lambda, blocks, r,
+                                  &reduction->Y[chunk], &reduction->V_inverse);
+  });
+  for (int chunk = 0; chunk < kReductionChunks; ++chunk)
+    if (singular[chunk] >= 0) return layout.free_points[singular[chunk]];
+  // The partial sums in chunk order, pair by pair on the threads (each pair its own).
+  ParallelFor(layout.pairs.size(), reduction->num_threads, [&](size_t k) {
+    for (int chunk = 1; chunk < kReductionChunks; ++chunk)
+      reduction->blocks[k] += reduction->chunk_blocks[chunk - 1][k];
+  });
+  for (int chunk = 1; chunk < kReductionChunks; ++chunk) reduction->r += reduction->chunk_r[chunk - 1];
+  return -1;
+}
+
+double PredictedDecrease(const Layout& layout, const Normal& normal, double lambda,
+                         const Eigen::VectorXd& d_e, const std::vector<Eigen::Vector3d>& d_p) {
+  double dg = 0.0, dDd = 0.0;
+  for (size_t b = 0; b < layout.free_images.size(); ++b) {
+    const Vector6d d = d_e.segment<6>(6 * b);
+    dg += d.dot(normal.ge[b]);
+    dDd += d.dot(normal.U[b].diagonal().cwiseProduct(d));
+  }
+  for (size_t q = 0; q < layout.free_points.size(); ++q) {
+    dg += d_p[q].dot(normal.gp[q]);
+    dDd += d_p[q].dot(normal.V[q].diagonal().cwiseProduct(d_p[q]));
+  }
+  return 0.5 * (dg + lambda * dDd);
 }
 
 // Writes the Jacobi-scaled S into layout->S (fixed components: their row and column zero, 1 on
@@ -382,6 +550,16 @@ int WriteScaled(const Plan& plan, Layout* layout, Reduction* reduction) {
 
 // Factorises the scaled S. False when it is not positive definite to min_pivot_ratio.
 bool Factorize(double min_pivot_ratio, const Layout& layout, Reduction* reduction) {
+  if (reduction->solver == TaylorLinearSolver::kCholmodSupernodal) {
+    if (!reduction->analysed) {
+      if (!reduction->cholmod.Analyze(layout.S).ok()) {
+        reduction->pivot_ratio = 0.0;
+        return false;
+      }
+      reduction->analysed = true;
+    }
+    return reduction->cholmod.Factorize(layout.S, min_pivot_ratio, &reduction->pivot_ratio);
+  }
   if (!reduction->analysed) {
     reduction->ldlt.analyzePattern(layout.S);
     reduction->analysed = true;
@@ -410,14 +588,16 @@ void SolveCorrections(const Plan& plan, const Layout& layout, const Normal& norm
   for (int b = 0; b < static_cast<int>(layout.free_images.size()); ++b)
     for (int c = 0; c < 6; ++c)
       if (IsFixed(plan, layout, b, c)) rhs[6 * b + c] = 0.0;
-  *d_e = s.cwiseProduct(reduction.ldlt.solve(rhs));
+  *d_e = s.cwiseProduct(reduction.solver == TaylorLinearSolver::kCholmodSupernodal
+                           ? reduction.cholmod.Solve(rhs)
+                           : Eigen::VectorXd(reduction.ldlt.solve(rhs)));
   d_p->resize(layout.free_points.size());
-  for (size_t q = 0; q < layout.free_points.size(); ++q) {
+  ParallelFor(layout.free_points.size(), reduction.num_threads, [&](size_t q) {
     Eigen::Vector3d t = normal.gp[q];
     for (const int k : layout.point_marks[q])
       t.noalias() -= normal.W[k].transpose() * d_e->segment<6>(6 * layout.mark_block[k]);
     (*d_p)[q] = reduction.V_inverse[q] * t;
-  }
+  });
 }
 
 // The blocks of S^-1 the statistics need, unscaled (the whitened system's inverse): per camera

@@ -362,6 +362,18 @@ bool TaylorPoseLinearization::Linearize(const double* point, const double* obser
                                     w_m);
 }
 
+bool TaylorPoseLinearization::Residual(const double* point, const double* observed_um,
+                                       double* fu_um, double* fv_um, double* w_m) const {
+  PoseTrig trig;
+  std::copy(R_, R_ + 9, trig.R);
+  trig.sin_omega = sin_omega_;
+  trig.cos_omega = cos_omega_;
+  const double d[3] = {point[0] - center_[0], point[1] - center_[1], point[2] - center_[2]};
+  return photopose::Linearize<false>(trig, focal_um_, 1.0 / focal_um_, as_printed_, d,
+                                     observed_um[0], observed_um[1], nullptr, nullptr, fu_um,
+                                     fv_um, w_m);
+}
+
 Status TaylorResection(const TaylorResectionOptions& options,
                        const std::vector<Eigen::Vector2d>& image_plane_um,
                        const std::vector<Eigen::Vector3d>& points_in_ground,

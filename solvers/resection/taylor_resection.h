@@ -184,6 +184,9 @@ class TaylorPoseLinearization {
   // w_m receives w (m). Returns false when w >= 0 (or NaN); then only w_m is written.
   bool Linearize(const double* point, const double* observed_um, double row_u[6], double row_v[6],
                  double* fu_um, double* fv_um, double* w_m) const;
+  // Fu, Fv and w alone, the same values Linearize gives (a cost evaluation without partials).
+  bool Residual(const double* point, const double* observed_um, double* fu_um, double* fv_um,
+                double* w_m) const;
 
  private:
   double center_[3];

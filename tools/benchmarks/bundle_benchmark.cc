@@ -47,18 +47,9 @@ const BenchData& BenchBlock(int size_index) {
   static std::map<int, BenchData> cache;
   auto found = cache.find(size_index);
   if (found != cache.end()) return found->second;
-  SyntheticBlockOptions o;
-  o.seed = 2026;
-  o.num_lines = kBlockSizes[size_index].lines;
-  o.images_per_line = kBlockSizes[size_index].images_per_line;
-  o.num_tie_points = kBlockSizes[size_index].tie_points;
-  o.forward_spacing_m = 20.0;
-  o.side_spacing_m = 30.0;
-  o.control_layout = {{0, 0}, {1, 0}, {0, 1}, {1, 1}, {0.5, 0.5}};
-  o.num_check_points = 2;
-  o.control_sigma_m = 0.005;
-  o.mark_sigma_px = 0.5;
-  o.gnss_sigma_m = Eigen::Vector3d::Constant(0.03);
+  const SyntheticBlockOptions o = SolverBenchmarkBlockOptions(
+      kBlockSizes[size_index].lines, kBlockSizes[size_index].images_per_line,
+      kBlockSizes[size_index].tie_points);
   BenchData data;
   const Status status = MakeSyntheticBlock(o, &data.block, &data.truth);
   if (!status.ok()) {
@@ -115,10 +106,17 @@ void TimeAdjustment(benchmark::State& state, const BenchData& data, Adjust adjus
   state.counters["converged"] = outcome.second ? 1.0 : 0.0;
 }
 
-void BM_BundleTaylor(benchmark::State& state, TaylorPartials partials) {
+// The Taylor solver's production settings (Levenberg-Marquardt, CHOLMOD supernodal) on one and
+// two threads, the lecture's undamped Gauss-Newton with Eigen's LDL^T (its first implementation),
+// and the printed partials.
+void BM_BundleTaylor(benchmark::State& state, TaylorPartials partials, TaylorDamping damping,
+                     TaylorLinearSolver linear_solver, int threads) {
   const BenchData& data = BenchBlock(static_cast<int>(state.range(0)));
   TaylorBundleOptions options;
   options.partials = partials;
+  options.damping = damping;
+  options.linear_solver = linear_solver;
+  options.num_threads = threads;
   options.rejection_threshold = 0.0;
   options.covariances = BundleCovarianceMethod::kNone;
   if (partials == TaylorPartials::kAsPrinted) options.max_iterations = 200;
@@ -130,10 +128,20 @@ void BM_BundleTaylor(benchmark::State& state, TaylorPartials partials) {
                           adjusted.ok() && result.summary.IsSolutionUsable());
   });
 }
-BENCHMARK_CAPTURE(BM_BundleTaylor, corrected, TaylorPartials::kCorrected)
+BENCHMARK_CAPTURE(BM_BundleTaylor, corrected, TaylorPartials::kCorrected,
+                  TaylorDamping::kLevenbergMarquardt, TaylorLinearSolver::kCholmodSupernodal, 1)
     ->DenseRange(0, 2)
     ->Unit(benchmark::kMillisecond);
-BENCHMARK_CAPTURE(BM_BundleTaylor, as_printed, TaylorPartials::kAsPrinted)
+BENCHMARK_CAPTURE(BM_BundleTaylor, corrected_two_threads, TaylorPartials::kCorrected,
+                  TaylorDamping::kLevenbergMarquardt, TaylorLinearSolver::kCholmodSupernodal, 2)
+    ->DenseRange(0, 2)
+    ->Unit(benchmark::kMillisecond);
+BENCHMARK_CAPTURE(BM_BundleTaylor, gauss_newton_eigen_ldlt, TaylorPartials::kCorrected,
+                  TaylorDamping::kNone, TaylorLinearSolver::kEigenLdlt, 1)
+    ->DenseRange(0, 2)
+    ->Unit(benchmark::kMillisecond);
+BENCHMARK_CAPTURE(BM_BundleTaylor, as_printed, TaylorPartials::kAsPrinted, TaylorDamping::kNone,
+                  TaylorLinearSolver::kCholmodSupernodal, 1)
     ->DenseRange(0, 2)
     ->Unit(benchmark::kMillisecond);
 

@@ -7,6 +7,7 @@
 #include <cstdio>
 #include <filesystem>
 #include <iostream>
+#include <optional>
 #include <sstream>
 
 #include "core/io/bal.h"
@@ -50,7 +51,8 @@ DEFINE_string(bundle_out_colmap_format, "", "Format of --out_colmap: text or bin
 DEFINE_string(bundle_report, "", "JSON report: summary, groups with their over-fitting verdict, control and check points, images, calibration, diagnostics, options (docs/formats.md).");
 DEFINE_string(bundle_html, "", "Self-contained HTML page of the adjustment: verdicts, plan view, residual histograms, tables.");
 DEFINE_string(bundle_rotation, "rxryrz", "Angle convention of the frames tables read and written: rxryrz (R = Rx(omega) Ry(phi) Rz(kappa) maps ground to camera; 'seed' is an alias), opk or pok (see docs/conventions.md).");
-DEFINE_string(bundle_solver, "ceres", "Block solver: ceres (Levenberg-Marquardt on the cost functions), taylor (the seed's Taylor linearisation, hand-written Gauss-Newton) or taylor_as_printed (with the partial derivatives as printed in the seed).");
+DEFINE_string(bundle_solver, "ceres", "Block solver: ceres (Levenberg-Marquardt on the cost functions), taylor (the seed's Taylor linearisation with hand-written normal equations; Levenberg-Marquardt unless --taylor_damping=none) or taylor_as_printed (with the partial derivatives as printed in the seed; Gauss-Newton).");
+DEFINE_string(bundle_taylor_damping, "", "Damping of --solver=taylor: levenberg_marquardt (the default) or none (the lecture's plain Gauss-Newton, which diverges from poor starts). Empty: the solver's default.");
 DEFINE_double(bundle_tie_accuracy, 1.0, "Accuracy (one sigma) of tie marks without an Accuracy value, in pixels.");
 DEFINE_double(bundle_marker_projection_accuracy, 0.5, "Accuracy (one sigma) of control and check marks without an Accuracy value, in pixels.");
 DEFINE_double(bundle_film_tie_accuracy, 5.0, "Accuracy of tie marks in film coordinates without an Accuracy value when the camera has no pixel size, in micrometres.");
@@ -152,6 +154,7 @@ struct BundleRun {
   BundleAdjustmentConfig config;
   std::vector<std::string> calibrate;  // --calibrate names
   PoseSolver solver = PoseSolver::kCeres;
+  std::optional<TaylorDamping> taylor_damping;  // --taylor_damping; empty: the solver's default
   BundleReportContext context;
   std::vector<std::pair<std::string, std::string>> written;  // (label, path) of the outputs
   Block block;
@@ -304,6 +307,14 @@ int OptionsFromFlags(const char* command, BundleRun* run) {
     return BadInput(command, EnumFlagError<PoseSolver>("--solver", FLAGS_bundle_solver));
   if (run->solver != PoseSolver::kCeres && (robustness.snoop || options.statistics.estimate_accuracies || FLAGS_bundle_cross_validate))
     return BadInput(command, "--solver=" + FLAGS_bundle_solver + " adjusts without snooping, accuracy estimation or cross-validation; use --solver=ceres for those");
+  if (!FLAGS_bundle_taylor_damping.empty()) {
+    TaylorDamping damping;
+    if (!ParseEnum(FLAGS_bundle_taylor_damping, &damping))
+      return BadInput(command, EnumFlagError<TaylorDamping>("--taylor_damping", FLAGS_bundle_taylor_damping));
+    if (run->solver == PoseSolver::kCeres)
+      return BadInput(command, "--taylor_damping is for --solver=taylor or taylor_as_printed; Ceres damps by its own trust region");
+    run->taylor_damping = damping;
+  }
   return kGoOn;
 }
 
@@ -703,7 +714,7 @@ int AdjustBundleBlock(const char* command, BundleRun* run) {
         ModelPart(*run), FLAGS_bundle_colmap_model.empty() ? nullptr : &run->colmap_extras);
     if (!writable.ok()) return BadInput(command, "--out_colmap: " + writable.message());
   }
-  const Status adjusted = BundleAdjustWithSolver(run->solver, run->options, run->config, &run->block, &result);
+  const Status adjusted = BundleAdjustWithSolver(run->solver, run->options, run->config, &run->block, &result, nullptr, run->taylor_damping);
   if (!adjusted.ok()) return BadInput(command, adjusted.message());
   const int checked = CheckSigma0(command, run);
   if (checked != kGoOn) return checked;

@@ -17,6 +17,7 @@
 #include "core/status.h"
 #include "solvers/bundle/internal/bundle_problem.h"
 #include "solvers/bundle/internal/selected_inversion.h"
+#include "solvers/bundle/internal/supernodal_cholesky.h"
 #include "solvers/bundle/taylor_bundle.h"
 
 namespace photopose::internal::taylor {
@@ -25,6 +26,12 @@ using Matrix63 = Eigen::Matrix<double, 6, 3>;
 using Matrix26 = Eigen::Matrix<double, 2, 6>;
 using Matrix23 = Eigen::Matrix<double, 2, 3>;
 using SparseMatrix = Eigen::SparseMatrix<double, Eigen::ColMajor, int>;
+
+// The free points are eliminated in this many chunks (contiguous, of about equal work), each
+// with its own partial S and r, added in chunk order: the sums, and so the result, do not depend
+// on how many threads run the chunks. 4 keeps two threads busy at a memory cost of three extra
+// copies of S's blocks.
+constexpr int kReductionChunks = 4;
 
 // The ground-point partials.
 // dF/dX = -dF/dX0: F depends on the point and the centre only through X - X0 (eqs. 7-8), so the
@@ -63,6 +70,9 @@ struct Layout {
   std::vector<std::vector<int>> point_marks;  // per free point: positions in `marks` of its
                                               // marks in free images
   std::vector<std::vector<int>> point_pairs;  // per free point: pair of each (a <= c) of those
+  std::vector<std::vector<int>> point_all_marks;  // per free point: positions of all its marks
+  std::vector<std::vector<int>> image_marks;      // per image: positions in `marks` of its marks
+  std::vector<int> chunk_start;  // kReductionChunks + 1 boundaries in the free points
   std::vector<int> diagonal_pair;             // per camera block
   std::vector<std::pair<int, int>> pairs;
   std::vector<std::array<int, 6>> value_start;
@@ -94,7 +104,8 @@ struct Normal {
   std::vector<Vector6d> ge;
   std::vector<Eigen::Matrix3d> V;  // per free point
   std::vector<Eigen::Vector3d> gp;
-  std::vector<Matrix63> W;         // per mark of the round (zero unless image and point free)
+  std::vector<Matrix63> W;         // per mark of the round: w A_e^T A_p
+  std::vector<Eigen::Vector3d> gp_mark;  // per mark of the round: w A_p^T F
   std::vector<Eigen::Vector2d> f;  // per mark of the round: F (um)
   double weighted_ssr = 0.0;       // F^T P F over every observation
   int behind_mark = -1;            // a mark whose point is not in front of its camera
@@ -125,15 +136,26 @@ struct DenseRows {
 
 // The points eliminated, the reduced camera system factorised.
 struct Reduction {
-  std::vector<Eigen::Matrix3d> V_inverse;  // per free point
-  std::vector<Matrix63> Y;                 // scratch: W V^-1 of the marks of one point
+  TaylorLinearSolver solver = TaylorLinearSolver::kCholmodSupernodal;
+  int num_threads = 1;
+  double damping = 0.0;                    // lambda of the reduction (unitless)
+  std::vector<Eigen::Matrix3d> V_inverse;  // per free point (of V_p + lambda diag V_p)
+  // Per chunk but the first (which writes into blocks and r): partial S blocks and r; and per
+  // chunk the scratch W V^-1 of the marks of one point.
+  std::vector<std::vector<Matrix6d>> chunk_blocks;
+  std::vector<Eigen::VectorXd> chunk_r;
+  std::vector<std::vector<Matrix63>> Y;
   std::vector<Matrix6d> blocks;            // per pair: the reduced matrix S (unscaled)
   Eigen::VectorXd r;                       // reduced right-hand side (unscaled)
   Eigen::VectorXd scale;                   // Jacobi scale 1 / sqrt(diag S); 1 where fixed
   // Natural order: the camera blocks are already in a fill-reducing order (BuildLayout).
   Eigen::SimplicialLDLT<SparseMatrix, Eigen::Upper, Eigen::NaturalOrdering<int>> ldlt;
+  SupernodalCholesky cholmod;
   bool analysed = false;
   double pivot_ratio = 0.0;  // smallest / largest pivot of the scaled LDL^T
+  // True when the factorisation is the undamped one at the round's final linearisation (the
+  // statistics reuse it).
+  bool undamped_at_solution = false;
 };
 
 inline bool IsFixed(const Plan& plan, const Layout& layout, int b, int component) {
@@ -147,20 +169,36 @@ void BuildLayout(const Block& block, const Plan& plan, Layout* layout);
 // Linearises every observation equation at `state` and accumulates the normal equations (and,
 // when `dense` is not null, the whitened rows). False when a point is not in front of its camera
 // (normal->behind_mark says which) or the residuals are not finite.
+// On num_threads threads (the sums in a fixed order, the result the same for every count).
 bool Linearize(TaylorPartials partials, const Block& block, const Plan& plan, const Layout& layout,
-               const Frame& frame, const State& state, Normal* normal, DenseRows* dense);
+               const Frame& frame, const State& state, int num_threads, Normal* normal,
+               DenseRows* dense);
 
-// Eliminates the points, 3 x 3 at a time:
+// The weighted sum of squared residuals F^T P F at `state` alone (no partials), in the same order
+// of summation as Linearize. False when a point is not in front of its camera (*behind_mark, as
+// Linearize) or the sum is not finite.
+bool EvaluateCost(TaylorPartials partials, const Block& block, const Plan& plan,
+                  const Layout& layout, const Frame& frame, const State& state, int num_threads,
+                  double* weighted_ssr, int* behind_mark);
+
+// Eliminates the points, 3 x 3 at a time, from the normal matrix whose diagonal is scaled by
+// (1 + lambda) (lambda = reduction->damping; 0: Gauss-Newton):
 //   S = U - sum_p W_p V_p^-1 W_p^T,   r = g_e - sum_p W_p V_p^-1 g_p.
 // Returns the first free point whose block V_p is singular (its rays fix no point), or -1.
 int Reduce(const Normal& normal, const Layout& layout, Reduction* reduction);
+
+// The decrease of 1/2 F^T P F the linearisation predicts for the correction (d_e, d_p) solved
+// with damping lambda: 1/2 (d^T g + lambda d^T diag(N) d).
+double PredictedDecrease(const Layout& layout, const Normal& normal, double lambda,
+                         const Eigen::VectorXd& d_e, const std::vector<Eigen::Vector3d>& d_p);
 
 // Writes the Jacobi-scaled S into layout->S (fixed components: their row and column zero, 1 on
 // the diagonal, which removes them exactly) and sets the scale. Returns the first camera column
 // without weight (a zero diagonal), or -1.
 int WriteScaled(const Plan& plan, Layout* layout, Reduction* reduction);
 
-// Factorises the scaled S. False when it is not positive definite to min_pivot_ratio.
+// Factorises the scaled S (reduction->solver). False when it is not positive definite to
+// min_pivot_ratio.
 bool Factorize(double min_pivot_ratio, const Layout& layout, Reduction* reduction);
 
 // Solves S d_e = r (through the scaled factorisation) and back-substitutes

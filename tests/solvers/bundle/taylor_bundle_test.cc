@@ -52,6 +52,7 @@ BundleAdjustmentOptions CeresOptions() {
 TaylorBundleOptions TaylorOptions(TaylorPartials partials = TaylorPartials::kCorrected) {
   TaylorBundleOptions options;
   options.partials = partials;
+  options.damping = DefaultTaylorDamping(partials);
   options.rejection_threshold = 0.0;
   return options;
 }
@@ -491,11 +492,13 @@ TEST(TaylorBundleVsCeres, SameMinimumOnSimulatedBlocks) {
   }
 }
 
+// The lecture's method, undamped: Gauss-Newton's quadratic convergence.
 TEST(TaylorBundle, NoiseFreeBlockReachesTheTruth) {
   TestBlock data = MakeTestBlock(NoiseFree(TaylorBlockOptions()));
   TaylorBundleResult result;
-  ASSERT_TRUE(
-      TaylorBundleAdjust(TaylorOptions(), BundleAdjustmentConfig(), &data.block, &result).ok());
+  TaylorBundleOptions options = TaylorOptions();
+  options.damping = TaylorDamping::kNone;
+  ASSERT_TRUE(TaylorBundleAdjust(options, BundleAdjustmentConfig(), &data.block, &result).ok());
   ASSERT_TRUE(result.summary.IsSolutionUsable()) << result.summary.BriefReport();
   for (size_t i = 0; i < data.truth.eo.size(); ++i) {
     EXPECT_LT(
