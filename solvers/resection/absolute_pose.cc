@@ -238,6 +238,7 @@ AbsolutePoseEstimator::AbsolutePoseEstimator(const std::vector<Eigen::Vector2d>&
   if (n > 0) origin_in_ground_ /= n;
   centred_points_.resize(n);
   observed_over_c_.resize(n);
+  unit_bearings_.resize(n);
   x_.resize(n);
   y_.resize(n);
   z_.resize(n);
@@ -248,6 +249,9 @@ AbsolutePoseEstimator::AbsolutePoseEstimator(const std::vector<Eigen::Vector2d>&
     const Eigen::Vector2d& xy = image_plane_um[i];
     centred_points_[i] = points_in_ground[i] - origin_in_ground_;
     observed_over_c_[i] = xy / focal_um;
+    // (x / c, y / c, -1) is along the bearing (never zero: its third coordinate is -1).
+    UnitBearing(Eigen::Vector3d(observed_over_c_[i].x(), observed_over_c_[i].y(), -1.0),
+                &unit_bearings_[i]);
   }
   // The scoring copy is in a fixed pseudo-random order (a Fisher-Yates shuffle driven by
   // splitmix64 from a constant seed), so the scores are reproducible and the sequential test in
@@ -272,15 +276,12 @@ AbsolutePoseEstimator::AbsolutePoseEstimator(const std::vector<Eigen::Vector2d>&
 }
 
 void AbsolutePoseEstimator::GenerateModels(const int* sample, std::vector<Model>* models) const {
-  // (x / c, y / c, -1) is along the bearing; SolveP3P normalises.
   const std::array<Eigen::Vector3d, 3> bearings = {
-      Eigen::Vector3d(observed_over_c_[sample[0]].x(), observed_over_c_[sample[0]].y(), -1.0),
-      Eigen::Vector3d(observed_over_c_[sample[1]].x(), observed_over_c_[sample[1]].y(), -1.0),
-      Eigen::Vector3d(observed_over_c_[sample[2]].x(), observed_over_c_[sample[2]].y(), -1.0)};
+      unit_bearings_[sample[0]], unit_bearings_[sample[1]], unit_bearings_[sample[2]]};
   const std::array<Eigen::Vector3d, 3> points = {
       centred_points_[sample[0]], centred_points_[sample[1]], centred_points_[sample[2]]};
   const size_t first = models->size();
-  SolveP3P(bearings, points, models);
+  SolveP3PUnitBearings(bearings, points, models);
   for (size_t k = first; k < models->size(); ++k)
     (*models)[k].center_in_ground += origin_in_ground_;
 }
@@ -332,10 +333,17 @@ double AbsolutePoseEstimator::ScoreModel(const Model& model, double best_score_s
   // is rejected, which by Wald's bound happens to a model with inlier ratio >= eps with probability
   // <= 1 / A. A bad model is thus dropped after a dozen or so points instead of the ~n (1 - eps)
   // that the exact bound (sum >= best) needs.
-  const double eps = 1.0 - best_score_so_far / (num_data_ * threshold_sq_);
-  const bool sprt = eps > 2.0 * kSprtBadInlierRatio && eps < 1.0;
-  const double log_per_inlier = sprt ? std::log(kSprtBadInlierRatio / eps) : 0.0;
-  const double log_per_outlier = sprt ? std::log((1.0 - kSprtBadInlierRatio) / (1.0 - eps)) : 0.0;
+  // The best score changes rarely (every model of a RANSAC run is scored against it): its two
+  // logarithms are kept from the last call.
+  if (!(sprt_best_score_ == best_score_so_far)) {
+    const double eps = 1.0 - best_score_so_far / (num_data_ * threshold_sq_);
+    const bool sprt = eps > 2.0 * kSprtBadInlierRatio && eps < 1.0;
+    sprt_best_score_ = best_score_so_far;
+    sprt_log_per_inlier_ = sprt ? std::log(kSprtBadInlierRatio / eps) : 0.0;
+    sprt_log_per_outlier_ = sprt ? std::log((1.0 - kSprtBadInlierRatio) / (1.0 - eps)) : 0.0;
+  }
+  const double log_per_inlier = sprt_log_per_inlier_;
+  const double log_per_outlier = sprt_log_per_outlier_;
   const double log_threshold = std::log(kSprtThreshold);
 
   double sum = 0.0;
@@ -391,20 +399,29 @@ void AbsolutePoseEstimator::RefineModel(const std::vector<int>& inliers, Model* 
   GaussNewton(inliers, kMaxLocalOptimizationPoints, gauss_newton_iterations_, &refined);
   const int size = static_cast<int>(inliers.size());
   if (size >= kDltMinimumPoints) {
-    const int count = std::min(size, kMaxDltPoints);
-    std::vector<Eigen::Vector3d> bearings(count), points(count);
-    for (int k = 0; k < count; ++k) {
-      const int i = inliers[static_cast<size_t>(k) * size / count];
-      bearings[k] = Eigen::Vector3d(observed_over_c_[i].x(), observed_over_c_[i].y(), -1.0).normalized();
-      points[k] = centred_points_[i];
+    // The DLT start, its Gauss-Newton polish and its score depend on the inliers alone, and local
+    // optimisation meets the same inlier set again and again: they are kept for the last set.
+    const double infinity = std::numeric_limits<double>::infinity();
+    if (!dlt_.valid || dlt_.inliers != inliers) {
+      dlt_.valid = true;
+      dlt_.inliers = inliers;
+      const int count = std::min(size, kMaxDltPoints);
+      dlt_.bearings.resize(count);
+      dlt_.points.resize(count);
+      for (int k = 0; k < count; ++k) {
+        const int i = inliers[static_cast<size_t>(k) * size / count];
+        dlt_.bearings[k] =
+            Eigen::Vector3d(observed_over_c_[i].x(), observed_over_c_[i].y(), -1.0).normalized();
+        dlt_.points[k] = centred_points_[i];
+      }
+      dlt_.solved = SolveDlt(dlt_.bearings, dlt_.points, &dlt_.model).ok();
+      if (dlt_.solved) {
+        dlt_.model.center_in_ground += origin_in_ground_;
+        GaussNewton(inliers, kMaxLocalOptimizationPoints, gauss_newton_iterations_, &dlt_.model);
+        dlt_.score = ScoreModel(dlt_.model, infinity);
+      }
     }
-    Model linear;
-    if (SolveDlt(bearings, points, &linear).ok()) {
-      linear.center_in_ground += origin_in_ground_;
-      GaussNewton(inliers, kMaxLocalOptimizationPoints, gauss_newton_iterations_, &linear);
-      const double infinity = std::numeric_limits<double>::infinity();
-      if (ScoreModel(linear, infinity) < ScoreModel(refined, infinity)) refined = linear;
-    }
+    if (dlt_.solved && dlt_.score < ScoreModel(refined, infinity)) refined = dlt_.model;
   }
   *model = refined;
 }

@@ -18,6 +18,7 @@
 // sigma = (1 + 5 / (n - 3)) sqrt(r_h^2 / q), q the chi-square(2) quantile at h / (n + 1).
 
 #include <Eigen/Core>
+#include <limits>
 #include <string>
 #include <vector>
 
@@ -117,11 +118,27 @@ class AbsolutePoseEstimator {
   Eigen::Vector3d origin_in_ground_ = Eigen::Vector3d::Zero();  // centroid of the points (m)
   std::vector<Eigen::Vector3d> centred_points_;                 // X - origin (m)
   std::vector<Eigen::Vector2d> observed_over_c_;                // image-plane point / c (unitless)
+  std::vector<Eigen::Vector3d> unit_bearings_;                  // normalize(x / c, y / c, -1)
   // Scoring layout, in a fixed pseudo-random order of the data (datum order_[k] at position k):
   // centred X, Y, Z (m), the observations divided by c (x / c, y / c) and the squared weights
   // (c / s)^2 that whiten a residual over c.
   std::vector<int> order_;
   std::vector<double> x_, y_, z_, ox_, oy_, w2_;
+  // Memos of the const methods (so an estimator is used by one thread at a time): ScoreModel's
+  // sequential-test logarithms for the last best score, RefineModel's DLT start for the last
+  // inlier set (its pose after Gauss-Newton and its score).
+  mutable double sprt_best_score_ = std::numeric_limits<double>::quiet_NaN();
+  mutable double sprt_log_per_inlier_ = 0.0;
+  mutable double sprt_log_per_outlier_ = 0.0;
+  struct DltMemo {
+    bool valid = false;
+    bool solved = false;
+    std::vector<int> inliers;
+    std::vector<Eigen::Vector3d> bearings, points;  // the DLT's input (scratch)
+    Model model;
+    double score = 0.0;
+  };
+  mutable DltMemo dlt_;
 };
 
 namespace internal {

@@ -23,7 +23,7 @@ constexpr double kMaxRelativeConstraintError = 1e-6;
 constexpr double kDiscriminantSlack = 1e-12;
 
 // adj(A), so that adj(A) * A = det(A) * I; its rows are cross products of the columns of A.
-Eigen::Matrix3d Adjugate(const Eigen::Matrix3d& A) {
+inline Eigen::Matrix3d Adjugate(const Eigen::Matrix3d& A) {
   Eigen::Matrix3d adj;
   adj.row(0) = A.col(1).cross(A.col(2)).transpose();
   adj.row(1) = A.col(2).cross(A.col(0)).transpose();
@@ -96,6 +96,23 @@ Eigen::Matrix3d TriangleFrame(const Eigen::Vector3d& u, const Eigen::Vector3d& v
 int SolveP3P(const std::array<Eigen::Vector3d, 3>& bearings,
              const std::array<Eigen::Vector3d, 3>& points_in_ground,
              std::vector<PoseCandidate>* solutions) {
+  std::array<Eigen::Vector3d, 3> unit;
+  for (int i = 0; i < 3; ++i) {
+    if (!UnitBearing(bearings[i], &unit[i])) return 0;
+  }
+  return SolveP3PUnitBearings(unit, points_in_ground, solutions);
+}
+
+bool UnitBearing(const Eigen::Vector3d& bearing, Eigen::Vector3d* unit) {
+  const double norm = bearing.norm();
+  if (!(norm > 0.0) || !std::isfinite(norm)) return false;
+  *unit = bearing / norm;
+  return true;
+}
+
+int SolveP3PUnitBearings(const std::array<Eigen::Vector3d, 3>& y,
+                         const std::array<Eigen::Vector3d, 3>& points_in_ground,
+                         std::vector<PoseCandidate>* solutions) {
   const Eigen::Vector3d& x1 = points_in_ground[0];
   const Eigen::Vector3d& x2 = points_in_ground[1];
   const Eigen::Vector3d& x3 = points_in_ground[2];
@@ -108,12 +125,6 @@ int SolveP3P(const std::array<Eigen::Vector3d, 3>& bearings,
   // Collinear or coincident points (this also rejects NaN through the negated comparison).
   if (!(d12.cross(d13).norm() > kCollinearSine * std::sqrt(a12 * a13))) return 0;
 
-  Eigen::Vector3d y[3];
-  for (int i = 0; i < 3; ++i) {
-    const double norm = bearings[i].norm();
-    if (!(norm > 0.0) || !std::isfinite(norm)) return 0;
-    y[i] = bearings[i] / norm;
-  }
   // The constraints read lambda_i^2 + lambda_j^2 + b_ij lambda_i lambda_j = a_ij.
   const double b12 = -2.0 * y[0].dot(y[1]);
   const double b13 = -2.0 * y[0].dot(y[2]);
@@ -191,6 +202,8 @@ int SolveP3P(const std::array<Eigen::Vector3d, 3>& bearings,
   const double s = std::sqrt(std::max(0.0, -sigma2 / sigma1));
 
   const double a_sum = a12 + a13 + a23;
+  // The ground triangle's frame, the same for every solution.
+  const Eigen::Matrix3d ground_frame = TriangleFrame(d12, d13);
   const int num_before = static_cast<int>(solutions->size());
   const int num_planes = s > 0.0 ? 2 : 1;
   for (int plane = 0; plane < num_planes; ++plane) {
@@ -275,7 +288,7 @@ int SolveP3P(const std::array<Eigen::Vector3d, 3>& bearings,
       const Eigen::Vector3d c13 = p3 - p1;
       if (!(c12.cross(c13).norm() > kCollinearSine * c12.norm() * c13.norm())) continue;
       PoseCandidate pose;
-      pose.R_camera_from_ground = TriangleFrame(c12, c13) * TriangleFrame(d12, d13).transpose();
+      pose.R_camera_from_ground = TriangleFrame(c12, c13) * ground_frame.transpose();
       // X = center + R^T p for each point; the mean of the three spreads the rounding.
       pose.center_in_ground =
           (x1 + x2 + x3 - pose.R_camera_from_ground.transpose() * (p1 + p2 + p3)) / 3.0;

@@ -38,4 +38,13 @@ int SolveP3P(const std::array<Eigen::Vector3d, 3>& bearings,
              const std::array<Eigen::Vector3d, 3>& points_in_ground,
              std::vector<PoseCandidate>* solutions);
 
+// SolveP3P's normalisation of one bearing: *unit = bearing / |bearing|; false for a zero or
+// non-finite bearing.
+bool UnitBearing(const Eigen::Vector3d& bearing, Eigen::Vector3d* unit);
+// SolveP3P for bearings already normalised by UnitBearing (the same solutions, bit for bit): a
+// caller that draws many triples from the same bearings normalises each once.
+int SolveP3PUnitBearings(const std::array<Eigen::Vector3d, 3>& unit_bearings,
+                         const std::array<Eigen::Vector3d, 3>& points_in_ground,
+                         std::vector<PoseCandidate>* solutions);
+
 }  // namespace photopose

@@ -677,9 +677,9 @@ ResectionResult ResectImage(const ResectionOptions& options, const ResectionInpu
 
 std::vector<ResectionResult> ResectImages(const ResectionOptions& options,
                                           const std::vector<ResectionInput>& inputs,
-                                          int num_threads) {
+                                          int num_threads, size_t chunk_size) {
   std::vector<ResectionResult> results(inputs.size());
-  ParallelFor(inputs.size(), num_threads, [&](size_t i) {
+  ParallelForChunks(inputs.size(), num_threads, chunk_size, [&](size_t i) {
     ResectionOptions image_options = options;
     // A distinct, reproducible RANSAC stream per image, whatever the thread schedule.
     image_options.consensus.ransac.seed =

@@ -202,11 +202,13 @@ struct ResectionResult {
 
 ResectionResult ResectImage(const ResectionOptions& options, const ResectionInput& input);
 
-// Many images, resected in parallel on num_threads threads (0: all cores); results in input order.
-// Image i gets its own reproducible RANSAC seed, whatever the thread schedule.
+// Many images, resected in parallel on num_threads threads (0: all cores), handed to the threads
+// chunk_size images at a time as they become free (core/parallel.h); results in input order.
+// Image i gets its own reproducible RANSAC seed, so every result is the same, bit for bit,
+// whatever the thread count, chunk size and schedule.
 std::vector<ResectionResult> ResectImages(const ResectionOptions& options,
                                           const std::vector<ResectionInput>& inputs,
-                                          int num_threads);
+                                          int num_threads, size_t chunk_size = 1);
 
 // ------------------------------------------------------------------ from a block
 

@@ -5,6 +5,8 @@
 #include <algorithm>
 #include <atomic>
 #include <chrono>
+#include <map>
+#include <string>
 #include <mutex>
 #include <set>
 #include <thread>
@@ -73,6 +75,45 @@ TEST(ParallelFor, UsesSeveralThreadsWhenAsked) {
     if (started.load() < 2) both = false;
   });
   EXPECT_TRUE(both.load());
+}
+
+TEST(ParallelForChunks, EveryItemOnceEachChunkOnOneThreadInOrder) {
+  constexpr size_t kCount = 1003;  // not a multiple of the chunk sizes
+  for (const int threads : {1, 2, 4})
+    for (const size_t chunk : {size_t{0}, size_t{1}, size_t{7}, size_t{64}, size_t{5000}}) {
+      SCOPED_TRACE(std::to_string(threads) + " threads, chunk " + std::to_string(chunk));
+      std::vector<std::atomic<int>> calls(kCount);
+      for (auto& c : calls) c = 0;
+      std::vector<std::thread::id> thread_of(kCount);
+      std::vector<size_t> sequence(kCount);  // per item: its position among its thread's calls
+      std::mutex mutex;
+      std::map<std::thread::id, size_t> calls_of_thread;
+      ParallelForChunks(kCount, threads, chunk, [&](size_t i) {
+        ++calls[i];
+        std::lock_guard<std::mutex> lock(mutex);
+        thread_of[i] = std::this_thread::get_id();
+        sequence[i] = calls_of_thread[thread_of[i]]++;
+      });
+      const size_t step = std::max<size_t>(1, chunk);
+      for (size_t i = 0; i < kCount; ++i) {
+        ASSERT_EQ(calls[i].load(), 1) << i;
+        if (i % step == 0) continue;
+        // Within a chunk: the same thread, one call after the other.
+        EXPECT_EQ(thread_of[i], thread_of[i - 1]) << i;
+        EXPECT_EQ(sequence[i], sequence[i - 1] + 1) << i;
+      }
+      // Never more threads than chunks.
+      EXPECT_LE(calls_of_thread.size(), (kCount + step - 1) / step);
+    }
+}
+
+TEST(ParallelForChunks, OneChunkRunsOnTheCaller) {
+  const std::thread::id caller = std::this_thread::get_id();
+  std::atomic<bool> elsewhere{false};
+  ParallelForChunks(10, 4, 10, [&](size_t) {
+    if (std::this_thread::get_id() != caller) elsewhere = true;
+  });
+  EXPECT_FALSE(elsewhere.load());
 }
 
 }  // namespace

@@ -226,6 +226,41 @@ TEST(AbsolutePoseEstimatorTest, ScoresInliersAndEarlyExit) {
   EXPECT_NEAR(b.x() / -b.z() * c.focal_um, c.image_plane_um[7].x(), 1e-9);
 }
 
+TEST(AbsolutePoseEstimatorTest, MemosGiveWhatAFreshEstimatorGives) {
+  // ScoreModel keeps its sequential test's logarithms for the last best score, RefineModel its DLT
+  // start for the last inlier set. Interleaving scores and sets on one estimator must give, bit
+  // for bit, what a fresh estimator gives for each call alone.
+  const Correspondences c = SimpleScene(5, 40, Eigen::Vector3d(0.02, -0.01, 0.5), 3.0);
+  const auto fresh = [&c]() {
+    return AbsolutePoseEstimator(c.image_plane_um, c.points_in_ground, c.focal_um, kThresholdUm);
+  };
+  const AbsolutePoseEstimator reused = fresh();
+  PoseCandidate start;
+  start.R_camera_from_ground =
+      RotationX(0.02) * RotationFromAngles(RotationConvention::kSeed, c.truth.angles_seed_rad());
+  // Far enough that two Gauss-Newton iterations from here do not converge: the DLT start wins, so
+  // a DLT of the wrong set would show.
+  start.center_in_ground = c.truth.center_in_ground() + Eigen::Vector3d(20.0, -15.0, 10.0);
+  std::vector<int> first, second;
+  for (int i = 0; i < 40; ++i) (i % 3 == 0 ? second : first).push_back(i);
+  for (const std::vector<int>* set : {&first, &second, &first, &first, &second}) {
+    PoseCandidate a = start, b = start;
+    reused.RefineModel(*set, &a);
+    fresh().RefineModel(*set, &b);
+    EXPECT_EQ(a.R_camera_from_ground, b.R_camera_from_ground);
+    EXPECT_EQ(a.center_in_ground, b.center_in_ground);
+    EXPECT_NE(a.center_in_ground, start.center_in_ground);  // it did refine
+  }
+  // Best scores that switch the sequential test on and off (infinity: off), repeated.
+  const double inf = std::numeric_limits<double>::infinity();
+  const double exact = fresh().ScoreModel(start, inf);
+  for (const double best : {inf, 0.5 * exact, inf, 2.0 * exact, 0.5 * exact, 0.5 * exact}) {
+    const double a = reused.ScoreModel(start, best);
+    const double b = fresh().ScoreModel(start, best);
+    EXPECT_EQ(a, b) << best;
+  }
+}
+
 TEST(AbsolutePoseEstimatorTest, GaussNewtonConvergesEvenAtGimbalLock) {
   // phi = 90 deg is the seed angles' singularity; the refinement works on a local rotation
   // increment and must not care.

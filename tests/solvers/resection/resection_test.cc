@@ -4,6 +4,7 @@
 #include <gtest/gtest.h>
 
 #include <cstdio>
+#include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <map>
@@ -185,6 +186,93 @@ TEST(Resection, RansacFlagsTheGrossErrors) {
   // the ~700; more than 4 would happen once in 1500 runs.
   EXPECT_LE(good_left_out, 4) << "of " << good << " good marks";
   EXPECT_GT(good, 500);
+}
+
+// Every field of two results equal, doubles bit for bit (NaN equals NaN), timings left out.
+void ExpectIdentical(const ResectionResult& a, const ResectionResult& b, const std::string& what) {
+  SCOPED_TRACE(what);
+  const auto same = [](const auto& x, const auto& y) {
+    return x.size() == y.size() &&
+           (x.size() == 0 || std::memcmp(x.data(), y.data(), x.size() * sizeof(x[0])) == 0);
+  };
+  const auto same_matrix = [](const auto& x, const auto& y) {
+    return std::memcmp(x.data(), y.data(), x.size() * sizeof(double)) == 0;
+  };
+  EXPECT_EQ(a.success, b.success);
+  EXPECT_TRUE(same_matrix(a.eo.parameters, b.eo.parameters));
+  EXPECT_EQ(a.has_covariance, b.has_covariance);
+  EXPECT_TRUE(same_matrix(a.covariance, b.covariance));
+  EXPECT_TRUE(same_matrix(a.standard_deviations, b.standard_deviations));
+  EXPECT_EQ(a.accuracy_stated, b.accuracy_stated);
+  EXPECT_TRUE(same_matrix(Eigen::Vector3d(a.sigma0, a.critical_normalized_residual,
+                                          a.max_pose_shift_sigmas),
+                          Eigen::Vector3d(b.sigma0, b.critical_normalized_residual,
+                                          b.max_pose_shift_sigmas)));
+  EXPECT_EQ(a.degrees_of_freedom, b.degrees_of_freedom);
+  EXPECT_EQ(a.num_inliers, b.num_inliers);
+  EXPECT_TRUE(same(a.residuals, b.residuals));
+  EXPECT_TRUE(same(a.normalized_residuals, b.normalized_residuals));
+  EXPECT_TRUE(same(a.redundancy_numbers, b.redundancy_numbers));
+  EXPECT_TRUE(same(a.minimal_detectable_blunders, b.minimal_detectable_blunders));
+  EXPECT_TRUE(same(a.pose_shifts_sigmas, b.pose_shifts_sigmas));
+  EXPECT_EQ(a.mark_status, b.mark_status);
+  EXPECT_EQ(a.inliers, b.inliers);
+  EXPECT_EQ(a.weakest_mark, b.weakest_mark);
+  EXPECT_EQ(a.weak, b.weak);
+  EXPECT_EQ(a.accuracy_disagrees, b.accuracy_disagrees);
+  EXPECT_EQ(a.ambiguous, b.ambiguous);
+  EXPECT_TRUE(same_matrix(a.competing_eo.parameters, b.competing_eo.parameters));
+  EXPECT_EQ(a.competing_inliers, b.competing_inliers);
+  EXPECT_EQ(a.warnings, b.warnings);
+  EXPECT_EQ(a.summary.termination, b.summary.termination);
+  EXPECT_EQ(a.summary.message, b.summary.message);
+  EXPECT_EQ(a.summary.used_approximate, b.summary.used_approximate);
+  EXPECT_EQ(a.summary.ransac_trials, b.summary.ransac_trials);
+  EXPECT_EQ(a.summary.ransac_exhaustive, b.summary.ransac_exhaustive);
+  EXPECT_EQ(a.summary.adjustments, b.summary.adjustments);
+  EXPECT_EQ(a.summary.iterations, b.summary.iterations);
+  EXPECT_TRUE(same_matrix(Eigen::Vector2d(a.summary.initial_cost, a.summary.final_cost),
+                          Eigen::Vector2d(b.summary.initial_cost, b.summary.final_cost)));
+}
+
+TEST(Resection, BatchIsBitIdenticalForEveryThreadCountAndChunkSize) {
+  // Images of every kind in one batch: 4 to 15 control points, clean and with gross errors,
+  // without approximate values (the consensus, its ambiguity search) and with them, stated and
+  // unstated accuracy. Each result must not depend on the thread that ran it, on what that thread
+  // ran before (the per-thread caches), nor on the order.
+  std::vector<ResectionInput> batch;
+  uint64_t seed = 40;
+  for (const int points : {4, 6, 10, 15})
+    for (const double outliers : {0.0, 0.2}) {
+      const Inputs inputs = InputsOf(Scene(Scenario::kUavBlock, 0.5, outliers, ++seed, points, 0),
+                                     /*with_approximate=*/points == 6);
+      for (size_t i = 0; i < inputs.inputs.size(); ++i) {
+        batch.push_back(inputs.inputs[i]);
+        if (i % 4 == 3) batch.back().sigma.clear();
+      }
+    }
+  ASSERT_GT(batch.size(), 60u);
+  const ResectionOptions options;
+  const std::vector<ResectionResult> reference = ResectImages(options, batch, 1);
+  int solved = 0;
+  for (const ResectionResult& r : reference) solved += r.success;
+  EXPECT_GT(solved, static_cast<int>(batch.size()) / 2);
+  // Alone, each image gives what it gives in the batch.
+  for (size_t i = 0; i < batch.size(); i += 7) {
+    ResectionOptions alone = options;
+    alone.consensus.ransac.seed += 0x9E3779B97F4A7C15ull * (i + 1);
+    ExpectIdentical(ResectImage(alone, batch[i]), reference[i], "alone " + std::to_string(i));
+  }
+  for (const int threads : {1, 2, 3})
+    for (const size_t chunk : {size_t{1}, size_t{3}, size_t{16}, size_t{1000}}) {
+      if (threads == 1 && chunk == 1) continue;
+      const std::vector<ResectionResult> results = ResectImages(options, batch, threads, chunk);
+      ASSERT_EQ(results.size(), reference.size());
+      for (size_t i = 0; i < results.size(); ++i)
+        ExpectIdentical(results[i], reference[i],
+                        std::to_string(threads) + " threads, chunk " + std::to_string(chunk) +
+                            ", image " + std::to_string(i));
+    }
 }
 
 TEST(Resection, ParallelResultsEqualSerialInInputOrder) {
