@@ -126,18 +126,7 @@ arrays (set_positions).)doc");
              "Camera positions: N image names, N x 3 coordinates in crs (GIS order), optional N x 3 "
              "one-sigma accuracies east, north, up (m; a NaN row: none stated).");
   inputs.def("set_positions_from_geo_txt", [](GeoreferenceInputs& self, const GeoTxt& geo, const std::string& source) {
-    self.positions_crs = geo.crs;
-    self.positions_source = source;
-    self.positions.clear();
-    for (const GeoTxtRecord& r : geo.records) {
-      CameraPositionMeasurement p;
-      p.image = r.image;
-      p.position = r.position;
-      if (r.horizontal_accuracy_m && r.vertical_accuracy_m)
-        p.accuracy_m = Eigen::Vector3d(*r.horizontal_accuracy_m, *r.horizontal_accuracy_m, *r.vertical_accuracy_m);
-      p.line = r.line;
-      self.positions.push_back(p);
-    }
+    SetPositionsFromGeoTxt(geo, source, &self);
   }, py::arg("geo"), py::arg("source") = "geo.txt", "The camera positions of a geo.txt (its yaw/pitch/roll are not used).");
   inputs.def("set_positions_from_images_gps",
              [](GeoreferenceInputs& self, const std::vector<std::string>& images,
@@ -145,17 +134,7 @@ arrays (set_positions).)doc");
                if (gps.size() != images.size())
                  throw py::value_error("gps: " + std::to_string(gps.size()) + " entries for " +
                                        std::to_string(images.size()) + " images");
-               self.positions_crs = crs;
-               self.positions_source = "GPS tags";
-               self.positions.clear();
-               for (size_t i = 0; i < images.size(); ++i) {
-                 if (!gps[i]) continue;
-                 CameraPositionMeasurement p;
-                 p.image = images[i];
-                 p.position = gps[i]->lon_lat_height;
-                 p.accuracy_m = gps[i]->rtk_sigma_enu_m;
-                 self.positions.push_back(p);
-               }
+               SetPositionsFromGps(images, gps, crs, "GPS tags", &self);
              },
              py::arg("images"), py::arg("gps"), py::arg("crs") = "EPSG:4979",
              "The positions read_images_gps returned (None entries skipped), in crs: EPSG:4979 takes the "
@@ -163,19 +142,7 @@ arrays (set_positions).)doc");
   inputs.def("set_control_from_gcp_list",
              [](GeoreferenceInputs& self, const GcpList& list, const std::vector<std::string>& check_points,
                 const std::string& source) {
-               self.control_crs = list.crs;
-               self.control_source = source;
-               self.control_points = list.points;
-               self.control_marks = list.marks;
-               for (const std::string& id : check_points) {
-                 bool found = false;
-                 for (GroundPoint& p : self.control_points) {
-                   if (p.point_id != id) continue;
-                   p.role = PointRole::kCheck;
-                   found = true;
-                 }
-                 if (!found) throw StatusError("check_points: '" + id + "' is not a point of the gcp_list");
-               }
+               ThrowIfError(SetControlFromGcpList(list, check_points, source, &self));
              },
              py::arg("gcp_list"), py::arg("check_points") = std::vector<std::string>(),
              py::arg("source") = "gcp_list.txt", "Control (and check, as named) points with their marks.");

@@ -400,4 +400,51 @@ Status GeoreferencedFrames(const GeoreferenceResult& result, std::vector<FrameRe
   return Status::Ok();
 }
 
+void SetPositionsFromGeoTxt(const GeoTxt& geo, const std::string& source, GeoreferenceInputs* inputs) {
+  inputs->positions_crs = geo.crs;
+  inputs->positions_source = source;
+  inputs->positions.clear();
+  for (const GeoTxtRecord& record : geo.records) {
+    CameraPositionMeasurement m;
+    m.image = record.image;
+    m.position = record.position;
+    if (record.horizontal_accuracy_m && record.vertical_accuracy_m)
+      m.accuracy_m = Eigen::Vector3d(*record.horizontal_accuracy_m, *record.horizontal_accuracy_m,
+                                     *record.vertical_accuracy_m);
+    m.line = record.line;
+    inputs->positions.push_back(m);
+  }
+}
+
+void SetPositionsFromGps(const std::vector<std::string>& images,
+                         const std::vector<std::optional<ExifGps>>& gps, const std::string& crs,
+                         const std::string& source, GeoreferenceInputs* inputs) {
+  inputs->positions_crs = crs;
+  inputs->positions_source = source;
+  inputs->positions.clear();
+  for (size_t i = 0; i < images.size() && i < gps.size(); ++i) {
+    if (!gps[i]) continue;
+    CameraPositionMeasurement m;
+    m.image = images[i];
+    m.position = gps[i]->lon_lat_height;
+    m.accuracy_m = gps[i]->rtk_sigma_enu_m;
+    inputs->positions.push_back(m);
+  }
+}
+
+Status SetControlFromGcpList(const GcpList& gcp_list, const std::vector<std::string>& check_points,
+                             const std::string& source, GeoreferenceInputs* inputs) {
+  std::vector<GroundPoint> points = gcp_list.points;
+  for (const std::string& id : check_points) {
+    auto it = std::find_if(points.begin(), points.end(), [&](const GroundPoint& p) { return p.point_id == id; });
+    if (it == points.end()) return Status::Error("'" + id + "' is not a point of " + source);
+    it->role = PointRole::kCheck;
+  }
+  inputs->control_crs = gcp_list.crs;
+  inputs->control_source = source;
+  inputs->control_points = std::move(points);
+  inputs->control_marks = gcp_list.marks;
+  return Status::Ok();
+}
+
 }  // namespace photopose

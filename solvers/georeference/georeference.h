@@ -29,6 +29,7 @@
 
 #include "core/block.h"
 #include "core/geodesy/crs.h"
+#include "core/io/exif_gps.h"
 #include "core/io/tables.h"
 #include "core/status.h"
 #include "solvers/bundle/bundle_adjustment.h"
@@ -53,6 +54,20 @@ struct GeoreferenceInputs {
   std::vector<GroundPoint> control_points;  // control / check as their role says
   std::vector<ImageMark> control_marks;     // pixels, (0, 0) the top-left corner of the image
 };
+
+// Filling the inputs from what the files hold (the one rule of the CLI and the Python module).
+// The camera positions of a geo.txt: accuracy horizontal for east and north, vertical for up, when
+// the line gives them; its yaw/pitch/roll are not used (the aircraft's axes, not the camera's).
+void SetPositionsFromGeoTxt(const GeoTxt& geo, const std::string& source, GeoreferenceInputs* inputs);
+// The positions of images' GPS tags (`gps[i]` of `images[i]`; entries without one skipped) in
+// `crs`, DJI's RTK sigmas as their accuracies.
+void SetPositionsFromGps(const std::vector<std::string>& images,
+                         const std::vector<std::optional<ExifGps>>& gps, const std::string& crs,
+                         const std::string& source, GeoreferenceInputs* inputs);
+// The control points and marks of a gcp_list.txt; those named in `check_points` become check
+// points (an id the list does not have is an error naming `source`).
+Status SetControlFromGcpList(const GcpList& gcp_list, const std::vector<std::string>& check_points,
+                             const std::string& source, GeoreferenceInputs* inputs);
 
 struct GeoreferenceOptions {
   // Output CRS; empty: the control's CRS, else the positions' CRS when it is projected, else the

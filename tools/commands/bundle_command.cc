@@ -425,18 +425,10 @@ int ReadGeoreferenceInputs(const char* command, const BundleRun& run, Georeferen
     if (!read.ok()) return BadInput(command, "--images: " + read.message());
     if (missing.size() == names.size())
       return BadInput(command, "--images: no image in " + FLAGS_bundle_images + " has GPS tags (EXIF GPSLatitude/GPSLongitude or DJI XMP GpsLatitude/GpsLongitude)");
-    inputs->positions_crs = FLAGS_bundle_exif_crs.empty() ? "EPSG:4979" : FLAGS_bundle_exif_crs;
-    inputs->positions_source = FLAGS_bundle_images + " (GPS tags)";
-    int with_rtk = 0;
-    for (size_t i = 0; i < names.size(); ++i) {
-      if (!gps[i]) continue;
-      CameraPositionMeasurement m;
-      m.image = names[i];
-      m.position = gps[i]->lon_lat_height;
-      m.accuracy_m = gps[i]->rtk_sigma_enu_m;
-      with_rtk += m.accuracy_m.has_value();
-      inputs->positions.push_back(m);
-    }
+    SetPositionsFromGps(names, gps, FLAGS_bundle_exif_crs.empty() ? "EPSG:4979" : FLAGS_bundle_exif_crs,
+                        FLAGS_bundle_images + " (GPS tags)", inputs);
+    const long with_rtk = std::count_if(inputs->positions.begin(), inputs->positions.end(),
+                                        [](const CameraPositionMeasurement& m) { return m.accuracy_m.has_value(); });
     if (!FLAGS_bundle_quiet) {
       std::cerr << "photopose bundle: --images: " << inputs->positions.size() << " camera positions from GPS tags ("
                 << with_rtk << " with DJI RTK accuracies), heights as " << inputs->positions_crs << " defines them\n";
@@ -451,19 +443,9 @@ int ReadGeoreferenceInputs(const char* command, const BundleRun& run, Georeferen
     GeoTxt geo;
     const Status read = ReadGeoTxt(FLAGS_bundle_geo, &geo);
     if (!read.ok()) return BadInput(command, read.message());
-    inputs->positions_crs = geo.crs;
-    inputs->positions_source = FLAGS_bundle_geo;
-    int with_attitude = 0;
-    for (const GeoTxtRecord& record : geo.records) {
-      CameraPositionMeasurement m;
-      m.image = record.image;
-      m.position = record.position;
-      if (record.horizontal_accuracy_m)
-        m.accuracy_m = Eigen::Vector3d(*record.horizontal_accuracy_m, *record.horizontal_accuracy_m, *record.vertical_accuracy_m);
-      m.line = record.line;
-      inputs->positions.push_back(m);
-      with_attitude += record.yaw_pitch_roll_deg.has_value();
-    }
+    SetPositionsFromGeoTxt(geo, FLAGS_bundle_geo, inputs);
+    const long with_attitude = std::count_if(geo.records.begin(), geo.records.end(),
+                                             [](const GeoTxtRecord& r) { return r.yaw_pitch_roll_deg.has_value(); });
     if (with_attitude > 0 && !FLAGS_bundle_quiet)
       std::cerr << "photopose bundle: " << FLAGS_bundle_geo << ": yaw/pitch/roll of " << with_attitude
                 << " images read and not used (their axes are the drone's, not the camera's; the model gives the attitudes)\n";
@@ -489,20 +471,11 @@ int ReadGeoreferenceInputs(const char* command, const BundleRun& run, Georeferen
     GcpList gcp;
     const Status read = ReadGcpList(FLAGS_bundle_gcp_list, &gcp);
     if (!read.ok()) return BadInput(command, read.message());
-    inputs->control_crs = gcp.crs;
-    inputs->control_source = FLAGS_bundle_gcp_list;
-    inputs->control_points = gcp.points;
-    inputs->control_marks = gcp.marks;
     std::vector<std::string> checks;
     for (const std::string& id : SplitCommaList(FLAGS_bundle_check_points))
       if (!id.empty()) checks.push_back(id);
-    for (const std::string& id : checks) {
-      auto it = std::find_if(inputs->control_points.begin(), inputs->control_points.end(),
-                             [&](const GroundPoint& p) { return p.point_id == id; });
-      if (it == inputs->control_points.end())
-        return BadInput(command, "--check_points: '" + id + "' is not a point of " + FLAGS_bundle_gcp_list);
-      it->role = PointRole::kCheck;
-    }
+    const Status control = SetControlFromGcpList(gcp, checks, FLAGS_bundle_gcp_list, inputs);
+    if (!control.ok()) return BadInput(command, "--check_points: " + control.message());
   } else if (!FLAGS_bundle_points.empty()) {
     const Status points = ReadGroundPoints(FLAGS_bundle_points, &inputs->control_points);
     if (!points.ok()) return BadInput(command, points.message());
