@@ -636,6 +636,15 @@ std::string FoldedName(std::string_view text) {
   return folded;
 }
 
+std::vector<std::string> SplitCommaList(const std::string& text) {
+  std::vector<std::string> items;
+  if (text.empty()) return items;
+  for (const std::string_view part : SplitOn(text, ',')) items.emplace_back(TrimBlanks(part));
+  // As a stream read item by item gives them: nothing after a final comma.
+  if (!text.empty() && text.back() == ',') items.pop_back();
+  return items;
+}
+
 std::vector<std::string_view> SplitListItems(std::string_view text) {
   std::vector<std::string_view> items;
   text = TrimBlanks(text);

@@ -280,6 +280,10 @@ std::vector<std::string_view> SplitWords(std::string_view text);
 // and enumerated values ("Distortion Model" = "DistortionModel", "x_right_y_up" = "X_RIGHT_Y_UP").
 std::string FoldedName(std::string_view text);
 
+// The items of a comma-separated value (a flag's list), each trimmed of blanks; an empty item stays
+// as an empty string so that callers can name it ("a,,b" -> "a", "", "b"; "" -> none).
+std::vector<std::string> SplitCommaList(const std::string& text);
+
 // Splits a list field at semicolons and runs of spaces/tabs; an empty item between two semicolons
 // is returned as an empty string so that callers can report it.
 std::vector<std::string_view> SplitListItems(std::string_view text);

@@ -5,6 +5,7 @@
 // std::shuffle are implementation-defined). Synthetic data made with it are reproducible across
 // compilers for the same seed.
 
+#include <Eigen/Core>
 #include <cmath>
 #include <cstdint>
 #include <random>
@@ -49,6 +50,23 @@ class PortableRandom {
     spare_ = v * factor;
     has_spare_ = true;
     return u * factor;
+  }
+  // Vectors of independent draws, their components drawn LAST TO FIRST. The order is written out
+  // because the arguments of Eigen::Vector3d(Gaussian(), Gaussian(), Gaussian()) are evaluated in
+  // an unspecified order (GCC: last first; Clang: first first), which made the same seed give
+  // different blocks with the two compilers; last-to-first keeps the blocks GCC always made.
+  Eigen::Vector2d Gaussian2() {
+    const double y = Gaussian();
+    return Eigen::Vector2d(Gaussian(), y);
+  }
+  Eigen::Vector3d Gaussian3() {
+    const double z = Gaussian();
+    const double y = Gaussian();
+    return Eigen::Vector3d(Gaussian(), y, z);
+  }
+  Eigen::Vector2d Uniform01x2() {
+    const double y = Uniform01();
+    return Eigen::Vector2d(Uniform01(), y);
   }
 
  private:

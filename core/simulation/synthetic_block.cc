@@ -1,3 +1,7 @@
+// The one synthetic block generator (synthetic_block.h) of the tests, the benchmarks and
+// `photopose simulate`. About 1000 lines, one file on purpose: its options' checks, the flight,
+// terrain and point layout, then the steps of MakeSyntheticBlock in order (each on its own random
+// stream), and the truth as text; splitting it would scatter one seed's draws over several files.
 #include "core/simulation/synthetic_block.h"
 
 #include <algorithm>
@@ -520,7 +524,7 @@ Status PlaceSurveyedPoints(const SyntheticBlockOptions& o, const Geometry& g,
     const Eigen::Vector2d unit = !o.control_layout.empty() ? o.control_layout[c]
                                  : c < static_cast<int>(ControlLayout().size())
                                      ? ControlLayout()[c]
-                                     : Eigen::Vector2d(random.Uniform01(), random.Uniform01());
+                                     : random.Uniform01x2();
     add(Numbered("C", c + 1, control_digits), PointRole::kControl, unit.x(), unit.y());
   }
   const int n = o.num_check_points;
@@ -619,7 +623,7 @@ Status MakeMarks(const SyntheticBlockOptions& o, const std::vector<View>& views,
     mark.point = v.point;
     mark.unit = MarkUnit::kPixel;
     mark.measured =
-        v.pixel + o.mark_sigma_px * Eigen::Vector2d(random.Gaussian(), random.Gaussian());
+        v.pixel + o.mark_sigma_px * random.Gaussian2();
     mark.accuracy = accuracy;
     mark.observation_units_per_unit = units_per_px;
     PHOTOPOSE_RETURN_IF_ERROR(projector.Observation(mark.measured, &mark.observation));
@@ -635,9 +639,7 @@ void MeasureSurveyedAndGnss(const SyntheticBlockOptions& o, const SyntheticBlock
   for (size_t p = 0; p < block->points.size(); ++p) {
     BlockPoint& point = block->points[p];
     if (point.role == PointRole::kTie) continue;
-    point.surveyed_m =
-        t.points_m[p] + o.control_sigma_m * Eigen::Vector3d(random.Gaussian(), random.Gaussian(),
-                                                            random.Gaussian());
+    point.surveyed_m = t.points_m[p] + o.control_sigma_m * random.Gaussian3();
     if (accuracy) point.accuracy_m = Eigen::Vector3d::Constant(*accuracy);
   }
   if (!o.gnss) return;
@@ -730,9 +732,7 @@ void PerturbStart(const SyntheticBlockOptions& o, const SyntheticBlockTruth& t, 
     if (point.role != PointRole::kTie) {
       point.position_m = point.surveyed_m;
     } else if (o.tie_point_start) {
-      point.position_m = t.points_m[p] + o.start_point_sigma_m * Eigen::Vector3d(random.Gaussian(),
-                                                                                 random.Gaussian(),
-                                                                                 random.Gaussian());
+      point.position_m = t.points_m[p] + o.start_point_sigma_m * random.Gaussian3();
     }
   }
 }
@@ -767,47 +767,118 @@ SyntheticBlockOptions SolverBenchmarkBlockOptions(int lines, int images_per_line
   return o;
 }
 
-Status SyntheticBlockOptions::IsValid() const {
-  if (num_lines < 1) return Invalid("num_lines must be >= 1");
-  if (images_per_line < 1) return Invalid("images_per_line must be >= 1");
-  const long long num_images = static_cast<long long>(num_lines) * images_per_line;
+namespace {
+
+// The flight and the camera.
+Status CheckFlightAndCamera(const SyntheticBlockOptions& o) {
+  if (o.num_lines < 1) return Invalid("num_lines must be >= 1");
+  if (o.images_per_line < 1) return Invalid("images_per_line must be >= 1");
+  const long long num_images = static_cast<long long>(o.num_lines) * o.images_per_line;
   if (num_images > kMaxImages)
     return Invalid("num_lines x images_per_line must be <= " + std::to_string(kMaxImages));
-  if (!NonNegative(forward_spacing_m) || !NonNegative(side_spacing_m))
+  if (!NonNegative(o.forward_spacing_m) || !NonNegative(o.side_spacing_m))
     return Invalid("the spacings must be finite and >= 0 (m)");
-  if (forward_spacing_m == 0.0 && !(forward_overlap >= 0.0 && forward_overlap < 1.0))
+  if (o.forward_spacing_m == 0.0 && !(o.forward_overlap >= 0.0 && o.forward_overlap < 1.0))
     return Invalid("forward_overlap must be in [0, 1)");
-  if (side_spacing_m == 0.0 && !(side_overlap >= 0.0 && side_overlap < 1.0))
+  if (o.side_spacing_m == 0.0 && !(o.side_overlap >= 0.0 && o.side_overlap < 1.0))
     return Invalid("side_overlap must be in [0, 1)");
-  if (!Positive(flying_height_m)) return Invalid("flying_height_m must be > 0");
-  if (!origin_m.allFinite()) return Invalid("origin_m must be finite");
-  if (!NonNegative(position_jitter_m)) return Invalid("position_jitter_m must be >= 0");
-  if (!(NonNegative(attitude_jitter_deg) && attitude_jitter_deg < 30.0))
+  if (!Positive(o.flying_height_m)) return Invalid("flying_height_m must be > 0");
+  if (!o.origin_m.allFinite()) return Invalid("origin_m must be finite");
+  if (!NonNegative(o.position_jitter_m)) return Invalid("position_jitter_m must be >= 0");
+  if (!(NonNegative(o.attitude_jitter_deg) && o.attitude_jitter_deg < 30.0))
     return Invalid("attitude_jitter_deg must be in [0, 30)");
-  if (!nominal_angles_deg.allFinite()) return Invalid("nominal_angles_deg must be finite");
-  for (const auto& [image, extra_deg] : extra_angles_deg) {
+  if (!o.nominal_angles_deg.allFinite()) return Invalid("nominal_angles_deg must be finite");
+  for (const auto& [image, extra_deg] : o.extra_angles_deg) {
     if (image < 0 || image >= num_images || !extra_deg.allFinite())
       return Invalid("extra_angles_deg: image indices in [0, number of images), finite angles");
   }
-  if (!std::isfinite(ground_height_m)) return Invalid("ground_height_m must be finite");
-  if (!(NonNegative(terrain_relief_m) &&
-        0.5 * terrain_relief_m + position_jitter_m < 0.5 * flying_height_m))
+  if (!std::isfinite(o.ground_height_m)) return Invalid("ground_height_m must be finite");
+  if (!(NonNegative(o.terrain_relief_m) &&
+        0.5 * o.terrain_relief_m + o.position_jitter_m < 0.5 * o.flying_height_m))
     return Invalid("terrain_relief_m must be >= 0 and keep the terrain well below the cameras");
-  if (!Positive(focal_length_mm)) return Invalid("focal_length_mm must be > 0");
-  if (!Positive(pixel_size_um)) return Invalid("pixel_size_um must be > 0");
-  if (image_width_px < 1 || image_height_px < 1) return Invalid("the image size must be >= 1 px");
-  if (!camera_params.empty()) {
-    if (static_cast<int>(camera_params.size()) != CameraModelNumParams(camera_model)) {
+  if (!Positive(o.focal_length_mm)) return Invalid("focal_length_mm must be > 0");
+  if (!Positive(o.pixel_size_um)) return Invalid("pixel_size_um must be > 0");
+  if (o.image_width_px < 1 || o.image_height_px < 1) return Invalid("the image size must be >= 1 px");
+  if (!o.camera_params.empty()) {
+    if (static_cast<int>(o.camera_params.size()) != CameraModelNumParams(o.camera_model)) {
       return Invalid("camera_params must have the " +
-                     std::to_string(CameraModelNumParams(camera_model)) + " parameters of " +
-                     EnumName(camera_model));
+                     std::to_string(CameraModelNumParams(o.camera_model)) + " parameters of " +
+                     EnumName(o.camera_model));
     }
-    for (const double p : camera_params)
+    for (const double p : o.camera_params)
       if (!std::isfinite(p)) return Invalid("camera_params must be finite");
-    if (!(camera_params[0] > 0.0) ||
-        !(CameraModelFocal(camera_model, camera_params.data()) > 0.0))
+    if (!(o.camera_params[0] > 0.0) ||
+        !(CameraModelFocal(o.camera_model, o.camera_params.data()) > 0.0))
       return Invalid("the focal length in camera_params must be > 0");
   }
+  return Status::Ok();
+}
+
+// Points, errors and blunders.
+Status CheckPointsAndErrors(const SyntheticBlockOptions& o) {
+  const long long num_images = static_cast<long long>(o.num_lines) * o.images_per_line;
+  if (o.num_tie_points < 0 || o.num_tie_points > kMaxIndex)
+    return Invalid("num_tie_points must be in [0, " + std::to_string(kMaxIndex) + "]");
+  if (!NonNegative(o.tie_point_density_per_m2))
+    return Invalid("tie_point_density_per_m2 must be >= 0");
+  if (o.min_tie_views < 1) return Invalid("min_tie_views must be >= 1");
+  if (o.num_control_points < 0 || o.num_check_points < 0)
+    return Invalid("the control and check point counts must be >= 0");
+  for (const auto* layout : {&o.control_layout, &o.check_layout}) {
+    for (const Eigen::Vector2d& at : *layout) {
+      if (!(at.minCoeff() >= 0.0 && at.maxCoeff() <= 1.0))
+        return Invalid("control_layout and check_layout fractions must be in [0, 1]");
+    }
+  }
+  if (!NonNegative(o.control_sigma_m) || !NonNegative(o.control_accuracy_m))
+    return Invalid("control_sigma_m and control_accuracy_m must be >= 0");
+  if (!NonNegative(o.mark_sigma_px) || !NonNegative(o.mark_accuracy_px))
+    return Invalid("mark_sigma_px and mark_accuracy_px must be >= 0");
+  for (int k = 0; k < 3; ++k) {
+    if (!NonNegative(o.gnss_sigma_m[k]) || !NonNegative(o.gnss_accuracy_m[k]))
+      return Invalid("gnss_sigma_m and gnss_accuracy_m must be >= 0");
+  }
+  if (!NonNegative(o.attitude_sigma_deg) || !NonNegative(o.attitude_accuracy_deg))
+    return Invalid("attitude_sigma_deg and attitude_accuracy_deg must be >= 0");
+  if (o.num_tie_blunders < 0 || !NonNegative(o.tie_blunder_px))
+    return Invalid("num_tie_blunders and tie_blunder_px must be >= 0");
+  if (o.num_control_blunders < 0 || o.num_control_blunders > NumControlPoints(o) ||
+      !NonNegative(o.control_blunder_m))
+    return Invalid("num_control_blunders must be in [0, num_control_points], control_blunder_m >= 0");
+  if (o.num_gnss_blunders < 0 || o.num_gnss_blunders > num_images || !NonNegative(o.gnss_blunder_m))
+    return Invalid("num_gnss_blunders must be in [0, number of images], gnss_blunder_m >= 0");
+  if (o.num_gnss_blunders > 0 && !o.gnss) return Invalid("num_gnss_blunders needs gnss");
+  if (!NonNegative(o.start_position_sigma_m) || !NonNegative(o.start_angle_sigma_deg) ||
+      !NonNegative(o.start_point_sigma_m))
+    return Invalid("the start errors must be >= 0");
+
+  return Status::Ok();
+}
+
+// Sizes, in floating point (no overflow): points and marks must fit 32-bit indices.
+Status CheckSizes(const SyntheticBlockOptions& o, const Geometry& g) {
+  const SurveyRectangle covered = CoveredArea(o, g);
+  const double candidates = o.num_tie_points > 0
+                                ? static_cast<double>(o.num_tie_points)
+                                : o.tie_point_density_per_m2 * covered.span_x * covered.span_y;
+  const double points = candidates + static_cast<double>(NumControlPoints(o)) +
+                        static_cast<double>(NumCheckPoints(o));
+  const double views = std::min(static_cast<double>(o.num_lines),
+                                (g.footprint.x1 - g.footprint.x0) / g.side_m + 1.0) *
+                       std::min(static_cast<double>(o.images_per_line),
+                                (g.footprint.y1 - g.footprint.y0) / g.forward_m + 1.0);
+  if (!(points <= static_cast<double>(kMaxIndex)) ||
+      !(points * views <= static_cast<double>(kMaxIndex))) {
+    return Invalid("the block would have about " + std::to_string(points) + " points and " +
+                   std::to_string(points * views) + " marks, more than 32-bit indices hold");
+  }
+  return Status::Ok();
+}
+
+}  // namespace
+
+Status SyntheticBlockOptions::IsValid() const {
+  PHOTOPOSE_RETURN_IF_ERROR(CheckFlightAndCamera(*this));
   const Geometry g = FlightGeometry(*this);
   if (!Positive(g.forward_m) || !Positive(g.side_m))
     return Invalid("the spacings derived from the overlaps must be > 0");
@@ -816,58 +887,8 @@ Status SyntheticBlockOptions::IsValid() const {
         "nominal_angles_deg (with the attitude jitter) tilts an image corner's ray to within 6 deg "
         "of the horizon");
   }
-  if (num_tie_points < 0 || num_tie_points > kMaxIndex)
-    return Invalid("num_tie_points must be in [0, " + std::to_string(kMaxIndex) + "]");
-  if (!NonNegative(tie_point_density_per_m2))
-    return Invalid("tie_point_density_per_m2 must be >= 0");
-  if (min_tie_views < 1) return Invalid("min_tie_views must be >= 1");
-  if (num_control_points < 0 || num_check_points < 0)
-    return Invalid("the control and check point counts must be >= 0");
-  for (const auto* layout : {&control_layout, &check_layout}) {
-    for (const Eigen::Vector2d& at : *layout) {
-      if (!(at.minCoeff() >= 0.0 && at.maxCoeff() <= 1.0))
-        return Invalid("control_layout and check_layout fractions must be in [0, 1]");
-    }
-  }
-  if (!NonNegative(control_sigma_m) || !NonNegative(control_accuracy_m))
-    return Invalid("control_sigma_m and control_accuracy_m must be >= 0");
-  if (!NonNegative(mark_sigma_px) || !NonNegative(mark_accuracy_px))
-    return Invalid("mark_sigma_px and mark_accuracy_px must be >= 0");
-  for (int k = 0; k < 3; ++k) {
-    if (!NonNegative(gnss_sigma_m[k]) || !NonNegative(gnss_accuracy_m[k]))
-      return Invalid("gnss_sigma_m and gnss_accuracy_m must be >= 0");
-  }
-  if (!NonNegative(attitude_sigma_deg) || !NonNegative(attitude_accuracy_deg))
-    return Invalid("attitude_sigma_deg and attitude_accuracy_deg must be >= 0");
-  if (num_tie_blunders < 0 || !NonNegative(tie_blunder_px))
-    return Invalid("num_tie_blunders and tie_blunder_px must be >= 0");
-  if (num_control_blunders < 0 || num_control_blunders > NumControlPoints(*this) ||
-      !NonNegative(control_blunder_m))
-    return Invalid("num_control_blunders must be in [0, num_control_points], control_blunder_m >= 0");
-  if (num_gnss_blunders < 0 || num_gnss_blunders > num_images || !NonNegative(gnss_blunder_m))
-    return Invalid("num_gnss_blunders must be in [0, number of images], gnss_blunder_m >= 0");
-  if (num_gnss_blunders > 0 && !gnss) return Invalid("num_gnss_blunders needs gnss");
-  if (!NonNegative(start_position_sigma_m) || !NonNegative(start_angle_sigma_deg) ||
-      !NonNegative(start_point_sigma_m))
-    return Invalid("the start errors must be >= 0");
-
-  // Sizes, in floating point (no overflow): points and marks must fit 32-bit indices.
-  const SurveyRectangle covered = CoveredArea(*this, g);
-  const double candidates = num_tie_points > 0
-                                ? static_cast<double>(num_tie_points)
-                                : tie_point_density_per_m2 * covered.span_x * covered.span_y;
-  const double points = candidates + static_cast<double>(NumControlPoints(*this)) +
-                        static_cast<double>(NumCheckPoints(*this));
-  const double views = std::min(static_cast<double>(num_lines),
-                                (g.footprint.x1 - g.footprint.x0) / g.side_m + 1.0) *
-                       std::min(static_cast<double>(images_per_line),
-                                (g.footprint.y1 - g.footprint.y0) / g.forward_m + 1.0);
-  if (!(points <= static_cast<double>(kMaxIndex)) ||
-      !(points * views <= static_cast<double>(kMaxIndex))) {
-    return Invalid("the block would have about " + std::to_string(points) + " points and " +
-                   std::to_string(points * views) + " marks, more than 32-bit indices hold");
-  }
-  return Status::Ok();
+  PHOTOPOSE_RETURN_IF_ERROR(CheckPointsAndErrors(*this));
+  return CheckSizes(*this, g);
 }
 
 Status MakeSyntheticBlock(const SyntheticBlockOptions& o, Block* block,

@@ -82,56 +82,82 @@ Status SyntheticSceneOptions::IsValid() const {
   return Status::Ok();
 }
 
-Status MakeSyntheticScene(const SyntheticSceneOptions& options, SyntheticScene* scene) {
-  const Status valid = options.IsValid();
-  if (!valid.ok()) return valid;
-  *scene = SyntheticScene();
-  std::mt19937_64 rng(options.seed);
-  std::uniform_real_distribution<double> unit(0.0, 1.0);
-  auto uniform = [&](double lo, double hi) { return lo + (hi - lo) * unit(rng); };
-  std::normal_distribution<double> gaussian(0.0, 1.0);
+namespace {
 
-  // Cameras and true poses.
-  double ground_z = 0.0;
-  std::vector<ExteriorOrientation> poses;
-  switch (options.scenario) {
-    case Scenario::kNadir:
-    case Scenario::kOblique: {
-      scene->cameras.push_back(AerialCamera());
-      ground_z = 50.0;
-      ExteriorOrientation eo;
-      const bool oblique = options.scenario == Scenario::kOblique;
-      eo.set_center_in_ground(Eigen::Vector3d(uniform(4000, 6000), uniform(4000, 6000),
-                                              ground_z + (oblique ? 600.0 : 800.0)));
-      const double tilt = oblique ? DegreesToRadians(45.0) : 0.0;
-      eo.set_angles_seed_rad(Eigen::Vector3d(tilt + DegreesToRadians(uniform(-2, 2)),
-                                             DegreesToRadians(uniform(-2, 2)),
-                                             DegreesToRadians(uniform(-180, 180))));
-      poses.push_back(eo);
-      break;
-    }
-    case Scenario::kUavBlock: {
-      scene->cameras.push_back(UavCamera());
-      ground_z = 20.0;
-      for (int strip = 0; strip < 3; ++strip) {
-        for (int i = 0; i < 4; ++i) {
-          const int along = strip % 2 == 0 ? i : 3 - i;  // serpentine flight
-          ExteriorOrientation eo;
-          eo.set_center_in_ground(Eigen::Vector3d(300000.0 + 45.0 * along + uniform(-2, 2),
-                                                  4100000.0 + 40.0 * strip + uniform(-2, 2),
-                                                  ground_z + 100.0 + uniform(-1.5, 1.5)));
-          eo.set_angles_seed_rad(Eigen::Vector3d(DegreesToRadians(uniform(-3, 3)),
-                                                 DegreesToRadians(uniform(-3, 3)),
-                                                 DegreesToRadians((strip % 2 ? 180.0 : 0.0) +
-                                                                  uniform(-5, 5))));
-          poses.push_back(eo);
-        }
-      }
-      break;
-    }
+// The scene's random draws. The components of a vector are drawn last to first, written out: the
+// arguments of Eigen::Vector3d(Uniform(), Uniform(), Uniform()) are evaluated in an unspecified
+// order (GCC: last first; Clang: first first), which gave the two compilers different scenes for
+// one seed; last-to-first keeps the scenes GCC always made.
+struct SceneDraws {
+  explicit SceneDraws(uint64_t seed) : rng(seed) {}
+  double Uniform(double lo, double hi) { return lo + (hi - lo) * unit(rng); }
+  double Gaussian() { return gaussian(rng); }
+  // (Uniform(lo[0], hi[0]), ...) drawn last to first.
+  Eigen::Vector3d Uniform3(const Eigen::Vector3d& lo, const Eigen::Vector3d& hi) {
+    const double z = Uniform(lo.z(), hi.z());
+    const double y = Uniform(lo.y(), hi.y());
+    return Eigen::Vector3d(Uniform(lo.x(), hi.x()), y, z);
   }
-  const FrameCamera& camera = scene->cameras.front();
+  Eigen::Vector2d Uniform2(const Eigen::Vector2d& lo, const Eigen::Vector2d& hi) {
+    const double y = Uniform(lo.y(), hi.y());
+    return Eigen::Vector2d(Uniform(lo.x(), hi.x()), y);
+  }
+  Eigen::Vector2d Gaussian2() {
+    const double y = Gaussian();
+    return Eigen::Vector2d(Gaussian(), y);
+  }
 
+  std::mt19937_64 rng;
+  std::uniform_real_distribution<double> unit{0.0, 1.0};
+  std::normal_distribution<double> gaussian{0.0, 1.0};
+};
+
+// The scenario's camera (into scene->cameras) and true poses; *ground_z the terrain's mean height.
+std::vector<ExteriorOrientation> TruePoses(const SyntheticSceneOptions& options, SceneDraws* draw,
+                                           SyntheticScene* scene, double* ground_z) {
+  std::vector<ExteriorOrientation> poses;
+  if (options.scenario == Scenario::kUavBlock) {
+    scene->cameras.push_back(UavCamera());
+    *ground_z = 20.0;
+    for (int strip = 0; strip < 3; ++strip) {
+      for (int i = 0; i < 4; ++i) {
+        const int along = strip % 2 == 0 ? i : 3 - i;  // serpentine flight
+        ExteriorOrientation eo;
+        eo.set_center_in_ground(
+            Eigen::Vector3d(300000.0 + 45.0 * along, 4100000.0 + 40.0 * strip, *ground_z + 100.0) +
+            draw->Uniform3(Eigen::Vector3d(-2, -2, -1.5), Eigen::Vector3d(2, 2, 1.5)));
+        const Eigen::Vector3d jitter_deg =
+            draw->Uniform3(Eigen::Vector3d(-3, -3, -5), Eigen::Vector3d(3, 3, 5));
+        eo.set_angles_seed_rad(Eigen::Vector3d(
+            DegreesToRadians(jitter_deg.x()), DegreesToRadians(jitter_deg.y()),
+            DegreesToRadians((strip % 2 ? 180.0 : 0.0) + jitter_deg.z())));
+        poses.push_back(eo);
+      }
+    }
+    return poses;
+  }
+  // kNadir, kOblique: one aerial image.
+  scene->cameras.push_back(AerialCamera());
+  *ground_z = 50.0;
+  ExteriorOrientation eo;
+  const bool oblique = options.scenario == Scenario::kOblique;
+  const Eigen::Vector2d xy =
+      draw->Uniform2(Eigen::Vector2d(4000, 4000), Eigen::Vector2d(6000, 6000));
+  eo.set_center_in_ground(Eigen::Vector3d(xy.x(), xy.y(), *ground_z + (oblique ? 600.0 : 800.0)));
+  const double tilt = oblique ? DegreesToRadians(45.0) : 0.0;
+  const Eigen::Vector3d jitter_deg =
+      draw->Uniform3(Eigen::Vector3d(-2, -2, -180), Eigen::Vector3d(2, 2, 180));
+  eo.set_angles_seed_rad(Eigen::Vector3d(tilt + DegreesToRadians(jitter_deg.x()),
+                                         DegreesToRadians(jitter_deg.y()),
+                                         DegreesToRadians(jitter_deg.z())));
+  poses.push_back(eo);
+  return poses;
+}
+
+// The true and the approximate frames (the truth moved by the asked initial errors).
+void Frames(const SyntheticSceneOptions& options, const std::vector<ExteriorOrientation>& poses,
+            SceneDraws* draw, SyntheticScene* scene) {
+  const FrameCamera& camera = scene->cameras.front();
   for (size_t i = 0; i < poses.size(); ++i) {
     FrameRecord truth;
     truth.raster = Name("img_", static_cast<int>(i + 1));
@@ -141,25 +167,31 @@ Status MakeSyntheticScene(const SyntheticSceneOptions& options, SyntheticScene* 
     Eigen::Vector3d center = poses[i].center_in_ground();
     Eigen::Vector3d angles = poses[i].angles_seed_rad();
     for (int k = 0; k < 3; ++k) {
-      center[k] += uniform(-1, 1) * options.initial_position_error_m;
-      angles[k] += DegreesToRadians(uniform(-1, 1) * options.initial_angle_error_deg);
+      center[k] += draw->Uniform(-1, 1) * options.initial_position_error_m;
+      angles[k] += DegreesToRadians(draw->Uniform(-1, 1) * options.initial_angle_error_deg);
     }
     approximate.eo.set_center_in_ground(center);
     approximate.eo.set_angles_seed_rad(angles);
     scene->true_frames.push_back(truth);
     scene->approximate_frames.push_back(approximate);
   }
+}
 
-  // Ground points: rays of random pixels of each image meet the terrain at a random height, so
-  // every point is seen by the image that made it (and by its neighbours where they overlap).
+// Ground points: rays of random pixels of each image meet the terrain at a random height, so
+// every point is seen by the image that made it (and by its neighbours where they overlap).
+Status GroundPoints(const SyntheticSceneOptions& options,
+                    const std::vector<ExteriorOrientation>& poses, double ground_z,
+                    SceneDraws* draw, SyntheticScene* scene) {
+  const FrameCamera& camera = scene->cameras.front();
   int point_index = 0;
   for (const ExteriorOrientation& eo : poses) {
     const int total = options.num_control_points + options.num_check_points;
     for (int k = 0; k < total; ++k) {
       const double margin = 0.03;
-      const Eigen::Vector2d pixel(uniform(margin, 1 - margin) * camera.n_columns,
-                                  uniform(margin, 1 - margin) * camera.n_rows);
-      const double height = ground_z + uniform(-0.5, 0.5) * options.terrain_relief_m;
+      const Eigen::Vector2d pixel =
+          draw->Uniform2(Eigen::Vector2d::Constant(margin), Eigen::Vector2d::Constant(1 - margin))
+              .cwiseProduct(Eigen::Vector2d(camera.n_columns, camera.n_rows));
+      const double height = ground_z + draw->Uniform(-0.5, 0.5) * options.terrain_relief_m;
       GroundPoint point;
       const Status status = IntersectRayWithPlane(camera, eo, pixel, PixelOrigin::kCorner, height,
                                                   &point.position);
@@ -169,8 +201,14 @@ Status MakeSyntheticScene(const SyntheticSceneOptions& options, SyntheticScene* 
       scene->points.push_back(point);
     }
   }
+  return Status::Ok();
+}
 
-  // Marks: every point inside every image, with noise and outliers.
+// Marks: every point inside every image, with noise; then exactly round(fraction * marks) gross
+// errors, on marks drawn without replacement.
+void Marks(const SyntheticSceneOptions& options, const std::vector<ExteriorOrientation>& poses,
+           SceneDraws* draw, SyntheticScene* scene) {
+  const FrameCamera& camera = scene->cameras.front();
   const double accuracy_px = options.mark_accuracy_px > 0.0 ? options.mark_accuracy_px
                              : options.noise_px > 0.0        ? options.noise_px
                                                              : 1.0;
@@ -185,25 +223,36 @@ Status MakeSyntheticScene(const SyntheticSceneOptions& options, SyntheticScene* 
       mark.point_id = point.point_id;
       mark.camera_id = camera.camera_id;
       mark.accuracy_px = accuracy_px;
-      pixel += options.noise_px * Eigen::Vector2d(gaussian(rng), gaussian(rng));
-      mark.column_row = pixel;
+      mark.column_row = pixel + options.noise_px * draw->Gaussian2();
       scene->marks.push_back(mark);
       scene->mark_is_outlier.push_back(false);
     }
   }
-  // Exactly round(fraction * marks) gross errors, on marks drawn without replacement.
   const size_t num_outliers =
       static_cast<size_t>(std::lround(options.outlier_fraction * scene->marks.size()));
   std::vector<size_t> order(scene->marks.size());
   for (size_t i = 0; i < order.size(); ++i) order[i] = i;
-  std::shuffle(order.begin(), order.end(), rng);
+  std::shuffle(order.begin(), order.end(), draw->rng);
   for (size_t k = 0; k < num_outliers; ++k) {
     ImageMark& mark = scene->marks[order[k]];
-    const double magnitude = uniform(options.outlier_min_px, options.outlier_max_px);
-    const double direction = uniform(-kPi, kPi);
+    const double magnitude = draw->Uniform(options.outlier_min_px, options.outlier_max_px);
+    const double direction = draw->Uniform(-kPi, kPi);
     *mark.column_row += magnitude * Eigen::Vector2d(std::cos(direction), std::sin(direction));
     scene->mark_is_outlier[order[k]] = true;
   }
+}
+
+}  // namespace
+
+Status MakeSyntheticScene(const SyntheticSceneOptions& options, SyntheticScene* scene) {
+  PHOTOPOSE_RETURN_IF_ERROR(options.IsValid());
+  *scene = SyntheticScene();
+  SceneDraws draw(options.seed);
+  double ground_z = 0.0;
+  const std::vector<ExteriorOrientation> poses = TruePoses(options, &draw, scene, &ground_z);
+  Frames(options, poses, &draw, scene);
+  PHOTOPOSE_RETURN_IF_ERROR(GroundPoints(options, poses, ground_z, &draw, scene));
+  Marks(options, poses, &draw, scene);
   return Status::Ok();
 }
 

@@ -278,18 +278,6 @@ void PrintHelp(const std::string& usage, const CommandFlags& flags) {
             << kMaxFlagFileDepth << " levels deep at most.\n";
 }
 
-std::vector<std::string> SplitCommaList(const std::string& text) {
-  std::vector<std::string> items;
-  std::string item;
-  std::stringstream stream(text);
-  while (std::getline(stream, item, ',')) {
-    const size_t begin = item.find_first_not_of(" \t");
-    const size_t end = item.find_last_not_of(" \t");
-    items.push_back(begin == std::string::npos ? "" : item.substr(begin, end - begin + 1));
-  }
-  return items;
-}
-
 int BadInput(const std::string& subcommand, const std::string& message) {
   std::cerr << "photopose " << subcommand << ": " << EscapeForMessage(message) << "\n";
   return kExitBadInput;

@@ -87,9 +87,6 @@ std::vector<std::string> NumericFlagsWithoutRange(const CommandFlags& flags);
 // Prints the usage text and the command's flags with their help texts and ranges.
 void PrintHelp(const std::string& usage, const CommandFlags& flags);
 
-// The items of a comma-separated flag value, each trimmed of blanks; an empty item stays as an empty
-// string so that callers can name it ("a,,b" -> "a", "", "b").
-std::vector<std::string> SplitCommaList(const std::string& text);
 
 // The refusal of an enumerated flag's value, naming the accepted ones from the enum's table
 // (core/enum_names.h): "--rotation must be rxryrz (alias seed), opk or pok, not 'x'".

@@ -32,6 +32,7 @@
 #include "tools/commands/commands.h"
 #include "tools/compare/comparison.h"
 #include "tools/report/comparison_html.h"
+#include "tools/report/comparison_tables.h"
 #include "tools/report/html_kit.h"
 
 // Both modes.
@@ -234,8 +235,7 @@ bool WasGiven(const std::string& name) {
 bool ParseList(const std::string& text, const FlagRange& range, bool whole,
                std::vector<double>* values, std::string* why) {
   values->clear();
-  std::stringstream stream(text);
-  for (std::string item; std::getline(stream, item, ',');) {
+  for (const std::string& item : SplitCommaList(text)) {
     double value = 0.0;
     std::string reason;
     if (!ParseFiniteNumber(item, &value, &reason) || (whole && value != std::floor(value))) {
@@ -364,8 +364,7 @@ int RunMonteCarloMode(const std::vector<SolverVariant>& solvers, const Resection
   options.solvers = solvers;
   options.resection = resection;
   options.scenarios.clear();
-  std::stringstream names(FLAGS_compare_scenarios);
-  for (std::string name; std::getline(names, name, ',');) {
+  for (const std::string& name : SplitCommaList(FLAGS_compare_scenarios)) {
     Scenario scenario;
     if (name == "block")
       return BadInput(kCommand, "--scenarios: 'block' compares the block solvers and runs alone (--scenarios=block); the single-image scenarios (" +

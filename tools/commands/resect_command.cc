@@ -11,7 +11,8 @@
 #include "solvers/resection/resection.h"
 #include "tools/commands/cli_common.h"
 #include "tools/commands/commands.h"
-#include "tools/commands/resection_job.h"
+#include "tools/jobs/resection_job.h"
+#include "tools/report/resection_report.h"
 
 DEFINE_string(cameras, "", "Camera table (CSV, ArcGIS frame-camera schema): the interior orientation of every CameraID.");
 DEFINE_string(points, "", "Ground points (CSV: PointID, X, Y, Z in metres, optional AccuracyX/Y/Z and Role control|check|tie); a point that has marks but no row is a tie point and is left out.");

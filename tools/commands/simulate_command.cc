@@ -91,103 +91,145 @@ bool IsDefault(const char* gflag) {
   return !gflags::GetCommandLineFlagInfo(gflag, &info) || info.is_default;
 }
 
-// --scenario=block: a synthetic block (core/simulation/synthetic_block.h) as the project's tables, its truth
-// and, with --colmap, a COLMAP model, written into --out_dir all or nothing.
-int RunSimulateBlock(const ParsedFlags& parsed, RotationConvention rotation) {
-  if (FLAGS_outlier_fraction != 0.0)
-    return BadInput("simulate", "--outlier_fraction is for the single-image scenarios; a block takes "
-                                "--tie_blunders, --control_blunders and --gnss_blunders");
-  SyntheticBlockOptions options;
-  if (FLAGS_benchmark_block) {
-    // The benchmark's layout; --lines and --images_per_line resize it for the growth curve, with
-    // the same tie-point density (120 per image) unless --tie_points says otherwise.
-    options = BenchmarkBlockOptions();
-    const int default_images = options.num_lines * options.images_per_line;
-    if (!IsDefault("lines")) options.num_lines = FLAGS_lines;
-    if (!IsDefault("images_per_line")) options.images_per_line = FLAGS_images_per_line;
-    if (!IsDefault("tie_points")) {
-      options.num_tie_points = FLAGS_tie_points;
-    } else {
-      options.num_tie_points = static_cast<int>(static_cast<long long>(options.num_tie_points) *
-                                                options.num_lines * options.images_per_line /
-                                                default_images);
-    }
-  } else {
-    options.num_lines = FLAGS_lines;
-    options.images_per_line = FLAGS_images_per_line;
-    options.forward_overlap = FLAGS_forward_overlap;
-    options.side_overlap = FLAGS_side_overlap;
-    options.flying_height_m = FLAGS_flying_height;
-    options.num_tie_points = FLAGS_tie_points;
-    if (!IsDefault("control_points")) options.num_control_points = FLAGS_control_points;
-    if (!IsDefault("check_points")) options.num_check_points = FLAGS_check_points;
-    options.num_tie_blunders = FLAGS_tie_blunders;
-    options.num_control_blunders = FLAGS_control_blunders;
-    options.num_gnss_blunders = FLAGS_gnss_blunders;
-  }
-  options.seed = FLAGS_sim_seed;
-  options.mark_sigma_px = FLAGS_noise_px;
-  options.control_sigma_m = FLAGS_control_sigma;
-  options.gnss = FLAGS_gnss;
-  options.gnss_sigma_m = Eigen::Vector3d(FLAGS_gnss_sigma, FLAGS_gnss_sigma, 2.0 * FLAGS_gnss_sigma);
-  if (!IsDefault("initial_position_error"))
-    options.start_position_sigma_m = FLAGS_initial_position_error;
-  if (!IsDefault("initial_angle_error")) options.start_angle_sigma_deg = FLAGS_initial_angle_error;
-  if (options.num_gnss_blunders > 0 && !options.gnss)
-    return BadInput("simulate", "--gnss_blunders needs --gnss");
-  const Status valid = options.IsValid();
-  if (!valid.ok()) return BadInput("simulate", valid.message());
-
-  std::vector<FolderFile> files = {{"cameras.csv", ""},       {"points.csv", ""},
-                                   {"marks.csv", ""},         {"frames.csv", ""},
-                                   {"truth/frames.csv", ""},  {"truth/points.csv", ""},
-                                   {"truth/blunders.csv", ""}};
-  if (FLAGS_colmap) {
-    for (const char* name : {"colmap/cameras.txt", "colmap/images.txt", "colmap/points3D.txt"})
-      files.push_back({name, ""});
-  }
-  const Status folder = CheckOutputFolder("--out_dir", FLAGS_out_dir, files);
-  if (!folder.ok()) return BadInput("simulate", folder.message());
+// --out_dir checked for the dataset's files: writable, and none of them a flag file of this run
+// (photopose never writes over an input).
+Status CheckDatasetFolder(const ParsedFlags& parsed, const std::vector<FolderFile>& files) {
+  PHOTOPOSE_RETURN_IF_ERROR(CheckOutputFolder("--out_dir", FLAGS_out_dir, files));
   for (const std::string& flag_file : parsed.flag_files) {
     for (const FolderFile& file : files) {
       std::error_code error;
       if (std::filesystem::equivalent(
               flag_file, std::filesystem::path(FLAGS_out_dir) / file.relative_path, error))
-        return BadInput("simulate", "--out_dir=" + FLAGS_out_dir + " would overwrite the flag file " +
-                                        flag_file + "; photopose never writes over an input");
+        return Status::Error("--out_dir=" + FLAGS_out_dir + " would overwrite the flag file " +
+                             flag_file + " with " + file.relative_path +
+                             "; photopose never writes over an input");
     }
   }
+  return Status::Ok();
+}
 
-  Block block;
-  SyntheticBlockTruth truth;
-  Status status = MakeSyntheticBlock(options, &block, &truth);
-  if (!status.ok()) return BadInput("simulate", status.message());
+// The flags only a block uses ("block:" in their help): refused for the single-image scenarios.
+constexpr const char* kBlockOnlyFlags[] = {
+    "lines",        "images_per_line", "forward_overlap",  "side_overlap",  "flying_height",
+    "tie_points",   "gnss",            "gnss_sigma",       "control_sigma", "tie_blunders",
+    "control_blunders", "gnss_blunders", "benchmark_block", "colmap"};
+
+// --scenario=block: a synthetic block (core/simulation/synthetic_block.h) as the project's tables, its truth
+// and, with --colmap, a COLMAP model, written into --out_dir all or nothing.
+// The block's options from the flags; false (and *why) for a flag the chosen block cannot use.
+bool BlockOptionsFromFlags(SyntheticBlockOptions* options, std::string* why) {
+  if (FLAGS_outlier_fraction != 0.0) {
+    *why = "--outlier_fraction is for the single-image scenarios; a block takes --tie_blunders, "
+           "--control_blunders and --gnss_blunders";
+    return false;
+  }
+  if (FLAGS_benchmark_block) {
+    // The benchmark's layout; --lines and --images_per_line resize it for the growth curve, with
+    // the same tie-point density (120 per image) unless --tie_points says otherwise. Its
+    // geometry and blunders are fixed: the flags that would change them are refused.
+    for (const char* flag : {"forward_overlap", "side_overlap", "flying_height", "control_points",
+                             "check_points", "tie_blunders", "control_blunders", "gnss_blunders"}) {
+      if (!IsDefault(flag)) {
+        *why = std::string("--") + flag + " does not apply to --benchmark_block (its layout is "
+               "fixed; --lines, --images_per_line and --tie_points resize it)";
+        return false;
+      }
+    }
+    *options = BenchmarkBlockOptions();
+    const int default_images = options->num_lines * options->images_per_line;
+    if (!IsDefault("lines")) options->num_lines = FLAGS_lines;
+    if (!IsDefault("images_per_line")) options->images_per_line = FLAGS_images_per_line;
+    options->num_tie_points =
+        !IsDefault("tie_points")
+            ? FLAGS_tie_points
+            : static_cast<int>(static_cast<long long>(options->num_tie_points) *
+                               options->num_lines * options->images_per_line / default_images);
+  } else {
+    options->num_lines = FLAGS_lines;
+    options->images_per_line = FLAGS_images_per_line;
+    options->forward_overlap = FLAGS_forward_overlap;
+    options->side_overlap = FLAGS_side_overlap;
+    options->flying_height_m = FLAGS_flying_height;
+    options->num_tie_points = FLAGS_tie_points;
+    if (!IsDefault("control_points")) options->num_control_points = FLAGS_control_points;
+    if (!IsDefault("check_points")) options->num_check_points = FLAGS_check_points;
+    options->num_tie_blunders = FLAGS_tie_blunders;
+    options->num_control_blunders = FLAGS_control_blunders;
+    options->num_gnss_blunders = FLAGS_gnss_blunders;
+  }
+  options->seed = FLAGS_sim_seed;
+  options->mark_sigma_px = FLAGS_noise_px;
+  options->control_sigma_m = FLAGS_control_sigma;
+  options->gnss = FLAGS_gnss;
+  options->gnss_sigma_m =
+      Eigen::Vector3d(FLAGS_gnss_sigma, FLAGS_gnss_sigma, 2.0 * FLAGS_gnss_sigma);
+  if (!IsDefault("initial_position_error"))
+    options->start_position_sigma_m = FLAGS_initial_position_error;
+  if (!IsDefault("initial_angle_error")) options->start_angle_sigma_deg = FLAGS_initial_angle_error;
+  if (options->num_gnss_blunders > 0 && !options->gnss) {
+    *why = "--gnss_blunders needs --gnss";
+    return false;
+  }
+  const Status valid = options->IsValid();
+  if (!valid.ok()) *why = valid.message();
+  return valid.ok();
+}
+
+// The files of --out_dir (contents empty), checked writable and never over a flag file.
+Status SimulatedBlockFiles(const ParsedFlags& parsed, std::vector<FolderFile>* files) {
+  *files = {{"cameras.csv", ""},      {"points.csv", ""},       {"marks.csv", ""},
+            {"frames.csv", ""},       {"truth/frames.csv", ""}, {"truth/points.csv", ""},
+            {"truth/blunders.csv", ""}};
+  if (FLAGS_colmap) {
+    for (const char* name : {"colmap/cameras.txt", "colmap/images.txt", "colmap/points3D.txt"})
+      files->push_back({name, ""});
+  }
+  return CheckDatasetFolder(parsed, *files);
+}
+
+// The block and its truth as the contents of *files (in SimulatedBlockFiles' order).
+Status FormatSimulatedBlock(const Block& block, const SyntheticBlockTruth& truth,
+                            const SyntheticBlockOptions& options, RotationConvention rotation,
+                            std::vector<FolderFile>* files) {
   BlockTableWriteOptions table_options;
   table_options.rotation = rotation;
   table_options.write_tie_points = false;  // tie points: marks without a row, as in a survey
   BlockTableText tables;
-  status = FormatBlockTables(block, table_options, &tables);
-  if (!status.ok()) return BadInput("simulate", status.message());
+  PHOTOPOSE_RETURN_IF_ERROR(FormatBlockTables(block, table_options, &tables));
   SyntheticTruthText truth_text;
-  status = FormatSyntheticBlockTruth(block, truth, options, rotation, &truth_text);
-  if (!status.ok()) return BadInput("simulate", status.message());
-  files[0].contents = std::move(tables.cameras);
-  files[1].contents = std::move(tables.points);
-  files[2].contents = std::move(tables.marks);
-  files[3].contents = std::move(tables.frames);
-  files[4].contents = std::move(truth_text.frames);
-  files[5].contents = std::move(truth_text.points);
-  files[6].contents = std::move(truth_text.blunders);
+  PHOTOPOSE_RETURN_IF_ERROR(
+      FormatSyntheticBlockTruth(block, truth, options, rotation, &truth_text));
+  std::vector<FolderFile>& f = *files;
+  f[0].contents = std::move(tables.cameras);
+  f[1].contents = std::move(tables.points);
+  f[2].contents = std::move(tables.marks);
+  f[3].contents = std::move(tables.frames);
+  f[4].contents = std::move(truth_text.frames);
+  f[5].contents = std::move(truth_text.points);
+  f[6].contents = std::move(truth_text.blunders);
   if (FLAGS_colmap) {
     ColmapModelFiles model;
-    status = FormatColmapModel(block, nullptr, ColmapWriteOptions(), &model);
-    if (!status.ok()) return BadInput("simulate", status.message());
-    files[7].contents = std::move(model.cameras);
-    files[8].contents = std::move(model.images);
-    files[9].contents = std::move(model.points3D);
+    PHOTOPOSE_RETURN_IF_ERROR(FormatColmapModel(block, nullptr, ColmapWriteOptions(), &model));
+    f[7].contents = std::move(model.cameras);
+    f[8].contents = std::move(model.images);
+    f[9].contents = std::move(model.points3D);
   }
-  const Status written = WriteFolderAtomically("--out_dir", FLAGS_out_dir, files);
-  if (!written.ok()) return BadInput("simulate", written.message());
+  return Status::Ok();
+}
+
+int RunSimulateBlock(const ParsedFlags& parsed, RotationConvention rotation) {
+  SyntheticBlockOptions options;
+  std::string why;
+  if (!BlockOptionsFromFlags(&options, &why)) return BadInput("simulate", why);
+  std::vector<FolderFile> files;
+  Status status = SimulatedBlockFiles(parsed, &files);
+  if (!status.ok()) return BadInput("simulate", status.message());
+  Block block;
+  SyntheticBlockTruth truth;
+  status = MakeSyntheticBlock(options, &block, &truth);
+  if (status.ok()) status = FormatSimulatedBlock(block, truth, options, rotation, &files);
+  if (status.ok()) status = WriteFolderAtomically("--out_dir", FLAGS_out_dir, files);
+  if (!status.ok()) return BadInput("simulate", status.message());
   int controls = 0, checks = 0, ties = 0;
   for (const BlockPoint& point : block.points) {
     controls += point.role == PointRole::kControl;
@@ -224,24 +266,18 @@ int RunSimulate(int argc, char** argv) {
     choices.replace(choices.size() - 2, 2, " or block");
     return BadInput("simulate", "--scenario must be " + choices + ", not '" + FLAGS_scenario + "'");
   }
+  for (const char* flag : kBlockOnlyFlags) {
+    if (!IsDefault(flag)) {
+      return BadInput("simulate", std::string("--") + flag + " is for --scenario=block, not " +
+                                      FLAGS_scenario);
+    }
+  }
   // The dataset's files, for the pre-flight check of the folder before any work.
   std::vector<FolderFile> files = {{"cameras.csv", ""},      {"points.csv", ""},
                                    {"marks.csv", ""},        {"frames_approx.csv", ""},
                                    {"truth/frames.csv", ""}, {"truth/outliers.csv", ""}};
-  const Status folder = CheckOutputFolder("--out_dir", FLAGS_out_dir, files);
+  const Status folder = CheckDatasetFolder(parsed, files);
   if (!folder.ok()) return BadInput("simulate", folder.message());
-  // A flag file that is one of the dataset's files would be overwritten by it.
-  for (const std::string& flag_file : parsed.flag_files) {
-    for (const FolderFile& file : files) {
-      std::error_code error;
-      if (std::filesystem::equivalent(
-              flag_file, std::filesystem::path(FLAGS_out_dir) / file.relative_path, error))
-        return BadInput("simulate", "--out_dir=" + FLAGS_out_dir +
-                                        " would overwrite the flag file " + flag_file + " with " +
-                                        file.relative_path +
-                                        "; photopose never writes over an input");
-    }
-  }
 
   SyntheticSceneOptions options;
   options.scenario = scenario;

@@ -14,9 +14,7 @@
 #include "core/simulation/synthetic_block.h"
 #include "core/statistics.h"
 #include "solvers/bundle/taylor_bundle.h"
-#include "tools/commands/cli_common.h"
-#include "tools/report/comparison_html.h"
-#include "tools/report/html_kit.h"
+#include "core/io/csv.h"
 
 namespace photopose::cli {
 namespace {
@@ -183,303 +181,151 @@ std::string BlockSetting::Label() const {
   return os.str();
 }
 
-Status RunBlockComparison(const BlockComparisonOptions& options, BlockComparisonResult* result) {
-  *result = BlockComparisonResult();
-  std::string why;
-  if (!options.IsValid(&why)) return Status::Error(why);
-  const Clock::time_point start = Clock::now();
+namespace {
 
-  // Settings: the baseline, then each further value of one axis.
+// The baseline (the first value of every axis), then each further value of one axis.
+std::vector<BlockSetting> BlockSettings(const BlockComparisonOptions& options) {
   BlockSetting base;
   base.axis = "baseline";
   base.noise_px = options.noise_px[0];
   base.tie_blunders = options.tie_blunders[0];
   base.tie_points = options.tie_points[0];
   base.gnss_sigma_m = options.gnss_sigma_m[0];
-  result->settings.push_back(base);
-  for (size_t k = 1; k < options.noise_px.size(); ++k) {
-    BlockSetting s = base;
-    s.axis = "noise_px";
-    s.noise_px = options.noise_px[k];
-    result->settings.push_back(s);
+  std::vector<BlockSetting> settings = {base};
+  const auto sweep = [&](const char* axis, const auto& values, auto BlockSetting::*field) {
+    for (size_t k = 1; k < values.size(); ++k) {
+      BlockSetting s = base;
+      s.axis = axis;
+      s.*field = values[k];
+      settings.push_back(s);
+    }
+  };
+  sweep("noise_px", options.noise_px, &BlockSetting::noise_px);
+  sweep("tie_blunders", options.tie_blunders, &BlockSetting::tie_blunders);
+  sweep("tie_points", options.tie_points, &BlockSetting::tie_points);
+  sweep("gnss_sigma_m", options.gnss_sigma_m, &BlockSetting::gnss_sigma_m);
+  return settings;
+}
+
+// Simulates the block of one (setting, trial) and runs every solver on it.
+Status RunTrial(const BlockComparisonOptions& options, const BlockSetting& setting, int trial,
+                std::vector<TrialOutcome>* outcomes) {
+  SyntheticBlockOptions o;
+  o.seed = options.seed + static_cast<uint64_t>(trial);
+  o.num_lines = options.lines;
+  o.images_per_line = options.images_per_line;
+  o.num_tie_points = setting.tie_points;
+  o.mark_sigma_px = setting.noise_px;
+  o.mark_accuracy_px = std::max(setting.noise_px, 0.05);  // stated = true (0 noise: 0.05)
+  o.gnss_sigma_m =
+      Eigen::Vector3d(setting.gnss_sigma_m, setting.gnss_sigma_m, 2.0 * setting.gnss_sigma_m);
+  o.num_tie_blunders = setting.tie_blunders;
+  o.control_sigma_m = 0.005;
+  Block block;
+  SyntheticBlockTruth truth;
+  const Status made = MakeSyntheticBlock(o, &block, &truth);
+  if (!made.ok()) {
+    return Status::Error(setting.Label() + ", trial " + std::to_string(trial) + ": " +
+                         made.message());
   }
-  for (size_t k = 1; k < options.tie_blunders.size(); ++k) {
-    BlockSetting s = base;
-    s.axis = "tie_blunders";
-    s.tie_blunders = options.tie_blunders[k];
-    result->settings.push_back(s);
+  for (const BlockSolverVariant& variant : options.solvers)
+    outcomes->push_back(SolveBlock(variant, block, truth));
+  return Status::Ok();
+}
+
+// One solver's figures over the trials [first, first + count) of `outcomes` ([job][solver]);
+// `reference` is the corrected Taylor solver's index (-1 without it), the baseline of position
+// offsets.
+BlockSolverStatistics BlockSolverStatisticsOf(
+    const std::vector<std::vector<TrialOutcome>>& outcomes, size_t first, size_t count,
+    size_t solver, int reference) {
+  BlockSolverStatistics st;
+  double camera_ssq = 0.0, check_ssq = 0.0, nees = 0.0, iterations = 0.0, seconds = 0.0;
+  int cameras = 0, checks = 0;
+  for (size_t trial = first; trial < first + count; ++trial) {
+    const std::vector<TrialOutcome>& job = outcomes[trial];
+    const TrialOutcome& o = job[solver];
+    ++st.trials;
+    iterations += o.iterations;
+    seconds += o.seconds;
+    if (!o.success) {
+      if (st.failures.size() < 3) st.failures.push_back(o.failure);
+      continue;
+    }
+    ++st.successes;
+    camera_ssq += o.camera_ssq;
+    cameras += o.num_images;
+    check_ssq += o.check_ssq;
+    checks += o.num_checks;
+    nees += o.nees_sum;
+    st.nees_count += o.nees_count;
+    if (reference >= 0 && job[reference].success) {
+      for (size_t i = 0; i < o.centres.size(); ++i) {
+        st.max_position_offset_m = std::max(st.max_position_offset_m,
+                                            (o.centres[i] - job[reference].centres[i]).norm());
+      }
+    }
   }
-  for (size_t k = 1; k < options.tie_points.size(); ++k) {
-    BlockSetting s = base;
-    s.axis = "tie_points";
-    s.tie_points = options.tie_points[k];
-    result->settings.push_back(s);
+  st.camera_rmse_m = cameras > 0 ? std::sqrt(camera_ssq / (3.0 * cameras)) : kNaN;
+  st.check_rmse_m = checks > 0 ? std::sqrt(check_ssq / (3.0 * checks)) : kNaN;
+  st.mean_nees = st.nees_count > 0 ? nees / st.nees_count : kNaN;
+  st.nees_interval_95 = NeesInterval{kNaN, kNaN};
+  if (st.nees_count > 0) {
+    const double dof = 3.0 * st.nees_count;
+    st.nees_interval_95 = NeesInterval{ChiSquaredQuantile(0.025, dof) / st.nees_count,
+                                       ChiSquaredQuantile(0.975, dof) / st.nees_count};
   }
-  for (size_t k = 1; k < options.gnss_sigma_m.size(); ++k) {
-    BlockSetting s = base;
-    s.axis = "gnss_sigma_m";
-    s.gnss_sigma_m = options.gnss_sigma_m[k];
-    result->settings.push_back(s);
-  }
+  st.mean_iterations = iterations / st.trials;
+  st.mean_seconds = seconds / st.trials;
+  if (reference < 0) st.max_position_offset_m = kNaN;
+  return st;
+}
+
+}  // namespace
+
+Status RunBlockComparison(const BlockComparisonOptions& options, BlockComparisonResult* result) {
+  *result = BlockComparisonResult();
+  std::string why;
+  if (!options.IsValid(&why)) return Status::Error(why);
+  const Clock::time_point start = Clock::now();
+  result->settings = BlockSettings(options);
   for (const BlockSolverVariant& v : options.solvers) result->solver_names.push_back(v.Name());
   const size_t num_settings = result->settings.size();
   const size_t num_solvers = options.solvers.size();
-  const size_t jobs = num_settings * static_cast<size_t>(options.trials);
+  const size_t trials = static_cast<size_t>(options.trials);
+  const size_t jobs = num_settings * trials;
   result->images_per_block = options.lines * options.images_per_line;
 
-  // [job][solver]
+  // [job][solver], job = setting * trials + trial.
   std::vector<std::vector<TrialOutcome>> outcomes(jobs);
-  std::vector<std::string> errors(jobs);
+  std::vector<Status> errors(jobs, Status::Ok());
   std::atomic<size_t> done{0};
   std::mutex progress_mutex;
   ParallelFor(jobs, options.num_threads, [&](size_t job) {
-    const BlockSetting& setting = result->settings[job / options.trials];
-    const int trial = static_cast<int>(job % options.trials);
-    SyntheticBlockOptions o;
-    o.seed = options.seed + static_cast<uint64_t>(trial);
-    o.num_lines = options.lines;
-    o.images_per_line = options.images_per_line;
-    o.num_tie_points = setting.tie_points;
-    o.mark_sigma_px = setting.noise_px;
-    o.mark_accuracy_px = std::max(setting.noise_px, 0.05);  // stated = true (0 noise: 0.05)
-    o.gnss_sigma_m = Eigen::Vector3d(setting.gnss_sigma_m, setting.gnss_sigma_m,
-                                     2.0 * setting.gnss_sigma_m);
-    o.num_tie_blunders = setting.tie_blunders;
-    o.control_sigma_m = 0.005;
-    Block block;
-    SyntheticBlockTruth truth;
-    const Status made = MakeSyntheticBlock(o, &block, &truth);
-    if (!made.ok()) {
-      errors[job] = setting.Label() + ", trial " + std::to_string(trial) + ": " + made.message();
-    } else {
-      for (const BlockSolverVariant& variant : options.solvers)
-        outcomes[job].push_back(SolveBlock(variant, block, truth));
-    }
+    errors[job] = RunTrial(options, result->settings[job / trials], static_cast<int>(job % trials),
+                           &outcomes[job]);
     const size_t finished = ++done;
     if (options.progress) {
       const std::lock_guard<std::mutex> lock(progress_mutex);
       options.progress(finished, jobs);
     }
   });
-  for (const std::string& error : errors)
-    if (!error.empty()) return Status::Error(error);
+  for (const Status& error : errors) PHOTOPOSE_RETURN_IF_ERROR(error);
 
   // The corrected Taylor solver, when compared, is the baseline of time and position offsets.
   int taylor = -1;
   for (size_t s = 0; s < num_solvers; ++s)
     if (options.solvers[s].solver == PoseSolver::kTaylor) taylor = static_cast<int>(s);
-
-  result->statistics.assign(num_settings, std::vector<BlockSolverStatistics>(num_solvers));
+  result->statistics.assign(num_settings, {});
   for (size_t setting = 0; setting < num_settings; ++setting) {
-    for (size_t s = 0; s < num_solvers; ++s) {
-      BlockSolverStatistics& st = result->statistics[setting][s];
-      double camera_ssq = 0.0, check_ssq = 0.0, nees = 0.0, iterations = 0.0, seconds = 0.0;
-      int cameras = 0, checks = 0;
-      for (int trial = 0; trial < options.trials; ++trial) {
-        const std::vector<TrialOutcome>& job = outcomes[setting * options.trials + trial];
-        const TrialOutcome& o = job[s];
-        ++st.trials;
-        iterations += o.iterations;
-        seconds += o.seconds;
-        if (!o.success) {
-          if (st.failures.size() < 3) st.failures.push_back(o.failure);
-          continue;
-        }
-        ++st.successes;
-        camera_ssq += o.camera_ssq;
-        cameras += o.num_images;
-        check_ssq += o.check_ssq;
-        checks += o.num_checks;
-        nees += o.nees_sum;
-        st.nees_count += o.nees_count;
-        if (taylor >= 0 && job[taylor].success) {
-          for (size_t i = 0; i < o.centres.size(); ++i) {
-            st.max_position_offset_m = std::max(
-                st.max_position_offset_m, (o.centres[i] - job[taylor].centres[i]).norm());
-          }
-        }
-      }
-      st.camera_rmse_m = cameras > 0 ? std::sqrt(camera_ssq / (3.0 * cameras)) : kNaN;
-      st.check_rmse_m = checks > 0 ? std::sqrt(check_ssq / (3.0 * checks)) : kNaN;
-      st.mean_nees = st.nees_count > 0 ? nees / st.nees_count : kNaN;
-      if (st.nees_count > 0) {
-        const double dof = 3.0 * st.nees_count;
-        st.nees_interval_95 = NeesInterval{ChiSquaredQuantile(0.025, dof) / st.nees_count,
-                                           ChiSquaredQuantile(0.975, dof) / st.nees_count};
-      } else {
-        st.nees_interval_95 = NeesInterval{kNaN, kNaN};
-      }
-      st.mean_iterations = iterations / st.trials;
-      st.mean_seconds = seconds / st.trials;
-    }
-    for (size_t s = 0; s < num_solvers; ++s) {
-      BlockSolverStatistics& st = result->statistics[setting][s];
-      st.time_ratio_to_taylor =
-          taylor >= 0 ? st.mean_seconds / result->statistics[setting][taylor].mean_seconds : kNaN;
-      if (taylor < 0) st.max_position_offset_m = kNaN;
-    }
+    std::vector<BlockSolverStatistics>& row = result->statistics[setting];
+    for (size_t s = 0; s < num_solvers; ++s)
+      row.push_back(BlockSolverStatisticsOf(outcomes, setting * trials, trials, s, taylor));
+    for (BlockSolverStatistics& st : row)
+      st.time_ratio_to_taylor = taylor >= 0 ? st.mean_seconds / row[taylor].mean_seconds : kNaN;
   }
   result->wall_seconds = std::chrono::duration<double>(Clock::now() - start).count();
   return Status::Ok();
-}
-
-std::vector<TextTable> BlockComparisonTables(const BlockComparisonOptions& options,
-                                             const BlockComparisonResult& result) {
-  std::vector<TextTable> tables;
-  for (size_t setting = 0; setting < result.settings.size(); ++setting) {
-    TextTable table;
-    table.title = "Blocks of " + std::to_string(result.images_per_block) + " images (" +
-                  std::to_string(options.lines) + " x " + std::to_string(options.images_per_line) +
-                  "), " + result.settings[setting].Label() + ", " + std::to_string(options.trials) +
-                  " blocks";
-    table.header = {"solver",          "success",        "camera RMSE (mm)", "check RMSE (mm)",
-                    "NEES (3 = honest)", "iterations",   "time (ms)",        "x Taylor",
-                    "max offset from Taylor (mm)"};
-    for (size_t s = 0; s < result.solver_names.size(); ++s) {
-      const BlockSolverStatistics& st = result.statistics[setting][s];
-      table.rows.push_back(
-          {result.solver_names[s], std::to_string(st.successes) + "/" + std::to_string(st.trials),
-           ReportFixed(1e3 * st.camera_rmse_m, 2), ReportFixed(1e3 * st.check_rmse_m, 2),
-           ReportFixed(st.mean_nees, 2) +
-               (st.nees_count > 0 && !st.nees_interval_95.Contains(st.mean_nees)
-                    ? " (outside " + ReportFixed(st.nees_interval_95.lower, 2) + "-" +
-                          ReportFixed(st.nees_interval_95.upper, 2) + ")"
-                    : ""),
-           ReportFixed(st.mean_iterations, 1), ReportFixed(1e3 * st.mean_seconds, 1),
-           ReportFixed(st.time_ratio_to_taylor, 2),
-           ReportFixed(1e3 * st.max_position_offset_m, 4)});
-      for (const std::string& failure : st.failures)
-        table.notes.push_back(result.solver_names[s] + " failed: " + failure);
-    }
-    tables.push_back(std::move(table));
-  }
-  return tables;
-}
-
-std::string BlockComparisonCsv(const BlockComparisonResult& result) {
-  std::string csv =
-      "Axis,NoisePx,TieBlunders,TiePoints,GnssSigmaM,Solver,Trials,Successes,CameraRmseM,"
-      "CheckRmseM,MeanNees,NeesLow95,NeesHigh95,MeanIterations,MeanSeconds,TimeRatioToTaylor,"
-      "MaxOffsetFromTaylorM\n";
-  char line[1024];
-  for (size_t setting = 0; setting < result.settings.size(); ++setting) {
-    const BlockSetting& b = result.settings[setting];
-    for (size_t s = 0; s < result.solver_names.size(); ++s) {
-      const BlockSolverStatistics& st = result.statistics[setting][s];
-      std::snprintf(line, sizeof(line),
-                    "%s,%.17g,%d,%lld,%.17g,%s,%d,%d,%.17g,%.17g,%.17g,%.17g,%.17g,%.17g,%.17g,%.17g,"
-                    "%.17g\n",
-                    b.axis.c_str(), b.noise_px, b.tie_blunders, b.tie_points, b.gnss_sigma_m,
-                    result.solver_names[s].c_str(), st.trials, st.successes, st.camera_rmse_m,
-                    st.check_rmse_m, st.mean_nees, st.nees_interval_95.lower,
-                    st.nees_interval_95.upper, st.mean_iterations, st.mean_seconds,
-                    st.time_ratio_to_taylor, st.max_position_offset_m);
-      csv += line;
-    }
-  }
-  return csv;
-}
-
-std::string BlockComparisonHtml(const BlockComparisonOptions& options,
-                                const BlockComparisonResult& result,
-                                const std::string& command_line) {
-  // Solvers within this fraction of the best camera RMSE tie: with a few blocks per setting the
-  // RMSE itself is uncertain by several per cent (unitless).
-  constexpr double kTieFraction = 0.05;
-  std::ostringstream html;
-  html << HtmlPageOpen("photopose compare: blocks", "Which block solver to use");
-  // The verdict from the baseline setting.
-  html << "<h2>Verdict</h2>\n";
-  if (!result.statistics.empty()) {
-    const std::vector<BlockSolverStatistics>& base = result.statistics[0];
-    std::vector<double> rmse, seconds;
-    int most = 0;
-    for (const BlockSolverStatistics& st : base) most = std::max(most, st.successes);
-    for (const BlockSolverStatistics& st : base) {
-      rmse.push_back(st.successes == most && most > 0 ? st.camera_rmse_m : std::nan(""));
-      seconds.push_back(st.mean_seconds);
-    }
-    const std::vector<size_t> tied = TiedBest(rmse, kTieFraction);
-    std::vector<std::string> findings;
-    for (size_t s = 0; s < base.size(); ++s) {
-      const BlockSolverStatistics& st = base[s];
-      const std::string name = "<b>" + HtmlEscape(result.solver_names[s]) + "</b>";
-      if (st.successes < st.trials)
-        findings.push_back(name + " failed " + std::to_string(st.trials - st.successes) + " of " +
-                           std::to_string(st.trials) + " blocks.");
-      if (st.nees_count > 0 && !st.nees_interval_95.Contains(st.mean_nees))
-        findings.push_back(name + ": covariance not honest (mean NEES " +
-                           FormatUnitless(st.mean_nees) + ", expected " +
-                           FormatUnitless(st.nees_interval_95.lower) + " to " +
-                           FormatUnitless(st.nees_interval_95.upper) + ").");
-      if (result.solver_names[s] == "taylor_as_printed" && std::isfinite(st.max_position_offset_m))
-        findings.push_back(
-            "The partial derivatives as printed in the seed note (its eq. 21) move camera centres "
-            "by up to " + FormatLengthWithUnit(st.max_position_offset_m) +
-            " from the corrected linearisation in these blocks (camera RMSE " +
-            FormatLengthWithUnit(st.camera_rmse_m) + " against the truth).");
-    }
-    if (tied.empty()) {
-      html << "<div class=\"verdict bad\"><b>No solver adjusted a block at the baseline.</b>";
-    } else {
-      size_t fastest = tied.front();
-      for (const size_t k : tied)
-        if (seconds[k] < seconds[fastest]) fastest = k;
-      html << "<div class=\"verdict " << (findings.empty() ? "good" : "note") << "\"><b>Use "
-           << HtmlEscape(result.solver_names[fastest]) << ".</b> At the baseline ("
-           << HtmlEscape(result.settings[0].Label()) << ") ";
-      for (size_t k = 0; k < tied.size(); ++k)
-        html << (k == 0 ? "" : (k + 1 == tied.size() ? " and " : ", ")) << "<b>"
-             << HtmlEscape(result.solver_names[tied[k]]) << "</b>";
-      html << (tied.size() > 1 ? " tie for the most accurate camera positions (RMSE within " +
-                                     FormatUnitless(100.0 * kTieFraction, 0) + " % of "
-                               : " has the most accurate camera positions (RMSE ")
-           << FormatLengthWithUnit(base[tied.front()].camera_rmse_m) << ")";
-      if (tied.size() > 1)
-        html << "; " << HtmlEscape(result.solver_names[fastest]) << " is the fastest of them ("
-             << FormatSignificant(1e3 * base[fastest].mean_seconds, 3) << " ms per block)";
-      html << ".";
-    }
-    if (!findings.empty()) {
-      html << "<ul>";
-      for (const std::string& f : findings) html << "<li>" << f << "</li>";
-      html << "</ul>";
-    }
-    html << "</div>\n";
-  }
-  html << "<h2>Glossary</h2>\n" << ComparisonGlossaryHtml()
-       << "<ul class=\"notes\">\n"
-       << "<li>Every solver adjusts the same simulated block from the same perturbed start "
-          "(core/simulation/synthetic_block.h), with the stated accuracies equal to the true "
-          "noise and the default rejection of marks beyond 4.5 sigma.</li>\n"
-       << "<li>Camera RMSE: per axis, over every image of the successful blocks, of the adjusted "
-          "centre minus the true one. Check RMSE: the check points intersected from the adjusted "
-          "images against their true positions.</li>\n"
-       << "<li>NEES here: of the camera centres (3 degrees of freedom; 3 when the reported "
-          "covariance is honest), with its 95 % interval.</li>\n"
-       << "<li>Time: one adjustment, single-threaded, including its statistics; x Taylor: the "
-          "ratio to the corrected Taylor solver in the same run.</li>\n</ul>\n";
-  // Small multiples: camera RMSE by solver, one panel per setting.
-  html << "<h2>Camera accuracy per setting</h2>\n<div class=\"plots\">\n";
-  for (size_t setting = 0; setting < result.settings.size(); ++setting) {
-    BarPlot bars;
-    bars.title = result.settings[setting].Label();
-    bars.value_label = "camera RMSE (mm)";
-    for (size_t s = 0; s < result.solver_names.size(); ++s) {
-      const BlockSolverStatistics& st = result.statistics[setting][s];
-      bars.labels.push_back(result.solver_names[s]);
-      bars.values.push_back(st.successes > 0 ? 1e3 * st.camera_rmse_m : std::nan(""));
-    }
-    html << RenderBarPlotSvg(bars) << "\n";
-  }
-  html << "</div>\n<h2>Tables</h2>\n";
-  for (const TextTable& table : BlockComparisonTables(options, result))
-    html << RenderHtmlTable(table) << "\n";
-  html << "<p>" << FormatCount(static_cast<long long>(result.settings.size() * options.trials),
-                               "block")
-       << " in " << FormatSignificant(result.wall_seconds, 3) << " s.</p>\n"
-       << HtmlPageClose();
-  return html.str();
 }
 
 Status RunBlockDatasetComparison(const BlockDatasetOptions& options, const Block& block,
@@ -544,52 +390,6 @@ Status RunBlockDatasetComparison(const BlockDatasetOptions& options, const Block
     summary.offset_rms_m = centres[s].empty() ? kNaN : std::sqrt(ssq / (3.0 * centres[s].size()));
   }
   return Status::Ok();
-}
-
-TextTable BlockDatasetTable(const BlockDatasetResult& result) {
-  TextTable table;
-  table.title = "The block (" + std::to_string(result.num_images) + " images, " +
-                std::to_string(result.num_points) + " points, " +
-                std::to_string(result.num_marks) + " marks): every solver from the same start; "
-                "offsets from " + (result.reference.empty() ? "no reference" : result.reference);
-  table.header = {"solver", "result", "offset RMS (mm)", "offset max (mm)", "check RMSE (mm)",
-                  "sigma0", "iterations", "time (ms)", "x Taylor"};
-  for (const BlockDatasetSolverSummary& s : result.solvers) {
-    table.rows.push_back(
-        {s.name, s.success ? "converged" : "failed", ReportFixed(1e3 * s.offset_rms_m, 4),
-         ReportFixed(1e3 * s.offset_max_m, 4), ReportFixed(1e3 * s.check_rmse_m, 2),
-         ReportFixed(s.sigma0, 4), std::to_string(s.iterations), ReportFixed(1e3 * s.seconds, 1),
-         ReportFixed(s.time_ratio_to_taylor, 2)});
-    if (!s.success) table.notes.push_back(s.name + ": " + s.message);
-  }
-  return table;
-}
-
-std::string BlockDatasetCsv(const BlockDatasetResult& result) {
-  std::string csv =
-      "Solver,Success,OffsetRmsM,OffsetMaxM,CheckRmseM,NumCheckPoints,Sigma0,Iterations,Seconds,"
-      "TimeRatioToTaylor\n";
-  char line[512];
-  for (const BlockDatasetSolverSummary& s : result.solvers) {
-    std::snprintf(line, sizeof(line), "%s,%d,%.17g,%.17g,%.17g,%d,%.17g,%d,%.17g,%.17g\n",
-                  s.name.c_str(), s.success ? 1 : 0, s.offset_rms_m, s.offset_max_m,
-                  s.check_rmse_m, s.num_check_points, s.sigma0, s.iterations, s.seconds,
-                  s.time_ratio_to_taylor);
-    csv += line;
-  }
-  return csv;
-}
-
-std::string BlockDatasetHtml(const BlockDatasetResult& result, const std::string& command_line) {
-  std::ostringstream html;
-  html << HtmlPageOpen("photopose compare: a block", "The block solvers on one block")
-       << "<p><code>" << HtmlEscape(command_line)
-       << "</code></p>\n<p>No truth: every solver's camera centres "
-       << "against " << HtmlEscape(result.reference.empty() ? "no reference" : result.reference)
-       << "; check points against their surveyed coordinates.</p>\n"
-       << RenderHtmlTable(BlockDatasetTable(result)) << "\n"
-       << HtmlPageClose();
-  return html.str();
 }
 
 }  // namespace photopose::cli

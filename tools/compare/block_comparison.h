@@ -87,13 +87,6 @@ struct BlockComparisonResult {
 
 Status RunBlockComparison(const BlockComparisonOptions& options, BlockComparisonResult* result);
 
-std::vector<TextTable> BlockComparisonTables(const BlockComparisonOptions& options,
-                                             const BlockComparisonResult& result);
-std::string BlockComparisonCsv(const BlockComparisonResult& result);
-// A self-contained page: the verdicts, the definitions and the tables.
-std::string BlockComparisonHtml(const BlockComparisonOptions& options,
-                                const BlockComparisonResult& result,
-                                const std::string& command_line);
 
 // ------------------------------------------------------------------ dataset mode
 
@@ -128,8 +121,5 @@ struct BlockDatasetResult {
 // `block` must have initial values (solvers/bundle/block_initialization.h).
 Status RunBlockDatasetComparison(const BlockDatasetOptions& options, const Block& block,
                                  BlockDatasetResult* result);
-TextTable BlockDatasetTable(const BlockDatasetResult& result);
-std::string BlockDatasetCsv(const BlockDatasetResult& result);
-std::string BlockDatasetHtml(const BlockDatasetResult& result, const std::string& command_line);
 
 }  // namespace photopose::cli

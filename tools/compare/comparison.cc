@@ -18,7 +18,7 @@
 #include "core/rotation.h"
 #include "core/statistics.h"
 #include "core/io/tables.h"
-#include "tools/commands/cli_common.h"
+#include "core/io/csv.h"
 
 namespace photopose::cli {
 namespace {

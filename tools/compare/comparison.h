@@ -43,7 +43,7 @@
 #include "core/types.h"
 #include "cost_functions/collinearity_cost.h"
 #include "solvers/resection/resection.h"
-#include "tools/commands/resection_job.h"
+#include "tools/jobs/resection_job.h"
 
 namespace photopose::cli {
 
@@ -355,42 +355,6 @@ struct DatasetComparisonResult {
 // Reads the tables and runs every solver on every image. Errors: unreadable or inconsistent input.
 Status RunDatasetComparison(const DatasetComparisonOptions& options,
                             DatasetComparisonResult* result);
-
-// ------------------------------------------------------------------ rendering
-
-// A table as text cells: rendered aligned for the terminal, as Markdown, or as HTML.
-struct TextTable {
-  std::string title;
-  std::vector<std::string> header;
-  std::vector<std::vector<std::string>> rows;
-  std::vector<std::string> notes;  // lines printed under the table
-};
-
-// One table per setting; its notes say why samples were not solved. The definitions of the columns
-// are MonteCarloNotes.
-std::vector<TextTable> MonteCarloTables(const MonteCarloOptions& options,
-                                        const MonteCarloResult& result);
-std::vector<TextTable> DatasetTables(const DatasetComparisonResult& result);
-
-// The terminal's width the console tables keep to (characters).
-constexpr size_t kConsoleWidth = 100;
-// Right-aligned numeric columns, left-aligned first column (first two for per-image tables),
-// title and notes; columns that do not fit in kConsoleWidth go to further blocks under the first,
-// each repeating the naming columns; title and notes word-wrapped to kConsoleWidth.
-std::string RenderText(const TextTable& table);
-// `text` word-wrapped to `width` characters: the first line after `first_indent`, the others
-// after `indent`; a final newline.
-std::string WrapText(const std::string& text, const std::string& first_indent,
-                     const std::string& indent, size_t width = kConsoleWidth);
-std::string RenderMarkdown(const TextTable& table);
-
-// One row per (scenario, setting, solver), full precision, units in the header names.
-std::string MonteCarloCsv(const MonteCarloResult& result);
-// One row per (image, solver).
-std::string DatasetCsv(const DatasetComparisonResult& result);
-
-// The definitions of the Monte-Carlo columns (success, RMSEs, times, NEES), one line each.
-std::vector<std::string> MonteCarloNotes(const MonteCarloOptions& options);
 
 // "oblique: noise 1 px, outliers 10%, ... (axis; 200 trials x 1 image)": one sweep setting, for
 // titles and messages.

@@ -6,7 +6,9 @@
 #include <string>
 #include <vector>
 
+#include "tools/compare/block_comparison.h"
 #include "tools/compare/comparison.h"
+#include "tools/report/comparison_tables.h"
 #include "tools/report/html_kit.h"
 
 namespace photopose::cli {
@@ -36,5 +38,12 @@ std::string MonteCarloHtml(const MonteCarloOptions& options, const MonteCarloRes
 // smallest residuals, the fastest of them), the glossary, the bar plots of time per solve and of
 // the differences between the solvers (and to the reference when given), and the tables.
 std::string DatasetHtml(const DatasetComparisonResult& result, const std::string& command_line);
+
+// The block comparisons: the verdicts, the definitions and the tables.
+std::string BlockComparisonHtml(const BlockComparisonOptions& options,
+                                const BlockComparisonResult& result,
+                                const std::string& command_line);
+
+std::string BlockDatasetHtml(const BlockDatasetResult& result, const std::string& command_line);
 
 }  // namespace photopose::cli

@@ -1,12 +1,11 @@
-// Rendering of the comparison results (tools/compare/comparison.h): the console and Markdown
-// tables, the notes under them and the CSV files. The HTML page is tools/report/comparison_html.cc.
+#include "tools/report/comparison_tables.h"
+
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <limits>
 #include <sstream>
 
-#include "tools/compare/comparison.h"
 #include "tools/report/html_kit.h"
 
 namespace photopose::cli {
@@ -390,6 +389,99 @@ std::string RenderMarkdown(const TextTable& table) {
     for (const std::string& note : table.notes) out << "- " << escape(note) << "\n";
   }
   return out.str();
+}
+
+// ------------------------------------------------------------------ block comparisons
+
+std::vector<TextTable> BlockComparisonTables(const BlockComparisonOptions& options,
+                                             const BlockComparisonResult& result) {
+  std::vector<TextTable> tables;
+  for (size_t setting = 0; setting < result.settings.size(); ++setting) {
+    TextTable table;
+    table.title = "Blocks of " + std::to_string(result.images_per_block) + " images (" +
+                  std::to_string(options.lines) + " x " + std::to_string(options.images_per_line) +
+                  "), " + result.settings[setting].Label() + ", " + std::to_string(options.trials) +
+                  " blocks";
+    table.header = {"solver",          "success",        "camera RMSE (mm)", "check RMSE (mm)",
+                    "NEES (3 = honest)", "iterations",   "time (ms)",        "x Taylor",
+                    "max offset from Taylor (mm)"};
+    for (size_t s = 0; s < result.solver_names.size(); ++s) {
+      const BlockSolverStatistics& st = result.statistics[setting][s];
+      table.rows.push_back(
+          {result.solver_names[s], std::to_string(st.successes) + "/" + std::to_string(st.trials),
+           ReportFixed(1e3 * st.camera_rmse_m, 2), ReportFixed(1e3 * st.check_rmse_m, 2),
+           ReportFixed(st.mean_nees, 2) +
+               (st.nees_count > 0 && !st.nees_interval_95.Contains(st.mean_nees)
+                    ? " (outside " + ReportFixed(st.nees_interval_95.lower, 2) + "-" +
+                          ReportFixed(st.nees_interval_95.upper, 2) + ")"
+                    : ""),
+           ReportFixed(st.mean_iterations, 1), ReportFixed(1e3 * st.mean_seconds, 1),
+           ReportFixed(st.time_ratio_to_taylor, 2),
+           ReportFixed(1e3 * st.max_position_offset_m, 4)});
+      for (const std::string& failure : st.failures)
+        table.notes.push_back(result.solver_names[s] + " failed: " + failure);
+    }
+    tables.push_back(std::move(table));
+  }
+  return tables;
+}
+
+std::string BlockComparisonCsv(const BlockComparisonResult& result) {
+  std::string csv =
+      "Axis,NoisePx,TieBlunders,TiePoints,GnssSigmaM,Solver,Trials,Successes,CameraRmseM,"
+      "CheckRmseM,MeanNees,NeesLow95,NeesHigh95,MeanIterations,MeanSeconds,TimeRatioToTaylor,"
+      "MaxOffsetFromTaylorM\n";
+  char line[1024];
+  for (size_t setting = 0; setting < result.settings.size(); ++setting) {
+    const BlockSetting& b = result.settings[setting];
+    for (size_t s = 0; s < result.solver_names.size(); ++s) {
+      const BlockSolverStatistics& st = result.statistics[setting][s];
+      std::snprintf(line, sizeof(line),
+                    "%s,%.17g,%d,%lld,%.17g,%s,%d,%d,%.17g,%.17g,%.17g,%.17g,%.17g,%.17g,%.17g,%.17g,"
+                    "%.17g\n",
+                    b.axis.c_str(), b.noise_px, b.tie_blunders, b.tie_points, b.gnss_sigma_m,
+                    result.solver_names[s].c_str(), st.trials, st.successes, st.camera_rmse_m,
+                    st.check_rmse_m, st.mean_nees, st.nees_interval_95.lower,
+                    st.nees_interval_95.upper, st.mean_iterations, st.mean_seconds,
+                    st.time_ratio_to_taylor, st.max_position_offset_m);
+      csv += line;
+    }
+  }
+  return csv;
+}
+
+TextTable BlockDatasetTable(const BlockDatasetResult& result) {
+  TextTable table;
+  table.title = "The block (" + std::to_string(result.num_images) + " images, " +
+                std::to_string(result.num_points) + " points, " +
+                std::to_string(result.num_marks) + " marks): every solver from the same start; "
+                "offsets from " + (result.reference.empty() ? "no reference" : result.reference);
+  table.header = {"solver", "result", "offset RMS (mm)", "offset max (mm)", "check RMSE (mm)",
+                  "sigma0", "iterations", "time (ms)", "x Taylor"};
+  for (const BlockDatasetSolverSummary& s : result.solvers) {
+    table.rows.push_back(
+        {s.name, s.success ? "converged" : "failed", ReportFixed(1e3 * s.offset_rms_m, 4),
+         ReportFixed(1e3 * s.offset_max_m, 4), ReportFixed(1e3 * s.check_rmse_m, 2),
+         ReportFixed(s.sigma0, 4), std::to_string(s.iterations), ReportFixed(1e3 * s.seconds, 1),
+         ReportFixed(s.time_ratio_to_taylor, 2)});
+    if (!s.success) table.notes.push_back(s.name + ": " + s.message);
+  }
+  return table;
+}
+
+std::string BlockDatasetCsv(const BlockDatasetResult& result) {
+  std::string csv =
+      "Solver,Success,OffsetRmsM,OffsetMaxM,CheckRmseM,NumCheckPoints,Sigma0,Iterations,Seconds,"
+      "TimeRatioToTaylor\n";
+  char line[512];
+  for (const BlockDatasetSolverSummary& s : result.solvers) {
+    std::snprintf(line, sizeof(line), "%s,%d,%.17g,%.17g,%.17g,%d,%.17g,%d,%.17g,%.17g\n",
+                  s.name.c_str(), s.success ? 1 : 0, s.offset_rms_m, s.offset_max_m,
+                  s.check_rmse_m, s.num_check_points, s.sigma0, s.iterations, s.seconds,
+                  s.time_ratio_to_taylor);
+    csv += line;
+  }
+  return csv;
 }
 
 }  // namespace photopose::cli

@@ -265,6 +265,16 @@ TEST(SplitListItemsTest, SplitsAtSemicolonsAndBlanks) {
   EXPECT_EQ(SplitListItems("1;;2"), (std::vector<std::string_view>{"1", "", "2"}));
 }
 
+TEST(SplitCommaListTest, TrimsItemsKeepsEmptyOnesDropsAFinalComma) {
+  using List = std::vector<std::string>;
+  EXPECT_EQ(SplitCommaList("a, b ,\tc"), (List{"a", "b", "c"}));
+  EXPECT_EQ(SplitCommaList("a,,b"), (List{"a", "", "b"}));
+  EXPECT_EQ(SplitCommaList("a, "), (List{"a", ""}));
+  EXPECT_EQ(SplitCommaList("a,"), (List{"a"}));
+  EXPECT_EQ(SplitCommaList(","), (List{""}));
+  EXPECT_TRUE(SplitCommaList("").empty());
+}
+
 TEST(FormatNumberTest, RoundTripsEveryDouble) {
   const std::vector<double> values = {0.0,
                                       -0.0,

@@ -10,6 +10,7 @@
 
 #include "tests/tools/cli_test_util.h"
 #include "tools/compare/comparison.h"
+#include "tools/report/comparison_tables.h"
 
 namespace photopose {
 namespace {

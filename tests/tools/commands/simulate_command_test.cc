@@ -154,6 +154,12 @@ TEST(SimulateCommand, BadUsageIsRefusedWithItsReason) {
             "--outlier_fraction is for the single-image scenarios"},
            {"--scenario=block --gnss_blunders=1 --nognss --out_dir=" + dir + "/x",
             "--gnss_blunders needs --gnss"},
+           {"--scenario=oblique --tie_points=50 --out_dir=" + dir + "/x",
+            "--tie_points is for --scenario=block, not oblique"},
+           {"--scenario=block --benchmark_block --forward_overlap=0.7 --out_dir=" + dir + "/x",
+            "--forward_overlap does not apply to --benchmark_block"},
+           {"--scenario=block --benchmark_block --tie_blunders=3 --out_dir=" + dir + "/x",
+            "--tie_blunders does not apply to --benchmark_block"},
        }) {
     const CliRun run = RunCli("simulate " + refusal.flags, dir);
     EXPECT_EQ(run.exit_code, 2) << refusal.flags;

@@ -18,6 +18,7 @@
 #include "solvers/resection/resection.h"
 #include "tests/tools/cli_test_util.h"
 #include "tools/report/comparison_html.h"
+#include "tools/report/comparison_tables.h"
 
 namespace photopose::cli {
 namespace {

@@ -7,6 +7,7 @@
 #include <string>
 
 #include "tools/compare/comparison.h"
+#include "tools/report/comparison_tables.h"
 
 namespace photopose::cli {
 namespace {

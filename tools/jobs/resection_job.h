@@ -1,7 +1,10 @@
 #pragma once
-// From a block to resection inputs and back to tables and reports: used by `photopose resect` and
-// `photopose compare`. The block (core/block.h) is the one assembly of the tables; every image with
-// marks becomes one resection input (MakeResectionInput, solvers/resection/resection.h).
+// From a block to resection inputs, and what every output of a solved input shows (its check
+// residuals, angles in the asked convention, verdict): used by `photopose resect` and
+// `photopose compare` (tools/compare). The tables and the JSON report of `resect` are written by
+// tools/report/resection_report.h. The block (core/block.h) is the one assembly of the tables;
+// every image with marks becomes one resection input (MakeResectionInput,
+// solvers/resection/resection.h).
 
 #include <string>
 #include <vector>
@@ -28,6 +31,11 @@ struct ResectionJob {
   std::vector<std::vector<int>> input_marks;  // block mark of each observation of each input
   std::vector<std::vector<int>> check_marks;  // block marks of the check points of each input
   int num_tie_marks = 0;                      // marks of tie points, left out of resection
+
+  // The camera of input `input`'s image.
+  const BlockCamera& camera(size_t input) const {
+    return block.cameras[block.images[images[input]].camera];
+  }
 };
 
 // Reads the tables (ReadBlock) and prepares the inputs.
@@ -59,12 +67,5 @@ const char* ResectionVerdictName(const ResectionResult& result);
 
 // The unit of sigma0 of a result: "" when the accuracy was stated (unitless), else the marks'.
 std::string Sigma0Unit(const ResectionJob& job, size_t input, const ResectionResult& result);
-
-Status WriteResectionFrames(const std::string& path, const ResectionJobOptions& options,
-                            const ResectionJob& job, const std::vector<ResectionResult>& results);
-// `written` names the files of the run for the report's summary.
-Status WriteResectionReport(const std::string& path, const ResectionJobOptions& options,
-                            const ResectionJob& job, const std::vector<ResectionResult>& results,
-                            const std::vector<std::string>& written);
 
 }  // namespace photopose::cli

@@ -1,0 +1,104 @@
+#include "tools/compare/block_comparison.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <string>
+#include <vector>
+
+namespace photopose::cli {
+namespace {
+
+TEST(BlockComparison, ParsesSolversAndLossesAndNamesWhatItRefuses) {
+  std::vector<BlockSolverVariant> variants;
+  ASSERT_TRUE(ParseBlockSolverVariants("taylor, ceres_analytic", "none,huber", &variants).ok());
+  std::vector<std::string> names;
+  for (const BlockSolverVariant& v : variants) names.push_back(v.Name());
+  EXPECT_EQ(names, (std::vector<std::string>{"taylor", "ceres_analytic/none",
+                                             "ceres_analytic/huber"}));
+  const Status loss = ParseBlockSolverVariants("ceres_analytic", "tukey_typo", &variants);
+  ASSERT_FALSE(loss.ok());
+  EXPECT_NE(loss.message().find("'tukey_typo'"), std::string::npos) << loss.message();
+  EXPECT_FALSE(ParseBlockSolverVariants("levmar", "none", &variants).ok());
+}
+
+TEST(BlockComparison, OneSettingPerAxisValueAndFiguresPerSolver) {
+  BlockComparisonOptions options;
+  ASSERT_TRUE(ParseBlockSolverVariants("taylor,ceres_analytic", "none", &options.solvers).ok());
+  options.noise_px = {0.5, 1.0};
+  options.tie_blunders = {0};
+  options.tie_points = {120, 200};
+  options.gnss_sigma_m = {0.03};
+  options.lines = 2;
+  options.images_per_line = 4;
+  options.trials = 2;
+  int progress_calls = 0;
+  options.progress = [&](size_t done, size_t total) {
+    ++progress_calls;
+    EXPECT_LE(done, total);
+  };
+  BlockComparisonResult result;
+  const Status status = RunBlockComparison(options, &result);
+  ASSERT_TRUE(status.ok()) << status.message();
+  // The baseline, then one setting per further value of an axis, the others at the baseline.
+  ASSERT_EQ(result.settings.size(), 3u);
+  EXPECT_EQ(result.settings[0].axis, "baseline");
+  EXPECT_EQ(result.settings[1].axis, "noise_px");
+  EXPECT_EQ(result.settings[1].noise_px, 1.0);
+  EXPECT_EQ(result.settings[1].tie_points, 120);
+  EXPECT_EQ(result.settings[2].axis, "tie_points");
+  EXPECT_EQ(result.settings[2].tie_points, 200);
+  EXPECT_EQ(result.settings[2].noise_px, 0.5);
+  EXPECT_EQ(progress_calls, 6);  // 3 settings x 2 trials
+  EXPECT_EQ(result.images_per_block, 8);
+  ASSERT_EQ(result.statistics.size(), 3u);
+  for (const std::vector<BlockSolverStatistics>& row : result.statistics) {
+    ASSERT_EQ(row.size(), 2u);
+    for (const BlockSolverStatistics& st : row) {
+      EXPECT_EQ(st.trials, 2);
+      EXPECT_EQ(st.successes, 2) << (st.failures.empty() ? "" : st.failures[0]);
+      // Simulated with 0.5-1 px noise and 3 cm GNSS: centres within decimetres of the truth.
+      EXPECT_GT(st.camera_rmse_m, 0.0);
+      EXPECT_LT(st.camera_rmse_m, 0.2);
+      EXPECT_GT(st.mean_iterations, 0.0);
+    }
+    // Taylor is the reference of times and offsets: its own ratio is 1 and its offset 0; the
+    // Ceres solver reaches the same minimum (offsets of micrometres, not decimetres).
+    EXPECT_DOUBLE_EQ(row[0].time_ratio_to_taylor, 1.0);
+    EXPECT_EQ(row[0].max_position_offset_m, 0.0);
+    EXPECT_TRUE(std::isfinite(row[1].time_ratio_to_taylor));
+    EXPECT_LT(row[1].max_position_offset_m, 1e-3);
+  }
+  // More noise: larger errors on the same blocks (the seeds are the baseline's).
+  EXPECT_GT(result.statistics[1][1].camera_rmse_m, result.statistics[0][1].camera_rmse_m);
+}
+
+TEST(BlockComparison, WithoutTaylorThereIsNoReference) {
+  BlockComparisonOptions options;
+  ASSERT_TRUE(ParseBlockSolverVariants("ceres_analytic", "none", &options.solvers).ok());
+  options.tie_points = {120};
+  options.lines = 2;
+  options.images_per_line = 4;
+  options.trials = 1;
+  BlockComparisonResult result;
+  ASSERT_TRUE(RunBlockComparison(options, &result).ok());
+  ASSERT_EQ(result.statistics.size(), 1u);
+  EXPECT_TRUE(std::isnan(result.statistics[0][0].time_ratio_to_taylor));
+  EXPECT_TRUE(std::isnan(result.statistics[0][0].max_position_offset_m));
+}
+
+TEST(BlockComparison, RefusesInvalidOptionsWithTheReason) {
+  BlockComparisonOptions options;
+  BlockComparisonResult result;
+  Status status = RunBlockComparison(options, &result);
+  ASSERT_FALSE(status.ok());
+  EXPECT_EQ(status.message(), "no solver");
+  ASSERT_TRUE(ParseBlockSolverVariants("taylor", "none", &options.solvers).ok());
+  options.tie_points = {5};
+  status = RunBlockComparison(options, &result);
+  ASSERT_FALSE(status.ok());
+  EXPECT_EQ(status.message(), "tie points must be in [10, 1000000]");
+}
+
+}  // namespace
+}  // namespace photopose::cli
