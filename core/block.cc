@@ -23,6 +23,10 @@ CameraModelData BlockCamera::data() const {
   return CameraModelData();
 }
 
+double BlockCamera::earth_curvature_radius_m() const {
+  return model == CameraModelType::kFrame && table.apply_ecc ? table.earth_radius_m : 0.0;
+}
+
 void Block::BuildIndex() {
   marks_of_image.assign(images.size(), {});
   marks_of_point.assign(points.size(), {});

@@ -44,6 +44,10 @@ struct BlockCamera {
   FrameCamera table;
   // The model's fixed data (Polarity, distortion table), pointing into `table`.
   CameraModelData data() const;
+  // The radius of the earth-curvature correction of this camera's images (m): the table's
+  // EarthRadius for a kFrame camera with ApplyECC, else 0 (none; the COLMAP, OpenSfM and BAL
+  // cameras carry no such setting). core/collinearity.h (LowerByEarthCurvature) applies it.
+  double earth_curvature_radius_m() const;
 };
 
 // One image: its camera, its exterior orientation when known, and measured position / attitude.

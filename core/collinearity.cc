@@ -106,10 +106,34 @@ bool ProjectWithJacobians(const double* eo, const double* point, double focal, d
   return SeedProjector(eo, focal).Project(point, xy, d_eo, d_point, d_focal);
 }
 
+bool ProjectWithJacobiansEarthCurvature(const double* eo, const double* point, double focal,
+                                        double earth_radius_m, double* xy, double* d_eo,
+                                        double* d_point, double* d_focal) {
+  double lowered[3];
+  LowerByEarthCurvature(eo, point, earth_radius_m, lowered);
+  double point_partials[6];
+  double* d_lowered = d_point != nullptr ? d_point : (d_eo != nullptr ? point_partials : nullptr);
+  if (!ProjectWithJacobians(eo, lowered, focal, xy, d_eo, d_lowered, d_focal)) return false;
+  if (d_lowered == nullptr) return true;
+  // d(lowered Z)/dX = -g_X, d(lowered Z)/dY = -g_Y; the rotation partials need no change.
+  const double g_x = (point[0] - eo[0]) / earth_radius_m;
+  const double g_y = (point[1] - eo[1]) / earth_radius_m;
+  for (int row = 0; row < 2; ++row) {
+    double* p = d_lowered + 3 * row;
+    const double by_z = p[2];
+    p[0] -= by_z * g_x;
+    p[1] -= by_z * g_y;
+    if (d_eo != nullptr) {
+      d_eo[6 * row + 0] = -p[0];
+      d_eo[6 * row + 1] = -p[1];
+    }
+  }
+  return true;
+}
 
 double EarthCurvatureDrop(const Eigen::Vector3d& center, const Eigen::Vector3d& point,
                           double earth_radius_m) {
-  return (point.head<2>() - center.head<2>()).squaredNorm() / (2.0 * earth_radius_m);
+  return EarthCurvatureDropOf(center.data(), point.data(), earth_radius_m);
 }
 
 namespace {

@@ -56,6 +56,25 @@ bool ProjectToNormalized(const T* eo, const T* point, T* ab) {
   return true;
 }
 
+// The earth-curvature correction (ApplyECC of the camera table): the ground surface lies
+// D^2 / (2 R) below the tangent plane of the ground frame at horizontal distance D from the
+// projection centre, so a camera at eo sees the point at
+//   lowered = (X, Y, Z - ((X - X0)^2 + (Y - Y0)^2) / (2 R)),   R = earth_radius_m (m, > 0).
+// It depends on the point and on the projection centre; the rotation does not enter. Templated for
+// the autodiff costs; EarthCurvatureDrop and ProjectWithJacobiansEarthCurvature use the same rule.
+template <typename T>
+T EarthCurvatureDropOf(const T* center, const T* point, double earth_radius_m) {
+  const T dx = point[0] - center[0];
+  const T dy = point[1] - center[1];
+  return (dx * dx + dy * dy) / (2.0 * earth_radius_m);
+}
+template <typename T>
+void LowerByEarthCurvature(const T* eo, const T* point, double earth_radius_m, T* lowered) {
+  lowered[0] = point[0];
+  lowered[1] = point[1];
+  lowered[2] = point[2] - EarthCurvatureDropOf(eo, point, earth_radius_m);
+}
+
 // The double-only projection of one pose: R and the trigonometry computed once, then any number of
 // points projected with closed-form partial derivatives (the corrected equations 17-28 of the seed,
 // see docs/taylor_derivatives.md).
@@ -81,9 +100,20 @@ class SeedProjector {
 bool ProjectWithJacobians(const double* eo, const double* point, double focal, double* xy,
                           double* d_eo, double* d_point, double* d_focal);
 
+// ProjectWithJacobians of the point as the camera sees it with the earth-curvature correction
+// (LowerByEarthCurvature, earth_radius_m > 0), the partials chained through the drop: with
+// g = d(drop)/d(X, Y) = ((X - X0) / R, (Y - Y0) / R) and P_Z the projection's partial by the
+// lowered Z,  d/dX = P_X - P_Z g_X,  d/dY = P_Y - P_Z g_Y,  d/dZ = P_Z, and the centre's partials
+// stay the point's negated (d/dX0 = -d/dX, ...; the drop depends on X - X0, Y - Y0 only); the
+// rotation partials are those of the lowered point. Same layout and contract as
+// ProjectWithJacobians.
+bool ProjectWithJacobiansEarthCurvature(const double* eo, const double* point, double focal,
+                                        double earth_radius_m, double* xy, double* d_eo,
+                                        double* d_point, double* d_focal);
+
 // The earth-curvature drop D^2 / (2 R) (m) of a ground point at horizontal distance D from the
 // projection centre (ApplyECC of the camera table): the ground surface lies that much below the
-// tangent plane of the ground frame.
+// tangent plane of the ground frame (EarthCurvatureDropOf).
 double EarthCurvatureDrop(const Eigen::Vector3d& center_in_ground,
                           const Eigen::Vector3d& point_in_ground, double earth_radius_m);
 

@@ -10,7 +10,10 @@
 //                   image-plane observation (um) are data.
 //  - Collinearity*: bundle adjustment and self-calibration. Parameter blocks: exterior orientation
 //                   (6), ground point (3), the camera model's parameters (core/camera_models.h).
-//                   The measurement, in the model's observation unit, is data.
+//                   The measurement, in the model's observation unit, is data. A kFrame camera with
+//                   ApplyECC sees the point lowered by the earth-curvature drop
+//                   (LowerByEarthCurvature, core/collinearity.h), in both derivative paths; a camera
+//                   without it evaluates exactly the plain model (a separate cost type, no test).
 // A point behind the camera makes every cost return false (never a silent zero).
 
 #include <ceres/ceres.h>
@@ -104,48 +107,64 @@ inline ceres::CostFunction* CreatePoseCost(JacobianType type, const PoseCostFunc
 // whitened by the measurement's standard deviation in the model's observation unit.
 struct CollinearityFunctor {
   CollinearityFunctor(CameraModelType model, const Eigen::Vector2d& observation,
-                      const CameraModelData& data, double inverse_sigma)
+                      const CameraModelData& data, double inverse_sigma,
+                      double earth_radius_m = 0.0)
       : observation{observation.x(), observation.y()},
         inverse_sigma(inverse_sigma),
+        earth_radius_m(earth_radius_m),
         data(data),
         model(model) {}
 
   template <typename T>
   bool operator()(const T* eo, const T* point, const T* camera, T* residual) const {
     T ab[2];
-    if (!ProjectToNormalized(eo, point, ab)) return false;
+    if (earth_radius_m > 0.0) {
+      T lowered[3];
+      LowerByEarthCurvature(eo, point, earth_radius_m, lowered);
+      if (!ProjectToNormalized(eo, lowered, ab)) return false;
+    } else if (!ProjectToNormalized(eo, point, ab)) {
+      return false;
+    }
     CameraModelResidual(model, camera, ab, observation, data, residual);
     residual[0] *= inverse_sigma;
     residual[1] *= inverse_sigma;
     return true;
   }
 
-  // A bundle adjustment holds one per mark (1.7 million for 1000 images): plain doubles, no
-  // 16-byte-aligned Eigen member, and the members ordered so that nothing is padded (64 bytes).
+  // The intersections build one per ray (the bundle's marks use CollinearityMarkFunctor): plain
+  // doubles, no 16-byte-aligned Eigen member.
   double observation[2];  // film um (kFrame) or pixels (COLMAP models)
   double inverse_sigma;   // 1 / sigma of the measurement, in the observation unit
+  double earth_radius_m;  // kFrame with ApplyECC: the earth-curvature radius (m); 0: none
   CameraModelData data;   // fixed data of the model (points into the camera it came from)
   CameraModelType model;
 };
-static_assert(sizeof(CollinearityFunctor) <= 64, "one per mark: keep it small");
+static_assert(sizeof(CollinearityFunctor) <= 72, "one per ray: keep it small");
 
 // The analytic residual and Jacobians of one measurement: the closed-form collinearity partials
 // (core/collinearity.h, c = 1) chained with the camera model's derivatives
 // (cost_functions/camera_model_jacobians.h), whitened by inverse_sigma. d_eo (2 x 6), d_point
 // (2 x 3) and d_camera (2 x kNumParams), row-major, each only when not null. False for a point
-// behind the camera.
-template <int kNumParams>
+// behind the camera. kEarthCurvature: the point lowered by the earth-curvature drop of radius
+// earth_radius_m (m; ProjectWithJacobiansEarthCurvature), else earth_radius_m is unused.
+template <int kNumParams, bool kEarthCurvature = false>
 bool EvaluateCollinearityAnalytic(CameraModelType model, const CameraModelData& data,
                                   const double* observation, double inverse_sigma,
                                   const double* eo, const double* point, const double* camera,
                                   double* residuals, double* d_eo, double* d_point,
-                                  double* d_camera) {
+                                  double* d_camera, double earth_radius_m = 0.0) {
   double ab[2];
   double ab_eo[2 * kExteriorOrientationSize], ab_point[2 * kPointSize];
-  if (!ProjectWithJacobians(eo, point, 1.0, ab, d_eo ? ab_eo : nullptr,
-                            d_point ? ab_point : nullptr, nullptr)) {
-    return false;
+  bool in_front;
+  if constexpr (kEarthCurvature) {
+    in_front = ProjectWithJacobiansEarthCurvature(eo, point, 1.0, earth_radius_m, ab,
+                                                  d_eo ? ab_eo : nullptr,
+                                                  d_point ? ab_point : nullptr, nullptr);
+  } else {
+    in_front = ProjectWithJacobians(eo, point, 1.0, ab, d_eo ? ab_eo : nullptr,
+                                    d_point ? ab_point : nullptr, nullptr);
   }
+  if (!in_front) return false;
   const double s = inverse_sigma;
   const bool derivatives = d_eo != nullptr || d_point != nullptr || d_camera != nullptr;
   double r_ab[4];
@@ -187,10 +206,17 @@ class CollinearityCostAnalytic final
 
   bool Evaluate(double const* const* parameters, double* residuals,
                 double** jacobians) const override {
+    double* d_eo = jacobians ? jacobians[0] : nullptr;
+    double* d_point = jacobians ? jacobians[1] : nullptr;
+    double* d_camera = jacobians ? jacobians[2] : nullptr;
+    if (data_.earth_radius_m > 0.0) {
+      return EvaluateCollinearityAnalytic<kNumParams, true>(
+          data_.model, data_.data, data_.observation, data_.inverse_sigma, parameters[0],
+          parameters[1], parameters[2], residuals, d_eo, d_point, d_camera, data_.earth_radius_m);
+    }
     return EvaluateCollinearityAnalytic<kNumParams>(
         data_.model, data_.data, data_.observation, data_.inverse_sigma, parameters[0],
-        parameters[1], parameters[2], residuals, jacobians ? jacobians[0] : nullptr,
-        jacobians ? jacobians[1] : nullptr, jacobians ? jacobians[2] : nullptr);
+        parameters[1], parameters[2], residuals, d_eo, d_point, d_camera);
   }
 
  private:
@@ -206,6 +232,9 @@ struct CollinearityCamera {
   CameraModelType model = CameraModelType::kFrame;
   CameraModelData data;
   const double* constant_params = nullptr;  // null: the parameters are the third parameter block
+  // kFrame with ApplyECC (BlockCamera::earth_curvature_radius_m): the radius of the earth-curvature
+  // correction (m); its marks get the cost type with the correction. 0: none, the plain cost.
+  double earth_radius_m = 0.0;
 };
 
 // The templated residual of one mark of a bundle adjustment: CollinearityFunctor's, with what the
@@ -245,9 +274,30 @@ struct CollinearityMarkFunctor {
 };
 static_assert(sizeof(CollinearityMarkFunctor) <= 32, "one per mark: keep it small");
 
+// The autodiff functor of a mark whose camera applies the earth-curvature correction: the point
+// lowered (LowerByEarthCurvature, radius camera->earth_radius_m), then CollinearityMarkFunctor. A
+// type of its own so that the marks of other cameras carry no test.
+struct EarthCurvatureMarkFunctor {
+  explicit EarthCurvatureMarkFunctor(const CollinearityMarkFunctor& mark) : mark(mark) {}
+  template <typename T>
+  bool operator()(const T* eo, const T* point, T* residual) const {
+    T lowered[3];
+    LowerByEarthCurvature(eo, point, mark.camera->earth_radius_m, lowered);
+    return mark(eo, lowered, residual);
+  }
+  template <typename T>
+  bool operator()(const T* eo, const T* point, const T* params, T* residual) const {
+    T lowered[3];
+    LowerByEarthCurvature(eo, point, mark.camera->earth_radius_m, lowered);
+    return mark(eo, lowered, params, residual);
+  }
+  CollinearityMarkFunctor mark;
+};
+
 // The analytic path of CollinearityMarkFunctor; kCameraBlock: the camera parameters are the third
-// parameter block (self-calibration), else CollinearityCamera::constant_params.
-template <int kNumParams, bool kCameraBlock>
+// parameter block (self-calibration), else CollinearityCamera::constant_params; kEarthCurvature:
+// with the earth-curvature correction of CollinearityCamera::earth_radius_m.
+template <int kNumParams, bool kCameraBlock, bool kEarthCurvature = false>
 class CollinearityMarkCostAnalytic final
     : public std::conditional_t<
           kCameraBlock,
@@ -265,10 +315,11 @@ class CollinearityMarkCostAnalytic final
       params = parameters[2];
       d_camera = jacobians != nullptr ? jacobians[2] : nullptr;
     }
-    return EvaluateCollinearityAnalytic<kNumParams>(
+    return EvaluateCollinearityAnalytic<kNumParams, kEarthCurvature>(
         camera.model, camera.data, mark_.observation, mark_.inverse_sigma, parameters[0],
         parameters[1], params, residuals, jacobians != nullptr ? jacobians[0] : nullptr,
-        jacobians != nullptr ? jacobians[1] : nullptr, d_camera);
+        jacobians != nullptr ? jacobians[1] : nullptr, d_camera,
+        kEarthCurvature ? camera.earth_radius_m : 0.0);
   }
 
  private:
@@ -284,7 +335,8 @@ ceres::CostFunction* CreateCollinearityCost(JacobianType type, const Collinearit
 // derivative path. Parameter blocks: exterior orientation (6), ground point (3) and, when
 // mark.camera->constant_params is null, the camera parameters (CameraModelNumParams). *inside, when
 // not null, is the functor the cost evaluates (its inverse_sigma may be changed; it lives as long
-// as the cost).
+// as the cost). A camera with earth_radius_m > 0 (kFrame only) gets the cost with the
+// earth-curvature correction.
 ceres::CostFunction* CreateCollinearityMarkCost(JacobianType type,
                                                 const CollinearityMarkFunctor& mark,
                                                 CollinearityMarkFunctor** inside = nullptr);
@@ -331,31 +383,49 @@ inline ceres::CostFunction* CreateCollinearityCost(JacobianType type,
 }
 
 namespace internal {
+// The functor a mark cost evaluates (its inverse_sigma switches the mark off).
+inline CollinearityMarkFunctor* MarkOf(CollinearityMarkFunctor* functor) { return functor; }
+inline CollinearityMarkFunctor* MarkOf(EarthCurvatureMarkFunctor* functor) { return &functor->mark; }
+
+// The mark cost of one camera-parameter count, with (kEarthCurvature) or without the correction.
+template <int kNumParams, bool kEarthCurvature>
+ceres::CostFunction* MakeMarkCost(JacobianType type, const CollinearityMarkFunctor& mark,
+                                  CollinearityMarkFunctor** inside) {
+  using Functor =
+      std::conditional_t<kEarthCurvature, EarthCurvatureMarkFunctor, CollinearityMarkFunctor>;
+  const bool camera_block = mark.camera->constant_params == nullptr;
+  if (type == JacobianType::kAutodiff) {
+    // The cost owns the functor and evaluates that very object.
+    Functor* functor = new Functor(mark);
+    *inside = MarkOf(functor);
+    if (camera_block) {
+      return new ceres::AutoDiffCostFunction<Functor, kResidualSize, kExteriorOrientationSize,
+                                             kPointSize, kNumParams>(functor);
+    }
+    return new ceres::AutoDiffCostFunction<Functor, kResidualSize, kExteriorOrientationSize,
+                                           kPointSize>(functor);
+  }
+  if (camera_block) {
+    auto* cost = new CollinearityMarkCostAnalytic<kNumParams, true, kEarthCurvature>(mark);
+    *inside = cost->mutable_mark();
+    return cost;
+  }
+  auto* cost = new CollinearityMarkCostAnalytic<kNumParams, false, kEarthCurvature>(mark);
+  *inside = cost->mutable_mark();
+  return cost;
+}
+
+// The earth-curvature costs exist for the frame model's parameter count alone (kFrame is the
+// only model with a camera table, hence with ApplyECC).
 template <int kNumParams>
 ceres::CostFunction* MakeCollinearityMarkCost(JacobianType type,
                                               const CollinearityMarkFunctor& mark,
                                               CollinearityMarkFunctor** inside) {
-  const bool camera_block = mark.camera->constant_params == nullptr;
-  if (type == JacobianType::kAutodiff) {
-    // The cost owns the functor and evaluates that very object.
-    CollinearityMarkFunctor* functor = new CollinearityMarkFunctor(mark);
-    *inside = functor;
-    if (camera_block) {
-      return new ceres::AutoDiffCostFunction<CollinearityMarkFunctor, kResidualSize,
-                                             kExteriorOrientationSize, kPointSize, kNumParams>(
-          functor);
-    }
-    return new ceres::AutoDiffCostFunction<CollinearityMarkFunctor, kResidualSize,
-                                           kExteriorOrientationSize, kPointSize>(functor);
+  if constexpr (kNumParams == kFrameNumParams) {
+    if (mark.camera->earth_radius_m > 0.0)
+      return MakeMarkCost<kNumParams, true>(type, mark, inside);
   }
-  if (camera_block) {
-    auto* cost = new CollinearityMarkCostAnalytic<kNumParams, true>(mark);
-    *inside = cost->mutable_mark();
-    return cost;
-  }
-  auto* cost = new CollinearityMarkCostAnalytic<kNumParams, false>(mark);
-  *inside = cost->mutable_mark();
-  return cost;
+  return MakeMarkCost<kNumParams, false>(type, mark, inside);
 }
 }  // namespace internal
 

@@ -192,6 +192,7 @@ BlockCamera MakeCamera(const SyntheticBlockOptions& o) {
     table.pixel_size_um = o.pixel_size_um;
     table.focal_length_um = o.focal_length_mm * 1000.0;
     table.average_z_m = o.ground_height_m;
+    table.apply_ecc = o.earth_curvature;
     if (o.camera_params.empty()) {
       const auto params = FrameModelParams(table);
       camera.params.assign(params.begin(), params.end());
@@ -301,7 +302,10 @@ class Projector {
   bool Pixel(const ExteriorOrientation& eo, const Eigen::Vector3d& point,
              Eigen::Vector2d* pixel) const {
     double ab[2];
-    if (!ProjectToNormalized(eo.data(), point.data(), ab)) return false;
+    double lowered[3] = {point.x(), point.y(), point.z()};
+    if (camera_.earth_curvature_radius_m() > 0.0)
+      LowerByEarthCurvature(eo.data(), point.data(), camera_.earth_curvature_radius_m(), lowered);
+    if (!ProjectToNormalized(eo.data(), lowered, ab)) return false;
     Eigen::Vector2d observation;
     if (!ObservationFromNormalized(camera_.model, camera_.params.data(), data_, {ab[0], ab[1]},
                                    &observation)
@@ -767,6 +771,24 @@ SyntheticBlockOptions SolverBenchmarkBlockOptions(int lines, int images_per_line
   return o;
 }
 
+SyntheticBlockOptions EarthCurvatureBlockOptions() {
+  SyntheticBlockOptions o;
+  o.seed = 2026;
+  o.num_lines = 3;
+  o.images_per_line = 5;
+  o.forward_spacing_m = 400.0;
+  o.side_spacing_m = 800.0;
+  o.flying_height_m = 800.0;
+  o.focal_length_mm = 10.0;
+  o.terrain_relief_m = 30.0;
+  o.num_tie_points = 600;
+  o.mark_sigma_px = 0.1;
+  o.control_sigma_m = 0.01;
+  o.gnss_sigma_m = Eigen::Vector3d(0.03, 0.03, 0.05);
+  o.earth_curvature = true;
+  return o;
+}
+
 namespace {
 
 // The flight and the camera.
@@ -834,6 +856,8 @@ Status CheckPointsAndErrors(const SyntheticBlockOptions& o) {
     return Invalid("control_sigma_m and control_accuracy_m must be >= 0");
   if (!NonNegative(o.mark_sigma_px) || !NonNegative(o.mark_accuracy_px))
     return Invalid("mark_sigma_px and mark_accuracy_px must be >= 0");
+  if (o.earth_curvature && o.camera_model != CameraModelType::kFrame)
+    return Invalid("earth_curvature needs the frame camera (its table's ApplyECC)");
   for (int k = 0; k < 3; ++k) {
     if (!NonNegative(o.gnss_sigma_m[k]) || !NonNegative(o.gnss_accuracy_m[k]))
       return Invalid("gnss_sigma_m and gnss_accuracy_m must be >= 0");

@@ -78,6 +78,9 @@ struct SyntheticBlockOptions {
   // derived from the four fields above (principal point at the image centre, no distortion).
   // Empty: derived. Must have CameraModelNumParams(camera_model) values.
   std::vector<double> camera_params;
+  // kFrame only: the camera table says ApplyECC (EarthRadius 6378137 m) and every mark is
+  // generated with the earth-curvature drop (core/collinearity.h, LowerByEarthCurvature).
+  bool earth_curvature = false;
 
   // ---- ground points
   long long num_tie_points = 0;     // exactly this many tie points when > 0, else by density:
@@ -142,6 +145,13 @@ SyntheticBlockOptions BenchmarkBlockOptions();
 // (the corners and the centre of the camera-centre rectangle, 5 mm) and two check points, 0.5 px
 // marks, 3 cm GNSS, the generator's perturbed start; seed 2026.
 SyntheticBlockOptions SolverBenchmarkBlockOptions(int lines, int images_per_line, int tie_points);
+
+// The block of the earth-curvature tests (ApplyECC, docs/conventions.md): 3 lines of 5 images of
+// a 10 mm / 4 um / 6000 x 4000 frame camera at 800 m (0.32 m ground pixel, 1.9 x 1.3 km
+// footprint), 400 m apart along the lines and 800 m across, 600 tie points, 30 m of relief, 0.1 px
+// marks, 1 cm control, GNSS 3/3/5 cm; earth_curvature on, so that the marks carry the drop: 0.10 m
+// at an image corner (D = 1.15 km), about half a pixel in the image. Seed 2026.
+SyntheticBlockOptions EarthCurvatureBlockOptions();
 
 // The truth of a synthetic block, parallel to the block's vectors.
 struct SyntheticBlockTruth {

@@ -440,6 +440,7 @@ class SyntheticBlockOptions:
     image_width_px: int
     image_height_px: int
     camera_params: list[float]
+    earth_curvature: bool
     num_tie_points: int
     tie_point_density_per_m2: float
     min_tie_views: int

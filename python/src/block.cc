@@ -587,6 +587,7 @@ perturbed start.)doc");
       .def_readwrite("image_width_px", &SyntheticBlockOptions::image_width_px)
       .def_readwrite("image_height_px", &SyntheticBlockOptions::image_height_px)
       .def_readwrite("camera_params", &SyntheticBlockOptions::camera_params)
+      .def_readwrite("earth_curvature", &SyntheticBlockOptions::earth_curvature)
       .def_readwrite("num_tie_points", &SyntheticBlockOptions::num_tie_points)
       .def_readwrite("tie_point_density_per_m2", &SyntheticBlockOptions::tie_point_density_per_m2)
       .def_readwrite("min_tie_views", &SyntheticBlockOptions::min_tie_views)

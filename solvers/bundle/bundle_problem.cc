@@ -417,6 +417,7 @@ void AddCameraBlocks(const BundleAdjustmentConfig& config, const Block& block,
     const std::vector<int>& free = plan.calibrated[c];
     round->cameras[c].model = block.cameras[c].model;
     round->cameras[c].data = block.cameras[c].data();
+    round->cameras[c].earth_radius_m = block.cameras[c].earth_curvature_radius_m();
     if (free.empty()) {
       // Held constant: data of its marks' costs, not a parameter block.
       round->cameras[c].constant_params = params;

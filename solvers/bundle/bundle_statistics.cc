@@ -681,9 +681,7 @@ Eigen::Matrix3d PropagatedCheckPointCovariance(const Block& block, const BundleS
   for (size_t j = 0; j < rays.size(); ++j) {
     const int image = block.marks[marks[j]].image;
     const int camera = block.images[image].camera;
-    const std::unique_ptr<ceres::CostFunction> cost(CreateCollinearityCost(
-        JacobianType::kAnalytic, CollinearityFunctor(rays[j].camera->model, rays[j].observation,
-                                                     rays[j].camera->data(), 1.0 / rays[j].sigma)));
+    const std::unique_ptr<ceres::CostFunction> cost(CreateRayCost(rays[j]));
     const int n = static_cast<int>(state.cameras[camera].size());
     Eigen::Matrix<double, 2, 6, Eigen::RowMajor> J_eo;
     Eigen::Matrix<double, 2, 3, Eigen::RowMajor> J_X;

@@ -37,9 +37,7 @@ bool IntersectionResiduals(const std::vector<RayObservation>& rays, const Eigen:
   whitened->resize(rows);
   for (size_t i = 0; i < rays.size(); ++i) {
     const RayObservation& ray = rays[i];
-    const std::unique_ptr<ceres::CostFunction> cost(CreateCollinearityCost(
-        JacobianType::kAnalytic, CollinearityFunctor(ray.camera->model, ray.observation,
-                                                     ray.camera->data(), 1.0 / ray.sigma)));
+    const std::unique_ptr<ceres::CostFunction> cost(CreateRayCost(ray));
     const double* parameters[] = {ray.eo.data(), point_m.data(), ray.camera->params.data()};
     double residual[2];
     Eigen::Matrix<double, 2, 3, Eigen::RowMajor> J;

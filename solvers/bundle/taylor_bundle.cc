@@ -81,6 +81,11 @@ Status CheckSupported(const BundleAdjustmentConfig& config, const Block& block) 
                            " model: the Taylor bundle adjustment takes the ArcGIS frame model "
                            "(FRAME) only; use the Ceres adjustment");
     }
+    if (camera.earth_curvature_radius_m() > 0.0) {
+      return Status::Error("camera " + Quoted(camera.camera_id) +
+                           " applies the earth-curvature correction (ApplyECC), which the Taylor "
+                           "bundle adjustment does not model; use the Ceres adjustment");
+    }
   }
   for (const int i : config.constant_images)
     if (i < 0 || i >= static_cast<int>(block.images.size()))

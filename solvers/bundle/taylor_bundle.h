@@ -56,7 +56,9 @@
 // (COLMAP's convention) when nothing ties the block to the ground; rejection rounds of marks as
 // in BundleAdjust. Not supported, refused with the reason: self-calibration, the COLMAP forward
 // camera models (their residual lives in the pixel domain after distortion, whose derivative is
-// not part of the lecture's linearisation), robust losses, an estimated lever arm.
+// not part of the lecture's linearisation), robust losses, an estimated lever arm, a camera with
+// the earth-curvature correction (ApplyECC: not in the lecture's equations; the Ceres adjustment
+// models it).
 //
 // Data-dependent failures (no datum, a singular reduced normal matrix, a point behind a camera,
 // divergence, no convergence) are reported in the summary with the block left at its input

@@ -38,6 +38,13 @@ std::vector<RayObservation> PointRays(const Block& block, int point,
   return rays;
 }
 
+ceres::CostFunction* CreateRayCost(const RayObservation& ray) {
+  return CreateCollinearityCost(
+      JacobianType::kAnalytic,
+      CollinearityFunctor(ray.camera->model, ray.observation, ray.camera->data(), 1.0 / ray.sigma,
+                          ray.camera->earth_curvature_radius_m()));
+}
+
 Status TriangulatePoint(const TriangulationOptions& options,
                         const std::vector<RayObservation>& rays, TriangulationResult* result) {
   *result = TriangulationResult();
@@ -79,9 +86,7 @@ Status TriangulatePoint(const TriangulationOptions& options,
   costs.reserve(rays.size());
   double nearest = std::numeric_limits<double>::infinity();
   for (const RayObservation& ray : rays) {
-    costs.emplace_back(CreateCollinearityCost(
-        JacobianType::kAnalytic, CollinearityFunctor(ray.camera->model, ray.observation,
-                                                     ray.camera->data(), 1.0 / ray.sigma)));
+    costs.emplace_back(CreateRayCost(ray));
     nearest = std::min(nearest, (X - ray.eo.center_in_ground()).norm());
   }
   Eigen::Matrix3d normal;

@@ -6,8 +6,9 @@
 // 1. Linear: the point nearest, in the least-squares sense, to every ray (X0_i + t d_i), d_i the
 //    direction of the measurement's ray R_i^T (a_i, b_i, -1) from its camera model's inversion.
 // 2. Gauss-Newton on the whitened collinearity residuals of the measurements (the same cost
-//    functions as the bundle adjustment, the images and cameras held fixed), until the step is
-//    below 1e-9 of the distance to the nearest camera.
+//    functions as the bundle adjustment, the images and cameras held fixed, with each camera's
+//    earth-curvature correction: CreateRayCost), until the step is below 1e-9 of the distance to
+//    the nearest camera. The linear start ignores the correction (decimetres at most).
 // 3. Covariance (J^T J)^-1 of the whitened residuals: the a-priori covariance of the point from
 //    the measurement accuracies alone (images taken as error-free); multiply by sigma0^2 for the
 //    a-posteriori one.
@@ -23,6 +24,10 @@
 #include "core/mark_weight.h"
 #include "core/status.h"
 #include "core/types.h"
+
+namespace ceres {
+class CostFunction;
+}
 
 namespace photopose {
 
@@ -50,6 +55,12 @@ struct TriangulationResult {
   double rms_whitened = 0.0;                // RMS of the whitened residuals (unitless)
   int iterations = 0;
 };
+
+// The cost of one ray (analytic; parameter blocks: the eo, the point, the camera's parameters):
+// the collinearity model of its camera, whitened by the ray's sigma, with the camera's
+// earth-curvature correction (BlockCamera::earth_curvature_radius_m). The one model of every
+// intersection: the tie points' start values, the check points and their covariances.
+ceres::CostFunction* CreateRayCost(const RayObservation& ray);
 
 Status TriangulatePoint(const TriangulationOptions& options,
                         const std::vector<RayObservation>& rays, TriangulationResult* result);

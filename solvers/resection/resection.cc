@@ -705,8 +705,7 @@ Status MakeResectionInput(const Block& block, int image, const ResectionInputOpt
   result.raster = block_image.name;
   result.focal_length = focal;
   result.approximate = block_image.eo;
-  if (camera.model == CameraModelType::kFrame && camera.table.apply_ecc)
-    result.earth_radius_m = camera.table.earth_radius_m;
+  result.earth_radius_m = camera.earth_curvature_radius_m();
   MarkSigmaDefaults defaults;
   defaults.pixel_px = options.default_accuracy;
   defaults.film_um = options.default_film_accuracy_um;
@@ -753,8 +752,8 @@ Status MarkResidual(const Block& block, int mark_index, const ExteriorOrientatio
   PHOTOPOSE_RETURN_IF_ERROR(NormalizedFromObservation(camera.model, camera.params.data(),
                                                       camera.data(), mark.observation, &observed));
   Eigen::Vector3d p = *point.surveyed_m;
-  if (camera.model == CameraModelType::kFrame && camera.table.apply_ecc)
-    p.z() -= EarthCurvatureDrop(eo.center_in_ground(), p, camera.table.earth_radius_m);
+  if (camera.earth_curvature_radius_m() > 0.0)
+    p.z() -= EarthCurvatureDrop(eo.center_in_ground(), p, camera.earth_curvature_radius_m());
   Eigen::Vector2d computed;
   if (!ProjectToNormalized(eo.data(), p.data(), computed.data()))
     return Status::Error("point '" + point.id + "' is behind the camera");

@@ -20,6 +20,32 @@ FrameCamera UavCamera() {
   return camera;
 }
 
+// The partials d_eo (2 x 6) and d_point (2 x 3), row-major, of project(eo, point, xy) against
+// central differences; h balances truncation (h^2) and rounding (eps / h): 1e-4 m for
+// coordinates, 1e-7 rad for angles. Tolerance 1e-5 relative (at least 1e-5 absolute).
+template <typename Project>
+void ExpectCentralDifferences(const Project& project, const double* eo, const double* point,
+                              const double* d_eo, const double* d_point) {
+  for (int k = 0; k < 9; ++k) {
+    const bool of_eo = k < 6;
+    const double h = of_eo ? (k < 3 ? 1e-4 : 1e-7) : 1e-4;
+    double eo_plus[6], eo_minus[6], point_plus[3], point_minus[3], xp[2], xm[2];
+    std::copy(eo, eo + 6, eo_plus);
+    std::copy(eo, eo + 6, eo_minus);
+    std::copy(point, point + 3, point_plus);
+    std::copy(point, point + 3, point_minus);
+    (of_eo ? eo_plus[k] : point_plus[k - 6]) += h;
+    (of_eo ? eo_minus[k] : point_minus[k - 6]) -= h;
+    ASSERT_TRUE(project(eo_plus, point_plus, xp));
+    ASSERT_TRUE(project(eo_minus, point_minus, xm));
+    for (int r = 0; r < 2; ++r) {
+      const double numeric = (xp[r] - xm[r]) / (2 * h);
+      const double analytic = of_eo ? d_eo[r * 6 + k] : d_point[r * 3 + k - 6];
+      EXPECT_NEAR(analytic, numeric, 1e-5 * std::max(1.0, std::abs(numeric))) << k << r;
+    }
+  }
+}
+
 TEST(Collinearity, NadirHandComputed) {
   // 1000 m above the origin, looking down, c = 100 mm: a point 100 m east lands 10 mm right.
   ExteriorOrientation eo;
@@ -44,31 +70,11 @@ TEST(Collinearity, ClosedFormPartialsMatchCentralDifferences) {
     double point[3] = {p.x(), p.y(), p.z()};
     double xy[2], d_eo[12], d_point[6], d_focal[2];
     ASSERT_TRUE(ProjectWithJacobians(eo, point, 8800.0, xy, d_eo, d_point, d_focal));
-    // Central differences; h balances truncation (h^2) and rounding (eps / h).
-    for (int k = 0; k < 6; ++k) {
-      const double h = k < 3 ? 1e-4 : 1e-7;
-      double plus[6], minus[6], xp[2], xm[2];
-      std::copy(eo, eo + 6, plus);
-      std::copy(eo, eo + 6, minus);
-      plus[k] += h;
-      minus[k] -= h;
-      ASSERT_TRUE(ProjectToImagePlane(plus, point, 8800.0, xp));
-      ASSERT_TRUE(ProjectToImagePlane(minus, point, 8800.0, xm));
-      for (int r = 0; r < 2; ++r) {
-        const double numeric = (xp[r] - xm[r]) / (2 * h);
-        EXPECT_NEAR(d_eo[r * 6 + k], numeric, 1e-5 * std::max(1.0, std::abs(numeric))) << k << r;
-      }
-    }
-    for (int k = 0; k < 3; ++k) {
-      double plus[3] = {point[0], point[1], point[2]}, minus[3] = {point[0], point[1], point[2]};
-      plus[k] += 1e-4;
-      minus[k] -= 1e-4;
-      double xp[2], xm[2];
-      ASSERT_TRUE(ProjectToImagePlane(eo, plus, 8800.0, xp));
-      ASSERT_TRUE(ProjectToImagePlane(eo, minus, 8800.0, xm));
-      for (int r = 0; r < 2; ++r)
-        EXPECT_NEAR(d_point[r * 3 + k], (xp[r] - xm[r]) / 2e-4, 1e-6 * std::max(1.0, std::abs(d_point[r * 3 + k])));
-    }
+    ExpectCentralDifferences(
+        [](const double* e, const double* p, double* out) {
+          return ProjectToImagePlane(e, p, 8800.0, out);
+        },
+        eo, point, d_eo, d_point);
     EXPECT_NEAR(d_focal[0], xy[0] / 8800.0, 1e-12);
   }
 }
@@ -109,6 +115,59 @@ TEST(Collinearity, EarthCurvatureLowersDistantPoints) {
   Eigen::Vector2d back;
   ASSERT_TRUE(ProjectGroundPoint(camera, eo, curved, PixelOrigin::kCorner, &back).ok());
   EXPECT_LE((back - pixel).norm(), 1e-6);
+}
+
+TEST(Collinearity, EarthCurvatureDropHandComputed) {
+  // 1 km east and 1 km north of the centre: D^2 = 2e6 m^2, drop = 2e6 / (2 * 6378137) = 0.1568 m.
+  const double center[6] = {1000.0, 2000.0, 800.0, 0.0, 0.0, 0.0};
+  const double point[3] = {2000.0, 3000.0, 50.0};
+  double lowered[3];
+  LowerByEarthCurvature(center, point, 6378137.0, lowered);
+  EXPECT_EQ(lowered[0], point[0]);
+  EXPECT_EQ(lowered[1], point[1]);
+  // 1e-14 m: the subtraction from Z = 50 m rounds at 50 * 2^-52.
+  EXPECT_NEAR(point[2] - lowered[2], 2e6 / (2.0 * 6378137.0), 1e-14);
+  EXPECT_NEAR(point[2] - lowered[2], 0.15678, 1e-5);
+  // The Eigen form is the same rule, bit for bit.
+  EXPECT_EQ(EarthCurvatureDrop({1000.0, 2000.0, 800.0}, {2000.0, 3000.0, 50.0}, 6378137.0),
+            EarthCurvatureDropOf(center, point, 6378137.0));
+}
+
+// The projection with the earth-curvature correction and its chained partials: the value is the
+// plain projection of the lowered point; every partial (centre, angles, point) matches central
+// differences of that value, with the drop recomputed at each perturbed centre and point. R is
+// shrunk to 50 km so that the chain-rule terms are large enough for the differences to resolve.
+TEST(Collinearity, EarthCurvaturePartialsMatchCentralDifferences) {
+  std::mt19937_64 rng(21);
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  constexpr double kRadius = 50000.0;
+  constexpr double kFocal = 8800.0;
+  auto project = [&](const double* eo, const double* point, double* xy) {
+    double lowered[3];
+    LowerByEarthCurvature(eo, point, kRadius, lowered);
+    return ProjectToImagePlane(eo, lowered, kFocal, xy);
+  };
+  for (int trial = 0; trial < 200; ++trial) {
+    double eo[6] = {50 * u(rng), 50 * u(rng), 800 + 50 * u(rng), 0.6 * u(rng), 0.4 * u(rng), kPi * u(rng)};
+    const Eigen::Matrix3d R = RotationFromAngles(RotationConvention::kSeed, {eo[3], eo[4], eo[5]});
+    const Eigen::Vector3d ray(0.6 * u(rng), 0.6 * u(rng), -1.0);
+    const Eigen::Vector3d p = Eigen::Vector3d(eo[0], eo[1], eo[2]) + R.transpose() * (900.0 * ray);
+    const double point[3] = {p.x(), p.y(), p.z()};
+    double xy[2], d_eo[12], d_point[6], d_focal[2];
+    ASSERT_TRUE(ProjectWithJacobiansEarthCurvature(eo, point, kFocal, kRadius, xy, d_eo, d_point, d_focal));
+    double expected[2];
+    ASSERT_TRUE(project(eo, point, expected));
+    // The same value by another order of rounding (SeedProjector against the template).
+    EXPECT_NEAR(xy[0], expected[0], 1e-12 * std::max(1.0, std::abs(expected[0])));
+    EXPECT_NEAR(xy[1], expected[1], 1e-12 * std::max(1.0, std::abs(expected[1])));
+    ExpectCentralDifferences(project, eo, point, d_eo, d_point);
+    EXPECT_NEAR(d_focal[0], xy[0] / kFocal, 1e-12);
+    // Only the centre's partials alone (the point's taken internally) give the same d_eo.
+    double xy_only[2], d_eo_only[12];
+    ASSERT_TRUE(ProjectWithJacobiansEarthCurvature(eo, point, kFocal, kRadius, xy_only, d_eo_only,
+                                                   nullptr, nullptr));
+    for (int k = 0; k < 12; ++k) EXPECT_EQ(d_eo_only[k], d_eo[k]);
+  }
 }
 
 TEST(Collinearity, RayAwayFromThePlaneFails) {

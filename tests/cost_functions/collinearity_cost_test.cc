@@ -276,6 +276,22 @@ RandomView MakeLocalView(std::mt19937_64* rng) {
   return view;
 }
 
+// Probes a cost with Ceres' gradient checker. The element-wise relative test of Probe() trips
+// over cross terms of ~1e-6 next to elements of ~1e7 in the camera block (pure rounding in the
+// numeric side); each block is compared relative to its largest element instead (1e-7).
+void ExpectGradientCheckerBlocks(const ceres::GradientChecker& checker,
+                                 const double* const* parameters) {
+  ceres::GradientChecker::ProbeResults results;
+  checker.Probe(parameters, 1e-5, &results);
+  ASSERT_TRUE(results.return_value);
+  for (size_t b = 0; b < results.jacobians.size(); ++b) {
+    const double scale = results.numeric_jacobians[b].cwiseAbs().maxCoeff();
+    EXPECT_LE((results.jacobians[b] - results.numeric_jacobians[b]).cwiseAbs().maxCoeff(),
+              1e-7 * scale)
+        << "block " << b;
+  }
+}
+
 TEST(PoseCost, PassesCeresGradientChecker) {
   std::mt19937_64 rng(3);
   for (int i = 0; i < 50; ++i) {
@@ -308,20 +324,139 @@ TEST(CollinearityCost, PassesCeresGradientCheckerForEveryCameraModel) {
       numeric_options.ridders_relative_initial_step_size = 1e-6;
       const std::vector<const ceres::Manifold*>* no_manifolds = nullptr;
       ceres::GradientChecker checker(cost.get(), no_manifolds, numeric_options);
-      ceres::GradientChecker::ProbeResults results;
       const double* parameters[] = {view.eo, view.point, model.params.data()};
-      checker.Probe(parameters, 1e-5, &results);
-      ASSERT_TRUE(results.return_value);
-      // The element-wise relative test of Probe() trips over cross terms of ~1e-6 next to elements
-      // of ~1e7 in the camera block (pure rounding in the numeric side); compare each block
-      // relative to its largest element instead.
-      for (size_t b = 0; b < results.jacobians.size(); ++b) {
-        const double scale = results.numeric_jacobians[b].cwiseAbs().maxCoeff();
-        EXPECT_LE((results.jacobians[b] - results.numeric_jacobians[b]).cwiseAbs().maxCoeff(),
-                  1e-7 * scale)
-            << EnumName(model.type) << " block " << b;
+      SCOPED_TRACE(EnumName(model.type));
+      ExpectGradientCheckerBlocks(checker, parameters);
+    }
+  }
+}
+
+// ------------------------------------------------------------------ earth curvature (ApplyECC)
+
+// The radius of the gradient checks: 50 km instead of 6378 km, so that the chain-rule terms of the
+// drop (D / R of the point's Z partial) are far above the numeric differences' error.
+constexpr double kSmallEarthRadius = 50000.0;
+
+// The costs with the correction against the plain model evaluated by hand at the point lowered by
+// EarthCurvatureDrop: the same residual. The analytic and autodiff paths of the measurement cost
+// and of the compact mark cost (with and without the camera block) agree to kAgreementTolerance,
+// and the correction changes the Jacobians by far more than that (the test can fail).
+TEST(CollinearityCostEarthCurvature, MatchesTheLoweredPointAndAgreesAcrossPaths) {
+  std::mt19937_64 rng(17);
+  for (int i = 0; i < kNumRandomPoses / 4; ++i) {
+    RandomView view = MakeRandomView(&rng);
+    ModelCase frame;
+    for (ModelCase& model : ModelCases(view, &rng))
+      if (model.type == CameraModelType::kFrame) frame = model;
+    for (const double radius : {6378137.0, kSmallEarthRadius}) {
+      const double inverse_sigma = 1.0 / 2.4;
+      Eigen::Vector3d lowered = Eigen::Map<const Eigen::Vector3d>(view.point);
+      lowered.z() -= EarthCurvatureDrop(Eigen::Map<const Eigen::Vector3d>(view.eo), lowered, radius);
+      const std::unique_ptr<ceres::CostFunction> plain(CreateCollinearityCost(
+          JacobianType::kAnalytic,
+          CollinearityFunctor(frame.type, frame.observation, frame.data, inverse_sigma)));
+      Eigen::Vector2d r_by_hand;
+      std::vector<Eigen::VectorXd> j_plain;
+      ASSERT_TRUE(Evaluate(*plain, {view.eo, lowered.data(), frame.params.data()}, &r_by_hand,
+                           &j_plain));
+      const CollinearityFunctor with_ecc(frame.type, frame.observation, frame.data, inverse_sigma,
+                                         radius);
+      const std::unique_ptr<ceres::CostFunction> analytic(
+          CreateCollinearityCost(JacobianType::kAnalytic, with_ecc));
+      const std::unique_ptr<ceres::CostFunction> autodiff(
+          CreateCollinearityCost(JacobianType::kAutodiff, with_ecc));
+      const std::vector<const double*> parameters = {view.eo, view.point, frame.params.data()};
+      Eigen::Vector2d r;
+      std::vector<Eigen::VectorXd> j;
+      ASSERT_TRUE(Evaluate(*analytic, parameters, &r, &j));
+      EXPECT_LE((r - r_by_hand).cwiseAbs().maxCoeff(),
+                kSameArithmetic * std::max(1.0, r_by_hand.cwiseAbs().maxCoeff()));
+      ExpectAgreement(*analytic, *autodiff, parameters);
+      if (radius == kSmallEarthRadius) {
+        // The point's X, Y partials carry the drop's chain rule: -P_Z (X - X0) / R.
+        EXPECT_GT((j[1] - j_plain[1]).cwiseAbs().maxCoeff(),
+                  1e3 * kAgreementTolerance * j[1].cwiseAbs().maxCoeff());
+      }
+      for (const bool camera_block : {true, false}) {
+        CollinearityCamera camera;
+        camera.model = frame.type;
+        camera.data = frame.data;
+        camera.constant_params = camera_block ? nullptr : frame.params.data();
+        camera.earth_radius_m = radius;
+        const CollinearityMarkFunctor mark(&camera, frame.observation, inverse_sigma);
+        const std::unique_ptr<ceres::CostFunction> mark_analytic(
+            CreateCollinearityMarkCost(JacobianType::kAnalytic, mark));
+        const std::unique_ptr<ceres::CostFunction> mark_autodiff(
+            CreateCollinearityMarkCost(JacobianType::kAutodiff, mark));
+        std::vector<const double*> mark_parameters = {view.eo, view.point};
+        if (camera_block) mark_parameters.push_back(frame.params.data());
+        Eigen::Vector2d r_mark;
+        std::vector<Eigen::VectorXd> j_mark;
+        ASSERT_TRUE(Evaluate(*mark_analytic, mark_parameters, &r_mark, &j_mark));
+        EXPECT_LE((r_mark - r).cwiseAbs().maxCoeff(),
+                  kSameArithmetic * std::max(1.0, r.cwiseAbs().maxCoeff()));
+        for (size_t b = 0; b < j_mark.size(); ++b) {
+          EXPECT_LE((j_mark[b] - j[b]).cwiseAbs().maxCoeff(), kSameArithmetic * j[b].cwiseAbs().maxCoeff())
+              << "block " << b;
+        }
+        ExpectAgreement(*mark_analytic, *mark_autodiff, mark_parameters);
       }
     }
+  }
+}
+
+// A camera without the correction gets exactly today's cost type; one with it a type of its own,
+// whose functor inside still switches the mark off.
+TEST(CollinearityCostEarthCurvature, OnlyCamerasWithTheCorrectionGetTheCorrectedCost) {
+  std::mt19937_64 rng(19);
+  RandomView view = MakeRandomView(&rng);
+  CollinearityCamera camera;
+  camera.model = CameraModelType::kFrame;
+  camera.constant_params = view.frame_params;
+  const CollinearityMarkFunctor mark(&camera, view.film_um, 1.0);
+  {
+    const std::unique_ptr<ceres::CostFunction> cost(
+        CreateCollinearityMarkCost(JacobianType::kAnalytic, mark));
+    using Plain = CollinearityMarkCostAnalytic<kFrameNumParams, false, false>;
+    EXPECT_NE(dynamic_cast<Plain*>(cost.get()), nullptr);
+  }
+  camera.earth_radius_m = kSmallEarthRadius;
+  {
+    const std::unique_ptr<ceres::CostFunction> cost(
+        CreateCollinearityMarkCost(JacobianType::kAnalytic, mark));
+    using Corrected = CollinearityMarkCostAnalytic<kFrameNumParams, false, true>;
+    EXPECT_NE(dynamic_cast<Corrected*>(cost.get()), nullptr);
+  }
+  for (const JacobianType type : {JacobianType::kAnalytic, JacobianType::kAutodiff}) {
+    CollinearityMarkFunctor* inside = nullptr;
+    const std::unique_ptr<ceres::CostFunction> cost(CreateCollinearityMarkCost(type, mark, &inside));
+    ASSERT_NE(inside, nullptr);
+    Eigen::Vector2d r;
+    std::vector<Eigen::VectorXd> j;
+    ASSERT_TRUE(Evaluate(*cost, {view.eo, view.point}, &r, &j));
+    EXPECT_GT(r.norm(), 1.0);
+    inside->inverse_sigma = 0.0;
+    ASSERT_TRUE(Evaluate(*cost, {view.eo, view.point}, &r, &j));
+    EXPECT_EQ(r.norm(), 0.0);
+    for (size_t b = 0; b < j.size(); ++b) EXPECT_EQ(j[b].norm(), 0.0) << "block " << b;
+  }
+}
+
+TEST(CollinearityCostEarthCurvature, PassesCeresGradientChecker) {
+  std::mt19937_64 rng(23);
+  for (int i = 0; i < 30; ++i) {
+    RandomView view = MakeLocalView(&rng);
+    CollinearityCamera camera;
+    camera.model = CameraModelType::kFrame;
+    camera.earth_radius_m = kSmallEarthRadius;
+    const std::unique_ptr<ceres::CostFunction> cost(CreateCollinearityMarkCost(
+        JacobianType::kAnalytic, CollinearityMarkFunctor(&camera, view.film_um, 1.0)));
+    ceres::NumericDiffOptions numeric_options;
+    numeric_options.ridders_relative_initial_step_size = 1e-6;  // as above
+    const std::vector<const ceres::Manifold*>* no_manifolds = nullptr;
+    ceres::GradientChecker checker(cost.get(), no_manifolds, numeric_options);
+    const double* parameters[] = {view.eo, view.point, view.frame_params};
+    ExpectGradientCheckerBlocks(checker, parameters);
   }
 }
 

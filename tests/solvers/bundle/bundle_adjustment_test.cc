@@ -13,7 +13,10 @@
 #include "core/io/colmap.h"
 #include "core/collinearity.h"
 #include "core/rotation.h"
+#include "core/simulation/synthetic_block.h"
 #include "solvers/bundle/block_initialization.h"
+#include "solvers/bundle/check_points.h"
+#include "solvers/resection/resection.h"
 #include "test_data.h"
 #include "tests/support/dbat_data.h"
 
@@ -830,6 +833,201 @@ TEST(BundleDiagnostics, CrossValidationAfterSnoopingKeepsTheRemovedPriorsOut) {
     EXPECT_FALSE(point.stands_out) << data.block.points[point.point].id << " misses by "
                                    << point.error_m.norm() << " m";
   }
+}
+
+// ------------------------------------------------------------------ earth curvature (ApplyECC)
+
+// The block (generated once) and its truth.
+const Block& EarthCurvatureBlock(const SyntheticBlockTruth** truth = nullptr) {
+  static Block block;
+  static SyntheticBlockTruth block_truth;
+  static const Status made = MakeSyntheticBlock(EarthCurvatureBlockOptions(), &block, &block_truth);
+  EXPECT_TRUE(made.ok()) << made.message();
+  if (truth != nullptr) *truth = &block_truth;
+  return block;
+}
+
+struct EarthCurvatureRun {
+  Block block;
+  BundleAdjustmentResult result;
+  double center_rms_m = 0.0;  // adjusted - true projection centres, RMS over the images (m)
+};
+
+// The ECC block adjusted with its camera's ApplyECC (apply_ecc) or with it switched off.
+EarthCurvatureRun AdjustEarthCurvatureBlock(bool apply_ecc,
+                                            const BundleAdjustmentOptions& options = QuietOptions()) {
+  const SyntheticBlockTruth* truth = nullptr;
+  EarthCurvatureRun run;
+  run.block = EarthCurvatureBlock(&truth);
+  run.block.cameras[0].table.apply_ecc = apply_ecc;
+  const Status status =
+      BundleAdjust(options, BundleAdjustmentConfig(), &run.block, &run.result);
+  EXPECT_TRUE(status.ok()) << status.message();
+  double ssq = 0.0;
+  for (size_t i = 0; i < run.block.images.size(); ++i) {
+    ssq += (run.block.images[i].eo->center_in_ground() - truth->eo[i].center_in_ground())
+               .squaredNorm();
+  }
+  run.center_rms_m = std::sqrt(ssq / run.block.images.size());
+  return run;
+}
+
+// Adjusted with the correction the block reaches its truth within the noise (sigma0 near 1, the
+// check points as accurate as the control). Without it the same marks are adjusted to centres
+// that are biased: farther from the truth, and moved from the corrected ones by several of their
+// own standard deviations. (sigma0 does not show it: the tie points' heights absorb most of the
+// drop, the rest bends the block.) The autodiff path gives the same adjustment as the analytic one.
+TEST(BundleEarthCurvature, AdjustedWithTheCorrectionRecoversTheTruthAndWithoutItIsBiased) {
+  const EarthCurvatureRun with = AdjustEarthCurvatureBlock(true);
+  const EarthCurvatureRun without = AdjustEarthCurvatureBlock(false);
+  ASSERT_TRUE(with.result.summary.IsSolutionUsable()) << with.result.summary.BriefReport();
+  double largest_shift_sigmas = 0.0;
+  Eigen::Vector3d mean_shift = Eigen::Vector3d::Zero();
+  for (size_t i = 0; i < with.block.images.size(); ++i) {
+    ASSERT_TRUE(with.result.images[i].has_covariance);
+    const Eigen::Vector3d shift = without.block.images[i].eo->center_in_ground() -
+                                  with.block.images[i].eo->center_in_ground();
+    const Eigen::Vector3d sigma =
+        with.result.images[i].covariance.diagonal().head<3>().cwiseSqrt();
+    largest_shift_sigmas = std::max(largest_shift_sigmas, shift.cwiseQuotient(sigma).cwiseAbs().maxCoeff());
+    mean_shift += shift / with.block.images.size();
+  }
+  std::printf("  with ApplyECC: sigma0 %.3f, centres %.4f m RMS off the truth, check RMSE %.4f m "
+              "(%d), %d rejected\n",
+              with.result.summary.sigma0, with.center_rms_m, with.result.check_rmse_total_m,
+              with.result.num_check_points, with.result.summary.num_rejected_marks);
+  std::printf("  without:       sigma0 %.3f, centres %.4f m RMS off the truth, check RMSE %.4f m "
+              "(%d), %d rejected\n",
+              without.result.summary.sigma0, without.center_rms_m,
+              without.result.check_rmse_total_m, without.result.num_check_points,
+              without.result.summary.num_rejected_marks);
+  std::printf("  centres without - with: mean %.4f %.4f %.4f m, largest %.1f sigma\n",
+              mean_shift.x(), mean_shift.y(), mean_shift.z(), largest_shift_sigmas);
+  EXPECT_NEAR(with.result.summary.sigma0, 1.0, 0.15);
+  EXPECT_EQ(with.result.summary.num_rejected_marks, 0);
+  EXPECT_LT(with.center_rms_m, 0.04);
+  EXPECT_EQ(with.result.num_check_points, 6);
+  EXPECT_LT(with.result.check_rmse_total_m, 0.05);
+  EXPECT_GT(without.center_rms_m, 1.5 * with.center_rms_m);
+  EXPECT_GT(largest_shift_sigmas, 3.0);
+
+  BundleAdjustmentOptions autodiff = QuietOptions();
+  autodiff.solver.jacobian = JacobianType::kAutodiff;
+  const EarthCurvatureRun by_autodiff = AdjustEarthCurvatureBlock(true, autodiff);
+  EXPECT_NEAR(by_autodiff.result.summary.sigma0, with.result.summary.sigma0, 1e-6);
+  for (size_t i = 0; i < with.block.images.size(); ++i) {
+    EXPECT_LT((by_autodiff.block.images[i].eo->center_in_ground() -
+               with.block.images[i].eo->center_in_ground()).norm(), 1e-5);
+  }
+}
+
+// The statistics come from the same cost: every mark's reported residual is the correction's
+// projection of the adjusted point by hand (ProjectGroundPoint, which lowers by
+// EarthCurvatureDrop), and differs from the plain projection's by up to the drop's image motion.
+TEST(BundleEarthCurvature, ReportedMarkResidualsAreThoseOfTheCorrectedModel) {
+  const EarthCurvatureRun run = AdjustEarthCurvatureBlock(true);
+  const Block& block = run.block;
+  const BlockCamera& camera = block.cameras[0];
+  double largest_difference_um = 0.0;
+  int checked = 0;
+  for (size_t m = 0; m < block.marks.size(); m += 7) {
+    const BlockMark& mark = block.marks[m];
+    const Eigen::Vector2d& reported = run.result.mark_residuals[m];
+    if (!reported.allFinite()) continue;
+    const BlockPoint& point = block.points[mark.point];
+    const Eigen::Vector3d position = point.position_m ? *point.position_m : *point.surveyed_m;
+    const ExteriorOrientation& eo = *block.images[mark.image].eo;
+    Eigen::Vector2d film, film_plain;
+    FrameCamera plain_table = camera.table;
+    plain_table.apply_ecc = false;
+    Eigen::Vector2d pixel, pixel_plain;
+    ASSERT_TRUE(ProjectGroundPoint(camera.table, eo, position, PixelOrigin::kCorner, &pixel).ok());
+    ASSERT_TRUE(ProjectGroundPoint(plain_table, eo, position, PixelOrigin::kCorner, &pixel_plain).ok());
+    ASSERT_TRUE(FilmFromPixel(camera.table, pixel, PixelOrigin::kCorner, &film).ok());
+    ASSERT_TRUE(FilmFromPixel(camera.table, pixel_plain, PixelOrigin::kCorner, &film_plain).ok());
+    // The frame model's residual without distortion is observed - computed film point up to
+    // the principal point's offset and the Polarity sign (um); reported in the mark's unit (px).
+    EXPECT_NEAR((mark.observation - film).norm(), reported.norm() * mark.observation_units_per_unit,
+                1e-6) << "mark " << m;
+    largest_difference_um = std::max(largest_difference_um, (film - film_plain).norm());
+    ++checked;
+  }
+  EXPECT_GT(checked, 100);
+  std::printf("  largest image motion of the drop among %d marks: %.2f um (%.2f px)\n", checked,
+              largest_difference_um, largest_difference_um / 4.0);
+  EXPECT_GT(largest_difference_um, 1.0);  // a quarter pixel: far above the 1e-6 um compared
+}
+
+// One image of the adjusted block resected from its marks with the adjusted points as control
+// (resect's model: the camera table's ApplyECC) agrees with the bundle's pose within the
+// resection's own standard deviations; resected without the correction it does not.
+TEST(BundleEarthCurvature, OneImageAgreesWithResectionsCorrectedPose) {
+  const EarthCurvatureRun run = AdjustEarthCurvatureBlock(true);
+  Block block = run.block;
+  const int image = 7;  // the middle of the middle line
+  ResectionInputOptions input_options;
+  input_options.include_tie_points_with_positions = true;
+  input_options.default_accuracy = 0.1;
+  const auto resect = [&](bool apply_ecc, ResectionResult* result) {
+    block.cameras[0].table.apply_ecc = apply_ecc;
+    ResectionInput input;
+    ASSERT_TRUE(MakeResectionInput(block, image, input_options, &input, nullptr).ok());
+    EXPECT_EQ(input.earth_radius_m > 0.0, apply_ecc);
+    *result = ResectImage(ResectionOptions(), input);
+    ASSERT_TRUE(result->success);
+  };
+  ResectionResult corrected, plain;
+  resect(true, &corrected);
+  resect(false, &plain);
+  const Eigen::Vector3d bundle = run.block.images[image].eo->center_in_ground();
+  const Eigen::Vector3d sigma = corrected.standard_deviations.head<3>();
+  const Eigen::Vector3d off = corrected.eo.center_in_ground() - bundle;
+  const Eigen::Vector3d plain_off = plain.eo.center_in_ground() - bundle;
+  std::printf("  resection with ECC - bundle: %.4f %.4f %.4f m (sigma %.4f %.4f %.4f); without: "
+              "%.4f %.4f %.4f m\n",
+              off.x(), off.y(), off.z(), sigma.x(), sigma.y(), sigma.z(), plain_off.x(),
+              plain_off.y(), plain_off.z());
+  for (int k = 0; k < 3; ++k) EXPECT_LT(std::abs(off[k]), 3.0 * sigma[k] + 1e-3) << k;
+  EXPECT_GT(plain_off.norm(), 5.0 * off.norm() + 0.01);
+}
+
+// The check points are intersected with the correction: from the adjusted images their errors
+// are at the control's level. Intersected from the same images without it (ApplyECC off, nothing
+// adjusted again), each lands lower, by an amount between the smallest and the largest drop
+// D^2 / (2R) of its rays: the rays were generated towards the lowered point.
+TEST(BundleEarthCurvature, CheckPointsAreIntersectedWithTheCorrection) {
+  const EarthCurvatureRun run = AdjustEarthCurvatureBlock(true);
+  Block block = run.block;
+  BundleAdjustmentResult corrected = run.result, plain = run.result;
+  TabulateControlAndCheckPoints(block, BundleAccuracies(), 1.0, &corrected);
+  const double radius = block.cameras[0].earth_curvature_radius_m();
+  block.cameras[0].table.apply_ecc = false;
+  TabulateControlAndCheckPoints(block, BundleAccuracies(), 1.0, &plain);
+  ASSERT_EQ(corrected.num_check_points, 6);
+  ASSERT_EQ(plain.num_check_points, 6);
+  EXPECT_NEAR(corrected.check_rmse_total_m, run.result.check_rmse_total_m, 1e-9);
+  EXPECT_LT(corrected.check_rmse_total_m, 0.05);
+  double mean_lowering = 0.0;
+  for (size_t p = 0; p < block.points.size(); ++p) {
+    if (block.points[p].role != PointRole::kCheck) continue;
+    double smallest = 1e9, largest = 0.0;
+    for (const int m : block.marks_of_point[p]) {
+      const double drop = EarthCurvatureDrop(block.images[block.marks[m].image].eo->center_in_ground(),
+                                             *block.points[p].surveyed_m, radius);
+      smallest = std::min(smallest, drop);
+      largest = std::max(largest, drop);
+    }
+    const double lowering = corrected.points[p].error_m->z() - plain.points[p].error_m->z();
+    std::printf("  check point %s: %zu rays, drops %.4f .. %.4f m, intersected %.4f m lower "
+                "without the correction\n",
+                block.points[p].id.c_str(), block.marks_of_point[p].size(), smallest, largest,
+                lowering);
+    // 2 mm: the least-squares intersection weighs the rays by geometry, not equally.
+    EXPECT_GT(lowering, smallest - 0.002) << block.points[p].id;
+    EXPECT_LT(lowering, largest + 0.002) << block.points[p].id;
+    mean_lowering += lowering / 6.0;
+  }
+  EXPECT_GT(mean_lowering, 0.01);
 }
 
 }  // namespace

@@ -1033,3 +1033,33 @@ TEST(TaylorBundle, BundleAdjustWithSolverDispatches) {
 
 }  // namespace
 }  // namespace photopose
+
+namespace photopose {
+namespace {
+
+// The Taylor linearisation has no earth-curvature term: a camera with ApplyECC is refused with
+// its name, through BundleAdjustWithSolver too (the CLI's --solver=taylor), the block untouched.
+TEST(TaylorBundle, RefusesACameraWithTheEarthCurvatureCorrection) {
+  const TestBlock data = MakeTestBlock(TaylorBlockOptions());
+  Block block = data.block;
+  block.cameras[0].table.apply_ecc = true;
+  TaylorBundleResult result;
+  const Status status = TaylorBundleAdjust(TaylorOptions(), BundleAdjustmentConfig(), &block, &result);
+  ASSERT_FALSE(status.ok());
+  EXPECT_NE(status.message().find("'" + block.cameras[0].camera_id + "'"), std::string::npos)
+      << status.message();
+  EXPECT_NE(status.message().find("ApplyECC"), std::string::npos) << status.message();
+  for (size_t i = 0; i < block.images.size(); ++i)
+    EXPECT_EQ(block.images[i].eo->parameters, data.block.images[i].eo->parameters);
+  BundleAdjustmentResult adjustment;
+  const Status via_solver = BundleAdjustWithSolver(PoseSolver::kTaylor, BundleAdjustmentOptions(),
+                                                   BundleAdjustmentConfig(), &block, &adjustment);
+  ASSERT_FALSE(via_solver.ok());
+  EXPECT_NE(via_solver.message().find("ApplyECC"), std::string::npos) << via_solver.message();
+  // Without the correction the same block is adjusted.
+  block.cameras[0].table.apply_ecc = false;
+  EXPECT_TRUE(TaylorBundleAdjust(TaylorOptions(), BundleAdjustmentConfig(), &block, &result).ok());
+}
+
+}  // namespace
+}  // namespace photopose

@@ -2,6 +2,8 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <cstdio>
 #include <vector>
 
 #include "tests/support/exact_block.h"
@@ -39,6 +41,36 @@ TEST(Triangulation, NoiseFreeRaysMeetAtTheTruePoint) {
   EXPECT_TRUE(result.covariance.isApprox(result.covariance.transpose(), 1e-12));
   EXPECT_GT(result.covariance(0, 0), 0.0);
   EXPECT_GT(result.covariance(2, 2), result.covariance(0, 0));
+}
+
+// Noise-free marks generated with the earth-curvature drop (EarthCurvatureBlockOptions): every
+// tie point with three or more rays is intersected at the truth through the camera's ApplyECC
+// (CreateRayCost); with ApplyECC off the same rays meet lower, by up to their largest drop.
+TEST(Triangulation, RaysOfACameraWithApplyEccMeetAtTheTruePointThroughTheCorrection) {
+  ExactBlock data = MakeExactBlock(EarthCurvatureBlockOptions());
+  double largest_miss_m = 0.0, largest_plain_miss_m = 0.0;
+  int intersected = 0;
+  for (size_t p = 0; p < data.block.points.size(); ++p) {
+    if (data.block.points[p].role != PointRole::kTie || data.block.marks_of_point[p].size() < 3)
+      continue;
+    data.block.cameras[0].table.apply_ecc = true;
+    std::vector<RayObservation> rays = PointRays(data.block, static_cast<int>(p), MarkSigmaDefaults());
+    TriangulationResult corrected, plain;
+    ASSERT_TRUE(TriangulatePoint(TriangulationOptions(), rays, &corrected).ok());
+    data.block.cameras[0].table.apply_ecc = false;
+    rays = PointRays(data.block, static_cast<int>(p), MarkSigmaDefaults());
+    ASSERT_TRUE(TriangulatePoint(TriangulationOptions(), rays, &plain).ok());
+    largest_miss_m = std::max(largest_miss_m, (corrected.point_m - data.truth.points_m[p]).norm());
+    largest_plain_miss_m =
+        std::max(largest_plain_miss_m, (plain.point_m - data.truth.points_m[p]).norm());
+    EXPECT_LT(plain.point_m.z(), data.truth.points_m[p].z()) << data.block.points[p].id;
+    ++intersected;
+  }
+  std::printf("  %d tie points: largest miss %.2g m with the correction, %.3f m without\n",
+              intersected, largest_miss_m, largest_plain_miss_m);
+  EXPECT_GT(intersected, 100);
+  EXPECT_LT(largest_miss_m, kExactPointM);
+  EXPECT_GT(largest_plain_miss_m, 0.02);
 }
 
 TEST(Triangulation, PointRaysLeaveOutSkippedMarksAndImagesWithoutOrientation) {
