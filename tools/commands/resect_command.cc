@@ -86,17 +86,14 @@ std::string NameList(const std::vector<std::string>& names) {
   return text;
 }
 
-}  // namespace
-
-int RunResect(int argc, char** argv) {
-  ParsedFlags parsed;
-  if (!ParseFlags(argc, argv, ResectFlags(), &parsed)) return kExitBadInput;
-  if (parsed.help) {
-    PrintHelp(kUsage, ResectFlags());
-    return kExitSuccess;
-  }
-  ResectionJobOptions job;
-  BlockFiles& files = job.files;
+// The job (tables, input and resection options) from the flags; false (and *why) for a missing or
+// invalid one.
+bool JobFromFlags(ResectionJobOptions* job, std::string* why) {
+  const auto fail = [why](std::string text) {
+    *why = std::move(text);
+    return false;
+  };
+  BlockFiles& files = job->files;
   files.cameras = FLAGS_cameras;
   files.points = FLAGS_points;
   files.marks = FLAGS_marks;
@@ -105,45 +102,43 @@ int RunResect(int argc, char** argv) {
   files.fiducials = FLAGS_fiducials;
   files.max_fiducial_residual_um = FLAGS_max_fiducial_residual;
   files.pixel_origin = FLAGS_pixel_center_origin ? PixelOrigin::kCenter : PixelOrigin::kCorner;
-  job.input.default_accuracy = FLAGS_default_accuracy;
-  job.input.default_film_accuracy_um = FLAGS_default_film_accuracy;
-  if (FLAGS_cameras.empty()) return BadInput("resect", "--cameras is required");
+  job->input.default_accuracy = FLAGS_default_accuracy;
+  job->input.default_film_accuracy_um = FLAGS_default_film_accuracy;
+  if (FLAGS_cameras.empty()) return fail("--cameras is required");
   if (FLAGS_gcp_list.empty() && (FLAGS_points.empty() || FLAGS_marks.empty()))
-    return BadInput("resect", "--points and --marks (or --gcp_list) are required");
+    return fail("--points and --marks (or --gcp_list) are required");
   if (!FLAGS_gcp_list.empty() && (!FLAGS_points.empty() || !FLAGS_marks.empty()))
-    return BadInput("resect", "--gcp_list replaces --points and --marks; give one or the other");
-  if (FLAGS_out.empty()) return BadInput("resect", "--out is required");
+    return fail("--gcp_list replaces --points and --marks; give one or the other");
+  if (FLAGS_out.empty()) return fail("--out is required");
   if (!ParseEnum(FLAGS_rotation, &files.rotation))
-    return BadInput("resect", EnumFlagError<RotationConvention>("--rotation", FLAGS_rotation));
-  ResectionOptions& options = job.resection;
+    return fail(EnumFlagError<RotationConvention>("--rotation", FLAGS_rotation));
+  ResectionOptions& options = job->resection;
   PoseRefinementOptions& refinement = options.refinement;
   if (!ParseEnum(FLAGS_solver, &refinement.solver))
-    return BadInput("resect", EnumFlagError<PoseSolver>("--solver", FLAGS_solver));
+    return fail(EnumFlagError<PoseSolver>("--solver", FLAGS_solver));
   if (!ParseEnum(FLAGS_jacobian, &refinement.jacobian))
-    return BadInput("resect", EnumFlagError<JacobianType>("--jacobian", FLAGS_jacobian));
+    return fail(EnumFlagError<JacobianType>("--jacobian", FLAGS_jacobian));
   if (!ParseEnum(FLAGS_loss, &refinement.loss))
-    return BadInput("resect", EnumFlagError<LossType>("--loss", FLAGS_loss));
+    return fail(EnumFlagError<LossType>("--loss", FLAGS_loss));
   if (!ParseEnum(FLAGS_ceres_minimizer, &refinement.ceres.minimizer))
-    return BadInput("resect",
-                    EnumFlagError<CeresMinimizer>("--ceres_minimizer", FLAGS_ceres_minimizer));
+    return fail(EnumFlagError<CeresMinimizer>("--ceres_minimizer", FLAGS_ceres_minimizer));
   if (!(FLAGS_default_accuracy > 0.0) || !std::isfinite(FLAGS_default_accuracy))
-    return BadInput("resect", "--default_accuracy must be a positive number of pixels");
+    return fail("--default_accuracy must be a positive number of pixels");
   if (!(FLAGS_default_film_accuracy > 0.0) || !std::isfinite(FLAGS_default_film_accuracy))
-    return BadInput("resect", "--default_film_accuracy must be a positive number of micrometres");
+    return fail("--default_film_accuracy must be a positive number of micrometres");
   if (!(FLAGS_max_fiducial_residual > 0.0) || !std::isfinite(FLAGS_max_fiducial_residual))
-    return BadInput("resect", "--max_fiducial_residual must be a positive number of micrometres");
-  if (FLAGS_threads < 0) return BadInput("resect", "--threads must be >= 0");
-
+    return fail("--max_fiducial_residual must be a positive number of micrometres");
+  if (FLAGS_threads < 0) return fail("--threads must be >= 0");
   refinement.loss_scale = FLAGS_loss_scale;
   options.test.confidence = FLAGS_confidence;
   options.consensus.ransac.seed = FLAGS_seed;
   options.allow_no_redundancy = FLAGS_allow_no_redundancy;
   options.refuse_weak = FLAGS_strict;
-  std::string why;
-  if (!options.IsValid(&why)) return BadInput("resect", why);
+  return options.IsValid(why);
+}
 
-  // Outputs: checked before any work (never an input, never each other), written all or nothing.
-  OutputFiles outputs;
+// Inputs and outputs declared before any work: an output is never an input nor another output.
+Status DeclareFiles(const ParsedFlags& parsed, OutputFiles* outputs) {
   for (const auto& [label, path] :
        {std::pair<const char*, const std::string&>{"--cameras", FLAGS_cameras},
         {"--points", FLAGS_points},
@@ -151,32 +146,21 @@ int RunResect(int argc, char** argv) {
         {"--gcp_list", FLAGS_gcp_list},
         {"--frames", FLAGS_frames},
         {"--fiducials", FLAGS_fiducials}}) {
-    const Status input = outputs.AddInput(label, path);
-    if (!input.ok()) return BadInput("resect", input.message());
+    PHOTOPOSE_RETURN_IF_ERROR(outputs->AddInput(label, path));
   }
-  for (const std::string& flag_file : parsed.flag_files) {
-    const Status input = outputs.AddInput("--flagfile", flag_file);
-    if (!input.ok()) return BadInput("resect", input.message());
-  }
+  for (const std::string& flag_file : parsed.flag_files)
+    PHOTOPOSE_RETURN_IF_ERROR(outputs->AddInput("--flagfile", flag_file));
   for (const auto& [label, path] : {std::pair<const char*, const std::string&>{"--out", FLAGS_out},
                                     {"--report", FLAGS_report}}) {
-    if (path.empty()) continue;
-    const Status declared = outputs.AddOutput(label, path);
-    if (!declared.ok()) return BadInput("resect", declared.message());
+    if (!path.empty()) PHOTOPOSE_RETURN_IF_ERROR(outputs->AddOutput(label, path));
   }
+  return Status::Ok();
+}
 
-  // Read and check every input before any output is written.
-  ResectionJob prepared;
-  const Status read = PrepareResectionJob(job, &prepared);
-  if (!read.ok()) return BadInput("resect", read.message());
-  if (prepared.inputs.empty()) return BadInput("resect", "no image has marks");
-
-  std::vector<ResectionResult> results;
-  {
-    const ScopedSolving solving;
-    results = ResectImages(options, prepared.inputs, FLAGS_threads);
-  }
-
+// One line per image: the pose on stdout, or why it was not resected (and its warnings) on
+// stderr. Returns the images not resected.
+std::vector<std::string> PrintResults(const ResectionJob& prepared, RotationConvention rotation,
+                                      const std::vector<ResectionResult>& results) {
   std::vector<std::string> failed;
   for (size_t i = 0; i < results.size(); ++i) {
     const ResectionResult& r = results[i];
@@ -192,11 +176,11 @@ int RunResect(int argc, char** argv) {
     }
     for (const std::string& warning : r.warnings)
       std::cerr << "photopose resect: " << raster << ": warning: " << warning << "\n";
-    const Eigen::Vector3d angles = OutputAnglesDeg(prepared, i, files.rotation, r.eo);
+    const Eigen::Vector3d angles = OutputAnglesDeg(prepared, i, rotation, r.eo);
     const std::string unit = Sigma0Unit(prepared, i, r);
     std::printf("%s: X=%.4f Y=%.4f Z=%.4f m  %s omega=%.6f phi=%.6f kappa=%.6f deg  ",
                 raster.c_str(), r.eo.parameters[0], r.eo.parameters[1], r.eo.parameters[2],
-                EnumName(files.rotation), angles[0], angles[1], angles[2]);
+                EnumName(rotation), angles[0], angles[1], angles[2]);
     if (r.degrees_of_freedom > 0) {
       std::printf("sigma0=%.3f%s%s  ", r.sigma0, unit.empty() ? "" : " ", unit.c_str());
     } else {
@@ -206,6 +190,36 @@ int RunResect(int argc, char** argv) {
                 r.summary.used_approximate ? "(from --frames)" : "(consensus)",
                 r.weak ? "  WEAK" : "");
   }
+  return failed;
+}
+
+}  // namespace
+
+int RunResect(int argc, char** argv) {
+  ParsedFlags parsed;
+  if (!ParseFlags(argc, argv, ResectFlags(), &parsed)) return kExitBadInput;
+  if (parsed.help) {
+    PrintHelp(kUsage, ResectFlags());
+    return kExitSuccess;
+  }
+  ResectionJobOptions job;
+  std::string why;
+  if (!JobFromFlags(&job, &why)) return BadInput("resect", why);
+  OutputFiles outputs;
+  const Status declared = DeclareFiles(parsed, &outputs);
+  if (!declared.ok()) return BadInput("resect", declared.message());
+
+  // Read and check every input before any output is written.
+  ResectionJob prepared;
+  const Status read = PrepareResectionJob(job, &prepared);
+  if (!read.ok()) return BadInput("resect", read.message());
+  if (prepared.inputs.empty()) return BadInput("resect", "no image has marks");
+  std::vector<ResectionResult> results;
+  {
+    const ScopedSolving solving;
+    results = ResectImages(job.resection, prepared.inputs, FLAGS_threads);
+  }
+  const std::vector<std::string> failed = PrintResults(prepared, job.files.rotation, results);
   // Nothing solved: nothing written (an older output stays), exit 1 with the reason.
   if (failed.size() == results.size()) {
     std::cerr << "photopose resect: no image was resected (" << NameList(failed)
