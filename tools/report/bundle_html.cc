@@ -526,6 +526,11 @@ std::string PointsHtml(const Block& block, const BundleAdjustmentResult& result)
                        r.message.empty() ? "not in the adjustment" : r.message});
         continue;
       }
+      if (IsHeldFixed(point)) {  // error and sigma 0 by construction: not plotted
+        out.push_back({point.id, std::to_string(r.num_observations), "0", "0", "0", "0", "0",
+                       "held fixed"});
+        continue;
+      }
       errors->push_back(*r.error_m);
       vertical.x.push_back(static_cast<double>(vertical.x.size() + 1));
       vertical.y.push_back(LengthIn(r.error_m->z(), unit));

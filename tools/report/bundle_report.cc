@@ -218,6 +218,7 @@ json BundleReportJson(const Block& block, const BundleAdjustmentResult& result,
                 {"error_m", r.error_m ? Vector3(*r.error_m) : json(nullptr)},
                 {"sigma_m", r.has_covariance ? Vector3(r.covariance.diagonal().cwiseSqrt())
                                              : json(nullptr)},
+                {"fixed", IsHeldFixed(point)},
                 {"message", r.message}};
     (point.role == PointRole::kControl ? control : check).push_back(row);
   }

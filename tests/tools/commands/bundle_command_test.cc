@@ -486,9 +486,16 @@ TEST(BundleCommand, ControlPointsWithAccuracyZeroAreHeldFixed) {
     EXPECT_FALSE(group["overfit"].get<bool>());
   }
   EXPECT_TRUE(found);
+  ASSERT_EQ(report["control_points"].size(), surveyed.size());
+  for (const auto& point : report["control_points"]) {
+    EXPECT_TRUE(point["fixed"].get<bool>()) << point;
+    EXPECT_EQ(point["sigma_m"], nlohmann::json::parse("[0.0, 0.0, 0.0]")) << point;
+  }
+  EXPECT_EQ(report["control_rmse_m"]["count"].get<int>(), 0);
   const std::string html = ReadFile(dir + "/report.html");
   EXPECT_NE(html.find("<b>Held fixed:</b> " + std::to_string(surveyed.size()) + " control points"),
             std::string::npos);
+  EXPECT_NE(html.find("<td>held fixed</td>"), std::string::npos);
 
   // resect takes the same points: control is fixed in a resection anyway.
   const CliRun resected = RunCli("resect " + inputs + " --out=" + dir + "/resected.csv", dir);
