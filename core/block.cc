@@ -18,6 +18,20 @@ bool Finite(const std::optional<Eigen::Vector3d>& v) { return !v || v->allFinite
 
 }  // namespace
 
+int InvalidPointAccuracyAxis(const Eigen::Vector3d& accuracy_m) {
+  const bool zero = accuracy_m[0] == 0.0;
+  for (int axis = 0; axis < 3; ++axis) {
+    const double sigma = accuracy_m[axis];
+    if (!std::isfinite(sigma) || sigma < 0.0 || (sigma == 0.0) != zero) return axis;
+  }
+  return -1;
+}
+
+bool IsHeldFixed(const BlockPoint& point) {
+  return point.role == PointRole::kControl && point.accuracy_m &&
+         (point.accuracy_m->array() == 0.0).all();
+}
+
 CameraModelData BlockCamera::data() const {
   if (model == CameraModelType::kFrame) return FrameModelData(table);
   return CameraModelData();
@@ -78,6 +92,10 @@ Status CheckBlock(const Block& block) {
       return Status::Error("point '" + point.id + "' has a non-finite coordinate");
     if (point.role != PointRole::kTie && !point.surveyed_m)
       return Status::Error("point '" + point.id + "' is a control or check point without coordinates");
+    if (point.accuracy_m && InvalidPointAccuracyAxis(*point.accuracy_m) >= 0)
+      return Status::Error("point '" + point.id +
+                           "' has an accuracy that is neither positive on every axis nor 0 on all "
+                           "three (held fixed)");
   }
   const int num_images = static_cast<int>(block.images.size());
   const int num_points = static_cast<int>(block.points.size());

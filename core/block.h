@@ -12,10 +12,10 @@
 // every mark also keeps what was read, in its own unit (pixels for Column/Row, micrometres for
 // FilmX/FilmY), for reports.
 //
-// Roles of the ground points: control (surveyed, used as observations), check (surveyed, kept out
-// of the adjustment and compared with it afterwards), tie (unknown coordinates: a point that has
-// marks but no row in the points table, or a row with Role tie, whose coordinates are then only
-// approximate values).
+// Roles of the ground points: control (surveyed, used as observations, or held fixed when its
+// stated accuracy is 0: IsHeldFixed), check (surveyed, kept out of the adjustment and compared with
+// it afterwards), tie (unknown coordinates: a point that has marks but no row in the points table,
+// or a row with Role tie, whose coordinates are then only approximate values).
 
 #include <Eigen/Core>
 #include <optional>
@@ -87,7 +87,9 @@ struct BlockPoint {
   std::string id;
   PointRole role = PointRole::kTie;
   // Control and check points: the surveyed coordinates (m) and their per-point accuracy (m, one
-  // sigma per axis; unset: the adjustment's default marker accuracy).
+  // sigma per axis; unset: the adjustment's default marker accuracy). Positive on every axis, or 0
+  // on all three: a control point taken as error-free, held fixed (IsHeldFixed); a check point
+  // with 0 is only compared (InvalidPointAccuracyAxis states the rule).
   std::optional<Eigen::Vector3d> surveyed_m;
   std::optional<Eigen::Vector3d> accuracy_m;
   // The current estimate (m): an initial value (a points-table row of a tie point, a COLMAP
@@ -95,6 +97,18 @@ struct BlockPoint {
   std::optional<Eigen::Vector3d> position_m;
   int line = 0;  // line of the points table it came from (0: none), for messages
 };
+
+// The rule of a point's stated accuracy (m, per axis): every axis positive (a weighted
+// observation), or all three exactly 0 (error-free). The first axis (0..2) that breaks it — a
+// negative or non-finite value, or 0 beside a non-zero one — or -1 when none does. The points
+// table's reader and writer and CheckBlock apply it.
+int InvalidPointAccuracyAxis(const Eigen::Vector3d& accuracy_m);
+
+// A control point stated error-free (AccuracyX = AccuracyY = AccuracyZ = 0): the one rule that
+// decides which points an adjustment holds fixed on their surveyed coordinates (no prior, no
+// residual, part of the datum; BundleAdjust and TaylorBundleAdjust add them to the config's
+// constant points). Its marks stay weighted observations.
+bool IsHeldFixed(const BlockPoint& point);
 
 // The unit of a mark as it was measured.
 enum class MarkUnit {

@@ -34,6 +34,10 @@ const std::vector<Spelling<PointRole>>& RoleSpellings() {
   return *kSpellings;
 }
 
+// A point's AccuracyX/Y/Z (m): unlike a frame's, 0 is a value (all three 0: held fixed, the rule
+// of core/block.h, InvalidPointAccuracyAxis).
+constexpr ValueRange kPointAccuracyRange{0.0, kMaxCoordinate, false, false, "m"};
+
 // The points table's columns, looked up once per table.
 struct PointTableColumns {
   explicit PointTableColumns(const CsvHeader& header)
@@ -41,11 +45,20 @@ struct PointTableColumns {
         x(LookUp(header, "X")),
         y(LookUp(header, "Y")),
         z(LookUp(header, "Z")),
-        accuracy{LookUp(header, kAccuracyColumns[0]), LookUp(header, kAccuracyColumns[1]),
-                 LookUp(header, kAccuracyColumns[2])},
+        accuracy{{header.Column(kAccuracyColumns[0]), &kPointAccuracyRange},
+                 {header.Column(kAccuracyColumns[1]), &kPointAccuracyRange},
+                 {header.Column(kAccuracyColumns[2]), &kPointAccuracyRange}},
         role(LookUp(header, "Role")) {}
   TableColumn point_id, x, y, z, accuracy[3], role;
 };
+
+// What breaks the accuracy rule of core/block.h on `axis` (InvalidPointAccuracyAxis), for messages.
+std::string MixedAccuracyProblem(const Eigen::Vector3d& accuracy, int axis) {
+  const int other = axis == 0 ? 1 : 0;
+  return FormatPlainNumber(accuracy[axis]) + " beside " + std::string(kAccuracyColumns[other]) +
+         " " + FormatPlainNumber(accuracy[other]) +
+         ": AccuracyX, AccuracyY, AccuracyZ are all positive, or all 0 (the point held fixed)";
+}
 
 Status ReadPointRow(const CsvRowReader& row, const PointTableColumns& c, GroundPoint* point) {
   GroundPoint p;
@@ -65,6 +78,8 @@ Status ReadPointRow(const CsvRowReader& row, const PointTableColumns& c, GroundP
       }
       accuracy[i] = *sigma;
     }
+    const int axis = InvalidPointAccuracyAxis(accuracy);
+    if (axis >= 0) return row.Error(c.accuracy[axis].csv, MixedAccuracyProblem(accuracy, axis));
     p.accuracy_m = accuracy;
   }
   PHOTOPOSE_RETURN_IF_ERROR(ReadEnum(row, c.role.csv, RoleSpellings(), 3, &p.role));
@@ -225,11 +240,12 @@ Status FormatGroundPoints(const std::vector<GroundPoint>& points, const std::str
     row.Number("X", p.position.x());
     row.Number("Y", p.position.y());
     row.Number("Z", p.position.z());
+    const int axis = p.accuracy_m ? InvalidPointAccuracyAxis(*p.accuracy_m) : -1;
+    if (axis >= 0) row.Fail(kAccuracyColumns[axis], MixedAccuracyProblem(*p.accuracy_m, axis));
     for (int i = 0; i < 3; ++i) {
-      if (p.accuracy_m && !((*p.accuracy_m)[i] > 0.0))
-        row.Fail(kAccuracyColumns[i], "must be positive");
       row.OptionalNumber(kAccuracyColumns[i],
-                         p.accuracy_m ? std::optional<double>((*p.accuracy_m)[i]) : std::nullopt);
+                         p.accuracy_m ? std::optional<double>((*p.accuracy_m)[i]) : std::nullopt,
+                         &kPointAccuracyRange);
     }
     row.Text(p.role == PointRole::kCheck ? "check" : p.role == PointRole::kTie ? "tie" : "control");
     PHOTOPOSE_RETURN_IF_ERROR(row.status(path));

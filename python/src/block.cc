@@ -98,6 +98,9 @@ PythonBlock FromArrays(const std::vector<FrameCamera>& cameras, const py::object
   const auto accuracies = OptionalRows3(point_accuracy, "point_accuracy_m", point_ids.size());
   std::vector<GroundPoint> points(point_ids.size());
   for (size_t i = 0; i < points.size(); ++i) {
+    if (accuracies[i] && InvalidPointAccuracyAxis(*accuracies[i]) >= 0)
+      throw py::value_error("point_accuracy_m: row " + std::to_string(i) +
+                            " is neither positive on every axis nor 0 on all three (held fixed)");
     points[i].point_id = point_ids[i];
     points[i].position = positions[i];
     points[i].accuracy_m = accuracies[i];

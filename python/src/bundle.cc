@@ -202,6 +202,10 @@ constant images and points, the GNSS lever arm (camera frame u, v, w; m).)doc");
       .def_readonly("redundancy_share", &BundleGroupStatistics::redundancy_share)
       .def_readonly("overfit", &BundleGroupStatistics::overfit)
       .def_readonly("message", &BundleGroupStatistics::message)
+      .def_readonly("num_fixed", &BundleGroupStatistics::num_fixed,
+                    "items held fixed (control points stated error-free): not in count or verdict")
+      .def_property_readonly("fixed", &BundleGroupStatistics::fixed,
+                             "every item held fixed: no residuals, no verdict")
       .def_readonly("estimated_accuracy", &BundleGroupStatistics::estimated_accuracy)
       .def_readonly("estimated_accuracy_standard_error", &BundleGroupStatistics::estimated_accuracy_standard_error)
       .def_readonly("estimation_message", &BundleGroupStatistics::estimation_message)

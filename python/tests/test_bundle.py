@@ -153,3 +153,45 @@ def test_bundle_adjust_releases_the_gil(assert_releases_gil):
     options = pp.BundleAdjustmentOptions()
     options.solver.num_threads = 1
     assert_releases_gil(lambda: pp.bundle_adjust(block, options))
+
+
+def test_control_points_with_accuracy_zero_are_held_fixed(tmp_path):
+    """AccuracyX/Y/Z 0 in the points table (read by read_ground_points and read_block) holds a
+    control point fixed: it stays on its survey and its group is "fixed", without a verdict; a row
+    mixing 0 and non-zero is refused naming file, line and field, and from_arrays refuses it too."""
+    synthetic_tables(tmp_path)
+    lines = (tmp_path / "points.csv").read_text().splitlines()
+    header = lines[0].split(",")
+    role, accuracy = header.index("Role"), header.index("AccuracyX")
+    rows = [line.split(",") for line in lines[1:]]
+    for row in rows:
+        if row[role] == "control":
+            row[accuracy:accuracy + 3] = ["0", "0", "0"]
+    (tmp_path / "points0.csv").write_text("\n".join([lines[0]] + [",".join(r) for r in rows]) + "\n")
+    points = pp.read_ground_points(tmp_path / "points0.csv")
+    fixed = [p.point_id for p in points if p.role == "control"]
+    assert fixed and all(list(p.accuracy_m) == [0, 0, 0] for p in points if p.role == "control")
+    block = pp.read_block(tmp_path / "cameras.csv", tmp_path / "points0.csv", tmp_path / "marks.csv",
+                          frames=tmp_path / "frames.csv")
+    surveyed = block.surveyed_positions.copy()
+    pp.initialize_block(block)
+    result = pp.bundle_adjust(block, cli_options())
+    assert result.summary.is_solution_usable()
+    groups = {g.group: g for g in result.groups}
+    control = groups["control_points"]
+    assert control.fixed and control.num_fixed == len(fixed) and control.count == 0
+    assert not control.overfit and control.message == ""
+    held = [i for i, (name, r) in enumerate(zip(block.point_ids, block.point_roles))
+            if r == "control" and name in fixed]
+    np.testing.assert_array_equal(block.point_positions[held], surveyed[held])
+
+    first = next(i for i, r in enumerate(rows) if r[role] == "control")
+    rows[first][accuracy + 1] = "0.01"
+    (tmp_path / "mixed.csv").write_text("\n".join([lines[0]] + [",".join(r) for r in rows]) + "\n")
+    with pytest.raises(pp.Error, match=rf"mixed\.csv:{first + 2}: AccuracyY: 0\.01 beside AccuracyX 0"):
+        pp.read_ground_points(tmp_path / "mixed.csv")
+    camera = pp.FrameCamera(camera_id="c", focal_length_um=8800.0, pixel_size_um=2.4, n_rows=3000,
+                            n_columns=4000)
+    with pytest.raises(ValueError, match="point_accuracy_m: row 1 is neither positive on every axis"):
+        pp.Block.from_arrays([camera], ["A", "B"], np.zeros((2, 3)), [], [], np.empty((0, 2)),
+                             point_accuracy_m=np.array([[0.0, 0.0, 0.0], [0.0, 0.01, 0.0]]))

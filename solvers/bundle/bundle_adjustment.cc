@@ -286,10 +286,16 @@ std::string BundleAdjustmentResult::FullReport(const Block& block) const {
   os << "Datum: " << summary.datum_description << "\n";
   os << "Groups (count, stated, RMS, RMS/stated, redundancy share):\n";
   for (const BundleGroupStatistics& g : groups) {
+    if (g.fixed()) {
+      os << "  " << EnumName(g.group) << ": " << g.num_fixed << " held fixed (no residuals, no verdict)\n";
+      continue;
+    }
     os << "  " << EnumName(g.group) << ": " << g.count << ", " << FormatNumber3(g.stated_accuracy.x()) << " "
        << g.unit << ", " << FormatNumber3(g.rms_total) << " " << g.unit << ", "
        << FormatNumber3(g.ratio) << ", " << FormatNumber3(g.redundancy_share)
-       << (g.overfit ? "  OVERFIT" : "") << "\n";
+       << (g.overfit ? "  OVERFIT" : "");
+    if (g.num_fixed > 0) os << "; " << g.num_fixed << " more held fixed";
+    os << "\n";
     if (!g.message.empty()) os << "    " << g.message << "\n";
   }
   for (const BundleGroupStatistics& g : groups) {
@@ -602,6 +608,7 @@ bool RescaleGroups(Adjustment* a) {
 // accuracy stays what the user stated.
 void ReportEstimatedAccuracies(const Adjustment& a) {
   for (BundleGroupStatistics& group : a.result->groups) {
+    if (group.fixed()) continue;  // no observations to estimate from
     const int g = group.group;
     const double r = a.variance.redundancy[g];
     if (a.group_estimable[g]) {
@@ -633,8 +640,18 @@ void WriteBack(const BundlePlan& plan, const BundleState& state, Block* block) {
 
 }  // namespace
 
-Status BundleAdjust(const BundleAdjustmentOptions& options, const BundleAdjustmentConfig& config,
-                    Block* block, BundleAdjustmentResult* result) {
+BundleAdjustmentConfig WithFixedControlPoints(const BundleAdjustmentConfig& config,
+                                              const Block& block) {
+  BundleAdjustmentConfig held = config;
+  for (size_t p = 0; p < block.points.size(); ++p)
+    if (IsHeldFixed(block.points[p])) held.constant_points.insert(static_cast<int>(p));
+  return held;
+}
+
+Status BundleAdjust(const BundleAdjustmentOptions& options,
+                    const BundleAdjustmentConfig& stated_config, Block* block,
+                    BundleAdjustmentResult* result) {
+  const BundleAdjustmentConfig config = WithFixedControlPoints(stated_config, *block);
   Adjustment a(options, config, block, result);
   *result = BundleAdjustmentResult();
   BundleAdjustmentSummary& summary = result->summary;

@@ -274,6 +274,12 @@ struct BundleAdjustmentConfig {
                                      BundleAdjustmentConfig* config);
 };
 
+// The config an adjustment of `block` runs with: `config` with every control point stated
+// error-free (IsHeldFixed, core/block.h: AccuracyX/Y/Z all 0) added to constant_points. BundleAdjust
+// and TaylorBundleAdjust apply it on entry, so a caller states fixed control in the block alone.
+BundleAdjustmentConfig WithFixedControlPoints(const BundleAdjustmentConfig& config,
+                                              const Block& block);
+
 // How the adjustment is tied to the ground.
 enum class BundleDatum {
   kControl,   // control points and/or camera positions fix all seven similarity parameters
@@ -321,6 +327,12 @@ struct BundleGroupStatistics {
   double redundancy_share = 0.0;
   bool overfit = false;  // a prior group with ratio or redundancy share < overfit_ratio
   std::string message;   // the warning, or empty
+  // Items of the group held fixed (control points stated error-free, core/block.h IsHeldFixed, or
+  // in BundleAdjustmentConfig::constant_points): no observations, so not in count, RMS, ratio or
+  // verdict. A group whose items are all fixed (count 0) is listed as fixed: stated accuracy 0,
+  // RMS 0, ratio and redundancy share NaN, never over-fitted.
+  int num_fixed = 0;
+  bool fixed() const { return count == 0 && num_fixed > 0; }
   // Variance component estimation (estimate_accuracies): the group's accuracy estimated from the
   // data (mean per axis, unit above; NaN when not estimated) and its standard error
   // s / sqrt(2 r_g); why it was not estimated otherwise.

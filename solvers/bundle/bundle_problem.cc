@@ -105,7 +105,7 @@ Eigen::VectorXd DatumSingularValues(const std::vector<Eigen::Vector3d>& fixed_po
 // datum is refused with the reason when plan->refuse_weak_datum, else left to the round.
 Status CheckDatum(const BundleAdjustmentConfig& config, const Block& block, BundlePlan* plan) {
   std::vector<Eigen::Vector3d> fixed_positions;
-  int num_control = 0, num_cameras = 0, num_attitudes = 0;
+  int num_control = 0, num_held = 0, num_cameras = 0, num_attitudes = 0;
   bool fixed_rotation = false;
   for (size_t p = 0; p < block.points.size(); ++p) {
     if (!plan->point_in_problem[p]) continue;
@@ -113,7 +113,7 @@ Status CheckDatum(const BundleAdjustmentConfig& config, const Block& block, Bund
       fixed_positions.push_back(block.points[p].role == PointRole::kTie
                                     ? *block.points[p].position_m
                                     : *block.points[p].surveyed_m);
-      ++num_control;
+      ++(plan->point_prior[p] ? num_control : num_held);
     }
   }
   for (size_t i = 0; i < block.images.size(); ++i) {
@@ -129,14 +129,15 @@ Status CheckDatum(const BundleAdjustmentConfig& config, const Block& block, Bund
   }
   if (fixed_positions.empty() && !fixed_rotation) return PlanRelativeGauge(block, plan);
   std::ostringstream what;
+  if (num_held > 0) what << num_held << " point" << (num_held == 1 ? "" : "s") << " held fixed, ";
   what << num_control << " control point" << (num_control == 1 ? "" : "s") << ", " << num_cameras
        << " camera position" << (num_cameras == 1 ? "" : "s");
   if (num_attitudes > 0) what << ", " << num_attitudes << " attitude" << (num_attitudes == 1 ? "" : "s");
+  const std::string weighted = num_held > 0 ? " (the rest weighted as stated)" : " weighted as stated";
   plan->datum = BundleDatum::kControl;
   if (!plan->refuse_weak_datum) {
-    plan->datum_description = "absolute: " + what.str() +
-                              " weighted as stated (a datum defect shows as a singular reduced "
-                              "normal matrix)";
+    plan->datum_description = "absolute: " + what.str() + weighted +
+                              " (a datum defect shows as a singular reduced normal matrix)";
     return Status::Ok();
   }
   const Eigen::VectorXd s = DatumSingularValues(fixed_positions, fixed_rotation);
@@ -153,7 +154,7 @@ Status CheckDatum(const BundleAdjustmentConfig& config, const Block& block, Bund
                          " of the 7 similarity parameters of the block (" + why +
                          "); add control points off that line or camera positions");
   }
-  plan->datum_description = "absolute: " + what.str() + " weighted as stated";
+  plan->datum_description = "absolute: " + what.str() + weighted;
   return Status::Ok();
 }
 

@@ -341,11 +341,21 @@ void ResetStatistics(const Block& block, const BundlePlan& plan, BundleAdjustmen
 void TabulateResiduals(const Block& block, const BundlePlan& plan, const BundleState& state,
                        const BundleRound& round, GroupSums* sums, BundleAdjustmentResult* result,
                        GroupVariance* variance) {
-  sums[kTieMarks].unit = sums[kControlMarks].unit = "px";
+  // A mark group's unit: its marks' own ("px" or "um") when they share one; a group that mixes
+  // pixel and film marks has no one unit, and states its accuracy and RMS in each mark's own
+  // sigma ("sigma": residual / sigma, the stated accuracy 1).
+  bool has_unit[kNumBundleGroups][2] = {};
+  for (size_t m = 0; m < block.marks.size(); ++m)
+    if (plan.mark_used[m])
+      has_unit[plan.mark_group[m]][block.marks[m].unit == MarkUnit::kFilm] = true;
+  bool in_sigmas[kNumBundleGroups] = {};
+  for (const int g : {kTieMarks, kControlMarks}) {
+    in_sigmas[g] = has_unit[g][0] && has_unit[g][1];
+    sums[g].unit = in_sigmas[g] ? "sigma" : EnumName(has_unit[g][1] ? MarkUnit::kFilm : MarkUnit::kPixel);
+  }
   sums[kControlPoints].unit = sums[kCameraPositions].unit = "m";
   sums[kAttitudes].unit = "deg";
   std::vector<double> image_ssq(block.images.size(), 0.0);
-  bool film_marks = false;
   for (const ResidualInfo& info : round.residuals) {
     double whitened[3] = {0.0, 0.0, 0.0};
     double cost;
@@ -360,9 +370,9 @@ void TabulateResiduals(const Block& block, const BundlePlan& plan, const BundleS
       const Eigen::Vector2d residual(whitened[0] * scale, whitened[1] * scale);
       result->mark_residuals[info.item] = residual;
       ++s.count;
-      s.ssq.head<2>() += residual.cwiseAbs2();
-      s.stated.head<2>() += Eigen::Vector2d::Constant(scale);
-      film_marks |= mark.unit == MarkUnit::kFilm;
+      const double unit = in_sigmas[info.group] ? 1.0 : scale;
+      s.ssq.head<2>() += (Eigen::Vector2d(whitened[0], whitened[1]) * unit).cwiseAbs2();
+      s.stated.head<2>() += Eigen::Vector2d::Constant(unit);
       BundleImageResult& image = result->images[mark.image];
       ++image.num_marks;
       image_ssq[mark.image] += residual.squaredNorm();
@@ -379,7 +389,6 @@ void TabulateResiduals(const Block& block, const BundlePlan& plan, const BundleS
       s.stated[axis] += scale;
     }
   }
-  if (film_marks) sums[kTieMarks].unit = sums[kControlMarks].unit = "px or um";
   for (size_t i = 0; i < block.images.size(); ++i) {
     BundleImageResult& image = result->images[i];
     image.adjusted = true;
@@ -407,9 +416,10 @@ void SetTestLevel(const BundleAdjustmentOptions& options, const GroupVariance& v
 }
 
 // Exterior orientations, in the ambient (Euler) parameters (P C P^T), and control points.
-void OrientationAndPointCovariances(const Block& block, const BundleState& state,
-                                    const BundleRound& round, const ReducedNormals& reduced,
-                                    double variance_factor, BundleAdjustmentResult* result) {
+void OrientationAndPointCovariances(const Block& block, const BundlePlan& plan,
+                                    const BundleState& state, const BundleRound& round,
+                                    const ReducedNormals& reduced, double variance_factor,
+                                    int num_threads, BundleAdjustmentResult* result) {
   Eigen::MatrixXd C;
   for (size_t i = 0; i < block.images.size(); ++i) {
     const double* eo = state.eo[i].data();
@@ -422,14 +432,26 @@ void OrientationAndPointCovariances(const Block& block, const BundleState& state
     result->images[i].covariance = variance_factor * P * C * P.transpose();
     result->images[i].has_covariance = true;
   }
-  SupportCovariance support;
-  for (const auto& [block_ptr, index] : reduced.point_index) {
-    const int p = round.point_of_block[index];
-    if (block.points[p].role != PointRole::kControl) continue;
-    if (!MakeSupportCovariance(reduced, index, {}, &support)) continue;
-    result->points[p].covariance = variance_factor * PointCovariance(reduced, support, index);
+  // Every adjusted point, tie and control alike (the points in parallel); a point held fixed
+  // (stated error-free, or a constant point of the config) has covariance 0.
+  std::vector<char> adjusted(block.points.size(), 0);
+  for (const int p : round.point_of_block) adjusted[p] = 1;
+  for (size_t p = 0; p < block.points.size(); ++p) {
+    if (!plan.point_in_problem[p] || adjusted[p]) continue;
+    result->points[p].covariance.setZero();
     result->points[p].has_covariance = true;
   }
+  std::vector<int> indices;
+  indices.reserve(reduced.point_index.size());
+  for (const auto& [block_ptr, index] : reduced.point_index) indices.push_back(index);
+  ParallelFor(indices.size(), num_threads, [&](size_t k) {
+    const int index = indices[k];
+    SupportCovariance support;
+    if (!MakeSupportCovariance(reduced, index, {}, &support)) return;
+    BundlePointResult& point = result->points[round.point_of_block[index]];
+    point.covariance = variance_factor * PointCovariance(reduced, support, index);
+    point.has_covariance = true;
+  });
 }
 
 // Per e block, the camera-centre components leading its tangent space (0..2; the relative
@@ -632,17 +654,37 @@ void CalibrationResults(const BundleAdjustmentOptions& options, const Block& blo
   }
 }
 
-// The report's groups: counts, stated accuracies, RMS, ratio, redundancy share, over-fit flags.
+// Control points in the round held fixed (no parameter block adjusted: stated error-free or in the
+// config's constant points).
+int NumFixedControlPoints(const Block& block, const BundlePlan& plan, const BundleRound& round) {
+  std::vector<char> adjusted(block.points.size(), 0);
+  for (const int p : round.point_of_block) adjusted[p] = 1;
+  int fixed = 0;
+  for (size_t p = 0; p < block.points.size(); ++p)
+    fixed += plan.point_in_problem[p] && !adjusted[p] && block.points[p].role == PointRole::kControl;
+  return fixed;
+}
+
+// The report's groups: counts, stated accuracies, RMS, ratio, redundancy share, over-fit flags; a
+// group held fixed (only control points can be) without residuals or verdict.
 void GroupStatistics(const BundleAdjustmentOptions& options, const GroupSums* sums,
-                     const GroupVariance& variance, BundleAdjustmentResult* result) {
+                     const GroupVariance& variance, int num_fixed_control_points,
+                     BundleAdjustmentResult* result) {
   for (int g = 0; g < kNumBundleGroups; ++g) {
     const GroupSums& s = sums[g];
-    if (s.count == 0) continue;
+    const int num_fixed = g == kControlPoints ? num_fixed_control_points : 0;
+    if (s.count == 0 && num_fixed == 0) continue;
     BundleGroupStatistics group;
     group.group = static_cast<BundleGroup>(g);
     group.count = s.count;
+    group.num_fixed = num_fixed;
     group.unit = s.unit;
     group.num_axes = (g == kTieMarks || g == kControlMarks) ? 2 : 3;
+    if (group.fixed()) {
+      group.ratio = group.redundancy_share = kNaN;
+      result->groups.push_back(group);
+      continue;
+    }
     group.stated_accuracy = s.stated / s.count;
     group.rms = (s.ssq / s.count).cwiseSqrt();
     group.rms_total = std::sqrt(s.ssq.sum() / (s.count * group.num_axes));
@@ -660,6 +702,8 @@ void GroupStatistics(const BundleAdjustmentOptions& options, const GroupSums* su
       if (share_known) message << ", redundancy share " << Format3(group.redundancy_share);
       message << ". The adjustment bends to these priors: too few or too weak tie points, or a "
                  "stated accuracy that is too loose.";
+      if (g == kControlPoints)
+        message << " Control points taken as error-free are held fixed with AccuracyX/Y/Z 0.";
       group.message = message.str();
     }
     result->groups.push_back(group);
@@ -767,7 +811,8 @@ void ComputeBundleStatistics(const BundleAdjustmentOptions& options, const Block
   summary.inversion_seconds = reduced.ok ? reduced.C.inversion_seconds() : 0.0;
   SetTestLevel(options, *variance, result);
   if (reduced.ok) {
-    OrientationAndPointCovariances(block, state, round, reduced, variance_factor, result);
+    OrientationAndPointCovariances(block, plan, state, round, reduced, variance_factor,
+                                   options.solver.num_threads, result);
     ObservationDiagnostics(options, block, plan, state, round, reduced,
                            options.statistics.observation_diagnostics, sums, result, variance);
     CalibrationResults(options, block, plan, state, &reduced, variance_factor, result);
@@ -778,7 +823,7 @@ void ComputeBundleStatistics(const BundleAdjustmentOptions& options, const Block
                             : "covariances not computed (statistics turned off)";
   }
   if (plan.use_lever) result->lever_arm_m = state.lever;
-  GroupStatistics(options, sums, *variance, result);
+  GroupStatistics(options, sums, *variance, NumFixedControlPoints(block, plan, round), result);
   ControlAndCheckPoints(options, block, state, round, reduced, variance_factor, result);
 }
 

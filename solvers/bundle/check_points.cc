@@ -142,8 +142,8 @@ void TabulateControlAndCheckPoints(const Block& block, const std::vector<const V
     const BlockPoint& point = block.points[p];
     BundlePointResult& table = result->points[p];
     // A control point whose coordinates snooping removed keeps its error in the table but stays
-    // out of the RMSE (it is reported as removed).
-    if (point.role == PointRole::kControl && table.error_m &&
+    // out of the RMSE (it is reported as removed); so does one held fixed (its error is 0).
+    if (point.role == PointRole::kControl && table.error_m && !IsHeldFixed(point) &&
         !PriorRemoved(*result, static_cast<int>(p))) {
       ++result->num_control_points;
       control_ssq += table.error_m->cwiseAbs2();

@@ -820,10 +820,12 @@ Status LinearizeTaylorBundle(const TaylorBundleOptions& options,
   return Status::Ok();
 }
 
-Status TaylorBundleAdjust(const TaylorBundleOptions& options, const BundleAdjustmentConfig& config,
-                          Block* block, TaylorBundleResult* result) {
+Status TaylorBundleAdjust(const TaylorBundleOptions& options,
+                          const BundleAdjustmentConfig& stated_config, Block* block,
+                          TaylorBundleResult* result) {
   CHECK(block != nullptr);
   CHECK(result != nullptr);
+  const BundleAdjustmentConfig config = WithFixedControlPoints(stated_config, *block);
   const Clock::time_point start = Clock::now();
   *result = TaylorBundleResult();
   TaylorBundleSummary& summary = result->summary;

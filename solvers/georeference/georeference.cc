@@ -279,7 +279,11 @@ Status PrepareGeoreference(const GeoreferenceOptions& options, const Georeferenc
     SimilarityCorrespondence pair;
     pair.source = *in_model[p];
     pair.target = *work.points[p].surveyed_m;
-    pair.sigma_m = work.points[p].accuracy_m ? work.points[p].accuracy_m->mean() : options.default_marker_accuracy_m;
+    // A point held fixed (accuracy 0) weighs as a default one here: the similarity only aligns
+    // the model; the adjustment then holds it.
+    pair.sigma_m = work.points[p].accuracy_m && !IsHeldFixed(work.points[p])
+                       ? work.points[p].accuracy_m->mean()
+                       : options.default_marker_accuracy_m;
     pair.group = out.positions_matched > 0 ? 1 : 0;
     pairs.push_back(pair);
     out.similarity_labels.push_back("control " + work.points[p].id);

@@ -122,5 +122,36 @@ TEST(Block, CheckNamesTheFirstOffence) {
   }
 }
 
+// A point's accuracy is positive on every axis or 0 on all three; only a control point with 0 is
+// held fixed.
+TEST(Block, AccuracyZeroOnEveryAxisHoldsAControlPointFixed) {
+  EXPECT_EQ(InvalidPointAccuracyAxis(Eigen::Vector3d(0.01, 0.01, 0.02)), -1);
+  EXPECT_EQ(InvalidPointAccuracyAxis(Eigen::Vector3d::Zero()), -1);
+  EXPECT_EQ(InvalidPointAccuracyAxis(Eigen::Vector3d(0.0, 0.0, 0.02)), 2);
+  EXPECT_EQ(InvalidPointAccuracyAxis(Eigen::Vector3d(0.01, 0.0, 0.0)), 1);
+  EXPECT_EQ(InvalidPointAccuracyAxis(Eigen::Vector3d(-0.01, -0.01, -0.01)), 0);
+  BlockPoint point;
+  point.role = PointRole::kControl;
+  point.surveyed_m = Eigen::Vector3d(1, 2, 3);
+  EXPECT_FALSE(IsHeldFixed(point));  // no accuracy: the default one
+  point.accuracy_m = Eigen::Vector3d(1e-9, 1e-9, 1e-9);
+  EXPECT_FALSE(IsHeldFixed(point));
+  point.accuracy_m = Eigen::Vector3d::Zero();
+  EXPECT_TRUE(IsHeldFixed(point));
+  point.role = PointRole::kCheck;
+  EXPECT_FALSE(IsHeldFixed(point));  // only compared
+
+  Block block = TwoImageBlock();
+  for (BlockPoint& p : block.points) p.accuracy_m = Eigen::Vector3d::Zero();
+  EXPECT_TRUE(CheckBlock(block).ok());
+  block.points[0].accuracy_m = Eigen::Vector3d(0.0, 0.01, 0.0);
+  const Status status = CheckBlock(block);
+  ASSERT_FALSE(status.ok());
+  EXPECT_NE(status.message().find("point '" + block.points[0].id +
+                                  "' has an accuracy that is neither positive"),
+            std::string::npos)
+      << status.message();
+}
+
 }  // namespace
 }  // namespace photopose

@@ -30,7 +30,7 @@
 
 DEFINE_string(bundle_cameras, "", "Camera table (CSV, ArcGIS frame-camera schema): the interior orientation of every CameraID.");
 DEFINE_string(bundle_marks, "", "Image marks (CSV: Raster, PointID, Column and Row in pixels or FilmX and FilmY in micrometres, optional Accuracy in the mark's own unit and CameraID). A point with marks but no row in --points is a tie point.");
-DEFINE_string(bundle_points, "", "Ground points (CSV: PointID, X, Y, Z in metres, optional AccuracyX/Y/Z in metres and Role control|check|tie). Optional for a block held by camera positions.");
+DEFINE_string(bundle_points, "", "Ground points (CSV: PointID, X, Y, Z in metres, optional AccuracyX/Y/Z in metres, all three 0 holding a control point fixed, and Role control|check|tie). Optional for a block held by camera positions.");
 DEFINE_string(bundle_frames, "", "Frames table: PerspectiveX/Y/Z are the measured camera positions (priors with --camera_accuracy or per-row AccuracyX/Y/Z, otherwise initial values only) and Omega/Phi/Kappa initial values (priors with --attitude_accuracy or per-row AccuracyOmega/Phi/Kappa). Images without a row are oriented by resection.");
 DEFINE_string(bundle_colmap_model, "", "A COLMAP model folder to adjust instead of the tables: binary (cameras.bin, images.bin, points3D.bin) when all three are there, else text (cameras.txt, images.txt, points3D.txt).");
 DEFINE_string(bundle_bal, "", "A BAL problem file to adjust instead of the tables.");

@@ -15,7 +15,7 @@
 #include "tools/report/resection_report.h"
 
 DEFINE_string(cameras, "", "Camera table (CSV, ArcGIS frame-camera schema): the interior orientation of every CameraID.");
-DEFINE_string(points, "", "Ground points (CSV: PointID, X, Y, Z in metres, optional AccuracyX/Y/Z and Role control|check|tie); a point that has marks but no row is a tie point and is left out.");
+DEFINE_string(points, "", "Ground points (CSV: PointID, X, Y, Z in metres, optional AccuracyX/Y/Z (0 allowed: control points are fixed in a resection anyway) and Role control|check|tie); a point that has marks but no row is a tie point and is left out.");
 DEFINE_string(marks, "", "Image marks (CSV: Raster, PointID, Column and Row in pixels or FilmX and FilmY in micrometres, optional Accuracy in the mark's own unit and CameraID).");
 DEFINE_string(gcp_list, "", "OpenDroneMap gcp_list.txt to use instead of --points and --marks (first line a CRS, then 'X Y Z px py image [name]'); its CRS goes to the SRS column of the output.");
 DEFINE_string(frames, "", "Optional frames table with approximate exterior orientations; when an image has one, it replaces the automatic initial values (the consensus of minimal samples).");

@@ -420,6 +420,13 @@ std::string VerdictsHtml(const Block& block, const BundleAdjustmentResult& resul
     for (const std::string& m : overfit) html << "<li>" << HtmlEscape(m) << "</li>";
     html << "</ul></div>\n";
   }
+  for (const BundleGroupStatistics& g : result.groups) {
+    if (g.num_fixed == 0) continue;
+    html << "<div class=\"verdict note\"><b>Held fixed:</b> "
+         << FormatCount(g.num_fixed, "control point")
+         << " stated error-free (AccuracyX/Y/Z 0), not adjusted: no residuals and no verdict"
+         << (g.fixed() ? "" : "; the verdict above covers the weighted ones only") << ".</div>\n";
+  }
   if (!weights.empty()) {
     html << "<div class=\"verdict note\"><b>Stated accuracies the data contradict</b> (RMS / "
             "stated outside "
@@ -517,6 +524,11 @@ std::string PointsHtml(const Block& block, const BundleAdjustmentResult& result)
       if (!r.error_m) {
         out.push_back({point.id, std::to_string(r.num_observations), "", "", "", "", "",
                        r.message.empty() ? "not in the adjustment" : r.message});
+        continue;
+      }
+      if (IsHeldFixed(point)) {  // error and sigma 0 by construction: not plotted
+        out.push_back({point.id, std::to_string(r.num_observations), "0", "0", "0", "0", "0",
+                       "held fixed"});
         continue;
       }
       errors->push_back(*r.error_m);
@@ -899,7 +911,13 @@ std::string DiagnosticsHtml(const Block& block, const BundleAdjustmentResult& re
   for (const BundleGroupStatistics& g : result.groups) {
     const bool prior = g.group == kControlPoints || g.group == kCameraPositions ||
                        g.group == kAttitudes;
+    if (g.fixed()) {
+      rows.push_back({EnumName(g.group), FormatCount(g.num_fixed, "held fixed", "held fixed"),
+                      "0 (error-free)", "n/a", "n/a", "n/a", "n/a", "fixed"});
+      continue;
+    }
     std::string verdict = "fits";
+    if (g.num_fixed > 0) verdict += ", " + std::to_string(g.num_fixed) + " more held fixed";
     if (g.overfit) {
       verdict = "OVER-FITTED";
     } else if (!prior) {

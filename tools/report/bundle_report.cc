@@ -192,6 +192,8 @@ json BundleReportJson(const Block& block, const BundleAdjustmentResult& result,
                   {"ratio", Number(g.ratio)},
                   {"redundancy_share", Number(g.redundancy_share)},
                   {"overfit", g.overfit},
+                  {"fixed", g.fixed()},
+                  {"num_fixed", g.num_fixed},
                   {"message", g.message}};
     if (o.statistics.estimate_accuracies) {
       group["estimated_accuracy"] = g.num_axes == 2 ? Number(g.estimated_accuracy.x())
@@ -216,6 +218,7 @@ json BundleReportJson(const Block& block, const BundleAdjustmentResult& result,
                 {"error_m", r.error_m ? Vector3(*r.error_m) : json(nullptr)},
                 {"sigma_m", r.has_covariance ? Vector3(r.covariance.diagonal().cwiseSqrt())
                                              : json(nullptr)},
+                {"fixed", IsHeldFixed(point)},
                 {"message", r.message}};
     (point.role == PointRole::kControl ? control : check).push_back(row);
   }
@@ -522,10 +525,17 @@ std::vector<std::string> BundleConsoleLines(const Block& block, const BundleAdju
   lines.push_back("datum: " + s.datum_description);
   for (const BundleGroupStatistics& g : result.groups) {
     std::ostringstream line;
+    if (g.fixed()) {
+      line << EnumName(g.group) << ": " << g.num_fixed
+           << " held fixed (stated error-free): no residuals, no verdict";
+      lines.push_back(line.str());
+      continue;
+    }
     line << EnumName(g.group) << ": " << g.count << ", stated " << Format(g.stated_accuracy.x()) << " "
          << g.unit << ", RMS " << Format(g.rms_total) << " " << g.unit << ", RMS/stated "
          << Format(g.ratio) << ", redundancy share " << Format(g.redundancy_share)
          << (g.overfit ? "  OVERFIT" : "");
+    if (g.num_fixed > 0) line << "; " << g.num_fixed << " more held fixed";
     lines.push_back(line.str());
   }
   for (const BundleGroupStatistics& g : result.groups)

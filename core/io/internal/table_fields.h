@@ -505,14 +505,20 @@ class RowFields {
   explicit RowFields(std::string record) : record_(std::move(record)) {}
 
   void Text(std::string_view text) { fields_.emplace_back(text); }
-  void Number(std::string_view column, double value) {
-    const std::string problem = ValueProblem(value, RangeOf(column));
+  // Within `range` (nullptr: any finite number), by default its column's (RangeOf).
+  void Number(std::string_view column, double value) { Number(column, value, RangeOf(column)); }
+  void Number(std::string_view column, double value, const ValueRange* range) {
+    const std::string problem = ValueProblem(value, range);
     if (!problem.empty()) Fail(column, problem);
     fields_.push_back(FormatNumber(value));
   }
   void OptionalNumber(std::string_view column, const std::optional<double>& value) {
+    OptionalNumber(column, value, RangeOf(column));
+  }
+  void OptionalNumber(std::string_view column, const std::optional<double>& value,
+                      const ValueRange* range) {
     if (value) {
-      Number(column, *value);
+      Number(column, *value, range);
     } else {
       fields_.emplace_back();
     }

@@ -848,6 +848,34 @@ TEST_F(TablesTest, GroundPointsReadAndRoundTrip) {
   }
 }
 
+// AccuracyX = AccuracyY = AccuracyZ = 0: a control point held fixed (error-free), a check point
+// compared as usual; read, written and read back as 0.
+TEST_F(TablesTest, GroundPointsWithAccuracyZeroAreHeldFixedControl) {
+  const std::string path = Write("points.csv",
+                                 "PointID,X,Y,Z,AccuracyX,AccuracyY,AccuracyZ,Role\n"
+                                 "F1,10,20,30,0,0,0,control\n"
+                                 "K1,11,21,31,0,0,0,check\n"
+                                 "W1,12,22,32,0.01,0.01,0.02,control\n");
+  std::vector<GroundPoint> points;
+  const Status status = ReadGroundPoints(path, &points);
+  ASSERT_TRUE(status.ok()) << status.message();
+  ASSERT_EQ(points.size(), 3u);
+  ASSERT_TRUE(points[0].accuracy_m.has_value());
+  EXPECT_EQ(*points[0].accuracy_m, Eigen::Vector3d::Zero());
+  EXPECT_EQ(*points[1].accuracy_m, Eigen::Vector3d::Zero());
+  std::string text;
+  ASSERT_TRUE(FormatGroundPoints(points, "out.csv", &text).ok());
+  EXPECT_NE(text.find("F1,10,20,30,0,0,0,control\n"), std::string::npos) << text;
+  std::vector<GroundPoint> back;
+  ASSERT_TRUE(ParseGroundPoints(text, "out.csv", &back).ok());
+  for (size_t i = 0; i < points.size(); ++i) EXPECT_EQ(back[i].accuracy_m, points[i].accuracy_m);
+  // The writer refuses what the reader refuses.
+  points[2].accuracy_m = Eigen::Vector3d(0.0, 0.01, 0.01);
+  EXPECT_EQ(FormatGroundPoints(points, "out.csv", &text).message(),
+            "out.csv: point 'W1': AccuracyY: 0.01 beside AccuracyX 0: AccuracyX, AccuracyY, "
+            "AccuracyZ are all positive, or all 0 (the point held fixed)");
+}
+
 TEST_F(TablesTest, GroundPointsMinimalColumns) {
   const std::string path = Write("points.csv", "pointid,x,y,z\nA,1,2,3\n");
   std::vector<GroundPoint> points;
@@ -871,8 +899,17 @@ TEST_F(TablesTest, GroundPointsErrors) {
        "7: Z: 'abc' is not a number"},
       {full, "P1,1,2,3,0.1,,0.1,\n",
        "2: AccuracyY: is empty; AccuracyX, AccuracyY, AccuracyZ are given together"},
-      {full, "P1,1,2,3,0.1,0,0.1,\n", "2: AccuracyY: '0' is outside (0, 100000000] m"},
-      {full, "P1,1,2,3,0.1,0.1,-1,\n", "2: AccuracyZ: '-1' is outside (0, 100000000] m"},
+      {full, "P1,1,2,3,0.1,0.1,-1,\n", "2: AccuracyZ: '-1' is outside [0, 100000000] m"},
+      // All three 0 hold a control point fixed; a mix is refused at the first axis that breaks it.
+      {full, "P1,1,2,3,0.1,0,0.1,\n",
+       "2: AccuracyY: 0 beside AccuracyX 0.1: AccuracyX, AccuracyY, AccuracyZ are all positive, or "
+       "all 0 (the point held fixed)"},
+      {full, "P1,1,2,3,0,0,0,control\nP2,1,2,3,0,0,0.02,control\n",
+       "3: AccuracyZ: 0.02 beside AccuracyX 0: AccuracyX, AccuracyY, AccuracyZ are all positive, or "
+       "all 0 (the point held fixed)"},
+      {full, "P1,1,2,3,0.01,0,0,check\n",
+       "2: AccuracyY: 0 beside AccuracyX 0.01: AccuracyX, AccuracyY, AccuracyZ are all positive, or "
+       "all 0 (the point held fixed)"},
       {full, "P1,1,2,3,,,,tied\n", "2: Role: 'tied' is not control, check or tie"},
       {full, "P1,1,2,3,,,,\nP1,4,5,6,,,,\n", "3: PointID: duplicate point 'P1' (first on line 2)"},
       {full, ",1,2,3,,,,\n", "2: PointID: is empty"},
@@ -1323,7 +1360,7 @@ TEST_F(TablesTest, CoordinatesBeyondTheRangeAreRefusedInEveryTable) {
             path + ":3: X: '1e308' is outside [-100000000, 100000000] m");
   path = Write("points.csv", "PointID,X,Y,Z,AccuracyX,AccuracyY,AccuracyZ\nP1,1,2,3,1,1,1e9\n");
   EXPECT_EQ(ReadGroundPoints(path, &points).message(),
-            path + ":2: AccuracyZ: '1e9' is outside (0, 100000000] m");
+            path + ":2: AccuracyZ: '1e9' is outside [0, 100000000] m");
   std::vector<FrameRecord> frames;
   path = Write("frames.csv",
                "Raster,CameraID,PerspectiveX,PerspectiveY,PerspectiveZ,Omega,Phi,Kappa\n"

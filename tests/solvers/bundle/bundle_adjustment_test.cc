@@ -318,6 +318,130 @@ TEST(BundleAdjustment, FewTiePointsFlagTheCameraPositionsAsOverfitted) {
   }
 }
 
+// Control points stated error-free (AccuracyX/Y/Z 0) are held fixed: the same adjustment as with
+// them in the config's constant points, bit for bit; they stay on their survey, form the datum of a
+// block without camera positions, add no observation, and their group is "fixed" without a verdict.
+TEST(BundleAdjustment, ControlPointsWithAccuracyZeroAreHeldFixed) {
+  SmallBlockOptions o;
+  o.gnss = false;  // the fixed points alone give the datum
+  const SmallBlock data = MakeSmallBlock(o);
+  std::vector<int> control;
+  for (size_t p = 0; p < data.block.points.size(); ++p)
+    if (data.block.points[p].role == PointRole::kControl) control.push_back(static_cast<int>(p));
+  ASSERT_EQ(control.size(), 4u);
+
+  Block fixed = data.block;
+  for (const int p : control) fixed.points[p].accuracy_m = Eigen::Vector3d::Zero();
+  BundleAdjustmentResult fixed_result;
+  ASSERT_TRUE(BundleAdjust(QuietOptions(), BundleAdjustmentConfig(), &fixed, &fixed_result).ok());
+  ASSERT_TRUE(fixed_result.summary.IsSolutionUsable()) << fixed_result.summary.BriefReport();
+  EXPECT_EQ(fixed_result.summary.datum, BundleDatum::kControl);
+  EXPECT_NE(fixed_result.summary.datum_description.find("4 points held fixed"), std::string::npos)
+      << fixed_result.summary.datum_description;
+
+  Block constant = data.block;
+  BundleAdjustmentConfig config;
+  config.constant_points.insert(control.begin(), control.end());
+  BundleAdjustmentResult constant_result;
+  ASSERT_TRUE(BundleAdjust(QuietOptions(), config, &constant, &constant_result).ok());
+  for (size_t i = 0; i < fixed.images.size(); ++i)
+    EXPECT_EQ(fixed.images[i].eo->parameters, constant.images[i].eo->parameters) << i;
+  EXPECT_EQ(fixed_result.summary.final_cost, constant_result.summary.final_cost);
+  EXPECT_EQ(fixed_result.summary.redundancy, constant_result.summary.redundancy);
+
+  for (const int p : control) {
+    // Not moved, bit for bit; sigma 0; the error 0 and not in the control RMSE.
+    ASSERT_TRUE(fixed.points[p].position_m.has_value());
+    EXPECT_EQ(*fixed.points[p].position_m, *data.block.points[p].surveyed_m);
+    EXPECT_TRUE(fixed_result.points[p].has_covariance);
+    EXPECT_EQ(fixed_result.points[p].covariance, Eigen::Matrix3d::Zero());
+  }
+  EXPECT_EQ(fixed_result.num_control_points, 0);
+  // Redundancy: two per mark in use, less six per image and three per adjusted (tie) point; the
+  // fixed points are neither observations nor unknowns.
+  const int tie_points = fixed_result.summary.num_points - static_cast<int>(control.size());
+  EXPECT_EQ(fixed_result.summary.redundancy,
+            2 * fixed_result.summary.num_marks - 6 * fixed_result.summary.num_images -
+                3 * tie_points);
+  // Every adjusted tie point has its sigmas.
+  int tie_with_sigmas = 0;
+  for (size_t p = 0; p < fixed.points.size(); ++p) {
+    if (fixed.points[p].role != PointRole::kTie || fixed_result.points[p].num_observations == 0)
+      continue;
+    ASSERT_TRUE(fixed_result.points[p].has_covariance) << fixed.points[p].id;
+    EXPECT_GT(fixed_result.points[p].covariance.diagonal().minCoeff(), 0.0) << fixed.points[p].id;
+    ++tie_with_sigmas;
+  }
+  EXPECT_EQ(tie_with_sigmas, tie_points);
+
+  const BundleGroupStatistics* group = FindGroup(fixed_result, kControlPoints);
+  ASSERT_NE(group, nullptr);
+  EXPECT_TRUE(group->fixed());
+  EXPECT_EQ(group->count, 0);
+  EXPECT_EQ(group->num_fixed, 4);
+  EXPECT_FALSE(group->overfit);
+  EXPECT_TRUE(group->message.empty()) << group->message;
+  for (const BundleGroupStatistics& g : fixed_result.groups) EXPECT_FALSE(g.overfit) << EnumName(g.group);
+
+  // One control point weighted beside three fixed: the group covers the weighted one alone.
+  Block mixed = data.block;
+  for (size_t k = 1; k < control.size(); ++k) mixed.points[control[k]].accuracy_m = Eigen::Vector3d::Zero();
+  BundleAdjustmentResult mixed_result;
+  ASSERT_TRUE(BundleAdjust(QuietOptions(), BundleAdjustmentConfig(), &mixed, &mixed_result).ok());
+  group = FindGroup(mixed_result, kControlPoints);
+  ASSERT_NE(group, nullptr);
+  EXPECT_FALSE(group->fixed());
+  EXPECT_EQ(group->count, 1);
+  EXPECT_EQ(group->num_fixed, 3);
+  EXPECT_EQ(mixed_result.num_control_points, 1);
+}
+
+// A tiny stated accuracy is a weighted prior the tie points cannot check: over-fitted, and the
+// warning says how to hold the points fixed instead.
+TEST(BundleAdjustment, ATinyControlAccuracyIsOverfittedAndPointsToAccuracyZero) {
+  SmallBlockOptions o;
+  o.gnss = false;
+  SmallBlock data = MakeSmallBlock(o);
+  for (BlockPoint& point : data.block.points)
+    if (point.role == PointRole::kControl) point.accuracy_m = Eigen::Vector3d::Constant(1e-5);
+  BundleAdjustmentResult result;
+  ASSERT_TRUE(BundleAdjust(QuietOptions(), BundleAdjustmentConfig(), &data.block, &result).ok());
+  const BundleGroupStatistics* group = FindGroup(result, kControlPoints);
+  ASSERT_NE(group, nullptr);
+  EXPECT_TRUE(group->overfit);
+  EXPECT_NE(group->message.find("AccuracyX/Y/Z 0"), std::string::npos) << group->message;
+}
+
+// A mark group's unit is its marks' own: um when they are all film marks; a group mixing pixel
+// and film marks is stated in each mark's sigma (stated 1, RMS = RMS / stated).
+TEST(BundleAdjustment, MarkGroupsStateTheirUnitOrSigmasWhenMixed) {
+  for (const bool all_film : {true, false}) {
+    SmallBlock data = MakeSmallBlock(SmallBlockOptions());
+    const double pixel_um = data.block.cameras[0].table.pixel_size_um;
+    for (size_t m = 0; m < data.block.marks.size(); ++m) {
+      if (!all_film && m % 2 == 0) continue;
+      BlockMark& mark = data.block.marks[m];
+      mark.unit = MarkUnit::kFilm;
+      mark.measured = mark.observation;
+      mark.accuracy = *mark.accuracy * pixel_um;
+      mark.observation_units_per_unit = 1.0;
+    }
+    BundleAdjustmentResult result;
+    ASSERT_TRUE(BundleAdjust(QuietOptions(), BundleAdjustmentConfig(), &data.block, &result).ok());
+    const BundleGroupStatistics* tie = FindGroup(result, kTieMarks);
+    ASSERT_NE(tie, nullptr);
+    if (all_film) {
+      EXPECT_EQ(tie->unit, "um");
+      EXPECT_NEAR(tie->stated_accuracy.x(), 0.5 * pixel_um, 1e-12);  // 0.5 px noise
+      EXPECT_NEAR(tie->rms_total, tie->ratio * tie->stated_accuracy.x(), 1e-9);
+    } else {
+      EXPECT_EQ(tie->unit, "sigma");
+      EXPECT_NEAR(tie->stated_accuracy.x(), 1.0, 1e-12);
+      EXPECT_NEAR(tie->rms_total, tie->ratio, 1e-9);
+    }
+  }
+}
+
 TEST(BundleAdjustment, SelfCalibrationRecoversFocalLengthAndRadialDistortion) {
   SmallBlockOptions o;
   o.tie_grid = 20;

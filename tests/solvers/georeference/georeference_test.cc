@@ -23,17 +23,28 @@ double CentreRms(const GeoreferenceScene& scene, const Block& block, const Geore
   return std::sqrt(sum / centres.size());
 }
 
-TEST(Georeference, DomedModelWithGnssAndControlReachesTheNoiseAfterTheAdjustment) {
-  GeoreferenceScene scene = MakeGeoreferenceScene(2.0);
-  Block block = scene.model;
-  GeoreferenceResult result;
-  BundleAdjustmentResult adjustment;
+// GeoreferenceBlock of the scene's model with the default options, into *block: success when it
+// ran and the adjustment converged.
+::testing::AssertionResult GeoreferenceTheScene(const GeoreferenceScene& scene, Block* block,
+                                                GeoreferenceResult* result,
+                                                BundleAdjustmentResult* adjustment) {
+  *block = scene.model;
   BundleAdjustmentOptions options;
   options.solver.progress = nullptr;
   const Status status = GeoreferenceBlock(GeoreferenceOptions(), scene.inputs, options,
-                                          BundleAdjustmentConfig(), &block, &result, &adjustment);
-  ASSERT_TRUE(status.ok()) << status.message();
-  ASSERT_TRUE(adjustment.summary.IsSolutionUsable()) << adjustment.summary.message;
+                                          BundleAdjustmentConfig(), block, result, adjustment);
+  if (!status.ok()) return ::testing::AssertionFailure() << status.message();
+  if (!adjustment->summary.IsSolutionUsable())
+    return ::testing::AssertionFailure() << adjustment->summary.message;
+  return ::testing::AssertionSuccess();
+}
+
+TEST(Georeference, DomedModelWithGnssAndControlReachesTheNoiseAfterTheAdjustment) {
+  GeoreferenceScene scene = MakeGeoreferenceScene(2.0);
+  Block block;
+  GeoreferenceResult result;
+  BundleAdjustmentResult adjustment;
+  ASSERT_TRUE(GeoreferenceTheScene(scene, &block, &result, &adjustment));
   EXPECT_EQ(result.out_crs, "EPSG:32632");  // the control's
   EXPECT_EQ(result.positions_matched, 24);
   EXPECT_TRUE(result.positions_unmatched.empty());
@@ -45,6 +56,32 @@ TEST(Georeference, DomedModelWithGnssAndControlReachesTheNoiseAfterTheAdjustment
   EXPECT_GT(result.check_after_similarity.total_m, 0.1);
   EXPECT_LT(result.check_after_adjustment.total_m, 0.03);
   EXPECT_LT(result.check_after_adjustment.rmse_m.z(), 0.03);
+  EXPECT_LT(CentreRms(scene, block, result), 0.03);
+}
+
+// Control points stated error-free (accuracy 0) align the model like weighted ones and are then
+// held fixed by the adjustment: they end on their survey, the block at the noise.
+TEST(Georeference, ControlPointsWithAccuracyZeroAlignTheModelAndAreHeldFixed) {
+  GeoreferenceScene scene = MakeGeoreferenceScene(2.0);
+  int fixed = 0;
+  for (GroundPoint& point : scene.inputs.control_points) {
+    if (point.role != PointRole::kControl) continue;
+    point.accuracy_m = Eigen::Vector3d::Zero();
+    ++fixed;
+  }
+  ASSERT_GT(fixed, 2);
+  Block block;
+  GeoreferenceResult result;
+  BundleAdjustmentResult adjustment;
+  ASSERT_TRUE(GeoreferenceTheScene(scene, &block, &result, &adjustment));
+  int held = 0;
+  for (const BlockPoint& point : block.points) {
+    if (!IsHeldFixed(point)) continue;
+    ++held;
+    EXPECT_EQ(*point.position_m, *point.surveyed_m) << point.id;
+  }
+  EXPECT_EQ(held, fixed);
+  EXPECT_LT(result.check_after_adjustment.total_m, 0.03);
   EXPECT_LT(CentreRms(scene, block, result), 0.03);
 }
 

@@ -431,5 +431,176 @@ TEST(BundleCommand, Sigma0FarAboveOneAfterTheSearchIsAFailureNamingTheGroup) {
   EXPECT_EQ(forced_report["summary"]["message"].get<std::string>().rfind("FAILED the sigma0 check", 0), 0u);
 }
 
+// The rows of a CSV text split at commas (the simulated tables quote nothing).
+std::vector<std::vector<std::string>> CsvRows(const std::string& text) {
+  std::vector<std::vector<std::string>> rows;
+  size_t start = 0;
+  while (start < text.size()) {
+    const size_t end = std::min(text.find('\n', start), text.size());
+    std::vector<std::string> fields;
+    size_t field = start;
+    while (true) {
+      const size_t comma = text.find(',', field);
+      if (comma == std::string::npos || comma >= end) {
+        fields.push_back(text.substr(field, end - field));
+        break;
+      }
+      fields.push_back(text.substr(field, comma - field));
+      field = comma + 1;
+    }
+    rows.push_back(fields);
+    start = end + 1;
+  }
+  return rows;
+}
+
+// A block of two lines (`flags` give the rest), written into dir/block; its path.
+std::string SimulateTwoLineBlock(const std::string& dir, const std::string& flags) {
+  const CliRun run =
+      RunCli("simulate --scenario=block --lines=2 " + flags + " --out_dir=" + dir + "/block", dir);
+  EXPECT_EQ(run.exit_code, 0) << run.err;
+  return dir + "/block";
+}
+
+std::string CsvText(const std::vector<std::vector<std::string>>& rows) {
+  std::string text;
+  for (const auto& row : rows) {
+    for (size_t k = 0; k < row.size(); ++k) text += (k ? "," : "") + row[k];
+    text += "\n";
+  }
+  return text;
+}
+
+// Control points with AccuracyX/Y/Z 0 are held fixed: the block (no camera positions) adjusts on
+// them alone, they come out on their survey with sigmas 0, every tie point has its sigmas, and the
+// group is reported "fixed" without a verdict; a row mixing 0 and non-zero is refused on one line
+// naming file, line and field; resect takes the same table.
+TEST(BundleCommand, ControlPointsWithAccuracyZeroAreHeldFixed) {
+  const std::string dir = ScratchDir();
+  const std::string block =
+      SimulateTwoLineBlock(dir, "--images_per_line=5 --seed=3 --gnss=false --control_sigma=0");
+  auto points = CsvRows(ReadFile(block + "/points.csv"));
+  ASSERT_EQ(points[0][4], "AccuracyX");
+  ASSERT_EQ(points[0][7], "Role");
+  std::map<std::string, std::vector<std::string>> surveyed;
+  for (size_t r = 1; r < points.size(); ++r) {
+    if (points[r].size() < 8 || points[r][7] != "control") continue;
+    points[r][4] = points[r][5] = points[r][6] = "0";
+    surveyed[points[r][0]] = points[r];
+  }
+  ASSERT_GE(surveyed.size(), 4u);
+  testing::WriteFile(dir + "/points0.csv", CsvText(points));
+  const std::string inputs = "--cameras=" + block + "/cameras.csv --points=" + dir +
+                             "/points0.csv --marks=" + block + "/marks.csv";
+  const CliRun run = RunCli("bundle " + inputs + " --out=" + dir + "/frames.csv --out_points=" +
+                                dir + "/adjusted.csv --report=" + dir + "/report.json --html=" +
+                                dir + "/report.html --quiet",
+                            dir);
+  ASSERT_EQ(run.exit_code, 0) << run.err;
+  EXPECT_NE(run.out.find("control_points: " + std::to_string(surveyed.size()) +
+                         " held fixed (stated error-free): no residuals, no verdict"),
+            std::string::npos)
+      << run.out;
+  EXPECT_EQ(run.out.find("control_points over-fitted"), std::string::npos) << run.out;
+
+  const auto adjusted = CsvRows(ReadFile(dir + "/adjusted.csv"));
+  ASSERT_EQ(CsvText({adjusted[0]}),
+            "PointID,X,Y,Z,SigmaX,SigmaY,SigmaZ,Role,NumObservations,SurveyedX,SurveyedY,SurveyedZ,"
+            "ErrorX,ErrorY,ErrorZ\n");
+  int fixed = 0, tie = 0;
+  for (size_t r = 1; r < adjusted.size(); ++r) {
+    const auto& row = adjusted[r];
+    if (row.size() < 8) continue;
+    if (row[7] == "control") {
+      ++fixed;
+      const auto& in = surveyed.at(row[0]);
+      for (int k = 1; k <= 3; ++k) EXPECT_EQ(std::stod(row[k]), std::stod(in[k])) << row[0];
+      for (int k = 4; k <= 6; ++k) EXPECT_EQ(row[k], "0") << row[0];
+    } else if (row[7] == "tie") {
+      ++tie;
+      for (int k = 4; k <= 6; ++k) {
+        ASSERT_FALSE(row[k].empty()) << row[0];
+        EXPECT_GT(std::stod(row[k]), 0.0) << row[0];
+      }
+    }
+  }
+  EXPECT_EQ(fixed, static_cast<int>(surveyed.size()));
+  EXPECT_GT(tie, 100);
+
+  const nlohmann::json report = nlohmann::json::parse(ReadFile(dir + "/report.json"));
+  bool found = false;
+  for (const auto& group : report["groups"]) {
+    if (group["name"] != "control_points") continue;
+    found = true;
+    EXPECT_TRUE(group["fixed"].get<bool>());
+    EXPECT_EQ(group["num_fixed"].get<int>(), static_cast<int>(surveyed.size()));
+    EXPECT_EQ(group["count"].get<int>(), 0);
+    EXPECT_FALSE(group["overfit"].get<bool>());
+  }
+  EXPECT_TRUE(found);
+  ASSERT_EQ(report["control_points"].size(), surveyed.size());
+  for (const auto& point : report["control_points"]) {
+    EXPECT_TRUE(point["fixed"].get<bool>()) << point;
+    EXPECT_EQ(point["sigma_m"], nlohmann::json::parse("[0.0, 0.0, 0.0]")) << point;
+  }
+  EXPECT_EQ(report["control_rmse_m"]["count"].get<int>(), 0);
+  const std::string html = ReadFile(dir + "/report.html");
+  EXPECT_NE(html.find("<b>Held fixed:</b> " + std::to_string(surveyed.size()) + " control points"),
+            std::string::npos);
+  EXPECT_NE(html.find("<td>held fixed</td>"), std::string::npos);
+
+  // resect takes the same points: control is fixed in a resection anyway.
+  const CliRun resected = RunCli("resect " + inputs + " --out=" + dir + "/resected.csv", dir);
+  EXPECT_EQ(resected.exit_code, 0) << resected.err;
+
+  // 0 beside a non-zero accuracy: one line naming the file, line and field; nothing written.
+  auto mixed = points;
+  size_t row = 1;
+  while (mixed[row][7] != "control") ++row;
+  mixed[row][5] = "0.01";
+  testing::WriteFile(dir + "/mixed.csv", CsvText(mixed));
+  const CliRun refused = RunCli("bundle --cameras=" + block + "/cameras.csv --points=" + dir +
+                                    "/mixed.csv --marks=" + block + "/marks.csv --out=" + dir +
+                                    "/refused.csv --quiet",
+                                dir);
+  EXPECT_NE(refused.exit_code, 0);
+  EXPECT_EQ(refused.err, "photopose bundle: " + dir + "/mixed.csv:" + std::to_string(row + 1) +
+                             ": AccuracyY: 0.01 beside AccuracyX 0: AccuracyX, AccuracyY, "
+                             "AccuracyZ are all positive, or all 0 (the point held fixed)\n");
+  EXPECT_FALSE(std::filesystem::exists(dir + "/refused.csv"));
+}
+
+// Film marks (FilmX/FilmY) of a camera without PixelSize: adjusted (their defaults are in um),
+// and the groups print um, not "px or um".
+TEST(BundleCommand, FilmMarksOfACameraWithoutPixelSizeAreAdjustedInMicrometres) {
+  const std::string dir = ScratchDir();
+  const std::string block = SimulateTwoLineBlock(dir, "--images_per_line=4 --seed=5");
+  // The simulated camera: 6000 x 4000 pixels of 4 um, principal point at the centre, film y up.
+  auto cameras = CsvRows(ReadFile(block + "/cameras.csv"));
+  ASSERT_EQ(cameras[0][5], "PixelSize");
+  ASSERT_EQ(cameras[1][5], "4");
+  ASSERT_EQ(cameras[1][6] + "x" + cameras[1][7], "4000x6000");
+  cameras[1][5] = "";
+  testing::WriteFile(dir + "/cameras.csv", CsvText(cameras));
+  auto marks = CsvRows(ReadFile(block + "/marks.csv"));
+  ASSERT_EQ(CsvText({marks[0]}), "Raster,PointID,Column,Row,FilmX,FilmY,Accuracy,CameraID\n");
+  for (size_t r = 1; r < marks.size(); ++r) {
+    if (marks[r].size() < 8) continue;
+    marks[r][4] = std::to_string((std::stod(marks[r][2]) - 3000.0) * 4.0);
+    marks[r][5] = std::to_string(-(std::stod(marks[r][3]) - 2000.0) * 4.0);
+    marks[r][2] = marks[r][3] = marks[r][6] = "";  // no Accuracy: the film defaults
+  }
+  testing::WriteFile(dir + "/marks.csv", CsvText(marks));
+  const CliRun run = RunCli("bundle --cameras=" + dir + "/cameras.csv --points=" + block +
+                                "/points.csv --marks=" + dir + "/marks.csv --frames=" + block +
+                                "/frames.csv --out=" + dir + "/frames.csv --quiet",
+                            dir);
+  ASSERT_EQ(run.exit_code, 0) << run.err;
+  EXPECT_NE(run.out.find("tie_marks: "), std::string::npos) << run.out;
+  EXPECT_NE(run.out.find(", stated 5 um, RMS "), std::string::npos) << run.out;  // --film_tie_accuracy
+  EXPECT_NE(run.out.find(", stated 2.5 um, RMS "), std::string::npos) << run.out;
+  EXPECT_EQ(run.out.find("px"), std::string::npos) << run.out;
+}
+
 }  // namespace
 }  // namespace photopose
