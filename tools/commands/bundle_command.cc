@@ -865,11 +865,13 @@ int RunBundle(int argc, char** argv) {
   const Status written = WriteBundleOutputs(run, usable);
   if (!written.ok()) return BadInput(kCommand, written.message());
   const double write_seconds = SecondsSince(write_start);
-  if (!FLAGS_bundle_quiet) std::cerr << "photopose bundle: outputs written in " << write_seconds << " s\n";
+  if (!FLAGS_bundle_quiet) std::fprintf(stderr, "photopose bundle: outputs written in %.3f s\n", write_seconds);
   if (run.georeference && !FLAGS_bundle_quiet) {
-    std::cerr << "photopose bundle: georeference: " << run.georeferenced.prepare_seconds << " s to prepare (CRSs, matching, similarity), "
-              << run.georeferenced.evaluate_seconds << " s to evaluate; outputs (in " << run.georeferenced.out_crs << ") written in "
-              << write_seconds << " s\n";
+    std::fprintf(stderr,
+                 "photopose bundle: georeference: %.3f s to prepare (CRSs, matching, similarity), "
+                 "%.3f s to evaluate; outputs (in %s) written in %.3f s\n",
+                 run.georeferenced.prepare_seconds, run.georeferenced.evaluate_seconds,
+                 run.georeferenced.out_crs.c_str(), write_seconds);
   }
   PrintClosingSummary(run, usable);
   return run.exit_code;
