@@ -27,6 +27,7 @@ using Clock = std::chrono::steady_clock;
 using internal::BundlePlan;
 using internal::BundleRound;
 using internal::BundleState;
+using internal::StartState;
 
 double SecondsSince(Clock::time_point start) {
   return std::chrono::duration<double>(Clock::now() - start).count();
@@ -361,21 +362,6 @@ Status CheckInputs(const BundleAdjustmentOptions& options, const BundleAdjustmen
     if (p < 0 || p >= static_cast<int>(block->points.size()))
       return Status::Error("the config holds a non-existent point constant");
   return Status::Ok();
-}
-
-// The values the adjustment starts from: the block's orientations, points (tie points from their
-// coordinates, control points from their survey) and cameras, and the given lever arm.
-BundleState StartState(const BundleAdjustmentConfig& config, const Block& block) {
-  BundleState state;
-  for (const BlockImage& image : block.images) state.eo.push_back(image.eo->parameters);
-  for (const BlockPoint& point : block.points) {
-    state.points.push_back(point.position_m ? *point.position_m
-                           : point.surveyed_m ? *point.surveyed_m
-                                              : Eigen::Vector3d::Zero());
-  }
-  for (const BlockCamera& camera : block.cameras) state.cameras.push_back(camera.params);
-  if (config.lever_arm_m) state.lever = *config.lever_arm_m;
-  return state;
 }
 
 // Runs Ceres on the round's problem, with the progress callback when asked.

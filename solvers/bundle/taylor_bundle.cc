@@ -19,8 +19,8 @@
 #include "core/camera_models.h"
 #include "core/parallel.h"
 #include "core/rotation.h"
-#include "solvers/bundle/check_points.h"
 #include "solvers/bundle/internal/bundle_problem.h"
+#include "solvers/bundle/internal/bundle_statistics.h"
 #include "solvers/bundle/internal/taylor_normals.h"
 #include "solvers/resection/taylor_resection.h"
 
@@ -29,7 +29,6 @@ namespace {
 
 using Clock = std::chrono::steady_clock;
 using internal::taylor::BuildLayout;
-using internal::taylor::Covariances;
 using internal::taylor::DenseRows;
 using internal::taylor::Factorize;
 using internal::taylor::Frame;
@@ -382,7 +381,6 @@ SolverTermination RunRound(const Context& ctx, int round, Layout* layout, State*
     // fails the round), and a full step when the start is good.
     const double step_lambda = damped && iteration > 1 ? lambda : 0.0;
     reduction->damping = step_lambda;
-    reduction->undamped_at_solution = false;
     if (!SolveStep(ctx, at, *normal, layout, reduction, &d_e, &d_p, message))
       return SolverTermination::kFailure;
     double max_position = 0.0, max_angle = 0.0, step_squared = 0.0;
@@ -425,7 +423,6 @@ SolverTermination RunRound(const Context& ctx, int round, Layout* layout, State*
       MeasureCorrections(*layout, d_e, d_p, &gn_position, &gn_angle, &gn_squared);
       converged = below_tolerance(gn_position, gn_angle);
       if (converged) {
-        reduction->undamped_at_solution = true;
         summary.last_position_correction_m = max_position = gn_position;
         summary.last_angle_correction_rad = max_angle = gn_angle;
       } else {
@@ -507,73 +504,39 @@ int RejectWorstMarks(const TaylorBundleOptions& options, const Block& block, con
   return rejected;
 }
 
-// The result's tables, with the marks' residuals: observed - computed = -F, in the mark's own
-// unit, per mark and as RMS per image.
-void MarkResiduals(const Block& block, const Layout& layout, const Normal& normal,
-                   BundleAdjustmentResult* out) {
-  const size_t num_images = block.images.size();
-  out->images.assign(num_images, BundleImageResult());
-  out->points.assign(block.points.size(), BundlePointResult());
-  out->mark_residuals.assign(block.marks.size(), Eigen::Vector2d::Constant(kNaN));
-  std::vector<double> image_ssq(num_images, 0.0);
-  for (size_t k = 0; k < layout.marks.size(); ++k) {
-    const BlockMark& mark = block.marks[layout.marks[k]];
-    const Eigen::Vector2d residual = -normal.f[k] / mark.observation_units_per_unit;
-    out->mark_residuals[layout.marks[k]] = residual;
-    BundleImageResult& image = out->images[mark.image];
-    ++image.num_marks;
-    image_ssq[mark.image] += residual.squaredNorm();
-    image.unit = mark.unit == MarkUnit::kFilm ? "um" : "px";
-    ++out->points[mark.point].num_observations;
-  }
-  for (size_t i = 0; i < num_images; ++i) {
-    BundleImageResult& image = out->images[i];
-    image.adjusted = true;
-    image.rms_residual = image.num_marks > 0 ? std::sqrt(image_ssq[i] / image.num_marks) : 0.0;
-  }
+// BundleAdjust's options for the statistics of a Taylor solution: the same accuracies, statistics
+// options and threads, its analytic Jacobian and no loss (the Taylor objective).
+BundleAdjustmentOptions StatisticsOptionsOf(const TaylorBundleOptions& options) {
+  BundleAdjustmentOptions out;
+  out.accuracies = options.accuracies;
+  out.statistics = options.statistics;
+  out.solver.num_threads = options.num_threads;
+  return out;
 }
 
-// Covariances of the orientations and control points from the reduced normal matrix at the
-// solution; `message` says when they are skipped or singular.
-void SolutionCovariances(const TaylorBundleOptions& options, const Block& block, const Plan& plan,
-                         const Normal& normal, double variance_factor, Layout* layout,
-                         Reduction* reduction, BundleAdjustmentResult* out, std::string* message) {
-  const int num_blocks = static_cast<int>(layout->free_images.size());
-  if (options.covariances == BundleCovarianceMethod::kNone) {
-    *message += "; covariances not computed (statistics turned off)";
-    return;
-  }
-  reduction->damping = 0.0;
-  if (!reduction->undamped_at_solution &&
-      !(Reduce(normal, *layout, reduction) < 0 && WriteScaled(plan, layout, reduction) < 0 &&
-        Factorize(options.min_pivot_ratio, *layout, reduction))) {
-    *message += "; the normal matrix at the solution is singular: no covariances";
-    return;
-  }
-  std::vector<Matrix6d> cameras;
-  std::vector<Eigen::Matrix3d> points;
-  std::vector<char> has_point;
-  internal::SelectedInversionOptions inversion;
-  inversion.dense = options.covariances == BundleCovarianceMethod::kDenseInverse;
-  inversion.min_pivot_ratio = options.min_pivot_ratio;
-  const Status status = Covariances(block, plan, *layout, normal, *reduction, inversion, &cameras,
-                                    &points, &has_point);
-  if (!status.ok()) {
-    *message += "; the normal matrix at the solution is singular: no covariances (" +
-                status.message() + ")";
-    return;
-  }
-  for (int b = 0; b < num_blocks; ++b) {
-    BundleImageResult& image = out->images[layout->free_images[b]];
-    image.covariance = variance_factor * cameras[b];
-    image.has_covariance = true;
-  }
-  for (size_t q = 0; q < layout->free_points.size(); ++q) {
-    if (!has_point[q]) continue;
-    BundlePointResult& point = out->points[layout->free_points[q]];
-    point.covariance = variance_factor * points[q];
-    point.has_covariance = true;
-  }
+// The statistics of the solution written into `block`, by BundleAdjust's code
+// (internal::ComputeBundleStatistics) so that both solvers report one set of figures. That code
+// evaluates each observation's whitened rows through the round's Ceres problem; the problem is
+// built here once, at the solution, and never solved (its cost: summary->statistics_setup_seconds).
+// A second implementation of every row in Ceres' tangent spaces behind an interface would be a
+// second derivative path to keep in agreement with the first.
+void SolutionStatistics(const TaylorBundleOptions& options, const BundleAdjustmentConfig& config,
+                        const Block& block, const Plan& plan, TaylorBundleSummary* summary,
+                        BundleAdjustmentResult* out) {
+  const BundleAdjustmentOptions statistics_options = StatisticsOptionsOf(options);
+  Clock::time_point start = Clock::now();
+  internal::BundleState state = internal::StartState(config, block);
+  internal::BundleRound round;
+  internal::BuildBundleRound(statistics_options, config, block, plan, &state, &round);
+  summary->statistics_setup_seconds = SecondsSince(start);
+  start = Clock::now();
+  out->summary.sigma0 = summary->sigma0;
+  out->summary.redundancy = summary->redundancy;
+  out->summary.message.clear();
+  internal::GroupVariance variance;
+  internal::ComputeBundleStatistics(statistics_options, block, plan, state, round, out, &variance);
+  if (!out->summary.message.empty()) summary->message += "; " + out->summary.message;
+  summary->statistics_seconds = SecondsSince(start);
 }
 
 // The adjusted values, back in the ground frame, written into the block.
@@ -607,6 +570,7 @@ void FillBundleSummary(const TaylorBundleSummary& taylor, BundleAdjustmentSummar
   out->num_marks = taylor.num_marks;
   out->num_rejected_marks = taylor.num_rejected_marks;
   out->time_seconds = taylor.time_seconds;
+  out->problem_build_seconds = taylor.statistics_setup_seconds;
   out->statistics_seconds = taylor.statistics_seconds;
 }
 
@@ -623,6 +587,7 @@ bool TaylorBundleOptions::IsValid(std::string* why) const {
   // The accuracies are checked by the rule BundleAdjust applies to the same struct.
   BundleAdjustmentOptions objective;
   objective.accuracies = accuracies;
+  objective.statistics = statistics;
   std::string accuracy_why;
   if (!objective.IsValid(&accuracy_why)) return fail(accuracy_why);
   if (!(rejection_threshold >= 0.0) || !std::isfinite(rejection_threshold))
@@ -662,13 +627,18 @@ Status TaylorBundleOptionsFromBundleOptions(const BundleAdjustmentOptions& ceres
         "the Taylor bundle adjustment is plain least squares: a robust tie loss is done by the "
         "Ceres adjustment");
   }
+  if (ceres.robustness.snoop || ceres.statistics.estimate_accuracies) {
+    return Status::Error(
+        "the Taylor bundle adjustment does not snoop or estimate accuracies: done by the Ceres "
+        "adjustment");
+  }
   *options = TaylorBundleOptions();
   options->partials = partials;
   options->damping = DefaultTaylorDamping(partials);
   options->accuracies = ceres.accuracies;
   options->rejection_threshold = ceres.robustness.rejection_threshold;
   options->max_rejection_rounds = ceres.robustness.max_rejection_rounds;
-  options->covariances = ceres.statistics.covariances;
+  options->statistics = ceres.statistics;
   options->num_threads = ceres.solver.num_threads;
   options->progress = ceres.solver.progress;
   return Status::Ok();
@@ -893,24 +863,12 @@ Status TaylorBundleAdjust(const TaylorBundleOptions& options, const BundleAdjust
   summary.num_rejected_marks = static_cast<int>(out.rejected_marks.size());
 
   // ------------------------------------------------------------ statistics at the solution
-  const Clock::time_point statistics_start = Clock::now();
-  const double variance_factor =
-      std::isfinite(summary.sigma0) ? summary.sigma0 * summary.sigma0 : 1.0;
-  MarkResiduals(*block, layout, normal, &out);
-
-  SolutionCovariances(options, *block, plan, normal, variance_factor, &layout, reduction.get(), &out,
-                      &summary.message);
-
   WriteBack(plan, state, frame, block);
-
-  // Control points: adjusted - surveyed. Check points: intersected from the adjusted images as
-  // BundleAdjust does, so both solvers are measured with one yardstick.
-  for (size_t p = 0; p < block->points.size(); ++p)
-    if (block->points[p].role == PointRole::kControl && plan.point_in_problem[p])
-      out.points[p].error_m = *block->points[p].position_m - *block->points[p].surveyed_m;
-  TabulateControlAndCheckPoints(*block, options.accuracies, variance_factor, &out);
-  if (frame.use_lever) out.lever_arm_m = frame.lever;
-  summary.statistics_seconds = SecondsSince(statistics_start);
+  // The round's structures are freed first: the statistics' own peak comes after them.
+  layout = Layout();
+  normal = Normal();
+  reduction.reset();
+  SolutionStatistics(options, config, *block, plan, &summary, &out);
   return finish(SolverTermination::kConverged, summary.message);
 }
 

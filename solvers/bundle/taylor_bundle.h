@@ -56,7 +56,13 @@
 // (COLMAP's convention) when nothing ties the block to the ground; rejection rounds of marks as
 // in BundleAdjust. Not supported, refused with the reason: self-calibration, the COLMAP forward
 // camera models (their residual lives in the pixel domain after distortion, whose derivative is
-// not part of the lecture's linearisation), robust losses, an estimated lever arm.
+// not part of the lecture's linearisation), robust losses, an estimated lever arm, data snooping
+// and accuracy estimation.
+//
+// Statistics: once the last round has converged, the solution goes through BundleAdjust's own
+// statistics (internal::ComputeBundleStatistics: groups and verdicts, covariances, redundancy
+// numbers, w-tests, MDBs, reliability, control and check points), evaluated on the Ceres problem of
+// the solution, built once and not solved; both solvers report one set of figures.
 //
 // Data-dependent failures (no datum, a singular reduced normal matrix, a point behind a camera,
 // divergence, no convergence) are reported in the summary with the block left at its input
@@ -154,10 +160,11 @@ struct TaylorBundleOptions {
   // pivot of the LDL^T of its Jacobi-scaled form is at most this fraction of the largest
   // (unitless; the threshold BundleAdjust's statistics use).
   double min_pivot_ratio = 1e-12;
-  // Posterior covariances of the orientations and control points: the entries of the inverse of
-  // the reduced normal matrix on the pattern of its sparse factor (selected inversion, at every
-  // block size; kDenseInverse: the dense inverse, the tests' oracle; kNone: not computed).
-  BundleCovarianceMethod covariances = BundleCovarianceMethod::kSelectedInversion;
+  // The statistics at the solution, exactly as BundleAdjust computes them (the one path,
+  // internal::ComputeBundleStatistics): covariances (statistics.covariances: selected inversion,
+  // kDenseInverse the tests' oracle, kNone none), group verdicts, redundancy numbers, w-tests,
+  // reliability, check points. Units and limits as in BundleStatisticsOptions.
+  BundleStatisticsOptions statistics;
   // Called after every Gauss-Newton correction (may be empty); the fields as BundleAdjust fills
   // them (round, iteration, cost, sigma0, step_norm = |d| over all unknowns, elapsed).
   std::function<void(const BundleIterationInfo&)> progress;
@@ -215,7 +222,10 @@ struct TaylorBundleSummary {
   double last_angle_correction_rad = 0.0;
   double time_seconds = 0.0;        // the whole call (s)
   double iteration_seconds = 0.0;   // the Gauss-Newton corrections alone, over all rounds (s)
-  double statistics_seconds = 0.0;  // covariances and check points (s)
+  // The statistics after the last round (s): building their evaluation structure (the Ceres
+  // problem of the solution, built once and not solved) and computing them.
+  double statistics_setup_seconds = 0.0;
+  double statistics_seconds = 0.0;
 
   // One line: variant, termination, rounds, iterations, costs, sigma0, time, message.
   std::string BriefReport() const;
@@ -225,17 +235,16 @@ struct TaylorBundleSummary {
 
 struct TaylorBundleResult {
   TaylorBundleSummary summary;
-  // The result in BundleAdjust's shape, for the same report writers:
-  //  - summary: filled from `summary` (termination kConverged / kNoConvergence / kFailure, the same
-  //    costs, sigma0, redundancy, counts and times);
-  //  - per image: adjusted, num_marks, rms_residual, unit, and the covariance, the 6 x 6 block of
-  //    sigma0^2 S^-1 in X0, Y0, Z0, omega, phi, kappa (with the as-printed partials S is built
-  //    from them, so this is that variant's own, wrong, covariance, as in TaylorResection);
-  //  - per point: num_observations; control points their covariance and error (adjusted -
-  //    surveyed); check points their intersection error (solvers/bundle/check_points.h, as BundleAdjust);
-  //  - mark_residuals, the control and check RMSE, rejected_marks and lever_arm_m as BundleAdjust.
-  // Not filled: groups (the per-group RMS, redundancy shares and over-fitting verdicts are
-  // BundleAdjust's) and calibration (no self-calibration here).
+  // The result in BundleAdjust's shape, for the same report writers: the summary filled from
+  // `summary` (termination kConverged / kNoConvergence / kFailure, the same costs, sigma0,
+  // redundancy, counts and times; problem_build_seconds is statistics_setup_seconds), rejected_marks,
+  // and, at a converged solution, every statistic BundleAdjust reports, computed by the same code
+  // on the same observations (internal::ComputeBundleStatistics): residuals per mark and image,
+  // groups with their RMS, redundancy shares and over-fitting verdicts, covariances of the
+  // orientations and control points, per-observation redundancy numbers, w-tests, MDBs and
+  // external reliability, control and check points with their w-tested marks, the lever arm. With
+  // the as-printed partials the solution is that variant's fixed point, and the statistics are
+  // those of the objective there.
   BundleAdjustmentResult adjustment;
   // Every correction of every round, in order.
   std::vector<TaylorBundleIteration> history;

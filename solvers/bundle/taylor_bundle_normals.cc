@@ -1,5 +1,5 @@
 // The normal equations of the Taylor bundle adjustment (internal/taylor_normals.h): layout,
-// linearisation, elimination of the points, factorisation, covariances.
+// linearisation, elimination of the points, factorisation.
 #include "solvers/bundle/internal/taylor_normals.h"
 
 #include <Eigen/Dense>
@@ -598,58 +598,6 @@ void SolveCorrections(const Plan& plan, const Layout& layout, const Normal& norm
       t.noalias() -= normal.W[k].transpose() * d_e->segment<6>(6 * layout.mark_block[k]);
     (*d_p)[q] = reduction.V_inverse[q] * t;
   });
-}
-
-// The blocks of S^-1 the statistics need, unscaled (the whitened system's inverse): per camera
-// block its 6 x 6 diagonal block, and per free control point its 3 x 3 covariance
-// V^-1 + sum_a sum_c Y_a^T C(a, c) Y_c (a, c over its marks in free images). Column block by
-// column block through the sparse factorisation, so memory stays O(n).
-Status Covariances(const Block& block, const Plan& plan, const Layout& layout,
-                   const Normal& normal, const Reduction& reduction,
-                   const SelectedInversionOptions& inversion, std::vector<Matrix6d>* cameras,
-                   std::vector<Eigen::Matrix3d>* points, std::vector<char>* has_point) {
-  const int num_blocks = static_cast<int>(layout.free_images.size());
-  cameras->assign(num_blocks, Matrix6d::Zero());
-  points->assign(layout.free_points.size(), Eigen::Matrix3d::Zero());
-  has_point->assign(layout.free_points.size(), 0);
-  std::vector<int> block_start(num_blocks + 1);
-  for (int b = 0; b <= num_blocks; ++b) block_start[b] = 6 * b;
-  SelectedInverse inverse;
-  const Status status = inverse.Compute(layout.S, block_start, inversion);
-  if (!status.ok()) return status;
-  // C_ab unscaled; a fixed component (its row and column of the scaled S the identity's, so
-  // decoupled) has zero variance and covariances.
-  const Eigen::VectorXd& s = reduction.scale;
-  const auto unscaled = [&](int a, int b, Matrix6d* C) {
-    Eigen::MatrixXd Z;
-    if (!inverse.Block(a, b, &Z)) return false;
-    for (int r = 0; r < 6; ++r)
-      for (int c = 0; c < 6; ++c)
-        (*C)(r, c) = IsFixed(plan, layout, a, r) || IsFixed(plan, layout, b, c)
-                         ? 0.0
-                         : s[6 * a + r] * Z(r, c) * s[6 * b + c];
-    return true;
-  };
-  for (int b = 0; b < num_blocks; ++b)
-    if (!unscaled(b, b, &(*cameras)[b])) return Status::Error("a camera block off the pattern");
-  Matrix6d C_ac;
-  for (size_t q = 0; q < layout.free_points.size(); ++q) {
-    if (block.points[layout.free_points[q]].role != PointRole::kControl) continue;
-    const std::vector<int>& marks = layout.point_marks[q];
-    const Eigen::Matrix3d& V_inverse = reduction.V_inverse[q];
-    Eigen::Matrix3d covariance = V_inverse;
-    for (const int kc : marks) {
-      const Matrix63 Y_c = normal.W[kc] * V_inverse;
-      for (const int ka : marks) {
-        if (!unscaled(layout.mark_block[ka], layout.mark_block[kc], &C_ac))
-          return Status::Error("two images of a control point off the pattern");
-        covariance.noalias() += (normal.W[ka] * V_inverse).transpose() * C_ac * Y_c;
-      }
-    }
-    (*points)[q] = covariance;
-    (*has_point)[q] = 1;
-  }
-  return Status::Ok();
 }
 
 }  // namespace photopose::internal::taylor

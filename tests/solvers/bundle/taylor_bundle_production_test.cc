@@ -52,7 +52,7 @@ TestBlock MakeBlock(int lines, int images_per_line, int tie_points) {
 TaylorBundleOptions Options() {
   TaylorBundleOptions options;
   options.rejection_threshold = 0.0;
-  options.covariances = BundleCovarianceMethod::kNone;
+  options.statistics.covariances = BundleCovarianceMethod::kNone;
   return options;
 }
 
@@ -164,7 +164,7 @@ TEST(TaylorBundleLinearSolver, CholmodSupernodalEqualsEigenLdlt) {
     Block cholmod = data.block, eigen = data.block;
     TaylorBundleOptions options = Options();
     options.damping = damping;
-    options.covariances = BundleCovarianceMethod::kSelectedInversion;
+    options.statistics.covariances = BundleCovarianceMethod::kSelectedInversion;
     TaylorBundleResult cholmod_result, eigen_result;
     ASSERT_TRUE(
         TaylorBundleAdjust(options, BundleAdjustmentConfig(), &cholmod, &cholmod_result).ok());
@@ -231,7 +231,7 @@ TEST(TaylorBundleThreads, OneAndTwoThreadsGiveIdenticalResults) {
     Block one = data.block, two = data.block;
     TaylorBundleOptions options = Options();
     options.damping = damping;
-    options.covariances = BundleCovarianceMethod::kSelectedInversion;
+    options.statistics.covariances = BundleCovarianceMethod::kSelectedInversion;
     TaylorBundleResult one_result, two_result;
     options.num_threads = 1;
     ASSERT_TRUE(TaylorBundleAdjust(options, BundleAdjustmentConfig(), &one, &one_result).ok());
