@@ -20,6 +20,7 @@
 #include "core/parallel.h"
 #include "core/rotation.h"
 #include "solvers/bundle/internal/bundle_problem.h"
+#include "solvers/bundle/internal/bundle_rounds.h"
 #include "solvers/bundle/internal/bundle_statistics.h"
 #include "solvers/bundle/internal/taylor_normals.h"
 #include "solvers/resection/taylor_resection.h"
@@ -474,70 +475,64 @@ void SummarizeRound(const Block& block, const Plan& plan, const Layout& layout, 
   summary->reduced_nonzeros = static_cast<int>(layout.S.nonZeros());
 }
 
-// Rejects the marks beyond the threshold (whitened, in units of sigma0, never below the stated
-// sigma): one mark per point and round, its worst (as BundleAdjust does: a blunder raises the
-// other marks of its track too). Returns how many.
-int RejectWorstMarks(const TaylorBundleOptions& options, const Block& block, const Layout& layout,
-                     const Normal& normal, int round, double sigma0, Plan* plan,
-                     std::vector<BundleRejectedMark>* rejected_marks) {
-  const double limit = options.rejection_threshold * std::max(1.0, sigma0);
-  std::vector<int> worst_of_point(block.points.size(), -1);
-  std::vector<double> worst_whitened(block.points.size(), 0.0);
-  for (size_t k = 0; k < layout.marks.size(); ++k) {
-    const int m = layout.marks[k];
-    const double whitened = normal.f[k].norm() / plan->mark_sigma[m];
-    if (!(whitened > limit)) continue;
-    const int p = block.marks[m].point;
-    if (worst_of_point[p] < 0 || whitened > worst_whitened[p]) {
-      worst_of_point[p] = m;
-      worst_whitened[p] = whitened;
-    }
-  }
-  int rejected = 0;
-  for (size_t p = 0; p < worst_of_point.size(); ++p) {
-    const int m = worst_of_point[p];
-    if (m < 0) continue;
-    plan->mark_used[m] = 0;
-    rejected_marks->push_back({m, round, worst_whitened[p] / sigma0});
-    ++rejected;
-  }
-  return rejected;
-}
-
-// BundleAdjust's options for the statistics of a Taylor solution: the same accuracies, statistics
-// options and threads, its analytic Jacobian and no loss (the Taylor objective).
-BundleAdjustmentOptions StatisticsOptionsOf(const TaylorBundleOptions& options) {
+// BundleAdjust's options for the steps between rounds and the statistics of a Taylor solution:
+// the same accuracies, rejection, snooping, statistics options and threads, its analytic Jacobian
+// and no loss (the Taylor objective).
+BundleAdjustmentOptions AdjustmentOptionsOf(const TaylorBundleOptions& options) {
   BundleAdjustmentOptions out;
   out.accuracies = options.accuracies;
+  out.robustness.rejection_threshold = options.rejection_threshold;
+  out.robustness.max_rejection_rounds = options.max_rejection_rounds;
+  out.robustness.snoop = options.snoop;
+  out.robustness.max_snooping_removals = options.max_snooping_removals;
   out.statistics = options.statistics;
   out.solver.num_threads = options.num_threads;
   return out;
 }
 
-// The statistics of the solution written into `block`, by BundleAdjust's code
+// The statistics of each round's solution, by BundleAdjust's code
 // (internal::ComputeBundleStatistics) so that both solvers report one set of figures. That code
-// evaluates each observation's whitened rows through the round's Ceres problem; the problem is
-// built here once, at the solution, and never solved (its cost: summary->statistics_setup_seconds).
-// A second implementation of every row in Ceres' tangent spaces behind an interface would be a
-// second derivative path to keep in agreement with the first.
-void SolutionStatistics(const TaylorBundleOptions& options, const BundleAdjustmentConfig& config,
-                        const Block& block, const Plan& plan, TaylorBundleSummary* summary,
-                        BundleAdjustmentResult* out) {
-  const BundleAdjustmentOptions statistics_options = StatisticsOptionsOf(options);
-  Clock::time_point start = Clock::now();
-  internal::BundleState state = internal::StartState(config, block);
+// evaluates each observation's whitened rows through a round's Ceres problem: it is built here at
+// the first solution and never solved, and later rounds update it in place as BundleAdjust does
+// (its cost: statistics_setup_seconds). A second implementation of every row in Ceres' tangent
+// spaces behind an interface would be a second derivative path to keep in agreement with the first.
+struct Statistics {
+  Statistics(const BundleAdjustmentOptions& options, const BundleAdjustmentConfig& config,
+             const Block& block, const Plan& plan)
+      : options(options), config(config), block(block), plan(plan),
+        ground(internal::StartState(config, block)) {}
+  const BundleAdjustmentOptions& options;
+  const BundleAdjustmentConfig& config;
+  const Block& block;
+  const Plan& plan;
+  internal::BundleState ground;  // the solution in the ground frame; the problem points into it
   internal::BundleRound round;
-  internal::BuildBundleRound(statistics_options, config, block, plan, &state, &round);
-  summary->statistics_setup_seconds = SecondsSince(start);
-  start = Clock::now();
-  out->summary.sigma0 = summary->sigma0;
-  out->summary.redundancy = summary->redundancy;
-  out->summary.message.clear();
-  internal::GroupVariance variance;
-  internal::ComputeBundleStatistics(statistics_options, block, plan, state, round, out, &variance);
-  if (!out->summary.message.empty()) summary->message += "; " + out->summary.message;
-  summary->statistics_seconds = SecondsSince(start);
-}
+  bool built = false;
+
+  void Compute(const State& state, const Frame& frame, bool marks_removed_only,
+               TaylorBundleSummary* summary, BundleAdjustmentResult* out,
+               internal::GroupVariance* variance) {
+    Clock::time_point start = Clock::now();
+    // In place: the problem holds pointers to these values.
+    for (size_t i = 0; i < block.images.size(); ++i) {
+      ground.eo[i] = state.eo[i];
+      ground.eo[i].head<3>() += frame.centroid;
+    }
+    for (size_t p = 0; p < block.points.size(); ++p)
+      if (plan.point_in_problem[p]) ground.points[p] = state.points[p] + frame.centroid;
+    if (!(built && marks_removed_only && internal::UpdateBundleRound(plan, &round)))
+      internal::BuildBundleRound(options, config, block, plan, &ground, &round);
+    built = true;
+    summary->statistics_setup_seconds += SecondsSince(start);
+    start = Clock::now();
+    out->summary.sigma0 = summary->sigma0;
+    out->summary.redundancy = summary->redundancy;
+    out->summary.message.clear();
+    internal::ComputeBundleStatistics(options, block, plan, ground, round, out, variance);
+    if (!out->summary.message.empty()) summary->message += "; " + out->summary.message;
+    summary->statistics_seconds += SecondsSince(start);
+  }
+};
 
 // The adjusted values, back in the ground frame, written into the block.
 void WriteBack(const Plan& plan, const State& state, const Frame& frame, Block* block) {
@@ -593,6 +588,7 @@ bool TaylorBundleOptions::IsValid(std::string* why) const {
   if (!(rejection_threshold >= 0.0) || !std::isfinite(rejection_threshold))
     return fail("the rejection threshold must be >= 0 (0: no rejection)");
   if (max_rejection_rounds < 0) return fail("max_rejection_rounds must be >= 0");
+  if (max_snooping_removals < 0) return fail("max_snooping_removals must be >= 0");
   if (max_iterations < 1) return fail("max_iterations must be at least 1");
   if (damping != TaylorDamping::kNone && damping != TaylorDamping::kLevenbergMarquardt)
     return fail("damping is not a TaylorDamping value");
@@ -627,17 +623,14 @@ Status TaylorBundleOptionsFromBundleOptions(const BundleAdjustmentOptions& ceres
         "the Taylor bundle adjustment is plain least squares: a robust tie loss is done by the "
         "Ceres adjustment");
   }
-  if (ceres.robustness.snoop || ceres.statistics.estimate_accuracies) {
-    return Status::Error(
-        "the Taylor bundle adjustment does not snoop or estimate accuracies: done by the Ceres "
-        "adjustment");
-  }
   *options = TaylorBundleOptions();
   options->partials = partials;
   options->damping = DefaultTaylorDamping(partials);
   options->accuracies = ceres.accuracies;
   options->rejection_threshold = ceres.robustness.rejection_threshold;
   options->max_rejection_rounds = ceres.robustness.max_rejection_rounds;
+  options->snoop = ceres.robustness.snoop;
+  options->max_snooping_removals = ceres.robustness.max_snooping_removals;
   options->statistics = ceres.statistics;
   options->num_threads = ceres.solver.num_threads;
   options->progress = ceres.solver.progress;
@@ -821,6 +814,14 @@ Status TaylorBundleAdjust(const TaylorBundleOptions& options, const BundleAdjust
   summary.num_threads = context.num_threads;
   BundleAdjustmentResult& out = result->adjustment;
   auto finish = [&](SolverTermination type, const std::string& message) {
+    if (type != SolverTermination::kConverged) {
+      // An earlier round's statistics do not describe a block left at its input values.
+      out.images.clear();
+      out.points.clear();
+      out.groups.clear();
+      out.observations.clear();
+      out.mark_residuals.clear();
+    }
     summary.termination_type = type;
     summary.message = message;
     summary.time_seconds = SecondsSince(start);
@@ -828,12 +829,18 @@ Status TaylorBundleAdjust(const TaylorBundleOptions& options, const BundleAdjust
     return Status::Ok();
   };
 
-  // Rounds: adjust, reject the marks beyond the threshold, adjust again.
+  // Rounds: adjust; then, as BundleAdjust (internal/bundle_rounds.h), the statistics of the
+  // solution, blunders out (rejection rounds or data snooping) or the groups rescaled (variance
+  // components), and adjust again, until neither changes.
+  const BundleAdjustmentOptions adjustment_options = AdjustmentOptionsOf(options);
+  internal::GroupVariance variance;
+  internal::RoundChanges changes(adjustment_options, config, *block, &plan, &out, &variance);
+  Statistics statistics(adjustment_options, config, *block, plan);
   Layout layout;
   Normal normal;
   std::unique_ptr<Reduction> reduction;
-  const int max_rounds = options.rejection_threshold > 0.0 ? options.max_rejection_rounds + 1 : 1;
-  for (int round = 1; round <= max_rounds; ++round) {
+  bool marks_removed_only = false;
+  for (int round = 1;; ++round) {
     BuildLayout(*block, plan, &layout);
     SummarizeRound(*block, plan, layout, round, &summary);
     reduction = std::make_unique<Reduction>();
@@ -849,26 +856,21 @@ Status TaylorBundleAdjust(const TaylorBundleOptions& options, const BundleAdjust
     summary.message = message;
     summary.sigma0 =
         summary.redundancy > 0 ? std::sqrt(normal.weighted_ssr / summary.redundancy) : kNaN;
-    if (round == max_rounds) break;
-    if (RejectWorstMarks(options, *block, layout, normal, round, summary.sigma0, &plan,
-                         &out.rejected_marks) == 0)
-      break;
-    const Status still = internal::RecheckBundlePlan(config, *block, &plan);
-    if (!still.ok()) {
-      return finish(SolverTermination::kFailure,
-                    "after rejecting " + std::to_string(out.rejected_marks.size()) +
-                        " marks as blunders, " + still.message());
-    }
+    // The round's structures are freed first: the statistics' own peak comes after them.
+    layout = Layout();
+    normal = Normal();
+    reduction.reset();
+    statistics.Compute(state, frame, marks_removed_only, &summary, &out, &variance);
+    const internal::RoundChange change = internal::ChangeAfterRound(&changes, round);
+    if (change == internal::RoundChange::kFailed)
+      return finish(SolverTermination::kFailure, out.summary.message);
+    if (change == internal::RoundChange::kNone) break;
+    marks_removed_only = change == internal::RoundChange::kMarksRemoved;
   }
   summary.num_rejected_marks = static_cast<int>(out.rejected_marks.size());
-
-  // ------------------------------------------------------------ statistics at the solution
+  if (adjustment_options.statistics.estimate_accuracies)
+    internal::ReportEstimatedAccuracies(changes);
   WriteBack(plan, state, frame, block);
-  // The round's structures are freed first: the statistics' own peak comes after them.
-  layout = Layout();
-  normal = Normal();
-  reduction.reset();
-  SolutionStatistics(options, config, *block, plan, &summary, &out);
   return finish(SolverTermination::kConverged, summary.message);
 }
 

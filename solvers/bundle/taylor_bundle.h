@@ -53,16 +53,17 @@
 // Supported: kFrame cameras with fixed interior orientation (any distortion model or table,
 // affinity, Polarity); control, check and tie points; GNSS camera positions with an applied
 // (not estimated) lever arm; attitude priors; images and points held constant; the relative gauge
-// (COLMAP's convention) when nothing ties the block to the ground; rejection rounds of marks as
-// in BundleAdjust. Not supported, refused with the reason: self-calibration, the COLMAP forward
+// (COLMAP's convention) when nothing ties the block to the ground; rejection rounds, data
+// snooping and accuracy estimation as in BundleAdjust. Not supported, refused with the reason: self-calibration, the COLMAP forward
 // camera models (their residual lives in the pixel domain after distortion, whose derivative is
-// not part of the lecture's linearisation), robust losses, an estimated lever arm, data snooping
-// and accuracy estimation.
+// not part of the lecture's linearisation), robust losses, an estimated lever arm.
 //
-// Statistics: once the last round has converged, the solution goes through BundleAdjust's own
-// statistics (internal::ComputeBundleStatistics: groups and verdicts, covariances, redundancy
-// numbers, w-tests, MDBs, reliability, control and check points), evaluated on the Ceres problem of
-// the solution, built once and not solved; both solvers report one set of figures.
+// Statistics and rounds: each round's solution goes through BundleAdjust's own statistics
+// (internal::ComputeBundleStatistics: groups and verdicts, covariances, redundancy numbers,
+// w-tests, MDBs, reliability, control and check points), evaluated on the Ceres problem of the
+// solution (built once, never solved, updated in place when marks are rejected), and then through
+// BundleAdjust's steps between rounds (internal/bundle_rounds.h: rejection rounds, data snooping,
+// variance components); both solvers report one set of figures.
 //
 // Data-dependent failures (no datum, a singular reduced normal matrix, a point behind a camera,
 // divergence, no convergence) are reported in the summary with the block left at its input
@@ -135,11 +136,17 @@ struct TaylorBundleOptions {
   int num_threads = 1;
   // The objective's accuracies, defaults and per-row overrides exactly as BundleAdjust takes them.
   BundleAccuracies accuracies;
-  // After convergence, marks whose whitened residual |v| / sigma exceeds rejection_threshold *
-  // max(1, sigma0) (unitless) are rejected and the block adjusted again, at most
-  // max_rejection_rounds times (BundleAdjust's rule). 0 disables rejection.
+  // Between rounds, BundleAdjust's steps (internal/bundle_rounds.h) with the meaning of
+  // BundleRobustnessOptions' fields of the same names: tie marks whose normalized residual (or,
+  // without diagnostics, whitened residual over max(1, sigma0)) exceeds rejection_threshold
+  // (unitless; 0: no rejection) are rejected and the block adjusted again, at most
+  // max_rejection_rounds times (count); or, with snoop, data snooping removes one observation at
+  // a time, at most max_snooping_removals (count). Variance components: statistics'
+  // estimate_accuracies.
   double rejection_threshold = 4.5;
   int max_rejection_rounds = 3;
+  bool snoop = false;
+  int max_snooping_removals = 200;
   // Corrections per round, taken or refused (count). With the corrected partials a block converges
   // in 3-6; the as-printed partials converge linearly and can need several times more.
   int max_iterations = 50;
@@ -222,8 +229,8 @@ struct TaylorBundleSummary {
   double last_angle_correction_rad = 0.0;
   double time_seconds = 0.0;        // the whole call (s)
   double iteration_seconds = 0.0;   // the Gauss-Newton corrections alone, over all rounds (s)
-  // The statistics after the last round (s): building their evaluation structure (the Ceres
-  // problem of the solution, built once and not solved) and computing them.
+  // The statistics of every round (s): building or updating their evaluation structure (the Ceres
+  // problem of the solution, never solved) and computing them.
   double statistics_setup_seconds = 0.0;
   double statistics_seconds = 0.0;
 
