@@ -111,6 +111,7 @@ Status MakePlan(const TaylorBundleOptions& options, const BundleAdjustmentConfig
     plan->image_constant[plan->relative_fixed_image] = 1;
     plan->image_fixed[plan->relative_scale_image][plan->relative_scale_axis] = true;
   }
+  plan->tie_loss.reset(MakeLoss(options.tie_loss, options.tie_loss_scale_sigmas));
   plan->ideal_um.assign(block.marks.size(), Eigen::Vector2d::Zero());
   for (size_t m = 0; m < block.marks.size(); ++m) {
     if (!plan->mark_used[m]) continue;
@@ -484,6 +485,8 @@ BundleAdjustmentOptions AdjustmentOptionsOf(const TaylorBundleOptions& options) 
   out.robustness.rejection_threshold = options.rejection_threshold;
   out.robustness.max_rejection_rounds = options.max_rejection_rounds;
   out.robustness.snoop = options.snoop;
+  out.robustness.tie_loss = options.tie_loss;
+  out.robustness.tie_loss_scale_sigmas = options.tie_loss_scale_sigmas;
   out.robustness.max_snooping_removals = options.max_snooping_removals;
   out.statistics = options.statistics;
   out.solver.num_threads = options.num_threads;
@@ -583,6 +586,8 @@ bool TaylorBundleOptions::IsValid(std::string* why) const {
   BundleAdjustmentOptions objective;
   objective.accuracies = accuracies;
   objective.statistics = statistics;
+  objective.robustness.tie_loss = tie_loss;
+  objective.robustness.tie_loss_scale_sigmas = tie_loss_scale_sigmas;
   std::string accuracy_why;
   if (!objective.IsValid(&accuracy_why)) return fail(accuracy_why);
   if (!(rejection_threshold >= 0.0) || !std::isfinite(rejection_threshold))
@@ -618,11 +623,6 @@ bool TaylorBundleOptions::IsValid(std::string* why) const {
 
 Status TaylorBundleOptionsFromBundleOptions(const BundleAdjustmentOptions& ceres,
                                             TaylorPartials partials, TaylorBundleOptions* options) {
-  if (ceres.robustness.tie_loss != LossType::kNone) {
-    return Status::Error(
-        "the Taylor bundle adjustment is plain least squares: a robust tie loss is done by the "
-        "Ceres adjustment");
-  }
   *options = TaylorBundleOptions();
   options->partials = partials;
   options->damping = DefaultTaylorDamping(partials);
@@ -630,6 +630,8 @@ Status TaylorBundleOptionsFromBundleOptions(const BundleAdjustmentOptions& ceres
   options->rejection_threshold = ceres.robustness.rejection_threshold;
   options->max_rejection_rounds = ceres.robustness.max_rejection_rounds;
   options->snoop = ceres.robustness.snoop;
+  options->tie_loss = ceres.robustness.tie_loss;
+  options->tie_loss_scale_sigmas = ceres.robustness.tie_loss_scale_sigmas;
   options->max_snooping_removals = ceres.robustness.max_snooping_removals;
   options->statistics = ceres.statistics;
   options->num_threads = ceres.solver.num_threads;

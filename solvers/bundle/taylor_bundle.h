@@ -56,7 +56,13 @@
 // (COLMAP's convention) when nothing ties the block to the ground; rejection rounds, data
 // snooping and accuracy estimation as in BundleAdjust. Not supported, refused with the reason: self-calibration, the COLMAP forward
 // camera models (their residual lives in the pixel domain after distortion, whose derivative is
-// not part of the lecture's linearisation), robust losses, an estimated lever arm.
+// not part of the lecture's linearisation), an estimated lever arm.
+//
+// Robust losses (tie_loss, on tie marks as in BundleAdjust): iteratively reweighted least squares
+// in the same normal equations. Each linearisation weights a tie mark by rho'(s) (s its squared
+// whitened residual) and counts rho(s) in the cost; Levenberg-Marquardt's gain ratio compares that
+// cost with the reweighted model's decrease. A fixed point is a stationary point of the robust
+// cost, BundleAdjust's minimum (which Ceres reaches with its own Hessian correction).
 //
 // Statistics and rounds: each round's solution goes through BundleAdjust's own statistics
 // (internal::ComputeBundleStatistics: groups and verdicts, covariances, redundancy numbers,
@@ -145,6 +151,11 @@ struct TaylorBundleOptions {
   // estimate_accuracies.
   double rejection_threshold = 4.5;
   int max_rejection_rounds = 3;
+  // Robust loss on tie marks and its scale (sigmas of the mark, unitless), as
+  // BundleRobustnessOptions::tie_loss (one of kBundleTieLosses), by iteratively reweighted least
+  // squares (see the header comment).
+  LossType tie_loss = LossType::kNone;
+  double tie_loss_scale_sigmas = 3.0;
   bool snoop = false;
   int max_snooping_removals = 200;
   // Corrections per round, taken or refused (count). With the corrected partials a block converges
@@ -179,11 +190,12 @@ struct TaylorBundleOptions {
   bool IsValid(std::string* why) const;
 };
 
-// The Taylor options that minimise the same objective as `ceres` (accuracies, rejection, covariance
-// limit, threads, progress; the lever arm is the config's, BundleAdjustmentConfig::lever_arm_m). Errors name
-// what the Taylor path does not do: a robust tie loss (an estimated lever arm, a config matter, is
-// refused by TaylorBundleAdjust). The Taylor options keep their own flat fields rather than
-// BundleAdjustmentOptions' parts: they take only a few fields of each part (and refuse the rest).
+// The Taylor options that minimise the same objective as `ceres` and take the same steps between
+// rounds (accuracies, robust tie loss, rejection, snooping, statistics, threads, progress; the
+// lever arm is the config's, BundleAdjustmentConfig::lever_arm_m). An error would name what the
+// Taylor path does not do; no field of BundleAdjustmentOptions is refused today (an estimated
+// lever arm, a config matter, is refused by TaylorBundleAdjust). The Taylor options keep their own
+// flat fields rather than BundleAdjustmentOptions' parts: they take only a few fields of each.
 Status TaylorBundleOptionsFromBundleOptions(const BundleAdjustmentOptions& ceres,
                                             TaylorPartials partials, TaylorBundleOptions* options);
 
@@ -301,7 +313,8 @@ Eigen::Vector3d TaylorAntennaPosition(const ExteriorOrientation& eo, const Eigen
 // One linearisation of the whole block at its current values, dense, for tests and teaching
 // (small blocks only). Unknowns in order: per image not held constant its six parameters, then
 // per point in the adjustment and not held constant its three. The relative gauge's fixed
-// coordinate keeps its column, zeroed, and a zero correction.
+// coordinate keeps its column, zeroed, and a zero correction. Plain least squares: the dense rows
+// carry no robust loss's weights (the reduced system and the correction do).
 struct TaylorBundleLinearSystem {
   std::vector<int> image_columns;  // per Block::images: first column, or -1 (held constant)
   std::vector<int> point_columns;  // per Block::points: first column, or -1 (not an unknown)

@@ -161,6 +161,21 @@ void BuildLayout(const Block& block, const Plan& plan, Layout* layout) {
 
 namespace {
 
+// A mark's share of the cost, 1/2 of it: s = |F|^2 / sigma^2, or rho(s) for a tie mark under the
+// robust loss; *weight_factor (when not null) its IRLS factor rho'(s) (1 without a loss). At a
+// fixed point of the reweighted normal equations sum_m rho'(s_m) A_m^T F_m / sigma_m^2 = 0 (plus
+// the priors): the gradient of the robust cost, so the minimum is Ceres'.
+double MarkCost(const Plan& plan, int m, double s, double* weight_factor) {
+  if (plan.tie_loss == nullptr || plan.mark_group[m] != kTieMarks) {
+    if (weight_factor != nullptr) *weight_factor = 1.0;
+    return s;
+  }
+  double rho[3];
+  plan.tie_loss->Evaluate(s, rho);
+  if (weight_factor != nullptr) *weight_factor = rho[1];
+  return rho[0];
+}
+
 // Marks: eqs. 7-8 with eqs. 17-28 for the camera and dF/dX = -dF/dX0 for the point, image by
 // image on num_threads threads: each image's camera sums (U, g_e) and its marks' W, g_p parts and
 // F are its own. The point sums (V, g_p) follow point by point over its marks in mark order. False
@@ -188,10 +203,12 @@ bool LinearizeMarks(TaylorPartials partials, const Block& block, const Plan& pla
         image_behind_w[i] = w;
         return;
       }
-      const double weight = 1.0 / (plan.mark_sigma[m] * plan.mark_sigma[m]);
       const Eigen::Vector2d F(fu, fv);
       normal->f[k] = F;
-      ssr += weight * F.squaredNorm();
+      double weight = 1.0 / (plan.mark_sigma[m] * plan.mark_sigma[m]);
+      double factor = 1.0;
+      ssr += MarkCost(plan, m, weight * F.squaredNorm(), &factor);
+      weight *= factor;
       Matrix26 A_e;
       for (int c = 0; c < 6; ++c) {
         A_e(0, c) = row_u[c];
@@ -379,7 +396,7 @@ bool EvaluateCost(TaylorPartials partials, const Block& block, const Plan& plan,
         return;
       }
       const double weight = 1.0 / (plan.mark_sigma[m] * plan.mark_sigma[m]);
-      ssr += weight * Eigen::Vector2d(fu, fv).squaredNorm();
+      ssr += MarkCost(plan, m, weight * Eigen::Vector2d(fu, fv).squaredNorm(), nullptr);
     }
     image_ssr[i] = ssr;
   });

@@ -10,6 +10,7 @@
 #include <Eigen/SparseCholesky>
 #include <Eigen/SparseCore>
 #include <array>
+#include <memory>
 #include <utility>
 #include <vector>
 
@@ -51,6 +52,11 @@ struct Plan : BundlePlan {
   std::vector<char> image_constant;  // held constant (config or the relative gauge's first image)
   std::vector<char> point_constant;
   std::vector<std::array<bool, 6>> image_fixed;  // components held fixed of a free image
+  // The robust loss of the tie marks (plan.mark_group kTieMarks) on their squared whitened
+  // residual, as BundleAdjust applies it (cost_functions/losses.h MakeLoss); null: none. It
+  // enters the normal equations as iteratively reweighted least squares: a mark's weight times
+  // rho'(s) at the linearisation point, its cost rho(s).
+  std::shared_ptr<const ceres::LossFunction> tie_loss;
 };
 
 // The unknowns and the sparsity of the reduced normal matrix of one round. Camera block b is
