@@ -18,6 +18,7 @@
 #include "core/rotation.h"
 #include "core/statistics.h"
 #include "solvers/bundle/internal/bundle_problem.h"
+#include "solvers/bundle/internal/bundle_rounds.h"
 #include "solvers/bundle/internal/bundle_statistics.h"
 
 namespace photopose {
@@ -27,6 +28,7 @@ using Clock = std::chrono::steady_clock;
 using internal::BundlePlan;
 using internal::BundleRound;
 using internal::BundleState;
+using internal::StartState;
 
 double SecondsSince(Clock::time_point start) {
   return std::chrono::duration<double>(Clock::now() - start).count();
@@ -121,50 +123,6 @@ void AddSolverTimes(const ceres::Solver::Summary& ceres_summary, BundleAdjustmen
   summary->jacobian_evaluation_seconds += ceres_summary.jacobian_evaluation_time_in_seconds;
   summary->linear_solver_seconds += ceres_summary.linear_solver_time_in_seconds;
   summary->schur_structure = ceres_summary.schur_structure_used;
-}
-
-// Removes one observation found by data snooping: a mark, or the whole prior of a control point,
-// camera position or attitude.
-void RemoveObservation(const BundleObservationDiagnostics& d, BundlePlan* plan) {
-  switch (d.group) {
-    case kTieMarks:
-    case kControlMarks:
-      plan->mark_used[d.item] = 0;
-      break;
-    case kControlPoints:
-      plan->point_prior[d.item] = 0;
-      break;
-    case kCameraPositions:
-      plan->image_prior[d.item] = 0;
-      break;
-    case kAttitudes:
-      plan->image_attitude[d.item] = 0;
-      break;
-    default:
-      break;
-  }
-}
-
-// Scales every sigma of group g by `factor`.
-void ScaleGroup(int g, double factor, BundlePlan* plan) {
-  switch (g) {
-    case kTieMarks:
-    case kControlMarks:
-      for (size_t m = 0; m < plan->mark_sigma.size(); ++m)
-        if (plan->mark_group[m] == g) plan->mark_sigma[m] *= factor;
-      break;
-    case kControlPoints:
-      for (auto& sigma : plan->point_sigma) sigma *= factor;
-      break;
-    case kCameraPositions:
-      for (auto& sigma : plan->image_prior_sigma) sigma *= factor;
-      break;
-    case kAttitudes:
-      for (auto& sigma : plan->image_attitude_sigma) sigma *= factor;
-      break;
-    default:
-      break;
-  }
 }
 
 }  // namespace
@@ -342,10 +300,7 @@ struct Adjustment {
   BundleState state;
   BundleRound round;
   internal::GroupVariance variance;
-  // Variance component estimation rescales each group's sigmas by group_scale.
-  double group_scale[kNumBundleGroups] = {1.0, 1.0, 1.0, 1.0, 1.0};
-  bool group_estimable[kNumBundleGroups] = {};
-  int rejections_done = 0;
+  internal::RoundChanges changes{options, config, *block, &plan, result, &variance};
   // The last change of the plan removed marks only (rejection, or snooping a mark): the round's
   // problem is updated in place instead of built again.
   bool marks_removed_only = false;
@@ -367,21 +322,6 @@ Status CheckInputs(const BundleAdjustmentOptions& options, const BundleAdjustmen
     if (p < 0 || p >= static_cast<int>(block->points.size()))
       return Status::Error("the config holds a non-existent point constant");
   return Status::Ok();
-}
-
-// The values the adjustment starts from: the block's orientations, points (tie points from their
-// coordinates, control points from their survey) and cameras, and the given lever arm.
-BundleState StartState(const BundleAdjustmentConfig& config, const Block& block) {
-  BundleState state;
-  for (const BlockImage& image : block.images) state.eo.push_back(image.eo->parameters);
-  for (const BlockPoint& point : block.points) {
-    state.points.push_back(point.position_m ? *point.position_m
-                           : point.surveyed_m ? *point.surveyed_m
-                                              : Eigen::Vector3d::Zero());
-  }
-  for (const BlockCamera& camera : block.cameras) state.cameras.push_back(camera.params);
-  if (config.lever_arm_m) state.lever = *config.lever_arm_m;
-  return state;
 }
 
 // Runs Ceres on the round's problem, with the progress callback when asked.
@@ -476,156 +416,6 @@ void EndWithFailedRound(const Adjustment& a, int r, const ceres::Solver::Summary
   summary.time_seconds = SecondsSince(a.start);
 }
 
-// Data snooping: removes the observation with the largest rejected |w|, if the block still holds
-// without it. Returns whether one was removed.
-bool SnoopOne(Adjustment* a) {
-  BundleAdjustmentResult* result = a->result;
-  if (result->observations.empty() && !result->groups.empty())
-    result->summary.message = "data snooping needs the covariance; it was not computed";
-  const BundleObservationDiagnostics* worst = nullptr;
-  for (const BundleObservationDiagnostics& d : result->observations) {
-    if (!d.rejected) continue;
-    if (worst == nullptr || std::abs(d.normalized) > std::abs(worst->normalized)) worst = &d;
-  }
-  if (worst == nullptr ||
-      static_cast<int>(result->snooping.size()) >= a->options.robustness.max_snooping_removals)
-    return false;
-  BundlePlan trial = a->plan;
-  RemoveObservation(*worst, &trial);
-  const Status still = internal::RecheckBundlePlan(a->config, *a->block, &trial);
-  if (!still.ok()) {
-    result->summary.message = "data snooping stopped: removing " + std::string(EnumName(worst->group)) + " #" +
-                              std::to_string(worst->item) + " would leave " + still.message();
-    return false;
-  }
-  result->snooping.push_back(
-      {worst->group, worst->item, worst->axis, std::abs(worst->normalized), worst->residual});
-  a->plan = std::move(trial);
-  return true;
-}
-
-// The rejection score of every tie mark: its normalized residual when known, else its whitened
-// residual, with the limit it is held against. Control and check marks score 0: they are a
-// surveyor's own measurements and are tested and reported (diagnostics), removed only by data
-// snooping (--snoop), never by the automatic rejection.
-std::vector<double> RejectionScores(const Adjustment& a, double* limit) {
-  const Block& block = *a.block;
-  std::vector<double> score(block.marks.size(), 0.0);
-  *limit = a.options.robustness.rejection_threshold;
-  if (!a.result->observations.empty()) {
-    for (const BundleObservationDiagnostics& d : a.result->observations) {
-      const int g = d.group;
-      if (g != kTieMarks) continue;
-      if (std::isfinite(d.normalized)) score[d.item] = std::max(score[d.item], std::abs(d.normalized));
-    }
-    return score;
-  }
-  *limit *= std::max(1.0, a.result->summary.sigma0);
-  for (size_t m = 0; m < block.marks.size(); ++m) {
-    if (!a.plan.mark_used[m] || !a.result->mark_residuals[m].allFinite()) continue;
-    if (block.points[block.marks[m].point].role != PointRole::kTie) continue;
-    score[m] = a.result->mark_residuals[m].norm() * block.marks[m].observation_units_per_unit /
-               a.plan.mark_sigma[m];
-  }
-  return score;
-}
-
-enum class Rejection { kNone, kRemoved, kFailed };
-
-// A rejection round: marks beyond the threshold (normalized residuals when known, whitened
-// residuals in units of max(1, sigma0) otherwise), one per point and round, its worst: a blunder
-// in one mark of a track pulls the point and raises its other marks' residuals too, and those
-// recover once it is gone. kFailed when the block no longer holds (the summary says why).
-Rejection RejectMarks(Adjustment* a, int r) {
-  const Block& block = *a->block;
-  double limit = 0.0;
-  const std::vector<double> score = RejectionScores(*a, &limit);
-  BundlePlan trial = a->plan;
-  std::vector<BundleRejectedMark> rejected;
-  std::vector<int> worst_of_point(block.points.size(), -1);
-  for (size_t m = 0; m < block.marks.size(); ++m) {
-    if (!trial.mark_used[m] || !(score[m] > limit)) continue;
-    int& worst = worst_of_point[block.marks[m].point];
-    if (worst < 0 || score[m] > score[worst]) worst = static_cast<int>(m);
-  }
-  for (size_t m = 0; m < block.marks.size(); ++m) {
-    if (worst_of_point[block.marks[m].point] != static_cast<int>(m)) continue;
-    trial.mark_used[m] = 0;
-    rejected.push_back({static_cast<int>(m), r, score[m]});
-  }
-  ++a->rejections_done;
-  if (rejected.empty()) return Rejection::kNone;
-  const Status still = internal::RecheckBundlePlan(a->config, block, &trial);
-  if (!still.ok()) {
-    BundleAdjustmentSummary& summary = a->result->summary;
-    summary.termination = SolverTermination::kFailure;
-    summary.message = "after rejecting " + std::to_string(rejected.size()) +
-                      " marks as blunders, " + still.message();
-    summary.time_seconds = SecondsSince(a->start);
-    return Rejection::kFailed;
-  }
-  a->result->rejected_marks.insert(a->result->rejected_marks.end(), rejected.begin(),
-                                   rejected.end());
-  a->plan = std::move(trial);
-  return Rejection::kRemoved;
-}
-
-// Variance components: each estimable group's factor; true (adjust again) when one is not 1
-// within the tolerance, after rescaling the groups; false when they settled (the reported
-// adjustment is then the one whose weights produced them) or cannot go on.
-bool RescaleGroups(Adjustment* a) {
-  const BundleAdjustmentOptions& options = a->options;
-  const internal::GroupVariance& variance = a->variance;
-  BundleAdjustmentResult* result = a->result;
-  if (!std::isfinite(variance.redundancy[0]) && variance.scalar_rows[0] > 0) {
-    result->summary.message = "accuracies not estimated: the covariance was not computed";
-    return false;
-  }
-  double factors[kNumBundleGroups];
-  bool changed = false;
-  for (int g = 0; g < kNumBundleGroups; ++g) {
-    a->group_estimable[g] = variance.scalar_rows[g] > 0 &&
-                            variance.redundancy[g] >= options.statistics.min_variance_redundancy;
-    factors[g] = a->group_estimable[g] ? variance.whitened_ssq[g] / variance.redundancy[g] : 1.0;
-    if (std::abs(factors[g] - 1.0) > options.statistics.variance_tolerance) changed = true;
-  }
-  ++result->variance_iterations;
-  if (!changed) return false;
-  if (result->variance_iterations >= options.statistics.max_variance_iterations) {
-    result->summary.message = "variance components did not settle in " +
-                              std::to_string(result->variance_iterations) + " iterations";
-    return false;
-  }
-  for (int g = 0; g < kNumBundleGroups; ++g) {
-    if (!a->group_estimable[g]) continue;
-    a->group_scale[g] *= std::sqrt(factors[g]);
-    ScaleGroup(g, std::sqrt(factors[g]), &a->plan);
-  }
-  return true;
-}
-
-// Estimated accuracies per group: the sigmas in use are the estimates; the report's stated
-// accuracy stays what the user stated.
-void ReportEstimatedAccuracies(const Adjustment& a) {
-  for (BundleGroupStatistics& group : a.result->groups) {
-    if (group.fixed()) continue;  // no observations to estimate from
-    const int g = group.group;
-    const double r = a.variance.redundancy[g];
-    if (a.group_estimable[g]) {
-      group.estimated_accuracy = group.stated_accuracy;
-      group.estimated_accuracy_standard_error = 1.0 / std::sqrt(2.0 * r);
-      group.stated_accuracy /= a.group_scale[g];
-      group.ratio *= a.group_scale[g];
-    } else {
-      std::ostringstream message;
-      message << "not estimated: the rest of the block checks it too little (redundancy "
-              << FormatNumber3(r) << " < " << FormatNumber3(a.options.statistics.min_variance_redundancy)
-              << ")";
-      group.estimation_message = message.str();
-    }
-  }
-}
-
 // The adjusted orientations, points and cameras, written into the block.
 void WriteBack(const BundlePlan& plan, const BundleState& state, Block* block) {
   for (size_t i = 0; i < block->images.size(); ++i) {
@@ -666,11 +456,8 @@ Status BundleAdjust(const BundleAdjustmentOptions& options,
   summary.plan_seconds = SecondsSince(a.start);
 
   // Rounds: adjust; then remove blunders (rejection rounds or data snooping, one at a time) or
-  // rescale the groups (variance component estimation) and adjust again, until neither changes.
-  const int rejection_rounds =
-      options.robustness.snoop || options.robustness.rejection_threshold <= 0.0 ? 0 : options.robustness.max_rejection_rounds;
-  const int max_rounds = 1 + rejection_rounds + (options.robustness.snoop ? options.robustness.max_snooping_removals : 0) +
-                         (options.statistics.estimate_accuracies ? options.statistics.max_variance_iterations : 0);
+  // rescale the groups (variance component estimation) and adjust again, until neither changes
+  // (internal/bundle_rounds.h).
   for (int r = 1;; ++r) {
     ceres::Solver::Summary ceres_summary;
     SolveRound(&a, r, &ceres_summary);
@@ -685,26 +472,17 @@ Status BundleAdjust(const BundleAdjustmentOptions& options,
     internal::ComputeBundleStatistics(options, *block, a.plan, a.state, a.round, result,
                                       &a.variance);
     summary.statistics_seconds += SecondsSince(statistics_start);
-    if (r >= max_rounds) break;
-    // 1. Blunders.
-    a.marks_removed_only = true;
-    if (options.robustness.snoop) {
-      if (SnoopOne(&a)) continue;
-    } else if (a.rejections_done < rejection_rounds) {
-      const Clock::time_point rejection_start = Clock::now();
-      const Rejection rejection = RejectMarks(&a, r);
-      summary.rejection_seconds += SecondsSince(rejection_start);
-      if (rejection == Rejection::kFailed) return Status::Ok();
-      if (rejection == Rejection::kRemoved) continue;
+    const internal::RoundChange change = internal::ChangeAfterRound(&a.changes, r);
+    if (change == internal::RoundChange::kFailed) {
+      summary.time_seconds = SecondsSince(a.start);
+      return Status::Ok();
     }
-    // 2. Variance components.
-    a.marks_removed_only = false;
-    if (options.statistics.estimate_accuracies && RescaleGroups(&a)) continue;
-    break;
+    if (change == internal::RoundChange::kNone) break;
+    a.marks_removed_only = change == internal::RoundChange::kMarksRemoved;
   }
   summary.termination = SolverTermination::kConverged;
   summary.num_rejected_marks = static_cast<int>(result->rejected_marks.size());
-  if (options.statistics.estimate_accuracies) ReportEstimatedAccuracies(a);
+  if (options.statistics.estimate_accuracies) internal::ReportEstimatedAccuracies(a.changes);
   WriteBack(a.plan, a.state, block);
   summary.time_seconds = SecondsSince(a.start);
   return Status::Ok();

@@ -546,6 +546,19 @@ void AddPriorResiduals(const Block& block, const BundlePlan& plan, BundleState* 
 
 }  // namespace
 
+BundleState StartState(const BundleAdjustmentConfig& config, const Block& block) {
+  BundleState state;
+  for (const BlockImage& image : block.images) state.eo.push_back(image.eo->parameters);
+  for (const BlockPoint& point : block.points) {
+    state.points.push_back(point.position_m ? *point.position_m
+                           : point.surveyed_m ? *point.surveyed_m
+                                              : Eigen::Vector3d::Zero());
+  }
+  for (const BlockCamera& camera : block.cameras) state.cameras.push_back(camera.params);
+  if (config.lever_arm_m) state.lever = *config.lever_arm_m;
+  return state;
+}
+
 void BuildBundleRound(const BundleAdjustmentOptions& options, const BundleAdjustmentConfig& config,
                       const Block& block, const BundlePlan& plan, BundleState* state,
                       BundleRound* round) {

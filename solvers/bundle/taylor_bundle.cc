@@ -19,8 +19,9 @@
 #include "core/camera_models.h"
 #include "core/parallel.h"
 #include "core/rotation.h"
-#include "solvers/bundle/check_points.h"
 #include "solvers/bundle/internal/bundle_problem.h"
+#include "solvers/bundle/internal/bundle_rounds.h"
+#include "solvers/bundle/internal/bundle_statistics.h"
 #include "solvers/bundle/internal/taylor_normals.h"
 #include "solvers/resection/taylor_resection.h"
 
@@ -29,7 +30,6 @@ namespace {
 
 using Clock = std::chrono::steady_clock;
 using internal::taylor::BuildLayout;
-using internal::taylor::Covariances;
 using internal::taylor::DenseRows;
 using internal::taylor::Factorize;
 using internal::taylor::Frame;
@@ -116,6 +116,7 @@ Status MakePlan(const TaylorBundleOptions& options, const BundleAdjustmentConfig
     plan->image_constant[plan->relative_fixed_image] = 1;
     plan->image_fixed[plan->relative_scale_image][plan->relative_scale_axis] = true;
   }
+  plan->tie_loss.reset(MakeLoss(options.tie_loss, options.tie_loss_scale_sigmas));
   plan->ideal_um.assign(block.marks.size(), Eigen::Vector2d::Zero());
   for (size_t m = 0; m < block.marks.size(); ++m) {
     if (!plan->mark_used[m]) continue;
@@ -387,7 +388,6 @@ SolverTermination RunRound(const Context& ctx, int round, Layout* layout, State*
     // fails the round), and a full step when the start is good.
     const double step_lambda = damped && iteration > 1 ? lambda : 0.0;
     reduction->damping = step_lambda;
-    reduction->undamped_at_solution = false;
     if (!SolveStep(ctx, at, *normal, layout, reduction, &d_e, &d_p, message))
       return SolverTermination::kFailure;
     double max_position = 0.0, max_angle = 0.0, step_squared = 0.0;
@@ -430,7 +430,6 @@ SolverTermination RunRound(const Context& ctx, int round, Layout* layout, State*
       MeasureCorrections(*layout, d_e, d_p, &gn_position, &gn_angle, &gn_squared);
       converged = below_tolerance(gn_position, gn_angle);
       if (converged) {
-        reduction->undamped_at_solution = true;
         summary.last_position_correction_m = max_position = gn_position;
         summary.last_angle_correction_rad = max_angle = gn_angle;
       } else {
@@ -482,104 +481,66 @@ void SummarizeRound(const Block& block, const Plan& plan, const Layout& layout, 
   summary->reduced_nonzeros = static_cast<int>(layout.S.nonZeros());
 }
 
-// Rejects the marks beyond the threshold (whitened, in units of sigma0, never below the stated
-// sigma): one mark per point and round, its worst (as BundleAdjust does: a blunder raises the
-// other marks of its track too). Returns how many.
-int RejectWorstMarks(const TaylorBundleOptions& options, const Block& block, const Layout& layout,
-                     const Normal& normal, int round, double sigma0, Plan* plan,
-                     std::vector<BundleRejectedMark>* rejected_marks) {
-  const double limit = options.rejection_threshold * std::max(1.0, sigma0);
-  std::vector<int> worst_of_point(block.points.size(), -1);
-  std::vector<double> worst_whitened(block.points.size(), 0.0);
-  for (size_t k = 0; k < layout.marks.size(); ++k) {
-    const int m = layout.marks[k];
-    const double whitened = normal.f[k].norm() / plan->mark_sigma[m];
-    if (!(whitened > limit)) continue;
-    const int p = block.marks[m].point;
-    if (worst_of_point[p] < 0 || whitened > worst_whitened[p]) {
-      worst_of_point[p] = m;
-      worst_whitened[p] = whitened;
+// BundleAdjust's options for the steps between rounds and the statistics of a Taylor solution:
+// the same accuracies, rejection, snooping, statistics options and threads, its analytic Jacobian
+// and no loss (the Taylor objective).
+BundleAdjustmentOptions AdjustmentOptionsOf(const TaylorBundleOptions& options) {
+  BundleAdjustmentOptions out;
+  out.accuracies = options.accuracies;
+  out.robustness.rejection_threshold = options.rejection_threshold;
+  out.robustness.max_rejection_rounds = options.max_rejection_rounds;
+  out.robustness.snoop = options.snoop;
+  out.robustness.tie_loss = options.tie_loss;
+  out.robustness.tie_loss_scale_sigmas = options.tie_loss_scale_sigmas;
+  out.robustness.max_snooping_removals = options.max_snooping_removals;
+  out.statistics = options.statistics;
+  out.solver.num_threads = options.num_threads;
+  return out;
+}
+
+// The statistics of each round's solution, by BundleAdjust's code
+// (internal::ComputeBundleStatistics) so that both solvers report one set of figures. That code
+// evaluates each observation's whitened rows through a round's Ceres problem: it is built here at
+// the first solution and never solved, and later rounds update it in place as BundleAdjust does
+// (its cost: statistics_setup_seconds). A second implementation of every row in Ceres' tangent
+// spaces behind an interface would be a second derivative path to keep in agreement with the first.
+struct Statistics {
+  Statistics(const BundleAdjustmentOptions& options, const BundleAdjustmentConfig& config,
+             const Block& block, const Plan& plan)
+      : options(options), config(config), block(block), plan(plan),
+        ground(internal::StartState(config, block)) {}
+  const BundleAdjustmentOptions& options;
+  const BundleAdjustmentConfig& config;
+  const Block& block;
+  const Plan& plan;
+  internal::BundleState ground;  // the solution in the ground frame; the problem points into it
+  internal::BundleRound round;
+  bool built = false;
+
+  void Compute(const State& state, const Frame& frame, bool marks_removed_only,
+               TaylorBundleSummary* summary, BundleAdjustmentResult* out,
+               internal::GroupVariance* variance) {
+    Clock::time_point start = Clock::now();
+    // In place: the problem holds pointers to these values.
+    for (size_t i = 0; i < block.images.size(); ++i) {
+      ground.eo[i] = state.eo[i];
+      ground.eo[i].head<3>() += frame.centroid;
     }
+    for (size_t p = 0; p < block.points.size(); ++p)
+      if (plan.point_in_problem[p]) ground.points[p] = state.points[p] + frame.centroid;
+    if (!(built && marks_removed_only && internal::UpdateBundleRound(plan, &round)))
+      internal::BuildBundleRound(options, config, block, plan, &ground, &round);
+    built = true;
+    summary->statistics_setup_seconds += SecondsSince(start);
+    start = Clock::now();
+    out->summary.sigma0 = summary->sigma0;
+    out->summary.redundancy = summary->redundancy;
+    out->summary.message.clear();
+    internal::ComputeBundleStatistics(options, block, plan, ground, round, out, variance);
+    if (!out->summary.message.empty()) summary->message += "; " + out->summary.message;
+    summary->statistics_seconds += SecondsSince(start);
   }
-  int rejected = 0;
-  for (size_t p = 0; p < worst_of_point.size(); ++p) {
-    const int m = worst_of_point[p];
-    if (m < 0) continue;
-    plan->mark_used[m] = 0;
-    rejected_marks->push_back({m, round, worst_whitened[p] / sigma0});
-    ++rejected;
-  }
-  return rejected;
-}
-
-// The result's tables, with the marks' residuals: observed - computed = -F, in the mark's own
-// unit, per mark and as RMS per image.
-void MarkResiduals(const Block& block, const Layout& layout, const Normal& normal,
-                   BundleAdjustmentResult* out) {
-  const size_t num_images = block.images.size();
-  out->images.assign(num_images, BundleImageResult());
-  out->points.assign(block.points.size(), BundlePointResult());
-  out->mark_residuals.assign(block.marks.size(), Eigen::Vector2d::Constant(kNaN));
-  std::vector<double> image_ssq(num_images, 0.0);
-  for (size_t k = 0; k < layout.marks.size(); ++k) {
-    const BlockMark& mark = block.marks[layout.marks[k]];
-    const Eigen::Vector2d residual = -normal.f[k] / mark.observation_units_per_unit;
-    out->mark_residuals[layout.marks[k]] = residual;
-    BundleImageResult& image = out->images[mark.image];
-    ++image.num_marks;
-    image_ssq[mark.image] += residual.squaredNorm();
-    image.unit = mark.unit == MarkUnit::kFilm ? "um" : "px";
-    ++out->points[mark.point].num_observations;
-  }
-  for (size_t i = 0; i < num_images; ++i) {
-    BundleImageResult& image = out->images[i];
-    image.adjusted = true;
-    image.rms_residual = image.num_marks > 0 ? std::sqrt(image_ssq[i] / image.num_marks) : 0.0;
-  }
-}
-
-// Covariances of the orientations and control points from the reduced normal matrix at the
-// solution; `message` says when they are skipped or singular.
-void SolutionCovariances(const TaylorBundleOptions& options, const Block& block, const Plan& plan,
-                         const Normal& normal, double variance_factor, Layout* layout,
-                         Reduction* reduction, BundleAdjustmentResult* out, std::string* message) {
-  const int num_blocks = static_cast<int>(layout->free_images.size());
-  if (options.covariances == BundleCovarianceMethod::kNone) {
-    *message += "; covariances not computed (statistics turned off)";
-    return;
-  }
-  reduction->damping = 0.0;
-  if (!reduction->undamped_at_solution &&
-      !(Reduce(normal, *layout, reduction) < 0 && WriteScaled(plan, layout, reduction) < 0 &&
-        Factorize(options.min_pivot_ratio, *layout, reduction))) {
-    *message += "; the normal matrix at the solution is singular: no covariances";
-    return;
-  }
-  std::vector<Matrix6d> cameras;
-  std::vector<Eigen::Matrix3d> points;
-  std::vector<char> has_point;
-  internal::SelectedInversionOptions inversion;
-  inversion.dense = options.covariances == BundleCovarianceMethod::kDenseInverse;
-  inversion.min_pivot_ratio = options.min_pivot_ratio;
-  const Status status = Covariances(block, plan, *layout, normal, *reduction, inversion, &cameras,
-                                    &points, &has_point);
-  if (!status.ok()) {
-    *message += "; the normal matrix at the solution is singular: no covariances (" +
-                status.message() + ")";
-    return;
-  }
-  for (int b = 0; b < num_blocks; ++b) {
-    BundleImageResult& image = out->images[layout->free_images[b]];
-    image.covariance = variance_factor * cameras[b];
-    image.has_covariance = true;
-  }
-  for (size_t q = 0; q < layout->free_points.size(); ++q) {
-    if (!has_point[q]) continue;
-    BundlePointResult& point = out->points[layout->free_points[q]];
-    point.covariance = variance_factor * points[q];
-    point.has_covariance = true;
-  }
-}
+};
 
 // The adjusted values, back in the ground frame, written into the block.
 void WriteBack(const Plan& plan, const State& state, const Frame& frame, Block* block) {
@@ -612,6 +573,7 @@ void FillBundleSummary(const TaylorBundleSummary& taylor, BundleAdjustmentSummar
   out->num_marks = taylor.num_marks;
   out->num_rejected_marks = taylor.num_rejected_marks;
   out->time_seconds = taylor.time_seconds;
+  out->problem_build_seconds = taylor.statistics_setup_seconds;
   out->statistics_seconds = taylor.statistics_seconds;
 }
 
@@ -628,11 +590,15 @@ bool TaylorBundleOptions::IsValid(std::string* why) const {
   // The accuracies are checked by the rule BundleAdjust applies to the same struct.
   BundleAdjustmentOptions objective;
   objective.accuracies = accuracies;
+  objective.statistics = statistics;
+  objective.robustness.tie_loss = tie_loss;
+  objective.robustness.tie_loss_scale_sigmas = tie_loss_scale_sigmas;
   std::string accuracy_why;
   if (!objective.IsValid(&accuracy_why)) return fail(accuracy_why);
   if (!(rejection_threshold >= 0.0) || !std::isfinite(rejection_threshold))
     return fail("the rejection threshold must be >= 0 (0: no rejection)");
   if (max_rejection_rounds < 0) return fail("max_rejection_rounds must be >= 0");
+  if (max_snooping_removals < 0) return fail("max_snooping_removals must be >= 0");
   if (max_iterations < 1) return fail("max_iterations must be at least 1");
   if (damping != TaylorDamping::kNone && damping != TaylorDamping::kLevenbergMarquardt)
     return fail("damping is not a TaylorDamping value");
@@ -662,18 +628,17 @@ bool TaylorBundleOptions::IsValid(std::string* why) const {
 
 Status TaylorBundleOptionsFromBundleOptions(const BundleAdjustmentOptions& ceres,
                                             TaylorPartials partials, TaylorBundleOptions* options) {
-  if (ceres.robustness.tie_loss != LossType::kNone) {
-    return Status::Error(
-        "the Taylor bundle adjustment is plain least squares: a robust tie loss is done by the "
-        "Ceres adjustment");
-  }
   *options = TaylorBundleOptions();
   options->partials = partials;
   options->damping = DefaultTaylorDamping(partials);
   options->accuracies = ceres.accuracies;
   options->rejection_threshold = ceres.robustness.rejection_threshold;
   options->max_rejection_rounds = ceres.robustness.max_rejection_rounds;
-  options->covariances = ceres.statistics.covariances;
+  options->snoop = ceres.robustness.snoop;
+  options->tie_loss = ceres.robustness.tie_loss;
+  options->tie_loss_scale_sigmas = ceres.robustness.tie_loss_scale_sigmas;
+  options->max_snooping_removals = ceres.robustness.max_snooping_removals;
+  options->statistics = ceres.statistics;
   options->num_threads = ceres.solver.num_threads;
   options->progress = ceres.solver.progress;
   return Status::Ok();
@@ -858,6 +823,14 @@ Status TaylorBundleAdjust(const TaylorBundleOptions& options,
   summary.num_threads = context.num_threads;
   BundleAdjustmentResult& out = result->adjustment;
   auto finish = [&](SolverTermination type, const std::string& message) {
+    if (type != SolverTermination::kConverged) {
+      // An earlier round's statistics do not describe a block left at its input values.
+      out.images.clear();
+      out.points.clear();
+      out.groups.clear();
+      out.observations.clear();
+      out.mark_residuals.clear();
+    }
     summary.termination_type = type;
     summary.message = message;
     summary.time_seconds = SecondsSince(start);
@@ -865,12 +838,18 @@ Status TaylorBundleAdjust(const TaylorBundleOptions& options,
     return Status::Ok();
   };
 
-  // Rounds: adjust, reject the marks beyond the threshold, adjust again.
+  // Rounds: adjust; then, as BundleAdjust (internal/bundle_rounds.h), the statistics of the
+  // solution, blunders out (rejection rounds or data snooping) or the groups rescaled (variance
+  // components), and adjust again, until neither changes.
+  const BundleAdjustmentOptions adjustment_options = AdjustmentOptionsOf(options);
+  internal::GroupVariance variance;
+  internal::RoundChanges changes(adjustment_options, config, *block, &plan, &out, &variance);
+  Statistics statistics(adjustment_options, config, *block, plan);
   Layout layout;
   Normal normal;
   std::unique_ptr<Reduction> reduction;
-  const int max_rounds = options.rejection_threshold > 0.0 ? options.max_rejection_rounds + 1 : 1;
-  for (int round = 1; round <= max_rounds; ++round) {
+  bool marks_removed_only = false;
+  for (int round = 1;; ++round) {
     BuildLayout(*block, plan, &layout);
     SummarizeRound(*block, plan, layout, round, &summary);
     reduction = std::make_unique<Reduction>();
@@ -886,38 +865,21 @@ Status TaylorBundleAdjust(const TaylorBundleOptions& options,
     summary.message = message;
     summary.sigma0 =
         summary.redundancy > 0 ? std::sqrt(normal.weighted_ssr / summary.redundancy) : kNaN;
-    if (round == max_rounds) break;
-    if (RejectWorstMarks(options, *block, layout, normal, round, summary.sigma0, &plan,
-                         &out.rejected_marks) == 0)
-      break;
-    const Status still = internal::RecheckBundlePlan(config, *block, &plan);
-    if (!still.ok()) {
-      return finish(SolverTermination::kFailure,
-                    "after rejecting " + std::to_string(out.rejected_marks.size()) +
-                        " marks as blunders, " + still.message());
-    }
+    // The round's structures are freed first: the statistics' own peak comes after them.
+    layout = Layout();
+    normal = Normal();
+    reduction.reset();
+    statistics.Compute(state, frame, marks_removed_only, &summary, &out, &variance);
+    const internal::RoundChange change = internal::ChangeAfterRound(&changes, round);
+    if (change == internal::RoundChange::kFailed)
+      return finish(SolverTermination::kFailure, out.summary.message);
+    if (change == internal::RoundChange::kNone) break;
+    marks_removed_only = change == internal::RoundChange::kMarksRemoved;
   }
   summary.num_rejected_marks = static_cast<int>(out.rejected_marks.size());
-
-  // ------------------------------------------------------------ statistics at the solution
-  const Clock::time_point statistics_start = Clock::now();
-  const double variance_factor =
-      std::isfinite(summary.sigma0) ? summary.sigma0 * summary.sigma0 : 1.0;
-  MarkResiduals(*block, layout, normal, &out);
-
-  SolutionCovariances(options, *block, plan, normal, variance_factor, &layout, reduction.get(), &out,
-                      &summary.message);
-
+  if (adjustment_options.statistics.estimate_accuracies)
+    internal::ReportEstimatedAccuracies(changes);
   WriteBack(plan, state, frame, block);
-
-  // Control points: adjusted - surveyed. Check points: intersected from the adjusted images as
-  // BundleAdjust does, so both solvers are measured with one yardstick.
-  for (size_t p = 0; p < block->points.size(); ++p)
-    if (block->points[p].role == PointRole::kControl && plan.point_in_problem[p])
-      out.points[p].error_m = *block->points[p].position_m - *block->points[p].surveyed_m;
-  TabulateControlAndCheckPoints(*block, options.accuracies, variance_factor, &out);
-  if (frame.use_lever) out.lever_arm_m = frame.lever;
-  summary.statistics_seconds = SecondsSince(statistics_start);
   return finish(SolverTermination::kConverged, summary.message);
 }
 

@@ -53,12 +53,25 @@
 // Supported: kFrame cameras with fixed interior orientation (any distortion model or table,
 // affinity, Polarity); control, check and tie points; GNSS camera positions with an applied
 // (not estimated) lever arm; attitude priors; images and points held constant; the relative gauge
-// (COLMAP's convention) when nothing ties the block to the ground; rejection rounds of marks as
-// in BundleAdjust. Not supported, refused with the reason: self-calibration, the COLMAP forward
+// (COLMAP's convention) when nothing ties the block to the ground; rejection rounds, data
+// snooping and accuracy estimation as in BundleAdjust. Not supported, refused with the reason: self-calibration, the COLMAP forward
 // camera models (their residual lives in the pixel domain after distortion, whose derivative is
-// not part of the lecture's linearisation), robust losses, an estimated lever arm, a camera with
-// the earth-curvature correction (ApplyECC: not in the lecture's equations; the Ceres adjustment
+// not part of the lecture's linearisation), an estimated lever arm, a camera with the
+// earth-curvature correction (ApplyECC: not in the lecture's equations; the Ceres adjustment
 // models it).
+//
+// Robust losses (tie_loss, on tie marks as in BundleAdjust): iteratively reweighted least squares
+// in the same normal equations. Each linearisation weights a tie mark by rho'(s) (s its squared
+// whitened residual) and counts rho(s) in the cost; Levenberg-Marquardt's gain ratio compares that
+// cost with the reweighted model's decrease. A fixed point is a stationary point of the robust
+// cost, BundleAdjust's minimum (which Ceres reaches with its own Hessian correction).
+//
+// Statistics and rounds: each round's solution goes through BundleAdjust's own statistics
+// (internal::ComputeBundleStatistics: groups and verdicts, covariances, redundancy numbers,
+// w-tests, MDBs, reliability, control and check points), evaluated on the Ceres problem of the
+// solution (built once, never solved, updated in place when marks are rejected), and then through
+// BundleAdjust's steps between rounds (internal/bundle_rounds.h: rejection rounds, data snooping,
+// variance components); both solvers report one set of figures.
 //
 // Data-dependent failures (no datum, a singular reduced normal matrix, a point behind a camera,
 // divergence, no convergence) are reported in the summary with the block left at its input
@@ -131,11 +144,22 @@ struct TaylorBundleOptions {
   int num_threads = 1;
   // The objective's accuracies, defaults and per-row overrides exactly as BundleAdjust takes them.
   BundleAccuracies accuracies;
-  // After convergence, marks whose whitened residual |v| / sigma exceeds rejection_threshold *
-  // max(1, sigma0) (unitless) are rejected and the block adjusted again, at most
-  // max_rejection_rounds times (BundleAdjust's rule). 0 disables rejection.
+  // Between rounds, BundleAdjust's steps (internal/bundle_rounds.h) with the meaning of
+  // BundleRobustnessOptions' fields of the same names: tie marks whose normalized residual (or,
+  // without diagnostics, whitened residual over max(1, sigma0)) exceeds rejection_threshold
+  // (unitless; 0: no rejection) are rejected and the block adjusted again, at most
+  // max_rejection_rounds times (count); or, with snoop, data snooping removes one observation at
+  // a time, at most max_snooping_removals (count). Variance components: statistics'
+  // estimate_accuracies.
   double rejection_threshold = 4.5;
   int max_rejection_rounds = 3;
+  // Robust loss on tie marks and its scale (sigmas of the mark, unitless), as
+  // BundleRobustnessOptions::tie_loss (one of kBundleTieLosses), by iteratively reweighted least
+  // squares (see the header comment).
+  LossType tie_loss = LossType::kNone;
+  double tie_loss_scale_sigmas = 3.0;
+  bool snoop = false;
+  int max_snooping_removals = 200;
   // Corrections per round, taken or refused (count). With the corrected partials a block converges
   // in 3-6; the as-printed partials converge linearly and can need several times more.
   int max_iterations = 50;
@@ -156,10 +180,11 @@ struct TaylorBundleOptions {
   // pivot of the LDL^T of its Jacobi-scaled form is at most this fraction of the largest
   // (unitless; the threshold BundleAdjust's statistics use).
   double min_pivot_ratio = 1e-12;
-  // Posterior covariances of the orientations and control points: the entries of the inverse of
-  // the reduced normal matrix on the pattern of its sparse factor (selected inversion, at every
-  // block size; kDenseInverse: the dense inverse, the tests' oracle; kNone: not computed).
-  BundleCovarianceMethod covariances = BundleCovarianceMethod::kSelectedInversion;
+  // The statistics at the solution, exactly as BundleAdjust computes them (the one path,
+  // internal::ComputeBundleStatistics): covariances (statistics.covariances: selected inversion,
+  // kDenseInverse the tests' oracle, kNone none), group verdicts, redundancy numbers, w-tests,
+  // reliability, check points. Units and limits as in BundleStatisticsOptions.
+  BundleStatisticsOptions statistics;
   // Called after every Gauss-Newton correction (may be empty); the fields as BundleAdjust fills
   // them (round, iteration, cost, sigma0, step_norm = |d| over all unknowns, elapsed).
   std::function<void(const BundleIterationInfo&)> progress;
@@ -167,11 +192,12 @@ struct TaylorBundleOptions {
   bool IsValid(std::string* why) const;
 };
 
-// The Taylor options that minimise the same objective as `ceres` (accuracies, rejection, covariance
-// limit, threads, progress; the lever arm is the config's, BundleAdjustmentConfig::lever_arm_m). Errors name
-// what the Taylor path does not do: a robust tie loss (an estimated lever arm, a config matter, is
-// refused by TaylorBundleAdjust). The Taylor options keep their own flat fields rather than
-// BundleAdjustmentOptions' parts: they take only a few fields of each part (and refuse the rest).
+// The Taylor options that minimise the same objective as `ceres` and take the same steps between
+// rounds (accuracies, robust tie loss, rejection, snooping, statistics, threads, progress; the
+// lever arm is the config's, BundleAdjustmentConfig::lever_arm_m). An error would name what the
+// Taylor path does not do; no field of BundleAdjustmentOptions is refused today (an estimated
+// lever arm, a config matter, is refused by TaylorBundleAdjust). The Taylor options keep their own
+// flat fields rather than BundleAdjustmentOptions' parts: they take only a few fields of each.
 Status TaylorBundleOptionsFromBundleOptions(const BundleAdjustmentOptions& ceres,
                                             TaylorPartials partials, TaylorBundleOptions* options);
 
@@ -217,7 +243,10 @@ struct TaylorBundleSummary {
   double last_angle_correction_rad = 0.0;
   double time_seconds = 0.0;        // the whole call (s)
   double iteration_seconds = 0.0;   // the Gauss-Newton corrections alone, over all rounds (s)
-  double statistics_seconds = 0.0;  // covariances and check points (s)
+  // The statistics of every round (s): building or updating their evaluation structure (the Ceres
+  // problem of the solution, never solved) and computing them.
+  double statistics_setup_seconds = 0.0;
+  double statistics_seconds = 0.0;
 
   // One line: variant, termination, rounds, iterations, costs, sigma0, time, message.
   std::string BriefReport() const;
@@ -227,17 +256,16 @@ struct TaylorBundleSummary {
 
 struct TaylorBundleResult {
   TaylorBundleSummary summary;
-  // The result in BundleAdjust's shape, for the same report writers:
-  //  - summary: filled from `summary` (termination kConverged / kNoConvergence / kFailure, the same
-  //    costs, sigma0, redundancy, counts and times);
-  //  - per image: adjusted, num_marks, rms_residual, unit, and the covariance, the 6 x 6 block of
-  //    sigma0^2 S^-1 in X0, Y0, Z0, omega, phi, kappa (with the as-printed partials S is built
-  //    from them, so this is that variant's own, wrong, covariance, as in TaylorResection);
-  //  - per point: num_observations; control points their covariance and error (adjusted -
-  //    surveyed); check points their intersection error (solvers/bundle/check_points.h, as BundleAdjust);
-  //  - mark_residuals, the control and check RMSE, rejected_marks and lever_arm_m as BundleAdjust.
-  // Not filled: groups (the per-group RMS, redundancy shares and over-fitting verdicts are
-  // BundleAdjust's) and calibration (no self-calibration here).
+  // The result in BundleAdjust's shape, for the same report writers: the summary filled from
+  // `summary` (termination kConverged / kNoConvergence / kFailure, the same costs, sigma0,
+  // redundancy, counts and times; problem_build_seconds is statistics_setup_seconds), rejected_marks,
+  // and, at a converged solution, every statistic BundleAdjust reports, computed by the same code
+  // on the same observations (internal::ComputeBundleStatistics): residuals per mark and image,
+  // groups with their RMS, redundancy shares and over-fitting verdicts, covariances of the
+  // orientations and control points, per-observation redundancy numbers, w-tests, MDBs and
+  // external reliability, control and check points with their w-tested marks, the lever arm. With
+  // the as-printed partials the solution is that variant's fixed point, and the statistics are
+  // those of the objective there.
   BundleAdjustmentResult adjustment;
   // Every correction of every round, in order.
   std::vector<TaylorBundleIteration> history;
@@ -287,7 +315,8 @@ Eigen::Vector3d TaylorAntennaPosition(const ExteriorOrientation& eo, const Eigen
 // One linearisation of the whole block at its current values, dense, for tests and teaching
 // (small blocks only). Unknowns in order: per image not held constant its six parameters, then
 // per point in the adjustment and not held constant its three. The relative gauge's fixed
-// coordinate keeps its column, zeroed, and a zero correction.
+// coordinate keeps its column, zeroed, and a zero correction. Plain least squares: the dense rows
+// carry no robust loss's weights (the reduced system and the correction do).
 struct TaylorBundleLinearSystem {
   std::vector<int> image_columns;  // per Block::images: first column, or -1 (held constant)
   std::vector<int> point_columns;  // per Block::points: first column, or -1 (not an unknown)

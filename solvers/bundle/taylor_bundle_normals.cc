@@ -1,5 +1,5 @@
 // The normal equations of the Taylor bundle adjustment (internal/taylor_normals.h): layout,
-// linearisation, elimination of the points, factorisation, covariances.
+// linearisation, elimination of the points, factorisation.
 #include "solvers/bundle/internal/taylor_normals.h"
 
 #include <Eigen/Dense>
@@ -161,6 +161,21 @@ void BuildLayout(const Block& block, const Plan& plan, Layout* layout) {
 
 namespace {
 
+// A mark's share of the cost, 1/2 of it: s = |F|^2 / sigma^2, or rho(s) for a tie mark under the
+// robust loss; *weight_factor (when not null) its IRLS factor rho'(s) (1 without a loss). At a
+// fixed point of the reweighted normal equations sum_m rho'(s_m) A_m^T F_m / sigma_m^2 = 0 (plus
+// the priors): the gradient of the robust cost, so the minimum is Ceres'.
+double MarkCost(const Plan& plan, int m, double s, double* weight_factor) {
+  if (plan.tie_loss == nullptr || plan.mark_group[m] != kTieMarks) {
+    if (weight_factor != nullptr) *weight_factor = 1.0;
+    return s;
+  }
+  double rho[3];
+  plan.tie_loss->Evaluate(s, rho);
+  if (weight_factor != nullptr) *weight_factor = rho[1];
+  return rho[0];
+}
+
 // Marks: eqs. 7-8 with eqs. 17-28 for the camera and dF/dX = -dF/dX0 for the point, image by
 // image on num_threads threads: each image's camera sums (U, g_e) and its marks' W, g_p parts and
 // F are its own. The point sums (V, g_p) follow point by point over its marks in mark order. False
@@ -188,10 +203,12 @@ bool LinearizeMarks(TaylorPartials partials, const Block& block, const Plan& pla
         image_behind_w[i] = w;
         return;
       }
-      const double weight = 1.0 / (plan.mark_sigma[m] * plan.mark_sigma[m]);
       const Eigen::Vector2d F(fu, fv);
       normal->f[k] = F;
-      ssr += weight * F.squaredNorm();
+      double weight = 1.0 / (plan.mark_sigma[m] * plan.mark_sigma[m]);
+      double factor = 1.0;
+      ssr += MarkCost(plan, m, weight * F.squaredNorm(), &factor);
+      weight *= factor;
       Matrix26 A_e;
       for (int c = 0; c < 6; ++c) {
         A_e(0, c) = row_u[c];
@@ -379,7 +396,7 @@ bool EvaluateCost(TaylorPartials partials, const Block& block, const Plan& plan,
         return;
       }
       const double weight = 1.0 / (plan.mark_sigma[m] * plan.mark_sigma[m]);
-      ssr += weight * Eigen::Vector2d(fu, fv).squaredNorm();
+      ssr += MarkCost(plan, m, weight * Eigen::Vector2d(fu, fv).squaredNorm(), nullptr);
     }
     image_ssr[i] = ssr;
   });
@@ -598,58 +615,6 @@ void SolveCorrections(const Plan& plan, const Layout& layout, const Normal& norm
       t.noalias() -= normal.W[k].transpose() * d_e->segment<6>(6 * layout.mark_block[k]);
     (*d_p)[q] = reduction.V_inverse[q] * t;
   });
-}
-
-// The blocks of S^-1 the statistics need, unscaled (the whitened system's inverse): per camera
-// block its 6 x 6 diagonal block, and per free control point its 3 x 3 covariance
-// V^-1 + sum_a sum_c Y_a^T C(a, c) Y_c (a, c over its marks in free images). Column block by
-// column block through the sparse factorisation, so memory stays O(n).
-Status Covariances(const Block& block, const Plan& plan, const Layout& layout,
-                   const Normal& normal, const Reduction& reduction,
-                   const SelectedInversionOptions& inversion, std::vector<Matrix6d>* cameras,
-                   std::vector<Eigen::Matrix3d>* points, std::vector<char>* has_point) {
-  const int num_blocks = static_cast<int>(layout.free_images.size());
-  cameras->assign(num_blocks, Matrix6d::Zero());
-  points->assign(layout.free_points.size(), Eigen::Matrix3d::Zero());
-  has_point->assign(layout.free_points.size(), 0);
-  std::vector<int> block_start(num_blocks + 1);
-  for (int b = 0; b <= num_blocks; ++b) block_start[b] = 6 * b;
-  SelectedInverse inverse;
-  const Status status = inverse.Compute(layout.S, block_start, inversion);
-  if (!status.ok()) return status;
-  // C_ab unscaled; a fixed component (its row and column of the scaled S the identity's, so
-  // decoupled) has zero variance and covariances.
-  const Eigen::VectorXd& s = reduction.scale;
-  const auto unscaled = [&](int a, int b, Matrix6d* C) {
-    Eigen::MatrixXd Z;
-    if (!inverse.Block(a, b, &Z)) return false;
-    for (int r = 0; r < 6; ++r)
-      for (int c = 0; c < 6; ++c)
-        (*C)(r, c) = IsFixed(plan, layout, a, r) || IsFixed(plan, layout, b, c)
-                         ? 0.0
-                         : s[6 * a + r] * Z(r, c) * s[6 * b + c];
-    return true;
-  };
-  for (int b = 0; b < num_blocks; ++b)
-    if (!unscaled(b, b, &(*cameras)[b])) return Status::Error("a camera block off the pattern");
-  Matrix6d C_ac;
-  for (size_t q = 0; q < layout.free_points.size(); ++q) {
-    if (block.points[layout.free_points[q]].role != PointRole::kControl) continue;
-    const std::vector<int>& marks = layout.point_marks[q];
-    const Eigen::Matrix3d& V_inverse = reduction.V_inverse[q];
-    Eigen::Matrix3d covariance = V_inverse;
-    for (const int kc : marks) {
-      const Matrix63 Y_c = normal.W[kc] * V_inverse;
-      for (const int ka : marks) {
-        if (!unscaled(layout.mark_block[ka], layout.mark_block[kc], &C_ac))
-          return Status::Error("two images of a control point off the pattern");
-        covariance.noalias() += (normal.W[ka] * V_inverse).transpose() * C_ac * Y_c;
-      }
-    }
-    (*points)[q] = covariance;
-    (*has_point)[q] = 1;
-  }
-  return Status::Ok();
 }
 
 }  // namespace photopose::internal::taylor

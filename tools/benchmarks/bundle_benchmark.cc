@@ -118,7 +118,7 @@ void BM_BundleTaylor(benchmark::State& state, TaylorPartials partials, TaylorDam
   options.linear_solver = linear_solver;
   options.num_threads = threads;
   options.rejection_threshold = 0.0;
-  options.covariances = BundleCovarianceMethod::kNone;
+  options.statistics.covariances = BundleCovarianceMethod::kNone;
   if (partials == TaylorPartials::kAsPrinted) options.max_iterations = 200;
   TaylorBundleResult result;
   TimeAdjustment(state, data, [&](Block* block, const auto& progress) {

@@ -305,8 +305,8 @@ int OptionsFromFlags(const char* command, BundleRun* run) {
   run->context.calibrate = run->calibrate;
   if (!ParseEnum(FLAGS_bundle_solver, &run->solver))
     return BadInput(command, EnumFlagError<PoseSolver>("--solver", FLAGS_bundle_solver));
-  if (run->solver != PoseSolver::kCeres && (robustness.snoop || options.statistics.estimate_accuracies || FLAGS_bundle_cross_validate))
-    return BadInput(command, "--solver=" + FLAGS_bundle_solver + " adjusts without snooping, accuracy estimation or cross-validation; use --solver=ceres for those");
+  if (run->solver != PoseSolver::kCeres && FLAGS_bundle_cross_validate)
+    return BadInput(command, "--solver=" + FLAGS_bundle_solver + " does not cross-validate (the left-out adjustments are Ceres'); use --solver=ceres for --cross_validate");
   if (!FLAGS_bundle_taylor_damping.empty()) {
     TaylorDamping damping;
     if (!ParseEnum(FLAGS_bundle_taylor_damping, &damping))

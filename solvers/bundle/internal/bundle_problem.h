@@ -95,6 +95,12 @@ BundlePlanOptions PlanOptionsOf(const BundleAdjustmentOptions& options,
 Status RecheckBundlePlan(const BundleAdjustmentConfig& config, const Block& block,
                          BundlePlan* plan);
 
+// The values an adjustment starts from: the block's orientations, points (tie points from their
+// coordinates, control points from their survey) and cameras, and the config's lever arm. Also
+// the values a solution is evaluated at once it is written into the block (the Taylor
+// adjustment's statistics).
+BundleState StartState(const BundleAdjustmentConfig& config, const Block& block);
+
 // The Ceres problem of an adjustment's rounds and what it needs to stay alive. Built once; a
 // rejection round switches the rejected marks off in place (UpdateBundleRound).
 struct BundleRound {

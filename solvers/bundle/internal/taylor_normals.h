@@ -2,7 +2,7 @@
 // The inside of the Taylor bundle adjustment (solvers/bundle/taylor_bundle.h) shared by its two
 // files: the plan, the layout of a round's unknowns and of the sparse reduced normal matrix, the
 // linearisation of the observation equations (eqs. 7-8, 17-28 of the seed), the elimination of the
-// points, the factorisation and the covariances (taylor_bundle_normals.cc). taylor_bundle.cc runs
+// points, and the factorisation (taylor_bundle_normals.cc). taylor_bundle.cc runs
 // the rounds and fills the results. Not part of the library's interface.
 
 #include <Eigen/Core>
@@ -10,13 +10,13 @@
 #include <Eigen/SparseCholesky>
 #include <Eigen/SparseCore>
 #include <array>
+#include <memory>
 #include <utility>
 #include <vector>
 
 #include "core/block.h"
 #include "core/status.h"
 #include "solvers/bundle/internal/bundle_problem.h"
-#include "solvers/bundle/internal/selected_inversion.h"
 #include "solvers/bundle/internal/supernodal_cholesky.h"
 #include "solvers/bundle/taylor_bundle.h"
 
@@ -52,6 +52,11 @@ struct Plan : BundlePlan {
   std::vector<char> image_constant;  // held constant (config or the relative gauge's first image)
   std::vector<char> point_constant;
   std::vector<std::array<bool, 6>> image_fixed;  // components held fixed of a free image
+  // The robust loss of the tie marks (plan.mark_group kTieMarks) on their squared whitened
+  // residual, as BundleAdjust applies it (cost_functions/losses.h MakeLoss); null: none. It
+  // enters the normal equations as iteratively reweighted least squares: a mark's weight times
+  // rho'(s) at the linearisation point, its cost rho(s).
+  std::shared_ptr<const ceres::LossFunction> tie_loss;
 };
 
 // The unknowns and the sparsity of the reduced normal matrix of one round. Camera block b is
@@ -153,9 +158,6 @@ struct Reduction {
   SupernodalCholesky cholmod;
   bool analysed = false;
   double pivot_ratio = 0.0;  // smallest / largest pivot of the scaled LDL^T
-  // True when the factorisation is the undamped one at the round's final linearisation (the
-  // statistics reuse it).
-  bool undamped_at_solution = false;
 };
 
 inline bool IsFixed(const Plan& plan, const Layout& layout, int b, int component) {
@@ -206,16 +208,5 @@ bool Factorize(double min_pivot_ratio, const Layout& layout, Reduction* reductio
 void SolveCorrections(const Plan& plan, const Layout& layout, const Normal& normal,
                       const Reduction& reduction, Eigen::VectorXd* d_e,
                       std::vector<Eigen::Vector3d>* d_p);
-
-// The blocks of S^-1 the statistics need, unscaled, by selected inversion of the scaled S
-// (internal/selected_inversion.h; the pairs of images of a control point share it, so they lie on
-// the pattern): per camera block its 6 x 6 diagonal block (fixed components: zero), and per free
-// control point its 3 x 3 covariance (has_point). An error when S is singular.
-[[nodiscard]] Status Covariances(const Block& block, const Plan& plan, const Layout& layout,
-                                 const Normal& normal, const Reduction& reduction,
-                                 const SelectedInversionOptions& inversion,
-                                 std::vector<Matrix6d>* cameras,
-                                 std::vector<Eigen::Matrix3d>* points,
-                                 std::vector<char>* has_point);
 
 }  // namespace photopose::internal::taylor

@@ -205,7 +205,7 @@ TEST(BundleStatistics, TaylorCovariancesEqualTheDenseOracle) {
   ASSERT_TRUE(MakeSyntheticBlock(BlockOptions(s), &block, &truth).ok());
   TaylorBundleOptions options;
   TaylorBundleOptions oracle_options;
-  oracle_options.covariances = BundleCovarianceMethod::kDenseInverse;
+  oracle_options.statistics.covariances = BundleCovarianceMethod::kDenseInverse;
   Block sparse_block = block, dense_block = block;
   TaylorBundleResult sparse_result, dense_result;
   ASSERT_TRUE(

@@ -178,6 +178,47 @@ TEST(BundleCommand, TaylorAndCeresSolversReachTheSamePoses) {
   EXPECT_GT(largest_turn_rad, DegreesToRadians(0.1));
 }
 
+// --solver=taylor snoops and estimates accuracies by BundleAdjust's rounds and statistics
+// (issue 23): its report removes the same observations and gives the same verdicts as Ceres'.
+// Cross-validation (Ceres' left-out adjustments) is refused in one line.
+TEST(BundleCommand, TaylorSolverSnoopsAndEstimatesAsCeres) {
+  const std::string dir = ScratchDir();
+  const std::string block = SimulateBlock(dir);
+  std::map<std::string, nlohmann::json> reports;
+  for (const char* solver : {"ceres", "taylor"}) {
+    const std::string report = dir + "/" + solver + ".json";
+    const CliRun run = RunCli("bundle " + TableArgs(block) +
+                                  " --quiet --snoop --estimate_accuracies --solver=" + solver +
+                                  " --report=" + report,
+                              dir);
+    ASSERT_EQ(run.exit_code, 0) << solver << ": " << run.err;
+    reports[solver] = nlohmann::json::parse(ReadFile(report));
+  }
+  const nlohmann::json& ceres = reports["ceres"];
+  const nlohmann::json& taylor = reports["taylor"];
+  ASSERT_TRUE(taylor.contains("snooping"));
+  ASSERT_EQ(taylor["snooping"].size(), ceres["snooping"].size());
+  EXPECT_GE(ceres["snooping"].size(), 4u);  // the four tie blunders
+  for (size_t k = 0; k < ceres["snooping"].size(); ++k) {
+    EXPECT_EQ(taylor["snooping"][k]["item"], ceres["snooping"][k]["item"]) << k;
+    EXPECT_EQ(taylor["snooping"][k]["axis"], ceres["snooping"][k]["axis"]) << k;
+  }
+  ASSERT_EQ(taylor["groups"].size(), ceres["groups"].size());
+  for (size_t g = 0; g < ceres["groups"].size(); ++g) {
+    EXPECT_EQ(taylor["groups"][g]["name"], ceres["groups"][g]["name"]);
+    EXPECT_EQ(taylor["groups"][g]["overfit"], ceres["groups"][g]["overfit"]);
+  }
+  EXPECT_NEAR(taylor["summary"]["sigma0"].get<double>(), ceres["summary"]["sigma0"].get<double>(),
+              1e-6 * ceres["summary"]["sigma0"].get<double>());
+
+  const CliRun refused = RunCli("bundle " + TableArgs(block) + " --quiet --solver=taylor " +
+                                    "--cross_validate --report=" + dir + "/cv.json",
+                                dir);
+  EXPECT_EQ(refused.exit_code, 2);
+  EXPECT_NE(refused.err.find("--solver=taylor does not cross-validate"), std::string::npos)
+      << refused.err;
+}
+
 // The marks of each image of a block by point id, to compare models across a run.
 std::set<std::pair<std::string, std::string>> ImagePointPairs(const Block& block) {
   std::set<std::pair<std::string, std::string>> pairs;

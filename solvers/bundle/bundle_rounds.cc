@@ -1,0 +1,251 @@
+// The steps between the rounds of a bundle adjustment (internal/bundle_rounds.h): rejection
+// rounds, data snooping, variance components.
+#include "solvers/bundle/internal/bundle_rounds.h"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <sstream>
+#include <string>
+#include <vector>
+
+namespace photopose::internal {
+namespace {
+
+std::string FormatNumber3(double value) {
+  std::ostringstream os;
+  os.precision(3);
+  os << value;
+  return os.str();
+}
+
+// Removes one observation found by data snooping: a mark, or the whole prior of a control point,
+// camera position or attitude.
+void RemoveObservation(const BundleObservationDiagnostics& d, BundlePlan* plan) {
+  switch (d.group) {
+    case kTieMarks:
+    case kControlMarks:
+      plan->mark_used[d.item] = 0;
+      break;
+    case kControlPoints:
+      plan->point_prior[d.item] = 0;
+      break;
+    case kCameraPositions:
+      plan->image_prior[d.item] = 0;
+      break;
+    case kAttitudes:
+      plan->image_attitude[d.item] = 0;
+      break;
+    default:
+      break;
+  }
+}
+
+// Scales every sigma of group g by `factor`.
+void ScaleGroup(int g, double factor, BundlePlan* plan) {
+  switch (g) {
+    case kTieMarks:
+    case kControlMarks:
+      for (size_t m = 0; m < plan->mark_sigma.size(); ++m)
+        if (plan->mark_group[m] == g) plan->mark_sigma[m] *= factor;
+      break;
+    case kControlPoints:
+      for (auto& sigma : plan->point_sigma) sigma *= factor;
+      break;
+    case kCameraPositions:
+      for (auto& sigma : plan->image_prior_sigma) sigma *= factor;
+      break;
+    case kAttitudes:
+      for (auto& sigma : plan->image_attitude_sigma) sigma *= factor;
+      break;
+    default:
+      break;
+  }
+}
+
+// Data snooping: removes the observation with the largest rejected |w|, if the block still holds
+// without it. Returns whether one was removed.
+bool SnoopOne(RoundChanges* a) {
+  BundleAdjustmentResult* result = a->result;
+  if (result->observations.empty() && !result->groups.empty())
+    result->summary.message = "data snooping needs the covariance; it was not computed";
+  const BundleObservationDiagnostics* worst = nullptr;
+  for (const BundleObservationDiagnostics& d : result->observations) {
+    if (!d.rejected) continue;
+    if (worst == nullptr || std::abs(d.normalized) > std::abs(worst->normalized)) worst = &d;
+  }
+  if (worst == nullptr ||
+      static_cast<int>(result->snooping.size()) >= a->options.robustness.max_snooping_removals)
+    return false;
+  BundlePlan trial = *a->plan;
+  RemoveObservation(*worst, &trial);
+  const Status still = RecheckBundlePlan(a->config, a->block, &trial);
+  if (!still.ok()) {
+    result->summary.message = "data snooping stopped: removing " + std::string(EnumName(worst->group)) + " #" +
+                              std::to_string(worst->item) + " would leave " + still.message();
+    return false;
+  }
+  result->snooping.push_back(
+      {worst->group, worst->item, worst->axis, std::abs(worst->normalized), worst->residual});
+  *a->plan = std::move(trial);
+  return true;
+}
+
+// The rejection score of every tie mark: its normalized residual when known, else its whitened
+// residual, with the limit it is held against. Control and check marks score 0: they are a
+// surveyor's own measurements and are tested and reported (diagnostics), removed only by data
+// snooping (--snoop), never by the automatic rejection.
+std::vector<double> RejectionScores(const RoundChanges& a, double* limit) {
+  const Block& block = a.block;
+  std::vector<double> score(block.marks.size(), 0.0);
+  *limit = a.options.robustness.rejection_threshold;
+  if (!a.result->observations.empty()) {
+    for (const BundleObservationDiagnostics& d : a.result->observations) {
+      const int g = d.group;
+      if (g != kTieMarks) continue;
+      if (std::isfinite(d.normalized)) score[d.item] = std::max(score[d.item], std::abs(d.normalized));
+    }
+    return score;
+  }
+  *limit *= std::max(1.0, a.result->summary.sigma0);
+  for (size_t m = 0; m < block.marks.size(); ++m) {
+    if (!a.plan->mark_used[m] || !a.result->mark_residuals[m].allFinite()) continue;
+    if (block.points[block.marks[m].point].role != PointRole::kTie) continue;
+    score[m] = a.result->mark_residuals[m].norm() * block.marks[m].observation_units_per_unit /
+               a.plan->mark_sigma[m];
+  }
+  return score;
+}
+
+// A rejection round: marks beyond the threshold (normalized residuals when known, whitened
+// residuals in units of max(1, sigma0) otherwise), one per point and round, its worst: a blunder
+// in one mark of a track pulls the point and raises its other marks' residuals too, and those
+// recover once it is gone. kFailed when the block no longer holds (the summary says why).
+enum class Rejection { kNone, kRemoved, kFailed };
+
+Rejection RejectMarks(RoundChanges* a, int r) {
+  const Block& block = a->block;
+  double limit = 0.0;
+  const std::vector<double> score = RejectionScores(*a, &limit);
+  BundlePlan trial = *a->plan;
+  std::vector<BundleRejectedMark> rejected;
+  std::vector<int> worst_of_point(block.points.size(), -1);
+  for (size_t m = 0; m < block.marks.size(); ++m) {
+    if (!trial.mark_used[m] || !(score[m] > limit)) continue;
+    int& worst = worst_of_point[block.marks[m].point];
+    if (worst < 0 || score[m] > score[worst]) worst = static_cast<int>(m);
+  }
+  for (size_t m = 0; m < block.marks.size(); ++m) {
+    if (worst_of_point[block.marks[m].point] != static_cast<int>(m)) continue;
+    trial.mark_used[m] = 0;
+    rejected.push_back({static_cast<int>(m), r, score[m]});
+  }
+  ++a->rejections_done;
+  if (rejected.empty()) return Rejection::kNone;
+  const Status still = RecheckBundlePlan(a->config, block, &trial);
+  if (!still.ok()) {
+    BundleAdjustmentSummary& summary = a->result->summary;
+    summary.termination = SolverTermination::kFailure;
+    summary.message = "after rejecting " + std::to_string(rejected.size()) +
+                      " marks as blunders, " + still.message();
+    return Rejection::kFailed;
+  }
+  a->result->rejected_marks.insert(a->result->rejected_marks.end(), rejected.begin(),
+                                   rejected.end());
+  *a->plan = std::move(trial);
+  return Rejection::kRemoved;
+}
+
+// Variance components: each estimable group's factor; true (adjust again) when one is not 1
+// within the tolerance, after rescaling the groups; false when they settled (the reported
+// adjustment is then the one whose weights produced them) or cannot go on.
+bool RescaleGroups(RoundChanges* a) {
+  const BundleAdjustmentOptions& options = a->options;
+  const GroupVariance& variance = *a->variance;
+  BundleAdjustmentResult* result = a->result;
+  if (!std::isfinite(variance.redundancy[0]) && variance.scalar_rows[0] > 0) {
+    result->summary.message = "accuracies not estimated: the covariance was not computed";
+    return false;
+  }
+  double factors[kNumBundleGroups];
+  bool changed = false;
+  for (int g = 0; g < kNumBundleGroups; ++g) {
+    a->group_estimable[g] = variance.scalar_rows[g] > 0 &&
+                            variance.redundancy[g] >= options.statistics.min_variance_redundancy;
+    factors[g] = a->group_estimable[g] ? variance.whitened_ssq[g] / variance.redundancy[g] : 1.0;
+    if (std::abs(factors[g] - 1.0) > options.statistics.variance_tolerance) changed = true;
+  }
+  ++result->variance_iterations;
+  if (!changed) return false;
+  if (result->variance_iterations >= options.statistics.max_variance_iterations) {
+    result->summary.message = "variance components did not settle in " +
+                              std::to_string(result->variance_iterations) + " iterations";
+    return false;
+  }
+  for (int g = 0; g < kNumBundleGroups; ++g) {
+    if (!a->group_estimable[g]) continue;
+    a->group_scale[g] *= std::sqrt(factors[g]);
+    ScaleGroup(g, std::sqrt(factors[g]), a->plan);
+  }
+  return true;
+}
+
+}  // namespace
+
+// The sigmas in use are the estimates; the report's stated accuracy stays what the user stated.
+void ReportEstimatedAccuracies(const RoundChanges& a) {
+  for (BundleGroupStatistics& group : a.result->groups) {
+    if (group.fixed()) continue;  // no observations to estimate from
+    const int g = group.group;
+    const double r = a.variance->redundancy[g];
+    if (a.group_estimable[g]) {
+      group.estimated_accuracy = group.stated_accuracy;
+      group.estimated_accuracy_standard_error = 1.0 / std::sqrt(2.0 * r);
+      group.stated_accuracy /= a.group_scale[g];
+      group.ratio *= a.group_scale[g];
+    } else {
+      std::ostringstream message;
+      message << "not estimated: the rest of the block checks it too little (redundancy "
+              << FormatNumber3(r) << " < " << FormatNumber3(a.options.statistics.min_variance_redundancy)
+              << ")";
+      group.estimation_message = message.str();
+    }
+  }
+}
+
+RoundChanges::RoundChanges(const BundleAdjustmentOptions& options,
+                           const BundleAdjustmentConfig& config, const Block& block,
+                           BundlePlan* plan, BundleAdjustmentResult* result,
+                           const GroupVariance* variance)
+    : options(options), config(config), block(block), plan(plan), result(result),
+      variance(variance) {
+  const BundleRobustnessOptions& robustness = options.robustness;
+  rejection_rounds = robustness.snoop || robustness.rejection_threshold <= 0.0
+                         ? 0
+                         : robustness.max_rejection_rounds;
+  max_rounds = 1 + rejection_rounds + (robustness.snoop ? robustness.max_snooping_removals : 0) +
+               (options.statistics.estimate_accuracies
+                    ? options.statistics.max_variance_iterations
+                    : 0);
+}
+
+RoundChange ChangeAfterRound(RoundChanges* a, int r) {
+  if (r >= a->max_rounds) return RoundChange::kNone;
+  // 1. Blunders.
+  if (a->options.robustness.snoop) {
+    if (SnoopOne(a)) return RoundChange::kMarksRemoved;
+  } else if (a->rejections_done < a->rejection_rounds) {
+    const auto start = std::chrono::steady_clock::now();
+    const Rejection rejection = RejectMarks(a, r);
+    a->result->summary.rejection_seconds +=
+        std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    if (rejection == Rejection::kFailed) return RoundChange::kFailed;
+    if (rejection == Rejection::kRemoved) return RoundChange::kMarksRemoved;
+  }
+  // 2. Variance components.
+  if (a->options.statistics.estimate_accuracies && RescaleGroups(a))
+    return RoundChange::kWeightsChanged;
+  return RoundChange::kNone;
+}
+
+}  // namespace photopose::internal
