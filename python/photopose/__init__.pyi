@@ -632,6 +632,20 @@ class BundleAdjustmentSummary:
     def linear_solver_seconds(self) -> float: ...
     @property
     def schur_structure(self) -> str: ...
+    @property
+    def plan_seconds(self) -> float: ...  # s
+    @property
+    def round_seconds(self) -> list[float]: ...  # s per round
+    @property
+    def rejection_seconds(self) -> float: ...  # s
+    @property
+    def factorization_seconds(self) -> float: ...  # s
+    @property
+    def inversion_seconds(self) -> float: ...  # s
+    @property
+    def covariance_entries(self) -> int: ...  # count
+    @property
+    def covariance_memory_bytes(self) -> int: ...  # bytes
     def is_solution_usable(self) -> bool: ...
     def brief_report(self) -> str: ...
 
@@ -791,7 +805,7 @@ class BundleAdjustmentResult:
     def point_errors_m(self) -> numpy.ndarray: ...  # N x 3 adjusted (control) or intersected (check) - surveyed (m); NaN for tie points.
     def full_report(self, block: Block) -> str: ...
 
-def bundle_adjust(block: Block, options: Optional[BundleAdjustmentOptions] = None, config: Optional[BundleAdjustmentConfig] = None, *, progress: Optional[Callable[[BundleIterationInfo], None]] = None) -> BundleAdjustmentResult: ...
+def bundle_adjust(block: Block, options: Optional[BundleAdjustmentOptions] = None, config: Optional[BundleAdjustmentConfig] = None, *, progress: Optional[Callable[[BundleIterationInfo], None]] = None, solver: str = 'ceres') -> BundleAdjustmentResult: ...
 class BlockInitializationOptions:
     """Initial values of a block: resection and intersection."""
     def __init__(self, **kwargs: Any) -> None: ...

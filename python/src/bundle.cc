@@ -7,6 +7,7 @@
 #include "common.h"
 #include "solvers/bundle/block_initialization.h"
 #include "solvers/bundle/bundle_adjustment.h"
+#include "solvers/bundle/taylor_bundle.h"
 
 namespace photopose::python {
 namespace {
@@ -166,6 +167,14 @@ constant images and points, the GNSS lever arm (camera frame u, v, w; m).)doc");
       .def_readonly("jacobian_evaluation_seconds", &BundleAdjustmentSummary::jacobian_evaluation_seconds)
       .def_readonly("linear_solver_seconds", &BundleAdjustmentSummary::linear_solver_seconds)
       .def_readonly("schur_structure", &BundleAdjustmentSummary::schur_structure)
+      .def_readonly("plan_seconds", &BundleAdjustmentSummary::plan_seconds, "s")
+      .def_readonly("round_seconds", &BundleAdjustmentSummary::round_seconds, "s per round")
+      .def_readonly("rejection_seconds", &BundleAdjustmentSummary::rejection_seconds, "s")
+      .def_readonly("factorization_seconds", &BundleAdjustmentSummary::factorization_seconds, "s")
+      .def_readonly("inversion_seconds", &BundleAdjustmentSummary::inversion_seconds, "s")
+      .def_readonly("covariance_entries", &BundleAdjustmentSummary::covariance_entries, "count")
+      .def_readonly("covariance_memory_bytes", &BundleAdjustmentSummary::covariance_memory_bytes,
+                    "bytes")
       .def("is_solution_usable", &BundleAdjustmentSummary::IsSolutionUsable)
       .def("brief_report", &BundleAdjustmentSummary::BriefReport)
       .def("__repr__", &SummaryRepr);
@@ -299,7 +308,8 @@ redundancy, normalized, mdb, external_m, rejected. Empty arrays when not compute
   // ---------------------------------------------------------------- calls
   m.def("bundle_adjust",
         [](PythonBlock& block, std::optional<BundleAdjustmentOptions> options,
-           std::optional<BundleAdjustmentConfig> config, const py::object& progress) {
+           std::optional<BundleAdjustmentConfig> config, const py::object& progress,
+           PoseSolver solver) {
           BundleAdjustmentOptions o = options.value_or(BundleAdjustmentOptions());
           const BundleAdjustmentConfig c = config.value_or(BundleAdjustmentConfig());
           if (!progress.is_none() && !PyCallable_Check(progress.ptr()))
@@ -310,17 +320,22 @@ redundancy, normalized, mdb, external_m, rejected. Empty arrays when not compute
           Status status;
           {
             py::gil_scoped_release release;
-            status = BundleAdjust(o, c, &block.block, &result);
+            status = BundleAdjustWithSolver(solver, o, c, &block.block, &result);
           }
           relay.Rethrow();
           ThrowIfError(status);
           return result;
         },
         py::arg("block"), py::arg("options") = py::none(), py::arg("config") = py::none(),
-        py::kw_only(), py::arg("progress") = py::none(), R"doc(
-Adjusts the block in place (BundleAdjust): on success its images' orientations, points' positions
-and cameras' parameters hold the adjusted values. Every image needs an orientation and every tie
-point a position (initialize_block). Raises photopose.Error for invalid options or a block the
+        py::kw_only(), py::arg("progress") = py::none(), py::arg("solver") = PoseSolver::kCeres,
+        R"doc(
+Adjusts the block in place: on success its images' orientations, points' positions and cameras'
+parameters hold the adjusted values. Every image needs an orientation and every tie point a
+position (initialize_block). solver: 'ceres' (BundleAdjust, the default), 'taylor' (the
+hand-written Levenberg-Marquardt block solver on its reduced normal equations, the same objective,
+rounds and statistics) or 'taylor_as_printed' (the lecture's partials as printed); the Taylor
+solvers refuse what they cannot adjust (self-calibration, COLMAP camera models, an estimated lever
+arm, ApplyECC) with the reason. Raises photopose.Error for invalid options or a block the
 adjustment cannot use; a failed or unconverged adjustment is result.summary.termination with the
 block unchanged. progress(info: BundleIterationInfo) is called after every iteration (from the
 adjusting thread, with the GIL); an exception it raises is raised when the adjustment returns.)doc");

@@ -195,3 +195,36 @@ def test_control_points_with_accuracy_zero_are_held_fixed(tmp_path):
     with pytest.raises(ValueError, match="point_accuracy_m: row 1 is neither positive on every axis"):
         pp.Block.from_arrays([camera], ["A", "B"], np.zeros((2, 3)), [], [], np.empty((0, 2)),
                              point_accuracy_m=np.array([[0.0, 0.0, 0.0], [0.0, 0.01, 0.0]]))
+
+
+def test_taylor_solver_reaches_the_same_minimum_and_statistics(shared_data):
+    # The same simulated block twice (the generator is deterministic per seed).
+    ceres_block, _ = pp.simulate_block(seed=3, num_lines=3, images_per_line=5, num_check_points=3)
+    taylor_block, _ = pp.simulate_block(seed=3, num_lines=3, images_per_line=5, num_check_points=3)
+    ceres = pp.bundle_adjust(ceres_block)
+    infos = []
+    taylor = pp.bundle_adjust(taylor_block, solver="taylor", progress=infos.append)
+    assert ceres.summary.termination == taylor.summary.termination == "converged"
+    assert infos and infos[-1].iteration >= 1
+    # One minimum (Ceres stops within about 1e-6 m of it) and one set of statistics.
+    np.testing.assert_allclose(taylor.summary.final_cost, ceres.summary.final_cost, rtol=1e-8)
+    np.testing.assert_allclose(taylor_block.image_parameters[:, :3],
+                               ceres_block.image_parameters[:, :3], rtol=0, atol=1e-5)
+    np.testing.assert_allclose(taylor_block.image_parameters[:, 3:],
+                               ceres_block.image_parameters[:, 3:], rtol=0, atol=1e-7)
+    np.testing.assert_allclose(taylor.image_standard_deviations, ceres.image_standard_deviations,
+                               rtol=1e-4)
+    np.testing.assert_allclose(taylor.check_rmse_m, ceres.check_rmse_m, rtol=1e-4)
+    ratios = {g.group: g.ratio for g in ceres.groups}
+    for g in taylor.groups:
+        np.testing.assert_allclose(g.ratio, ratios[g.group], rtol=1e-4, err_msg=g.group)
+    assert len(taylor.observations["redundancy"]) == len(ceres.observations["redundancy"])
+    np.testing.assert_allclose(np.sum(taylor.observations["redundancy"]),
+                               taylor.summary.redundancy, rtol=1e-6)
+    # What the Taylor solver cannot adjust is refused with the reason; an unknown solver by name.
+    colmap = pp.read_colmap_model(shared_data / "colmap_ar7")
+    pp.initialize_block(colmap)
+    with pytest.raises(pp.Error, match="SIMPLE_RADIAL model: the Taylor bundle adjustment takes"):
+        pp.bundle_adjust(colmap, solver="taylor")
+    with pytest.raises(ValueError, match="levmar"):
+        pp.bundle_adjust(taylor_block, solver="levmar")
