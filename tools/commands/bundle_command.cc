@@ -622,7 +622,7 @@ constexpr int kSearchRemovals = 50;
 int CheckSigma0(const char* command, BundleRun* run) {
   BundleAdjustmentResult& result = run->result;
   if (!result.summary.IsSolutionUsable() || !(result.summary.sigma0 > kSigma0Bound)) return kGoOn;
-  if (!run->options.robustness.snoop && run->solver == PoseSolver::kCeres) {
+  if (!run->options.robustness.snoop) {
     std::cerr << "photopose bundle: sigma0 " << result.summary.sigma0 << " is above " << kSigma0Bound
               << ": the block disagrees with its stated accuracies by more than noise; searching every group for gross errors (data snooping, at most "
               << kSearchRemovals << " removals)\n";
@@ -631,7 +631,8 @@ int CheckSigma0(const char* command, BundleRun* run) {
     search.robustness.max_snooping_removals = kSearchRemovals;
     BundleAdjustmentResult searched;
     Block block = run->block;
-    const Status again = BundleAdjust(search, run->config, &block, &searched);
+    const Status again = BundleAdjustWithSolver(run->solver, search, run->config, &block, &searched,
+                                                nullptr, run->taylor_damping);
     if (again.ok() && searched.summary.IsSolutionUsable()) {
       run->block = std::move(block);
       result = std::move(searched);

@@ -8,6 +8,7 @@
 #include <map>
 #include <nlohmann/json.hpp>
 #include <set>
+#include <sstream>
 #include <string>
 
 #include "core/block.h"
@@ -470,6 +471,48 @@ TEST(BundleCommand, Sigma0FarAboveOneAfterTheSearchIsAFailureNamingTheGroup) {
   EXPECT_TRUE(std::filesystem::exists(dir + "/frames.csv"));
   const nlohmann::json forced_report = nlohmann::json::parse(ReadFile(dir + "/report.json"));
   EXPECT_EQ(forced_report["summary"]["message"].get<std::string>().rfind("FAILED the sigma0 check", 0), 0u);
+}
+
+// One control point 50 m off: sigma0 far above 3, the search for gross errors (data snooping in
+// every group) finds it with either solver, and the block is then adjusted.
+TEST(BundleCommand, AControlPoint50MetresOffIsFoundByTheSearchWithEitherSolver) {
+  const std::string dir = ScratchDir();
+  const std::string block = SimulateBlock(dir);
+  std::vector<std::string> lines;
+  std::istringstream points(ReadFile(block + "/points.csv"));
+  std::string moved;
+  for (std::string line; std::getline(points, line);) {
+    if (moved.empty() && line.find(",control") != std::string::npos) {
+      moved = line.substr(0, line.find(','));
+      const size_t x = line.find(',') + 1;
+      const size_t end = line.find(',', x);
+      line = line.substr(0, x) + std::to_string(std::stod(line.substr(x, end - x)) + 50.0) +
+             line.substr(end);
+    }
+    lines.push_back(line);
+  }
+  ASSERT_FALSE(moved.empty());
+  std::string text;
+  for (const std::string& line : lines) text += line + "\n";
+  testing::WriteFile(block + "/points.csv", text);
+  for (const char* solver : {"ceres", "taylor"}) {
+    const CliRun run = RunCli("bundle " + TableArgs(block) + " --solver=" + solver +
+                                  " --quiet --out=" + dir + "/frames.csv --report=" + dir +
+                                  "/report.json",
+                              dir);
+    EXPECT_EQ(run.exit_code, 0) << solver << ": " << run.err;
+    EXPECT_NE(run.err.find("searching every group for gross errors"), std::string::npos)
+        << solver << ": " << run.err;
+    const nlohmann::json report = nlohmann::json::parse(ReadFile(dir + "/report.json"));
+    EXPECT_EQ(report["summary"]["termination"], "converged") << solver;
+    EXPECT_LT(report["summary"]["sigma0"].get<double>(), 3.0) << solver;
+    bool removed = false;
+    for (const nlohmann::json& step : report["snooping"]) {
+      removed = removed || (step["group"] == "control_points" &&
+                            step["item"].get<std::string>().find(moved) != std::string::npos);
+    }
+    EXPECT_TRUE(removed) << solver << ": " << report["snooping"].dump();
+  }
 }
 
 // The rows of a CSV text split at commas (the simulated tables quote nothing).
