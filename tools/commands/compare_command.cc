@@ -44,7 +44,9 @@ DEFINE_string(compare_solvers, "taylor_as_printed,taylor,ceres_analytic,ceres_au
 DEFINE_string(
     compare_losses, "none,huber",
     "Comma-separated robust losses; every Ceres solver is run with each: none, huber, softl1, "
-    "cauchy, arctan, tukey, or all. The Taylor solvers are always plain least squares.");
+    "cauchy, arctan, tukey, or all. The single-image Taylor solvers are always plain least "
+    "squares; with --scenarios=block (or a dataset block) every solver, Taylor included, runs "
+    "with each tie-mark loss (none, huber, cauchy, softl1).");
 DEFINE_string(
     compare_ceres_minimizer, "tiny_solver",
     "How the Ceres solvers minimise each image: tiny_solver (ceres::TinySolver, the robust loss by "

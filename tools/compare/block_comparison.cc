@@ -46,8 +46,8 @@ TrialOutcome SolveBlock(const BlockSolverVariant& variant, const Block& start,
   options.solver.num_threads = 1;
   options.solver.jacobian = variant.jacobian;
   options.robustness.tie_loss = variant.loss;
-  // Covariances yes (NEES); per-observation tests no, so that both solvers reject marks by the same
-  // rule (whitened residual beyond 4.5 max(1, sigma0)).
+  // Covariances yes (NEES); per-observation tests no: every solver rejects tie marks by their
+  // whitened residual beyond 4.5 max(1, sigma0) (the rounds both solvers share), the cheaper rule.
   options.statistics.observation_diagnostics = false;
   BundleAdjustmentResult result;
   const Clock::time_point begin = Clock::now();
@@ -94,7 +94,8 @@ TrialOutcome SolveBlock(const BlockSolverVariant& variant, const Block& start,
 }  // namespace
 
 std::string BlockSolverVariant::Name() const {
-  if (solver != PoseSolver::kCeres) return EnumName(solver);
+  if (solver != PoseSolver::kCeres)
+    return EnumName(solver) + (loss == LossType::kNone ? "" : "/" + std::string(EnumName(loss)));
   return std::string("ceres_") + EnumName(jacobian) + "/" + EnumName(loss);
 }
 
@@ -128,7 +129,10 @@ Status ParseBlockSolverVariants(const std::string& solvers, const std::string& l
       std::vector<BlockSolverVariant> add;
       BlockSolverVariant taylor;
       if ((n == "taylor" || n == "taylor_as_printed") && ParseEnum(n, &taylor.solver)) {
-        add.push_back(taylor);
+        for (const auto loss : loss_list) {
+          taylor.loss = loss;
+          add.push_back(taylor);
+        }
       } else if (n == "ceres_analytic" || n == "ceres_autodiff") {
         for (const auto loss : loss_list) {
           BlockSolverVariant v;
@@ -312,10 +316,15 @@ Status RunBlockComparison(const BlockComparisonOptions& options, BlockComparison
   });
   for (const Status& error : errors) PHOTOPOSE_RETURN_IF_ERROR(error);
 
-  // The corrected Taylor solver, when compared, is the baseline of time and position offsets.
+  // The corrected Taylor solver, when compared, is the baseline of time and position offsets:
+  // without a loss when it runs without one, else its first loss.
   int taylor = -1;
-  for (size_t s = 0; s < num_solvers; ++s)
-    if (options.solvers[s].solver == PoseSolver::kTaylor) taylor = static_cast<int>(s);
+  for (size_t s = 0; s < num_solvers; ++s) {
+    const BlockSolverVariant& v = options.solvers[s];
+    if (v.solver != PoseSolver::kTaylor) continue;
+    if (taylor < 0 || (v.loss == LossType::kNone && options.solvers[taylor].loss != LossType::kNone))
+      taylor = static_cast<int>(s);
+  }
   result->statistics.assign(num_settings, {});
   for (size_t setting = 0; setting < num_settings; ++setting) {
     std::vector<BlockSolverStatistics>& row = result->statistics[setting];

@@ -21,13 +21,14 @@ namespace photopose::cli {
 struct BlockSolverVariant {
   PoseSolver solver = PoseSolver::kCeres;
   JacobianType jacobian = JacobianType::kAnalytic;                    // Ceres only
-  LossType loss = LossType::kNone;  // Ceres only; one of kBundleTieLosses
-  // "taylor_as_printed", "taylor", "ceres_analytic/none", "ceres_autodiff/huber", ...
+  LossType loss = LossType::kNone;  // one of kBundleTieLosses
+  // "taylor_as_printed", "taylor", "taylor/huber", "ceres_analytic/none", "ceres_autodiff/huber", ...
   std::string Name() const;
 };
 
 // Comma-separated solvers (taylor_as_printed, taylor, ceres_analytic, ceres_autodiff; "all") and
-// tie-mark losses of the Ceres solvers (none, huber, cauchy, softl1; "all").
+// tie-mark losses (none, huber, cauchy, softl1; "all"): every solver runs with each loss ("taylor",
+// "taylor/huber", "ceres_analytic/none", ...).
 Status ParseBlockSolverVariants(const std::string& solvers, const std::string& losses,
                                 std::vector<BlockSolverVariant>* variants);
 

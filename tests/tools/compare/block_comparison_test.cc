@@ -14,12 +14,37 @@ TEST(BlockComparison, ParsesSolversAndLossesAndNamesWhatItRefuses) {
   ASSERT_TRUE(ParseBlockSolverVariants("taylor, ceres_analytic", "none,huber", &variants).ok());
   std::vector<std::string> names;
   for (const BlockSolverVariant& v : variants) names.push_back(v.Name());
-  EXPECT_EQ(names, (std::vector<std::string>{"taylor", "ceres_analytic/none",
+  EXPECT_EQ(names, (std::vector<std::string>{"taylor", "taylor/huber", "ceres_analytic/none",
                                              "ceres_analytic/huber"}));
   const Status loss = ParseBlockSolverVariants("ceres_analytic", "tukey_typo", &variants);
   ASSERT_FALSE(loss.ok());
   EXPECT_NE(loss.message().find("'tukey_typo'"), std::string::npos) << loss.message();
   EXPECT_FALSE(ParseBlockSolverVariants("levmar", "none", &variants).ok());
+  // The Taylor solvers run with every loss too (iteratively reweighted least squares).
+  ASSERT_TRUE(ParseBlockSolverVariants("taylor,taylor_as_printed", "none,cauchy", &variants).ok());
+  names.clear();
+  for (const BlockSolverVariant& v : variants) names.push_back(v.Name());
+  EXPECT_EQ(names, (std::vector<std::string>{"taylor", "taylor/cauchy", "taylor_as_printed",
+                                             "taylor_as_printed/cauchy"}));
+}
+
+TEST(BlockComparison, TheTaylorSolverWithALossReachesCeresMinimumWithThatLoss) {
+  BlockComparisonOptions options;
+  ASSERT_TRUE(ParseBlockSolverVariants("taylor,ceres_analytic", "huber", &options.solvers).ok());
+  options.tie_blunders = {6};
+  options.tie_points = {400};
+  options.lines = 3;
+  options.images_per_line = 6;
+  options.trials = 2;
+  BlockComparisonResult result;
+  ASSERT_TRUE(RunBlockComparison(options, &result).ok());
+  EXPECT_EQ(result.solver_names, (std::vector<std::string>{"taylor/huber", "ceres_analytic/huber"}));
+  const std::vector<BlockSolverStatistics>& row = result.statistics[0];
+  EXPECT_EQ(row[0].successes, 2) << (row[0].failures.empty() ? "" : row[0].failures[0]);
+  EXPECT_EQ(row[1].successes, 2) << (row[1].failures.empty() ? "" : row[1].failures[0]);
+  // Its own reference: the offsets are Ceres' from taylor/huber, the same minimum.
+  EXPECT_DOUBLE_EQ(row[0].time_ratio_to_taylor, 1.0);
+  EXPECT_LT(row[1].max_position_offset_m, 1e-3);
 }
 
 TEST(BlockComparison, OneSettingPerAxisValueAndFiguresPerSolver) {
