@@ -665,9 +665,16 @@ Status BundleAdjust(const BundleAdjustmentOptions& options, const BundleAdjustme
                          ? std::sqrt(2.0 * ceres_summary.final_cost / summary.redundancy)
                          : kNaN;
     const Clock::time_point statistics_start = Clock::now();
-    internal::ComputeBundleStatistics(options, *block, a.plan, a.state, a.round, result,
-                                      &a.variance);
+    const Status determined = internal::ComputeBundleStatistics(options, *block, a.plan, a.state,
+                                                                a.round, result, &a.variance);
     summary.statistics_seconds += SecondsSince(statistics_start);
+    if (!determined.ok()) {
+      // Converged, but to one of infinitely many minima: a failure, the block left as it was.
+      summary.termination = SolverTermination::kFailure;
+      summary.message = "round " + std::to_string(r) + ": " + determined.message();
+      summary.time_seconds = SecondsSince(a.start);
+      return Status::Ok();
+    }
     if (r >= max_rounds) break;
     // 1. Blunders.
     a.marks_removed_only = true;
@@ -684,6 +691,19 @@ Status BundleAdjust(const BundleAdjustmentOptions& options, const BundleAdjustme
     a.marks_removed_only = false;
     if (options.statistics.estimate_accuracies && RescaleGroups(&a)) continue;
     break;
+  }
+  if (options.statistics.covariances == BundleCovarianceMethod::kNone) {
+    // No covariances: the last round's normal matrix factorised once all the same.
+    const Clock::time_point check_start = Clock::now();
+    const Status determined = internal::CheckBundleDeterminacy(*block, a.plan, a.state, a.round,
+                                                               &summary.factorization_seconds);
+    summary.statistics_seconds += SecondsSince(check_start);
+    if (!determined.ok()) {
+      summary.termination = SolverTermination::kFailure;
+      summary.message = "round " + std::to_string(summary.rounds) + ": " + determined.message();
+      summary.time_seconds = SecondsSince(a.start);
+      return Status::Ok();
+    }
   }
   summary.termination = SolverTermination::kConverged;
   summary.num_rejected_marks = static_cast<int>(result->rejected_marks.size());
