@@ -469,9 +469,16 @@ Status BundleAdjust(const BundleAdjustmentOptions& options,
                          ? std::sqrt(2.0 * ceres_summary.final_cost / summary.redundancy)
                          : kNaN;
     const Clock::time_point statistics_start = Clock::now();
-    internal::ComputeBundleStatistics(options, *block, a.plan, a.state, a.round, result,
-                                      &a.variance);
+    const Status determined = internal::ComputeBundleStatistics(options, *block, a.plan, a.state,
+                                                                a.round, result, &a.variance);
     summary.statistics_seconds += SecondsSince(statistics_start);
+    if (!determined.ok()) {
+      // Converged, but to one of infinitely many minima: a failure, the block left as it was.
+      summary.termination = SolverTermination::kFailure;
+      summary.message = "round " + std::to_string(r) + ": " + determined.message();
+      summary.time_seconds = SecondsSince(a.start);
+      return Status::Ok();
+    }
     const internal::RoundChange change = internal::ChangeAfterRound(&a.changes, r);
     if (change == internal::RoundChange::kFailed) {
       summary.time_seconds = SecondsSince(a.start);
@@ -479,6 +486,19 @@ Status BundleAdjust(const BundleAdjustmentOptions& options,
     }
     if (change == internal::RoundChange::kNone) break;
     a.marks_removed_only = change == internal::RoundChange::kMarksRemoved;
+  }
+  if (options.statistics.covariances == BundleCovarianceMethod::kNone) {
+    // No covariances: the last round's normal matrix factorised once all the same.
+    const Clock::time_point check_start = Clock::now();
+    const Status determined = internal::CheckBundleDeterminacy(*block, a.plan, a.state, a.round,
+                                                               &summary.factorization_seconds);
+    summary.statistics_seconds += SecondsSince(check_start);
+    if (!determined.ok()) {
+      summary.termination = SolverTermination::kFailure;
+      summary.message = "round " + std::to_string(summary.rounds) + ": " + determined.message();
+      summary.time_seconds = SecondsSince(a.start);
+      return Status::Ok();
+    }
   }
   summary.termination = SolverTermination::kConverged;
   summary.num_rejected_marks = static_cast<int>(result->rejected_marks.size());

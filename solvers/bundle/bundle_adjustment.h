@@ -26,7 +26,8 @@
 // overfit_redundancy_share).
 //
 // Data-dependent failures (no datum, disconnected block, an image with too few marks, a point
-// behind a camera, no convergence) are reported in the summary; nothing aborts.
+// behind a camera, no convergence, a singular normal matrix) are reported in the summary; nothing
+// aborts.
 
 #include <Eigen/Core>
 #include <cmath>
@@ -155,7 +156,8 @@ enum class BundleCovarianceMethod {
   kSelectedInversion,
   // S inverted densely: the tests' oracle. n^2 memory and n^3 time in the reduced parameters.
   kDenseInverse,
-  kNone,  // not computed: group RMS and check points only
+  kNone,  // not computed: group RMS and check points only (the last round's S is still
+          // factorised once, to check that every parameter is determined)
 };
 inline constexpr EnumNameEntry<BundleCovarianceMethod> kBundleCovarianceMethodNames[] = {
     {BundleCovarianceMethod::kSelectedInversion, "full"},
@@ -507,11 +509,18 @@ struct BundleAdjustmentResult {
 
 // Adjusts the block in place: on success the images' eo, the points' position_m and the cameras'
 // params hold the adjusted values. Every image needs an initial eo and every tie point an initial
-// position (see solvers/bundle/block_initialization.h); control and check points start at their surveyed
-// coordinates. Returns an error (nothing changed) for invalid options or a block the adjustment
-// cannot use (no datum for the asked output, disconnected, an image with fewer than 3 marks, a
-// parameter to calibrate that the model lacks); a failed or unconverged adjustment is reported in
-// result->summary with the block left at its input values.
+// position (see solvers/bundle/block_initialization.h); control and check points start at their
+// surveyed coordinates. Returns an error (nothing changed) for invalid options or a block the
+// adjustment cannot use (no datum for the asked output, disconnected, an image with fewer than 3
+// marks, a parameter to calibrate that the model lacks); a failed or unconverged adjustment is
+// reported in result->summary with the block left at its input values. A round that converges with
+// a singular normal matrix (a parameter the observations do not determine: an image whose marks lie
+// on one line in space, a self-calibrated parameter no mark constrains, a lever arm component the
+// attitudes cannot separate from the datum) fails: termination kFailure, and the message names the
+// parameter where the factorisation of the reduced camera system found the rank defect ("image
+// 'IMG_12': omega is not determined by the observations"; its image, camera or the lever arm).
+// This is checked with every statistics option: with covariances kNone the last round's reduced
+// camera system is still built and factorised once (not inverted).
 Status BundleAdjust(const BundleAdjustmentOptions& options, const BundleAdjustmentConfig& config,
                     Block* block, BundleAdjustmentResult* result);
 

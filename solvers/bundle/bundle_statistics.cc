@@ -154,6 +154,8 @@ void BuildReducedNormals(const BundleRound& round, const SelectedInversionOption
     const Eigen::LDLT<Eigen::Matrix3d> ldlt(V[p]);
     if (ldlt.info() != Eigen::Success || !(ldlt.vectorD().minCoeff() > 0.0)) {
       reduced->message = "a point is not determined by its rays";
+      reduced->singular = true;
+      reduced->undetermined_point = static_cast<int>(p);
       return;
     }
     reduced->V_inverse[p] = ldlt.solve(Eigen::Matrix3d::Identity());
@@ -199,6 +201,16 @@ void BuildReducedNormals(const BundleRound& round, const SelectedInversionOption
   const Status status = reduced->C.Compute(S, block_start, options);
   if (!status.ok()) {
     reduced->message = status.message();
+    reduced->singular = reduced->C.singular();
+    const int column = reduced->C.singular_column();
+    if (column >= 0) {
+      const int b =
+          static_cast<int>(std::upper_bound(block_start.begin(), block_start.end(), column) -
+                           block_start.begin()) -
+          1;
+      reduced->singular_block = b;
+      reduced->singular_component = column - block_start[b];
+    }
     return;
   }
   reduced->ok = true;
@@ -761,6 +773,43 @@ Eigen::Matrix3d PropagatedCheckPointCovariance(const Block& block, const BundleS
   return N_inverse + A * reduced.C.Solve(A.transpose());
 }
 
+// What a singular normal matrix leaves undetermined, in words: the parameter of the column where
+// the factorisation found the rank defect (its image, camera or the lever arm, and its name in the
+// block's tangent space), or the point whose rays do not determine it.
+std::string Undetermined(const Block& block, const BundlePlan& plan, const BundleState& state,
+                         const BundleRound& round, const ReducedNormals& reduced) {
+  constexpr const char* kNotDetermined = " is not determined by the observations";
+  if (reduced.undetermined_point >= 0) {
+    const int p = round.point_of_block[reduced.undetermined_point];
+    return "point '" + block.points[p].id + "' is not determined by its rays";
+  }
+  const int b = reduced.singular_block, t = reduced.singular_component;
+  if (b < 0 || t < 0) return "a combination of parameters" + std::string(kNotDetermined);
+  const double* e = round.e_blocks[b];
+  for (size_t i = 0; i < block.images.size(); ++i) {
+    if (state.eo[i].data() != e) continue;
+    // The tangent space of an orientation: centre X, Y, Z (m), then the small rotation about the
+    // seed's omega, phi, kappa axes; the relative gauge's scale image lacks its held coordinate.
+    static const char* const kNames[] = {"X", "Y", "Z", "omega", "phi", "kappa"};
+    const int held =
+        static_cast<int>(i) == plan.relative_scale_image ? plan.relative_scale_axis : 6;
+    const int ambient = t >= held ? t + 1 : t;
+    return "image '" + block.images[i].name + "': " + kNames[std::min(ambient, 5)] + kNotDetermined;
+  }
+  for (size_t c = 0; c < block.cameras.size(); ++c) {
+    if (state.cameras[c].data() != e || t >= static_cast<int>(plan.calibrated[c].size())) continue;
+    const std::vector<std::string> names = CameraModelParamNames(block.cameras[c].model);
+    return "camera '" + block.cameras[c].camera_id + "': the self-calibrated " +
+           names[plan.calibrated[c][t]] + kNotDetermined;
+  }
+  if (e == state.lever.data()) {
+    static const char* const kAxes[] = {"x", "y", "z"};
+    return std::string("the lever arm's ") + kAxes[std::min(t, 2)] + " (camera frame)" +
+           kNotDetermined;
+  }
+  return "a combination of parameters" + std::string(kNotDetermined);
+}
+
 // Control and check points: the shared table (internal/bundle_statistics.h), check points
 // intersected from the adjusted images and cameras.
 void ControlAndCheckPoints(const BundleAdjustmentOptions& options, const Block& block,
@@ -785,10 +834,10 @@ void ControlAndCheckPoints(const BundleAdjustmentOptions& options, const Block& 
 
 }  // namespace
 
-void ComputeBundleStatistics(const BundleAdjustmentOptions& options, const Block& block,
-                             const BundlePlan& plan, const BundleState& state,
-                             const BundleRound& round, BundleAdjustmentResult* result,
-                             GroupVariance* variance) {
+Status ComputeBundleStatistics(const BundleAdjustmentOptions& options, const Block& block,
+                               const BundlePlan& plan, const BundleState& state,
+                               const BundleRound& round, BundleAdjustmentResult* result,
+                               GroupVariance* variance) {
   BundleAdjustmentSummary& summary = result->summary;
   const double sigma0 = summary.sigma0;
   const double variance_factor = std::isfinite(sigma0) ? sigma0 * sigma0 : 1.0;
@@ -796,7 +845,8 @@ void ComputeBundleStatistics(const BundleAdjustmentOptions& options, const Block
   GroupSums sums[kNumBundleGroups];
   TabulateResiduals(block, plan, state, round, sums, result, variance);
 
-  // Covariances and redundancy numbers from the reduced normal matrix.
+  // Covariances and redundancy numbers from the reduced normal matrix (without them, the
+  // adjustment checks its last round with CheckBundleDeterminacy).
   ReducedNormals reduced;
   const BundleCovarianceMethod method = options.statistics.covariances;
   const bool asked = method != BundleCovarianceMethod::kNone;
@@ -805,12 +855,13 @@ void ComputeBundleStatistics(const BundleAdjustmentOptions& options, const Block
     inversion.dense = method == BundleCovarianceMethod::kDenseInverse;
     BuildReducedNormals(round, inversion, &reduced);
   }
-  summary.covariance_entries = reduced.ok ? reduced.C.num_entries() : 0;
-  summary.covariance_memory_bytes = reduced.ok ? reduced.C.memory_bytes() : 0;
-  summary.factorization_seconds = reduced.ok ? reduced.C.factorization_seconds() : 0.0;
-  summary.inversion_seconds = reduced.ok ? reduced.C.inversion_seconds() : 0.0;
+  const bool covariances = reduced.ok;
+  summary.covariance_entries = covariances ? reduced.C.num_entries() : 0;
+  summary.covariance_memory_bytes = covariances ? reduced.C.memory_bytes() : 0;
+  summary.factorization_seconds = covariances ? reduced.C.factorization_seconds() : 0.0;
+  summary.inversion_seconds = covariances ? reduced.C.inversion_seconds() : 0.0;
   SetTestLevel(options, *variance, result);
-  if (reduced.ok) {
+  if (covariances) {
     OrientationAndPointCovariances(block, plan, state, round, reduced, variance_factor,
                                    options.solver.num_threads, result);
     ObservationDiagnostics(options, block, plan, state, round, reduced,
@@ -825,6 +876,23 @@ void ComputeBundleStatistics(const BundleAdjustmentOptions& options, const Block
   if (plan.use_lever) result->lever_arm_m = state.lever;
   GroupStatistics(options, sums, *variance, NumFixedControlPoints(block, plan, round), result);
   ControlAndCheckPoints(options, block, state, round, reduced, variance_factor, result);
+  if (reduced.singular)
+    return Status::Error("the normal matrix is singular: " +
+                         Undetermined(block, plan, state, round, reduced));
+  return Status::Ok();
+}
+
+Status CheckBundleDeterminacy(const Block& block, const BundlePlan& plan, const BundleState& state,
+                              const BundleRound& round, double* factorization_seconds) {
+  ReducedNormals reduced;
+  SelectedInversionOptions factor_only;
+  factor_only.factor_only = true;
+  BuildReducedNormals(round, factor_only, &reduced);
+  *factorization_seconds = reduced.C.factorization_seconds();
+  if (reduced.singular)
+    return Status::Error("the normal matrix is singular: " +
+                         Undetermined(block, plan, state, round, reduced));
+  return Status::Ok();
 }
 
 }  // namespace photopose::internal

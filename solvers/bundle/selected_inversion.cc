@@ -134,6 +134,14 @@ Status SelectedInverse::Compute(const SparseMatrix& S_upper, const std::vector<i
   sparse_.reset();
   dense_.resize(0, 0);
   factorization_seconds_ = inversion_seconds_ = 0.0;
+  singular_ = false;
+  singular_column_ = -1;
+  // A singular S: the column found, and the one message of every such case.
+  const auto singular = [this](int column) {
+    singular_ = true;
+    singular_column_ = column;
+    return Status::Error("the reduced normal matrix is singular (not positive definite)");
+  };
   const int n = static_cast<int>(S_upper.cols());
   if (S_upper.rows() != n || block_start.empty() || block_start.front() != 0 ||
       block_start.back() != n)
@@ -145,8 +153,8 @@ Status SelectedInverse::Compute(const SparseMatrix& S_upper, const std::vector<i
   scale_.resize(n);
   for (int c = 0; c < n; ++c) {
     const double d = S_upper.coeff(c, c);
-    if (!(d > 0.0) || !std::isfinite(d))
-      return Status::Error("the reduced normal matrix has a column without weight");
+    if (!std::isfinite(d)) return Status::Error("the reduced normal matrix is not finite");
+    if (!(d > 0.0)) return singular(c);  // a column without weight
     scale_[c] = 1.0 / std::sqrt(d);
   }
   const Clock::time_point start = Clock::now();
@@ -159,14 +167,28 @@ Status SelectedInverse::Compute(const SparseMatrix& S_upper, const std::vector<i
       }
     }
     const Eigen::LDLT<Eigen::MatrixXd> ldlt(A);
-    if (ldlt.info() != Eigen::Success || !(ldlt.vectorD().minCoeff() > 0.0) ||
-        !(ldlt.vectorD().minCoeff() > options.min_pivot_ratio * ldlt.vectorD().maxCoeff()))
-      return Status::Error("the reduced normal matrix is singular");
+    const double pivot = ldlt.vectorD().minCoeff();
+    if (ldlt.info() != Eigen::Success || !(pivot > 0.0) ||
+        !(pivot > options.min_pivot_ratio * ldlt.vectorD().maxCoeff())) {
+      // Eigen's LDL^T picks its pivots by size, which would name any member of the undetermined
+      // combination; a Cholesky in the blocks' own order names the last of it, as the sparse
+      // factor does in its order (A's diagonal is 1: the first pivot <= the ratio).
+      Eigen::MatrixXd L = A;
+      for (int k = 0; k < n; ++k) {
+        const double d = L(k, k) - L.row(k).head(k).squaredNorm();
+        if (!(d > options.min_pivot_ratio)) return singular(k);
+        L(k, k) = std::sqrt(d);
+        for (int i = k + 1; i < n; ++i)
+          L(i, k) = (L(i, k) - L.row(i).head(k).dot(L.row(k).head(k))) / L(k, k);
+      }
+      return singular(-1);
+    }
     factorization_seconds_ = SecondsSince(start);
+    if (options.factor_only) return Status::Ok();
     dense_ = scale_.asDiagonal() * ldlt.solve(Eigen::MatrixXd::Identity(n, n)) *
              scale_.asDiagonal();
     inversion_seconds_ = SecondsSince(start) - factorization_seconds_;
-    if (!dense_.allFinite()) return Status::Error("the reduced normal matrix is singular");
+    if (!dense_.allFinite()) return singular(-1);
     return Status::Ok();
   }
 
@@ -256,9 +278,12 @@ Status SelectedInverse::Compute(const SparseMatrix& S_upper, const std::vector<i
   const bool factored =
       sparse->factor != nullptr && cholmod_factorize(A, sparse->factor, c) != 0;
   cholmod_free_sparse(&A, c);
-  if (!factored || c->status == CHOLMOD_NOT_POSDEF ||
-      static_cast<int>(sparse->factor->minor) < n)
-    return Status::Error("the reduced normal matrix is singular (not positive definite)");
+  if (!factored) return Status::Error("selected inversion: CHOLMOD's factorisation failed");
+  if (c->status == CHOLMOD_NOT_POSDEF || static_cast<int>(sparse->factor->minor) < n) {
+    // L->minor: the permuted column where the factorisation met a pivot <= 0.
+    const int minor = static_cast<int>(sparse->factor->minor);
+    return singular(minor < n ? permutation[minor] : -1);
+  }
   if (sparse->factor->is_super || !sparse->factor->is_ll)
     return Status::Error("selected inversion: CHOLMOD did not give a simplicial LL^T factor");
   factorization_seconds_ = SecondsSince(start);
@@ -268,6 +293,7 @@ Status SelectedInverse::Compute(const SparseMatrix& S_upper, const std::vector<i
   int* Li = static_cast<int*>(sparse->factor->i);
   double* Lx = static_cast<double*>(sparse->factor->x);
   double smallest = std::numeric_limits<double>::infinity(), largest = 0.0;
+  int smallest_column = -1;
   for (int col = 0; col < n; ++col) {
     if (Li[Lp[col]] != col)
       return Status::Error("selected inversion: unexpected factor layout (diagonal not first)");
@@ -279,11 +305,15 @@ Status SelectedInverse::Compute(const SparseMatrix& S_upper, const std::vector<i
         std::tie(Li[t], Lx[t]) = entries[t - Lp[col]];
     }
     const double pivot = Lx[Lp[col]] * Lx[Lp[col]];  // the D of LDL^T
-    smallest = std::min(smallest, pivot);
+    if (pivot < smallest) {
+      smallest = pivot;
+      smallest_column = col;
+    }
     largest = std::max(largest, pivot);
   }
   if (!(smallest > options.min_pivot_ratio * largest))
-    return Status::Error("the reduced normal matrix is singular");
+    return singular(smallest_column >= 0 ? permutation[smallest_column] : -1);
+  if (options.factor_only) return Status::Ok();
 
   // Takahashi, backwards, one block of S (a panel of columns J with one pattern R below it) at a
   // time: Z_RJ = -Z_RR L_RJ L_JJ^-1 and Z_JJ = (L_JJ^-T - Z_RJ^T L_RJ) L_JJ^-1. The products need
@@ -306,7 +336,7 @@ Status SelectedInverse::Compute(const SparseMatrix& S_upper, const std::vector<i
   }
   inversion_seconds_ = SecondsSince(inversion_start);
   for (const double value : sparse->z)
-    if (!std::isfinite(value)) return Status::Error("the reduced normal matrix is singular");
+    if (!std::isfinite(value)) return singular(-1);
   sparse_ = std::move(sparse);
   return Status::Ok();
 }
@@ -377,6 +407,9 @@ bool SelectedInverse::Blocks(const std::vector<int>& blocks, Eigen::MatrixXd* ou
 }
 
 Eigen::MatrixXd SelectedInverse::Solve(const Eigen::MatrixXd& rhs) const {
+  if (sparse_ == nullptr && dense_.size() == 0)  // not computed (or factor_only): no figure
+    return Eigen::MatrixXd::Constant(rhs.rows(), rhs.cols(),
+                                     std::numeric_limits<double>::quiet_NaN());
   if (sparse_ == nullptr) return dense_ * rhs;
   const int n = size();
   cholmod_common* c = &sparse_->common;

@@ -517,9 +517,11 @@ struct Statistics {
   internal::BundleRound round;
   bool built = false;
 
-  void Compute(const State& state, const Frame& frame, bool marks_removed_only,
-               TaylorBundleSummary* summary, BundleAdjustmentResult* out,
-               internal::GroupVariance* variance) {
+  // An error when the normal matrix at the solution is singular (naming what is undetermined):
+  // the adjustment then fails, as BundleAdjust's does.
+  Status Compute(const State& state, const Frame& frame, bool marks_removed_only,
+                 TaylorBundleSummary* summary, BundleAdjustmentResult* out,
+                 internal::GroupVariance* variance) {
     Clock::time_point start = Clock::now();
     // In place: the problem holds pointers to these values.
     for (size_t i = 0; i < block.images.size(); ++i) {
@@ -536,9 +538,22 @@ struct Statistics {
     out->summary.sigma0 = summary->sigma0;
     out->summary.redundancy = summary->redundancy;
     out->summary.message.clear();
-    internal::ComputeBundleStatistics(options, block, plan, ground, round, out, variance);
+    const Status determined =
+        internal::ComputeBundleStatistics(options, block, plan, ground, round, out, variance);
     if (!out->summary.message.empty()) summary->message += "; " + out->summary.message;
     summary->statistics_seconds += SecondsSince(start);
+    return determined;
+  }
+
+  // Without covariances the last round's normal matrix is factorised once all the same
+  // (internal::CheckBundleDeterminacy), as BundleAdjust does.
+  Status CheckDeterminacy(TaylorBundleSummary* summary) {
+    const Clock::time_point start = Clock::now();
+    double factorization_seconds = 0.0;
+    const Status determined =
+        internal::CheckBundleDeterminacy(block, plan, ground, round, &factorization_seconds);
+    summary->statistics_seconds += SecondsSince(start);
+    return determined;
   }
 };
 
@@ -869,12 +884,26 @@ Status TaylorBundleAdjust(const TaylorBundleOptions& options,
     layout = Layout();
     normal = Normal();
     reduction.reset();
-    statistics.Compute(state, frame, marks_removed_only, &summary, &out, &variance);
+    const Status determined =
+        statistics.Compute(state, frame, marks_removed_only, &summary, &out, &variance);
+    if (!determined.ok()) {
+      summary.sigma0 = kNaN;
+      return finish(SolverTermination::kFailure,
+                    "round " + std::to_string(round) + ": " + determined.message());
+    }
     const internal::RoundChange change = internal::ChangeAfterRound(&changes, round);
     if (change == internal::RoundChange::kFailed)
       return finish(SolverTermination::kFailure, out.summary.message);
     if (change == internal::RoundChange::kNone) break;
     marks_removed_only = change == internal::RoundChange::kMarksRemoved;
+  }
+  if (adjustment_options.statistics.covariances == BundleCovarianceMethod::kNone) {
+    const Status determined = statistics.CheckDeterminacy(&summary);
+    if (!determined.ok()) {
+      summary.sigma0 = kNaN;
+      return finish(SolverTermination::kFailure, "round " + std::to_string(summary.rounds) +
+                                                     ": " + determined.message());
+    }
   }
   summary.num_rejected_marks = static_cast<int>(out.rejected_marks.size());
   if (adjustment_options.statistics.estimate_accuracies)

@@ -34,8 +34,17 @@ struct ReducedNormals {
   int64_t S_nonzeros = 0;                       // stored entries of S (both triangles)
   bool ok = false;
   std::string message;                          // why not ok
+  // Why not ok, when it is a rank defect: S singular (singular_block: the e block of the column
+  // where the factorisation found it, singular_component: that column's place in the block's
+  // tangent space; -1 when not known) or a point whose rays do not determine it
+  // (undetermined_point: index into the point data).
+  bool singular = false;
+  int singular_block = -1;
+  int singular_component = -1;
+  int undetermined_point = -1;
 };
-// With options.dense, C is S inverted densely (the oracle of the tests).
+// With options.dense, C is S inverted densely (the oracle of the tests); with options.factor_only
+// S is only factorised (ok: every parameter determined; C holds no entry: not for the statistics).
 void BuildReducedNormals(const BundleRound& round, const SelectedInversionOptions& options,
                          ReducedNormals* reduced);
 
@@ -93,10 +102,25 @@ struct GroupVariance {
 // Everything the result reports about a converged round: residuals, groups, covariances,
 // calibration, per-observation diagnostics (with the whitened normalized residual of each of the
 // round's observations in `normalized`, aligned with `round.residuals` rows), check points.
-void ComputeBundleStatistics(const BundleAdjustmentOptions& options, const Block& block,
-                             const BundlePlan& plan, const BundleState& state,
-                             const BundleRound& round, BundleAdjustmentResult* result,
-                             GroupVariance* variance);
+// With covariances asked for, an error when the round's normal matrix is singular (a parameter
+// the observations do not determine): the message names it ("the normal matrix is singular: image
+// 'IMG_12': omega is not determined by the observations"), the result holds what needs no
+// covariance. A singular normal matrix is a failed adjustment, never a success without
+// covariances.
+[[nodiscard]] Status ComputeBundleStatistics(const BundleAdjustmentOptions& options,
+                                             const Block& block, const BundlePlan& plan,
+                                             const BundleState& state, const BundleRound& round,
+                                             BundleAdjustmentResult* result,
+                                             GroupVariance* variance);
+
+// The same check without covariances (BundleCovarianceMethod::kNone): the reduced normal matrix
+// built and factorised once, not inverted; the error as above. Ceres' Levenberg-Marquardt steps
+// solve damped systems, which are never singular, so a parameter no observation determines
+// converges to wherever the damping left it: only an undamped factorisation shows it.
+// *factorization_seconds: the factorisation's time (s).
+[[nodiscard]] Status CheckBundleDeterminacy(const Block& block, const BundlePlan& plan,
+                                            const BundleState& state, const BundleRound& round,
+                                            double* factorization_seconds);
 
 // The images' and cameras' own uncertainty carried into the covariance of a check point: given
 // its rays, the marks they come from (indices into Block::marks) and its intersection, the

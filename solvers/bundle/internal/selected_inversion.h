@@ -28,8 +28,15 @@ struct SelectedInversionOptions {
   // The test oracle (and nothing else): S inverted densely with Eigen's LDL^T, every entry kept.
   bool dense = false;
   // S is singular (a datum defect in all but name) when a pivot of the LDL^T of its Jacobi-scaled
-  // form is at most this fraction of the largest (unitless).
-  double min_pivot_ratio = 1e-12;
+  // form is at most this fraction of the largest (unitless). Above the rounding of the Schur
+  // complement: an exactly singular S (tests/support/singular_block.h) gives pivots of either
+  // sign up to 7e-11 of the largest. A parameter at this ratio has a sigma 3e4 times the one it
+  // would have with the parameters factorised before it held.
+  double min_pivot_ratio = 1e-9;
+  // Factorise only (S checked positive definite, singular_column() found), compute no entry of
+  // the inverse: Block and Blocks then return false. What a bundle without statistics needs to
+  // know that every parameter is determined, at the cost of one factorisation.
+  bool factor_only = false;
 };
 
 class SelectedInverse {
@@ -44,7 +51,8 @@ class SelectedInverse {
   // S symmetric positive definite, given by its upper triangle (entries below the diagonal are
   // ignored). block_start partitions its columns into parameter blocks: block b is columns
   // block_start[b] .. block_start[b + 1] - 1 (block_start.back() = S.cols()). An error when S is
-  // singular to min_pivot_ratio, not finite, or CHOLMOD fails.
+  // singular to min_pivot_ratio, not finite, or CHOLMOD fails; singular() then says whether S
+  // was found singular and singular_column() where.
   [[nodiscard]] Status Compute(const SparseMatrix& S_upper, const std::vector<int>& block_start,
                                const SelectedInversionOptions& options);
 
@@ -55,9 +63,19 @@ class SelectedInverse {
   // together). False when a pair of them lies off the filled pattern.
   bool Blocks(const std::vector<int>& blocks, Eigen::MatrixXd* out) const;
   // C rhs, through the factor (or the dense inverse): what lies off the pattern, e.g. a check
-  // point's images that share no tie point. NaN when out of memory. Uses CHOLMOD's workspace: one
-  // thread at a time (Block and Blocks are safe to call concurrently).
+  // point's images that share no tie point. NaN when out of memory or not computed. Uses CHOLMOD's
+  // workspace: one thread at a time (Block and Blocks are safe to call concurrently).
   Eigen::MatrixXd Solve(const Eigen::MatrixXd& rhs) const;
+
+  // After Compute failed: S is singular (not positive definite to min_pivot_ratio), and the
+  // column of S (its own order, 0-based; -1 when not known, e.g. an inverse that is not finite)
+  // that depends on the columns factorised before it: a column without weight, the column where
+  // CHOLMOD's factorisation stopped (L->minor, mapped back through the fill-reducing
+  // permutation), or the one with the smallest pivot of the LDL^T of the Jacobi-scaled S. That
+  // parameter is not determined given the others ordered before it: one member of the
+  // undetermined combination.
+  bool singular() const { return singular_; }
+  int singular_column() const { return singular_column_; }
 
   int size() const { return static_cast<int>(scale_.size()); }
   int num_blocks() const { return static_cast<int>(block_start_.size()) - 1; }
@@ -77,6 +95,8 @@ class SelectedInverse {
   std::vector<int> block_start_;  // S's blocks
   double factorization_seconds_ = 0.0;
   double inversion_seconds_ = 0.0;
+  bool singular_ = false;
+  int singular_column_ = -1;
 };
 
 }  // namespace photopose::internal

@@ -9,9 +9,9 @@
 #include <random>
 #include <set>
 
+#include "core/collinearity.h"
 #include "core/io/bal.h"
 #include "core/io/colmap.h"
-#include "core/collinearity.h"
 #include "core/rotation.h"
 #include "core/simulation/synthetic_block.h"
 #include "solvers/bundle/block_initialization.h"
@@ -19,6 +19,7 @@
 #include "solvers/resection/resection.h"
 #include "test_data.h"
 #include "tests/support/dbat_data.h"
+#include "tests/support/singular_block.h"
 
 namespace photopose {
 namespace {
@@ -1152,6 +1153,71 @@ TEST(BundleEarthCurvature, CheckPointsAreIntersectedWithTheCorrection) {
     mean_lowering += lowering / 6.0;
   }
   EXPECT_GT(mean_lowering, 0.01);
+// ------------------------------------------------------------------ a singular normal matrix
+
+// Ceres' damped steps converge on a block with an undetermined parameter; the adjustment must
+// fail, name it, and leave the block as it was, with every statistics option (kNone factorises
+// the reduced system once without inverting it).
+constexpr BundleCovarianceMethod kEveryStatisticsMethod[] = {
+    BundleCovarianceMethod::kSelectedInversion, BundleCovarianceMethod::kDenseInverse,
+    BundleCovarianceMethod::kNone};
+
+void ExpectSingularFailure(const Block& input, const BundleAdjustmentConfig& config,
+                           const std::string& named) {
+  for (const BundleCovarianceMethod method : kEveryStatisticsMethod) {
+    SCOPED_TRACE(EnumName(method));
+    BundleAdjustmentOptions options;
+    options.statistics.covariances = method;
+    Block block = input;
+    BundleAdjustmentResult result;
+    const Status status = BundleAdjust(options, config, &block, &result);
+    ASSERT_TRUE(status.ok()) << status.message();  // a data-dependent failure, in the summary
+    EXPECT_EQ(result.summary.termination, SolverTermination::kFailure);
+    EXPECT_FALSE(result.summary.IsSolutionUsable());
+    EXPECT_NE(result.summary.message.find("the normal matrix is singular: " + named),
+              std::string::npos)
+        << result.summary.message;
+    // The block keeps its input values.
+    for (size_t i = 0; i < block.images.size(); ++i)
+      EXPECT_EQ(block.images[i].eo->parameters, input.images[i].eo->parameters) << i;
+  }
+}
+
+TEST(BundleAdjustSingular, AnImageWhoseMarksLieOnOneLineFailsNamingItsRotation) {
+  const testing::SingularBlock data = testing::BlockWithAnImageOnALine();
+  const std::string image = data.block.images[data.image].name;
+  ExpectSingularFailure(data.block, BundleAdjustmentConfig(),
+                        "image '" + image + "': omega is not determined by the observations");
+}
+
+TEST(BundleAdjustSingular, TheSameBlockWithOneMarkOffTheLineAdjusts) {
+  // The control of the test above: one more mark, of a point well off the line, determines the
+  // image.
+  testing::SingularBlock line = testing::BlockWithAnImageOnALine();
+  const int image = line.image;
+  for (const BlockMark& mark : std::vector<BlockMark>(line.block.marks)) {
+    const BlockPoint& point = line.block.points[mark.point];
+    if (mark.image == image + 1 && point.id.rfind("LINE_", 0) != 0 &&
+        point.role == PointRole::kTie) {
+      // A tie point of the next image seen from this one too, well off the line.
+      BlockMark extra;
+      if (!testing::TrueMark(line.block, line.truth, image, mark.point,
+                             line.truth.points_m[mark.point],
+                             line.block.marks[line.block.marks_of_image[image].front()], &extra))
+        continue;
+      if (std::abs(extra.observation.y()) < 3000.0) continue;  // um from the principal point
+      line.block.marks.push_back(extra);
+      break;
+    }
+  }
+  const size_t on_the_line = line.block.marks_of_image[image].size();
+  line.block.BuildIndex();
+  ASSERT_EQ(line.block.marks_of_image[image].size(), on_the_line + 1);
+  BundleAdjustmentResult result;
+  ASSERT_TRUE(
+      BundleAdjust(BundleAdjustmentOptions(), BundleAdjustmentConfig(), &line.block, &result).ok());
+  EXPECT_TRUE(result.summary.IsSolutionUsable()) << result.summary.message;
+  EXPECT_TRUE(result.images[image].has_covariance);
 }
 
 }  // namespace

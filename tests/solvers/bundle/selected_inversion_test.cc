@@ -177,5 +177,49 @@ TEST(SelectedInversion, SingularMatrixIsAnErrorNotAnAbort) {
   EXPECT_FALSE(C.Compute(S, {0, 1}, SelectedInversionOptions()).ok());
 }
 
+TEST(SelectedInversion, ASingularMatrixNamesAColumnOfItsDefect) {
+  // S = J^T J over blocks {0, 1}, {2, 3}, {4} with column 3 = column 0 + 2 column 1: the null
+  // vector (1, 2, 0, -1, 0). A Cholesky meets the defect at the last of columns 0, 1, 3 in its
+  // order: 3 in the blocks' own order (the dense path), one of the three in the sparse factor's.
+  std::mt19937 rng(3);
+  std::uniform_real_distribution<double> uniform(-1.0, 1.0);
+  Eigen::MatrixXd J(12, 5);
+  for (int r = 0; r < J.rows(); ++r)
+    for (int c = 0; c < J.cols(); ++c) J(r, c) = uniform(rng);
+  J.col(3) = J.col(0) + 2.0 * J.col(1);
+  const Eigen::MatrixXd S = J.transpose() * J;
+  SelectedInverse::SparseMatrix upper(5, 5);
+  for (int c = 0; c < 5; ++c)
+    for (int r = 0; r <= c; ++r) upper.insert(r, c) = S(r, c);
+  const std::vector<int> blocks = {0, 2, 4, 5};
+  SelectedInverse C;
+  EXPECT_FALSE(C.Compute(upper, blocks, SelectedInversionOptions()).ok());
+  EXPECT_TRUE(C.singular());
+  EXPECT_TRUE(C.singular_column() == 0 || C.singular_column() == 1 || C.singular_column() == 3)
+      << C.singular_column();
+  SelectedInversionOptions dense;
+  dense.dense = true;
+  EXPECT_FALSE(C.Compute(upper, blocks, dense).ok());
+  EXPECT_TRUE(C.singular());
+  EXPECT_EQ(C.singular_column(), 3);
+  // Factorising only finds it too.
+  SelectedInversionOptions factor_only;
+  factor_only.factor_only = true;
+  EXPECT_FALSE(C.Compute(upper, blocks, factor_only).ok());
+  EXPECT_TRUE(C.singular());
+  // A column without weight is named as such; a regular matrix is not singular, and factorising
+  // only keeps no entry of the inverse.
+  SelectedInverse::SparseMatrix T(2, 2);
+  T.insert(0, 0) = 1.0;
+  EXPECT_FALSE(C.Compute(T, {0, 1, 2}, SelectedInversionOptions()).ok());
+  EXPECT_EQ(C.singular_column(), 1);
+  ASSERT_TRUE(C.Compute(TwoByTwo(4.0, 2.0, 3.0), {0, 1, 2}, factor_only).ok());
+  EXPECT_FALSE(C.singular());
+  EXPECT_EQ(C.singular_column(), -1);
+  Eigen::MatrixXd block;
+  EXPECT_FALSE(C.Block(0, 0, &block));
+  EXPECT_TRUE(C.Solve(Eigen::MatrixXd::Ones(2, 1)).hasNaN());
+}
+
 }  // namespace
 }  // namespace photopose::internal

@@ -14,9 +14,10 @@
 #include "core/block.h"
 #include "core/io/block_tables.h"
 #include "core/io/colmap.h"
-#include "core/rotation.h"
 #include "core/io/tables.h"
 #include "core/simulation/synthetic_block.h"
+#include "core/rotation.h"
+#include "tests/support/singular_block.h"
 #include "tests/tools/cli_test_util.h"
 
 namespace photopose {
@@ -684,6 +685,36 @@ TEST(BundleCommand, FilmMarksOfACameraWithoutPixelSizeAreAdjustedInMicrometres) 
   EXPECT_NE(run.out.find(", stated 5 um, RMS "), std::string::npos) << run.out;  // --film_tie_accuracy
   EXPECT_NE(run.out.find(", stated 2.5 um, RMS "), std::string::npos) << run.out;
   EXPECT_EQ(run.out.find("px"), std::string::npos) << run.out;
+}
+
+// An image whose marks all lie on one ground line (tests/support/singular_block.h), as a COLMAP
+// model (start values without priors, COLMAP's gauge): Ceres converges, the normal matrix is
+// singular. Not adjusted, exit 1, the one-line reason names the image and the parameter, only the
+// report written; with every statistics option, and --force (which is for the sigma0 check)
+// changes nothing.
+TEST(BundleCommand, ASingularNormalMatrixIsAFailureNamingWhatIsNotDetermined) {
+  const std::string dir = ScratchDir();
+  const testing::SingularBlock data = testing::BlockWithAnImageOnALine();
+  std::filesystem::create_directories(dir + "/model");
+  ASSERT_TRUE(WriteColmapModel(dir + "/model", data.block).ok());
+  const std::string image = data.block.images[data.image].name;
+  const std::string common = "bundle --colmap_model=" + dir + "/model --quiet --out_colmap=" + dir +
+                             "/out --report=" + dir + "/report.json";
+  for (const std::string extra : {"", " --statistics=dense", " --statistics=none", " --force"}) {
+    SCOPED_TRACE(extra);
+    std::filesystem::remove(dir + "/report.json");
+    const CliRun run = RunCli(common + extra, dir);
+    EXPECT_EQ(run.exit_code, 1) << run.err;
+    EXPECT_NE(run.err.find("photopose bundle: not adjusted: round 1: the normal matrix is "
+                           "singular: image '" +
+                           image + "': omega is not determined by the observations\n"),
+              std::string::npos)
+        << run.err;
+    EXPECT_NE(run.out.find("bundle: not adjusted"), std::string::npos) << run.out;
+    EXPECT_FALSE(std::filesystem::exists(dir + "/out/images.txt"));
+    const nlohmann::json report = nlohmann::json::parse(ReadFile(dir + "/report.json"));
+    EXPECT_EQ(report["summary"]["termination"], "failure");
+  }
 }
 
 }  // namespace
