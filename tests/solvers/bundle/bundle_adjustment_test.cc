@@ -1153,6 +1153,8 @@ TEST(BundleEarthCurvature, CheckPointsAreIntersectedWithTheCorrection) {
     mean_lowering += lowering / 6.0;
   }
   EXPECT_GT(mean_lowering, 0.01);
+}
+
 // ------------------------------------------------------------------ a singular normal matrix
 
 // Ceres' damped steps converge on a block with an undetermined parameter; the adjustment must
