@@ -246,6 +246,7 @@ bool SolveStep(const Context& ctx, const std::string& at, const Normal& normal, 
     return false;
   }
   if (!Factorize(ctx.options.min_pivot_ratio, *layout, reduction)) {
+    reduction->singular = true;
     *message = Format("the reduced normal matrix is singular (pivot ratio %.3g)",
                       reduction->pivot_ratio) +
                at +
@@ -517,19 +518,23 @@ struct Statistics {
   internal::BundleRound round;
   bool built = false;
 
-  // An error when the normal matrix at the solution is singular (naming what is undetermined):
-  // the adjustment then fails, as BundleAdjust's does.
-  Status Compute(const State& state, const Frame& frame, bool marks_removed_only,
-                 TaylorBundleSummary* summary, BundleAdjustmentResult* out,
-                 internal::GroupVariance* variance) {
-    Clock::time_point start = Clock::now();
-    // In place: the problem holds pointers to these values.
+  // The solution in the ground frame, in place: the problem holds pointers to these values.
+  void SetGround(const State& state, const Frame& frame) {
     for (size_t i = 0; i < block.images.size(); ++i) {
       ground.eo[i] = state.eo[i];
       ground.eo[i].head<3>() += frame.centroid;
     }
     for (size_t p = 0; p < block.points.size(); ++p)
       if (plan.point_in_problem[p]) ground.points[p] = state.points[p] + frame.centroid;
+  }
+
+  // An error when the normal matrix at the solution is singular (naming what is undetermined):
+  // the adjustment then fails, as BundleAdjust's does.
+  Status Compute(const State& state, const Frame& frame, bool marks_removed_only,
+                 TaylorBundleSummary* summary, BundleAdjustmentResult* out,
+                 internal::GroupVariance* variance) {
+    Clock::time_point start = Clock::now();
+    SetGround(state, frame);
     if (!(built && marks_removed_only && internal::UpdateBundleRound(plan, &round)))
       internal::BuildBundleRound(options, config, block, plan, &ground, &round);
     built = true;
@@ -543,6 +548,17 @@ struct Statistics {
     if (!out->summary.message.empty()) summary->message += "; " + out->summary.message;
     summary->statistics_seconds += SecondsSince(start);
     return determined;
+  }
+
+  // What a singular reduced normal matrix at `state` leaves undetermined, named as BundleAdjust
+  // names it (internal::CheckBundleDeterminacy on the Ceres problem of that state); Ok when that
+  // check finds S regular after all.
+  Status NameUndetermined(const State& state, const Frame& frame) {
+    SetGround(state, frame);
+    internal::BuildBundleRound(options, config, block, plan, &ground, &round);
+    built = true;
+    double factorization_seconds = 0.0;
+    return internal::CheckBundleDeterminacy(block, plan, ground, round, &factorization_seconds);
   }
 
   // Without covariances the last round's normal matrix is factorised once all the same
@@ -875,6 +891,11 @@ Status TaylorBundleAdjust(const TaylorBundleOptions& options,
         RunRound(context, round, &layout, &state, &normal, reduction.get(), result, &message);
     if (type != SolverTermination::kConverged) {
       summary.sigma0 = kNaN;
+      if (reduction->singular) {
+        // Named as BundleAdjust names it: the image and parameter, or the point, undetermined.
+        const Status named = statistics.NameUndetermined(state, frame);
+        if (!named.ok()) message = named.message() + " (" + message + ")";
+      }
       return finish(type, "round " + std::to_string(round) + ": " + message);
     }
     summary.message = message;

@@ -158,6 +158,7 @@ struct Reduction {
   SupernodalCholesky cholmod;
   bool analysed = false;
   double pivot_ratio = 0.0;  // smallest / largest pivot of the scaled LDL^T
+  bool singular = false;     // the last factorisation found S singular (SolveStep)
 };
 
 inline bool IsFixed(const Plan& plan, const Layout& layout, int b, int component) {
