@@ -335,7 +335,7 @@ position (initialize_block). solver: 'ceres' (BundleAdjust, the default), 'taylo
 hand-written Levenberg-Marquardt block solver on its reduced normal equations, the same objective,
 rounds and statistics) or 'taylor_as_printed' (the lecture's partials as printed); the Taylor
 solvers refuse what they cannot adjust (self-calibration, COLMAP camera models, an estimated lever
-arm, ApplyECC) with the reason. Raises photopose.Error for invalid options or a block the
+arm) with the reason. Raises photopose.Error for invalid options or a block the
 adjustment cannot use; a failed or unconverged adjustment is result.summary.termination with the
 block unchanged. progress(info: BundleIterationInfo) is called after every iteration (from the
 adjusting thread, with the GIL); an exception it raises is raised when the adjustment returns.)doc");

@@ -81,11 +81,6 @@ Status CheckSupported(const BundleAdjustmentConfig& config, const Block& block) 
                            " model: the Taylor bundle adjustment takes the ArcGIS frame model "
                            "(FRAME) only; use the Ceres adjustment");
     }
-    if (camera.earth_curvature_radius_m() > 0.0) {
-      return Status::Error("camera " + Quoted(camera.camera_id) +
-                           " applies the earth-curvature correction (ApplyECC), which the Taylor "
-                           "bundle adjustment does not model; use the Ceres adjustment");
-    }
   }
   for (const int i : config.constant_images)
     if (i < 0 || i >= static_cast<int>(block.images.size()))
@@ -161,10 +156,13 @@ Frame MakeFrame(const BundleAdjustmentConfig& config, const Block& block, const 
       frame.surveyed[p] = *block.points[p].surveyed_m - frame.centroid;
   frame.measured.assign(block.images.size(), Eigen::Vector3d::Zero());
   frame.focal_um.assign(block.images.size(), 0.0);
+  frame.earth_radius_m.assign(block.images.size(), 0.0);
   for (size_t i = 0; i < block.images.size(); ++i) {
     if (block.images[i].measured_center_m)
       frame.measured[i] = *block.images[i].measured_center_m - frame.centroid;
-    frame.focal_um[i] = block.cameras[block.images[i].camera].params[kFrameFocal];
+    const BlockCamera& camera = block.cameras[block.images[i].camera];
+    frame.focal_um[i] = camera.params[kFrameFocal];
+    frame.earth_radius_m[i] = camera.earth_curvature_radius_m();
   }
   frame.use_lever = config.lever_arm_m.has_value();
   if (frame.use_lever) frame.lever = *config.lever_arm_m;

@@ -54,11 +54,12 @@
 // affinity, Polarity); control, check and tie points; GNSS camera positions with an applied
 // (not estimated) lever arm; attitude priors; images and points held constant; the relative gauge
 // (COLMAP's convention) when nothing ties the block to the ground; rejection rounds, data
-// snooping and accuracy estimation as in BundleAdjust. Not supported, refused with the reason: self-calibration, the COLMAP forward
-// camera models (their residual lives in the pixel domain after distortion, whose derivative is
-// not part of the lecture's linearisation), an estimated lever arm, a camera with the
-// earth-curvature correction (ApplyECC: not in the lecture's equations; the Ceres adjustment
-// models it).
+// snooping and accuracy estimation as in BundleAdjust; the camera table's earth-curvature
+// correction (ApplyECC: each point seen lowered by D^2 / (2R), the centre's partials chained
+// through the drop; TaylorPoseLinearization). Not supported, refused with the reason:
+// self-calibration, the COLMAP forward camera models (their residual lives in the pixel domain
+// after distortion, whose derivative is not part of the lecture's linearisation), an estimated
+// lever arm.
 //
 // Robust losses (tie_loss, on tie marks as in BundleAdjust): iteratively reweighted least squares
 // in the same normal equations. Each linearisation weights a tie mark by rho'(s) (s its squared

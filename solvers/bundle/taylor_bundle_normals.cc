@@ -188,7 +188,8 @@ bool LinearizeMarks(TaylorPartials partials, const Block& block, const Plan& pla
   std::vector<int> image_behind(num_images, -1);
   std::vector<double> image_behind_w(num_images, 0.0);
   ParallelFor(num_images, num_threads, [&](size_t i) {
-    const TaylorPoseLinearization pose(partials, state.eo[i].data(), frame.focal_um[i]);
+    const TaylorPoseLinearization pose(partials, state.eo[i].data(), frame.focal_um[i],
+                                       frame.earth_radius_m[i]);
     const int b = layout.image_block[i];
     Matrix6d U = Matrix6d::Zero();
     Vector6d ge = Vector6d::Zero();
@@ -261,7 +262,7 @@ void DenseMarkRows(TaylorPartials partials, const Block& block, const Plan& plan
     const int m = layout.marks[k];
     const BlockMark& mark = block.marks[m];
     const TaylorPoseLinearization pose(partials, state.eo[mark.image].data(),
-                                       frame.focal_um[mark.image]);
+                                       frame.focal_um[mark.image], frame.earth_radius_m[mark.image]);
     double row_u[6], row_v[6], fu, fv, w;
     if (!pose.Linearize(state.points[mark.point].data(), plan.ideal_um[m].data(), row_u, row_v,
                         &fu, &fv, &w))
@@ -385,7 +386,8 @@ bool EvaluateCost(TaylorPartials partials, const Block& block, const Plan& plan,
   std::vector<double> image_ssr(num_images, 0.0);
   std::vector<int> image_behind(num_images, -1);
   ParallelFor(num_images, num_threads, [&](size_t i) {
-    const TaylorPoseLinearization pose(partials, state.eo[i].data(), frame.focal_um[i]);
+    const TaylorPoseLinearization pose(partials, state.eo[i].data(), frame.focal_um[i],
+                                       frame.earth_radius_m[i]);
     double ssr = 0.0;
     for (const int k : layout.image_marks[i]) {
       const int m = layout.marks[k];

@@ -339,14 +339,23 @@ bool TaylorPartialsForPoint(TaylorPartials partials, const ExteriorOrientation& 
 }
 
 TaylorPoseLinearization::TaylorPoseLinearization(TaylorPartials partials, const double* eo,
-                                                 double focal_um)
-    : focal_um_(focal_um), as_printed_(partials == TaylorPartials::kAsPrinted) {
+                                                 double focal_um, double earth_radius_m)
+    : focal_um_(focal_um),
+      earth_radius_m_(earth_radius_m),
+      as_printed_(partials == TaylorPartials::kAsPrinted) {
   PoseTrig trig;
   ComputeTrig(eo, &trig);
   std::copy(eo, eo + 3, center_);
   std::copy(trig.R, trig.R + 9, R_);
   sin_omega_ = trig.sin_omega;
   cos_omega_ = trig.cos_omega;
+}
+
+void TaylorPoseLinearization::Difference(const double* point, double d[3]) const {
+  d[0] = point[0] - center_[0];
+  d[1] = point[1] - center_[1];
+  d[2] = point[2] - center_[2];
+  if (earth_radius_m_ > 0.0) d[2] -= (d[0] * d[0] + d[1] * d[1]) / (2.0 * earth_radius_m_);
 }
 
 bool TaylorPoseLinearization::Linearize(const double* point, const double* observed_um,
@@ -356,10 +365,21 @@ bool TaylorPoseLinearization::Linearize(const double* point, const double* obser
   std::copy(R_, R_ + 9, trig.R);
   trig.sin_omega = sin_omega_;
   trig.cos_omega = cos_omega_;
-  const double d[3] = {point[0] - center_[0], point[1] - center_[1], point[2] - center_[2]};
-  return photopose::Linearize<true>(trig, focal_um_, 1.0 / focal_um_, as_printed_, d,
-                                    observed_um[0], observed_um[1], row_u, row_v, fu_um, fv_um,
-                                    w_m);
+  double d[3];
+  Difference(point, d);
+  if (!photopose::Linearize<true>(trig, focal_um_, 1.0 / focal_um_, as_printed_, d,
+                                  observed_um[0], observed_um[1], row_u, row_v, fu_um, fv_um,
+                                  w_m))
+    return false;
+  if (earth_radius_m_ > 0.0) {
+    // The drop depends on X - X0, Y - Y0: the centre's partials chained through it.
+    const double gx = d[0] / earth_radius_m_, gy = d[1] / earth_radius_m_;
+    for (double* row : {row_u, row_v}) {
+      row[0] -= row[2] * gx;
+      row[1] -= row[2] * gy;
+    }
+  }
+  return true;
 }
 
 bool TaylorPoseLinearization::Residual(const double* point, const double* observed_um,
@@ -368,7 +388,8 @@ bool TaylorPoseLinearization::Residual(const double* point, const double* observ
   std::copy(R_, R_ + 9, trig.R);
   trig.sin_omega = sin_omega_;
   trig.cos_omega = cos_omega_;
-  const double d[3] = {point[0] - center_[0], point[1] - center_[1], point[2] - center_[2]};
+  double d[3];
+  Difference(point, d);
   return photopose::Linearize<false>(trig, focal_um_, 1.0 / focal_um_, as_printed_, d,
                                      observed_um[0], observed_um[1], nullptr, nullptr, fu_um,
                                      fv_um, w_m);

@@ -176,8 +176,13 @@ bool TaylorPartialsForPoint(TaylorPartials partials, const ExteriorOrientation& 
 // of an image at the same pose.
 class TaylorPoseLinearization {
  public:
-  // eo = [X0, Y0, Z0, omega, phi, kappa] (m, rad, seed), focal_um = c (um).
-  TaylorPoseLinearization(TaylorPartials partials, const double* eo, double focal_um);
+  // eo = [X0, Y0, Z0, omega, phi, kappa] (m, rad, seed), focal_um = c (um). earth_radius_m > 0:
+  // the camera table's earth-curvature correction (ApplyECC): every point is seen lowered by
+  // ((X - X0)^2 + (Y - Y0)^2) / (2 R) (core/collinearity.h, LowerByEarthCurvature), and the
+  // partials by the centre are chained through the drop, dF/dX0 -= dF/dZ0 (X - X0) / R and
+  // dF/dY0 -= dF/dZ0 (Y - Y0) / R (the point's partials stay the centre's negated).
+  TaylorPoseLinearization(TaylorPartials partials, const double* eo, double focal_um,
+                          double earth_radius_m = 0.0);
 
   // For the point (m, the frame of eo's centre) observed at observed_um (um): Fu, Fv (um) and the
   // rows dFu/dp, dFv/dp, p = (X0, Y0, Z0, omega, phi, kappa), exactly as TaylorPartialsForPoint.
@@ -189,10 +194,14 @@ class TaylorPoseLinearization {
                 double* w_m) const;
 
  private:
+  // The point relative to the centre, lowered by the earth-curvature drop when asked.
+  void Difference(const double* point, double d[3]) const;
+
   double center_[3];
   double R_[9];
   double sin_omega_, cos_omega_;
   double focal_um_;
+  double earth_radius_m_;
   bool as_printed_;
 };
 

@@ -99,6 +99,9 @@ struct Frame {
   std::vector<Eigen::Vector3d> surveyed;  // per point (control points), centred
   std::vector<Eigen::Vector3d> measured;  // per image (camera positions), centred
   std::vector<double> focal_um;           // per image
+  // Per image: its camera's earth-curvature radius (m; BlockCamera::earth_curvature_radius_m),
+  // 0 without ApplyECC. The drop depends on X - X0, Y - Y0 only: the centred frame keeps it.
+  std::vector<double> earth_radius_m;
   Eigen::Vector3d lever = Eigen::Vector3d::Zero();
   bool use_lever = false;
 };
