@@ -14,6 +14,7 @@
 #include <sstream>
 #include <utility>
 
+#include "core/collinearity.h"
 #include "core/rotation.h"
 
 namespace photopose {
@@ -355,7 +356,7 @@ void TaylorPoseLinearization::Difference(const double* point, double d[3]) const
   d[0] = point[0] - center_[0];
   d[1] = point[1] - center_[1];
   d[2] = point[2] - center_[2];
-  if (earth_radius_m_ > 0.0) d[2] -= (d[0] * d[0] + d[1] * d[1]) / (2.0 * earth_radius_m_);
+  if (earth_radius_m_ > 0.0) d[2] -= EarthCurvatureDropOf(center_, point, earth_radius_m_);
 }
 
 bool TaylorPoseLinearization::Linearize(const double* point, const double* observed_um,

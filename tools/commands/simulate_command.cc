@@ -108,11 +108,18 @@ Status CheckDatasetFolder(const ParsedFlags& parsed, const std::vector<FolderFil
   return Status::Ok();
 }
 
-// The flags only a block uses ("block:" in their help): refused for the single-image scenarios.
-constexpr const char* kBlockOnlyFlags[] = {
-    "lines",        "images_per_line", "forward_overlap",  "side_overlap",  "flying_height",
-    "tie_points",   "gnss",            "gnss_sigma",       "control_sigma", "tie_blunders",
-    "control_blunders", "gnss_blunders", "benchmark_block", "colmap"};
+// The first flag set on the command line that only a block uses, or "": the one rule is the
+// flag's help, which starts with "block:".
+std::string BlockOnlyFlagSet() {
+  std::vector<gflags::CommandLineFlagInfo> flags;
+  gflags::GetAllFlags(&flags);
+  for (const gflags::CommandLineFlagInfo& flag : flags) {
+    if (!flag.is_default && flag.filename.find("simulate_command") != std::string::npos &&
+        flag.description.rfind("block:", 0) == 0)
+      return flag.name;
+  }
+  return "";
+}
 
 // --scenario=block: a synthetic block (core/simulation/synthetic_block.h) as the project's tables, its truth
 // and, with --colmap, a COLMAP model, written into --out_dir all or nothing.
@@ -266,11 +273,10 @@ int RunSimulate(int argc, char** argv) {
     choices.replace(choices.size() - 2, 2, " or block");
     return BadInput("simulate", "--scenario must be " + choices + ", not '" + FLAGS_scenario + "'");
   }
-  for (const char* flag : kBlockOnlyFlags) {
-    if (!IsDefault(flag)) {
-      return BadInput("simulate", std::string("--") + flag + " is for --scenario=block, not " +
-                                      FLAGS_scenario);
-    }
+  const std::string block_flag = BlockOnlyFlagSet();
+  if (!block_flag.empty()) {
+    return BadInput("simulate",
+                    "--" + block_flag + " is for --scenario=block, not " + FLAGS_scenario);
   }
   // The dataset's files, for the pre-flight check of the folder before any work.
   std::vector<FolderFile> files = {{"cameras.csv", ""},      {"points.csv", ""},
