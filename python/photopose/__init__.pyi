@@ -510,6 +510,7 @@ class BundleStatisticsOptions:
     """Covariances, verdicts, diagnostics, variance components."""
     def __init__(self, **kwargs: Any) -> None: ...
     covariances: str  # 'full' (selected inversion), 'dense' (the test oracle) or 'none'
+    relative_covariance: str  # a relative block's covariance datum: 'points', 'centres' or 'first_image'
     overfit_ratio: float
     overfit_redundancy_share: float
     high_correlation: float
@@ -646,6 +647,8 @@ class BundleAdjustmentSummary:
     def covariance_entries(self) -> int: ...  # count
     @property
     def covariance_memory_bytes(self) -> int: ...  # bytes
+    @property
+    def covariance_datum(self) -> str: ...  # what the covariances refer to, in words
     def is_solution_usable(self) -> bool: ...
     def brief_report(self) -> str: ...
 

@@ -77,6 +77,8 @@ default). A per-row accuracy of the tables overrides its row's default.)doc");
   auto stats = BindStruct<BundleStatisticsOptions>(m, "BundleStatisticsOptions",
                                                    "Covariances, verdicts, diagnostics, variance components.");
   stats.def_readwrite("covariances", &BundleStatisticsOptions::covariances, "'full' (selected inversion), 'dense' (the test oracle) or 'none'")
+      .def_readwrite("relative_covariance", &BundleStatisticsOptions::relative_covariance,
+                     "a relative block's covariance datum: 'points', 'centres' or 'first_image'")
       .def_readwrite("overfit_ratio", &BundleStatisticsOptions::overfit_ratio)
       .def_readwrite("overfit_redundancy_share", &BundleStatisticsOptions::overfit_redundancy_share)
       .def_readwrite("high_correlation", &BundleStatisticsOptions::high_correlation)
@@ -175,6 +177,8 @@ constant images and points, the GNSS lever arm (camera frame u, v, w; m).)doc");
       .def_readonly("covariance_entries", &BundleAdjustmentSummary::covariance_entries, "count")
       .def_readonly("covariance_memory_bytes", &BundleAdjustmentSummary::covariance_memory_bytes,
                     "bytes")
+      .def_readonly("covariance_datum", &BundleAdjustmentSummary::covariance_datum,
+                    "what the covariances refer to, in words")
       .def("is_solution_usable", &BundleAdjustmentSummary::IsSolutionUsable)
       .def("brief_report", &BundleAdjustmentSummary::BriefReport)
       .def("__repr__", &SummaryRepr);

@@ -229,6 +229,7 @@ PHOTOPOSE_PYTHON_ENUM(photopose::BundleLinearSolver)
 PHOTOPOSE_PYTHON_ENUM(photopose::BundleDatum)
 PHOTOPOSE_PYTHON_ENUM(photopose::BundleGroup)
 PHOTOPOSE_PYTHON_ENUM(photopose::BundleCovarianceMethod)
+PHOTOPOSE_PYTHON_ENUM(photopose::BundleRelativeCovariance)
 
 #undef PHOTOPOSE_PYTHON_ENUM
 

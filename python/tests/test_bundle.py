@@ -27,6 +27,19 @@ def test_colmap_model_same_poses_as_the_cli(cli, shared_data, tmp_path):
     result = pp.bundle_adjust(block, cli_options())
     assert result.summary.termination == "converged"
     assert result.summary.datum == "relative"
+    assert result.summary.covariance_datum.startswith("inner constraints on the")
+    # Every image has a covariance in the inner-constraint datum; in the adjustment's gauge the
+    # first has none.
+    assert np.all(np.isfinite(result.image_covariances))
+    gauge_options = cli_options()
+    gauge_options.statistics.relative_covariance = "first_image"
+    gauge_block = pp.read_colmap_model(model)
+    pp.initialize_block(gauge_block)
+    gauge = pp.bundle_adjust(gauge_block, gauge_options)
+    assert "held" in gauge.summary.covariance_datum
+    assert np.all(np.isnan(gauge.image_covariances[0]))
+    with pytest.raises(ValueError, match="relative_covariance|points"):
+        gauge_options.statistics.relative_covariance = "centers"
     expected = pp.read_colmap_model(out)
     np.testing.assert_allclose(block.image_parameters, expected.image_parameters, rtol=0,
                                atol=POSE_TOLERANCE)

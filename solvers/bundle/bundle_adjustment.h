@@ -167,6 +167,30 @@ constexpr EnumNameTable<BundleCovarianceMethod> EnumNames(BundleCovarianceMethod
   return EnumNameTable<BundleCovarianceMethod>(kBundleCovarianceMethodNames);
 }
 
+// The datum the covariances of a relative block refer to (no control points, no camera positions:
+// the seven similarity parameters are free and any covariance is one gauge's). Residuals,
+// redundancy numbers, w-tests, the smallest detectable errors and the calibration's covariance are
+// the same in every datum; orientation and point covariances are not. A block with an absolute
+// datum has its own, and this does not apply to it.
+enum class BundleRelativeCovariance {
+  // Inner constraints on the adjusted points: of all datums, the one with the smallest trace of
+  // the points' covariance (the free network of close-range photogrammetry; Polic et al. 2018 at
+  // scale). Every image, the first too, then has a covariance.
+  kInnerPoints,
+  // Inner constraints on the camera centres: the smallest trace of the centres' covariance.
+  kInnerCentres,
+  // The adjustment's own gauge (COLMAP's): the first image held (covariance zero), one centre
+  // coordinate of the second held (its variance zero).
+  kFirstImage,
+};
+inline constexpr EnumNameEntry<BundleRelativeCovariance> kBundleRelativeCovarianceNames[] = {
+    {BundleRelativeCovariance::kInnerPoints, "points"},
+    {BundleRelativeCovariance::kInnerCentres, "centres"},
+    {BundleRelativeCovariance::kFirstImage, "first_image"}};
+constexpr EnumNameTable<BundleRelativeCovariance> EnumNames(BundleRelativeCovariance) {
+  return EnumNameTable<BundleRelativeCovariance>(kBundleRelativeCovarianceNames);
+}
+
 // What the adjustment computes after convergence, and the thresholds of its verdicts: posterior
 // covariances, over-fitting, correlations, per-observation diagnostics with their w-test, and the
 // variance component estimation.
@@ -174,6 +198,8 @@ struct BundleStatisticsOptions {
   // Posterior covariances, redundancy numbers and everything that needs them, at every block size
   // (kNone: not computed).
   BundleCovarianceMethod covariances = BundleCovarianceMethod::kSelectedInversion;
+  // The datum of a relative block's orientation and point covariances.
+  BundleRelativeCovariance relative_covariance = BundleRelativeCovariance::kInnerPoints;
   // A prior group is flagged `overfit` when its RMS / stated accuracy is below overfit_ratio
   // (unitless, the note's "well below"), or its redundancy share below overfit_redundancy_share
   // (unitless: the tie points check less than a fifth of it, the solution follows the priors). A
@@ -371,13 +397,16 @@ struct BundleSnoopingStep {
 struct BundleImageResult {
   bool adjusted = false;
   std::string message;  // why not, or empty
-  // Posterior covariance sigma0^2 (J^T P J)^-1 of the exterior orientation (m, rad, seed); zero
-  // when not computed.
+  // Posterior covariance sigma0^2 (J^T P J)^-1 of the exterior orientation (m, rad, seed), in the
+  // datum of BundleAdjustmentSummary::covariance_datum; zero when not computed (and for an image
+  // the datum holds fixed).
   Matrix6d covariance = Matrix6d::Zero();
   bool has_covariance = false;
   int num_marks = 0;         // marks used in the final round
   double rms_residual = 0.0; // of those, RMS of the residual vector length in the marks' unit
-  std::string unit;          // "px" or "um"
+  // "px" or "um"; "sigma" when the image has pixel and film marks (the RMS of the whitened
+  // residual vector: residual / sigma, the stated accuracy 1).
+  std::string unit;
 };
 
 struct BundlePointResult {
@@ -441,6 +470,9 @@ struct BundleAdjustmentSummary {
   double inversion_seconds = 0.0;
   int64_t covariance_entries = 0;
   int64_t covariance_memory_bytes = 0;
+  // The datum the orientation and point covariances refer to, in words ("the block's datum", or a
+  // relative block's BundleRelativeCovariance with its size); empty without covariances.
+  std::string covariance_datum;
   // Where the adjustment's time went, over all rounds (s): building the Ceres problems; Ceres'
   // preprocessing (program, ordering, Schur structure, symbolic factorisation); residual and
   // Jacobian evaluation; the linear solves of the Levenberg-Marquardt steps (Schur elimination,

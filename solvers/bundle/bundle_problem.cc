@@ -14,12 +14,22 @@
 
 namespace photopose::internal {
 
-namespace {
+Eigen::Matrix<double, 3, 7> SimilarityRows(const Eigen::Vector3d& p, const Eigen::Vector3d& centroid,
+                                           double extent) {
+  const Eigen::Vector3d d = (p - centroid) / extent;
+  Eigen::Matrix<double, 3, 7> J = Eigen::Matrix<double, 3, 7>::Zero();
+  J.leftCols<3>().setIdentity();
+  J(0, 4) = d.z();
+  J(0, 5) = -d.y();
+  J(1, 3) = -d.z();
+  J(1, 5) = d.x();
+  J(2, 3) = d.y();
+  J(2, 4) = -d.x();
+  J.col(6) = d;
+  return J;
+}
 
-// The seven datum parameters are fixed when the smallest singular value of the (scaled) datum
-// Jacobian is above this fraction of the largest: below it one similarity motion is all but free
-// (control points 1 mm off a line 1 km long, say), and the adjustment would rest on noise.
-constexpr double kDatumConditioning = 1e-3;
+namespace {
 
 // Union-find over images.
 int Root(std::vector<int>* parent, int i) {
@@ -38,21 +48,10 @@ std::string Names(const std::vector<std::string>& names, size_t max_listed = 5) 
   return text;
 }
 
-// Rows of the datum Jacobian of one fixed position p: d p / d(t, rotation, scale) = [I, -[p-c]x,
-// (p-c)], columns scaled so that the three kinds are comparable (extent = RMS spread).
+// Rows of the datum Jacobian of one fixed position p (internal/bundle_problem.h), gathered.
 void AddDatumRows(const Eigen::Vector3d& p, const Eigen::Vector3d& centroid, double extent,
                   std::vector<Eigen::Matrix<double, 3, 7>>* rows) {
-  const Eigen::Vector3d d = (p - centroid) / extent;
-  Eigen::Matrix<double, 3, 7> J = Eigen::Matrix<double, 3, 7>::Zero();
-  J.leftCols<3>().setIdentity();
-  J(0, 4) = d.z();
-  J(0, 5) = -d.y();
-  J(1, 3) = -d.z();
-  J(1, 5) = d.x();
-  J(2, 3) = d.y();
-  J(2, 4) = -d.x();
-  J.col(6) = d;
-  rows->push_back(J);
+  rows->push_back(SimilarityRows(p, centroid, extent));
 }
 
 // COLMAP's gauge for a relative block (no control points, camera positions or attitudes): the

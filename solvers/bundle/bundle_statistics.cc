@@ -6,6 +6,7 @@
 #include <Eigen/Dense>
 #include <Eigen/SparseCore>
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <limits>
 #include <memory>
@@ -15,6 +16,8 @@
 #include "core/parallel.h"
 #include "core/rotation.h"
 #include "core/statistics.h"
+#include "cost_functions/exterior_orientation_manifold.h"
+#include "solvers/bundle/internal/inner_constraints.h"
 #include "solvers/bundle/triangulation.h"
 
 namespace photopose::internal {
@@ -356,10 +359,15 @@ void TabulateResiduals(const Block& block, const BundlePlan& plan, const BundleS
   // A mark group's unit: its marks' own ("px" or "um") when they share one; a group that mixes
   // pixel and film marks has no one unit, and states its accuracy and RMS in each mark's own
   // sigma ("sigma": residual / sigma, the stated accuracy 1).
+  // The same rule per image: an image with pixel and film marks has its RMS in sigmas.
   bool has_unit[kNumBundleGroups][2] = {};
-  for (size_t m = 0; m < block.marks.size(); ++m)
-    if (plan.mark_used[m])
-      has_unit[plan.mark_group[m]][block.marks[m].unit == MarkUnit::kFilm] = true;
+  std::vector<std::array<bool, 2>> image_has_unit(block.images.size(), {false, false});
+  for (size_t m = 0; m < block.marks.size(); ++m) {
+    if (!plan.mark_used[m]) continue;
+    const bool film = block.marks[m].unit == MarkUnit::kFilm;
+    has_unit[plan.mark_group[m]][film] = true;
+    image_has_unit[block.marks[m].image][film] = true;
+  }
   bool in_sigmas[kNumBundleGroups] = {};
   for (const int g : {kTieMarks, kControlMarks}) {
     in_sigmas[g] = has_unit[g][0] && has_unit[g][1];
@@ -387,8 +395,10 @@ void TabulateResiduals(const Block& block, const BundlePlan& plan, const BundleS
       s.stated.head<2>() += Eigen::Vector2d::Constant(unit);
       BundleImageResult& image = result->images[mark.image];
       ++image.num_marks;
-      image_ssq[mark.image] += residual.squaredNorm();
-      image.unit = EnumName(mark.unit);
+      const bool image_in_sigmas = image_has_unit[mark.image][0] && image_has_unit[mark.image][1];
+      image_ssq[mark.image] += image_in_sigmas ? whitened[0] * whitened[0] + whitened[1] * whitened[1]
+                                               : residual.squaredNorm();
+      image.unit = image_in_sigmas ? "sigma" : EnumName(mark.unit);
       ++result->points[mark.point].num_observations;
       ++result->summary.num_marks;
       continue;
@@ -427,21 +437,34 @@ void SetTestLevel(const BundleAdjustmentOptions& options, const GroupVariance& v
   result->delta0 = result->critical_value + NormalQuantile(options.statistics.snooping_power);
 }
 
-// Exterior orientations, in the ambient (Euler) parameters (P C P^T), and control points.
+// Exterior orientations, in the ambient (Euler) parameters (P C P^T), and every adjusted point;
+// with `inner`, a relative block's in its inner-constraint datum (the images the gauge holds
+// too).
 void OrientationAndPointCovariances(const Block& block, const BundlePlan& plan,
                                     const BundleState& state, const BundleRound& round,
-                                    const ReducedNormals& reduced, double variance_factor,
+                                    const ReducedNormals& reduced,
+                                    const InnerConstraintTransform* inner, double variance_factor,
                                     int num_threads, BundleAdjustmentResult* result) {
+  const ExteriorOrientationManifold full_tangent;
   Eigen::MatrixXd C;
   for (size_t i = 0; i < block.images.size(); ++i) {
     const double* eo = state.eo[i].data();
     const auto found = reduced.e_index.find(eo);
-    if (found == reduced.e_index.end()) continue;
-    const int tangent = round.e_sizes[found->second];
-    Eigen::Matrix<double, 6, Eigen::Dynamic, Eigen::RowMajor> P(6, tangent);
-    round.problem->GetManifold(const_cast<double*>(eo))->PlusJacobian(eo, P.data());
-    if (!reduced.C.Block(found->second, found->second, &C)) continue;  // diagonal: always known
-    result->images[i].covariance = variance_factor * P * C * P.transpose();
+    const bool held = static_cast<int>(i) == plan.relative_fixed_image;
+    if (found == reduced.e_index.end() && !(inner != nullptr && held)) continue;
+    // The gauge's covariance in the full tangent space (zero where the gauge holds a component).
+    Matrix6d gauge = Matrix6d::Zero();
+    if (found != reduced.e_index.end()) {
+      if (!reduced.C.Block(found->second, found->second, &C)) continue;  // diagonal: always known
+      const int skip = static_cast<int>(i) == plan.relative_scale_image ? plan.relative_scale_axis : 6;
+      for (int r = 0; r < C.rows(); ++r)
+        for (int c = 0; c < C.cols(); ++c)
+          gauge(r >= skip ? r + 1 : r, c >= skip ? c + 1 : c) = C(r, c);
+    }
+    if (inner != nullptr) gauge = inner->Image(static_cast<int>(i), gauge);
+    Eigen::Matrix<double, 6, 6, Eigen::RowMajor> P;
+    full_tangent.PlusJacobian(eo, P.data());
+    result->images[i].covariance = variance_factor * P * gauge * P.transpose();
     result->images[i].has_covariance = true;
   }
   // Every adjusted point, tie and control alike (the points in parallel); a point held fixed
@@ -461,9 +484,19 @@ void OrientationAndPointCovariances(const Block& block, const BundlePlan& plan,
     SupportCovariance support;
     if (!MakeSupportCovariance(reduced, index, {}, &support)) return;
     BundlePointResult& point = result->points[round.point_of_block[index]];
-    point.covariance = variance_factor * PointCovariance(reduced, support, index);
+    Eigen::Matrix3d covariance = PointCovariance(reduced, support, index);
+    if (inner != nullptr) covariance = inner->Point(index, covariance);
+    point.covariance = variance_factor * covariance;
     point.has_covariance = true;
   });
+}
+
+// A relative block's gauge in words: what the adjustment held.
+std::string GaugeInWords(const Block& block, const BundlePlan& plan) {
+  const char* axes = "XYZ";
+  return "image '" + block.images[plan.relative_fixed_image].name + "' held, the " +
+         axes[plan.relative_scale_axis] + " coordinate of image '" +
+         block.images[plan.relative_scale_image].name + "' held";
 }
 
 // Per e block, the camera-centre components leading its tangent space (0..2; the relative
@@ -862,7 +895,24 @@ Status ComputeBundleStatistics(const BundleAdjustmentOptions& options, const Blo
   summary.inversion_seconds = covariances ? reduced.C.inversion_seconds() : 0.0;
   SetTestLevel(options, *variance, result);
   if (covariances) {
-    OrientationAndPointCovariances(block, plan, state, round, reduced, variance_factor,
+    InnerConstraintTransform inner;
+    bool use_inner =
+        plan.datum == BundleDatum::kRelative &&
+        options.statistics.relative_covariance != BundleRelativeCovariance::kFirstImage;
+    if (use_inner) {
+      const Status datum = inner.Compute(options.statistics.relative_covariance, block, plan, state,
+                                         round, reduced, options.solver.num_threads);
+      summary.covariance_datum = datum.ok() ? inner.description()
+                                            : "the adjustment's gauge (" + GaugeInWords(block, plan) +
+                                                  "), because " + datum.message();
+      use_inner = datum.ok();
+    } else {
+      summary.covariance_datum = plan.datum == BundleDatum::kRelative
+                                     ? "the adjustment's gauge (" + GaugeInWords(block, plan) + ")"
+                                     : "the block's datum (absolute)";
+    }
+    OrientationAndPointCovariances(block, plan, state, round, reduced,
+                                   use_inner ? &inner : nullptr, variance_factor,
                                    options.solver.num_threads, result);
     ObservationDiagnostics(options, block, plan, state, round, reduced,
                            options.statistics.observation_diagnostics, sums, result, variance);

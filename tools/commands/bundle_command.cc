@@ -75,6 +75,7 @@ DEFINE_bool(bundle_snoop, false, "Data snooping: remove the most significant rej
 DEFINE_double(bundle_alpha, 0.001, "Significance level of the w-test per observation (two-sided).");
 DEFINE_bool(bundle_cross_validate, false, "Leave each control point out in turn and report its error as a check point.");
 DEFINE_string(bundle_statistics, "full", "Posterior covariances, redundancy numbers, reliability and the verdicts that need them: full (at every block size, by selected inversion of the reduced camera system's sparse factor), none (group RMS and check points only), or dense (the dense inverse, for comparison; n^2 memory in the reduced parameters).");
+DEFINE_string(bundle_relative_covariance, "points", "The datum of a relative block's orientation and point covariances (residuals, redundancy numbers and w-tests are the same in every datum): points (inner constraints on the adjusted points: the smallest trace of their covariance, every image with a covariance), centres (inner constraints on the camera centres), or first_image (the adjustment's own gauge: the first image's covariance zero). Blocks with control points or camera positions have their own datum; this flag is refused for them.");
 DEFINE_string(bundle_relative_gauge, "free", "Relative blocks (no control points, no camera positions): free solves without a gauge and then moves the result into COLMAP's gauge (the first image as given, one coordinate of the second), the same minimum in far fewer iterations; fixed holds COLMAP's gauge from the start.");
 DEFINE_int32(bundle_threads, 0, "Threads of the linear algebra and of the cross-validation; 0 uses all cores.");
 DEFINE_bool(bundle_quiet, false, "No progress lines on stderr.");
@@ -211,6 +212,11 @@ int CheckInputChoice(const char* command, BundleRun* run) {
   if (run->tables && (!FLAGS_bundle_crs.empty() || !FLAGS_bundle_out_crs.empty()))
     return BadInput(command, "--crs and --out_crs georeference a --colmap_model; the tables are adjusted in their own ground frame");
   run->georeference = model && measurements;
+  gflags::CommandLineFlagInfo relative_covariance;
+  if ((run->tables || run->georeference) &&
+      gflags::GetCommandLineFlagInfo("bundle_relative_covariance", &relative_covariance) &&
+      !relative_covariance.is_default)
+    return BadInput(command, "--relative_covariance chooses the datum of a relative block's covariances (a model without positions or control, or --bal); this block's datum is its control points and camera positions");
   if (model) {
     if (!FLAGS_bundle_gcp_list.empty() && !FLAGS_bundle_points.empty())
       return BadInput(command, "give the control as --gcp_list or as --points with --marks, not both");
@@ -293,6 +299,9 @@ int OptionsFromFlags(const char* command, BundleRun* run) {
   options.statistics.snooping_alpha = FLAGS_bundle_alpha;
   if (!ParseEnum(FLAGS_bundle_statistics, &options.statistics.covariances))
     return BadInput(command, EnumFlagError<BundleCovarianceMethod>("--statistics", FLAGS_bundle_statistics));
+  if (!ParseEnum(FLAGS_bundle_relative_covariance, &options.statistics.relative_covariance))
+    return BadInput(command, EnumFlagError<BundleRelativeCovariance>("--relative_covariance",
+                                                                     FLAGS_bundle_relative_covariance));
   solver.num_threads = FLAGS_bundle_threads;
   if (FLAGS_bundle_relative_gauge != "free" && FLAGS_bundle_relative_gauge != "fixed")
     return BadInput(command, "--relative_gauge must be free or fixed, not '" + FLAGS_bundle_relative_gauge + "'");

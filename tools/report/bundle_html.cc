@@ -366,6 +366,7 @@ std::string OverviewHtml(const Block& block, const BundleAdjustmentResult& resul
                  FormatSignificant(images_per_tie[images_per_tie.size() / 2], 3)},
       {"Area covered by the ground points (convex hull)", FormatArea(HullArea(ground_plan))},
       {"Datum", s.datum_description},
+      {"Covariances in the datum of", s.covariance_datum.empty() ? "n/a (not computed)" : s.covariance_datum},
       {"sigma0 (unitless, 1 when the stated accuracies hold)", FormatUnitless(s.sigma0, 3)},
       {"Redundancy", FormatCount(s.redundancy, "observation") + " more than unknowns"},
       {"Adjustment time", FormatSignificant(s.time_seconds, 3) + " s (" +

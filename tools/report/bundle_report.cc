@@ -178,7 +178,8 @@ json BundleReportJson(const Block& block, const BundleAdjustmentResult& result,
                        {"tie_points_left_out", s.tie_points_left_out},
                        {"num_images_initialized", context.num_images_initialized},
                        {"datum", EnumName(s.datum)},
-                       {"datum_description", s.datum_description}};
+                       {"datum_description", s.datum_description},
+                       {"covariance_datum", s.covariance_datum}};
   json groups = json::array();
   for (const BundleGroupStatistics& g : result.groups) {
     json group = {{"name", EnumName(g.group)},
@@ -523,6 +524,7 @@ std::vector<std::string> BundleConsoleLines(const Block& block, const BundleAdju
     lines.push_back(time.str());
   }
   lines.push_back("datum: " + s.datum_description);
+  if (!s.covariance_datum.empty()) lines.push_back("covariances in the datum of " + s.covariance_datum);
   for (const BundleGroupStatistics& g : result.groups) {
     std::ostringstream line;
     if (g.fixed()) {

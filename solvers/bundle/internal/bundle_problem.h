@@ -22,6 +22,19 @@ namespace photopose::internal {
 // An image needs at least this many marks for its six unknowns.
 constexpr int kMinMarksPerImage = 3;
 
+// The seven datum parameters are fixed when the smallest singular value of the (scaled) datum
+// Jacobian (SimilarityRows of the fixing positions) is above this fraction of the largest: below
+// it one similarity motion is all but free (control points 1 mm off a line 1 km long, say), and
+// the adjustment would rest on noise.
+constexpr double kDatumConditioning = 1e-3;
+
+// How a small similarity of the ground frame moves a position p: dp / d(t, rotation, scale) =
+// [I, -[d]x, d] with d = (p - centroid) / extent, i.e. dp = t + w x d + s d: translation (m),
+// rotation (rad) and scale (unitless) about `centroid`, the last four columns per `extent` (m) so
+// that the three kinds are comparable. The datum check's and the inner constraints' one rule.
+Eigen::Matrix<double, 3, 7> SimilarityRows(const Eigen::Vector3d& p, const Eigen::Vector3d& centroid,
+                                           double extent);
+
 // The default sigmas of the marks of `group` (kTieMarks or kControlMarks; check marks weigh as
 // control marks) under `accuracies`, for the rule of core/mark_weight.h.
 MarkSigmaDefaults GroupMarkDefaults(const BundleAccuracies& accuracies, BundleGroup group);

@@ -441,6 +441,13 @@ TEST(BundleAdjustment, MarkGroupsStateTheirUnitOrSigmasWhenMixed) {
       EXPECT_NEAR(tie->stated_accuracy.x(), 1.0, 1e-12);
       EXPECT_NEAR(tie->rms_total, tie->ratio, 1e-9);
     }
+    // Each image by the same rule: its RMS in its marks' unit, or in sigmas when it has both.
+    for (size_t i = 0; i < data.block.images.size(); ++i) {
+      const BundleImageResult& image = result.images[i];
+      ASSERT_GT(image.num_marks, 1);
+      EXPECT_EQ(image.unit, all_film ? "um" : "sigma") << i;
+      if (!all_film) EXPECT_LT(image.rms_residual, 5.0) << i;  // 0.5 px noise in 0.5 px sigmas
+    }
   }
 }
 

@@ -251,6 +251,9 @@ TEST(BundleCommand, ColmapModelInColmapModelOutWithoutTheRejectedMarks) {
   const nlohmann::json report = nlohmann::json::parse(ReadFile(dir + "/report.json"));
   EXPECT_EQ(report["summary"]["termination"], "converged");
   EXPECT_EQ(report["summary"]["datum"], "relative");
+  EXPECT_NE(report["summary"]["covariance_datum"].get<std::string>().find(
+                "inner constraints on the"),
+            std::string::npos);
   ASSERT_GE(report["rejected_marks"].size(), 4u);  // the 4 blunders at least
   // Every step's time: one entry per round, and the steps within the whole run's time.
   const nlohmann::json& time = report["summary"]["time_breakdown"];
@@ -279,6 +282,41 @@ TEST(BundleCommand, ColmapModelInColmapModelOutWithoutTheRejectedMarks) {
   std::vector<double> errors;
   MarkReprojectionErrors(out, &errors);
   EXPECT_LT(*std::max_element(errors.begin(), errors.end()), 5.0);
+}
+
+// A relative block's covariance datum: the inner constraints on the points by default, the
+// adjustment's gauge (its first image without a covariance) on request; refused where the block has
+// its own datum, and a name it does not know is refused with the choices.
+TEST(BundleCommand, RelativeCovarianceDatumIsChosenAndReported) {
+  const std::string dir = ScratchDir();
+  const std::string block = SimulateBlock(dir);
+  const std::string common = "bundle --colmap_model=" + block + "/colmap --quiet --report=" + dir;
+  CliRun run = RunCli(common + "/gauge.json --relative_covariance=first_image", dir);
+  ASSERT_EQ(run.exit_code, 0) << run.err;
+  run = RunCli(common + "/points.json", dir);
+  ASSERT_EQ(run.exit_code, 0) << run.err;
+  const nlohmann::json gauge = nlohmann::json::parse(ReadFile(dir + "/gauge.json"));
+  const nlohmann::json points = nlohmann::json::parse(ReadFile(dir + "/points.json"));
+  EXPECT_NE(gauge["summary"]["covariance_datum"].get<std::string>().find("the adjustment's gauge"),
+            std::string::npos);
+  EXPECT_NE(points["summary"]["covariance_datum"].get<std::string>().find("adjusted points"),
+            std::string::npos);
+  // The residuals do not depend on the datum (the same adjustment; threads sum in any order).
+  EXPECT_NEAR(gauge["summary"]["sigma0"].get<double>(), points["summary"]["sigma0"].get<double>(),
+              1e-12);
+  EXPECT_EQ(gauge["rejected_marks"].size(), points["rejected_marks"].size());
+
+  run = RunCli(common + "/x.json --relative_covariance=centers", dir);
+  EXPECT_EQ(run.exit_code, 2);
+  EXPECT_NE(run.err.find("--relative_covariance"), std::string::npos) << run.err;
+  EXPECT_NE(run.err.find("centres"), std::string::npos) << run.err;
+  run = RunCli("bundle " + TableArgs(block) + " --out=" + dir +
+                   "/f.csv --quiet --relative_covariance=points",
+               dir);
+  EXPECT_EQ(run.exit_code, 2);
+  EXPECT_NE(run.err.find("this block's datum is its control points and camera positions"),
+            std::string::npos)
+      << run.err;
 }
 
 TEST(BundleCommand, BinaryColmapModelInBinaryOutUnlessAsked) {

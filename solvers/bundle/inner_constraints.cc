@@ -1,0 +1,182 @@
+// The S-transformation of a relative block's covariances into an inner-constraint datum
+// (solvers/bundle/internal/inner_constraints.h).
+
+#include "solvers/bundle/internal/inner_constraints.h"
+
+#include <Eigen/Dense>
+#include <cmath>
+#include <sstream>
+
+#include "core/parallel.h"
+#include "core/rotation.h"
+
+namespace photopose::internal {
+namespace {
+
+// Per image, the full tangent component (0..5) of each tangent column of its e block: the
+// relative gauge's scale image lacks its held centre coordinate.
+int FullComponent(const BundlePlan& plan, int image, int column) {
+  const int held = image == plan.relative_scale_image ? plan.relative_scale_axis : 6;
+  return column >= held ? column + 1 : column;
+}
+
+}  // namespace
+
+Eigen::Matrix<double, 6, 7> OrientationSimilarityRows(const Vector6d& eo,
+                                                      const Eigen::Vector3d& centroid,
+                                                      double extent) {
+  Eigen::Matrix<double, 6, 7> G = Eigen::Matrix<double, 6, 7>::Zero();
+  G.topRows<3>() = SimilarityRows(eo.head<3>(), centroid, extent);
+  const Eigen::Matrix3d R_camera_from_ground =
+      RotationFromAngles(RotationConvention::kSeed, eo.tail<3>());
+  G.block<3, 3>(3, 3) = -R_camera_from_ground / extent;
+  return G;
+}
+
+Status InnerConstraintTransform::Compute(BundleRelativeCovariance datum, const Block& block,
+                                         const BundlePlan& plan, const BundleState& state,
+                                         const BundleRound& round, const ReducedNormals& reduced,
+                                         int num_threads) {
+  const bool on_points = datum == BundleRelativeCovariance::kInnerPoints;
+  const size_t num_images = block.images.size();
+  const size_t num_points = round.point_blocks.size();
+  // The datum's positions: their centroid and RMS spread condition G.
+  std::vector<Eigen::Vector3d> positions;
+  if (on_points) {
+    for (const double* X : round.point_blocks) positions.emplace_back(X[0], X[1], X[2]);
+  } else {
+    for (size_t i = 0; i < num_images; ++i) {
+      const bool in_round = reduced.e_index.count(state.eo[i].data()) ||
+                            static_cast<int>(i) == plan.relative_fixed_image;
+      if (in_round) positions.push_back(state.eo[i].head<3>());
+    }
+  }
+  const char* what = on_points ? "adjusted points" : "camera centres";
+  if (positions.size() < 3)
+    return Status::Error(std::string("the inner constraints on the ") + what +
+                         " need three of them, the block has " +
+                         std::to_string(positions.size()));
+  Eigen::Vector3d centroid = Eigen::Vector3d::Zero();
+  for (const auto& p : positions) centroid += p;
+  centroid /= static_cast<double>(positions.size());
+  double extent = 0.0;
+  for (const auto& p : positions) extent += (p - centroid).squaredNorm();
+  extent = std::sqrt(extent / positions.size());
+  if (!(extent > 0.0)) extent = 1.0;
+
+  // G per image (the held first image too) and per point.
+  image_G_.assign(num_images, Eigen::Matrix<double, 6, 7>::Zero());
+  image_M_.assign(num_images, Eigen::Matrix<double, 6, 7>::Zero());
+  for (size_t i = 0; i < num_images; ++i)
+    image_G_[i] = OrientationSimilarityRows(state.eo[i], centroid, extent);
+  centroid_ = centroid;
+  extent_ = extent;
+  point_blocks_ = &round.point_blocks;
+
+  // Y = C_g W G: the right-hand side W G on the round's parameters, the points eliminated
+  // (r_e = b_e - sum_p W_p V_p^-1 b_p), the reduced system solved, the points back-substituted
+  // (y_p = V_p^-1 (b_p - W_p^T y_e)). Held parameters have no rows in C_g: Y is zero there.
+  std::vector<int> image_block(num_images, -1);
+  for (size_t i = 0; i < num_images; ++i) {
+    const auto found = reduced.e_index.find(state.eo[i].data());
+    if (found != reduced.e_index.end()) image_block[i] = found->second;
+  }
+  Eigen::MatrixXd rhs = Eigen::MatrixXd::Zero(reduced.size, 7);
+  Eigen::Matrix<double, 7, 7> GtWG = Eigen::Matrix<double, 7, 7>::Zero();
+  if (on_points) {
+    for (size_t k = 0; k < num_points; ++k) {
+      const Eigen::Matrix<double, 3, 7> G = PointRows(static_cast<int>(k));
+      GtWG += G.transpose() * G;
+      const Eigen::MatrixXd WV_b = reduced.W[k] * (reduced.V_inverse[k] * G);
+      int row = 0;
+      for (const int b : reduced.W_blocks[k]) {
+        const int size = reduced.C.block_size(b);
+        rhs.middleRows(reduced.e_offset[b], size) -= WV_b.middleRows(row, size);
+        row += size;
+      }
+    }
+  } else {
+    for (size_t i = 0; i < num_images; ++i) {
+      const bool in_round = image_block[i] >= 0 || static_cast<int>(i) == plan.relative_fixed_image;
+      if (!in_round) continue;
+      GtWG += image_G_[i].topRows<3>().transpose() * image_G_[i].topRows<3>();
+      if (image_block[i] < 0) continue;
+      const int b = image_block[i];
+      for (int c = 0; c < round.e_sizes[b]; ++c) {
+        const int k = FullComponent(plan, static_cast<int>(i), c);
+        if (k < 3) rhs.row(reduced.e_offset[b] + c) = image_G_[i].row(k);
+      }
+    }
+  }
+  const Eigen::SelfAdjointEigenSolver<Eigen::Matrix<double, 7, 7>> eigen(GtWG);
+  // G^T W G's eigenvalues are the squared singular values of the datum check's Jacobian.
+  if (!(eigen.eigenvalues()[0] > kDatumConditioning * kDatumConditioning * eigen.eigenvalues()[6]))
+    return Status::Error(std::string("the inner constraints on the ") + what +
+                         " do not fix the seven similarity parameters (they lie on one line)");
+  const Eigen::Matrix<double, 7, 7> A = eigen.eigenvectors() *
+                                        eigen.eigenvalues().cwiseInverse().asDiagonal() *
+                                        eigen.eigenvectors().transpose();
+  const Eigen::MatrixXd y_e = reduced.C.Solve(rhs);
+  if (!y_e.allFinite()) return Status::Error("the reduced system could not be solved for the datum");
+  // y_p, kept in point_M_ until A is known.
+  std::vector<Eigen::Matrix<double, 3, 7>>& y_p = point_M_;
+  y_p.resize(num_points);
+  ParallelFor(num_points, num_threads, [&](size_t k) {
+    Eigen::Matrix<double, 3, 7> b =
+        on_points ? PointRows(static_cast<int>(k)) : Eigen::Matrix<double, 3, 7>::Zero();
+    int row = 0;
+    for (const int block_index : reduced.W_blocks[k]) {
+      const int size = reduced.C.block_size(block_index);
+      b -= reduced.W[k].middleRows(row, size).transpose() *
+           y_e.middleRows(reduced.e_offset[block_index], size);
+      row += size;
+    }
+    y_p[k] = reduced.V_inverse[k] * b;
+  });
+
+  // G^T W Y, then Q = A G^T W Y A and M = Y A.
+  Eigen::Matrix<double, 7, 7> GtWY = Eigen::Matrix<double, 7, 7>::Zero();
+  if (on_points) {
+    for (size_t k = 0; k < num_points; ++k)
+      GtWY += PointRows(static_cast<int>(k)).transpose() * y_p[k];
+  }
+  for (size_t i = 0; i < num_images; ++i) {
+    const int b = image_block[i];
+    if (b < 0) continue;
+    Eigen::Matrix<double, 6, 7> Y = Eigen::Matrix<double, 6, 7>::Zero();
+    for (int c = 0; c < round.e_sizes[b]; ++c)
+      Y.row(FullComponent(plan, static_cast<int>(i), c)) = y_e.row(reduced.e_offset[b] + c);
+    if (!on_points) GtWY += image_G_[i].topRows<3>().transpose() * Y.topRows<3>();
+    image_M_[i] = Y * A;
+  }
+  for (size_t k = 0; k < num_points; ++k) point_M_[k] = (y_p[k] * A).eval();
+  Q_ = A * GtWY * A;
+  Q_ = 0.5 * (Q_ + Q_.transpose()).eval();
+
+  std::ostringstream words;
+  words << "inner constraints on the " << positions.size() << " " << what
+        << " (minimum trace of their covariance; the block is relative)";
+  description_ = words.str();
+  return Status::Ok();
+}
+
+Matrix6d InnerConstraintTransform::Image(int image, const Matrix6d& gauge) const {
+  const Eigen::Matrix<double, 6, 7>& G = image_G_[image];
+  const Eigen::Matrix<double, 6, 7>& M = image_M_[image];
+  const Matrix6d C = gauge - G * M.transpose() - M * G.transpose() + G * Q_ * G.transpose();
+  return 0.5 * (C + C.transpose());
+}
+
+Eigen::Matrix<double, 3, 7> InnerConstraintTransform::PointRows(int p) const {
+  const double* X = (*point_blocks_)[p];
+  return SimilarityRows(Eigen::Vector3d(X[0], X[1], X[2]), centroid_, extent_);
+}
+
+Eigen::Matrix3d InnerConstraintTransform::Point(int p, const Eigen::Matrix3d& gauge) const {
+  const Eigen::Matrix<double, 3, 7> G = PointRows(p);
+  const Eigen::Matrix<double, 3, 7>& M = point_M_[p];
+  const Eigen::Matrix3d C = gauge - G * M.transpose() - M * G.transpose() + G * Q_ * G.transpose();
+  return 0.5 * (C + C.transpose());
+}
+
+}  // namespace photopose::internal
