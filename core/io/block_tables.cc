@@ -8,6 +8,7 @@
 #include <string_view>
 #include <unordered_map>
 
+#include "core/geodesy/crs.h"
 #include "core/io/csv.h"
 #include "core/io/output_files.h"
 #include "core/types.h"
@@ -176,6 +177,33 @@ std::string Where(const std::string& file, int line, const std::string& column) 
 
 std::string Quoted(const std::string& text) { return "'" + text + "'"; }
 
+// The earth-curvature correction lowers points by D^2 / (2R) below the tangent plane of a map
+// frame (projected or local, heights along the plumb line); in a geographic frame (degrees) or a
+// geocentric one (ECEF) it has no meaning. A camera with ApplyECC is refused when a CRS that
+// names the block's ground frame -- its own SRS, the gcp_list header, a frames row's SRS --
+// resolves (PROJ) to one of those. Texts PROJ does not know stay as written, unchecked (SRS is
+// free text); without ApplyECC nothing is resolved.
+Status CheckEarthCurvatureFrame(const BlockTables& tables, const FrameCamera& camera) {
+  if (!camera.apply_ecc) return Status::Ok();
+  std::vector<std::pair<std::string, std::string>> named;  // (CRS text, where it is named)
+  if (!camera.srs.empty()) named.emplace_back(camera.srs, tables.cameras_file + ": SRS");
+  if (!tables.crs.empty()) named.emplace_back(tables.crs, tables.points_file + ": header");
+  for (const FrameRecord& frame : tables.frames) {
+    if (frame.srs.empty() || (!frame.camera_id.empty() && frame.camera_id != camera.camera_id)) continue;
+    named.emplace_back(frame.srs, tables.frames_file + ":" + std::to_string(frame.line) + ": SRS");
+    break;  // one row names the frame of its camera's images
+  }
+  for (const auto& [text, where] : named) {
+    CrsInfo info;
+    if (!ResolveCrs(text, &info).ok() || !(info.geographic || info.geocentric)) continue;
+    return Status::Error(Where(tables.cameras_file, 0, "ApplyECC") + "camera " +
+                         Quoted(camera.camera_id) + ": the earth-curvature correction needs a projected or "
+                         "local map frame, and the ground frame is " + (info.geographic ? "geographic" : "geocentric") +
+                         " (" + TokenForMessage(text) + ", " + where + ")");
+  }
+  return Status::Ok();
+}
+
 // The seed-angle standard deviations (rad) of angles whose file sigmas are given (degrees, in
 // `convention` with AngleDirection applied): diag(J^-1 diag(sigma^2) J^-T), J the Jacobian of the
 // boundary conversion; correlations are dropped.
@@ -265,6 +293,7 @@ Status BlockAssembler::AddCameras() {
     if (result_.FindCamera(table.camera_id) >= 0)
       return Status::Error(Where(tables_.cameras_file, 0, "CameraID") + "duplicate camera " +
                            Quoted(table.camera_id));
+    PHOTOPOSE_RETURN_IF_ERROR(CheckEarthCurvatureFrame(tables_, table));
     result_.cameras.push_back(CameraOf(table));
   }
   return Status::Ok();

@@ -2,10 +2,14 @@
 
 #include <exiv2/exiv2.hpp>
 
+#include <algorithm>
 #include <cmath>
 #include <filesystem>
 #include <mutex>
 #include <sstream>
+
+#include "core/io/csv.h"
+#include "core/io/tables.h"
 
 namespace photopose {
 namespace {
@@ -65,7 +69,7 @@ Status XmpNumber(const std::string& path, const Exiv2::XmpData& xmp, const std::
   double number = 0.0;
   in >> number;
   if (in.fail() || !(in >> std::ws).eof() || !std::isfinite(number))
-    return TagError(path, "Xmp.drone-dji." + name, "not a number: '" + text + "'");
+    return TagError(path, "Xmp.drone-dji." + name, "not a number: '" + TokenForMessage(text) + "'");
   *value = number;
   return Status::Ok();
 }
@@ -74,6 +78,12 @@ Status CheckRange(const std::string& path, const std::string& tag, double value,
   if (!(std::abs(value) <= limit))
     return TagError(path, tag, "outside [-" + std::to_string(static_cast<int>(limit)) + ", " +
                                    std::to_string(static_cast<int>(limit)) + "] degrees");
+  return Status::Ok();
+}
+
+// A height (m) inside the documented range of coordinates (docs/formats.md, "Physical ranges").
+Status CheckHeight(const std::string& path, const std::string& tag, double height_m) {
+  if (!(std::abs(height_m) <= kMaxCoordinate)) return TagError(path, tag, "outside [-100000000, 100000000] m");
   return Status::Ok();
 }
 
@@ -92,9 +102,9 @@ Status ReadFromExif(const std::string& path, const Exiv2::ExifData& exif, bool* 
   const std::optional<std::string> lat_ref = ExifString(exif, "Exif.GPSInfo.GPSLatitudeRef");
   const std::optional<std::string> lon_ref = ExifString(exif, "Exif.GPSInfo.GPSLongitudeRef");
   if (!lat_ref || (*lat_ref != "N" && *lat_ref != "S"))
-    return TagError(path, "Exif.GPSInfo.GPSLatitudeRef", "expected N or S, found '" + lat_ref.value_or("") + "'");
+    return TagError(path, "Exif.GPSInfo.GPSLatitudeRef", "expected N or S, found '" + TokenForMessage(lat_ref.value_or("")) + "'");
   if (!lon_ref || (*lon_ref != "E" && *lon_ref != "W"))
-    return TagError(path, "Exif.GPSInfo.GPSLongitudeRef", "expected E or W, found '" + lon_ref.value_or("") + "'");
+    return TagError(path, "Exif.GPSInfo.GPSLongitudeRef", "expected E or W, found '" + TokenForMessage(lon_ref.value_or("")) + "'");
   if (*lat_ref == "S") latitude = -latitude;
   if (*lon_ref == "W") longitude = -longitude;
   PHOTOPOSE_RETURN_IF_ERROR(CheckRange(path, "Exif.GPSInfo.GPSLatitude", latitude, 90.0));
@@ -114,6 +124,7 @@ Status ReadFromExif(const std::string& path, const Exiv2::ExifData& exif, bool* 
       return TagError(path, alt_ref->key(), "expected 0 (above) or 1 (below), found " + std::to_string(ref));
     if (ref == 1) height = -height;
   }
+  PHOTOPOSE_RETURN_IF_ERROR(CheckHeight(path, alt->key(), height));
   *lon_lat_height = Eigen::Vector3d(longitude, latitude, height);
   *found = true;
   return Status::Ok();
@@ -134,6 +145,7 @@ Status ReadFromDjiXmp(const std::string& path, const Exiv2::XmpData& xmp, bool* 
                     "missing while the other DJI position tags are present");
   PHOTOPOSE_RETURN_IF_ERROR(CheckRange(path, "Xmp.drone-dji.GpsLatitude", *latitude, 90.0));
   PHOTOPOSE_RETURN_IF_ERROR(CheckRange(path, "Xmp.drone-dji.GpsLongitude", *longitude, 180.0));
+  PHOTOPOSE_RETURN_IF_ERROR(CheckHeight(path, "Xmp.drone-dji.AbsoluteAltitude", *height));
   *lon_lat_height = Eigen::Vector3d(*longitude, *latitude, *height);
   *found = true;
   return Status::Ok();
@@ -145,46 +157,88 @@ Status ReadRtk(const std::string& path, const Exiv2::XmpData& xmp, ExifGps* gps)
   PHOTOPOSE_RETURN_IF_ERROR(XmpNumber(path, xmp, "RtkStdLat", &north));
   PHOTOPOSE_RETURN_IF_ERROR(XmpNumber(path, xmp, "RtkStdHgt", &up));
   PHOTOPOSE_RETURN_IF_ERROR(XmpNumber(path, xmp, "RtkFlag", &flag));
-  if (flag) gps->rtk_flag = static_cast<int>(std::lround(*flag));
+  if (flag) {
+    if (!(*flag >= 0.0 && *flag <= 255.0)) return TagError(path, "Xmp.drone-dji.RtkFlag", "outside [0, 255]");
+    gps->rtk_flag = static_cast<int>(std::lround(*flag));
+  }
   if (east && north && up) {
     // DJI writes 0 (or nothing) when there is no RTK solution: no stated accuracy then.
-    if (*east > 0.0 && *north > 0.0 && *up > 0.0) gps->rtk_sigma_enu_m = Eigen::Vector3d(*east, *north, *up);
-    else if (*east < 0.0 || *north < 0.0 || *up < 0.0)
+    if (*east < 0.0 || *north < 0.0 || *up < 0.0)
       return TagError(path, "Xmp.drone-dji.RtkStd*", "negative standard deviation");
+    if (std::max({*east, *north, *up}) > kMaxCoordinate)
+      return TagError(path, "Xmp.drone-dji.RtkStd*", "above 100000000 m");
+    if (*east > 0.0 && *north > 0.0 && *up > 0.0) gps->rtk_sigma_enu_m = Eigen::Vector3d(*east, *north, *up);
   }
   return Status::Ok();
 }
 
-// Reads the position; *found false (and Ok) when the file has no GPS tags at all.
-Status ReadImageGps(const std::string& path, ExifGps* gps, bool* found) {
+// exiv2's message (it may repeat bytes of the file) fit for a one-line message: cut, escaped.
+std::string Exiv2Message(const char* what) {
+  constexpr size_t kMaxBytes = 200;
+  const std::string_view text(what);
+  return EscapeForMessage(text.substr(0, kMaxBytes)) + (text.size() > kMaxBytes ? "..." : "");
+}
+
+// Reads the position from an opened image; *found false (and Ok) when it has no GPS tags at all.
+// Every exception of exiv2 (Exiv2::Error on a corrupt file, std::bad_alloc, std::out_of_range of
+// a value without elements) becomes an error naming the file.
+template <typename OpenImage>
+Status ReadImageGps(const std::string& name, OpenImage open_image, ExifGps* gps, bool* found) {
   InitialiseExiv2();
   *gps = ExifGps();
   *found = false;
   try {
-    auto image = Exiv2::ImageFactory::open(path);
-    if (image.get() == nullptr) return Status::Error(path + ": not an image exiv2 can read");
+    auto image = open_image();
+    if (image.get() == nullptr) return Status::Error(name + ": not an image exiv2 can read");
     image->readMetadata();
-    PHOTOPOSE_RETURN_IF_ERROR(ReadFromExif(path, image->exifData(), found, &gps->lon_lat_height));
+    PHOTOPOSE_RETURN_IF_ERROR(ReadFromExif(name, image->exifData(), found, &gps->lon_lat_height));
     if (*found) {
       gps->source = ExifGpsSource::kExif;
     } else {
-      PHOTOPOSE_RETURN_IF_ERROR(ReadFromDjiXmp(path, image->xmpData(), found, &gps->lon_lat_height));
+      PHOTOPOSE_RETURN_IF_ERROR(ReadFromDjiXmp(name, image->xmpData(), found, &gps->lon_lat_height));
       if (!*found) return Status::Ok();
       gps->source = ExifGpsSource::kDjiXmp;
     }
-    return ReadRtk(path, image->xmpData(), gps);
+    return ReadRtk(name, image->xmpData(), gps);
   } catch (const std::exception& e) {
-    return Status::Error(path + ": exiv2: " + e.what());
+    *found = false;
+    return Status::Error(name + ": exiv2: " + Exiv2Message(e.what()));
+  } catch (...) {
+    *found = false;
+    return Status::Error(name + ": exiv2: an unknown exception");
   }
+}
+
+Status ReadFileGps(const std::string& path, ExifGps* gps, bool* found) {
+  // A FIFO would block exiv2's open until a writer comes; a folder or device is no image.
+  std::error_code error;
+  if (!std::filesystem::is_regular_file(path, error))
+    return Status::Error(EscapeForMessage(path) + ": not a regular file (an image file is needed)");
+  return ReadImageGps(EscapeForMessage(path), [&path] { return Exiv2::ImageFactory::open(path); }, gps, found);
+}
+
+Status NoGpsError(const std::string& name) {
+  return Status::Error(name + ": no GPS position (neither EXIF GPSLatitude/GPSLongitude nor DJI XMP GpsLatitude/GpsLongitude)");
 }
 
 }  // namespace
 
 Status ReadExifGps(const std::string& path, ExifGps* gps) {
   bool found = false;
-  PHOTOPOSE_RETURN_IF_ERROR(ReadImageGps(path, gps, &found));
-  if (!found)
-    return Status::Error(path + ": no GPS position (neither EXIF GPSLatitude/GPSLongitude nor DJI XMP GpsLatitude/GpsLongitude)");
+  PHOTOPOSE_RETURN_IF_ERROR(ReadFileGps(path, gps, &found));
+  if (!found) return NoGpsError(EscapeForMessage(path));
+  return Status::Ok();
+}
+
+Status ParseExifGps(std::string_view bytes, const std::string& file_name, ExifGps* gps) {
+  if (bytes.size() > kMaxInputBytes)
+    return Status::Error(EscapeForMessage(file_name) + ": is larger than " + std::to_string(kMaxInputBytes) + " bytes");
+  bool found = false;
+  const auto open = [bytes] {
+    return Exiv2::ImageFactory::open(reinterpret_cast<const Exiv2::byte*>(bytes.data()), static_cast<long>(bytes.size()));
+  };
+  PHOTOPOSE_RETURN_IF_ERROR(ReadImageGps(EscapeForMessage(file_name), open, gps, &found));
+  if (!found) return NoGpsError(EscapeForMessage(file_name));
   return Status::Ok();
 }
 
@@ -202,7 +256,7 @@ Status ReadExifGpsOfImages(const std::string& directory, const std::vector<std::
       return Status::Error(path + ": no such image file (image '" + names[i] + "' of the block)");
     ExifGps gps;
     bool found = false;
-    PHOTOPOSE_RETURN_IF_ERROR(ReadImageGps(path, &gps, &found));
+    PHOTOPOSE_RETURN_IF_ERROR(ReadFileGps(path, &gps, &found));
     if (found) (*positions)[i] = gps;
     else missing->push_back(names[i]);
   }

@@ -18,11 +18,17 @@
 // EGM96 heights through PROJ's egm96_15.gtx).
 //
 // Coordinates come in GIS order (longitude, latitude, height), as core/geodesy/crs.h expects.
-// Errors name the file and the tag; a file exiv2 cannot read is an error, never a crash.
+// Errors name the file and the tag; a file exiv2 cannot read is an error, never a crash: every
+// exception of exiv2 (Exiv2::Error on a corrupt file) becomes a Status naming the file, its text
+// escaped and cut to 200 bytes. Ranges (docs/formats.md): latitude [-90, 90] and longitude
+// [-180, 180] degrees, height and RTK sigmas within 1e8 m, RtkFlag [0, 255]. Only regular files
+// are opened (a FIFO would block). exiv2 maps TIFF-based files (DNG, TIFF) while it reads them; a
+// file that shrinks meanwhile is outside what this reader guards (JPEG is read, not mapped).
 
 #include <Eigen/Core>
 #include <optional>
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include "core/status.h"
@@ -44,6 +50,9 @@ struct ExifGps {
 // is an error saying so; a tag that is present but malformed (wrong count, zero denominator,
 // latitude beyond 90 degrees) is an error naming it.
 Status ReadExifGps(const std::string& path, ExifGps* gps);
+// The same from the bytes of an image file held in memory; `file_name` names it in messages (the
+// fuzz harness tests/fuzz/exif_fuzzer.cc feeds arbitrary bytes here).
+Status ParseExifGps(std::string_view bytes, const std::string& file_name, ExifGps* gps);
 
 // The positions of the named images in `directory` (names as the block gives them, relative to
 // the directory; a name with sub-folders is followed). `missing` receives the names whose file

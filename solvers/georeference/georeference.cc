@@ -164,6 +164,12 @@ Status PrepareGeoreference(const GeoreferenceOptions& options, const Georeferenc
     if (!block->images[i].eo)
       return Status::Error("image '" + block->images[i].name + "' of the model has no pose; georeferencing moves a reconstructed model");
   }
+  for (const BlockCamera& camera : block->cameras) {
+    if (camera.earth_curvature_radius_m() > 0.0)
+      return Status::Error("camera '" + camera.camera_id + "': ApplyECC: a georeferenced block is adjusted in a local "
+                           "East-North-Up frame, whose coordinates hold the earth's curvature already; the "
+                           "earth-curvature correction would count it twice (set ApplyECC to false)");
+  }
   // 1. CRSs, the local frame, the measurements in it.
   Eigen::Vector3d centre;
   PHOTOPOSE_RETURN_IF_ERROR(MeasurementCentre(inputs, &centre));
@@ -183,6 +189,11 @@ Status PrepareGeoreference(const GeoreferenceOptions& options, const Georeferenc
     out.heights_notes.push_back(HeightsNote("control", inputs.control_crs));
   }
   out.heights_notes.push_back(HeightsNote("outputs", out.out_crs));
+  if (inputs.attitudes_not_used > 0) {
+    out.inputs_not_used.push_back(inputs.positions_source + ": " + std::to_string(inputs.attitudes_not_used) +
+                                  (inputs.attitudes_not_used == 1 ? " attitude" : " attitudes") +
+                                  " (yaw pitch roll) read and not used (" + GeoTxtAttitudesNotUsedReason() + ")");
+  }
 
   // 2. Matching; control points and marks join a copy of the block.
   Block work = *block;
@@ -404,11 +415,21 @@ Status GeoreferencedFrames(const GeoreferenceResult& result, std::vector<FrameRe
   return Status::Ok();
 }
 
+const char* GeoTxtAttitudesNotUsedReason() {
+  // ODM's own conversion (opendm/photo.py, compute_opk) builds its north-east-down frame from an
+  // ECEF north vector and the ECEF -Z axis, which are not orthogonal off the poles: a nadir image
+  // with yaw 0 gets kappa = 90 degrees + longitude. No convention is stated that could be tested.
+  return "ODM documents them for radiometric calibration only, 0 when not available, and states no "
+         "convention that gives the camera's omega/phi/kappa; the model gives the attitudes";
+}
+
 void SetPositionsFromGeoTxt(const GeoTxt& geo, const std::string& source, GeoreferenceInputs* inputs) {
   inputs->positions_crs = geo.crs;
   inputs->positions_source = source;
   inputs->positions.clear();
+  inputs->attitudes_not_used = 0;
   for (const GeoTxtRecord& record : geo.records) {
+    if (record.yaw_pitch_roll_deg && !record.yaw_pitch_roll_deg->isZero(0.0)) ++inputs->attitudes_not_used;
     CameraPositionMeasurement m;
     m.image = record.image;
     m.position = record.position;
@@ -426,6 +447,7 @@ void SetPositionsFromGps(const std::vector<std::string>& images,
   inputs->positions_crs = crs;
   inputs->positions_source = source;
   inputs->positions.clear();
+  inputs->attitudes_not_used = 0;
   for (size_t i = 0; i < images.size() && i < gps.size(); ++i) {
     if (!gps[i]) continue;
     CameraPositionMeasurement m;

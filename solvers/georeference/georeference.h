@@ -49,6 +49,10 @@ struct GeoreferenceInputs {
   std::string positions_crs;
   std::string positions_source;  // file name, for messages and reports
   std::vector<CameraPositionMeasurement> positions;
+  // Attitudes the positions' source gives and the chain does not use: the geo.txt lines with a
+  // yaw/pitch/roll triple other than ODM's "0 0 0" (not available). Reported, with the reason, in
+  // GeoreferenceResult::inputs_not_used (docs/formats.md, "OpenDroneMap geo.txt").
+  int attitudes_not_used = 0;
   std::string control_crs;
   std::string control_source;
   std::vector<GroundPoint> control_points;  // control / check as their role says
@@ -57,8 +61,12 @@ struct GeoreferenceInputs {
 
 // Filling the inputs from what the files hold (the one rule of the CLI and the Python module).
 // The camera positions of a geo.txt: accuracy horizontal for east and north, vertical for up, when
-// the line gives them; its yaw/pitch/roll are not used (the aircraft's axes, not the camera's).
+// the line gives them. Its yaw/pitch/roll are counted in inputs->attitudes_not_used and not used:
+// ODM documents them for radiometric calibration only (0 when not available) and states no
+// convention that turns them into the camera's omega/phi/kappa (GeoTxtAttitudesNotUsedReason).
 void SetPositionsFromGeoTxt(const GeoTxt& geo, const std::string& source, GeoreferenceInputs* inputs);
+// Why geo.txt attitudes are read and not used, as the reports say it.
+const char* GeoTxtAttitudesNotUsedReason();
 // The positions of images' GPS tags (`gps[i]` of `images[i]`; entries without one skipped) in
 // `crs`, DJI's RTK sigmas as their accuracies.
 void SetPositionsFromGps(const std::vector<std::string>& images,
@@ -102,6 +110,9 @@ struct GeoreferenceResult {
   std::string out_crs_reason;  // why this output CRS ("--out_crs", "the control's CRS", ...)
   LocalFrame frame;            // the local ENU frame the block is adjusted in
   std::vector<std::string> heights_notes;  // per input CRS: how its heights were treated
+  // Inputs read and not used, one line each with its count and reason ("geo.txt: 12 attitudes
+  // (yaw pitch roll) read and not used (...)"); empty when everything read is used.
+  std::vector<std::string> inputs_not_used;
 
   // Matching.
   int positions_matched = 0;
@@ -130,7 +141,9 @@ struct GeoreferenceResult {
 // into the local frame, gets the camera positions as measured centres (accuracy per row, else
 // `default_camera_accuracy_m` when given, else the bundle's default) and the control points and
 // marks. Fails (nothing changed) on unknown CRSs, fewer than three usable pairs, pairs on a line,
-// a control point id that a model point already has, or marks outside their images.
+// a control point id that a model point already has, marks outside their images, or a camera with
+// the earth-curvature correction (ApplyECC): the local frame is Cartesian, the earth's curvature
+// is in its coordinates already, and the correction would count it twice.
 Status PrepareGeoreference(const GeoreferenceOptions& options, const GeoreferenceInputs& inputs,
                            Block* block, GeoreferenceResult* result);
 

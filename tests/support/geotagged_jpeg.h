@@ -85,4 +85,14 @@ inline void WriteGeotaggedJpeg(const std::string& path, const GeotagOptions& opt
   image->writeMetadata();
 }
 
+// Sets one XMP text tag of an existing image file (e.g. a malformed DJI value).
+inline void SetXmpText(const std::string& path, const std::string& key, const std::string& value) {
+  auto image = Exiv2::ImageFactory::open(path);
+  image->readMetadata();
+  Exiv2::XmpData xmp = image->xmpData();
+  xmp[key] = value;
+  image->setXmpData(xmp);
+  image->writeMetadata();
+}
+
 }  // namespace photopose::testing

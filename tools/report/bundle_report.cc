@@ -118,6 +118,7 @@ json GeoreferenceJson(const Block& block, const GeoreferenceResult& g) {
                            {"origin_lon_lat_h", {g.frame.origin_lon_lat_h().x(), g.frame.origin_lon_lat_h().y(), g.frame.origin_lon_lat_h().z()}},
                            {"note", "the other sections of this report (images, points, groups) are in this local East-North-Up frame (m)"}}},
           {"heights", g.heights_notes},
+          {"inputs_not_used", g.inputs_not_used},
           {"positions_matched", g.positions_matched},
           {"positions_unmatched", g.positions_unmatched},
           {"images_without_position", g.images_without_position},

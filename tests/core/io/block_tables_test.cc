@@ -294,6 +294,41 @@ TEST(BlockAssembly, ErrorsNameTheFileLineAndColumn) {
   EXPECT_EQ(AssembleBlock(t, &block).message().rfind("frames.csv:2: CameraID:", 0), 0u);
 }
 
+// ApplyECC lowers points below the tangent plane of a map frame; a ground frame that PROJ knows as
+// geographic (degrees) or geocentric (ECEF) is refused, naming the camera and where the CRS is named.
+TEST(BlockAssembly, EarthCurvatureIsRefusedInAGeographicOrGeocentricFrame) {
+  Block block;
+  BlockTables t = Tables();
+  t.cameras[0].apply_ecc = true;
+  t.crs = "EPSG:4326";  // a gcp_list header
+  EXPECT_EQ(AssembleBlock(t, &block).message(),
+            "cameras.csv: ApplyECC: camera 'cam': the earth-curvature correction needs a projected or local "
+            "map frame, and the ground frame is geographic (EPSG:4326, points.csv: header)");
+  t.crs.clear();
+  t.cameras[0].srs = "EPSG:4978";
+  EXPECT_EQ(AssembleBlock(t, &block).message(),
+            "cameras.csv: ApplyECC: camera 'cam': the earth-curvature correction needs a projected or local "
+            "map frame, and the ground frame is geocentric (EPSG:4978, cameras.csv: SRS)");
+  t.cameras[0].srs.clear();
+  t.frames[0].srs = "EPSG:4979";
+  EXPECT_EQ(AssembleBlock(t, &block).message(),
+            "cameras.csv: ApplyECC: camera 'cam': the earth-curvature correction needs a projected or local "
+            "map frame, and the ground frame is geographic (EPSG:4979, frames.csv:2: SRS)");
+  // A projected grid, a text PROJ does not know (SRS is free text), or no ApplyECC: assembled.
+  for (const char* srs : {"EPSG:32632", "site grid 1987"}) {
+    t.frames[0].srs = srs;
+    const Status status = AssembleBlock(t, &block);
+    EXPECT_TRUE(status.ok()) << srs << ": " << status.message();
+    EXPECT_GT(block.cameras[0].earth_curvature_radius_m(), 0.0);
+  }
+  t.frames[0].srs = "EPSG:4326";
+  t.cameras[0].apply_ecc = false;
+  EXPECT_TRUE(AssembleBlock(t, &block).ok());
+  // The film camera's ApplyECC is checked against its own frames rows, not those of 'cam'.
+  t.cameras[1].apply_ecc = true;
+  EXPECT_TRUE(AssembleBlock(t, &block).ok());
+}
+
 TEST(BlockAssembly, ReadsTheFilesAndKeepsTheCoordinateSystemOfAGcpList) {
   const std::filesystem::path dir = testing::ScratchRoot();
   std::filesystem::create_directories(dir);

@@ -1,6 +1,11 @@
 #include "core/io/exif_gps.h"
 
 #include <gtest/gtest.h>
+#include <sys/stat.h>
+
+#include <fstream>
+#include <iterator>
+#include <string>
 
 #include "tests/support/geotagged_jpeg.h"
 #include "tests/support/temp_dir.h"
@@ -10,6 +15,7 @@ namespace {
 
 using testing::GeotagOptions;
 using testing::ScopedTempDir;
+using testing::SetXmpText;
 using testing::WriteGeotaggedJpeg;
 
 TEST(ExifGps, ReadsTheExifGpsTagsWithTheirHemispheresAndAltitudeReference) {
@@ -113,17 +119,84 @@ TEST(ExifGps, GarbageAndMalformedTagsAreErrorsNamingFileAndTag) {
   GeotagOptions dji;
   dji.dji_lon_lat_height = Eigen::Vector3d(11.2, 47.8, 500.0);
   WriteGeotaggedJpeg(dir.Path("dji.jpg"), dji);
-  {
-    auto image = Exiv2::ImageFactory::open(dir.Path("dji.jpg"));
-    image->readMetadata();
-    Exiv2::XmpData xmp = image->xmpData();
-    xmp["Xmp.drone-dji.GpsLatitude"] = "47.8N";
-    image->setXmpData(xmp);
-    image->writeMetadata();
-  }
+  SetXmpText(dir.Path("dji.jpg"), "Xmp.drone-dji.GpsLatitude", "47.8N");
   const Status bad = ReadExifGps(dir.Path("dji.jpg"), &gps);
   EXPECT_FALSE(bad.ok());
   EXPECT_NE(bad.message().find("Xmp.drone-dji.GpsLatitude: not a number: '47.8N'"), std::string::npos) << bad.message();
+}
+
+std::string FileBytes(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  return std::string(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
+}
+
+TEST(ExifGps, BytesInMemoryReadAsTheFileDoes) {
+  ScopedTempDir dir;
+  GeotagOptions tags;
+  tags.dji_lon_lat_height = Eigen::Vector3d(8.5432109876, 47.3765432109, 488.123);
+  tags.rtk_sigma_enu_m = Eigen::Vector3d(0.011, 0.012, 0.025);
+  tags.rtk_flag = 50;
+  WriteGeotaggedJpeg(dir.Path("dji.jpg"), tags);
+  ExifGps from_file, from_memory;
+  ASSERT_TRUE(ReadExifGps(dir.Path("dji.jpg"), &from_file).ok());
+  const Status parsed = ParseExifGps(FileBytes(dir.Path("dji.jpg")), "dji.jpg", &from_memory);
+  ASSERT_TRUE(parsed.ok()) << parsed.message();
+  EXPECT_EQ(from_memory.lon_lat_height, from_file.lon_lat_height);
+  EXPECT_EQ(from_memory.source, ExifGpsSource::kDjiXmp);
+  EXPECT_EQ(from_memory.rtk_sigma_enu_m, from_file.rtk_sigma_enu_m);
+  EXPECT_EQ(from_memory.rtk_flag, 50);
+  const Status none = ParseExifGps("", "empty.jpg", &from_memory);
+  EXPECT_EQ(none.message().rfind("empty.jpg: ", 0), 0u) << none.message();
+}
+
+// exiv2 throws Exiv2::Error on corrupt files: every cut of a geotagged JPEG is read or refused with
+// one line naming the file, never an exception.
+TEST(ExifGps, EveryTruncationOfAGeotaggedJpegIsAPositionOrAnErrorNamingTheFile) {
+  ScopedTempDir dir;
+  GeotagOptions tags;
+  tags.exif_lon_lat_height = Eigen::Vector3d(11.2, 47.8, 612.5);
+  tags.dji_lon_lat_height = Eigen::Vector3d(11.3, 47.9, 600.0);
+  tags.rtk_sigma_enu_m = Eigen::Vector3d(0.011, 0.012, 0.025);
+  WriteGeotaggedJpeg(dir.Path("a.jpg"), tags);
+  const std::string bytes = FileBytes(dir.Path("a.jpg"));
+  ASSERT_GT(bytes.size(), 100u);
+  int errors = 0;
+  for (size_t size = 0; size < bytes.size(); size += 7) {
+    ExifGps gps;
+    Status status;
+    ASSERT_NO_THROW(status = ParseExifGps(std::string_view(bytes).substr(0, size), "cut.jpg", &gps));
+    if (status.ok()) {
+      EXPECT_NEAR(gps.lon_lat_height.y(), 47.8, 1e-9);
+      continue;
+    }
+    ++errors;
+    EXPECT_EQ(status.message().rfind("cut.jpg: ", 0), 0u) << status.message();
+    EXPECT_EQ(status.message().find('\n'), std::string::npos) << status.message();
+    EXPECT_LT(status.message().size(), 400u) << status.message();
+  }
+  EXPECT_GT(errors, 0);
+}
+
+TEST(ExifGps, AFifoIsRefusedWithoutWaitingAndLongValuesAreEchoedCut) {
+  ScopedTempDir dir;
+  ASSERT_EQ(mkfifo(dir.Path("pipe.jpg").c_str(), 0600), 0);
+  ExifGps gps;
+  const Status fifo = ReadExifGps(dir.Path("pipe.jpg"), &gps);
+  EXPECT_NE(fifo.message().find("pipe.jpg: not a regular file"), std::string::npos) << fifo.message();
+
+  GeotagOptions dji;
+  dji.dji_lon_lat_height = Eigen::Vector3d(11.2, 47.8, 500.0);
+  WriteGeotaggedJpeg(dir.Path("dji.jpg"), dji);
+  SetXmpText(dir.Path("dji.jpg"), "Xmp.drone-dji.AbsoluteAltitude", std::string(5000, '9') + "x");
+  const Status long_value = ReadExifGps(dir.Path("dji.jpg"), &gps);
+  EXPECT_NE(long_value.message().find("Xmp.drone-dji.AbsoluteAltitude: not a number: '" + std::string(40, '9') +
+                                      "\u2026(5001 bytes)'"),
+            std::string::npos)
+      << long_value.message();
+  // A height beyond the documented 1e8 m.
+  SetXmpText(dir.Path("dji.jpg"), "Xmp.drone-dji.AbsoluteAltitude", "1e300");
+  EXPECT_NE(ReadExifGps(dir.Path("dji.jpg"), &gps).message().find("AbsoluteAltitude: outside [-100000000, 100000000] m"),
+            std::string::npos);
 }
 
 }  // namespace

@@ -159,5 +159,53 @@ TEST(Georeference, BadCrsCollidingIdsAndALineOfPositionsAreRefusedLeavingTheBloc
   }
 }
 
+// geo.txt yaw/pitch/roll are read, counted and reported as not used; ODM's "0 0 0" (not
+// available) is not an attitude.
+TEST(Georeference, GeoTxtAttitudesAreReportedAsReadAndNotUsed) {
+  GeoTxt geo;
+  ASSERT_TRUE(ParseGeoTxt("EPSG:4326\n"
+                          "a.jpg 11.1 47.1 500 12.5 -3.0 0.5\n"
+                          "b.jpg 11.2 47.1 500 0 0 0\n"
+                          "c.jpg 11.3 47.1 500\n"
+                          "d.jpg 11.4 47.1 500 90 0 0 0.05 0.1\n",
+                          "geo.txt", &geo)
+                  .ok());
+  GeoreferenceInputs inputs;
+  SetPositionsFromGeoTxt(geo, "geo.txt", &inputs);
+  EXPECT_EQ(inputs.positions.size(), 4u);
+  EXPECT_EQ(inputs.attitudes_not_used, 2);
+
+  GeoreferenceScene scene = MakeGeoreferenceScene(0.0);
+  Block block = scene.model;
+  GeoreferenceResult result;
+  ASSERT_TRUE(PrepareGeoreference(GeoreferenceOptions(), scene.inputs, &block, &result).ok());
+  EXPECT_TRUE(result.inputs_not_used.empty());
+  scene.inputs.attitudes_not_used = 2;
+  block = scene.model;
+  ASSERT_TRUE(PrepareGeoreference(GeoreferenceOptions(), scene.inputs, &block, &result).ok());
+  ASSERT_EQ(result.inputs_not_used.size(), 1u);
+  EXPECT_EQ(result.inputs_not_used[0], scene.inputs.positions_source +
+                                           ": 2 attitudes (yaw pitch roll) read and not used (" +
+                                           GeoTxtAttitudesNotUsedReason() + ")");
+}
+
+// The local East-North-Up frame holds the earth's curvature in its coordinates: a camera with
+// ApplyECC would have it counted twice, so the block is refused as it is, naming the camera.
+TEST(Georeference, EarthCurvatureCorrectionIsRefusedInTheLocalFrame) {
+  GeoreferenceScene scene = MakeGeoreferenceScene(0.0);
+  Block block = scene.model;
+  block.cameras[0].model = CameraModelType::kFrame;
+  block.cameras[0].table.apply_ecc = true;
+  ASSERT_GT(block.cameras[0].earth_curvature_radius_m(), 0.0);
+  const Block before = block;
+  GeoreferenceResult result;
+  const Status status = PrepareGeoreference(GeoreferenceOptions(), scene.inputs, &block, &result);
+  ASSERT_FALSE(status.ok());
+  EXPECT_EQ(status.message().rfind("camera '" + block.cameras[0].camera_id + "': ApplyECC: ", 0), 0u) << status.message();
+  EXPECT_EQ(status.message().find('\n'), std::string::npos);
+  EXPECT_EQ(block.images[0].eo->parameters, before.images[0].eo->parameters);
+  EXPECT_EQ(block.points.size(), before.points.size());
+}
+
 }  // namespace
 }  // namespace photopose

@@ -30,13 +30,16 @@ std::string Number(double value) {
   return buffer;
 }
 
-// dir/model (COLMAP text), dir/geo.txt, dir/gcp_list.txt; returns the check point names.
-std::string WriteScene(const testing::GeoreferenceScene& scene, const std::string& dir) {
+// dir/model (COLMAP text), dir/geo.txt, dir/gcp_list.txt; returns the check point names. The
+// first `with_attitudes` lines of geo.txt give yaw pitch roll, the others ODM's "0 0 0".
+std::string WriteScene(const testing::GeoreferenceScene& scene, const std::string& dir, int with_attitudes = 0) {
   EXPECT_TRUE(WriteColmapModel(dir + "/model", scene.model).ok());
   std::string geo = "EPSG:4326\n";
+  int line = 0;
   for (const CameraPositionMeasurement& m : scene.inputs.positions)
     geo += m.image + " " + Number(m.position.x()) + " " + Number(m.position.y()) + " " + Number(m.position.z()) +
-           " 0 0 0 " + Number(m.accuracy_m->x()) + " " + Number(m.accuracy_m->z()) + "\n";
+           (line++ < with_attitudes ? " 92.5 -1.5 0.25 " : " 0 0 0 ") + Number(m.accuracy_m->x()) + " " +
+           Number(m.accuracy_m->z()) + "\n";
   WriteFile(dir + "/geo.txt", geo);
   std::string gcp = "WGS84 UTM 32N\n", checks;
   for (const ImageMark& mark : scene.inputs.control_marks) {
@@ -55,7 +58,7 @@ std::string WriteScene(const testing::GeoreferenceScene& scene, const std::strin
 TEST(BundleGeoreference, DomedColmapModelWithGeoTxtAndGcpListComesOutInUtm) {
   const testing::GeoreferenceScene scene = testing::MakeGeoreferenceScene(2.0);
   const std::string dir = ScratchDir();
-  const std::string checks = WriteScene(scene, dir);
+  const std::string checks = WriteScene(scene, dir, 3);
   const CliRun run = RunCli("bundle --colmap_model=" + dir + "/model --geo=" + dir + "/geo.txt --gcp_list=" + dir +
                                 "/gcp_list.txt --check_points=" + checks + " --out=" + dir + "/frames.csv --out_points=" +
                                 dir + "/points.csv --out_colmap=" + dir + "/out --report=" + dir + "/report.json --html=" + dir + "/report.html --quiet",
@@ -66,6 +69,12 @@ TEST(BundleGeoreference, DomedColmapModelWithGeoTxtAndGcpListComesOutInUtm) {
   const nlohmann::json& g = report.at("georeference");
   EXPECT_EQ(g.at("out_crs_name"), "WGS 84 / UTM zone 32N");
   EXPECT_EQ(g.at("positions_matched"), 24);
+  // The three geo.txt attitudes are reported as read and not used, with the reason.
+  ASSERT_EQ(g.at("inputs_not_used").size(), 1u);
+  EXPECT_EQ(g.at("inputs_not_used")[0].get<std::string>().rfind(
+                dir + "/geo.txt: 3 attitudes (yaw pitch roll) read and not used (ODM documents them", 0),
+            0u)
+      << g.at("inputs_not_used");
   EXPECT_EQ(g.at("check_after_adjustment").at("count"), 4);
   const double before = g.at("check_after_similarity").at("rmse_total_m");
   const double after = g.at("check_after_adjustment").at("rmse_total_m");
