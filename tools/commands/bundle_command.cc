@@ -453,11 +453,9 @@ int ReadGeoreferenceInputs(const char* command, const BundleRun& run, Georeferen
     const Status read = ReadGeoTxt(FLAGS_bundle_geo, &geo);
     if (!read.ok()) return BadInput(command, read.message());
     SetPositionsFromGeoTxt(geo, FLAGS_bundle_geo, inputs);
-    const long with_attitude = std::count_if(geo.records.begin(), geo.records.end(),
-                                             [](const GeoTxtRecord& r) { return r.yaw_pitch_roll_deg.has_value(); });
-    if (with_attitude > 0 && !FLAGS_bundle_quiet)
-      std::cerr << "photopose bundle: " << FLAGS_bundle_geo << ": yaw/pitch/roll of " << with_attitude
-                << " images read and not used (their axes are the drone's, not the camera's; the model gives the attitudes)\n";
+    if (inputs->attitudes_not_used > 0 && !FLAGS_bundle_quiet)
+      std::cerr << "photopose bundle: " << FLAGS_bundle_geo << ": yaw/pitch/roll of " << inputs->attitudes_not_used
+                << " images read and not used (" << GeoTxtAttitudesNotUsedReason() << ")\n";
   } else if (!FLAGS_bundle_frames.empty()) {
     std::vector<FrameRecord> frames;
     FramesTableOptions frames_options;
