@@ -24,10 +24,7 @@ constexpr const char* kFramesName = "frames";
 
 PythonBlock Assemble(BlockTables tables) {
   PythonBlock out;
-  {
-    py::gil_scoped_release release;
-    ThrowIfError(AssembleBlock(tables, &out.block));
-  }
+  CallWithoutGil([&] { return AssembleBlock(tables, &out.block); });
   return out;
 }
 
@@ -147,17 +144,6 @@ void CheckImage(const Block& block, int image) {
                           std::to_string(block.images.size()) + " images)");
 }
 
-template <typename Get>
-py::array_t<double> OptionalRowsArray(size_t n, int columns, Get get) {
-  py::array_t<double> out({static_cast<py::ssize_t>(n), py::ssize_t(columns)});
-  double* d = out.mutable_data();
-  for (size_t i = 0; i < n; ++i) {
-    const auto value = get(i);
-    for (int k = 0; k < columns; ++k) d[columns * i + k] = value ? (*value)[k] : NaN();
-  }
-  return out;
-}
-
 std::string BlockRepr(const PythonBlock& b) {
   const Block& block = b.block;
   int roles[3] = {0, 0, 0};
@@ -172,10 +158,8 @@ std::string BlockRepr(const PythonBlock& b) {
   return text + ")";
 }
 
-}  // namespace
-
-void BindBlock(py::module_& m) {
-  // ---------------------------------------------------------------- the tables' records
+// ---------------------------------------------------------------- the tables' records
+void BindTableRecords(py::module_& m) {
   auto point = BindStruct<GroundPoint>(m, "GroundPoint", "A row of the ground points table.");
   point.def_readwrite("point_id", &GroundPoint::point_id)
       .def_readwrite("position", &GroundPoint::position, "X, Y, Z (m)")
@@ -211,16 +195,35 @@ accuracies AccuracyX/Y/Z (m) and AccuracyOmega/Phi/Kappa (deg).)doc");
   gcp.def_readwrite("crs", &GcpList::crs)
       .def_readwrite("points", &GcpList::points)
       .def_readwrite("marks", &GcpList::marks);
+}
 
-  // ---------------------------------------------------------------- table files
-  m.def("read_camera_table", [](const py::object& path) {
-    std::vector<FrameCamera> cameras;
-    ThrowIfError(ReadCameraTable(PathArgument(path, "path"), &cameras));
-    return cameras;
-  }, py::arg("path"), "The rows of a camera table (CSV).");
-  m.def("write_camera_table", [](const py::object& path, const std::vector<FrameCamera>& cameras) {
-    ThrowIfError(WriteCameraTable(PathArgument(path, "path"), cameras));
-  }, py::arg("path"), py::arg("cameras"));
+// ---------------------------------------------------------------- table files
+
+// read_<table>(path) -> [rows] and write_<table>(path, <rows>) over a table's reader and writer.
+template <typename Row>
+void DefTableFile(py::module_& m, const std::string& table, const char* rows,
+                  Status (*read)(const std::string&, std::vector<Row>*),
+                  Status (*write)(const std::string&, const std::vector<Row>&),
+                  const char* read_doc = nullptr) {
+  m.def(
+      ("read_" + table).c_str(),
+      [read](const py::object& path) {
+        std::vector<Row> out;
+        ThrowIfError(read(PathArgument(path, "path"), &out));
+        return out;
+      },
+      py::arg("path"), read_doc);
+  m.def(
+      ("write_" + table).c_str(),
+      [write](const py::object& path, const std::vector<Row>& values) {
+        ThrowIfError(write(PathArgument(path, "path"), values));
+      },
+      py::arg("path"), py::arg(rows));
+}
+
+void BindTableFiles(py::module_& m) {
+  DefTableFile(m, "camera_table", "cameras", &ReadCameraTable, &WriteCameraTable,
+               "The rows of a camera table (CSV).");
   m.def("read_frames_table",
         [](const py::object& path, RotationConvention rotation,
            std::optional<std::vector<FrameCamera>> cameras) {
@@ -245,29 +248,17 @@ accuracies AccuracyX/Y/Z (m) and AccuracyOmega/Phi/Kappa (deg).)doc");
         },
         py::arg("path"), py::arg("frames"), py::arg("rotation") = RotationConvention::kSeed,
         py::arg("cameras") = py::none());
-  m.def("read_ground_points", [](const py::object& path) {
-    std::vector<GroundPoint> points;
-    ThrowIfError(ReadGroundPoints(PathArgument(path, "path"), &points));
-    return points;
-  }, py::arg("path"));
-  m.def("write_ground_points", [](const py::object& path, const std::vector<GroundPoint>& points) {
-    ThrowIfError(WriteGroundPoints(PathArgument(path, "path"), points));
-  }, py::arg("path"), py::arg("points"));
-  m.def("read_image_marks", [](const py::object& path) {
-    std::vector<ImageMark> marks;
-    ThrowIfError(ReadImageMarks(PathArgument(path, "path"), &marks));
-    return marks;
-  }, py::arg("path"));
-  m.def("write_image_marks", [](const py::object& path, const std::vector<ImageMark>& marks) {
-    ThrowIfError(WriteImageMarks(PathArgument(path, "path"), marks));
-  }, py::arg("path"), py::arg("marks"));
+  DefTableFile(m, "ground_points", "points", &ReadGroundPoints, &WriteGroundPoints);
+  DefTableFile(m, "image_marks", "marks", &ReadImageMarks, &WriteImageMarks);
   m.def("read_gcp_list", [](const py::object& path) {
     GcpList list;
     ThrowIfError(ReadGcpList(PathArgument(path, "path"), &list));
     return list;
   }, py::arg("path"), "OpenDroneMap's gcp_list.txt.");
+}
 
-  // ---------------------------------------------------------------- the block
+// ---------------------------------------------------------------- the block
+py::class_<PythonBlock> BindBlockClass(py::module_& m) {
   py::class_<PythonBlock> block(m, "Block", R"doc(
 A photogrammetric block: cameras, images (with their exterior orientation when known), ground
 points (control, check, tie) and image marks. Arrays come out as copies: N x 3 points (m, ground
@@ -301,6 +292,11 @@ the fourth mark.)doc");
   block.def("__repr__", &BlockRepr);
   block.def("check", [](const PythonBlock& b) { ThrowIfError(CheckBlock(b.block)); },
             "CheckBlock: raises photopose.Error naming the first offence.");
+  return block;
+}
+
+// The images' contents as arrays.
+void BindImageArrays(py::class_<PythonBlock>& block) {
   block.def_property_readonly("num_cameras", [](const PythonBlock& b) { return B(b).cameras.size(); })
       .def_property_readonly("num_images", [](const PythonBlock& b) { return B(b).images.size(); })
       .def_property_readonly("num_points", [](const PythonBlock& b) { return B(b).points.size(); })
@@ -309,16 +305,12 @@ the fourth mark.)doc");
       .def_property_readonly("pixel_origin", [](const PythonBlock& b) { return B(b).pixel_origin; })
       .def_property_readonly("cameras", [](const PythonBlock& b) { return B(b).cameras; },
                              "The cameras (copies; set_camera_params changes the block's).")
-      .def_property_readonly("image_names", [](const PythonBlock& b) {
-        std::vector<std::string> names;
-        for (const BlockImage& i : B(b).images) names.push_back(i.name);
-        return names;
-      })
-      .def_property_readonly("image_cameras", [](const PythonBlock& b) {
-        std::vector<int> cameras;
-        for (const BlockImage& i : B(b).images) cameras.push_back(i.camera);
-        return ToArray(cameras);
-      }, "Per image, the index of its camera.")
+      .def_property_readonly("image_names",
+                             [](const PythonBlock& b) { return Column(B(b).images, &BlockImage::name); })
+      .def_property_readonly(
+          "image_cameras",
+          [](const PythonBlock& b) { return ToArray(Column(B(b).images, &BlockImage::camera)); },
+          "Per image, the index of its camera.")
       .def_property_readonly("image_parameters", [](const PythonBlock& b) {
         const auto& images = B(b).images;
         return OptionalRowsArray(images.size(), 6, [&](size_t i) -> std::optional<Vector6d> {
@@ -347,17 +339,16 @@ the fourth mark.)doc");
       .def_property_readonly("center_accuracies_m", [](const PythonBlock& b) {
         const auto& images = B(b).images;
         return OptionalRowsArray(images.size(), 3, [&](size_t i) { return images[i].center_accuracy_m; });
-      }, "N x 3 per-image accuracy of the measured centres (m); NaN rows: the adjustment's default.")
-      .def_property_readonly("point_ids", [](const PythonBlock& b) {
-        std::vector<std::string> ids;
-        for (const BlockPoint& p : B(b).points) ids.push_back(p.id);
-        return ids;
-      })
-      .def_property_readonly("point_roles", [](const PythonBlock& b) {
-        std::vector<PointRole> roles;
-        for (const BlockPoint& p : B(b).points) roles.push_back(p.role);
-        return roles;
-      }, "Per point: 'control', 'check' or 'tie'.")
+      }, "N x 3 per-image accuracy of the measured centres (m); NaN rows: the adjustment's default.");
+}
+
+// The points' and marks' contents as arrays.
+void BindPointAndMarkArrays(py::class_<PythonBlock>& block) {
+  block.def_property_readonly("point_ids",
+                             [](const PythonBlock& b) { return Column(B(b).points, &BlockPoint::id); })
+      .def_property_readonly(
+          "point_roles", [](const PythonBlock& b) { return Column(B(b).points, &BlockPoint::role); },
+          "Per point: 'control', 'check' or 'tie'.")
       .def_property_readonly("point_positions", [](const PythonBlock& b) {
         const auto& points = B(b).points;
         return OptionalRowsArray(points.size(), 3, [&](size_t i) { return points[i].position_m; });
@@ -366,31 +357,26 @@ the fourth mark.)doc");
         const auto& points = B(b).points;
         return OptionalRowsArray(points.size(), 3, [&](size_t i) { return points[i].surveyed_m; });
       }, "N x 3 surveyed coordinates of control and check points (m); NaN rows: tie points.")
-      .def_property_readonly("mark_images", [](const PythonBlock& b) {
-        std::vector<int> v;
-        for (const BlockMark& k : B(b).marks) v.push_back(k.image);
-        return ToArray(v);
-      })
-      .def_property_readonly("mark_points", [](const PythonBlock& b) {
-        std::vector<int> v;
-        for (const BlockMark& k : B(b).marks) v.push_back(k.point);
-        return ToArray(v);
-      })
-      .def_property_readonly("mark_measured", [](const PythonBlock& b) {
-        std::vector<Eigen::Vector2d> v;
-        for (const BlockMark& k : B(b).marks) v.push_back(k.measured);
-        return ToArray(v);
-      }, "M x 2 as read, in each mark's unit (mark_units).")
-      .def_property_readonly("mark_units", [](const PythonBlock& b) {
-        std::vector<MarkUnit> v;
-        for (const BlockMark& k : B(b).marks) v.push_back(k.unit);
-        return v;
-      })
-      .def_property_readonly("mark_observations", [](const PythonBlock& b) {
-        std::vector<Eigen::Vector2d> v;
-        for (const BlockMark& k : B(b).marks) v.push_back(k.observation);
-        return ToArray(v);
-      }, "M x 2 in the camera model's unit (film um for FRAME, px for the COLMAP models).");
+      .def_property_readonly(
+          "mark_images",
+          [](const PythonBlock& b) { return ToArray(Column(B(b).marks, &BlockMark::image)); })
+      .def_property_readonly(
+          "mark_points",
+          [](const PythonBlock& b) { return ToArray(Column(B(b).marks, &BlockMark::point)); })
+      .def_property_readonly(
+          "mark_measured",
+          [](const PythonBlock& b) { return ToArray(Column(B(b).marks, &BlockMark::measured)); },
+          "M x 2 as read, in each mark's unit (mark_units).")
+      .def_property_readonly("mark_units",
+                             [](const PythonBlock& b) { return Column(B(b).marks, &BlockMark::unit); })
+      .def_property_readonly(
+          "mark_observations",
+          [](const PythonBlock& b) { return ToArray(Column(B(b).marks, &BlockMark::observation)); },
+          "M x 2 in the camera model's unit (film um for FRAME, px for the COLMAP models).");
+}
+
+// Finding images and points; setting orientations, positions, measured centres, camera parameters.
+void BindBlockEditing(py::class_<PythonBlock>& block) {
   block.def("find_image", [](const PythonBlock& b, const std::string& n) { return B(b).FindImage(n); },
             py::arg("name"), "Index of an image by name, -1 when absent.");
   block.def("find_point", [](const PythonBlock& b, const std::string& n) { return B(b).FindPoint(n); },
@@ -454,6 +440,10 @@ the fourth mark.)doc");
     const std::vector<double> p = Vector(params, "params", CameraModelNumParams(c.model), false);
     c.params = p;
   }, py::arg("camera"), py::arg("params"));
+}
+
+// An image's marks as the input of a resection (solvers/resection/resection.h).
+void BindResectionInputs(py::class_<PythonBlock>& block) {
   block.def("resection_input", [](const PythonBlock& b, int image, double default_accuracy,
                                   double default_film_accuracy_um, bool include_tie_points) {
     CheckImage(b.block, image);
@@ -487,25 +477,26 @@ the fourth mark.)doc");
   }, py::kw_only(), py::arg("default_accuracy") = 1.0, py::arg("default_film_accuracy_um") = 5.0,
      "(images, inputs): the resection input of every image that has marks, in block order, as "
      "`photopose resect` builds them.");
+}
 
-  // ---------------------------------------------------------------- block files
+// ---------------------------------------------------------------- block files
+void BindBlockFiles(py::module_& m) {
   m.def("read_block",
         [](const py::object& cameras, const py::object& points, const py::object& marks,
            const py::object& gcp_list, const py::object& frames, const py::object& fiducials,
            RotationConvention rotation, PixelOrigin pixel_origin, double max_fiducial_residual_um) {
           BlockFiles files;
           files.cameras = PathArgument(cameras, "cameras");
-          if (!points.is_none()) files.points = PathArgument(points, "points");
-          if (!marks.is_none()) files.marks = PathArgument(marks, "marks");
-          if (!gcp_list.is_none()) files.gcp_list = PathArgument(gcp_list, "gcp_list");
-          if (!frames.is_none()) files.frames = PathArgument(frames, "frames");
-          if (!fiducials.is_none()) files.fiducials = PathArgument(fiducials, "fiducials");
+          files.points = OptionalPathArgument(points, "points");
+          files.marks = OptionalPathArgument(marks, "marks");
+          files.gcp_list = OptionalPathArgument(gcp_list, "gcp_list");
+          files.frames = OptionalPathArgument(frames, "frames");
+          files.fiducials = OptionalPathArgument(fiducials, "fiducials");
           files.rotation = rotation;
           files.pixel_origin = pixel_origin;
           files.max_fiducial_residual_um = max_fiducial_residual_um;
           PythonBlock out;
-          py::gil_scoped_release release;
-          ThrowIfError(ReadBlock(files, &out.block));
+          CallWithoutGil([&] { return ReadBlock(files, &out.block); });
           return out;
         },
         py::arg("cameras"), py::arg("points") = py::none(), py::arg("marks") = py::none(),
@@ -518,28 +509,24 @@ the fourth mark.)doc");
     PythonBlock out;
     out.colmap.emplace();
     const std::string path = PathArgument(directory, "directory");
-    py::gil_scoped_release release;
-    ThrowIfError(ReadColmapModel(path, &out.block, &*out.colmap));
+    CallWithoutGil([&] { return ReadColmapModel(path, &out.block, &*out.colmap); });
     return out;
   }, py::arg("directory"), "A COLMAP text model (cameras.txt, images.txt, points3D.txt).");
   m.def("read_bal_problem", [](const py::object& path) {
     PythonBlock out;
     const std::string p = PathArgument(path, "path");
-    py::gil_scoped_release release;
-    ThrowIfError(ReadBalProblem(p, &out.block));
+    CallWithoutGil([&] { return ReadBalProblem(p, &out.block); });
     return out;
   }, py::arg("path"), "A BAL problem file (Agarwal et al. 2010).");
   m.def("read_bundler_file", [](const py::object& path) {
     PythonBlock out;
     const std::string p = PathArgument(path, "path");
-    py::gil_scoped_release release;
-    ThrowIfError(ReadBundlerFile(p, &out.block));
+    CallWithoutGil([&] { return ReadBundlerFile(p, &out.block); });
     return out;
   }, py::arg("path"), "A Bundler v0.3 .out file.");
   m.def("write_colmap_model", [](const PythonBlock& b, const py::object& directory) {
     const std::string path = PathArgument(directory, "directory");
-    py::gil_scoped_release release;
-    ThrowIfError(WriteColmapModel(path, b.block, b.colmap ? &*b.colmap : nullptr));
+    CallWithoutGil([&] { return WriteColmapModel(path, b.block, b.colmap ? &*b.colmap : nullptr); });
   }, py::arg("block"), py::arg("directory"),
      "Writes the block as a COLMAP text model (ids, keypoints and colours of a model read with "
      "read_colmap_model kept).");
@@ -548,23 +535,24 @@ the fourth mark.)doc");
            const py::object& marks, const py::object& frames, RotationConvention rotation,
            bool write_tie_points) {
           BlockTableFiles files;
-          if (!cameras.is_none()) files.cameras = PathArgument(cameras, "cameras");
-          if (!points.is_none()) files.points = PathArgument(points, "points");
-          if (!marks.is_none()) files.marks = PathArgument(marks, "marks");
-          if (!frames.is_none()) files.frames = PathArgument(frames, "frames");
+          files.cameras = OptionalPathArgument(cameras, "cameras");
+          files.points = OptionalPathArgument(points, "points");
+          files.marks = OptionalPathArgument(marks, "marks");
+          files.frames = OptionalPathArgument(frames, "frames");
           BlockTableWriteOptions options;
           options.rotation = rotation;
           options.write_tie_points = write_tie_points;
-          py::gil_scoped_release release;
-          ThrowIfError(WriteBlockTables(b.block, files, options));
+          CallWithoutGil([&] { return WriteBlockTables(b.block, files, options); });
         },
         py::arg("block"), py::kw_only(), py::arg("cameras") = py::none(),
         py::arg("points") = py::none(), py::arg("marks") = py::none(),
         py::arg("frames") = py::none(), py::arg("rotation") = RotationConvention::kSeed,
         py::arg("write_tie_points") = true,
         "Writes the block as the tables photopose reads back (None leaves a table out).");
+}
 
-  // ---------------------------------------------------------------- synthetic blocks
+// ---------------------------------------------------------------- synthetic blocks
+void BindSyntheticBlockOptions(py::module_& m) {
   auto sim = BindStruct<SyntheticBlockOptions>(m, "SyntheticBlockOptions", R"doc(
 The seeded synthetic aerial block of tests, benchmarks and `photopose simulate --scenario=block`
 (core/simulation/synthetic_block.h): flight lines, terrain, camera, points, noise, blunders, a
@@ -617,7 +605,9 @@ perturbed start.)doc");
       .def_readwrite("start_point_sigma_m", &SyntheticBlockOptions::start_point_sigma_m)
       .def_readwrite("tie_point_start", &SyntheticBlockOptions::tie_point_start);
   sim.def("validate", [](const SyntheticBlockOptions& o) { ThrowIfError(o.IsValid()); });
+}
 
+void BindSyntheticBlock(py::module_& m) {
   py::class_<SyntheticBlockTruth> truth(m, "SyntheticBlockTruth", "The truth of a synthetic block.");
   truth.def_property_readonly("image_parameters", [](const SyntheticBlockTruth& t) {
          std::vector<Vector6d> rows;
@@ -643,13 +633,26 @@ perturbed start.)doc");
     }
     PythonBlock out;
     SyntheticBlockTruth t;
-    {
-      py::gil_scoped_release release;
-      ThrowIfError(MakeSyntheticBlock(o, &out.block, &t));
-    }
+    CallWithoutGil([&] { return MakeSyntheticBlock(o, &out.block, &t); });
     return py::make_tuple(py::cast(std::move(out)), py::cast(std::move(t)));
   }, py::arg("options") = py::none(),
      "(block, truth): a seeded synthetic block; options as a SyntheticBlockOptions or as keywords.");
+}
+
+}  // namespace
+
+// In this order: a function's signature names the classes bound before it.
+void BindBlock(py::module_& m) {
+  BindTableRecords(m);
+  BindTableFiles(m);
+  py::class_<PythonBlock> block = BindBlockClass(m);
+  BindImageArrays(block);
+  BindPointAndMarkArrays(block);
+  BindBlockEditing(block);
+  BindResectionInputs(block);
+  BindBlockFiles(m);
+  BindSyntheticBlockOptions(m);
+  BindSyntheticBlock(m);
 }
 
 }  // namespace photopose::python

@@ -48,10 +48,8 @@ std::string SummaryRepr(const BundleAdjustmentSummary& s) {
   return "BundleAdjustmentSummary(" + s.BriefReport() + ")";
 }
 
-}  // namespace
-
-void BindBundle(py::module_& m) {
-  // ---------------------------------------------------------------- options
+// The options of bundle_adjust, one class per part, then the composed BundleAdjustmentOptions.
+void BindBundleOptions(py::module_& m) {
   auto acc = BindStruct<BundleAccuracies>(m, "BundleAccuracies", R"doc(
 The stated accuracies of the objective's groups (one sigma; Metashape's reference settings by
 default). A per-row accuracy of the tables overrides its row's default.)doc");
@@ -112,7 +110,10 @@ The options of bundle_adjust, composed as in C++: accuracies, robustness, statis
       .def_readwrite("statistics", &BundleAdjustmentOptions::statistics)
       .def_readwrite("solver", &BundleAdjustmentOptions::solver);
   DefValidate(options, "BundleAdjustmentOptions");
+}
 
+// What the adjustment holds constant or estimates.
+void BindBundleConfig(py::module_& m) {
   auto config = BindStruct<BundleAdjustmentConfig>(m, "BundleAdjustmentConfig", R"doc(
 What the adjustment holds constant or estimates: per camera the parameter indices to calibrate,
 constant images and points, the GNSS lever arm (camera frame u, v, w; m).)doc");
@@ -128,8 +129,10 @@ constant images and points, the GNSS lever arm (camera frame u, v, w; m).)doc");
   }, py::arg("block"), py::arg("names"),
      "Self-calibration of every camera by name ('FocalLength', 'PrincipalX', 'K1', ...: "
      "`photopose bundle --calibrate`).");
+}
 
-  // ---------------------------------------------------------------- result
+// The progress hook's iteration and the summary of an adjustment.
+void BindBundleProgressAndSummary(py::module_& m) {
   py::class_<BundleIterationInfo> info(m, "BundleIterationInfo", "One iteration, as progress reports it.");
   info.def_readonly("round", &BundleIterationInfo::round)
       .def_readonly("iteration", &BundleIterationInfo::iteration)
@@ -182,7 +185,10 @@ constant images and points, the GNSS lever arm (camera frame u, v, w; m).)doc");
       .def("is_solution_usable", &BundleAdjustmentSummary::IsSolutionUsable)
       .def("brief_report", &BundleAdjustmentSummary::BriefReport)
       .def("__repr__", &SummaryRepr);
+}
 
+// The parts of a result: per image, per point, per group, calibration, rejections, snooping.
+void BindBundleResultParts(py::module_& m) {
   py::class_<BundleImageResult>(m, "BundleImageResult")
       .def_readonly("adjusted", &BundleImageResult::adjusted)
       .def_readonly("message", &BundleImageResult::message)
@@ -247,7 +253,10 @@ constant images and points, the GNSS lever arm (camera frame u, v, w; m).)doc");
       .def_readonly("normalized", &BundleSnoopingStep::normalized)
       .def_readonly("residual", &BundleSnoopingStep::residual)
       .def("__repr__", [](const py::object& self) { return PropertiesRepr(self); });
+}
 
+// The result of bundle_adjust, with its per-observation diagnostics and arrays.
+void BindBundleResult(py::module_& m) {
   py::class_<BundleAdjustmentResult> result(m, "BundleAdjustmentResult", R"doc(
 The adjustment's result: summary (termination, sigma0, redundancy, timings), per image and per
 point results, the groups' statistics and over-fitting verdicts, calibration, rejected marks,
@@ -290,44 +299,34 @@ redundancy, normalized, mdb, external_m, rejected. Empty arrays when not compute
         });
       }, "N x 6 x 6 (m, rad; seed); NaN without covariance.")
       .def_property_readonly("image_standard_deviations", [](const BundleAdjustmentResult& r) {
-        py::array_t<double> out({static_cast<py::ssize_t>(r.images.size()), py::ssize_t(6)});
-        for (size_t i = 0; i < r.images.size(); ++i)
-          for (int k = 0; k < 6; ++k)
-            out.mutable_at(i, k) = r.images[i].has_covariance ? std::sqrt(r.images[i].covariance(k, k)) : NaN();
-        return out;
+        return OptionalRowsArray(r.images.size(), 6, [&](size_t i) -> std::optional<Vector6d> {
+          if (!r.images[i].has_covariance) return std::nullopt;
+          return r.images[i].covariance.diagonal().cwiseSqrt();
+        });
       }, "N x 6 (m, rad; seed); NaN without covariance.")
       .def_property_readonly("point_errors_m", [](const BundleAdjustmentResult& r) {
-        py::array_t<double> out({static_cast<py::ssize_t>(r.points.size()), py::ssize_t(3)});
-        for (size_t i = 0; i < r.points.size(); ++i)
-          for (int k = 0; k < 3; ++k)
-            out.mutable_at(i, k) = r.points[i].error_m ? (*r.points[i].error_m)[k] : NaN();
-        return out;
+        return OptionalRowsArray(r.points.size(), 3, [&](size_t i) { return r.points[i].error_m; });
       }, "N x 3 adjusted (control) or intersected (check) - surveyed (m); NaN for tie points.")
       .def("full_report", [](const BundleAdjustmentResult& r, const PythonBlock& b) { return r.FullReport(b.block); },
            py::arg("block"), "The multi-line report: summary, groups and verdicts, images, points, calibration.")
       .def("__repr__", [](const BundleAdjustmentResult& r) {
         return "BundleAdjustmentResult(" + r.summary.BriefReport() + ")";
       });
+}
 
-  // ---------------------------------------------------------------- calls
+// bundle_adjust: the adjustment in place, its progress as a Python callback.
+void BindBundleAdjust(py::module_& m) {
   m.def("bundle_adjust",
         [](PythonBlock& block, std::optional<BundleAdjustmentOptions> options,
            std::optional<BundleAdjustmentConfig> config, const py::object& progress,
            PoseSolver solver) {
           BundleAdjustmentOptions o = options.value_or(BundleAdjustmentOptions());
           const BundleAdjustmentConfig c = config.value_or(BundleAdjustmentConfig());
-          if (!progress.is_none() && !PyCallable_Check(progress.ptr()))
-            throw py::type_error("progress: expected a callable taking a BundleIterationInfo");
           ProgressRelay relay(progress);
           o.solver.progress = relay.Function();
           BundleAdjustmentResult result;
-          Status status;
-          {
-            py::gil_scoped_release release;
-            status = BundleAdjustWithSolver(solver, o, c, &block.block, &result);
-          }
-          relay.Rethrow();
-          ThrowIfError(status);
+          CallWithoutGil([&] { return BundleAdjustWithSolver(solver, o, c, &block.block, &result); },
+                         &relay);
           return result;
         },
         py::arg("block"), py::arg("options") = py::none(), py::arg("config") = py::none(),
@@ -343,7 +342,10 @@ arm) with the reason. Raises photopose.Error for invalid options or a block the
 adjustment cannot use; a failed or unconverged adjustment is result.summary.termination with the
 block unchanged. progress(info: BundleIterationInfo) is called after every iteration (from the
 adjusting thread, with the GIL); an exception it raises is raised when the adjustment returns.)doc");
+}
 
+// Initial values of a block (solvers/bundle/block_initialization.h).
+void BindBlockInitialization(py::module_& m) {
   auto init_options = BindStruct<BlockInitializationOptions>(m, "BlockInitializationOptions",
                                                              "Initial values of a block: resection and intersection.");
   init_options.def_readwrite("resection", &BlockInitializationOptions::resection)
@@ -371,18 +373,16 @@ adjusting thread, with the GIL); an exception it raises is raised when the adjus
         [](PythonBlock& block, std::optional<BlockInitializationOptions> options) {
           const BlockInitializationOptions o = options.value_or(BlockInitializationOptions());
           BlockInitializationSummary summary;
-          Status status;
-          {
-            py::gil_scoped_release release;
-            status = InitializeBlock(o, &block.block, &summary);
-          }
-          ThrowIfError(status);
+          CallWithoutGil([&] { return InitializeBlock(o, &block.block, &summary); });
           return summary;
         },
         py::arg("block"), py::arg("options") = py::none(),
         "Fills in missing orientations (resection) and tie-point positions (intersection) in "
         "place (InitializeBlock); images it cannot orient are listed in the summary.");
+}
 
+// Leave-one-out cross-validation of the control points.
+void BindCrossValidation(py::module_& m) {
   py::class_<BundleCrossValidationPoint>(m, "BundleCrossValidationPoint")
       .def_readonly("point", &BundleCrossValidationPoint::point)
       .def_readonly("ok", &BundleCrossValidationPoint::ok)
@@ -408,18 +408,29 @@ adjusting thread, with the GIL); an exception it raises is raised when the adjus
           const BundleAdjustmentConfig c = config.value_or(BundleAdjustmentConfig());
           if (num_threads < 0) throw py::value_error("num_threads must be >= 0 (0: all cores)");
           BundleCrossValidationResult out;
-          Status status;
-          {
-            py::gil_scoped_release release;
-            status = CrossValidateControlPoints(o, c, adjusted.block, full, num_threads, &out);
-          }
-          ThrowIfError(status);
+          CallWithoutGil([&] {
+            return CrossValidateControlPoints(o, c, adjusted.block, full, num_threads, &out);
+          });
           return out;
         },
         py::arg("adjusted"), py::arg("full"), py::arg("options") = py::none(),
         py::arg("config") = py::none(), py::arg("num_threads") = 0,
         "Leave-one-out: each control point of the adjusted block in turn as a check point "
         "(CrossValidateControlPoints), with the options and config of the full adjustment.");
+}
+
+}  // namespace
+
+// In this order: a function's signature names the classes bound before it.
+void BindBundle(py::module_& m) {
+  BindBundleOptions(m);
+  BindBundleConfig(m);
+  BindBundleProgressAndSummary(m);
+  BindBundleResultParts(m);
+  BindBundleResult(m);
+  BindBundleAdjust(m);
+  BindBlockInitialization(m);
+  BindCrossValidation(m);
 }
 
 }  // namespace photopose::python

@@ -61,6 +61,10 @@ void CheckOptions(const Options& options, const char* name) {
 
 // A path argument: str or os.PathLike (os.fspath).
 std::string PathArgument(const py::handle& path, const char* name);
+// An optional path argument: empty for None (the file left out).
+inline std::string OptionalPathArgument(const py::handle& path, const char* name) {
+  return path.is_none() ? std::string() : PathArgument(path, name);
+}
 
 // ------------------------------------------------------------------ numpy in
 
@@ -86,6 +90,25 @@ py::array_t<double> ToArray(const std::vector<double>& values);
 py::array_t<int> ToArray(const std::vector<int>& values);
 py::array_t<bool> ToBoolArray(const std::vector<char>& flags);
 inline double NaN() { return std::numeric_limits<double>::quiet_NaN(); }
+// One field of every row, in order: Column(block.marks, &BlockMark::image).
+template <typename Row, typename Field>
+std::vector<Field> Column(const std::vector<Row>& rows, Field Row::*field) {
+  std::vector<Field> column;
+  column.reserve(rows.size());
+  for (const Row& row : rows) column.push_back(row.*field);
+  return column;
+}
+// N x columns: get(i) is an optional vector (or a pointer-like), a row of NaN where it is empty.
+template <typename Get>
+py::array_t<double> OptionalRowsArray(size_t n, int columns, Get get) {
+  py::array_t<double> out({static_cast<py::ssize_t>(n), py::ssize_t(columns)});
+  double* d = out.mutable_data();
+  for (size_t i = 0; i < n; ++i) {
+    const auto value = get(i);
+    for (int k = 0; k < columns; ++k) d[columns * i + k] = value ? (*value)[k] : NaN();
+  }
+  return out;
+}
 // N x rows x cols: get(i) is an optional matrix (or a pointer-like), NaN where it is empty.
 template <typename Get>
 py::array_t<double> StackOrNaN(size_t n, int rows, int cols, Get get) {
@@ -144,12 +167,16 @@ struct PythonBlock {
 };
 
 // ------------------------------------------------------------------ progress
-// A Python progress callback, called from the adjustment's thread with the GIL taken. The first
-// exception it raises stops further calls (the C++ adjustment cannot be interrupted from its
-// progress hook) and is raised again when the adjustment returns.
+// A Python progress callback (None, or a callable taking a BundleIterationInfo: anything else is a
+// TypeError), called from the adjustment's thread with the GIL taken. The first exception it raises
+// stops further calls (the C++ adjustment cannot be interrupted from its progress hook) and is
+// raised again when the adjustment returns.
 class ProgressRelay {
  public:
-  explicit ProgressRelay(py::object callback) : callback_(std::move(callback)) {}
+  explicit ProgressRelay(py::object callback) : callback_(std::move(callback)) {
+    if (!callback_.is_none() && !PyCallable_Check(callback_.ptr()))
+      throw py::type_error("progress: expected a callable taking a BundleIterationInfo");
+  }
   ~ProgressRelay() {
     py::gil_scoped_acquire acquire;
     callback_ = py::object();
@@ -176,6 +203,21 @@ class ProgressRelay {
   py::object callback_;
   std::unique_ptr<py::error_already_set> error_;
 };
+
+// ------------------------------------------------------------------ library calls
+// Runs a library call (returning Status) without the GIL, so that other Python threads run
+// meanwhile; then raises, in this order, the progress callback's exception (when a relay is given)
+// and the call's failed Status as photopose.Error.
+template <typename Call>
+void CallWithoutGil(Call call, ProgressRelay* relay = nullptr) {
+  Status status;
+  {
+    py::gil_scoped_release release;
+    status = call();
+  }
+  if (relay != nullptr) relay->Rethrow();
+  ThrowIfError(status);
+}
 
 // ------------------------------------------------------------------ the areas of the module
 void BindGeometry(py::module_& m);

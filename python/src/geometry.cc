@@ -41,6 +41,25 @@ std::string EoRepr(const ExteriorOrientation& eo) {
   return text;
 }
 
+// The six parameters [X0, Y0, Z0, omega, phi, kappa] as a list, and back.
+std::vector<double> ParametersOf(const ExteriorOrientation& eo) {
+  return std::vector<double>(eo.parameters.data(), eo.parameters.data() + 6);
+}
+void SetParameters(const std::vector<double>& p, ExteriorOrientation* eo) {
+  for (int i = 0; i < 6; ++i) eo->parameters[i] = p[i];
+}
+
+// N x 2: each row mapped by map(row, &out) (false: no value), NaN rows where it gives none.
+template <typename Row, typename Map>
+py::array_t<double> MapRowsOrNaN(const std::vector<Row>& rows, Map map) {
+  std::vector<Eigen::Vector2d> out(rows.size(), Eigen::Vector2d::Constant(NaN()));
+  for (size_t i = 0; i < rows.size(); ++i) {
+    Eigen::Vector2d value;
+    if (map(rows[i], &value)) out[i] = value;
+  }
+  return ToArray(out);
+}
+
 std::string ParamNamesText(CameraModelType model) {
   std::string text;
   for (const std::string& name : CameraModelParamNames(model))
@@ -78,9 +97,8 @@ py::array_t<double> ProjectThroughCamera(const BlockCamera& camera, const Exteri
   return ToArray(out);
 }
 
-}  // namespace
-
-void BindGeometry(py::module_& m) {
+// kDegreesPerRadian, and the pose of an image in the seed convention: its constructors.
+py::class_<ExteriorOrientation> BindExteriorOrientation(py::module_& m) {
   m.attr("kDegreesPerRadian") = kDegreesPerRadian;
 
   // ---------------------------------------------------------------- exterior orientation
@@ -130,11 +148,15 @@ film y and w towards the viewer: visible points have w < 0.)doc");
       },
       py::arg("T_camera_from_ground"),
       "From [R | t] (4 x 4 or 3 x 4) with (u, v, w) = R X + t, t = -R X0.");
+  return eo;
+}
+
+// Its parameters, centre, angles in every convention, rotation and pose matrix; copy and pickle.
+void BindExteriorOrientationAccess(py::class_<ExteriorOrientation>& eo) {
   eo.def_property(
-      "parameters", [](const ExteriorOrientation& e) { return ToArray(std::vector<double>(e.parameters.data(), e.parameters.data() + 6)); },
+      "parameters", [](const ExteriorOrientation& e) { return ToArray(ParametersOf(e)); },
       [](ExteriorOrientation& e, const py::object& v) {
-        const std::vector<double> p = Vector(v, "parameters", 6, false);
-        for (int i = 0; i < 6; ++i) e.parameters[i] = p[i];
+        SetParameters(Vector(v, "parameters", 6, false), &e);
       },
       "[X0, Y0, Z0 (m), omega, phi, kappa (rad, seed)], a copy.");
   eo.def_property(
@@ -174,15 +196,16 @@ film y and w towards the viewer: visible points have w < 0.)doc");
   eo.def("__repr__", &EoRepr);
   eo.def("__copy__", [](const ExteriorOrientation& e) { return e; });
   eo.def("__deepcopy__", [](const ExteriorOrientation& e, const py::dict&) { return e; });
-  eo.def(py::pickle([](const ExteriorOrientation& e) { return py::make_tuple(std::vector<double>(e.parameters.data(), e.parameters.data() + 6)); },
+  eo.def(py::pickle([](const ExteriorOrientation& e) { return py::make_tuple(ParametersOf(e)); },
                     [](const py::tuple& t) {
                       ExteriorOrientation e;
-                      const auto p = t[0].cast<std::vector<double>>();
-                      for (int i = 0; i < 6; ++i) e.parameters[i] = p[i];
+                      SetParameters(t[0].cast<std::vector<double>>(), &e);
                       return e;
                     }));
+}
 
-  // ---------------------------------------------------------------- rotation conventions
+// The rotation conventions (core/rotation.h).
+void BindRotationConventions(py::module_& m) {
   m.def(
       "rotation_from_angles",
       [](const py::object& angles, RotationConvention convention) {
@@ -217,18 +240,17 @@ film y and w towards the viewer: visible points have w < 0.)doc");
       },
       py::arg("convention_angles_rad"), py::arg("convention"), py::arg("angle_direction") = -1,
       "The inverse of convention_angles_from_seed.");
+}
 
-  // ---------------------------------------------------------------- collinearity
+// The collinearity projection (core/collinearity.h).
+void BindCollinearity(py::module_& m) {
   m.def(
       "project_to_normalized",
       [](const ExteriorOrientation& e, const py::object& points_value) {
-        const std::vector<Eigen::Vector3d> points = Points3(points_value, "points_in_ground");
-        std::vector<Eigen::Vector2d> out(points.size(), Eigen::Vector2d::Constant(NaN()));
-        for (size_t i = 0; i < points.size(); ++i) {
-          Eigen::Vector2d ab;
-          if (ProjectToNormalized(e.data(), points[i].data(), ab.data())) out[i] = ab;
-        }
-        return ToArray(out);
+        return MapRowsOrNaN(Points3(points_value, "points_in_ground"),
+                            [&](const Eigen::Vector3d& point, Eigen::Vector2d* ab) {
+                              return ProjectToNormalized(e.data(), point.data(), ab->data());
+                            });
       },
       py::arg("eo"), py::arg("points_in_ground"),
       "The seed's normalised image coordinates (a, b) = (-u / w, -v / w) of N x 3 ground points "
@@ -236,19 +258,18 @@ film y and w towards the viewer: visible points have w < 0.)doc");
   m.def(
       "project_to_image_plane",
       [](const ExteriorOrientation& e, const py::object& points_value, double focal) {
-        const std::vector<Eigen::Vector3d> points = Points3(points_value, "points_in_ground");
-        std::vector<Eigen::Vector2d> out(points.size(), Eigen::Vector2d::Constant(NaN()));
-        for (size_t i = 0; i < points.size(); ++i) {
-          Eigen::Vector2d xy;
-          if (ProjectToImagePlane(e.data(), points[i].data(), focal, xy.data())) out[i] = xy;
-        }
-        return ToArray(out);
+        return MapRowsOrNaN(Points3(points_value, "points_in_ground"),
+                            [&](const Eigen::Vector3d& point, Eigen::Vector2d* xy) {
+                              return ProjectToImagePlane(e.data(), point.data(), focal, xy->data());
+                            });
       },
       py::arg("eo"), py::arg("points_in_ground"), py::arg("focal_length"),
       "The seed's equations 4-5: x = -c u / w, y = -c v / w (unit of c, e.g. um), N x 2; NaN rows "
       "for points not in front of the camera.");
+}
 
-  // ---------------------------------------------------------------- the camera table's row
+// The camera table's row and its fields.
+py::class_<FrameCamera> BindFrameCamera(py::module_& m) {
   auto fc = BindStruct<FrameCamera>(m, "FrameCamera", R"doc(
 One row of an ArcGIS frame-camera table (docs/formats.md): focal length, principal point and
 distortion in micrometres and the table's mm-based coefficients, the pixel -> film mapping, flags.)doc");
@@ -289,6 +310,11 @@ distortion in micrometres and the table's mm-based coefficients, the pixel -> fi
       .def_readwrite("earth_radius_m", &FrameCamera::earth_radius_m)
       .def_readwrite("srs", &FrameCamera::srs)
       .def_readwrite("block_name", &FrameCamera::block_name);
+  return fc;
+}
+
+// Its checks and mappings: pixels <-> film, ground -> pixels.
+void BindFrameCameraMethods(py::class_<FrameCamera>& fc) {
   fc.def(
       "validate", [](const FrameCamera& c) { ThrowIfError(c.IsValid()); },
       "Raises photopose.Error naming the first inconsistent field.");
@@ -318,20 +344,19 @@ distortion in micrometres and the table's mm-based coefficients, the pixel -> fi
       "project",
       [](const FrameCamera& c, const ExteriorOrientation& e, const py::object& points_value,
          PixelOrigin origin) {
-        const std::vector<Eigen::Vector3d> points = Points3(points_value, "points_in_ground");
-        std::vector<Eigen::Vector2d> out(points.size(), Eigen::Vector2d::Constant(NaN()));
-        for (size_t i = 0; i < points.size(); ++i) {
-          Eigen::Vector2d pixel;
-          if (ProjectGroundPoint(c, e, points[i], origin, &pixel).ok()) out[i] = pixel;
-        }
-        return ToArray(out);
+        return MapRowsOrNaN(Points3(points_value, "points_in_ground"),
+                            [&](const Eigen::Vector3d& point, Eigen::Vector2d* pixel) {
+                              return ProjectGroundPoint(c, e, point, origin, pixel).ok();
+                            });
       },
       py::arg("eo"), py::arg("points_in_ground"), py::arg("pixel_origin") = PixelOrigin::kCorner,
       "N x 3 ground points (m) -> N x 2 pixels (Column, Row) through the whole camera "
       "(collinearity, Polarity, distortion, film, pixel; earth curvature with apply_ecc). NaN rows "
       "for points not in front of the camera.");
+}
 
-  // ---------------------------------------------------------------- camera models
+// A block's camera (core/camera_models.h): its constructors and parameters.
+py::class_<BlockCamera> BindCamera(py::module_& m) {
   py::class_<BlockCamera> cam(m, "Camera", R"doc(
 The interior orientation of one camera of a block: a model of core/camera_models.h ('FRAME', the
 camera table's backward model with observations in film um; or COLMAP's 'SIMPLE_PINHOLE',
@@ -381,20 +406,24 @@ corner of the image) and its parameters in that model's order and units.)doc");
           "observation_unit",
           [](const BlockCamera& c) { return c.model == CameraModelType::kFrame ? "um" : "px"; },
           "'um' (film micrometres) for FRAME, 'px' for the COLMAP models.");
+  return cam;
+}
+
+// Ground -> observations and observations -> rays through a camera model.
+void BindCameraProjection(py::class_<BlockCamera>& cam) {
   cam.def("project", &ProjectThroughCamera, py::arg("eo"), py::arg("points_in_ground"),
           "N x 3 ground points (m) -> N x 2 observations in the model's unit (film um for FRAME, "
           "pixels for the COLMAP models); NaN rows for points not in front of the camera.");
   cam.def(
       "normalized_from_observations",
       [](const BlockCamera& c, const py::object& value) {
-        const std::vector<Eigen::Vector2d> obs = Points2(value, "observations");
-        std::vector<Eigen::Vector2d> out(obs.size(), Eigen::Vector2d::Constant(NaN()));
         const CameraModelData data = c.data();
-        for (size_t i = 0; i < obs.size(); ++i) {
-          Eigen::Vector2d ab;
-          if (NormalizedFromObservation(c.model, c.params.data(), data, obs[i], &ab).ok()) out[i] = ab;
-        }
-        return ToArray(out);
+        return MapRowsOrNaN(Points2(value, "observations"),
+                            [&](const Eigen::Vector2d& observation, Eigen::Vector2d* ab) {
+                              return NormalizedFromObservation(c.model, c.params.data(), data,
+                                                               observation, ab)
+                                  .ok();
+                            });
       },
       py::arg("observations"),
       "The rays (a, b) (seed's normalised coordinates, x right, y up) of N x 2 observations; NaN "
@@ -408,6 +437,20 @@ corner of the image) and its parameters in that model's order and units.)doc");
     }
     return text + "])";
   });
+}
+
+}  // namespace
+
+// In this order: a function's signature names the classes bound before it.
+void BindGeometry(py::module_& m) {
+  py::class_<ExteriorOrientation> eo = BindExteriorOrientation(m);
+  BindExteriorOrientationAccess(eo);
+  BindRotationConventions(m);
+  BindCollinearity(m);
+  py::class_<FrameCamera> fc = BindFrameCamera(m);
+  BindFrameCameraMethods(fc);
+  py::class_<BlockCamera> cam = BindCamera(m);
+  BindCameraProjection(cam);
 }
 
 }  // namespace photopose::python

@@ -19,23 +19,10 @@ py::dict RmseDict(const GeoreferenceRmse& r) {
   return d;
 }
 
-// N x 3 of an optional per point, NaN where it is unset.
-template <typename Get>
-py::array_t<double> Rows3(size_t n, Get get) {
-  py::array_t<double> out({static_cast<py::ssize_t>(n), py::ssize_t(3)});
-  for (size_t i = 0; i < n; ++i) {
-    const std::optional<Eigen::Vector3d> v = get(i);
-    for (int k = 0; k < 3; ++k) out.mutable_at(i, k) = v ? (*v)[k] : NaN();
-  }
-  return out;
-}
-
 const char* SourceName(ExifGpsSource source) { return source == ExifGpsSource::kExif ? "exif" : "dji_xmp"; }
 
-}  // namespace
-
-void BindGeoreference(py::module_& m) {
-  // ---------------------------------------------------------------- inputs
+// Camera positions from files: ODM's geo.txt, the images' GPS tags.
+void BindPositionFiles(py::module_& m) {
   auto geo_record = BindStruct<GeoTxtRecord>(m, "GeoTxtRecord", "A line of ODM's geo.txt.");
   geo_record.def_readwrite("image", &GeoTxtRecord::image)
       .def_readwrite("position", &GeoTxtRecord::position, "x, y, z in the file's CRS (GIS order: easting or longitude first)")
@@ -66,17 +53,15 @@ void BindGeoreference(py::module_& m) {
   m.def("read_images_gps", [](const py::object& directory, const std::vector<std::string>& names) {
     std::vector<std::optional<ExifGps>> positions;
     std::vector<std::string> missing;
-    Status status;
     const std::string dir = PathArgument(directory, "directory");
-    {
-      py::gil_scoped_release release;
-      status = ReadExifGpsOfImages(dir, names, &positions, &missing);
-    }
-    ThrowIfError(status);
+    CallWithoutGil([&] { return ReadExifGpsOfImages(dir, names, &positions, &missing); });
     return py::make_tuple(positions, missing);
   }, py::arg("directory"), py::arg("names"),
         "(positions, missing): per name its ExifGps or None, and the names without GPS tags.");
+}
 
+// What ties a model to the ground, from files or arrays, and how it is georeferenced.
+void BindGeoreferenceInputs(py::module_& m) {
   auto position = BindStruct<CameraPositionMeasurement>(m, "CameraPositionMeasurement",
                                                         "A measured projection centre (GNSS) of an image, named as the block names it.");
   position.def_readwrite("image", &CameraPositionMeasurement::image)
@@ -152,8 +137,10 @@ arrays (set_positions).)doc");
                         "empty: the control's CRS, else the positions' when projected, else the UTM zone of the centre")
       .def_readwrite("default_camera_accuracy_m", &GeoreferenceOptions::default_camera_accuracy_m, "m")
       .def_readwrite("default_marker_accuracy_m", &GeoreferenceOptions::default_marker_accuracy_m, "m");
+}
 
-  // ---------------------------------------------------------------- result
+// The result: the similarity, the control and check errors, the outputs in the output CRS.
+void BindGeoreferenceResult(py::module_& m) {
   py::class_<GeoreferenceResult> result(m, "GeoreferenceResult", R"doc(
 How the model was tied to the ground: the output CRS and why, the matching of names, the robust
 similarity (model -> local ENU frame), the control and check errors after the similarity and after
@@ -186,10 +173,10 @@ ENU frame; to_output_crs and output_poses bring coordinates and poses into the o
         return ToArray(points);
       }, "indices into the block's points of the surveyed points below")
       .def_property_readonly("errors_after_similarity_m", [](const GeoreferenceResult& r) {
-        return Rows3(r.point_errors.size(), [&](size_t i) { return r.point_errors[i].after_similarity_m; });
+        return OptionalRowsArray(r.point_errors.size(), 3, [&](size_t i) { return r.point_errors[i].after_similarity_m; });
       }, "K x 3 estimate - surveyed (m, level axes), NaN where not computed")
       .def_property_readonly("errors_after_adjustment_m", [](const GeoreferenceResult& r) {
-        return Rows3(r.point_errors.size(), [&](size_t i) { return r.point_errors[i].after_adjustment_m; });
+        return OptionalRowsArray(r.point_errors.size(), 3, [&](size_t i) { return r.point_errors[i].after_adjustment_m; });
       }, "K x 3 estimate - surveyed (m, level axes), NaN where not computed")
       .def_readonly("evaluated", &GeoreferenceResult::evaluated)
       .def_readonly("prepare_seconds", &GeoreferenceResult::prepare_seconds)
@@ -226,17 +213,17 @@ ENU frame; to_output_crs and output_poses bring coordinates and poses into the o
           s += ", check_rmse_m=" + std::to_string(r.check_after_adjustment.total_m);
         return s + ")";
       });
+}
 
-  // ---------------------------------------------------------------- calls
+// The steps of georeferencing, and all of them with the adjustment.
+void BindGeoreferenceCalls(py::module_& m) {
   m.def("prepare_georeference",
         [](PythonBlock& block, const GeoreferenceInputs& in, std::optional<GeoreferenceOptions> options) {
           GeoreferenceResult out;
-          Status status;
-          {
-            py::gil_scoped_release release;
-            status = PrepareGeoreference(options.value_or(GeoreferenceOptions()), in, &block.block, &out);
-          }
-          ThrowIfError(status);
+          CallWithoutGil([&] {
+            return PrepareGeoreference(options.value_or(GeoreferenceOptions()), in, &block.block,
+                                       &out);
+          });
           return out;
         },
         py::arg("block"), py::arg("inputs"), py::arg("options") = py::none(),
@@ -253,20 +240,17 @@ ENU frame; to_output_crs and output_poses bring coordinates and poses into the o
            std::optional<BundleAdjustmentOptions> bundle_options, std::optional<BundleAdjustmentConfig> config,
            const py::object& progress) {
           BundleAdjustmentOptions o = bundle_options.value_or(BundleAdjustmentOptions());
-          if (!progress.is_none() && !PyCallable_Check(progress.ptr()))
-            throw py::type_error("progress: expected a callable taking a BundleIterationInfo");
           ProgressRelay relay(progress);
           o.solver.progress = relay.Function();
           GeoreferenceResult out;
           BundleAdjustmentResult adjustment;
-          Status status;
-          {
-            py::gil_scoped_release release;
-            status = GeoreferenceBlock(options.value_or(GeoreferenceOptions()), in, o,
-                                       config.value_or(BundleAdjustmentConfig()), &block.block, &out, &adjustment);
-          }
-          relay.Rethrow();
-          ThrowIfError(status);
+          CallWithoutGil(
+              [&] {
+                return GeoreferenceBlock(options.value_or(GeoreferenceOptions()), in, o,
+                                         config.value_or(BundleAdjustmentConfig()), &block.block,
+                                         &out, &adjustment);
+              },
+              &relay);
           return py::make_tuple(std::move(out), std::move(adjustment));
         },
         py::arg("block"), py::arg("inputs"), py::arg("options") = py::none(),
@@ -276,6 +260,16 @@ Georeferences and adjusts a model in place (GeoreferenceBlock): (GeoreferenceRes
 BundleAdjustmentResult). The block ends in the local ENU frame; result.to_output_crs and
 result.output_poses give the output CRS. Raises photopose.Error on unknown CRSs, fewer than three
 usable pairs, pairs on a line, or a block the adjustment cannot use.)doc");
+}
+
+}  // namespace
+
+// In this order: a function's signature names the classes bound before it.
+void BindGeoreference(py::module_& m) {
+  BindPositionFiles(m);
+  BindGeoreferenceInputs(m);
+  BindGeoreferenceResult(m);
+  BindGeoreferenceCalls(m);
 }
 
 }  // namespace photopose::python

@@ -63,10 +63,8 @@ std::string ResultRepr(const ResectionResult& r) {
   return text;
 }
 
-}  // namespace
-
-void BindResection(py::module_& m) {
-  // ---------------------------------------------------------------- options
+// The consensus' options: RANSAC, the absolute-pose estimator, the tests' confidence.
+void BindConsensusOptions(py::module_& m) {
   auto ransac = BindStruct<RansacOptions>(m, "RansacOptions",
                                           "The consensus' sampling (solvers/resection/ransac.h).");
   ransac.def_readwrite("max_trials", &RansacOptions::max_trials, "count, >= 1")
@@ -94,7 +92,10 @@ void BindResection(py::module_& m) {
                                              "The confidence of every test of the resection.");
   test.def_readwrite("confidence", &OutlierTestOptions::confidence, "1 - alpha, (0, 1)");
   DefValidate(test, "OutlierTestOptions");
+}
 
+// The refinement's options (Ceres, Taylor) and the composed ResectionOptions.
+void BindRefinementOptions(py::module_& m) {
   auto ceres = BindStruct<CeresPoseOptions>(m, "CeresPoseOptions",
                                             "How Ceres minimises one image's problem.");
   ceres.def_readwrite("minimizer", &CeresPoseOptions::minimizer, "'tiny_solver' or 'problem'")
@@ -144,8 +145,10 @@ refinement (solver, Jacobian, loss), and the verdict's limits.)doc");
                      "standard deviations of a pose parameter")
       .def_readwrite("refuse_weak", &ResectionOptions::refuse_weak);
   DefValidate(options, "ResectionOptions");
+}
 
-  // ---------------------------------------------------------------- input
+// One image's control marks.
+void BindResectionInput(py::module_& m) {
   py::class_<ResectionInput> input(m, "ResectionInput", R"doc(
 One image's control marks: N x 2 ideal image-plane points (distortion removed, principal point at
 the origin, x right, y up, in the unit of focal_length: um for film cameras, px for the COLMAP
@@ -173,8 +176,10 @@ stated), observation_units_per_unit (image-plane units per mark unit, e.g. um pe
         return "ResectionInput(raster='" + i.raster + "', marks=" + std::to_string(i.image_plane.size()) +
                ", focal_length=" + std::string(py::repr(py::float_(i.focal_length))) + ")";
       });
+}
 
-  // ---------------------------------------------------------------- result
+// The resection of one image: its summary and result.
+void BindResectionResult(py::module_& m) {
   py::class_<ResectionSummary> summary(m, "ResectionSummary", "How the resection of one image went.");
   summary.def_readonly("termination", &ResectionSummary::termination,
                        "'converged', 'no_convergence' or 'failure'")
@@ -234,8 +239,10 @@ numbers, minimal detectable blunders, pose shifts (sigmas) and status.)doc");
       .def_readonly("warnings", &ResectionResult::warnings)
       .def_readonly("summary", &ResectionResult::summary)
       .def("__repr__", &ResultRepr);
+}
 
-  // ---------------------------------------------------------------- calls
+// resect and resect_images.
+void BindResectionCalls(py::module_& m) {
   m.def(
       "resect",
       [](const ResectionInput& input, std::optional<ResectionOptions> options) {
@@ -265,6 +272,17 @@ numbers, minimal detectable blunders, pose shifts (sigmas) and status.)doc");
       "Resects many images in parallel (ResectImages; 0 threads: all cores), results in input "
       "order; image i gets its own reproducible RANSAC seed. No progress hook: the C++ call "
       "offers none.");
+}
+
+}  // namespace
+
+// In this order: a function's signature names the classes bound before it.
+void BindResection(py::module_& m) {
+  BindConsensusOptions(m);
+  BindRefinementOptions(m);
+  BindResectionInput(m);
+  BindResectionResult(m);
+  BindResectionCalls(m);
 }
 
 }  // namespace photopose::python

@@ -98,4 +98,20 @@ inline int CountLines(const std::string& text) {
   return lines;
 }
 
+// The rows of a CSV text, split at line ends and commas: the tables and results the executable
+// writes in these tests quote nothing. "a,,b," is {"a", "", "b", ""}; an empty line is {""}.
+inline std::vector<std::vector<std::string>> SplitCsvText(const std::string& text) {
+  std::vector<std::vector<std::string>> rows;
+  std::istringstream lines(text);
+  for (std::string line; std::getline(lines, line);) {
+    std::vector<std::string> cells;
+    size_t start = 0;
+    for (size_t comma; (comma = line.find(',', start)) != std::string::npos; start = comma + 1)
+      cells.push_back(line.substr(start, comma - start));
+    cells.push_back(line.substr(start));
+    rows.push_back(std::move(cells));
+  }
+  return rows;
+}
+
 }  // namespace photopose::testing

@@ -114,15 +114,21 @@ bool Flag(const std::string& arg, const char* name, std::string* value) {
   return true;
 }
 
-int Run(int argc, char** argv) {
-  SyntheticBlockOptions options = BenchmarkBlockOptions();
+// What the command line asks for.
+struct Arguments {
+  SyntheticBlockOptions block = BenchmarkBlockOptions();
   std::string out_dir;
-  bool peer = true;
+  bool peer = true;  // time colmap's own reader and writer when it is on the PATH
+};
+
+// Parses the flags of the comment at the top; false (and the reason on stderr) on a bad one.
+bool ParseArguments(int argc, char** argv, Arguments* arguments) {
+  SyntheticBlockOptions& options = arguments->block;
   for (int i = 1; i < argc; ++i) {
     const std::string arg = argv[i];
     std::string v;
     if (Flag(arg, "out_dir", &v)) {
-      out_dir = v;
+      arguments->out_dir = v;
     } else if (Flag(arg, "lines", &v)) {
       options.num_lines = std::stoi(v);
     } else if (Flag(arg, "images_per_line", &v)) {
@@ -136,161 +142,201 @@ int Run(int argc, char** argv) {
     } else if (Flag(arg, "seed", &v)) {
       options.seed = std::stoull(v);
     } else if (arg == "--no_peer") {
-      peer = false;
+      arguments->peer = false;
     } else {
       std::fprintf(stderr, "unknown argument '%s' (see the comment at the top of %s)\n",
                    arg.c_str(), __FILE__);
-      return 2;
+      return false;
     }
   }
-  if (out_dir.empty()) {
+  if (arguments->out_dir.empty()) {
     std::fprintf(stderr, "--out_dir=DIR is required\n");
-    return 2;
+    return false;
   }
-  std::filesystem::create_directories(out_dir + "/truth");
-  const std::string colmap_dir = out_dir + "/colmap";
-  const BlockTableFiles files{out_dir + "/cameras.csv", out_dir + "/points.csv",
-                              out_dir + "/marks.csv", out_dir + "/frames.csv"};
+  return true;
+}
 
+// The dataset's files below --out_dir (the comment at the top).
+struct DatasetPaths {
+  explicit DatasetPaths(const std::string& out_dir)
+      : out_dir(out_dir),
+        tables{out_dir + "/cameras.csv", out_dir + "/points.csv", out_dir + "/marks.csv",
+               out_dir + "/frames.csv"},
+        colmap_text(out_dir + "/colmap"),
+        colmap_binary(out_dir + "/colmap_binary"),
+        opensfm(out_dir + "/opensfm") {}
+
+  std::string out_dir;
+  BlockTableFiles tables;
+  std::string colmap_text;    // folder of the COLMAP text model
+  std::string colmap_binary;  // folder of the COLMAP binary model
+  std::string opensfm;        // folder of the OpenSfM reconstruction
+};
+
+// The times the peer comparison needs, in seconds.
+struct ColmapTimes {
+  double write_text = 0.0;
+  double read_text = 0.0;
+};
+
+// Whether a block read back holds every mark written; prints "<verb> N <what>, wrote M" if not.
+bool AllMarks(const Block& block, size_t num_marks, const char* verb, const char* what) {
+  if (block.marks.size() == num_marks) return true;
+  std::fprintf(stderr, "%s %zu %s, wrote %zu\n", verb, block.marks.size(), what, num_marks);
+  return false;
+}
+
+// Step 1: generates the block and writes it as tables (with its truth) and as COLMAP text and
+// binary models; the number of marks written.
+bool WriteDataset(const SyntheticBlockOptions& options, const DatasetPaths& paths,
+                  size_t* num_marks, ColmapTimes* colmap) {
+  std::filesystem::create_directories(paths.out_dir + "/truth");
   Block block;
   SyntheticBlockTruth truth;
-  double t = 0.0, colmap_read = 0.0, colmap_write = 0.0;
+  double t = 0.0;
   if (!Timed("generate (MakeSyntheticBlock)", [&] { return MakeSyntheticBlock(options, &block, &truth); },
              &t))
-    return 1;
+    return false;
   std::printf("  %zu images, %zu points, %zu marks\n", block.images.size(), block.points.size(),
               block.marks.size());
-  if (!Timed("write tables (WriteBlockTables)", [&] { return WriteBlockTables(block, files); }, &t))
-    return 1;
+  if (!Timed("write tables (WriteBlockTables)", [&] { return WriteBlockTables(block, paths.tables); },
+             &t))
+    return false;
   if (!Timed("write truth (WriteSyntheticBlockTruth)",
              [&] {
                return WriteSyntheticBlockTruth(
                    block, truth, options,
-                   {out_dir + "/truth/frames.csv", out_dir + "/truth/points.csv",
-                    out_dir + "/truth/blunders.csv"});
+                   {paths.out_dir + "/truth/frames.csv", paths.out_dir + "/truth/points.csv",
+                    paths.out_dir + "/truth/blunders.csv"});
              },
              &t))
-    return 1;
+    return false;
   if (!Timed("write COLMAP text (WriteColmapModel)",
-             [&] { return WriteColmapModel(colmap_dir, block); }, &colmap_write))
-    return 1;
+             [&] { return WriteColmapModel(paths.colmap_text, block); }, &colmap->write_text))
+    return false;
   std::printf("  sizes: marks.csv %.1f MB, images.txt %.1f MB, points3D.txt %.1f MB\n",
-              FileMb(files.marks), FileMb(colmap_dir + "/images.txt"),
-              FileMb(colmap_dir + "/points3D.txt"));
-  const std::string binary_dir = out_dir + "/colmap_binary";
+              FileMb(paths.tables.marks), FileMb(paths.colmap_text + "/images.txt"),
+              FileMb(paths.colmap_text + "/points3D.txt"));
   ColmapWriteOptions binary;
   binary.format = ColmapFormat::kBinary;
   if (!Timed("write COLMAP binary (WriteColmapModel)",
-             [&] { return WriteColmapModel(binary_dir, block, nullptr, binary); }, &t))
-    return 1;
+             [&] { return WriteColmapModel(paths.colmap_binary, block, nullptr, binary); }, &t))
+    return false;
   std::printf("  sizes: images.bin %.1f MB, points3D.bin %.1f MB\n",
-              FileMb(binary_dir + "/images.bin"), FileMb(binary_dir + "/points3D.bin"));
-  const size_t num_marks = block.marks.size();
-  block = Block();
-  truth = SyntheticBlockTruth();
+              FileMb(paths.colmap_binary + "/images.bin"),
+              FileMb(paths.colmap_binary + "/points3D.bin"));
+  *num_marks = block.marks.size();
+  return true;
+}
 
+// Step 2: reads the COLMAP text model, writes it as an OpenSfM reconstruction (its COLMAP pinhole
+// camera) and reads that, then reads the COLMAP binary model.
+bool ReadModels(const DatasetPaths& paths, size_t num_marks, ColmapTimes* colmap) {
+  double t = 0.0;
   Block again;
-  if (!Timed("read COLMAP text (ReadColmapModel)", [&] { return ReadColmapModel(colmap_dir, &again); },
-             &colmap_read))
-    return 1;
-  if (again.marks.size() != num_marks) {
-    std::fprintf(stderr, "read %zu marks, wrote %zu\n", again.marks.size(), num_marks);
-    return 1;
-  }
-  // The same block (its COLMAP pinhole camera) as an OpenSfM reconstruction.
-  const std::string opensfm_dir = out_dir + "/opensfm";
-  std::filesystem::create_directories(opensfm_dir);
+  if (!Timed("read COLMAP text (ReadColmapModel)",
+             [&] { return ReadColmapModel(paths.colmap_text, &again); }, &colmap->read_text) ||
+      !AllMarks(again, num_marks, "read", "marks"))
+    return false;
+  std::filesystem::create_directories(paths.opensfm);
   if (!Timed("write OpenSfM (WriteOpenSfmReconstruction)",
-             [&] { return WriteOpenSfmReconstruction(opensfm_dir, again); }, &t))
-    return 1;
+             [&] { return WriteOpenSfmReconstruction(paths.opensfm, again); }, &t))
+    return false;
   std::printf("  sizes: reconstruction.json %.1f MB, tracks.csv %.1f MB\n",
-              FileMb(opensfm_dir + "/reconstruction.json"), FileMb(opensfm_dir + "/tracks.csv"));
+              FileMb(paths.opensfm + "/reconstruction.json"), FileMb(paths.opensfm + "/tracks.csv"));
   again = Block();
   if (!Timed("read OpenSfM (ReadOpenSfmReconstruction)",
-             [&] { return ReadOpenSfmReconstruction(opensfm_dir, &again); }, &t))
-    return 1;
-  if (again.marks.size() != num_marks) {
-    std::fprintf(stderr, "read %zu OpenSfM marks, wrote %zu\n", again.marks.size(), num_marks);
-    return 1;
-  }
+             [&] { return ReadOpenSfmReconstruction(paths.opensfm, &again); }, &t) ||
+      !AllMarks(again, num_marks, "read", "OpenSfM marks"))
+    return false;
   again = Block();
-  if (!Timed("read COLMAP binary (ReadColmapModel)",
-             [&] { return ReadColmapModel(binary_dir, &again); }, &t))
-    return 1;
-  if (again.marks.size() != num_marks) {
-    std::fprintf(stderr, "read %zu marks from the binary model, wrote %zu\n", again.marks.size(),
-                 num_marks);
-    return 1;
+  return Timed("read COLMAP binary (ReadColmapModel)",
+               [&] { return ReadColmapModel(paths.colmap_binary, &again); }, &t) &&
+         AllMarks(again, num_marks, "read", "marks from the binary model");
+}
+
+// Step 3: the tables as `photopose bundle --cameras --points --marks --frames` reads them
+// (ReadBlock), step by step: each table, then the assembly of the block from them; then ReadBlock
+// at once.
+bool ReadTables(const BlockTableFiles& files, size_t num_marks) {
+  double t = 0.0;
+  {
+    std::vector<ImageMark> marks;
+    if (!Timed("read marks table (ReadImageMarks)",
+               [&] { return ReadImageMarks(files.marks, &marks); }, &t))
+      return false;
   }
-  again = Block();
-  std::vector<ImageMark> marks;
-  if (!Timed("read marks table (ReadImageMarks)", [&] { return ReadImageMarks(files.marks, &marks); },
-             &t))
-    return 1;
-  marks.clear();
-  marks.shrink_to_fit();
-  // The tables as `photopose bundle --cameras --points --marks --frames` reads them (ReadBlock),
-  // step by step: each table, then the assembly of the block from them.
-  BlockTables tables;
-  tables.cameras_file = files.cameras;
-  tables.points_file = files.points;
-  tables.marks_file = files.marks;
-  tables.frames_file = files.frames;
-  if (!Timed("read camera table (ReadCameraTable)",
-             [&] { return ReadCameraTable(files.cameras, &tables.cameras); }, &t))
-    return 1;
-  if (!Timed("read points table (ReadGroundPoints)",
-             [&] { return ReadGroundPoints(files.points, &tables.points); }, &t))
-    return 1;
-  FramesTableOptions frames_options;
-  frames_options.cameras = &tables.cameras;
-  if (!Timed("read frames table (ReadFramesTable)",
-             [&] { return ReadFramesTable(files.frames, frames_options, &tables.frames); }, &t))
-    return 1;
-  if (!Timed("read marks table again (ReadImageMarks)",
-             [&] { return ReadImageMarks(files.marks, &tables.marks); }, &t))
-    return 1;
-  if (!Timed("assemble the block (AssembleBlock)", [&] { return AssembleBlock(tables, &again); },
-             &t))
-    return 1;
-  if (again.marks.size() != num_marks) {
-    std::fprintf(stderr, "assembled %zu marks, wrote %zu\n", again.marks.size(), num_marks);
-    return 1;
+  {
+    BlockTables tables;
+    tables.cameras_file = files.cameras;
+    tables.points_file = files.points;
+    tables.marks_file = files.marks;
+    tables.frames_file = files.frames;
+    FramesTableOptions frames_options;
+    frames_options.cameras = &tables.cameras;
+    Block assembled;
+    if (!Timed("read camera table (ReadCameraTable)",
+               [&] { return ReadCameraTable(files.cameras, &tables.cameras); }, &t) ||
+        !Timed("read points table (ReadGroundPoints)",
+               [&] { return ReadGroundPoints(files.points, &tables.points); }, &t) ||
+        !Timed("read frames table (ReadFramesTable)",
+               [&] { return ReadFramesTable(files.frames, frames_options, &tables.frames); }, &t) ||
+        !Timed("read marks table again (ReadImageMarks)",
+               [&] { return ReadImageMarks(files.marks, &tables.marks); }, &t) ||
+        !Timed("assemble the block (AssembleBlock)",
+               [&] { return AssembleBlock(tables, &assembled); }, &t) ||
+        !AllMarks(assembled, num_marks, "assembled", "marks"))
+      return false;
   }
-  tables = BlockTables();
-  again = Block();
   BlockFiles block_files;
   block_files.cameras = files.cameras;
   block_files.points = files.points;
   block_files.marks = files.marks;
   block_files.frames = files.frames;
-  if (!Timed("read the block from tables (ReadBlock)",
-             [&] { return ReadBlock(block_files, &again); }, &t))
-    return 1;
-  again = Block();
+  Block block;
+  return Timed("read the block from tables (ReadBlock)",
+               [&] { return ReadBlock(block_files, &block); }, &t);
+}
 
-  if (peer && std::system("command -v colmap > /dev/null 2>&1") == 0) {
-    const std::string bin_dir = out_dir + "/colmap_bin", txt_dir = out_dir + "/colmap_txt";
-    std::filesystem::create_directories(bin_dir);
-    std::filesystem::create_directories(txt_dir);
-    double peer_read = 0.0, peer_write = 0.0;
-    if (!TimedCommand("peer: colmap model_converter TXT -> BIN",
-                      "colmap model_converter --input_path " + colmap_dir + " --output_path " +
-                          bin_dir + " --output_type BIN",
-                      &peer_read))
-      return 1;
-    if (!TimedCommand("peer: colmap model_converter BIN -> TXT",
-                      "colmap model_converter --input_path " + bin_dir + " --output_path " +
-                          txt_dir + " --output_type TXT",
-                      &peer_write))
-      return 1;
-    std::printf("  photopose reads the text model in %.2fx, writes it in %.2fx the time COLMAP\n"
-                "  takes to read it and write binary / read binary and write it (whole processes)\n",
-                colmap_read / peer_read, colmap_write / peer_write);
-  } else {
+// Step 4: colmap's own converter on the same model, when it is on the PATH.
+bool RunPeer(const DatasetPaths& paths, const ColmapTimes& colmap) {
+  if (std::system("command -v colmap > /dev/null 2>&1") != 0) {
     std::printf("  (colmap not on the PATH: no peer)\n");
+    return true;
   }
-  return 0;
+  const std::string bin_dir = paths.out_dir + "/colmap_bin", txt_dir = paths.out_dir + "/colmap_txt";
+  std::filesystem::create_directories(bin_dir);
+  std::filesystem::create_directories(txt_dir);
+  double peer_read = 0.0, peer_write = 0.0;
+  if (!TimedCommand("peer: colmap model_converter TXT -> BIN",
+                    "colmap model_converter --input_path " + paths.colmap_text +
+                        " --output_path " + bin_dir + " --output_type BIN",
+                    &peer_read) ||
+      !TimedCommand("peer: colmap model_converter BIN -> TXT",
+                    "colmap model_converter --input_path " + bin_dir + " --output_path " +
+                        txt_dir + " --output_type TXT",
+                    &peer_write))
+    return false;
+  std::printf("  photopose reads the text model in %.2fx, writes it in %.2fx the time COLMAP\n"
+              "  takes to read it and write binary / read binary and write it (whole processes)\n",
+              colmap.read_text / peer_read, colmap.write_text / peer_write);
+  return true;
+}
+
+int Run(int argc, char** argv) {
+  Arguments arguments;
+  if (!ParseArguments(argc, argv, &arguments)) return 2;
+  const DatasetPaths paths(arguments.out_dir);
+  size_t num_marks = 0;
+  ColmapTimes colmap;
+  if (!WriteDataset(arguments.block, paths, &num_marks, &colmap) ||
+      !ReadModels(paths, num_marks, &colmap) || !ReadTables(paths.tables, num_marks))
+    return 1;
+  if (!arguments.peer) {
+    std::printf("  (colmap not on the PATH: no peer)\n");
+    return 0;
+  }
+  return RunPeer(paths, colmap) ? 0 : 1;
 }
 
 }  // namespace

@@ -21,6 +21,7 @@
 #include "cost_functions/collinearity_cost.h"
 #include "solvers/resection/resection.h"
 #include "solvers/resection/taylor_resection.h"
+#include "tools/compare/comparison.h"
 
 #ifdef PHOTOPOSE_HAVE_OPENCV
 #include <opencv2/calib3d.hpp>
@@ -29,6 +30,8 @@
 
 namespace photopose {
 namespace {
+
+using cli::RotationErrorArcSeconds;
 
 constexpr int kNumScenes = 16;  // distinct scenes cycled through, so RANSAC luck averages out
 
@@ -73,15 +76,6 @@ const std::vector<BenchScene>& Scenes(int num_points, double outlier_fraction) {
   if (scenes.empty())
     for (int s = 0; s < kNumScenes; ++s) scenes.push_back(MakeBenchScene(num_points, outlier_fraction, 1000 + s));
   return scenes;
-}
-
-double PositionError(const ExteriorOrientation& a, const ExteriorOrientation& b) {
-  return (a.center_in_ground() - b.center_in_ground()).norm();
-}
-
-double RotationErrorArcSeconds(const Eigen::Matrix3d& a, const Eigen::Matrix3d& b) {
-  const double c = std::clamp(((a.transpose() * b).trace() - 1.0) / 2.0, -1.0, 1.0);
-  return std::acos(c) * kArcSecondsPerRadian;
 }
 
 // A pose is a success when it is within 0.5 m and 60" of the truth (0.5 px noise gives centimetres

@@ -331,9 +331,12 @@ std::string WrittenFiles() {
   return files.empty() ? "no file written (see --csv, --html, --markdown)" : "wrote " + files;
 }
 
-// The outputs of the run (--csv, --html, --markdown), declared before any work.
-Status DeclareOutputs(const std::vector<std::pair<std::string, std::string>>& inputs,
-                      OutputFiles* outputs) {
+// The outputs of the run (--csv, --html, --markdown), declared before any work, with its inputs:
+// the mode's files and every --flagfile read.
+Status DeclareOutputs(std::vector<std::pair<std::string, std::string>> inputs,
+                      const ParsedFlags& parsed, OutputFiles* outputs) {
+  for (const std::string& flag_file : parsed.flag_files)
+    inputs.emplace_back("--flagfile", flag_file);
   for (const auto& [label, path] : inputs)
     PHOTOPOSE_RETURN_IF_ERROR(outputs->AddInput(label, path));
   for (const auto& [label, path] : {std::pair<std::string, std::string>{"--csv", FLAGS_compare_csv},
@@ -358,6 +361,54 @@ Status WriteOutputs(const std::string& csv, const std::string& html,
     if (!path.empty()) PHOTOPOSE_RETURN_IF_ERROR(outputs->Stage(path, contents));
   }
   return outputs->Commit();
+}
+
+// Runs one comparison engine (RunMonteCarlo, RunDatasetComparison, RunBlockComparison) as the
+// solving phase of the run, with a progress line on stderr counting `items`.
+template <typename Options, typename Result>
+Status RunWithProgress(const char* items, Status (*run)(const Options&, Result*), Options* options,
+                       Result* result) {
+  ProgressLine progress(items);
+  options->progress = [&progress](size_t done, size_t total) { progress(done, total); };
+  Status status;
+  {
+    const ScopedSolving solving;
+    status = run(*options, result);
+  }
+  options->progress = nullptr;  // `progress` ends here
+  return status;
+}
+
+// Prints the tables (and the notes under them) on stdout, then writes every requested output.
+Status PrintAndWrite(const std::vector<TextTable>& tables, const std::vector<std::string>& notes,
+                     const std::string& csv, const std::string& html, OutputFiles* outputs) {
+  for (const TextTable& table : tables) std::cout << RenderText(table) << "\n";
+  for (const std::string& note : notes) std::cout << WrapText(note, "", "  ");
+  return WriteOutputs(csv, html, tables, notes, outputs);
+}
+
+// The closing line of a sweep: "compare: 4 settings x 5 blocks x 3 solvers in 1.2 s; wrote F".
+void PrintSweepSummary(long long settings, long long trials, const std::string& trial_word,
+                       long long solvers, double wall_seconds) {
+  std::cout << WrapText("compare: " + FormatCount(settings, "setting") + " x " +
+                            FormatCount(trials, trial_word) + " x " +
+                            FormatCount(solvers, "solver") + " in " +
+                            FormatSignificant(wall_seconds, 3) + " s; " + WrittenFiles(),
+                        "", "  ");
+}
+
+// The tables named by the dataset flags (--cameras, --points, --marks, --frames, --rotation,
+// --pixel_center_origin); false with the refusal of --rotation.
+bool TablesFromFlags(BlockFiles* files, std::string* why) {
+  files->cameras = FLAGS_compare_cameras;
+  files->points = FLAGS_compare_points;
+  files->marks = FLAGS_compare_marks;
+  files->frames = FLAGS_compare_frames;
+  files->pixel_origin =
+      FLAGS_compare_pixel_center_origin ? PixelOrigin::kCenter : PixelOrigin::kCorner;
+  if (ParseEnum(FLAGS_compare_rotation, &files->rotation)) return true;
+  *why = EnumFlagError<RotationConvention>("--rotation", FLAGS_compare_rotation);
+  return false;
 }
 
 int RunMonteCarloMode(const std::vector<SolverVariant>& solvers, const ResectionOptions& resection,
@@ -423,34 +474,18 @@ int RunMonteCarloMode(const std::vector<SolverVariant>& solvers, const Resection
             " solvers); at most " + std::to_string(kMaxSolves) + " per run");
   }
   OutputFiles outputs;
-  std::vector<std::pair<std::string, std::string>> inputs;
-  for (const std::string& flag_file : parsed.flag_files)
-    inputs.emplace_back("--flagfile", flag_file);
-  const Status declared = DeclareOutputs(inputs, &outputs);
+  const Status declared = DeclareOutputs({}, parsed, &outputs);
   if (!declared.ok()) return BadInput(kCommand, declared.message());
 
-  ProgressLine progress("trials");
-  options.progress = [&progress](size_t done, size_t total) { progress(done, total); };
   MonteCarloResult result;
-  Status status;
-  {
-    const ScopedSolving solving;
-    status = RunMonteCarlo(options, &result);
-  }
+  const Status status = RunWithProgress("trials", &RunMonteCarlo, &options, &result);
   if (!status.ok()) return BadInput(kCommand, status.message());
-  const std::vector<TextTable> tables = MonteCarloTables(options, result);
-  for (const TextTable& table : tables) std::cout << RenderText(table) << "\n";
-  const std::vector<std::string> notes = MonteCarloNotes(options);
-  for (const std::string& note : notes) std::cout << WrapText(note, "", "  ");
-  const Status written = WriteOutputs(MonteCarloCsv(result),
-                                      MonteCarloHtml(options, result, command_line), tables, notes,
-                                      &outputs);
+  const Status written =
+      PrintAndWrite(MonteCarloTables(options, result), MonteCarloNotes(options),
+                    MonteCarloCsv(result), MonteCarloHtml(options, result, command_line), &outputs);
   if (!written.ok()) return BadInput(kCommand, written.message());
-  std::cout << WrapText("compare: " + FormatCount(result.settings.size(), "setting") + " x " +
-                            FormatCount(options.trials, "trial") + " x " +
-                            FormatCount(result.solver_names.size(), "solver") + " in " +
-                            FormatSignificant(result.wall_seconds, 3) + " s; " + WrittenFiles(),
-                        "", "  ");
+  PrintSweepSummary(static_cast<long long>(result.settings.size()), options.trials, "trial",
+                    static_cast<long long>(result.solver_names.size()), result.wall_seconds);
   return kExitSuccess;
 }
 
@@ -461,15 +496,8 @@ int RunDatasetMode(const std::vector<SolverVariant>& solvers, const ResectionOpt
   options.reference_path = FLAGS_compare_reference;
   options.num_threads = FLAGS_compare_threads;
   ResectionJobOptions& job = options.job;
-  job.files.cameras = FLAGS_compare_cameras;
-  job.files.points = FLAGS_compare_points;
-  job.files.marks = FLAGS_compare_marks;
-  job.files.gcp_list = FLAGS_compare_gcp_list;
-  job.files.frames = FLAGS_compare_frames;
   job.input.default_accuracy = FLAGS_compare_default_accuracy;
   job.input.default_film_accuracy_um = FLAGS_compare_default_film_accuracy;
-  job.files.pixel_origin =
-      FLAGS_compare_pixel_center_origin ? PixelOrigin::kCenter : PixelOrigin::kCorner;
   job.resection = resection;
   if (FLAGS_compare_cameras.empty())
     return BadInput(kCommand, "--cameras is required in the dataset mode");
@@ -480,39 +508,32 @@ int RunDatasetMode(const std::vector<SolverVariant>& solvers, const ResectionOpt
   if (!FLAGS_compare_gcp_list.empty() &&
       (!FLAGS_compare_points.empty() || !FLAGS_compare_marks.empty()))
     return BadInput(kCommand, "--gcp_list replaces --points and --marks; give one or the other");
-  if (!ParseEnum(FLAGS_compare_rotation, &job.files.rotation))
-    return BadInput(kCommand, EnumFlagError<RotationConvention>("--rotation", FLAGS_compare_rotation));
+  std::string why;
+  if (!TablesFromFlags(&job.files, &why)) return BadInput(kCommand, why);
+  job.files.gcp_list = FLAGS_compare_gcp_list;
   if (!(FLAGS_compare_default_accuracy > 0.0) || !std::isfinite(FLAGS_compare_default_accuracy))
     return BadInput(kCommand, "--default_accuracy must be a positive number of pixels");
   if (!(FLAGS_compare_default_film_accuracy > 0.0) ||
       !std::isfinite(FLAGS_compare_default_film_accuracy))
     return BadInput(kCommand, "--default_film_accuracy must be a positive number of micrometres");
-  std::string why;
   if (!options.IsValid(&why)) return BadInput(kCommand, why);
   OutputFiles outputs;
-  std::vector<std::pair<std::string, std::string>> inputs = {
-      {"--cameras", job.files.cameras}, {"--points", job.files.points},
-      {"--marks", job.files.marks},     {"--gcp_list", job.files.gcp_list},
-      {"--frames", job.files.frames},   {"--fiducials", job.files.fiducials},
-      {"--reference", options.reference_path}};
-  for (const std::string& flag_file : parsed.flag_files)
-    inputs.emplace_back("--flagfile", flag_file);
-  const Status declared = DeclareOutputs(inputs, &outputs);
+  const Status declared =
+      DeclareOutputs({{"--cameras", job.files.cameras},
+                      {"--points", job.files.points},
+                      {"--marks", job.files.marks},
+                      {"--gcp_list", job.files.gcp_list},
+                      {"--frames", job.files.frames},
+                      {"--fiducials", job.files.fiducials},
+                      {"--reference", options.reference_path}},
+                     parsed, &outputs);
   if (!declared.ok()) return BadInput(kCommand, declared.message());
 
-  ProgressLine progress("solvers");
-  options.progress = [&progress](size_t done, size_t total) { progress(done, total); };
   DatasetComparisonResult result;
-  Status status;
-  {
-    const ScopedSolving solving;
-    status = RunDatasetComparison(options, &result);
-  }
+  const Status status = RunWithProgress("solvers", &RunDatasetComparison, &options, &result);
   if (!status.ok()) return BadInput(kCommand, status.message());
-  const std::vector<TextTable> tables = DatasetTables(result);
-  for (const TextTable& table : tables) std::cout << RenderText(table) << "\n";
-  const Status written =
-      WriteOutputs(DatasetCsv(result), DatasetHtml(result, command_line), tables, {}, &outputs);
+  const Status written = PrintAndWrite(DatasetTables(result), {}, DatasetCsv(result),
+                                       DatasetHtml(result, command_line), &outputs);
   if (!written.ok()) return BadInput(kCommand, written.message());
   const size_t images = result.summaries.empty() ? 0 : result.summaries.front().images;
   std::cout << WrapText("compare: " + FormatCount(images, "image") + " x " +
@@ -565,31 +586,18 @@ int RunBlockMode(const std::string& command_line, const ParsedFlags& parsed) {
                                   std::to_string(kMaxSolves / 1000) + " per run");
   }
   OutputFiles outputs;
-  std::vector<std::pair<std::string, std::string>> inputs;
-  for (const std::string& flag_file : parsed.flag_files) inputs.emplace_back("--flagfile", flag_file);
-  const Status declared = DeclareOutputs(inputs, &outputs);
+  const Status declared = DeclareOutputs({}, parsed, &outputs);
   if (!declared.ok()) return BadInput(kCommand, declared.message());
 
-  ProgressLine progress("blocks");
-  options.progress = [&progress](size_t done, size_t total) { progress(done, total); };
   BlockComparisonResult result;
-  Status status;
-  {
-    const ScopedSolving solving;
-    status = RunBlockComparison(options, &result);
-  }
+  const Status status = RunWithProgress("blocks", &RunBlockComparison, &options, &result);
   if (!status.ok()) return BadInput(kCommand, status.message());
-  const std::vector<TextTable> tables = BlockComparisonTables(options, result);
-  for (const TextTable& table : tables) std::cout << RenderText(table) << "\n";
-  const Status written = WriteOutputs(BlockComparisonCsv(result),
-                                      BlockComparisonHtml(options, result, command_line), tables,
-                                      {}, &outputs);
+  const Status written = PrintAndWrite(BlockComparisonTables(options, result), {},
+                                       BlockComparisonCsv(result),
+                                       BlockComparisonHtml(options, result, command_line), &outputs);
   if (!written.ok()) return BadInput(kCommand, written.message());
-  std::cout << WrapText("compare: " + FormatCount(result.settings.size(), "setting") + " x " +
-                            FormatCount(options.trials, "block") + " x " +
-                            FormatCount(result.solver_names.size(), "solver") + " in " +
-                            FormatSignificant(result.wall_seconds, 3) + " s; " + WrittenFiles(),
-                        "", "  ");
+  PrintSweepSummary(static_cast<long long>(result.settings.size()), options.trials, "block",
+                    static_cast<long long>(result.solver_names.size()), result.wall_seconds);
   return kExitSuccess;
 }
 // --scenarios=block with a dataset: the block solvers on one given block.
@@ -604,37 +612,25 @@ int RunBlockDatasetMode(const std::string& command_line, const ParsedFlags& pars
     return BadInput(kCommand, "give --colmap_model or the tables (--cameras, --marks), not both");
   if (!colmap && (FLAGS_compare_cameras.empty() || FLAGS_compare_marks.empty()))
     return BadInput(kCommand, "a block needs --cameras and --marks (or --colmap_model)");
-  RotationConvention rotation = RotationConvention::kSeed;
-  if (!ParseEnum(FLAGS_compare_rotation, &rotation))
-    return BadInput(kCommand, EnumFlagError<RotationConvention>("--rotation", FLAGS_compare_rotation));
+  BlockFiles files;
+  std::string why;
+  if (!TablesFromFlags(&files, &why)) return BadInput(kCommand, why);
   OutputFiles outputs;
-  std::vector<std::pair<std::string, std::string>> inputs = {
-      {"--cameras", FLAGS_compare_cameras}, {"--points", FLAGS_compare_points},
-      {"--marks", FLAGS_compare_marks},     {"--frames", FLAGS_compare_frames}};
+  std::vector<std::pair<std::string, std::string>> inputs = {{"--cameras", files.cameras},
+                                                             {"--points", files.points},
+                                                             {"--marks", files.marks},
+                                                             {"--frames", files.frames}};
   if (colmap) {
     for (const char* name : {"cameras.txt", "images.txt", "points3D.txt"})
       inputs.emplace_back("--colmap_model", FLAGS_compare_colmap_model + "/" + name);
   }
-  for (const std::string& flag_file : parsed.flag_files) inputs.emplace_back("--flagfile", flag_file);
-  const Status declared = DeclareOutputs(inputs, &outputs);
+  const Status declared = DeclareOutputs(std::move(inputs), parsed, &outputs);
   if (!declared.ok()) return BadInput(kCommand, declared.message());
 
   Block block;
-  if (colmap) {
-    const Status read = ReadColmapModel(FLAGS_compare_colmap_model, &block);
-    if (!read.ok()) return BadInput(kCommand, read.message());
-  } else {
-    BlockFiles files;
-    files.cameras = FLAGS_compare_cameras;
-    files.points = FLAGS_compare_points;
-    files.marks = FLAGS_compare_marks;
-    files.frames = FLAGS_compare_frames;
-    files.rotation = rotation;
-    files.pixel_origin =
-        FLAGS_compare_pixel_center_origin ? PixelOrigin::kCenter : PixelOrigin::kCorner;
-    const Status read = ReadBlock(files, &block);
-    if (!read.ok()) return BadInput(kCommand, read.message());
-  }
+  const Status read =
+      colmap ? ReadColmapModel(FLAGS_compare_colmap_model, &block) : ReadBlock(files, &block);
+  if (!read.ok()) return BadInput(kCommand, read.message());
   BlockDatasetResult result;
   {
     const ScopedSolving solving;
@@ -651,10 +647,8 @@ int RunBlockDatasetMode(const std::string& command_line, const ParsedFlags& pars
     const Status status = RunBlockDatasetComparison(options, block, &result);
     if (!status.ok()) return BadInput(kCommand, status.message());
   }
-  const TextTable table = BlockDatasetTable(result);
-  std::cout << RenderText(table) << "\n";
-  const Status written = WriteOutputs(BlockDatasetCsv(result), BlockDatasetHtml(result, command_line),
-                                      {table}, {}, &outputs);
+  const Status written = PrintAndWrite({BlockDatasetTable(result)}, {}, BlockDatasetCsv(result),
+                                       BlockDatasetHtml(result, command_line), &outputs);
   if (!written.ok()) return BadInput(kCommand, written.message());
   std::cout << "compare: a block of " << result.num_images << " images x "
             << result.solvers.size() << " solvers; " << WrittenFiles() << "\n";

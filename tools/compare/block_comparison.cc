@@ -38,29 +38,48 @@ struct TrialOutcome {
   double seconds = 0.0;
 };
 
+// One solver variant's adjustment of a block, as both comparisons run it.
+struct VariantRun {
+  bool usable = false;  // a solution to compare
+  std::string failure;  // why not
+  BundleAdjustmentResult result;
+  double seconds = 0.0;  // wall time of the adjustment
+};
+
+// Adjusts `block` in place with `variant` on `num_threads` threads. Covariances yes (NEES);
+// per-observation tests no: every solver rejects tie marks by their whitened residual beyond
+// 4.5 max(1, sigma0) (the rounds both solvers share), the cheaper rule.
+VariantRun RunVariant(const BlockSolverVariant& variant, int num_threads, Block* block) {
+  BundleAdjustmentOptions options;
+  options.solver.num_threads = num_threads;
+  options.solver.jacobian = variant.jacobian;
+  options.robustness.tie_loss = variant.loss;
+  options.statistics.observation_diagnostics = false;
+  VariantRun run;
+  const Clock::time_point begin = Clock::now();
+  const Status status =
+      BundleAdjustWithSolver(variant.solver, options, BundleAdjustmentConfig(), block, &run.result);
+  run.seconds = std::chrono::duration<double>(Clock::now() - begin).count();
+  if (!status.ok()) {
+    run.failure = status.message();
+  } else if (!run.result.summary.IsSolutionUsable()) {
+    run.failure = run.result.summary.message;
+  } else {
+    run.usable = true;
+  }
+  return run;
+}
+
 TrialOutcome SolveBlock(const BlockSolverVariant& variant, const Block& start,
                         const SyntheticBlockTruth& truth) {
   TrialOutcome out;
   Block block = start;
-  BundleAdjustmentOptions options;
-  options.solver.num_threads = 1;
-  options.solver.jacobian = variant.jacobian;
-  options.robustness.tie_loss = variant.loss;
-  // Covariances yes (NEES); per-observation tests no: every solver rejects tie marks by their
-  // whitened residual beyond 4.5 max(1, sigma0) (the rounds both solvers share), the cheaper rule.
-  options.statistics.observation_diagnostics = false;
-  BundleAdjustmentResult result;
-  const Clock::time_point begin = Clock::now();
-  const Status status =
-      BundleAdjustWithSolver(variant.solver, options, BundleAdjustmentConfig(), &block, &result);
-  out.seconds = std::chrono::duration<double>(Clock::now() - begin).count();
+  const VariantRun run = RunVariant(variant, /*num_threads=*/1, &block);
+  const BundleAdjustmentResult& result = run.result;
+  out.seconds = run.seconds;
   out.iterations = result.summary.iterations;
-  if (!status.ok()) {
-    out.failure = status.message();
-    return out;
-  }
-  if (!result.summary.IsSolutionUsable()) {
-    out.failure = result.summary.message;
+  if (!run.usable) {
+    out.failure = run.failure;
     return out;
   }
   out.success = true;
@@ -351,21 +370,12 @@ Status RunBlockDatasetComparison(const BlockDatasetOptions& options, const Block
     BlockDatasetSolverSummary summary;
     summary.name = variant.Name();
     Block copy = block;
-    BundleAdjustmentOptions adjustment;
-    adjustment.solver.num_threads = options.num_threads;
-    adjustment.solver.jacobian = variant.jacobian;
-    adjustment.robustness.tie_loss = variant.loss;
-    adjustment.statistics.observation_diagnostics = false;
-    BundleAdjustmentResult adjusted;
-    const Clock::time_point begin = Clock::now();
-    const Status status = BundleAdjustWithSolver(variant.solver, adjustment,
-                                                 BundleAdjustmentConfig(), &copy, &adjusted);
-    summary.seconds = std::chrono::duration<double>(Clock::now() - begin).count();
+    const VariantRun run = RunVariant(variant, options.num_threads, &copy);
+    const BundleAdjustmentResult& adjusted = run.result;
+    summary.seconds = run.seconds;
     summary.iterations = adjusted.summary.iterations;
-    if (!status.ok()) {
-      summary.message = status.message();
-    } else if (!adjusted.summary.IsSolutionUsable()) {
-      summary.message = adjusted.summary.message;
+    if (!run.usable) {
+      summary.message = run.failure;
     } else {
       summary.success = true;
       summary.sigma0 = adjusted.summary.sigma0;

@@ -363,9 +363,12 @@ NeesInterval MeanNeesInterval(int count, double confidence) {
 
 double RotationErrorArcSeconds(const Eigen::Vector3d& angles_a_rad,
                                const Eigen::Vector3d& angles_b_rad) {
-  const Eigen::Matrix3d R =
-      RotationFromAngles(RotationConvention::kSeed, angles_a_rad).transpose() *
-      RotationFromAngles(RotationConvention::kSeed, angles_b_rad);
+  return RotationErrorArcSeconds(RotationFromAngles(RotationConvention::kSeed, angles_a_rad),
+                                 RotationFromAngles(RotationConvention::kSeed, angles_b_rad));
+}
+
+double RotationErrorArcSeconds(const Eigen::Matrix3d& R_a, const Eigen::Matrix3d& R_b) {
+  const Eigen::Matrix3d R = R_a.transpose() * R_b;
   // atan2 of the sine and cosine parts: accurate for small angles, unlike acos of the trace.
   const Eigen::Vector3d axis(R(2, 1) - R(1, 2), R(0, 2) - R(2, 0), R(1, 0) - R(0, 1));
   const double angle = std::atan2(0.5 * axis.norm(), 0.5 * (R.trace() - 1.0));

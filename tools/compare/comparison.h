@@ -80,9 +80,10 @@ struct NeesInterval {
 };
 NeesInterval MeanNeesInterval(int count, double confidence);
 
-// Angle of R_a^T R_b (arc-seconds) for two poses in seed angles (rad).
+// Angle of R_a^T R_b (arc-seconds) for two poses in seed angles (rad), or for two rotations.
 double RotationErrorArcSeconds(const Eigen::Vector3d& angles_a_rad,
                                const Eigen::Vector3d& angles_b_rad);
+double RotationErrorArcSeconds(const Eigen::Matrix3d& R_a, const Eigen::Matrix3d& R_b);
 
 // e^T C^-1 e for the 6-vector e = (estimate - truth) with the angles wrapped to (-pi, pi]. The seed
 // angles (omega + pi, pi - phi, kappa + pi) are the same rotation as (omega, phi, kappa): when the

@@ -29,6 +29,7 @@ using testing::ReadFrames;
 using testing::RunCli;
 using testing::ScratchDir;
 using testing::SharedDataPath;
+using testing::SplitCsvText;
 
 // A small block: 3 lines of 6 images, tie blunders, written into dir/block.
 std::string SimulateBlock(const std::string& dir, const std::string& extra = "") {
@@ -561,29 +562,6 @@ TEST(BundleCommand, AControlPoint50MetresOffIsFoundByTheSearchWithEitherSolver) 
   }
 }
 
-// The rows of a CSV text split at commas (the simulated tables quote nothing).
-std::vector<std::vector<std::string>> CsvRows(const std::string& text) {
-  std::vector<std::vector<std::string>> rows;
-  size_t start = 0;
-  while (start < text.size()) {
-    const size_t end = std::min(text.find('\n', start), text.size());
-    std::vector<std::string> fields;
-    size_t field = start;
-    while (true) {
-      const size_t comma = text.find(',', field);
-      if (comma == std::string::npos || comma >= end) {
-        fields.push_back(text.substr(field, end - field));
-        break;
-      }
-      fields.push_back(text.substr(field, comma - field));
-      field = comma + 1;
-    }
-    rows.push_back(fields);
-    start = end + 1;
-  }
-  return rows;
-}
-
 // A block of two lines (`flags` give the rest), written into dir/block; its path.
 std::string SimulateTwoLineBlock(const std::string& dir, const std::string& flags) {
   const CliRun run =
@@ -609,7 +587,7 @@ TEST(BundleCommand, ControlPointsWithAccuracyZeroAreHeldFixed) {
   const std::string dir = ScratchDir();
   const std::string block =
       SimulateTwoLineBlock(dir, "--images_per_line=5 --seed=3 --gnss=false --control_sigma=0");
-  auto points = CsvRows(ReadFile(block + "/points.csv"));
+  auto points = SplitCsvText(ReadFile(block + "/points.csv"));
   ASSERT_EQ(points[0][4], "AccuracyX");
   ASSERT_EQ(points[0][7], "Role");
   std::map<std::string, std::vector<std::string>> surveyed;
@@ -633,7 +611,7 @@ TEST(BundleCommand, ControlPointsWithAccuracyZeroAreHeldFixed) {
       << run.out;
   EXPECT_EQ(run.out.find("control_points over-fitted"), std::string::npos) << run.out;
 
-  const auto adjusted = CsvRows(ReadFile(dir + "/adjusted.csv"));
+  const auto adjusted = SplitCsvText(ReadFile(dir + "/adjusted.csv"));
   ASSERT_EQ(CsvText({adjusted[0]}),
             "PointID,X,Y,Z,SigmaX,SigmaY,SigmaZ,Role,NumObservations,SurveyedX,SurveyedY,SurveyedZ,"
             "ErrorX,ErrorY,ErrorZ\n");
@@ -706,13 +684,13 @@ TEST(BundleCommand, FilmMarksOfACameraWithoutPixelSizeAreAdjustedInMicrometres) 
   const std::string dir = ScratchDir();
   const std::string block = SimulateTwoLineBlock(dir, "--images_per_line=4 --seed=5");
   // The simulated camera: 6000 x 4000 pixels of 4 um, principal point at the centre, film y up.
-  auto cameras = CsvRows(ReadFile(block + "/cameras.csv"));
+  auto cameras = SplitCsvText(ReadFile(block + "/cameras.csv"));
   ASSERT_EQ(cameras[0][5], "PixelSize");
   ASSERT_EQ(cameras[1][5], "4");
   ASSERT_EQ(cameras[1][6] + "x" + cameras[1][7], "4000x6000");
   cameras[1][5] = "";
   testing::WriteFile(dir + "/cameras.csv", CsvText(cameras));
-  auto marks = CsvRows(ReadFile(block + "/marks.csv"));
+  auto marks = SplitCsvText(ReadFile(block + "/marks.csv"));
   ASSERT_EQ(CsvText({marks[0]}), "Raster,PointID,Column,Row,FilmX,FilmY,Accuracy,CameraID\n");
   for (size_t r = 1; r < marks.size(); ++r) {
     if (marks[r].size() < 8) continue;

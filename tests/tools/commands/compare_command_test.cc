@@ -21,23 +21,11 @@ using testing::ReadFile;
 using testing::RunCli;
 using testing::ScratchDir;
 using testing::SourcePath;
+using testing::SplitCsvText;
 using testing::WriteFile;
 
 // The CSV carries ten significant digits.
 constexpr double kCsvRelativeTolerance = 1e-8;
-
-std::vector<std::vector<std::string>> ParseCsv(const std::string& text) {
-  std::vector<std::vector<std::string>> rows;
-  std::istringstream lines(text);
-  for (std::string line; std::getline(lines, line);) {
-    std::vector<std::string> cells;
-    std::stringstream s(line);
-    for (std::string cell; std::getline(s, cell, ',');) cells.push_back(cell);
-    if (!line.empty() && line.back() == ',') cells.push_back("");
-    rows.push_back(cells);
-  }
-  return rows;
-}
 
 size_t Column(const std::vector<std::string>& header, const std::string& name) {
   for (size_t c = 0; c < header.size(); ++c)
@@ -95,7 +83,7 @@ TEST(CompareCommand, MonteCarloRunsWritesEveryOutputAndAgreesWithTheEngine) {
   EXPECT_NE(ReadFile(dir + "/t.md").find("| taylor |"), std::string::npos);
 
   // The CSV equals a direct run of the engine with the same options.
-  const auto csv = ParseCsv(ReadFile(dir + "/c.csv"));
+  const auto csv = SplitCsvText(ReadFile(dir + "/c.csv"));
   ASSERT_EQ(csv.size(), 1u + 2 * solvers.size());
   cli::MonteCarloOptions options;
   options.scenarios = {Scenario::kNadir};
@@ -145,7 +133,7 @@ TEST(CompareCommand, DatasetModeComparesEverySolverToTheReference) {
   for (const char* solver : {"taylor_as_printed", "taylor", "ceres_analytic/huber"})
     EXPECT_EQ(RowsStartingWith(run.out, solver), RowsStartingWith(run.out, "solver")) << solver;
   EXPECT_LE(LongestLine(run.out, dir), cli::kConsoleWidth) << run.out;
-  const auto csv = ParseCsv(ReadFile(dir + "/d.csv"));
+  const auto csv = SplitCsvText(ReadFile(dir + "/d.csv"));
   ASSERT_EQ(csv.size(), 1u + 12 * 3);
   const size_t success = Column(csv[0], "Success");
   const size_t reference = Column(csv[0], "RefPositionM");
