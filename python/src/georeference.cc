@@ -80,7 +80,9 @@ arrays (set_positions).)doc");
       .def_readwrite("control_crs", &GeoreferenceInputs::control_crs)
       .def_readwrite("control_source", &GeoreferenceInputs::control_source)
       .def_readwrite("control_points", &GeoreferenceInputs::control_points)
-      .def_readwrite("control_marks", &GeoreferenceInputs::control_marks);
+      .def_readwrite("control_marks", &GeoreferenceInputs::control_marks)
+      .def_readwrite("attitudes_not_used", &GeoreferenceInputs::attitudes_not_used,
+                     "geo.txt yaw/pitch/roll read and not used (count)");
   inputs.def("set_positions",
              [](GeoreferenceInputs& self, const std::string& crs, const std::vector<std::string>& images,
                 const py::object& positions, const py::object& accuracies_m, const std::string& source) {
@@ -150,6 +152,8 @@ ENU frame; to_output_crs and output_poses bring coordinates and poses into the o
       .def_property_readonly("out_crs_name", [](const GeoreferenceResult& r) { return r.out_crs_info.name; })
       .def_readonly("out_crs_reason", &GeoreferenceResult::out_crs_reason)
       .def_readonly("heights_notes", &GeoreferenceResult::heights_notes)
+      .def_readonly("inputs_not_used", &GeoreferenceResult::inputs_not_used,
+                    "inputs read and not used, each with the reason")
       .def_readonly("positions_matched", &GeoreferenceResult::positions_matched)
       .def_readonly("positions_unmatched", &GeoreferenceResult::positions_unmatched)
       .def_readonly("images_without_position", &GeoreferenceResult::images_without_position)

@@ -47,6 +47,8 @@ def test_same_poses_as_the_cli(scene, tmp_path, cli):
     geo, result = pp.georeference_block(block, inputs, progress=calls.append)
     assert calls and result.summary.termination == "converged"
     assert geo.out_crs == "EPSG:32633" and geo.positions_matched == 24 and geo.evaluated
+    # Its yaw/pitch/roll are all 0 ("not available" in ODM): nothing read and left unused.
+    assert inputs.attitudes_not_used == 0 and geo.inputs_not_used == []
     assert "projected" in geo.out_crs_reason or "positions" in geo.out_crs_reason, geo.out_crs_reason
     assert 0.09 < geo.similarity_scale < 0.11 or 9.0 < geo.similarity_scale < 11.0
     poses = geo.output_poses(block)
