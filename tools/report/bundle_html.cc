@@ -427,6 +427,12 @@ std::string VerdictsHtml(const Block& block, const BundleAdjustmentResult& resul
          << " stated error-free (AccuracyX/Y/Z 0), not adjusted: no residuals and no verdict"
          << (g.fixed() ? "" : "; the verdict above covers the weighted ones only") << ".</div>\n";
   }
+  for (const BundleGroupStatistics& g : result.groups) {
+    const std::string gross = GrossErrorsAbsorbed(g);
+    if (!gross.empty())
+      html << "<div class=\"verdict bad\"><b>Gross errors absorbed:</b> " << HtmlEscape(gross)
+           << "</div>\n";
+  }
   if (!weights.empty()) {
     html << "<div class=\"verdict note\"><b>Stated accuracies the data contradict</b> (RMS / "
             "stated outside "

@@ -253,6 +253,8 @@ std::string FormatFilm(double value_um) { return ReportFixed(value_um, 2); }
 
 std::string FormatMarkValue(double value, const std::string& unit) {
   if (!std::isfinite(value)) return "n/a";
+  if (unit == "m") return FormatLengthWithUnit(value);
+  if (unit == "deg") return FormatArcSeconds(value) + " arcsec";
   return ReportFixed(value, 2) + " " + unit;
 }
 

@@ -55,8 +55,9 @@ std::string FormatCoordinate(double value_m);
 // Image measurements: pixels (px) and film coordinates (um), two decimals.
 std::string FormatPixels(double value_px);
 std::string FormatFilm(double value_um);
-// A value in a mark group's unit ("px", "um", or "sigma" for a group mixing pixel and film marks,
-// solvers/bundle/bundle_statistics.cc): two decimals and the unit.
+// A value in a group's unit (BundleGroupStatistics::unit): marks in "px", "um", or "sigma" for a
+// group mixing pixel and film marks (solvers/bundle/bundle_statistics.cc) with two decimals and
+// the unit; "m" as FormatLengthWithUnit (mm, cm or m); "deg" in arc seconds ("36.0 arcsec").
 std::string FormatMarkValue(double value, const std::string& unit);
 // Angles: degrees with four decimals, arc seconds (of a value in degrees) with one.
 std::string FormatDegrees(double value_deg);

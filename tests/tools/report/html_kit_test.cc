@@ -149,6 +149,9 @@ TEST(HtmlKit, NumbersNeverTakeAnExponent) {
   EXPECT_EQ(FormatDegrees(12.3456789), "12.3457");
   EXPECT_EQ(FormatPixels(0.456), "0.46");
   EXPECT_EQ(FormatMarkValue(0.5, "px"), "0.50 px");
+  EXPECT_EQ(FormatMarkValue(0.005, "m"), "5.0 mm");  // a control point group's accuracy
+  EXPECT_EQ(FormatMarkValue(6.97e-05, "m"), "0.1 mm");
+  EXPECT_EQ(FormatMarkValue(0.01, "deg"), "36.0 arcsec");  // an attitude group's
   EXPECT_EQ(FormatUnitless(0.0839), "0.08");
   EXPECT_EQ(TickLabel(0.0001), "0.0001");
   EXPECT_EQ(TickLabel(200000.0), "200000");
