@@ -33,6 +33,7 @@ const char kStyle[] =
     "caption{text-align:left;font-weight:bold;padding:0.3em 0}"
     "th,td{border:1px solid #ccc;padding:0.2em 0.5em;text-align:right;white-space:nowrap}"
     "th{background:#f0f0f0}td:first-child,th:first-child{text-align:left}"
+    "th.group{text-align:center}th.blank{background:none;border:none}"
     "ul.notes{font-size:0.85em;color:#444}"
     ".plots{display:flex;flex-wrap:wrap;gap:1em}svg{background:#fff;border:1px solid #ddd}"
     ".verdict{padding:0.75em 1em;border-radius:6px;margin:0.5em 0}"
@@ -283,10 +284,23 @@ std::string FormatCount(long long count, const std::string& singular, const std:
 
 std::string HtmlTable(const std::string& title, const std::vector<std::string>& header,
                       const std::vector<std::vector<std::string>>& rows,
-                      const std::vector<std::string>& notes) {
+                      const std::vector<std::string>& notes,
+                      const std::vector<HeaderGroup>& groups) {
   std::ostringstream html;
   html << "<table>\n";
   if (!title.empty()) html << "<caption>" << HtmlEscape(title) << "</caption>\n";
+  size_t grouped = 0;
+  for (const HeaderGroup& g : groups) grouped += std::max(0, g.span);
+  if (!groups.empty() && grouped == header.size()) {
+    html << "<tr>";
+    for (const HeaderGroup& g : groups) {
+      if (g.span <= 0) continue;
+      html << "<th" << (g.span > 1 ? " colspan=\"" + std::to_string(g.span) + "\"" : "")
+           << (g.label.empty() ? " class=\"blank\"" : " class=\"group\"") << ">"
+           << HtmlEscape(g.label) << "</th>";
+    }
+    html << "</tr>\n";
+  }
   html << "<tr>";
   for (const auto& h : header) html << "<th>" << HtmlEscape(h) << "</th>";
   html << "</tr>\n";

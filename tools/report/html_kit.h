@@ -71,11 +71,20 @@ std::string FormatSignificant(double value, int significant = 3);
 std::string FormatCount(long long count, const std::string& singular,
                         const std::string& plural = "");
 
+// A header cell over `span` columns of a table's header row (e.g. "centre (m)" over X, Y, Z):
+// the quantity and its unit once, short axis names under it.
+struct HeaderGroup {
+  std::string label;  // empty over columns that need no group
+  int span = 1;       // columns (count)
+};
+
 // A <table> with a <caption> (the title, left out when empty) and the notes as a list under it;
-// every cell escaped.
+// every cell escaped. With `groups` (their spans summing to the header's size) a row of grouped
+// header cells above the header.
 std::string HtmlTable(const std::string& title, const std::vector<std::string>& header,
                       const std::vector<std::vector<std::string>>& rows,
-                      const std::vector<std::string>& notes = {});
+                      const std::vector<std::string>& notes = {},
+                      const std::vector<HeaderGroup>& groups = {});
 
 // ------------------------------------------------------------------ SVG primitives
 

@@ -61,6 +61,17 @@ TEST(HtmlKit, TableEscapesCellsAndListsNotes) {
   EXPECT_EQ(HtmlTable("", {"a"}, {}).find("<caption>"), std::string::npos);
 }
 
+TEST(HtmlKit, GroupedHeaderNamesAQuantityOnceOverItsAxes) {
+  const std::string table = HtmlTable("t", {"image", "X", "Y", "Z"}, {{"a", "1", "2", "3"}}, {},
+                                      {{"", 1}, {"centre (m)", 3}});
+  EXPECT_NE(table.find("<tr><th class=\"blank\"></th><th colspan=\"3\" class=\"group\">centre "
+                       "(m)</th></tr>\n<tr><th>image</th><th>X</th>"),
+            std::string::npos)
+      << table;
+  // Spans that do not cover the header: no group row.
+  EXPECT_EQ(HtmlTable("t", {"a", "b"}, {}, {}, {{"x", 3}}).find("colspan"), std::string::npos);
+}
+
 TEST(HtmlKit, NiceSteps) {
   EXPECT_DOUBLE_EQ(NiceStep(10.0, 5), 2.0);
   EXPECT_DOUBLE_EQ(NiceStep(0.7, 5), 0.2);
