@@ -598,7 +598,7 @@ std::string CamerasHtml(const Block& block, const BundleAdjustmentResult& result
                                      "X",     "Y",     "Z",            "omega", "phi", "kappa"};
   std::vector<HeaderGroup> groups = {{"", 3},
                                      {"projection centre (m)", 3},
-                                     {"its sigma (" + su + ")", 3},
+                                     {"sigma of the centre (" + su + ")", 3},
                                      {"sigma of the angles (arcsec)", 3}};
   if (measured) {
     header.insert(header.end(), {"X", "Y", "Z"});

@@ -202,22 +202,47 @@ TEST(HtmlKit, HistogramOverAFixedRangeAndScatterPlot) {
   EXPECT_NE(points.find("stroke-dasharray"), std::string::npos);  // the zero line
 }
 
-TEST(HtmlKit, SmallMultiplesDrawOnePanelPerSeriesOnSharedAxes) {
+TEST(HtmlKit, SmallMultiplesDrawOnePanelPerSeriesSideBySideOnSharedAxes) {
   LinePlot plot;
   plot.title = "RMSE vs noise";
   plot.x_label = "noise (px)";
   plot.y_label = "RMSE (m)";
   plot.series = {{"a", {0, 1, 2}, {0.1, 0.2, 0.3}}, {"b", {0, 1, 2}, {0.1, 0.4, 0.9}}};
   const std::string svg = RenderSmallMultiplesSvg(plot);
-  EXPECT_EQ(Count(svg, "<svg"), 2u);
-  EXPECT_EQ(Count(svg, "</svg>"), 2u);
-  // Each panel: its own series in colour, the other in grey behind; both panels with the same
-  // y ticks (the axis covers the larger series).
+  // One <svg> across the A4 content width holding both panels.
+  EXPECT_EQ(Count(svg, "<svg"), 1u);
+  EXPECT_EQ(svg.substr(svg.size() - 6), "</svg>");
+  EXPECT_NE(svg.find("width=\"700\""), std::string::npos);
+  EXPECT_NE(svg.find("aria-label=\"RMSE vs noise\""), std::string::npos);
+  EXPECT_NE(svg.find(">a</text>"), std::string::npos);  // the panels' titles
+  EXPECT_NE(svg.find(">b</text>"), std::string::npos);
+  // Each panel: its own series in colour, the other in grey behind; the axis titles once.
   EXPECT_EQ(Count(svg, "stroke=\"#cccccc\""), 2u);
-  EXPECT_EQ(Count(svg, ">0.8</text>"), 2u);  // a y tick (x ticks: 0 to 2 by 0.5)
-  EXPECT_EQ(Count(svg, ">RMSE (m)</text>"), 2u);
-  EXPECT_EQ(Count(svg, "class=\"axis-label\""), 4u);
-  EXPECT_NE(svg.find("aria-label=\"RMSE vs noise: b\""), std::string::npos);
+  EXPECT_EQ(Count(svg, ">RMSE (m)</text>"), 1u);
+  EXPECT_EQ(Count(svg, ">noise (px)</text>"), 1u);
+  EXPECT_EQ(Count(svg, "class=\"axis-label\""), 2u);
+  // Narrow panels take about 3 tick steps: x 0, 1, 2 in each panel; y (covering the larger
+  // series) 0, 0.5, 1 labelled once, on the first panel.
+  EXPECT_EQ(Count(svg, ">2</text>"), 2u);
+  EXPECT_EQ(Count(svg, ">0.5</text>"), 1u);
+  EXPECT_EQ(Count(svg, ">1</text>"), 3u);
+}
+
+TEST(HtmlKit, SectionedTableHasOneHeaderAndAHeadingRowPerSection) {
+  const std::string table = HtmlSectionedTable(
+      "every setting", {"solver", "RMSE"},
+      {{"noise 0.5 px", {{"taylor", "0.1"}, {"ceres", "0.1"}}, {}},
+       {"noise 1 <px>", {{"taylor", "0.2"}}, {"not solved: 1 x degenerate"}}},
+      {"a note"});
+  EXPECT_EQ(Count(table, "<table>"), 1u);
+  EXPECT_EQ(Count(table, "<th>solver</th>"), 1u);
+  EXPECT_NE(table.find("<caption>every setting</caption>"), std::string::npos);
+  EXPECT_NE(table.find("<tr class=\"section\"><th colspan=\"2\">noise 1 &lt;px&gt;</th></tr>"),
+            std::string::npos);
+  EXPECT_LT(table.find("noise 0.5 px"), table.find("<td>ceres</td>"));
+  EXPECT_NE(table.find("<tr class=\"note\"><td colspan=\"2\">not solved: 1 x degenerate</td></tr>"),
+            std::string::npos);
+  EXPECT_NE(table.find("<li>a note</li>"), std::string::npos);
 }
 
 }  // namespace
