@@ -54,14 +54,42 @@ bool IntersectionResiduals(const std::vector<RayObservation>& rays, const Eigen:
   return true;
 }
 
+// The factor (unitless) by which the adjustment's variance components rescaled the control marks'
+// sigmas (1 without them): the control-marks group's mean sigma in use (its stated accuracy in
+// the statistics) over the mean of the same marks' sigmas by `defaults`. Check marks are measured
+// as control marks are, so they are weighed and tested with the same yardstick; 1 when the group
+// is missing, mixes pixel and film marks (its unit is "sigma") or the marks cannot be matched.
+double ControlMarkScale(const Block& block, const std::vector<BlockCamera>& cameras,
+                        const MarkSigmaDefaults& defaults, const BundleAdjustmentResult& result) {
+  const BundleGroupStatistics* group = nullptr;
+  for (const BundleGroupStatistics& g : result.groups)
+    if (g.group == kControlMarks && g.count > 0) group = &g;
+  if (group == nullptr || group->unit == "sigma" || result.mark_residuals.size() != block.marks.size())
+    return 1.0;
+  double sum = 0.0;
+  int count = 0;
+  for (size_t m = 0; m < block.marks.size(); ++m) {
+    const BlockMark& mark = block.marks[m];
+    if (block.points[mark.point].role != PointRole::kControl ||
+        !result.mark_residuals[m].allFinite())
+      continue;
+    sum += MarkSigma(mark, cameras[block.images[mark.image].camera], defaults) /
+           mark.observation_units_per_unit;
+    ++count;
+  }
+  const double scale = count == group->count && sum > 0.0 ? group->stated_accuracy.x() * count / sum : 1.0;
+  return std::isfinite(scale) && scale > 0.0 ? scale : 1.0;
+}
+
 // The check point's row of the table: its intersection against its surveyed coordinates, after
-// the w-test of its marks. While the largest |w| = |v| / (s sigma sqrt(r)) of a mark's coordinate
+// the w-test of its marks (their sigmas `sigma_scale` times the rule's). While the largest |w| = |v| / (s sigma sqrt(r)) of a mark's coordinate
 // (s = max(1, sqrt(variance_factor)), the rule of the block's observations) exceeds `critical`,
 // that mark is rejected (appended to `rejected`) and the point intersected again from the rest.
 // False (with the reason in table->message) when it cannot be intersected.
 bool TabulateCheckPoint(const Block& block, int p, const std::vector<const Vector6d*>& eo,
                         const std::vector<BlockCamera>& cameras,
-                        const MarkSigmaDefaults& defaults, double variance_factor, double critical,
+                        const MarkSigmaDefaults& defaults, double sigma_scale,
+                        double variance_factor, double critical,
                         const CheckPointCovariance& covariance, BundlePointResult* table,
                         std::vector<BundleRejectedCheckMark>* rejected) {
   std::vector<RayObservation> rays;
@@ -73,7 +101,7 @@ bool TabulateCheckPoint(const Block& block, int p, const std::vector<const Vecto
     ray.camera = &cameras[block.images[mark.image].camera];
     ray.eo.parameters = *eo[mark.image];
     ray.observation = mark.observation;
-    ray.sigma = MarkSigma(mark, *ray.camera, defaults);
+    ray.sigma = sigma_scale * MarkSigma(mark, *ray.camera, defaults);
     rays.push_back(ray);
     marks.push_back(m);
   }
@@ -135,6 +163,8 @@ void TabulateControlAndCheckPoints(const Block& block, const std::vector<const V
     critical = NormalQuantile(1.0 - 0.5 * BundleStatisticsOptions().snooping_alpha /
                                         std::max(1, num_check_coordinates));
   }
+  // The control marks' sigmas in use, variance components applied: the check marks' too.
+  const double sigma_scale = ControlMarkScale(block, cameras, defaults, *result);
   result->rejected_check_marks.clear();
   Eigen::Vector3d control_ssq = Eigen::Vector3d::Zero(), check_ssq = Eigen::Vector3d::Zero();
   result->num_control_points = result->num_check_points = 0;
@@ -149,8 +179,9 @@ void TabulateControlAndCheckPoints(const Block& block, const std::vector<const V
       control_ssq += table.error_m->cwiseAbs2();
     }
     if (point.role != PointRole::kCheck) continue;
-    if (!TabulateCheckPoint(block, static_cast<int>(p), eo, cameras, defaults, variance_factor,
-                            critical, covariance, &table, &result->rejected_check_marks))
+    if (!TabulateCheckPoint(block, static_cast<int>(p), eo, cameras, defaults, sigma_scale,
+                            variance_factor, critical, covariance, &table,
+                            &result->rejected_check_marks))
       continue;
     ++result->num_check_points;
     check_ssq += table.error_m->cwiseAbs2();

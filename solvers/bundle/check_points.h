@@ -15,7 +15,9 @@ namespace photopose {
 
 // Fills, from `adjusted` (the block holding the adjusted orientations and cameras):
 //  - per check point: the intersection of its marks (sigmas by core/mark_weight.h with the
-//    marker-projection defaults) against its surveyed coordinates, error_m = intersected -
+//    marker-projection defaults, times the factor by which variance component estimation
+//    rescaled the control marks when result->groups says so: check marks are measured as control
+//    marks are) against its surveyed coordinates, error_m = intersected -
 //    surveyed (m), covariance = variance_factor times the intersection's a-priori covariance
 //    (m^2), num_observations (marks kept); or a message when it cannot be intersected;
 //  - its marks tested like the block's observations: the w-test w = v / (s sigma sqrt(r)) of each

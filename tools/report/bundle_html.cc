@@ -428,6 +428,12 @@ std::string VerdictsHtml(const Block& block, const BundleAdjustmentResult& resul
          << " stated error-free (AccuracyX/Y/Z 0), not adjusted: no residuals and no verdict"
          << (g.fixed() ? "" : "; the verdict above covers the weighted ones only") << ".</div>\n";
   }
+  for (const BundleGroupStatistics& g : result.groups) {
+    const std::string gross = GrossErrorsAbsorbed(g);
+    if (!gross.empty())
+      html << "<div class=\"verdict bad\"><b>Gross errors absorbed:</b> " << HtmlEscape(gross)
+           << "</div>\n";
+  }
   if (!weights.empty()) {
     html << "<div class=\"verdict note\"><b>Stated accuracies the data contradict</b> (RMS / "
             "stated outside "
@@ -586,13 +592,33 @@ std::string CamerasHtml(const Block& block, const BundleAdjustmentResult& result
   const LengthUnit sigma_unit = LengthUnitFor(LargestMagnitude(sigmas));
   const LengthUnit error_unit = LengthUnitFor(LargestMagnitude(errors));
   const std::string su = LengthUnitName(sigma_unit), eu = LengthUnitName(error_unit);
+  // Grouped columns, each quantity's unit named once above its axes: the table fits a 1280 px
+  // screen and the A4 width. The comparison with the measured centres only when there are some.
+  const bool measured = !errors.empty();
+  std::vector<std::string> header = {"image", "marks", "RMS residual", "X", "Y", "Z",
+                                     "X",     "Y",     "Z",            "omega", "phi", "kappa"};
+  std::vector<HeaderGroup> groups = {{"", 3},
+                                     {"projection centre (m)", 3},
+                                     {"sigma of the centre (" + su + ")", 3},
+                                     {"sigma of the angles (arcsec)", 3}};
+  if (measured) {
+    header.insert(header.end(), {"X", "Y", "Z"});
+    groups.push_back({"adjusted - measured (" + eu + ")", 3});
+  }
   std::vector<std::vector<std::string>> rows;
+  std::vector<std::string> notes = {
+      "sigmas: sigma0-scaled, from the posterior covariance; angles: the seed's omega, phi, kappa"};
+  if (measured) notes.push_back("measured: the frames table's projection centre (GNSS)");
   for (size_t i = 0; i < block.images.size(); ++i) {
     const BlockImage& image = block.images[i];
     const BundleImageResult* r = i < result.images.size() ? &result.images[i] : nullptr;
     if (!image.eo || r == nullptr || !r->adjusted) {
-      rows.push_back({image.name, "", "", "", "", "", "", "", "", "", "", "", "",
-                      r != nullptr && !r->message.empty() ? r->message : "not adjusted"});
+      std::vector<std::string> row(header.size(), "");
+      row[0] = image.name;
+      row[1] = "not adjusted";
+      rows.push_back(row);
+      notes.push_back(image.name + " not adjusted" +
+                      (r != nullptr && !r->message.empty() ? ": " + r->message : ""));
       continue;
     }
     const Eigen::Vector3d c = image.eo->center_in_ground();
@@ -607,26 +633,18 @@ std::string CamerasHtml(const Block& block, const BundleAdjustmentResult& result
       row.push_back(r->has_covariance
                         ? FormatArcSeconds(std::sqrt(r->covariance(a, a)) * kDegreesPerRadian)
                         : "n/a");
-    if (image.measured_center_m) {
-      const Eigen::Vector3d e = c - *image.measured_center_m;
-      row.push_back(FormatLength(e.x(), error_unit) + " / " + FormatLength(e.y(), error_unit) +
-                    " / " + FormatLength(e.z(), error_unit));
-    } else {
-      row.push_back("no measured centre");
+    if (measured) {
+      for (int a = 0; a < 3; ++a)
+        row.push_back(image.measured_center_m
+                          ? FormatLength(c[a] - (*image.measured_center_m)[a], error_unit)
+                          : "n/a");
     }
     rows.push_back(row);
   }
   std::ostringstream html;
   html << "<h2>4. Cameras</h2>\n"
-       << HtmlTable("Adjusted projection centres and their precision",
-                    {"image", "marks", "RMS residual", "X (m)", "Y (m)", "Z (m)",
-                     "sigma X (" + su + ")", "sigma Y (" + su + ")", "sigma Z (" + su + ")",
-                     "sigma omega (\")", "sigma phi (\")", "sigma kappa (\")",
-                     "adjusted - measured X / Y / Z (" + eu + ")"},
-                    rows,
-                    {"sigmas: sigma0-scaled, from the posterior covariance; angles in arc seconds "
-                     "(\"), seed angles",
-                     "measured: the frames table's projection centre (GNSS), when given"});
+       << HtmlTable("Adjusted projection centres and their precision", header, rows, notes,
+                    groups);
   return html.str();
 }
 

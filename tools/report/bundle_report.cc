@@ -21,12 +21,6 @@ json Number(double value) { return std::isfinite(value) ? json(value) : json(nul
 
 json Vector3(const Eigen::Vector3d& v) { return json::array({Number(v.x()), Number(v.y()), Number(v.z())}); }
 
-std::string Format(double value, const char* format = "%.3g") {
-  if (!std::isfinite(value)) return "n/a";
-  char buffer[64];
-  std::snprintf(buffer, sizeof(buffer), format, value);
-  return buffer;
-}
 
 const char* RoleName(PointRole role) {
   switch (role) {
@@ -509,19 +503,53 @@ std::vector<FrameRecord> BundleFrames(const Block& block, const BundleAdjustment
   return frames;
 }
 
+std::string GrossErrorsAbsorbed(const BundleGroupStatistics& group) {
+  const double stated = group.stated_accuracy.x(), estimated = group.estimated_accuracy.x();
+  if (!(stated > 0.0) || !(estimated > kGrossErrorFactor * stated)) return "";
+  std::string text = std::string(EnumName(group.group)) + ": the estimated accuracy " +
+                     FormatMarkValue(estimated, group.unit) + " is " +
+                     FormatUnitless(estimated / stated, 1) + " times the stated " +
+                     FormatMarkValue(stated, group.unit) +
+                     ": gross errors are far likelier than a misstated accuracy, and the "
+                     "estimation absorbed them into every observation of the group instead of "
+                     "finding them (the search for gross errors starts only when sigma0 stays "
+                     "above 3, which the estimation prevents)";
+  if (group.group == kControlMarks)
+    text += "; check marks are tested with this accuracy too";
+  return text + ". Run with --snoop to remove the gross errors before the estimation.";
+}
+
 std::vector<std::string> BundleConsoleLines(const Block& block, const BundleAdjustmentResult& result,
                                             const BundleReportContext& context) {
+  // Every number through the report kit's formatters (tools/report/html_kit.h): fixed units,
+  // never an exponent.
   std::vector<std::string> lines;
   const BundleAdjustmentSummary& s = result.summary;
-  lines.push_back("bundle: " + s.BriefReport());
   {
+    std::ostringstream line;
+    line << "bundle: " << EnumName(s.termination) << ": " << FormatCount(s.num_images, "image")
+         << ", " << FormatCount(s.num_points, "point") << ", " << FormatCount(s.num_marks, "mark")
+         << ", " << FormatCount(s.rounds, "round") << ", " << FormatCount(s.iterations, "iteration")
+         << ", cost " << FormatSignificant(s.initial_cost, 6) << " -> "
+         << FormatSignificant(s.final_cost, 6) << ", sigma0 " << FormatUnitless(s.sigma0, 3)
+         << " (unitless; redundancy " << s.redundancy << ")";
+    if (s.num_rejected_marks > 0) line << ", " << FormatCount(s.num_rejected_marks, "mark") << " rejected";
+    if (!s.tie_points_left_out.empty())
+      line << ", " << FormatCount(static_cast<long long>(s.tie_points_left_out.size()), "tie point")
+           << " without initial coordinates left out";
+    line << ", " << FormatSignificant(s.time_seconds, 3) << " s";
+    if (!s.message.empty()) line << ": " << s.message;
+    lines.push_back(line.str());
+  }
+  {
+    auto seconds = [](double value) { return FormatSignificant(value, 3) + " s"; };
     std::ostringstream time;
-    time << "time: problem " << Format(s.problem_build_seconds) << " s, Ceres preprocessing "
-         << Format(s.solver_preprocessing_seconds) << " s, residuals "
-         << Format(s.residual_evaluation_seconds) << " s, Jacobians "
-         << Format(s.jacobian_evaluation_seconds) << " s, linear solves "
-         << Format(s.linear_solver_seconds) << " s, statistics " << Format(s.statistics_seconds)
-         << " s; Schur structure " << (s.schur_structure.empty() ? "n/a" : s.schur_structure);
+    time << "time: problem " << seconds(s.problem_build_seconds) << ", Ceres preprocessing "
+         << seconds(s.solver_preprocessing_seconds) << ", residuals "
+         << seconds(s.residual_evaluation_seconds) << ", Jacobians "
+         << seconds(s.jacobian_evaluation_seconds) << ", linear solves "
+         << seconds(s.linear_solver_seconds) << ", statistics " << seconds(s.statistics_seconds)
+         << "; Schur structure " << (s.schur_structure.empty() ? "n/a" : s.schur_structure);
     lines.push_back(time.str());
   }
   lines.push_back("datum: " + s.datum_description);
@@ -534,9 +562,10 @@ std::vector<std::string> BundleConsoleLines(const Block& block, const BundleAdju
       lines.push_back(line.str());
       continue;
     }
-    line << EnumName(g.group) << ": " << g.count << ", stated " << Format(g.stated_accuracy.x()) << " "
-         << g.unit << ", RMS " << Format(g.rms_total) << " " << g.unit << ", RMS/stated "
-         << Format(g.ratio) << ", redundancy share " << Format(g.redundancy_share)
+    line << EnumName(g.group) << ": " << g.count << ", stated "
+         << FormatMarkValue(g.stated_accuracy.x(), g.unit) << ", RMS "
+         << FormatMarkValue(g.rms_total, g.unit) << ", RMS/stated " << FormatUnitless(g.ratio)
+         << ", redundancy share " << FormatUnitless(g.redundancy_share)
          << (g.overfit ? "  OVERFIT" : "");
     if (g.num_fixed > 0) line << "; " << g.num_fixed << " more held fixed";
     lines.push_back(line.str());
@@ -553,7 +582,7 @@ std::vector<std::string> BundleConsoleLines(const Block& block, const BundleAdju
                     "close to parallel, or marks that do not meet) and were left out: " + names +
                     " (report: summary.tie_points_left_out)");
   }
-  // Advice from the estimated accuracies.
+  // Advice from the estimated accuracies (the flag's value in the flag's own unit).
   static const std::pair<BundleGroup, const char*> kFlags[] = {
       {kTieMarks, "--tie_accuracy"},
       {kControlMarks, "--marker_projection_accuracy"},
@@ -568,21 +597,25 @@ std::vector<std::string> BundleConsoleLines(const Block& block, const BundleAdju
     for (const auto& [group, flag] : kFlags) {
       if (g.group != group) continue;
       std::ostringstream line;
-      line << EnumName(g.group) << ": " << Format(g.stated_accuracy.x()) << " " << g.unit << " stated, "
-           << Format(g.estimated_accuracy.x()) << " " << g.unit << " estimated (+-"
-           << Format(100.0 * g.estimated_accuracy_standard_error, "%.0f") << " %): set " << flag
-           << "=" << Format(g.estimated_accuracy.x(), "%.2g");
+      line << EnumName(g.group) << ": " << FormatMarkValue(g.stated_accuracy.x(), g.unit)
+           << " stated, " << FormatMarkValue(g.estimated_accuracy.x(), g.unit) << " estimated (+-"
+           << FormatUnitless(100.0 * g.estimated_accuracy_standard_error, 0) << " %): set " << flag
+           << "=" << FormatSignificant(g.estimated_accuracy.x(), 2);
       lines.push_back(line.str());
     }
+    const std::string gross = GrossErrorsAbsorbed(g);
+    if (!gross.empty()) lines.push_back("warning: " + gross);
   }
   if (result.num_control_points > 0)
     lines.push_back("control points: " + std::to_string(result.num_control_points) + ", RMSE " +
-                    Format(result.control_rmse_total_m) + " m");
+                    FormatLengthWithUnit(result.control_rmse_total_m));
   if (result.num_check_points > 0) {
+    const LengthUnit unit = LengthUnitFor(result.check_rmse_m.maxCoeff());
     lines.push_back("check points: " + std::to_string(result.num_check_points) + ", RMSE X " +
-                    Format(result.check_rmse_m.x()) + " Y " + Format(result.check_rmse_m.y()) +
-                    " Z " + Format(result.check_rmse_m.z()) + " total " +
-                    Format(result.check_rmse_total_m) + " m");
+                    FormatLength(result.check_rmse_m.x(), unit) + " Y " +
+                    FormatLength(result.check_rmse_m.y(), unit) + " Z " +
+                    FormatLength(result.check_rmse_m.z(), unit) + " total " +
+                    FormatLength(result.check_rmse_total_m, unit) + " " + LengthUnitName(unit));
   }
   if (!result.rejected_marks.empty())
     lines.push_back(std::to_string(result.rejected_marks.size()) +
@@ -591,26 +624,28 @@ std::vector<std::string> BundleConsoleLines(const Block& block, const BundleAdju
     const BlockMark& mark = block.marks[r.mark];
     lines.push_back("check mark of '" + PointName(block, mark.point) + "' on image '" +
                     block.images[mark.image].name + "' rejected by the w-test (|w| = " +
-                    Format(r.normalized) + "): check its measurement");
+                    FormatUnitless(r.normalized, 1) + "): check its measurement");
   }
   for (const BundleSnoopingStep& step : result.snooping)
     lines.push_back("snooping removed the " + BundleItemName(block, step.group, step.item) + " (" +
-                    BundleAxisName(step.group, step.axis) + ", |w| = " + Format(step.normalized) + ")");
+                    BundleAxisName(step.group, step.axis) + ", |w| = " +
+                    FormatUnitless(step.normalized, 1) + ")");
   if (result.num_uncontrolled > 0)
     lines.push_back(std::to_string(result.num_uncontrolled) +
                     " observations are uncontrolled (redundancy number below " +
-                    Format(context.options.statistics.uncontrolled_redundancy) +
+                    FormatUnitless(context.options.statistics.uncontrolled_redundancy) +
                     "): a blunder there cannot be seen; add images or points around them");
   if (context.cross_validation != nullptr) {
     const BundleCrossValidationResult& cv = *context.cross_validation;
+    const LengthUnit unit = LengthUnitFor(cv.rmse_m.maxCoeff());
     lines.push_back("leave-one-out control points: " + std::to_string(cv.count) + ", RMSE X " +
-                    Format(cv.rmse_m.x()) + " Y " + Format(cv.rmse_m.y()) + " Z " +
-                    Format(cv.rmse_m.z()) + " m");
+                    FormatLength(cv.rmse_m.x(), unit) + " Y " + FormatLength(cv.rmse_m.y(), unit) +
+                    " Z " + FormatLength(cv.rmse_m.z(), unit) + " " + LengthUnitName(unit));
     for (const BundleCrossValidationPoint& p : cv.points) {
       if (p.stands_out)
         lines.push_back("control point '" + PointName(block, p.point) +
-                        "' stands out: left out, it misses by " + Format(p.error_m.norm()) +
-                        " m (normalized " + Format(p.normalized) + " > " + Format(cv.threshold) +
+                        "' stands out: left out, it misses by " + FormatLengthWithUnit(p.error_m.norm()) +
+                        " (normalized " + FormatUnitless(p.normalized) + " > " + FormatUnitless(cv.threshold) +
                         "): check its coordinates and marks");
       else if (!p.ok)
         lines.push_back("control point '" + PointName(block, p.point) +

@@ -39,6 +39,15 @@ struct BundleReportContext {
 std::string BundleItemName(const Block& block, BundleGroup group, int item);
 const char* BundleAxisName(BundleGroup group, int axis);
 
+// Variance component estimation (--estimate_accuracies) on a group whose estimated accuracy is
+// more than kGrossErrorFactor times its stated one: in words, that gross errors are far likelier
+// than a misstated accuracy and the estimation absorbed them (it rescales every observation of
+// the group; the automatic search for gross errors starts only when sigma0 stays above 3, which
+// the rescaling prevents), with the remedy (--snoop removes them before the estimation). Empty
+// otherwise. The console and the HTML page state it.
+constexpr double kGrossErrorFactor = 3.0;
+std::string GrossErrorsAbsorbed(const BundleGroupStatistics& group);
+
 // The JSON report; every key is documented in docs/formats.md.
 nlohmann::json BundleReportJson(const Block& block, const BundleAdjustmentResult& result,
                                 const BundleReportContext& context);

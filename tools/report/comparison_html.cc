@@ -274,43 +274,42 @@ std::string MonteCarloHtml(const MonteCarloOptions& options, const MonteCarloRes
   html << "</ul>\n";
 
   const std::vector<TextTable> tables = MonteCarloTables(options, result);
+  // Metric of a solver in a setting, for the plots.
+  struct Metric {
+    const char* name;
+    const char* unit_label;  // short: the row's title names the metric
+    bool log_y;
+    bool rate;
+    bool nees_reference;  // draw the dashed line at 6
+    double (*get)(const SolverStatistics&);
+  };
+  const Metric position{"position RMSE", "RMSE (m)", true, false, false,
+                        [](const SolverStatistics& s) { return s.position_rmse_m; }};
+  const Metric success{"success rate", "success (0 to 1)", false, true, false,
+                       [](const SolverStatistics& s) { return s.success_rate; }};
+  const Metric nees{"mean NEES (sigma0 = 1)", "NEES (unitless)", true, false, true,
+                    [](const SolverStatistics& s) { return s.mean_nees_apriori; }};
+  const Metric iterations{"mean iterations", "iterations", false, false, false,
+                          [](const SolverStatistics& s) { return s.mean_iterations; }};
+  const std::vector<std::pair<std::string, std::vector<Metric>>> plots = {
+      {"noise", {position, nees}},
+      {"outliers", {position, success}},
+      {"initial", {success, iterations}},
+      {"control", {position, success}},
+  };
   for (Scenario scenario : options.scenarios) {
     html << "<h2>Scenario " << EnumName(scenario) << "</h2>\n";
-    // Metric of a solver in a setting, for the plots.
-    struct Metric {
-      const char* name;
-      const char* unit_label;
-      bool log_y;
-      bool rate;
-      bool nees_reference;  // draw the dashed line at 6
-      double (*get)(const SolverStatistics&);
-    };
-    const Metric position{
-        "position RMSE", "position RMSE (m)", true, false, false, [](const SolverStatistics& s) {
-          return s.position_rmse_m;
-        }};
-    const Metric success{"success rate", "success rate",
-                         false,          true,
-                         false,          [](const SolverStatistics& s) { return s.success_rate; }};
-    const Metric nees{"mean NEES (sigma0 = 1)",
-                      "mean NEES, a-priori covariance",
-                      true,
-                      false,
-                      true,
-                      [](const SolverStatistics& s) { return s.mean_nees_apriori; }};
-    const Metric iterations{
-        "mean iterations", "iterations", false, false, false, [](const SolverStatistics& s) {
-          return s.mean_iterations;
-        }};
-    const std::vector<std::pair<std::string, std::vector<Metric>>> plots = {
-        {"noise", {position, nees}},
-        {"outliers", {position, success}},
-        {"initial", {success, iterations}},
-        {"control", {position, success}},
-    };
+    // One row of small multiples (a panel per solver) per metric and sweep axis.
     for (const auto& [axis, metrics] : plots) {
       const std::vector<size_t> along = SettingsAlongAxis(options, result, scenario, axis);
       if (along.empty()) continue;
+      if (axis == "initial") {
+        html << "<p>Initial error: +-";
+        for (size_t k = 0; k < along.size(); ++k)
+          html << (k ? "/" : "")
+               << FormatSignificant(result.settings[along[k]].setting.initial_error.position_m, 3);
+        html << " m in position with the angle errors on the x axis.</p>\n";
+      }
       for (const Metric& metric : metrics) {
         LinePlot plot;
         plot.title = std::string(EnumName(scenario)) + ": " + metric.name + " vs " +
@@ -323,12 +322,16 @@ std::string MonteCarloHtml(const MonteCarloOptions& options, const MonteCarloRes
           plot.reference_y = 6.0;
           plot.reference_label = "6 (honest)";
         }
-        // Logarithmic only when the values span more than a factor of 30.
+        // Logarithmic only when the values span more than a factor of 30; values below 1e-6 of
+        // the largest (noise 0: rounding) count as 0, which a linear axis shows as such.
         double lo = std::numeric_limits<double>::infinity(), hi = 0.0;
+        for (size_t k : along)
+          for (const SolverStatistics& s : result.settings[k].solvers)
+            if (std::isfinite(metric.get(s))) hi = std::max(hi, metric.get(s));
         for (size_t k : along)
           for (const SolverStatistics& s : result.settings[k].solvers) {
             const double v = metric.get(s);
-            if (std::isfinite(v) && v > 0.0) lo = std::min(lo, v), hi = std::max(hi, v);
+            if (std::isfinite(v) && v > 1e-6 * hi) lo = std::min(lo, v);
           }
         if (plot.log_y && std::isfinite(lo) && hi < 30.0 * lo && lo > 0.0 && !(hi < 1e-3))
           plot.log_y = false;
@@ -341,42 +344,41 @@ std::string MonteCarloHtml(const MonteCarloOptions& options, const MonteCarloRes
           }
           plot.series.push_back(series);
         }
-        html << "<h3>" << HtmlEscape(plot.title) << "</h3>\n";
-        if (axis == "initial") {
-          html << "<p>Initial position error +-";
-          for (size_t k = 0; k < along.size(); ++k)
-            html << (k ? "/" : "")
-                 << FormatSignificant(result.settings[along[k]].setting.initial_error.position_m, 3);
-          html << " m with the angle errors.</p>\n";
-        }
         html << "<div class=\"plots\">" << RenderSmallMultiplesSvg(plot) << "</div>\n";
       }
     }
-    // Time per solve at the scenario's baseline setting (the first of the scenario).
+    // Time per solve at the scenario's baseline setting (the first of the scenario); the
+    // refinement part is in the table.
     for (const SettingResult& setting : result.settings) {
       if (setting.setting.scenario != scenario) continue;
       BarPlot bars;
       bars.title = std::string(EnumName(scenario)) + ": median time per solve (" +
                    setting.setting.axis + " setting)";
       bars.value_label = "microseconds per image (ResectImage wall time)";
-      BarPlot refinement = bars;
-      refinement.title = std::string(EnumName(scenario)) + ": median refinement time (" +
-                         setting.setting.axis + " setting)";
-      refinement.value_label = "microseconds per image (the solver's own iterations)";
       for (const SolverStatistics& s : setting.solvers) {
         bars.labels.push_back(s.solver);
         bars.values.push_back(s.median_seconds * 1e6);
-        refinement.labels.push_back(s.solver);
-        refinement.values.push_back(s.median_refinement_seconds * 1e6);
       }
-      html << "<div class=\"plots\">" << RenderBarPlotSvg(bars) << "\n"
-           << RenderBarPlotSvg(refinement) << "</div>\n";
+      html << "<div class=\"plots\">" << RenderBarPlotSvg(bars) << "</div>\n";
       break;
     }
-    for (size_t k = 0; k < result.settings.size(); ++k)
-      if (result.settings[k].setting.scenario == scenario) {
-        html << RenderHtmlTable(tables[k]);
-      }
+    // Every setting of the scenario in one table: the header once, a section per setting.
+    std::vector<TableSection> sections;
+    const std::string prefix = std::string(EnumName(scenario)) + ": ";
+    std::vector<std::string> header;
+    for (size_t k = 0; k < result.settings.size(); ++k) {
+      if (result.settings[k].setting.scenario != scenario) continue;
+      const TextTable& table = tables[k];
+      if (header.empty()) header = table.header;
+      TableSection section;
+      section.heading = table.title.rfind(prefix, 0) == 0 ? table.title.substr(prefix.size())
+                                                          : table.title;
+      section.rows = table.rows;
+      section.notes = table.notes;
+      sections.push_back(std::move(section));
+    }
+    html << HtmlSectionedTable(std::string(EnumName(scenario)) + ": every setting", header,
+                               sections);
   }
   html << HtmlPageClose();
   return html.str();

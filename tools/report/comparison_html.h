@@ -28,9 +28,11 @@ std::vector<size_t> TiedBest(const std::vector<double>& values, double relative)
 
 // The Monte-Carlo report: the verdict first (per scenario: the solvers that tie for the most
 // accurate at the baseline, the fastest of them, whose covariance is honest, which stays robust at
-// the most outliers), the glossary, then per scenario small multiples (error against noise and
-// outlier fraction, success against initial error and control points, NEES against noise; one
-// panel per solver), time per solve, and the tables of every setting.
+// the most outliers), the glossary, then per scenario one row of small multiples per metric and
+// sweep (a panel per solver side by side: error against noise, outliers and control points,
+// success against outliers, initial error and control points, iterations against initial error,
+// NEES against noise), the time per solve, and one table of every setting (a section each under
+// one header). Compact for print: 7 A4 pages at the default scenarios (render_pages_test.py).
 std::string MonteCarloHtml(const MonteCarloOptions& options, const MonteCarloResult& result,
                            const std::string& command_line);
 

@@ -33,6 +33,9 @@ const char kStyle[] =
     "caption{text-align:left;font-weight:bold;padding:0.3em 0}"
     "th,td{border:1px solid #ccc;padding:0.2em 0.5em;text-align:right;white-space:nowrap}"
     "th{background:#f0f0f0}td:first-child,th:first-child{text-align:left}"
+    "th.group{text-align:center}th.blank{background:none;border:none}"
+    "tr.section th{text-align:left;background:#e3ebf5;white-space:normal}"
+    "tr.note td{text-align:left;white-space:normal;color:#444}"
     "ul.notes{font-size:0.85em;color:#444}"
     ".plots{display:flex;flex-wrap:wrap;gap:1em}svg{background:#fff;border:1px solid #ddd}"
     ".verdict{padding:0.75em 1em;border-radius:6px;margin:0.5em 0}"
@@ -253,6 +256,8 @@ std::string FormatFilm(double value_um) { return ReportFixed(value_um, 2); }
 
 std::string FormatMarkValue(double value, const std::string& unit) {
   if (!std::isfinite(value)) return "n/a";
+  if (unit == "m") return FormatLengthWithUnit(value);
+  if (unit == "deg") return FormatArcSeconds(value) + " arcsec";
   return ReportFixed(value, 2) + " " + unit;
 }
 
@@ -279,27 +284,71 @@ std::string FormatCount(long long count, const std::string& singular, const std:
          (count == 1 ? singular : (plural.empty() ? singular + "s" : plural));
 }
 
+namespace {
+
+// A table's opening, caption and a row of <th> cells; the rows of <td> cells; the notes as a
+// list under a table.
+std::string TableHead(const std::string& title, const std::vector<std::string>& header) {
+  std::string html = "<table>\n";
+  if (!title.empty()) html += "<caption>" + HtmlEscape(title) + "</caption>\n";
+  html += "<tr>";
+  for (const auto& h : header) html += "<th>" + HtmlEscape(h) + "</th>";
+  return html + "</tr>\n";
+}
+
+std::string TableRows(const std::vector<std::vector<std::string>>& rows) {
+  std::string html;
+  for (const auto& row : rows) {
+    html += "<tr>";
+    for (const auto& cell : row) html += "<td>" + HtmlEscape(cell) + "</td>";
+    html += "</tr>\n";
+  }
+  return html;
+}
+
+std::string NotesList(const std::vector<std::string>& notes) {
+  if (notes.empty()) return "";
+  std::string html = "<ul class=\"notes\">\n";
+  for (const auto& note : notes) html += "<li>" + HtmlEscape(note) + "</li>\n";
+  return html + "</ul>\n";
+}
+
+}  // namespace
+
 std::string HtmlTable(const std::string& title, const std::vector<std::string>& header,
                       const std::vector<std::vector<std::string>>& rows,
-                      const std::vector<std::string>& notes) {
-  std::ostringstream html;
-  html << "<table>\n";
-  if (!title.empty()) html << "<caption>" << HtmlEscape(title) << "</caption>\n";
-  html << "<tr>";
-  for (const auto& h : header) html << "<th>" << HtmlEscape(h) << "</th>";
-  html << "</tr>\n";
-  for (const auto& row : rows) {
-    html << "<tr>";
-    for (const auto& cell : row) html << "<td>" << HtmlEscape(cell) << "</td>";
-    html << "</tr>\n";
+                      const std::vector<std::string>& notes,
+                      const std::vector<HeaderGroup>& groups) {
+  std::string head = TableHead(title, header);
+  size_t grouped = 0;
+  for (const HeaderGroup& g : groups) grouped += std::max(0, g.span);
+  if (!groups.empty() && grouped == header.size()) {
+    std::string row = "<tr>";
+    for (const HeaderGroup& g : groups) {
+      if (g.span <= 0) continue;
+      row += "<th" + (g.span > 1 ? " colspan=\"" + std::to_string(g.span) + "\"" : std::string()) +
+             (g.label.empty() ? " class=\"blank\"" : " class=\"group\"") + ">" +
+             HtmlEscape(g.label) + "</th>";
+    }
+    // Above the header row, after the caption.
+    head.insert(head.rfind("<tr>"), row + "</tr>\n");
   }
-  html << "</table>\n";
-  if (!notes.empty()) {
-    html << "<ul class=\"notes\">\n";
-    for (const auto& note : notes) html << "<li>" << HtmlEscape(note) << "</li>\n";
-    html << "</ul>\n";
+  return head + TableRows(rows) + "</table>\n" + NotesList(notes);
+}
+
+std::string HtmlSectionedTable(const std::string& title, const std::vector<std::string>& header,
+                               const std::vector<TableSection>& sections,
+                               const std::vector<std::string>& notes) {
+  const std::string columns = std::to_string(std::max<size_t>(1, header.size()));
+  std::string html = TableHead(title, header);
+  for (const TableSection& section : sections) {
+    html += "<tr class=\"section\"><th colspan=\"" + columns + "\">" +
+            HtmlEscape(section.heading) + "</th></tr>\n" + TableRows(section.rows);
+    for (const auto& note : section.notes)
+      html += "<tr class=\"note\"><td colspan=\"" + columns + "\">" + HtmlEscape(note) +
+              "</td></tr>\n";
   }
-  return html.str();
+  return html + "</table>\n" + NotesList(notes);
 }
 
 const char* PlotColor(size_t index) { return kColors[index % kNumPlotColors]; }
@@ -370,7 +419,8 @@ double PlotAxis::Fraction(double value) const {
 std::vector<double> PlotAxis::Ticks() const {
   std::vector<double> ticks;
   if (log) {
-    const int step = std::max(1, static_cast<int>(std::ceil((hi - lo) / 8.0)));
+    // At most about steps + 3 decades labelled (8 at the default 5).
+    const int step = std::max(1, static_cast<int>(std::ceil((hi - lo) / (std::max(1, steps) + 3.0))));
     for (int e = static_cast<int>(lo); e <= static_cast<int>(hi); e += step) {
       ticks.push_back(std::pow(10.0, e));
       // Few decades: 2 and 5 times each power of ten as well.
@@ -379,7 +429,7 @@ std::vector<double> PlotAxis::Ticks() const {
     }
     return ticks;
   }
-  const double step = NiceStep(hi - lo, 5);
+  const double step = NiceStep(hi - lo, std::max(1, steps));
   for (double t = std::ceil(lo / step - 1e-9) * step; t <= hi + 1e-9 * step; t += step)
     ticks.push_back(std::abs(t) < 1e-12 * step ? 0.0 : t);
   return ticks;
@@ -489,25 +539,54 @@ std::string RenderLinePlotSvg(const LinePlot& plot) {
 }
 
 std::string RenderSmallMultiplesSvg(const LinePlot& plot) {
-  constexpr double kWidth = 300.0, kHeight = 220.0;
+  // A row of panels across the A4 content width: room for the y tick labels and the y title on
+  // the left, the plot's title and the panels' titles above, x ticks and the x title below.
+  constexpr double kWidth = 700.0, kHeight = 150.0, kLeft = 62.0, kRight = 6.0, kGap = 18.0;
+  constexpr double kTop = 36.0, kBottom = 34.0;
   PlotAxis x_axis, y_axis;
   bool empty = false;
   LinePlotAxes(plot, &x_axis, &y_axis, &empty);
-  const PlotFrame frame = SmallPlotFrame(kWidth, kHeight);
+  x_axis.steps = 3;
+  y_axis.steps = 3;
+  const size_t n = std::max<size_t>(1, plot.series.size());
+  const double panel = (kWidth - kLeft - kRight - kGap * (n - 1)) / n;
   std::ostringstream svg;
-  for (size_t s = 0; s < plot.series.size(); ++s) {
-    const std::string title = plot.series[s].label;
-    svg << SvgOpen(kWidth, kHeight, plot.title + ": " + title)
-        << SvgText(kWidth / 2, 18, title, "middle", " font-size=\"13\" font-weight=\"bold\"");
-    svg << SvgAxes(frame, &x_axis, &y_axis, plot.x_label, plot.y_label);
-    svg << ReferenceLine(plot, frame, y_axis);
-    if (empty) svg << SvgText(frame.left + frame.width / 2, frame.top + frame.height / 2, "no data");
+  svg << SvgOpen(kWidth, kHeight, plot.title)
+      << SvgText(kLeft, 14, plot.title, "start", " font-size=\"13\" font-weight=\"bold\"");
+  for (size_t s = 0; s < n; ++s) {
+    PlotFrame frame;
+    frame.left = kLeft + s * (panel + kGap);
+    frame.top = kTop;
+    frame.width = panel;
+    frame.height = kHeight - kTop - kBottom;
+    frame.svg_height = kHeight;
+    svg << "<g font-size=\"10\">";
+    if (s < plot.series.size())
+      svg << SvgText(frame.left + panel / 2, kTop - 6, plot.series[s].label, "middle",
+                     " font-weight=\"bold\"");
+    // Tick labels of y on the first panel only; its grid lines in every one.
+    svg << SvgAxes(frame, &x_axis, s == 0 ? &y_axis : nullptr, "", "");
+    if (s > 0)
+      for (const double t : y_axis.Ticks()) {
+        const double y = frame.Y(y_axis, t);
+        svg << SvgLine(frame.left, y, frame.left + panel, y, "stroke=\"#e5e5e5\"");
+      }
+    svg << ReferenceLine(plot, frame, y_axis) << "</g>";
+    if (empty) svg << SvgText(frame.left + panel / 2, frame.top + frame.height / 2, "no data");
+    if (s >= plot.series.size()) continue;
     for (size_t other = 0; other < plot.series.size(); ++other)
       if (other != s)
         svg << SeriesPolylines(plot.series[other], frame, x_axis, y_axis, "#cccccc", 1.0, "");
     svg << SeriesPolylines(plot.series[s], frame, x_axis, y_axis, PlotColor(s), 2.0, "")
-        << SeriesMarkers(plot.series[s], s, frame, x_axis, y_axis, 3.0) << "</svg>";
+        << SeriesMarkers(plot.series[s], s, frame, x_axis, y_axis, 2.5);
   }
+  // The axis titles once: x under the panels, y along the left edge.
+  const std::string label = std::string(" class=\"") + kAxisLabelClass + "\"";
+  svg << SvgText(kLeft + (kWidth - kLeft - kRight) / 2, kHeight - 6, plot.x_label, "middle", label);
+  const double middle = kTop + (kHeight - kTop - kBottom) / 2;
+  svg << SvgText(12, middle, plot.y_label, "middle",
+                 label + " font-size=\"11\" transform=\"rotate(-90 12 " + Coordinate(middle) + ")\"");
+  svg << "</svg>";
   return svg.str();
 }
 

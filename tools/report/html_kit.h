@@ -55,8 +55,9 @@ std::string FormatCoordinate(double value_m);
 // Image measurements: pixels (px) and film coordinates (um), two decimals.
 std::string FormatPixels(double value_px);
 std::string FormatFilm(double value_um);
-// A value in a mark group's unit ("px", "um", or "sigma" for a group mixing pixel and film marks,
-// solvers/bundle/bundle_statistics.cc): two decimals and the unit.
+// A value in a group's unit (BundleGroupStatistics::unit): marks in "px", "um", or "sigma" for a
+// group mixing pixel and film marks (solvers/bundle/bundle_statistics.cc) with two decimals and
+// the unit; "m" as FormatLengthWithUnit (mm, cm or m); "deg" in arc seconds ("36.0 arcsec").
 std::string FormatMarkValue(double value, const std::string& unit);
 // Angles: degrees with four decimals, arc seconds (of a value in degrees) with one.
 std::string FormatDegrees(double value_deg);
@@ -70,11 +71,33 @@ std::string FormatSignificant(double value, int significant = 3);
 std::string FormatCount(long long count, const std::string& singular,
                         const std::string& plural = "");
 
+// A header cell over `span` columns of a table's header row (e.g. "centre (m)" over X, Y, Z):
+// the quantity and its unit once, short axis names under it.
+struct HeaderGroup {
+  std::string label;  // empty over columns that need no group
+  int span = 1;       // columns (count)
+};
+
 // A <table> with a <caption> (the title, left out when empty) and the notes as a list under it;
-// every cell escaped.
+// every cell escaped. With `groups` (their spans summing to the header's size) a row of grouped
+// header cells above the header.
 std::string HtmlTable(const std::string& title, const std::vector<std::string>& header,
                       const std::vector<std::vector<std::string>>& rows,
-                      const std::vector<std::string>& notes = {});
+                      const std::vector<std::string>& notes = {},
+                      const std::vector<HeaderGroup>& groups = {});
+
+// Rows of a table under a heading row that spans every column (e.g. one section per setting of a
+// sweep under one header), and notes on that section as rows spanning every column after them.
+struct TableSection {
+  std::string heading;
+  std::vector<std::vector<std::string>> rows;
+  std::vector<std::string> notes;
+};
+// One <table>: the caption (left out when empty), the header once, then each section; the notes
+// as a list under it; every cell escaped.
+std::string HtmlSectionedTable(const std::string& title, const std::vector<std::string>& header,
+                               const std::vector<TableSection>& sections,
+                               const std::vector<std::string>& notes = {});
 
 // ------------------------------------------------------------------ SVG primitives
 
@@ -103,9 +126,11 @@ double NiceAtMost(double value);
 struct PlotAxis {
   double lo = 0.0, hi = 1.0;
   bool log = false;
+  int steps = 5;  // about this many tick steps on a linear axis (count; fewer on a narrow panel)
   // Position of a value along the axis, 0 at lo and 1 at hi (log: values <= 0 at lo).
   double Fraction(double value) const;
-  // Tick values: about 5 "nice" steps (linear), or decades with 2 and 5 between few decades (log).
+  // Tick values: about `steps` "nice" steps (linear), or decades with 2 and 5 between few decades
+  // (log).
   std::vector<double> Ticks() const;
 };
 // A linear axis over the data range [lo, hi] widened to whole tick steps (from 0 when
@@ -195,9 +220,11 @@ struct ScatterPlot {
 // <svg> elements (no XML prolog): line plots 680 x 380, bar plots 680 wide, histograms 360 x 220.
 std::string RenderLinePlotSvg(const LinePlot& plot);
 std::string RenderBarPlotSvg(const BarPlot& plot);
-// Small multiples of a line plot instead of overlapping lines: one 300 x 220 <svg> per series, its
-// label the panel's title, the same axes (and reference line) in every panel, the other series
-// drawn thin and grey behind the panel's own for comparison.
+// Small multiples of a line plot instead of overlapping lines: one <svg> 700 wide (the A4 content
+// width) and 150 high holding a row of panels side by side, one per series with its label as the
+// panel's title, on the same axes (y ticks labelled on the first panel, grid lines in all; the
+// plot's title above, the axis titles once), the reference line in every panel and the other
+// series drawn thin and grey behind the panel's own for comparison.
 std::string RenderSmallMultiplesSvg(const LinePlot& plot);
 std::string RenderHistogramSvg(const HistogramPlot& plot);
 // 340 x 240: a small multiple (several side by side in a .plots row).

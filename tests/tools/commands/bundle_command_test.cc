@@ -705,8 +705,8 @@ TEST(BundleCommand, FilmMarksOfACameraWithoutPixelSizeAreAdjustedInMicrometres) 
                             dir);
   ASSERT_EQ(run.exit_code, 0) << run.err;
   EXPECT_NE(run.out.find("tie_marks: "), std::string::npos) << run.out;
-  EXPECT_NE(run.out.find(", stated 5 um, RMS "), std::string::npos) << run.out;  // --film_tie_accuracy
-  EXPECT_NE(run.out.find(", stated 2.5 um, RMS "), std::string::npos) << run.out;
+  EXPECT_NE(run.out.find(", stated 5.00 um, RMS "), std::string::npos) << run.out;  // --film_tie_accuracy
+  EXPECT_NE(run.out.find(", stated 2.50 um, RMS "), std::string::npos) << run.out;
   EXPECT_EQ(run.out.find("px"), std::string::npos) << run.out;
 }
 

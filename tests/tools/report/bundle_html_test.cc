@@ -76,6 +76,13 @@ TEST_F(BundleHtmlTest, SectionsComeInTheOrderASurveyorReadsThem) {
     EXPECT_NE(svg.find("class=\"axis-label\""), std::string::npos) << svg.substr(0, 200);
   }
   EXPECT_GE(plots, 6u);
+  // The cameras' table: each quantity and its unit once over its axes (narrow enough for a 1280 px
+  // screen, tests/tools/report/render_pages_test.py).
+  EXPECT_NE(html.find("<th colspan=\"3\" class=\"group\">projection centre (m)</th>"),
+            std::string::npos);
+  EXPECT_NE(html.find("<th colspan=\"3\" class=\"group\">sigma of the angles (arcsec)</th>"),
+            std::string::npos);
+  EXPECT_NE(html.find("<th>omega</th><th>phi</th><th>kappa</th>"), std::string::npos);
   // Tables of the control and check points, by id; the command line escaped; nothing failed.
   EXPECT_NE(html.find("<td>C001</td>"), std::string::npos);
   EXPECT_NE(html.find("<td>K001</td>"), std::string::npos);

@@ -61,6 +61,17 @@ TEST(HtmlKit, TableEscapesCellsAndListsNotes) {
   EXPECT_EQ(HtmlTable("", {"a"}, {}).find("<caption>"), std::string::npos);
 }
 
+TEST(HtmlKit, GroupedHeaderNamesAQuantityOnceOverItsAxes) {
+  const std::string table = HtmlTable("t", {"image", "X", "Y", "Z"}, {{"a", "1", "2", "3"}}, {},
+                                      {{"", 1}, {"centre (m)", 3}});
+  EXPECT_NE(table.find("<tr><th class=\"blank\"></th><th colspan=\"3\" class=\"group\">centre "
+                       "(m)</th></tr>\n<tr><th>image</th><th>X</th>"),
+            std::string::npos)
+      << table;
+  // Spans that do not cover the header: no group row.
+  EXPECT_EQ(HtmlTable("t", {"a", "b"}, {}, {}, {{"x", 3}}).find("colspan"), std::string::npos);
+}
+
 TEST(HtmlKit, NiceSteps) {
   EXPECT_DOUBLE_EQ(NiceStep(10.0, 5), 2.0);
   EXPECT_DOUBLE_EQ(NiceStep(0.7, 5), 0.2);
@@ -149,6 +160,9 @@ TEST(HtmlKit, NumbersNeverTakeAnExponent) {
   EXPECT_EQ(FormatDegrees(12.3456789), "12.3457");
   EXPECT_EQ(FormatPixels(0.456), "0.46");
   EXPECT_EQ(FormatMarkValue(0.5, "px"), "0.50 px");
+  EXPECT_EQ(FormatMarkValue(0.005, "m"), "5.0 mm");  // a control point group's accuracy
+  EXPECT_EQ(FormatMarkValue(6.97e-05, "m"), "0.1 mm");
+  EXPECT_EQ(FormatMarkValue(0.01, "deg"), "36.0 arcsec");  // an attitude group's
   EXPECT_EQ(FormatUnitless(0.0839), "0.08");
   EXPECT_EQ(TickLabel(0.0001), "0.0001");
   EXPECT_EQ(TickLabel(200000.0), "200000");
@@ -188,22 +202,47 @@ TEST(HtmlKit, HistogramOverAFixedRangeAndScatterPlot) {
   EXPECT_NE(points.find("stroke-dasharray"), std::string::npos);  // the zero line
 }
 
-TEST(HtmlKit, SmallMultiplesDrawOnePanelPerSeriesOnSharedAxes) {
+TEST(HtmlKit, SmallMultiplesDrawOnePanelPerSeriesSideBySideOnSharedAxes) {
   LinePlot plot;
   plot.title = "RMSE vs noise";
   plot.x_label = "noise (px)";
   plot.y_label = "RMSE (m)";
   plot.series = {{"a", {0, 1, 2}, {0.1, 0.2, 0.3}}, {"b", {0, 1, 2}, {0.1, 0.4, 0.9}}};
   const std::string svg = RenderSmallMultiplesSvg(plot);
-  EXPECT_EQ(Count(svg, "<svg"), 2u);
-  EXPECT_EQ(Count(svg, "</svg>"), 2u);
-  // Each panel: its own series in colour, the other in grey behind; both panels with the same
-  // y ticks (the axis covers the larger series).
+  // One <svg> across the A4 content width holding both panels.
+  EXPECT_EQ(Count(svg, "<svg"), 1u);
+  EXPECT_EQ(svg.substr(svg.size() - 6), "</svg>");
+  EXPECT_NE(svg.find("width=\"700\""), std::string::npos);
+  EXPECT_NE(svg.find("aria-label=\"RMSE vs noise\""), std::string::npos);
+  EXPECT_NE(svg.find(">a</text>"), std::string::npos);  // the panels' titles
+  EXPECT_NE(svg.find(">b</text>"), std::string::npos);
+  // Each panel: its own series in colour, the other in grey behind; the axis titles once.
   EXPECT_EQ(Count(svg, "stroke=\"#cccccc\""), 2u);
-  EXPECT_EQ(Count(svg, ">0.8</text>"), 2u);  // a y tick (x ticks: 0 to 2 by 0.5)
-  EXPECT_EQ(Count(svg, ">RMSE (m)</text>"), 2u);
-  EXPECT_EQ(Count(svg, "class=\"axis-label\""), 4u);
-  EXPECT_NE(svg.find("aria-label=\"RMSE vs noise: b\""), std::string::npos);
+  EXPECT_EQ(Count(svg, ">RMSE (m)</text>"), 1u);
+  EXPECT_EQ(Count(svg, ">noise (px)</text>"), 1u);
+  EXPECT_EQ(Count(svg, "class=\"axis-label\""), 2u);
+  // Narrow panels take about 3 tick steps: x 0, 1, 2 in each panel; y (covering the larger
+  // series) 0, 0.5, 1 labelled once, on the first panel.
+  EXPECT_EQ(Count(svg, ">2</text>"), 2u);
+  EXPECT_EQ(Count(svg, ">0.5</text>"), 1u);
+  EXPECT_EQ(Count(svg, ">1</text>"), 3u);
+}
+
+TEST(HtmlKit, SectionedTableHasOneHeaderAndAHeadingRowPerSection) {
+  const std::string table = HtmlSectionedTable(
+      "every setting", {"solver", "RMSE"},
+      {{"noise 0.5 px", {{"taylor", "0.1"}, {"ceres", "0.1"}}, {}},
+       {"noise 1 <px>", {{"taylor", "0.2"}}, {"not solved: 1 x degenerate"}}},
+      {"a note"});
+  EXPECT_EQ(Count(table, "<table>"), 1u);
+  EXPECT_EQ(Count(table, "<th>solver</th>"), 1u);
+  EXPECT_NE(table.find("<caption>every setting</caption>"), std::string::npos);
+  EXPECT_NE(table.find("<tr class=\"section\"><th colspan=\"2\">noise 1 &lt;px&gt;</th></tr>"),
+            std::string::npos);
+  EXPECT_LT(table.find("noise 0.5 px"), table.find("<td>ceres</td>"));
+  EXPECT_NE(table.find("<tr class=\"note\"><td colspan=\"2\">not solved: 1 x degenerate</td></tr>"),
+            std::string::npos);
+  EXPECT_NE(table.find("<li>a note</li>"), std::string::npos);
 }
 
 }  // namespace
