@@ -699,6 +699,23 @@ void CalibrationResults(const BundleAdjustmentOptions& options, const Block& blo
   }
 }
 
+}  // namespace
+
+std::string OverfitMessage(const BundleGroupStatistics& group, const char* accuracy) {
+  std::ostringstream message;
+  message << EnumName(group.group) << " over-fitted: residual RMS " << Format3(group.ratio)
+          << " of the " << accuracy << " accuracy";
+  if (std::isfinite(group.redundancy_share))
+    message << ", redundancy share " << Format3(group.redundancy_share);
+  message << ". The adjustment bends to these priors: too few or too weak tie points, or a "
+             "stated accuracy that is too loose.";
+  if (group.group == kControlPoints)
+    message << " Control points taken as error-free are held fixed with AccuracyX/Y/Z 0.";
+  return message.str();
+}
+
+namespace {
+
 // Control points in the round held fixed (no parameter block adjusted: stated error-free or in the
 // config's constant points).
 int NumFixedControlPoints(const Block& block, const BundlePlan& plan, const BundleRound& round) {
@@ -741,15 +758,7 @@ void GroupStatistics(const BundleAdjustmentOptions& options, const GroupSums* su
     if (prior && (group.ratio < options.statistics.overfit_ratio ||
                   (share_known && group.redundancy_share < options.statistics.overfit_redundancy_share))) {
       group.overfit = true;
-      std::ostringstream message;
-      message << EnumName(group.group) << " over-fitted: residual RMS " << Format3(group.ratio)
-              << " of the stated accuracy";
-      if (share_known) message << ", redundancy share " << Format3(group.redundancy_share);
-      message << ". The adjustment bends to these priors: too few or too weak tie points, or a "
-                 "stated accuracy that is too loose.";
-      if (g == kControlPoints)
-        message << " Control points taken as error-free are held fixed with AccuracyX/Y/Z 0.";
-      group.message = message.str();
+      group.message = OverfitMessage(group, "stated");
     }
     result->groups.push_back(group);
   }

@@ -626,12 +626,29 @@ Block ModelPart(const BundleRun& run) {
 constexpr double kSigma0Bound = 3.0;
 constexpr int kSearchRemovals = 50;
 
+// With --estimate_accuracies sigma0 ends near 1 whatever the data: a group estimated at more than
+// kGrossErrorFactor times its stated accuracy is the same alarm (tools/report/bundle_report.h).
+const BundleGroupStatistics* GroupAbsorbingGrossErrors(const BundleAdjustmentResult& result) {
+  for (const BundleGroupStatistics& g : result.groups)
+    if (AbsorbsGrossErrors(g)) return &g;
+  return nullptr;
+}
+
 int CheckSigma0(const char* command, BundleRun* run) {
   BundleAdjustmentResult& result = run->result;
-  if (!result.summary.IsSolutionUsable() || !(result.summary.sigma0 > kSigma0Bound)) return kGoOn;
+  if (!result.summary.IsSolutionUsable()) return kGoOn;
+  const BundleGroupStatistics* absorbing = GroupAbsorbingGrossErrors(result);
+  if (!(result.summary.sigma0 > kSigma0Bound) && absorbing == nullptr) return kGoOn;
   if (!run->options.robustness.snoop) {
-    std::cerr << "photopose bundle: sigma0 " << result.summary.sigma0 << " is above " << kSigma0Bound
-              << ": the block disagrees with its stated accuracies by more than noise; searching every group for gross errors (data snooping, at most "
+    if (absorbing != nullptr) {
+      std::cerr << "photopose bundle: " << EnumName(absorbing->group) << " estimated at "
+                << FormatUnitless(absorbing->estimated_accuracy.x() / absorbing->stated_accuracy.x(), 1)
+                << " times the stated accuracy";
+    } else {
+      std::cerr << "photopose bundle: sigma0 " << FormatUnitless(result.summary.sigma0, 2) << " is above "
+                << FormatUnitless(kSigma0Bound, 0);
+    }
+    std::cerr << ": the block disagrees with its stated accuracies by more than noise; searching every group for gross errors (data snooping, at most "
               << kSearchRemovals << " removals)\n";
     BundleAdjustmentOptions search = run->options;
     search.robustness.snoop = true;

@@ -503,20 +503,24 @@ std::vector<FrameRecord> BundleFrames(const Block& block, const BundleAdjustment
   return frames;
 }
 
-std::string GrossErrorsAbsorbed(const BundleGroupStatistics& group) {
+bool AbsorbsGrossErrors(const BundleGroupStatistics& group) {
   const double stated = group.stated_accuracy.x(), estimated = group.estimated_accuracy.x();
-  if (!(stated > 0.0) || !(estimated > kGrossErrorFactor * stated)) return "";
+  return stated > 0.0 && estimated > kGrossErrorFactor * stated;
+}
+
+std::string GrossErrorsAbsorbed(const BundleGroupStatistics& group) {
+  if (!AbsorbsGrossErrors(group)) return "";
+  const double stated = group.stated_accuracy.x(), estimated = group.estimated_accuracy.x();
   std::string text = std::string(EnumName(group.group)) + ": the estimated accuracy " +
                      FormatMarkValue(estimated, group.unit) + " is " +
                      FormatUnitless(estimated / stated, 1) + " times the stated " +
                      FormatMarkValue(stated, group.unit) +
                      ": gross errors are far likelier than a misstated accuracy, and the "
-                     "estimation absorbed them into every observation of the group instead of "
-                     "finding them (the search for gross errors starts only when sigma0 stays "
-                     "above 3, which the estimation prevents)";
+                     "estimation absorbed them into every observation of the group (sigma0 "
+                     "ends near 1 and does not show them)";
   if (group.group == kControlMarks)
     text += "; check marks are tested with this accuracy too";
-  return text + ". Run with --snoop to remove the gross errors before the estimation.";
+  return text + ". Check the group's observations with the largest |w|, or state its accuracy.";
 }
 
 std::vector<std::string> BundleConsoleLines(const Block& block, const BundleAdjustmentResult& result,

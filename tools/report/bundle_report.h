@@ -40,12 +40,14 @@ std::string BundleItemName(const Block& block, BundleGroup group, int item);
 const char* BundleAxisName(BundleGroup group, int axis);
 
 // Variance component estimation (--estimate_accuracies) on a group whose estimated accuracy is
-// more than kGrossErrorFactor times its stated one: in words, that gross errors are far likelier
-// than a misstated accuracy and the estimation absorbed them (it rescales every observation of
-// the group; the automatic search for gross errors starts only when sigma0 stays above 3, which
-// the rescaling prevents), with the remedy (--snoop removes them before the estimation). Empty
-// otherwise. The console and the HTML page state it.
+// more than kGrossErrorFactor times its stated one (AbsorbsGrossErrors): gross errors are far
+// likelier than a misstated accuracy, and the estimation absorbed them (it rescales every
+// observation of the group, so sigma0 ends near 1 and does not show them). `photopose bundle`
+// then searches for them as it does when sigma0 stays above 3 (data snooping); GrossErrorsAbsorbed
+// states, in words, what is still so after that search, with the remedy. Empty otherwise. The
+// console and the HTML page state it.
 constexpr double kGrossErrorFactor = 3.0;
+bool AbsorbsGrossErrors(const BundleGroupStatistics& group);
 std::string GrossErrorsAbsorbed(const BundleGroupStatistics& group);
 
 // The JSON report; every key is documented in docs/formats.md.

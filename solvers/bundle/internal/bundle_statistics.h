@@ -122,6 +122,11 @@ struct GroupVariance {
                                             const BundleState& state, const BundleRound& round,
                                             double* factorization_seconds);
 
+// The over-fitting verdict of a prior group in words: its residual RMS as group.ratio of the
+// `accuracy` ("stated", or "estimated" once variance components replaced it) accuracy, its
+// redundancy share, and what to do.
+std::string OverfitMessage(const BundleGroupStatistics& group, const char* accuracy);
+
 // The images' and cameras' own uncertainty carried into the covariance of a check point: given
 // its rays, the marks they come from (indices into Block::marks) and its intersection, the
 // unscaled covariance (m^2) that replaces the intersection's a-priori one.

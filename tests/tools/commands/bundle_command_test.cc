@@ -29,6 +29,7 @@ using testing::ReadFrames;
 using testing::RunCli;
 using testing::ScratchDir;
 using testing::SharedDataPath;
+using testing::SourcePath;
 using testing::SplitCsvText;
 
 // A small block: 3 lines of 6 images, tie blunders, written into dir/block.
@@ -283,6 +284,32 @@ TEST(BundleCommand, ColmapModelInColmapModelOutWithoutTheRejectedMarks) {
   std::vector<double> errors;
   MarkReprojectionErrors(out, &errors);
   EXPECT_LT(*std::max_element(errors.begin(), errors.end()), 5.0);
+}
+
+// With --estimate_accuracies sigma0 ends near 1 whatever the data, so the search for gross errors
+// cannot wait for sigma0 > 3: a group estimated at more than 3 times its stated accuracy starts it
+// (the bundled example: 12 control-mark blunders of 20-200 px would make the control marks 37 times
+// their 0.5 px and move the check points by a metre).
+TEST(BundleCommand, EstimatedAccuraciesThatAbsorbGrossErrorsStartTheSearch) {
+  const std::string dir = ScratchDir();
+  const CliRun run = RunCli("bundle --cameras=" + SourcePath("examples/cameras.csv") + " --points=" +
+                                SourcePath("examples/points.csv") + " --marks=" +
+                                SourcePath("examples/marks.csv") + " --frames=" +
+                                SourcePath("examples/frames_approx.csv") +
+                                " --estimate_accuracies --out=" + dir + "/f.csv --report=" + dir +
+                                "/r.json",
+                            dir);
+  ASSERT_EQ(run.exit_code, 0) << run.err;
+  EXPECT_NE(run.err.find("control_marks estimated at"), std::string::npos) << run.err;
+  EXPECT_NE(run.err.find("searching every group for gross errors"), std::string::npos) << run.err;
+  const nlohmann::json report = nlohmann::json::parse(ReadFile(dir + "/r.json"));
+  const nlohmann::json& rmse = report["check_rmse_m"];
+  EXPECT_GT(rmse["count"].get<int>(), 25);
+  for (const char* axis : {"x", "y", "z"}) EXPECT_LT(rmse[axis].get<double>(), 0.05) << axis;  // 1 m before
+  for (const auto& group : report["groups"]) {
+    if (group["name"] != "control_marks") continue;
+    EXPECT_LT(group["estimated_accuracy"].get<double>(), 1.0);  // px; 18.6 before
+  }
 }
 
 // A relative block's covariance datum: the inner constraints on the points by default, the

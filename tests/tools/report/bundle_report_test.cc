@@ -92,7 +92,7 @@ TEST(BundleReport, AnEstimateFarAboveTheStatedAccuracyIsCalledGrossErrors) {
             std::string::npos)
       << text;
   EXPECT_NE(text.find("check marks are tested with this accuracy"), std::string::npos);
-  EXPECT_NE(text.find("--snoop"), std::string::npos);
+  EXPECT_NE(text.find("largest |w|"), std::string::npos);  // what to check after the search
   BundleAdjustmentResult result = TinyAndLargeFigures();
   result.groups.push_back(marks);
   bool warned = false;
