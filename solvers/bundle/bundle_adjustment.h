@@ -198,6 +198,14 @@ struct BundleStatisticsOptions {
   // Posterior covariances, redundancy numbers and everything that needs them, at every block size
   // (kNone: not computed).
   BundleCovarianceMethod covariances = BundleCovarianceMethod::kSelectedInversion;
+  // A parameter of an absolute block whose sigma exceeds this many times (unitless) what the
+  // observations would give it were every other parameter known (sqrt(C_jj S_jj) on the reduced
+  // camera system) is listed as weakly determined: it trades off with others nearly exactly (a
+  // lever arm against the flying height, an image turning about a line of points), so its value
+  // rests on noise even though the normal matrix is regular. 1000: the blocks of the tests reach
+  // 250 (DBAT's close-range self-calibration 76, a GNSS-only block with lever arm and focal length
+  // 360).
+  double weak_sigma_inflation = 1000.0;
   // The datum of a relative block's orientation and point covariances.
   BundleRelativeCovariance relative_covariance = BundleRelativeCovariance::kInnerPoints;
   // A prior group is flagged `overfit` when its RMS / stated accuracy is below overfit_ratio
@@ -421,6 +429,12 @@ struct BundlePointResult {
   std::string message;  // e.g. why a check point could not be intersected
 };
 
+// A weakly determined parameter (BundleStatisticsOptions::weak_sigma_inflation).
+struct BundleWeakParameter {
+  std::string parameter;         // "image 'IMG_12': omega", "the lever arm's z (camera frame)", ...
+  double sigma_inflation = 0.0;  // its sigma over what its own observations give it (unitless)
+};
+
 struct BundleCalibrationResult {
   int camera = -1;
   std::vector<std::string> names;    // estimated parameters
@@ -504,6 +518,8 @@ struct BundleAdjustmentResult {
   std::vector<BundlePointResult> points;  // per Block::points
   std::vector<BundleGroupStatistics> groups;
   std::vector<BundleCalibrationResult> calibration;
+  // Weakly determined parameters of an absolute block, the worst first (empty without covariances).
+  std::vector<BundleWeakParameter> weakly_determined;
   std::vector<BundleRejectedMark> rejected_marks;
   // Check marks rejected by the w-test of their point's intersection, in order of rejection.
   std::vector<BundleRejectedCheckMark> rejected_check_marks;

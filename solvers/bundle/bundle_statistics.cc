@@ -343,6 +343,7 @@ void ResetStatistics(const Block& block, const BundlePlan& plan, BundleAdjustmen
   result->mark_residuals.assign(block.marks.size(), Eigen::Vector2d::Constant(kNaN));
   result->groups.clear();
   result->calibration.clear();
+  result->weakly_determined.clear();
   result->observations.clear();
   result->num_uncontrolled = 0;
   summary.num_images = static_cast<int>(block.images.size());
@@ -815,18 +816,11 @@ Eigen::Matrix3d PropagatedCheckPointCovariance(const Block& block, const BundleS
   return N_inverse + A * reduced.C.Solve(A.transpose());
 }
 
-// What a singular normal matrix leaves undetermined, in words: the parameter of the column where
-// the factorisation found the rank defect (its image, camera or the lever arm, and its name in the
-// block's tangent space), or the point whose rays do not determine it.
-std::string Undetermined(const Block& block, const BundlePlan& plan, const BundleState& state,
-                         const BundleRound& round, const ReducedNormals& reduced) {
-  constexpr const char* kNotDetermined = " is not determined by the observations";
-  if (reduced.undetermined_point >= 0) {
-    const int p = round.point_of_block[reduced.undetermined_point];
-    return "point '" + block.points[p].id + "' is not determined by its rays";
-  }
-  const int b = reduced.singular_block, t = reduced.singular_component;
-  if (b < 0 || t < 0) return "a combination of parameters" + std::string(kNotDetermined);
+// The parameter of tangent component t of e block b, in words: "image 'IMG_12': omega", "camera
+// 'c1': the self-calibrated K1", "the lever arm's z (camera frame)"; empty when not known.
+std::string ParameterName(const Block& block, const BundlePlan& plan, const BundleState& state,
+                          const BundleRound& round, int b, int t) {
+  if (b < 0 || t < 0) return "";
   const double* e = round.e_blocks[b];
   for (size_t i = 0; i < block.images.size(); ++i) {
     if (state.eo[i].data() != e) continue;
@@ -836,20 +830,58 @@ std::string Undetermined(const Block& block, const BundlePlan& plan, const Bundl
     const int held =
         static_cast<int>(i) == plan.relative_scale_image ? plan.relative_scale_axis : 6;
     const int ambient = t >= held ? t + 1 : t;
-    return "image '" + block.images[i].name + "': " + kNames[std::min(ambient, 5)] + kNotDetermined;
+    return "image '" + block.images[i].name + "': " + kNames[std::min(ambient, 5)];
   }
   for (size_t c = 0; c < block.cameras.size(); ++c) {
     if (state.cameras[c].data() != e || t >= static_cast<int>(plan.calibrated[c].size())) continue;
     const std::vector<std::string> names = CameraModelParamNames(block.cameras[c].model);
     return "camera '" + block.cameras[c].camera_id + "': the self-calibrated " +
-           names[plan.calibrated[c][t]] + kNotDetermined;
+           names[plan.calibrated[c][t]];
   }
   if (e == state.lever.data()) {
     static const char* const kAxes[] = {"x", "y", "z"};
-    return std::string("the lever arm's ") + kAxes[std::min(t, 2)] + " (camera frame)" +
-           kNotDetermined;
+    return std::string("the lever arm's ") + kAxes[std::min(t, 2)] + " (camera frame)";
   }
-  return "a combination of parameters" + std::string(kNotDetermined);
+  return "";
+}
+
+// What a singular normal matrix leaves undetermined, in words: the parameter of the column where
+// the factorisation found the rank defect, or the point whose rays do not determine it.
+std::string Undetermined(const Block& block, const BundlePlan& plan, const BundleState& state,
+                         const BundleRound& round, const ReducedNormals& reduced) {
+  constexpr const char* kNotDetermined = " is not determined by the observations";
+  if (reduced.undetermined_point >= 0) {
+    const int p = round.point_of_block[reduced.undetermined_point];
+    return "point '" + block.points[p].id + "' is not determined by its rays";
+  }
+  const std::string name = ParameterName(block, plan, state, round, reduced.singular_block,
+                                         reduced.singular_component);
+  return (name.empty() ? "a combination of parameters" : name) + kNotDetermined;
+}
+
+// Parameters of an absolute block whose sigma the trade-off with others inflates beyond
+// options.statistics.weak_sigma_inflation (the datum is physical there; a relative block's gauge
+// inflates its parameters by construction), the worst first.
+void WeaklyDeterminedParameters(const BundleAdjustmentOptions& options, const Block& block,
+                                const BundlePlan& plan, const BundleState& state,
+                                const BundleRound& round, const ReducedNormals& reduced,
+                                BundleAdjustmentResult* result) {
+  if (plan.datum != BundleDatum::kControl) return;
+  const double limit = options.statistics.weak_sigma_inflation;
+  for (int b = 0; b < reduced.C.num_blocks(); ++b) {
+    const Eigen::VectorXd inflation = reduced.C.VarianceInflation(b).cwiseSqrt();
+    for (int t = 0; t < inflation.size(); ++t) {
+      if (!(inflation[t] > limit)) continue;
+      BundleWeakParameter weak;
+      weak.parameter = ParameterName(block, plan, state, round, b, t);
+      weak.sigma_inflation = inflation[t];
+      result->weakly_determined.push_back(weak);
+    }
+  }
+  std::sort(result->weakly_determined.begin(), result->weakly_determined.end(),
+            [](const BundleWeakParameter& a, const BundleWeakParameter& b) {
+              return a.sigma_inflation > b.sigma_inflation;
+            });
 }
 
 // Control and check points: the shared table (internal/bundle_statistics.h), check points
@@ -926,6 +958,7 @@ Status ComputeBundleStatistics(const BundleAdjustmentOptions& options, const Blo
     ObservationDiagnostics(options, block, plan, state, round, reduced,
                            options.statistics.observation_diagnostics, sums, result, variance);
     CalibrationResults(options, block, plan, state, &reduced, variance_factor, result);
+    WeaklyDeterminedParameters(options, block, plan, state, round, reduced, result);
   } else {
     for (int g = 0; g < kNumBundleGroups; ++g) variance->redundancy[g] = kNaN;
     CalibrationResults(options, block, plan, state, nullptr, variance_factor, result);

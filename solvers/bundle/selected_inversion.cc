@@ -406,6 +406,14 @@ bool SelectedInverse::Blocks(const std::vector<int>& blocks, Eigen::MatrixXd* ou
   return true;
 }
 
+Eigen::VectorXd SelectedInverse::VarianceInflation(int b) const {
+  const int size = block_size(b);
+  Eigen::MatrixXd C;
+  if (!Block(b, b, &C)) return Eigen::VectorXd::Constant(size, std::numeric_limits<double>::quiet_NaN());
+  const Eigen::VectorXd s = scale_.segment(block_start_[b], size);
+  return C.diagonal().cwiseQuotient(s.cwiseAbs2());
+}
+
 Eigen::MatrixXd SelectedInverse::Solve(const Eigen::MatrixXd& rhs) const {
   if (sparse_ == nullptr && dense_.size() == 0)  // not computed (or factor_only): no figure
     return Eigen::MatrixXd::Constant(rhs.rows(), rhs.cols(),

@@ -434,6 +434,9 @@ std::string VerdictsHtml(const Block& block, const BundleAdjustmentResult& resul
       html << "<div class=\"verdict bad\"><b>Gross errors absorbed:</b> " << HtmlEscape(gross)
            << "</div>\n";
   }
+  const std::string weak = WeaklyDeterminedWarning(result);
+  if (!weak.empty())
+    html << "<div class=\"verdict bad\"><b>Weakly determined:</b> " << HtmlEscape(weak) << "</div>\n";
   if (!weights.empty()) {
     html << "<div class=\"verdict note\"><b>Stated accuracies the data contradict</b> (RMS / "
             "stated outside "

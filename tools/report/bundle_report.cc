@@ -287,6 +287,10 @@ json BundleReportJson(const Block& block, const BundleAdjustmentResult& result,
                            {"high_correlations", c.high_correlations}});
   }
   report["calibration"] = calibration;
+  json weak = json::array();
+  for (const BundleWeakParameter& w : result.weakly_determined)
+    weak.push_back({{"parameter", w.parameter}, {"sigma_inflation", Number(w.sigma_inflation)}});
+  report["weakly_determined"] = weak;
   if (result.lever_arm_m) report["lever_arm_m"] = Vector3(*result.lever_arm_m);
 
   json rejected = json::array();
@@ -523,6 +527,20 @@ std::string GrossErrorsAbsorbed(const BundleGroupStatistics& group) {
   return text + ". Check the group's observations with the largest |w|, or state its accuracy.";
 }
 
+std::string WeaklyDeterminedWarning(const BundleAdjustmentResult& result) {
+  const std::vector<BundleWeakParameter>& weak = result.weakly_determined;
+  if (weak.empty()) return "";
+  std::string text = FormatCount(static_cast<long long>(weak.size()), "parameter") +
+                     " trade off nearly exactly with others: ";
+  for (size_t k = 0; k < weak.size() && k < 5; ++k)
+    text += (k == 0 ? "" : ", ") + weak[k].parameter + " (sigma " +
+            FormatSignificant(weak[k].sigma_inflation, 2) + " times what its own observations give)";
+  if (weak.size() > 5) text += ", ...";
+  return text + ". The normal matrix is regular, but these values rest on noise and their sigmas "
+                "say so: add observations that separate them (control points, oblique images, "
+                "marks spread over the image) or hold them fixed.";
+}
+
 std::vector<std::string> BundleConsoleLines(const Block& block, const BundleAdjustmentResult& result,
                                             const BundleReportContext& context) {
   // Every number through the report kit's formatters (tools/report/html_kit.h): fixed units,
@@ -634,6 +652,8 @@ std::vector<std::string> BundleConsoleLines(const Block& block, const BundleAdju
     lines.push_back("snooping removed the " + BundleItemName(block, step.group, step.item) + " (" +
                     BundleAxisName(step.group, step.axis) + ", |w| = " +
                     FormatUnitless(step.normalized, 1) + ")");
+  const std::string weak = WeaklyDeterminedWarning(result);
+  if (!weak.empty()) lines.push_back("warning: weakly determined: " + weak);
   if (result.num_uncontrolled > 0)
     lines.push_back(std::to_string(result.num_uncontrolled) +
                     " observations are uncontrolled (redundancy number below " +

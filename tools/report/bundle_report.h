@@ -50,6 +50,11 @@ constexpr double kGrossErrorFactor = 3.0;
 bool AbsorbsGrossErrors(const BundleGroupStatistics& group);
 std::string GrossErrorsAbsorbed(const BundleGroupStatistics& group);
 
+// The weakly determined parameters of a result (BundleAdjustmentResult::weakly_determined) in
+// words, the worst five named, with what it means; empty when there are none. The console and the
+// HTML page state it.
+std::string WeaklyDeterminedWarning(const BundleAdjustmentResult& result);
+
 // The JSON report; every key is documented in docs/formats.md.
 nlohmann::json BundleReportJson(const Block& block, const BundleAdjustmentResult& result,
                                 const BundleReportContext& context);

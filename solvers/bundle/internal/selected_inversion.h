@@ -77,6 +77,11 @@ class SelectedInverse {
   bool singular() const { return singular_; }
   int singular_column() const { return singular_column_; }
 
+  // Per column j of block b, C_jj S_jj: how many times the parameter's variance exceeds what it
+  // would be were every other parameter known (1 / (1 - R_j^2), R_j its multiple correlation with
+  // the rest; the diagonal of the Jacobi-scaled inverse). NaN when not computed.
+  Eigen::VectorXd VarianceInflation(int b) const;
+
   int size() const { return static_cast<int>(scale_.size()); }
   int num_blocks() const { return static_cast<int>(block_start_.size()) - 1; }
   int block_size(int b) const { return block_start_[b + 1] - block_start_[b]; }

@@ -1243,6 +1243,38 @@ TEST(BundleAdjustSingular, TheSameBlockWithOneMarkOffTheLineAdjusts) {
       BundleAdjust(BundleAdjustmentOptions(), BundleAdjustmentConfig(), &line.block, &result).ok());
   EXPECT_TRUE(result.summary.IsSolutionUsable()) << result.summary.message;
   EXPECT_TRUE(result.images[image].has_covariance);
+  EXPECT_TRUE(result.weakly_determined.empty())
+      << result.weakly_determined.front().parameter << " "
+      << result.weakly_determined.front().sigma_inflation;
+}
+
+// The image on the line with a camera-position prior of 10 m: the normal matrix is regular (the
+// prior holds the centre on its circle within 10 m, so the turn about the line within ~10 m / the
+// flying height), the block adjusts, and that image's rotation about the line is listed as weakly
+// determined, nothing else.
+TEST(BundleAdjustSingular, ANearlySingularImageIsListedAsWeaklyDetermined) {
+  testing::SingularBlock data = testing::BlockWithAnImageOnALine();
+  BlockImage& image = data.block.images[data.image];
+  image.measured_center_m = data.truth.eo[data.image].center_in_ground();
+  image.center_accuracy_m = Eigen::Vector3d::Constant(10.0);
+  BundleAdjustmentResult result;
+  ASSERT_TRUE(
+      BundleAdjust(BundleAdjustmentOptions(), BundleAdjustmentConfig(), &data.block, &result).ok());
+  ASSERT_TRUE(result.summary.IsSolutionUsable()) << result.summary.message;
+  ASSERT_FALSE(result.weakly_determined.empty());
+  const std::string named = "image '" + image.name + "': ";
+  for (const BundleWeakParameter& weak : result.weakly_determined) {
+    EXPECT_EQ(weak.parameter.rfind(named, 0), 0u) << weak.parameter;
+    EXPECT_GT(weak.sigma_inflation, 1000.0);
+  }
+  EXPECT_LT(result.weakly_determined.size(), 6u);
+  // Its sigma says so: its rotation about the line (omega) 100 times less certain than a
+  // neighbour's (the marks are exact here, so sigma0 and every sigma are tiny; the ratio is not).
+  const int neighbour = data.image + 1;
+  EXPECT_GT(std::sqrt(result.images[data.image].covariance(3, 3)),
+            100.0 * std::sqrt(result.images[neighbour].covariance(3, 3)));
+  const std::string listed = result.weakly_determined.front().parameter;
+  EXPECT_TRUE(listed == named + "omega" || listed == named + "Y") << listed;
 }
 
 }  // namespace
