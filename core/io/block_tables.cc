@@ -241,6 +241,18 @@ bool NearTheImage(const FrameCamera& camera, const Eigen::Vector2d& corner_colum
          r <= (1.0 + fraction) * h;
 }
 
+// A Row of `file`:`line` in the tables' row convention, counted down (rows counted up need the
+// camera's NRows).
+Status RowCountedDownAt(const BlockTables& tables, const FrameCamera& camera,
+                        const std::string& file, int line, double* row) {
+  if (tables.pixel_rows == PixelRows::kDown) return Status::Ok();
+  if (camera.n_rows <= 0)
+    return Status::Error(Where(file, line, "Row") + "rows counted up need NRows in the camera " +
+                         "table (camera " + Quoted(camera.camera_id) + " has none)");
+  *row = RowCountedDown(*row, camera.n_rows, tables.pixel_origin);
+  return Status::Ok();
+}
+
 // The steps of AssembleBlock, each over the tables and the block assembled so far. Name -> index
 // maps hold views of the tables' strings (which outlive them): a block has millions of marks, each
 // looked up by its raster and point.
@@ -294,7 +306,13 @@ Status BlockAssembler::AddCameras() {
       return Status::Error(Where(tables_.cameras_file, 0, "CameraID") + "duplicate camera " +
                            Quoted(table.camera_id));
     PHOTOPOSE_RETURN_IF_ERROR(CheckEarthCurvatureFrame(tables_, table));
-    result_.cameras.push_back(CameraOf(table));
+    FrameCamera rows_down = table;
+    if (tables_.pixel_rows == PixelRows::kUp) {
+      const Status flipped = AffineWithRowsFlipped(&rows_down);
+      if (!flipped.ok())
+        return Status::Error(Where(tables_.cameras_file, 0, "NRows") + flipped.message());
+    }
+    result_.cameras.push_back(CameraOf(rows_down));
   }
   return Status::Ok();
 }
@@ -410,9 +428,14 @@ Status BlockAssembler::FitScannedFilm() {
                            "image " + Quoted(raster) + " has no marks and no frames row");
     }
     BlockImage& image = result_.images[found->second];
+    const FrameCamera& camera = result_.cameras[image.camera].table;
+    std::vector<MeasuredFiducial> rows_down = measured;
+    for (MeasuredFiducial& f : rows_down)
+      PHOTOPOSE_RETURN_IF_ERROR(
+          RowCountedDownAt(tables_, camera, tables_.fiducials_file, f.line, &f.column_row.y()));
     FiducialFit fit;
-    PHOTOPOSE_RETURN_IF_ERROR(FitFiducials(result_.cameras[image.camera].table, measured,
-                                           fit_options, tables_.fiducials_file, &fit));
+    PHOTOPOSE_RETURN_IF_ERROR(
+        FitFiducials(camera, rows_down, fit_options, tables_.fiducials_file, &fit));
     image.fiducial_fit = std::move(fit);
   }
   return Status::Ok();
@@ -423,6 +446,8 @@ Status BlockAssembler::PixelMark(const ImageMark& row, const FrameCamera& camera
   const double origin_shift = tables_.pixel_origin == PixelOrigin::kCenter ? 0.5 : 0.0;
   mark->unit = MarkUnit::kPixel;
   mark->measured = *row.column_row;
+  PHOTOPOSE_RETURN_IF_ERROR(
+      RowCountedDownAt(tables_, camera, tables_.marks_file, row.line, &mark->measured.y()));
   const Status film = FilmFromPixel(camera, mark->measured, tables_.pixel_origin, &mark->observation);
   if (!film.ok()) return Status::Error(Where(tables_.marks_file, row.line, "Column") + film.message());
   const Eigen::Vector2d corner = mark->measured + Eigen::Vector2d::Constant(origin_shift);
@@ -505,10 +530,15 @@ Status ReadBlock(const BlockFiles& files, Block* block) {
   BlockTables tables;
   tables.cameras_file = files.cameras;
   tables.pixel_origin = files.pixel_origin;
+  tables.pixel_rows = files.pixel_rows;
   tables.frames_rotation = files.rotation;
   tables.max_fiducial_residual_um = files.max_fiducial_residual_um;
   PHOTOPOSE_RETURN_IF_ERROR(ReadCameraTable(files.cameras, &tables.cameras));
   if (!files.gcp_list.empty()) {
+    if (files.pixel_rows == PixelRows::kUp)
+      return Status::Error(files.gcp_list + ": rows counted up apply to a marks table; a " +
+                           "gcp_list.txt counts pixel rows down from the top-left corner " +
+                           "(OpenDroneMap's definition)");
     GcpList gcp;
     PHOTOPOSE_RETURN_IF_ERROR(ReadGcpList(files.gcp_list, &gcp));
     tables.points = std::move(gcp.points);

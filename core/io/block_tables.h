@@ -30,6 +30,7 @@
 #include "core/rotation.h"
 #include "core/status.h"
 #include "core/fiducials.h"
+#include "core/pixel_rows.h"
 #include "core/io/tables.h"
 
 namespace photopose {
@@ -48,6 +49,10 @@ struct BlockTables {
   // File names for messages ("file:line: column: what").
   std::string cameras_file, points_file, marks_file, frames_file, fiducials_file;
   PixelOrigin pixel_origin = PixelOrigin::kCorner;
+  // Which way the marks', the measured fiducials' and the camera table's A0-B2 Row counts. Rows
+  // counted up are turned to rows counted down here (RowCountedDown, AffineWithRowsFlipped), with
+  // the camera's NRows: the block holds rows counted down.
+  PixelRows pixel_rows = PixelRows::kDown;
   // A pixel mark farther outside its image than this fraction of the image size (per axis) is
   // refused (when the camera gives the size): it cannot be a measurement in that image.
   double max_outside_fraction = kMarkOutsideImageFraction;
@@ -70,6 +75,10 @@ struct BlockTables {
 //    observation_units_per_unit is the local um per pixel of that map (FilmUmPerPixel). A pixel mark
 //    of a camera without PixelSize/NRows/NColumns (or A0-B2) is refused at its own line, as is one
 //    farther than max_outside_fraction outside its image.
+//  - Rows counted up (pixel_rows kUp): every pixel mark's and measured fiducial's Row is counted
+//    down with its camera's NRows (refused at its line, field Row, when the camera has none), and
+//    every camera's A0-B2 are turned to rows counted down (a camera with A0-B2 and no NRows is
+//    refused); Block::marks[].measured and the cameras' tables then count rows down.
 // Outputs are written only on success.
 Status AssembleBlock(const BlockTables& tables, Block* block);
 
@@ -83,6 +92,9 @@ struct BlockFiles {
   std::string fiducials;  // optional measured fiducials of scanned film (core/fiducials.h)
   RotationConvention rotation = RotationConvention::kSeed;  // of the frames table
   PixelOrigin pixel_origin = PixelOrigin::kCorner;          // of the marks' Column/Row
+  // Of the marks', fiducials' and A0-B2's Row (see BlockTables); rows counted up are refused with
+  // a gcp_list, whose format counts them down.
+  PixelRows pixel_rows = PixelRows::kDown;
   double max_fiducial_residual_um = 30.0;                   // see BlockTables
 };
 Status ReadBlock(const BlockFiles& files, Block* block);

@@ -31,7 +31,7 @@ PythonBlock Assemble(BlockTables tables) {
 PythonBlock FromTables(std::vector<FrameCamera> cameras, std::vector<GroundPoint> points,
                        std::vector<ImageMark> marks, std::vector<FrameRecord> frames,
                        RotationConvention frames_rotation, PixelOrigin pixel_origin,
-                       const std::string& crs) {
+                       const std::string& crs, PixelRows pixel_rows) {
   BlockTables tables;
   tables.cameras = std::move(cameras);
   tables.points = std::move(points);
@@ -39,6 +39,7 @@ PythonBlock FromTables(std::vector<FrameCamera> cameras, std::vector<GroundPoint
   tables.frames = std::move(frames);
   tables.frames_rotation = frames_rotation;
   tables.pixel_origin = pixel_origin;
+  tables.pixel_rows = pixel_rows;
   tables.crs = crs;
   tables.cameras_file = kCamerasName;
   tables.points_file = kPointsName;
@@ -75,7 +76,7 @@ PythonBlock FromArrays(const std::vector<FrameCamera>& cameras, const py::object
                        MarkUnit mark_unit, const py::object& mark_accuracy,
                        const py::object& mark_camera_ids_value, std::vector<FrameRecord> frames,
                        RotationConvention frames_rotation, PixelOrigin pixel_origin,
-                       const std::string& crs) {
+                       PixelRows pixel_rows, const std::string& crs) {
   const std::vector<std::string> point_ids = Strings(point_ids_value, "point_ids");
   const std::vector<Eigen::Vector3d> positions = Points3(points_value, "points_in_ground");
   if (positions.size() != point_ids.size())
@@ -133,7 +134,7 @@ PythonBlock FromArrays(const std::vector<FrameCamera>& cameras, const py::object
     marks[i].line = static_cast<int>(i) + 1;
   }
   return FromTables(cameras, std::move(points), std::move(marks), std::move(frames),
-                    frames_rotation, pixel_origin, crs);
+                    frames_rotation, pixel_origin, crs, pixel_rows);
 }
 
 const Block& B(const PythonBlock& b) { return b.block; }
@@ -263,15 +264,18 @@ py::class_<PythonBlock> BindBlockClass(py::module_& m) {
 A photogrammetric block: cameras, images (with their exterior orientation when known), ground
 points (control, check, tie) and image marks. Arrays come out as copies: N x 3 points (m, ground
 frame), N x 2 marks in their own unit (px: Column/Row, (0, 0) the image's top-left corner, Row
-down; um: film), N x 6 poses [X0, Y0, Z0 (m), omega, phi, kappa (rad, seed: R_camera_from_ground
+down, also when read with pixel_rows='up'; um: film), N x 6 poses [X0, Y0, Z0 (m), omega, phi, kappa (rad, seed: R_camera_from_ground
 = Rx Ry Rz)], NaN where a value is unset. Build one with Block.from_arrays, Block.from_tables,
 read_block, read_colmap_model, read_bal_problem, read_bundler_file or simulate_block.)doc");
   block.def_static("from_tables", &FromTables, py::arg("cameras"), py::arg("points"),
                    py::arg("marks"), py::arg("frames") = std::vector<FrameRecord>(),
                    py::arg("frames_rotation") = RotationConvention::kSeed,
                    py::arg("pixel_origin") = PixelOrigin::kCorner, py::arg("crs") = "",
+                   py::arg("pixel_rows") = PixelRows::kDown,
                    "Assembles the tables' records (AssembleBlock): marks paired with points, images "
-                   "with cameras and frames, every mark in its camera model's unit.");
+                   "with cameras and frames, every mark in its camera model's unit; with "
+                   "pixel_rows='up' the marks' Row and the cameras' A0-B2 count rows up from the "
+                   "bottom edge and are turned to rows counted down (NRows needed).");
   block.def_static("from_arrays", &FromArrays, py::arg("cameras"), py::arg("point_ids"),
                    py::arg("points_in_ground"), py::arg("mark_rasters"), py::arg("mark_point_ids"),
                    py::arg("marks"), py::kw_only(), py::arg("point_roles") = py::none(),
@@ -279,13 +283,15 @@ read_block, read_colmap_model, read_bal_problem, read_bundler_file or simulate_b
                    py::arg("mark_accuracy") = py::none(), py::arg("mark_camera_ids") = py::none(),
                    py::arg("frames") = std::vector<FrameRecord>(),
                    py::arg("frames_rotation") = RotationConvention::kSeed,
-                   py::arg("pixel_origin") = PixelOrigin::kCorner, py::arg("crs") = "", R"doc(
+                   py::arg("pixel_origin") = PixelOrigin::kCorner,
+                   py::arg("pixel_rows") = PixelRows::kDown, py::arg("crs") = "", R"doc(
 A block from numpy arrays, assembled as the tables are (AssembleBlock): camera-table rows; N point
 ids with their N x 3 ground coordinates (m), roles ('control' by default; 'check', 'tie') and
 accuracies (N x 3, N or a scalar, m; NaN: not stated); M marks: raster names, point ids and the
 M x 2 measurements, in pixels (mark_unit 'px', Column/Row) or film micrometres ('um'), with their
-accuracy (M or a scalar, the mark's unit; NaN: not stated). Errors name the row: "marks:4: ..." is
-the fourth mark.)doc");
+accuracy (M or a scalar, the mark's unit; NaN: not stated); pixel_rows 'up' for a Row counted up
+from the bottom edge (turned to rows counted down with the cameras' NRows, as are their A0-B2).
+Errors name the row: "marks:4: ..." is the fourth mark.)doc");
   block.def("copy", [](const PythonBlock& b) { return PythonBlock(b); }, "A deep copy.");
   block.def("__copy__", [](const PythonBlock& b) { return PythonBlock(b); });
   block.def("__deepcopy__", [](const PythonBlock& b, const py::dict&) { return PythonBlock(b); });
@@ -484,7 +490,8 @@ void BindBlockFiles(py::module_& m) {
   m.def("read_block",
         [](const py::object& cameras, const py::object& points, const py::object& marks,
            const py::object& gcp_list, const py::object& frames, const py::object& fiducials,
-           RotationConvention rotation, PixelOrigin pixel_origin, double max_fiducial_residual_um) {
+           RotationConvention rotation, PixelOrigin pixel_origin, PixelRows pixel_rows,
+           double max_fiducial_residual_um) {
           BlockFiles files;
           files.cameras = PathArgument(cameras, "cameras");
           files.points = OptionalPathArgument(points, "points");
@@ -494,6 +501,7 @@ void BindBlockFiles(py::module_& m) {
           files.fiducials = OptionalPathArgument(fiducials, "fiducials");
           files.rotation = rotation;
           files.pixel_origin = pixel_origin;
+          files.pixel_rows = pixel_rows;
           files.max_fiducial_residual_um = max_fiducial_residual_um;
           PythonBlock out;
           CallWithoutGil([&] { return ReadBlock(files, &out.block); });
@@ -502,9 +510,12 @@ void BindBlockFiles(py::module_& m) {
         py::arg("cameras"), py::arg("points") = py::none(), py::arg("marks") = py::none(),
         py::kw_only(), py::arg("gcp_list") = py::none(), py::arg("frames") = py::none(),
         py::arg("fiducials") = py::none(), py::arg("rotation") = RotationConvention::kSeed,
-        py::arg("pixel_origin") = PixelOrigin::kCorner, py::arg("max_fiducial_residual_um") = 30.0,
+        py::arg("pixel_origin") = PixelOrigin::kCorner, py::arg("pixel_rows") = PixelRows::kDown,
+        py::arg("max_fiducial_residual_um") = 30.0,
         "Reads the tables (camera table, points + marks or an ODM gcp_list, optional frames table "
-        "in `rotation` and measured fiducials) into a Block (ReadBlock).");
+        "in `rotation` and measured fiducials) into a Block (ReadBlock); pixel_rows='up' reads the "
+        "marks', fiducials' and A0-B2's Row counted up from the bottom edge (NRows needed) and "
+        "turns it down.");
   m.def("read_colmap_model", [](const py::object& directory) {
     PythonBlock out;
     out.colmap.emplace();

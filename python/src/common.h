@@ -27,6 +27,7 @@
 #include "core/camera_models.h"
 #include "core/enum_names.h"
 #include "core/io/colmap.h"
+#include "core/pixel_rows.h"
 #include "core/rotation.h"
 #include "core/status.h"
 #include "core/termination.h"
@@ -258,6 +259,7 @@ struct PhotoposeEnumCaster {
 PHOTOPOSE_PYTHON_ENUM(photopose::RotationConvention)
 PHOTOPOSE_PYTHON_ENUM(photopose::CameraModelType)
 PHOTOPOSE_PYTHON_ENUM(photopose::PixelOrigin)
+PHOTOPOSE_PYTHON_ENUM(photopose::PixelRows)
 PHOTOPOSE_PYTHON_ENUM(photopose::PointRole)
 PHOTOPOSE_PYTHON_ENUM(photopose::MarkUnit)
 PHOTOPOSE_PYTHON_ENUM(photopose::SolverTermination)

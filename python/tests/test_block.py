@@ -36,6 +36,41 @@ def test_from_arrays_is_the_block_read_from_the_tables(example_files):
     np.testing.assert_array_equal(again.mark_observations, read.mark_observations)
 
 
+def test_pixel_rows_up_reads_rows_counted_from_the_bottom_edge(tmp_path, example_files):
+    cameras_csv, points_csv, marks_csv = example_files
+    read = pp.read_block(cameras_csv, points_csv, marks_csv)
+    cameras = pp.read_camera_table(cameras_csv)
+    marks = pp.read_image_marks(marks_csv)
+    n_rows = cameras[0].n_rows
+    for mark in marks:
+        mark.column_row = [mark.column_row[0], n_rows - mark.column_row[1]]
+    pp.write_image_marks(tmp_path / "marks_up.csv", marks)
+    # Rows counted up, turned down at the reader: the block of the original marks (to the
+    # rounding of n_rows - (n_rows - row)).
+    up = pp.read_block(cameras_csv, points_csv, tmp_path / "marks_up.csv", pixel_rows="up")
+    np.testing.assert_allclose(up.mark_measured, read.mark_measured, rtol=0, atol=1e-9)
+    np.testing.assert_allclose(up.mark_observations, read.mark_observations, rtol=0, atol=1e-9)
+    points = pp.read_ground_points(points_csv)
+    again = pp.Block.from_tables(cameras, points, marks, pixel_rows="up")
+    np.testing.assert_allclose(again.mark_observations, read.mark_observations, rtol=0, atol=1e-9)
+    arrays = pp.Block.from_arrays(
+        cameras, [p.point_id for p in points], np.array([p.position for p in points]),
+        [m.raster for m in marks], [m.point_id for m in marks], np.array([m.column_row for m in marks]),
+        point_roles=[p.role for p in points], pixel_rows="up")
+    np.testing.assert_allclose(arrays.mark_measured, read.mark_measured, rtol=0, atol=1e-9)
+    # Read as rows counted down they are other marks.
+    down = pp.read_block(cameras_csv, points_csv, tmp_path / "marks_up.csv")
+    assert np.abs(down.mark_measured[:, 1] - read.mark_measured[:, 1]).max() > 1.0
+    # A camera without NRows cannot count rows up: refused at the first mark, field Row.
+    cameras[0].n_rows = 0
+    pp.write_camera_table(tmp_path / "cameras.csv", cameras)
+    with pytest.raises(pp.Error, match=r"marks_up.csv:2: Row: rows counted up need NRows"):
+        pp.read_block(tmp_path / "cameras.csv", points_csv, tmp_path / "marks_up.csv",
+                      pixel_rows="up")
+    with pytest.raises(ValueError):
+        pp.read_block(cameras_csv, points_csv, marks_csv, pixel_rows="sideways")
+
+
 def test_block_arrays_and_setters(example_files):
     block = pp.read_block(*example_files)
     n, m = block.num_images, block.num_points

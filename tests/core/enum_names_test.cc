@@ -7,6 +7,7 @@
 
 #include "core/block.h"
 #include "core/camera.h"
+#include "core/pixel_rows.h"
 #include "core/camera_models.h"
 #include "core/rotation.h"
 #include "core/simulation/synthetic_scene.h"
@@ -133,6 +134,7 @@ TEST(EnumNames, EveryTableRoundTrips) {
   ExpectTableRoundTrips<CameraModelType>("CameraModelType");
   ExpectTableRoundTrips<MarkUnit>("MarkUnit");
   ExpectTableRoundTrips<PixelOrigin>("PixelOrigin");
+  ExpectTableRoundTrips<PixelRows>("PixelRows");
   ExpectTableRoundTrips<Scenario>("Scenario");
   ExpectTableRoundTrips<SolverTermination>("SolverTermination");
   ExpectTableRoundTrips<LossType>("LossType");
@@ -172,6 +174,7 @@ TEST(EnumNames, PrintedNamesAndAliasesAreThoseOfTheFormats) {
   EXPECT_EQ(EnumChoices<MarkStatus>(), "accepted, outlier or rejected");
   EXPECT_EQ(EnumChoices<MarkUnit>(), "px or um");
   EXPECT_EQ(EnumChoices<PixelOrigin>(), "corner or center");
+  EXPECT_EQ(EnumChoices<PixelRows>(), "down or up");
   EXPECT_EQ(EnumChoices<Scenario>(), "nadir, oblique or uav_block");
   EXPECT_EQ(EnumChoices<cli::SweepType>(), "axes or grid");
   EXPECT_EQ(EnumChoices<cli::InitialValues>(), "frames or ransac");

@@ -80,6 +80,21 @@ inline std::string ScratchDir() {
 }
 
 // A frames table the executable wrote, by raster; a read error fails the test.
+// The bundled example's marks with Row counted up from the bottom edge, Row' = NRows - Row (NRows
+// 3648), written as dir/marks_up.csv; and as dir/marks_down.csv with Row = NRows - Row' again, as
+// the reader counts them down (within an ulp of the example's Row, so that a run on either file
+// sees the same numbers). Returns the path of marks_down.csv.
+inline std::string WriteExampleMarksWithRowsUp(const std::string& dir) {
+  constexpr double kExampleRows = 3648.0;  // examples/cameras.csv NRows
+  std::vector<ImageMark> marks;
+  EXPECT_TRUE(ReadImageMarks(SourcePath("examples/marks.csv"), &marks).ok());
+  for (ImageMark& mark : marks) mark.column_row->y() = kExampleRows - mark.column_row->y();
+  EXPECT_TRUE(WriteImageMarks(dir + "/marks_up.csv", marks).ok());
+  for (ImageMark& mark : marks) mark.column_row->y() = kExampleRows - mark.column_row->y();
+  EXPECT_TRUE(WriteImageMarks(dir + "/marks_down.csv", marks).ok());
+  return dir + "/marks_down.csv";
+}
+
 inline std::map<std::string, FrameRecord> ReadFrames(
     const std::string& path, RotationConvention convention = RotationConvention::kSeed) {
   std::vector<FrameRecord> frames;

@@ -81,6 +81,7 @@ DEFINE_int32(bundle_threads, 0, "Threads of the linear algebra and of the cross-
 DEFINE_bool(bundle_quiet, false, "No progress lines on stderr.");
 DEFINE_bool(bundle_force, false, "Write the outputs of an adjustment whose sigma0 stays above 3 after the search for gross errors (the run still exits 1 and the report says the check failed).");
 DEFINE_bool(bundle_pixel_center_origin, false, "Read Column/Row with (0,0) at the centre of the first pixel instead of the top-left corner of the image.");
+DEFINE_bool(bundle_pixel_rows_up, false, "With the tables: read Row counted up from the bottom edge of the image (Row 0 at the bottom) in the marks and the camera table's A0-B2, instead of down from the top edge; needs NRows in the camera table. --out_cameras writes A0-B2 back with rows counted up.");
 
 namespace photopose::cli {
 namespace {
@@ -199,6 +200,8 @@ int CheckInputChoice(const char* command, BundleRun* run) {
     return BadInput(command, "--cameras and --marks are both required with the tables");
   if (FLAGS_bundle_out.empty() && FLAGS_bundle_out_colmap.empty() && FLAGS_bundle_report.empty())
     return BadInput(command, "nothing to write: give --out, --out_colmap or --report");
+  if (FLAGS_bundle_pixel_rows_up && !run->tables)
+    return BadInput(command, "--pixel_rows_up applies to the tables: --colmap_model, --opensfm and --bal define their own pixels");
   if (!FLAGS_bundle_out_cameras.empty() && !run->tables)
     return BadInput(command, "--out_cameras writes a camera table of frame cameras; with --colmap_model or --bal use --out_colmap");
   // A COLMAP model is georeferenced with positions and control; a BAL problem takes nothing else.
@@ -533,6 +536,7 @@ int ReadBundleBlock(const char* command, BundleRun* run) {
     files.frames = FLAGS_bundle_frames;
     files.rotation = run->context.rotation;
     files.pixel_origin = FLAGS_bundle_pixel_center_origin ? PixelOrigin::kCenter : PixelOrigin::kCorner;
+    files.pixel_rows = FLAGS_bundle_pixel_rows_up ? PixelRows::kUp : PixelRows::kDown;
     const Status read = ReadBlock(files, &block);
     if (!read.ok()) return BadInput(command, read.message());
     // Measured centres are priors when an accuracy is known: per row, --camera_accuracy, or the
@@ -772,6 +776,8 @@ Status WriteBundleOutputs(const BundleRun& run, bool usable) {
       for (const BlockCamera& camera : block.cameras) {
         FrameCamera table = camera.table;
         if (status.ok()) status = SetFrameModelParams(camera.params.data(), &table);
+        // A0-B2 back in the user's row convention (the block counts rows down).
+        if (status.ok() && FLAGS_bundle_pixel_rows_up) status = AffineWithRowsFlipped(&table);
         cameras.push_back(table);
       }
       if (status.ok())

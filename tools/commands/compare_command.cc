@@ -152,6 +152,10 @@ DEFINE_double(compare_default_film_accuracy, 5.0,
 DEFINE_bool(compare_pixel_center_origin, false,
             "Dataset: read Column/Row with (0,0) at the centre of the first pixel instead of the "
             "top-left corner.");
+DEFINE_bool(compare_pixel_rows_up, false,
+            "Dataset (tables): read Row counted up from the bottom edge of the image (Row 0 at the "
+            "bottom) in the marks and the camera table's A0-B2, instead of down from the top edge; "
+            "needs NRows in the camera table.");
 
 namespace photopose::cli {
 namespace {
@@ -188,7 +192,7 @@ const char* const kMonteCarloFlags[] = {"scenarios",      "noise_px",     "outli
                                         "gnss_sigma",     "block_lines",  "block_images"};
 const char* const kDatasetFlags[] = {"frames", "reference", "rotation", "default_accuracy",
                                      "default_film_accuracy",
-                                     "pixel_center_origin"};
+                                     "pixel_center_origin", "pixel_rows_up"};
 
 // Every numeric flag's range; the comma-separated lists are checked item by item against the
 // ranges of their items (kListItemRanges).
@@ -398,7 +402,7 @@ void PrintSweepSummary(long long settings, long long trials, const std::string& 
 }
 
 // The tables named by the dataset flags (--cameras, --points, --marks, --frames, --rotation,
-// --pixel_center_origin); false with the refusal of --rotation.
+// --pixel_center_origin, --pixel_rows_up); false with the refusal of --rotation.
 bool TablesFromFlags(BlockFiles* files, std::string* why) {
   files->cameras = FLAGS_compare_cameras;
   files->points = FLAGS_compare_points;
@@ -406,6 +410,7 @@ bool TablesFromFlags(BlockFiles* files, std::string* why) {
   files->frames = FLAGS_compare_frames;
   files->pixel_origin =
       FLAGS_compare_pixel_center_origin ? PixelOrigin::kCenter : PixelOrigin::kCorner;
+  files->pixel_rows = FLAGS_compare_pixel_rows_up ? PixelRows::kUp : PixelRows::kDown;
   if (ParseEnum(FLAGS_compare_rotation, &files->rotation)) return true;
   *why = EnumFlagError<RotationConvention>("--rotation", FLAGS_compare_rotation);
   return false;
@@ -610,6 +615,8 @@ int RunBlockDatasetMode(const std::string& command_line, const ParsedFlags& pars
   const bool colmap = !FLAGS_compare_colmap_model.empty();
   if (colmap && !(FLAGS_compare_cameras.empty() && FLAGS_compare_marks.empty()))
     return BadInput(kCommand, "give --colmap_model or the tables (--cameras, --marks), not both");
+  if (colmap && FLAGS_compare_pixel_rows_up)
+    return BadInput(kCommand, "--pixel_rows_up applies to the tables: a COLMAP model defines its own pixels");
   if (!colmap && (FLAGS_compare_cameras.empty() || FLAGS_compare_marks.empty()))
     return BadInput(kCommand, "a block needs --cameras and --marks (or --colmap_model)");
   BlockFiles files;

@@ -37,6 +37,7 @@ DEFINE_bool(allow_no_redundancy, false, "Also report poses whose accepted marks 
 DEFINE_uint64(seed, 0, "Seed of the random sampling of the consensus when an image has too many marks to try every minimal sample; the same seed gives the same result.");
 DEFINE_int32(threads, 0, "Number of images resected in parallel; 0 uses all cores.");
 DEFINE_bool(pixel_center_origin, false, "Read Column/Row with (0,0) at the centre of the first pixel instead of the top-left corner of the image.");
+DEFINE_bool(pixel_rows_up, false, "Read Row counted up from the bottom edge of the image (Row 0 at the bottom) in the marks, the measured fiducials and the camera table's A0-B2, instead of down from the top edge; needs NRows in the camera table. Not with --gcp_list (OpenDroneMap counts rows down).");
 
 namespace photopose::cli {
 namespace {
@@ -102,6 +103,7 @@ bool JobFromFlags(ResectionJobOptions* job, std::string* why) {
   files.fiducials = FLAGS_fiducials;
   files.max_fiducial_residual_um = FLAGS_max_fiducial_residual;
   files.pixel_origin = FLAGS_pixel_center_origin ? PixelOrigin::kCenter : PixelOrigin::kCorner;
+  files.pixel_rows = FLAGS_pixel_rows_up ? PixelRows::kUp : PixelRows::kDown;
   job->input.default_accuracy = FLAGS_default_accuracy;
   job->input.default_film_accuracy_um = FLAGS_default_film_accuracy;
   if (FLAGS_cameras.empty()) return fail("--cameras is required");
@@ -109,6 +111,8 @@ bool JobFromFlags(ResectionJobOptions* job, std::string* why) {
     return fail("--points and --marks (or --gcp_list) are required");
   if (!FLAGS_gcp_list.empty() && (!FLAGS_points.empty() || !FLAGS_marks.empty()))
     return fail("--gcp_list replaces --points and --marks; give one or the other");
+  if (!FLAGS_gcp_list.empty() && FLAGS_pixel_rows_up)
+    return fail("--pixel_rows_up: a gcp_list.txt counts pixel rows down from the top-left corner (OpenDroneMap's definition); it applies to --marks");
   if (FLAGS_out.empty()) return fail("--out is required");
   if (!ParseEnum(FLAGS_rotation, &files.rotation))
     return fail(EnumFlagError<RotationConvention>("--rotation", FLAGS_rotation));

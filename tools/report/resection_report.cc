@@ -6,6 +6,7 @@
 
 #include "core/io/output_files.h"
 #include "core/io/tables.h"
+#include "core/pixel_rows.h"
 
 namespace photopose::cli {
 
@@ -78,7 +79,8 @@ Status WriteResectionReport(const std::string& path, const ResectionJobOptions& 
       {"weak_pose_shift_sigmas", o.weak_pose_shift_sigmas},
       {"ambiguous_pose_sigmas", o.ambiguous_pose_sigmas},
       {"detection_power", o.detection_power},
-      {"pixel_origin", EnumName(options.files.pixel_origin)}};
+      {"pixel_origin", EnumName(options.files.pixel_origin)},
+      {"pixel_rows", EnumName(options.files.pixel_rows)}};
   json images = json::array();
   int solved = 0;
   for (size_t i = 0; i < results.size(); ++i) {
@@ -123,11 +125,17 @@ Status WriteResectionReport(const std::string& path, const ResectionJobOptions& 
                              {"line", f.line},
                              {"residual_x_um", f.residual_um.x()},
                              {"residual_y_um", f.residual_um.y()}});
+      // The fitted A0-B2 in the user's row convention, as the camera table would take them.
+      FrameCamera affine = WithFiducialAffine(job.camera(i).table, fit);
+      if (options.files.pixel_rows == PixelRows::kUp)
+        PHOTOPOSE_RETURN_IF_ERROR(AffineWithRowsFlipped(&affine));
       image["fiducials"] = {{"count", fit.residuals.size()},
                             {"rms_um", fit.rms_um},
                             {"max_um", fit.max_um},
                             {"redundancy", fit.redundancy},
-                            {"affine", fit.affine},
+                            {"affine", {affine.affine_a[0], affine.affine_a[1], affine.affine_a[2],
+                                        affine.affine_b[0], affine.affine_b[1], affine.affine_b[2]}},
+                            {"affine_pixel_rows", EnumName(options.files.pixel_rows)},
                             {"residuals", residuals}};
     }
     if (r.success) {

@@ -348,32 +348,45 @@ TEST(BlockAssembly, ReadsTheFilesAndKeepsTheCoordinateSystemOfAGcpList) {
   EXPECT_EQ(block.marks[0].line, 2);
 }
 
-TEST(BlockAssembly, ScannedFilmUsesEachImagesFiducialAffine) {
+// A scan of 11500 x 11500 pixels of 20 um, the film centre at pixel (5750, 5750), film y up: four
+// measured fiducials and the mark of film point (60000, 40000) um, Row counted as `rows` says.
+BlockTables ScannedFilmTables(PixelRows rows) {
   BlockTables t;
   FrameCamera rc30;
   rc30.camera_id = "RC30";
   rc30.focal_length_um = 153012.0;
+  rc30.n_rows = 11500;
+  rc30.n_columns = 11500;
   rc30.film_fiducials_um = {{-106000, -106000}, {106000, -106000}, {106000, 106000},
                             {-106000, 106000}};
   t.cameras = {rc30};
+  // Row 5750 - y / 20 counted down, 11500 minus that counted up.
+  const auto pixel = [&](const Eigen::Vector2d& film) {
+    const double row = 5750.0 - film.y() / 20.0;
+    return Eigen::Vector2d(5750.0 + film.x() / 20.0, rows == PixelRows::kUp ? 11500.0 - row : row);
+  };
   ImageMark mark;
   mark.raster = "scan_1";
   mark.point_id = "P";
-  mark.column_row = Eigen::Vector2d(5750 + 3000, 5750 - 2000);
+  mark.column_row = pixel({60000, 40000});
   mark.line = 2;
   t.marks = {mark};
-  // 20 um pixels, the film centre at (5750, 5750), rows down.
   for (int k = 0; k < 4; ++k) {
     MeasuredFiducial f;
     f.raster = "scan_1";
     f.fiducial_id = k + 1;
-    f.column_row = Eigen::Vector2d(5750.0 + rc30.film_fiducials_um[k].x() / 20.0,
-                                   5750.0 - rc30.film_fiducials_um[k].y() / 20.0);
+    f.column_row = pixel(rc30.film_fiducials_um[k]);
     f.line = k + 2;
     t.fiducials.push_back(f);
   }
+  t.pixel_rows = rows;
   t.marks_file = "marks.csv";
   t.fiducials_file = "fiducials.csv";
+  return t;
+}
+
+TEST(BlockAssembly, ScannedFilmUsesEachImagesFiducialAffine) {
+  BlockTables t = ScannedFilmTables(PixelRows::kDown);
   Block block;
   const Status status = AssembleBlock(t, &block);
   ASSERT_TRUE(status.ok()) << status.message();
@@ -386,6 +399,107 @@ TEST(BlockAssembly, ScannedFilmUsesEachImagesFiducialAffine) {
   t.fiducials[0].raster = "scan_9";
   EXPECT_EQ(AssembleBlock(t, &block).message(),
             "fiducials.csv:2: Raster: image 'scan_9' has no marks and no frames row");
+}
+
+// Rows counted up (Row 0 at the bottom edge) are counted down at the reader: the same marks
+// written either way give the same block, with the corner and the centre origin, with and without
+// A0-B2 (stated in the file's row convention).
+TEST(BlockAssembly, RowsCountedUpGiveTheBlockOfRowsCountedDown) {
+  for (const PixelOrigin origin : {PixelOrigin::kCorner, PixelOrigin::kCenter}) {
+    for (const bool affine : {false, true}) {
+      SCOPED_TRACE(EnumName(origin) + std::string(affine ? " with A0-B2" : ""));
+      BlockTables down = Tables();
+      down.pixel_origin = origin;
+      if (affine) {
+        // 4.4 um pixels, the film centre at (3000, 2000), turned by 0.01 / 4.4 rad.
+        down.cameras[0].has_affine = true;
+        down.cameras[0].affine_a = {-13200.0, 4.4, 0.01};
+        down.cameras[0].affine_b = {8800.0, 0.01, -4.4};
+      }
+      BlockTables up = down;
+      up.pixel_rows = PixelRows::kUp;
+      if (affine) {
+        // By hand, Row counted up = 4000 - Row counted down (corner coordinates):
+        // x = -13200 + 4.4 c + 0.01 (4000 - r') = -13160 + 4.4 c - 0.01 r',
+        // y = 8800 + 0.01 c - 4.4 (4000 - r') = -8800 + 0.01 c + 4.4 r'.
+        up.cameras[0].affine_a = {-13160.0, 4.4, -0.01};
+        up.cameras[0].affine_b = {-8800.0, 0.01, 4.4};
+      }
+      const double last_row = origin == PixelOrigin::kCorner ? 4000.0 : 3999.0;
+      for (ImageMark& mark : up.marks)
+        if (mark.column_row) mark.column_row->y() = last_row - mark.column_row->y();
+      Block from_down, from_up;
+      ASSERT_TRUE(AssembleBlock(down, &from_down).ok());
+      const Status status = AssembleBlock(up, &from_up);
+      ASSERT_TRUE(status.ok()) << status.message();
+      ASSERT_EQ(from_up.marks.size(), from_down.marks.size());
+      for (size_t m = 0; m < from_up.marks.size(); ++m) {
+        // 4000 - (4000 - r) is r to an ulp of 4000.
+        EXPECT_NEAR((from_up.marks[m].measured - from_down.marks[m].measured).norm(), 0.0, 1e-12);
+        EXPECT_NEAR((from_up.marks[m].observation - from_down.marks[m].observation).norm(), 0.0,
+                    1e-9);
+        EXPECT_NEAR(from_up.marks[m].observation_units_per_unit,
+                    from_down.marks[m].observation_units_per_unit, 1e-12);
+      }
+      // The film camera has no NRows: its film mark needs none.
+      EXPECT_EQ(from_up.marks[3].unit, MarkUnit::kFilm);
+      EXPECT_EQ(from_up.cameras[0].table.affine_a, from_down.cameras[0].table.affine_a);
+      for (int k = 0; k < 3; ++k)
+        EXPECT_NEAR(from_up.cameras[0].table.affine_b[k], from_down.cameras[0].table.affine_b[k],
+                    1e-9);
+    }
+  }
+}
+
+TEST(BlockAssembly, RowsCountedUpNeedNRows) {
+  Block block;
+  // A pixel mark of a camera without NRows, refused at its line and field.
+  BlockTables t = Tables();
+  t.pixel_rows = PixelRows::kUp;
+  t.marks[3].film_um.reset();
+  t.marks[3].column_row = Eigen::Vector2d(10, 10);
+  EXPECT_EQ(AssembleBlock(t, &block).message(),
+            "marks.csv:5: Row: rows counted up need NRows in the camera table (camera 'film' has "
+            "none)");
+  // A0-B2 of a camera without NRows cannot be turned: refused at the camera table.
+  t = Tables();
+  t.pixel_rows = PixelRows::kUp;
+  t.cameras[1].has_affine = true;
+  t.cameras[1].affine_a = {0.0, 1.0, 0.0};
+  t.cameras[1].affine_b = {0.0, 0.0, -1.0};
+  EXPECT_EQ(AssembleBlock(t, &block).message(),
+            "cameras.csv: NRows: camera 'film': rows counted up need NRows in the camera table (to "
+            "turn A0-B2 to rows counted down)");
+  // A gcp_list counts rows down by its definition.
+  ScopedTempDir dir;
+  ASSERT_TRUE(dir.ok());
+  ASSERT_TRUE(WriteCameraTable(dir.Path("cameras.csv"), Tables().cameras).ok());
+  {
+    std::ofstream(dir.Path("gcp_list.txt")) << "EPSG:32632\n100 100 0 10 20 img1.jpg A\n";
+  }
+  BlockFiles files;
+  files.cameras = dir.Path("cameras.csv");
+  files.gcp_list = dir.Path("gcp_list.txt");
+  files.pixel_rows = PixelRows::kUp;
+  const std::string message = ReadBlock(files, &block).message();
+  EXPECT_NE(message.find("gcp_list.txt: rows counted up apply to a marks table"), std::string::npos)
+      << message;
+}
+
+// Scanned film with rows counted up: the measured fiducials' and the marks' Row counted down with
+// NRows before the fit; a fiducial of a camera without NRows is refused at its line.
+TEST(BlockAssembly, ScannedFilmWithRowsCountedUp) {
+  BlockTables t = ScannedFilmTables(PixelRows::kUp);
+  Block block;
+  const Status status = AssembleBlock(t, &block);
+  ASSERT_TRUE(status.ok()) << status.message();
+  EXPECT_LT((block.marks[0].observation - Eigen::Vector2d(60000, 40000)).norm(), 1e-6);
+  EXPECT_EQ(block.marks[0].measured, Eigen::Vector2d(8750, 3750));  // counted down
+  EXPECT_LT(block.images[0].fiducial_fit->max_um, 1e-6);
+  t.cameras[0].n_rows = 0;
+  EXPECT_EQ(AssembleBlock(t, &block).message(),
+            "fiducials.csv:2: Row: rows counted up need NRows in the camera table (camera 'RC30' "
+            "has none)");
 }
 
 }  // namespace

@@ -466,6 +466,73 @@ TEST(BundleCommand, BalProblemIsAdjusted) {
             0.5 * report["summary"]["initial_cost"].get<double>());
 }
 
+// The bundled example with its marks' rows counted up (Row' = NRows - Row): --pixel_rows_up gives
+// the frames of the original; the flag is refused where the block's own reader defines its pixels.
+TEST(BundleCommand, RowsCountedUpGiveTheSameFramesWithPixelRowsUp) {
+  const std::string dir = ScratchDir();
+  const std::string down_marks = testing::WriteExampleMarksWithRowsUp(dir);
+  const std::string common = "bundle --cameras=" + SourcePath("examples/cameras.csv") +
+                             " --points=" + SourcePath("examples/points.csv") + " --quiet";
+  CliRun run = RunCli(common + " --marks=" + down_marks + " --out=" + dir + "/down.csv", dir);
+  ASSERT_EQ(run.exit_code, 0) << run.err;
+  run = RunCli(common + " --marks=" + dir + "/marks_up.csv --pixel_rows_up --out=" + dir +
+                   "/up.csv",
+               dir);
+  ASSERT_EQ(run.exit_code, 0) << run.err;
+  const auto down = ReadFrames(dir + "/down.csv");
+  const auto up = ReadFrames(dir + "/up.csv");
+  ASSERT_EQ(down.size(), up.size());
+  for (const auto& [raster, frame] : down) {
+    ASSERT_EQ(up.count(raster), 1u) << raster;
+    for (int k = 0; k < 6; ++k)
+      EXPECT_NEAR(frame.eo.parameters[k], up.at(raster).eo.parameters[k], 1e-9) << raster << k;
+  }
+  // Without the flag the turned marks are another block: other frames, or no adjustment.
+  run = RunCli(common + " --marks=" + dir + "/marks_up.csv --out=" + dir + "/wrong.csv", dir);
+  if (run.exit_code == 0) {
+    const auto wrong = ReadFrames(dir + "/wrong.csv");
+    double largest = 0.0;
+    for (const auto& [raster, frame] : wrong)
+      if (down.count(raster))
+        largest = std::max(largest, (frame.eo.center_in_ground() -
+                                     down.at(raster).eo.center_in_ground()).norm());
+    EXPECT_GT(largest, 1.0);
+  }
+  // The example's camera with its PixelSize (2.41 um, 5472 x 3648, film y up) as A0-B2 on rows
+  // counted up: x = 2.41 (Column - 2736), y = 2.41 (Row' - 1824). --out_cameras writes them back as
+  // read, and the frames are those of the PixelSize camera.
+  std::vector<FrameCamera> cameras;
+  ASSERT_TRUE(ReadCameraTable(SourcePath("examples/cameras.csv"), &cameras).ok());
+  cameras[0].has_affine = true;
+  cameras[0].affine_a = {-2736 * 2.41, 2.41, 0.0};
+  cameras[0].affine_b = {-1824 * 2.41, 0.0, 2.41};
+  ASSERT_TRUE(WriteCameraTable(dir + "/cameras_up.csv", cameras).ok());
+  run = RunCli("bundle --cameras=" + dir + "/cameras_up.csv --points=" +
+                   SourcePath("examples/points.csv") + " --quiet --marks=" + dir +
+                   "/marks_up.csv --pixel_rows_up --out=" + dir + "/affine.csv --out_cameras=" +
+                   dir + "/cameras_out.csv",
+               dir);
+  ASSERT_EQ(run.exit_code, 0) << run.err;
+  std::vector<FrameCamera> written;
+  ASSERT_TRUE(ReadCameraTable(dir + "/cameras_out.csv", &written).ok());
+  for (int k = 0; k < 3; ++k) {
+    EXPECT_NEAR(written[0].affine_a[k], cameras[0].affine_a[k], 1e-9) << k;
+    EXPECT_NEAR(written[0].affine_b[k], cameras[0].affine_b[k], 1e-9) << k;
+  }
+  // The same pixel -> film map by another path of arithmetic: the same frames to 1e-6 m / rad.
+  for (const auto& [raster, frame] : ReadFrames(dir + "/affine.csv"))
+    for (int k = 0; k < 6; ++k)
+      EXPECT_NEAR(frame.eo.parameters[k], down.at(raster).eo.parameters[k], 1e-6) << raster << k;
+  run = RunCli("bundle --bal=" + SharedDataPath("bal_dubrovnik/dubrovnik-3-7-pre.txt") +
+                   " --pixel_rows_up --report=" + dir + "/r.json",
+               dir);
+  EXPECT_EQ(run.exit_code, 2);
+  EXPECT_NE(run.err.find("--pixel_rows_up applies to the tables: --colmap_model, --opensfm and "
+                         "--bal define their own pixels"),
+            std::string::npos)
+      << run.err;
+}
+
 TEST(BundleCommand, AnOutputThatIsAnInputIsRefusedBeforeAnyWork) {
   const std::string dir = ScratchDir();
   const std::string block = SimulateBlock(dir);

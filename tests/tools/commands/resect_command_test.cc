@@ -93,6 +93,60 @@ TEST(ResectCommand, PixelCentreOriginGivesTheSameSolutionAndCheckResiduals) {
   }
 }
 
+// The example's marks with rows counted up from the bottom edge (Row' = NRows - Row, NRows 3648):
+// with --pixel_rows_up the same poses as the original; without it, other poses or none.
+TEST(ResectCommand, RowsCountedUpGiveTheSamePosesWithPixelRowsUp) {
+  const std::string dir = ScratchDir();
+  const std::string down_marks = testing::WriteExampleMarksWithRowsUp(dir);
+  const std::string common = "resect --cameras=" + SourcePath("examples/cameras.csv") +
+                             " --points=" + SourcePath("examples/points.csv");
+  CliRun run = RunCli(common + " --marks=" + down_marks + " --out=" + dir +
+                          "/down.csv --report=" + dir + "/down.json",
+                      dir);
+  ASSERT_EQ(run.exit_code, 0) << run.err;
+  run = RunCli(common + " --marks=" + dir + "/marks_up.csv --pixel_rows_up --out=" + dir +
+                   "/up.csv --report=" + dir + "/up.json",
+               dir);
+  ASSERT_EQ(run.exit_code, 0) << run.err;
+  const auto down = nlohmann::json::parse(ReadFile(dir + "/down.json"));
+  const auto up = nlohmann::json::parse(ReadFile(dir + "/up.json"));
+  EXPECT_EQ(up["options"]["pixel_rows"], "up");
+  EXPECT_EQ(down["options"]["pixel_rows"], "down");
+  ASSERT_EQ(down["images"].size(), up["images"].size());
+  for (size_t i = 0; i < up["images"].size(); ++i) {
+    const auto& a = down["images"][i]["pose"];
+    const auto& b = up["images"][i]["pose"];
+    for (const char* key : {"X", "Y", "Z", "omega_deg", "phi_deg", "kappa_deg"})
+      EXPECT_NEAR(a[key].get<double>(), b[key].get<double>(), 1e-9) << key;
+    // Residuals are on the image plane (x right, y up) either way.
+    EXPECT_NEAR(down["images"][i]["marks"][0]["residual_y"].get<double>(),
+                up["images"][i]["marks"][0]["residual_y"].get<double>(), 1e-9);
+  }
+  // Read as rows counted down, the turned marks give other poses (or none).
+  run = RunCli(common + " --marks=" + dir + "/marks_up.csv --out=" + dir + "/wrong.csv --report=" +
+                   dir + "/wrong.json",
+               dir);
+  // Some images unsolved, or none (and then nothing is written).
+  if (std::filesystem::exists(dir + "/wrong.json")) {
+    const auto wrong = nlohmann::json::parse(ReadFile(dir + "/wrong.json"));
+    int same = 0;
+    for (size_t i = 0; i < wrong["images"].size(); ++i) {
+      if (!wrong["images"][i]["success"].get<bool>()) continue;
+      same += std::abs(wrong["images"][i]["pose"]["X"].get<double>() -
+                       down["images"][i]["pose"]["X"].get<double>()) < 1.0;
+    }
+    EXPECT_EQ(same, 0);
+  }
+  // A gcp_list counts rows down (OpenDroneMap's definition): refused with the flag.
+  run = RunCli("resect --cameras=" + SourcePath("examples/cameras.csv") + " --gcp_list=" + dir +
+                   "/gcp_list.txt --pixel_rows_up --out=" + dir + "/x.csv",
+               dir);
+  EXPECT_EQ(run.exit_code, 2);
+  EXPECT_NE(run.err.find("--pixel_rows_up: a gcp_list.txt counts pixel rows down"),
+            std::string::npos)
+      << run.err;
+}
+
 TEST(ResectCommand, OutlierFlagsMatchTheSimulatedTruth) {
   const std::string dir = ScratchDir();
   const CliRun run = RunCli("resect " + ExampleArgs() + " --out=" + dir + "/frames.csv --report=" +
@@ -530,6 +584,72 @@ TEST(ResectCommand, ScannedFilmWithMeasuredFiducials) {
   EXPECT_EQ(run.exit_code, 2);
   EXPECT_NE(run.err.find("fiducials.csv:"), std::string::npos) << run.err;
   EXPECT_NE(run.err.find("misnumbered or mismeasured fiducial"), std::string::npos) << run.err;
+}
+
+// The same scan measured by software that counts rows up from the bottom edge of the 11500-row
+// scan: with --pixel_rows_up the textbook pose again, and the report's fitted A0-B2 in the rows
+// the user counts (the rows-down fit with A0 + A2 NRows, -A2, B0 + B2 NRows, -B2).
+TEST(ResectCommand, ScannedFilmWithRowsCountedUp) {
+  const std::string dir = ScratchDir();
+  WriteFile(dir + "/cameras.csv",
+            "ObjectID,CameraID,FocalLength,PixelSize,NRows,NColumns,FilmFiducials\n"
+            "1,RC30,152916,1,11500,11500,\"-106000 -106000;106000 -106000;106000 106000;"
+            "-106000 106000\"\n");
+  WriteFile(dir + "/points.csv",
+            "PointID,X,Y,Z\nA,1268.102,1455.027,22.606\nB,732.181,545.344,22.299\n"
+            "C,1454.553,731.666,22.649\nD,545.245,1268.232,22.336\n");
+  const double angle = 0.2 * 3.14159265358979 / 180.0;
+  // Rows counted down (as ScannedFilmWithMeasuredFiducials) and up.
+  const auto pixel = [&](double x, double y, bool up) {
+    const double row = 5749.6 - (std::sin(angle) * x + std::cos(angle) * y) / 20.0;
+    return Eigen::Vector2d(5750.3 + (std::cos(angle) * x - std::sin(angle) * y) / 20.0,
+                           up ? 11500.0 - row : row);
+  };
+  const double fiducials[4][2] = {{-106000, -106000}, {106000, -106000}, {106000, 106000},
+                                  {-106000, 106000}};
+  const double film[4][2] = {{86421, -83977}, {-100916, 92582}, {-98322, -89161}, {78812, 98123}};
+  for (const bool up : {false, true}) {
+    std::string table = "Raster,FiducialID,Column,Row\n";
+    for (int k = 0; k < 4; ++k) {
+      const Eigen::Vector2d p = pixel(fiducials[k][0], fiducials[k][1], up);
+      table += "scan_017.tif," + std::to_string(k + 1) + "," + FormatNumber(p.x()) + "," +
+               FormatNumber(p.y()) + "\n";
+    }
+    WriteFile(dir + (up ? "/fiducials_up.csv" : "/fiducials.csv"), table);
+    std::string marks = "Raster,PointID,Column,Row,Accuracy\n";
+    for (int k = 0; k < 4; ++k) {
+      const Eigen::Vector2d p = pixel(film[k][0], film[k][1], up);
+      marks += std::string("scan_017.tif,") + "ABCD"[k] + "," + FormatNumber(p.x()) + "," +
+               FormatNumber(p.y()) + ",0.25\n";
+    }
+    WriteFile(dir + (up ? "/marks_up.csv" : "/marks.csv"), marks);
+  }
+  const std::string common = "resect --cameras=" + dir + "/cameras.csv --points=" + dir +
+                             "/points.csv --rotation=opk";
+  CliRun run = RunCli(common + " --marks=" + dir + "/marks.csv --fiducials=" + dir +
+                          "/fiducials.csv --out=" + dir + "/down.csv --report=" + dir +
+                          "/down.json",
+                      dir);
+  ASSERT_EQ(run.exit_code, 0) << run.err;
+  EXPECT_NE(run.out.find("X=1027.8571 Y=1044.1138 Z=648.1974"), std::string::npos) << run.out;
+  run = RunCli(common + " --marks=" + dir + "/marks_up.csv --fiducials=" + dir +
+                   "/fiducials_up.csv --pixel_rows_up --out=" + dir + "/up.csv --report=" + dir +
+                   "/up.json",
+               dir);
+  ASSERT_EQ(run.exit_code, 0) << run.err;
+  EXPECT_NE(run.out.find("X=1027.8571 Y=1044.1138 Z=648.1974"), std::string::npos) << run.out;
+  const auto down = nlohmann::json::parse(ReadFile(dir + "/down.json"))["images"][0]["fiducials"];
+  const auto up = nlohmann::json::parse(ReadFile(dir + "/up.json"))["images"][0]["fiducials"];
+  EXPECT_EQ(down["affine_pixel_rows"], "down");
+  EXPECT_EQ(up["affine_pixel_rows"], "up");
+  const std::vector<double> a = down["affine"].get<std::vector<double>>();
+  const std::vector<double> b = up["affine"].get<std::vector<double>>();
+  ASSERT_EQ(a.size(), 6u);
+  ASSERT_EQ(b.size(), 6u);
+  // The fit's coefficients agree to the rounding of the written pixels (1e-10 px x 20 um).
+  const std::vector<double> expected = {a[0] + a[2] * 11500, a[1], -a[2],
+                                        a[3] + a[5] * 11500, a[4], -a[5]};
+  for (int k = 0; k < 6; ++k) EXPECT_NEAR(b[k], expected[k], 1e-6) << k;
 }
 
 // ------------------------------------------------------------------ bad input
