@@ -23,6 +23,16 @@ class [[nodiscard]] Status {
   std::string message_;
 };
 
+// The outcome of `value.IsValid(&why)` (the XxxOptions convention, `bool IsValid(std::string*)`)
+// as a Status: Ok, or an Error reading `prefix` + why ("invalid options: the loss scale must be
+// positive").
+template <typename Validated>
+Status Validate(const Validated& value, const std::string& prefix = "") {
+  std::string why;
+  if (value.IsValid(&why)) return Status::Ok();
+  return Status::Error(prefix + why);
+}
+
 }  // namespace photopose
 
 // Returns the Status of `expr` from the enclosing function when it is an error.

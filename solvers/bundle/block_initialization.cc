@@ -35,8 +35,7 @@ std::string BlockInitializationSummary::BriefReport() const {
 Status InitializeBlock(const BlockInitializationOptions& options, Block* block,
                        BlockInitializationSummary* summary) {
   *summary = BlockInitializationSummary();
-  std::string why;
-  if (!options.resection.IsValid(&why)) return Status::Error("invalid resection options: " + why);
+  PHOTOPOSE_RETURN_IF_ERROR(Validate(options.resection, "invalid resection options: "));
   if (!(options.max_ray_misfit_rad > 0.0))
     return Status::Error("max_ray_misfit_rad must be positive");
   if (options.min_marks_for_resection < 3)

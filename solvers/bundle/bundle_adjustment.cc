@@ -308,8 +308,7 @@ struct Adjustment {
 
 Status CheckInputs(const BundleAdjustmentOptions& options, const BundleAdjustmentConfig& config,
                    Block* block) {
-  std::string why;
-  if (!options.IsValid(&why)) return Status::Error("invalid options: " + why);
+  PHOTOPOSE_RETURN_IF_ERROR(Validate(options, "invalid options: "));
   // The lever arm moved from the options to the config; its message stays the one it had.
   if (config.lever_arm_m && !config.lever_arm_m->allFinite())
     return Status::Error("invalid options: the lever arm must be finite");
@@ -585,8 +584,7 @@ Status CrossValidateControlPoints(const BundleAdjustmentOptions& options,
                                   BundleCrossValidationResult* result) {
   const Clock::time_point start = Clock::now();
   *result = BundleCrossValidationResult();
-  std::string why;
-  if (!options.IsValid(&why)) return Status::Error("invalid options: " + why);
+  PHOTOPOSE_RETURN_IF_ERROR(Validate(options, "invalid options: "));
   if (config.lever_arm_m && !config.lever_arm_m->allFinite())
     return Status::Error("invalid options: the lever arm must be finite");
   std::vector<char> rejected;

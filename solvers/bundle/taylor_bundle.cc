@@ -171,8 +171,7 @@ Frame MakeFrame(const BundleAdjustmentConfig& config, const Block& block, const 
 
 Status Prepare(const TaylorBundleOptions& options, const BundleAdjustmentConfig& config,
                const Block& block, Plan* plan) {
-  std::string why;
-  if (!options.IsValid(&why)) return Status::Error("invalid options: " + why);
+  PHOTOPOSE_RETURN_IF_ERROR(Validate(options, "invalid options: "));
   // The lever arm moved from the options to the config; its message stays the one it had.
   if (config.lever_arm_m && !config.lever_arm_m->allFinite())
     return Status::Error("invalid options: the lever arm must be finite");
@@ -622,8 +621,7 @@ bool TaylorBundleOptions::IsValid(std::string* why) const {
   objective.statistics = statistics;
   objective.robustness.tie_loss = tie_loss;
   objective.robustness.tie_loss_scale_sigmas = tie_loss_scale_sigmas;
-  std::string accuracy_why;
-  if (!objective.IsValid(&accuracy_why)) return fail(accuracy_why);
+  if (const Status valid = Validate(objective); !valid.ok()) return fail(valid.message());
   if (!(rejection_threshold >= 0.0) || !std::isfinite(rejection_threshold))
     return fail("the rejection threshold must be >= 0 (0: no rejection)");
   if (max_rejection_rounds < 0) return fail("max_rejection_rounds must be >= 0");

@@ -503,8 +503,8 @@ Status EstimateAbsolutePoseRansac(const AbsolutePoseRansacOptions& options,
     return Status::Error("absolute pose RANSAC: " + message);
   };
 
-  std::string why;
-  if (!options.IsValid(&why)) return fail("invalid options: " + why);
+  if (const Status valid = Validate(options, "invalid options: "); !valid.ok())
+    return fail(valid.message());
   const int n = static_cast<int>(points_in_ground.size());
   if (image_plane_um.size() != points_in_ground.size())
     return fail(std::to_string(image_plane_um.size()) + " image points for " + std::to_string(n) +

@@ -56,6 +56,8 @@
 #include <utility>
 #include <vector>
 
+#include "core/status.h"
+
 namespace photopose {
 
 struct RansacOptions {
@@ -225,9 +227,8 @@ RansacSummary Ransac(const RansacOptions& options, const Estimator& estimator,
   static_assert(kSampleSize >= 1, "kMinimalSampleSize must be positive");
 
   RansacSummary summary;
-  std::string why;
-  if (!options.IsValid(&why)) {
-    summary.message = "invalid RansacOptions: " + why;
+  if (const Status valid = Validate(options, "invalid RansacOptions: "); !valid.ok()) {
+    summary.message = valid.message();
     return summary;
   }
   const int n = estimator.num_data();

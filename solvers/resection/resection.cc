@@ -373,8 +373,8 @@ class ImageResection {
 };
 
 bool ImageResection::CheckInput() {
-  std::string why;
-  if (!options_.IsValid(&why)) return Fail("invalid options: " + why);
+  if (const Status valid = Validate(options_, "invalid options: "); !valid.ok())
+    return Fail(valid.message());
   const size_t n = n_;
   const auto sized = [n](size_t size) { return size == 0 || size == n; };
   if (input_.points_in_ground.size() != n || !sized(input_.sigma.size()) ||

@@ -422,8 +422,8 @@ Status TaylorResection(const TaylorResectionOptions& options,
   };
 
   // ---------------------------------------------------------------- input checks
-  std::string why;
-  if (!options.IsValid(&why)) return fail("invalid options: " + why);
+  if (const Status valid = Validate(options, "invalid options: "); !valid.ok())
+    return fail(valid.message());
   const int n = static_cast<int>(points_in_ground.size());
   summary.num_points = n;
   summary.degrees_of_freedom = 2 * n - 6;

@@ -41,5 +41,26 @@ TEST(Status, ReturnIfErrorStopsAtTheFirstErrorAndPassesItOn) {
   EXPECT_EQ(steps, 1);
 }
 
+// The XxxOptions convention: bool IsValid(std::string* why).
+struct ScaleOptions {
+  double scale = 1.0;
+  bool IsValid(std::string* why) const {
+    if (scale > 0.0) return true;
+    *why = "the scale must be positive";
+    return false;
+  }
+};
+
+TEST(Status, ValidateTurnsIsValidIntoAStatusWithItsReason) {
+  ScaleOptions options;
+  EXPECT_TRUE(Validate(options).ok());
+  EXPECT_TRUE(Validate(options, "invalid options: ").ok());
+  options.scale = -1.0;
+  EXPECT_FALSE(Validate(options).ok());
+  EXPECT_EQ(Validate(options).message(), "the scale must be positive");
+  EXPECT_EQ(Validate(options, "invalid options: ").message(),
+            "invalid options: the scale must be positive");
+}
+
 }  // namespace
 }  // namespace photopose

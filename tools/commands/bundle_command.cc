@@ -244,23 +244,26 @@ int CheckInputChoice(const char* command, BundleRun* run) {
   return kGoOn;
 }
 
-// The progress line of every iteration, on stderr.
+// The progress line of every iteration, on stderr: "photopose bundle: round 1 iteration   1:
+// cost 895984  sigma0 14.2136  step 254  taken quality 1.00 radius 30000  solve 0.00 of 0.01 s
+// 0.0 s" (tools/benchmarks/bundle_scaling.sh reads "iteration N:" and "solve A of B s").
+// Numbers through the report kit (tools/report/html_kit.h): fixed notation, never an exponent.
 void PrintProgress(const BundleIterationInfo& info) {
-  std::string lm;
+  char iteration[16];
+  std::snprintf(iteration, sizeof(iteration), "%3d", info.iteration);
+  std::ostringstream line;
+  line << "photopose bundle: round " << info.round << (info.free_gauge ? " (free gauge)" : "")
+       << " iteration " << iteration << ": cost " << FormatSignificant(info.cost, 6) << "  sigma0 "
+       << FormatUnitless(info.sigma0, 4) << "  step " << FormatSignificant(info.step_norm, 3);
   if (std::isfinite(info.trust_region_radius)) {
-    char buffer[128];
-    std::snprintf(buffer, sizeof(buffer), "  %s quality %.2f radius %.2g  solve %.2f of %.2f s",
-                  info.step_successful ? "taken" : "REJECTED", info.step_quality,
-                  info.trust_region_radius, info.linear_solver_seconds,
-                  info.iteration_seconds);
-    lm = buffer;
+    line << "  " << (info.step_successful ? "taken" : "REJECTED") << " quality "
+         << FormatUnitless(info.step_quality, 2) << " radius "
+         << FormatSignificant(info.trust_region_radius, 2) << "  solve "
+         << FormatUnitless(info.linear_solver_seconds, 2) << " of "
+         << FormatUnitless(info.iteration_seconds, 2) << " s";
   }
-  std::fprintf(stderr,
-               "photopose bundle: round %d%s iteration %3d: cost %.6g  sigma0 %.4f  step %.3g%s  "
-               "%.1f s\n",
-               info.round, info.free_gauge ? " (free gauge)" : "", info.iteration, info.cost,
-               info.sigma0, info.step_norm, lm.c_str(),
-               info.elapsed_seconds);
+  line << "  " << FormatUnitless(info.elapsed_seconds, 1) << " s\n";
+  std::cerr << line.str();
 }
 
 // The flags -> the options (accuracies, robustness, statistics, solver), the lever arm of the
@@ -310,8 +313,7 @@ int OptionsFromFlags(const char* command, BundleRun* run) {
     return BadInput(command, "--relative_gauge must be free or fixed, not '" + FLAGS_bundle_relative_gauge + "'");
   solver.free_gauge_for_relative_blocks = FLAGS_bundle_relative_gauge == "free";
   if (!FLAGS_bundle_quiet) solver.progress = PrintProgress;
-  std::string why;
-  if (!options.IsValid(&why)) return BadInput(command, why);
+  if (const Status valid = Validate(options); !valid.ok()) return BadInput(command, valid.message());
   for (const std::string& name : SplitCommaList(FLAGS_bundle_calibrate))
     if (!name.empty()) run->calibrate.push_back(name);
   run->context.calibrate = run->calibrate;
@@ -398,85 +400,100 @@ int DeclareFiles(const char* command, const ParsedFlags& parsed, BundleRun* run,
   return kGoOn;
 }
 
-// The camera positions and control of a georeferenced model, as files give them.
-int ReadGeoreferenceInputs(const char* command, const BundleRun& run, GeoreferenceInputs* inputs) {
-  if (FLAGS_bundle_model_gps) {
-    // The shots' GNSS, in the reconstruction's topocentric frame at reference_lla: to EPSG:4979.
-    const OpenSfmExtras& extras = run.opensfm_extras;
-    if (!extras.reference_lla)
-      return BadInput(command, "--model_gps: " + FLAGS_bundle_opensfm + " has no reference_lla (nor a reference_lla.json beside it): its GNSS positions have no place on Earth");
-    LocalFrame frame;
-    const Status made = LocalFrame::Create("EPSG:4979", Eigen::Vector3d(extras.reference_lla->longitude_deg, extras.reference_lla->latitude_deg, extras.reference_lla->altitude_m), &frame);
-    if (!made.ok()) return BadInput(command, "--model_gps: " + made.message());
-    std::vector<Eigen::Vector3d> positions;
-    std::vector<int> images;
-    for (size_t i = 0; i < run.block.images.size() && i < extras.gps_position_m.size(); ++i) {
-      if (!extras.gps_position_m[i]) continue;
-      positions.push_back(*extras.gps_position_m[i]);
-      images.push_back(static_cast<int>(i));
-    }
-    if (positions.empty()) return BadInput(command, "--model_gps: no shot of " + FLAGS_bundle_opensfm + " has a gps_position");
-    const Status moved = frame.FromLocal("EPSG:4979", &positions);
-    if (!moved.ok()) return BadInput(command, "--model_gps: " + moved.message());
-    inputs->positions_crs = "EPSG:4979";
-    inputs->positions_source = FLAGS_bundle_opensfm;
-    for (size_t k = 0; k < positions.size(); ++k) {
-      CameraPositionMeasurement m;
-      m.image = run.block.images[images[k]].name;
-      m.position = positions[k];
-      const std::optional<double>& dop = run.opensfm_extras.gps_dop_m[images[k]];
-      if (dop && *dop > 0.0) m.accuracy_m = Eigen::Vector3d::Constant(*dop);
-      inputs->positions.push_back(m);
-    }
-  } else if (!FLAGS_bundle_images.empty()) {
-    std::vector<std::string> names;
-    for (const BlockImage& image : run.block.images) names.push_back(image.name);
-    std::vector<std::optional<ExifGps>> gps;
-    std::vector<std::string> missing;
-    const Status read = ReadExifGpsOfImages(FLAGS_bundle_images, names, &gps, &missing);
-    if (!read.ok()) return BadInput(command, "--images: " + read.message());
-    if (missing.size() == names.size())
-      return BadInput(command, "--images: no image in " + FLAGS_bundle_images + " has GPS tags (EXIF GPSLatitude/GPSLongitude or DJI XMP GpsLatitude/GpsLongitude)");
-    SetPositionsFromGps(names, gps, FLAGS_bundle_exif_crs.empty() ? "EPSG:4979" : FLAGS_bundle_exif_crs,
-                        FLAGS_bundle_images + " (GPS tags)", inputs);
-    const long with_rtk = std::count_if(inputs->positions.begin(), inputs->positions.end(),
-                                        [](const CameraPositionMeasurement& m) { return m.accuracy_m.has_value(); });
-    if (!FLAGS_bundle_quiet) {
-      std::cerr << "photopose bundle: --images: " << inputs->positions.size() << " camera positions from GPS tags ("
-                << with_rtk << " with DJI RTK accuracies), heights as " << inputs->positions_crs << " defines them\n";
-      if (!missing.empty()) {
-        std::cerr << "photopose bundle: --images: " << missing.size() << (missing.size() == 1 ? " image" : " images")
-                  << " without GPS tags, adjusted without a position:";
-        for (size_t k = 0; k < missing.size() && k < 5; ++k) std::cerr << " " << missing[k];
-        std::cerr << (missing.size() > 5 ? " ...\n" : "\n");
-      }
-    }
-  } else if (!FLAGS_bundle_geo.empty()) {
-    GeoTxt geo;
-    const Status read = ReadGeoTxt(FLAGS_bundle_geo, &geo);
-    if (!read.ok()) return BadInput(command, read.message());
-    SetPositionsFromGeoTxt(geo, FLAGS_bundle_geo, inputs);
-    if (inputs->attitudes_not_used > 0 && !FLAGS_bundle_quiet)
-      std::cerr << "photopose bundle: " << FLAGS_bundle_geo << ": yaw/pitch/roll of " << inputs->attitudes_not_used
-                << " images read and not used (" << GeoTxtAttitudesNotUsedReason() << ")\n";
-  } else if (!FLAGS_bundle_frames.empty()) {
-    std::vector<FrameRecord> frames;
-    FramesTableOptions frames_options;
-    const Status read = ReadFramesTable(FLAGS_bundle_frames, frames_options, &frames);
-    if (!read.ok()) return BadInput(command, read.message());
-    inputs->positions_crs = FLAGS_bundle_crs;
-    inputs->positions_source = FLAGS_bundle_frames;
-    for (const FrameRecord& frame : frames) {
-      CameraPositionMeasurement m;
-      m.image = frame.raster;
-      m.position = frame.eo.center_in_ground();
-      m.accuracy_m = frame.center_accuracy_m;
-      m.line = frame.line;
-      inputs->positions.push_back(m);
-    }
-    if (!FLAGS_bundle_quiet)
-      std::cerr << "photopose bundle: " << FLAGS_bundle_frames << ": PerspectiveX/Y/Z read as camera positions; Omega/Phi/Kappa not used (the model gives the attitudes)\n";
+// --model_gps: the shots' GNSS positions an OpenSfM reconstruction holds.
+int PositionsFromModelGps(const char* command, const BundleRun& run, GeoreferenceInputs* inputs) {
+  // The shots' GNSS, in the reconstruction's topocentric frame at reference_lla: to EPSG:4979.
+  const OpenSfmExtras& extras = run.opensfm_extras;
+  if (!extras.reference_lla)
+    return BadInput(command, "--model_gps: " + FLAGS_bundle_opensfm + " has no reference_lla (nor a reference_lla.json beside it): its GNSS positions have no place on Earth");
+  LocalFrame frame;
+  const Status made = LocalFrame::Create("EPSG:4979", Eigen::Vector3d(extras.reference_lla->longitude_deg, extras.reference_lla->latitude_deg, extras.reference_lla->altitude_m), &frame);
+  if (!made.ok()) return BadInput(command, "--model_gps: " + made.message());
+  std::vector<Eigen::Vector3d> positions;
+  std::vector<int> images;
+  for (size_t i = 0; i < run.block.images.size() && i < extras.gps_position_m.size(); ++i) {
+    if (!extras.gps_position_m[i]) continue;
+    positions.push_back(*extras.gps_position_m[i]);
+    images.push_back(static_cast<int>(i));
   }
+  if (positions.empty()) return BadInput(command, "--model_gps: no shot of " + FLAGS_bundle_opensfm + " has a gps_position");
+  const Status moved = frame.FromLocal("EPSG:4979", &positions);
+  if (!moved.ok()) return BadInput(command, "--model_gps: " + moved.message());
+  inputs->positions_crs = "EPSG:4979";
+  inputs->positions_source = FLAGS_bundle_opensfm;
+  for (size_t k = 0; k < positions.size(); ++k) {
+    CameraPositionMeasurement m;
+    m.image = run.block.images[images[k]].name;
+    m.position = positions[k];
+    const std::optional<double>& dop = run.opensfm_extras.gps_dop_m[images[k]];
+    if (dop && *dop > 0.0) m.accuracy_m = Eigen::Vector3d::Constant(*dop);
+    inputs->positions.push_back(m);
+  }
+  return kGoOn;
+}
+
+// --images: the camera positions from the images' GPS tags (DJI's RTK accuracies where present).
+int PositionsFromImages(const char* command, const BundleRun& run, GeoreferenceInputs* inputs) {
+  std::vector<std::string> names;
+  for (const BlockImage& image : run.block.images) names.push_back(image.name);
+  std::vector<std::optional<ExifGps>> gps;
+  std::vector<std::string> missing;
+  const Status read = ReadExifGpsOfImages(FLAGS_bundle_images, names, &gps, &missing);
+  if (!read.ok()) return BadInput(command, "--images: " + read.message());
+  if (missing.size() == names.size())
+    return BadInput(command, "--images: no image in " + FLAGS_bundle_images + " has GPS tags (EXIF GPSLatitude/GPSLongitude or DJI XMP GpsLatitude/GpsLongitude)");
+  SetPositionsFromGps(names, gps, FLAGS_bundle_exif_crs.empty() ? "EPSG:4979" : FLAGS_bundle_exif_crs,
+                      FLAGS_bundle_images + " (GPS tags)", inputs);
+  const long with_rtk = std::count_if(inputs->positions.begin(), inputs->positions.end(),
+                                      [](const CameraPositionMeasurement& m) { return m.accuracy_m.has_value(); });
+  if (!FLAGS_bundle_quiet) {
+    std::cerr << "photopose bundle: --images: " << inputs->positions.size() << " camera positions from GPS tags ("
+              << with_rtk << " with DJI RTK accuracies), heights as " << inputs->positions_crs << " defines them\n";
+    if (!missing.empty()) {
+      std::cerr << "photopose bundle: --images: " << missing.size() << (missing.size() == 1 ? " image" : " images")
+                << " without GPS tags, adjusted without a position:";
+      for (size_t k = 0; k < missing.size() && k < 5; ++k) std::cerr << " " << missing[k];
+      std::cerr << (missing.size() > 5 ? " ...\n" : "\n");
+    }
+  }
+  return kGoOn;
+}
+
+// --geo: the camera positions of an OpenDroneMap geo.txt.
+int PositionsFromGeoTxt(const char* command, GeoreferenceInputs* inputs) {
+  GeoTxt geo;
+  const Status read = ReadGeoTxt(FLAGS_bundle_geo, &geo);
+  if (!read.ok()) return BadInput(command, read.message());
+  SetPositionsFromGeoTxt(geo, FLAGS_bundle_geo, inputs);
+  if (inputs->attitudes_not_used > 0 && !FLAGS_bundle_quiet)
+    std::cerr << "photopose bundle: " << FLAGS_bundle_geo << ": yaw/pitch/roll of " << inputs->attitudes_not_used
+              << " images read and not used (" << GeoTxtAttitudesNotUsedReason() << ")\n";
+  return kGoOn;
+}
+
+// --frames (with --crs): PerspectiveX/Y/Z of a frames table as the camera positions.
+int PositionsFromFrames(const char* command, GeoreferenceInputs* inputs) {
+  std::vector<FrameRecord> frames;
+  FramesTableOptions frames_options;
+  const Status read = ReadFramesTable(FLAGS_bundle_frames, frames_options, &frames);
+  if (!read.ok()) return BadInput(command, read.message());
+  inputs->positions_crs = FLAGS_bundle_crs;
+  inputs->positions_source = FLAGS_bundle_frames;
+  for (const FrameRecord& frame : frames) {
+    CameraPositionMeasurement m;
+    m.image = frame.raster;
+    m.position = frame.eo.center_in_ground();
+    m.accuracy_m = frame.center_accuracy_m;
+    m.line = frame.line;
+    inputs->positions.push_back(m);
+  }
+  if (!FLAGS_bundle_quiet)
+    std::cerr << "photopose bundle: " << FLAGS_bundle_frames << ": PerspectiveX/Y/Z read as camera positions; Omega/Phi/Kappa not used (the model gives the attitudes)\n";
+  return kGoOn;
+}
+
+// --gcp_list (with --check_points), or --points with --marks (with --crs): the control.
+int ControlFromFiles(const char* command, GeoreferenceInputs* inputs) {
   if (!FLAGS_bundle_gcp_list.empty()) {
     GcpList gcp;
     const Status read = ReadGcpList(FLAGS_bundle_gcp_list, &gcp);
@@ -495,6 +512,23 @@ int ReadGeoreferenceInputs(const char* command, const BundleRun& run, Georeferen
     inputs->control_source = FLAGS_bundle_points;
   }
   return kGoOn;
+}
+
+// The camera positions and control of a georeferenced model, as files give them: the positions
+// from one source (CheckInputChoice allows one), then the control.
+int ReadGeoreferenceInputs(const char* command, const BundleRun& run, GeoreferenceInputs* inputs) {
+  int code = kGoOn;
+  if (FLAGS_bundle_model_gps) {
+    code = PositionsFromModelGps(command, run, inputs);
+  } else if (!FLAGS_bundle_images.empty()) {
+    code = PositionsFromImages(command, run, inputs);
+  } else if (!FLAGS_bundle_geo.empty()) {
+    code = PositionsFromGeoTxt(command, inputs);
+  } else if (!FLAGS_bundle_frames.empty()) {
+    code = PositionsFromFrames(command, inputs);
+  }
+  if (code != kGoOn) return code;
+  return ControlFromFiles(command, inputs);
 }
 
 // Moves the model into the local frame of its positions and control (PrepareGeoreference).
@@ -516,10 +550,10 @@ int GeoreferenceModel(const char* command, BundleRun* run) {
     if (!g.positions_unmatched.empty()) std::cerr << ", " << g.positions_unmatched.size() << " name no image of the model (first: '" << g.positions_unmatched[0] << "')";
     std::cerr << "; " << g.control_marks_matched << " control marks";
     if (!g.control_marks_unmatched.empty()) std::cerr << ", " << g.control_marks_unmatched.size() << " on images the model does not have (first: " << g.control_marks_unmatched[0] << ")";
-    std::cerr << "\nphotopose bundle: similarity: scale " << g.model_to_local.scale << ", " << g.similarity.num_inliers
+    std::cerr << "\nphotopose bundle: similarity: scale " << FormatSignificant(g.model_to_local.scale, 6) << ", " << g.similarity.num_inliers
               << " of " << g.similarity.residual_m.size() << " pairs inliers";
-    if (g.control_after_similarity.count > 0) std::cerr << "; control RMSE after it " << g.control_after_similarity.total_m << " m";
-    if (g.check_after_similarity.count > 0) std::cerr << "; check RMSE after it " << g.check_after_similarity.total_m << " m";
+    if (g.control_after_similarity.count > 0) std::cerr << "; control RMSE after it " << FormatLengthWithUnit(g.control_after_similarity.total_m);
+    if (g.check_after_similarity.count > 0) std::cerr << "; check RMSE after it " << FormatLengthWithUnit(g.check_after_similarity.total_m);
     std::cerr << "\n";
   }
   return kGoOn;
@@ -827,13 +861,17 @@ void PrintClosingSummary(const BundleRun& run, bool usable) {
   if (run.georeference && run.georeferenced.evaluated) {
     const GeoreferenceResult& g = run.georeferenced;
     std::cout << "; georeferenced in " << g.out_crs;
-    if (g.control_after_adjustment.count > 0)
-      std::cout << ": control RMSE " << g.control_after_similarity.total_m << " m after the similarity, "
-                << g.control_after_adjustment.total_m << " m after the adjustment";
-    else
+    // Each pair of figures in one unit (tools/report/html_kit.h).
+    if (g.control_after_adjustment.count > 0) {
+      const std::vector<std::string> rmse = FormatLengthsWithUnit({g.control_after_similarity.total_m, g.control_after_adjustment.total_m});
+      std::cout << ": control RMSE " << rmse[0] << " after the similarity, " << rmse[1] << " after the adjustment";
+    } else {
       std::cout << " by the camera positions alone (no control point)";
-    if (g.check_after_adjustment.count > 0)
-      std::cout << "; check RMSE " << g.check_after_similarity.total_m << " m -> " << g.check_after_adjustment.total_m << " m";
+    }
+    if (g.check_after_adjustment.count > 0) {
+      const std::vector<std::string> rmse = FormatLengthsWithUnit({g.check_after_similarity.total_m, g.check_after_adjustment.total_m});
+      std::cout << "; check RMSE " << rmse[0] << " -> " << rmse[1];
+    }
   }
   std::cout << "; wrote";
   bool any = false;
@@ -855,11 +893,7 @@ double SecondsSince(std::chrono::steady_clock::time_point start) {
 int RunBundle(int argc, char** argv) {
   const char* const kCommand = "bundle";
   ParsedFlags parsed;
-  if (!ParseFlags(argc, argv, BundleFlags(), &parsed)) return kExitBadInput;
-  if (parsed.help) {
-    PrintHelp(kUsage, BundleFlags());
-    return kExitSuccess;
-  }
+  if (const std::optional<int> done = StartCommand(argc, argv, kUsage, BundleFlags(), &parsed)) return *done;
   BundleRun run;
   run.context.command_line = "photopose bundle";
   for (int i = 0; i < argc; ++i) run.context.command_line += std::string(" ") + argv[i];

@@ -253,6 +253,14 @@ bool ParseFlags(int argc, char** argv, const CommandFlags& flags, ParsedFlags* p
   return parser.Parse(std::vector<std::string>(argv, argv + argc), "") && parser.CheckRanges();
 }
 
+std::optional<int> StartCommand(int argc, char** argv, const std::string& usage,
+                                const CommandFlags& flags, ParsedFlags* parsed) {
+  if (!ParseFlags(argc, argv, flags, parsed)) return kExitBadInput;
+  if (!parsed->help) return std::nullopt;
+  PrintHelp(usage, flags);
+  return kExitSuccess;
+}
+
 std::vector<std::string> NumericFlagsWithoutRange(const CommandFlags& flags) {
   std::vector<std::string> missing;
   for (const gflags::CommandLineFlagInfo& info : CommandGflags(flags)) {

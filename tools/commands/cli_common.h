@@ -3,6 +3,7 @@
 // own and checks every flag wherever it comes from, one-line error reporting, and the phase of a
 // run that main's top-level guard reads.
 
+#include <optional>
 #include <string>
 #include <utility>
 #include <vector>
@@ -79,6 +80,12 @@ struct ParsedFlags {
 // flag --bogus") and give false: the caller exits with kExitBadInput before any work. gflags never
 // sees a flag file.
 bool ParseFlags(int argc, char** argv, const CommandFlags& flags, ParsedFlags* parsed);
+
+// The opening of every subcommand's Run*: ParseFlags, then --help answered with PrintHelp(usage).
+// Returns the exit status when the run ends here (kExitBadInput after bad flags, kExitSuccess
+// after --help), nothing when the command goes on with `parsed`.
+std::optional<int> StartCommand(int argc, char** argv, const std::string& usage,
+                                const CommandFlags& flags, ParsedFlags* parsed);
 
 // The numeric flags of `flags` (user names) that have no FlagRange: empty when the command is
 // complete (a test holds every command to it).

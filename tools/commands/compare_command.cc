@@ -14,6 +14,7 @@
 #include <iostream>
 #include <iterator>
 #include <mutex>
+#include <optional>
 #include <sstream>
 #include <string>
 #include <vector>
@@ -464,7 +465,7 @@ int RunMonteCarloMode(const std::vector<SolverVariant>& solvers, const Resection
   options.seed = FLAGS_compare_seed;
   options.success_sigmas = FLAGS_compare_success_sigmas;
   options.num_threads = FLAGS_compare_threads;
-  if (!options.IsValid(&why)) return BadInput(kCommand, why);
+  if (const Status valid = Validate(options); !valid.ok()) return BadInput(kCommand, valid.message());
   // Sizes in 64 bits: a grid of long lists times many trials must be refused, not allocated.
   const int64_t settings = CountSweepSettings(options);
   const int64_t solves = SaturatedProduct(SaturatedProduct(settings, options.trials),
@@ -521,7 +522,7 @@ int RunDatasetMode(const std::vector<SolverVariant>& solvers, const ResectionOpt
   if (!(FLAGS_compare_default_film_accuracy > 0.0) ||
       !std::isfinite(FLAGS_compare_default_film_accuracy))
     return BadInput(kCommand, "--default_film_accuracy must be a positive number of micrometres");
-  if (!options.IsValid(&why)) return BadInput(kCommand, why);
+  if (const Status valid = Validate(options); !valid.ok()) return BadInput(kCommand, valid.message());
   OutputFiles outputs;
   const Status declared =
       DeclareOutputs({{"--cameras", job.files.cameras},
@@ -579,7 +580,7 @@ int RunBlockMode(const std::string& command_line, const ParsedFlags& parsed) {
   options.trials = WasGiven("trials") ? FLAGS_compare_trials : 5;
   options.seed = FLAGS_compare_seed;
   options.num_threads = FLAGS_compare_threads;
-  if (!options.IsValid(&why)) return BadInput(kCommand, why);
+  if (const Status valid = Validate(options); !valid.ok()) return BadInput(kCommand, valid.message());
   const int64_t settings = static_cast<int64_t>(options.noise_px.size() + options.tie_blunders.size() +
                                                 options.tie_points.size() +
                                                 options.gnss_sigma_m.size()) - 3;
@@ -666,11 +667,7 @@ int RunBlockDatasetMode(const std::string& command_line, const ParsedFlags& pars
 
 int RunCompare(int argc, char** argv) {
   ParsedFlags parsed;
-  if (!ParseFlags(argc, argv, CompareFlags(), &parsed)) return kExitBadInput;
-  if (parsed.help) {
-    PrintHelp(kUsage, CompareFlags());
-    return kExitSuccess;
-  }
+  if (const std::optional<int> done = StartCommand(argc, argv, kUsage, CompareFlags(), &parsed)) return *done;
   std::string command_line = "photopose compare";
   for (int i = 0; i < argc; ++i) command_line += " " + QuoteForShell(argv[i]);
 
@@ -710,8 +707,7 @@ int RunCompare(int argc, char** argv) {
   resection.refinement.taylor.max_iterations = FLAGS_compare_max_iterations;
   resection.consensus.ransac.seed = FLAGS_compare_seed;
   if (FLAGS_compare_threads < 0) return BadInput(kCommand, "--threads must be >= 0");
-  std::string why;
-  if (!resection.IsValid(&why)) return BadInput(kCommand, why);
+  if (const Status valid = Validate(resection); !valid.ok()) return BadInput(kCommand, valid.message());
   return dataset ? RunDatasetMode(solvers, resection, command_line, parsed)
                  : RunMonteCarloMode(solvers, resection, command_line, parsed);
 }

@@ -3,6 +3,7 @@
 
 #include <cstdio>
 #include <iostream>
+#include <optional>
 
 #include "core/io/block_tables.h"
 #include "core/camera.h"
@@ -201,11 +202,7 @@ std::vector<std::string> PrintResults(const ResectionJob& prepared, RotationConv
 
 int RunResect(int argc, char** argv) {
   ParsedFlags parsed;
-  if (!ParseFlags(argc, argv, ResectFlags(), &parsed)) return kExitBadInput;
-  if (parsed.help) {
-    PrintHelp(kUsage, ResectFlags());
-    return kExitSuccess;
-  }
+  if (const std::optional<int> done = StartCommand(argc, argv, kUsage, ResectFlags(), &parsed)) return *done;
   ResectionJobOptions job;
   std::string why;
   if (!JobFromFlags(&job, &why)) return BadInput("resect", why);

@@ -3,6 +3,7 @@
 
 #include <filesystem>
 #include <iostream>
+#include <optional>
 
 #include "core/io/block_tables.h"
 #include "core/io/colmap.h"
@@ -256,11 +257,7 @@ int RunSimulateBlock(const ParsedFlags& parsed, RotationConvention rotation) {
 
 int RunSimulate(int argc, char** argv) {
   ParsedFlags parsed;
-  if (!ParseFlags(argc, argv, SimulateFlags(), &parsed)) return kExitBadInput;
-  if (parsed.help) {
-    PrintHelp(kUsage, SimulateFlags());
-    return kExitSuccess;
-  }
+  if (const std::optional<int> done = StartCommand(argc, argv, kUsage, SimulateFlags(), &parsed)) return *done;
   RotationConvention rotation = RotationConvention::kSeed;
   if (!ParseEnum(FLAGS_sim_rotation, &rotation))
     return BadInput("simulate", EnumFlagError<RotationConvention>("--rotation", FLAGS_sim_rotation));

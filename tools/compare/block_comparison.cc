@@ -308,8 +308,7 @@ BlockSolverStatistics BlockSolverStatisticsOf(
 
 Status RunBlockComparison(const BlockComparisonOptions& options, BlockComparisonResult* result) {
   *result = BlockComparisonResult();
-  std::string why;
-  if (!options.IsValid(&why)) return Status::Error(why);
+  PHOTOPOSE_RETURN_IF_ERROR(Validate(options));
   const Clock::time_point start = Clock::now();
   result->settings = BlockSettings(options);
   for (const BlockSolverVariant& v : options.solvers) result->solver_names.push_back(v.Name());

@@ -572,8 +572,7 @@ Status MakeSceneJob(const SyntheticScene& scene, SceneJob* scene_job) {
 
 Status RunMonteCarlo(const MonteCarloOptions& options, MonteCarloResult* result) {
   *result = MonteCarloResult();
-  std::string why;
-  if (!options.IsValid(&why)) return Status::Error(why);
+  PHOTOPOSE_RETURN_IF_ERROR(Validate(options));
   const auto start = std::chrono::steady_clock::now();
   for (const SolverVariant& v : options.solvers) result->solver_names.push_back(v.Name());
   const std::vector<SweepSetting> settings = MakeSweepSettings(options);
@@ -637,8 +636,7 @@ bool DatasetComparisonOptions::IsValid(std::string* why) const {
 Status RunDatasetComparison(const DatasetComparisonOptions& options,
                             DatasetComparisonResult* result) {
   *result = DatasetComparisonResult();
-  std::string why;
-  if (!options.IsValid(&why)) return Status::Error(why);
+  PHOTOPOSE_RETURN_IF_ERROR(Validate(options));
   ResectionJob job;
   Status status = PrepareResectionJob(options.job, &job);
   if (!status.ok()) return status;

@@ -515,10 +515,10 @@ bool AbsorbsGrossErrors(const BundleGroupStatistics& group) {
 std::string GrossErrorsAbsorbed(const BundleGroupStatistics& group) {
   if (!AbsorbsGrossErrors(group)) return "";
   const double stated = group.stated_accuracy.x(), estimated = group.estimated_accuracy.x();
+  const std::vector<std::string> values = FormatMarkValues({estimated, stated}, group.unit);
   std::string text = std::string(EnumName(group.group)) + ": the estimated accuracy " +
-                     FormatMarkValue(estimated, group.unit) + " is " +
-                     FormatUnitless(estimated / stated, 1) + " times the stated " +
-                     FormatMarkValue(stated, group.unit) +
+                     values[0] + " is " + FormatUnitless(estimated / stated, 1) +
+                     " times the stated " + values[1] +
                      ": gross errors are far likelier than a misstated accuracy, and the "
                      "estimation absorbed them into every observation of the group (sigma0 "
                      "ends near 1 and does not show them)";
@@ -584,9 +584,11 @@ std::vector<std::string> BundleConsoleLines(const Block& block, const BundleAdju
       lines.push_back(line.str());
       continue;
     }
-    line << EnumName(g.group) << ": " << g.count << ", stated "
-         << FormatMarkValue(g.stated_accuracy.x(), g.unit) << ", RMS "
-         << FormatMarkValue(g.rms_total, g.unit) << ", RMS/stated " << FormatUnitless(g.ratio)
+    // One unit for the line's lengths (a group of metres: mm, cm or m for both).
+    const std::vector<std::string> values =
+        FormatMarkValues({g.stated_accuracy.x(), g.rms_total}, g.unit);
+    line << EnumName(g.group) << ": " << g.count << ", stated " << values[0] << ", RMS "
+         << values[1] << ", RMS/stated " << FormatUnitless(g.ratio)
          << ", redundancy share " << FormatUnitless(g.redundancy_share)
          << (g.overfit ? "  OVERFIT" : "");
     if (g.num_fixed > 0) line << "; " << g.num_fixed << " more held fixed";
@@ -619,8 +621,9 @@ std::vector<std::string> BundleConsoleLines(const Block& block, const BundleAdju
     for (const auto& [group, flag] : kFlags) {
       if (g.group != group) continue;
       std::ostringstream line;
-      line << EnumName(g.group) << ": " << FormatMarkValue(g.stated_accuracy.x(), g.unit)
-           << " stated, " << FormatMarkValue(g.estimated_accuracy.x(), g.unit) << " estimated (+-"
+      const std::vector<std::string> values =
+          FormatMarkValues({g.stated_accuracy.x(), g.estimated_accuracy.x()}, g.unit);
+      line << EnumName(g.group) << ": " << values[0] << " stated, " << values[1] << " estimated (+-"
            << FormatUnitless(100.0 * g.estimated_accuracy_standard_error, 0) << " %): set " << flag
            << "=" << FormatSignificant(g.estimated_accuracy.x(), 2);
       lines.push_back(line.str());

@@ -250,6 +250,17 @@ std::string FormatLengthWithUnit(double value_m) {
   return FormatLength(value_m, unit) + " " + LengthUnitName(unit);
 }
 
+std::vector<std::string> FormatLengthsWithUnit(const std::vector<double>& values_m) {
+  double largest = 0.0;
+  for (const double v : values_m)
+    if (std::isfinite(v)) largest = std::max(largest, std::abs(v));
+  const LengthUnit unit = LengthUnitFor(largest);
+  std::vector<std::string> texts;
+  for (const double v : values_m)
+    texts.push_back(std::isfinite(v) ? FormatLength(v, unit) + " " + LengthUnitName(unit) : "n/a");
+  return texts;
+}
+
 std::string FormatCoordinate(double value_m) { return ReportFixed(value_m, 3); }
 std::string FormatPixels(double value_px) { return ReportFixed(value_px, 2); }
 std::string FormatFilm(double value_um) { return ReportFixed(value_um, 2); }
@@ -259,6 +270,14 @@ std::string FormatMarkValue(double value, const std::string& unit) {
   if (unit == "m") return FormatLengthWithUnit(value);
   if (unit == "deg") return FormatArcSeconds(value) + " arcsec";
   return ReportFixed(value, 2) + " " + unit;
+}
+
+std::vector<std::string> FormatMarkValues(const std::vector<double>& values,
+                                          const std::string& unit) {
+  if (unit == "m") return FormatLengthsWithUnit(values);
+  std::vector<std::string> texts;
+  for (const double v : values) texts.push_back(FormatMarkValue(v, unit));
+  return texts;
 }
 
 std::string FormatDegrees(double value_deg) { return ReportFixed(value_deg, 4); }

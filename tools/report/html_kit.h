@@ -50,6 +50,9 @@ double LengthIn(double value_m, LengthUnit unit);
 std::string FormatLength(double value_m, LengthUnit unit);
 // The value (m) in the unit its own magnitude calls for, with the unit: "6.9 mm", "1.24 m".
 std::string FormatLengthWithUnit(double value_m);
+// Lengths (m) printed side by side on one line, in one unit: LengthUnitFor of their largest
+// finite magnitude, each with the unit ("27.9 cm", "1000.0 cm"); "n/a" when not finite.
+std::vector<std::string> FormatLengthsWithUnit(const std::vector<double>& values_m);
 // A ground coordinate or a camera position (m) to the millimetre: "1234.567".
 std::string FormatCoordinate(double value_m);
 // Image measurements: pixels (px) and film coordinates (um), two decimals.
@@ -59,6 +62,10 @@ std::string FormatFilm(double value_um);
 // group mixing pixel and film marks (solvers/bundle/bundle_statistics.cc) with two decimals and
 // the unit; "m" as FormatLengthWithUnit (mm, cm or m); "deg" in arc seconds ("36.0 arcsec").
 std::string FormatMarkValue(double value, const std::string& unit);
+// Values of one group's unit printed on one line (stated, RMS, estimated): FormatMarkValue of each,
+// lengths ("m") in one unit for all of them (FormatLengthsWithUnit).
+std::vector<std::string> FormatMarkValues(const std::vector<double>& values,
+                                          const std::string& unit);
 // Angles: degrees with four decimals, arc seconds (of a value in degrees) with one.
 std::string FormatDegrees(double value_deg);
 std::string FormatArcSeconds(double value_deg);

@@ -7,6 +7,7 @@
 #include <filesystem>
 #include <map>
 #include <nlohmann/json.hpp>
+#include <regex>
 #include <set>
 #include <sstream>
 #include <string>
@@ -103,6 +104,29 @@ TEST(BundleCommand, SimulatedBlockAdjustsToItsTruthWithEveryBlunderFound) {
 // and otherwise the same tables. The frames and points written differ; with the correction the
 // centres are at the truth within centimetres, without it farther off; --solver=taylor gives the
 // same corrected centres.
+// Issue 25: no scientific notation a surveyor has to read, on the console either. The progress
+// lines (Ceres' trust-region radius starts at 10000, which %g printed as 1e+04) and the summary.
+TEST(BundleCommand, ProgressAndSummaryLinesPrintNoExponent) {
+  const std::string dir = ScratchDir();
+  const std::string block = SimulateBlock(dir);
+  const CliRun run = RunCli("bundle " + TableArgs(block) + " --out=" + dir + "/frames.csv", dir);
+  ASSERT_EQ(run.exit_code, 0) << run.err;
+  const std::regex exponent("[0-9]e[+-]?[0-9]");
+  int progress = 0;
+  for (const std::string& text : {run.err, run.out}) {
+    std::istringstream lines(text);
+    for (std::string line; std::getline(lines, line);) {
+      // The paths are the test's, not the command's figures.
+      for (size_t at; (at = line.find(dir)) != std::string::npos;) line.replace(at, dir.size(), "DIR");
+      EXPECT_FALSE(std::regex_search(line, exponent)) << line;
+      progress += line.find(" radius 10000  solve ") != std::string::npos;
+    }
+  }
+  EXPECT_GE(progress, 1) << run.err;  // the first iteration's radius, in fixed notation
+  EXPECT_NE(run.err.find("photopose bundle: round 1 iteration   0: cost "), std::string::npos)
+      << run.err;
+}
+
 TEST(BundleCommand, TheCameraTablesApplyEccIsHonoured) {
   const std::string dir = ScratchDir();
   Block block;

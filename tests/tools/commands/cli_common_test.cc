@@ -1,14 +1,19 @@
 // The shared flag handling of the subcommands: ranges, flag files, help.
 #include "tools/commands/cli_common.h"
 
+#include <gflags/gflags.h>
 #include <gtest/gtest.h>
 
 #include <cmath>
 #include <limits>
+#include <optional>
 #include <sstream>
 #include <string>
+#include <vector>
 
 #include "tests/tools/cli_test_util.h"
+
+DEFINE_int32(clitest_count, 1, "A count for the tests of StartCommand.");
 
 namespace photopose::cli {
 namespace {
@@ -89,6 +94,51 @@ TEST(CliCommonTest, FlagFilesTakeBothFormsCommentsAndNestedFiles) {
                          "/inputs.flags is the input --flagfile=" + dir +
                          "/inputs.flags; photopose never writes over an input: choose "
                          "another output file\n");
+}
+
+// StartCommand: the opening of every Run*. A command of this file's own flags (defined_in
+// "cli_common_test").
+const CommandFlags& TestFlags() {
+  static const CommandFlags* const kFlags =
+      new CommandFlags{"test", "cli_common_test", "clitest_", {}, {{"count", 0.0, 10.0}}};
+  return *kFlags;
+}
+
+std::optional<int> Start(std::vector<std::string> args, ParsedFlags* parsed) {
+  std::vector<char*> argv;
+  for (std::string& arg : args) argv.push_back(arg.data());
+  return StartCommand(static_cast<int>(argv.size()), argv.data(), "usage: photopose test",
+                      TestFlags(), parsed);
+}
+
+TEST(CliCommonTest, StartCommandParsesAnswersHelpOrRefuses) {
+  ParsedFlags parsed;
+  ::testing::internal::CaptureStdout();
+  ::testing::internal::CaptureStderr();
+  const std::optional<int> go_on = Start({"--count=7"}, &parsed);
+  EXPECT_FALSE(go_on.has_value());
+  EXPECT_EQ(FLAGS_clitest_count, 7);
+  EXPECT_FALSE(parsed.help);
+  EXPECT_EQ(::testing::internal::GetCapturedStdout(), "");
+  EXPECT_EQ(::testing::internal::GetCapturedStderr(), "");
+
+  ::testing::internal::CaptureStdout();
+  const std::optional<int> help = Start({"--count=3", "--help"}, &parsed);
+  const std::string help_text = ::testing::internal::GetCapturedStdout();
+  ASSERT_TRUE(help.has_value());
+  EXPECT_EQ(*help, kExitSuccess);
+  EXPECT_EQ(help_text.rfind("usage: photopose test\n", 0), 0u) << help_text;
+  EXPECT_NE(help_text.find("  --count (int32, default: \"1\")"), std::string::npos) << help_text;
+
+  ::testing::internal::CaptureStdout();
+  ::testing::internal::CaptureStderr();
+  const std::optional<int> refused = Start({"--count=11"}, &parsed);
+  EXPECT_EQ(::testing::internal::GetCapturedStdout(), "");
+  EXPECT_EQ(::testing::internal::GetCapturedStderr(),
+            "photopose test: --count=11 is outside [0, 10]\n");
+  ASSERT_TRUE(refused.has_value());
+  EXPECT_EQ(*refused, kExitBadInput);
+  FLAGS_clitest_count = 1;
 }
 
 TEST(CliCommonTest, LoggingFlagsOfTheLibrariesAreNotTheCommandsFlags) {

@@ -80,6 +80,34 @@ TEST(BundleReport, ConsoleLinesNeverPrintAnExponent) {
   EXPECT_TRUE(has("time: problem 0.000061 s"));
 }
 
+// One unit per line: a group's stated accuracy, RMS and estimate are printed in the unit the
+// largest of them calls for, not each in its own (no "stated 10.000 m, RMS 278.7 cm").
+TEST(BundleReport, AGroupLinePrintsItsLengthsInOneUnit) {
+  BundleAdjustmentResult result;
+  result.summary.datum_description = "absolute";
+  result.groups.push_back(Group(kCameraPositions, "m", 10.0, 2.787));
+  result.groups.back().estimated_accuracy = Eigen::Vector3d::Constant(3.1);
+  result.groups.back().estimated_accuracy_standard_error = 0.2;
+  result.groups.push_back(Group(kControlPoints, "m", 0.005, 0.25));
+  const std::vector<std::string> lines = BundleConsoleLines(Block(), result, BundleReportContext());
+  const auto has = [&](const std::string& text) {
+    for (const std::string& line : lines)
+      if (line.find(text) != std::string::npos) return true;
+    return false;
+  };
+  EXPECT_TRUE(has("camera_positions: 12, stated 10.000 m, RMS 2.787 m, RMS/stated 0.28"));
+  EXPECT_TRUE(has("camera_positions: 10.000 m stated, 3.100 m estimated (+-20 %): set "
+                  "--camera_accuracy=3.1"));
+  EXPECT_TRUE(has("control_points: 12, stated 0.5 cm, RMS 25.0 cm, RMS/stated 50.00"));
+  // The gross-error warning's two accuracies too.
+  BundleGroupStatistics points = Group(kControlPoints, "m", 0.005, 0.25);
+  points.estimated_accuracy = Eigen::Vector3d::Constant(0.26);
+  EXPECT_NE(GrossErrorsAbsorbed(points).find("the estimated accuracy 26.0 cm is 52.0 times the "
+                                             "stated 0.5 cm"),
+            std::string::npos)
+      << GrossErrorsAbsorbed(points);
+}
+
 // The README's example with --estimate_accuracies: the control marks' gross errors (5 % of the
 // marks, 20-200 px) stay in and the estimation makes 0.5 px into 18.6 px. The report says so in
 // words; an estimate within the factor says nothing.

@@ -149,6 +149,20 @@ TEST(HtmlKit, LengthsTakeTheUnitTheirMagnitudeCallsFor) {
   EXPECT_DOUBLE_EQ(LengthIn(0.5, LengthUnit::kCentimetre), 50.0);
 }
 
+// Figures printed side by side take one unit, the one their largest magnitude calls for.
+TEST(HtmlKit, LengthsOfOneLineShareOneUnit) {
+  EXPECT_EQ(FormatLengthsWithUnit({10.0, 2.787}), (std::vector<std::string>{"10.000 m", "2.787 m"}));
+  EXPECT_EQ(FormatLengthsWithUnit({0.005, 0.25}), (std::vector<std::string>{"0.5 cm", "25.0 cm"}));
+  EXPECT_EQ(FormatLengthsWithUnit({0.005, std::nan(""), -0.0069}),
+            (std::vector<std::string>{"5.0 mm", "n/a", "-6.9 mm"}));
+  EXPECT_EQ(FormatLengthsWithUnit({}), std::vector<std::string>{});
+  // A group's values: lengths share a unit, pixels, micrometres and arc seconds are fixed.
+  EXPECT_EQ(FormatMarkValues({10.0, 2.787}, "m"), (std::vector<std::string>{"10.000 m", "2.787 m"}));
+  EXPECT_EQ(FormatMarkValues({0.5, 18.6}, "px"), (std::vector<std::string>{"0.50 px", "18.60 px"}));
+  EXPECT_EQ(FormatMarkValues({0.01, 0.0000214}, "deg"),
+            (std::vector<std::string>{"36.0 arcsec", "0.1 arcsec"}));
+}
+
 TEST(HtmlKit, NumbersNeverTakeAnExponent) {
   EXPECT_EQ(FormatSignificant(0.000697, 3), "0.000697");
   EXPECT_EQ(FormatSignificant(6.97e-05, 3), "0.00007");  // at most six decimals
