@@ -708,10 +708,10 @@ int CheckSigma0(const char* command, BundleRun* run) {
     if (g.count > 0 && g.ratio > kSigma0Bound) groups.push_back(&g);
   std::sort(groups.begin(), groups.end(), [](const auto* a, const auto* b) { return a->ratio > b->ratio; });
   std::ostringstream why;
-  why << "sigma0 " << result.summary.sigma0 << " stays above " << kSigma0Bound
+  why << "sigma0 " << FormatUnitless(result.summary.sigma0, 2) << " stays above " << FormatUnitless(kSigma0Bound, 0)
       << " after the search for gross errors: the stated accuracies do not describe these data";
   for (size_t k = 0; k < groups.size(); ++k)
-    why << (k == 0 ? "; groups to blame: " : ", ") << EnumName(groups[k]->group) << " (RMS/stated " << groups[k]->ratio << ")";
+    why << (k == 0 ? "; groups to blame: " : ", ") << EnumName(groups[k]->group) << " (RMS/stated " << FormatUnitless(groups[k]->ratio, 2) << ")";
   std::vector<const BundleObservationDiagnostics*> worst;
   for (const BundleObservationDiagnostics& d : result.observations)
     if (std::isfinite(d.normalized)) worst.push_back(&d);
@@ -727,7 +727,7 @@ int CheckSigma0(const char* command, BundleRun* run) {
     } else {
       item = std::string(EnumName(d.group)) + " of image '" + run->block.images[d.item].name + "'";
     }
-    why << (k == 0 ? "; worst: " : ", ") << item << " |w| " << std::abs(d.normalized);
+    why << (k == 0 ? "; worst: " : ", ") << item << " |w| " << FormatUnitless(std::abs(d.normalized), 1);
   }
   why << (FLAGS_bundle_force ? " (outputs written because of --force)" : "; check them, state other accuracies, or give --force to write the outputs anyway");
   std::cerr << "photopose bundle: " << why.str() << "\n";
