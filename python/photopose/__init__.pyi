@@ -285,7 +285,16 @@ class ResectionResult:
     def summary(self) -> ResectionSummary: ...
 
 def resect(input: ResectionInput, options: Optional[ResectionOptions] = None) -> ResectionResult: ...
-def resect_images(inputs: list[ResectionInput], options: Optional[ResectionOptions] = None, num_threads: int = 0) -> list[ResectionResult]: ...
+class ResectionProgress:
+    """resect_images' progress, given to its callback after each part of the batch."""
+    @property
+    def images_done(self) -> int: ...  # count, increasing to images_total
+    @property
+    def images_total(self) -> int: ...  # count
+    @property
+    def elapsed_seconds(self) -> float: ...  # s since the call started
+
+def resect_images(inputs: list[ResectionInput], options: Optional[ResectionOptions] = None, num_threads: int = 0, *, progress: Optional[Callable[[ResectionProgress], None]] = None) -> list[ResectionResult]: ...
 class GroundPoint:
     """A row of the ground points table."""
     def __init__(self, **kwargs: Any) -> None: ...
@@ -666,7 +675,7 @@ class BundleImageResult:
     @property
     def rms_residual(self) -> float: ...
     @property
-    def unit(self) -> str: ...
+    def unit(self) -> str: ...  # rms_residual's unit: 'px', 'um', or 'sigma' for an image with pixel and film marks
 
 class BundlePointResult:
     @property
@@ -739,6 +748,15 @@ class BundleRejectedMark:
     @property
     def whitened_residual(self) -> float: ...
 
+class BundleRejectedCheckMark:
+    """A check point's mark rejected by the w-test of its intersection."""
+    @property
+    def mark(self) -> int: ...  # index into the block's marks
+    @property
+    def normalized(self) -> float: ...  # the larger |w| of x and y
+    @property
+    def residual(self) -> numpy.ndarray: ...  # 2: observed - computed at the intersection that still held it, image-plane units (um for a frame camera's pixel marks)
+
 class BundleSnoopingStep:
     @property
     def group(self) -> str: ...
@@ -768,6 +786,8 @@ class BundleAdjustmentResult:
     def calibration(self) -> list[BundleCalibrationResult]: ...
     @property
     def rejected_marks(self) -> list[BundleRejectedMark]: ...
+    @property
+    def rejected_check_marks(self) -> list[BundleRejectedCheckMark]: ...
     @property
     def lever_arm_m(self) -> Optional[numpy.ndarray]: ...
     @property
@@ -900,6 +920,7 @@ class ExifGps:
     def rtk_flag(self) -> Optional[int]: ...  # DJI RtkFlag (50 fixed)
 
 def read_image_gps(path: PathLike) -> ExifGps: ...
+def parse_image_gps(data: bytes, name: str = '<bytes>') -> ExifGps: ...
 def read_images_gps(directory: PathLike, names: list[str]) -> tuple: ...
 class CameraPositionMeasurement:
     """A measured projection centre (GNSS) of an image, named as the block names it."""

@@ -197,7 +197,8 @@ void BindBundleResultParts(py::module_& m) {
       .def_readonly("has_covariance", &BundleImageResult::has_covariance)
       .def_readonly("num_marks", &BundleImageResult::num_marks)
       .def_readonly("rms_residual", &BundleImageResult::rms_residual)
-      .def_readonly("unit", &BundleImageResult::unit)
+      .def_readonly("unit", &BundleImageResult::unit,
+                    "rms_residual's unit: 'px', 'um', or 'sigma' for an image with pixel and film marks")
       .def("__repr__", [](const py::object& self) { return PropertiesRepr(self); });
 
   py::class_<BundlePointResult>(m, "BundlePointResult")
@@ -246,6 +247,15 @@ void BindBundleResultParts(py::module_& m) {
       .def_readonly("whitened_residual", &BundleRejectedMark::whitened_residual)
       .def("__repr__", [](const py::object& self) { return PropertiesRepr(self); });
 
+  py::class_<BundleRejectedCheckMark>(m, "BundleRejectedCheckMark",
+                                      "A check point's mark rejected by the w-test of its intersection.")
+      .def_readonly("mark", &BundleRejectedCheckMark::mark, "index into the block's marks")
+      .def_readonly("normalized", &BundleRejectedCheckMark::normalized, "the larger |w| of x and y")
+      .def_property_readonly("residual", [](const BundleRejectedCheckMark& r) { return Eigen::Vector2d(r.residual); },
+                             "observed - computed at the intersection that still held it, in image-plane units (um for a "
+                             "frame camera's pixel marks)")
+      .def("__repr__", [](const py::object& self) { return PropertiesRepr(self); });
+
   py::class_<BundleSnoopingStep>(m, "BundleSnoopingStep")
       .def_readonly("group", &BundleSnoopingStep::group)
       .def_readonly("item", &BundleSnoopingStep::item)
@@ -268,6 +278,7 @@ bundle_adjust holds the adjusted values.)doc");
       .def_readonly("groups", &BundleAdjustmentResult::groups)
       .def_readonly("calibration", &BundleAdjustmentResult::calibration)
       .def_readonly("rejected_marks", &BundleAdjustmentResult::rejected_marks)
+      .def_readonly("rejected_check_marks", &BundleAdjustmentResult::rejected_check_marks)
       .def_readonly("lever_arm_m", &BundleAdjustmentResult::lever_arm_m)
       .def_readonly("num_check_points", &BundleAdjustmentResult::num_check_points)
       .def_readonly("check_rmse_m", &BundleAdjustmentResult::check_rmse_m)

@@ -168,32 +168,46 @@ struct PythonBlock {
 };
 
 // ------------------------------------------------------------------ progress
-// A Python progress callback (None, or a callable taking a BundleIterationInfo: anything else is a
-// TypeError), called from the adjustment's thread with the GIL taken. The first exception it raises
-// stops further calls (the C++ adjustment cannot be interrupted from its progress hook) and is
-// raised again when the adjustment returns.
+// A Python progress callback (None, or a callable taking one Info: a BundleIterationInfo from the
+// adjustments, a ResectionProgress from resect_images; anything else is a TypeError), called from
+// the library's thread with the GIL taken. The first exception it raises stops further calls (the
+// C++ adjustment cannot be interrupted from its progress hook; resect_images stops after the images
+// at hand) and is raised again when the call returns.
 class ProgressRelay {
  public:
-  explicit ProgressRelay(py::object callback) : callback_(std::move(callback)) {
+  // `takes` names what the callback receives, for the TypeError ("a BundleIterationInfo").
+  explicit ProgressRelay(py::object callback, const char* takes = "a BundleIterationInfo")
+      : callback_(std::move(callback)) {
     if (!callback_.is_none() && !PyCallable_Check(callback_.ptr()))
-      throw py::type_error("progress: expected a callable taking a BundleIterationInfo");
+      throw py::type_error(std::string("progress: expected a callable taking ") + takes);
   }
   ~ProgressRelay() {
     py::gil_scoped_acquire acquire;
     callback_ = py::object();
   }
 
-  std::function<void(const BundleIterationInfo&)> Function() {
-    if (callback_.is_none()) return {};
-    return [this](const BundleIterationInfo& info) {
-      py::gil_scoped_acquire acquire;
-      if (error_) return;
-      try {
-        callback_(info);
-      } catch (py::error_already_set& e) {
-        error_ = std::make_unique<py::error_already_set>(std::move(e));
-      }
-    };
+  bool active() const { return !callback_.is_none(); }
+  // True once the callback has raised.
+  bool failed() const { return error_ != nullptr; }
+
+  // Calls the callback with `info` (a no-op without one or after it raised). Any thread, with or
+  // without the GIL.
+  template <typename Info>
+  void Call(const Info& info) {
+    if (!active()) return;
+    py::gil_scoped_acquire acquire;
+    if (error_) return;
+    try {
+      callback_(info);
+    } catch (py::error_already_set& e) {
+      error_ = std::make_unique<py::error_already_set>(std::move(e));
+    }
+  }
+  // The hook of a library call that reports Info: empty without a callback.
+  template <typename Info = BundleIterationInfo>
+  std::function<void(const Info&)> Function() {
+    if (!active()) return {};
+    return [this](const Info& info) { Call(info); };
   }
   // Raises the callback's exception, if any (with the GIL held).
   void Rethrow() {

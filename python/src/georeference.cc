@@ -50,6 +50,14 @@ void BindPositionFiles(py::module_& m) {
     ThrowIfError(ReadExifGps(PathArgument(path, "path"), &out));
     return out;
   }, py::arg("path"), "The GPS tags of one image file (libexiv2); raises photopose.Error when it has none.");
+  m.def("parse_image_gps", [](const py::bytes& data, const std::string& name) {
+    ExifGps out;
+    const std::string_view bytes(data);
+    CallWithoutGil([&] { return ParseExifGps(bytes, name, &out); });
+    return out;
+  }, py::arg("data"), py::arg("name") = "<bytes>",
+        "The GPS tags of an image file held in memory (its bytes, e.g. from a zip or an HTTP "
+        "response); name names it in messages. Raises photopose.Error as read_image_gps does.");
   m.def("read_images_gps", [](const py::object& directory, const std::vector<std::string>& names) {
     std::vector<std::optional<ExifGps>> positions;
     std::vector<std::string> missing;

@@ -241,3 +241,32 @@ def test_taylor_solver_reaches_the_same_minimum_and_statistics(shared_data):
         pp.bundle_adjust(colmap, solver="taylor")
     with pytest.raises(ValueError, match="levmar"):
         pp.bundle_adjust(taylor_block, solver="levmar")
+
+
+def test_rejected_check_marks(tmp_path):
+    """A check point's mark off by 40 px is rejected by the w-test of the check point's
+    intersection: result.rejected_check_marks names it, with its residual."""
+    block, _ = pp.simulate_block(seed=7, num_lines=4, images_per_line=10)
+    tables = {name: tmp_path / f"{name}.csv" for name in ("cameras", "points", "marks", "frames")}
+    pp.write_block_tables(block, **tables)
+    assert pp.bundle_adjust(block).rejected_check_marks == []
+    roles = dict(zip(block.point_ids, block.point_roles))
+    lines = tables["marks"].read_text().splitlines()
+    header = lines[0].split(",")
+    raster_column, point_column, x_column = (header.index(n) for n in ("Raster", "PointID", "Column"))
+    row = next(k for k, line in enumerate(lines[1:], 1) if roles[line.split(",")[point_column]] == "check")
+    fields = lines[row].split(",")
+    fields[x_column] = repr(float(fields[x_column]) + 40.0)
+    lines[row] = ",".join(fields)
+    tables["marks"].write_text("\n".join(lines) + "\n")
+    blundered = pp.read_block(tables["cameras"], tables["points"], tables["marks"], frames=tables["frames"])
+    result = pp.bundle_adjust(blundered)
+    assert len(result.rejected_check_marks) == 1, result.rejected_check_marks
+    rejected = result.rejected_check_marks[0]
+    assert blundered.image_names[blundered.mark_images[rejected.mark]] == fields[raster_column]
+    assert blundered.point_ids[blundered.mark_points[rejected.mark]] == fields[point_column]
+    # In image-plane units: um, 4 um a pixel (solvers/bundle/check_points.cc: whitened x sigma;
+    # the comment of BundleRejectedCheckMark says the mark's unit).
+    assert rejected.normalized > 3.0 and 20.0 < abs(rejected.residual[0]) / 4.0 < 40.0
+    assert abs(rejected.residual[1]) < abs(rejected.residual[0]) / 4.0
+    assert repr(rejected).startswith(f"BundleRejectedCheckMark(mark={rejected.mark}, normalized=")

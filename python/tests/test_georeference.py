@@ -86,3 +86,35 @@ def test_bad_inputs_raise_with_the_library_message(scene, tmp_path):
     with pytest.raises(pp.Error, match="geo.txt"):
         (tmp_path / "bad_geo.txt").write_text("EPSG:32633\na.jpg 1 2\n")
         pp.read_geo_txt(tmp_path / "bad_geo.txt")
+
+
+def dji_jpeg(lon, lat, height, rtk_sigma_enu_m, rtk_flag):
+    """The bytes of a JPEG with no picture and DJI's XMP position tags, as a drone writes them."""
+    sigma = dict(zip(("RtkStdLon", "RtkStdLat", "RtkStdHgt"), rtk_sigma_enu_m))
+    xmp = ('<?xpacket begin="\ufeff" id="W5M0MpCehiHzreSzNTczkc9d"?>'
+           '<x:xmpmeta xmlns:x="adobe:ns:meta/"><rdf:RDF xmlns:rdf="http://www.w3.org/1999/02/22-rdf-syntax-ns#">'
+           '<rdf:Description rdf:about="" xmlns:drone-dji="http://www.dji.com/drone-dji/1.0/" '
+           f'drone-dji:GpsLatitude="{lat:+.10f}" drone-dji:GpsLongitude="{lon:+.10f}" '
+           f'drone-dji:AbsoluteAltitude="{height:+.3f}" drone-dji:RtkFlag="{rtk_flag}" '
+           + " ".join(f'drone-dji:{k}="{v}"' for k, v in sigma.items()) +
+           '/></rdf:RDF></x:xmpmeta><?xpacket end="w"?>').encode()
+    app1 = b"http://ns.adobe.com/xap/1.0/\x00" + xmp
+    return b"\xff\xd8\xff\xe1" + (len(app1) + 2).to_bytes(2, "big") + app1 + b"\xff\xd9"
+
+
+def test_image_gps_from_bytes(tmp_path):
+    data = dji_jpeg(-45.25, -22.5, 812.5, (0.01, 0.02, 0.03), 50)
+    gps = pp.parse_image_gps(data, name="DJI_0001.JPG")
+    assert gps.source == "dji_xmp" and gps.rtk_flag == 50
+    np.testing.assert_allclose(gps.lon_lat_height, [-45.25, -22.5, 812.5], rtol=0, atol=1e-9)
+    np.testing.assert_allclose(gps.rtk_sigma_enu_m, [0.01, 0.02, 0.03], rtol=0, atol=1e-12)
+    # The same as the file read from disk.
+    (tmp_path / "DJI_0001.JPG").write_bytes(data)
+    from_file = pp.read_image_gps(tmp_path / "DJI_0001.JPG")
+    assert repr(from_file) == repr(gps)
+    with pytest.raises(pp.Error, match="^in_memory.jpg"):
+        pp.parse_image_gps(b"hello\n", name="in_memory.jpg")
+    with pytest.raises(pp.Error, match="<bytes>"):
+        pp.parse_image_gps(data[:4])
+    with pytest.raises(TypeError):
+        pp.parse_image_gps("not bytes")

@@ -159,3 +159,66 @@ def test_batch_resection_releases_the_gil(source_dir, assert_releases_gil):
     block = pp.read_block(examples / "cameras.csv", examples / "points.csv", examples / "marks.csv")
     _, inputs = block.resection_inputs()
     assert_releases_gil(lambda: pp.resect_images(inputs * 40, num_threads=1))
+
+
+def blundered_inputs(n, seed=5):
+    """n images of 25 control marks each, four of them blunders: too many samples to try them all
+    (C(25, 3) > max_exhaustive_samples), so the RANSAC trials depend on the image's seed."""
+    rng = np.random.default_rng(seed)
+    inputs = []
+    for i in range(n):
+        truth, points, xy, focal = synthetic_image(seed=int(rng.integers(1 << 30)), n=25)
+        xy[:4] += rng.uniform(60.0, 120.0, (4, 2))
+        inputs.append(pp.ResectionInput(xy, points, focal, sigma=1.0, raster=f"img_{i}"))
+    return inputs
+
+
+def outcome(results):
+    return [(r.success, tuple(r.eo.parameters), r.sigma0, r.summary.ransac_trials) for r in results]
+
+
+def test_batch_resection_progress():
+    inputs = blundered_inputs(150)
+    alone = pp.resect_images(inputs, num_threads=2)
+    for threads in (1, 2):
+        infos = []
+        results = pp.resect_images(inputs, num_threads=threads, progress=infos.append)
+        done = [info.images_done for info in infos]
+        assert len(infos) > 2 and done[-1] == len(inputs), done
+        assert all(a < b for a, b in zip(done, done[1:])), done
+        assert {info.images_total for info in infos} == {len(inputs)}
+        elapsed = [info.elapsed_seconds for info in infos]
+        assert elapsed[0] >= 0.0 and all(a <= b for a, b in zip(elapsed, elapsed[1:]))
+        assert repr(infos[-1]).startswith(f"ResectionProgress(images_done={len(inputs)}, images_total=")
+        # Resected in parts, each image keeps the seed of the whole batch: the same results.
+        assert outcome(results) == outcome(alone)
+    # The comparison can fail: another seed gives other trials.
+    other = pp.ResectionOptions()
+    other.consensus.ransac.seed += 1
+    assert outcome(pp.resect_images(inputs, other, num_threads=2)) != outcome(alone)
+    calls = []
+    assert pp.resect_images([], progress=calls.append) == [] and calls == []
+    with pytest.raises(TypeError, match="progress: expected a callable taking a ResectionProgress"):
+        pp.resect_images(inputs, progress=3)
+
+
+def test_batch_resection_progress_exception_is_raised():
+    inputs = blundered_inputs(100)
+    calls = []
+
+    def stop(info):
+        calls.append(info.images_done)
+        raise KeyboardInterrupt("stop")
+
+    with pytest.raises(KeyboardInterrupt, match="stop"):
+        pp.resect_images(inputs, num_threads=1, progress=stop)
+    assert calls == [16]  # after the first part (16 images on one thread), and not again
+
+
+def test_batch_resection_with_progress_releases_the_gil(source_dir, assert_releases_gil):
+    examples = source_dir / "examples"
+    block = pp.read_block(examples / "cameras.csv", examples / "points.csv", examples / "marks.csv")
+    _, inputs = block.resection_inputs()
+    infos = []
+    assert_releases_gil(lambda: pp.resect_images(inputs * 40, num_threads=1, progress=infos.append))
+    assert infos[-1].images_done == 480

@@ -4,18 +4,20 @@ module"): what a call from Python costs on top of the library.
 
     PYTHONPATH=build/python python3 tools/benchmarks/python_benchmark.py \
         --peer=build/photopose_python_benchmark_peer [--images=10000] [--bundle_lines=5] \
-        [--bundle_images_per_line=20] [--repeats=5] [--threads=0] [--work_dir=DIR]
+        [--bundle_images_per_line=20] [--repeats=3] [--threads=0] [--work_dir=DIR]
 
 1. Batch resection: --images synthetic images, 8 control points each (24 mm, 4 um pixels,
    6000 x 4000 px at 100 m, marks with 0.5 px noise and stated accuracy, a 30 px blunder in every
    tenth image), written as tables. Python reads them (read_block), builds the inputs
-   (Block.resection_inputs) and times resect_images alone; the peer reads the same tables, builds
-   the same inputs (MakeResectionInput) and times ResectImages alone.
+   (Block.resection_inputs) and times resect_images alone, without and with a progress callback
+   (the batch in parts); the peer reads the same tables, builds the same inputs
+   (MakeResectionInput) and times ResectImages alone.
 2. Bundle: a synthetic block of --bundle_lines x --bundle_images_per_line images written as
    tables; both read them and time the bundle adjustment alone (default options, then without the
    per-observation diagnostics), each run on a fresh copy of the block.
-The time of a side is the fastest of --repeats runs (the machine is shared: the fastest is the one
-least disturbed). Both sides' poses must agree (printed), so that the same work is timed.
+Each side runs each call --repeats times; the table gives the median and the fastest run of each
+side and their ratios (the machine is shared: the fastest run is the least disturbed). Both sides'
+poses must agree (printed), so that the same work is timed.
 """
 
 import argparse
@@ -73,7 +75,7 @@ def run_peer(peer, mode, directory, threads, repeats):
         sys.exit(f"peer failed: {done.stderr}")
     seconds = [float(s) for s in done.stdout.split("seconds:")[1].split()]
     poses = np.loadtxt(out, ndmin=2)[:, 1:]
-    return min(seconds), poses
+    return seconds, poses
 
 
 def pose_difference(a, b):
@@ -89,7 +91,7 @@ def main():
     parser.add_argument("--images", type=int, default=10000)
     parser.add_argument("--bundle_lines", type=int, default=5)
     parser.add_argument("--bundle_images_per_line", type=int, default=20)
-    parser.add_argument("--repeats", type=int, default=5)
+    parser.add_argument("--repeats", type=int, default=3)
     parser.add_argument("--threads", type=int, default=0, help="0: all cores (both sides)")
     parser.add_argument("--work_dir", default=None, help="default: a temporary folder")
     args = parser.parse_args()
@@ -104,19 +106,24 @@ def main():
         block = pp.read_block(resect_dir / "cameras.csv", resect_dir / "points.csv",
                               resect_dir / "marks.csv")
         images, inputs = block.resection_inputs()
-        times = []
-        for _ in range(args.repeats):
-            start = time.perf_counter()
-            results = pp.resect_images(inputs, num_threads=args.threads)
-            times.append(time.perf_counter() - start)
-        python_poses = np.full((block.num_images, 6), np.nan)
-        for image, result in zip(images, results):
-            if result.success:
-                python_poses[image] = result.eo.parameters
         cpp_seconds, cpp_poses = run_peer(args.peer, "resect", resect_dir, args.threads, args.repeats)
-        solved = int((~np.isnan(python_poses).any(axis=1)).sum())
-        rows.append((f"resect_images, {len(inputs)} images ({solved} solved)", min(times), cpp_seconds,
-                     pose_difference(python_poses, cpp_poses)))
+        for with_progress in (False, True):
+            infos = []
+            progress = infos.append if with_progress else None
+            times = []
+            for _ in range(args.repeats):
+                start = time.perf_counter()
+                results = pp.resect_images(inputs, num_threads=args.threads, progress=progress)
+                times.append(time.perf_counter() - start)
+            python_poses = np.full((block.num_images, 6), np.nan)
+            for image, result in zip(images, results):
+                if result.success:
+                    python_poses[image] = result.eo.parameters
+            solved = int((~np.isnan(python_poses).any(axis=1)).sum())
+            name = f"resect_images, {len(inputs)} images ({solved} solved)"
+            if with_progress:
+                name += f", progress ({len(infos) // args.repeats} calls)"
+            rows.append((name, times, cpp_seconds, pose_difference(python_poses, cpp_poses)))
 
         bundle_dir = work / "bundle"
         bundle_dir.mkdir(parents=True, exist_ok=True)
@@ -139,12 +146,15 @@ def main():
             name = f"bundle_adjust, {block.num_images} images, {block.num_marks} marks"
             if not diagnostics:
                 name += ", observation_diagnostics off"
-            rows.append((name, min(times), cpp_seconds, pose_difference(adjusted.image_parameters, cpp_poses)))
+            rows.append((name, times, cpp_seconds, pose_difference(adjusted.image_parameters, cpp_poses)))
 
-    print(f"| call | Python (s) | C++ (s) | Python / C++ | largest pose difference |")
-    print(f"|---|---|---|---|---|")
+    print(f"{args.repeats} runs a side; median (fastest) in seconds")
+    print("| call | Python (s) | C++ (s) | Python / C++ | largest pose difference |")
+    print("|---|---|---|---|---|")
     for name, python_s, cpp_s, difference in rows:
-        print(f"| {name} | {python_s:.3f} | {cpp_s:.3f} | {python_s / cpp_s:.3f} | {difference:.1e} |")
+        python_m, cpp_m = float(np.median(python_s)), float(np.median(cpp_s))
+        print(f"| {name} | {python_m:.3f} ({min(python_s):.3f}) | {cpp_m:.3f} ({min(cpp_s):.3f}) | "
+              f"{python_m / cpp_m:.3f} ({min(python_s) / min(cpp_s):.3f}) | {difference:.1e} |")
 
 
 if __name__ == "__main__":
