@@ -748,6 +748,13 @@ class BundleRejectedMark:
     @property
     def whitened_residual(self) -> float: ...
 
+class BundleWeakParameter:
+    """A parameter that trades off nearly exactly with others (weakly determined)."""
+    @property
+    def parameter(self) -> str: ...  # in words, e.g. "image 'IMG_3': omega"
+    @property
+    def sigma_inflation(self) -> float: ...  # its sigma over what its own observations give it (unitless)
+
 class BundleRejectedCheckMark:
     """A check point's mark rejected by the w-test of its intersection."""
     @property
@@ -755,7 +762,7 @@ class BundleRejectedCheckMark:
     @property
     def normalized(self) -> float: ...  # the larger |w| of x and y
     @property
-    def residual(self) -> numpy.ndarray: ...  # 2: observed - computed at the intersection that still held it, image-plane units (um for a frame camera's pixel marks)
+    def residual(self) -> numpy.ndarray: ...  # 2: observed - computed at the intersection that still held it, in the mark's own unit (px or um; x right, y up)
 
 class BundleSnoopingStep:
     @property
@@ -788,6 +795,8 @@ class BundleAdjustmentResult:
     def rejected_marks(self) -> list[BundleRejectedMark]: ...
     @property
     def rejected_check_marks(self) -> list[BundleRejectedCheckMark]: ...
+    @property
+    def weakly_determined(self) -> list[BundleWeakParameter]: ...  # weakly determined parameters of an absolute block, the worst first
     @property
     def lever_arm_m(self) -> Optional[numpy.ndarray]: ...
     @property

@@ -247,13 +247,19 @@ void BindBundleResultParts(py::module_& m) {
       .def_readonly("whitened_residual", &BundleRejectedMark::whitened_residual)
       .def("__repr__", [](const py::object& self) { return PropertiesRepr(self); });
 
+  py::class_<BundleWeakParameter>(m, "BundleWeakParameter",
+                                  "A parameter that trades off nearly exactly with others (weakly determined).")
+      .def_readonly("parameter", &BundleWeakParameter::parameter, "in words, e.g. \"image 'IMG_3': omega\"")
+      .def_readonly("sigma_inflation", &BundleWeakParameter::sigma_inflation,
+                    "its sigma over what its own observations give it (unitless)")
+      .def("__repr__", [](const py::object& self) { return PropertiesRepr(self); });
   py::class_<BundleRejectedCheckMark>(m, "BundleRejectedCheckMark",
                                       "A check point's mark rejected by the w-test of its intersection.")
       .def_readonly("mark", &BundleRejectedCheckMark::mark, "index into the block's marks")
       .def_readonly("normalized", &BundleRejectedCheckMark::normalized, "the larger |w| of x and y")
       .def_property_readonly("residual", [](const BundleRejectedCheckMark& r) { return Eigen::Vector2d(r.residual); },
-                             "observed - computed at the intersection that still held it, in image-plane units (um for a "
-                             "frame camera's pixel marks)")
+                             "observed - computed at the intersection that still held it, in the mark's own unit (px or um; "
+                             "x right, y up)")
       .def("__repr__", [](const py::object& self) { return PropertiesRepr(self); });
 
   py::class_<BundleSnoopingStep>(m, "BundleSnoopingStep")
@@ -277,6 +283,8 @@ bundle_adjust holds the adjusted values.)doc");
       .def_readonly("points", &BundleAdjustmentResult::points)
       .def_readonly("groups", &BundleAdjustmentResult::groups)
       .def_readonly("calibration", &BundleAdjustmentResult::calibration)
+      .def_readonly("weakly_determined", &BundleAdjustmentResult::weakly_determined,
+                    "weakly determined parameters of an absolute block, the worst first")
       .def_readonly("rejected_marks", &BundleAdjustmentResult::rejected_marks)
       .def_readonly("rejected_check_marks", &BundleAdjustmentResult::rejected_check_marks)
       .def_readonly("lever_arm_m", &BundleAdjustmentResult::lever_arm_m)

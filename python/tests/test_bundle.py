@@ -249,7 +249,9 @@ def test_rejected_check_marks(tmp_path):
     block, _ = pp.simulate_block(seed=7, num_lines=4, images_per_line=10)
     tables = {name: tmp_path / f"{name}.csv" for name in ("cameras", "points", "marks", "frames")}
     pp.write_block_tables(block, **tables)
-    assert pp.bundle_adjust(block).rejected_check_marks == []
+    clean = pp.bundle_adjust(block)
+    assert clean.rejected_check_marks == []
+    assert clean.weakly_determined == []  # a well-determined block lists none
     roles = dict(zip(block.point_ids, block.point_roles))
     lines = tables["marks"].read_text().splitlines()
     header = lines[0].split(",")
@@ -265,8 +267,8 @@ def test_rejected_check_marks(tmp_path):
     rejected = result.rejected_check_marks[0]
     assert blundered.image_names[blundered.mark_images[rejected.mark]] == fields[raster_column]
     assert blundered.point_ids[blundered.mark_points[rejected.mark]] == fields[point_column]
-    # In image-plane units: um, 4 um a pixel (solvers/bundle/check_points.cc: whitened x sigma;
-    # the comment of BundleRejectedCheckMark says the mark's unit).
-    assert rejected.normalized > 3.0 and 20.0 < abs(rejected.residual[0]) / 4.0 < 40.0
+    # In the mark's own unit, pixels (the camera model's film micrometres divided by the mark's
+    # micrometres per pixel).
+    assert rejected.normalized > 3.0 and 20.0 < abs(rejected.residual[0]) < 40.0
     assert abs(rejected.residual[1]) < abs(rejected.residual[0]) / 4.0
     assert repr(rejected).startswith(f"BundleRejectedCheckMark(mark={rejected.mark}, normalized=")

@@ -131,7 +131,9 @@ bool TabulateCheckPoint(const Block& block, int p, const std::vector<const Vecto
     BundleRejectedCheckMark mark;
     mark.mark = marks[worst];
     mark.normalized = worst_w;
-    mark.residual = whitened.segment<2>(2 * worst) * rays[worst].sigma;
+    // The ray's sigma is in the camera model's observation unit; the report's, the mark's own.
+    mark.residual = whitened.segment<2>(2 * worst) * rays[worst].sigma /
+                    block.marks[marks[worst]].observation_units_per_unit;
     rejected->push_back(mark);
     ++num_rejected;
     rays.erase(rays.begin() + worst);
