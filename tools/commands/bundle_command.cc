@@ -202,6 +202,8 @@ int CheckInputChoice(const char* command, BundleRun* run) {
     return BadInput(command, "nothing to write: give --out, --out_colmap or --report");
   if (FLAGS_bundle_pixel_rows_up && !run->tables)
     return BadInput(command, "--pixel_rows_up applies to the tables: --colmap_model, --opensfm and --bal define their own pixels");
+  if (FLAGS_bundle_pixel_center_origin && !run->tables)
+    return BadInput(command, "--pixel_center_origin applies to the tables: --colmap_model, --opensfm and --bal define their own pixels (and a model's control marks count from the top-left corner)");
   if (!FLAGS_bundle_out_cameras.empty() && !run->tables)
     return BadInput(command, "--out_cameras writes a camera table of frame cameras; with --colmap_model or --bal use --out_colmap");
   // A COLMAP model is georeferenced with positions and control; a BAL problem takes nothing else.

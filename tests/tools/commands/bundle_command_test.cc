@@ -358,6 +358,9 @@ TEST(BundleCommand, RelativeCovarianceDatumIsChosenAndReported) {
               1e-12);
   EXPECT_EQ(gauge["rejected_marks"].size(), points["rejected_marks"].size());
 
+  run = RunCli(common + "/x.json --pixel_center_origin", dir);  // a model's pixels are its own
+  EXPECT_EQ(run.exit_code, 2);
+  EXPECT_NE(run.err.find("--pixel_center_origin applies to the tables"), std::string::npos) << run.err;
   run = RunCli(common + "/x.json --relative_covariance=centers", dir);
   EXPECT_EQ(run.exit_code, 2);
   EXPECT_NE(run.err.find("--relative_covariance"), std::string::npos) << run.err;
