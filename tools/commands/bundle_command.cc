@@ -573,6 +573,7 @@ int ReadBundleBlock(const char* command, BundleRun* run) {
     files.rotation = run->context.rotation;
     files.pixel_origin = FLAGS_bundle_pixel_center_origin ? PixelOrigin::kCenter : PixelOrigin::kCorner;
     files.pixel_rows = FLAGS_bundle_pixel_rows_up ? PixelRows::kUp : PixelRows::kDown;
+    run->context.pixel_rows = files.pixel_rows;
     const Status read = ReadBlock(files, &block);
     if (!read.ok()) return BadInput(command, read.message());
     // Measured centres are priors when an accuracy is known: per row, --camera_accuracy, or the

@@ -397,6 +397,8 @@ json BundleReportJson(const Block& block, const BundleAdjustmentResult& result,
   }
   const BundleAccuracies& a = o.accuracies;
   report["options"] = {{"input", context.input_kind},
+                       {"pixel_origin", EnumName(block.pixel_origin)},
+                       {"pixel_rows", EnumName(context.pixel_rows)},
                        {"rotation", EnumName(context.rotation)},
                        {"jacobian", EnumName(o.solver.jacobian)},
                        {"linear_solver", EnumName(o.solver.linear_solver)},

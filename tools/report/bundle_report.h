@@ -10,6 +10,7 @@
 #include <vector>
 
 #include "core/block.h"
+#include "core/pixel_rows.h"
 #include "core/rotation.h"
 #include "core/io/tables.h"
 #include "solvers/bundle/bundle_adjustment.h"
@@ -24,6 +25,8 @@ struct BundleReportContext {
   std::vector<std::string> inputs;                          // files read
   std::vector<std::string> outputs;                         // files written (besides the report)
   std::string input_kind;  // "tables", "colmap" or "bal"
+  // The tables' pixel rows as read (--pixel_rows_up); a model's and BAL's are their readers'.
+  PixelRows pixel_rows = PixelRows::kDown;
   BundleAdjustmentOptions options;
   BundleAdjustmentConfig config;  // what was held constant or estimated (e.g. the lever arm)
   std::vector<std::string> calibrate;  // --calibrate names

@@ -503,9 +503,13 @@ TEST(BundleCommand, RowsCountedUpGiveTheSameFramesWithPixelRowsUp) {
   CliRun run = RunCli(common + " --marks=" + down_marks + " --out=" + dir + "/down.csv", dir);
   ASSERT_EQ(run.exit_code, 0) << run.err;
   run = RunCli(common + " --marks=" + dir + "/marks_up.csv --pixel_rows_up --out=" + dir +
-                   "/up.csv",
+                   "/up.csv --report=" + dir + "/up.json",
                dir);
   ASSERT_EQ(run.exit_code, 0) << run.err;
+  // The report says how the rows were read.
+  const nlohmann::json report = nlohmann::json::parse(ReadFile(dir + "/up.json"));
+  EXPECT_EQ(report["options"]["pixel_rows"], "up");
+  EXPECT_EQ(report["options"]["pixel_origin"], "corner");
   const auto down = ReadFrames(dir + "/down.csv");
   const auto up = ReadFrames(dir + "/up.csv");
   ASSERT_EQ(down.size(), up.size());
