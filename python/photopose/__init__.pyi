@@ -519,6 +519,7 @@ class BundleStatisticsOptions:
     """Covariances, verdicts, diagnostics, variance components."""
     def __init__(self, **kwargs: Any) -> None: ...
     covariances: str  # 'full' (selected inversion), 'dense' (the test oracle) or 'none'
+    weak_sigma_inflation: float  # unitless: sigma inflation above which a parameter is listed as weakly determined
     relative_covariance: str  # a relative block's covariance datum: 'points', 'centres' or 'first_image'
     overfit_ratio: float
     overfit_redundancy_share: float

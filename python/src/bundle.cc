@@ -75,6 +75,8 @@ default). A per-row accuracy of the tables overrides its row's default.)doc");
   auto stats = BindStruct<BundleStatisticsOptions>(m, "BundleStatisticsOptions",
                                                    "Covariances, verdicts, diagnostics, variance components.");
   stats.def_readwrite("covariances", &BundleStatisticsOptions::covariances, "'full' (selected inversion), 'dense' (the test oracle) or 'none'")
+      .def_readwrite("weak_sigma_inflation", &BundleStatisticsOptions::weak_sigma_inflation,
+                     "unitless: sigma inflation above which a parameter is listed as weakly determined")
       .def_readwrite("relative_covariance", &BundleStatisticsOptions::relative_covariance,
                      "a relative block's covariance datum: 'points', 'centres' or 'first_image'")
       .def_readwrite("overfit_ratio", &BundleStatisticsOptions::overfit_ratio)

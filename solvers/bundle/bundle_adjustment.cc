@@ -166,6 +166,7 @@ bool BundleStatisticsOptions::IsValid(std::string* why) const {
     return Fail(why, "snooping_power must be in (0, 1)");
   if (!(uncontrolled_redundancy >= 0.0 && uncontrolled_redundancy < 1.0))
     return Fail(why, "uncontrolled_redundancy must be in [0, 1)");
+  if (!(weak_sigma_inflation >= 1.0)) return Fail(why, "weak_sigma_inflation must be >= 1");
   return true;
 }
 

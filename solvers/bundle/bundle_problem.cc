@@ -29,6 +29,18 @@ Eigen::Matrix<double, 3, 7> SimilarityRows(const Eigen::Vector3d& p, const Eigen
   return J;
 }
 
+int OrientationComponent(const BundlePlan& plan, int image, int column) {
+  const int held = image == plan.relative_scale_image ? plan.relative_scale_axis : 6;
+  return column >= held ? column + 1 : column;
+}
+
+std::string RelativeGaugeInWords(const Block& block, const BundlePlan& plan) {
+  const char* axes = "XYZ";
+  return "image '" + block.images[plan.relative_fixed_image].name + "' held fixed and the " +
+         std::string(1, axes[plan.relative_scale_axis]) + " coordinate of image '" +
+         block.images[plan.relative_scale_image].name + "' fixes the scale";
+}
+
 namespace {
 
 // Union-find over images.
@@ -67,12 +79,9 @@ Status PlanRelativeGauge(const Block& block, BundlePlan* plan) {
   baseline.cwiseAbs().maxCoeff(&plan->relative_scale_axis);
   if (!(baseline.norm() > 0.0))
     return Status::Error("a relative block needs its first two images at different positions");
-  const char* axes = "XYZ";
-  plan->datum_description =
-      "relative: no control points and no camera positions; image '" + block.images[0].name +
-      "' held fixed and the " + std::string(1, axes[plan->relative_scale_axis]) +
-      " coordinate of image '" + block.images[1].name +
-      "' fixes the scale (COLMAP's convention); coordinates are in the frame of the input";
+  plan->datum_description = "relative: no control points and no camera positions; " +
+                            RelativeGaugeInWords(block, *plan) +
+                            " (COLMAP's convention); coordinates are in the frame of the input";
   return Status::Ok();
 }
 

@@ -457,10 +457,10 @@ void OrientationAndPointCovariances(const Block& block, const BundlePlan& plan,
     Matrix6d gauge = Matrix6d::Zero();
     if (found != reduced.e_index.end()) {
       if (!reduced.C.Block(found->second, found->second, &C)) continue;  // diagonal: always known
-      const int skip = static_cast<int>(i) == plan.relative_scale_image ? plan.relative_scale_axis : 6;
+      const int image = static_cast<int>(i);
       for (int r = 0; r < C.rows(); ++r)
         for (int c = 0; c < C.cols(); ++c)
-          gauge(r >= skip ? r + 1 : r, c >= skip ? c + 1 : c) = C(r, c);
+          gauge(OrientationComponent(plan, image, r), OrientationComponent(plan, image, c)) = C(r, c);
     }
     if (inner != nullptr) gauge = inner->Image(static_cast<int>(i), gauge);
     Eigen::Matrix<double, 6, 6, Eigen::RowMajor> P;
@@ -490,14 +490,6 @@ void OrientationAndPointCovariances(const Block& block, const BundlePlan& plan,
     point.covariance = variance_factor * covariance;
     point.has_covariance = true;
   });
-}
-
-// A relative block's gauge in words: what the adjustment held.
-std::string GaugeInWords(const Block& block, const BundlePlan& plan) {
-  const char* axes = "XYZ";
-  return "image '" + block.images[plan.relative_fixed_image].name + "' held, the " +
-         axes[plan.relative_scale_axis] + " coordinate of image '" +
-         block.images[plan.relative_scale_image].name + "' held";
 }
 
 // Per e block, the camera-centre components leading its tangent space (0..2; the relative
@@ -824,13 +816,9 @@ std::string ParameterName(const Block& block, const BundlePlan& plan, const Bund
   const double* e = round.e_blocks[b];
   for (size_t i = 0; i < block.images.size(); ++i) {
     if (state.eo[i].data() != e) continue;
-    // The tangent space of an orientation: centre X, Y, Z (m), then the small rotation about the
-    // seed's omega, phi, kappa axes; the relative gauge's scale image lacks its held coordinate.
     static const char* const kNames[] = {"X", "Y", "Z", "omega", "phi", "kappa"};
-    const int held =
-        static_cast<int>(i) == plan.relative_scale_image ? plan.relative_scale_axis : 6;
-    const int ambient = t >= held ? t + 1 : t;
-    return "image '" + block.images[i].name + "': " + kNames[std::min(ambient, 5)];
+    const int component = OrientationComponent(plan, static_cast<int>(i), t);
+    return "image '" + block.images[i].name + "': " + kNames[std::min(component, 5)];
   }
   for (size_t c = 0; c < block.cameras.size(); ++c) {
     if (state.cameras[c].data() != e || t >= static_cast<int>(plan.calibrated[c].size())) continue;
@@ -874,6 +862,7 @@ void WeaklyDeterminedParameters(const BundleAdjustmentOptions& options, const Bl
       if (!(inflation[t] > limit)) continue;
       BundleWeakParameter weak;
       weak.parameter = ParameterName(block, plan, state, round, b, t);
+      if (weak.parameter.empty()) weak.parameter = "a parameter of the reduced camera system";
       weak.sigma_inflation = inflation[t];
       result->weakly_determined.push_back(weak);
     }
@@ -940,17 +929,17 @@ Status ComputeBundleStatistics(const BundleAdjustmentOptions& options, const Blo
     bool use_inner =
         plan.datum == BundleDatum::kRelative &&
         options.statistics.relative_covariance != BundleRelativeCovariance::kFirstImage;
-    if (use_inner) {
-      const Status datum = inner.Compute(options.statistics.relative_covariance, block, plan, state,
-                                         round, reduced, options.solver.num_threads);
-      summary.covariance_datum = datum.ok() ? inner.description()
-                                            : "the adjustment's gauge (" + GaugeInWords(block, plan) +
-                                                  "), because " + datum.message();
-      use_inner = datum.ok();
+    if (plan.datum != BundleDatum::kRelative) {
+      summary.covariance_datum = "the block's datum (absolute)";
     } else {
-      summary.covariance_datum = plan.datum == BundleDatum::kRelative
-                                     ? "the adjustment's gauge (" + GaugeInWords(block, plan) + ")"
-                                     : "the block's datum (absolute)";
+      summary.covariance_datum = "the adjustment's gauge (" + RelativeGaugeInWords(block, plan) + ")";
+      if (use_inner) {
+        const Status datum = inner.Compute(options.statistics.relative_covariance, block, plan,
+                                           state, round, reduced, options.solver.num_threads);
+        use_inner = datum.ok();
+        summary.covariance_datum =
+            use_inner ? inner.description() : summary.covariance_datum + ", because " + datum.message();
+      }
     }
     OrientationAndPointCovariances(block, plan, state, round, reduced,
                                    use_inner ? &inner : nullptr, variance_factor,

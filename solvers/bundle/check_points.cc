@@ -82,8 +82,9 @@ double ControlMarkScale(const Block& block, const std::vector<BlockCamera>& came
 }
 
 // The check point's row of the table: its intersection against its surveyed coordinates, after
-// the w-test of its marks (their sigmas `sigma_scale` times the rule's). While the largest |w| = |v| / (s sigma sqrt(r)) of a mark's coordinate
-// (s = max(1, sqrt(variance_factor)), the rule of the block's observations) exceeds `critical`,
+// the w-test of its marks (their sigmas `sigma_scale` times the rule's). While the largest
+// |w| = |v| / (s sigma sqrt(r)) of a mark's coordinate (s = max(1, sqrt(variance_factor)), the
+// rule of the block's observations) exceeds `critical`,
 // that mark is rejected (appended to `rejected`) and the point intersected again from the rest.
 // False (with the reason in table->message) when it cannot be intersected.
 bool TabulateCheckPoint(const Block& block, int p, const std::vector<const Vector6d*>& eo,

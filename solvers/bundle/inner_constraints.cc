@@ -11,17 +11,6 @@
 #include "core/rotation.h"
 
 namespace photopose::internal {
-namespace {
-
-// Per image, the full tangent component (0..5) of each tangent column of its e block: the
-// relative gauge's scale image lacks its held centre coordinate.
-int FullComponent(const BundlePlan& plan, int image, int column) {
-  const int held = image == plan.relative_scale_image ? plan.relative_scale_axis : 6;
-  return column >= held ? column + 1 : column;
-}
-
-}  // namespace
-
 Eigen::Matrix<double, 6, 7> OrientationSimilarityRows(const Vector6d& eo,
                                                       const Eigen::Vector3d& centroid,
                                                       double extent) {
@@ -103,7 +92,7 @@ Status InnerConstraintTransform::Compute(BundleRelativeCovariance datum, const B
       if (image_block[i] < 0) continue;
       const int b = image_block[i];
       for (int c = 0; c < round.e_sizes[b]; ++c) {
-        const int k = FullComponent(plan, static_cast<int>(i), c);
+        const int k = OrientationComponent(plan, static_cast<int>(i), c);
         if (k < 3) rhs.row(reduced.e_offset[b] + c) = image_G_[i].row(k);
       }
     }
@@ -145,7 +134,7 @@ Status InnerConstraintTransform::Compute(BundleRelativeCovariance datum, const B
     if (b < 0) continue;
     Eigen::Matrix<double, 6, 7> Y = Eigen::Matrix<double, 6, 7>::Zero();
     for (int c = 0; c < round.e_sizes[b]; ++c)
-      Y.row(FullComponent(plan, static_cast<int>(i), c)) = y_e.row(reduced.e_offset[b] + c);
+      Y.row(OrientationComponent(plan, static_cast<int>(i), c)) = y_e.row(reduced.e_offset[b] + c);
     if (!on_points) GtWY += image_G_[i].topRows<3>().transpose() * Y.topRows<3>();
     image_M_[i] = Y * A;
   }

@@ -95,6 +95,15 @@ struct BundlePlan {
   bool refuse_weak_datum = true;  // from BundlePlanOptions
 };
 
+// The full tangent component (0..5: centre X, Y, Z, then the small rotation about the seed's
+// omega, phi, kappa axes; cost_functions/exterior_orientation_manifold.h) of tangent column
+// `column` of image `image`'s e block: the relative gauge's scale image lacks its held coordinate.
+int OrientationComponent(const BundlePlan& plan, int image, int column);
+
+// A relative block's gauge in words: "image 'A' held fixed and the X coordinate of image 'B'
+// fixes the scale" (the datum description and the covariance datum).
+std::string RelativeGaugeInWords(const Block& block, const BundlePlan& plan);
+
 // The plan of a block: marks (weights by core/mark_weight.h), points, priors, calibration,
 // connectivity and datum. Errors name what makes the block unusable. The one place that decides
 // which observations an adjustment uses, for BundleAdjust and TaylorBundleAdjust alike.
