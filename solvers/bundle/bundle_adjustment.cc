@@ -1,7 +1,8 @@
-// BundleAdjust and CrossValidateControlPoints (bundle_adjustment.h): options and reports, the rounds
-// (solve, snooping or rejection, variance components) as named steps, the cross-validation. The
-// plan and the Ceres problem are in bundle_problem.cc, the statistics in bundle_statistics.cc. About
-// 800 lines because it also holds the public types' methods (IsValid, BriefReport, FullReport).
+// BundleAdjust and CrossValidateControlPoints (bundle_adjustment.h): options and reports, the
+// rounds (solve, snooping or rejection, variance components) as named steps, the cross-validation.
+// The plan and the Ceres problem are in bundle_problem.cc, the statistics in bundle_statistics.cc.
+// About 800 lines because it also holds the public types' methods (IsValid, BriefReport,
+// FullReport).
 #include "solvers/bundle/bundle_adjustment.h"
 
 #include <ceres/ceres.h>
@@ -75,47 +76,6 @@ class ProgressCallback final : public ceres::IterationCallback {
   Clock::time_point start_;
   bool free_gauge_ = false;
 };
-
-// Moves a relative block solved without any gauge into COLMAP's gauge: the similarity
-// X -> s R_s (X - C0) + C0_fixed that returns the first image to its fixed pose and the scale
-// image's fixed coordinate to its value. Reprojection errors are invariant under a similarity of
-// the whole block, and a relative block has no priors, so the cost does not change.
-// Returns false, leaving *state as it was, when the free solution cannot be moved (the second
-// image collapsed onto the first or passed to its other side: no positive scale).
-bool MoveToRelativeGauge(const BundlePlan& plan, const Vector6d& fixed_eo, double fixed_coordinate,
-                         BundleState* state) {
-  const int first = plan.relative_fixed_image;
-  const int second = plan.relative_scale_image;
-  const int axis = plan.relative_scale_axis;
-  const Eigen::Vector3d c0 = state->eo[first].head<3>();
-  const Eigen::Matrix3d R0 = RotationFromAngles(RotationConvention::kSeed, state->eo[first].tail<3>());
-  const Eigen::Matrix3d R0_fixed = RotationFromAngles(RotationConvention::kSeed, fixed_eo.tail<3>());
-  const Eigen::Vector3d c0_fixed = fixed_eo.head<3>();
-  // R_camera_from_ground' = R R_s^T, so R_s = R0_fixed^T R0 returns the first image's attitude.
-  const Eigen::Matrix3d R_s = R0_fixed.transpose() * R0;
-  const double along = (R_s * (state->eo[second].head<3>() - c0))[axis];
-  const double scale = (fixed_coordinate - c0_fixed[axis]) / along;
-  if (!std::isfinite(scale) || !(scale > 0.0)) return false;
-  const auto move = [&](const Eigen::Vector3d& x) -> Eigen::Vector3d {
-    return c0_fixed + scale * (R_s * (x - c0));
-  };
-  for (Vector6d& eo : state->eo) {
-    const Eigen::Matrix3d R = RotationFromAngles(RotationConvention::kSeed, eo.tail<3>());
-    Eigen::Vector3d angles =
-        AnglesFromRotation(RotationConvention::kSeed, R * R_s.transpose());
-    // Keep every angle within pi of its previous value (no 2 pi jumps in the output).
-    for (int k = 0; k < 3; ++k)
-      angles[k] += 2.0 * M_PI * std::round((eo[3 + k] - angles[k]) / (2.0 * M_PI));
-    eo.head<3>() = move(eo.head<3>());
-    eo.tail<3>() = angles;
-  }
-  for (size_t p = 0; p < state->points.size(); ++p)
-    if (plan.point_in_problem[p]) state->points[p] = move(state->points[p]);
-  // Exactly the fixed values (no rounding left in the held parameters).
-  state->eo[first] = fixed_eo;
-  state->eo[second][axis] = fixed_coordinate;
-  return true;
-}
 
 void AddSolverTimes(const ceres::Solver::Summary& ceres_summary, BundleAdjustmentSummary* summary) {
   summary->solver_preprocessing_seconds += ceres_summary.preprocessor_time_in_seconds;
@@ -209,10 +169,10 @@ Status BundleAdjustmentConfig::FromCalibrationNames(const Block& block,
 
 std::string BundleAdjustmentSummary::BriefReport() const {
   std::ostringstream os;
-  os << EnumName(termination) << ": " << num_images << " images, " << num_points
-     << " points, " << num_marks << " marks, " << rounds << " round" << (rounds == 1 ? "" : "s")
-     << ", " << iterations << " iterations, cost " << initial_cost << " -> " << final_cost
-     << ", sigma0 " << sigma0 << " (redundancy " << redundancy << ")";
+  os << EnumName(termination) << ": " << num_images << " images, " << num_points << " points, "
+     << num_marks << " marks, " << rounds << " round" << (rounds == 1 ? "" : "s") << ", "
+     << iterations << " iterations, cost " << initial_cost << " -> " << final_cost << ", sigma0 "
+     << sigma0 << " (redundancy " << redundancy << ")";
   if (num_rejected_marks > 0) os << ", " << num_rejected_marks << " marks rejected";
   if (!tie_points_left_out.empty())
     os << ", " << tie_points_left_out.size() << " tie points without initial coordinates left out";
@@ -235,9 +195,9 @@ std::vector<char> BundleAdjustmentResult::RemovedMarks(size_t num_marks) const {
 std::string BundleAdjustmentResult::FullReport(const Block& block) const {
   std::ostringstream os;
   os << "Bundle adjustment: " << summary.BriefReport() << "\n";
-  os << "Time: problem " << FormatNumber3(summary.problem_build_seconds) << " s, Ceres preprocessing "
-     << FormatNumber3(summary.solver_preprocessing_seconds) << " s, residuals "
-     << FormatNumber3(summary.residual_evaluation_seconds) << " s, Jacobians "
+  os << "Time: problem " << FormatNumber3(summary.problem_build_seconds)
+     << " s, Ceres preprocessing " << FormatNumber3(summary.solver_preprocessing_seconds)
+     << " s, residuals " << FormatNumber3(summary.residual_evaluation_seconds) << " s, Jacobians "
      << FormatNumber3(summary.jacobian_evaluation_seconds) << " s, linear solves "
      << FormatNumber3(summary.linear_solver_seconds) << " s, statistics "
      << FormatNumber3(summary.statistics_seconds) << " s (Schur structure "
@@ -246,22 +206,25 @@ std::string BundleAdjustmentResult::FullReport(const Block& block) const {
   os << "Groups (count, stated, RMS, RMS/stated, redundancy share):\n";
   for (const BundleGroupStatistics& g : groups) {
     if (g.fixed()) {
-      os << "  " << EnumName(g.group) << ": " << g.num_fixed << " held fixed (no residuals, no verdict)\n";
+      os << "  " << EnumName(g.group) << ": " << g.num_fixed
+         << " held fixed (no residuals, no verdict)\n";
       continue;
     }
-    os << "  " << EnumName(g.group) << ": " << g.count << ", " << FormatNumber3(g.stated_accuracy.x()) << " "
-       << g.unit << ", " << FormatNumber3(g.rms_total) << " " << g.unit << ", "
-       << FormatNumber3(g.ratio) << ", " << FormatNumber3(g.redundancy_share)
-       << (g.overfit ? "  OVERFIT" : "");
+    os << "  " << EnumName(g.group) << ": " << g.count << ", "
+       << FormatNumber3(g.stated_accuracy.x()) << " " << g.unit << ", "
+       << FormatNumber3(g.rms_total) << " " << g.unit << ", " << FormatNumber3(g.ratio) << ", "
+       << FormatNumber3(g.redundancy_share) << (g.overfit ? "  OVERFIT" : "");
     if (g.num_fixed > 0) os << "; " << g.num_fixed << " more held fixed";
     os << "\n";
     if (!g.message.empty()) os << "    " << g.message << "\n";
   }
   for (const BundleGroupStatistics& g : groups) {
     if (std::isfinite(g.estimated_accuracy.x())) {
-      os << "  " << EnumName(g.group) << " accuracy estimated from the data: " << FormatNumber3(g.estimated_accuracy.x())
-         << " " << g.unit << " (stated " << FormatNumber3(g.stated_accuracy.x()) << ", relative standard error "
-         << FormatNumber3(g.estimated_accuracy_standard_error) << ")\n";
+      os << "  " << EnumName(g.group)
+         << " accuracy estimated from the data: " << FormatNumber3(g.estimated_accuracy.x()) << " "
+         << g.unit << " (stated " << FormatNumber3(g.stated_accuracy.x())
+         << ", relative standard error " << FormatNumber3(g.estimated_accuracy_standard_error)
+         << ")\n";
     } else if (!g.estimation_message.empty()) {
       os << "  " << EnumName(g.group) << ": " << g.estimation_message << "\n";
     }
@@ -363,7 +326,8 @@ bool SolveInFreeGaugeFirst(Adjustment* a, int r, ceres::Solver::Summary* ceres_s
   Solve(a, r, /*free_gauge=*/true, ceres_summary);
   summary.initial_cost = ceres_summary->initial_cost;
   *free_iterations = static_cast<int>(ceres_summary->iterations.size()) - 1;
-  if (MoveToRelativeGauge(a->plan, fixed_eo, fixed_coordinate, &a->state)) {
+  if (internal::MoveToRelativeGauge(a->plan, fixed_eo, fixed_coordinate, &a->state.eo,
+                                    &a->state.points)) {
     internal::ApplyRelativeGauge(a->plan, &a->state, &a->round);
     return ceres_summary->termination_type == ceres::CONVERGENCE;
   }

@@ -8,14 +8,15 @@
 #include <sstream>
 
 #include "core/parallel.h"
+#include "core/rotation.h"
 #include "cost_functions/exterior_orientation_manifold.h"
 #include "cost_functions/losses.h"
 #include "cost_functions/priors.h"
 
 namespace photopose::internal {
 
-Eigen::Matrix<double, 3, 7> SimilarityRows(const Eigen::Vector3d& p, const Eigen::Vector3d& centroid,
-                                           double extent) {
+Eigen::Matrix<double, 3, 7> SimilarityRows(const Eigen::Vector3d& p,
+                                           const Eigen::Vector3d& centroid, double extent) {
   const Eigen::Vector3d d = (p - centroid) / extent;
   Eigen::Matrix<double, 3, 7> J = Eigen::Matrix<double, 3, 7>::Zero();
   J.leftCols<3>().setIdentity();
@@ -140,8 +141,10 @@ Status CheckDatum(const BundleAdjustmentConfig& config, const Block& block, Bund
   if (num_held > 0) what << num_held << " point" << (num_held == 1 ? "" : "s") << " held fixed, ";
   what << num_control << " control point" << (num_control == 1 ? "" : "s") << ", " << num_cameras
        << " camera position" << (num_cameras == 1 ? "" : "s");
-  if (num_attitudes > 0) what << ", " << num_attitudes << " attitude" << (num_attitudes == 1 ? "" : "s");
-  const std::string weighted = num_held > 0 ? " (the rest weighted as stated)" : " weighted as stated";
+  if (num_attitudes > 0)
+    what << ", " << num_attitudes << " attitude" << (num_attitudes == 1 ? "" : "s");
+  const std::string weighted =
+      num_held > 0 ? " (the rest weighted as stated)" : " weighted as stated";
   plan->datum = BundleDatum::kControl;
   if (!plan->refuse_weak_datum) {
     plan->datum_description = "absolute: " + what.str() + weighted +
@@ -182,8 +185,8 @@ Status PlanCalibration(const BundleAdjustmentConfig& config, const Block& block,
     indices.erase(std::unique(indices.begin(), indices.end()), indices.end());
     for (const int index : indices)
       if (index < 0 || index >= n)
-        return Status::Error("camera '" + block.cameras[c].camera_id +
-                             "': parameter index " + std::to_string(index) + " out of range");
+        return Status::Error("camera '" + block.cameras[c].camera_id + "': parameter index " +
+                             std::to_string(index) + " out of range");
     plan->calibrated[c] = indices;
   }
   return Status::Ok();
@@ -237,7 +240,8 @@ void PlanPoints(const BundleAdjustmentConfig& config, const Block& block, Bundle
     plan->point_in_problem[p] = 1;
     if (point.role == PointRole::kControl && !config.constant_points.count(static_cast<int>(p)))
       plan->point_prior[p] = 1;
-    if (point.role == PointRole::kControl && point.accuracy_m) plan->point_sigma[p] = *point.accuracy_m;
+    if (point.role == PointRole::kControl && point.accuracy_m)
+      plan->point_sigma[p] = *point.accuracy_m;
   }
 }
 
@@ -362,7 +366,8 @@ Status RecheckBundlePlan(const BundleAdjustmentConfig& config, const Block& bloc
     if (!plan->point_in_problem[p]) continue;
     int rays = 0;
     for (const int m : block.marks_of_point[p]) rays += plan->mark_used[m];
-    const bool tie_like = !plan->point_prior[p] && !config.constant_points.count(static_cast<int>(p));
+    const bool tie_like =
+        !plan->point_prior[p] && !config.constant_points.count(static_cast<int>(p));
     if (rays == 0 || (tie_like && rays < 2)) {
       for (const int m : block.marks_of_point[p]) plan->mark_used[m] = 0;
       plan->point_in_problem[p] = 0;
@@ -453,7 +458,6 @@ void AddCameraBlocks(const BundleAdjustmentConfig& config, const Block& block,
       problem.SetParameterBlockConstant(lever);
     }
   }
-
 }
 
 void AddPointBlocks(const BundleAdjustmentConfig& config, const Block& block,
@@ -470,7 +474,6 @@ void AddPointBlocks(const BundleAdjustmentConfig& config, const Block& block,
     round->point_blocks.push_back(point);
     round->point_of_block.push_back(static_cast<int>(p));
   }
-
 }
 
 // The collinearity residual of every mark in use, weighted by its sigma; the tie loss on tie
@@ -549,7 +552,6 @@ void AddPriorResiduals(const Block& block, const BundlePlan& plan, BundleState* 
       round->residuals.push_back({kAttitudes, static_cast<int>(i), 3, 0, id});
     }
   }
-
 }
 
 }  // namespace
@@ -558,7 +560,7 @@ BundleState StartState(const BundleAdjustmentConfig& config, const Block& block)
   BundleState state;
   for (const BlockImage& image : block.images) state.eo.push_back(image.eo->parameters);
   for (const BlockPoint& point : block.points) {
-    state.points.push_back(point.position_m ? *point.position_m
+    state.points.push_back(point.position_m   ? *point.position_m
                            : point.surveyed_m ? *point.surveyed_m
                                               : Eigen::Vector3d::Zero());
   }
@@ -578,7 +580,8 @@ void BuildBundleRound(const BundleAdjustmentOptions& options, const BundleAdjust
   problem_options.cost_function_ownership = ceres::DO_NOT_TAKE_OWNERSHIP;
   problem_options.enable_fast_removal = false;
   round->problem = std::make_unique<ceres::Problem>(problem_options);
-  round->tie_loss.reset(MakeLoss(options.robustness.tie_loss, options.robustness.tie_loss_scale_sigmas));
+  round->tie_loss.reset(
+      MakeLoss(options.robustness.tie_loss, options.robustness.tie_loss_scale_sigmas));
   AddOrientationBlocks(config, block, plan, state, round);
   AddCameraBlocks(config, block, plan, state, round);
   AddPointBlocks(config, block, plan, state, round);
@@ -640,6 +643,42 @@ bool UpdateBundleRound(const BundlePlan& plan, BundleRound* round) {
   for (const int size : round->e_sizes) round->num_free_parameters += size;
   round->num_observations = 0;
   for (const ResidualInfo& info : round->residuals) round->num_observations += info.rows;
+  return true;
+}
+
+bool MoveToRelativeGauge(const BundlePlan& plan, const Vector6d& fixed_eo, double fixed_coordinate,
+                         std::vector<Vector6d>* eo_seed, std::vector<Eigen::Vector3d>* points) {
+  const int first = plan.relative_fixed_image;
+  const int second = plan.relative_scale_image;
+  const int axis = plan.relative_scale_axis;
+  const Eigen::Vector3d c0 = (*eo_seed)[first].head<3>();
+  const Eigen::Matrix3d R0 =
+      RotationFromAngles(RotationConvention::kSeed, (*eo_seed)[first].tail<3>());
+  const Eigen::Matrix3d R0_fixed =
+      RotationFromAngles(RotationConvention::kSeed, fixed_eo.tail<3>());
+  const Eigen::Vector3d c0_fixed = fixed_eo.head<3>();
+  // R_camera_from_ground' = R R_s^T, so R_s = R0_fixed^T R0 returns the first image's attitude.
+  const Eigen::Matrix3d R_s = R0_fixed.transpose() * R0;
+  const double along = (R_s * ((*eo_seed)[second].head<3>() - c0))[axis];
+  const double scale = (fixed_coordinate - c0_fixed[axis]) / along;
+  if (!std::isfinite(scale) || !(scale > 0.0)) return false;
+  const auto move = [&](const Eigen::Vector3d& x) -> Eigen::Vector3d {
+    return c0_fixed + scale * (R_s * (x - c0));
+  };
+  for (Vector6d& eo : *eo_seed) {
+    const Eigen::Matrix3d R = RotationFromAngles(RotationConvention::kSeed, eo.tail<3>());
+    Eigen::Vector3d angles = AnglesFromRotation(RotationConvention::kSeed, R * R_s.transpose());
+    // Keep every angle within pi of its previous value (no 2 pi jumps in the output).
+    for (int k = 0; k < 3; ++k)
+      angles[k] += 2.0 * M_PI * std::round((eo[3 + k] - angles[k]) / (2.0 * M_PI));
+    eo.head<3>() = move(eo.head<3>());
+    eo.tail<3>() = angles;
+  }
+  for (size_t p = 0; p < points->size(); ++p)
+    if (plan.point_in_problem[p]) (*points)[p] = move((*points)[p]);
+  // Exactly the fixed values (no rounding left in the held parameters).
+  (*eo_seed)[first] = fixed_eo;
+  (*eo_seed)[second][axis] = fixed_coordinate;
   return true;
 }
 

@@ -31,12 +31,12 @@ namespace {
 using Clock = std::chrono::steady_clock;
 using internal::taylor::BuildLayout;
 using internal::taylor::DenseRows;
+using internal::taylor::EvaluateCost;
 using internal::taylor::Factorize;
 using internal::taylor::Frame;
 using internal::taylor::IsFixed;
 using internal::taylor::Layout;
 using internal::taylor::Linearize;
-using internal::taylor::EvaluateCost;
 using internal::taylor::Normal;
 using internal::taylor::Plan;
 using internal::taylor::PointPartialsFromCentrePartials;
@@ -73,15 +73,6 @@ Status CheckSupported(const BundleAdjustmentConfig& config, const Block& block) 
           "is done by the Ceres adjustment");
     }
   }
-  for (const BlockImage& image : block.images) {
-    const BlockCamera& camera = block.cameras[image.camera];
-    if (camera.model != CameraModelType::kFrame) {
-      return Status::Error("camera " + Quoted(camera.camera_id) + " is a " +
-                           EnumName(camera.model) +
-                           " model: the Taylor bundle adjustment takes the ArcGIS frame model "
-                           "(FRAME) only; use the Ceres adjustment");
-    }
-  }
   for (const int i : config.constant_images)
     if (i < 0 || i >= static_cast<int>(block.images.size()))
       return Status::Error("the config holds a non-existent image constant");
@@ -94,7 +85,8 @@ Status CheckSupported(const BundleAdjustmentConfig& config, const Block& block) 
 // The plan: BundleAdjust's (a weak datum is not refused: it shows as a singular reduced normal
 // matrix in the round), then the unknowns held (config, relative gauge) and each mark's ideal
 // image-plane point: the frame model's correction of the measured film point, constant with the
-// interior orientation.
+// interior orientation (a forward model's marks enter as observed: MarkEquation in
+// taylor_bundle_normals.cc).
 Status MakePlan(const TaylorBundleOptions& options, const BundleAdjustmentConfig& config,
                 const Block& block, Plan* plan) {
   internal::BundlePlanOptions plan_options;
@@ -117,6 +109,7 @@ Status MakePlan(const TaylorBundleOptions& options, const BundleAdjustmentConfig
     if (!plan->mark_used[m]) continue;
     const BlockMark& mark = block.marks[m];
     const BlockCamera& camera = block.cameras[block.images[mark.image].camera];
+    if (camera.model != CameraModelType::kFrame) continue;
     FrameCorrectFilmPoint(camera.params.data(), mark.observation.data(), camera.data(),
                           plan->ideal_um[m].data());
   }
@@ -156,12 +149,15 @@ Frame MakeFrame(const BundleAdjustmentConfig& config, const Block& block, const 
       frame.surveyed[p] = *block.points[p].surveyed_m - frame.centroid;
   frame.measured.assign(block.images.size(), Eigen::Vector3d::Zero());
   frame.focal_um.assign(block.images.size(), 0.0);
+  frame.forward_camera.assign(block.images.size(), nullptr);
   frame.earth_radius_m.assign(block.images.size(), 0.0);
   for (size_t i = 0; i < block.images.size(); ++i) {
     if (block.images[i].measured_center_m)
       frame.measured[i] = *block.images[i].measured_center_m - frame.centroid;
     const BlockCamera& camera = block.cameras[block.images[i].camera];
-    frame.focal_um[i] = camera.params[kFrameFocal];
+    const bool forward = camera.model != CameraModelType::kFrame;
+    frame.focal_um[i] = forward ? 1.0 : camera.params[kFrameFocal];
+    if (forward) frame.forward_camera[i] = &camera;
     frame.earth_radius_m[i] = camera.earth_curvature_radius_m();
   }
   frame.use_lever = config.lever_arm_m.has_value();
@@ -178,7 +174,7 @@ Status Prepare(const TaylorBundleOptions& options, const BundleAdjustmentConfig&
   PHOTOPOSE_RETURN_IF_ERROR(CheckBlock(block));
   PHOTOPOSE_RETURN_IF_ERROR(CheckSupported(config, block));
   for (const BlockCamera& camera : block.cameras)
-    if (!(camera.model != CameraModelType::kFrame || camera.params[kFrameFocal] > 0.0))
+    if (!(CameraModelFocal(camera.model, camera.params.data()) > 0.0))
       return Status::Error("camera " + Quoted(camera.camera_id) + " has no positive focal length");
   return MakePlan(options, config, block, plan);
 }
@@ -244,11 +240,11 @@ bool SolveStep(const Context& ctx, const std::string& at, const Normal& normal, 
   }
   if (!Factorize(ctx.options.min_pivot_ratio, *layout, reduction)) {
     reduction->singular = true;
-    *message = Format("the reduced normal matrix is singular (pivot ratio %.3g)",
-                      reduction->pivot_ratio) +
-               at +
-               ": a datum defect (too few control points and camera positions, or all on one "
-               "line) or an image its marks do not determine";
+    *message =
+        Format("the reduced normal matrix is singular (pivot ratio %.3g)", reduction->pivot_ratio) +
+        at +
+        ": a datum defect (too few control points and camera positions, or all on one "
+        "line) or an image its marks do not determine";
     return false;
   }
   SolveCorrections(ctx.plan, *layout, normal, *reduction, d_e, d_p);
@@ -289,7 +285,7 @@ bool Diverged(const Context& ctx, const Layout& layout, const State& state, doub
     const double distance = state.eo[i].head<3>().norm();
     if (!(distance <= divergence_m)) {
       *message = "diverged" + at + ": image " + Quoted(ctx.block.images[i].name) +
-                 Format(" moved %.3g m from the block's centroid", distance);
+                 Format(" moved %.0f m from the block's centroid", distance);
       return true;
     }
   }
@@ -297,7 +293,7 @@ bool Diverged(const Context& ctx, const Layout& layout, const State& state, doub
     const double distance = state.points[p].norm();
     if (!(distance <= divergence_m)) {
       *message = "diverged" + at + ": " + PointName(ctx.block, p) +
-                 Format(" moved %.3g m from the block's centroid", distance);
+                 Format(" moved %.0f m from the block's centroid", distance);
       return true;
     }
   }
@@ -327,8 +323,12 @@ bool DecideStep(const Context& ctx, const Layout& layout, const Normal& normal, 
                           0.5 * trial_ssr <= cost * (1.0 + kCostResolution);
   if (*gain_ratio > ctx.options.min_gain_ratio || unresolved) {
     *state = std::move(trial);
-    const double t = 2.0 * *gain_ratio - 1.0;
-    *lambda *= std::max(1.0 / 3.0, 1.0 - t * t * t);
+    // Nielsen's update needs a meaningful gain ratio; an unresolved one (rounding noise, possibly
+    // far below zero) leaves lambda as it was.
+    if (*gain_ratio > ctx.options.min_gain_ratio) {
+      const double t = 2.0 * *gain_ratio - 1.0;
+      *lambda *= std::max(1.0 / 3.0, 1.0 - t * t * t);
+    }
     *nu = 2.0;
     return true;
   }
@@ -339,10 +339,13 @@ bool DecideStep(const Context& ctx, const Layout& layout, const Normal& normal, 
 
 // One round from *state: Gauss-Newton (eqs. 9-16) or Levenberg-Marquardt on the same normal
 // equations (options.damping). On kConvergence *state is the solution and *normal its
-// linearisation; otherwise *message says why it stopped.
-SolverTermination RunRound(const Context& ctx, int round, Layout* layout, State* state,
-                           Normal* normal, Reduction* reduction, TaylorBundleResult* result,
-                           std::string* message) {
+// linearisation; otherwise *message says why it stopped. free_gauge (a relative block's first
+// solve, with the plan's gauge released and Levenberg-Marquardt): every step damped, lambda at
+// least options.free_gauge_min_damping, converged when a damped step is below the tolerances (no
+// undamped step: the reduced system is singular by the 7 free directions).
+SolverTermination RunRound(const Context& ctx, int round, bool free_gauge, Layout* layout,
+                           State* state, Normal* normal, Reduction* reduction,
+                           TaylorBundleResult* result, std::string* message) {
   const TaylorBundleOptions& options = ctx.options;
   TaylorBundleSummary& summary = result->summary;
   const int redundancy = layout->num_observations - layout->num_unknowns;
@@ -370,7 +373,7 @@ SolverTermination RunRound(const Context& ctx, int round, Layout* layout, State*
             : "the residuals at the start are not finite";
     return SolverTermination::kFailure;
   }
-  if (round == 1) summary.initial_cost = 0.5 * normal->weighted_ssr;
+  if (round == 1 && summary.iterations == 0) summary.initial_cost = 0.5 * normal->weighted_ssr;
   summary.final_cost = 0.5 * normal->weighted_ssr;
 
   const bool damped = options.damping == TaylorDamping::kLevenbergMarquardt;
@@ -383,8 +386,10 @@ SolverTermination RunRound(const Context& ctx, int round, Layout* layout, State*
     const double cost = 0.5 * normal->weighted_ssr;
     const std::string at = " at iteration " + std::to_string(iteration);
     // The first step of a round is undamped: the datum check Gauss-Newton makes (a singular S
-    // fails the round), and a full step when the start is good.
-    const double step_lambda = damped && iteration > 1 ? lambda : 0.0;
+    // fails the round), and a full step when the start is good. Without a gauge every step is
+    // damped.
+    if (free_gauge) lambda = std::max(lambda, options.free_gauge_min_damping);
+    const double step_lambda = damped && (iteration > 1 || free_gauge) ? lambda : 0.0;
     reduction->damping = step_lambda;
     if (!SolveStep(ctx, at, *normal, layout, reduction, &d_e, &d_p, message))
       return SolverTermination::kFailure;
@@ -397,13 +402,13 @@ SolverTermination RunRound(const Context& ctx, int round, Layout* layout, State*
       *message = "the correction is not finite" + at;
       return SolverTermination::kFailure;
     }
-    TaylorBundleIteration record{round, iteration, cost, max_position, max_angle, 0.0,
-                                 step_lambda, 1.0, true};
+    TaylorBundleIteration record{round, iteration,   cost, max_position, max_angle,
+                                 0.0,   step_lambda, 1.0,  true};
     bool converged = below_tolerance(max_position, max_angle);
     bool relinearize = true;
     if (damped) {
-      record.taken = DecideStep(ctx, *layout, *normal, cost, step_lambda, d_e, d_p, state,
-                                &lambda, &nu, &record.gain_ratio);
+      record.taken = DecideStep(ctx, *layout, *normal, cost, step_lambda, d_e, d_p, state, &lambda,
+                                &nu, &record.gain_ratio);
       relinearize = record.taken;
       if (!record.taken) summary.refused_steps += 1;
     } else {
@@ -418,7 +423,7 @@ SolverTermination RunRound(const Context& ctx, int round, Layout* layout, State*
                      : "the residuals are not finite after iteration " + std::to_string(iteration);
       return SolverTermination::kFailure;
     }
-    if (damped && converged && step_lambda > 0.0) {
+    if (damped && converged && step_lambda > 0.0 && !free_gauge) {
       // A damped step can be small because lambda is large: the undamped step at the current
       // linearisation decides, and checks the datum (a singular S fails as in Gauss-Newton).
       reduction->damping = 0.0;
@@ -434,7 +439,7 @@ SolverTermination RunRound(const Context& ctx, int round, Layout* layout, State*
         lambda = std::min(lambda, options.initial_damping);
         nu = 2.0;
       }
-    } else if (damped && !(lambda <= options.max_damping)) {
+    } else if (damped && !converged && !(lambda <= options.max_damping)) {
       *message = Format("no decrease of the cost with damping %.3g", lambda) + at;
       return SolverTermination::kFailure;
     }
@@ -453,7 +458,11 @@ SolverTermination RunRound(const Context& ctx, int round, Layout* layout, State*
       options.progress(info);
     }
     if (converged) {
-      *message = Format("corrections below tolerance (%.3g m, %.3g rad)", max_position, max_angle);
+      // The tolerances, in fixed notation (the corrections themselves are below them and would
+      // print as zeros): 0.001 mm and 0.0002 arc seconds by default.
+      *message =
+          Format("corrections below the tolerances (%.4f mm, %.4f arc seconds)",
+                 1e3 * position_tolerance_m, kArcSecondsPerRadian * options.angle_tolerance_rad);
       return SolverTermination::kConverged;
     }
   }
@@ -482,6 +491,46 @@ void SummarizeRound(const Block& block, const Plan& plan, const Layout& layout, 
 // BundleAdjust's options for the steps between rounds and the statistics of a Taylor solution:
 // the same accuracies, rejection, snooping, statistics options and threads, its analytic Jacobian
 // and no loss (the Taylor objective).
+// A relative block's first solve without a gauge (options.free_gauge_for_relative_blocks), as
+// BundleAdjust does: the plan's held first image and scale coordinate released, every step damped
+// (RunRound's free_gauge), then the block moved by the similarity into COLMAP's gauge
+// (internal::MoveToRelativeGauge), where the round goes on from the moved state. When the free
+// solve fails or no similarity reaches the gauge, *state is left at the start and the round
+// solves in the gauge from there. The free solve's structures are freed before the round builds
+// its own. Returns the free solve's iterations.
+int SolveInFreeGaugeFirst(const Context& ctx, Plan* plan, State* state,
+                          TaylorBundleResult* result) {
+  const int first = plan->relative_fixed_image;
+  const int second = plan->relative_scale_image;
+  const int axis = plan->relative_scale_axis;
+  const State start = *state;
+  const Vector6d fixed_eo = state->eo[first];
+  const double fixed_coordinate = state->eo[second][axis];
+  const char held_first = plan->image_constant[first];
+  const bool held_axis = plan->image_fixed[second][axis];
+  plan->image_constant[first] = 0;
+  plan->image_fixed[second][axis] = false;
+  const int iterations_before = result->summary.iterations;
+  SolverTermination type = SolverTermination::kFailure;
+  {
+    Layout layout;
+    BuildLayout(ctx.block, *plan, &layout);
+    Normal normal;
+    Reduction reduction;
+    reduction.solver = ctx.options.linear_solver;
+    reduction.num_threads = ctx.num_threads;
+    std::string message;
+    type = RunRound(ctx, 1, /*free_gauge=*/true, &layout, state, &normal, &reduction, result,
+                    &message);
+  }
+  plan->image_constant[first] = held_first;
+  plan->image_fixed[second][axis] = held_axis;
+  if (type != SolverTermination::kConverged ||
+      !internal::MoveToRelativeGauge(*plan, fixed_eo, fixed_coordinate, &state->eo, &state->points))
+    *state = start;
+  return result->summary.iterations - iterations_before;
+}
+
 BundleAdjustmentOptions AdjustmentOptionsOf(const TaylorBundleOptions& options) {
   BundleAdjustmentOptions out;
   out.accuracies = options.accuracies;
@@ -493,6 +542,7 @@ BundleAdjustmentOptions AdjustmentOptionsOf(const TaylorBundleOptions& options) 
   out.robustness.max_snooping_removals = options.max_snooping_removals;
   out.statistics = options.statistics;
   out.solver.num_threads = options.num_threads;
+  out.solver.free_gauge_for_relative_blocks = options.free_gauge_for_relative_blocks;
   return out;
 }
 
@@ -505,7 +555,10 @@ BundleAdjustmentOptions AdjustmentOptionsOf(const TaylorBundleOptions& options) 
 struct Statistics {
   Statistics(const BundleAdjustmentOptions& options, const BundleAdjustmentConfig& config,
              const Block& block, const Plan& plan)
-      : options(options), config(config), block(block), plan(plan),
+      : options(options),
+        config(config),
+        block(block),
+        plan(plan),
         ground(internal::StartState(config, block)) {}
   const BundleAdjustmentOptions& options;
   const BundleAdjustmentConfig& config;
@@ -573,6 +626,8 @@ struct Statistics {
 // The adjusted values, back in the ground frame, written into the block.
 void WriteBack(const Plan& plan, const State& state, const Frame& frame, Block* block) {
   for (size_t i = 0; i < block->images.size(); ++i) {
+    // An image held constant keeps its input values exactly (the centred frame would round them).
+    if (plan.image_constant[i] && block->images[i].eo) continue;
     ExteriorOrientation eo;
     eo.parameters = state.eo[i];
     eo.parameters.head<3>() += frame.centroid;
@@ -667,19 +722,21 @@ Status TaylorBundleOptionsFromBundleOptions(const BundleAdjustmentOptions& ceres
   options->max_snooping_removals = ceres.robustness.max_snooping_removals;
   options->statistics = ceres.statistics;
   options->num_threads = ceres.solver.num_threads;
+  options->free_gauge_for_relative_blocks = ceres.solver.free_gauge_for_relative_blocks;
   options->progress = ceres.solver.progress;
   return Status::Ok();
 }
 
 std::string TaylorBundleSummary::BriefReport() const {
   std::ostringstream os;
-  os << "Taylor bundle adjustment (" << EnumName(partials) << " partials, "
-     << EnumName(damping) << ", " << EnumName(linear_solver) << ", " << num_threads
-     << (num_threads == 1 ? " thread), " : " threads), ")
-     << EnumName(termination_type) << ": " << num_images << " images, "
-     << num_points << " points, " << num_marks << " marks, " << rounds << " round"
-     << (rounds == 1 ? "" : "s") << ", " << iterations << " iterations, cost " << initial_cost
-     << " -> " << final_cost << ", sigma0 " << sigma0 << " (redundancy " << redundancy << ")";
+  os << "Taylor bundle adjustment (" << EnumName(partials) << " partials, " << EnumName(damping)
+     << ", " << EnumName(linear_solver) << ", " << num_threads
+     << (num_threads == 1 ? " thread), " : " threads), ") << EnumName(termination_type) << ": "
+     << num_images << " images, " << num_points << " points, " << num_marks << " marks, " << rounds
+     << " round" << (rounds == 1 ? "" : "s") << ", " << iterations << " iterations";
+  if (free_gauge_iterations > 0) os << " (" << free_gauge_iterations << " without a gauge)";
+  os << ", cost " << initial_cost << " -> " << final_cost << ", sigma0 " << sigma0
+     << " (redundancy " << redundancy << ")";
   if (num_rejected_marks > 0) os << ", " << num_rejected_marks << " marks rejected";
   os << ", " << time_seconds << " s";
   if (!message.empty()) os << ": " << message;
@@ -843,8 +900,8 @@ Status TaylorBundleAdjust(const TaylorBundleOptions& options,
 
   State state;
   const Frame frame = MakeFrame(config, *block, plan, &state);
-  const Context context{options, *block, plan, frame, start,
-                        ThreadsForMarks(options.num_threads, plan)};
+  const Context context{options, *block, plan,
+                        frame,   start,  ThreadsForMarks(options.num_threads, plan)};
   summary.damping = options.damping;
   summary.linear_solver = options.linear_solver;
   summary.num_threads = context.num_threads;
@@ -877,14 +934,18 @@ Status TaylorBundleAdjust(const TaylorBundleOptions& options,
   std::unique_ptr<Reduction> reduction;
   bool marks_removed_only = false;
   for (int round = 1;; ++round) {
+    if (round == 1 && plan.datum == BundleDatum::kRelative &&
+        options.free_gauge_for_relative_blocks &&
+        options.damping == TaylorDamping::kLevenbergMarquardt)
+      summary.free_gauge_iterations = SolveInFreeGaugeFirst(context, &plan, &state, result);
     BuildLayout(*block, plan, &layout);
     SummarizeRound(*block, plan, layout, round, &summary);
     reduction = std::make_unique<Reduction>();
     reduction->solver = options.linear_solver;
     reduction->num_threads = context.num_threads;
     std::string message;
-    const SolverTermination type =
-        RunRound(context, round, &layout, &state, &normal, reduction.get(), result, &message);
+    const SolverTermination type = RunRound(context, round, /*free_gauge=*/false, &layout, &state,
+                                            &normal, reduction.get(), result, &message);
     if (type != SolverTermination::kConverged) {
       summary.sigma0 = kNaN;
       if (reduction->singular) {
@@ -918,8 +979,8 @@ Status TaylorBundleAdjust(const TaylorBundleOptions& options,
     const Status determined = statistics.CheckDeterminacy(&summary);
     if (!determined.ok()) {
       summary.sigma0 = kNaN;
-      return finish(SolverTermination::kFailure, "round " + std::to_string(summary.rounds) +
-                                                     ": " + determined.message());
+      return finish(SolverTermination::kFailure,
+                    "round " + std::to_string(summary.rounds) + ": " + determined.message());
     }
   }
   summary.num_rejected_marks = static_cast<int>(out.rejected_marks.size());

@@ -2,8 +2,8 @@
 // Bundle adjustment by the seed's Taylor linearisation: the classical photogrammetric block
 // adjustment that the exterior-orientation lecture ("カメラの幾何学2", eqs. 7-28) leads to, written
 // from its formulas with Eigen only (no Ceres), as the independent baseline the Ceres adjustment
-// (solvers/bundle/bundle_adjustment.h) is compared with. It minimises the SAME weighted objective on the
-// SAME block:
+// (solvers/bundle/bundle_adjustment.h) is compared with. It minimises the SAME weighted objective
+// on the SAME block:
 //
 //   sum over tie and control marks   |F|^2 / sigma_mark^2      F = (Fu, Fv), seed eqs. 7-8 (um)
 // + sum over control points          |X - X_surveyed|^2 / sigma_marker^2        (per axis, m)
@@ -23,7 +23,11 @@
 // partials"), and the identity (and R^T l's derivative) for the priors. The camera model enters on
 // the observation side: for the ArcGIS frame model (kFrame) the measured film point is corrected
 // (affinity, principal point, distortion, Polarity) into the ideal image plane once, a constant
-// with the interior orientation fixed.
+// with the interior orientation fixed. The COLMAP forward models distort the ideal point, so
+// their equation stays in pixels: F = model(a, b) - observation of the ray's normalised
+// coordinates (a, b), its rows the lecture's rows of (a, b) (written with c = 1) times the
+// model's 2 x 2 derivative d model / d(a, b) at the current point (chain rule; the one model of
+// core/camera_models.h, differentiated by a Jet). Its cost is then BundleAdjust's, exactly.
 //
 // Normal equations (A^T P A) d = A^T P F, assembled by hand and reduced to the cameras (the
 // classical reduced normal equations): with N = [U W; W^T V] (U cameras, V points, block-diagonal
@@ -32,34 +36,33 @@
 //   S = U - sum_p W_p V_p^-1 W_p^T,   r = g_e - sum_p W_p V_p^-1 g_p,
 //
 // S d_e = r is solved by a sparse Cholesky factor of the Jacobi-scaled S, the images ordered by AMD
-// on the image graph (CHOLMOD's supernodal LL^T, the pattern analysed once per round and refactorised
-// per iteration; or Eigen::SimplicialLDLT, the first implementation, kept as the reference), and the
-// point corrections are back-substituted, d_p = V_p^-1 (g_p - W_p^T d_e).
+// on the image graph (CHOLMOD's supernodal LL^T, the pattern analysed once per round and
+// refactorised per iteration; or Eigen::SimplicialLDLT, the first implementation, kept as the
+// reference), and the point corrections are back-substituted, d_p = V_p^-1 (g_p - W_p^T d_e).
 //
 // Damping: plain Gauss-Newton (kNone) is the lecture's method and diverges from poor starts. The
 // default is Levenberg-Marquardt on the same normal equations: the diagonal of the full normal
-// matrix is scaled by (1 + lambda) before the points are eliminated (U + lambda diag U, V_p + lambda
-// diag V_p), a step is taken when its gain ratio rho = (actual decrease) / (decrease predicted by
-// the linearisation) exceeds min_gain_ratio, and lambda follows Nielsen's rule (taken: lambda *=
-// max(1/3, 1 - (2 rho - 1)^3); refused: lambda *= nu, nu *= 2). A refused step is retried from the
-// same linearisation (only the reduction and the factorisation are redone). When a step is below
-// the tolerances the undamped Gauss-Newton step is solved at that point: the round has converged
-// when it too is below them (it is also the datum check: a singular S fails the round as before).
+// matrix is scaled by (1 + lambda) before the points are eliminated (U + lambda diag U, V_p +
+// lambda diag V_p), a step is taken when its gain ratio rho = (actual decrease) / (decrease
+// predicted by the linearisation) exceeds min_gain_ratio, and lambda follows Nielsen's rule (taken:
+// lambda *= max(1/3, 1 - (2 rho - 1)^3); refused: lambda *= nu, nu *= 2). A refused step is retried
+// from the same linearisation (only the reduction and the factorisation are redone). When a step is
+// below the tolerances the undamped Gauss-Newton step is solved at that point: the round has
+// converged when it too is below them (it is also the datum check: a singular S fails the round as
+// before).
 //
 // Threads: the linearisation (per image), the elimination of the points (in kReductionChunks fixed
 // chunks whose partial sums are added in chunk order) and the back-substitution (per point) run on
 // num_threads threads; the result does not depend on the thread count, bit for bit.
 //
-// Supported: kFrame cameras with fixed interior orientation (any distortion model or table,
-// affinity, Polarity); control, check and tie points; GNSS camera positions with an applied
-// (not estimated) lever arm; attitude priors; images and points held constant; the relative gauge
-// (COLMAP's convention) when nothing ties the block to the ground; rejection rounds, data
-// snooping and accuracy estimation as in BundleAdjust; the camera table's earth-curvature
-// correction (ApplyECC: each point seen lowered by D^2 / (2R), the centre's partials chained
-// through the drop; TaylorPoseLinearization). Not supported, refused with the reason:
-// self-calibration, the COLMAP forward camera models (their residual lives in the pixel domain
-// after distortion, whose derivative is not part of the lecture's linearisation), an estimated
-// lever arm.
+// Supported: kFrame cameras (any distortion model or table, affinity, Polarity) and the COLMAP
+// models (SIMPLE_PINHOLE ... OPENCV_FISHEYE), each with fixed interior orientation; control, check
+// and tie points; GNSS camera positions with an applied (not estimated) lever arm; attitude priors;
+// images and points held constant; the relative gauge (COLMAP's convention) when nothing ties the
+// block to the ground; rejection rounds, data snooping and accuracy estimation as in BundleAdjust;
+// the camera table's earth-curvature correction (ApplyECC: each point seen lowered by D^2 / (2R),
+// the centre's partials chained through the drop; TaylorPoseLinearization). Not supported, refused
+// with the reason: self-calibration and an estimated lever arm.
 //
 // Robust losses (tie_loss, on tie marks as in BundleAdjust): iteratively reweighted least squares
 // in the same normal equations. Each linearisation weights a tie mark by rho'(s) (s its squared
@@ -140,6 +143,15 @@ struct TaylorBundleOptions {
   double min_gain_ratio = 1e-3;
   double max_damping = 1e16;
   TaylorLinearSolver linear_solver = TaylorLinearSolver::kCholmodSupernodal;
+  // A relative block (BundleDatum::kRelative) is solved first without a gauge, as BundleAdjust
+  // does (BundleSolverOptions::free_gauge_for_relative_blocks): Levenberg-Marquardt with lambda
+  // kept at or above free_gauge_min_damping (unitless), so that the 7 free directions of the
+  // reduced system stay damped and still; then moved by the similarity into COLMAP's gauge and
+  // polished there (the undamped step of the held gauge is the datum check). Needs the damping;
+  // false, or Gauss-Newton: held in COLMAP's gauge from the start, where the damping creeps
+  // while the whole block turns about the first image.
+  bool free_gauge_for_relative_blocks = true;
+  double free_gauge_min_damping = 1e-8;
   // Threads of the linearisation, the elimination and the back-substitution (count; 0: every
   // core); never more than one per 1000 marks. The result is the same for every count.
   int num_threads = 1;
@@ -210,9 +222,9 @@ struct TaylorBundleIteration {
   double max_position_correction_m = 0.0;  // camera centres and points (m)
   double max_angle_correction_rad = 0.0;   // rad
   double seconds = 0.0;                    // wall time of this correction (linearise + solve)
-  double damping = 0.0;      // lambda of the step (unitless; 0 for Gauss-Newton)
-  double gain_ratio = 1.0;   // actual / predicted decrease (unitless; 1 for Gauss-Newton)
-  bool taken = true;         // false: refused, the state unchanged
+  double damping = 0.0;                    // lambda of the step (unitless; 0 for Gauss-Newton)
+  double gain_ratio = 1.0;  // actual / predicted decrease (unitless; 1 for Gauss-Newton)
+  bool taken = true;        // false: refused, the state unchanged
 };
 
 struct TaylorBundleSummary {
@@ -223,9 +235,12 @@ struct TaylorBundleSummary {
   std::string datum_description;
   // Tie points seen twice or more without initial coordinates: left out with their marks.
   std::vector<std::string> tie_points_left_out;
-  int rounds = 0;      // adjustment rounds (rejections re-adjust)
-  int iterations = 0;  // corrections over all rounds, taken or refused (count)
+  int rounds = 0;         // adjustment rounds (rejections re-adjust)
+  int iterations = 0;     // corrections over all rounds, taken or refused (count)
   int refused_steps = 0;  // Levenberg-Marquardt steps refused (count)
+  // Of `iterations`, those of a relative block's first solve without a gauge
+  // (free_gauge_for_relative_blocks; count, 0 when none ran).
+  int free_gauge_iterations = 0;
   TaylorDamping damping = TaylorDamping::kLevenbergMarquardt;
   TaylorLinearSolver linear_solver = TaylorLinearSolver::kCholmodSupernodal;
   int num_threads = 1;  // threads used (count)
@@ -242,8 +257,8 @@ struct TaylorBundleSummary {
   // Largest components of the last correction (m, rad).
   double last_position_correction_m = 0.0;
   double last_angle_correction_rad = 0.0;
-  double time_seconds = 0.0;        // the whole call (s)
-  double iteration_seconds = 0.0;   // the Gauss-Newton corrections alone, over all rounds (s)
+  double time_seconds = 0.0;       // the whole call (s)
+  double iteration_seconds = 0.0;  // the Gauss-Newton corrections alone, over all rounds (s)
   // The statistics of every round (s): building or updating their evaluation structure (the Ceres
   // problem of the solution, never solved) and computing them.
   double statistics_setup_seconds = 0.0;
@@ -259,11 +274,11 @@ struct TaylorBundleResult {
   TaylorBundleSummary summary;
   // The result in BundleAdjust's shape, for the same report writers: the summary filled from
   // `summary` (termination kConverged / kNoConvergence / kFailure, the same costs, sigma0,
-  // redundancy, counts and times; problem_build_seconds is statistics_setup_seconds), rejected_marks,
-  // and, at a converged solution, every statistic BundleAdjust reports, computed by the same code
-  // on the same observations (internal::ComputeBundleStatistics): residuals per mark and image,
-  // groups with their RMS, redundancy shares and over-fitting verdicts, covariances of the
-  // orientations and control points, per-observation redundancy numbers, w-tests, MDBs and
+  // redundancy, counts and times; problem_build_seconds is statistics_setup_seconds),
+  // rejected_marks, and, at a converged solution, every statistic BundleAdjust reports, computed by
+  // the same code on the same observations (internal::ComputeBundleStatistics): residuals per mark
+  // and image, groups with their RMS, redundancy shares and over-fitting verdicts, covariances of
+  // the orientations and control points, per-observation redundancy numbers, w-tests, MDBs and
   // external reliability, control and check points with their w-tested marks, the lever arm. With
   // the as-printed partials the solution is that variant's fixed point, and the statistics are
   // those of the objective there.
@@ -283,12 +298,12 @@ Status TaylorBundleAdjust(const TaylorBundleOptions& options, const BundleAdjust
 
 // The block adjustment that `photopose bundle --solver=ceres|taylor|taylor_as_printed` and the
 // block mode of `photopose compare` run, selected by the same PoseSolver switch as resection:
-// kCeres calls BundleAdjust(options, ...) (its derivative path from options.solver.jacobian); kTaylor and
-// kTaylorAsPrinted call TaylorBundleAdjust with TaylorBundleOptionsFromBundleOptions(options) and
-// return its result in BundleAdjust's shape (taylor_result, when not null, receives the whole
-// Taylor result: its summary and iteration history; damping, when given, replaces the Taylor
-// path's default, DefaultTaylorDamping). Errors as the solver called returns them, plus the
-// options the Taylor path refuses.
+// kCeres calls BundleAdjust(options, ...) (its derivative path from options.solver.jacobian);
+// kTaylor and kTaylorAsPrinted call TaylorBundleAdjust with
+// TaylorBundleOptionsFromBundleOptions(options) and return its result in BundleAdjust's shape
+// (taylor_result, when not null, receives the whole Taylor result: its summary and iteration
+// history; damping, when given, replaces the Taylor path's default, DefaultTaylorDamping). Errors
+// as the solver called returns them, plus the options the Taylor path refuses.
 Status BundleAdjustWithSolver(PoseSolver solver, const BundleAdjustmentOptions& options,
                               const BundleAdjustmentConfig& config, Block* block,
                               BundleAdjustmentResult* result,

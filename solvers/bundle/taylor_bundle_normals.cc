@@ -1,14 +1,16 @@
 // The normal equations of the Taylor bundle adjustment (internal/taylor_normals.h): layout,
 // linearisation, elimination of the points, factorisation.
-#include "solvers/bundle/internal/taylor_normals.h"
+#include <ceres/jet.h>
 
 #include <Eigen/Dense>
 #include <algorithm>
 #include <cmath>
 #include <unordered_map>
 
+#include "core/camera_models.h"
 #include "core/parallel.h"
 #include "core/rotation.h"
+#include "solvers/bundle/internal/taylor_normals.h"
 #include "solvers/resection/taylor_resection.h"
 
 namespace photopose::internal::taylor {
@@ -104,7 +106,8 @@ void BuildLayout(const Block& block, const Plan& plan, Layout* layout) {
     const int chunk = static_cast<int>(layout->chunk_start.size());
     if (chunk < kReductionChunks && work >= total_work * chunk / kReductionChunks)
       layout->chunk_start.push_back(static_cast<int>(q));
-    work += 1.0 + static_cast<double>(layout->point_marks[q].size()) * layout->point_marks[q].size();
+    work +=
+        1.0 + static_cast<double>(layout->point_marks[q].size()) * layout->point_marks[q].size();
   }
   while (static_cast<int>(layout->chunk_start.size()) <= kReductionChunks)
     layout->chunk_start.push_back(static_cast<int>(layout->free_points.size()));
@@ -176,6 +179,44 @@ double MarkCost(const Plan& plan, int m, double s, double* weight_factor) {
   return rho[0];
 }
 
+// One mark's observation equation at the pose of its image, in the seed's sign (eqs. 7-8:
+// F = computed - observed, p = p0 - d) and the camera model's unit (um for kFrame, pixels for a
+// forward model), with, when row_u is not null, its rows dF/d(X0, Y0, Z0, omega, phi, kappa).
+// False when the point is not in front of the camera (*w_m: its w).
+//   kFrame: c (a, b) against the mark's ideal film point (eqs. 17-28).
+//   Forward models (COLMAP): the pose's equation is written with c = 1 against the observation
+//   0, so F0 = (a, b), the ray's normalised coordinates, and rows0 = d(a, b)/dp; the mark's
+//   equation is F = model(a, b) - observation = -r(a, b), r the residual "observed - computed" of
+//   the one model (core/camera_models.h CameraModelResidual), and its rows -J rows0 with
+//   J = dr/d(a, b), by a 2-derivative Jet.
+bool MarkEquation(const TaylorPoseLinearization& pose, const Block& block, const Plan& plan,
+                  const Frame& frame, const State& state, int m, double* row_u, double* row_v,
+                  double* fu, double* fv, double* w_m) {
+  const BlockMark& mark = block.marks[m];
+  const double* point = state.points[mark.point].data();
+  const bool in_front =
+      row_u != nullptr ? pose.Linearize(point, plan.ideal_um[m].data(), row_u, row_v, fu, fv, w_m)
+                       : pose.Residual(point, plan.ideal_um[m].data(), fu, fv, w_m);
+  const BlockCamera* camera = frame.forward_camera[mark.image];
+  if (!in_front || camera == nullptr) return in_front;
+  using Jet = ceres::Jet<double, 2>;
+  const Jet ab[2] = {Jet(*fu, 0), Jet(*fv, 1)};
+  Jet params[kMaxCameraModelParams];
+  for (size_t k = 0; k < camera->params.size(); ++k) params[k] = Jet(camera->params[k]);
+  Jet residual[2];
+  CameraModelResidual(camera->model, params, ab, mark.observation.data(), camera->data(), residual);
+  *fu = -residual[0].a;
+  *fv = -residual[1].a;
+  if (row_u != nullptr) {
+    for (int c = 0; c < 6; ++c) {
+      const double u = row_u[c], v = row_v[c];
+      row_u[c] = -(residual[0].v[0] * u + residual[0].v[1] * v);
+      row_v[c] = -(residual[1].v[0] * u + residual[1].v[1] * v);
+    }
+  }
+  return std::isfinite(*fu) && std::isfinite(*fv);
+}
+
 // Marks: eqs. 7-8 with eqs. 17-28 for the camera and dF/dX = -dF/dX0 for the point, image by
 // image on num_threads threads: each image's camera sums (U, g_e) and its marks' W, g_p parts and
 // F are its own. The point sums (V, g_p) follow point by point over its marks in mark order. False
@@ -196,10 +237,8 @@ bool LinearizeMarks(TaylorPartials partials, const Block& block, const Plan& pla
     double ssr = 0.0;
     for (const int k : layout.image_marks[i]) {
       const int m = layout.marks[k];
-      const BlockMark& mark = block.marks[m];
       double row_u[6], row_v[6], fu, fv, w;
-      if (!pose.Linearize(state.points[mark.point].data(), plan.ideal_um[m].data(), row_u, row_v,
-                          &fu, &fv, &w)) {
+      if (!MarkEquation(pose, block, plan, frame, state, m, row_u, row_v, &fu, &fv, &w)) {
         image_behind[i] = m;
         image_behind_w[i] = w;
         return;
@@ -256,16 +295,15 @@ bool LinearizeMarks(TaylorPartials partials, const Block& block, const Plan& pla
 
 // The dense rows of the marks, in mark order (LinearizeTaylorBundle only: small blocks).
 void DenseMarkRows(TaylorPartials partials, const Block& block, const Plan& plan,
-                   const Layout& layout, const Frame& frame, const State& state,
-                   DenseRows* dense) {
+                   const Layout& layout, const Frame& frame, const State& state, DenseRows* dense) {
   for (size_t k = 0; k < layout.marks.size(); ++k) {
     const int m = layout.marks[k];
     const BlockMark& mark = block.marks[m];
     const TaylorPoseLinearization pose(partials, state.eo[mark.image].data(),
-                                       frame.focal_um[mark.image], frame.earth_radius_m[mark.image]);
+                                       frame.focal_um[mark.image],
+                                       frame.earth_radius_m[mark.image]);
     double row_u[6], row_v[6], fu, fv, w;
-    if (!pose.Linearize(state.points[mark.point].data(), plan.ideal_um[m].data(), row_u, row_v,
-                        &fu, &fv, &w))
+    if (!MarkEquation(pose, block, plan, frame, state, m, row_u, row_v, &fu, &fv, &w))
       continue;  // not reached: LinearizeMarks succeeded at the same values
     Matrix23 A_p;
     PointPartialsFromCentrePartials(row_u, row_v, &A_p);
@@ -280,8 +318,7 @@ void DenseMarkRows(TaylorPartials partials, const Block& block, const Plan& plan
 // Control points: F = X - X_surveyed per axis, A = I.
 // With cost_only, only normal->weighted_ssr is touched (EvaluateCost).
 void LinearizeControlPoints(const Plan& plan, const Layout& layout, const Frame& frame,
-                            const State& state, bool cost_only, Normal* normal,
-                            DenseRows* dense) {
+                            const State& state, bool cost_only, Normal* normal, DenseRows* dense) {
   for (size_t q = 0; q < layout.free_points.size(); ++q) {
     const int p = layout.free_points[q];
     if (!plan.point_prior[p]) continue;
@@ -392,8 +429,7 @@ bool EvaluateCost(TaylorPartials partials, const Block& block, const Plan& plan,
     for (const int k : layout.image_marks[i]) {
       const int m = layout.marks[k];
       double fu, fv, w;
-      if (!pose.Residual(state.points[block.marks[m].point].data(), plan.ideal_um[m].data(), &fu,
-                         &fv, &w)) {
+      if (!MarkEquation(pose, block, plan, frame, state, m, nullptr, nullptr, &fu, &fv, &w)) {
         image_behind[i] = m;
         return;
       }
@@ -416,7 +452,6 @@ bool EvaluateCost(TaylorPartials partials, const Block& block, const Plan& plan,
 }
 
 // ------------------------------------------------------------------ the reduced normal equations
-
 
 namespace {
 
@@ -498,9 +533,9 @@ int Reduce(const Normal& normal, const Layout& layout, Reduction* reduction) {
       blocks->assign(layout.pairs.size(), Matrix6d::Zero());
       r->setZero(6 * num_blocks);
     }
-    singular[chunk] = ReduceChunk(normal, layout, layout.chunk_start[chunk],
-                                  layout.chunk_start[chunk + 1], lambda, blocks, r,
-                                  &reduction->Y[chunk], &reduction->V_inverse);
+    singular[chunk] =
+        ReduceChunk(normal, layout, layout.chunk_start[chunk], layout.chunk_start[chunk + 1],
+                    lambda, blocks, r, &reduction->Y[chunk], &reduction->V_inverse);
   });
   for (int chunk = 0; chunk < kReductionChunks; ++chunk)
     if (singular[chunk] >= 0) return layout.free_points[singular[chunk]];
@@ -509,7 +544,8 @@ int Reduce(const Normal& normal, const Layout& layout, Reduction* reduction) {
     for (int chunk = 1; chunk < kReductionChunks; ++chunk)
       reduction->blocks[k] += reduction->chunk_blocks[chunk - 1][k];
   });
-  for (int chunk = 1; chunk < kReductionChunks; ++chunk) reduction->r += reduction->chunk_r[chunk - 1];
+  for (int chunk = 1; chunk < kReductionChunks; ++chunk)
+    reduction->r += reduction->chunk_r[chunk - 1];
   return -1;
 }
 
@@ -608,8 +644,8 @@ void SolveCorrections(const Plan& plan, const Layout& layout, const Normal& norm
     for (int c = 0; c < 6; ++c)
       if (IsFixed(plan, layout, b, c)) rhs[6 * b + c] = 0.0;
   *d_e = s.cwiseProduct(reduction.solver == TaylorLinearSolver::kCholmodSupernodal
-                           ? reduction.cholmod.Solve(rhs)
-                           : Eigen::VectorXd(reduction.ldlt.solve(rhs)));
+                            ? reduction.cholmod.Solve(rhs)
+                            : Eigen::VectorXd(reduction.ldlt.solve(rhs)));
   d_p->resize(layout.free_points.size());
   ParallelFor(layout.free_points.size(), reduction.num_threads, [&](size_t q) {
     Eigen::Vector3d t = normal.gp[q];

@@ -331,6 +331,12 @@ int OptionsFromFlags(const char* command, BundleRun* run) {
       return BadInput(command, "--taylor_damping is for --solver=taylor or taylor_as_printed; Ceres damps by its own trust region");
     run->taylor_damping = damping;
   }
+  const bool gauss_newton = run->solver == PoseSolver::kTaylorAsPrinted ||
+                            (run->taylor_damping && *run->taylor_damping == TaylorDamping::kNone);
+  gflags::CommandLineFlagInfo relative_gauge;
+  if (gauss_newton && FLAGS_bundle_relative_gauge == "free" &&
+      gflags::GetCommandLineFlagInfo("bundle_relative_gauge", &relative_gauge) && !relative_gauge.is_default)
+    return BadInput(command, "--relative_gauge=free needs a damped solver (the free directions stay still only under Levenberg-Marquardt's damping); Gauss-Newton holds COLMAP's gauge from the start");
   return kGoOn;
 }
 

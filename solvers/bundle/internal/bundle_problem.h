@@ -32,8 +32,8 @@ constexpr double kDatumConditioning = 1e-3;
 // [I, -[d]x, d] with d = (p - centroid) / extent, i.e. dp = t + w x d + s d: translation (m),
 // rotation (rad) and scale (unitless) about `centroid`, the last four columns per `extent` (m) so
 // that the three kinds are comparable. The datum check's and the inner constraints' one rule.
-Eigen::Matrix<double, 3, 7> SimilarityRows(const Eigen::Vector3d& p, const Eigen::Vector3d& centroid,
-                                           double extent);
+Eigen::Matrix<double, 3, 7> SimilarityRows(const Eigen::Vector3d& p,
+                                           const Eigen::Vector3d& centroid, double extent);
 
 // The default sigmas of the marks of `group` (kTieMarks or kControlMarks; check marks weigh as
 // control marks) under `accuracies`, for the rule of core/mark_weight.h.
@@ -72,17 +72,17 @@ struct BundlePlanOptions {
 
 // Everything decided before a round: observations in use, their sigmas, the datum.
 struct BundlePlan {
-  std::vector<char> mark_used;                 // per mark: in the adjustment
-  std::vector<double> mark_sigma;              // per mark: sigma in the observation unit
-  std::vector<BundleGroup> mark_group;         // per mark: tie or control marks
-  std::vector<char> point_in_problem;          // per point
-  std::vector<char> point_prior;               // per point: control-point prior active
-  std::vector<Eigen::Vector3d> point_sigma;    // per point: prior sigma (m)
-  std::vector<char> image_prior;               // per image: camera-position prior active
+  std::vector<char> mark_used;                        // per mark: in the adjustment
+  std::vector<double> mark_sigma;                     // per mark: sigma in the observation unit
+  std::vector<BundleGroup> mark_group;                // per mark: tie or control marks
+  std::vector<char> point_in_problem;                 // per point
+  std::vector<char> point_prior;                      // per point: control-point prior active
+  std::vector<Eigen::Vector3d> point_sigma;           // per point: prior sigma (m)
+  std::vector<char> image_prior;                      // per image: camera-position prior active
   std::vector<Eigen::Vector3d> image_prior_sigma;     // (m)
-  std::vector<char> image_attitude;            // per image: attitude prior active
+  std::vector<char> image_attitude;                   // per image: attitude prior active
   std::vector<Eigen::Vector3d> image_attitude_sigma;  // (rad)
-  std::vector<std::vector<int>> calibrated;    // per camera: parameter indices estimated
+  std::vector<std::vector<int>> calibrated;           // per camera: parameter indices estimated
   BundleDatum datum = BundleDatum::kControl;
   std::string datum_description;
   // Tie points seen twice or more but without initial coordinates (the initialisation could not
@@ -131,7 +131,7 @@ struct BundleRound {
   // insertion per mark).
   std::vector<std::unique_ptr<ceres::Manifold>> manifolds;
   std::unique_ptr<ceres::LossFunction> tie_loss;
-  std::vector<CollinearityCamera> cameras;  // per camera: what its marks' costs share
+  std::vector<CollinearityCamera> cameras;             // per camera: what its marks' costs share
   std::vector<CollinearityMarkFunctor*> mark_functor;  // per mark (block order): inside its cost
   std::vector<std::unique_ptr<ceres::CostFunction>> costs;
   std::unique_ptr<ceres::Problem> problem;
@@ -158,6 +158,16 @@ void BuildBundleRound(const BundleAdjustmentOptions& options, const BundleAdjust
 // the round any more. False when the plan changed otherwise (a prior removed): the round must be
 // built again.
 bool UpdateBundleRound(const BundlePlan& plan, BundleRound* round);
+// Moves a relative block solved without any gauge into COLMAP's gauge (plan kRelative): the
+// similarity X -> s R_s (X - C0) + C0_fixed that returns the first image to its fixed pose
+// (fixed_eo, seed) and the scale image's fixed coordinate to its value. Reprojection errors are
+// invariant under a similarity of the whole block, and a relative block has no priors, so the cost
+// does not change. Any frame works for the positions (the Taylor solver's is centred) as long as
+// fixed_eo and the state share it. Returns false, leaving the state as it was, when the free
+// solution cannot be moved (the second image collapsed onto the first or passed to its other side:
+// no positive scale). Both solvers' free-gauge solves end here.
+bool MoveToRelativeGauge(const BundlePlan& plan, const Vector6d& fixed_eo, double fixed_coordinate,
+                         std::vector<Vector6d>* eo_seed, std::vector<Eigen::Vector3d>* points);
 // Turns a round built without a gauge (plan.relative_fixed_image = -1) into one in the relative
 // gauge of `plan` (kRelative): holds the first image and one coordinate of the second, without
 // building the problem again.

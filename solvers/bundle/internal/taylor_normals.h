@@ -48,7 +48,9 @@ inline void PointPartialsFromCentrePartials(const double* row_u, const double* r
 // sigmas, and how the block is tied to the ground) are BundleAdjust's plan
 // (internal::MakeBundlePlan); the Taylor adjustment adds only what is its own.
 struct Plan : BundlePlan {
-  std::vector<Eigen::Vector2d> ideal_um;  // per mark: the corrected (ideal) image-plane point
+  // Per mark: the corrected (ideal) image-plane point (um) of a kFrame camera's mark; zero for a
+  // forward model's mark (its equation is F = observation - model(a, b), Frame::forward_camera).
+  std::vector<Eigen::Vector2d> ideal_um;
   std::vector<char> image_constant;  // held constant (config or the relative gauge's first image)
   std::vector<char> point_constant;
   std::vector<std::array<bool, 6>> image_fixed;  // components held fixed of a free image
@@ -77,8 +79,8 @@ struct Layout {
   std::vector<std::vector<int>> point_pairs;  // per free point: pair of each (a <= c) of those
   std::vector<std::vector<int>> point_all_marks;  // per free point: positions of all its marks
   std::vector<std::vector<int>> image_marks;      // per image: positions in `marks` of its marks
-  std::vector<int> chunk_start;  // kReductionChunks + 1 boundaries in the free points
-  std::vector<int> diagonal_pair;             // per camera block
+  std::vector<int> chunk_start;    // kReductionChunks + 1 boundaries in the free points
+  std::vector<int> diagonal_pair;  // per camera block
   std::vector<std::pair<int, int>> pairs;
   std::vector<std::array<int, 6>> value_start;
   SparseMatrix S;
@@ -98,7 +100,14 @@ struct Frame {
   double extent_m = 1.0;                  // RMS distance of cameras and points from the centroid
   std::vector<Eigen::Vector3d> surveyed;  // per point (control points), centred
   std::vector<Eigen::Vector3d> measured;  // per image (camera positions), centred
-  std::vector<double> focal_um;           // per image
+  // Per image: the seed's focal length c (um) of a kFrame camera, whose marks enter as their
+  // ideal film points (Plan::ideal_um); 1 for a forward (COLMAP) model, whose pose equations are
+  // written for the ray's normalised coordinates (a, b) and mapped to pixels per mark
+  // (forward_camera).
+  std::vector<double> focal_um;
+  // Per image: its camera when the camera is a forward model (observation = model(a, b): core/
+  // camera_models.h CameraModelResidual), null for kFrame. Points into the block.
+  std::vector<const BlockCamera*> forward_camera;
   // Per image: its camera's earth-curvature radius (m; BlockCamera::earth_curvature_radius_m),
   // 0 without ApplyECC. The drop depends on X - X0, Y - Y0 only: the centred frame keeps it.
   std::vector<double> earth_radius_m;
@@ -112,11 +121,11 @@ struct Normal {
   std::vector<Vector6d> ge;
   std::vector<Eigen::Matrix3d> V;  // per free point
   std::vector<Eigen::Vector3d> gp;
-  std::vector<Matrix63> W;         // per mark of the round: w A_e^T A_p
+  std::vector<Matrix63> W;               // per mark of the round: w A_e^T A_p
   std::vector<Eigen::Vector3d> gp_mark;  // per mark of the round: w A_p^T F
-  std::vector<Eigen::Vector2d> f;  // per mark of the round: F (um)
-  double weighted_ssr = 0.0;       // F^T P F over every observation
-  int behind_mark = -1;            // a mark whose point is not in front of its camera
+  std::vector<Eigen::Vector2d> f;        // per mark of the round: F (um)
+  double weighted_ssr = 0.0;             // F^T P F over every observation
+  int behind_mark = -1;                  // a mark whose point is not in front of its camera
   double behind_w = 0.0;
 };
 
@@ -153,9 +162,9 @@ struct Reduction {
   std::vector<std::vector<Matrix6d>> chunk_blocks;
   std::vector<Eigen::VectorXd> chunk_r;
   std::vector<std::vector<Matrix63>> Y;
-  std::vector<Matrix6d> blocks;            // per pair: the reduced matrix S (unscaled)
-  Eigen::VectorXd r;                       // reduced right-hand side (unscaled)
-  Eigen::VectorXd scale;                   // Jacobi scale 1 / sqrt(diag S); 1 where fixed
+  std::vector<Matrix6d> blocks;  // per pair: the reduced matrix S (unscaled)
+  Eigen::VectorXd r;             // reduced right-hand side (unscaled)
+  Eigen::VectorXd scale;         // Jacobi scale 1 / sqrt(diag S); 1 where fixed
   // Natural order: the camera blocks are already in a fill-reducing order (BuildLayout).
   Eigen::SimplicialLDLT<SparseMatrix, Eigen::Upper, Eigen::NaturalOrdering<int>> ldlt;
   SupernodalCholesky cholmod;
