@@ -268,17 +268,6 @@ SolverStatistics Aggregate(const std::string& name,
 
 }  // namespace
 
-std::string SweepSettingTitle(const SweepSetting& s, int trials, int images) {
-  char buffer[256];
-  std::snprintf(buffer, sizeof(buffer),
-                "%s: noise %g px, outliers %g%%, %d control points, initial error +-%g m +-%g deg "
-                "(%s; %d trials x %d image%s)",
-                EnumName(s.scenario), s.noise_px, 100.0 * s.outlier_fraction, s.control_points,
-                s.initial_error.position_m, s.initial_error.angle_deg, s.axis.c_str(), trials,
-                images, images == 1 ? "" : "s");
-  return buffer;
-}
-
 size_t ReferenceSolverIndex(const std::vector<std::string>& names) {
   for (size_t s = 0; s < names.size(); ++s)
     if (names[s] == "taylor") return s;
@@ -592,9 +581,14 @@ Status RunMonteCarlo(const MonteCarloOptions& options, MonteCarloResult* result)
   for (size_t task = 0; task < num_tasks; ++task) {
     if (!statuses[task].ok()) {
       const size_t setting = task / options.trials;
-      return Status::Error(SweepSettingTitle(settings[setting], options.trials, images[task]) +
-                           ", trial " + std::to_string(task % options.trials) + ": " +
-                           statuses[task].message());
+      // Which setting by its place (the engine writes no numbers; the reports' title,
+      // tools/report/comparison_tables.h SweepSettingTitle, prints its values).
+      const int trial = static_cast<int>(task % options.trials);
+      return Status::Error(std::string(EnumName(settings[setting].scenario)) + ", sweep setting " +
+                           std::to_string(setting + 1) + " of " + std::to_string(settings.size()) +
+                           " (axis " + settings[setting].axis + "), trial " +
+                           std::to_string(trial) + " (scene seed " +
+                           std::to_string(options.seed + trial) + "): " + statuses[task].message());
     }
   }
 

@@ -357,10 +357,6 @@ struct DatasetComparisonResult {
 Status RunDatasetComparison(const DatasetComparisonOptions& options,
                             DatasetComparisonResult* result);
 
-// "oblique: noise 1 px, outliers 10%, ... (axis; 200 trials x 1 image)": one sweep setting, for
-// titles and messages.
-std::string SweepSettingTitle(const SweepSetting& setting, int trials, int images);
-
 // Index of the solver the differences and time ratios refer to: "taylor" when present, otherwise
 // the first.
 size_t ReferenceSolverIndex(const std::vector<std::string>& names);

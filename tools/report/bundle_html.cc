@@ -231,14 +231,6 @@ std::string FactsTable(const std::string& title,
   return HtmlTable(title, {"item", "value"}, rows);
 }
 
-// The largest magnitude of a set of lengths (m), for the unit of their column.
-double LargestMagnitude(const std::vector<double>& values) {
-  double largest = 0.0;
-  for (const double v : values)
-    if (std::isfinite(v)) largest = std::max(largest, std::abs(v));
-  return largest;
-}
-
 // The area (m^2) of the convex hull of plan points (Andrew's monotone chain).
 double HullArea(std::vector<Eigen::Vector2d> points) {
   if (points.size() < 3) return 0.0;
@@ -457,20 +449,21 @@ std::string VerdictsHtml(const Block& block, const BundleAdjustmentResult& resul
         continue;
       }
       const double normalized = NormalizedError(r);
-      if (normalized > level)
-        out_of_tolerance.push_back(
-            block.points[p].id + " misses by " + FormatLengthWithUnit(r.error_m->norm()) +
-            " where its sigma is " + FormatLengthWithUnit(std::sqrt(r.covariance.trace())) +
-            " (e^T C^-1 e = " + FormatUnitless(normalized, 1) + " > " + FormatUnitless(level, 1) +
-            "): check its surveyed coordinates and its marks");
+      if (!(normalized > level)) continue;
+      const std::vector<std::string> miss =
+          FormatLengthsWithUnit({r.error_m->norm(), std::sqrt(r.covariance.trace())});
+      out_of_tolerance.push_back(
+          block.points[p].id + " misses by " + miss[0] + " where its sigma is " + miss[1] +
+          " (e^T C^-1 e = " + FormatUnitless(normalized, 1) + " > " + FormatUnitless(level, 1) +
+          "): check its surveyed coordinates and its marks");
     }
     const bool bad = !out_of_tolerance.empty() || !not_intersected.empty();
+    const std::vector<std::string> rmse =
+        FormatLengthsWithUnit({result.check_rmse_m.x(), result.check_rmse_m.y(),
+                               result.check_rmse_m.z(), result.check_rmse_total_m});
     html << "<div class=\"verdict " << (bad ? "bad" : "good") << "\"><b>Check points:</b> "
-         << FormatCount(result.num_check_points, "point") << " intersected, RMSE X "
-         << FormatLengthWithUnit(result.check_rmse_m.x()) << ", Y "
-         << FormatLengthWithUnit(result.check_rmse_m.y()) << ", Z "
-         << FormatLengthWithUnit(result.check_rmse_m.z()) << ", total "
-         << FormatLengthWithUnit(result.check_rmse_total_m) << ".";
+         << FormatCount(result.num_check_points, "point") << " intersected, RMSE X " << rmse[0]
+         << ", Y " << rmse[1] << ", Z " << rmse[2] << ", total " << rmse[3] << ".";
     if (!bad)
       html << " Every error is within what its covariance allows (chi-square(3) at "
            << FormatUnitless(100.0 * kCheckPointLevel, 1) << " %).";
@@ -595,12 +588,34 @@ std::string CamerasHtml(const Block& block, const BundleAdjustmentResult& result
   const LengthUnit sigma_unit = LengthUnitFor(LargestMagnitude(sigmas));
   const LengthUnit error_unit = LengthUnitFor(LargestMagnitude(errors));
   const std::string su = LengthUnitName(sigma_unit), eu = LengthUnitName(error_unit);
+  // The marks' RMS residual in the images' unit (px, um, or sigma for an image mixing both): in
+  // the header when every image has the same, else in a unit column after it.
+  std::vector<double> rms_residuals;
+  std::vector<std::string> rms_kinds;
+  for (size_t i = 0; i < block.images.size(); ++i) {
+    const BundleImageResult* r = i < result.images.size() ? &result.images[i] : nullptr;
+    const bool adjusted = block.images[i].eo && r != nullptr && r->adjusted;
+    rms_residuals.push_back(adjusted ? r->rms_residual : std::nan(""));
+    rms_kinds.push_back(adjusted ? r->unit : "");
+  }
+  // An image not adjusted (no unit, no value) takes the first adjusted image's kind: no part in
+  // the choice.
+  const auto first = std::find_if(rms_kinds.begin(), rms_kinds.end(),
+                                  [](const std::string& k) { return !k.empty(); });
+  const std::string first_kind = first == rms_kinds.end() ? "px" : *first;
+  for (std::string& kind : rms_kinds)
+    if (kind.empty()) kind = first_kind;
+  const ColumnsInUnits rms = FormatColumnsInUnits({rms_residuals}, rms_kinds);
+  const bool rms_unit_column = rms.unit.empty() && !rms_kinds.empty();
   // Grouped columns, each quantity's unit named once above its axes: the table fits a 1280 px
   // screen and the A4 width. The comparison with the measured centres only when there are some.
   const bool measured = !errors.empty();
-  std::vector<std::string> header = {"image", "marks", "RMS residual", "X", "Y", "Z",
-                                     "X",     "Y",     "Z",            "omega", "phi", "kappa"};
-  std::vector<HeaderGroup> groups = {{"", 3},
+  const std::string rms_header =
+      rms_unit_column ? "RMS residual" : "RMS residual (" + rms.unit + ")";
+  std::vector<std::string> header = {"image", "marks", rms_header, "X",     "Y",   "Z",
+                                     "X",     "Y",     "Z",        "omega", "phi", "kappa"};
+  if (rms_unit_column) header.insert(header.begin() + 3, "unit");
+  std::vector<HeaderGroup> groups = {{"", rms_unit_column ? 4 : 3},
                                      {"projection centre (m)", 3},
                                      {"sigma of the centre (" + su + ")", 3},
                                      {"sigma of the angles (arcsec)", 3}};
@@ -625,10 +640,9 @@ std::string CamerasHtml(const Block& block, const BundleAdjustmentResult& result
       continue;
     }
     const Eigen::Vector3d c = image.eo->center_in_ground();
-    std::vector<std::string> row = {image.name, std::to_string(r->num_marks),
-                                    FormatMarkValue(r->rms_residual, r->unit),
-                                    FormatCoordinate(c.x()), FormatCoordinate(c.y()),
-                                    FormatCoordinate(c.z())};
+    std::vector<std::string> row = {image.name, std::to_string(r->num_marks), rms.texts[0][i]};
+    if (rms_unit_column) row.push_back(rms.units[i]);
+    for (int a = 0; a < 3; ++a) row.push_back(FormatCoordinate(c[a]));
     for (int a = 0; a < 3; ++a)
       row.push_back(r->has_covariance ? FormatLength(std::sqrt(r->covariance(a, a)), sigma_unit)
                                       : "n/a");
@@ -884,33 +898,66 @@ std::string RejectedHtml(const Block& block, const BundleAdjustmentResult& resul
   }
   if (!result.rejected_check_marks.empty()) {
     any = true;
-    std::vector<std::vector<std::string>> rows;
+    // Residuals in the mark's unit (px or um): in the headers when every mark has the same.
+    std::vector<std::vector<double>> residuals(2);
+    std::vector<std::string> kinds;
     for (const BundleRejectedCheckMark& r : result.rejected_check_marks) {
+      residuals[0].push_back(r.residual.x());
+      residuals[1].push_back(r.residual.y());
+      kinds.push_back(EnumName(block.marks[r.mark].unit));
+    }
+    const ColumnsInUnits in_units = FormatColumnsInUnits(residuals, kinds);
+    const std::string u = in_units.unit.empty() ? "" : " (" + in_units.unit + ")";
+    std::vector<std::vector<std::string>> rows;
+    for (size_t k = 0; k < result.rejected_check_marks.size(); ++k) {
+      const BundleRejectedCheckMark& r = result.rejected_check_marks[k];
       const BlockMark& mark = block.marks[r.mark];
       rows.push_back({block.points[mark.point].id, block.images[mark.image].name,
                       std::to_string(mark.line), FormatUnitless(r.normalized, 1),
-                      FormatSignificant(r.residual.x(), 3), FormatSignificant(r.residual.y(), 3)});
+                      in_units.texts[0][k], in_units.texts[1][k]});
+      if (in_units.unit.empty()) rows.back().push_back(in_units.units[k]);
     }
+    std::vector<std::string> header = {"point", "image",          "marks file line",
+                                       "|w|",   "residual x" + u, "residual y" + u};
+    if (in_units.unit.empty()) header.push_back("unit");
     html << HtmlTable(
         "Check marks rejected by the w-test of their point's intersection (|w| above " +
             FormatUnitless(result.critical_value > 0.0 ? result.critical_value : std::nan(""), 2) +
             ")",
-        {"point", "image", "marks file line", "|w|", "residual x", "residual y"}, rows,
-        {"residuals in the camera model's unit (px, or um on film), at the intersection that "
-         "still held the mark"});
+        header, rows,
+        {"residuals: observed - computed in the mark's own unit, at the intersection that still "
+         "held the mark"});
   }
   if (!result.snooping.empty()) {
     any = true;
+    // Residuals in their group's unit, one per kind (marks px or um, lengths mm, cm or m,
+    // attitudes arcsec): in the header when every step has the same, else in a unit column.
+    std::map<BundleGroup, std::string> group_units;
+    for (const BundleGroupStatistics& g : result.groups) group_units[g.group] = g.unit;
+    std::vector<double> residuals;
+    std::vector<std::string> kinds;
+    for (const BundleSnoopingStep& step : result.snooping) {
+      residuals.push_back(step.residual);
+      const auto unit = group_units.find(step.group);
+      kinds.push_back(unit != group_units.end() ? unit->second : "");
+    }
+    const ColumnsInUnits in_units = FormatColumnsInUnits({residuals}, kinds);
     std::vector<std::vector<std::string>> rows;
     for (size_t k = 0; k < result.snooping.size(); ++k) {
       const BundleSnoopingStep& step = result.snooping[k];
       rows.push_back({std::to_string(k + 1), EnumName(step.group),
-                      BundleItemName(block, step.group, step.item), BundleAxisName(step.group, step.axis),
-                      FormatUnitless(step.normalized, 1), FormatSignificant(step.residual, 3)});
+                      BundleItemName(block, step.group, step.item),
+                      BundleAxisName(step.group, step.axis), FormatUnitless(step.normalized, 1),
+                      in_units.texts[0][k]});
+      if (in_units.unit.empty()) rows.back().push_back(in_units.units[k]);
     }
+    std::vector<std::string> header = {
+        "step", "group", "observation",
+        "axis", "|w|",   in_units.unit.empty() ? "residual" : "residual (" + in_units.unit + ")"};
+    if (in_units.unit.empty()) header.push_back("unit");
     html << HtmlTable("Data snooping: observations removed, in order (|w| above " +
                           FormatUnitless(result.critical_value) + ")",
-                      {"step", "group", "observation", "axis", "|w|", "residual"}, rows);
+                      header, rows);
   }
   if (!result.summary.tie_points_left_out.empty()) {
     any = true;
@@ -929,44 +976,83 @@ std::string DiagnosticsHtml(const Block& block, const BundleAdjustmentResult& re
                             const BundleReportContext& context) {
   std::ostringstream html;
   html << "<h2>8. Diagnostics</h2>\n";
-  std::vector<std::vector<std::string>> rows;
+  // The stated, RMS and estimated columns in one unit per kind of group (every length in mm,
+  // cm or m, chosen once from the largest; marks in px or um; attitudes in arc seconds): named in
+  // the headers when every group has it, else in a unit column; never in a cell.
+  std::vector<std::string> kinds;
+  std::vector<std::vector<double>> values(3);  // stated, RMS, estimated
   for (const BundleGroupStatistics& g : result.groups) {
+    kinds.push_back(g.unit);
+    const bool fixed = g.fixed();
+    values[0].push_back(fixed ? std::nan("") : g.stated_accuracy.x());
+    values[1].push_back(fixed ? std::nan("") : g.rms_total);
+    values[2].push_back(fixed ? std::nan("") : g.estimated_accuracy.x());
+  }
+  const ColumnsInUnits in_units = FormatColumnsInUnits(values, kinds);
+  const bool unit_column = in_units.unit.empty() && !result.groups.empty();
+  const std::string u = unit_column ? "" : " (" + in_units.unit + ")";
+  std::vector<std::vector<std::string>> rows;
+  for (size_t k = 0; k < result.groups.size(); ++k) {
+    const BundleGroupStatistics& g = result.groups[k];
     const bool prior = g.group == kControlPoints || g.group == kCameraPositions ||
                        g.group == kAttitudes;
+    std::vector<std::string> row;
     if (g.fixed()) {
-      rows.push_back({EnumName(g.group), FormatCount(g.num_fixed, "held fixed", "held fixed"),
-                      "0 (error-free)", "n/a", "n/a", "n/a", "n/a", "fixed"});
-      continue;
+      row = {EnumName(g.group),
+             FormatCount(g.num_fixed, "held fixed", "held fixed"),
+             "0 (error-free)",
+             "n/a",
+             "n/a",
+             "n/a",
+             "n/a",
+             "fixed"};
+    } else {
+      std::string verdict = "fits";
+      if (g.num_fixed > 0) verdict += ", " + std::to_string(g.num_fixed) + " more held fixed";
+      if (g.overfit) {
+        verdict = "OVER-FITTED";
+      } else if (!prior) {
+        verdict = g.ratio > kWeightFactor || g.ratio < 1.0 / kWeightFactor ? "weight off" : "fits";
+      }
+      row = {EnumName(g.group),
+             std::to_string(g.count),
+             in_units.texts[0][k],
+             in_units.texts[1][k],
+             std::isfinite(g.estimated_accuracy.x())
+                 ? in_units.texts[2][k]
+                 : (g.estimation_message.empty() ? "not asked" : "not estimated"),
+             FormatUnitless(g.ratio),
+             std::isfinite(g.redundancy_share) ? FormatUnitless(g.redundancy_share) : "n/a",
+             verdict};
     }
-    std::string verdict = "fits";
-    if (g.num_fixed > 0) verdict += ", " + std::to_string(g.num_fixed) + " more held fixed";
-    if (g.overfit) {
-      verdict = "OVER-FITTED";
-    } else if (!prior) {
-      verdict = g.ratio > kWeightFactor || g.ratio < 1.0 / kWeightFactor ? "weight off" : "fits";
-    }
-    rows.push_back({EnumName(g.group), std::to_string(g.count),
-                    FormatMarkValue(g.stated_accuracy.x(), g.unit),
-                    FormatMarkValue(g.rms_total, g.unit), FormatUnitless(g.ratio),
-                    std::isfinite(g.redundancy_share) ? FormatUnitless(g.redundancy_share) : "n/a",
-                    std::isfinite(g.estimated_accuracy.x())
-                        ? FormatMarkValue(g.estimated_accuracy.x(), g.unit)
-                        : (g.estimation_message.empty() ? "not asked" : "not estimated"),
-                    verdict});
+    if (unit_column) row.insert(row.begin() + 2, in_units.units[k]);
+    rows.push_back(row);
   }
-  html << HtmlTable(
-      "Groups of the objective: residuals against the stated accuracies",
-      {"group", "count", "stated", "RMS", "RMS / stated", "redundancy share",
-       "estimated accuracy", "verdict"},
-      rows,
-      {"redundancy share: the group's summed redundancy numbers over its observations, how much "
-       "of it the rest of the block checks (0 to 1)",
-       "over-fitted: a prior group whose RMS / stated is below " +
-           FormatUnitless(context.options.statistics.overfit_ratio) +
-           " or whose redundancy share is below " +
-           FormatUnitless(context.options.statistics.overfit_redundancy_share),
-       "weight off: RMS / stated outside " + FormatUnitless(1.0 / kWeightFactor) + " to " +
-           FormatUnitless(kWeightFactor)});
+  std::vector<std::string> header = {"group",
+                                     "count",
+                                     "stated" + u,
+                                     "RMS" + u,
+                                     "estimated accuracy" + u,
+                                     "RMS / stated",
+                                     "redundancy share",
+                                     "verdict"};
+  std::vector<std::string> notes = {
+      "redundancy share: the group's summed redundancy numbers over its observations, how much "
+      "of it the rest of the block checks (0 to 1)",
+      "over-fitted: a prior group whose RMS / stated is below " +
+          FormatUnitless(context.options.statistics.overfit_ratio) +
+          " or whose redundancy share is below " +
+          FormatUnitless(context.options.statistics.overfit_redundancy_share),
+      "weight off: RMS / stated outside " + FormatUnitless(1.0 / kWeightFactor) + " to " +
+          FormatUnitless(kWeightFactor)};
+  if (unit_column) {
+    header.insert(header.begin() + 2, "unit");
+    notes.insert(notes.begin(),
+                 "unit: of the row's stated, RMS and estimated accuracy; the "
+                 "lengths of every group in one unit");
+  }
+  html << HtmlTable("Groups of the objective: residuals against the stated accuracies", header,
+                    rows, notes);
   if (!result.observations.empty()) {
     std::map<std::string, std::vector<double>> redundancy;
     for (const BundleObservationDiagnostics& d : result.observations)

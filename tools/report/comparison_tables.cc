@@ -53,13 +53,21 @@ std::string CsvField(const std::string& text) {
 
 // ------------------------------------------------------------------ rendering
 
+std::string SweepSettingTitle(const SweepSetting& s, int trials, int images) {
+  return std::string(EnumName(s.scenario)) + ": noise " + FormatSignificant(s.noise_px, 4) +
+         " px, outliers " + FormatSignificant(100.0 * s.outlier_fraction, 4) + "%, " +
+         FormatCount(s.control_points, "control point") + ", initial error +-" +
+         FormatScaledLength(s.initial_error.position_m) + " +-" +
+         FormatScaledAngle(s.initial_error.angle_deg) + " (" + s.axis + "; " +
+         FormatCount(trials, "trial") + " x " + FormatCount(images, "image") + ")";
+}
+
 std::vector<std::string> MonteCarloNotes(const MonteCarloOptions& options) {
-  char success[256];
-  std::snprintf(
-      success, sizeof(success),
-      "success: a pose was returned and |X0 - X0_true| <= %g design sigmas, sigma = "
-      "sqrt(trace C_pos), C = (J^T P J)^-1 at the true pose; its mean (m) is in each table title.",
-      options.success_sigmas);
+  const std::string success =
+      "success: a pose was returned and |X0 - X0_true| <= " +
+      FormatSignificant(options.success_sigmas, 4) +
+      " design sigmas, sigma = sqrt(trace C_pos), C = (J^T P J)^-1 at the true pose; its mean is "
+      "in each table title.";
   return {
       "solved: a pose was returned; success as below. pos/rot/check/reproj RMSE are over the "
       "solved "
@@ -95,7 +103,7 @@ std::vector<TextTable> MonteCarloTables(const MonteCarloOptions& options,
     table.title = SweepSettingTitle(setting.setting, options.trials, setting.images_per_trial);
     double threshold = kNaN;
     if (!setting.solvers.empty()) threshold = setting.solvers.front().mean_success_threshold_m;
-    table.title += ", success threshold " + Sig(threshold) + " m";
+    table.title += ", success threshold " + FormatScaledLength(threshold);
     table.header = {"solver",   "solved",   "success",   "pos_rmse_m", "rot_rmse_as", "d_ref_m",
                     "d_ref_as", "check_px", "reproj_px", "iter",       "t_us",        "refine_us",
                     "t/ref",    "nees",     "E[nees]",   "nees_ap",    "99% int",     "cov"};

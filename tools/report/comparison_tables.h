@@ -19,6 +19,12 @@ struct TextTable {
   std::vector<std::string> notes;  // lines printed under the table
 };
 
+// One sweep setting, for table titles and the comparison page: "oblique: noise 1 px, outliers
+// 10%, 20 control points, initial error +-5 m +-2 deg (axis; 200 trials x 1 image)". The values
+// through the report kit (html_kit.h): noise FormatSignificant in px, the outlier fraction in
+// percent, the initial errors FormatScaledLength and FormatScaledAngle; never an exponent.
+std::string SweepSettingTitle(const SweepSetting& setting, int trials, int images);
+
 // One table per setting; its notes say why samples were not solved. The definitions of the columns
 // are MonteCarloNotes.
 std::vector<TextTable> MonteCarloTables(const MonteCarloOptions& options,

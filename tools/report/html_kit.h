@@ -43,6 +43,9 @@ std::string ReportFixed(double value, int digits);
 enum class LengthUnit { kMillimetre, kCentimetre, kMetre };
 // mm below 0.1 m, cm below 10 m, m from there (of the largest magnitude, m).
 LengthUnit LengthUnitFor(double largest_magnitude_m);
+// The largest finite magnitude of `values` (0 when there is none): what LengthUnitFor takes for a
+// column.
+double LargestMagnitude(const std::vector<double>& values);
 const char* LengthUnitName(LengthUnit unit);  // "mm", "cm", "m"
 // The value (m) in `unit` as a number (for plots).
 double LengthIn(double value_m, LengthUnit unit);
@@ -58,22 +61,51 @@ std::string FormatCoordinate(double value_m);
 // Image measurements: pixels (px) and film coordinates (um), two decimals.
 std::string FormatPixels(double value_px);
 std::string FormatFilm(double value_um);
-// A value in a group's unit (BundleGroupStatistics::unit): marks in "px", "um", or "sigma" for a
-// group mixing pixel and film marks (solvers/bundle/bundle_statistics.cc) with two decimals and
-// the unit; "m" as FormatLengthWithUnit (mm, cm or m); "deg" in arc seconds ("36.0 arcsec").
-std::string FormatMarkValue(double value, const std::string& unit);
-// Values of one group's unit printed on one line (stated, RMS, estimated): FormatMarkValue of each,
-// lengths ("m") in one unit for all of them (FormatLengthsWithUnit).
+// Values of one kind read together (a table column, the columns of a row, the figures of one
+// line) in one unit for all of them, and that unit's name. The kind is a group's unit
+// (BundleGroupStatistics::unit): marks in "px", "um", or "sigma" for a group mixing pixel and film
+// marks (solvers/bundle/bundle_statistics.cc), two decimals; "m" in mm, cm or m (LengthUnitFor of
+// the largest finite magnitude, FormatLength); "deg" in arc seconds, one decimal ("arcsec").
+struct ValuesInOneUnit {
+  std::string unit;                // "px", "um", "sigma", "mm", "cm", "m" or "arcsec"
+  std::vector<std::string> texts;  // one per value, without the unit; "n/a" when not finite
+};
+ValuesInOneUnit FormatInOneUnit(const std::vector<double>& values, const std::string& kind);
+// The same with the unit after each value ("5.0 mm", "0.50 px", "36.0 arcsec"; "n/a" alone): the
+// figures of one line (stated, RMS, estimated).
 std::vector<std::string> FormatMarkValues(const std::vector<double>& values,
-                                          const std::string& unit);
+                                          const std::string& kind);
+// One value: FormatMarkValues({value}, kind).
+std::string FormatMarkValue(double value, const std::string& kind);
+
+// Columns of a table whose rows are of different kinds (e.g. the groups of an adjustment: marks in
+// px, points in m, attitudes in deg), the columns of one row read together (stated, RMS,
+// estimated): every value of one kind, over all the columns, in one unit (FormatInOneUnit), so
+// that a column never mixes mm and cm. When every row has the same unit, `unit` names it for the
+// headers; otherwise `unit` is empty and the table takes a unit column (`units`, one per row).
+// Cells never carry a unit.
+struct ColumnsInUnits {
+  std::vector<std::vector<std::string>> texts;  // [column][row], without the unit
+  std::vector<std::string> units;               // [row]: its kind's unit
+  std::string unit;                             // the unit of every row, or empty
+};
+ColumnsInUnits FormatColumnsInUnits(const std::vector<std::vector<double>>& columns,
+                                    const std::vector<std::string>& row_kinds);
 // Angles: degrees with four decimals, arc seconds (of a value in degrees) with one.
 std::string FormatDegrees(double value_deg);
 std::string FormatArcSeconds(double value_deg);
 // A unitless figure (sigma0, ratios, w, correlations) with `decimals` decimals.
 std::string FormatUnitless(double value, int decimals = 2);
-// `value` with `significant` significant digits in fixed notation (at most 6 decimals): times,
-// counts per second, calibration values.
+// `value` with `significant` significant digits in fixed notation (at most 6 decimals, so below
+// 0.0000005 it prints "0"): times, counts per second, calibration values.
 std::string FormatSignificant(double value, int significant = 3);
+// A value someone chose (a sweep's setting, an initial error, a threshold: an input, not a
+// measured error) with its unit and at most 4 significant digits (FormatSignificant), lengths and
+// angles in the unit that puts the magnitude in [0.1, 1000): lengths (m) in mm, m or km ("50 mm",
+// "0.5 m", "2.5 km"), angles (deg) in arc seconds or degrees ("36 arcsec", "2 deg"); the smallest
+// unit below that range, the largest above it; 0 in the base unit ("0 m"); "n/a" when not finite.
+std::string FormatScaledLength(double value_m);
+std::string FormatScaledAngle(double value_deg);
 // "1 image", "12 images".
 std::string FormatCount(long long count, const std::string& singular,
                         const std::string& plural = "");
@@ -143,7 +175,7 @@ struct PlotAxis {
 // A linear axis over the data range [lo, hi] widened to whole tick steps (from 0 when
 // `from_zero` and lo >= 0; a flat range is padded).
 PlotAxis LinearPlotAxis(double lo, double hi, bool from_zero);
-// A tick's label: %g, or %.0e for very small and very large magnitudes.
+// A tick's label: FormatSignificant with 6 digits (never an exponent).
 std::string TickLabel(double value);
 
 // The rectangle the data are drawn in, inside an SVG of `svg_height`.

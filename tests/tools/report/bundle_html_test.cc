@@ -6,8 +6,9 @@
 #include <string>
 
 #include "core/simulation/synthetic_block.h"
-#include "solvers/bundle/check_points.h"
 #include "solvers/bundle/bundle_adjustment.h"
+#include "solvers/bundle/check_points.h"
+#include "tests/support/bundle_groups.h"
 #include "tools/report/bundle_report.h"
 
 namespace photopose::cli {
@@ -83,6 +84,9 @@ TEST_F(BundleHtmlTest, SectionsComeInTheOrderASurveyorReadsThem) {
   EXPECT_NE(html.find("<th colspan=\"3\" class=\"group\">sigma of the angles (arcsec)</th>"),
             std::string::npos);
   EXPECT_NE(html.find("<th>omega</th><th>phi</th><th>kappa</th>"), std::string::npos);
+  // The marks' RMS residual of every image in pixels: the unit in the header, not in the cells.
+  EXPECT_NE(html.find("<th>RMS residual (px)</th>"), std::string::npos);
+  EXPECT_EQ(html.find(" px</td>"), std::string::npos);
   // Tables of the control and check points, by id; the command line escaped; nothing failed.
   EXPECT_NE(html.find("<td>C001</td>"), std::string::npos);
   EXPECT_NE(html.find("<td>K001</td>"), std::string::npos);
@@ -122,6 +126,87 @@ TEST_F(BundleHtmlTest, ARejectedCheckMarkIsListedAndNamedInTheVerdict) {
                           block_.images[block_.marks[blunder].image].name + "</td>",
                       table),
             std::string::npos);
+  // Its residuals in the mark's unit, named in the header.
+  EXPECT_NE(html.find("<th>residual x (px)</th><th>residual y (px)</th>", table),
+            std::string::npos);
+}
+
+BundleGroupStatistics Group(BundleGroup group, const std::string& unit, double stated, double rms) {
+  return testing::GroupOf(group, unit, stated, rms, 0.5);
+}
+
+// The <table> whose caption starts with `caption`, or "".
+std::string TableWithCaption(const std::string& html, const std::string& caption) {
+  const size_t at = html.find("<caption>" + caption);
+  if (at == std::string::npos) return "";
+  const size_t open = html.rfind("<table", at);
+  return html.substr(open, html.find("</table>", at) + 8 - open);
+}
+
+// The diagnostics' group table reads by column: every length in one unit chosen once for the
+// table (not 5.0 mm in one row and 50.0 cm in the next), the unit in its own column when the
+// groups are of different kinds, never in a cell.
+TEST_F(BundleHtmlTest, TheGroupTableTakesOneUnitPerColumn) {
+  result_.groups = {Group(kTieMarks, "px", 0.5, 0.43), Group(kControlPoints, "m", 0.005, 0.003),
+                    Group(kCameraPositions, "m", 0.5, 0.2), Group(kAttitudes, "deg", 0.01, 0.005)};
+  result_.groups[2].estimated_accuracy = Eigen::Vector3d::Constant(0.21);
+  const std::string table =
+      TableWithCaption(BundleReportHtml(block_, result_, context_), "Groups of the objective");
+  ASSERT_NE(table, "");
+  EXPECT_NE(table.find("<th>group</th><th>count</th><th>unit</th><th>stated</th><th>RMS</th>"
+                       "<th>estimated accuracy</th>"),
+            std::string::npos)
+      << table;
+  EXPECT_NE(table.find("<td>tie_marks</td><td>12</td><td>px</td><td>0.50</td><td>0.43</td>"),
+            std::string::npos)
+      << table;
+  EXPECT_NE(table.find("<td>control_points</td><td>12</td><td>cm</td><td>0.5</td><td>0.3</td>"),
+            std::string::npos)
+      << table;
+  EXPECT_NE(table.find("<td>camera_positions</td><td>12</td><td>cm</td><td>50.0</td><td>20.0</td>"
+                       "<td>21.0</td>"),
+            std::string::npos)
+      << table;
+  EXPECT_NE(table.find("<td>attitudes</td><td>12</td><td>arcsec</td><td>36.0</td><td>18.0</td>"),
+            std::string::npos)
+      << table;
+  // No cell holds a number with a unit after it.
+  std::smatch with_unit;
+  EXPECT_FALSE(
+      std::regex_search(table, with_unit, std::regex("<td>[-0-9.]+ (mm|cm|m|px|um|arcsec)</td>")))
+      << with_unit.str();
+
+  // Groups of one kind: the unit in the headers, no unit column.
+  result_.groups = {Group(kTieMarks, "px", 0.5, 0.43), Group(kControlMarks, "px", 0.5, 1.7)};
+  const std::string marks =
+      TableWithCaption(BundleReportHtml(block_, result_, context_), "Groups of the objective");
+  EXPECT_NE(marks.find("<th>count</th><th>stated (px)</th><th>RMS (px)</th>"
+                       "<th>estimated accuracy (px)</th>"),
+            std::string::npos)
+      << marks;
+  EXPECT_NE(marks.find("<td>control_marks</td><td>12</td><td>0.50</td><td>1.70</td>"),
+            std::string::npos)
+      << marks;
+  EXPECT_EQ(marks.find("<th>unit</th>"), std::string::npos) << marks;
+}
+
+// Columns whose rows are of different kinds take a unit column: an image measured on film among
+// pixel images, data snooping that removed a mark and a control point's coordinate.
+TEST_F(BundleHtmlTest, ColumnsMixingKindsTakeAUnitColumn) {
+  result_.images[0].unit = "um";
+  result_.images[0].rms_residual = 1.25;
+  result_.snooping = {{kTieMarks, 0, 0, 9.5, 3.25}, {kControlPoints, 0, 2, 5.1, 0.0421}};
+  const std::string html = BundleReportHtml(block_, result_, context_);
+  EXPECT_NE(html.find("<th>RMS residual</th><th>unit</th>"), std::string::npos);
+  EXPECT_NE(
+      html.find("<td>" + block_.images[0].name + "</td><td>" +
+                std::to_string(result_.images[0].num_marks) + "</td><td>1.25</td><td>um</td>"),
+      std::string::npos);
+  const std::string snooping = TableWithCaption(html, "Data snooping");
+  EXPECT_NE(snooping.find("<th>|w|</th><th>residual</th><th>unit</th>"), std::string::npos)
+      << snooping;
+  EXPECT_NE(snooping.find("<td>9.5</td><td>3.25</td><td>px</td>"), std::string::npos) << snooping;
+  EXPECT_NE(snooping.find("<td>5.1</td><td>42.1</td><td>mm</td>"), std::string::npos) << snooping;
 }
 
 TEST_F(BundleHtmlTest, AFailedAdjustmentSaysSoFirst) {

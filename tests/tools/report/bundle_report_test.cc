@@ -9,22 +9,17 @@
 #include <string>
 #include <vector>
 
+#include "tests/support/bundle_groups.h"
+
 namespace photopose::cli {
 namespace {
 
 // A digit or point followed by an exponent: "6.97e-05", "1e+04", "5.7E7".
 const std::regex kScientific("[0-9.][eE][+-]?[0-9]");
 
+// Redundancy share 0.00007: %g would print it with an exponent.
 BundleGroupStatistics Group(BundleGroup group, const std::string& unit, double stated, double rms) {
-  BundleGroupStatistics g;
-  g.group = group;
-  g.unit = unit;
-  g.count = 12;
-  g.stated_accuracy = Eigen::Vector3d::Constant(stated);
-  g.rms_total = rms;
-  g.ratio = rms / stated;
-  g.redundancy_share = 0.00007;
-  return g;
+  return testing::GroupOf(group, unit, stated, rms, 0.00007);
 }
 
 // A result whose figures all take an exponent under printf's %g: tiny lengths and times, a large

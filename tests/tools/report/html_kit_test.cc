@@ -163,6 +163,52 @@ TEST(HtmlKit, LengthsOfOneLineShareOneUnit) {
             (std::vector<std::string>{"36.0 arcsec", "0.1 arcsec"}));
 }
 
+// A table column of several groups: every length of the table in one unit, chosen once from the
+// largest (not 5.0 mm in one row and 50.0 cm in the next); other kinds in their fixed units; the
+// unit named once (for the header) when every row shares it.
+TEST(HtmlKit, ColumnsOfSeveralKindsTakeOneUnitPerKind) {
+  const ValuesInOneUnit lengths = FormatInOneUnit({0.005, 0.5, std::nan("")}, "m");
+  EXPECT_EQ(lengths.unit, "cm");
+  EXPECT_EQ(lengths.texts, (std::vector<std::string>{"0.5", "50.0", "n/a"}));
+  EXPECT_EQ(FormatInOneUnit({0.01}, "deg").unit, "arcsec");
+  EXPECT_EQ(FormatInOneUnit({0.01}, "deg").texts[0], "36.0");
+  EXPECT_EQ(FormatInOneUnit({0.456}, "um").texts[0], "0.46");
+
+  // Rows: control points (m), camera positions (m), tie marks (px); columns stated and RMS.
+  const ColumnsInUnits mixed =
+      FormatColumnsInUnits({{0.005, 0.5, 0.5}, {0.003, 0.2, 0.43}}, {"m", "m", "px"});
+  EXPECT_EQ(mixed.unit, "");  // lengths and pixels: a unit column
+  EXPECT_EQ(mixed.units, (std::vector<std::string>{"cm", "cm", "px"}));
+  EXPECT_EQ(mixed.texts[0], (std::vector<std::string>{"0.5", "50.0", "0.50"}));
+  EXPECT_EQ(mixed.texts[1], (std::vector<std::string>{"0.3", "20.0", "0.43"}));
+  // The largest of any column sets the unit of the kind in all of them.
+  const ColumnsInUnits lengths_only =
+      FormatColumnsInUnits({{0.005, 0.002}, {0.003, 0.2}}, {"m", "m"});
+  EXPECT_EQ(lengths_only.unit, "cm");
+  EXPECT_EQ(lengths_only.texts[0], (std::vector<std::string>{"0.5", "0.2"}));
+  for (const auto& column : {mixed.texts[0], mixed.texts[1], lengths_only.texts[1]})
+    for (const std::string& cell : column)
+      EXPECT_EQ(cell.find_first_of("abcdefghijklmnopqrstuvwxyz"), std::string::npos) << cell;
+  EXPECT_EQ(FormatColumnsInUnits({{}}, {}).unit, "");
+}
+
+// Values someone chose: at most 4 significant digits, scaled into 0.1 to 1000 of a unit.
+TEST(HtmlKit, ChosenValuesTakeTheUnitThatKeepsThemReadable) {
+  EXPECT_EQ(FormatScaledLength(5.0), "5 m");
+  EXPECT_EQ(FormatScaledLength(0.5), "0.5 m");
+  EXPECT_EQ(FormatScaledLength(0.05), "50 mm");
+  EXPECT_EQ(FormatScaledLength(0.0001), "0.1 mm");
+  EXPECT_EQ(FormatScaledLength(1e-5), "0.01 mm");  // below the range: the smallest unit
+  EXPECT_EQ(FormatScaledLength(2500.0), "2.5 km");
+  EXPECT_EQ(FormatScaledLength(1.23456), "1.235 m");
+  EXPECT_EQ(FormatScaledLength(0.0), "0 m");
+  EXPECT_EQ(FormatScaledLength(std::nan("")), "n/a");
+  EXPECT_EQ(FormatScaledAngle(2.0), "2 deg");
+  EXPECT_EQ(FormatScaledAngle(0.05), "180 arcsec");
+  EXPECT_EQ(FormatScaledAngle(1e-5), "0.036 arcsec");
+  EXPECT_EQ(FormatScaledAngle(-0.25), "-0.25 deg");
+}
+
 TEST(HtmlKit, NumbersNeverTakeAnExponent) {
   EXPECT_EQ(FormatSignificant(0.000697, 3), "0.000697");
   EXPECT_EQ(FormatSignificant(6.97e-05, 3), "0.00007");  // at most six decimals
