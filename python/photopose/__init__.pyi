@@ -282,11 +282,13 @@ class ResectionResult:
     @property
     def warnings(self) -> list[str]: ...
     @property
+    def cancelled(self) -> bool: ...  # not resected: the batch was cancelled before this image started
+    @property
     def summary(self) -> ResectionSummary: ...
 
 def resect(input: ResectionInput, options: Optional[ResectionOptions] = None) -> ResectionResult: ...
 class ResectionProgress:
-    """resect_images' progress, given to its callback after each part of the batch."""
+    """resect_images' progress, given to its callback as the batch goes."""
     @property
     def images_done(self) -> int: ...  # count, increasing to images_total
     @property
@@ -294,7 +296,7 @@ class ResectionProgress:
     @property
     def elapsed_seconds(self) -> float: ...  # s since the call started
 
-def resect_images(inputs: list[ResectionInput], options: Optional[ResectionOptions] = None, num_threads: int = 0, *, progress: Optional[Callable[[ResectionProgress], None]] = None) -> list[ResectionResult]: ...
+def resect_images(inputs: list[ResectionInput], options: Optional[ResectionOptions] = None, num_threads: int = 0, *, progress: Optional[Callable[[ResectionProgress], Optional[bool]]] = None) -> list[ResectionResult]: ...
 class GroundPoint:
     """A row of the ground points table."""
     def __init__(self, **kwargs: Any) -> None: ...

@@ -170,9 +170,9 @@ struct PythonBlock {
 // ------------------------------------------------------------------ progress
 // A Python progress callback (None, or a callable taking one Info: a BundleIterationInfo from the
 // adjustments, a ResectionProgress from resect_images; anything else is a TypeError), called from
-// the library's thread with the GIL taken. The first exception it raises stops further calls (the
-// C++ adjustment cannot be interrupted from its progress hook; resect_images stops after the images
-// at hand) and is raised again when the call returns.
+// the library's threads with the GIL taken for the call alone. The first exception it raises stops
+// further calls and is raised again when the call returns; resect_images is cancelled by it, or by
+// the callback returning False (the C++ adjustment cannot be interrupted from its progress hook).
 class ProgressRelay {
  public:
   // `takes` names what the callback receives, for the TypeError ("a BundleIterationInfo").
@@ -187,27 +187,28 @@ class ProgressRelay {
   }
 
   bool active() const { return !callback_.is_none(); }
-  // True once the callback has raised.
-  bool failed() const { return error_ != nullptr; }
 
   // Calls the callback with `info` (a no-op without one or after it raised). Any thread, with or
-  // without the GIL.
+  // without the GIL. Returns whether to go on: false once the callback has raised or when it
+  // returned False.
   template <typename Info>
-  void Call(const Info& info) {
-    if (!active()) return;
+  bool Call(const Info& info) {
+    if (!active()) return true;
     py::gil_scoped_acquire acquire;
-    if (error_) return;
+    if (error_) return false;
     try {
-      callback_(info);
+      return callback_(info).ptr() != Py_False;
     } catch (py::error_already_set& e) {
       error_ = std::make_unique<py::error_already_set>(std::move(e));
+      return false;
     }
   }
-  // The hook of a library call that reports Info: empty without a callback.
-  template <typename Info = BundleIterationInfo>
-  std::function<void(const Info&)> Function() {
+  // The hook of a library call that reports Info (Result bool: a hook that may cancel, as Call
+  // returns): empty without a callback.
+  template <typename Info = BundleIterationInfo, typename Result = void>
+  std::function<Result(const Info&)> Function() {
     if (!active()) return {};
-    return [this](const Info& info) { Call(info); };
+    return [this](const Info& info) { return static_cast<Result>(Call(info)); };
   }
   // Raises the callback's exception, if any (with the GIL held).
   void Rethrow() {

@@ -1,61 +1,11 @@
 // Single-image resection (solvers/resection/resection.h): its composed options, its input from
 // numpy arrays, its result with summary, covariance and per-mark statistics, one image or many.
 
-#include <algorithm>
-#include <chrono>
-#include <cstdint>
-#include <iterator>
-
 #include "common.h"
-#include "core/parallel.h"
 #include "solvers/resection/resection.h"
 
 namespace photopose::python {
 namespace {
-
-// resect_images' progress: what its callback receives after each part of the batch.
-struct ResectionProgress {
-  int images_done = 0;           // images resected so far (count), increasing to images_total
-  int images_total = 0;          // images of the call (count)
-  double elapsed_seconds = 0.0;  // since the call started (s, wall clock)
-};
-
-// ResectImages gives image i the RANSAC seed options' seed + kSeedStep * (i + 1)
-// (solvers/resection/resection.cc), so the part of a batch that starts at image `first`, resected
-// with the seed raised by kSeedStep * first, gets the seeds of the whole batch: the results are
-// the same, bit for bit, with and without progress (python/tests/test_resection.py checks it).
-constexpr uint64_t kSeedStep = 0x9E3779B97F4A7C15ull;
-// With progress, the batch is resected in parts of at least kImagesPerThreadPerPart images per
-// thread (each part ends when its slowest thread does: about one image per thread lost per part),
-// and of at most kMaxParts parts (one callback each).
-constexpr size_t kImagesPerThreadPerPart = 16;
-constexpr size_t kMaxParts = 100;
-
-// ResectImages over consecutive parts of `inputs` (moved out of it), calling relay after each part
-// with a ResectionProgress; stops after the part at hand once the callback has raised.
-std::vector<ResectionResult> ResectImagesInParts(const ResectionOptions& options,
-                                                 std::vector<ResectionInput> inputs,
-                                                 int num_threads, ProgressRelay* relay) {
-  const auto start = std::chrono::steady_clock::now();
-  const size_t n = inputs.size();
-  const size_t threads = static_cast<size_t>(ResolveThreadCount(num_threads));
-  const size_t part_size = std::max(kImagesPerThreadPerPart * threads, (n + kMaxParts - 1) / kMaxParts);
-  std::vector<ResectionResult> results;
-  results.reserve(n);
-  for (size_t first = 0; first < n && !relay->failed(); first += part_size) {
-    const size_t last = std::min(n, first + part_size);
-    std::vector<ResectionInput> part(std::make_move_iterator(inputs.begin() + first),
-                                     std::make_move_iterator(inputs.begin() + last));
-    ResectionOptions part_options = options;
-    part_options.consensus.ransac.seed = options.consensus.ransac.seed + kSeedStep * first;
-    std::vector<ResectionResult> part_results = ResectImages(part_options, part, num_threads);
-    std::move(part_results.begin(), part_results.end(), std::back_inserter(results));
-    relay->Call(ResectionProgress{
-        static_cast<int>(last), static_cast<int>(n),
-        std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count()});
-  }
-  return results;
-}
 
 ResectionInput MakeInput(const py::object& image_plane, const py::object& points,
                          double focal_length, const py::object& sigma,
@@ -95,6 +45,7 @@ ResectionInput MakeInput(const py::object& image_plane, const py::object& points
 
 std::string ResultRepr(const ResectionResult& r) {
   std::string verdict = r.success ? (r.weak ? "weak" : "solved")
+                        : r.cancelled        ? "cancelled"
                         : r.ambiguous        ? "ambiguous"
                         : r.accuracy_disagrees ? "accuracy_disagrees"
                                                : "not_solved";
@@ -287,6 +238,8 @@ numbers, minimal detectable blunders, pose shifts (sigmas) and status.)doc");
       .def_property_readonly("competing_inliers",
                              [](const ResectionResult& r) { return ToBoolArray(r.competing_inliers); })
       .def_readonly("warnings", &ResectionResult::warnings)
+      .def_readonly("cancelled", &ResectionResult::cancelled,
+                    "not resected: the batch was cancelled before this image started")
       .def_readonly("summary", &ResectionResult::summary)
       .def("__repr__", &ResultRepr);
 }
@@ -305,26 +258,23 @@ void BindResectionCalls(py::module_& m) {
       "Resects one image (ResectImage). A failure is success = False with summary.message; "
       "invalid options raise photopose.Error.");
   py::class_<ResectionProgress>(m, "ResectionProgress",
-                                "resect_images' progress, given to its callback after each part of the batch.")
+                                "resect_images' progress, given to its callback as the batch goes.")
       .def_readonly("images_done", &ResectionProgress::images_done, "count, increasing to images_total")
       .def_readonly("images_total", &ResectionProgress::images_total, "count")
       .def_readonly("elapsed_seconds", &ResectionProgress::elapsed_seconds, "s since the call started")
       .def("__repr__", [](const py::object& self) { return PropertiesRepr(self); });
   m.def(
       "resect_images",
-      [](std::vector<ResectionInput> inputs, std::optional<ResectionOptions> options,
+      [](const std::vector<ResectionInput>& inputs, std::optional<ResectionOptions> options,
          int num_threads, const py::object& progress) {
-        const ResectionOptions o = options.value_or(ResectionOptions());
-        CheckOptions(o, "invalid options");
-        if (num_threads < 0) throw py::value_error("num_threads must be >= 0 (0: all cores)");
+        ResectionBatchOptions batch;
+        batch.num_threads = num_threads;
         ProgressRelay relay(progress, "a ResectionProgress");
+        batch.progress = relay.Function<ResectionProgress, bool>();
         std::vector<ResectionResult> results;
         CallWithoutGil(
             [&] {
-              results = relay.active()
-                            ? ResectImagesInParts(o, std::move(inputs), num_threads, &relay)
-                            : ResectImages(o, inputs, num_threads);
-              return Status::Ok();
+              return ResectImages(options.value_or(ResectionOptions()), inputs, batch, &results);
             },
             &relay);
         return results;
@@ -332,11 +282,13 @@ void BindResectionCalls(py::module_& m) {
       py::arg("inputs"), py::arg("options") = py::none(), py::arg("num_threads") = 0,
       py::kw_only(), py::arg("progress") = py::none(), R"doc(
 Resects many images in parallel (ResectImages; 0 threads: all cores), results in input order;
-image i gets its own reproducible RANSAC seed. progress(info: ResectionProgress) is called after
-each part of the batch (at most 100 parts, at least 16 images per thread each; from the resecting
-thread, with the GIL) with images_done, images_total and elapsed_seconds; the results are the same
-with and without it. An exception it raises stops the batch after the part at hand and is raised
-when the call returns.)doc");
+image i gets its own reproducible RANSAC seed. progress(info: ResectionProgress) is called as images
+finish (when 1 % of the batch has finished or 0.1 s has passed since its last call, and once with
+images_done == images_total; from a resecting thread, with the GIL taken for the call alone) with
+images_done, images_total and elapsed_seconds; the results are the same, bit for bit, with and
+without it. A callback that returns False cancels the batch: the images not yet started are
+results with cancelled True (no pose). An exception it raises cancels the batch and is raised when
+the call returns.)doc");
 }
 
 }  // namespace

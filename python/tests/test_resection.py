@@ -184,14 +184,18 @@ def test_batch_resection_progress():
         infos = []
         results = pp.resect_images(inputs, num_threads=threads, progress=infos.append)
         done = [info.images_done for info in infos]
-        assert len(infos) > 2 and done[-1] == len(inputs), done
+        # Throttled: a call when 1 % of the batch (here 2 images) has finished or 0.1 s has passed
+        # since the last one, and at the end.
+        assert 2 < len(infos) <= len(inputs) // 2 + infos[-1].elapsed_seconds / 0.1 + 2, done
+        assert done[-1] == len(inputs), done
         assert all(a < b for a, b in zip(done, done[1:])), done
         assert {info.images_total for info in infos} == {len(inputs)}
         elapsed = [info.elapsed_seconds for info in infos]
         assert elapsed[0] >= 0.0 and all(a <= b for a, b in zip(elapsed, elapsed[1:]))
         assert repr(infos[-1]).startswith(f"ResectionProgress(images_done={len(inputs)}, images_total=")
-        # Resected in parts, each image keeps the seed of the whole batch: the same results.
+        # One call, every image with its seed: the same results, bit for bit.
         assert outcome(results) == outcome(alone)
+        assert not any(r.cancelled for r in results)
     # The comparison can fail: another seed gives other trials.
     other = pp.ResectionOptions()
     other.consensus.ransac.seed += 1
@@ -212,7 +216,31 @@ def test_batch_resection_progress_exception_is_raised():
 
     with pytest.raises(KeyboardInterrupt, match="stop"):
         pp.resect_images(inputs, num_threads=1, progress=stop)
-    assert calls == [16]  # after the first part (16 images on one thread), and not again
+    assert calls == [1]  # after the first image (1 % of 100), and not again: the batch cancelled
+    # The module works on after it.
+    assert outcome(pp.resect_images(inputs[:3], num_threads=1)) == outcome(
+        pp.resect_images(inputs[:3], num_threads=1, progress=lambda info: None))
+
+
+def test_batch_resection_progress_returning_false_cancels():
+    inputs = blundered_inputs(60)
+    alone = pp.resect_images(inputs, num_threads=1)
+    calls = []
+
+    def enough(info):
+        calls.append(info.images_done)
+        return info.images_done < 10
+
+    results = pp.resect_images(inputs, num_threads=1, progress=enough)
+    assert calls == list(range(1, 11))  # 1 % of 60 is one image
+    assert [r.cancelled for r in results] == [False] * 10 + [True] * 50
+    assert outcome(results[:10]) == outcome(alone[:10])
+    for r in results[10:]:
+        assert not r.success and r.summary.message.startswith("cancelled")
+        assert r.num_inliers == 0 and len(r.inliers) == 0
+        assert repr(r).startswith("ResectionResult(cancelled, message='cancelled")
+    # True and None go on.
+    assert outcome(pp.resect_images(inputs, num_threads=2, progress=lambda info: True)) == outcome(alone)
 
 
 def test_batch_resection_with_progress_releases_the_gil(source_dir, assert_releases_gil):

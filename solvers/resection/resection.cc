@@ -3,10 +3,12 @@
 #include <Eigen/Dense>
 #include <algorithm>
 #include <array>
+#include <atomic>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <limits>
+#include <mutex>
 #include <set>
 #include <sstream>
 
@@ -675,17 +677,158 @@ ResectionResult ResectImage(const ResectionOptions& options, const ResectionInpu
   return image.Solved();
 }
 
-std::vector<ResectionResult> ResectImages(const ResectionOptions& options,
-                                          const std::vector<ResectionInput>& inputs,
-                                          int num_threads, size_t chunk_size) {
-  std::vector<ResectionResult> results(inputs.size());
+bool ResectionBatchOptions::IsValid(std::string* why) const {
+  const auto fail = [why](const char* text) {
+    if (why != nullptr) *why = text;
+    return false;
+  };
+  if (num_threads < 0) return fail("num_threads must be >= 0 (0: all cores)");
+  if (!(progress_fraction >= 0.0 && progress_fraction <= 1.0))
+    return fail("progress_fraction must be in [0, 1]");
+  if (!(progress_interval_seconds >= 0.0) || !std::isfinite(progress_interval_seconds))
+    return fail("progress_interval_seconds must be a finite number >= 0");
+  return true;
+}
+
+std::string ResectionBatchSummary::BriefReport() const {
+  std::ostringstream os;
+  os << images_total << " images: " << images_solved << " solved, "
+     << images_total - images_solved - images_cancelled << " not solved, " << images_cancelled
+     << " cancelled" << (cancelled ? " (the batch was cancelled)" : "") << "; " << progress_calls
+     << " progress calls; " << Number(total_seconds) << " s";
+  return os.str();
+}
+
+namespace {
+
+// A batch's side of its progress hook: counts the finished images and calls the hook, throttled
+// (ResectionBatchOptions), one call at a time under a mutex. A thread that finds the mutex taken
+// goes on resecting; only the thread that finishes the last image waits for it, so that the last
+// call reports every image.
+class BatchProgress {
+ public:
+  BatchProgress(const ResectionBatchOptions& options, size_t total, Clock::time_point start)
+      : hook_(options.progress),
+        total_(static_cast<int>(total)),
+        step_(std::max(1, static_cast<int>(std::ceil(options.progress_fraction * total)))),
+        // At most 30 years: the nanoseconds stay far inside int64_t.
+        interval_ns_(static_cast<int64_t>(std::min(options.progress_interval_seconds, 1e9) * 1e9)),
+        start_(start),
+        next_done_(step_),
+        next_ns_(interval_ns_) {}
+
+  bool cancelled() const { return cancelled_.load(std::memory_order_acquire); }
+  int calls() const { return calls_; }
+
+  // After an image's result is written.
+  void ImageDone() {
+    const int done = done_.fetch_add(1, std::memory_order_acq_rel) + 1;
+    if (done == total_) {
+      const std::lock_guard<std::mutex> lock(mutex_);
+      Report();
+      return;
+    }
+    if (done < next_done_.load(std::memory_order_relaxed) &&
+        NanosecondsSinceStart() < next_ns_.load(std::memory_order_relaxed))
+      return;
+    const std::unique_lock<std::mutex> lock(mutex_, std::try_to_lock);
+    if (lock.owns_lock()) Report();
+  }
+
+ private:
+  int64_t NanosecondsSinceStart() const {
+    return std::chrono::duration_cast<std::chrono::nanoseconds>(Clock::now() - start_).count();
+  }
+  // With mutex_ held: the hook with every image finished by now, unless that was reported already
+  // or the batch is cancelled; then the next due count and time.
+  void Report() {
+    const int done = done_.load(std::memory_order_acquire);
+    if (done <= reported_ || cancelled()) return;
+    const bool go_on = hook_(ResectionProgress{done, total_, SecondsSince(start_)});
+    ++calls_;
+    reported_ = done;
+    next_done_.store(done + step_, std::memory_order_relaxed);
+    next_ns_.store(NanosecondsSinceStart() + interval_ns_, std::memory_order_relaxed);
+    if (!go_on) cancelled_.store(true, std::memory_order_release);
+  }
+
+  const ResectionProgressHook& hook_;
+  const int total_;
+  const int step_;            // images between two calls (count)
+  const int64_t interval_ns_;  // time between two calls (ns)
+  const Clock::time_point start_;
+  std::atomic<int> done_{0};
+  std::atomic<bool> cancelled_{false};
+  // When the next call is due: images finished, ns since start_ (written under mutex_).
+  std::atomic<int> next_done_;
+  std::atomic<int64_t> next_ns_;
+  std::mutex mutex_;
+  int reported_ = 0;  // images_done of the last call (under mutex_)
+  int calls_ = 0;     // under mutex_; read after the threads joined
+};
+
+ResectionResult CancelledResult() {
+  ResectionResult result;
+  result.cancelled = true;
+  result.summary.termination = SolverTermination::kFailure;
+  result.summary.message = "cancelled: the batch was cancelled by its progress hook before this "
+                           "image started";
+  return result;
+}
+
+// The batch on its threads; with progress null exactly as without a hook.
+void ResectBatch(const ResectionOptions& options, const std::vector<ResectionInput>& inputs,
+                 int num_threads, size_t chunk_size, BatchProgress* progress,
+                 std::vector<ResectionResult>* results) {
+  results->assign(inputs.size(), ResectionResult());
   ParallelForChunks(inputs.size(), num_threads, chunk_size, [&](size_t i) {
+    if (progress != nullptr && progress->cancelled()) {
+      (*results)[i] = CancelledResult();
+      return;
+    }
     ResectionOptions image_options = options;
     // A distinct, reproducible RANSAC stream per image, whatever the thread schedule.
     image_options.consensus.ransac.seed =
         options.consensus.ransac.seed + 0x9E3779B97F4A7C15ull * (i + 1);
-    results[i] = ResectImage(image_options, inputs[i]);
+    (*results)[i] = ResectImage(image_options, inputs[i]);
+    if (progress != nullptr) progress->ImageDone();
   });
+}
+
+}  // namespace
+
+Status ResectImages(const ResectionOptions& options, const std::vector<ResectionInput>& inputs,
+                    const ResectionBatchOptions& batch, std::vector<ResectionResult>* results,
+                    ResectionBatchSummary* summary) {
+  PHOTOPOSE_RETURN_IF_ERROR(Validate(batch, "invalid batch options: "));
+  PHOTOPOSE_RETURN_IF_ERROR(Validate(options, "invalid resection options: "));
+  if (inputs.size() > static_cast<size_t>(std::numeric_limits<int>::max()))
+    return Status::Error("a batch holds at most " +
+                         std::to_string(std::numeric_limits<int>::max()) + " images");
+  const Clock::time_point start = Clock::now();
+  std::optional<BatchProgress> progress;
+  if (batch.progress) progress.emplace(batch, inputs.size(), start);
+  ResectBatch(options, inputs, batch.num_threads, batch.chunk_size,
+              progress ? &*progress : nullptr, results);
+  if (summary != nullptr) {
+    *summary = ResectionBatchSummary();
+    summary->images_total = static_cast<int>(results->size());
+    for (const ResectionResult& r : *results) {
+      summary->images_solved += r.success;
+      summary->images_cancelled += r.cancelled;
+    }
+    summary->cancelled = progress && progress->cancelled();
+    summary->progress_calls = progress ? progress->calls() : 0;
+    summary->total_seconds = SecondsSince(start);
+  }
+  return Status::Ok();
+}
+
+std::vector<ResectionResult> ResectImages(const ResectionOptions& options,
+                                          const std::vector<ResectionInput>& inputs,
+                                          int num_threads, size_t chunk_size) {
+  std::vector<ResectionResult> results;
+  ResectBatch(options, inputs, num_threads, chunk_size, /*progress=*/nullptr, &results);
   return results;
 }
 

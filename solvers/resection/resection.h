@@ -47,6 +47,7 @@
 // the image plane (the camera model's observation unit: um for film cameras).
 
 #include <Eigen/Core>
+#include <functional>
 #include <optional>
 #include <string>
 #include <vector>
@@ -197,15 +198,71 @@ struct ResectionResult {
   // Findings that do not stop the solution, one sentence each (stated accuracy too optimistic,
   // four marks that cannot be tested, no redundancy allowed).
   std::vector<std::string> warnings;
+  // Not resected: a batch's progress hook cancelled the batch before this image started
+  // (ResectImages with ResectionBatchOptions::progress). No pose and no statistics; success is
+  // false and summary.message says "cancelled".
+  bool cancelled = false;
   ResectionSummary summary;
 };
 
 ResectionResult ResectImage(const ResectionOptions& options, const ResectionInput& input);
 
-// Many images, resected in parallel on num_threads threads (0: all cores), handed to the threads
-// chunk_size images at a time as they become free (core/parallel.h); results in input order.
-// Image i gets its own reproducible RANSAC seed, so every result is the same, bit for bit,
-// whatever the thread count, chunk size and schedule.
+// ------------------------------------------------------------------ many images
+
+// Where a batch is, as its progress hook receives it.
+struct ResectionProgress {
+  int images_done = 0;           // images whose result is final (count), increasing to images_total
+  int images_total = 0;          // images of the batch (count)
+  double elapsed_seconds = 0.0;  // since the batch started (s, wall clock)
+};
+
+// A batch's progress hook: called from the resecting threads, one call at a time, images_done
+// increasing from call to call. Returns false to cancel the batch: the images not yet started are
+// not resected (ResectionResult::cancelled), those under way finish. Must not throw.
+using ResectionProgressHook = std::function<bool(const ResectionProgress&)>;
+
+struct ResectionBatchOptions {
+  // Threads (0: all cores, core/parallel.h) and the images handed to a free thread at a time
+  // (count; 0 counts as 1).
+  int num_threads = 0;
+  size_t chunk_size = 1;
+  // Empty: no hook, and the batch runs as without one (no lock, no clock, no shared counter).
+  ResectionProgressHook progress;
+  // Throttle: the hook is called when an image finishes and, since the hook's last call, either
+  // progress_fraction of the batch has finished (fraction of images_total; 0: every image) or
+  // progress_interval_seconds have passed (s; 0: every image); and once more with images_done ==
+  // images_total unless cancelled. So at most 1 / progress_fraction + elapsed /
+  // progress_interval_seconds + 1 calls. A thread that finds the hook busy goes on resecting.
+  double progress_fraction = 0.01;
+  double progress_interval_seconds = 0.1;
+
+  bool IsValid(std::string* why) const;
+};
+
+struct ResectionBatchSummary {
+  int images_total = 0;      // count
+  int images_solved = 0;     // results with success (count)
+  int images_cancelled = 0;  // results with cancelled (count)
+  bool cancelled = false;    // the hook returned false
+  int progress_calls = 0;    // calls of the hook (count)
+  double total_seconds = 0.0;  // wall clock (s)
+  // "10000 images: 9996 solved, 4 not solved, 0 cancelled; 101 progress calls; 0.45 s".
+  std::string BriefReport() const;
+};
+
+// Many images, resected in parallel on batch.num_threads threads, handed to the threads
+// batch.chunk_size images at a time as they become free (core/parallel.h); *results in input
+// order, one per input. Image i gets its own reproducible RANSAC seed, so every result is the
+// same, bit for bit, whatever the thread count, chunk size, schedule and hook. An error (invalid
+// options: the batch's or the resection's) leaves *results and *summary untouched; a cancelled
+// batch is not an error (summary->cancelled). summary may be null.
+[[nodiscard]] Status ResectImages(const ResectionOptions& options,
+                                  const std::vector<ResectionInput>& inputs,
+                                  const ResectionBatchOptions& batch,
+                                  std::vector<ResectionResult>* results,
+                                  ResectionBatchSummary* summary = nullptr);
+
+// The same without a hook, for valid options: num_threads threads (0 or less: all cores).
 std::vector<ResectionResult> ResectImages(const ResectionOptions& options,
                                           const std::vector<ResectionInput>& inputs,
                                           int num_threads, size_t chunk_size = 1);

@@ -10,8 +10,9 @@ module"): what a call from Python costs on top of the library.
    6000 x 4000 px at 100 m, marks with 0.5 px noise and stated accuracy, a 30 px blunder in every
    tenth image), written as tables. Python reads them (read_block), builds the inputs
    (Block.resection_inputs) and times resect_images alone, without and with a progress callback
-   (the batch in parts); the peer reads the same tables, builds the same inputs
-   (MakeResectionInput) and times ResectImages alone.
+   (a Python function called from the resecting threads); the peer reads the same tables, builds
+   the same inputs (MakeResectionInput) and times ResectImages alone, without and with a C++
+   progress hook that counts its calls.
 2. Bundle: a synthetic block of --bundle_lines x --bundle_images_per_line images written as
    tables; both read them and time the bundle adjustment alone (default options, then without the
    per-observation diagnostics), each run on a fresh copy of the block.
@@ -75,7 +76,8 @@ def run_peer(peer, mode, directory, threads, repeats):
         sys.exit(f"peer failed: {done.stderr}")
     seconds = [float(s) for s in done.stdout.split("seconds:")[1].split()]
     poses = np.loadtxt(out, ndmin=2)[:, 1:]
-    return seconds, poses
+    calls = done.stdout.split("progress calls:")[1].split()[0] if "progress calls:" in done.stdout else None
+    return seconds, poses, calls
 
 
 def pose_difference(a, b):
@@ -106,8 +108,10 @@ def main():
         block = pp.read_block(resect_dir / "cameras.csv", resect_dir / "points.csv",
                               resect_dir / "marks.csv")
         images, inputs = block.resection_inputs()
-        cpp_seconds, cpp_poses = run_peer(args.peer, "resect", resect_dir, args.threads, args.repeats)
         for with_progress in (False, True):
+            mode = "resect_progress" if with_progress else "resect"
+            cpp_seconds, cpp_poses, cpp_calls = run_peer(args.peer, mode, resect_dir, args.threads,
+                                                         args.repeats)
             infos = []
             progress = infos.append if with_progress else None
             times = []
@@ -122,7 +126,8 @@ def main():
             solved = int((~np.isnan(python_poses).any(axis=1)).sum())
             name = f"resect_images, {len(inputs)} images ({solved} solved)"
             if with_progress:
-                name += f", progress ({len(infos) // args.repeats} calls)"
+                name += (f", progress (Python: {len(infos) // args.repeats} calls; "
+                         f"C++: a hook, {cpp_calls} calls)")
             rows.append((name, times, cpp_seconds, pose_difference(python_poses, cpp_poses)))
 
         bundle_dir = work / "bundle"
@@ -142,7 +147,7 @@ def main():
                 times.append(time.perf_counter() - start)
                 if not result.summary.is_solution_usable():
                     sys.exit(f"bundle: {result.summary.message}")
-            cpp_seconds, cpp_poses = run_peer(args.peer, mode, bundle_dir, args.threads, args.repeats)
+            cpp_seconds, cpp_poses, _ = run_peer(args.peer, mode, bundle_dir, args.threads, args.repeats)
             name = f"bundle_adjust, {block.num_images} images, {block.num_marks} marks"
             if not diagnostics:
                 name += ", observation_diagnostics off"

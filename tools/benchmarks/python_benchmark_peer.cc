@@ -5,6 +5,9 @@
 //       reads DIR/cameras.csv, points.csv, marks.csv; one resection input per image with marks
 //       (MakeResectionInput, default accuracies); times ResectImages (default options) REPEATS
 //       times; writes the poses of the last run to OUT.
+//   photopose_python_benchmark_peer resect_progress DIR THREADS REPEATS OUT
+//       the same with a progress hook that counts its calls (default throttle), printed as
+//       "progress calls: N" (of the last run).
 //   photopose_python_benchmark_peer bundle DIR THREADS REPEATS OUT
 //       reads DIR/cameras.csv, points.csv, marks.csv, frames.csv; times BundleAdjust (default
 //       options, THREADS threads) on a fresh copy of the block REPEATS times; writes the adjusted
@@ -54,7 +57,8 @@ bool WritePoses(const std::string& path, const std::vector<std::optional<photopo
 }  // namespace
 
 int main(int argc, char** argv) {
-  if (argc != 6) return Fail("usage: resect|bundle|bundle_no_diagnostics DIR THREADS REPEATS OUT");
+  if (argc != 6)
+    return Fail("usage: resect|resect_progress|bundle|bundle_no_diagnostics DIR THREADS REPEATS OUT");
   const std::string mode = argv[1], dir = argv[2], out = argv[5];
   const int threads = std::atoi(argv[3]), repeats = std::atoi(argv[4]);
   if (threads < 0 || repeats < 1) return Fail("THREADS must be >= 0 and REPEATS >= 1");
@@ -71,7 +75,7 @@ int main(int argc, char** argv) {
 
   std::vector<double> seconds;
   std::vector<std::optional<photopose::ExteriorOrientation>> poses(block.images.size());
-  if (mode == "resect") {
+  if (mode == "resect" || mode == "resect_progress") {
     std::vector<int> images;
     std::vector<photopose::ResectionInput> inputs;
     for (size_t i = 0; i < block.images.size(); ++i) {
@@ -84,11 +88,20 @@ int main(int argc, char** argv) {
       inputs.push_back(std::move(input));
     }
     std::vector<photopose::ResectionResult> results;
+    photopose::ResectionBatchOptions batch;
+    batch.num_threads = threads;
+    int calls = 0;
+    if (mode == "resect_progress")
+      batch.progress = [&calls](const photopose::ResectionProgress&) { return ++calls > 0; };
     for (int r = 0; r < repeats; ++r) {
+      calls = 0;
       const auto start = Clock::now();
-      results = photopose::ResectImages(photopose::ResectionOptions(), inputs, threads);
+      const photopose::Status status =
+          photopose::ResectImages(photopose::ResectionOptions(), inputs, batch, &results);
       seconds.push_back(std::chrono::duration<double>(Clock::now() - start).count());
+      if (!status.ok()) return Fail(status.message());
     }
+    if (batch.progress) std::printf("progress calls: %d\n", calls);
     for (size_t k = 0; k < images.size(); ++k)
       if (results[k].success) poses[images[k]] = results[k].eo;
   } else if (bundle) {
@@ -108,7 +121,7 @@ int main(int argc, char** argv) {
     }
     for (size_t i = 0; i < adjusted.images.size(); ++i) poses[i] = adjusted.images[i].eo;
   } else {
-    return Fail("unknown mode '" + mode + "': resect, bundle or bundle_no_diagnostics");
+    return Fail("unknown mode '" + mode + "': resect, resect_progress, bundle or bundle_no_diagnostics");
   }
   if (!WritePoses(out, poses)) return Fail("cannot write " + out);
   std::printf("seconds:");

@@ -3,8 +3,10 @@
 #include <gflags/gflags.h>
 #include <sys/stat.h>
 
+#include <algorithm>
 #include <atomic>
 #include <cmath>
+#include <cstdio>
 #include <iostream>
 #include <sstream>
 #include <string_view>
@@ -289,6 +291,32 @@ void PrintHelp(const std::string& usage, const CommandFlags& flags) {
 int BadInput(const std::string& subcommand, const std::string& message) {
   std::cerr << "photopose " << subcommand << ": " << EscapeForMessage(message) << "\n";
   return kExitBadInput;
+}
+
+ProgressLine::ProgressLine(std::string command, std::string items, std::ostream* out,
+                           double first_seconds, double every_seconds)
+    : command_(std::move(command)),
+      items_(std::move(items)),
+      out_(out != nullptr ? out : &std::cerr),
+      every_seconds_(every_seconds),
+      next_seconds_(first_seconds) {}
+
+void ProgressLine::operator()(size_t done, size_t total) {
+  const std::lock_guard<std::mutex> lock(mutex_);
+  const double elapsed =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - start_).count();
+  const bool last = done == total;
+  if (last ? !printed_ : elapsed < next_seconds_) return;
+  next_seconds_ = std::max(elapsed, next_seconds_) + every_seconds_;
+  printed_ = true;
+  char line[160];
+  std::snprintf(line, sizeof(line), "photopose %s: %zu of %zu %s (%.0f%%), %.0f s",
+                command_.c_str(), done, total, items_.c_str(),
+                100.0 * done / std::max<size_t>(total, 1), elapsed);
+  *out_ << line;
+  if (!last && done > 0)
+    *out_ << ", about " << static_cast<long>(elapsed * (total - done) / done + 0.5) << " s left";
+  *out_ << "\n";
 }
 
 void SetSolving(bool solving) { g_solving = solving; }

@@ -3,7 +3,11 @@
 // own and checks every flag wherever it comes from, one-line error reporting, and the phase of a
 // run that main's top-level guard reads.
 
+#include <chrono>
+#include <cstddef>
+#include <mutex>
 #include <optional>
+#include <ostream>
 #include <string>
 #include <utility>
 #include <vector>
@@ -110,6 +114,27 @@ int BadInput(const std::string& subcommand, const std::string& message);
 // while solving exits kExitSomeFailed, at any other time kExitBadInput.
 void SetSolving(bool solving);
 int ExitCodeForUnexpectedFailure();
+
+// A progress line on stderr for runs longer than a couple of seconds: the first after
+// first_seconds, then every every_seconds, and the last when the run is done (if any was printed):
+// "photopose compare: 120 of 400 trials (30%), 7 s, about 16 s left". Thread-safe: the workers of
+// a run may call it.
+class ProgressLine {
+ public:
+  // "photopose <command>: ... <items>" on *out (stderr by default; the clock starts here).
+  ProgressLine(std::string command, std::string items, std::ostream* out = nullptr,
+               double first_seconds = 2.0, double every_seconds = 5.0);
+  void operator()(size_t done, size_t total);
+
+ private:
+  const std::string command_, items_;
+  std::ostream* const out_;
+  const double every_seconds_;
+  const std::chrono::steady_clock::time_point start_ = std::chrono::steady_clock::now();
+  std::mutex mutex_;
+  double next_seconds_;  // when the next line is due (s since start_)
+  bool printed_ = false;
+};
 
 // Marks the run as solving for its lifetime.
 class ScopedSolving {

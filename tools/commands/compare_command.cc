@@ -5,7 +5,6 @@
 // taken); the user writes --<name>, and the parsing, the messages and --help use the user's names.
 #include <gflags/gflags.h>
 
-#include <chrono>
 #include <cmath>
 #include <cstdint>
 #include <cstdio>
@@ -13,7 +12,6 @@
 #include <fstream>
 #include <iostream>
 #include <iterator>
-#include <mutex>
 #include <optional>
 #include <sstream>
 #include <string>
@@ -295,39 +293,6 @@ std::string QuoteForShell(const std::string& arg) {
   return quoted + "'";
 }
 
-// A progress line on stderr for runs longer than a couple of seconds: the first after
-// kFirstSeconds, then every kEverySeconds, and the last when the run is done (if any was printed).
-// Thread-safe: the Monte-Carlo workers call it.
-class ProgressLine {
- public:
-  explicit ProgressLine(std::string items) : items_(std::move(items)) {}
-  void operator()(size_t done, size_t total) {
-    constexpr double kFirstSeconds = 2.0, kEverySeconds = 5.0;
-    const std::lock_guard<std::mutex> lock(mutex_);
-    const double elapsed =
-        std::chrono::duration<double>(std::chrono::steady_clock::now() - start_).count();
-    const bool last = done == total;
-    if (last ? !printed_ : elapsed < next_seconds_) return;
-    next_seconds_ = std::max(elapsed, kFirstSeconds) + kEverySeconds;
-    printed_ = true;
-    char line[160];
-    std::snprintf(line, sizeof(line), "photopose compare: %zu of %zu %s (%.0f%%), %.0f s", done,
-                  total, items_.c_str(), 100.0 * done / std::max<size_t>(total, 1), elapsed);
-    std::cerr << line;
-    if (!last && done > 0)
-      std::cerr << ", about " << static_cast<long>(elapsed * (total - done) / done + 0.5)
-                << " s left";
-    std::cerr << "\n";
-  }
-
- private:
-  std::string items_;
-  std::mutex mutex_;
-  std::chrono::steady_clock::time_point start_ = std::chrono::steady_clock::now();
-  double next_seconds_ = 2.0;
-  bool printed_ = false;
-};
-
 // The files the outputs go to, for the closing summary.
 std::string WrittenFiles() {
   std::string files;
@@ -373,7 +338,7 @@ Status WriteOutputs(const std::string& csv, const std::string& html,
 template <typename Options, typename Result>
 Status RunWithProgress(const char* items, Status (*run)(const Options&, Result*), Options* options,
                        Result* result) {
-  ProgressLine progress(items);
+  ProgressLine progress("compare", items);
   options->progress = [&progress](size_t done, size_t total) { progress(done, total); };
   Status status;
   {

@@ -59,8 +59,9 @@ constexpr char kUsage[] =
     "image whose marks fail the global test at that accuracy, or that two poses fit, is not\n"
     "solved; a pose an undetectable blunder could move by more than 3 sigma is flagged weak\n"
     "(refused with --strict). A pose that no redundant mark checks is not reported. Nothing is\n"
-    "written when no image is resected. Exit status: 0 every image resected, 1 some image could\n"
-    "not be (each says why), 2 bad input or usage.\n";
+    "written when no image is resected. A run longer than 2 s prints a progress line on stderr\n"
+    "every 5 s. Exit status: 0 every image resected, 1 some image could not be (each says why),\n"
+    "2 bad input or usage.\n";
 
 // Every numeric flag's range (docs/formats.md, "Limits and refusals").
 const CommandFlags& ResectFlags() {
@@ -215,10 +216,19 @@ int RunResect(int argc, char** argv) {
   const Status read = PrepareResectionJob(job, &prepared);
   if (!read.ok()) return BadInput("resect", read.message());
   if (prepared.inputs.empty()) return BadInput("resect", "no image has marks");
+  // A progress line on stderr when the batch runs longer than a couple of seconds.
+  ProgressLine progress_line("resect", "images");
+  ResectionBatchOptions batch;
+  batch.num_threads = FLAGS_threads;
+  batch.progress = [&progress_line](const ResectionProgress& progress) {
+    progress_line(progress.images_done, progress.images_total);
+    return true;
+  };
   std::vector<ResectionResult> results;
   {
     const ScopedSolving solving;
-    results = ResectImages(job.resection, prepared.inputs, FLAGS_threads);
+    const Status resected = ResectImages(job.resection, prepared.inputs, batch, &results);
+    if (!resected.ok()) return BadInput("resect", resected.message());
   }
   const std::vector<std::string> failed = PrintResults(prepared, job.files.rotation, results);
   // Nothing solved: nothing written (an older output stays), exit 1 with the reason.

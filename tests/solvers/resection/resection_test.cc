@@ -3,6 +3,8 @@
 
 #include <gtest/gtest.h>
 
+#include <atomic>
+#include <cmath>
 #include <cstdio>
 #include <cstring>
 #include <filesystem>
@@ -235,11 +237,10 @@ void ExpectIdentical(const ResectionResult& a, const ResectionResult& b, const s
                           Eigen::Vector2d(b.summary.initial_cost, b.summary.final_cost)));
 }
 
-TEST(Resection, BatchIsBitIdenticalForEveryThreadCountAndChunkSize) {
-  // Images of every kind in one batch: 4 to 15 control points, clean and with gross errors,
-  // without approximate values (the consensus, its ambiguity search) and with them, stated and
-  // unstated accuracy. Each result must not depend on the thread that ran it, on what that thread
-  // ran before (the per-thread caches), nor on the order.
+// Images of every kind in one batch: 4 to 15 control points, clean and with gross errors, without
+// approximate values (the consensus, its ambiguity search) and with them, stated and unstated
+// accuracy.
+std::vector<ResectionInput> MixedBatch() {
   std::vector<ResectionInput> batch;
   uint64_t seed = 40;
   for (const int points : {4, 6, 10, 15})
@@ -251,6 +252,13 @@ TEST(Resection, BatchIsBitIdenticalForEveryThreadCountAndChunkSize) {
         if (i % 4 == 3) batch.back().sigma.clear();
       }
     }
+  return batch;
+}
+
+TEST(Resection, BatchIsBitIdenticalForEveryThreadCountAndChunkSize) {
+  // Each result must not depend on the thread that ran it, on what that thread ran before (the
+  // per-thread caches), nor on the order.
+  const std::vector<ResectionInput> batch = MixedBatch();
   ASSERT_GT(batch.size(), 60u);
   const ResectionOptions options;
   const std::vector<ResectionResult> reference = ResectImages(options, batch, 1);
@@ -285,6 +293,198 @@ TEST(Resection, ParallelResultsEqualSerialInInputOrder) {
     EXPECT_EQ(serial[i].eo.parameters, parallel[i].eo.parameters);
     EXPECT_EQ(serial[i].inliers, parallel[i].inliers);
   }
+}
+
+// ------------------------------------------------------------------ the batch's progress hook
+
+// What a hook saw: its calls, and whether two ever overlapped.
+struct HookCalls {
+  std::vector<ResectionProgress> calls;
+  std::atomic<int> inside{0};
+  bool overlapped = false;
+  // Go on until images_done reaches stop_at (0: never stop).
+  int stop_at = 0;
+  ResectionProgressHook Hook() {
+    return [this](const ResectionProgress& progress) {
+      if (inside.fetch_add(1) != 0) overlapped = true;
+      calls.push_back(progress);
+      inside.fetch_sub(1);
+      return stop_at == 0 || progress.images_done < stop_at;
+    };
+  }
+};
+
+TEST(ResectionBatch, ProgressIsMonotoneEndsWithEveryImageAndChangesNoResult) {
+  const std::vector<ResectionInput> batch = MixedBatch();
+  const int n = static_cast<int>(batch.size());
+  const ResectionOptions options;
+  const std::vector<ResectionResult> reference = ResectImages(options, batch, 1);
+  for (const int threads : {1, 2})
+    for (const size_t chunk : {size_t{1}, size_t{5}}) {
+      const std::string what =
+          std::to_string(threads) + " threads, chunk " + std::to_string(chunk);
+      SCOPED_TRACE(what);
+      HookCalls seen;
+      ResectionBatchOptions batch_options;
+      batch_options.num_threads = threads;
+      batch_options.chunk_size = chunk;
+      batch_options.progress = seen.Hook();
+      std::vector<ResectionResult> results;
+      ResectionBatchSummary summary;
+      ASSERT_TRUE(ResectImages(options, batch, batch_options, &results, &summary).ok());
+      ASSERT_FALSE(seen.calls.empty());
+      EXPECT_FALSE(seen.overlapped);
+      for (size_t k = 0; k < seen.calls.size(); ++k) {
+        EXPECT_EQ(seen.calls[k].images_total, n);
+        EXPECT_GE(seen.calls[k].elapsed_seconds, 0.0);
+        if (k == 0) continue;
+        EXPECT_GT(seen.calls[k].images_done, seen.calls[k - 1].images_done) << k;
+        EXPECT_GE(seen.calls[k].elapsed_seconds, seen.calls[k - 1].elapsed_seconds) << k;
+      }
+      EXPECT_EQ(seen.calls.back().images_done, n);
+      EXPECT_EQ(summary.progress_calls, static_cast<int>(seen.calls.size()));
+      EXPECT_FALSE(summary.cancelled);
+      EXPECT_EQ(summary.images_total, n);
+      EXPECT_EQ(summary.images_cancelled, 0);
+      int solved = 0;
+      ASSERT_EQ(results.size(), reference.size());
+      for (size_t i = 0; i < results.size(); ++i) {
+        ExpectIdentical(results[i], reference[i], what + ", image " + std::to_string(i));
+        EXPECT_FALSE(results[i].cancelled);
+        solved += results[i].success;
+      }
+      EXPECT_EQ(summary.images_solved, solved);
+      EXPECT_NE(summary.BriefReport().find(std::to_string(solved) + " solved"), std::string::npos)
+          << summary.BriefReport();
+    }
+}
+
+TEST(ResectionBatch, ProgressIsThrottledByFractionAndByTime) {
+  const std::vector<ResectionInput> batch = MixedBatch();
+  const int n = static_cast<int>(batch.size());
+  const auto run = [&](double fraction, double interval_seconds) {
+    HookCalls seen;
+    ResectionBatchOptions batch_options;
+    batch_options.num_threads = 1;
+    batch_options.progress = seen.Hook();
+    batch_options.progress_fraction = fraction;
+    batch_options.progress_interval_seconds = interval_seconds;
+    std::vector<ResectionResult> results;
+    EXPECT_TRUE(ResectImages(ResectionOptions(), batch, batch_options, &results).ok());
+    std::vector<int> done;
+    for (const ResectionProgress& call : seen.calls) done.push_back(call.images_done);
+    return done;
+  };
+  // A quarter of the batch between calls (and an hour: never due by time): at the quarters on one
+  // thread, then the end.
+  const int quarter = (n + 3) / 4;
+  std::vector<int> expected;
+  for (int done = quarter; done < n; done += quarter) expected.push_back(done);
+  expected.push_back(n);
+  EXPECT_EQ(run(0.25, 3600.0), expected);
+  // Only the end by count, but due by time after every image.
+  EXPECT_EQ(run(1.0, 0.0).size(), static_cast<size_t>(n));
+  // Neither due: the end alone.
+  EXPECT_EQ(run(1.0, 3600.0), std::vector<int>{n});
+}
+
+TEST(ResectionBatch, CancelLeavesTheRestNotResectedAndCallsNoMore) {
+  const std::vector<ResectionInput> batch = MixedBatch();
+  const int n = static_cast<int>(batch.size());
+  const ResectionOptions options;
+  const std::vector<ResectionResult> reference = ResectImages(options, batch, 1);
+  constexpr int kStopAt = 10;
+  for (const int threads : {1, 2}) {
+    SCOPED_TRACE(std::to_string(threads) + " threads");
+    HookCalls seen;
+    seen.stop_at = kStopAt;
+    ResectionBatchOptions batch_options;
+    batch_options.num_threads = threads;
+    batch_options.progress_fraction = 0.0;  // every image
+    batch_options.progress = seen.Hook();
+    std::vector<ResectionResult> results;
+    ResectionBatchSummary summary;
+    ASSERT_TRUE(ResectImages(options, batch, batch_options, &results, &summary).ok());
+    // The call that returned false was the last (on two threads it may count an image more: the
+    // other thread's, finished meanwhile).
+    ASSERT_FALSE(seen.calls.empty());
+    const int stopped_at = seen.calls.back().images_done;
+    EXPECT_GE(stopped_at, kStopAt);
+    if (threads == 1) EXPECT_EQ(stopped_at, kStopAt);
+    for (size_t k = 0; k + 1 < seen.calls.size(); ++k) EXPECT_LT(seen.calls[k].images_done, kStopAt);
+    EXPECT_TRUE(summary.cancelled);
+    EXPECT_EQ(summary.progress_calls, static_cast<int>(seen.calls.size()));
+    ASSERT_EQ(results.size(), batch.size());
+    int cancelled = 0, solved = 0;
+    for (size_t i = 0; i < results.size(); ++i) {
+      const ResectionResult& r = results[i];
+      solved += r.success;
+      if (!r.cancelled) {
+        ExpectIdentical(r, reference[i], "image " + std::to_string(i));
+        continue;
+      }
+      ++cancelled;
+      EXPECT_FALSE(r.success) << i;
+      EXPECT_EQ(r.summary.termination, SolverTermination::kFailure) << i;
+      EXPECT_EQ(r.summary.message.rfind("cancelled", 0), 0u) << r.summary.message;
+      EXPECT_EQ(r.eo.parameters, Vector6d::Zero()) << i;
+      EXPECT_EQ(r.num_inliers, 0) << i;
+      EXPECT_TRUE(r.inliers.empty()) << i;
+    }
+    // Every image counted by the last call, and those under way then, finished; the others were
+    // cancelled (one thread: exactly those after the last call).
+    EXPECT_GE(n - cancelled, stopped_at);
+    EXPECT_GT(cancelled, 0);
+    if (threads == 1) {
+      for (int i = 0; i < n; ++i) EXPECT_EQ(results[i].cancelled, i >= kStopAt) << i;
+    }
+    EXPECT_EQ(summary.images_cancelled, cancelled);
+    EXPECT_EQ(summary.images_solved, solved);
+    EXPECT_NE(summary.BriefReport().find("the batch was cancelled"), std::string::npos);
+  }
+}
+
+TEST(ResectionBatch, InvalidOptionsAreAnErrorAndLeaveTheResults) {
+  const std::vector<ResectionInput> batch = MixedBatch();
+  const std::vector<ResectionResult> untouched(3);
+  const auto refusal = [&](const ResectionOptions& options, const ResectionBatchOptions& batch_options) {
+    std::vector<ResectionResult> results = untouched;
+    ResectionBatchSummary summary;
+    summary.images_total = -7;
+    const Status status = ResectImages(options, batch, batch_options, &results, &summary);
+    EXPECT_EQ(results.size(), untouched.size());
+    EXPECT_EQ(summary.images_total, -7);
+    return status.ok() ? std::string("ok") : status.message();
+  };
+  ResectionBatchOptions batch_options;
+  batch_options.num_threads = -1;
+  EXPECT_EQ(refusal(ResectionOptions(), batch_options),
+            "invalid batch options: num_threads must be >= 0 (0: all cores)");
+  batch_options = ResectionBatchOptions();
+  batch_options.progress_fraction = 1.5;
+  EXPECT_EQ(refusal(ResectionOptions(), batch_options),
+            "invalid batch options: progress_fraction must be in [0, 1]");
+  batch_options = ResectionBatchOptions();
+  batch_options.progress_interval_seconds = std::nan("");
+  EXPECT_EQ(refusal(ResectionOptions(), batch_options),
+            "invalid batch options: progress_interval_seconds must be a finite number >= 0");
+  ResectionOptions options;
+  options.detection_power = 1.5;
+  EXPECT_EQ(refusal(options, ResectionBatchOptions()),
+            "invalid resection options: the detection power must be in (0, 1)");
+}
+
+TEST(ResectionBatch, AnEmptyBatchCallsNoHook) {
+  HookCalls seen;
+  ResectionBatchOptions batch_options;
+  batch_options.progress = seen.Hook();
+  std::vector<ResectionResult> results(2);
+  ResectionBatchSummary summary;
+  ASSERT_TRUE(ResectImages(ResectionOptions(), {}, batch_options, &results, &summary).ok());
+  EXPECT_TRUE(results.empty());
+  EXPECT_TRUE(seen.calls.empty());
+  EXPECT_EQ(summary.images_total, 0);
+  EXPECT_FALSE(summary.cancelled);
 }
 
 TEST(Resection, CovarianceMatchesTheMonteCarloScatter) {

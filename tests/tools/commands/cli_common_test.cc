@@ -24,6 +24,26 @@ using testing::ScratchDir;
 using testing::SourcePath;
 using testing::WriteFile;
 
+TEST(ProgressLineTest, PrintsWhenDueAndTheEndOnlyAfterALine) {
+  // Due at once and after every call: a line each, the estimate of what is left in all but the
+  // last.
+  std::ostringstream every;
+  ProgressLine every_call("resect", "images", &every, 0.0, 0.0);
+  every_call(1, 4);
+  every_call(4, 4);
+  const std::string text = every.str();
+  EXPECT_EQ(text.rfind("photopose resect: 1 of 4 images (25%), 0 s, about 0 s left\n", 0), 0u)
+      << text;
+  EXPECT_NE(text.find("\nphotopose resect: 4 of 4 images (100%), 0 s\n"), std::string::npos)
+      << text;
+  // Never due within the test: no line, and so no last line either.
+  std::ostringstream quiet;
+  ProgressLine later("compare", "trials", &quiet, 3600.0, 5.0);
+  later(1, 2);
+  later(2, 2);
+  EXPECT_EQ(quiet.str(), "");
+}
+
 TEST(FlagRangeTest, StatesItsEndsAndRefusesWhatLiesOutside) {
   const FlagRange threshold("ransac_threshold", 0.0, 1000.0, true, false, "px");
   EXPECT_EQ(threshold.Text(), "(0, 1000] px");
