@@ -1,8 +1,7 @@
-// Selected inversion (solvers/bundle/internal/selected_inversion.h): CHOLMOD's factor, the
-// Takahashi recursion on its pattern, and the lookups of blocks of the inverse.
+// Selected inversion (solvers/bundle/internal/selected_inversion.h): the block order, the
+// Takahashi recursion on the pattern of the factor (solvers/bundle/internal/cholmod_factor.h), and
+// the lookups of blocks of the inverse.
 #include "solvers/bundle/internal/selected_inversion.h"
-
-#include <cholmod.h>
 
 #include <Eigen/Dense>
 #include <algorithm>
@@ -11,8 +10,9 @@
 #include <limits>
 #include <numeric>
 #include <string>
-#include <tuple>
 #include <utility>
+
+#include "solvers/bundle/internal/cholmod_factor.h"
 
 namespace photopose::internal {
 namespace {
@@ -97,30 +97,19 @@ void TakahashiPanel(int j0, int j1, const int* Lp, const int* Li, const double* 
 // first) and Z = A^-1 on the pattern of L, in the permuted order; `first` maps a block of S to
 // its first permuted column (its columns stay together and in order).
 struct SelectedInverse::Sparse {
-  cholmod_common common;
-  cholmod_factor* factor = nullptr;
-  std::vector<double> z;      // aligned with factor->i
-  std::vector<int> first;     // per block of S: first permuted column
-  Sparse() {
-    cholmod_start(&common);
-    common.print = 0;  // a singular matrix is a result here, not a message on stderr
-  }
-  ~Sparse() {
-    if (factor != nullptr) cholmod_free_factor(&factor, &common);
-    cholmod_finish(&common);
-  }
-  const int* p() const { return static_cast<const int*>(factor->p); }
-  const int* i() const { return static_cast<const int*>(factor->i); }
-  const double* x() const { return static_cast<const double*>(factor->x); }
+  CholmodFactor factor{CholmodFactorForm::kSimplicialColumns};
+  CholmodFactor::Columns L;  // the factor's columns
+  std::vector<double> z;     // aligned with L.row
+  std::vector<int> first;    // per block of S: first permuted column
   // Position in z of permuted (row, column), row >= column, of the first of `count` consecutive
   // rows; -1 when any of them is off the pattern.
   int64_t Run(int row, int column, int count) const {
-    const int* begin = i() + p()[column];
-    const int* end = i() + p()[column + 1];
+    const int* begin = L.row + L.column_start[column];
+    const int* end = L.row + L.column_start[column + 1];
     const int* found = std::lower_bound(begin, end, row);
     if (end - found < count) return -1;
     if (found[count - 1] != row + count - 1) return -1;  // sorted and unique: all present
-    return found - i();
+    return found - L.row;
   }
 };
 
@@ -193,18 +182,18 @@ Status SelectedInverse::Compute(const SparseMatrix& S_upper, const std::vector<i
   }
 
   auto sparse = std::make_unique<Sparse>();
-  cholmod_common* c = &sparse->common;
+  CholmodFactor& factor = sparse->factor;
   // The scaled upper triangle, every stored entry kept (a block's structural zeros too, so that
   // its columns share one pattern in L).
   int64_t nnz = 0;
   for (int col = 0; col < n; ++col)
     for (SparseMatrix::InnerIterator it(S_upper, col); it; ++it) nnz += it.row() <= col;
-  cholmod_sparse* A = cholmod_allocate_sparse(n, n, nnz, 1, 1, 1, CHOLMOD_REAL, c);
-  if (A == nullptr) return Status::Error("selected inversion: out of memory");
+  SparseMatrix A(n, n);
+  A.resizeNonZeros(static_cast<Eigen::Index>(nnz));
   {
-    int* Ap = static_cast<int*>(A->p);
-    int* Ai = static_cast<int*>(A->i);
-    double* Ax = static_cast<double*>(A->x);
+    int* Ap = A.outerIndexPtr();
+    int* Ai = A.innerIndexPtr();
+    double* Ax = A.valuePtr();
     int64_t k = 0;
     for (int col = 0; col < n; ++col) {
       Ap[col] = static_cast<int>(k);
@@ -228,34 +217,19 @@ Status SelectedInverse::Compute(const SparseMatrix& S_upper, const std::vector<i
       if (block_rows[b].empty() || block_rows[b].back() != a) block_rows[b].push_back(a);
     }
   }
-  int64_t block_nnz = 0;
-  for (std::vector<int>& rows : block_rows) {
+  std::vector<int> block_column_start(num_blocks + 1, 0), block_pattern;
+  for (int b = 0; b < num_blocks; ++b) {
+    std::vector<int>& rows = block_rows[b];
     std::sort(rows.begin(), rows.end());
     rows.erase(std::unique(rows.begin(), rows.end()), rows.end());
-    block_nnz += static_cast<int64_t>(rows.size());
+    block_pattern.insert(block_pattern.end(), rows.begin(), rows.end());
+    block_column_start[b + 1] = static_cast<int>(block_pattern.size());
+    rows = std::vector<int>();
   }
-  cholmod_sparse* B =
-      cholmod_allocate_sparse(num_blocks, num_blocks, block_nnz, 1, 1, 1, CHOLMOD_PATTERN, c);
-  std::vector<int> block_order(num_blocks);
-  bool ordered = B != nullptr;
-  if (ordered) {
-    int* Bp = static_cast<int*>(B->p);
-    int* Bi = static_cast<int*>(B->i);
-    int64_t k = 0;
-    for (int b = 0; b < num_blocks; ++b) {
-      Bp[b] = static_cast<int>(k);
-      for (const int a : block_rows[b]) Bi[k++] = a;
-    }
-    Bp[num_blocks] = static_cast<int>(k);
-    ordered = cholmod_amd(B, nullptr, 0, block_order.data(), c) != 0;
-    cholmod_free_sparse(&B, c);
-  }
-  block_rows.clear();
-  block_rows.shrink_to_fit();
-  if (!ordered) {
-    cholmod_free_sparse(&A, c);
-    return Status::Error("selected inversion: CHOLMOD's ordering failed");
-  }
+  std::vector<int> block_order;
+  const Status ordered =
+      factor.AmdOrder(num_blocks, block_column_start, block_pattern, &block_order);
+  if (!ordered.ok()) return Status::Error("selected inversion: " + ordered.message());
   std::vector<int> permutation;
   permutation.reserve(n);
   sparse->first.assign(num_blocks, 0);
@@ -263,56 +237,22 @@ Status SelectedInverse::Compute(const SparseMatrix& S_upper, const std::vector<i
     sparse->first[b] = static_cast<int>(permutation.size());
     for (int col = block_start[b]; col < block_start[b + 1]; ++col) permutation.push_back(col);
   }
-  // Exactly this order (no postordering, which could interleave blocks); a supernodal
-  // factorisation, turned into a simplicial LL^T for the recursion.
-  c->nmethods = 1;
-  c->method[0].ordering = CHOLMOD_GIVEN;
-  c->postorder = 0;
-  c->supernodal = CHOLMOD_AUTO;
-  c->final_asis = 0;
-  c->final_super = 0;
-  c->final_ll = 1;
-  c->final_pack = 1;
-  c->final_monotonic = 1;
-  sparse->factor = cholmod_analyze_p(A, permutation.data(), nullptr, 0, c);
-  const bool factored =
-      sparse->factor != nullptr && cholmod_factorize(A, sparse->factor, c) != 0;
-  cholmod_free_sparse(&A, c);
-  if (!factored) return Status::Error("selected inversion: CHOLMOD's factorisation failed");
-  if (c->status == CHOLMOD_NOT_POSDEF || static_cast<int>(sparse->factor->minor) < n) {
-    // L->minor: the permuted column where the factorisation met a pivot <= 0.
-    const int minor = static_cast<int>(sparse->factor->minor);
-    return singular(minor < n ? permutation[minor] : -1);
+  // Exactly this order; a simplicial L L^T for the recursion.
+  const Status analysed = factor.Analyze(A, permutation);
+  if (!analysed.ok()) return Status::Error("selected inversion: " + analysed.message());
+  const Status factored = factor.Factorize(A);
+  A = SparseMatrix();
+  if (!factored.ok()) {
+    if (!factor.not_positive_definite())
+      return Status::Error("selected inversion: " + factored.message());
+    const int column = factor.bad_pivot_column();
+    return singular(column >= 0 ? permutation[column] : -1);
   }
-  if (sparse->factor->is_super || !sparse->factor->is_ll)
-    return Status::Error("selected inversion: CHOLMOD did not give a simplicial LL^T factor");
   factorization_seconds_ = SecondsSince(start);
-
-  // Each column's rows ascending, the diagonal first (CHOLMOD keeps them so; sorted here if not).
-  int* Lp = static_cast<int*>(sparse->factor->p);
-  int* Li = static_cast<int*>(sparse->factor->i);
-  double* Lx = static_cast<double*>(sparse->factor->x);
-  double smallest = std::numeric_limits<double>::infinity(), largest = 0.0;
-  int smallest_column = -1;
-  for (int col = 0; col < n; ++col) {
-    if (Li[Lp[col]] != col)
-      return Status::Error("selected inversion: unexpected factor layout (diagonal not first)");
-    if (!std::is_sorted(Li + Lp[col], Li + Lp[col + 1])) {
-      std::vector<std::pair<int, double>> entries;
-      for (int t = Lp[col]; t < Lp[col + 1]; ++t) entries.emplace_back(Li[t], Lx[t]);
-      std::sort(entries.begin(), entries.end());
-      for (int t = Lp[col]; t < Lp[col + 1]; ++t)
-        std::tie(Li[t], Lx[t]) = entries[t - Lp[col]];
-    }
-    const double pivot = Lx[Lp[col]] * Lx[Lp[col]];  // the D of LDL^T
-    if (pivot < smallest) {
-      smallest = pivot;
-      smallest_column = col;
-    }
-    largest = std::max(largest, pivot);
+  if (!(factor.pivot_ratio() > options.min_pivot_ratio)) {
+    const int column = factor.smallest_pivot_column();
+    return singular(column >= 0 ? permutation[column] : -1);
   }
-  if (!(smallest > options.min_pivot_ratio * largest))
-    return singular(smallest_column >= 0 ? permutation[smallest_column] : -1);
   if (options.factor_only) return Status::Ok();
 
   // Takahashi, backwards, one block of S (a panel of columns J with one pattern R below it) at a
@@ -320,7 +260,11 @@ Status SelectedInverse::Compute(const SparseMatrix& S_upper, const std::vector<i
   // Z_ik for i, k in R; they lie in the columns i of R (L's pattern is closed: R is a clique of
   // the filled graph), found by walking each such column once per panel with R marked.
   const Clock::time_point inversion_start = Clock::now();
-  sparse->z.assign(static_cast<size_t>(Lp[n]), 0.0);
+  sparse->L = factor.columns();
+  const int* Lp = sparse->L.column_start;
+  const int* Li = sparse->L.row;
+  const double* Lx = sparse->L.value;
+  sparse->z.assign(static_cast<size_t>(n > 0 ? Lp[n] : 0), 0.0);
   std::vector<int> position(n, -1);
   std::vector<int> panel_end(n, 0);  // per first column of a block: one past its last
   for (int b = 0; b < num_blocks; ++b) {
@@ -365,8 +309,8 @@ bool SelectedInverse::Block(int a, int b, Eigen::MatrixXd* out) const {
     } else {
       // The block's columns share their pattern below it: where the rows sit in the first
       // column, less one per column, is where they sit in the others (checked; else searched).
-      const int* Lp = sparse_->p();
-      const int* Li = sparse_->i();
+      const int* Lp = sparse_->L.column_start;
+      const int* Li = sparse_->L.row;
       int64_t at = -1;
       if (c > 0 && first_at >= 0) {
         const int64_t guess = Lp[col0 + c] + (first_at - Lp[col0]) - c;
@@ -419,24 +363,9 @@ Eigen::MatrixXd SelectedInverse::Solve(const Eigen::MatrixXd& rhs) const {
     return Eigen::MatrixXd::Constant(rhs.rows(), rhs.cols(),
                                      std::numeric_limits<double>::quiet_NaN());
   if (sparse_ == nullptr) return dense_ * rhs;
-  const int n = size();
-  cholmod_common* c = &sparse_->common;
-  cholmod_dense* B = cholmod_allocate_dense(n, rhs.cols(), n, CHOLMOD_REAL, c);
-  if (B == nullptr)  // out of memory: no figure rather than an abort
-    return Eigen::MatrixXd::Constant(n, rhs.cols(), std::numeric_limits<double>::quiet_NaN());
-  Eigen::Map<Eigen::MatrixXd>(static_cast<double*>(B->x), n, rhs.cols()) =
-      scale_.asDiagonal() * rhs;
-  cholmod_dense* X = cholmod_solve(CHOLMOD_A, sparse_->factor, B, c);
-  if (X == nullptr) {
-    cholmod_free_dense(&B, c);
-    return Eigen::MatrixXd::Constant(n, rhs.cols(), std::numeric_limits<double>::quiet_NaN());
-  }
-  Eigen::MatrixXd result =
-      scale_.asDiagonal() * Eigen::Map<const Eigen::MatrixXd>(static_cast<double*>(X->x), n,
-                                                               rhs.cols());
-  cholmod_free_dense(&B, c);
-  cholmod_free_dense(&X, c);
-  return result;
+  // NaN when CHOLMOD fails (out of memory): no figure rather than an abort.
+  const Eigen::MatrixXd scaled_rhs = scale_.asDiagonal() * rhs;
+  return scale_.asDiagonal() * sparse_->factor.Solve(scaled_rhs);
 }
 
 int64_t SelectedInverse::num_entries() const {

@@ -613,7 +613,9 @@ bool Factorize(double min_pivot_ratio, const Layout& layout, Reduction* reductio
       }
       reduction->analysed = true;
     }
-    return reduction->cholmod.Factorize(layout.S, min_pivot_ratio, &reduction->pivot_ratio);
+    const bool factorized = reduction->cholmod.Factorize(layout.S).ok();
+    reduction->pivot_ratio = reduction->cholmod.pivot_ratio();  // 0 when not positive definite
+    return factorized && reduction->pivot_ratio > min_pivot_ratio;
   }
   if (!reduction->analysed) {
     reduction->ldlt.analyzePattern(layout.S);

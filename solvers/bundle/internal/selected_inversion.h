@@ -7,8 +7,9 @@
 //
 // Method: S is Jacobi-scaled (A = D S D, D = diag(S)^-1/2), ordered by approximate minimum degree
 // on its block graph (every parameter block's columns stay contiguous), factorised by CHOLMOD
-// (SuiteSparse) as A = P^T L L^T P, and Z = A^-1 computed on the pattern of L by the Takahashi
-// recursion (Takahashi, Fagan, Chin 1973; Erisman and Tinney 1975), backwards over the columns:
+// (SuiteSparse, through internal/cholmod_factor.h) as A = P^T L L^T P, and Z = A^-1 computed on
+// the pattern of L by the Takahashi recursion (Takahashi, Fagan, Chin 1973; Erisman and Tinney
+// 1975), backwards over the columns:
 //   Z_ij = -(1/L_jj) sum_{k>j, L_kj != 0} Z_ik L_kj                (i > j, L_ij != 0)
 //   Z_jj = (1/L_jj) (1/L_jj - sum_{k>j, L_kj != 0} L_kj Z_kj).
 // Cost about that of the factorisation; memory one double per nonzero of L beside L itself.

@@ -17,7 +17,7 @@
 #include "core/block.h"
 #include "core/status.h"
 #include "solvers/bundle/internal/bundle_problem.h"
-#include "solvers/bundle/internal/supernodal_cholesky.h"
+#include "solvers/bundle/internal/cholmod_factor.h"
 #include "solvers/bundle/taylor_bundle.h"
 
 namespace photopose::internal::taylor {
@@ -167,7 +167,7 @@ struct Reduction {
   Eigen::VectorXd scale;         // Jacobi scale 1 / sqrt(diag S); 1 where fixed
   // Natural order: the camera blocks are already in a fill-reducing order (BuildLayout).
   Eigen::SimplicialLDLT<SparseMatrix, Eigen::Upper, Eigen::NaturalOrdering<int>> ldlt;
-  SupernodalCholesky cholmod;
+  CholmodFactor cholmod;  // supernodal
   bool analysed = false;
   double pivot_ratio = 0.0;  // smallest / largest pivot of the scaled LDL^T
   bool singular = false;     // the last factorisation found S singular (SolveStep)
