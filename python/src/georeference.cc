@@ -25,7 +25,8 @@ const char* SourceName(ExifGpsSource source) { return source == ExifGpsSource::k
 void BindPositionFiles(py::module_& m) {
   auto geo_record = BindStruct<GeoTxtRecord>(m, "GeoTxtRecord", "A line of ODM's geo.txt.");
   geo_record.def_readwrite("image", &GeoTxtRecord::image)
-      .def_readwrite("position", &GeoTxtRecord::position, "x, y, z in the file's CRS (GIS order: easting or longitude first)")
+      .def_readwrite("position", &GeoTxtRecord::position, "x, y, z in the file's CRS (GIS order: easting or longitude first); z NaN without height")
+      .def_readwrite("has_height", &GeoTxtRecord::has_height, "False for a line 'image x y': horizontal only")
       .def_readwrite("yaw_pitch_roll_deg", &GeoTxtRecord::yaw_pitch_roll_deg, "deg, or None")
       .def_readwrite("horizontal_accuracy_m", &GeoTxtRecord::horizontal_accuracy_m, "m, or None")
       .def_readwrite("vertical_accuracy_m", &GeoTxtRecord::vertical_accuracy_m, "m, or None")
@@ -74,6 +75,8 @@ void BindGeoreferenceInputs(py::module_& m) {
                                                         "A measured projection centre (GNSS) of an image, named as the block names it.");
   position.def_readwrite("image", &CameraPositionMeasurement::image)
       .def_readwrite("position", &CameraPositionMeasurement::position, "in GeoreferenceInputs.positions_crs")
+      .def_readwrite("has_height", &CameraPositionMeasurement::has_height,
+                     "False: position[2] is not read; the position constrains the horizontal only")
       .def_readwrite("accuracy_m", &CameraPositionMeasurement::accuracy_m, "one sigma east, north, up (m), or None")
       .def_readwrite("line", &CameraPositionMeasurement::line);
 
@@ -163,6 +166,8 @@ ENU frame; to_output_crs and output_poses bring coordinates and poses into the o
       .def_readonly("inputs_not_used", &GeoreferenceResult::inputs_not_used,
                     "inputs read and not used, each with the reason")
       .def_readonly("positions_matched", &GeoreferenceResult::positions_matched)
+      .def_readonly("positions_without_height", &GeoreferenceResult::positions_without_height,
+                    "of the matched positions, those without height (horizontal only)")
       .def_readonly("positions_unmatched", &GeoreferenceResult::positions_unmatched)
       .def_readonly("images_without_position", &GeoreferenceResult::images_without_position)
       .def_readonly("control_marks_matched", &GeoreferenceResult::control_marks_matched)
