@@ -3,6 +3,8 @@
 // the robust similarity and the weighted adjustment in the local East-North-Up frame; the errors
 // and the outputs in the output CRS.
 
+#include <cmath>
+
 #include "common.h"
 #include "core/io/exif_gps.h"
 #include "core/io/tables.h"
@@ -115,14 +117,16 @@ arrays (set_positions).)doc");
                  CameraPositionMeasurement p;
                  p.image = images[i];
                  p.position = xyz[i];
+                 p.has_height = !std::isnan(xyz[i].z());  // a NaN z: no height, as a geo.txt line "image x y"
                  if (!sigma.empty() && sigma[i].allFinite()) p.accuracy_m = sigma[i];
                  self.positions.push_back(p);
                }
              },
              py::arg("crs"), py::arg("images"), py::arg("positions"), py::arg("accuracies_m") = py::none(),
              py::arg("source") = "arrays",
-             "Camera positions: N image names, N x 3 coordinates in crs (GIS order), optional N x 3 "
-             "one-sigma accuracies east, north, up (m; a NaN row: none stated).");
+             "Camera positions: N image names, N x 3 coordinates in crs (GIS order; a NaN z: no height, "
+             "the position horizontal only), optional N x 3 one-sigma accuracies east, north, up (m; a NaN "
+             "row: none stated).");
   inputs.def("set_positions_from_geo_txt", [](GeoreferenceInputs& self, const GeoTxt& geo, const std::string& source) {
     SetPositionsFromGeoTxt(geo, source, &self);
   }, py::arg("geo"), py::arg("source") = "geo.txt", "The camera positions of a geo.txt (its yaw/pitch/roll are not used).");

@@ -90,6 +90,8 @@ def test_bad_inputs_raise_with_the_library_message(scene, tmp_path):
     (tmp_path / "flat_geo.txt").write_text("EPSG:32633\na.jpg 1 2\n")
     record = pp.read_geo_txt(tmp_path / "flat_geo.txt").records[0]
     assert not record.has_height and np.isnan(record.position[2])
+    inputs.set_positions("EPSG:32633", ["a.jpg", "b.jpg"], [[1.0, 2.0, np.nan], [1.0, 2.0, 3.0]])
+    assert [p.has_height for p in inputs.positions] == [False, True]
 
 
 def dji_jpeg(lon, lat, height, rtk_sigma_enu_m, rtk_flag):
