@@ -63,6 +63,11 @@ struct BlockImage {
   // default accuracy decides whether it is one).
   std::optional<Eigen::Vector3d> measured_center_m;
   std::optional<Eigen::Vector3d> center_accuracy_m;
+  // False when the measurement gives no height (an ODM geo.txt line "image x y"): the prior then
+  // constrains X and Y only, and measured_center_m.z() is not a measurement but the height the
+  // centre had when the position was attached (solvers/georeference/georeference.h), kept finite
+  // for the solvers and never compared with an adjusted height.
+  bool center_height_measured = true;
   // Measured attitude (seed angles, rad) and its per-image accuracy (rad, one sigma per angle).
   std::optional<Eigen::Vector3d> measured_angles_rad;
   std::optional<Eigen::Vector3d> attitude_accuracy_rad;

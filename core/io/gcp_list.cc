@@ -15,6 +15,7 @@
 #include <cstring>
 #include <deque>
 #include <functional>
+#include <limits>
 #include <map>
 #include <string_view>
 
@@ -148,27 +149,38 @@ Status ParseGeoTxt(std::string_view text, const std::string& file_name, GeoTxt* 
   PHOTOPOSE_RETURN_IF_ERROR(ForEachDataLine(text, [&](int line, const std::vector<std::string_view>& words) -> Status {
     if (line == 1) return ReadCrsLine(words, file_name, &result.crs);
     const size_t n = words.size();
-    if (n < 4 || n == 5 || n == 6 || n == 8) {
-      return error(line, "",
-                   "expected 'image x y z [yaw pitch roll] [horizontal_accuracy "
-                   "vertical_accuracy]', got " + std::to_string(n) + " fields" +
-                       (n == 3 ? " (the height z is missing)" : ""));
-    }
+    // The fields are positional (ODM reads them so): z, then yaw pitch roll, then the two
+    // accuracies. A count that stops inside a group is refused, naming the first missing field.
     static const char* const kNames[9] = {"image", "x", "y", "z", "yaw", "pitch", "roll",
                                           "horizontal_accuracy", "vertical_accuracy"};
+    if (n < 3 || n == 5 || n == 6 || n == 8) {
+      const std::string got = std::to_string(n - 1) + (n == 2 ? " number" : " numbers");
+      std::string why = "missing: expected 'image x y [z [yaw pitch roll [horizontal_accuracy vertical_accuracy]]]', got " + got;
+      if (n == 5 || n == 6) {
+        why += " (x y z and " + std::string(n == 5 ? "yaw" : "yaw pitch") +
+               ": yaw pitch roll come as three; the fields are positional, so a line without z cannot give accuracies)";
+      } else if (n == 8) {
+        why += " (the accuracies come as two: horizontal vertical)";
+      }
+      return error(line, kNames[n], why);
+    }
     double numbers[9] = {0};
     for (size_t i = 1; i < std::min<size_t>(n, 9); ++i) {
       std::string why;
       if (!ParseFiniteNumber(words[i], &numbers[i], &why)) return error(line, kNames[i], why);
     }
-    for (int i = 1; i <= 3; ++i) {
+    const bool has_height = n >= 4;
+    for (int i = 1; i <= (has_height ? 3 : 2); ++i) {
       const ValueRange& range = *RangeOf(i == 1 ? "X" : i == 2 ? "Y" : "Z");
       if (!InRange(numbers[i], range))
         return error(line, kNames[i], Quoted(words[i]) + " is outside " + RangeText(range));
     }
     GeoTxtRecord record;
     record.image = std::string(words[0]);
-    record.position = Eigen::Vector3d(numbers[1], numbers[2], numbers[3]);
+    // No height is NaN, never a number that could pass for one.
+    record.position = Eigen::Vector3d(numbers[1], numbers[2],
+                                      has_height ? numbers[3] : std::numeric_limits<double>::quiet_NaN());
+    record.has_height = has_height;
     record.line = line;
     if (n >= 7) {
       for (int i = 4; i <= 6; ++i) {

@@ -199,15 +199,20 @@ Status ReadGcpList(const std::string& path, GcpList* gcp_list);
 Status ParseGcpList(std::string_view text, const std::string& file_name, GcpList* gcp_list);
 
 // ------------------------------------------------------------------ OpenDroneMap geo.txt
-// Camera positions. First line: the CRS (as in gcp_list.txt); then per line
-//   image x y z [yaw pitch roll] [horizontal_accuracy vertical_accuracy] [extras...]
+// Camera positions. First line: the CRS (as in gcp_list.txt); then per line, positionally (ODM)
+//   image x y [z [yaw pitch roll [horizontal_accuracy vertical_accuracy [extras...]]]]
 // x, y in the CRS's GIS order (easting or longitude first, as ODM writes them, even for
 // EPSG:4326), z in metres; yaw, pitch, roll in degrees; accuracies in metres (one sigma). A line
-// with 5, 6 or 8 fields is refused (yaw pitch roll come as three, the accuracies as two); further
-// fields after the ninth are ODM's extras and are not read. An image named twice is refused.
+// "image x y" has no height (has_height false: the position is horizontal only). The fields are
+// positional, so a line without z cannot carry attitudes or accuracies: "image x y h v" reads as
+// z = h, yaw = v and is refused like every line with 5, 6 or 8 fields (yaw pitch roll come as
+// three, the accuracies as two), naming the missing field. Fields after the ninth are ODM's
+// extras and are not read. An image named twice is refused.
 struct GeoTxtRecord {
   std::string image;
+  // x, y, z; z is NaN when the line gives no height (never a height: has_height says so).
   Eigen::Vector3d position = Eigen::Vector3d::Zero();
+  bool has_height = true;
   std::optional<Eigen::Vector3d> yaw_pitch_roll_deg;
   std::optional<double> horizontal_accuracy_m;
   std::optional<double> vertical_accuracy_m;

@@ -907,7 +907,8 @@ class GeoTxtRecord:
     """A line of ODM's geo.txt."""
     def __init__(self, **kwargs: Any) -> None: ...
     image: str
-    position: numpy.ndarray  # x, y, z in the file's CRS (GIS order: easting or longitude first)
+    position: numpy.ndarray  # x, y, z in the file's CRS (GIS order: easting or longitude first); z NaN without height
+    has_height: bool  # False for a line 'image x y': horizontal only
     yaw_pitch_roll_deg: Optional[numpy.ndarray]  # deg, or None
     horizontal_accuracy_m: Optional[float]  # m, or None
     vertical_accuracy_m: Optional[float]  # m, or None
@@ -939,6 +940,7 @@ class CameraPositionMeasurement:
     def __init__(self, **kwargs: Any) -> None: ...
     image: str
     position: numpy.ndarray  # in GeoreferenceInputs.positions_crs
+    has_height: bool  # False: position[2] is not read; the position constrains the horizontal only
     accuracy_m: Optional[numpy.ndarray]  # one sigma east, north, up (m), or None
     line: int
 
@@ -980,6 +982,8 @@ class GeoreferenceResult:
     def inputs_not_used(self) -> list[str]: ...  # inputs read and not used, each with the reason
     @property
     def positions_matched(self) -> int: ...
+    @property
+    def positions_without_height(self) -> int: ...  # of the matched positions, those without height
     @property
     def positions_unmatched(self) -> list[str]: ...
     @property

@@ -3,6 +3,8 @@
 // the robust similarity and the weighted adjustment in the local East-North-Up frame; the errors
 // and the outputs in the output CRS.
 
+#include <cmath>
+
 #include "common.h"
 #include "core/io/exif_gps.h"
 #include "core/io/tables.h"
@@ -25,7 +27,8 @@ const char* SourceName(ExifGpsSource source) { return source == ExifGpsSource::k
 void BindPositionFiles(py::module_& m) {
   auto geo_record = BindStruct<GeoTxtRecord>(m, "GeoTxtRecord", "A line of ODM's geo.txt.");
   geo_record.def_readwrite("image", &GeoTxtRecord::image)
-      .def_readwrite("position", &GeoTxtRecord::position, "x, y, z in the file's CRS (GIS order: easting or longitude first)")
+      .def_readwrite("position", &GeoTxtRecord::position, "x, y, z in the file's CRS (GIS order: easting or longitude first); z NaN without height")
+      .def_readwrite("has_height", &GeoTxtRecord::has_height, "False for a line 'image x y': horizontal only")
       .def_readwrite("yaw_pitch_roll_deg", &GeoTxtRecord::yaw_pitch_roll_deg, "deg, or None")
       .def_readwrite("horizontal_accuracy_m", &GeoTxtRecord::horizontal_accuracy_m, "m, or None")
       .def_readwrite("vertical_accuracy_m", &GeoTxtRecord::vertical_accuracy_m, "m, or None")
@@ -74,6 +77,8 @@ void BindGeoreferenceInputs(py::module_& m) {
                                                         "A measured projection centre (GNSS) of an image, named as the block names it.");
   position.def_readwrite("image", &CameraPositionMeasurement::image)
       .def_readwrite("position", &CameraPositionMeasurement::position, "in GeoreferenceInputs.positions_crs")
+      .def_readwrite("has_height", &CameraPositionMeasurement::has_height,
+                     "False: position[2] is not read; the position constrains the horizontal only")
       .def_readwrite("accuracy_m", &CameraPositionMeasurement::accuracy_m, "one sigma east, north, up (m), or None")
       .def_readwrite("line", &CameraPositionMeasurement::line);
 
@@ -112,14 +117,16 @@ arrays (set_positions).)doc");
                  CameraPositionMeasurement p;
                  p.image = images[i];
                  p.position = xyz[i];
+                 p.has_height = !std::isnan(xyz[i].z());  // a NaN z: no height, as a geo.txt line "image x y"
                  if (!sigma.empty() && sigma[i].allFinite()) p.accuracy_m = sigma[i];
                  self.positions.push_back(p);
                }
              },
              py::arg("crs"), py::arg("images"), py::arg("positions"), py::arg("accuracies_m") = py::none(),
              py::arg("source") = "arrays",
-             "Camera positions: N image names, N x 3 coordinates in crs (GIS order), optional N x 3 "
-             "one-sigma accuracies east, north, up (m; a NaN row: none stated).");
+             "Camera positions: N image names, N x 3 coordinates in crs (GIS order; a NaN z: no height, "
+             "the position horizontal only), optional N x 3 one-sigma accuracies east, north, up (m; a NaN "
+             "row: none stated).");
   inputs.def("set_positions_from_geo_txt", [](GeoreferenceInputs& self, const GeoTxt& geo, const std::string& source) {
     SetPositionsFromGeoTxt(geo, source, &self);
   }, py::arg("geo"), py::arg("source") = "geo.txt", "The camera positions of a geo.txt (its yaw/pitch/roll are not used).");
@@ -163,6 +170,8 @@ ENU frame; to_output_crs and output_poses bring coordinates and poses into the o
       .def_readonly("inputs_not_used", &GeoreferenceResult::inputs_not_used,
                     "inputs read and not used, each with the reason")
       .def_readonly("positions_matched", &GeoreferenceResult::positions_matched)
+      .def_readonly("positions_without_height", &GeoreferenceResult::positions_without_height,
+                    "of the matched positions, those without height (horizontal only)")
       .def_readonly("positions_unmatched", &GeoreferenceResult::positions_unmatched)
       .def_readonly("images_without_position", &GeoreferenceResult::images_without_position)
       .def_readonly("control_marks_matched", &GeoreferenceResult::control_marks_matched)

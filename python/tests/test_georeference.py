@@ -83,9 +83,15 @@ def test_bad_inputs_raise_with_the_library_message(scene, tmp_path):
         pp.read_image_gps(tmp_path / "not_an_image.jpg")
     with pytest.raises(pp.Error, match="not a directory"):
         pp.read_images_gps(tmp_path / "nowhere", ["a.jpg"])
-    with pytest.raises(pp.Error, match="geo.txt"):
-        (tmp_path / "bad_geo.txt").write_text("EPSG:32633\na.jpg 1 2\n")
+    with pytest.raises(pp.Error, match="bad_geo.txt:2: y: missing"):
+        (tmp_path / "bad_geo.txt").write_text("EPSG:32633\na.jpg 1\n")
         pp.read_geo_txt(tmp_path / "bad_geo.txt")
+    # ODM's z is optional: "image x y" is a position without height, its z NaN.
+    (tmp_path / "flat_geo.txt").write_text("EPSG:32633\na.jpg 1 2\n")
+    record = pp.read_geo_txt(tmp_path / "flat_geo.txt").records[0]
+    assert not record.has_height and np.isnan(record.position[2])
+    inputs.set_positions("EPSG:32633", ["a.jpg", "b.jpg"], [[1.0, 2.0, np.nan], [1.0, 2.0, 3.0]])
+    assert [p.has_height for p in inputs.positions] == [False, True]
 
 
 def dji_jpeg(lon, lat, height, rtk_sigma_enu_m, rtk_flag):

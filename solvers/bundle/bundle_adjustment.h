@@ -351,11 +351,12 @@ struct BundleGroupStatistics {
   BundleGroup group = kTieMarks;
   int count = 0;     // observations (marks, points, cameras)
   std::string unit;  // px, um, m or deg
-  // Stated accuracy: mean over the group per axis (unit above).
+  // Stated accuracy: mean over the group per axis (unit above); 0 on an axis without rows (the
+  // marks' Z; the Z of camera positions that are all without height).
   Eigen::Vector3d stated_accuracy = Eigen::Vector3d::Zero();
   int num_axes = 2;  // 2 for marks, 3 otherwise
-  Eigen::Vector3d rms = Eigen::Vector3d::Zero();  // residual RMS per axis (unit above)
-  double rms_total = 0.0;                         // sqrt(mean over axes of rms^2)
+  Eigen::Vector3d rms = Eigen::Vector3d::Zero();  // residual RMS per axis (unit above; 0 as above)
+  double rms_total = 0.0;  // sqrt(mean of the squared residuals over the group's scalar rows)
   // rms / stated accuracy (unitless): the whitened RMS, 1 when the accuracy was right.
   double ratio = 0.0;
   // The group's summed redundancy numbers over its number of scalar observations (unitless,

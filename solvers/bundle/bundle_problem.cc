@@ -3,6 +3,7 @@
 #include <Eigen/Dense>
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <map>
 #include <numeric>
 #include <sstream>
@@ -61,10 +62,19 @@ std::string Names(const std::vector<std::string>& names, size_t max_listed = 5) 
   return text;
 }
 
-// Rows of the datum Jacobian of one fixed position p (internal/bundle_problem.h), gathered.
-void AddDatumRows(const Eigen::Vector3d& p, const Eigen::Vector3d& centroid, double extent,
+// A position that holds the datum: its coordinates, and whether it fixes the height (a camera
+// position without height fixes X and Y only).
+struct DatumPosition {
+  Eigen::Vector3d position_m;
+  bool fixes_height = true;
+};
+
+// Rows of the datum Jacobian of one fixed position (internal/bundle_problem.h), gathered; the Z row
+// is zero for a position that does not fix the height.
+void AddDatumRows(const DatumPosition& p, const Eigen::Vector3d& centroid, double extent,
                   std::vector<Eigen::Matrix<double, 3, 7>>* rows) {
-  rows->push_back(SimilarityRows(p, centroid, extent));
+  rows->push_back(SimilarityRows(p.position_m, centroid, extent));
+  if (!p.fixes_height) rows->back().row(2).setZero();
 }
 
 // COLMAP's gauge for a relative block (no control points, camera positions or attitudes): the
@@ -88,13 +98,13 @@ Status PlanRelativeGauge(const Block& block, BundlePlan* plan) {
 
 // The singular values of the scaled datum Jacobian of the fixed positions and, when
 // fixed_rotation, an attitude: how well they fix the seven similarity parameters.
-Eigen::VectorXd DatumSingularValues(const std::vector<Eigen::Vector3d>& fixed_positions,
+Eigen::VectorXd DatumSingularValues(const std::vector<DatumPosition>& fixed_positions,
                                     bool fixed_rotation) {
   Eigen::Vector3d centroid = Eigen::Vector3d::Zero();
-  for (const auto& p : fixed_positions) centroid += p;
+  for (const auto& p : fixed_positions) centroid += p.position_m;
   if (!fixed_positions.empty()) centroid /= static_cast<double>(fixed_positions.size());
   double extent = 0.0;
-  for (const auto& p : fixed_positions) extent += (p - centroid).squaredNorm();
+  for (const auto& p : fixed_positions) extent += (p.position_m - centroid).squaredNorm();
   extent = fixed_positions.empty() ? 1.0 : std::sqrt(extent / fixed_positions.size());
   if (!(extent > 0.0)) extent = 1.0;
   std::vector<Eigen::Matrix<double, 3, 7>> rows;
@@ -113,23 +123,26 @@ Eigen::VectorXd DatumSingularValues(const std::vector<Eigen::Vector3d>& fixed_po
 // positions, attitudes, held images and points), or COLMAP's gauge for a relative block. A weak
 // datum is refused with the reason when plan->refuse_weak_datum, else left to the round.
 Status CheckDatum(const BundleAdjustmentConfig& config, const Block& block, BundlePlan* plan) {
-  std::vector<Eigen::Vector3d> fixed_positions;
-  int num_control = 0, num_held = 0, num_cameras = 0, num_attitudes = 0;
+  std::vector<DatumPosition> fixed_positions;
+  int num_control = 0, num_held = 0, num_cameras = 0, num_horizontal = 0, num_attitudes = 0;
   bool fixed_rotation = false;
   for (size_t p = 0; p < block.points.size(); ++p) {
     if (!plan->point_in_problem[p]) continue;
     if (plan->point_prior[p] || config.constant_points.count(static_cast<int>(p))) {
-      fixed_positions.push_back(block.points[p].role == PointRole::kTie
-                                    ? *block.points[p].position_m
-                                    : *block.points[p].surveyed_m);
+      fixed_positions.push_back({block.points[p].role == PointRole::kTie
+                                     ? *block.points[p].position_m
+                                     : *block.points[p].surveyed_m});
       ++(plan->point_prior[p] ? num_control : num_held);
     }
   }
   for (size_t i = 0; i < block.images.size(); ++i) {
     if (plan->image_prior[i] || config.constant_images.count(static_cast<int>(i))) {
-      fixed_positions.push_back(plan->image_prior[i] ? *block.images[i].measured_center_m
-                                                     : block.images[i].eo->center_in_ground());
+      const bool horizontal = plan->image_prior[i] && !plan->image_prior_height[i];
+      fixed_positions.push_back({plan->image_prior[i] ? *block.images[i].measured_center_m
+                                                      : block.images[i].eo->center_in_ground(),
+                                 !horizontal});
       ++num_cameras;
+      num_horizontal += horizontal;
     }
     if (plan->image_attitude[i] || config.constant_images.count(static_cast<int>(i))) {
       fixed_rotation = true;
@@ -141,6 +154,7 @@ Status CheckDatum(const BundleAdjustmentConfig& config, const Block& block, Bund
   if (num_held > 0) what << num_held << " point" << (num_held == 1 ? "" : "s") << " held fixed, ";
   what << num_control << " control point" << (num_control == 1 ? "" : "s") << ", " << num_cameras
        << " camera position" << (num_cameras == 1 ? "" : "s");
+  if (num_horizontal > 0) what << " (" << num_horizontal << " without height)";
   if (num_attitudes > 0)
     what << ", " << num_attitudes << " attitude" << (num_attitudes == 1 ? "" : "s");
   const std::string weighted =
@@ -155,15 +169,19 @@ Status CheckDatum(const BundleAdjustmentConfig& config, const Block& block, Bund
   if (s.size() < 7 || !(s[6] > kDatumConditioning * s[0])) {
     int rank = 0;
     for (int k = 0; k < s.size(); ++k) rank += s[k] > kDatumConditioning * s[0];
-    std::string why;
-    if (fixed_positions.size() <= 2 && !fixed_rotation) {
+    std::string why, remedy = "add control points off that line or camera positions";
+    const bool any_height = std::any_of(fixed_positions.begin(), fixed_positions.end(),
+                                        [](const DatumPosition& p) { return p.fixes_height; });
+    if (num_horizontal > 0 && !any_height) {
+      why = "no position has a height: the vertical is free";
+      remedy = "add control points or camera positions with a height";
+    } else if (fixed_positions.size() <= 2 && !fixed_rotation) {
       why = "fewer than three positions cannot fix the rotation";
     } else {
       why = "the positions lie on one line (the rotation about it is free)";
     }
     return Status::Error("no datum: the " + what.str() + " fix only " + std::to_string(rank) +
-                         " of the 7 similarity parameters of the block (" + why +
-                         "); add control points off that line or camera positions");
+                         " of the 7 similarity parameters of the block (" + why + "); " + remedy);
   }
   plan->datum_description = "absolute: " + what.str() + weighted;
   return Status::Ok();
@@ -260,10 +278,13 @@ Status CheckMarksPerImage(const Block& block, const BundlePlan& plan) {
 }
 
 // Camera-position and attitude priors of the images that are adjusted.
-void PlanImagePriors(const BundleAccuracies& acc, const BundleAdjustmentConfig& config,
-                     const Block& block, BundlePlan* plan) {
+// A position without height constrains X and Y: its Z sigma is +infinity (no weight), its rows two.
+Status PlanImagePriors(const BundlePlanOptions& options, const BundleAdjustmentConfig& config,
+                       const Block& block, BundlePlan* plan) {
+  const BundleAccuracies& acc = options.accuracies;
   plan->image_prior.assign(block.images.size(), 0);
   plan->image_prior_sigma.assign(block.images.size(), acc.camera_m);
+  plan->image_prior_height.assign(block.images.size(), 1);
   plan->image_attitude.assign(block.images.size(), 0);
   plan->image_attitude_sigma.assign(block.images.size(), Eigen::Vector3d::Zero());
   for (size_t i = 0; i < block.images.size(); ++i) {
@@ -272,6 +293,16 @@ void PlanImagePriors(const BundleAccuracies& acc, const BundleAdjustmentConfig& 
     if (image.measured_center_m && (image.center_accuracy_m || acc.camera_positions_are_priors)) {
       plan->image_prior[i] = 1;
       if (image.center_accuracy_m) plan->image_prior_sigma[i] = *image.center_accuracy_m;
+      if (!image.center_height_measured) {
+        if (!options.horizontal_only_positions) {
+          return Status::Error(
+              "image '" + image.name +
+              "': a camera position without height (horizontal only) is adjusted by the "
+              "Ceres solver only; this solver would count its height as an observation");
+        }
+        plan->image_prior_height[i] = 0;
+        plan->image_prior_sigma[i].z() = std::numeric_limits<double>::infinity();
+      }
     }
     if (image.measured_angles_rad && (image.attitude_accuracy_rad || acc.attitude_deg)) {
       plan->image_attitude[i] = 1;
@@ -281,6 +312,7 @@ void PlanImagePriors(const BundleAccuracies& acc, const BundleAdjustmentConfig& 
               : Eigen::Vector3d::Constant(DegreesToRadians(*acc.attitude_deg));
     }
   }
+  return Status::Ok();
 }
 
 // Connectivity: images joined by the points they share; an error names the parts.
@@ -335,6 +367,7 @@ BundlePlanOptions PlanOptionsOf(const BundleAdjustmentOptions& options,
   plan_options.accuracies = options.accuracies;
   plan_options.use_lever = config.lever_arm_m.has_value() || config.estimate_lever_arm;
   plan_options.refuse_weak_datum = true;
+  plan_options.horizontal_only_positions = true;
   return plan_options;
 }
 
@@ -355,7 +388,7 @@ Status MakeBundlePlan(const BundlePlanOptions& options, const BundleAdjustmentCo
   PHOTOPOSE_RETURN_IF_ERROR(PlanMarks(acc, block, plan));
   PlanPoints(config, block, plan);
   PHOTOPOSE_RETURN_IF_ERROR(CheckMarksPerImage(block, *plan));
-  PlanImagePriors(acc, config, block, plan);
+  PHOTOPOSE_RETURN_IF_ERROR(PlanImagePriors(options, config, block, plan));
   PHOTOPOSE_RETURN_IF_ERROR(CheckConnected(block, *plan));
   return CheckDatum(config, block, plan);
 }
@@ -543,7 +576,9 @@ void AddPriorResiduals(const Block& block, const BundlePlan& plan, BundleState* 
         id = AddPrior(new CameraPositionPrior(measured, plan.image_prior_sigma[i]), parameters,
                       round);
       }
-      round->residuals.push_back({kCameraPositions, static_cast<int>(i), 3, 0, id});
+      // Without height the Z row has a zero weight (its sigma is infinite) and is not counted.
+      round->residuals.push_back(
+          {kCameraPositions, static_cast<int>(i), ImagePriorRows(plan, i), 0, id});
     }
     if (plan.image_attitude[i]) {
       const ceres::ResidualBlockId id = AddPrior(

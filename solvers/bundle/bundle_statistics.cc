@@ -310,6 +310,8 @@ namespace {
 // unit), and the leverage (sum of hat-matrix diagonals) once known.
 struct GroupSums {
   int count = 0;
+  // Scalar rows per axis: a camera position without height has no Z row.
+  Eigen::Vector3d rows = Eigen::Vector3d::Zero();
   Eigen::Vector3d ssq = Eigen::Vector3d::Zero();
   Eigen::Vector3d stated = Eigen::Vector3d::Zero();
   double leverage = 0.0;
@@ -394,6 +396,7 @@ void TabulateResiduals(const Block& block, const BundlePlan& plan, const BundleS
       const double unit = in_sigmas[info.group] ? 1.0 : scale;
       s.ssq.head<2>() += (Eigen::Vector2d(whitened[0], whitened[1]) * unit).cwiseAbs2();
       s.stated.head<2>() += Eigen::Vector2d::Constant(unit);
+      s.rows.head<2>() += Eigen::Vector2d::Ones();
       BundleImageResult& image = result->images[mark.image];
       ++image.num_marks;
       const bool image_in_sigmas = image_has_unit[mark.image][0] && image_has_unit[mark.image][1];
@@ -410,6 +413,7 @@ void TabulateResiduals(const Block& block, const BundlePlan& plan, const BundleS
       const double scale = RowScale(block, plan, info, row);
       s.ssq[axis] += (whitened[row] * scale) * (whitened[row] * scale);
       s.stated[axis] += scale;
+      s.rows[axis] += 1.0;
     }
   }
   for (size_t i = 0; i < block.images.size(); ++i) {
@@ -740,9 +744,11 @@ void GroupStatistics(const BundleAdjustmentOptions& options, const GroupSums* su
       result->groups.push_back(group);
       continue;
     }
-    group.stated_accuracy = s.stated / s.count;
-    group.rms = (s.ssq / s.count).cwiseSqrt();
-    group.rms_total = std::sqrt(s.ssq.sum() / (s.count * group.num_axes));
+    // Per axis over the rows it has (an axis without rows: 0, as the marks' Z).
+    const Eigen::Vector3d rows_per_axis = s.rows.cwiseMax(1.0);
+    group.stated_accuracy = s.stated.cwiseQuotient(rows_per_axis);
+    group.rms = s.ssq.cwiseQuotient(rows_per_axis).cwiseSqrt();
+    group.rms_total = std::sqrt(s.ssq.sum() / s.rows.sum());
     const int rows = variance.scalar_rows[g];
     group.ratio = std::sqrt(variance.whitened_ssq[g] / rows);
     group.redundancy_share = variance.redundancy[g] / rows;

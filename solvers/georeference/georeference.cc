@@ -15,6 +15,16 @@ namespace {
 
 constexpr char kGeographic3d[] = "EPSG:4979";
 
+// The heights (m) at which a position without height is handed to PROJ to find its vertical: the
+// points of constant horizontal coordinates lie on the ellipsoid normal through them, a straight
+// line in the local frame, so the line found does not depend on these placeholders.
+constexpr double kPlaceholderHeightsM[2] = {0.0, 100.0};
+
+// The position with the given height in place of its z (a height-less position's NaN).
+Eigen::Vector3d AtHeight(const Eigen::Vector3d& position, double height_m) {
+  return Eigen::Vector3d(position.x(), position.y(), height_m);
+}
+
 std::string FileNameOf(const std::string& name) {
   const size_t slash = name.find_last_of("/\\");
   return slash == std::string::npos ? name : name.substr(slash + 1);
@@ -68,36 +78,50 @@ std::string HeightsNote(const std::string& what, const std::string& crs) {
   return what + " (" + crs + ", " + info.name + "): heights transformed by PROJ as the CRS defines them";
 }
 
-// The mean longitude, latitude and height (EPSG:4979) of the measurements: the local frame's origin.
+// The mean longitude, latitude and height (EPSG:4979) of the measurements: the local frame's
+// origin. Positions without height count for the longitude and latitude only.
 Status MeasurementCentre(const GeoreferenceInputs& inputs, Eigen::Vector3d* centre) {
-  Eigen::Vector3d sum = Eigen::Vector3d::Zero();
+  Eigen::Vector2d sum = Eigen::Vector2d::Zero();
   int count = 0;
-  double control_height_sum = 0.0;
-  int control_count = 0;
-  auto add = [&](const std::string& crs, std::vector<Eigen::Vector3d> points, bool control) -> Status {
+  double height_sum = 0.0, control_height_sum = 0.0;
+  int height_count = 0, control_count = 0;
+  auto add = [&](const std::string& crs, std::vector<Eigen::Vector3d> points,
+                 const std::vector<char>& has_height, bool control) -> Status {
     if (points.empty()) return Status::Ok();
     CrsTransform to_geographic;
     PHOTOPOSE_RETURN_IF_ERROR(CrsTransform::Create(crs, kGeographic3d, &to_geographic));
     PHOTOPOSE_RETURN_IF_ERROR(to_geographic.Forward(&points));
-    for (const Eigen::Vector3d& p : points) {
-      sum += p;
+    for (size_t k = 0; k < points.size(); ++k) {
+      sum += points[k].head<2>();
       ++count;
+      if (!has_height[k]) continue;
+      height_sum += points[k].z();
+      ++height_count;
       if (control) {
-        control_height_sum += p.z();
+        control_height_sum += points[k].z();
         ++control_count;
       }
     }
     return Status::Ok();
   };
   std::vector<Eigen::Vector3d> positions, control;
-  for (const CameraPositionMeasurement& m : inputs.positions) positions.push_back(m.position);
+  std::vector<char> position_has_height;
+  for (const CameraPositionMeasurement& m : inputs.positions) {
+    positions.push_back(m.has_height ? m.position : AtHeight(m.position, kPlaceholderHeightsM[0]));
+    position_has_height.push_back(m.has_height);
+  }
   for (const GroundPoint& p : inputs.control_points) control.push_back(p.position);
-  PHOTOPOSE_RETURN_IF_ERROR(add(inputs.positions_crs, positions, false));
-  PHOTOPOSE_RETURN_IF_ERROR(add(inputs.control_crs, control, true));
+  PHOTOPOSE_RETURN_IF_ERROR(add(inputs.positions_crs, positions, position_has_height, false));
+  PHOTOPOSE_RETURN_IF_ERROR(add(inputs.control_crs, control, std::vector<char>(control.size(), 1), true));
   if (count == 0) return Status::Error("georeferencing needs camera positions or control points");
-  *centre = sum / count;
+  if (height_count == 0) {
+    return Status::Error(inputs.positions_source + ": none of its " + std::to_string(inputs.positions.size()) +
+                         " camera positions has a height and there is no control point: nothing ties the "
+                         "model's heights to the ground (give z, or control points)");
+  }
   // On the ground when control is known (heights of the local frame stay small).
-  if (control_count > 0) centre->z() = control_height_sum / control_count;
+  *centre = Eigen::Vector3d(sum.x() / count, sum.y() / count,
+                            control_count > 0 ? control_height_sum / control_count : height_sum / height_count);
   return Status::Ok();
 }
 
@@ -175,13 +199,34 @@ Status PrepareGeoreference(const GeoreferenceOptions& options, const Georeferenc
   PHOTOPOSE_RETURN_IF_ERROR(MeasurementCentre(inputs, &centre));
   PHOTOPOSE_RETURN_IF_ERROR(ChooseOutputCrs(options, inputs, centre, &out));
   PHOTOPOSE_RETURN_IF_ERROR(LocalFrame::Create(kGeographic3d, centre, &out.frame));
-  std::vector<Eigen::Vector3d> positions_local, control_local;
-  for (const CameraPositionMeasurement& m : inputs.positions) positions_local.push_back(m.position);
+  // A position without height at the lower placeholder height, its vertical's direction from the
+  // upper one.
+  std::vector<Eigen::Vector3d> positions_local, control_local, upper_local;
+  std::vector<size_t> without_height;  // indices into inputs.positions
+  for (size_t k = 0; k < inputs.positions.size(); ++k) {
+    const CameraPositionMeasurement& m = inputs.positions[k];
+    positions_local.push_back(m.has_height ? m.position : AtHeight(m.position, kPlaceholderHeightsM[0]));
+    if (m.has_height) continue;
+    without_height.push_back(k);
+    upper_local.push_back(AtHeight(m.position, kPlaceholderHeightsM[1]));
+  }
   for (const GroundPoint& p : inputs.control_points) control_local.push_back(p.position);
+  std::vector<Eigen::Vector3d> vertical_local(inputs.positions.size(), Eigen::Vector3d::Zero());
   if (!positions_local.empty()) {
-    const Status moved = out.frame.ToLocal(inputs.positions_crs, &positions_local);
+    Status moved = out.frame.ToLocal(inputs.positions_crs, &positions_local);
+    if (moved.ok()) moved = out.frame.ToLocal(inputs.positions_crs, &upper_local);
     if (!moved.ok()) return Status::Error(inputs.positions_source + ": " + moved.message());
     out.heights_notes.push_back(HeightsNote("camera positions", inputs.positions_crs));
+    for (size_t j = 0; j < without_height.size(); ++j) {
+      const size_t k = without_height[j];
+      vertical_local[k] = (upper_local[j] - positions_local[k]).normalized();
+    }
+    if (!without_height.empty()) {
+      out.heights_notes.push_back(
+          "camera positions (" + inputs.positions_source + "): " + std::to_string(without_height.size()) +
+          " without height: only their horizontal position is used (not in the similarity; in the "
+          "adjustment a prior on the local East and North, the height free)");
+    }
   }
   if (!control_local.empty()) {
     const Status moved = out.frame.ToLocal(inputs.control_crs, &control_local);
@@ -189,11 +234,8 @@ Status PrepareGeoreference(const GeoreferenceOptions& options, const Georeferenc
     out.heights_notes.push_back(HeightsNote("control", inputs.control_crs));
   }
   out.heights_notes.push_back(HeightsNote("outputs", out.out_crs));
-  if (inputs.attitudes_not_used > 0) {
-    out.inputs_not_used.push_back(inputs.positions_source + ": " + std::to_string(inputs.attitudes_not_used) +
-                                  (inputs.attitudes_not_used == 1 ? " attitude" : " attitudes") +
-                                  " (yaw pitch roll) read and not used (" + GeoTxtAttitudesNotUsedReason() + ")");
-  }
+  const std::string attitudes = AttitudesNotUsedLine(inputs);
+  if (!attitudes.empty()) out.inputs_not_used.push_back(attitudes);
 
   // 2. Matching; control points and marks join a copy of the block.
   Block work = *block;
@@ -214,7 +256,10 @@ Status PrepareGeoreference(const GeoreferenceOptions& options, const Georeferenc
     position_image[k] = image;
     ++out.positions_matched;
     BlockImage& target = work.images[image];
+    // Without height: a point of its vertical, placed after the similarity.
     target.measured_center_m = positions_local[k];
+    target.center_height_measured = inputs.positions[k].has_height;
+    out.positions_without_height += !inputs.positions[k].has_height;
     target.center_accuracy_m = inputs.positions[k].accuracy_m;
   }
   out.images_without_position = static_cast<int>(std::count(has_position.begin(), has_position.end(), 0));
@@ -270,11 +315,11 @@ Status PrepareGeoreference(const GeoreferenceOptions& options, const Georeferenc
     if (work.marks_of_point[p].empty()) out.control_points_without_marks.push_back(work.points[p].id);
   }
 
-  // 3. The similarity: camera centres <-> positions (group 0), control intersected in the model
-  // <-> surveyed (group 1).
+  // 3. The similarity: camera centres <-> positions with a height (group 0), control intersected
+  // in the model <-> surveyed (group 1).
   std::vector<SimilarityCorrespondence> pairs;
   for (size_t k = 0; k < inputs.positions.size(); ++k) {
-    if (position_image[k] < 0) continue;
+    if (position_image[k] < 0 || !inputs.positions[k].has_height) continue;
     SimilarityCorrespondence pair;
     pair.source = work.images[position_image[k]].eo->center_in_ground();
     pair.target = positions_local[k];
@@ -295,17 +340,30 @@ Status PrepareGeoreference(const GeoreferenceOptions& options, const Georeferenc
     pair.sigma_m = work.points[p].accuracy_m && !IsHeldFixed(work.points[p])
                        ? work.points[p].accuracy_m->mean()
                        : options.default_marker_accuracy_m;
-    pair.group = out.positions_matched > 0 ? 1 : 0;
+    pair.group = out.positions_matched > out.positions_without_height ? 1 : 0;
     pairs.push_back(pair);
     out.similarity_labels.push_back("control " + work.points[p].id);
   }
   const Status aligned = RobustSimilarity(options.similarity, pairs, &out.model_to_local, &out.similarity);
   if (!aligned.ok()) {
+    const std::string without_height =
+        out.positions_without_height > 0
+            ? "; " + std::to_string(out.positions_without_height) + " camera positions without height take no part in it"
+            : "";
     return Status::Error("cannot align the model with the measurements (" + std::to_string(pairs.size()) +
-                         " pairs of camera positions and control points intersected in the model): " +
-                         aligned.message());
+                         " pairs of camera positions and control points intersected in the model" +
+                         without_height + "): " + aligned.message());
   }
   MoveBlock(out.model_to_local, &work);
+  // A position without height: the point of its vertical nearest to the image's centre, now in
+  // the local frame (its height is the model's, never a measurement; the prior leaves it free).
+  for (const size_t k : without_height) {
+    if (position_image[k] < 0) continue;
+    BlockImage& image = work.images[position_image[k]];
+    const Eigen::Vector3d& d = vertical_local[k];
+    const Eigen::Vector3d& p0 = positions_local[k];
+    image.measured_center_m = p0 + d * d.dot(image.eo->center_in_ground() - p0);
+  }
 
   // Errors after the similarity, along the output CRS's level axes at each point.
   std::vector<Eigen::Vector3d> surveyed;
@@ -415,12 +473,28 @@ Status GeoreferencedFrames(const GeoreferenceResult& result, std::vector<FrameRe
   return Status::Ok();
 }
 
-const char* GeoTxtAttitudesNotUsedReason() {
+// Why any source's attitudes are not used: the one reason every source's reason ends with.
+constexpr char kModelGivesTheAttitudes[] = "the model gives the attitudes";
+
+std::string GeoTxtAttitudesNotUsedReason() {
   // ODM's own conversion (opendm/photo.py, compute_opk) builds its north-east-down frame from an
   // ECEF north vector and the ECEF -Z axis, which are not orthogonal off the poles: a nadir image
   // with yaw 0 gets kappa = 90 degrees + longitude. No convention is stated that could be tested.
-  return "ODM documents them for radiometric calibration only, 0 when not available, and states no "
-         "convention that gives the camera's omega/phi/kappa; the model gives the attitudes";
+  return std::string("ODM documents them for radiometric calibration only, 0 when not available, and "
+                     "states no convention that gives the camera's omega/phi/kappa; ") +
+         kModelGivesTheAttitudes;
+}
+
+std::string FramesAttitudesNotUsedReason() {
+  return std::string(kModelGivesTheAttitudes) +
+         "; with a model a frames table gives the camera positions only";
+}
+
+std::string AttitudesNotUsedLine(const GeoreferenceInputs& inputs) {
+  if (inputs.attitudes_not_used <= 0) return "";
+  return inputs.positions_source + ": " + std::to_string(inputs.attitudes_not_used) +
+         (inputs.attitudes_not_used == 1 ? " attitude" : " attitudes") + " (" + inputs.attitude_names +
+         ") read and not used (" + inputs.attitudes_not_used_reason + ")";
 }
 
 void SetPositionsFromGeoTxt(const GeoTxt& geo, const std::string& source, GeoreferenceInputs* inputs) {
@@ -428,15 +502,37 @@ void SetPositionsFromGeoTxt(const GeoTxt& geo, const std::string& source, Georef
   inputs->positions_source = source;
   inputs->positions.clear();
   inputs->attitudes_not_used = 0;
+  inputs->attitude_names = "yaw pitch roll";
+  inputs->attitudes_not_used_reason = GeoTxtAttitudesNotUsedReason();
   for (const GeoTxtRecord& record : geo.records) {
     if (record.yaw_pitch_roll_deg && !record.yaw_pitch_roll_deg->isZero(0.0)) ++inputs->attitudes_not_used;
     CameraPositionMeasurement m;
     m.image = record.image;
     m.position = record.position;
+    m.has_height = record.has_height;
     if (record.horizontal_accuracy_m && record.vertical_accuracy_m)
       m.accuracy_m = Eigen::Vector3d(*record.horizontal_accuracy_m, *record.horizontal_accuracy_m,
                                      *record.vertical_accuracy_m);
     m.line = record.line;
+    inputs->positions.push_back(m);
+  }
+}
+
+void SetPositionsFromFrames(const std::vector<FrameRecord>& frames, const std::string& crs,
+                            const std::string& source, GeoreferenceInputs* inputs) {
+  inputs->positions_crs = crs;
+  inputs->positions_source = source;
+  inputs->positions.clear();
+  // A frames row always has an attitude (Omega/Phi/Kappa or Matrix; core/io/tables.h).
+  inputs->attitudes_not_used = static_cast<int>(frames.size());
+  inputs->attitude_names = "Omega Phi Kappa";
+  inputs->attitudes_not_used_reason = FramesAttitudesNotUsedReason();
+  for (const FrameRecord& frame : frames) {
+    CameraPositionMeasurement m;
+    m.image = frame.raster;
+    m.position = frame.eo.center_in_ground();
+    m.accuracy_m = frame.center_accuracy_m;
+    m.line = frame.line;
     inputs->positions.push_back(m);
   }
 }
@@ -448,6 +544,8 @@ void SetPositionsFromGps(const std::vector<std::string>& images,
   inputs->positions_source = source;
   inputs->positions.clear();
   inputs->attitudes_not_used = 0;
+  inputs->attitude_names.clear();
+  inputs->attitudes_not_used_reason.clear();
   for (size_t i = 0; i < images.size() && i < gps.size(); ++i) {
     if (!gps[i]) continue;
     CameraPositionMeasurement m;

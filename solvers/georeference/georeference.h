@@ -13,7 +13,8 @@
 //  3. A robust similarity from the model frame to the local frame (solvers/georeference/
 //     similarity.h) on camera centres <-> positions and on control points intersected in the
 //     model <-> surveyed, each group with its own robust scale; the whole block is moved by it and
-//     the errors of control and check points after it are recorded.
+//     the errors of control and check points after it are recorded. A position without height
+//     (CameraPositionMeasurement::has_height) takes no part in it.
 //  4. (the caller) the bundle adjustment of the block in the local frame, camera positions as
 //     priors, control as weighted observations, check points held out.
 //  5. The errors of control and check points after the adjustment; every output in the output
@@ -38,9 +39,13 @@
 namespace photopose {
 
 // A measured projection centre (GNSS) of an image named as the block names it.
+// Without height (has_height false: a geo.txt line "image x y") it is the vertical through x, y:
+// position.z() is not read (NaN from a geo.txt) and the prior constrains the horizontal only
+// (PrepareGeoreference).
 struct CameraPositionMeasurement {
   std::string image;
   Eigen::Vector3d position = Eigen::Vector3d::Zero();  // in GeoreferenceInputs::positions_crs
+  bool has_height = true;
   std::optional<Eigen::Vector3d> accuracy_m;           // one sigma per axis (E, N, Up), m
   int line = 0;                                        // source line, for messages
 };
@@ -49,10 +54,14 @@ struct GeoreferenceInputs {
   std::string positions_crs;
   std::string positions_source;  // file name, for messages and reports
   std::vector<CameraPositionMeasurement> positions;
-  // Attitudes the positions' source gives and the chain does not use: the geo.txt lines with a
-  // yaw/pitch/roll triple other than ODM's "0 0 0" (not available). Reported, with the reason, in
+  // Attitudes the positions' source gives and the chain does not use (the model gives every
+  // image's attitude): their count, the source's names for them and why. The Set* functions fill
+  // them: a geo.txt's lines with a yaw/pitch/roll other than ODM's "0 0 0" (not available), a
+  // frames table's Omega/Phi/Kappa of every row. Reported as one line of
   // GeoreferenceResult::inputs_not_used (docs/formats.md, "OpenDroneMap geo.txt").
   int attitudes_not_used = 0;
+  std::string attitude_names;             // "yaw pitch roll", "Omega Phi Kappa"
+  std::string attitudes_not_used_reason;  // GeoTxtAttitudesNotUsedReason, ...
   std::string control_crs;
   std::string control_source;
   std::vector<GroundPoint> control_points;  // control / check as their role says
@@ -64,9 +73,20 @@ struct GeoreferenceInputs {
 // the line gives them. Its yaw/pitch/roll are counted in inputs->attitudes_not_used and not used:
 // ODM documents them for radiometric calibration only (0 when not available) and states no
 // convention that turns them into the camera's omega/phi/kappa (GeoTxtAttitudesNotUsedReason).
+// A line without z gives a position without height (has_height false).
 void SetPositionsFromGeoTxt(const GeoTxt& geo, const std::string& source, GeoreferenceInputs* inputs);
-// Why geo.txt attitudes are read and not used, as the reports say it.
-const char* GeoTxtAttitudesNotUsedReason();
+// The camera positions of a frames table (PerspectiveX/Y/Z in `crs`, AccuracyX/Y/Z when given);
+// its Omega/Phi/Kappa are counted in inputs->attitudes_not_used and not used
+// (FramesAttitudesNotUsedReason).
+void SetPositionsFromFrames(const std::vector<FrameRecord>& frames, const std::string& crs,
+                            const std::string& source, GeoreferenceInputs* inputs);
+// Why geo.txt and frames-table attitudes are read and not used, as the reports say it.
+std::string GeoTxtAttitudesNotUsedReason();
+std::string FramesAttitudesNotUsedReason();
+// The inputs_not_used line of the inputs' unused attitudes ("geo.txt: 12 attitudes (yaw pitch
+// roll) read and not used (...)"), empty when there are none: the one wording of the JSON report,
+// the console and the page.
+std::string AttitudesNotUsedLine(const GeoreferenceInputs& inputs);
 // The positions of images' GPS tags (`gps[i]` of `images[i]`; entries without one skipped) in
 // `crs`, DJI's RTK sigmas as their accuracies.
 void SetPositionsFromGps(const std::vector<std::string>& images,
@@ -116,6 +136,8 @@ struct GeoreferenceResult {
 
   // Matching.
   int positions_matched = 0;
+  // Of those, the positions without height: horizontal priors, not in the similarity.
+  int positions_without_height = 0;
   std::vector<std::string> positions_unmatched;  // names that match no image
   int images_without_position = 0;
   int control_marks_matched = 0;
@@ -144,6 +166,15 @@ struct GeoreferenceResult {
 // a control point id that a model point already has, marks outside their images, or a camera with
 // the earth-curvature correction (ApplyECC): the local frame is Cartesian, the earth's curvature
 // is in its coordinates already, and the correction would count it twice.
+// A position without height is never given one: the similarity uses only the positions with a
+// height (and the control); then the image's measured centre is the point of the position's
+// vertical (the line of its x, y at every height, from PROJ at two placeholder heights; the result
+// does not depend on them) nearest to the image's centre after the similarity, flagged
+// BlockImage::center_height_measured = false, so that the adjustment constrains its local X, Y
+// only. The vertical at the image is the local frame's Z within the angle between them
+// (distance from the frame's origin / the earth's radius: 0.16 mrad at 1 km), so a height change
+// of the adjustment moves the constrained point by that change times that angle (1.6 mm for 10 m
+// at 1 km).
 Status PrepareGeoreference(const GeoreferenceOptions& options, const GeoreferenceInputs& inputs,
                            Block* block, GeoreferenceResult* result);
 

@@ -108,7 +108,11 @@ void FuzzGeoTxt(std::string_view text) {
   CheckMessage(status);
   if (!status.ok()) return;
   for (const photopose::GeoTxtRecord& record : geo.records) {
-    Require(record.position.allFinite() && record.position.cwiseAbs().maxCoeff() <= photopose::kMaxCoordinate);
+    // Without height z is NaN, never a number.
+    Require(record.has_height ? std::isfinite(record.position.z()) : std::isnan(record.position.z()));
+    Require(record.position.head<2>().allFinite() &&
+            record.position.head<2>().cwiseAbs().maxCoeff() <= photopose::kMaxCoordinate);
+    Require(!record.has_height || std::abs(record.position.z()) <= photopose::kMaxCoordinate);
     Require(record.horizontal_accuracy_m.has_value() == record.vertical_accuracy_m.has_value());
     Require(!record.horizontal_accuracy_m || *record.horizontal_accuracy_m > 0.0);
   }

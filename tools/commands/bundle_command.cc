@@ -473,30 +473,17 @@ int PositionsFromGeoTxt(const char* command, GeoreferenceInputs* inputs) {
   const Status read = ReadGeoTxt(FLAGS_bundle_geo, &geo);
   if (!read.ok()) return BadInput(command, read.message());
   SetPositionsFromGeoTxt(geo, FLAGS_bundle_geo, inputs);
-  if (inputs->attitudes_not_used > 0 && !FLAGS_bundle_quiet)
-    std::cerr << "photopose bundle: " << FLAGS_bundle_geo << ": yaw/pitch/roll of " << inputs->attitudes_not_used
-              << " images read and not used (" << GeoTxtAttitudesNotUsedReason() << ")\n";
   return kGoOn;
 }
 
-// --frames (with --crs): PerspectiveX/Y/Z of a frames table as the camera positions.
+// --frames (with --crs): PerspectiveX/Y/Z of a frames table as the camera positions; its
+// Omega/Phi/Kappa are recorded as read and not used (GeoreferenceResult::inputs_not_used).
 int PositionsFromFrames(const char* command, GeoreferenceInputs* inputs) {
   std::vector<FrameRecord> frames;
   FramesTableOptions frames_options;
   const Status read = ReadFramesTable(FLAGS_bundle_frames, frames_options, &frames);
   if (!read.ok()) return BadInput(command, read.message());
-  inputs->positions_crs = FLAGS_bundle_crs;
-  inputs->positions_source = FLAGS_bundle_frames;
-  for (const FrameRecord& frame : frames) {
-    CameraPositionMeasurement m;
-    m.image = frame.raster;
-    m.position = frame.eo.center_in_ground();
-    m.accuracy_m = frame.center_accuracy_m;
-    m.line = frame.line;
-    inputs->positions.push_back(m);
-  }
-  if (!FLAGS_bundle_quiet)
-    std::cerr << "photopose bundle: " << FLAGS_bundle_frames << ": PerspectiveX/Y/Z read as camera positions; Omega/Phi/Kappa not used (the model gives the attitudes)\n";
+  SetPositionsFromFrames(frames, FLAGS_bundle_crs, FLAGS_bundle_frames, inputs);
   return kGoOn;
 }
 
@@ -555,6 +542,8 @@ int GeoreferenceModel(const char* command, BundleRun* run) {
   if (!FLAGS_bundle_quiet) {
     std::cerr << "photopose bundle: georeference: output CRS " << g.out_crs << " (" << g.out_crs_info.name
               << ", " << g.out_crs_reason << "); " << g.positions_matched << " camera positions matched";
+    if (g.positions_without_height > 0)
+      std::cerr << " (" << g.positions_without_height << " without height: horizontal only)";
     if (!g.positions_unmatched.empty()) std::cerr << ", " << g.positions_unmatched.size() << " name no image of the model (first: '" << g.positions_unmatched[0] << "')";
     std::cerr << "; " << g.control_marks_matched << " control marks";
     if (!g.control_marks_unmatched.empty()) std::cerr << ", " << g.control_marks_unmatched.size() << " on images the model does not have (first: " << g.control_marks_unmatched[0] << ")";

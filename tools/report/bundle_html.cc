@@ -365,6 +365,16 @@ std::string OverviewHtml(const Block& block, const BundleAdjustmentResult& resul
                               FormatCount(s.rounds, "round") + ", " +
                               FormatCount(s.iterations, "iteration") + ")"},
   };
+  if (context.georeference != nullptr) {
+    const GeoreferenceResult& g = *context.georeference;
+    if (g.positions_without_height > 0)
+      facts.push_back({"Camera positions without height",
+                       FormatCount(g.positions_without_height, "position") +
+                           ": horizontal only (not in the similarity; heights free in the adjustment)"});
+    std::string not_used;
+    for (const std::string& line : g.inputs_not_used) not_used += (not_used.empty() ? "" : "; ") + line;
+    if (!not_used.empty()) facts.push_back({"Inputs read and not used", not_used});
+  }
   std::ostringstream html;
   html << "<h2>1. Survey overview</h2>\n" << FactsTable("", facts);
   const PlanData plan = context.georeference != nullptr
@@ -582,8 +592,11 @@ std::string CamerasHtml(const Block& block, const BundleAdjustmentResult& result
     if (r.has_covariance)
       for (int a = 0; a < 3; ++a) sigmas.push_back(std::sqrt(r.covariance(a, a)));
     const BlockImage& image = block.images[i];
+    // A position without height is compared horizontally only.
     if (image.eo && image.measured_center_m)
-      errors.push_back((image.eo->center_in_ground() - *image.measured_center_m).norm());
+      errors.push_back((image.eo->center_in_ground() - *image.measured_center_m)
+                           .head(image.center_height_measured ? 3 : 2)
+                           .norm());
   }
   const LengthUnit sigma_unit = LengthUnitFor(LargestMagnitude(sigmas));
   const LengthUnit error_unit = LengthUnitFor(LargestMagnitude(errors));
@@ -627,6 +640,10 @@ std::string CamerasHtml(const Block& block, const BundleAdjustmentResult& result
   std::vector<std::string> notes = {
       "sigmas: sigma0-scaled, from the posterior covariance; angles: the seed's omega, phi, kappa"};
   if (measured) notes.push_back("measured: the frames table's projection centre (GNSS)");
+  if (std::any_of(block.images.begin(), block.images.end(), [](const BlockImage& image) {
+        return image.measured_center_m && !image.center_height_measured;
+      }))
+    notes.push_back("Z n/a: a camera position without height, compared horizontally only");
   for (size_t i = 0; i < block.images.size(); ++i) {
     const BlockImage& image = block.images[i];
     const BundleImageResult* r = i < result.images.size() ? &result.images[i] : nullptr;
@@ -652,7 +669,7 @@ std::string CamerasHtml(const Block& block, const BundleAdjustmentResult& result
                         : "n/a");
     if (measured) {
       for (int a = 0; a < 3; ++a)
-        row.push_back(image.measured_center_m
+        row.push_back(image.measured_center_m && (a < 2 || image.center_height_measured)
                           ? FormatLength(c[a] - (*image.measured_center_m)[a], error_unit)
                           : "n/a");
     }

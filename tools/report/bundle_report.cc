@@ -114,6 +114,7 @@ json GeoreferenceJson(const Block& block, const GeoreferenceResult& g) {
           {"heights", g.heights_notes},
           {"inputs_not_used", g.inputs_not_used},
           {"positions_matched", g.positions_matched},
+          {"positions_without_height", g.positions_without_height},
           {"positions_unmatched", g.positions_unmatched},
           {"images_without_position", g.images_without_position},
           {"control_marks_matched", g.control_marks_matched},
@@ -577,6 +578,14 @@ std::vector<std::string> BundleConsoleLines(const Block& block, const BundleAdju
     lines.push_back(time.str());
   }
   lines.push_back("datum: " + s.datum_description);
+  if (context.georeference != nullptr) {
+    const GeoreferenceResult& g = *context.georeference;
+    if (g.positions_without_height > 0)
+      lines.push_back("georeference: " + FormatCount(g.positions_without_height, "camera position") +
+                      " without height: horizontal only (not in the similarity; in the adjustment "
+                      "their heights are free)");
+    for (const std::string& line : g.inputs_not_used) lines.push_back("georeference: not used: " + line);
+  }
   if (!s.covariance_datum.empty()) lines.push_back("covariances in the datum of " + s.covariance_datum);
   for (const BundleGroupStatistics& g : result.groups) {
     std::ostringstream line;

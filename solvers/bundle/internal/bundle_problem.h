@@ -68,18 +68,26 @@ struct BundlePlanOptions {
   // (BundleAdjust), or accepted so that it shows as a singular normal matrix in the round (the
   // Taylor adjustment, which reports it as a failed round).
   bool refuse_weak_datum = true;
+  // The solver counts a camera position without height (BlockImage::center_height_measured
+  // false) as two observations (BundleAdjust). A solver that does not (the Taylor adjustment
+  // counts three per prior) leaves it false and such a block is refused with the reason.
+  bool horizontal_only_positions = false;
 };
 
 // Everything decided before a round: observations in use, their sigmas, the datum.
 struct BundlePlan {
-  std::vector<char> mark_used;                        // per mark: in the adjustment
-  std::vector<double> mark_sigma;                     // per mark: sigma in the observation unit
-  std::vector<BundleGroup> mark_group;                // per mark: tie or control marks
-  std::vector<char> point_in_problem;                 // per point
-  std::vector<char> point_prior;                      // per point: control-point prior active
-  std::vector<Eigen::Vector3d> point_sigma;           // per point: prior sigma (m)
-  std::vector<char> image_prior;                      // per image: camera-position prior active
-  std::vector<Eigen::Vector3d> image_prior_sigma;     // (m)
+  std::vector<char> mark_used;                     // per mark: in the adjustment
+  std::vector<double> mark_sigma;                  // per mark: sigma in the observation unit
+  std::vector<BundleGroup> mark_group;             // per mark: tie or control marks
+  std::vector<char> point_in_problem;              // per point
+  std::vector<char> point_prior;                   // per point: control-point prior active
+  std::vector<Eigen::Vector3d> point_sigma;        // per point: prior sigma (m)
+  std::vector<char> image_prior;                   // per image: camera-position prior active
+  std::vector<Eigen::Vector3d> image_prior_sigma;  // (m)
+  // Per image with a prior: 1 when it constrains the height too; 0 for a position without height
+  // (two rows, X and Y): its Z sigma is +infinity, so a solver weighting by 1 / sigma^2 gives
+  // the Z row no weight, and the rows counted are two (ImagePriorRows).
+  std::vector<char> image_prior_height;
   std::vector<char> image_attitude;                   // per image: attitude prior active
   std::vector<Eigen::Vector3d> image_attitude_sigma;  // (rad)
   std::vector<std::vector<int>> calibrated;           // per camera: parameter indices estimated
@@ -94,6 +102,11 @@ struct BundlePlan {
   bool use_lever = false;
   bool refuse_weak_datum = true;  // from BundlePlanOptions
 };
+
+// The scalar observations of image `image`'s camera-position prior: 3, 2 without height, 0 none.
+inline int ImagePriorRows(const BundlePlan& plan, size_t image) {
+  return plan.image_prior[image] ? (plan.image_prior_height[image] ? 3 : 2) : 0;
+}
 
 // The full tangent component (0..5: centre X, Y, Z, then the small rotation about the seed's
 // omega, phi, kappa axes; cost_functions/exterior_orientation_manifold.h) of tangent column

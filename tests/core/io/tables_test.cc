@@ -1251,6 +1251,27 @@ TEST_F(TablesTest, GeoTxtReadsPositionsAttitudesAndAccuracies) {
   EXPECT_EQ(*geo.records[2].vertical_accuracy_m, 0.05);
 }
 
+// ODM's z is optional: "image x y" is a horizontal position, its z NaN (never a height), while
+// "image x y z" beside it keeps its height.
+TEST_F(TablesTest, GeoTxtLineWithoutZIsAPositionWithoutHeight) {
+  const std::string path = Write("geo.txt",
+                                 "WGS84 UTM 32N\n"
+                                 "a.jpg 500100.5 5300200.25\n"
+                                 "b.jpg 500110 5300210 512.5\n");
+  GeoTxt geo;
+  const Status read = ReadGeoTxt(path, &geo);
+  ASSERT_TRUE(read.ok()) << read.message();
+  ASSERT_EQ(geo.records.size(), 2u);
+  EXPECT_FALSE(geo.records[0].has_height);
+  EXPECT_EQ(geo.records[0].position.head<2>(), Eigen::Vector2d(500100.5, 5300200.25));
+  EXPECT_TRUE(std::isnan(geo.records[0].position.z()));
+  EXPECT_FALSE(geo.records[0].yaw_pitch_roll_deg.has_value());
+  EXPECT_FALSE(geo.records[0].horizontal_accuracy_m.has_value());
+  EXPECT_EQ(geo.records[0].line, 2);
+  EXPECT_TRUE(geo.records[1].has_height);
+  EXPECT_EQ(geo.records[1].position, Eigen::Vector3d(500110, 5300210, 512.5));
+}
+
 TEST_F(TablesTest, GeoTxtWithMissingOrBrokenFieldsIsRefusedAtItsLine) {
   struct Case {
     std::string text;
@@ -1260,15 +1281,23 @@ TEST_F(TablesTest, GeoTxtWithMissingOrBrokenFieldsIsRefusedAtItsLine) {
       {"a.jpg 1 2 3\n",
        "1: CRS: the first line must name the coordinate system (EPSG:<code>, WGS84 UTM "
        "<zone><N|S>, or a +proj=... string), got 'a.jpg 1 2 3'"},
-      {"EPSG:4326\na.jpg 1 2\n",
-       "2: expected 'image x y z [yaw pitch roll] [horizontal_accuracy vertical_accuracy]', got 3 "
-       "fields (the height z is missing)"},
+      {"EPSG:4326\na.jpg 1\n",
+       "2: y: missing: expected 'image x y [z [yaw pitch roll [horizontal_accuracy "
+       "vertical_accuracy]]]', got 1 number"},
+      // x y and two accuracies read positionally as z and yaw: refused, not taken as accuracies.
+      {"EPSG:4326\na.jpg 1 2 0.05 0.1\n",
+       "2: pitch: missing: expected 'image x y [z [yaw pitch roll [horizontal_accuracy "
+       "vertical_accuracy]]]', got 4 numbers (x y z and yaw: yaw pitch roll come as three; the "
+       "fields are positional, so a line without z cannot give accuracies)"},
       {"EPSG:4326\na.jpg 1 2 3 4 5\n",
-       "2: expected 'image x y z [yaw pitch roll] [horizontal_accuracy vertical_accuracy]', got 6 "
-       "fields"},
+       "2: roll: missing: expected 'image x y [z [yaw pitch roll [horizontal_accuracy "
+       "vertical_accuracy]]]', got 5 numbers (x y z and yaw pitch: yaw pitch roll come as three; "
+       "the fields are positional, so a line without z cannot give accuracies)"},
       {"EPSG:4326\na.jpg 1 2 3 4 5 6 7\n",
-       "2: expected 'image x y z [yaw pitch roll] [horizontal_accuracy vertical_accuracy]', got 8 "
-       "fields"},
+       "2: vertical_accuracy: missing: expected 'image x y [z [yaw pitch roll "
+       "[horizontal_accuracy vertical_accuracy]]]', got 7 numbers (the accuracies come as two: "
+       "horizontal vertical)"},
+      {"EPSG:4326\na.jpg 1 1e30\n", "2: y: '1e30' is outside [-100000000, 100000000] m"},
       {"EPSG:4326\na.jpg 1 2 x\n", "2: z: 'x' is not a number"},
       {"EPSG:4326\na.jpg 1 2 3 4 5 6 0 1\n",
        "2: horizontal_accuracy: '0' must be a positive accuracy in metres (at most 1e6)"},

@@ -501,6 +501,69 @@ TEST(BundleAdjustment, CameraPositionCovarianceIsHonest) {
   EXPECT_NEAR(sum / count, 3.0, kNeesBand);
 }
 
+// A camera position without height (BlockImage::center_height_measured false) is two rows, X and
+// Y: its z is not read (set 50 m off here), the image's height comes from the block, and the
+// redundancy is one less per such image than with every height.
+TEST(BundleAdjustment, PositionsWithoutHeightAreTwoRowsAndLeaveTheHeightFree) {
+  SmallBlock full = MakeSmallBlock(SmallBlockOptions());
+  SmallBlock data = MakeSmallBlock(SmallBlockOptions());
+  int horizontal = 0;
+  for (size_t i = 0; i < data.block.images.size(); i += 2) {
+    data.block.images[i].center_height_measured = false;
+    data.block.images[i].measured_center_m->z() += 50.0;
+    ++horizontal;
+  }
+  BundleAdjustmentResult full_result, result;
+  ASSERT_TRUE(BundleAdjust(QuietOptions(), BundleAdjustmentConfig(), &full.block, &full_result).ok());
+  ASSERT_TRUE(BundleAdjust(QuietOptions(), BundleAdjustmentConfig(), &data.block, &result).ok());
+  ASSERT_TRUE(result.summary.IsSolutionUsable()) << result.summary.BriefReport();
+  EXPECT_EQ(full_result.summary.redundancy - result.summary.redundancy, horizontal);
+  EXPECT_NE(result.summary.datum_description.find("12 camera positions (6 without height)"), std::string::npos)
+      << result.summary.datum_description;
+  // Every centre within 4 of its stated sigmas (a few cm: 0.5 px at 1.7 cm, 3 cm GNSS, 5 mm
+  // control); the 50 m in the z not read would be metres.
+  for (size_t i = 0; i < data.true_eo.size(); ++i) {
+    ASSERT_TRUE(result.images[i].has_covariance);
+    const Eigen::Vector3d e = data.block.images[i].eo->center_in_ground() - data.true_eo[i].center_in_ground();
+    const Eigen::Vector3d sigma = result.images[i].covariance.diagonal().head<3>().cwiseSqrt();
+    EXPECT_LT(e.cwiseQuotient(sigma).cwiseAbs().maxCoeff(), 4.0) << data.block.images[i].name << " " << e.transpose();
+    EXPECT_LT(e.norm(), 0.1) << data.block.images[i].name;
+  }
+  EXPECT_NEAR(result.summary.sigma0, 1.0, 0.15);
+  // The group's Z is over the 6 positions with a height: their stated 3 cm, not diluted.
+  for (const BundleGroupStatistics& g : result.groups) {
+    if (g.group != kCameraPositions) continue;
+    EXPECT_EQ(g.count, 12);
+    EXPECT_DOUBLE_EQ(g.stated_accuracy.z(), 0.03);
+    EXPECT_LT(g.rms.z(), 0.1);
+  }
+}
+
+// The Taylor adjustment counts three rows per camera-position prior (solvers/bundle/
+// taylor_bundle_normals.cc): it refuses positions without height rather than misstate sigma0.
+TEST(BundleAdjustment, TheTaylorAdjustmentRefusesPositionsWithoutHeight) {
+  SmallBlock data = MakeSmallBlock(SmallBlockOptions());
+  data.block.images[3].center_height_measured = false;
+  BundleAdjustmentResult result;
+  const Status status = BundleAdjustWithSolver(PoseSolver::kTaylor, QuietOptions(), BundleAdjustmentConfig(),
+                                               &data.block, &result);
+  EXPECT_EQ(status.message(), "image 'img_0_3': a camera position without height (horizontal only) is adjusted "
+                              "by the Ceres solver only; this solver would count its height as an observation");
+}
+
+// Camera positions that are all without height, and no control: the vertical is free, refused.
+TEST(BundleAdjustment, PositionsWithoutAnyHeightAndNoControlHaveNoDatum) {
+  SmallBlockOptions o;
+  o.control_xy.clear();
+  SmallBlock data = MakeSmallBlock(o);
+  for (BlockImage& image : data.block.images) image.center_height_measured = false;
+  BundleAdjustmentResult result;
+  const Status status = BundleAdjust(QuietOptions(), BundleAdjustmentConfig(), &data.block, &result);
+  EXPECT_EQ(status.message(), "no datum: the 0 control points, 12 camera positions (12 without height) fix only 6 "
+                              "of the 7 similarity parameters of the block (no position has a height: the "
+                              "vertical is free); add control points or camera positions with a height");
+}
+
 TEST(BundleAdjustment, RelativeBlockUsesColmapsGauge) {
   SmallBlockOptions o;
   o.gnss = false;

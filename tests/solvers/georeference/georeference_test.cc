@@ -2,7 +2,9 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
+#include <limits>
 
 #include "tests/support/georeference_scene.h"
 
@@ -181,12 +183,168 @@ TEST(Georeference, GeoTxtAttitudesAreReportedAsReadAndNotUsed) {
   ASSERT_TRUE(PrepareGeoreference(GeoreferenceOptions(), scene.inputs, &block, &result).ok());
   EXPECT_TRUE(result.inputs_not_used.empty());
   scene.inputs.attitudes_not_used = 2;
+  scene.inputs.attitude_names = inputs.attitude_names;
+  scene.inputs.attitudes_not_used_reason = inputs.attitudes_not_used_reason;
   block = scene.model;
   ASSERT_TRUE(PrepareGeoreference(GeoreferenceOptions(), scene.inputs, &block, &result).ok());
   ASSERT_EQ(result.inputs_not_used.size(), 1u);
   EXPECT_EQ(result.inputs_not_used[0], scene.inputs.positions_source +
                                            ": 2 attitudes (yaw pitch roll) read and not used (" +
                                            GeoTxtAttitudesNotUsedReason() + ")");
+}
+
+// A frames table's Omega/Phi/Kappa are read and not used beside a model: every row counted, the
+// line worded as the geo.txt one (AttitudesNotUsedLine) with the frames table's reason.
+TEST(Georeference, FramesTableAttitudesAreReportedAsReadAndNotUsed) {
+  std::vector<FrameRecord> frames(3);
+  for (size_t k = 0; k < frames.size(); ++k) {
+    frames[k].raster = "img" + std::to_string(k) + ".jpg";
+    frames[k].eo.set_center_in_ground(Eigen::Vector3d(500000.0 + 10.0 * k, 5300000.0, 600.0));
+    frames[k].line = static_cast<int>(k) + 2;
+  }
+  frames[1].center_accuracy_m = Eigen::Vector3d(0.02, 0.02, 0.04);
+  GeoreferenceInputs inputs;
+  SetPositionsFromFrames(frames, "EPSG:32632", "frames.csv", &inputs);
+  ASSERT_EQ(inputs.positions.size(), 3u);
+  EXPECT_EQ(inputs.positions_crs, "EPSG:32632");
+  EXPECT_EQ(inputs.positions[1].position, Eigen::Vector3d(500010.0, 5300000.0, 600.0));
+  EXPECT_EQ(inputs.positions[1].accuracy_m, frames[1].center_accuracy_m);
+  EXPECT_EQ(inputs.positions[2].line, 4);
+  EXPECT_EQ(inputs.attitudes_not_used, 3);
+  EXPECT_EQ(AttitudesNotUsedLine(inputs),
+            "frames.csv: 3 attitudes (Omega Phi Kappa) read and not used (" + FramesAttitudesNotUsedReason() + ")");
+  // Positions of another source leave nothing of the frames table's count behind.
+  SetPositionsFromGps({}, {}, "EPSG:4979", "GPS tags", &inputs);
+  EXPECT_EQ(AttitudesNotUsedLine(inputs), "");
+}
+
+// ------------------------------------------------------------------ positions without height
+
+// The scene's positions, every `stride`-th one from `first` without height (z NaN, as a geo.txt
+// line "image x y" gives it); returns how many.
+int DropHeights(GeoreferenceInputs* inputs, int first, int stride) {
+  int dropped = 0;
+  for (size_t k = first; k < inputs->positions.size(); k += stride) {
+    inputs->positions[k].has_height = false;
+    inputs->positions[k].position.z() = std::numeric_limits<double>::quiet_NaN();
+    ++dropped;
+  }
+  return dropped;
+}
+
+// Half the images without a height, with control: the model is aligned on the others and the
+// control, the adjustment holds those images horizontally only, and every height comes out right
+// (the vertical datum from the control and the other images). Their rows are two, not three: the
+// redundancy is smaller by one per such image than with every height.
+TEST(Georeference, PositionsWithoutHeightConstrainTheHorizontalAndTheHeightsComeOutRight) {
+  GeoreferenceScene scene = MakeGeoreferenceScene(2.0);
+  Block full_block;
+  GeoreferenceResult full_result;
+  BundleAdjustmentResult full_adjustment;
+  ASSERT_TRUE(GeoreferenceTheScene(scene, &full_block, &full_result, &full_adjustment));
+
+  const int dropped = DropHeights(&scene.inputs, 0, 2);
+  ASSERT_EQ(dropped, 12);
+  Block block;
+  GeoreferenceResult result;
+  BundleAdjustmentResult adjustment;
+  ASSERT_TRUE(GeoreferenceTheScene(scene, &block, &result, &adjustment));
+  EXPECT_EQ(result.positions_matched, 24);
+  EXPECT_EQ(result.positions_without_height, 12);
+  // Only the 12 positions with a height (and the control) are pairs of the similarity.
+  int position_pairs = 0;
+  for (const std::string& label : result.similarity_labels) position_pairs += label.rfind("position ", 0) == 0;
+  EXPECT_EQ(position_pairs, 12);
+  EXPECT_EQ(full_adjustment.summary.redundancy - adjustment.summary.redundancy, 12);
+  // The data agree with their stated accuracies, as with every height.
+  EXPECT_NEAR(adjustment.summary.sigma0, 1.0, 0.15);
+  EXPECT_NEAR(adjustment.summary.sigma0, full_adjustment.summary.sigma0, 0.05);
+  for (size_t i = 0; i < block.images.size(); ++i)
+    EXPECT_EQ(block.images[i].center_height_measured, i % 2 != 0) << block.images[i].name;
+  EXPECT_NE(adjustment.summary.datum_description.find("(12 without height)"), std::string::npos)
+      << adjustment.summary.datum_description;
+  EXPECT_TRUE(std::any_of(result.heights_notes.begin(), result.heights_notes.end(), [](const std::string& note) {
+    return note.find(": 12 without height: only their horizontal position is used") != std::string::npos;
+  }));
+
+  // Heights of every image within the noise (GNSS 5 cm vertical, marks 0.3 px at 1.3 cm).
+  std::vector<Eigen::Vector3d> centres;
+  for (const BlockImage& image : block.images) centres.push_back(image.eo->center_in_ground());
+  ASSERT_TRUE(result.frame.FromLocal("EPSG:4979", &centres).ok());
+  ASSERT_TRUE(scene.truth_frame.ToLocal("EPSG:4979", &centres).ok());
+  double worst_height_m = 0.0;
+  for (size_t i = 0; i < centres.size(); i += 2)
+    worst_height_m = std::max(worst_height_m, std::abs(centres[i].z() - scene.true_centres_local[i].z()));
+  EXPECT_LT(worst_height_m, 0.05);
+  EXPECT_LT(CentreRms(scene, block, result), 0.03);
+  EXPECT_LT(result.check_after_adjustment.rmse_m.z(), 0.03);
+  EXPECT_LT(result.check_after_adjustment.total_m, 0.03);
+}
+
+// The z of a position without height is never read: any value there gives the same measured
+// centres, to the last bit, as NaN, and the same adjustment (to 1e-9: Ceres' threads sum in any
+// order).
+TEST(Georeference, TheZOfAPositionWithoutHeightIsNeverRead) {
+  GeoreferenceScene scene = MakeGeoreferenceScene(0.5);
+  DropHeights(&scene.inputs, 1, 3);
+  Block a, b;
+  GeoreferenceResult result_a, result_b;
+  BundleAdjustmentResult adjustment_a, adjustment_b;
+  ASSERT_TRUE(GeoreferenceTheScene(scene, &a, &result_a, &adjustment_a));
+  for (CameraPositionMeasurement& m : scene.inputs.positions)
+    if (!m.has_height) m.position.z() = 1234.5;
+  ASSERT_TRUE(GeoreferenceTheScene(scene, &b, &result_b, &adjustment_b));
+  for (size_t i = 0; i < a.images.size(); ++i) {
+    EXPECT_LT((a.images[i].eo->parameters - b.images[i].eo->parameters).cwiseAbs().maxCoeff(), 1e-9)
+        << a.images[i].name;
+    EXPECT_EQ(*a.images[i].measured_center_m, *b.images[i].measured_center_m) << a.images[i].name;
+  }
+}
+
+// Without control, the heights of the images that have one carry the vertical datum: all images
+// come out right.
+TEST(Georeference, WithoutControlTheOtherImagesHeightsCarryTheVertical) {
+  GeoreferenceScene scene = MakeGeoreferenceScene(0.0);
+  scene.inputs.control_points.clear();
+  scene.inputs.control_marks.clear();
+  DropHeights(&scene.inputs, 0, 3);
+  Block block;
+  GeoreferenceResult result;
+  BundleAdjustmentResult adjustment;
+  ASSERT_TRUE(GeoreferenceTheScene(scene, &block, &result, &adjustment));
+  EXPECT_EQ(result.positions_without_height, 8);
+  EXPECT_LT(CentreRms(scene, block, result), 0.05);
+}
+
+// No height anywhere (and no control): refused before any work, saying why; too few positions
+// with a height for the similarity: refused, counting those without.
+TEST(Georeference, PositionsWithoutAnyHeightAreRefusedWithTheReason) {
+  GeoreferenceScene scene = MakeGeoreferenceScene(0.0);
+  scene.inputs.control_points.clear();
+  scene.inputs.control_marks.clear();
+  const Block before = scene.model;
+  {
+    GeoreferenceInputs none = scene.inputs;
+    DropHeights(&none, 0, 1);
+    Block block = before;
+    GeoreferenceResult result;
+    const Status status = PrepareGeoreference(GeoreferenceOptions(), none, &block, &result);
+    EXPECT_EQ(status.message(), "geo.txt: none of its 24 camera positions has a height and there is no control "
+                                "point: nothing ties the model's heights to the ground (give z, or control points)");
+    EXPECT_EQ(block.images[0].eo->parameters, before.images[0].eo->parameters);
+  }
+  {
+    GeoreferenceInputs two = scene.inputs;
+    DropHeights(&two, 2, 1);  // images 0 and 1 keep their heights
+    Block block = before;
+    GeoreferenceResult result;
+    const Status status = PrepareGeoreference(GeoreferenceOptions(), two, &block, &result);
+    EXPECT_NE(status.message().find("(2 pairs of camera positions and control points intersected in the model; "
+                                    "22 camera positions without height take no part in it): similarity: 2 pairs; "
+                                    "at least 3 are needed"),
+              std::string::npos)
+        << status.message();
+  }
 }
 
 // The local East-North-Up frame holds the earth's curvature in its coordinates: a camera with

@@ -31,15 +31,22 @@ std::string Number(double value) {
 }
 
 // dir/model (COLMAP text), dir/geo.txt, dir/gcp_list.txt; returns the check point names. The
-// first `with_attitudes` lines of geo.txt give yaw pitch roll, the others ODM's "0 0 0".
-std::string WriteScene(const testing::GeoreferenceScene& scene, const std::string& dir, int with_attitudes = 0) {
+// first `with_attitudes` lines of geo.txt give yaw pitch roll, the others ODM's "0 0 0"; with
+// `without_height_stride`, every such line from the first is "image x y" (no height, so nothing
+// after it).
+std::string WriteScene(const testing::GeoreferenceScene& scene, const std::string& dir, int with_attitudes = 0,
+                       int without_height_stride = 0) {
   EXPECT_TRUE(WriteColmapModel(dir + "/model", scene.model).ok());
   std::string geo = "EPSG:4326\n";
   int line = 0;
-  for (const CameraPositionMeasurement& m : scene.inputs.positions)
-    geo += m.image + " " + Number(m.position.x()) + " " + Number(m.position.y()) + " " + Number(m.position.z()) +
-           (line++ < with_attitudes ? " 92.5 -1.5 0.25 " : " 0 0 0 ") + Number(m.accuracy_m->x()) + " " +
-           Number(m.accuracy_m->z()) + "\n";
+  for (const CameraPositionMeasurement& m : scene.inputs.positions) {
+    const bool without_height = without_height_stride > 0 && line % without_height_stride == 0;
+    geo += m.image + " " + Number(m.position.x()) + " " + Number(m.position.y());
+    geo += without_height ? "" : " " + Number(m.position.z()) + (line < with_attitudes ? " 92.5 -1.5 0.25 " : " 0 0 0 ") +
+                                     Number(m.accuracy_m->x()) + " " + Number(m.accuracy_m->z());
+    geo += "\n";
+    ++line;
+  }
   WriteFile(dir + "/geo.txt", geo);
   std::string gcp = "WGS84 UTM 32N\n", checks;
   for (const ImageMark& mark : scene.inputs.control_marks) {
@@ -110,6 +117,86 @@ TEST(BundleGeoreference, DomedColmapModelWithGeoTxtAndGcpListComesOutInUtm) {
   Block written;
   ASSERT_TRUE(ReadColmapModel(dir + "/out", &written).ok());
   EXPECT_EQ(written.points.size(), scene.model.points.size());  // the model's points, no control added
+}
+
+// The adjusted centres of a frames table in the output CRS (m) against the scene's truth there:
+// the largest height error and the largest horizontal one.
+Eigen::Vector2d WorstCentreErrors(const testing::GeoreferenceScene& scene, const std::string& frames_path,
+                                  const std::string& crs) {
+  std::vector<FrameRecord> frames;
+  const Status read = ReadFramesTable(frames_path, FramesTableOptions(), &frames);
+  EXPECT_TRUE(read.ok()) << read.message();
+  std::vector<Eigen::Vector3d> truth = scene.true_centres_local;
+  EXPECT_TRUE(scene.truth_frame.FromLocal(crs, &truth).ok());
+  EXPECT_EQ(frames.size(), truth.size());
+  Eigen::Vector2d worst = Eigen::Vector2d::Zero();
+  for (size_t i = 0; i < frames.size() && i < truth.size(); ++i) {
+    const Eigen::Vector3d e = frames[i].eo.center_in_ground() - truth[i];
+    worst = worst.cwiseMax(Eigen::Vector2d(std::abs(e.z()), e.head<2>().norm()));
+  }
+  return worst;
+}
+
+// geo.txt lines "image x y" (ODM's z is optional): those images are held horizontally only, the
+// heights come from the control and the other images, and the report and the console count them.
+TEST(BundleGeoreference, GeoTxtLinesWithoutHeightAreHorizontalOnlyAndCounted) {
+  const testing::GeoreferenceScene scene = testing::MakeGeoreferenceScene(2.0);
+  const std::string dir = ScratchDir();
+  const std::string checks = WriteScene(scene, dir, 0, 2);
+  const CliRun run = RunCli("bundle --colmap_model=" + dir + "/model --geo=" + dir + "/geo.txt --gcp_list=" + dir +
+                                "/gcp_list.txt --check_points=" + checks + " --out=" + dir + "/frames.csv --report=" +
+                                dir + "/report.json --html=" + dir + "/report.html",
+                            dir);
+  ASSERT_EQ(run.exit_code, 0) << run.err << run.out;
+  EXPECT_NE(run.out.find("georeference: 12 camera positions without height: horizontal only"), std::string::npos)
+      << run.out;
+  EXPECT_NE(run.err.find("24 camera positions matched (12 without height: horizontal only)"), std::string::npos)
+      << run.err;
+  const nlohmann::json report = nlohmann::json::parse(ReadFile(dir + "/report.json"));
+  const nlohmann::json& g = report.at("georeference");
+  EXPECT_EQ(g.at("positions_matched"), 24);
+  EXPECT_EQ(g.at("positions_without_height"), 12);
+  EXPECT_TRUE(g.at("inputs_not_used").empty()) << g.at("inputs_not_used");
+  EXPECT_LT(g.at("check_after_adjustment").at("rmse_m")[2].get<double>(), 0.03);
+  // Every image's height (GNSS 5 cm vertical on half of them, marks 0.3 px at 1.3 cm).
+  const Eigen::Vector2d worst = WorstCentreErrors(scene, dir + "/frames.csv", "EPSG:32632");
+  EXPECT_LT(worst.x(), 0.05);
+  EXPECT_LT(worst.y(), 0.05);
+  EXPECT_NE(ReadFile(dir + "/report.html").find("Camera positions without height"), std::string::npos);
+}
+
+// A frames table's Omega/Phi/Kappa beside a model are read and not used: recorded like geo.txt's
+// yaw/pitch/roll (one line, one wording) in the JSON report, the console summary and the page.
+TEST(BundleGeoreference, FramesTableAttitudesWithAModelAreReportedAsNotUsed) {
+  const testing::GeoreferenceScene scene = testing::MakeGeoreferenceScene(0.5);
+  const std::string dir = ScratchDir();
+  const std::string checks = WriteScene(scene, dir);
+  std::string frames = "Raster,CameraID,PerspectiveX,PerspectiveY,PerspectiveZ,Omega,Phi,Kappa,AccuracyX,AccuracyY,AccuracyZ\n";
+  for (const CameraPositionMeasurement& m : scene.inputs.positions)
+    frames += m.image + ",UAV," + Number(m.position.x()) + "," + Number(m.position.y()) + "," + Number(m.position.z()) +
+              ",1.5,-2,95," + Number(m.accuracy_m->x()) + "," + Number(m.accuracy_m->y()) + "," + Number(m.accuracy_m->z()) + "\n";
+  WriteFile(dir + "/gnss.csv", frames);
+  const CliRun run = RunCli("bundle --colmap_model=" + dir + "/model --frames=" + dir + "/gnss.csv --crs=EPSG:4326 --gcp_list=" +
+                                dir + "/gcp_list.txt --check_points=" + checks + " --out=" + dir + "/frames.csv --report=" +
+                                dir + "/report.json --html=" + dir + "/report.html --quiet",
+                            dir);
+  ASSERT_EQ(run.exit_code, 0) << run.err << run.out;
+  const std::string line = dir + "/gnss.csv: 24 attitudes (Omega Phi Kappa) read and not used (" +
+                           FramesAttitudesNotUsedReason() + ")";
+  // One reason shared with geo.txt's attitudes.
+  EXPECT_EQ(FramesAttitudesNotUsedReason().rfind("the model gives the attitudes", 0), 0u);
+  EXPECT_NE(GeoTxtAttitudesNotUsedReason().find("the model gives the attitudes"), std::string::npos);
+  const nlohmann::json g = nlohmann::json::parse(ReadFile(dir + "/report.json")).at("georeference");
+  ASSERT_EQ(g.at("inputs_not_used").size(), 1u) << g.at("inputs_not_used");
+  EXPECT_EQ(g.at("inputs_not_used")[0], line);
+  EXPECT_EQ(g.at("positions_matched"), 24);
+  EXPECT_EQ(g.at("positions_without_height"), 0);
+  EXPECT_NE(run.out.find("georeference: not used: " + line + "\n"), std::string::npos) << run.out;
+  const std::string html = ReadFile(dir + "/report.html");
+  EXPECT_NE(html.find("Inputs read and not used"), std::string::npos);
+  EXPECT_NE(html.find("24 attitudes (Omega Phi Kappa) read and not used"), std::string::npos);
+  // The positions were used: the block is where the truth is.
+  EXPECT_LT(WorstCentreErrors(scene, dir + "/frames.csv", "EPSG:32632").y(), 0.1);
 }
 
 TEST(BundleGeoreference, RefusesWhatItCannotUseBeforeAnyWork) {
