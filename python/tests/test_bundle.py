@@ -234,11 +234,26 @@ def test_taylor_solver_reaches_the_same_minimum_and_statistics(shared_data):
     assert len(taylor.observations["redundancy"]) == len(ceres.observations["redundancy"])
     np.testing.assert_allclose(np.sum(taylor.observations["redundancy"]),
                                taylor.summary.redundancy, rtol=1e-6)
+    # A real COLMAP model (SIMPLE_RADIAL, a relative block): the Taylor solver works in pixels
+    # through the model's derivative and reaches the Ceres minimum in COLMAP's gauge.
+    colmap_ceres = pp.read_colmap_model(shared_data / "colmap_ar7")
+    colmap_taylor = pp.read_colmap_model(shared_data / "colmap_ar7")
+    pp.initialize_block(colmap_ceres)
+    pp.initialize_block(colmap_taylor)
+    first_pose = colmap_taylor.image_parameters[0].copy()
+    keep_all = pp.BundleAdjustmentOptions(
+        robustness=pp.BundleRobustnessOptions(rejection_threshold=0.0))
+    on_ceres = pp.bundle_adjust(colmap_ceres, keep_all)
+    on_taylor = pp.bundle_adjust(colmap_taylor, keep_all, solver="taylor")
+    assert on_ceres.summary.termination == on_taylor.summary.termination == "converged"
+    assert on_taylor.summary.redundancy == on_ceres.summary.redundancy
+    np.testing.assert_allclose(on_taylor.summary.final_cost, on_ceres.summary.final_cost, rtol=1e-6)
+    np.testing.assert_array_equal(colmap_taylor.image_parameters[0], first_pose)
     # What the Taylor solver cannot adjust is refused with the reason; an unknown solver by name.
-    colmap = pp.read_colmap_model(shared_data / "colmap_ar7")
-    pp.initialize_block(colmap)
-    with pytest.raises(pp.Error, match="SIMPLE_RADIAL model: the Taylor bundle adjustment takes"):
-        pp.bundle_adjust(colmap, solver="taylor")
+    with pytest.raises(pp.Error, match="self-calibration is done by the Ceres adjustment"):
+        pp.bundle_adjust(colmap_taylor, keep_all,
+                         pp.BundleAdjustmentConfig.from_calibration_names(colmap_taylor, ["f"]),
+                         solver="taylor")
     with pytest.raises(ValueError, match="levmar"):
         pp.bundle_adjust(taylor_block, solver="levmar")
 

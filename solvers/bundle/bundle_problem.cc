@@ -294,12 +294,6 @@ Status PlanImagePriors(const BundlePlanOptions& options, const BundleAdjustmentC
       plan->image_prior[i] = 1;
       if (image.center_accuracy_m) plan->image_prior_sigma[i] = *image.center_accuracy_m;
       if (!image.center_height_measured) {
-        if (!options.horizontal_only_positions) {
-          return Status::Error(
-              "image '" + image.name +
-              "': a camera position without height (horizontal only) is adjusted by the "
-              "Ceres solver only; this solver would count its height as an observation");
-        }
         plan->image_prior_height[i] = 0;
         plan->image_prior_sigma[i].z() = std::numeric_limits<double>::infinity();
       }
@@ -367,7 +361,6 @@ BundlePlanOptions PlanOptionsOf(const BundleAdjustmentOptions& options,
   plan_options.accuracies = options.accuracies;
   plan_options.use_lever = config.lever_arm_m.has_value() || config.estimate_lever_arm;
   plan_options.refuse_weak_datum = true;
-  plan_options.horizontal_only_positions = true;
   return plan_options;
 }
 

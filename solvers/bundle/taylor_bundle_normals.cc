@@ -79,7 +79,7 @@ void BuildLayout(const Block& block, const Plan& plan, Layout* layout) {
     if (plan.point_prior[p]) layout->num_observations += 3;
   }
   for (size_t i = 0; i < block.images.size(); ++i)
-    layout->num_observations += 3 * (plan.image_prior[i] + plan.image_attitude[i]);
+    layout->num_observations += ImagePriorRows(plan, i) + 3 * plan.image_attitude[i];
   layout->point_marks.assign(layout->free_points.size(), {});
   layout->point_all_marks.assign(layout->free_points.size(), {});
   layout->image_marks.assign(block.images.size(), {});
@@ -356,15 +356,17 @@ void LinearizeImagePriors(const Block& block, const Plan& plan, const Layout& la
         antenna = TaylorAntennaPosition(eo, frame.lever, &d_angles);
         A.rightCols<3>() = d_angles;
       }
-      const Eigen::Vector3d F = antenna - frame.measured[i];
-      const Eigen::Vector3d weight = plan.image_prior_sigma[i].cwiseAbs2().cwiseInverse();
+      Eigen::Vector3d F = antenna - frame.measured[i];
+      Eigen::Vector3d weight = plan.image_prior_sigma[i].cwiseAbs2().cwiseInverse();
+      const int rows = ImagePriorRows(plan, i);  // 2: a position without height (X, Y only)
+      if (rows < 3) F.z() = weight.z() = 0.0;
       normal->weighted_ssr += weight.dot(F.cwiseAbs2());
       if (!cost_only) {
         normal->U[b].noalias() += A.transpose() * weight.asDiagonal() * A;
         normal->ge[b].noalias() += A.transpose() * weight.cwiseProduct(F);
       }
       if (dense != nullptr) {
-        for (int axis = 0; axis < 3; ++axis) {
+        for (int axis = 0; axis < rows; ++axis) {
           const Vector6d row = A.row(axis).transpose();
           dense->Add(static_cast<int>(i), row.data(), -1, nullptr, std::sqrt(weight[axis]),
                      F[axis]);

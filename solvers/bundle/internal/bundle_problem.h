@@ -68,10 +68,6 @@ struct BundlePlanOptions {
   // (BundleAdjust), or accepted so that it shows as a singular normal matrix in the round (the
   // Taylor adjustment, which reports it as a failed round).
   bool refuse_weak_datum = true;
-  // The solver counts a camera position without height (BlockImage::center_height_measured
-  // false) as two observations (BundleAdjust). A solver that does not (the Taylor adjustment
-  // counts three per prior) leaves it false and such a block is refused with the reason.
-  bool horizontal_only_positions = false;
 };
 
 // Everything decided before a round: observations in use, their sigmas, the datum.

@@ -539,16 +539,29 @@ TEST(BundleAdjustment, PositionsWithoutHeightAreTwoRowsAndLeaveTheHeightFree) {
   }
 }
 
-// The Taylor adjustment counts three rows per camera-position prior (solvers/bundle/
-// taylor_bundle_normals.cc): it refuses positions without height rather than misstate sigma0.
-TEST(BundleAdjustment, TheTaylorAdjustmentRefusesPositionsWithoutHeight) {
+// The Taylor adjustment takes a position without height as the same two rows: the same
+// redundancy, minimum and sigma0 as the Ceres adjustment, the 50 m off z not read by either.
+TEST(BundleAdjustment, TheTaylorAdjustmentTakesPositionsWithoutHeightAsTwoRows) {
   SmallBlock data = MakeSmallBlock(SmallBlockOptions());
-  data.block.images[3].center_height_measured = false;
-  BundleAdjustmentResult result;
-  const Status status = BundleAdjustWithSolver(PoseSolver::kTaylor, QuietOptions(), BundleAdjustmentConfig(),
-                                               &data.block, &result);
-  EXPECT_EQ(status.message(), "image 'img_0_3': a camera position without height (horizontal only) is adjusted "
-                              "by the Ceres solver only; this solver would count its height as an observation");
+  for (size_t i = 1; i < data.block.images.size(); i += 3) {
+    data.block.images[i].center_height_measured = false;
+    data.block.images[i].measured_center_m->z() += 50.0;
+  }
+  Block ceres_block = data.block, taylor_block = data.block;
+  BundleAdjustmentResult ceres, taylor;
+  ASSERT_TRUE(BundleAdjust(QuietOptions(), BundleAdjustmentConfig(), &ceres_block, &ceres).ok());
+  ASSERT_TRUE(BundleAdjustWithSolver(PoseSolver::kTaylor, QuietOptions(), BundleAdjustmentConfig(),
+                                     &taylor_block, &taylor)
+                  .ok());
+  ASSERT_TRUE(ceres.summary.IsSolutionUsable()) << ceres.summary.BriefReport();
+  ASSERT_TRUE(taylor.summary.IsSolutionUsable()) << taylor.summary.BriefReport();
+  EXPECT_EQ(taylor.summary.redundancy, ceres.summary.redundancy);
+  EXPECT_NEAR(taylor.summary.final_cost, ceres.summary.final_cost, 1e-6 * ceres.summary.final_cost);
+  EXPECT_NEAR(taylor.summary.sigma0, ceres.summary.sigma0, 1e-6 * ceres.summary.sigma0);
+  for (size_t i = 0; i < data.true_eo.size(); ++i)
+    EXPECT_LT((taylor_block.images[i].eo->center_in_ground() - ceres_block.images[i].eo->center_in_ground()).norm(),
+              1e-5)
+        << data.block.images[i].name;
 }
 
 // Camera positions that are all without height, and no control: the vertical is free, refused.

@@ -254,6 +254,34 @@ TEST(BundleCommand, TaylorSolverSnoopsAndEstimatesAsCeres) {
       << refused.err;
 }
 
+// --solver=taylor adjusts a COLMAP model (relative, pixels) to the Ceres minimum, freeing the gauge
+// first as Ceres does; Gauss-Newton cannot free it, so an explicit --relative_gauge=free is refused.
+TEST(BundleCommand, TaylorSolverAdjustsAColmapModelAsCeres) {
+  const std::string dir = ScratchDir();
+  const std::string block = SimulateBlock(dir);
+  std::map<std::string, nlohmann::json> reports;
+  for (const char* solver : {"ceres", "taylor"}) {
+    const std::string report = dir + "/colmap_" + solver + ".json";
+    const CliRun run = RunCli("bundle --colmap_model=" + block + "/colmap --quiet --solver=" +
+                                  solver + " --report=" + report,
+                              dir);
+    ASSERT_EQ(run.exit_code, 0) << solver << ": " << run.err;
+    reports[solver] = nlohmann::json::parse(ReadFile(report));
+  }
+  const nlohmann::json& ceres = reports["ceres"]["summary"];
+  const nlohmann::json& taylor = reports["taylor"]["summary"];
+  EXPECT_EQ(taylor["redundancy"], ceres["redundancy"]);
+  EXPECT_NEAR(taylor["final_cost"].get<double>(), ceres["final_cost"].get<double>(),
+              1e-6 * ceres["final_cost"].get<double>());
+  const CliRun refused =
+      RunCli("bundle --colmap_model=" + block + "/colmap --quiet --solver=taylor " +
+                 "--taylor_damping=none --relative_gauge=free --report=" + dir + "/gn.json",
+             dir);
+  EXPECT_EQ(refused.exit_code, 2);
+  EXPECT_NE(refused.err.find("--relative_gauge=free needs a damped solver"), std::string::npos)
+      << refused.err;
+}
+
 // The marks of each image of a block by point id, to compare models across a run.
 std::set<std::pair<std::string, std::string>> ImagePointPairs(const Block& block) {
   std::set<std::pair<std::string, std::string>> pairs;
