@@ -46,6 +46,7 @@
 #include "core/types.h"
 #include "cost_functions/collinearity_cost.h"
 #include "cost_functions/losses.h"
+#include "solvers/resection/pose_refinement.h"
 
 namespace photopose {
 
@@ -508,6 +509,11 @@ struct BundleAdjustmentSummary {
   // Ceres' fixed-size Schur specialisation of the last solve, "row,point,image" block sizes ("d":
   // dynamic, the slower generic path): "2,3,6" when every image block has 6 free parameters.
   std::string schur_structure;
+  // The solver that adjusted the block. The Taylor solvers (taylor_bundle.h) fill round_seconds
+  // (their own normal equations, a relative block's solve without a gauge included),
+  // problem_build_seconds (the Ceres problem their statistics evaluate) and the statistics; the
+  // Ceres-only times above stay 0.
+  PoseSolver solver = PoseSolver::kCeres;
 
   bool IsSolutionUsable() const { return termination == SolverTermination::kConverged; }
   std::string BriefReport() const;

@@ -22,6 +22,7 @@
 #include "solvers/bundle/internal/bundle_problem.h"
 #include "solvers/bundle/internal/bundle_rounds.h"
 #include "solvers/bundle/internal/bundle_statistics.h"
+#include "solvers/bundle/internal/selected_inversion.h"
 #include "solvers/bundle/internal/taylor_normals.h"
 #include "solvers/resection/taylor_resection.h"
 
@@ -54,6 +55,11 @@ constexpr double kPositionResolutionFactor = 256.0;
 // A relative change of the cost (a sum of up to millions of rounded squares) below which its
 // change says nothing about a step: Ceres' default function tolerance (unitless).
 constexpr double kCostResolution = 1e-10;
+// The factor by which the Taylor round's undamped pivot ratio must clear the statistics' bound
+// (internal::SelectedInversionOptions::min_pivot_ratio) to stand for their determinacy check: the
+// two factorise the same reduced system in two parameterisations of the rotations (Euler angles
+// here, Ceres' manifold there), whose pivot ratios differ by far less than this.
+constexpr double kDeterminedMargin = 1e3;
 
 double SecondsSince(Clock::time_point start) {
   return std::chrono::duration<double>(Clock::now() - start).count();
@@ -658,6 +664,9 @@ void FillBundleSummary(const TaylorBundleSummary& taylor, BundleAdjustmentSummar
   out->time_seconds = taylor.time_seconds;
   out->problem_build_seconds = taylor.statistics_setup_seconds;
   out->statistics_seconds = taylor.statistics_seconds;
+  out->round_seconds = taylor.round_seconds;
+  out->solver = taylor.partials == TaylorPartials::kAsPrinted ? PoseSolver::kTaylorAsPrinted
+                                                              : PoseSolver::kTaylor;
 }
 
 }  // namespace
@@ -934,6 +943,7 @@ Status TaylorBundleAdjust(const TaylorBundleOptions& options,
   std::unique_ptr<Reduction> reduction;
   bool marks_removed_only = false;
   for (int round = 1;; ++round) {
+    const Clock::time_point round_start = Clock::now();
     if (round == 1 && plan.datum == BundleDatum::kRelative &&
         options.free_gauge_for_relative_blocks &&
         options.damping == TaylorDamping::kLevenbergMarquardt)
@@ -946,6 +956,7 @@ Status TaylorBundleAdjust(const TaylorBundleOptions& options,
     std::string message;
     const SolverTermination type = RunRound(context, round, /*free_gauge=*/false, &layout, &state,
                                             &normal, reduction.get(), result, &message);
+    summary.round_seconds.push_back(SecondsSince(round_start));
     if (type != SolverTermination::kConverged) {
       summary.sigma0 = kNaN;
       if (reduction->singular) {
@@ -956,6 +967,7 @@ Status TaylorBundleAdjust(const TaylorBundleOptions& options,
       return finish(type, "round " + std::to_string(round) + ": " + message);
     }
     summary.message = message;
+    summary.pivot_ratio = reduction->pivot_ratio;  // undamped: RunRound converges on no other
     summary.sigma0 =
         summary.redundancy > 0 ? std::sqrt(normal.weighted_ssr / summary.redundancy) : kNaN;
     // The round's structures are freed first: the statistics' own peak comes after them.
@@ -975,7 +987,14 @@ Status TaylorBundleAdjust(const TaylorBundleOptions& options,
     if (change == internal::RoundChange::kNone) break;
     marks_removed_only = change == internal::RoundChange::kMarksRemoved;
   }
-  if (adjustment_options.statistics.covariances == BundleCovarianceMethod::kNone) {
+  // Without covariances the determinacy is checked by the statistics' own rule
+  // (CheckBundleDeterminacy: the reduced system of the Ceres problem factorised once more, 11 s
+  // of a 1000-image block). The last round's undamped factorisation has already shown S regular;
+  // when its pivot ratio clears the statistics' bound by kDeterminedMargin the check is skipped,
+  // otherwise that rule decides and names what is undetermined.
+  const double statistics_bound = internal::SelectedInversionOptions().min_pivot_ratio;
+  if (adjustment_options.statistics.covariances == BundleCovarianceMethod::kNone &&
+      !(summary.pivot_ratio >= kDeterminedMargin * statistics_bound)) {
     const Status determined = statistics.CheckDeterminacy(&summary);
     if (!determined.ok()) {
       summary.sigma0 = kNaN;

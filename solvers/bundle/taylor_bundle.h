@@ -83,6 +83,7 @@
 
 #include <Eigen/Core>
 #include <functional>
+#include <limits>
 #include <optional>
 #include <string>
 #include <vector>
@@ -238,6 +239,9 @@ struct TaylorBundleSummary {
   int rounds = 0;         // adjustment rounds (rejections re-adjust)
   int iterations = 0;     // corrections over all rounds, taken or refused (count)
   int refused_steps = 0;  // Levenberg-Marquardt steps refused (count)
+  // The last round's final undamped factorisation of the Jacobi-scaled reduced normal matrix:
+  // its smallest over its largest LDL^T pivot (unitless; NaN before one).
+  double pivot_ratio = std::numeric_limits<double>::quiet_NaN();
   // Of `iterations`, those of a relative block's first solve without a gauge
   // (free_gauge_for_relative_blocks; count, 0 when none ran).
   int free_gauge_iterations = 0;
@@ -259,6 +263,9 @@ struct TaylorBundleSummary {
   double last_angle_correction_rad = 0.0;
   double time_seconds = 0.0;       // the whole call (s)
   double iteration_seconds = 0.0;  // the Gauss-Newton corrections alone, over all rounds (s)
+  // Per round, wall clock (s): its layout, a relative block's solve without a gauge (round 1) and
+  // its corrections; the statistics are not part of it.
+  std::vector<double> round_seconds;
   // The statistics of every round (s): building or updating their evaluation structure (the Ceres
   // problem of the solution, never solved) and computing them.
   double statistics_setup_seconds = 0.0;

@@ -8,7 +8,8 @@
 # `photopose simulate --scenario=block --benchmark_block --colmap` with its perturbed start. Both
 # programs adjust that COLMAP model with the intrinsics fixed and every observation kept; each is timed as a whole process
 # (wall time and peak memory from /usr/bin/time). COLMAP's own iteration log gives the time at
-# which it first reached the cost at which photopose stopped. Needs the Debian packages colmap and
+# which it first reached the cost at which photopose stopped. photopose runs twice: the Ceres path
+# (the default) and the hand-written Taylor solver (--solver=taylor). Needs the Debian packages colmap and
 # time; the work goes to ${WORK:-build/colmap_comparison}.
 set -euo pipefail
 cd "$(dirname "$0")/../.."
@@ -24,7 +25,7 @@ else
   "$PHOTOPOSE" simulate --scenario=block --benchmark_block --colmap --out_dir="$WORK/block" >/dev/null
   label="issue 10's block"
 fi
-mkdir -p "$WORK/colmap_out" "$WORK/photopose_out"
+mkdir -p "$WORK/colmap_out" "$WORK/photopose_out" "$WORK/taylor_out"
 /usr/bin/time -v -o "$WORK/colmap.time" colmap bundle_adjuster \
   --input_path "$WORK/block/colmap" --output_path "$WORK/colmap_out" \
   --BundleAdjustment.refine_focal_length 0 --BundleAdjustment.refine_principal_point 0 \
@@ -32,6 +33,10 @@ mkdir -p "$WORK/colmap_out" "$WORK/photopose_out"
 /usr/bin/time -v -o "$WORK/photopose.time" "$PHOTOPOSE" bundle \
   --colmap_model="$WORK/block/colmap" --out_colmap="$WORK/photopose_out" \
   --rejection_threshold=0 --report="$WORK/photopose_report.json" > "$WORK/photopose.log" 2>&1
+# The hand-written Taylor solver on the same model, same settings (issue 23).
+/usr/bin/time -v -o "$WORK/taylor.time" "$PHOTOPOSE" bundle --solver=taylor \
+  --colmap_model="$WORK/block/colmap" --out_colmap="$WORK/taylor_out" \
+  --rejection_threshold=0 --report="$WORK/taylor_report.json" > "$WORK/taylor.log" 2>&1
 
 python3 - "$WORK" "$label" <<'EOF'
 import json, re, sys
@@ -77,4 +82,13 @@ print(f"photopose steps: read {t['read_seconds']:.1f} s, plan {t['plan_seconds']
       f"setup (read, plan, problem, preprocessing) {setup:.1f} s = {100 * setup / ours_s:.0f} % of the run")
 print(f"ratio photopose / colmap-to-same-cost: {ours_s / to_same:.3f}; final cost ratio "
       f"photopose / colmap: {ours_cost / colmap_final:.6f}; memory ratio {ours_mb / colmap_mb:.2f}")
+taylor_s, taylor_mb = usage(work + "/taylor.time")
+taylor = json.load(open(work + "/taylor_report.json"))["summary"]
+tt = taylor["time_breakdown"]
+print(f"photopose bundle --solver=taylor: {taylor_s:.1f} s wall, peak {taylor_mb:.0f} MB, "
+      f"{taylor['iterations']} iterations, final cost {taylor['final_cost']:.10g} px^2 "
+      f"(relative difference to the Ceres path {abs(taylor['final_cost'] - ours_cost) / ours_cost:.1e}), "
+      f"statistics {tt['statistics_seconds']:.1f} s; ratio taylor / colmap-to-same-cost "
+      f"{taylor_s / to_same:.3f}, taylor / ceres path {taylor_s / ours_s:.3f}, "
+      f"memory ratio to colmap {taylor_mb / colmap_mb:.2f}")
 EOF

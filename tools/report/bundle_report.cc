@@ -166,7 +166,8 @@ json BundleReportJson(const Block& block, const BundleAdjustmentResult& result,
                          {"residual_evaluation_seconds", s.residual_evaluation_seconds},
                          {"jacobian_evaluation_seconds", s.jacobian_evaluation_seconds},
                          {"linear_solver_seconds", s.linear_solver_seconds},
-                         {"schur_structure", s.schur_structure}}},
+                         {"schur_structure", s.schur_structure},
+                         {"solver", EnumName(s.solver)}}},
                        {"num_images", s.num_images},
                        {"num_points", s.num_points},
                        {"num_marks", s.num_marks},
@@ -569,12 +570,21 @@ std::vector<std::string> BundleConsoleLines(const Block& block, const BundleAdju
   {
     auto seconds = [](double value) { return FormatSignificant(value, 3) + " s"; };
     std::ostringstream time;
-    time << "time: problem " << seconds(s.problem_build_seconds) << ", Ceres preprocessing "
-         << seconds(s.solver_preprocessing_seconds) << ", residuals "
-         << seconds(s.residual_evaluation_seconds) << ", Jacobians "
-         << seconds(s.jacobian_evaluation_seconds) << ", linear solves "
-         << seconds(s.linear_solver_seconds) << ", statistics " << seconds(s.statistics_seconds)
-         << "; Schur structure " << (s.schur_structure.empty() ? "n/a" : s.schur_structure);
+    if (s.solver != PoseSolver::kCeres) {
+      // The hand-written normal equations: no Ceres solve, only its problem for the statistics.
+      double rounds = 0.0;
+      for (const double r : s.round_seconds) rounds += r;
+      time << "time: rounds " << seconds(rounds) << " (" << EnumName(s.solver)
+           << ": hand-written normal equations), problem for the statistics "
+           << seconds(s.problem_build_seconds) << ", statistics " << seconds(s.statistics_seconds);
+    } else {
+      time << "time: problem " << seconds(s.problem_build_seconds) << ", Ceres preprocessing "
+           << seconds(s.solver_preprocessing_seconds) << ", residuals "
+           << seconds(s.residual_evaluation_seconds) << ", Jacobians "
+           << seconds(s.jacobian_evaluation_seconds) << ", linear solves "
+           << seconds(s.linear_solver_seconds) << ", statistics " << seconds(s.statistics_seconds)
+           << "; Schur structure " << (s.schur_structure.empty() ? "n/a" : s.schur_structure);
+    }
     lines.push_back(time.str());
   }
   lines.push_back("datum: " + s.datum_description);
