@@ -245,6 +245,11 @@ bool SolveStep(const Context& ctx, const std::string& at, const Normal& normal, 
     return false;
   }
   if (!Factorize(ctx.options.min_pivot_ratio, *layout, reduction)) {
+    if (!reduction->failure.empty()) {
+      *message = "the reduced normal matrix could not be factorised" + at + ": " +
+                 reduction->failure;
+      return false;
+    }
     reduction->singular = true;
     *message =
         Format("the reduced normal matrix is singular (pivot ratio %.3g)", reduction->pivot_ratio) +
@@ -863,9 +868,13 @@ Status LinearizeTaylorBundle(const TaylorBundleOptions& options,
       system->reduced_rhs[column] = 0.0;
     }
   }
-  if (!Factorize(options.min_pivot_ratio, layout, &reduction))
+  if (!Factorize(options.min_pivot_ratio, layout, &reduction)) {
+    if (!reduction.failure.empty())
+      return Status::Error("the reduced normal matrix could not be factorised: " +
+                           reduction.failure);
     return Status::Error(
         Format("the reduced normal matrix is singular (pivot ratio %.3g)", reduction.pivot_ratio));
+  }
   Eigen::VectorXd d_e;
   std::vector<Eigen::Vector3d> d_p;
   SolveCorrections(plan, layout, normal, reduction, &d_e, &d_p);

@@ -608,16 +608,23 @@ int WriteScaled(const Plan& plan, Layout* layout, Reduction* reduction) {
 // Factorises the scaled S. False when it is not positive definite to min_pivot_ratio.
 bool Factorize(double min_pivot_ratio, const Layout& layout, Reduction* reduction) {
   if (reduction->solver == TaylorLinearSolver::kCholmodSupernodal) {
+    reduction->failure.clear();
     if (!reduction->analysed) {
-      if (!reduction->cholmod.Analyze(layout.S).ok()) {
+      const Status analysed = reduction->cholmod.Analyze(layout.S);
+      if (!analysed.ok()) {
         reduction->pivot_ratio = 0.0;
+        reduction->failure = analysed.message();
         return false;
       }
       reduction->analysed = true;
     }
-    const bool factorized = reduction->cholmod.Factorize(layout.S).ok();
+    const Status factorized = reduction->cholmod.Factorize(layout.S);
     reduction->pivot_ratio = reduction->cholmod.pivot_ratio();  // 0 when not positive definite
-    return factorized && reduction->pivot_ratio > min_pivot_ratio;
+    // A failure other than a matrix found not positive definite (out of memory, say) is no
+    // verdict on the block.
+    if (!factorized.ok() && !reduction->cholmod.not_positive_definite())
+      reduction->failure = factorized.message();
+    return factorized.ok() && reduction->pivot_ratio > min_pivot_ratio;
   }
   if (!reduction->analysed) {
     reduction->ldlt.analyzePattern(layout.S);

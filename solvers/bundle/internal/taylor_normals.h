@@ -11,6 +11,7 @@
 #include <Eigen/SparseCore>
 #include <array>
 #include <memory>
+#include <string>
 #include <utility>
 #include <vector>
 
@@ -171,6 +172,9 @@ struct Reduction {
   bool analysed = false;
   double pivot_ratio = 0.0;  // smallest / largest pivot of the scaled LDL^T
   bool singular = false;     // the last factorisation found S singular (SolveStep)
+  // The last factorisation failed for a reason that says nothing about S (CHOLMOD out of memory,
+  // say): that reason; empty otherwise.
+  std::string failure;
 };
 
 inline bool IsFixed(const Plan& plan, const Layout& layout, int b, int component) {
