@@ -646,6 +646,8 @@ class BundleAdjustmentSummary:
     @property
     def schur_structure(self) -> str: ...
     @property
+    def solver(self) -> str: ...  # 'ceres', 'taylor' or 'taylor_as_printed'
+    @property
     def plan_seconds(self) -> float: ...  # s
     @property
     def round_seconds(self) -> list[float]: ...  # s per round

@@ -174,6 +174,8 @@ void BindBundleProgressAndSummary(py::module_& m) {
       .def_readonly("jacobian_evaluation_seconds", &BundleAdjustmentSummary::jacobian_evaluation_seconds)
       .def_readonly("linear_solver_seconds", &BundleAdjustmentSummary::linear_solver_seconds)
       .def_readonly("schur_structure", &BundleAdjustmentSummary::schur_structure)
+      .def_readonly("solver", &BundleAdjustmentSummary::solver,
+                    "'ceres', 'taylor' or 'taylor_as_printed': which solver the times are of")
       .def_readonly("plan_seconds", &BundleAdjustmentSummary::plan_seconds, "s")
       .def_readonly("round_seconds", &BundleAdjustmentSummary::round_seconds, "s per round")
       .def_readonly("rejection_seconds", &BundleAdjustmentSummary::rejection_seconds, "s")

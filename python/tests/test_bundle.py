@@ -246,6 +246,7 @@ def test_taylor_solver_reaches_the_same_minimum_and_statistics(shared_data):
     on_ceres = pp.bundle_adjust(colmap_ceres, keep_all)
     on_taylor = pp.bundle_adjust(colmap_taylor, keep_all, solver="taylor")
     assert on_ceres.summary.termination == on_taylor.summary.termination == "converged"
+    assert (on_ceres.summary.solver, on_taylor.summary.solver) == ("ceres", "taylor")
     assert on_taylor.summary.redundancy == on_ceres.summary.redundancy
     np.testing.assert_allclose(on_taylor.summary.final_cost, on_ceres.summary.final_cost, rtol=1e-6)
     np.testing.assert_array_equal(colmap_taylor.image_parameters[0], first_pose)
