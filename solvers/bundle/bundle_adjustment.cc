@@ -454,8 +454,9 @@ Status BundleAdjust(const BundleAdjustmentOptions& options,
   if (options.statistics.covariances == BundleCovarianceMethod::kNone) {
     // No covariances: the last round's normal matrix factorised once all the same.
     const Clock::time_point check_start = Clock::now();
-    const Status determined = internal::CheckBundleDeterminacy(*block, a.plan, a.state, a.round,
-                                                               &summary.factorization_seconds);
+    const Status determined =
+        internal::CheckBundleDeterminacy(*block, a.plan, a.state, a.round,
+                                         options.solver.num_threads, &summary.factorization_seconds);
     summary.statistics_seconds += SecondsSince(check_start);
     if (!determined.ok()) {
       summary.termination = SolverTermination::kFailure;

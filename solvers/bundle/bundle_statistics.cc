@@ -10,6 +10,7 @@
 #include <cmath>
 #include <limits>
 #include <memory>
+#include <numeric>
 #include <sstream>
 #include <unordered_map>
 
@@ -37,271 +38,6 @@ std::string Format3(double value) {
 }
 
 }  // namespace
-
-bool EvaluateBlockRows(const BundleRound& round, const ReducedNormals& reduced,
-                       const ResidualInfo& info, BlockRows* out) {
-  ceres::Problem& problem = *round.problem;
-  const int num_residuals = problem.GetCostFunctionForResidualBlock(info.id)->num_residuals();
-  std::vector<double*> parameters;
-  problem.GetParameterBlocksForResidualBlock(info.id, &parameters);
-  std::vector<double*> jacobians(parameters.size(), nullptr);
-  std::vector<std::vector<double>> storage(parameters.size());
-  for (size_t k = 0; k < parameters.size(); ++k) {
-    double* block = parameters[k];
-    if (problem.IsParameterBlockConstant(block)) continue;
-    const int tangent = problem.ParameterBlockTangentSize(block);
-    storage[k].assign(static_cast<size_t>(num_residuals) * tangent, 0.0);
-    jacobians[k] = storage[k].data();
-  }
-  double cost;
-  out->residuals.assign(num_residuals, 0.0);
-  if (!problem.EvaluateResidualBlock(info.id, false, &cost, out->residuals.data(),
-                                     jacobians.data()))
-    return false;
-  out->rows = num_residuals;
-  out->e_columns.clear();
-  out->e_blocks.clear();
-  out->point = -1;
-  out->J_p.resize(0, 3);
-  std::vector<std::pair<int, int>> e_parts;  // (parameter k, tangent size)
-  for (size_t k = 0; k < parameters.size(); ++k) {
-    if (jacobians[k] == nullptr) continue;
-    const int tangent = problem.ParameterBlockTangentSize(parameters[k]);
-    const auto e = reduced.e_index.find(parameters[k]);
-    if (e != reduced.e_index.end()) {
-      for (int c = 0; c < tangent; ++c) out->e_columns.push_back(reduced.e_offset[e->second] + c);
-      out->e_blocks.push_back(e->second);
-      e_parts.push_back({static_cast<int>(k), tangent});
-    } else {
-      const auto p = reduced.point_index.find(parameters[k]);
-      if (p == reduced.point_index.end()) continue;
-      out->point = p->second;
-      out->J_p = Eigen::Map<const Eigen::Matrix<double, Eigen::Dynamic, 3, Eigen::RowMajor>>(
-          jacobians[k], num_residuals, 3);
-    }
-  }
-  out->J_e.resize(num_residuals, static_cast<int>(out->e_columns.size()));
-  int column = 0;
-  for (const auto& [k, tangent] : e_parts) {
-    for (int r = 0; r < num_residuals; ++r)
-      for (int c = 0; c < tangent; ++c) out->J_e(r, column + c) = jacobians[k][r * tangent + c];
-    column += tangent;
-  }
-  return true;
-}
-
-void BuildReducedNormals(const BundleRound& round, const SelectedInversionOptions& options,
-                         ReducedNormals* reduced) {
-  *reduced = ReducedNormals();
-  const int num_blocks = static_cast<int>(round.e_blocks.size());
-  int offset = 0;
-  std::vector<int> block_start;
-  for (int b = 0; b < num_blocks; ++b) {
-    reduced->e_index[round.e_blocks[b]] = b;
-    reduced->e_offset.push_back(offset);
-    block_start.push_back(offset);
-    offset += round.e_sizes[b];
-  }
-  block_start.push_back(offset);
-  reduced->size = offset;
-  for (size_t p = 0; p < round.point_blocks.size(); ++p)
-    reduced->point_index[round.point_blocks[p]] = static_cast<int>(p);
-  const size_t num_points = round.point_blocks.size();
-  // S block by block: (a, b), a <= b, the blocks of e blocks that share an observation or a point.
-  std::unordered_map<int64_t, int> pair_index;
-  std::vector<Eigen::MatrixXd> pair_value;
-  const auto pair = [&](int a, int b) -> Eigen::MatrixXd& {
-    const auto [it, inserted] =
-        pair_index.emplace(static_cast<int64_t>(a) * num_blocks + b, static_cast<int>(pair_value.size()));
-    if (inserted) pair_value.push_back(Eigen::MatrixXd::Zero(round.e_sizes[a], round.e_sizes[b]));
-    return pair_value[it->second];
-  };
-  std::vector<Eigen::Matrix3d> V(num_points, Eigen::Matrix3d::Zero());
-  // Per point: (e block, its rows of J_e^T J_p), few per point.
-  std::vector<std::vector<std::pair<int, Eigen::MatrixXd>>> W_parts(num_points);
-  BlockRows rows;
-  for (const ResidualInfo& info : round.residuals) {
-    if (!EvaluateBlockRows(round, *reduced, info, &rows)) {
-      reduced->message = "a residual could not be evaluated at the solution";
-      return;
-    }
-    const int num_parts = static_cast<int>(rows.e_blocks.size());
-    std::vector<int> column(num_parts + 1, 0);
-    for (int k = 0; k < num_parts; ++k) column[k + 1] = column[k] + round.e_sizes[rows.e_blocks[k]];
-    for (int k = 0; k < num_parts; ++k) {
-      for (int l = 0; l < num_parts; ++l) {
-        const int a = rows.e_blocks[k], b = rows.e_blocks[l];
-        if (a > b) continue;
-        pair(a, b).noalias() += rows.J_e.middleCols(column[k], column[k + 1] - column[k]).transpose() *
-                      rows.J_e.middleCols(column[l], column[l + 1] - column[l]);
-      }
-    }
-    if (rows.point < 0) continue;
-    V[rows.point] += rows.J_p.transpose() * rows.J_p;
-    for (int k = 0; k < num_parts; ++k) {
-      const Eigen::MatrixXd part =
-          rows.J_e.middleCols(column[k], column[k + 1] - column[k]).transpose() * rows.J_p;
-      auto& parts = W_parts[rows.point];
-      auto found = std::find_if(parts.begin(), parts.end(),
-                                [&](const auto& e) { return e.first == rows.e_blocks[k]; });
-      if (found == parts.end())
-        parts.emplace_back(rows.e_blocks[k], part);
-      else
-        found->second += part;
-    }
-  }
-  reduced->V_inverse.resize(num_points);
-  reduced->W_blocks.resize(num_points);
-  reduced->W.resize(num_points);
-  for (size_t p = 0; p < num_points; ++p) {
-    const Eigen::LDLT<Eigen::Matrix3d> ldlt(V[p]);
-    if (ldlt.info() != Eigen::Success || !(ldlt.vectorD().minCoeff() > 0.0)) {
-      reduced->message = "a point is not determined by its rays";
-      reduced->singular = true;
-      reduced->undetermined_point = static_cast<int>(p);
-      return;
-    }
-    reduced->V_inverse[p] = ldlt.solve(Eigen::Matrix3d::Identity());
-    auto& parts = W_parts[p];
-    std::sort(parts.begin(), parts.end(),
-              [](const auto& x, const auto& y) { return x.first < y.first; });
-    std::vector<int> start(parts.size() + 1, 0);
-    for (size_t k = 0; k < parts.size(); ++k) {
-      reduced->W_blocks[p].push_back(parts[k].first);
-      start[k + 1] = start[k] + static_cast<int>(parts[k].second.rows());
-    }
-    Eigen::MatrixXd& W = reduced->W[p];
-    W.resize(start.back(), 3);
-    for (size_t k = 0; k < parts.size(); ++k)
-      W.middleRows(start[k], parts[k].second.rows()) = parts[k].second;
-    std::vector<std::pair<int, Eigen::MatrixXd>>().swap(parts);
-    const Eigen::MatrixXd WV = W * reduced->V_inverse[p];
-    for (size_t k = 0; k < reduced->W_blocks[p].size(); ++k) {
-      for (size_t l = k; l < reduced->W_blocks[p].size(); ++l) {
-        pair(reduced->W_blocks[p][k], reduced->W_blocks[p][l]).noalias() -=
-            WV.middleRows(start[k], start[k + 1] - start[k]) *
-            W.middleRows(start[l], start[l + 1] - start[l]).transpose();
-      }
-    }
-  }
-  if (offset == 0) {
-    reduced->ok = true;
-    return;
-  }
-  std::vector<Eigen::Triplet<double, int>> entries;
-  for (const auto& [key, index] : pair_index) {
-    const int a = static_cast<int>(key / num_blocks), b = static_cast<int>(key % num_blocks);
-    const Eigen::MatrixXd& value = pair_value[index];
-    for (int r = 0; r < value.rows(); ++r)
-      for (int c = 0; c < value.cols(); ++c)
-        entries.emplace_back(block_start[a] + r, block_start[b] + c, value(r, c));
-  }
-  std::vector<Eigen::MatrixXd>().swap(pair_value);
-  SelectedInverse::SparseMatrix S(offset, offset);
-  S.setFromTriplets(entries.begin(), entries.end());
-  std::vector<Eigen::Triplet<double, int>>().swap(entries);
-  reduced->S_nonzeros = 2 * S.nonZeros() - offset;
-  const Status status = reduced->C.Compute(S, block_start, options);
-  if (!status.ok()) {
-    reduced->message = status.message();
-    reduced->singular = reduced->C.singular();
-    const int column = reduced->C.singular_column();
-    if (column >= 0) {
-      const int b =
-          static_cast<int>(std::upper_bound(block_start.begin(), block_start.end(), column) -
-                           block_start.begin()) -
-          1;
-      reduced->singular_block = b;
-      reduced->singular_component = column - block_start[b];
-    }
-    return;
-  }
-  reduced->ok = true;
-}
-
-int SupportCovariance::Offset(int e_block) const {
-  const auto found = std::lower_bound(blocks.begin(), blocks.end(), e_block);
-  if (found == blocks.end() || *found != e_block) return -1;
-  return block_offset[found - blocks.begin()];
-}
-
-bool MakeSupportCovariance(const ReducedNormals& reduced, int p, const std::vector<int>& blocks,
-                           SupportCovariance* support) {
-  support->blocks = p >= 0 ? reduced.W_blocks[p] : blocks;
-  std::sort(support->blocks.begin(), support->blocks.end());
-  support->block_offset.assign(support->blocks.size(), 0);
-  int k = 0;
-  for (size_t b = 0; b < support->blocks.size(); ++b) {
-    support->block_offset[b] = k;
-    k += reduced.C.block_size(support->blocks[b]);
-  }
-  if (!reduced.C.Blocks(support->blocks, &support->C)) return false;
-  if (p >= 0) {
-    support->WV = reduced.W[p] * reduced.V_inverse[p];
-    support->T = support->C * support->WV;
-    support->Q = support->WV.transpose() * support->T;
-  } else {
-    support->WV.resize(k, 0);
-    support->T.resize(k, 0);
-    support->Q.setZero();
-  }
-  return true;
-}
-
-Eigen::Matrix3d PointCovariance(const ReducedNormals& reduced, const SupportCovariance& support,
-                                int p) {
-  return reduced.V_inverse[p] + support.Q;
-}
-
-// h_i = g_i^T C g_i + J_p,i V^-1 J_p,i^T with g_i = E_i - W V^-1 J_p,i^T in the support's
-// columns (E_i: the row's own e part): the point's own part and its elimination folded in. With
-// T = C W V^-1 and Q = V^-1 W^T C W V^-1 once per point, g^T C g = E^T C E - 2 E^T T q + q^T Q q
-// (q = J_p,i^T) costs a row only its own columns; C g = C E - T q is the parameters' response.
-Eigen::VectorXd Leverages(const ReducedNormals& reduced, const SupportCovariance& support,
-                          const BlockRows& rows, const std::vector<int>* centres,
-                          Eigen::VectorXd* largest_shift) {
-  // The support positions of the row's own columns.
-  std::vector<int> own;
-  own.reserve(rows.e_columns.size());
-  for (const int b : rows.e_blocks) {
-    const int at = support.Offset(b);
-    for (int c = 0; c < reduced.C.block_size(b); ++c) own.push_back(at + c);
-  }
-  const int ne = static_cast<int>(own.size());
-  const int k = static_cast<int>(support.C.rows());
-  Eigen::MatrixXd C_own(ne, ne);
-  for (int a = 0; a < ne; ++a)
-    for (int b = 0; b < ne; ++b) C_own(a, b) = support.C(own[a], own[b]);
-  const bool with_point = rows.point >= 0;
-  Eigen::VectorXd h(rows.rows);
-  if (largest_shift != nullptr) largest_shift->resize(rows.rows);
-  for (int r = 0; r < rows.rows; ++r) {
-    // A row with no camera columns (a control point's prior) has an empty J_e: no row view of it
-    // (Eigen would offset a null pointer).
-    const Eigen::VectorXd e = rows.J_e.cols() > 0 ? Eigen::VectorXd(rows.J_e.row(r).transpose()) : Eigen::VectorXd();
-    double value = e.dot(C_own * e);
-    Eigen::Vector3d q = Eigen::Vector3d::Zero();
-    if (with_point) {
-      q = rows.J_p.row(r).transpose();
-      double e_Tq = 0.0;
-      const Eigen::VectorXd Tq = support.T * q;
-      for (int a = 0; a < ne; ++a) e_Tq += e[a] * Tq[own[a]];
-      value += -2.0 * e_Tq + q.dot(support.Q * q) + q.dot(reduced.V_inverse[rows.point] * q);
-    }
-    h[r] = value;
-    if (largest_shift == nullptr) continue;
-    Eigen::VectorXd Cg = Eigen::VectorXd::Zero(k);
-    for (int a = 0; a < ne; ++a) Cg += support.C.col(own[a]) * e[a];
-    if (with_point) Cg -= support.T * q;
-    double largest = 0.0;
-    for (size_t b = 0; b < support.blocks.size(); ++b) {
-      const int count = (*centres)[support.blocks[b]];
-      if (count > 0) largest = std::max(largest, Cg.segment(support.block_offset[b], count).norm());
-    }
-    (*largest_shift)[r] = largest;
-  }
-  return h;
-}
 
 // ------------------------------------------------------------------ the steps of the statistics
 namespace {
@@ -442,14 +178,14 @@ void SetTestLevel(const BundleAdjustmentOptions& options, const GroupVariance& v
   result->delta0 = result->critical_value + NormalQuantile(options.statistics.snooping_power);
 }
 
-// Exterior orientations, in the ambient (Euler) parameters (P C P^T), and every adjusted point;
-// with `inner`, a relative block's in its inner-constraint datum (the images the gauge holds
-// too).
-void OrientationAndPointCovariances(const Block& block, const BundlePlan& plan,
-                                    const BundleState& state, const BundleRound& round,
-                                    const ReducedNormals& reduced,
-                                    const InnerConstraintTransform* inner, double variance_factor,
-                                    int num_threads, BundleAdjustmentResult* result) {
+// Exterior orientations, in the ambient (Euler) parameters (P C P^T), with `inner` a relative
+// block's in its inner-constraint datum (the images the gauge holds too); and the points held
+// fixed (the adjusted points' covariances are ObservationDiagnostics').
+void OrientationAndFixedPointCovariances(const Block& block, const BundlePlan& plan,
+                                         const BundleState& state, const BundleRound& round,
+                                         const ReducedNormals& reduced,
+                                         const InnerConstraintTransform* inner,
+                                         double variance_factor, BundleAdjustmentResult* result) {
   const ExteriorOrientationManifold full_tangent;
   Eigen::MatrixXd C;
   for (size_t i = 0; i < block.images.size(); ++i) {
@@ -472,8 +208,8 @@ void OrientationAndPointCovariances(const Block& block, const BundlePlan& plan,
     result->images[i].covariance = variance_factor * P * gauge * P.transpose();
     result->images[i].has_covariance = true;
   }
-  // Every adjusted point, tie and control alike (the points in parallel); a point held fixed
-  // (stated error-free, or a constant point of the config) has covariance 0.
+  // A point held fixed (stated error-free, or a constant point of the config) has covariance 0;
+  // the adjusted points' are ObservationDiagnostics', which makes each point's support once.
   std::vector<char> adjusted(block.points.size(), 0);
   for (const int p : round.point_of_block) adjusted[p] = 1;
   for (size_t p = 0; p < block.points.size(); ++p) {
@@ -481,19 +217,6 @@ void OrientationAndPointCovariances(const Block& block, const BundlePlan& plan,
     result->points[p].covariance.setZero();
     result->points[p].has_covariance = true;
   }
-  std::vector<int> indices;
-  indices.reserve(reduced.point_index.size());
-  for (const auto& [block_ptr, index] : reduced.point_index) indices.push_back(index);
-  ParallelFor(indices.size(), num_threads, [&](size_t k) {
-    const int index = indices[k];
-    SupportCovariance support;
-    if (!MakeSupportCovariance(reduced, index, {}, &support)) return;
-    BundlePointResult& point = result->points[round.point_of_block[index]];
-    Eigen::Matrix3d covariance = PointCovariance(reduced, support, index);
-    if (inner != nullptr) covariance = inner->Point(index, covariance);
-    point.covariance = variance_factor * covariance;
-    point.has_covariance = true;
-  });
 }
 
 // Per e block, the camera-centre components leading its tangent space (0..2; the relative
@@ -542,13 +265,14 @@ BundleObservationDiagnostics RowDiagnostics(const BundleAdjustmentResult& result
 // diagnostics. Without them the tie marks' share is the remainder (the sum of all redundancy
 // numbers is the redundancy), which spares their rows.
 //
-// The rows are taken point by point (a point's rows share one SupportCovariance), the points in
-// chunks: each chunk's residual blocks are evaluated on one thread (Ceres' problem is not
-// evaluated concurrently), then its points run in parallel. The results land in per-row arrays,
-// summed and listed afterwards in the round's order, so the figures do not depend on the threads.
+// The rows are taken point by point (a point's rows share one SupportCovariance; the residuals
+// grouped by point in `reduced`), the points in parallel, each evaluating its own rows
+// (EvaluateBlockRows). The results land in per-row arrays, summed and listed afterwards in the
+// round's order, so the figures do not depend on the threads.
 void ObservationDiagnostics(const BundleAdjustmentOptions& options, const Block& block,
                             const BundlePlan& plan, const BundleState& state,
                             const BundleRound& round, const ReducedNormals& reduced,
+                            const InnerConstraintTransform* inner, double variance_factor,
                             bool diagnostics, GroupSums* sums, BundleAdjustmentResult* result,
                             GroupVariance* variance) {
   const std::vector<int> centres = CentreComponents(block, plan, state, reduced);
@@ -556,77 +280,76 @@ void ObservationDiagnostics(const BundleAdjustmentOptions& options, const Block&
   // a-posteriori sigma0 when the data say they were optimistic (Pope's tau-test then).
   const double sigma0 = result->summary.sigma0;
   const double s0 = std::isfinite(sigma0) ? std::max(1.0, sigma0) : 1.0;
-  // Which residual blocks, their first row, and their groups: one per point block, then one per
-  // residual block without a point.
+  // The rows wanted: every row with the diagnostics, else all but the tie marks'.
   const size_t num_residuals = round.residuals.size();
   std::vector<int64_t> first_row(num_residuals + 1, 0);
-  std::vector<int> group_of(num_residuals, -1);
-  const int num_point_groups = static_cast<int>(reduced.V_inverse.size());
-  int num_groups = num_point_groups;
-  std::vector<double*> parameters;
   for (size_t r = 0; r < num_residuals; ++r) {
     const ResidualInfo& info = round.residuals[r];
     const bool wanted = diagnostics || info.group != kTieMarks;
     first_row[r + 1] = first_row[r] + (wanted ? info.rows : 0);
-    if (!wanted) continue;
-    round.problem->GetParameterBlocksForResidualBlock(info.id, &parameters);
-    for (double* block_ptr : parameters) {
-      const auto p = reduced.point_index.find(block_ptr);
-      if (p != reduced.point_index.end()) group_of[r] = p->second;
-    }
-    if (group_of[r] < 0) group_of[r] = num_groups++;
   }
-  std::vector<std::vector<int>> members(num_groups);
-  for (size_t r = 0; r < num_residuals; ++r)
-    if (group_of[r] >= 0) members[group_of[r]].push_back(static_cast<int>(r));
-  std::vector<int>().swap(group_of);
   std::vector<double> leverage(first_row.back(), kNaN);
   std::vector<double> shift(diagnostics ? first_row.back() : 0, kNaN);
   std::vector<double> whitened(diagnostics ? first_row.back() : 0, kNaN);
   std::vector<char> evaluated(num_residuals, 0);
 
-  constexpr int kGroupsPerChunk = 4096;
-  std::vector<BlockRows> rows;
-  for (int chunk = 0; chunk < num_groups; chunk += kGroupsPerChunk) {
-    const int end = std::min(num_groups, chunk + kGroupsPerChunk);
-    std::vector<int> residuals_of_chunk;
-    for (int g = chunk; g < end; ++g)
-      residuals_of_chunk.insert(residuals_of_chunk.end(), members[g].begin(), members[g].end());
-    rows.resize(residuals_of_chunk.size());
-    std::vector<size_t> start_of_group(end - chunk + 1, 0);
-    for (int g = chunk; g < end; ++g)
-      start_of_group[g - chunk + 1] = start_of_group[g - chunk] + members[g].size();
-    for (size_t k = 0; k < residuals_of_chunk.size(); ++k) {
-      const int r = residuals_of_chunk[k];
-      evaluated[r] = EvaluateBlockRows(round, reduced, round.residuals[r], &rows[k]);
+  // Groups: one per point, then one per residual block without a point.
+  const int num_points = static_cast<int>(reduced.V_inverse.size());
+  const int first_other = reduced.point_residual_start[num_points];
+  const int num_groups = num_points + static_cast<int>(reduced.residual_order.size()) - first_other;
+  ParallelForChunks(num_groups, options.solver.num_threads, 64, [&](size_t order) {
+    // The points in reduced.point_order (neighbours share images), then the priors.
+    const size_t g = static_cast<int>(order) < num_points ? reduced.point_order[order] : order;
+    const int begin = static_cast<int>(g) < num_points ? reduced.point_residual_start[g]
+                                                       : first_other + static_cast<int>(g) - num_points;
+    const int end = static_cast<int>(g) < num_points ? reduced.point_residual_start[g + 1] : begin + 1;
+    const int point = static_cast<int>(g) < num_points ? static_cast<int>(g) : -1;
+    SupportCovariance support;
+    if (point >= 0) {
+      // The point's covariance (V^-1 + V^-1 W^T C W V^-1, in the datum).
+      if (!MakeSupportCovariance(reduced, point, {}, &support)) return;
+      Eigen::Matrix3d covariance = PointCovariance(reduced, support, point);
+      if (inner != nullptr) covariance = inner->Point(point, covariance);
+      BundlePointResult& point_result = result->points[round.point_of_block[point]];
+      point_result.covariance = variance_factor * covariance;
+      point_result.has_covariance = true;
+    }
+    // A tie point's rows are wanted only with the diagnostics (the others are priors).
+    bool any = false;
+    for (int k = begin; k < end && !any; ++k) {
+      const int r = reduced.residual_order[k];
+      any = first_row[r + 1] > first_row[r];
+    }
+    if (!any) return;
+    thread_local std::vector<BlockRows> rows;
+    if (rows.size() < static_cast<size_t>(end - begin)) rows.resize(end - begin);
+    for (int k = begin; k < end; ++k) {
+      const int r = reduced.residual_order[k];
+      evaluated[r] = EvaluateBlockRows(round, reduced, round.residuals[r], &rows[k - begin]);
       // Only the first info.rows rows are observations (a control point's Z prior block has a
       // zero row beside it).
-      if (evaluated[r] && diagnostics)
-        std::copy_n(rows[k].residuals.begin(), round.residuals[r].rows,
+      if (evaluated[r] && first_row[r + 1] > first_row[r] && diagnostics)
+        std::copy_n(rows[k - begin].residuals.begin(), round.residuals[r].rows,
                     whitened.begin() + first_row[r]);
     }
-    ParallelFor(end - chunk, options.solver.num_threads, [&](size_t local) {
-      const int g = chunk + static_cast<int>(local);
-      const std::vector<int>& own = members[g];
-      if (own.empty()) return;
-      const size_t first = start_of_group[local];
-      const int point = g < num_point_groups ? g : -1;
-      SupportCovariance support;
-      if (!MakeSupportCovariance(reduced, point, rows[first].e_blocks, &support)) return;
-      Eigen::VectorXd largest;
-      for (size_t m = 0; m < own.size(); ++m) {
-        const int r = own[m];
-        if (!evaluated[r]) continue;
-        const Eigen::VectorXd h = Leverages(reduced, support, rows[first + m],
-                                            diagnostics ? &centres : nullptr,
-                                            diagnostics ? &largest : nullptr);
-        for (int row = 0; row < round.residuals[r].rows; ++row) {
-          leverage[first_row[r] + row] = h[row];
-          if (diagnostics) shift[first_row[r] + row] = largest[row];
-        }
+    // A prior's support is its own e blocks.
+    if (point < 0 && (!evaluated[reduced.residual_order[begin]] ||
+                      !MakeSupportCovariance(reduced, point, rows[0].e_blocks, &support)))
+      return;
+    Eigen::VectorXd largest;
+    for (int k = begin; k < end; ++k) {
+      const int r = reduced.residual_order[k];
+      if (!evaluated[r] || first_row[r + 1] == first_row[r]) continue;
+      const Eigen::VectorXd h = Leverages(reduced, support, rows[k - begin],
+                                          diagnostics ? &centres : nullptr,
+                                          diagnostics ? &largest : nullptr);
+      for (int row = 0; row < round.residuals[r].rows; ++row) {
+        leverage[first_row[r] + row] = h[row];
+        if (diagnostics) shift[first_row[r] + row] = largest[row];
       }
-    });
-  }
+    }
+  });
+  if (diagnostics) result->observations.reserve(result->observations.size() + first_row.back());
   for (size_t r = 0; r < num_residuals; ++r) {
     const ResidualInfo& info = round.residuals[r];
     if (first_row[r + 1] == first_row[r] || !evaluated[r]) continue;
@@ -922,7 +645,7 @@ Status ComputeBundleStatistics(const BundleAdjustmentOptions& options, const Blo
   if (asked) {
     SelectedInversionOptions inversion;
     inversion.dense = method == BundleCovarianceMethod::kDenseInverse;
-    BuildReducedNormals(round, inversion, &reduced);
+    BuildReducedNormals(round, inversion, options.solver.num_threads, &reduced);
   }
   const bool covariances = reduced.ok;
   summary.covariance_entries = covariances ? reduced.C.num_entries() : 0;
@@ -947,11 +670,11 @@ Status ComputeBundleStatistics(const BundleAdjustmentOptions& options, const Blo
             use_inner ? inner.description() : summary.covariance_datum + ", because " + datum.message();
       }
     }
-    OrientationAndPointCovariances(block, plan, state, round, reduced,
-                                   use_inner ? &inner : nullptr, variance_factor,
-                                   options.solver.num_threads, result);
-    ObservationDiagnostics(options, block, plan, state, round, reduced,
-                           options.statistics.observation_diagnostics, sums, result, variance);
+    OrientationAndFixedPointCovariances(block, plan, state, round, reduced,
+                                        use_inner ? &inner : nullptr, variance_factor, result);
+    ObservationDiagnostics(options, block, plan, state, round, reduced, use_inner ? &inner : nullptr,
+                           variance_factor, options.statistics.observation_diagnostics, sums,
+                           result, variance);
     CalibrationResults(options, block, plan, state, &reduced, variance_factor, result);
     WeaklyDeterminedParameters(options, block, plan, state, round, reduced, result);
   } else {
@@ -970,11 +693,12 @@ Status ComputeBundleStatistics(const BundleAdjustmentOptions& options, const Blo
 }
 
 Status CheckBundleDeterminacy(const Block& block, const BundlePlan& plan, const BundleState& state,
-                              const BundleRound& round, double* factorization_seconds) {
+                              const BundleRound& round, int num_threads,
+                              double* factorization_seconds) {
   ReducedNormals reduced;
   SelectedInversionOptions factor_only;
   factor_only.factor_only = true;
-  BuildReducedNormals(round, factor_only, &reduced);
+  BuildReducedNormals(round, factor_only, num_threads, &reduced);
   *factorization_seconds = reduced.C.factorization_seconds();
   if (reduced.singular)
     return Status::Error("the normal matrix is singular: " +

@@ -285,12 +285,13 @@ Status SelectedInverse::Compute(const SparseMatrix& S_upper, const std::vector<i
   return Status::Ok();
 }
 
-bool SelectedInverse::Block(int a, int b, Eigen::MatrixXd* out) const {
-  const int na = block_size(a), nb = block_size(b);
-  const int ra = block_start_[a], cb = block_start_[b];
+bool SelectedInverse::CopyBlock(int a, int b, double* out, Eigen::Index stride) const {
+  // out(i, j) at out[i + j stride], i in block a, j in block b.
   if (sparse_ == nullptr) {
     if (dense_.size() == 0) return false;
-    *out = dense_.block(ra, cb, na, nb);
+    const int ra = block_start_[a], cb = block_start_[b];
+    for (int j = 0; j < block_size(b); ++j)
+      for (int i = 0; i < block_size(a); ++i) out[i + j * stride] = dense_(ra + i, cb + j);
     return true;
   }
   // Read from the lower triangle of Z: rows of the later block in the columns of the earlier.
@@ -298,19 +299,35 @@ bool SelectedInverse::Block(int a, int b, Eigen::MatrixXd* out) const {
   const int row_block = transpose ? b : a, col_block = transpose ? a : b;
   const int rows = block_size(row_block), cols = block_size(col_block);
   const int row0 = sparse_->first[row_block], col0 = sparse_->first[col_block];
-  Eigen::MatrixXd Z(rows, cols);
+  const double* s_row = scale_.data() + block_start_[row_block];
+  const double* s_col = scale_.data() + block_start_[col_block];
+  // Z(r, c) of the (row_block, col_block) block, unscaled, into out(r, c) or out(c, r).
+  const auto put = [&](int r, int c, double z) {
+    const double value = s_row[r] * z * s_col[c];
+    if (transpose)
+      out[c + r * stride] = value;
+    else
+      out[r + c * stride] = value;
+  };
+  const int* Lp = sparse_->L.column_start;
+  const int* Li = sparse_->L.row;
   int64_t first_at = -1;
   for (int c = 0; c < cols; ++c) {
     if (row_block == col_block) {
-      // Diagonal block: rows c.. of column c; the rest by symmetry.
-      const int64_t at = sparse_->Run(row0 + c, col0 + c, rows - c);
+      // Diagonal block: rows c.. of column c, which lead the column (the diagonal first, the
+      // block dense on it); the rest by symmetry.
+      int64_t at = Lp[col0 + c];
+      if (!(at + rows - c <= Lp[col0 + c + 1] && Li[at] == row0 + c &&
+            Li[at + rows - c - 1] == row0 + rows - 1))
+        at = sparse_->Run(row0 + c, col0 + c, rows - c);
       if (at < 0) return false;
-      for (int r = c; r < rows; ++r) Z(r, c) = Z(c, r) = sparse_->z[at + r - c];
+      for (int r = c; r < rows; ++r) {
+        put(r, c, sparse_->z[at + r - c]);
+        put(c, r, sparse_->z[at + r - c]);
+      }
     } else {
       // The block's columns share their pattern below it: where the rows sit in the first
       // column, less one per column, is where they sit in the others (checked; else searched).
-      const int* Lp = sparse_->L.column_start;
-      const int* Li = sparse_->L.row;
       int64_t at = -1;
       if (c > 0 && first_at >= 0) {
         const int64_t guess = Lp[col0 + c] + (first_at - Lp[col0]) - c;
@@ -321,16 +338,16 @@ bool SelectedInverse::Block(int a, int b, Eigen::MatrixXd* out) const {
       if (at < 0) at = sparse_->Run(row0, col0 + c, rows);
       if (at < 0) return false;
       if (c == 0) first_at = at;
-      for (int r = 0; r < rows; ++r) Z(r, c) = sparse_->z[at + r];
+      for (int r = 0; r < rows; ++r) put(r, c, sparse_->z[at + r]);
     }
   }
-  const Eigen::VectorXd s_row = scale_.segment(block_start_[row_block], rows);
-  const Eigen::VectorXd s_col = scale_.segment(block_start_[col_block], cols);
-  Z = s_row.asDiagonal() * Z * s_col.asDiagonal();
-  if (transpose)
-    *out = Z.transpose();
-  else
-    *out = std::move(Z);
+  return true;
+}
+
+bool SelectedInverse::Block(int a, int b, Eigen::MatrixXd* out) const {
+  Eigen::MatrixXd C(block_size(a), block_size(b));
+  if (!CopyBlock(a, b, C.data(), C.rows())) return false;
+  *out = std::move(C);
   return true;
 }
 
@@ -338,12 +355,13 @@ bool SelectedInverse::Blocks(const std::vector<int>& blocks, Eigen::MatrixXd* ou
   std::vector<int> offset(blocks.size() + 1, 0);
   for (size_t k = 0; k < blocks.size(); ++k) offset[k + 1] = offset[k] + block_size(blocks[k]);
   Eigen::MatrixXd C(offset.back(), offset.back());
-  Eigen::MatrixXd part;
   for (size_t k = 0; k < blocks.size(); ++k) {
     for (size_t l = k; l < blocks.size(); ++l) {
-      if (!Block(blocks[l], blocks[k], &part)) return false;
-      C.block(offset[l], offset[k], part.rows(), part.cols()) = part;
-      if (l != k) C.block(offset[k], offset[l], part.cols(), part.rows()) = part.transpose();
+      if (!CopyBlock(blocks[l], blocks[k], &C(offset[l], offset[k]), C.rows())) return false;
+      if (l != k)
+        C.block(offset[k], offset[l], offset[k + 1] - offset[k], offset[l + 1] - offset[l]) =
+            C.block(offset[l], offset[k], offset[l + 1] - offset[l], offset[k + 1] - offset[k])
+                .transpose();
     }
   }
   *out = std::move(C);

@@ -619,7 +619,8 @@ struct Statistics {
     internal::BuildBundleRound(options, config, block, plan, &ground, &round);
     built = true;
     double factorization_seconds = 0.0;
-    return internal::CheckBundleDeterminacy(block, plan, ground, round, &factorization_seconds);
+    return internal::CheckBundleDeterminacy(block, plan, ground, round, options.solver.num_threads,
+                                            &factorization_seconds);
   }
 
   // Without covariances the last round's normal matrix is factorised once all the same
@@ -628,7 +629,8 @@ struct Statistics {
     const Clock::time_point start = Clock::now();
     double factorization_seconds = 0.0;
     const Status determined =
-        internal::CheckBundleDeterminacy(block, plan, ground, round, &factorization_seconds);
+        internal::CheckBundleDeterminacy(block, plan, ground, round, options.solver.num_threads,
+                                         &factorization_seconds);
     summary->statistics_seconds += SecondsSince(start);
     return determined;
   }

@@ -8,88 +8,16 @@
 #include <cstdint>
 #include <map>
 #include <string>
+#include <unordered_map>
 #include <vector>
 
 #include "core/block.h"
 #include "solvers/bundle/bundle_adjustment.h"
 #include "solvers/bundle/internal/bundle_problem.h"
-#include "solvers/bundle/internal/selected_inversion.h"
+#include "solvers/bundle/internal/reduced_normals.h"
 #include "solvers/bundle/triangulation.h"
 
 namespace photopose::internal {
-
-// The reduced normal matrix S (e blocks; points eliminated 3 x 3 at a time) of the whitened
-// problem, the entries of its inverse C the statistics need (internal/selected_inversion.h) and
-// what they need of the point blocks. Memory: the point data grow with the marks, C with the
-// nonzeros of S's sparse factor; nothing is n^2 (unless `dense`, the test oracle).
-struct ReducedNormals {
-  int size = 0;                                 // number of e columns
-  std::vector<int> e_offset;                    // per e block, its first column
-  std::map<const double*, int> e_index;         // e block -> index
-  std::map<const double*, int> point_index;     // point block -> index into the point data
-  std::vector<Eigen::Matrix3d> V_inverse;       // per point block
-  std::vector<std::vector<int>> W_blocks;       // per point block: e blocks it touches, ascending
-  std::vector<Eigen::MatrixXd> W;               // per point block: (their columns x 3) of J_e^T J_p
-  SelectedInverse C;                            // S^-1 (unscaled) on the filled pattern
-  int64_t S_nonzeros = 0;                       // stored entries of S (both triangles)
-  bool ok = false;
-  std::string message;                          // why not ok
-  // Why not ok, when it is a rank defect: S singular (singular_block: the e block of the column
-  // where the factorisation found it, singular_component: that column's place in the block's
-  // tangent space; -1 when not known) or a point whose rays do not determine it
-  // (undetermined_point: index into the point data).
-  bool singular = false;
-  int singular_block = -1;
-  int singular_component = -1;
-  int undetermined_point = -1;
-};
-// With options.dense, C is S inverted densely (the oracle of the tests); with options.factor_only
-// S is only factorised (ok: every parameter determined; C holds no entry: not for the statistics).
-void BuildReducedNormals(const BundleRound& round, const SelectedInversionOptions& options,
-                         ReducedNormals* reduced);
-
-// The tangent-space Jacobian rows of one residual block: e columns (global) and point columns.
-struct BlockRows {
-  int rows = 0;
-  std::vector<double> residuals;                 // whitened
-  std::vector<int> e_blocks;                     // e blocks, their columns in this order in J_e
-  std::vector<int> e_columns;
-  Eigen::MatrixXd J_e;                           // rows x e_columns
-  Eigen::Matrix<double, Eigen::Dynamic, 3> J_p;  // rows x 3, when `point` >= 0
-  int point = -1;                                // index into the reduced point data, or -1
-};
-bool EvaluateBlockRows(const BundleRound& round, const ReducedNormals& reduced,
-                       const ResidualInfo& info, BlockRows* rows);
-
-// What the rows of one point (or of a prior on e blocks alone) need of C: its submatrix on the e
-// blocks they touch (a point's: every pair of its images, which share it, so on the pattern of
-// S) and its products with the point's elimination W V^-1.
-struct SupportCovariance {
-  std::vector<int> blocks;        // e blocks, ascending
-  std::vector<int> block_offset;  // their first row in `C`
-  Eigen::MatrixXd C;              // k x k
-  Eigen::MatrixXd WV;             // k x 3: W V^-1 (a point; else k x 0)
-  Eigen::MatrixXd T;              // C WV
-  Eigen::Matrix3d Q = Eigen::Matrix3d::Zero();  // WV^T C WV
-  int Offset(int e_block) const;  // row of an e block in `C`, or -1
-};
-// For point block p (blocks: its W_blocks) or, with p = -1, the given e blocks. False when C is
-// not known on them.
-bool MakeSupportCovariance(const ReducedNormals& reduced, int p, const std::vector<int>& blocks,
-                           SupportCovariance* support);
-
-// Unscaled covariance of point block p: V^-1 + V^-1 W^T C W V^-1 (support: MakeSupportCovariance
-// of p).
-Eigen::Matrix3d PointCovariance(const ReducedNormals& reduced, const SupportCovariance& support,
-                                int p);
-// The diagonal of the hat matrix J C J^T of a block's rows (unscaled C; support: of its point, or
-// of its own e blocks), and, when `centres` is not null, per row the largest shift of the centre
-// of an image in the support per unit whitened error in that row (the external reliability's
-// factor; centres[b] the number of centre components leading e block b's tangent space, 0 for a
-// block that is not an image).
-Eigen::VectorXd Leverages(const ReducedNormals& reduced, const SupportCovariance& support,
-                          const BlockRows& rows, const std::vector<int>* centres,
-                          Eigen::VectorXd* largest_shift);
 
 // Per group, what variance component estimation needs: the whitened sum of squares and the
 // redundancy (sum of redundancy numbers; NaN when not computed).
@@ -120,7 +48,7 @@ struct GroupVariance {
 // *factorization_seconds: the factorisation's time (s).
 [[nodiscard]] Status CheckBundleDeterminacy(const Block& block, const BundlePlan& plan,
                                             const BundleState& state, const BundleRound& round,
-                                            double* factorization_seconds);
+                                            int num_threads, double* factorization_seconds);
 
 // The over-fitting verdict of a prior group in words: its residual RMS as group.ratio of the
 // `accuracy` ("stated", or "estimated" once variance components replaced it) accuracy, its

@@ -94,6 +94,9 @@ class SelectedInverse {
   double inversion_seconds() const { return inversion_seconds_; }
 
  private:
+  // Block (a, b) of C into out(i, j) = out[i + j stride] (column-major, leading dimension
+  // `stride`); false when off the pattern (out then partly written).
+  bool CopyBlock(int a, int b, double* out, Eigen::Index stride) const;
   struct Sparse;  // the CHOLMOD factor and the entries of Z (scaled, permuted) on its pattern
   std::unique_ptr<Sparse> sparse_;
   Eigen::MatrixXd dense_;         // the oracle: C itself
