@@ -1122,10 +1122,42 @@ std::string DiagnosticsHtml(const Block& block, const BundleAdjustmentResult& re
        << ", " << FormatSignificant(s.time_seconds, 3) << " s (statistics "
        << FormatSignificant(s.statistics_seconds, 3) << " s).</p>\n<p><code>"
        << HtmlEscape(context.command_line) << "</code></p>\n";
+  html << BundleGlossaryHtml();
   return html.str();
 }
 
 }  // namespace
+
+std::string BundleGlossaryHtml() {
+  static const std::vector<std::pair<std::string, std::string>> kTerms = {
+      {"control point, check point",
+       "Surveyed ground points. Control points take part in the adjustment with their stated "
+       "accuracy; check points do not: they are intersected from the adjusted images afterwards, "
+       "so their errors measure the block's accuracy."},
+      {"sigma0", "The a-posteriori standard deviation of unit weight: the RMS of all residuals in "
+                 "units of their stated accuracies (unitless); 1 when the stated accuracies hold."},
+      {"RMS / stated", "A group's residual RMS over its stated accuracy: below 0.5 the accuracy "
+                       "was stated too loose (or the group is over-fitted), above 2 too tight."},
+      {"redundancy number r, redundancy share",
+       "The part of an observation's error that shows in its own residual, 0 to 1: near 0 the rest "
+       "of the block does not check it (a blunder there cannot be seen), near 1 it is fully "
+       "checked. A group's redundancy share is its mean redundancy number."},
+      {"over-fitted", "A prior group (control points, camera positions, attitudes) the solution "
+                      "follows rather than the images: RMS / stated or redundancy share small."},
+      {"w-test, |w|", "Baarda's test of one observation: its residual over the residual's standard "
+                      "deviation. Above the critical value it is taken as a gross error."},
+      {"data snooping", "The w-test applied one observation at a time: the worst above the "
+                        "critical value is removed and the block adjusted again."},
+      {"delta0, smallest detectable error",
+       "The size, in standard deviations, of an error the w-test finds with the chosen power; an "
+       "observation's smallest detectable error is delta0 sigma / sqrt(r)."},
+      {"e^T C^-1 e", "An error against its covariance: chi-square with 3 degrees of freedom for a "
+                     "point when both are honest, mean 3."},
+      {"datum", "What fixes the block's position, orientation and scale: control points, camera "
+                "positions, or a gauge held for a relative block."},
+  };
+  return "<h3>Terms</h3>\n" + HtmlGlossary(kTerms);
+}
 
 std::string BundleReportHtml(const Block& block, const BundleAdjustmentResult& result,
                              const BundleReportContext& context) {

@@ -227,12 +227,7 @@ std::string ComparisonGlossaryHtml() {
        "mean falls in 99 % of the time when honest, and the verdict (ok, HIGH: too optimistic, "
        "low: too pessimistic)."},
   };
-  std::ostringstream html;
-  html << "<dl class=\"glossary\">\n";
-  for (const auto& [term, meaning] : kTerms)
-    html << "<dt>" << HtmlEscape(term) << "</dt><dd>" << HtmlEscape(meaning) << "</dd>\n";
-  html << "</dl>\n";
-  return html.str();
+  return HtmlGlossary(kTerms);
 }
 
 std::string RenderHtmlTable(const TextTable& table) {

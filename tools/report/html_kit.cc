@@ -50,7 +50,8 @@ const char kPrintStyle[] =
     "svg{max-width:100%;height:auto;box-sizing:border-box}.plots{gap:0.5em}"
     "table{font-size:7pt;max-width:100%}th,td{white-space:normal;padding:0.1em 0.2em}th{overflow-wrap:anywhere}"
     "code,pre{word-break:break-all}"
-    "svg,tr,.verdict{break-inside:avoid}h2{break-after:avoid}";
+    "dl.glossary{columns:2;column-gap:1.5em;margin:0}dl.glossary dt{break-after:avoid}"
+    "svg,tr,.verdict,dl.glossary dd{break-inside:avoid}h2,h3{break-after:avoid}";
 
 std::string Coordinate(double value) { return ReportNumber(value, "%.1f"); }
 
@@ -278,6 +279,13 @@ std::string HtmlSectionedTable(const std::string& title, const std::vector<std::
               "</td></tr>\n";
   }
   return html + "</table>\n" + NotesList(notes);
+}
+
+std::string HtmlGlossary(const std::vector<std::pair<std::string, std::string>>& terms) {
+  std::string html = "<dl class=\"glossary\">\n";
+  for (const auto& [term, meaning] : terms)
+    html += "<dt>" + HtmlEscape(term) + "</dt><dd>" + HtmlEscape(meaning) + "</dd>\n";
+  return html + "</dl>\n";
 }
 
 const char* PlotColor(size_t index) { return kColors[index % kNumPlotColors]; }

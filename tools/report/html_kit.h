@@ -12,6 +12,7 @@
 #include <cstddef>
 #include <limits>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "core/units.h"
@@ -63,6 +64,9 @@ struct TableSection {
 std::string HtmlSectionedTable(const std::string& title, const std::vector<std::string>& header,
                                const std::vector<TableSection>& sections,
                                const std::vector<std::string>& notes = {});
+
+// A glossary: <dl class="glossary"> with a <dt> term and <dd> meaning per pair, escaped.
+std::string HtmlGlossary(const std::vector<std::pair<std::string, std::string>>& terms);
 
 // ------------------------------------------------------------------ SVG primitives
 

@@ -10,6 +10,7 @@
 #include "solvers/bundle/check_points.h"
 #include "tests/support/bundle_groups.h"
 #include "tools/report/bundle_report.h"
+#include "tools/report/html_kit.h"
 
 namespace photopose::cli {
 namespace {
@@ -54,6 +55,7 @@ TEST_F(BundleHtmlTest, SectionsComeInTheOrderASurveyorReadsThem) {
     EXPECT_GT(at, previous) << heading;
     previous = at;
   }
+  EXPECT_GT(html.find("<h3>Terms</h3>"), previous);  // the glossary closes the diagnostics
   // The overview: counts with their nouns, the flying height and GSD of the simulated block.
   EXPECT_NE(html.find("<td>8 of 8 images</td>"), std::string::npos);
   EXPECT_NE(html.find("Ground sample distance"), std::string::npos);
@@ -237,6 +239,18 @@ TEST_F(BundleHtmlTest, AFailedAdjustmentSaysSoFirst) {
   const size_t failed = html.find("<b>Not adjusted:</b> the normal matrix is &lt;singular&gt;");
   ASSERT_NE(failed, std::string::npos);
   EXPECT_LT(failed, html.find("<h2>3. Control and check points</h2>"));
+}
+
+
+// Every term the report uses without explaining it in place is in its glossary, and the glossary
+// is on the page.
+TEST(BundleHtml, TheGlossaryExplainsTheReportsTerms) {
+  const std::string glossary = BundleGlossaryHtml();
+  EXPECT_EQ(glossary.rfind("<h3>Terms</h3>\n<dl class=\"glossary\">", 0), 0u);
+  for (const char* term : {"sigma0", "RMS / stated", "redundancy number", "redundancy share",
+                           "over-fitted", "w-test", "data snooping", "delta0", "e^T C^-1 e",
+                           "datum", "check point"})
+    EXPECT_NE(glossary.find(HtmlEscape(term)), std::string::npos) << term;
 }
 
 }  // namespace

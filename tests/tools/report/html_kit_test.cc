@@ -132,6 +132,12 @@ TEST(HtmlKit, BarPlotAndHistogram) {
   EXPECT_NE(RenderHistogramSvg(empty).find(">none (0)</text>"), std::string::npos);
 }
 
+TEST(HtmlKit, GlossaryListsEachTermWithItsMeaningEscaped) {
+  EXPECT_EQ(HtmlGlossary({{"e^T C^-1 e", "below <3"}, {"w", "a test"}}),
+            "<dl class=\"glossary\">\n<dt>e^T C^-1 e</dt><dd>below &lt;3</dd>\n<dt>w</dt><dd>a "
+            "test</dd>\n</dl>\n");
+}
+
 TEST(HtmlKit, TickLabelsNeverTakeAnExponent) {
   EXPECT_EQ(TickLabel(0.0001), "0.0001");
   EXPECT_EQ(TickLabel(200000.0), "200000");
