@@ -18,6 +18,7 @@
 #include "core/parallel.h"
 #include "core/rotation.h"
 #include "core/statistics.h"
+#include "core/units.h"
 #include "solvers/bundle/internal/bundle_problem.h"
 #include "solvers/bundle/internal/bundle_rounds.h"
 #include "solvers/bundle/internal/bundle_statistics.h"
@@ -36,13 +37,6 @@ double SecondsSince(Clock::time_point start) {
 }
 
 constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
-
-std::string FormatNumber3(double value) {
-  std::ostringstream os;
-  os.precision(3);
-  os << value;
-  return os.str();
-}
 
 class ProgressCallback final : public ceres::IterationCallback {
  public:
@@ -167,16 +161,19 @@ Status BundleAdjustmentConfig::FromCalibrationNames(const Block& block,
   return Status::Ok();
 }
 
+// Numbers in the fixed units and decimals of core/units.h, never an exponent.
 std::string BundleAdjustmentSummary::BriefReport() const {
   std::ostringstream os;
-  os << EnumName(termination) << ": " << num_images << " images, " << num_points << " points, "
-     << num_marks << " marks, " << rounds << " round" << (rounds == 1 ? "" : "s") << ", "
-     << iterations << " iterations, cost " << initial_cost << " -> " << final_cost << ", sigma0 "
-     << sigma0 << " (redundancy " << redundancy << ")";
-  if (num_rejected_marks > 0) os << ", " << num_rejected_marks << " marks rejected";
+  os << EnumName(termination) << ": " << FormatCount(num_images, "image") << ", "
+     << FormatCount(num_points, "point") << ", " << FormatCount(num_marks, "mark") << ", "
+     << FormatCount(rounds, "round") << ", " << FormatCount(iterations, "iteration") << ", cost "
+     << FormatSignificant(initial_cost, 6) << " -> " << FormatSignificant(final_cost, 6)
+     << ", sigma0 " << FormatUnitless(sigma0, 3) << " (redundancy " << redundancy << ")";
+  if (num_rejected_marks > 0) os << ", " << FormatCount(num_rejected_marks, "mark") << " rejected";
   if (!tie_points_left_out.empty())
-    os << ", " << tie_points_left_out.size() << " tie points without initial coordinates left out";
-  os << ", " << time_seconds << " s";
+    os << ", " << FormatCount(static_cast<long long>(tie_points_left_out.size()), "tie point")
+       << " without initial coordinates left out";
+  os << ", " << FormatSignificant(time_seconds, 3) << " s";
   if (!message.empty()) os << ": " << message;
   return os.str();
 }
@@ -193,15 +190,16 @@ std::vector<char> BundleAdjustmentResult::RemovedMarks(size_t num_marks) const {
 }
 
 std::string BundleAdjustmentResult::FullReport(const Block& block) const {
+  auto seconds = [](double value) { return FormatSignificant(value, 3) + " s"; };
   std::ostringstream os;
   os << "Bundle adjustment: " << summary.BriefReport() << "\n";
-  os << "Time: problem " << FormatNumber3(summary.problem_build_seconds)
-     << " s, Ceres preprocessing " << FormatNumber3(summary.solver_preprocessing_seconds)
-     << " s, residuals " << FormatNumber3(summary.residual_evaluation_seconds) << " s, Jacobians "
-     << FormatNumber3(summary.jacobian_evaluation_seconds) << " s, linear solves "
-     << FormatNumber3(summary.linear_solver_seconds) << " s, statistics "
-     << FormatNumber3(summary.statistics_seconds) << " s (Schur structure "
-     << summary.schur_structure << ")\n";
+  os << "Time: problem " << seconds(summary.problem_build_seconds) << ", Ceres preprocessing "
+     << seconds(summary.solver_preprocessing_seconds) << ", residuals "
+     << seconds(summary.residual_evaluation_seconds) << ", Jacobians "
+     << seconds(summary.jacobian_evaluation_seconds) << ", linear solves "
+     << seconds(summary.linear_solver_seconds) << ", statistics "
+     << seconds(summary.statistics_seconds) << " (Schur structure " << summary.schur_structure
+     << ")\n";
   os << "Datum: " << summary.datum_description << "\n";
   os << "Groups (count, stated, RMS, RMS/stated, redundancy share):\n";
   for (const BundleGroupStatistics& g : groups) {
@@ -210,38 +208,46 @@ std::string BundleAdjustmentResult::FullReport(const Block& block) const {
          << " held fixed (no residuals, no verdict)\n";
       continue;
     }
-    os << "  " << EnumName(g.group) << ": " << g.count << ", "
-       << FormatNumber3(g.stated_accuracy.x()) << " " << g.unit << ", "
-       << FormatNumber3(g.rms_total) << " " << g.unit << ", " << FormatNumber3(g.ratio) << ", "
-       << FormatNumber3(g.redundancy_share) << (g.overfit ? "  OVERFIT" : "");
+    // Stated and RMS in one unit: the group's (px, um, sigma), mm/cm/m, or arc seconds.
+    const std::vector<std::string> values =
+        FormatMarkValues({g.stated_accuracy.x(), g.rms_total}, g.unit);
+    os << "  " << EnumName(g.group) << ": " << g.count << ", " << values[0] << ", " << values[1]
+       << ", " << FormatUnitless(g.ratio) << ", " << FormatUnitless(g.redundancy_share)
+       << (g.overfit ? "  OVERFIT" : "");
     if (g.num_fixed > 0) os << "; " << g.num_fixed << " more held fixed";
     os << "\n";
     if (!g.message.empty()) os << "    " << g.message << "\n";
   }
   for (const BundleGroupStatistics& g : groups) {
     if (std::isfinite(g.estimated_accuracy.x())) {
-      os << "  " << EnumName(g.group)
-         << " accuracy estimated from the data: " << FormatNumber3(g.estimated_accuracy.x()) << " "
-         << g.unit << " (stated " << FormatNumber3(g.stated_accuracy.x())
-         << ", relative standard error " << FormatNumber3(g.estimated_accuracy_standard_error)
-         << ")\n";
+      const std::vector<std::string> values =
+          FormatMarkValues({g.estimated_accuracy.x(), g.stated_accuracy.x()}, g.unit);
+      os << "  " << EnumName(g.group) << " accuracy estimated from the data: " << values[0]
+         << " (stated " << values[1] << ", relative standard error "
+         << FormatUnitless(g.estimated_accuracy_standard_error) << ")\n";
     } else if (!g.estimation_message.empty()) {
       os << "  " << EnumName(g.group) << ": " << g.estimation_message << "\n";
     }
   }
   for (const BundleSnoopingStep& step : snooping)
     os << "Snooping removed " << EnumName(step.group) << " #" << step.item << " axis " << step.axis
-       << ": |w| = " << FormatNumber3(step.normalized) << "\n";
+       << ": |w| = " << FormatUnitless(step.normalized, 1) << "\n";
   if (num_control_points > 0)
-    os << "Control points: " << num_control_points << ", RMSE " << control_rmse_total_m << " m\n";
+    os << "Control points: " << num_control_points << ", RMSE "
+       << FormatLengthWithUnit(control_rmse_total_m) << "\n";
   if (num_check_points > 0)
-    os << "Check points: " << num_check_points << ", RMSE " << check_rmse_total_m << " m\n";
+    os << "Check points: " << num_check_points << ", RMSE "
+       << FormatLengthWithUnit(check_rmse_total_m) << "\n";
   for (const BundleCalibrationResult& c : calibration) {
-    os << "Camera '" << block.cameras[c.camera].camera_id << "':\n";
+    const BlockCamera& camera = block.cameras[c.camera];
+    os << "Camera '" << camera.camera_id << "':\n";
     for (size_t k = 0; k < c.names.size(); ++k) {
-      os << "  " << c.names[k] << " = " << c.values[k];
-      if (k < c.sigmas.size()) os << " +- " << c.sigmas[k];
-      os << "\n";
+      const CoefficientTexts texts =
+          FormatCoefficient(c.values[k], k < c.sigmas.size() ? c.sigmas[k] : kNaN);
+      const std::string unit = CameraParamUnit(camera.model, c.names[k]);
+      os << "  " << c.names[k] << " = " << texts.value;
+      if (k < c.sigmas.size()) os << " +- " << texts.sigma;
+      os << " " << (texts.scale.empty() ? unit : texts.scale + " " + unit) << "\n";
     }
     for (const std::string& h : c.high_correlations) os << "  high correlation " << h << "\n";
   }

@@ -335,7 +335,7 @@ std::string OverviewHtml(const Block& block, const BundleAdjustmentResult& resul
   std::vector<std::pair<std::string, std::string>> facts = {
       {"Date", UtcNow()},
       {"Software", std::string("photopose ") + PHOTOPOSE_VERSION},
-      {"Images adjusted", FormatCount(s.num_images, "image") + " of " +
+      {"Images adjusted", std::to_string(s.num_images) + " of " +
                               FormatCount(static_cast<long long>(block.images.size()), "image")},
       {"Cameras", FormatCount(static_cast<long long>(block.cameras.size()), "camera")},
       {"Points", FormatCount(num_tie, "tie point") + ", " +
@@ -358,7 +358,7 @@ std::string OverviewHtml(const Block& block, const BundleAdjustmentResult& resul
                  FormatSignificant(images_per_tie[images_per_tie.size() / 2], 3)},
       {"Area covered by the ground points (convex hull)", FormatArea(HullArea(ground_plan))},
       {"Datum", s.datum_description},
-      {"Covariances in the datum of", s.covariance_datum.empty() ? "n/a (not computed)" : s.covariance_datum},
+      {"Covariances (datum they refer to)", s.covariance_datum.empty() ? "n/a (not computed)" : s.covariance_datum},
       {"sigma0 (unitless, 1 when the stated accuracies hold)", FormatUnitless(s.sigma0, 3)},
       {"Redundancy", FormatCount(s.redundancy, "observation") + " more than unknowns"},
       {"Adjustment time", FormatSignificant(s.time_seconds, 3) + " s (" +
@@ -684,20 +684,6 @@ std::string CamerasHtml(const Block& block, const BundleAdjustmentResult& result
 
 // ------------------------------------------------------------------ 5. calibration
 
-// The unit of a camera parameter (core/camera_models.h).
-std::string ParamUnit(CameraModelType model, const std::string& name) {
-  if (model == CameraModelType::kFrame) {
-    if (name == "FocalLength" || name == "PrincipalX" || name == "PrincipalY") return "um";
-    if (name == "K1") return "mm^-2";
-    if (name == "K2") return "mm^-4";
-    if (name == "K3") return "mm^-6";
-    if (name == "P1" || name == "P2") return "mm^-1";
-    return "unitless";
-  }
-  if (name == "f" || name == "fx" || name == "fy" || name == "cx" || name == "cy") return "px";
-  return "unitless";
-}
-
 // Radial distortion of a camera along the image's x axis: the measurement of each ray against
 // the same camera without its distortion (model unit), out to the image corner.
 std::string DistortionPlot(const BlockCamera& camera) {
@@ -747,17 +733,11 @@ std::string CalibrationHtml(const Block& block, const BundleAdjustmentResult& re
     const BlockCamera& camera = block.cameras[c.camera];
     std::vector<std::vector<std::string>> rows;
     for (size_t k = 0; k < c.names.size(); ++k) {
-      // Small coefficients (K1 ~ 1e-4 mm^-2, K2 ~ 1e-7 mm^-4) in a power of ten named in the
-      // unit, so that value and sigma keep their digits without an exponent.
-      const double sigma = k < c.sigmas.size() ? c.sigmas[k] : std::nan("");
-      const double magnitude = std::max(std::abs(c.values[k]), std::isfinite(sigma) ? sigma : 0.0);
-      const int exponent =
-          magnitude > 0.0 && magnitude < 1e-3 ? static_cast<int>(std::floor(std::log10(magnitude))) : 0;
-      const double scale = std::pow(10.0, -exponent);
-      std::string unit = ParamUnit(camera.model, c.names[k]);
-      if (exponent != 0) unit = "10^" + std::to_string(exponent) + " " + unit;
-      rows.push_back({c.names[k], FormatSignificant(c.values[k] * scale, 6),
-                      FormatSignificant(sigma * scale, 3), unit});
+      const CoefficientTexts texts =
+          FormatCoefficient(c.values[k], k < c.sigmas.size() ? c.sigmas[k] : std::nan(""));
+      const std::string unit = CameraParamUnit(camera.model, c.names[k]);
+      rows.push_back({c.names[k], texts.value, texts.sigma,
+                      texts.scale.empty() ? unit : texts.scale + " " + unit});
     }
     html << HtmlTable("Camera '" + camera.camera_id + "' (" + EnumName(camera.model) + ")",
                       {"parameter", "value", "sigma", "unit"}, rows, c.high_correlations);
@@ -868,6 +848,23 @@ std::string ResidualsHtml(const Block& block, const BundleAdjustmentResult& resu
       by_axis[{EnumName(group), "y"}].push_back(result.mark_residuals[m].y());
     }
   }
+  // Each group's residuals in its fixed unit (core/units.h): marks in px or um, lengths in the
+  // mm, cm or m of the group's largest, angles in arc seconds.
+  std::map<std::string, std::vector<double>> by_group;
+  for (const auto& [key, values] : by_axis)
+    by_group[key.first].insert(by_group[key.first].end(), values.begin(), values.end());
+  std::map<std::string, std::pair<std::string, double>> scale;  // group -> (unit, factor)
+  for (const auto& [group, values] : by_group) {
+    const std::string& kind = units[group];
+    if (kind == "m") {
+      const LengthUnit unit = LengthUnitFor(LargestMagnitude(values));
+      scale[group] = {LengthUnitName(unit), LengthIn(1.0, unit)};
+    } else if (kind == "deg") {
+      scale[group] = {"arcsec", 3600.0};
+    } else {
+      scale[group] = {kind.empty() ? "unitless" : kind, 1.0};
+    }
+  }
   std::ostringstream html;
   html << "<h2>6. Residuals</h2>\n";
   std::string current;
@@ -878,10 +875,11 @@ std::string ResidualsHtml(const Block& block, const BundleAdjustmentResult& resu
       html << "<h3>" << HtmlEscape(group) << "</h3>\n<div class=\"plots\">";
       current = group;
     }
+    const auto& [unit, factor] = scale[group];
     HistogramPlot plot;
     plot.title = group + ", " + axis;
-    plot.x_label = "residual " + axis + " (" + units[group] + ")";
-    plot.values = values;
+    plot.x_label = "residual " + axis + " (" + unit + ")";
+    for (const double v : values) plot.values.push_back(factor * v);
     html << RenderHistogramSvg(plot);
   }
   if (!current.empty()) html << "</div>\n";
@@ -1124,10 +1122,42 @@ std::string DiagnosticsHtml(const Block& block, const BundleAdjustmentResult& re
        << ", " << FormatSignificant(s.time_seconds, 3) << " s (statistics "
        << FormatSignificant(s.statistics_seconds, 3) << " s).</p>\n<p><code>"
        << HtmlEscape(context.command_line) << "</code></p>\n";
+  html << BundleGlossaryHtml();
   return html.str();
 }
 
 }  // namespace
+
+std::string BundleGlossaryHtml() {
+  static const std::vector<std::pair<std::string, std::string>> kTerms = {
+      {"control point, check point",
+       "Surveyed ground points. Control points take part in the adjustment with their stated "
+       "accuracy; check points do not: they are intersected from the adjusted images afterwards, "
+       "so their errors measure the block's accuracy."},
+      {"sigma0", "The a-posteriori standard deviation of unit weight: the RMS of all residuals in "
+                 "units of their stated accuracies (unitless); 1 when the stated accuracies hold."},
+      {"RMS / stated", "A group's residual RMS over its stated accuracy: below 0.5 the accuracy "
+                       "was stated too loose (or the group is over-fitted), above 2 too tight."},
+      {"redundancy number r, redundancy share",
+       "The part of an observation's error that shows in its own residual, 0 to 1: near 0 the rest "
+       "of the block does not check it (a blunder there cannot be seen), near 1 it is fully "
+       "checked. A group's redundancy share is its mean redundancy number."},
+      {"over-fitted", "A prior group (control points, camera positions, attitudes) the solution "
+                      "follows rather than the images: RMS / stated or redundancy share small."},
+      {"w-test, |w|", "Baarda's test of one observation: its residual over the residual's standard "
+                      "deviation. Above the critical value it is taken as a gross error."},
+      {"data snooping", "The w-test applied one observation at a time: the worst above the "
+                        "critical value is removed and the block adjusted again."},
+      {"delta0, smallest detectable error",
+       "The size, in standard deviations, of an error the w-test finds with the chosen power; an "
+       "observation's smallest detectable error is delta0 sigma / sqrt(r)."},
+      {"e^T C^-1 e", "An error against its covariance: chi-square with 3 degrees of freedom for a "
+                     "point when both are honest, mean 3."},
+      {"datum", "What fixes the block's position, orientation and scale: control points, camera "
+                "positions, or a gauge held for a relative block."},
+  };
+  return "<h3>Terms</h3>\n" + HtmlGlossary(kTerms);
+}
 
 std::string BundleReportHtml(const Block& block, const BundleAdjustmentResult& result,
                              const BundleReportContext& context) {

@@ -596,7 +596,7 @@ std::vector<std::string> BundleConsoleLines(const Block& block, const BundleAdju
                       "their heights are free)");
     for (const std::string& line : g.inputs_not_used) lines.push_back("georeference: not used: " + line);
   }
-  if (!s.covariance_datum.empty()) lines.push_back("covariances in the datum of " + s.covariance_datum);
+  if (!s.covariance_datum.empty()) lines.push_back("covariances in " + s.covariance_datum);
   for (const BundleGroupStatistics& g : result.groups) {
     std::ostringstream line;
     if (g.fixed()) {

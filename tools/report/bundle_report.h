@@ -68,6 +68,9 @@ nlohmann::json BundleReportJson(const Block& block, const BundleAdjustmentResult
 // and check tables, calibration, diagnostics.
 std::string BundleReportHtml(const Block& block, const BundleAdjustmentResult& result,
                              const BundleReportContext& context);
+// The terms of the bundle report (sigma0, redundancy numbers, w-test, data snooping, delta0, ...)
+// as a definition list: the last part of BundleReportHtml's diagnostics.
+std::string BundleGlossaryHtml();
 
 // The points table: PointID, X, Y, Z (the estimate of every point: adjusted tie and control
 // points, intersected check points; empty for a check point that could not be intersected),

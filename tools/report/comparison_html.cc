@@ -197,18 +197,28 @@ std::string ComparisonGlossaryHtml() {
       {"/none, /huber, /cauchy, /softl1",
        "The loss on the marks' residuals: none is plain least squares; the robust losses weigh "
        "large residuals down so that outliers pull less."},
-      {"success", "A pose was returned and its centre is within the stated number of design "
-                  "sigmas of the truth."},
-      {"position RMSE (pos_rmse_m), camera RMSE",
-       "Root mean square of the distance between the estimated and the true camera centre."},
-      {"rot_rmse_as", "Root mean square of the rotation error, in arc seconds."},
-      {"d_ref", "RMS of the differences to the reference solver (taylor when compared) on the "
-                "same data and start."},
-      {"check_px, reproj_px", "RMS image residual of the check marks, and of the control marks, "
-                              "in pixels."},
-      {"t_us, refine_us, t/ref, time",
-       "Median time of one solve in microseconds, its refinement part, and its ratio to the "
-       "reference solver's."},
+      {"solved, success",
+       "solved: a pose was returned (a block: the adjustment converged); success: and its centre "
+       "is within the stated number of design sigmas of the truth."},
+      {"iter, iterations", "Mean number of iterations of the solver (Gauss-Newton corrections, "
+                           "Levenberg-Marquardt steps)."},
+      {"pos RMSE, camera RMSE",
+       "Root mean square of the distance between the estimated and the true camera centre, in "
+       "the unit of the column's largest value (mm below 0.1 m, cm below 10 m, else m)."},
+      {"rot RMSE", "Root mean square of the rotation error, in arc seconds."},
+      {"d_ref pos, d_ref rot, max offset from Taylor, offset RMS, offset max",
+       "RMS (or largest) difference of the camera centres and rotations to the reference solver "
+       "(taylor when compared) on the same data and start."},
+      {"d_frames pos, d_frames rot",
+       "The same against the reference frames given with --reference."},
+      {"check RMSE, reproj RMSE, RMS",
+       "RMS image residual of the check marks, of the control marks, and of the inliers, in "
+       "pixels; check beyond: check marks beyond the inlier threshold."},
+      {"time, refine, t/ref, x Taylor",
+       "Median time of one solve (microseconds per image, milliseconds per block), its "
+       "refinement part, and its ratio to the reference solver's."},
+      {"sigma0", "The a-posteriori standard deviation of unit weight: 1 when the residuals match "
+                 "the stated accuracy of the marks."},
       {"NEES", "Normalised estimation error squared: the error against the solver's own "
                "covariance, e^T C^-1 e. Its mean is the number of parameters (6 for a pose, 3 for "
                "a camera centre) when the covariance is honest; above means too optimistic."},
@@ -217,12 +227,7 @@ std::string ComparisonGlossaryHtml() {
        "mean falls in 99 % of the time when honest, and the verdict (ok, HIGH: too optimistic, "
        "low: too pessimistic)."},
   };
-  std::ostringstream html;
-  html << "<dl class=\"glossary\">\n";
-  for (const auto& [term, meaning] : kTerms)
-    html << "<dt>" << HtmlEscape(term) << "</dt><dd>" << HtmlEscape(meaning) << "</dd>\n";
-  html << "</dl>\n";
-  return html.str();
+  return HtmlGlossary(kTerms);
 }
 
 std::string RenderHtmlTable(const TextTable& table) {
@@ -281,16 +286,25 @@ std::string MonteCarloHtml(const MonteCarloOptions& options, const MonteCarloRes
     bool log_y;
     bool rate;
     bool nees_reference;  // draw the dashed line at 6
+    bool length;          // a length (m) drawn in the unit of the largest (core/units.h)
     double (*get)(const SolverStatistics&);
   };
-  const Metric position{"position RMSE", "RMSE (m)", true, false, false,
+  const Metric position{"position RMSE", "RMSE", true, false, false, true,
                         [](const SolverStatistics& s) { return s.position_rmse_m; }};
-  const Metric success{"success rate", "success (0 to 1)", false, true, false,
+  const Metric success{"success rate", "success (0 to 1)", false, true, false, false,
                        [](const SolverStatistics& s) { return s.success_rate; }};
-  const Metric nees{"mean NEES (sigma0 = 1)", "NEES (unitless)", true, false, true,
+  const Metric nees{"mean NEES (sigma0 = 1)", "NEES (unitless)", true, false, true, false,
                     [](const SolverStatistics& s) { return s.mean_nees_apriori; }};
-  const Metric iterations{"mean iterations", "iterations", false, false, false,
+  const Metric iterations{"mean iterations", "iterations", false, false, false, false,
                           [](const SolverStatistics& s) { return s.mean_iterations; }};
+  // Every position plot of the page in one unit, that of the largest RMSE.
+  std::vector<double> position_values;
+  for (const SettingResult& setting : result.settings)
+    for (const SolverStatistics& s : setting.solvers) position_values.push_back(position.get(s));
+  const LengthUnit position_unit = LengthUnitFor(LargestMagnitude(position_values));
+  auto value_of = [&](const Metric& metric, const SolverStatistics& s) {
+    return metric.length ? LengthIn(metric.get(s), position_unit) : metric.get(s);
+  };
   const std::vector<std::pair<std::string, std::vector<Metric>>> plots = {
       {"noise", {position, nees}},
       {"outliers", {position, success}},
@@ -307,15 +321,17 @@ std::string MonteCarloHtml(const MonteCarloOptions& options, const MonteCarloRes
         html << "<p>Initial error: +-";
         for (size_t k = 0; k < along.size(); ++k)
           html << (k ? "/" : "")
-               << FormatSignificant(result.settings[along[k]].setting.initial_error.position_m, 3);
-        html << " m in position with the angle errors on the x axis.</p>\n";
+               << FormatScaledLength(result.settings[along[k]].setting.initial_error.position_m);
+        html << " in position with the angle errors on the x axis.</p>\n";
       }
       for (const Metric& metric : metrics) {
         LinePlot plot;
         plot.title = std::string(EnumName(scenario)) + ": " + metric.name + " vs " +
                      (axis == "initial" ? "initial error" : axis);
         plot.x_label = AxisLabel(axis);
-        plot.y_label = metric.unit_label;
+        plot.y_label = metric.length ? std::string(metric.unit_label) + " (" +
+                                           LengthUnitName(position_unit) + ")"
+                                     : metric.unit_label;
         plot.log_y = metric.log_y;
         if (metric.rate) plot.y_min = 0.0, plot.y_max = 1.0;
         if (metric.nees_reference) {
@@ -327,10 +343,10 @@ std::string MonteCarloHtml(const MonteCarloOptions& options, const MonteCarloRes
         double lo = std::numeric_limits<double>::infinity(), hi = 0.0;
         for (size_t k : along)
           for (const SolverStatistics& s : result.settings[k].solvers)
-            if (std::isfinite(metric.get(s))) hi = std::max(hi, metric.get(s));
+            if (std::isfinite(value_of(metric, s))) hi = std::max(hi, value_of(metric, s));
         for (size_t k : along)
           for (const SolverStatistics& s : result.settings[k].solvers) {
-            const double v = metric.get(s);
+            const double v = value_of(metric, s);
             if (std::isfinite(v) && v > 1e-6 * hi) lo = std::min(lo, v);
           }
         if (plot.log_y && std::isfinite(lo) && hi < 30.0 * lo && lo > 0.0 && !(hi < 1e-3))
@@ -340,7 +356,7 @@ std::string MonteCarloHtml(const MonteCarloOptions& options, const MonteCarloRes
           series.label = result.solver_names[s];
           for (size_t k : along) {
             series.x.push_back(PlotX(result.settings[k].setting, axis));
-            series.y.push_back(metric.get(result.settings[k].solvers[s]));
+            series.y.push_back(value_of(metric, result.settings[k].solvers[s]));
           }
           plot.series.push_back(series);
         }
@@ -396,19 +412,32 @@ std::string DatasetHtml(const DatasetComparisonResult& result, const std::string
   BarPlot time;
   time.title = "median time per image";
   time.value_label = "microseconds per image (ResectImage wall time)";
+  // The differences in the unit of the largest of each plot (core/units.h).
+  std::vector<double> differences, references;
+  for (const DatasetSolverSummary& s : result.summaries) {
+    differences.push_back(s.compared > 0 ? s.difference_position_m : kNaN);
+    references.push_back(s.referenced > 0 ? s.reference_position_m : kNaN);
+  }
+  const LengthUnit difference_unit = LengthUnitFor(LargestMagnitude(differences));
+  const LengthUnit reference_unit = LengthUnitFor(LargestMagnitude(references));
   BarPlot difference;
   difference.title = "RMS position difference to " + result.reference_solver;
-  difference.value_label = "RMS position difference (m; n/a: the solver itself or none solved)";
+  difference.value_label = std::string("RMS position difference (") +
+                           LengthUnitName(difference_unit) +
+                           "; n/a: the solver itself or none solved)";
   BarPlot reference = difference;
   reference.title = "RMS position difference to the reference frames";
-  reference.value_label = "RMS position difference (m)";
-  for (const DatasetSolverSummary& s : result.summaries) {
+  reference.value_label =
+      std::string("RMS position difference (") + LengthUnitName(reference_unit) + ")";
+  reference.values.clear();
+  for (size_t k = 0; k < result.summaries.size(); ++k) {
+    const DatasetSolverSummary& s = result.summaries[k];
     time.labels.push_back(s.solver);
     time.values.push_back(s.median_seconds * 1e6);
     difference.labels.push_back(s.solver);
-    difference.values.push_back(s.compared > 0 ? s.difference_position_m : kNaN);
+    difference.values.push_back(LengthIn(differences[k], difference_unit));
     reference.labels.push_back(s.solver);
-    reference.values.push_back(s.referenced > 0 ? s.reference_position_m : kNaN);
+    reference.values.push_back(LengthIn(references[k], reference_unit));
   }
   html << RenderBarPlotSvg(time) << "\n" << RenderBarPlotSvg(difference) << "\n";
   if (result.has_reference) html << RenderBarPlotSvg(reference) << "\n";
@@ -501,14 +530,21 @@ std::string BlockComparisonHtml(const BlockComparisonOptions& options,
           "ratio to the corrected Taylor solver in the same run.</li>\n</ul>\n";
   // Small multiples: camera RMSE by solver, one panel per setting.
   html << "<h2>Camera accuracy per setting</h2>\n<div class=\"plots\">\n";
+  // Every panel in one unit, that of the largest camera RMSE (core/units.h).
+  std::vector<double> camera_rmse;
+  for (const auto& per_setting : result.statistics)
+    for (const BlockSolverStatistics& st : per_setting)
+      camera_rmse.push_back(st.successes > 0 ? st.camera_rmse_m : std::nan(""));
+  const LengthUnit camera_unit = LengthUnitFor(LargestMagnitude(camera_rmse));
   for (size_t setting = 0; setting < result.settings.size(); ++setting) {
     BarPlot bars;
     bars.title = result.settings[setting].Label();
-    bars.value_label = "camera RMSE (mm)";
+    bars.value_label = std::string("camera RMSE (") + LengthUnitName(camera_unit) + ")";
     for (size_t s = 0; s < result.solver_names.size(); ++s) {
       const BlockSolverStatistics& st = result.statistics[setting][s];
       bars.labels.push_back(result.solver_names[s]);
-      bars.values.push_back(st.successes > 0 ? 1e3 * st.camera_rmse_m : std::nan(""));
+      bars.values.push_back(
+          st.successes > 0 ? LengthIn(st.camera_rmse_m, camera_unit) : std::nan(""));
     }
     html << RenderBarPlotSvg(bars) << "\n";
   }

@@ -21,8 +21,8 @@ std::string Format(const char* format, double value) {
   return buffer;
 }
 
-// Three significant digits in plain notation (the kit's rule: at most 6 decimals, never an
-// exponent); "-" when not finite.
+// Three significant digits in plain notation (times in microseconds, ratios): never an
+// exponent; "-" when not finite.
 std::string Sig(double value) {
   if (!std::isfinite(value)) return "-";
   return FormatSignificant(value, 3);
@@ -38,6 +38,59 @@ std::string Full(double value) {
 }
 
 std::string Microseconds(double seconds) { return Sig(seconds * 1e6); }
+
+// A cell of a table under construction: text as it stands, or a value of its column's kind.
+struct Cell {
+  std::string text;
+  double value = kNaN;
+  bool numeric = false;
+};
+Cell Text(std::string text) { return {std::move(text), kNaN, false}; }
+Cell Value(double value) { return {"", value, true}; }
+
+// A column: its name and, for a column of values, their kind (core/units.h FormatInOneUnit: "m"
+// lengths in mm, cm or m; "deg" angle errors in arc seconds; "px"; "" unitless, two decimals).
+struct Column {
+  std::string name;
+  std::string kind;  // empty: a column of text (or of values formatted before)
+  bool values = false;
+};
+Column TextColumn(std::string name) { return {std::move(name), "", false}; }
+Column ValueColumn(std::string name, std::string kind) {
+  return {std::move(name), std::move(kind), true};
+}
+
+// The table's header and rows: every column of values in the one unit FormatInOneUnit picks for
+// it (from its largest magnitude), named in its header ("pos RMSE (cm)"); a value cell that is
+// not finite prints "-".
+void FillTable(const std::vector<Column>& columns, const std::vector<std::vector<Cell>>& cells,
+               TextTable* table) {
+  table->header.clear();
+  table->rows.assign(cells.size(), std::vector<std::string>(columns.size()));
+  for (size_t c = 0; c < columns.size(); ++c) {
+    std::vector<double> values;
+    for (const auto& row : cells)
+      if (c < row.size() && row[c].numeric) values.push_back(row[c].value);
+    const ValuesInOneUnit in_one =
+        FormatInOneUnit(values, columns[c].kind.empty() ? "unitless" : columns[c].kind);
+    const bool named = columns[c].values && !columns[c].kind.empty();
+    table->header.push_back(named ? columns[c].name + " (" + in_one.unit + ")" : columns[c].name);
+    size_t k = 0;
+    for (size_t r = 0; r < cells.size(); ++r) {
+      if (c >= cells[r].size()) continue;
+      const Cell& cell = cells[r][c];
+      if (!cell.numeric) {
+        table->rows[r][c] = cell.text;
+        continue;
+      }
+      const std::string& text = in_one.texts[k++];
+      table->rows[r][c] = text == "n/a" ? "-" : text;
+    }
+  }
+}
+
+// An angle in arc seconds as the degrees FormatInOneUnit's "deg" kind takes.
+double ArcsecondsToDegrees(double arcsec) { return arcsec / 3600.0; }
 
 std::string CsvField(const std::string& text) {
   if (text.find_first_of(",\"\n") == std::string::npos) return text;
@@ -70,14 +123,15 @@ std::vector<std::string> MonteCarloNotes(const MonteCarloOptions& options) {
       "in each table title.";
   return {
       "solved: a pose was returned; success as below. pos/rot/check/reproj RMSE are over the "
-      "solved "
-      "samples (rotation: angle of R_true^T R_est; check and reproj: RMS of the 2-D residual norm, "
-      "reproj over uncontaminated control marks). d_ref_m, d_ref_as: RMS of the paired "
-      "differences to the reference solver (taylor when compared) on the same data and start.",
+      "solved samples (rotation: angle of R_true^T R_est; check and reproj: RMS of the 2-D "
+      "residual norm, reproj over uncontaminated control marks). d_ref pos, d_ref rot: RMS of the "
+      "paired differences to the reference solver (taylor when compared) on the same data and "
+      "start. Lengths in the unit of the column's largest value (mm below 0.1 m, cm below 10 m), "
+      "angles in arc seconds.",
       success,
-      "t_us: median wall time of one ResectImage call (statistics included) over the solved "
-      "samples, microseconds; refine_us: its refinement part; t/ref: t_us over the reference "
-      "solver's (taylor when compared).",
+      "time: median wall time of one ResectImage call (statistics included) over the solved "
+      "samples; refine: its refinement part; t/ref: time over the reference solver's (taylor "
+      "when compared).",
       "nees: mean of e^T C^-1 e over the solved samples, e = pose error (X0 in m, seed angles in "
       "rad, wrapped), C = the solver's covariance sigma0^2 (J^T P J)^-1; its expectation with "
       "sigma0 estimated from r = 2n - 6 redundant observations is E[nees] = 6 r/(r-2). nees_ap: "
@@ -104,9 +158,17 @@ std::vector<TextTable> MonteCarloTables(const MonteCarloOptions& options,
     double threshold = kNaN;
     if (!setting.solvers.empty()) threshold = setting.solvers.front().mean_success_threshold_m;
     table.title += ", success threshold " + FormatScaledLength(threshold);
-    table.header = {"solver",   "solved",   "success",   "pos_rmse_m", "rot_rmse_as", "d_ref_m",
-                    "d_ref_as", "check_px", "reproj_px", "iter",       "t_us",        "refine_us",
-                    "t/ref",    "nees",     "E[nees]",   "nees_ap",    "99% int",     "cov"};
+    const std::vector<Column> columns = {
+        TextColumn("solver"),         TextColumn("solved"),
+        TextColumn("success"),        ValueColumn("pos RMSE", "m"),
+        ValueColumn("rot RMSE", "deg"), ValueColumn("d_ref pos", "m"),
+        ValueColumn("d_ref rot", "deg"), ValueColumn("check RMSE", "px"),
+        ValueColumn("reproj RMSE", "px"), TextColumn("iter"),
+        TextColumn("time (us)"),      TextColumn("refine (us)"),
+        TextColumn("t/ref"),          ValueColumn("nees", ""),
+        ValueColumn("E[nees]", ""),   ValueColumn("nees_ap", ""),
+        TextColumn("99% int"),        TextColumn("cov")};
+    std::vector<std::vector<Cell>> cells;
     const double reference_seconds = setting.solvers[reference].median_seconds;
     for (const SolverStatistics& s : setting.solvers) {
       const bool has_nees = s.nees_count > 0;
@@ -116,29 +178,30 @@ std::vector<TextTable> MonteCarloTables(const MonteCarloOptions& options,
                   : s.mean_nees_apriori > s.nees_interval_99.upper ? "HIGH"
                                                                    : "low";
       }
-      table.rows.push_back({
-          s.solver,
-          Percent(static_cast<double>(s.solved) / std::max(1, s.samples)),
-          Percent(s.success_rate),
-          Sig(s.position_rmse_m),
-          Sig(s.rotation_rmse_arcsec),
-          Sig(s.difference_position_rmse_m),
-          Sig(s.difference_rotation_rmse_arcsec),
-          Sig(s.check_rmse_px),
-          Sig(s.reprojection_rmse_px),
-          Format("%.1f", s.mean_iterations),
-          Microseconds(s.median_seconds),
-          Microseconds(s.median_refinement_seconds),
-          Format("%.2f", s.median_seconds / reference_seconds),
-          has_nees ? Sig(s.mean_nees) : "-",
-          has_nees ? Sig(s.expected_nees) : "-",
-          has_nees ? Sig(s.mean_nees_apriori) : "-",
-          has_nees
-              ? "[" + Sig(s.nees_interval_99.lower) + ", " + Sig(s.nees_interval_99.upper) + "]"
-              : "-",
-          verdict,
+      cells.push_back({
+          Text(s.solver),
+          Text(Percent(static_cast<double>(s.solved) / std::max(1, s.samples))),
+          Text(Percent(s.success_rate)),
+          Value(s.position_rmse_m),
+          Value(ArcsecondsToDegrees(s.rotation_rmse_arcsec)),
+          Value(s.difference_position_rmse_m),
+          Value(ArcsecondsToDegrees(s.difference_rotation_rmse_arcsec)),
+          Value(s.check_rmse_px),
+          Value(s.reprojection_rmse_px),
+          Text(Format("%.1f", s.mean_iterations)),
+          Text(Microseconds(s.median_seconds)),
+          Text(Microseconds(s.median_refinement_seconds)),
+          Text(Format("%.2f", s.median_seconds / reference_seconds)),
+          Value(has_nees ? s.mean_nees : kNaN),
+          Value(has_nees ? s.expected_nees : kNaN),
+          Value(has_nees ? s.mean_nees_apriori : kNaN),
+          Text(has_nees ? "[" + FormatUnitless(s.nees_interval_99.lower) + ", " +
+                              FormatUnitless(s.nees_interval_99.upper) + "]"
+                        : "-"),
+          Text(verdict),
       });
     }
+    FillTable(columns, cells, &table);
     for (const SolverStatistics& s : setting.solvers) {
       std::string reasons;
       for (size_t k = 0; k < s.failure_reasons.size() && k < 2; ++k)
@@ -192,77 +255,97 @@ std::vector<TextTable> DatasetTables(const DatasetComparisonResult& result) {
   const double reference_seconds = result.summaries[reference].median_seconds;
   TextTable summary;
   summary.title = "Solvers (differences to " + result.reference_solver + ")";
-  summary.header = {"solver", "solved", "sigma0", "rms_px",    "check_px", "chk_out",
-                    "iter",   "t_us",   "t/ref",  "refine_us", "d_pos_m",  "d_rot_as"};
+  std::vector<Column> columns = {
+      TextColumn("solver"),          TextColumn("solved"),
+      TextColumn("sigma0"),          ValueColumn("RMS", "px"),
+      ValueColumn("check RMSE", "px"), TextColumn("check beyond"),
+      TextColumn("iter"),            TextColumn("time (us)"),
+      TextColumn("t/ref"),           TextColumn("refine (us)"),
+      ValueColumn("d_ref pos", "m"), ValueColumn("d_ref rot", "deg")};
   if (result.has_reference) {
-    summary.header.push_back("ref_pos_m");
-    summary.header.push_back("ref_rot_as");
+    columns.push_back(ValueColumn("d_frames pos", "m"));
+    columns.push_back(ValueColumn("d_frames rot", "deg"));
   }
+  std::vector<std::vector<Cell>> summary_cells;
   for (const DatasetSolverSummary& s : result.summaries) {
-    std::vector<std::string> row = {s.solver,
-                                    std::to_string(s.solved) + "/" + std::to_string(s.images),
-                                    Sig(s.rms_sigma0),
-                                    Sig(s.rms_px),
-                                    Sig(s.check_rmse_px),
-                                    std::to_string(s.check_beyond),
-                                    Format("%.1f", s.mean_iterations),
-                                    Microseconds(s.median_seconds),
-                                    Format("%.2f", s.median_seconds / reference_seconds),
-                                    Microseconds(s.median_refinement_seconds),
-                                    s.compared > 0 ? Sig(s.difference_position_m) : "-",
-                                    s.compared > 0 ? Sig(s.difference_rotation_arcsec) : "-"};
+    std::vector<Cell> row = {
+        Text(s.solver),
+        Text(std::to_string(s.solved) + "/" + std::to_string(s.images)),
+        Text(FormatUnitless(s.rms_sigma0, 3)),
+        Value(s.rms_px),
+        Value(s.check_rmse_px),
+        Text(std::to_string(s.check_beyond)),
+        Text(Format("%.1f", s.mean_iterations)),
+        Text(Microseconds(s.median_seconds)),
+        Text(Format("%.2f", s.median_seconds / reference_seconds)),
+        Text(Microseconds(s.median_refinement_seconds)),
+        Value(s.compared > 0 ? s.difference_position_m : kNaN),
+        Value(s.compared > 0 ? ArcsecondsToDegrees(s.difference_rotation_arcsec) : kNaN)};
     if (result.has_reference) {
-      row.push_back(s.referenced > 0 ? Sig(s.reference_position_m) : "-");
-      row.push_back(s.referenced > 0 ? Sig(s.reference_rotation_arcsec) : "-");
+      row.push_back(Value(s.referenced > 0 ? s.reference_position_m : kNaN));
+      row.push_back(
+          Value(s.referenced > 0 ? ArcsecondsToDegrees(s.reference_rotation_arcsec) : kNaN));
     }
-    summary.rows.push_back(row);
+    summary_cells.push_back(row);
   }
+  FillTable(columns, summary_cells, &summary);
   summary.notes = {
-      "sigma0: RMS over images of the a-posteriori sigma0; rms_px: RMS of the inlier residual "
-      "norms "
-      "(pixels); check_px: RMS of the check-point residual norms within the inlier threshold, "
-      "chk_out: check marks beyond it; t_us: median time per image (microseconds, RANSAC "
-      "included when it ran), refine_us: its refinement part.",
-      "d_pos_m, d_rot_as: RMS over images of |X0 - X0_" + result.reference_solver +
-          "| (m) and of the rotation angle between the two (arc-seconds)." +
-          (result.has_reference ? " ref_pos_m, ref_rot_as: the same to the reference frames."
+      "sigma0: RMS over images of the a-posteriori sigma0 (unitless); RMS: of the inlier residual "
+      "norms; check RMSE: of the check-point residual norms within the inlier threshold, check "
+      "beyond: check marks beyond it; time: median per image (RANSAC included when it ran), "
+      "refine: its refinement part.",
+      "d_ref pos, d_ref rot: RMS over images of |X0 - X0_" + result.reference_solver +
+          "| and of the rotation angle between the two." +
+          (result.has_reference ? " d_frames pos, d_frames rot: the same to the reference frames."
                                 : "")};
   tables.push_back(summary);
 
   TextTable images;
-  images.title = std::string("Per image (angles in degrees, ") +
-                 EnumName(result.rotation) + " convention)";
-  images.header = {"image",    "solver",  "status", "X_m",    "Y_m",     "Z_m",
-                   "omega",    "phi",     "kappa",  "sigma0", "inliers", "rms_px",
-                   "check_px", "chk_out", "iter",   "t_us",   "d_pos_m", "d_rot_as"};
+  images.title = std::string("Per image (angles in the ") + EnumName(result.rotation) +
+                 " convention)";
+  std::vector<Column> image_columns = {
+      TextColumn("image"),     TextColumn("solver"),         TextColumn("status"),
+      TextColumn("X (m)"),     TextColumn("Y (m)"),          TextColumn("Z (m)"),
+      TextColumn("omega (deg)"), TextColumn("phi (deg)"),    TextColumn("kappa (deg)"),
+      TextColumn("sigma0"),    TextColumn("inliers"),        ValueColumn("RMS", "px"),
+      ValueColumn("check RMSE", "px"), TextColumn("check beyond"), TextColumn("iter"),
+      TextColumn("time (us)"), ValueColumn("d_ref pos", "m"), ValueColumn("d_ref rot", "deg")};
   if (result.has_reference) {
-    images.header.push_back("ref_pos_m");
-    images.header.push_back("ref_rot_as");
+    image_columns.push_back(ValueColumn("d_frames pos", "m"));
+    image_columns.push_back(ValueColumn("d_frames rot", "deg"));
   }
+  std::vector<std::vector<Cell>> image_cells;
   for (const DatasetSolve& s : result.solves) {
-    std::vector<std::string> row = {s.raster, result.solver_names[s.solver],
-                                    s.success ? "ok" : "failed"};
+    std::vector<Cell> row = {Text(s.raster), Text(result.solver_names[s.solver]),
+                             Text(s.success ? "ok" : "failed")};
     if (s.success) {
-      for (int k = 0; k < 3; ++k) row.push_back(Format("%.4f", s.eo.parameters[k]));
-      for (int k = 0; k < 3; ++k) row.push_back(Format("%.6f", s.angles_deg[k]));
-      row.push_back(Sig(s.sigma0));
-      row.push_back(std::to_string(s.num_inliers) + "/" + std::to_string(s.num_observations));
-      row.push_back(Sig(s.rms_px));
-      row.push_back(Sig(s.check_rmse_px));
-      row.push_back(std::to_string(s.num_check_beyond));
+      for (int k = 0; k < 3; ++k) row.push_back(Text(FormatCoordinate(s.eo.parameters[k])));
+      for (int k = 0; k < 3; ++k) row.push_back(Text(FormatDegrees(s.angles_deg[k])));
+      row.push_back(Text(FormatUnitless(s.sigma0, 3)));
+      row.push_back(
+          Text(std::to_string(s.num_inliers) + "/" + std::to_string(s.num_observations)));
+      row.push_back(Value(s.rms_px));
+      row.push_back(Value(s.check_rmse_px));
+      row.push_back(Text(std::to_string(s.num_check_beyond)));
     } else {
-      for (int k = 0; k < 11; ++k) row.push_back("-");
+      for (int k = 0; k < 9; ++k) row.push_back(Text("-"));
+      row.push_back(Value(kNaN));
+      row.push_back(Value(kNaN));
+      row.push_back(Text("-"));
     }
-    row.push_back(std::to_string(s.iterations));
-    row.push_back(Microseconds(s.seconds));
-    row.push_back(s.has_difference ? Sig(s.difference_position_m) : "-");
-    row.push_back(s.has_difference ? Sig(s.difference_rotation_arcsec) : "-");
+    row.push_back(Text(std::to_string(s.iterations)));
+    row.push_back(Text(Microseconds(s.seconds)));
+    row.push_back(Value(s.has_difference ? s.difference_position_m : kNaN));
+    row.push_back(
+        Value(s.has_difference ? ArcsecondsToDegrees(s.difference_rotation_arcsec) : kNaN));
     if (result.has_reference) {
-      row.push_back(s.has_reference ? Sig(s.reference_position_m) : "-");
-      row.push_back(s.has_reference ? Sig(s.reference_rotation_arcsec) : "-");
+      row.push_back(Value(s.has_reference ? s.reference_position_m : kNaN));
+      row.push_back(
+          Value(s.has_reference ? ArcsecondsToDegrees(s.reference_rotation_arcsec) : kNaN));
     }
-    images.rows.push_back(row);
+    image_cells.push_back(row);
   }
+  FillTable(image_columns, image_cells, &images);
   for (const DatasetSolve& s : result.solves)
     if (!s.success)
       images.notes.push_back(s.raster + " " + result.solver_names[s.solver] + ": " + s.message);
@@ -410,25 +493,30 @@ std::vector<TextTable> BlockComparisonTables(const BlockComparisonOptions& optio
                   std::to_string(options.lines) + " x " + std::to_string(options.images_per_line) +
                   "), " + result.settings[setting].Label() + ", " + std::to_string(options.trials) +
                   " blocks";
-    table.header = {"solver",          "success",        "camera RMSE (mm)", "check RMSE (mm)",
-                    "NEES (3 = honest)", "iterations",   "time (ms)",        "x Taylor",
-                    "max offset from Taylor (mm)"};
+    const std::vector<Column> columns = {
+        TextColumn("solver"),           TextColumn("success"),
+        ValueColumn("camera RMSE", "m"), ValueColumn("check RMSE", "m"),
+        TextColumn("NEES (3 = honest)"), TextColumn("iterations"),
+        TextColumn("time (ms)"),        TextColumn("x Taylor"),
+        ValueColumn("max offset from Taylor", "m")};
+    std::vector<std::vector<Cell>> cells;
     for (size_t s = 0; s < result.solver_names.size(); ++s) {
       const BlockSolverStatistics& st = result.statistics[setting][s];
-      table.rows.push_back(
-          {result.solver_names[s], std::to_string(st.successes) + "/" + std::to_string(st.trials),
-           ReportFixed(1e3 * st.camera_rmse_m, 2), ReportFixed(1e3 * st.check_rmse_m, 2),
-           ReportFixed(st.mean_nees, 2) +
-               (st.nees_count > 0 && !st.nees_interval_95.Contains(st.mean_nees)
-                    ? " (outside " + ReportFixed(st.nees_interval_95.lower, 2) + "-" +
-                          ReportFixed(st.nees_interval_95.upper, 2) + ")"
-                    : ""),
-           ReportFixed(st.mean_iterations, 1), ReportFixed(1e3 * st.mean_seconds, 1),
-           ReportFixed(st.time_ratio_to_taylor, 2),
-           ReportFixed(1e3 * st.max_position_offset_m, 4)});
+      cells.push_back(
+          {Text(result.solver_names[s]),
+           Text(std::to_string(st.successes) + "/" + std::to_string(st.trials)),
+           Value(st.camera_rmse_m), Value(st.check_rmse_m),
+           Text(FormatUnitless(st.mean_nees) +
+                (st.nees_count > 0 && !st.nees_interval_95.Contains(st.mean_nees)
+                     ? " (outside " + FormatUnitless(st.nees_interval_95.lower) + "-" +
+                           FormatUnitless(st.nees_interval_95.upper) + ")"
+                     : "")),
+           Text(ReportFixed(st.mean_iterations, 1)), Text(ReportFixed(1e3 * st.mean_seconds, 1)),
+           Text(FormatUnitless(st.time_ratio_to_taylor)), Value(st.max_position_offset_m)});
       for (const std::string& failure : st.failures)
         table.notes.push_back(result.solver_names[s] + " failed: " + failure);
     }
+    FillTable(columns, cells, &table);
     tables.push_back(std::move(table));
   }
   return tables;
@@ -464,16 +552,22 @@ TextTable BlockDatasetTable(const BlockDatasetResult& result) {
                 std::to_string(result.num_points) + " points, " +
                 std::to_string(result.num_marks) + " marks): every solver from the same start; "
                 "offsets from " + (result.reference.empty() ? "no reference" : result.reference);
-  table.header = {"solver", "result", "offset RMS (mm)", "offset max (mm)", "check RMSE (mm)",
-                  "sigma0", "iterations", "time (ms)", "x Taylor"};
+  const std::vector<Column> columns = {
+      TextColumn("solver"),          TextColumn("result"),
+      ValueColumn("offset RMS", "m"), ValueColumn("offset max", "m"),
+      ValueColumn("check RMSE", "m"), TextColumn("sigma0"),
+      TextColumn("iterations"),      TextColumn("time (ms)"),
+      TextColumn("x Taylor")};
+  std::vector<std::vector<Cell>> cells;
   for (const BlockDatasetSolverSummary& s : result.solvers) {
-    table.rows.push_back(
-        {s.name, s.success ? "converged" : "failed", ReportFixed(1e3 * s.offset_rms_m, 4),
-         ReportFixed(1e3 * s.offset_max_m, 4), ReportFixed(1e3 * s.check_rmse_m, 2),
-         ReportFixed(s.sigma0, 4), std::to_string(s.iterations), ReportFixed(1e3 * s.seconds, 1),
-         ReportFixed(s.time_ratio_to_taylor, 2)});
+    cells.push_back({Text(s.name), Text(s.success ? "converged" : "failed"),
+                     Value(s.offset_rms_m), Value(s.offset_max_m), Value(s.check_rmse_m),
+                     Text(FormatUnitless(s.sigma0, 3)), Text(std::to_string(s.iterations)),
+                     Text(ReportFixed(1e3 * s.seconds, 1)),
+                     Text(FormatUnitless(s.time_ratio_to_taylor))});
     if (!s.success) table.notes.push_back(s.name + ": " + s.message);
   }
+  FillTable(columns, cells, &table);
   return table;
 }
 

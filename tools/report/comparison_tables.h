@@ -21,12 +21,14 @@ struct TextTable {
 
 // One sweep setting, for table titles and the comparison page: "oblique: noise 1 px, outliers
 // 10%, 20 control points, initial error +-5 m +-2 deg (axis; 200 trials x 1 image)". The values
-// through the report kit (html_kit.h): noise FormatSignificant in px, the outlier fraction in
+// through core/units.h: noise FormatSignificant in px, the outlier fraction in
 // percent, the initial errors FormatScaledLength and FormatScaledAngle; never an exponent.
 std::string SweepSettingTitle(const SweepSetting& setting, int trials, int images);
 
 // One table per setting; its notes say why samples were not solved. The definitions of the columns
-// are MonteCarloNotes.
+// are MonteCarloNotes. Every column of values is in the unit of its quantity (core/units.h
+// FormatInOneUnit: lengths in the mm, cm or m of the column's largest, angle errors in arc seconds,
+// marks in px), named in its header ("pos RMSE (cm)"); so are the other tables below.
 std::vector<TextTable> MonteCarloTables(const MonteCarloOptions& options,
                                         const MonteCarloResult& result);
 std::vector<TextTable> DatasetTables(const DatasetComparisonResult& result);

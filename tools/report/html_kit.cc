@@ -32,6 +32,7 @@ const char kStyle[] =
     "table{border-collapse:collapse;margin:1em 0;font-size:0.85em}"
     "caption{text-align:left;font-weight:bold;padding:0.3em 0}"
     "th,td{border:1px solid #ccc;padding:0.2em 0.5em;text-align:right;white-space:nowrap}"
+    "th{white-space:normal}"
     "th{background:#f0f0f0}td:first-child,th:first-child{text-align:left}"
     "th.group{text-align:center}th.blank{background:none;border:none}"
     "tr.section th{text-align:left;background:#e3ebf5;white-space:normal}"
@@ -49,9 +50,18 @@ const char kPrintStyle[] =
     "svg{max-width:100%;height:auto;box-sizing:border-box}.plots{gap:0.5em}"
     "table{font-size:7pt;max-width:100%}th,td{white-space:normal;padding:0.1em 0.2em}th{overflow-wrap:anywhere}"
     "code,pre{word-break:break-all}"
-    "svg,tr,.verdict{break-inside:avoid}h2{break-after:avoid}";
+    "dl.glossary{columns:2;column-gap:1.5em;margin:0}dl.glossary dt{break-after:avoid}"
+    "svg,tr,.verdict,dl.glossary dd{break-inside:avoid}h2,h3{break-after:avoid}";
 
 std::string Coordinate(double value) { return ReportNumber(value, "%.1f"); }
+
+// A plotted value as text (a bar's label, a marker's tooltip): three significant digits, "< 0.01"
+// below 0.01 in magnitude (a value that would read 0.000003 says nothing a reader can use; the
+// tables and CSV carry it).
+std::string PlotValueText(double value) {
+  if (value != 0.0 && std::abs(value) < 0.01) return value > 0.0 ? "< 0.01" : "> -0.01";
+  return FormatSignificant(value, 3);
+}
 
 // A line from (x1, y1) to (x2, y2) with more attributes.
 std::string SvgLine(double x1, double y1, double x2, double y2, const std::string& attributes) {
@@ -129,8 +139,8 @@ std::string SeriesMarkers(const PlotSeries& series, size_t s, const PlotFrame& f
     if (!std::isfinite(series.x[k]) || !std::isfinite(series.y[k])) continue;
     svg << SvgMarker(s, frame.X(x_axis, series.x[k]), frame.Y(y_axis, series.y[k]), r,
                      PlotColor(s))
-        << "<title>" << HtmlEscape(series.label) << ": " << FormatSignificant(series.x[k], 4)
-        << ", " << FormatSignificant(series.y[k], 4) << "</title></path>";
+        << "<title>" << HtmlEscape(series.label) << ": " << HtmlEscape(PlotValueText(series.x[k]))
+        << ", " << HtmlEscape(PlotValueText(series.y[k])) << "</title></path>";
   }
   return svg.str();
 }
@@ -204,173 +214,6 @@ std::string ReportNumber(double value, const char* format) {
   return buffer;
 }
 
-std::string ReportFixed(double value, int digits) {
-  if (!std::isfinite(value)) return "n/a";
-  char buffer[64];
-  std::snprintf(buffer, sizeof(buffer), "%.*f", digits, value);
-  return buffer;
-}
-
-LengthUnit LengthUnitFor(double largest_magnitude_m) {
-  const double m = std::abs(largest_magnitude_m);
-  if (!(m >= 0.1)) return LengthUnit::kMillimetre;  // NaN too
-  if (m < 10.0) return LengthUnit::kCentimetre;
-  return LengthUnit::kMetre;
-}
-
-double LargestMagnitude(const std::vector<double>& values) {
-  double largest = 0.0;
-  for (const double v : values)
-    if (std::isfinite(v)) largest = std::max(largest, std::abs(v));
-  return largest;
-}
-
-const char* LengthUnitName(LengthUnit unit) {
-  switch (unit) {
-    case LengthUnit::kMillimetre:
-      return "mm";
-    case LengthUnit::kCentimetre:
-      return "cm";
-    default:
-      return "m";
-  }
-}
-
-double LengthIn(double value_m, LengthUnit unit) {
-  switch (unit) {
-    case LengthUnit::kMillimetre:
-      return 1000.0 * value_m;
-    case LengthUnit::kCentimetre:
-      return 100.0 * value_m;
-    default:
-      return value_m;
-  }
-}
-
-std::string FormatLength(double value_m, LengthUnit unit) {
-  return ReportFixed(LengthIn(value_m, unit), unit == LengthUnit::kMetre ? 3 : 1);
-}
-
-std::string FormatLengthWithUnit(double value_m) { return FormatLengthsWithUnit({value_m})[0]; }
-
-std::vector<std::string> FormatLengthsWithUnit(const std::vector<double>& values_m) {
-  return FormatMarkValues(values_m, "m");
-}
-
-std::string FormatCoordinate(double value_m) { return ReportFixed(value_m, 3); }
-std::string FormatPixels(double value_px) { return ReportFixed(value_px, 2); }
-std::string FormatFilm(double value_um) { return ReportFixed(value_um, 2); }
-
-ValuesInOneUnit FormatInOneUnit(const std::vector<double>& values, const std::string& kind) {
-  ValuesInOneUnit out;
-  if (kind == "m") {
-    const LengthUnit unit = LengthUnitFor(LargestMagnitude(values));
-    out.unit = LengthUnitName(unit);
-    for (const double v : values) out.texts.push_back(FormatLength(v, unit));
-  } else if (kind == "deg") {
-    out.unit = "arcsec";
-    for (const double v : values) out.texts.push_back(FormatArcSeconds(v));
-  } else {
-    out.unit = kind;
-    for (const double v : values) out.texts.push_back(ReportFixed(v, 2));
-  }
-  return out;
-}
-
-std::vector<std::string> FormatMarkValues(const std::vector<double>& values,
-                                          const std::string& kind) {
-  ValuesInOneUnit in_one = FormatInOneUnit(values, kind);
-  for (size_t k = 0; k < values.size(); ++k)
-    if (std::isfinite(values[k])) in_one.texts[k] += " " + in_one.unit;
-  return in_one.texts;
-}
-
-std::string FormatMarkValue(double value, const std::string& kind) {
-  return FormatMarkValues({value}, kind)[0];
-}
-
-ColumnsInUnits FormatColumnsInUnits(const std::vector<std::vector<double>>& columns,
-                                    const std::vector<std::string>& row_kinds) {
-  ColumnsInUnits out;
-  const size_t num_rows = row_kinds.size();
-  out.texts.assign(columns.size(), std::vector<std::string>(num_rows));
-  out.units.assign(num_rows, "");
-  // Each kind's values over every column and row, in one unit.
-  std::vector<std::string> kinds(row_kinds);
-  std::sort(kinds.begin(), kinds.end());
-  kinds.erase(std::unique(kinds.begin(), kinds.end()), kinds.end());
-  for (const std::string& kind : kinds) {
-    std::vector<double> values;
-    for (const std::vector<double>& column : columns)
-      for (size_t r = 0; r < num_rows; ++r)
-        if (row_kinds[r] == kind) values.push_back(r < column.size() ? column[r] : kNaN);
-    const ValuesInOneUnit in_one = FormatInOneUnit(values, kind);
-    size_t k = 0;
-    for (size_t c = 0; c < columns.size(); ++c)
-      for (size_t r = 0; r < num_rows; ++r)
-        if (row_kinds[r] == kind) out.texts[c][r] = in_one.texts[k++];
-    for (size_t r = 0; r < num_rows; ++r)
-      if (row_kinds[r] == kind) out.units[r] = in_one.unit;
-  }
-  if (!out.units.empty() &&
-      std::all_of(out.units.begin(), out.units.end(),
-                  [&](const std::string& u) { return u == out.units.front(); }))
-    out.unit = out.units.front();
-  return out;
-}
-
-std::string FormatDegrees(double value_deg) { return ReportFixed(value_deg, 4); }
-std::string FormatArcSeconds(double value_deg) { return ReportFixed(3600.0 * value_deg, 1); }
-std::string FormatUnitless(double value, int decimals) { return ReportFixed(value, decimals); }
-
-std::string FormatSignificant(double value, int significant) {
-  if (!std::isfinite(value)) return "n/a";
-  if (value == 0.0) return "0";
-  const int magnitude = static_cast<int>(std::floor(std::log10(std::abs(value))));
-  const int decimals = std::clamp(significant - 1 - magnitude, 0, 6);
-  std::string text = ReportFixed(value, decimals);
-  // Trailing zeros of the decimals say nothing.
-  if (text.find('.') != std::string::npos) {
-    while (text.back() == '0') text.pop_back();
-    if (text.back() == '.') text.pop_back();
-  }
-  return text == "-0" ? "0" : text;
-}
-
-namespace {
-
-// A unit of a quantity and its size in the quantity's base unit (m, deg).
-struct ScaledUnit {
-  const char* name;
-  double size;
-};
-
-// `value` (base unit) in the largest of `ladder` (ascending sizes) in which its magnitude is at
-// least 0.1, the smallest when none is; 0 in the base unit.
-std::string FormatScaled(double value, const std::vector<ScaledUnit>& ladder, const char* base) {
-  if (!std::isfinite(value)) return "n/a";
-  if (value == 0.0) return std::string("0 ") + base;
-  const ScaledUnit* unit = &ladder.front();
-  for (const ScaledUnit& u : ladder)
-    if (std::abs(value) / u.size >= 0.1) unit = &u;
-  return FormatSignificant(value / unit->size, 4) + " " + unit->name;
-}
-
-}  // namespace
-
-std::string FormatScaledLength(double value_m) {
-  return FormatScaled(value_m, {{"mm", 1e-3}, {"m", 1.0}, {"km", 1e3}}, "m");
-}
-
-std::string FormatScaledAngle(double value_deg) {
-  return FormatScaled(value_deg, {{"arcsec", 1.0 / 3600.0}, {"deg", 1.0}}, "deg");
-}
-
-std::string FormatCount(long long count, const std::string& singular, const std::string& plural) {
-  return std::to_string(count) + " " +
-         (count == 1 ? singular : (plural.empty() ? singular + "s" : plural));
-}
-
 namespace {
 
 // A table's opening, caption and a row of <th> cells; the rows of <td> cells; the notes as a
@@ -438,12 +281,21 @@ std::string HtmlSectionedTable(const std::string& title, const std::vector<std::
   return html + "</table>\n" + NotesList(notes);
 }
 
+std::string HtmlGlossary(const std::vector<std::pair<std::string, std::string>>& terms) {
+  std::string html = "<dl class=\"glossary\">\n";
+  for (const auto& [term, meaning] : terms)
+    html += "<dt>" + HtmlEscape(term) + "</dt><dd>" + HtmlEscape(meaning) + "</dd>\n";
+  return html + "</dl>\n";
+}
+
 const char* PlotColor(size_t index) { return kColors[index % kNumPlotColors]; }
 
-std::string SvgOpen(double width, double height, const std::string& title) {
+std::string SvgOpen(double width, double height, const std::string& title,
+                    const std::string& kind) {
   std::ostringstream out;
   out << "<svg xmlns=\"http://www.w3.org/2000/svg\" viewBox=\"0 0 " << width << " " << height
-      << "\" width=\"" << width << "\" height=\"" << height << "\" class=\"plot\" role=\"img\" aria-label=\""
+      << "\" width=\"" << width << "\" height=\"" << height << "\" class=\"plot"
+      << (kind.empty() ? "" : " " + kind) << "\" role=\"img\" aria-label=\""
       << HtmlEscape(title) << "\" font-family=\"sans-serif\" font-size=\"12\">"
       << "<rect width=\"100%\" height=\"100%\" fill=\"#ffffff\"/>";
   return out.str();
@@ -563,14 +415,14 @@ std::string SvgAxes(const PlotFrame& frame, const PlotAxis* x_axis, const PlotAx
     for (double t : y_axis->Ticks()) {
       const double y = frame.Y(*y_axis, t);
       svg << SvgLine(frame.left, y, right, y, "stroke=\"#e5e5e5\"");
-      svg << SvgText(frame.left - 6, y + 4, TickLabel(t), "end");
+      svg << SvgText(frame.left - 6, y + 4, TickLabel(t), "end", " class=\"tick-y\"");
     }
   }
   if (x_axis != nullptr) {
     for (double t : x_axis->Ticks()) {
       const double x = frame.X(*x_axis, t);
       svg << SvgLine(x, frame.top, x, bottom, "stroke=\"#f0f0f0\"");
-      svg << SvgText(x, bottom + 16, TickLabel(t));
+      svg << SvgText(x, bottom + 16, TickLabel(t), "middle", " class=\"tick-x\"");
     }
   }
   svg << "<rect x=\"" << frame.left << "\" y=\"" << frame.top << "\" width=\"" << frame.width
@@ -708,9 +560,9 @@ std::string RenderBarPlotSvg(const BarPlot& plot) {
     const double w = std::max(0.5, axis.Fraction(v) * frame.width);
     svg << "<rect x=\"" << kLabelWidth << "\" y=\"" << Coordinate(y) << "\" width=\""
         << Coordinate(w) << "\" height=\"" << kBarHeight << "\" fill=\"" << PlotColor(k)
-        << "\"><title>" << HtmlEscape(plot.labels[k]) << ": " << FormatSignificant(v, 4)
+        << "\"><title>" << HtmlEscape(plot.labels[k]) << ": " << HtmlEscape(PlotValueText(v))
         << "</title></rect>";
-    svg << SvgText(kLabelWidth + w + 4, text_y, FormatSignificant(v, 3), "start");
+    svg << SvgText(kLabelWidth + w + 4, text_y, PlotValueText(v), "start");
   }
   svg << "</svg>";
   return svg.str();
@@ -724,8 +576,16 @@ std::string RenderHistogramSvg(const HistogramPlot& plot) {
     if (std::isfinite(v)) finite.push_back(v);
   const std::string title = plot.title + " (" + std::to_string(finite.size()) + ")";
   std::ostringstream svg;
-  svg << SvgOpen(kWidth, kHeight, title) << PlotTitle(kWidth / 2, title);
-  if (finite.empty()) return svg.str() + "</svg>";
+  svg << SvgOpen(kWidth, kHeight, title, "histogram") << PlotTitle(kWidth / 2, title);
+  const PlotFrame frame = SmallPlotFrame(kWidth, kHeight);
+  if (finite.empty()) {
+    PlotAxis x_axis = LinearPlotAxis(std::isfinite(plot.lo) ? plot.lo : -1.0,
+                                     std::isfinite(plot.hi) ? plot.hi : 1.0, false);
+    const PlotAxis y_axis = LinearPlotAxis(0.0, 1.0, true);
+    return svg.str() + SvgAxes(frame, &x_axis, &y_axis, plot.x_label, "count") +
+           SvgText(frame.left + frame.width / 2, frame.top + frame.height / 2, "no data") +
+           "</svg>";
+  }
   std::vector<double> sorted = finite;
   std::sort(sorted.begin(), sorted.end());
   double range_lo = plot.lo, range_hi = plot.hi;
@@ -742,7 +602,6 @@ std::string RenderHistogramSvg(const HistogramPlot& plot) {
     ++counts[std::clamp(bin, 0, kBins - 1)];
   }
   const int top = *std::max_element(counts.begin(), counts.end());
-  const PlotFrame frame = SmallPlotFrame(kWidth, kHeight);
   PlotAxis x_axis;
   x_axis.lo = range_lo;
   x_axis.hi = range_hi;
@@ -789,7 +648,7 @@ std::string RenderScatterPlotSvg(const ScatterPlot& plot) {
     if (!std::isfinite(plot.x[k]) || !std::isfinite(plot.y[k])) continue;
     svg << SvgMarker(0, frame.X(x_axis, plot.x[k]), frame.Y(y_axis, plot.y[k]), 3.5, PlotColor(0))
         << "<title>" << HtmlEscape(k < plot.labels.size() ? plot.labels[k] : std::string()) << ": "
-        << FormatSignificant(plot.y[k], 4) << "</title></path>";
+        << HtmlEscape(PlotValueText(plot.y[k])) << "</title></path>";
   }
   svg << "</svg>";
   return svg.str();

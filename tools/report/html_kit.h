@@ -12,7 +12,10 @@
 #include <cstddef>
 #include <limits>
 #include <string>
+#include <utility>
 #include <vector>
+
+#include "core/units.h"
 
 namespace photopose::cli {
 
@@ -30,85 +33,9 @@ std::string HtmlPageClose();
 std::string HtmlEscape(const std::string& text);
 
 // Numbers on pages and in report tables: `value` printed with a printf `format` for one double;
-// "n/a" when it is not finite. For SVG coordinates; page text uses the formatters below.
+// "n/a" when it is not finite. For SVG coordinates; page text uses core/units.h.
 std::string ReportNumber(double value, const char* format = "%.3g");
-// `value` with `digits` decimals; "n/a" when it is not finite.
-std::string ReportFixed(double value, int digits);
-
-// ------------------------------------------------------------------ numbers a surveyor reads
-// One formatter per quantity kind, all in fixed notation (never an exponent), "n/a" when not
-// finite. Lengths that are errors or sigmas take the unit their magnitude calls for; a table
-// column picks one unit for all its rows (LengthUnitFor of its largest magnitude) and names it in
-// its header.
-enum class LengthUnit { kMillimetre, kCentimetre, kMetre };
-// mm below 0.1 m, cm below 10 m, m from there (of the largest magnitude, m).
-LengthUnit LengthUnitFor(double largest_magnitude_m);
-// The largest finite magnitude of `values` (0 when there is none): what LengthUnitFor takes for a
-// column.
-double LargestMagnitude(const std::vector<double>& values);
-const char* LengthUnitName(LengthUnit unit);  // "mm", "cm", "m"
-// The value (m) in `unit` as a number (for plots).
-double LengthIn(double value_m, LengthUnit unit);
-// The value (m) in `unit` without the unit: mm and cm with one decimal, m with three.
-std::string FormatLength(double value_m, LengthUnit unit);
-// The value (m) in the unit its own magnitude calls for, with the unit: "6.9 mm", "1.24 m".
-std::string FormatLengthWithUnit(double value_m);
-// Lengths (m) printed side by side on one line, in one unit: LengthUnitFor of their largest
-// finite magnitude, each with the unit ("27.9 cm", "1000.0 cm"); "n/a" when not finite.
-std::vector<std::string> FormatLengthsWithUnit(const std::vector<double>& values_m);
-// A ground coordinate or a camera position (m) to the millimetre: "1234.567".
-std::string FormatCoordinate(double value_m);
-// Image measurements: pixels (px) and film coordinates (um), two decimals.
-std::string FormatPixels(double value_px);
-std::string FormatFilm(double value_um);
-// Values of one kind read together (a table column, the columns of a row, the figures of one
-// line) in one unit for all of them, and that unit's name. The kind is a group's unit
-// (BundleGroupStatistics::unit): marks in "px", "um", or "sigma" for a group mixing pixel and film
-// marks (solvers/bundle/bundle_statistics.cc), two decimals; "m" in mm, cm or m (LengthUnitFor of
-// the largest finite magnitude, FormatLength); "deg" in arc seconds, one decimal ("arcsec").
-struct ValuesInOneUnit {
-  std::string unit;                // "px", "um", "sigma", "mm", "cm", "m" or "arcsec"
-  std::vector<std::string> texts;  // one per value, without the unit; "n/a" when not finite
-};
-ValuesInOneUnit FormatInOneUnit(const std::vector<double>& values, const std::string& kind);
-// The same with the unit after each value ("5.0 mm", "0.50 px", "36.0 arcsec"; "n/a" alone): the
-// figures of one line (stated, RMS, estimated).
-std::vector<std::string> FormatMarkValues(const std::vector<double>& values,
-                                          const std::string& kind);
-// One value: FormatMarkValues({value}, kind).
-std::string FormatMarkValue(double value, const std::string& kind);
-
-// Columns of a table whose rows are of different kinds (e.g. the groups of an adjustment: marks in
-// px, points in m, attitudes in deg), the columns of one row read together (stated, RMS,
-// estimated): every value of one kind, over all the columns, in one unit (FormatInOneUnit), so
-// that a column never mixes mm and cm. When every row has the same unit, `unit` names it for the
-// headers; otherwise `unit` is empty and the table takes a unit column (`units`, one per row).
-// Cells never carry a unit.
-struct ColumnsInUnits {
-  std::vector<std::vector<std::string>> texts;  // [column][row], without the unit
-  std::vector<std::string> units;               // [row]: its kind's unit
-  std::string unit;                             // the unit of every row, or empty
-};
-ColumnsInUnits FormatColumnsInUnits(const std::vector<std::vector<double>>& columns,
-                                    const std::vector<std::string>& row_kinds);
-// Angles: degrees with four decimals, arc seconds (of a value in degrees) with one.
-std::string FormatDegrees(double value_deg);
-std::string FormatArcSeconds(double value_deg);
-// A unitless figure (sigma0, ratios, w, correlations) with `decimals` decimals.
-std::string FormatUnitless(double value, int decimals = 2);
-// `value` with `significant` significant digits in fixed notation (at most 6 decimals, so below
-// 0.0000005 it prints "0"): times, counts per second, calibration values.
-std::string FormatSignificant(double value, int significant = 3);
-// A value someone chose (a sweep's setting, an initial error, a threshold: an input, not a
-// measured error) with its unit and at most 4 significant digits (FormatSignificant), lengths and
-// angles in the unit that puts the magnitude in [0.1, 1000): lengths (m) in mm, m or km ("50 mm",
-// "0.5 m", "2.5 km"), angles (deg) in arc seconds or degrees ("36 arcsec", "2 deg"); the smallest
-// unit below that range, the largest above it; 0 in the base unit ("0 m"); "n/a" when not finite.
-std::string FormatScaledLength(double value_m);
-std::string FormatScaledAngle(double value_deg);
-// "1 image", "12 images".
-std::string FormatCount(long long count, const std::string& singular,
-                        const std::string& plural = "");
+// The numbers a surveyor reads (lengths, angles, marks in their fixed units): core/units.h.
 
 // A header cell over `span` columns of a table's header row (e.g. "centre (m)" over X, Y, Z):
 // the quantity and its unit once, short axis names under it.
@@ -138,6 +65,9 @@ std::string HtmlSectionedTable(const std::string& title, const std::vector<std::
                                const std::vector<TableSection>& sections,
                                const std::vector<std::string>& notes = {});
 
+// A glossary: <dl class="glossary"> with a <dt> term and <dd> meaning per pair, escaped.
+std::string HtmlGlossary(const std::vector<std::pair<std::string, std::string>>& terms);
+
 // ------------------------------------------------------------------ SVG primitives
 
 // The colour of series / bar `index`: the colour-blind-safe Okabe-Ito palette, then darker
@@ -145,9 +75,11 @@ std::string HtmlSectionedTable(const std::string& title, const std::vector<std::
 const char* PlotColor(size_t index);
 constexpr size_t kNumPlotColors = 10;
 
-// "<svg ...>" of width x height with role="img", an aria-label (the title), sans-serif 12 and a
-// white background; the caller closes it with "</svg>".
-std::string SvgOpen(double width, double height, const std::string& title);
+// "<svg ...>" of width x height with class "plot" (and `kind`, e.g. "histogram", when not empty),
+// role="img", an aria-label (the title), sans-serif 12 and a white background; the caller closes it
+// with "</svg>".
+std::string SvgOpen(double width, double height, const std::string& title,
+                    const std::string& kind = "");
 // A <text> at (x, y), escaped; `anchor` is start / middle / end; `extra` more attributes (with a
 // leading space).
 std::string SvgText(double x, double y, const std::string& text, const char* anchor = "middle",
@@ -190,8 +122,9 @@ struct PlotFrame {
 // The data rectangle of a small plot (histogram, scatter plot, small multiple) of width x height:
 // room for the title above, tick labels and the axis titles left and below.
 PlotFrame SmallPlotFrame(double width, double height);
-// Grid lines and labelled ticks of both axes, the frame, the x-axis title under the ticks and the
-// y-axis title turned along the left edge. A null axis draws neither its ticks nor its grid.
+// Grid lines and labelled ticks of both axes (tick labels of class "tick-x" and "tick-y"), the
+// frame, the x-axis title under the ticks and the y-axis title turned along the left edge. A null
+// axis draws neither its ticks nor its grid.
 std::string SvgAxes(const PlotFrame& frame, const PlotAxis* x_axis, const PlotAxis* y_axis,
                     const std::string& x_title, const std::string& y_title);
 // Plot convention (checked by the browser test, tests/tools/report/render_pages_test.py): every
@@ -237,7 +170,7 @@ struct BarPlot {
 // A histogram of values: 24 bins over [lo, hi] when both are finite (e.g. 0 and 1 for redundancy
 // numbers), else symmetric about 0 over +- the larger magnitude of the 0.25 % and 99.75 %
 // quantiles (a blunder does not squash the rest); values beyond go to the end bins. The y axis
-// counts, with ticks.
+// counts, with ticks; the <svg> has class "plot histogram"; without values its axes say "no data".
 struct HistogramPlot {
   std::string title;           // the count of finite values is appended
   std::string x_label;         // with its unit

@@ -8,6 +8,7 @@
 #include <cstdio>
 #include <fstream>
 #include <random>
+#include <regex>
 #include <set>
 
 #include "core/collinearity.h"
@@ -451,19 +452,34 @@ TEST(BundleAdjustment, MarkGroupsStateTheirUnitOrSigmasWhenMixed) {
   }
 }
 
-TEST(BundleAdjustment, SelfCalibrationRecoversFocalLengthAndRadialDistortion) {
+// The small block (20 x 20 tie grid) with its focal length 0.2 % off and K1 zeroed, adjusted with
+// both estimated.
+struct SelfCalibrated {
+  SmallBlock data;
+  double true_focal = 0.0, true_k1 = 0.0;
+  BundleAdjustmentResult result;
+};
+void AdjustSelfCalibrating(SelfCalibrated* s) {
   SmallBlockOptions o;
   o.tie_grid = 20;
-  SmallBlock data = MakeSmallBlock(o);
-  const double true_focal = data.block.cameras[0].params[kFrameFocal];
-  const double true_k1 = data.block.cameras[0].params[kFrameK1];
-  data.block.cameras[0].params[kFrameFocal] *= 1.002;
-  data.block.cameras[0].params[kFrameK1] = 0.0;
+  s->data = MakeSmallBlock(o);
+  Block& block = s->data.block;
+  s->true_focal = block.cameras[0].params[kFrameFocal];
+  s->true_k1 = block.cameras[0].params[kFrameK1];
+  block.cameras[0].params[kFrameFocal] *= 1.002;
+  block.cameras[0].params[kFrameK1] = 0.0;
   BundleAdjustmentConfig config;
-  ASSERT_TRUE(BundleAdjustmentConfig::FromCalibrationNames(data.block, {"FocalLength", "K1"}, &config).ok());
-  BundleAdjustmentResult result;
-  ASSERT_TRUE(BundleAdjust(QuietOptions(), config, &data.block, &result).ok());
-  ASSERT_TRUE(result.summary.IsSolutionUsable()) << result.summary.BriefReport();
+  ASSERT_TRUE(BundleAdjustmentConfig::FromCalibrationNames(block, {"FocalLength", "K1"}, &config).ok());
+  ASSERT_TRUE(BundleAdjust(QuietOptions(), config, &block, &s->result).ok());
+  ASSERT_TRUE(s->result.summary.IsSolutionUsable()) << s->result.summary.BriefReport();
+}
+
+TEST(BundleAdjustment, SelfCalibrationRecoversFocalLengthAndRadialDistortion) {
+  SelfCalibrated s;
+  ASSERT_NO_FATAL_FAILURE(AdjustSelfCalibrating(&s));
+  const SmallBlock& data = s.data;
+  const BundleAdjustmentResult& result = s.result;
+  const double true_focal = s.true_focal, true_k1 = s.true_k1;
   ASSERT_EQ(result.calibration.size(), 1u);
   const BundleCalibrationResult& c = result.calibration[0];
   ASSERT_EQ(c.names, (std::vector<std::string>{"FocalLength", "K1"}));
@@ -472,6 +488,27 @@ TEST(BundleAdjustment, SelfCalibrationRecoversFocalLengthAndRadialDistortion) {
   EXPECT_LT(std::abs(c.values[0] - true_focal), 4.0 * c.sigmas[0]) << result.FullReport(data.block);
   EXPECT_LT(std::abs(c.values[1] - true_k1), 4.0 * c.sigmas[1]) << result.FullReport(data.block);
   EXPECT_NEAR(c.correlation(0, 0), 1.0, 1e-12);
+}
+
+// The text report in the fixed units of core/units.h: marks in px, lengths in mm/cm/m with their
+// unit, sigma0 with three decimals, small calibration coefficients in a named power of ten; never
+// an exponent (printf's %g wrote "6.97e-05 m").
+TEST(BundleAdjustment, FullReportPrintsFixedUnitsWithoutExponents) {
+  SelfCalibrated s;
+  ASSERT_NO_FATAL_FAILURE(AdjustSelfCalibrating(&s));
+  ASSERT_GT(s.result.num_check_points, 0);
+  const std::string report = s.result.FullReport(s.data.block);
+  EXPECT_FALSE(std::regex_search(report, std::regex("[0-9.][eE][+-]?[0-9]"))) << report;
+  EXPECT_FALSE(std::regex_search(report, std::regex("(^|[^0-9.])-?0\\.0000[0-9]"))) << report;
+  EXPECT_TRUE(std::regex_search(report, std::regex("sigma0 [0-9]+\\.[0-9]{3} "))) << report;
+  EXPECT_TRUE(std::regex_search(report, std::regex("tie_marks: [0-9]+, [0-9.]+ px, [0-9.]+ px")))
+      << report;
+  EXPECT_TRUE(std::regex_search(report, std::regex("Check points: [0-9]+, RMSE [0-9.]+ (mm|cm|m)\n")))
+      << report;
+  EXPECT_TRUE(std::regex_search(report, std::regex("FocalLength = [0-9.]+ \\+- [0-9.]+ um\n")))
+      << report;
+  EXPECT_TRUE(std::regex_search(report, std::regex("K1 = -?[0-9.]+ \\+- [0-9.]+ 10\\^-[0-9]+ mm\\^-2\n")))
+      << report;
 }
 
 TEST(BundleAdjustment, CameraPositionCovarianceIsHonest) {

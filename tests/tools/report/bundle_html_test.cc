@@ -10,6 +10,7 @@
 #include "solvers/bundle/check_points.h"
 #include "tests/support/bundle_groups.h"
 #include "tools/report/bundle_report.h"
+#include "tools/report/html_kit.h"
 
 namespace photopose::cli {
 namespace {
@@ -54,8 +55,9 @@ TEST_F(BundleHtmlTest, SectionsComeInTheOrderASurveyorReadsThem) {
     EXPECT_GT(at, previous) << heading;
     previous = at;
   }
+  EXPECT_GT(html.find("<h3>Terms</h3>"), previous);  // the glossary closes the diagnostics
   // The overview: counts with their nouns, the flying height and GSD of the simulated block.
-  EXPECT_NE(html.find("<td>8 images of 8 images</td>"), std::string::npos);
+  EXPECT_NE(html.find("<td>8 of 8 images</td>"), std::string::npos);
   EXPECT_NE(html.find("Ground sample distance"), std::string::npos);
   EXPECT_NE(html.find("<b>Check points:</b> 2 points intersected"), std::string::npos);
   // Per-axis RMSE rows for control and check points, one length unit named in the header.
@@ -68,15 +70,36 @@ TEST_F(BundleHtmlTest, SectionsComeInTheOrderASurveyorReadsThem) {
   EXPECT_NE(html.find(">count</text>"), std::string::npos);
   EXPECT_NE(html.find(">redundancy number r (unitless, 0 to 1)</text>"), std::string::npos);
   // Every plot carries the kit's class and an axis label.
-  size_t plots = 0;
+  size_t plots = 0, histograms = 0;
   for (size_t at = html.find("<svg"); at != std::string::npos; at = html.find("<svg", at + 1)) {
     ++plots;
     const size_t end = html.find("</svg>", at);
     const std::string svg = html.substr(at, end - at);
-    EXPECT_NE(svg.find("class=\"plot\""), std::string::npos);
+    EXPECT_NE(svg.find("class=\"plot"), std::string::npos);
     EXPECT_NE(svg.find("class=\"axis-label\""), std::string::npos) << svg.substr(0, 200);
+    if (svg.find("class=\"plot histogram\"") == std::string::npos) continue;
+    ++histograms;
+    // A histogram: the count on y, a unit on x (lengths in mm, cm or m by the group's largest,
+    // never raw metres for marks); redundancy numbers with every x tick in [0, 1].
+    EXPECT_NE(svg.find(">count</text>"), std::string::npos) << svg.substr(0, 200);
+    EXPECT_TRUE(std::regex_search(
+        svg, std::regex("class=\"axis-label\">[^<]*\\((px|um|mm|cm|m|arcsec|unitless[^)]*)\\)<")))
+        << svg.substr(0, 200);
+    if (svg.find("aria-label=\"redundancy numbers") == std::string::npos) continue;
+    const std::regex tick("class=\"tick-x\">([^<]*)<");
+    int ticks = 0;
+    for (auto it = std::sregex_iterator(svg.begin(), svg.end(), tick); it != std::sregex_iterator();
+         ++it, ++ticks) {
+      const double value = std::stod((*it)[1].str());
+      EXPECT_GE(value, 0.0) << svg.substr(0, 200);
+      EXPECT_LE(value, 1.0) << svg.substr(0, 200);
+    }
+    EXPECT_GE(ticks, 2) << svg.substr(0, 200);
   }
   EXPECT_GE(plots, 6u);
+  EXPECT_GE(histograms, 3u);
+  // Camera positions' residuals (a few cm of GNSS noise) in cm or mm, not in metres.
+  EXPECT_EQ(html.find(">residual X (m)</text>"), std::string::npos);
   // The cameras' table: each quantity and its unit once over its axes (narrow enough for a 1280 px
   // screen, tests/tools/report/render_pages_test.py).
   EXPECT_NE(html.find("<th colspan=\"3\" class=\"group\">projection centre (m)</th>"),
@@ -216,6 +239,18 @@ TEST_F(BundleHtmlTest, AFailedAdjustmentSaysSoFirst) {
   const size_t failed = html.find("<b>Not adjusted:</b> the normal matrix is &lt;singular&gt;");
   ASSERT_NE(failed, std::string::npos);
   EXPECT_LT(failed, html.find("<h2>3. Control and check points</h2>"));
+}
+
+
+// Every term the report uses without explaining it in place is in its glossary, and the glossary
+// is on the page.
+TEST(BundleHtml, TheGlossaryExplainsTheReportsTerms) {
+  const std::string glossary = BundleGlossaryHtml();
+  EXPECT_EQ(glossary.rfind("<h3>Terms</h3>\n<dl class=\"glossary\">", 0), 0u);
+  for (const char* term : {"sigma0", "RMS / stated", "redundancy number", "redundancy share",
+                           "over-fitted", "w-test", "data snooping", "delta0", "e^T C^-1 e",
+                           "datum", "check point"})
+    EXPECT_NE(glossary.find(HtmlEscape(term)), std::string::npos) << term;
 }
 
 }  // namespace

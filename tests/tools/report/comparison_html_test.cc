@@ -5,9 +5,11 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <set>
 #include <string>
 
 #include "tests/support/text_count.h"
+#include "tools/report/comparison_tables.h"
 
 namespace photopose::cli {
 namespace {
@@ -50,6 +52,47 @@ TEST(ComparisonHtml, TheGlossaryExplainsEveryTermThePagesUse) {
                            "huber", "NEES", "nees_ap", "t/ref", "eq. 21", "success"})
     EXPECT_NE(glossary.find(term), std::string::npos) << term;
   EXPECT_EQ(glossary.rfind("<dl class=\"glossary\">", 0), 0u);
+}
+
+
+// Every column of every comparison table is in the glossary, its unit left out ("pos RMSE (cm)":
+// "pos RMSE"); the columns that only name a thing (solver, image, status, coordinates, angles) aside.
+TEST(ComparisonHtml, TheGlossaryExplainsEveryColumnOfTheTables) {
+  MonteCarloOptions options;
+  MonteCarloResult monte_carlo;
+  monte_carlo.solver_names = {"taylor"};
+  monte_carlo.settings.resize(1);
+  monte_carlo.settings[0].solvers.resize(1);
+  monte_carlo.settings[0].solvers[0].solver = "taylor";
+  DatasetComparisonResult dataset;
+  dataset.solver_names = {"taylor"};
+  dataset.reference_solver = "taylor";
+  dataset.has_reference = true;
+  dataset.summaries.resize(1);
+  BlockComparisonOptions block_options;
+  BlockComparisonResult blocks;
+  blocks.settings.resize(1);
+  blocks.solver_names = {"taylor"};
+  blocks.statistics = {{BlockSolverStatistics()}};
+  BlockDatasetResult block;
+  block.solvers.resize(1);
+  std::vector<TextTable> tables = MonteCarloTables(options, monte_carlo);
+  for (const TextTable& t : DatasetTables(dataset)) tables.push_back(t);
+  for (const TextTable& t : BlockComparisonTables(block_options, blocks)) tables.push_back(t);
+  tables.push_back(BlockDatasetTable(block));
+  const std::string glossary = ComparisonGlossaryHtml();
+  const std::set<std::string> naming = {"solver", "image",       "status",    "result", "X",
+                                        "Y",      "Z",           "omega",     "phi",    "kappa",
+                                        "inliers"};
+  size_t columns = 0;
+  for (const TextTable& table : tables)
+    for (const std::string& header : table.header) {
+      const std::string name = header.substr(0, header.find(" ("));
+      if (naming.count(name)) continue;
+      ++columns;
+      EXPECT_NE(glossary.find(HtmlEscape(name)), std::string::npos) << header;
+    }
+  EXPECT_GE(columns, 30u);
 }
 
 }  // namespace

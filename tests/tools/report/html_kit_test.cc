@@ -24,10 +24,7 @@ TEST(HtmlKit, EscapesTheFiveSpecialCharacters) {
 TEST(HtmlKit, NumbersSayNaWhenNotFinite) {
   EXPECT_EQ(ReportNumber(0.0123456), "0.0123");
   EXPECT_EQ(ReportNumber(2.5, "%g"), "2.5");
-  EXPECT_EQ(ReportFixed(1.23456, 2), "1.23");
-  EXPECT_EQ(ReportFixed(-0.5, 0), "-0");
   EXPECT_EQ(ReportNumber(std::nan("")), "n/a");
-  EXPECT_EQ(ReportFixed(INFINITY, 3), "n/a");
 }
 
 TEST(HtmlKit, PageHeadIsWellFormed) {
@@ -135,100 +132,15 @@ TEST(HtmlKit, BarPlotAndHistogram) {
   EXPECT_NE(RenderHistogramSvg(empty).find(">none (0)</text>"), std::string::npos);
 }
 
-TEST(HtmlKit, LengthsTakeTheUnitTheirMagnitudeCallsFor) {
-  EXPECT_EQ(LengthUnitFor(0.0123), LengthUnit::kMillimetre);
-  EXPECT_EQ(LengthUnitFor(0.25), LengthUnit::kCentimetre);
-  EXPECT_EQ(LengthUnitFor(12.0), LengthUnit::kMetre);
-  EXPECT_EQ(LengthUnitFor(std::nan("")), LengthUnit::kMillimetre);
-  EXPECT_EQ(FormatLength(-6.97e-05, LengthUnit::kMillimetre), "-0.1");
-  EXPECT_EQ(FormatLength(0.0267, LengthUnit::kCentimetre), "2.7");
-  EXPECT_EQ(FormatLength(1.2345, LengthUnit::kMetre), "1.234");  // 1.2345 is below it in binary
-  EXPECT_EQ(FormatLengthWithUnit(0.0069), "6.9 mm");
-  EXPECT_EQ(FormatLengthWithUnit(1.24), "124.0 cm");
-  EXPECT_EQ(FormatLengthWithUnit(std::nan("")), "n/a");
-  EXPECT_DOUBLE_EQ(LengthIn(0.5, LengthUnit::kCentimetre), 50.0);
+TEST(HtmlKit, GlossaryListsEachTermWithItsMeaningEscaped) {
+  EXPECT_EQ(HtmlGlossary({{"e^T C^-1 e", "below <3"}, {"w", "a test"}}),
+            "<dl class=\"glossary\">\n<dt>e^T C^-1 e</dt><dd>below &lt;3</dd>\n<dt>w</dt><dd>a "
+            "test</dd>\n</dl>\n");
 }
 
-// Figures printed side by side take one unit, the one their largest magnitude calls for.
-TEST(HtmlKit, LengthsOfOneLineShareOneUnit) {
-  EXPECT_EQ(FormatLengthsWithUnit({10.0, 2.787}), (std::vector<std::string>{"10.000 m", "2.787 m"}));
-  EXPECT_EQ(FormatLengthsWithUnit({0.005, 0.25}), (std::vector<std::string>{"0.5 cm", "25.0 cm"}));
-  EXPECT_EQ(FormatLengthsWithUnit({0.005, std::nan(""), -0.0069}),
-            (std::vector<std::string>{"5.0 mm", "n/a", "-6.9 mm"}));
-  EXPECT_EQ(FormatLengthsWithUnit({}), std::vector<std::string>{});
-  // A group's values: lengths share a unit, pixels, micrometres and arc seconds are fixed.
-  EXPECT_EQ(FormatMarkValues({10.0, 2.787}, "m"), (std::vector<std::string>{"10.000 m", "2.787 m"}));
-  EXPECT_EQ(FormatMarkValues({0.5, 18.6}, "px"), (std::vector<std::string>{"0.50 px", "18.60 px"}));
-  EXPECT_EQ(FormatMarkValues({0.01, 0.0000214}, "deg"),
-            (std::vector<std::string>{"36.0 arcsec", "0.1 arcsec"}));
-}
-
-// A table column of several groups: every length of the table in one unit, chosen once from the
-// largest (not 5.0 mm in one row and 50.0 cm in the next); other kinds in their fixed units; the
-// unit named once (for the header) when every row shares it.
-TEST(HtmlKit, ColumnsOfSeveralKindsTakeOneUnitPerKind) {
-  const ValuesInOneUnit lengths = FormatInOneUnit({0.005, 0.5, std::nan("")}, "m");
-  EXPECT_EQ(lengths.unit, "cm");
-  EXPECT_EQ(lengths.texts, (std::vector<std::string>{"0.5", "50.0", "n/a"}));
-  EXPECT_EQ(FormatInOneUnit({0.01}, "deg").unit, "arcsec");
-  EXPECT_EQ(FormatInOneUnit({0.01}, "deg").texts[0], "36.0");
-  EXPECT_EQ(FormatInOneUnit({0.456}, "um").texts[0], "0.46");
-
-  // Rows: control points (m), camera positions (m), tie marks (px); columns stated and RMS.
-  const ColumnsInUnits mixed =
-      FormatColumnsInUnits({{0.005, 0.5, 0.5}, {0.003, 0.2, 0.43}}, {"m", "m", "px"});
-  EXPECT_EQ(mixed.unit, "");  // lengths and pixels: a unit column
-  EXPECT_EQ(mixed.units, (std::vector<std::string>{"cm", "cm", "px"}));
-  EXPECT_EQ(mixed.texts[0], (std::vector<std::string>{"0.5", "50.0", "0.50"}));
-  EXPECT_EQ(mixed.texts[1], (std::vector<std::string>{"0.3", "20.0", "0.43"}));
-  // The largest of any column sets the unit of the kind in all of them.
-  const ColumnsInUnits lengths_only =
-      FormatColumnsInUnits({{0.005, 0.002}, {0.003, 0.2}}, {"m", "m"});
-  EXPECT_EQ(lengths_only.unit, "cm");
-  EXPECT_EQ(lengths_only.texts[0], (std::vector<std::string>{"0.5", "0.2"}));
-  for (const auto& column : {mixed.texts[0], mixed.texts[1], lengths_only.texts[1]})
-    for (const std::string& cell : column)
-      EXPECT_EQ(cell.find_first_of("abcdefghijklmnopqrstuvwxyz"), std::string::npos) << cell;
-  EXPECT_EQ(FormatColumnsInUnits({{}}, {}).unit, "");
-}
-
-// Values someone chose: at most 4 significant digits, scaled into 0.1 to 1000 of a unit.
-TEST(HtmlKit, ChosenValuesTakeTheUnitThatKeepsThemReadable) {
-  EXPECT_EQ(FormatScaledLength(5.0), "5 m");
-  EXPECT_EQ(FormatScaledLength(0.5), "0.5 m");
-  EXPECT_EQ(FormatScaledLength(0.05), "50 mm");
-  EXPECT_EQ(FormatScaledLength(0.0001), "0.1 mm");
-  EXPECT_EQ(FormatScaledLength(1e-5), "0.01 mm");  // below the range: the smallest unit
-  EXPECT_EQ(FormatScaledLength(2500.0), "2.5 km");
-  EXPECT_EQ(FormatScaledLength(1.23456), "1.235 m");
-  EXPECT_EQ(FormatScaledLength(0.0), "0 m");
-  EXPECT_EQ(FormatScaledLength(std::nan("")), "n/a");
-  EXPECT_EQ(FormatScaledAngle(2.0), "2 deg");
-  EXPECT_EQ(FormatScaledAngle(0.05), "180 arcsec");
-  EXPECT_EQ(FormatScaledAngle(1e-5), "0.036 arcsec");
-  EXPECT_EQ(FormatScaledAngle(-0.25), "-0.25 deg");
-}
-
-TEST(HtmlKit, NumbersNeverTakeAnExponent) {
-  EXPECT_EQ(FormatSignificant(0.000697, 3), "0.000697");
-  EXPECT_EQ(FormatSignificant(6.97e-05, 3), "0.00007");  // at most six decimals
-  EXPECT_EQ(FormatSignificant(2.45e-09, 3), "0");
-  EXPECT_EQ(FormatSignificant(1234567.0, 3), "1234567");
-  EXPECT_EQ(FormatSignificant(0.5, 3), "0.5");
-  EXPECT_EQ(FormatSignificant(-12.345, 3), "-12.3");
-  EXPECT_EQ(FormatArcSeconds(1.0 / 3600.0), "1.0");
-  EXPECT_EQ(FormatDegrees(12.3456789), "12.3457");
-  EXPECT_EQ(FormatPixels(0.456), "0.46");
-  EXPECT_EQ(FormatMarkValue(0.5, "px"), "0.50 px");
-  EXPECT_EQ(FormatMarkValue(0.005, "m"), "5.0 mm");  // a control point group's accuracy
-  EXPECT_EQ(FormatMarkValue(6.97e-05, "m"), "0.1 mm");
-  EXPECT_EQ(FormatMarkValue(0.01, "deg"), "36.0 arcsec");  // an attitude group's
-  EXPECT_EQ(FormatUnitless(0.0839), "0.08");
+TEST(HtmlKit, TickLabelsNeverTakeAnExponent) {
   EXPECT_EQ(TickLabel(0.0001), "0.0001");
   EXPECT_EQ(TickLabel(200000.0), "200000");
-  EXPECT_EQ(FormatCount(1, "image"), "1 image");
-  EXPECT_EQ(FormatCount(12, "image"), "12 images");
-  EXPECT_EQ(FormatCount(2, "check mark"), "2 check marks");
 }
 
 TEST(HtmlKit, HistogramOverAFixedRangeAndScatterPlot) {
@@ -245,6 +157,18 @@ TEST(HtmlKit, HistogramOverAFixedRangeAndScatterPlot) {
   EXPECT_EQ(svg.find(">-1</text>"), std::string::npos);
   EXPECT_NE(svg.find(">count</text>"), std::string::npos);
   EXPECT_EQ(Count(svg, "class=\"axis-label\""), 2u);
+  // Marked as a histogram, its x ticks marked for the page test (all in [0, 1] here).
+  EXPECT_NE(svg.find("class=\"plot histogram\""), std::string::npos);
+  EXPECT_NE(svg.find("class=\"tick-x\">0</text>"), std::string::npos);
+  EXPECT_NE(svg.find("class=\"tick-x\">1</text>"), std::string::npos);
+  EXPECT_EQ(svg.find("class=\"tick-x\">-"), std::string::npos);
+  // Without values: the axes and their titles still, and "no data".
+  HistogramPlot empty = redundancy;
+  empty.values = {std::nan("")};
+  const std::string nothing = RenderHistogramSvg(empty);
+  EXPECT_EQ(Count(nothing, "class=\"axis-label\""), 2u);
+  EXPECT_NE(nothing.find(">count</text>"), std::string::npos);
+  EXPECT_NE(nothing.find(">no data</text>"), std::string::npos);
 
   ScatterPlot scatter;
   scatter.title = "vertical errors";
@@ -256,6 +180,9 @@ TEST(HtmlKit, HistogramOverAFixedRangeAndScatterPlot) {
   const std::string points = RenderScatterPlotSvg(scatter);
   EXPECT_EQ(Count(points, "<title>"), 2u);  // the NaN is left out
   EXPECT_NE(points.find("<title>A: -4</title>"), std::string::npos);
+  // A tooltip never reads 0.000003: below 0.01 it says so.
+  scatter.y = {-4.0, 2e-6, 1.0};
+  EXPECT_NE(RenderScatterPlotSvg(scatter).find("<title>B: &lt; 0.01</title>"), std::string::npos);
   EXPECT_NE(points.find(">error Z (mm)</text>"), std::string::npos);
   EXPECT_EQ(Count(points, "class=\"axis-label\""), 2u);
   EXPECT_NE(points.find("class=\"plot\""), std::string::npos);
