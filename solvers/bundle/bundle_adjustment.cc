@@ -46,9 +46,14 @@ std::string FormatNumber3(double value) {
 
 class ProgressCallback final : public ceres::IterationCallback {
  public:
+  // *cancelled is set when the hook asks to stop.
   ProgressCallback(const BundleAdjustmentOptions& options, int round, int redundancy,
-                   Clock::time_point start)
-      : options_(options), round_(round), redundancy_(redundancy), start_(start) {}
+                   Clock::time_point start, bool* cancelled)
+      : options_(options),
+        round_(round),
+        redundancy_(redundancy),
+        start_(start),
+        cancelled_(cancelled) {}
   void set_free_gauge(bool free_gauge) { free_gauge_ = free_gauge; }
 
   ceres::CallbackReturnType operator()(const ceres::IterationSummary& summary) override {
@@ -65,8 +70,9 @@ class ProgressCallback final : public ceres::IterationCallback {
     info.step_successful = summary.step_is_successful;
     info.linear_solver_seconds = summary.step_solver_time_in_seconds;
     info.iteration_seconds = summary.iteration_time_in_seconds;
-    options_.solver.progress(info);
-    return ceres::SOLVER_CONTINUE;
+    if (options_.solver.progress(info)) return ceres::SOLVER_CONTINUE;
+    *cancelled_ = true;
+    return ceres::SOLVER_ABORT;
   }
 
  private:
@@ -74,6 +80,7 @@ class ProgressCallback final : public ceres::IterationCallback {
   int round_;
   int redundancy_;
   Clock::time_point start_;
+  bool* cancelled_;
   bool free_gauge_ = false;
 };
 
@@ -268,6 +275,7 @@ struct Adjustment {
   // The last change of the plan removed marks only (rejection, or snooping a mark): the round's
   // problem is updated in place instead of built again.
   bool marks_removed_only = false;
+  bool cancelled = false;  // the progress hook asked to stop
 };
 
 Status CheckInputs(const BundleAdjustmentOptions& options, const BundleAdjustmentConfig& config,
@@ -292,7 +300,8 @@ void Solve(Adjustment* a, int r, bool free_gauge, ceres::Solver::Summary* ceres_
   ceres::Solver::Options solver_options = internal::CeresSolverOptions(a->options, a->round);
   std::unique_ptr<ProgressCallback> callback;
   if (a->options.solver.progress) {
-    callback = std::make_unique<ProgressCallback>(a->options, r, a->round.redundancy(), a->start);
+    callback = std::make_unique<ProgressCallback>(a->options, r, a->round.redundancy(), a->start,
+                                                  &a->cancelled);
     callback->set_free_gauge(free_gauge);
     solver_options.callbacks.push_back(callback.get());
   }
@@ -326,6 +335,7 @@ bool SolveInFreeGaugeFirst(Adjustment* a, int r, ceres::Solver::Summary* ceres_s
   Solve(a, r, /*free_gauge=*/true, ceres_summary);
   summary.initial_cost = ceres_summary->initial_cost;
   *free_iterations = static_cast<int>(ceres_summary->iterations.size()) - 1;
+  if (a->cancelled) return true;  // done: the adjustment ends here
   if (internal::MoveToRelativeGauge(a->plan, fixed_eo, fixed_coordinate, &a->state.eo,
                                     &a->state.points)) {
     internal::ApplyRelativeGauge(a->plan, &a->state, &a->round);
@@ -364,14 +374,21 @@ void SolveRound(Adjustment* a, int r, ceres::Solver::Summary* ceres_summary) {
   summary.round_seconds.push_back(SecondsSince(round_start));
 }
 
-// A round that did not converge ends the adjustment: the summary says so, with what the round
-// adjusted (the statistics, which count them otherwise, are not computed).
+// A round that did not converge (or was cancelled by the progress hook) ends the adjustment: the
+// summary says so, with what the round adjusted (the statistics, which count them otherwise, are
+// not computed).
 void EndWithFailedRound(const Adjustment& a, int r, const ceres::Solver::Summary& ceres_summary) {
   BundleAdjustmentSummary& summary = a.result->summary;
-  summary.termination = ceres_summary.termination_type == ceres::NO_CONVERGENCE
+  summary.termination = a.cancelled ? SolverTermination::kCancelled
+                        : ceres_summary.termination_type == ceres::NO_CONVERGENCE
                             ? SolverTermination::kNoConvergence
                             : SolverTermination::kFailure;
-  summary.message = "round " + std::to_string(r) + ": " + ceres_summary.message;
+  summary.message = "round " + std::to_string(r) + ": " +
+                    (a.cancelled ? "cancelled by the progress hook after iteration " +
+                                       std::to_string(ceres_summary.iterations.empty()
+                                                          ? 0
+                                                          : ceres_summary.iterations.back().iteration)
+                                 : ceres_summary.message);
   summary.num_images = static_cast<int>(a.block->images.size());
   summary.num_points = static_cast<int>(
       std::count(a.plan.point_in_problem.begin(), a.plan.point_in_problem.end(), 1));
@@ -425,7 +442,7 @@ Status BundleAdjust(const BundleAdjustmentOptions& options,
   for (int r = 1;; ++r) {
     ceres::Solver::Summary ceres_summary;
     SolveRound(&a, r, &ceres_summary);
-    if (ceres_summary.termination_type != ceres::CONVERGENCE) {
+    if (ceres_summary.termination_type != ceres::CONVERGENCE || a.cancelled) {
       EndWithFailedRound(a, r, ceres_summary);
       return Status::Ok();
     }

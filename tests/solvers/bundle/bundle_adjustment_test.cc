@@ -612,7 +612,10 @@ TEST(BundleAdjustment, RelativeBlockSolvedFreeLandsInColmapsGauge) {
   ASSERT_TRUE(BundleAdjust(options, BundleAdjustmentConfig(), &fixed_block, &fixed).ok());
   options.solver.free_gauge_for_relative_blocks = true;
   std::vector<BundleIterationInfo> progress;
-  options.solver.progress = [&progress](const BundleIterationInfo& info) { progress.push_back(info); };
+  options.solver.progress = [&progress](const BundleIterationInfo& info) {
+    progress.push_back(info);
+    return true;
+  };
   ASSERT_TRUE(BundleAdjust(options, BundleAdjustmentConfig(), &free_block, &free).ok());
   ASSERT_TRUE(fixed.summary.IsSolutionUsable()) << fixed.summary.BriefReport();
   ASSERT_TRUE(free.summary.IsSolutionUsable()) << free.summary.BriefReport();
@@ -649,6 +652,54 @@ TEST(BundleAdjustment, RelativeBlockSolvedFreeLandsInColmapsGauge) {
   ASSERT_EQ(free.groups.size(), fixed.groups.size());
   for (size_t g = 0; g < free.groups.size(); ++g)
     EXPECT_NEAR(free.groups[g].redundancy_share, fixed.groups[g].redundancy_share, 1e-6);
+}
+
+// A progress hook that returns false after `stop_after` calls, counting them.
+struct CancellingHook {
+  int stop_after = 1;
+  std::vector<BundleIterationInfo> calls;
+  std::function<bool(const BundleIterationInfo&)> Hook() {
+    return [this](const BundleIterationInfo& info) {
+      calls.push_back(info);
+      return static_cast<int>(calls.size()) < stop_after;
+    };
+  }
+};
+
+TEST(BundleAdjustment, AProgressHookReturningFalseCancelsTheAdjustment) {
+  // Cancelled is not a failure: the summary says "cancelled", the hook is not called again, and
+  // the block keeps its start values. For an absolute block (stopped in its second iteration) and
+  // a relative one (stopped in its free-gauge solve, which must not go on in the gauge).
+  SmallBlockOptions relative;
+  relative.gnss = false;
+  relative.control_xy.clear();
+  relative.check_xy.clear();
+  for (const SmallBlockOptions& o : {SmallBlockOptions(), relative}) {
+    SmallBlock data = MakeSmallBlock(o);
+    const Block start = data.block;
+    const bool is_relative = o.control_xy.empty();
+    SCOPED_TRACE(is_relative ? "relative block" : "absolute block");
+    CancellingHook hook;
+    hook.stop_after = is_relative ? 1 : 2;
+    BundleAdjustmentOptions options = QuietOptions();
+    options.solver.progress = hook.Hook();
+    BundleAdjustmentResult result;
+    ASSERT_TRUE(BundleAdjust(options, BundleAdjustmentConfig(), &data.block, &result).ok());
+    EXPECT_EQ(result.summary.termination, SolverTermination::kCancelled) << result.summary.message;
+    EXPECT_STREQ(EnumName(result.summary.termination), "cancelled");
+    EXPECT_FALSE(result.summary.IsSolutionUsable());
+    EXPECT_NE(result.summary.message.find("cancelled by the progress hook"), std::string::npos)
+        << result.summary.message;
+    EXPECT_NE(result.summary.BriefReport().find("cancelled"), std::string::npos)
+        << result.summary.BriefReport();
+    ASSERT_EQ(static_cast<int>(hook.calls.size()), hook.stop_after);
+    EXPECT_EQ(hook.calls.back().free_gauge, is_relative);
+    EXPECT_EQ(result.summary.rounds, 1);
+    for (size_t i = 0; i < start.images.size(); ++i)
+      EXPECT_EQ(data.block.images[i].eo->parameters, start.images[i].eo->parameters) << i;
+    for (size_t p = 0; p < start.points.size(); ++p)
+      EXPECT_EQ(data.block.points[p].position_m, start.points[p].position_m) << p;
+  }
 }
 
 TEST(BundleAdjustment, TiePointsWithoutStartAreLeftOutAndNamed) {
