@@ -261,8 +261,16 @@ namespace {
 struct Adjustment {
   Adjustment(const BundleAdjustmentOptions& options, const BundleAdjustmentConfig& config,
              Block* block, BundleAdjustmentResult* result)
-      : options(options), config(config), block(block), result(result), start(Clock::now()) {}
+      : options(options),
+        build_options(options),
+        config(config),
+        block(block),
+        result(result),
+        start(Clock::now()) {}
   const BundleAdjustmentOptions& options;
+  // The options the rounds' problems are built with: `options`, without the tie loss once a
+  // robust round stalled (SolveRound).
+  BundleAdjustmentOptions build_options;
   const BundleAdjustmentConfig& config;
   Block* block;
   BundleAdjustmentResult* result;
@@ -330,7 +338,7 @@ bool SolveInFreeGaugeFirst(Adjustment* a, int r, ceres::Solver::Summary* ceres_s
   const double fixed_coordinate =
       a->state.eo[a->plan.relative_scale_image][a->plan.relative_scale_axis];
   const Clock::time_point build_start = Clock::now();
-  internal::BuildBundleRound(a->options, a->config, *a->block, free_plan, &a->state, &a->round);
+  internal::BuildBundleRound(a->build_options, a->config, *a->block, free_plan, &a->state, &a->round);
   summary.problem_build_seconds += SecondsSince(build_start);
   Solve(a, r, /*free_gauge=*/true, ceres_summary);
   summary.initial_cost = ceres_summary->initial_cost;
@@ -343,8 +351,35 @@ bool SolveInFreeGaugeFirst(Adjustment* a, int r, ceres::Solver::Summary* ceres_s
   }
   // No similarity reaches COLMAP's gauge from there: solved in that gauge from the start.
   a->state = start_state;
-  internal::BuildBundleRound(a->options, a->config, *a->block, a->plan, &a->state, &a->round);
+  internal::BuildBundleRound(a->build_options, a->config, *a->block, a->plan, &a->state, &a->round);
   return false;
+}
+
+// A robust round that reached its iteration limit has stalled, not failed: on a tie point whose
+// marks disagree with no majority (one of two marks gross, two of three), the misfit can sit in
+// either mark, and with both residuals outside the loss's quadratic zone the robust cost is almost
+// linear along the point's move. Ceres models a concave loss by reweighting alone (no second-order
+// correction for rho'' < 0), a curvature the linear cost does not have, so every step goes a
+// fraction of the way: the cost falls by the same amount each iteration (step quality 2: the
+// model predicts half the actual decrease) for hundreds or thousands of iterations (measured in
+// docs/performance.md, "Robust tie loss"). The data cannot say which mark is wrong; least squares
+// splits the misfit between them, where the rejection's w-tests see it. So the round goes on from
+// where it stopped as least squares, and so do the rounds after it; the summary's message says so.
+void ContinueWithoutTieLoss(Adjustment* a, int r, ceres::Solver::Summary* ceres_summary) {
+  BundleAdjustmentSummary& summary = a->result->summary;
+  const int stalled_iterations = static_cast<int>(ceres_summary->iterations.size()) - 1;
+  const LossType loss = a->build_options.robustness.tie_loss;
+  a->build_options.robustness.tie_loss = LossType::kNone;
+  const Clock::time_point build_start = Clock::now();
+  internal::BuildBundleRound(a->build_options, a->config, *a->block, a->plan, &a->state, &a->round);
+  summary.problem_build_seconds += SecondsSince(build_start);
+  Solve(a, r, /*free_gauge=*/false, ceres_summary);
+  summary.iterations += static_cast<int>(ceres_summary->iterations.size()) - 1;
+  summary.message = "round " + std::to_string(r) + ": the " + EnumName(loss) +
+                    " tie loss stalled (no convergence in " + std::to_string(stalled_iterations) +
+                    " iterations: tie marks outside its quadratic zone on points whose marks "
+                    "disagree); adjusted by least squares from there, blunders left to the "
+                    "rejection";
 }
 
 // Builds and solves round r; the summary's iteration counts, costs and redundancy follow.
@@ -359,13 +394,17 @@ void SolveRound(Adjustment* a, int r, ceres::Solver::Summary* ceres_summary) {
   } else {
     const Clock::time_point build_start = Clock::now();
     if (!(r > 1 && a->marks_removed_only && internal::UpdateBundleRound(a->plan, &a->round)))
-      internal::BuildBundleRound(a->options, a->config, *a->block, a->plan, &a->state, &a->round);
+      internal::BuildBundleRound(a->build_options, a->config, *a->block, a->plan, &a->state, &a->round);
     summary.problem_build_seconds += SecondsSince(build_start);
   }
   if (!solved) {
     Solve(a, r, /*free_gauge=*/false, ceres_summary);
     if (r == 1 && free_iterations == 0) summary.initial_cost = ceres_summary->initial_cost;
     summary.iterations += static_cast<int>(ceres_summary->iterations.size()) - 1;
+  }
+  if (ceres_summary->termination_type == ceres::NO_CONVERGENCE && !a->cancelled &&
+      a->build_options.robustness.tie_loss != LossType::kNone) {
+    ContinueWithoutTieLoss(a, r, ceres_summary);
   }
   summary.iterations += free_iterations;
   summary.rounds = r;
