@@ -209,12 +209,39 @@ Status ReadImageGps(const std::string& name, OpenImage open_image, ExifGps* gps,
   }
 }
 
+// exiv2 over bytes in memory (its MemIo: nothing is mapped).
+Exiv2::Image::AutoPtr OpenBytes(std::string_view bytes) {
+  return Exiv2::ImageFactory::open(reinterpret_cast<const Exiv2::byte*>(bytes.data()),
+                                   static_cast<long>(bytes.size()));
+}
+
+// exiv2 maps TIFF-based files (TIFF, DNG, most raw formats) while it parses them, and a file that
+// shrinks meanwhile ends the process with SIGBUS. So the file is opened by path only to learn its
+// format (exiv2 reads the magic number): a JPEG is parsed from the file, which exiv2 reads segment
+// by segment up to the image data and never maps (a few dozen KB of a 10 MB photo, as before);
+// every other format is read whole by ReadTextFile (regular files only, at most kMaxInputBytes,
+// read rather than mapped) and parsed from memory.
 Status ReadFileGps(const std::string& path, ExifGps* gps, bool* found) {
   // A FIFO would block exiv2's open until a writer comes; a folder or device is no image.
   std::error_code error;
   if (!std::filesystem::is_regular_file(path, error))
     return Status::Error(EscapeForMessage(path) + ": not a regular file (an image file is needed)");
-  return ReadImageGps(EscapeForMessage(path), [&path] { return Exiv2::ImageFactory::open(path); }, gps, found);
+  std::string bytes;
+  Status read;
+  const auto open = [&]() -> Exiv2::Image::AutoPtr {
+    Exiv2::Image::AutoPtr image = Exiv2::ImageFactory::open(path);
+    if (image.get() != nullptr && image->imageType() == Exiv2::ImageType::jpeg) return image;
+    image.reset();
+    read = ReadTextFile(path == "-" ? "./-" : path, &bytes);  // "-" is a file here, not stdin
+    if (!read.ok()) return Exiv2::Image::AutoPtr();
+    return OpenBytes(bytes);
+  };
+  const Status status = ReadImageGps(EscapeForMessage(path), open, gps, found);
+  if (!read.ok()) {
+    *found = false;
+    return read;
+  }
+  return status;
 }
 
 Status NoGpsError(const std::string& name) {
@@ -234,10 +261,8 @@ Status ParseExifGps(std::string_view bytes, const std::string& file_name, ExifGp
   if (bytes.size() > kMaxInputBytes)
     return Status::Error(EscapeForMessage(file_name) + ": is larger than " + std::to_string(kMaxInputBytes) + " bytes");
   bool found = false;
-  const auto open = [bytes] {
-    return Exiv2::ImageFactory::open(reinterpret_cast<const Exiv2::byte*>(bytes.data()), static_cast<long>(bytes.size()));
-  };
-  PHOTOPOSE_RETURN_IF_ERROR(ReadImageGps(EscapeForMessage(file_name), open, gps, &found));
+  PHOTOPOSE_RETURN_IF_ERROR(
+      ReadImageGps(EscapeForMessage(file_name), [bytes] { return OpenBytes(bytes); }, gps, &found));
   if (!found) return NoGpsError(EscapeForMessage(file_name));
   return Status::Ok();
 }

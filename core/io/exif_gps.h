@@ -22,8 +22,10 @@
 // exception of exiv2 (Exiv2::Error on a corrupt file) becomes a Status naming the file, its text
 // escaped and cut to 200 bytes. Ranges (docs/formats.md): latitude [-90, 90] and longitude
 // [-180, 180] degrees, height and RTK sigmas within 1e8 m, RtkFlag [0, 255]. Only regular files
-// are opened (a FIFO would block). exiv2 maps TIFF-based files (DNG, TIFF) while it reads them; a
-// file that shrinks meanwhile is outside what this reader guards (JPEG is read, not mapped).
+// are opened (a FIFO would block). No file is ever memory-mapped, so one that shrinks while it is
+// read is an error, never SIGBUS: a JPEG is read by exiv2 segment by segment up to its image data;
+// every other format (TIFF, DNG, raw, which exiv2 would map) is read whole into memory first,
+// at most kMaxInputBytes (core/io/csv.h; a larger file is an error naming it).
 
 #include <Eigen/Core>
 #include <optional>

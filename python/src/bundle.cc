@@ -151,7 +151,8 @@ void BindBundleProgressAndSummary(py::module_& m) {
       .def("__repr__", [](const py::object& self) { return PropertiesRepr(self); });
 
   py::class_<BundleAdjustmentSummary> summary(m, "BundleAdjustmentSummary");
-  summary.def_readonly("termination", &BundleAdjustmentSummary::termination)
+  summary.def_readonly("termination", &BundleAdjustmentSummary::termination,
+                       "'converged', 'no_convergence', 'failure' or 'cancelled'")
       .def_readonly("message", &BundleAdjustmentSummary::message)
       .def_readonly("datum", &BundleAdjustmentSummary::datum, "'absolute' or 'relative'")
       .def_readonly("datum_description", &BundleAdjustmentSummary::datum_description)
@@ -364,7 +365,9 @@ solvers refuse what they cannot adjust (self-calibration, COLMAP camera models, 
 arm) with the reason. Raises photopose.Error for invalid options or a block the
 adjustment cannot use; a failed or unconverged adjustment is result.summary.termination with the
 block unchanged. progress(info: BundleIterationInfo) is called after every iteration (from the
-adjusting thread, with the GIL); an exception it raises is raised when the adjustment returns.)doc");
+adjusting thread, with the GIL); returning False stops the adjustment after that iteration
+(result.summary.termination 'cancelled', the block unchanged; the Taylor solvers ignore it); an
+exception it raises stops it too and is raised when the call returns.)doc");
 }
 
 // Initial values of a block (solvers/bundle/block_initialization.h).

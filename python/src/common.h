@@ -171,8 +171,9 @@ struct PythonBlock {
 // A Python progress callback (None, or a callable taking one Info: a BundleIterationInfo from the
 // adjustments, a ResectionProgress from resect_images; anything else is a TypeError), called from
 // the library's threads with the GIL taken for the call alone. The first exception it raises stops
-// further calls and is raised again when the call returns; resect_images is cancelled by it, or by
-// the callback returning False (the C++ adjustment cannot be interrupted from its progress hook).
+// further calls and is raised again when the call returns. It cancels the call, as the callback
+// returning False does: resect_images' images not yet started, the Ceres adjustment after the
+// iteration (termination "cancelled"; the Taylor solvers ignore it and run to their end).
 class ProgressRelay {
  public:
   // `takes` names what the callback receives, for the TypeError ("a BundleIterationInfo").
@@ -203,12 +204,12 @@ class ProgressRelay {
       return false;
     }
   }
-  // The hook of a library call that reports Info (Result bool: a hook that may cancel, as Call
+  // The hook of a library call that reports Info and may be cancelled (it returns what Call
   // returns): empty without a callback.
-  template <typename Info = BundleIterationInfo, typename Result = void>
-  std::function<Result(const Info&)> Function() {
+  template <typename Info = BundleIterationInfo>
+  std::function<bool(const Info&)> Function() {
     if (!active()) return {};
-    return [this](const Info& info) { return static_cast<Result>(Call(info)); };
+    return [this](const Info& info) { return Call(info); };
   }
   // Raises the callback's exception, if any (with the GIL held).
   void Rethrow() {

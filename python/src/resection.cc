@@ -183,7 +183,7 @@ stated), observation_units_per_unit (image-plane units per mark unit, e.g. um pe
 void BindResectionResult(py::module_& m) {
   py::class_<ResectionSummary> summary(m, "ResectionSummary", "How the resection of one image went.");
   summary.def_readonly("termination", &ResectionSummary::termination,
-                       "'converged', 'no_convergence' or 'failure'")
+                       "'converged', 'no_convergence', 'failure' or 'cancelled'")
       .def_readonly("message", &ResectionSummary::message, "why it failed, with its numbers")
       .def_readonly("used_approximate", &ResectionSummary::used_approximate)
       .def_readonly("ransac_trials", &ResectionSummary::ransac_trials)
@@ -270,7 +270,7 @@ void BindResectionCalls(py::module_& m) {
         ResectionBatchOptions batch;
         batch.num_threads = num_threads;
         ProgressRelay relay(progress, "a ResectionProgress");
-        batch.progress = relay.Function<ResectionProgress, bool>();
+        batch.progress = relay.Function<ResectionProgress>();
         std::vector<ResectionResult> results;
         CallWithoutGil(
             [&] {

@@ -156,9 +156,29 @@ def test_progress_exception_is_raised_after_the_adjustment():
         calls.append(info.iteration)
         raise KeyboardInterrupt("stop")
 
+    start = block.image_parameters.copy()
     with pytest.raises(KeyboardInterrupt, match="stop"):
         pp.bundle_adjust(block, progress=stop)
     assert len(calls) == 1  # not called again after it raised
+    np.testing.assert_array_equal(block.image_parameters, start)  # the adjustment stopped there
+
+
+def test_progress_returning_false_cancels_the_adjustment():
+    block, _ = pp.simulate_block(seed=4, num_lines=2, images_per_line=5)
+    start = block.image_parameters.copy()
+    calls = []
+
+    def stop_after_two(info):
+        calls.append(info.iteration)
+        return len(calls) < 2  # None (no return) or True goes on; False stops
+
+    result = pp.bundle_adjust(block, progress=stop_after_two)
+    assert result.summary.termination == "cancelled"
+    assert "cancelled by the progress hook" in result.summary.message
+    assert calls == [0, 1]
+    np.testing.assert_array_equal(block.image_parameters, start)
+    # The same block adjusted without stopping: a callback returning None goes on.
+    assert pp.bundle_adjust(block, progress=lambda info: None).summary.termination == "converged"
 
 
 def test_bundle_adjust_releases_the_gil(assert_releases_gil):

@@ -237,6 +237,7 @@ def test_batch_resection_progress_returning_false_cancels():
     assert outcome(results[:10]) == outcome(alone[:10])
     for r in results[10:]:
         assert not r.success and r.summary.message.startswith("cancelled")
+        assert r.summary.termination == "cancelled"
         assert r.num_inliers == 0 and len(r.inliers) == 0
         assert repr(r).startswith("ResectionResult(cancelled, message='cancelled")
     # True and None go on.

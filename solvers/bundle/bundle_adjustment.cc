@@ -40,9 +40,14 @@ constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
 
 class ProgressCallback final : public ceres::IterationCallback {
  public:
+  // *cancelled is set when the hook asks to stop.
   ProgressCallback(const BundleAdjustmentOptions& options, int round, int redundancy,
-                   Clock::time_point start)
-      : options_(options), round_(round), redundancy_(redundancy), start_(start) {}
+                   Clock::time_point start, bool* cancelled)
+      : options_(options),
+        round_(round),
+        redundancy_(redundancy),
+        start_(start),
+        cancelled_(cancelled) {}
   void set_free_gauge(bool free_gauge) { free_gauge_ = free_gauge; }
 
   ceres::CallbackReturnType operator()(const ceres::IterationSummary& summary) override {
@@ -59,8 +64,9 @@ class ProgressCallback final : public ceres::IterationCallback {
     info.step_successful = summary.step_is_successful;
     info.linear_solver_seconds = summary.step_solver_time_in_seconds;
     info.iteration_seconds = summary.iteration_time_in_seconds;
-    options_.solver.progress(info);
-    return ceres::SOLVER_CONTINUE;
+    if (options_.solver.progress(info)) return ceres::SOLVER_CONTINUE;
+    *cancelled_ = true;
+    return ceres::SOLVER_ABORT;
   }
 
  private:
@@ -68,6 +74,7 @@ class ProgressCallback final : public ceres::IterationCallback {
   int round_;
   int redundancy_;
   Clock::time_point start_;
+  bool* cancelled_;
   bool free_gauge_ = false;
 };
 
@@ -260,8 +267,16 @@ namespace {
 struct Adjustment {
   Adjustment(const BundleAdjustmentOptions& options, const BundleAdjustmentConfig& config,
              Block* block, BundleAdjustmentResult* result)
-      : options(options), config(config), block(block), result(result), start(Clock::now()) {}
+      : options(options),
+        build_options(options),
+        config(config),
+        block(block),
+        result(result),
+        start(Clock::now()) {}
   const BundleAdjustmentOptions& options;
+  // The options the rounds' problems are built with: `options`, without the tie loss once a
+  // robust round stalled (SolveRound).
+  BundleAdjustmentOptions build_options;
   const BundleAdjustmentConfig& config;
   Block* block;
   BundleAdjustmentResult* result;
@@ -274,6 +289,7 @@ struct Adjustment {
   // The last change of the plan removed marks only (rejection, or snooping a mark): the round's
   // problem is updated in place instead of built again.
   bool marks_removed_only = false;
+  bool cancelled = false;  // the progress hook asked to stop
 };
 
 Status CheckInputs(const BundleAdjustmentOptions& options, const BundleAdjustmentConfig& config,
@@ -298,7 +314,8 @@ void Solve(Adjustment* a, int r, bool free_gauge, ceres::Solver::Summary* ceres_
   ceres::Solver::Options solver_options = internal::CeresSolverOptions(a->options, a->round);
   std::unique_ptr<ProgressCallback> callback;
   if (a->options.solver.progress) {
-    callback = std::make_unique<ProgressCallback>(a->options, r, a->round.redundancy(), a->start);
+    callback = std::make_unique<ProgressCallback>(a->options, r, a->round.redundancy(), a->start,
+                                                  &a->cancelled);
     callback->set_free_gauge(free_gauge);
     solver_options.callbacks.push_back(callback.get());
   }
@@ -327,11 +344,12 @@ bool SolveInFreeGaugeFirst(Adjustment* a, int r, ceres::Solver::Summary* ceres_s
   const double fixed_coordinate =
       a->state.eo[a->plan.relative_scale_image][a->plan.relative_scale_axis];
   const Clock::time_point build_start = Clock::now();
-  internal::BuildBundleRound(a->options, a->config, *a->block, free_plan, &a->state, &a->round);
+  internal::BuildBundleRound(a->build_options, a->config, *a->block, free_plan, &a->state, &a->round);
   summary.problem_build_seconds += SecondsSince(build_start);
   Solve(a, r, /*free_gauge=*/true, ceres_summary);
   summary.initial_cost = ceres_summary->initial_cost;
   *free_iterations = static_cast<int>(ceres_summary->iterations.size()) - 1;
+  if (a->cancelled) return true;  // done: the adjustment ends here
   if (internal::MoveToRelativeGauge(a->plan, fixed_eo, fixed_coordinate, &a->state.eo,
                                     &a->state.points)) {
     internal::ApplyRelativeGauge(a->plan, &a->state, &a->round);
@@ -339,8 +357,35 @@ bool SolveInFreeGaugeFirst(Adjustment* a, int r, ceres::Solver::Summary* ceres_s
   }
   // No similarity reaches COLMAP's gauge from there: solved in that gauge from the start.
   a->state = start_state;
-  internal::BuildBundleRound(a->options, a->config, *a->block, a->plan, &a->state, &a->round);
+  internal::BuildBundleRound(a->build_options, a->config, *a->block, a->plan, &a->state, &a->round);
   return false;
+}
+
+// A robust round that reached its iteration limit has stalled, not failed: on a tie point whose
+// marks disagree with no majority (one of two marks gross, two of three), the misfit can sit in
+// either mark, and with both residuals outside the loss's quadratic zone the robust cost is almost
+// linear along the point's move. Ceres models a concave loss by reweighting alone (no second-order
+// correction for rho'' < 0), a curvature the linear cost does not have, so every step goes a
+// fraction of the way: the cost falls by the same amount each iteration (step quality 2: the
+// model predicts half the actual decrease) for hundreds or thousands of iterations (measured in
+// docs/performance.md, "Robust tie loss"). The data cannot say which mark is wrong; least squares
+// splits the misfit between them, where the rejection's w-tests see it. So the round goes on from
+// where it stopped as least squares, and so do the rounds after it; the summary's message says so.
+void ContinueWithoutTieLoss(Adjustment* a, int r, ceres::Solver::Summary* ceres_summary) {
+  BundleAdjustmentSummary& summary = a->result->summary;
+  const int stalled_iterations = static_cast<int>(ceres_summary->iterations.size()) - 1;
+  const LossType loss = a->build_options.robustness.tie_loss;
+  a->build_options.robustness.tie_loss = LossType::kNone;
+  const Clock::time_point build_start = Clock::now();
+  internal::BuildBundleRound(a->build_options, a->config, *a->block, a->plan, &a->state, &a->round);
+  summary.problem_build_seconds += SecondsSince(build_start);
+  Solve(a, r, /*free_gauge=*/false, ceres_summary);
+  summary.iterations += static_cast<int>(ceres_summary->iterations.size()) - 1;
+  summary.message = "round " + std::to_string(r) + ": the " + EnumName(loss) +
+                    " tie loss stalled (no convergence in " + std::to_string(stalled_iterations) +
+                    " iterations: tie marks outside its quadratic zone on points whose marks "
+                    "disagree); adjusted by least squares from there, blunders left to the "
+                    "rejection";
 }
 
 // Builds and solves round r; the summary's iteration counts, costs and redundancy follow.
@@ -355,13 +400,17 @@ void SolveRound(Adjustment* a, int r, ceres::Solver::Summary* ceres_summary) {
   } else {
     const Clock::time_point build_start = Clock::now();
     if (!(r > 1 && a->marks_removed_only && internal::UpdateBundleRound(a->plan, &a->round)))
-      internal::BuildBundleRound(a->options, a->config, *a->block, a->plan, &a->state, &a->round);
+      internal::BuildBundleRound(a->build_options, a->config, *a->block, a->plan, &a->state, &a->round);
     summary.problem_build_seconds += SecondsSince(build_start);
   }
   if (!solved) {
     Solve(a, r, /*free_gauge=*/false, ceres_summary);
     if (r == 1 && free_iterations == 0) summary.initial_cost = ceres_summary->initial_cost;
     summary.iterations += static_cast<int>(ceres_summary->iterations.size()) - 1;
+  }
+  if (ceres_summary->termination_type == ceres::NO_CONVERGENCE && !a->cancelled &&
+      a->build_options.robustness.tie_loss != LossType::kNone) {
+    ContinueWithoutTieLoss(a, r, ceres_summary);
   }
   summary.iterations += free_iterations;
   summary.rounds = r;
@@ -370,14 +419,21 @@ void SolveRound(Adjustment* a, int r, ceres::Solver::Summary* ceres_summary) {
   summary.round_seconds.push_back(SecondsSince(round_start));
 }
 
-// A round that did not converge ends the adjustment: the summary says so, with what the round
-// adjusted (the statistics, which count them otherwise, are not computed).
+// A round that did not converge (or was cancelled by the progress hook) ends the adjustment: the
+// summary says so, with what the round adjusted (the statistics, which count them otherwise, are
+// not computed).
 void EndWithFailedRound(const Adjustment& a, int r, const ceres::Solver::Summary& ceres_summary) {
   BundleAdjustmentSummary& summary = a.result->summary;
-  summary.termination = ceres_summary.termination_type == ceres::NO_CONVERGENCE
+  summary.termination = a.cancelled ? SolverTermination::kCancelled
+                        : ceres_summary.termination_type == ceres::NO_CONVERGENCE
                             ? SolverTermination::kNoConvergence
                             : SolverTermination::kFailure;
-  summary.message = "round " + std::to_string(r) + ": " + ceres_summary.message;
+  summary.message = "round " + std::to_string(r) + ": " +
+                    (a.cancelled ? "cancelled by the progress hook after iteration " +
+                                       std::to_string(ceres_summary.iterations.empty()
+                                                          ? 0
+                                                          : ceres_summary.iterations.back().iteration)
+                                 : ceres_summary.message);
   summary.num_images = static_cast<int>(a.block->images.size());
   summary.num_points = static_cast<int>(
       std::count(a.plan.point_in_problem.begin(), a.plan.point_in_problem.end(), 1));
@@ -431,7 +487,7 @@ Status BundleAdjust(const BundleAdjustmentOptions& options,
   for (int r = 1;; ++r) {
     ceres::Solver::Summary ceres_summary;
     SolveRound(&a, r, &ceres_summary);
-    if (ceres_summary.termination_type != ceres::CONVERGENCE) {
+    if (ceres_summary.termination_type != ceres::CONVERGENCE || a.cancelled) {
       EndWithFailedRound(a, r, ceres_summary);
       return Status::Ok();
     }

@@ -272,8 +272,11 @@ struct BundleSolverOptions {
   // COLMAP's gauge from the start.
   bool free_gauge_for_relative_blocks = true;
   int num_threads = 0;                  // 0: all cores (count)
-  // Progress callback after every iteration (may be empty).
-  std::function<void(const BundleIterationInfo&)> progress;
+  // Progress callback after every iteration (may be empty). Returning false stops the adjustment
+  // after that iteration: the summary's termination is kCancelled and the block is left as it
+  // was. Called from the adjusting thread. The Taylor solvers (taylor_bundle.h) report through it
+  // too but ignore what it returns.
+  std::function<bool(const BundleIterationInfo&)> progress;
 
   bool IsValid(std::string* why) const;
 };

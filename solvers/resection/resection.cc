@@ -770,7 +770,7 @@ class BatchProgress {
 ResectionResult CancelledResult() {
   ResectionResult result;
   result.cancelled = true;
-  result.summary.termination = SolverTermination::kFailure;
+  result.summary.termination = SolverTermination::kCancelled;
   result.summary.message = "cancelled: the batch was cancelled by its progress hook before this "
                            "image started";
   return result;

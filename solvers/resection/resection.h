@@ -200,7 +200,8 @@ struct ResectionResult {
   std::vector<std::string> warnings;
   // Not resected: a batch's progress hook cancelled the batch before this image started
   // (ResectImages with ResectionBatchOptions::progress). No pose and no statistics; success is
-  // false and summary.message says "cancelled".
+  // false, summary.termination is kCancelled (not a failure: nothing was tried) and
+  // summary.message starts "cancelled".
   bool cancelled = false;
   ResectionSummary summary;
 };

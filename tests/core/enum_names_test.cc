@@ -155,7 +155,7 @@ TEST(EnumNames, EveryTableRoundTrips) {
 TEST(EnumNames, PrintedNamesAndAliasesAreThoseOfTheFormats) {
   EXPECT_EQ(EnumChoices<RotationConvention>(), "rxryrz (alias seed), opk or pok");
   EXPECT_EQ(ParseEnum<RotationConvention>("Seed"), RotationConvention::kSeed);
-  EXPECT_EQ(EnumChoices<SolverTermination>(), "converged, no_convergence or failure");
+  EXPECT_EQ(EnumChoices<SolverTermination>(), "converged, no_convergence, failure or cancelled");
   EXPECT_EQ(EnumChoices<LossType>(), "none, huber, softl1, cauchy, arctan or tukey");
   EXPECT_EQ(EnumNameList(kBundleTieLosses), "none, huber, cauchy or softl1");
   EXPECT_EQ(EnumChoices<JacobianType>(), "analytic or autodiff");

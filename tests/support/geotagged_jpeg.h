@@ -1,5 +1,5 @@
 #pragma once
-// Writes small JPEG files carrying GPS tags, as a drone writes them, for the tests of
+// Writes small JPEG (or TIFF) files carrying GPS tags, as a drone writes them, for the tests of
 // core/io/exif_gps: EXIF GPS (degrees, minutes, seconds as rationals; altitude with its Ref) and/or
 // DJI's XMP drone-dji tags with the RTK accuracies.
 #include <exiv2/exiv2.hpp>
@@ -21,6 +21,8 @@ struct GeotagOptions {
   bool dji_misspelt_longitude = false;  // GpsLongtitude, as some DJI firmware writes it
   std::optional<Eigen::Vector3d> rtk_sigma_enu_m;  // RtkStdLon, RtkStdLat, RtkStdHgt
   std::optional<int> rtk_flag;
+  // Bytes of an ImageDescription tag (0: none), to make a file larger than its metadata alone.
+  size_t description_bytes = 0;
 };
 
 // Degrees -> "d/1 m/1 s*1e6/1e6" rationals (seconds to 1e-6", 3 cm of a millimetre).
@@ -43,16 +45,43 @@ inline std::string Decimal(double value) {
   return buffer;
 }
 
-// Creates `path` as a blank JPEG with the tags of `options`.
-inline void WriteGeotaggedJpeg(const std::string& path, const GeotagOptions& options) {
+// Creates `path` as a blank image of `type` (Exiv2::ImageType::jpeg or tiff) with the tags of
+// `options`. exiv2 creates blank JPEGs only: a TIFF starts as a 1 x 1 grey image (little-endian,
+// one uncompressed strip), whose first directory exiv2 then fills.
+inline void WriteGeotaggedImage(const std::string& path, const GeotagOptions& options, int type) {
   std::filesystem::create_directories(std::filesystem::path(path).parent_path());
   Exiv2::XmpParser::initialize();
   try {
     Exiv2::XmpProperties::registerNs("http://www.dji.com/drone-dji/1.0/", "drone-dji");
   } catch (const std::exception&) {
   }
-  auto image = Exiv2::ImageFactory::create(Exiv2::ImageType::jpeg, path);
-  Exiv2::ExifData exif;
+  if (type == Exiv2::ImageType::tiff) {
+    std::FILE* file = std::fopen(path.c_str(), "wb");
+    static const unsigned char kBlankTiff[] = {
+        'I', 'I', 42, 0, 8, 0, 0, 0,                  // header: first directory at byte 8
+        8, 0,                                         // 8 entries (tag, type, count, value)
+        0x00, 0x01, 3, 0, 1, 0, 0, 0, 1, 0, 0, 0,     // ImageWidth 1
+        0x01, 0x01, 3, 0, 1, 0, 0, 0, 1, 0, 0, 0,     // ImageLength 1
+        0x02, 0x01, 3, 0, 1, 0, 0, 0, 8, 0, 0, 0,     // BitsPerSample 8
+        0x03, 0x01, 3, 0, 1, 0, 0, 0, 1, 0, 0, 0,     // Compression: none
+        0x06, 0x01, 3, 0, 1, 0, 0, 0, 1, 0, 0, 0,     // PhotometricInterpretation: black is 0
+        0x11, 0x01, 4, 0, 1, 0, 0, 0, 110, 0, 0, 0,   // StripOffsets 110
+        0x16, 0x01, 3, 0, 1, 0, 0, 0, 1, 0, 0, 0,     // RowsPerStrip 1
+        0x17, 0x01, 4, 0, 1, 0, 0, 0, 1, 0, 0, 0,     // StripByteCounts 1
+        0, 0, 0, 0,                                   // no next directory
+        128};                                         // the pixel, at byte 110
+    std::fwrite(kBlankTiff, 1, sizeof(kBlankTiff), file);
+    std::fclose(file);
+  }
+  auto image = type == Exiv2::ImageType::tiff ? Exiv2::ImageFactory::open(path)
+                                               : Exiv2::ImageFactory::create(type, path);
+  Exiv2::ExifData exif;  // a TIFF's image tags kept
+  if (type == Exiv2::ImageType::tiff) {
+    image->readMetadata();
+    exif = image->exifData();
+  }
+  if (options.description_bytes > 0)
+    exif["Exif.Image.ImageDescription"] = std::string(options.description_bytes, 'd');
   if (options.exif_lon_lat_height) {
     const Eigen::Vector3d& p = *options.exif_lon_lat_height;
     exif["Exif.GPSInfo.GPSVersionID"] = "2 3 0 0";
@@ -83,6 +112,14 @@ inline void WriteGeotaggedJpeg(const std::string& path, const GeotagOptions& opt
   image->setExifData(exif);
   image->setXmpData(xmp);
   image->writeMetadata();
+}
+
+inline void WriteGeotaggedJpeg(const std::string& path, const GeotagOptions& options) {
+  WriteGeotaggedImage(path, options, Exiv2::ImageType::jpeg);
+}
+
+inline void WriteGeotaggedTiff(const std::string& path, const GeotagOptions& options) {
+  WriteGeotaggedImage(path, options, Exiv2::ImageType::tiff);
 }
 
 // Sets one XMP text tag of an existing image file (e.g. a malformed DJI value).

@@ -83,8 +83,11 @@ double CentreRmseMm(const BenchData& data, const Block& adjusted) {
 template <typename Adjust>
 void TimeAdjustment(benchmark::State& state, const BenchData& data, Adjust adjust) {
   IterationClock clock;
-  const std::function<void(const BundleIterationInfo&)> progress =
-      [&clock](const BundleIterationInfo& info) { clock.Add(info); };
+  const std::function<bool(const BundleIterationInfo&)> progress =
+      [&clock](const BundleIterationInfo& info) {
+        clock.Add(info);
+        return true;
+      };
   Block block;
   double per_iteration_sum = 0.0;
   int solves = 0;

@@ -4,7 +4,8 @@ module"): what a call from Python costs on top of the library.
 
     PYTHONPATH=build/python python3 tools/benchmarks/python_benchmark.py \
         --peer=build/photopose_python_benchmark_peer [--images=10000] [--bundle_lines=5] \
-        [--bundle_images_per_line=20] [--repeats=3] [--threads=0] [--work_dir=DIR]
+        [--bundle_images_per_line=20] [--repeats=3] [--threads=0] [--work_dir=DIR] \
+        [--only=resect|bundle]
 
 1. Batch resection: --images synthetic images, 8 control points each (24 mm, 4 um pixels,
    6000 x 4000 px at 100 m, marks with 0.5 px noise and stated accuracy, a 30 px blunder in every
@@ -15,7 +16,10 @@ module"): what a call from Python costs on top of the library.
    progress hook that counts its calls.
 2. Bundle: a synthetic block of --bundle_lines x --bundle_images_per_line images written as
    tables; both read them and time the bundle adjustment alone (default options, then without the
-   per-observation diagnostics), each run on a fresh copy of the block.
+   per-observation diagnostics), each run on a fresh copy of the block. The sides alternate call
+   by call (Python first on even repeats, C++ first on odd ones: the peer runs one call per
+   launch), so that a change of the machine's load between calls falls on both; neither side
+   times the freeing of the previous call's result.
 Each side runs each call --repeats times; the table gives the median and the fastest run of each
 side and their ratios (the machine is shared: the fastest run is the least disturbed). Both sides'
 poses must agree (printed), so that the same work is timed.
@@ -96,62 +100,18 @@ def main():
     parser.add_argument("--repeats", type=int, default=3)
     parser.add_argument("--threads", type=int, default=0, help="0: all cores (both sides)")
     parser.add_argument("--work_dir", default=None, help="default: a temporary folder")
+    parser.add_argument("--only", choices=("resect", "bundle"), default=None,
+                        help="time these calls alone (default: both)")
     args = parser.parse_args()
 
     with tempfile.TemporaryDirectory() as scratch:
         work = pathlib.Path(args.work_dir or scratch)
         rows = []
 
-        resect_dir = work / "resect"
-        resect_dir.mkdir(parents=True, exist_ok=True)
-        resection_tables(resect_dir, args.images)
-        block = pp.read_block(resect_dir / "cameras.csv", resect_dir / "points.csv",
-                              resect_dir / "marks.csv")
-        images, inputs = block.resection_inputs()
-        for with_progress in (False, True):
-            mode = "resect_progress" if with_progress else "resect"
-            cpp_seconds, cpp_poses, cpp_calls = run_peer(args.peer, mode, resect_dir, args.threads,
-                                                         args.repeats)
-            infos = []
-            progress = infos.append if with_progress else None
-            times = []
-            for _ in range(args.repeats):
-                start = time.perf_counter()
-                results = pp.resect_images(inputs, num_threads=args.threads, progress=progress)
-                times.append(time.perf_counter() - start)
-            python_poses = np.full((block.num_images, 6), np.nan)
-            for image, result in zip(images, results):
-                if result.success:
-                    python_poses[image] = result.eo.parameters
-            solved = int((~np.isnan(python_poses).any(axis=1)).sum())
-            name = f"resect_images, {len(inputs)} images ({solved} solved)"
-            if with_progress:
-                name += (f", progress (Python: {len(infos) // args.repeats} calls; "
-                         f"C++: a hook, {cpp_calls} calls)")
-            rows.append((name, times, cpp_seconds, pose_difference(python_poses, cpp_poses)))
-
-        bundle_dir = work / "bundle"
-        bundle_dir.mkdir(parents=True, exist_ok=True)
-        bundle_tables(bundle_dir, args.bundle_lines, args.bundle_images_per_line)
-        block = pp.read_block(bundle_dir / "cameras.csv", bundle_dir / "points.csv",
-                              bundle_dir / "marks.csv", frames=bundle_dir / "frames.csv")
-        for diagnostics, mode in ((True, "bundle"), (False, "bundle_no_diagnostics")):
-            options = pp.BundleAdjustmentOptions()
-            options.solver.num_threads = args.threads
-            options.statistics.observation_diagnostics = diagnostics
-            times = []
-            for _ in range(args.repeats):
-                adjusted = block.copy()
-                start = time.perf_counter()
-                result = pp.bundle_adjust(adjusted, options)
-                times.append(time.perf_counter() - start)
-                if not result.summary.is_solution_usable():
-                    sys.exit(f"bundle: {result.summary.message}")
-            cpp_seconds, cpp_poses, _ = run_peer(args.peer, mode, bundle_dir, args.threads, args.repeats)
-            name = f"bundle_adjust, {block.num_images} images, {block.num_marks} marks"
-            if not diagnostics:
-                name += ", observation_diagnostics off"
-            rows.append((name, times, cpp_seconds, pose_difference(adjusted.image_parameters, cpp_poses)))
+        if args.only != "bundle":
+            rows += resection_rows(args, work)
+        if args.only != "resect":
+            rows += bundle_rows(args, work)
 
     print(f"{args.repeats} runs a side; median (fastest) in seconds")
     print("| call | Python (s) | C++ (s) | Python / C++ | largest pose difference |")
@@ -160,6 +120,70 @@ def main():
         python_m, cpp_m = float(np.median(python_s)), float(np.median(cpp_s))
         print(f"| {name} | {python_m:.3f} ({min(python_s):.3f}) | {cpp_m:.3f} ({min(cpp_s):.3f}) | "
               f"{python_m / cpp_m:.3f} ({min(python_s) / min(cpp_s):.3f}) | {difference:.1e} |")
+
+
+def resection_rows(args, work):
+    rows = []
+    resect_dir = work / "resect"
+    resect_dir.mkdir(parents=True, exist_ok=True)
+    resection_tables(resect_dir, args.images)
+    block = pp.read_block(resect_dir / "cameras.csv", resect_dir / "points.csv",
+                          resect_dir / "marks.csv")
+    images, inputs = block.resection_inputs()
+    for with_progress in (False, True):
+        mode = "resect_progress" if with_progress else "resect"
+        cpp_seconds, cpp_poses, cpp_calls = run_peer(args.peer, mode, resect_dir, args.threads,
+                                                     args.repeats)
+        infos = []
+        progress = infos.append if with_progress else None
+        times = []
+        for _ in range(args.repeats):
+            start = time.perf_counter()
+            results = pp.resect_images(inputs, num_threads=args.threads, progress=progress)
+            times.append(time.perf_counter() - start)
+        python_poses = np.full((block.num_images, 6), np.nan)
+        for image, result in zip(images, results):
+            if result.success:
+                python_poses[image] = result.eo.parameters
+        solved = int((~np.isnan(python_poses).any(axis=1)).sum())
+        name = f"resect_images, {len(inputs)} images ({solved} solved)"
+        if with_progress:
+            name += (f", progress (Python: {len(infos) // args.repeats} calls; "
+                     f"C++: a hook, {cpp_calls} calls)")
+        rows.append((name, times, cpp_seconds, pose_difference(python_poses, cpp_poses)))
+    return rows
+
+
+def bundle_rows(args, work):
+    rows = []
+    bundle_dir = work / "bundle"
+    bundle_dir.mkdir(parents=True, exist_ok=True)
+    bundle_tables(bundle_dir, args.bundle_lines, args.bundle_images_per_line)
+    block = pp.read_block(bundle_dir / "cameras.csv", bundle_dir / "points.csv",
+                          bundle_dir / "marks.csv", frames=bundle_dir / "frames.csv")
+    for diagnostics, mode in ((True, "bundle"), (False, "bundle_no_diagnostics")):
+        options = pp.BundleAdjustmentOptions()
+        options.solver.num_threads = args.threads
+        options.statistics.observation_diagnostics = diagnostics
+        times, cpp_seconds = [], []
+        for repeat in range(args.repeats):
+            if repeat % 2 == 1:
+                cpp_seconds += run_peer(args.peer, mode, bundle_dir, args.threads, 1)[0]
+            adjusted = block.copy()
+            result = None  # the previous result freed here, outside the timing (as in C++)
+            start = time.perf_counter()
+            result = pp.bundle_adjust(adjusted, options)
+            times.append(time.perf_counter() - start)
+            if not result.summary.is_solution_usable():
+                sys.exit(f"bundle: {result.summary.message}")
+            if repeat % 2 == 0:
+                seconds, cpp_poses, _ = run_peer(args.peer, mode, bundle_dir, args.threads, 1)
+                cpp_seconds += seconds
+        name = f"bundle_adjust, {block.num_images} images, {block.num_marks} marks"
+        if not diagnostics:
+            name += ", observation_diagnostics off"
+        rows.append((name, times, cpp_seconds, pose_difference(adjusted.image_parameters, cpp_poses)))
+    return rows
 
 
 if __name__ == "__main__":

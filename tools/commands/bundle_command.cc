@@ -250,7 +250,8 @@ int CheckInputChoice(const char* command, BundleRun* run) {
 // cost 895984  sigma0 14.2136  step 254  taken quality 1.00 radius 30000  solve 0.00 of 0.01 s
 // 0.0 s" (tools/benchmarks/bundle_scaling.sh reads "iteration N:" and "solve A of B s").
 // Numbers through the report kit (tools/report/html_kit.h): fixed notation, never an exponent.
-void PrintProgress(const BundleIterationInfo& info) {
+// Never cancels (returns true): the CLI has no way to ask for it.
+bool PrintProgress(const BundleIterationInfo& info) {
   char iteration[16];
   std::snprintf(iteration, sizeof(iteration), "%3d", info.iteration);
   std::ostringstream line;
@@ -266,6 +267,7 @@ void PrintProgress(const BundleIterationInfo& info) {
   }
   line << "  " << FormatUnitless(info.elapsed_seconds, 1) << " s\n";
   std::cerr << line.str();
+  return true;
 }
 
 // The flags -> the options (accuracies, robustness, statistics, solver), the lever arm of the

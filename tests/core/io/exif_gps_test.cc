@@ -1,11 +1,18 @@
 #include "core/io/exif_gps.h"
 
+#include <fcntl.h>
 #include <gtest/gtest.h>
 #include <sys/stat.h>
+#include <unistd.h>
 
+#include <atomic>
+#include <chrono>
 #include <fstream>
 #include <iterator>
 #include <string>
+#include <thread>
+
+#include "core/io/csv.h"
 
 #include "tests/support/geotagged_jpeg.h"
 #include "tests/support/temp_dir.h"
@@ -17,6 +24,7 @@ using testing::GeotagOptions;
 using testing::ScopedTempDir;
 using testing::SetXmpText;
 using testing::WriteGeotaggedJpeg;
+using testing::WriteGeotaggedTiff;
 
 TEST(ExifGps, ReadsTheExifGpsTagsWithTheirHemispheresAndAltitudeReference) {
   ScopedTempDir dir;
@@ -197,6 +205,118 @@ TEST(ExifGps, AFifoIsRefusedWithoutWaitingAndLongValuesAreEchoedCut) {
   SetXmpText(dir.Path("dji.jpg"), "Xmp.drone-dji.AbsoluteAltitude", "1e300");
   EXPECT_NE(ReadExifGps(dir.Path("dji.jpg"), &gps).message().find("AbsoluteAltitude: outside [-100000000, 100000000] m"),
             std::string::npos);
+}
+
+// A TIFF (as DNG and most raw formats are) carrying the tags a drone writes: the GPS position
+// and DJI's RTK accuracies, read from the file and from its bytes alike.
+GeotagOptions DroneTags() {
+  GeotagOptions tags;
+  tags.exif_lon_lat_height = Eigen::Vector3d(-71.1234567, -33.4567891, 812.3456);
+  tags.rtk_sigma_enu_m = Eigen::Vector3d(0.011, 0.012, 0.025);
+  tags.rtk_flag = 50;
+  return tags;
+}
+
+TEST(ExifGps, ReadsATiffFromItsBytesAsAJpeg) {
+  ScopedTempDir dir;
+  WriteGeotaggedTiff(dir.Path("a.tif"), DroneTags());
+  WriteGeotaggedJpeg(dir.Path("a.jpg"), DroneTags());
+  ASSERT_EQ(FileBytes(dir.Path("a.tif")).substr(0, 4), std::string("II*\0", 4));  // a TIFF
+  ExifGps tiff, jpeg, memory;
+  const Status read = ReadExifGps(dir.Path("a.tif"), &tiff);
+  ASSERT_TRUE(read.ok()) << read.message();
+  ASSERT_TRUE(ReadExifGps(dir.Path("a.jpg"), &jpeg).ok());
+  EXPECT_EQ(tiff.source, ExifGpsSource::kExif);
+  EXPECT_NEAR(tiff.lon_lat_height.x(), -71.1234567, 1e-9);  // 1e-6 arc seconds written
+  EXPECT_NEAR(tiff.lon_lat_height.y(), -33.4567891, 1e-9);
+  EXPECT_NEAR(tiff.lon_lat_height.z(), 812.3456, 1e-9);
+  EXPECT_EQ(tiff.lon_lat_height, jpeg.lon_lat_height);
+  EXPECT_EQ(tiff.rtk_sigma_enu_m, jpeg.rtk_sigma_enu_m);
+  EXPECT_EQ(tiff.rtk_flag, 50);
+  ASSERT_TRUE(ParseExifGps(FileBytes(dir.Path("a.tif")), "a.tif", &memory).ok());
+  EXPECT_EQ(memory.lon_lat_height, tiff.lon_lat_height);
+}
+
+TEST(ExifGps, EveryTruncatedTiffIsAPositionOrAnErrorNamingTheFile) {
+  ScopedTempDir dir;
+  WriteGeotaggedTiff(dir.Path("a.tif"), DroneTags());
+  const std::string bytes = FileBytes(dir.Path("a.tif"));
+  ASSERT_GT(bytes.size(), 100u);
+  int errors = 0;
+  for (size_t size = 0; size < bytes.size(); size += 5) {
+    const std::string cut = dir.Write("cut.tif", bytes.substr(0, size));
+    ExifGps gps;
+    Status status;
+    ASSERT_NO_THROW(status = ReadExifGps(cut, &gps));
+    if (status.ok()) {
+      EXPECT_NEAR(gps.lon_lat_height.y(), -33.4567891, 1e-9) << size;
+      continue;
+    }
+    ++errors;
+    EXPECT_EQ(status.message().rfind(cut + ": ", 0), 0u) << status.message();
+    EXPECT_EQ(status.message().find('\n'), std::string::npos) << status.message();
+  }
+  EXPECT_GT(errors, 0);
+}
+
+TEST(ExifGps, ATiffOverTheInputLimitIsAnErrorNamingTheFile) {
+  // A sparse file: a TIFF's first bytes, then zeros up to one byte over the limit.
+  ScopedTempDir dir;
+  WriteGeotaggedTiff(dir.Path("huge.tif"), DroneTags());
+  ASSERT_EQ(truncate(dir.Path("huge.tif").c_str(), static_cast<off_t>(kMaxInputBytes) + 1), 0);
+  ExifGps gps;
+  const Status huge = ReadExifGps(dir.Path("huge.tif"), &gps);
+  EXPECT_EQ(huge.message(), dir.Path("huge.tif") + ": is larger than 268435456 bytes, the largest "
+                                                   "input photopose reads");
+  // An unreadable one.
+  WriteGeotaggedTiff(dir.Path("locked.tif"), DroneTags());
+  ASSERT_EQ(chmod(dir.Path("locked.tif").c_str(), 0), 0);
+  if (geteuid() != 0) {  // root reads it anyway
+    const Status locked = ReadExifGps(dir.Path("locked.tif"), &gps);
+    EXPECT_FALSE(locked.ok());
+    EXPECT_EQ(locked.message().rfind(dir.Path("locked.tif") + ": ", 0), 0u) << locked.message();
+  }
+}
+
+// The SIGBUS of issue 20: exiv2 maps a TIFF while it parses it, and dies when the file shrinks
+// meanwhile. A thread cuts a 4 MB TIFF (its GPS directory after the 4 MB description) to 64 bytes
+// and writes it back, again and again, while this one reads it: every read is the position or an
+// error naming the file, and the process lives.
+TEST(ExifGps, ATiffThatShrinksWhileReadIsNeverACrash) {
+  ScopedTempDir dir;
+  GeotagOptions tags = DroneTags();
+  tags.description_bytes = size_t{4} << 20;
+  const std::string path = dir.Path("shrinking.tif");
+  WriteGeotaggedTiff(path, tags);
+  const std::string bytes = FileBytes(path);
+  ASSERT_GT(bytes.size(), tags.description_bytes);
+  std::atomic<bool> done{false};
+  std::thread cutter([&] {
+    const int fd = open(path.c_str(), O_WRONLY | O_CLOEXEC);
+    if (fd < 0) return;
+    while (!done.load()) {
+      if (ftruncate(fd, 64) != 0) break;
+      std::this_thread::sleep_for(std::chrono::microseconds(200));
+      if (pwrite(fd, bytes.data(), bytes.size(), 0) != static_cast<ssize_t>(bytes.size())) break;
+    }
+    close(fd);
+  });
+  int positions = 0, errors = 0;
+  const auto end = std::chrono::steady_clock::now() + std::chrono::milliseconds(500);
+  while (std::chrono::steady_clock::now() < end || positions + errors < 20) {
+    ExifGps gps;
+    const Status status = ReadExifGps(path, &gps);
+    if (status.ok()) {
+      ++positions;
+      EXPECT_NEAR(gps.lon_lat_height.y(), -33.4567891, 1e-9);
+    } else {
+      ++errors;
+      EXPECT_EQ(status.message().rfind(path + ": ", 0), 0u) << status.message();
+    }
+  }
+  done = true;
+  cutter.join();
+  EXPECT_GT(positions + errors, 0);
 }
 
 }  // namespace

@@ -425,7 +425,8 @@ TEST(ResectionBatch, CancelLeavesTheRestNotResectedAndCallsNoMore) {
       }
       ++cancelled;
       EXPECT_FALSE(r.success) << i;
-      EXPECT_EQ(r.summary.termination, SolverTermination::kFailure) << i;
+      EXPECT_EQ(r.summary.termination, SolverTermination::kCancelled) << i;
+      EXPECT_STREQ(EnumName(r.summary.termination), "cancelled");
       EXPECT_EQ(r.summary.message.rfind("cancelled", 0), 0u) << r.summary.message;
       EXPECT_EQ(r.eo.parameters, Vector6d::Zero()) << i;
       EXPECT_EQ(r.num_inliers, 0) << i;
