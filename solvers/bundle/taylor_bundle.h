@@ -267,7 +267,9 @@ struct TaylorBundleSummary {
   int redundancy = 0;   // scalar observations - unknowns (count)
   int num_images = 0, num_points = 0, num_marks = 0;  // in the final round
   int num_rejected_marks = 0;
-  int num_camera_unknowns = 0;  // exterior-orientation unknowns, i.e. of the reduced system (count)
+  // Unknowns of the reduced system: the exterior orientations' and the global ones (estimated
+  // calibration, lever arm) (count).
+  int num_camera_unknowns = 0;
   int reduced_nonzeros = 0;     // stored (upper) entries of the reduced normal matrix (count)
   // Largest components of the last correction (m, rad).
   double last_position_correction_m = 0.0;

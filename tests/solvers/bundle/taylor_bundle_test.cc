@@ -49,6 +49,15 @@ BundleAdjustmentOptions CeresOptions() {
   return options;
 }
 
+// Ceres with its tolerances at 1e-14, for comparisons at the minimum itself.
+BundleAdjustmentOptions TightCeresOptions() {
+  BundleAdjustmentOptions options = CeresOptions();
+  options.solver.function_tolerance = 1e-14;
+  options.solver.parameter_tolerance = 1e-14;
+  options.solver.gradient_tolerance = 1e-14;
+  return options;
+}
+
 TaylorBundleOptions TaylorOptions(TaylorPartials partials = TaylorPartials::kCorrected) {
   TaylorBundleOptions options;
   options.partials = partials;
@@ -1469,10 +1478,7 @@ TEST(TaylorBundleVsCeres, SameSelfCalibrationAndLeverArm) {
     // The lever arm starts at zero, 0.33 m off.
     const BundleAdjustmentConfig config =
         CalibrationConfig(data.block, scenario.calibrate, scenario.lever);
-    BundleAdjustmentOptions ceres_options = CeresOptions();
-    ceres_options.solver.function_tolerance = 1e-14;
-    ceres_options.solver.parameter_tolerance = 1e-14;
-    ceres_options.solver.gradient_tolerance = 1e-14;
+    const BundleAdjustmentOptions ceres_options = TightCeresOptions();
     Block ceres_block = data.block, taylor_block = data.block;
     BundleAdjustmentResult ceres;
     TaylorBundleResult taylor;
@@ -1540,6 +1546,29 @@ TEST(TaylorBundleVsCeres, SameSelfCalibrationAndLeverArm) {
     EXPECT_LT(sigma, kCalibrationRelativeAgreement);
     EXPECT_LT(lever_difference, kRelativeAgreement * data.size_m);
     EXPECT_LT(covariance, kCovarianceRelativeAgreement);
+  }
+}
+
+// An image held constant keeps its camera-position prior in the cost, as in BundleAdjust's
+// problem (a constant residual, but part of the cost, sigma0 and the estimated lever arm's rows).
+TEST(TaylorBundleVsCeres, ImagesHeldConstantKeepTheirPriorsInTheCost) {
+  const TestBlock data = MakeTestBlock(TaylorBlockOptions());
+  for (const bool estimate_lever : {false, true}) {
+    SCOPED_TRACE(estimate_lever ? "estimated lever arm" : "no lever arm");
+    BundleAdjustmentConfig config = CalibrationConfig(data.block, {}, estimate_lever);
+    config.constant_images = {0, 5};
+    const BundleAdjustmentOptions ceres_options = TightCeresOptions();
+    Block ceres_block = data.block, taylor_block = data.block;
+    BundleAdjustmentResult ceres;
+    TaylorBundleResult taylor;
+    ASSERT_TRUE(BundleAdjust(ceres_options, config, &ceres_block, &ceres).ok());
+    ASSERT_TRUE(TaylorBundleAdjust(TaylorOptions(), config, &taylor_block, &taylor).ok());
+    ASSERT_TRUE(ceres.summary.IsSolutionUsable()) << ceres.summary.BriefReport();
+    ASSERT_TRUE(taylor.summary.IsSolutionUsable()) << taylor.summary.BriefReport();
+    EXPECT_EQ(taylor.summary.redundancy, ceres.summary.redundancy);
+    EXPECT_NEAR(taylor.summary.final_cost, ceres.summary.final_cost,
+                kCostRelativeAgreement * ceres.summary.final_cost);
+    EXPECT_EQ(taylor_block.images[0].eo->parameters, data.block.images[0].eo->parameters);
   }
 }
 
