@@ -270,11 +270,14 @@ def test_taylor_solver_reaches_the_same_minimum_and_statistics(shared_data):
     assert on_taylor.summary.redundancy == on_ceres.summary.redundancy
     np.testing.assert_allclose(on_taylor.summary.final_cost, on_ceres.summary.final_cost, rtol=1e-6)
     np.testing.assert_array_equal(colmap_taylor.image_parameters[0], first_pose)
-    # What the Taylor solver cannot adjust is refused with the reason; an unknown solver by name.
-    with pytest.raises(pp.Error, match="self-calibration is done by the Ceres adjustment"):
-        pp.bundle_adjust(colmap_taylor, keep_all,
-                         pp.BundleAdjustmentConfig.from_calibration_names(colmap_taylor, ["f"]),
-                         solver="taylor")
+    # Self-calibration (the model's f) on the Taylor path reaches the Ceres minimum too.
+    calibrate_f = pp.BundleAdjustmentConfig.from_calibration_names(colmap_taylor, ["f"])
+    f_ceres = pp.bundle_adjust(colmap_ceres, keep_all, calibrate_f)
+    f_taylor = pp.bundle_adjust(colmap_taylor, keep_all, calibrate_f, solver="taylor")
+    assert f_ceres.summary.termination == f_taylor.summary.termination == "converged"
+    assert f_taylor.summary.redundancy == f_ceres.summary.redundancy
+    np.testing.assert_allclose(f_taylor.summary.final_cost, f_ceres.summary.final_cost, rtol=1e-6)
+    # An unknown solver is refused by name.
     with pytest.raises(ValueError, match="levmar"):
         pp.bundle_adjust(taylor_block, solver="levmar")
 

@@ -68,17 +68,6 @@ double SecondsSince(Clock::time_point start) {
 std::string Quoted(const std::string& name) { return "'" + name + "'"; }
 
 Status CheckSupported(const BundleAdjustmentConfig& config, const Block& block) {
-  if (config.estimate_lever_arm) {
-    return Status::Error(
-        "the Taylor bundle adjustment applies a given lever arm but does not estimate it");
-  }
-  for (const std::vector<int>& params : config.calibrated_params) {
-    if (!params.empty()) {
-      return Status::Error(
-          "the Taylor bundle adjustment holds the interior orientation fixed: self-calibration "
-          "is done by the Ceres adjustment");
-    }
-  }
   for (const int i : config.constant_images)
     if (i < 0 || i >= static_cast<int>(block.images.size()))
       return Status::Error("the config holds a non-existent image constant");
@@ -90,16 +79,17 @@ Status CheckSupported(const BundleAdjustmentConfig& config, const Block& block) 
 
 // The plan: BundleAdjust's (a weak datum is not refused: it shows as a singular reduced normal
 // matrix in the round), then the unknowns held (config, relative gauge) and each mark's ideal
-// image-plane point: the frame model's correction of the measured film point, constant with the
-// interior orientation (a forward model's marks enter as observed: MarkEquation in
-// taylor_bundle_normals.cc).
+// image-plane point: the frame model's correction of the measured film point, constant with a
+// fixed interior orientation (the marks of a forward model or a self-calibrated camera enter as
+// observed, through the model per mark: MarkEquation in taylor_bundle_normals.cc).
 Status MakePlan(const TaylorBundleOptions& options, const BundleAdjustmentConfig& config,
                 const Block& block, Plan* plan) {
   internal::BundlePlanOptions plan_options;
   plan_options.accuracies = options.accuracies;
-  plan_options.use_lever = config.lever_arm_m.has_value();
+  plan_options.use_lever = config.lever_arm_m.has_value() || config.estimate_lever_arm;
   plan_options.refuse_weak_datum = false;
   PHOTOPOSE_RETURN_IF_ERROR(internal::MakeBundlePlan(plan_options, config, block, plan));
+  plan->estimate_lever = config.estimate_lever_arm;
   plan->image_constant.assign(block.images.size(), 0);
   plan->point_constant.assign(block.points.size(), 0);
   plan->image_fixed.assign(block.images.size(), std::array<bool, 6>{});
@@ -114,8 +104,9 @@ Status MakePlan(const TaylorBundleOptions& options, const BundleAdjustmentConfig
   for (size_t m = 0; m < block.marks.size(); ++m) {
     if (!plan->mark_used[m]) continue;
     const BlockMark& mark = block.marks[m];
-    const BlockCamera& camera = block.cameras[block.images[mark.image].camera];
-    if (camera.model != CameraModelType::kFrame) continue;
+    const int c = block.images[mark.image].camera;
+    const BlockCamera& camera = block.cameras[c];
+    if (camera.model != CameraModelType::kFrame || !plan->calibrated[c].empty()) continue;
     FrameCorrectFilmPoint(camera.params.data(), mark.observation.data(), camera.data(),
                           plan->ideal_um[m].data());
   }
@@ -155,19 +146,24 @@ Frame MakeFrame(const BundleAdjustmentConfig& config, const Block& block, const 
       frame.surveyed[p] = *block.points[p].surveyed_m - frame.centroid;
   frame.measured.assign(block.images.size(), Eigen::Vector3d::Zero());
   frame.focal_um.assign(block.images.size(), 0.0);
-  frame.forward_camera.assign(block.images.size(), nullptr);
+  frame.model_camera.assign(block.images.size(), nullptr);
+  frame.camera_index.assign(block.images.size(), 0);
   frame.earth_radius_m.assign(block.images.size(), 0.0);
   for (size_t i = 0; i < block.images.size(); ++i) {
     if (block.images[i].measured_center_m)
       frame.measured[i] = *block.images[i].measured_center_m - frame.centroid;
-    const BlockCamera& camera = block.cameras[block.images[i].camera];
-    const bool forward = camera.model != CameraModelType::kFrame;
-    frame.focal_um[i] = forward ? 1.0 : camera.params[kFrameFocal];
-    if (forward) frame.forward_camera[i] = &camera;
+    const int c = block.images[i].camera;
+    const BlockCamera& camera = block.cameras[c];
+    const bool per_mark = camera.model != CameraModelType::kFrame || !plan.calibrated[c].empty();
+    frame.focal_um[i] = per_mark ? 1.0 : camera.params[kFrameFocal];
+    if (per_mark) frame.model_camera[i] = &camera;
+    frame.camera_index[i] = c;
     frame.earth_radius_m[i] = camera.earth_curvature_radius_m();
   }
-  frame.use_lever = config.lever_arm_m.has_value();
-  if (frame.use_lever) frame.lever = *config.lever_arm_m;
+  frame.use_lever = plan.use_lever;
+  state->cameras.clear();
+  for (const BlockCamera& camera : block.cameras) state->cameras.push_back(camera.params);
+  state->lever = config.lever_arm_m.value_or(Eigen::Vector3d::Zero());
   return frame;
 }
 
@@ -226,6 +222,18 @@ std::string BehindMessage(const Block& block, const Normal& normal, const std::s
   return os.str();
 }
 
+// A global column in words: "camera 'c1': the self-calibrated K1" or "the lever arm's z (camera
+// frame)", as BundleAdjust's statistics name them.
+std::string GlobalName(const Block& block, const Layout& layout, int j) {
+  const int c = layout.global_camera[j];
+  if (c < 0) {
+    static const char* const kAxes[] = {"x", "y", "z"};
+    return std::string("the lever arm's ") + kAxes[layout.global_param[j]] + " (camera frame)";
+  }
+  return "camera " + Quoted(block.cameras[c].camera_id) + ": the self-calibrated " +
+         CameraModelParamNames(block.cameras[c].model)[layout.global_param[j]];
+}
+
 // One Gauss-Newton correction from the linearisation `normal`: the points eliminated, the
 // reduced system scaled, factorised and solved. False, with the reason, when it is singular.
 bool SolveStep(const Context& ctx, const std::string& at, const Normal& normal, Layout* layout,
@@ -238,6 +246,12 @@ bool SolveStep(const Context& ctx, const std::string& at, const Normal& normal, 
     return false;
   }
   const int weightless = WriteScaled(ctx.plan, layout, reduction);
+  const int cameras_size = 6 * static_cast<int>(layout->free_images.size());
+  if (weightless >= cameras_size) {
+    *message = GlobalName(ctx.block, *layout, weightless - cameras_size) +
+               " has no weight (no observation depends on it)" + at;
+    return false;
+  }
   if (weightless >= 0) {
     *message = "image " + Quoted(ctx.block.images[layout->free_images[weightless / 6]].name) +
                ": parameter " + std::to_string(weightless % 6 + 1) +
@@ -262,8 +276,11 @@ bool SolveStep(const Context& ctx, const std::string& at, const Normal& normal, 
   return true;
 }
 
-// The largest position and angle components of a correction and its squared norm.
-void MeasureCorrections(const Layout& layout, const Eigen::VectorXd& d_e,
+// The largest position and angle components of a correction and its squared norm. The lever
+// arm's components count as positions (m); a calibration parameter's as the angle of view its
+// correction moves the camera's marks by, RMS (Normal::global_angle_per_unit): its tolerance is
+// the image shift of the angle tolerance.
+void MeasureCorrections(const Layout& layout, const Normal& normal, const Eigen::VectorXd& d_e,
                         const std::vector<Eigen::Vector3d>& d_p, double* max_position,
                         double* max_angle, double* step_squared) {
   *max_position = *max_angle = 0.0;
@@ -272,6 +289,15 @@ void MeasureCorrections(const Layout& layout, const Eigen::VectorXd& d_e,
     const Vector6d delta = d_e.segment<6>(6 * b);
     *max_position = std::max(*max_position, delta.head<3>().cwiseAbs().maxCoeff());
     *max_angle = std::max(*max_angle, delta.tail<3>().cwiseAbs().maxCoeff());
+  }
+  const int cameras_size = 6 * static_cast<int>(layout.free_images.size());
+  for (int j = 0; j < layout.num_global; ++j) {
+    const double delta = std::abs(d_e[cameras_size + j]);
+    if (layout.global_camera[j] < 0) {
+      *max_position = std::max(*max_position, delta);
+    } else {
+      *max_angle = std::max(*max_angle, delta * normal.global_angle_per_unit[j]);
+    }
   }
   for (const Eigen::Vector3d& delta : d_p) {
     *max_position = std::max(*max_position, delta.cwiseAbs().maxCoeff());
@@ -286,6 +312,13 @@ void ApplyCorrections(const Layout& layout, const Eigen::VectorXd& d_e,
     state->eo[layout.free_images[b]] -= d_e.segment<6>(6 * b);
   for (size_t q = 0; q < layout.free_points.size(); ++q)
     state->points[layout.free_points[q]] -= d_p[q];
+  const int cameras_size = 6 * static_cast<int>(layout.free_images.size());
+  for (int j = 0; j < layout.num_global; ++j) {
+    const int c = layout.global_camera[j];
+    double& value =
+        c < 0 ? state->lever[layout.global_param[j]] : state->cameras[c][layout.global_param[j]];
+    value -= d_e[cameras_size + j];
+  }
 }
 
 // True, with the message, when an image or point moved farther than divergence_m from the
@@ -405,7 +438,7 @@ SolverTermination RunRound(const Context& ctx, int round, bool free_gauge, Layou
     if (!SolveStep(ctx, at, *normal, layout, reduction, &d_e, &d_p, message))
       return SolverTermination::kFailure;
     double max_position = 0.0, max_angle = 0.0, step_squared = 0.0;
-    MeasureCorrections(*layout, d_e, d_p, &max_position, &max_angle, &step_squared);
+    MeasureCorrections(*layout, *normal, d_e, d_p, &max_position, &max_angle, &step_squared);
     summary.iterations += 1;
     summary.last_position_correction_m = max_position;
     summary.last_angle_correction_rad = max_angle;
@@ -441,7 +474,7 @@ SolverTermination RunRound(const Context& ctx, int round, bool free_gauge, Layou
       if (!SolveStep(ctx, at, *normal, layout, reduction, &d_e, &d_p, message))
         return SolverTermination::kFailure;
       double gn_position = 0.0, gn_angle = 0.0, gn_squared = 0.0;
-      MeasureCorrections(*layout, d_e, d_p, &gn_position, &gn_angle, &gn_squared);
+      MeasureCorrections(*layout, *normal, d_e, d_p, &gn_position, &gn_angle, &gn_squared);
       converged = below_tolerance(gn_position, gn_angle);
       if (converged) {
         summary.last_position_correction_m = max_position = gn_position;
@@ -587,6 +620,10 @@ struct Statistics {
     }
     for (size_t p = 0; p < block.points.size(); ++p)
       if (plan.point_in_problem[p]) ground.points[p] = state.points[p] + frame.centroid;
+    // In place: the problem's camera blocks point into these vectors.
+    for (size_t c = 0; c < block.cameras.size(); ++c)
+      std::copy(state.cameras[c].begin(), state.cameras[c].end(), ground.cameras[c].begin());
+    ground.lever = state.lever;
   }
 
   // An error when the normal matrix at the solution is singular (naming what is undetermined):
@@ -649,6 +686,8 @@ void WriteBack(const Plan& plan, const State& state, const Frame& frame, Block* 
   }
   for (size_t p = 0; p < block->points.size(); ++p)
     if (plan.point_in_problem[p]) block->points[p].position_m = state.points[p] + frame.centroid;
+  for (size_t c = 0; c < block->cameras.size(); ++c)
+    if (!plan.calibrated[c].empty()) block->cameras[c].params = state.cameras[c];
 }
 
 // BundleAdjust's summary, from the Taylor one (the single source of these numbers).
@@ -820,6 +859,8 @@ Status LinearizeTaylorBundle(const TaylorBundleOptions& options,
     dense.image_columns[i] = dense.num_columns;
     dense.num_columns += 6;
   }
+  dense.global_column = dense.num_columns;
+  dense.num_columns += layout.num_global;
   for (const int p : layout.free_points) {
     dense.point_columns[p] = dense.num_columns;
     dense.num_columns += 3;
@@ -833,6 +874,11 @@ Status LinearizeTaylorBundle(const TaylorBundleOptions& options,
   }
   system->image_columns = dense.image_columns;
   system->point_columns = dense.point_columns;
+  system->camera_columns.assign(block.cameras.size(), -1);
+  for (size_t c = 0; c < block.cameras.size(); ++c)
+    if (layout.camera_global[c] >= 0)
+      system->camera_columns[c] = dense.global_column + layout.camera_global[c];
+  if (layout.lever_global >= 0) system->lever_column = dense.global_column + layout.lever_global;
   system->jacobian.resize(static_cast<int>(dense.rows.size()), dense.num_columns);
   system->residual.resize(static_cast<int>(dense.rows.size()));
   for (size_t row = 0; row < dense.rows.size(); ++row) {
@@ -852,13 +898,19 @@ Status LinearizeTaylorBundle(const TaylorBundleOptions& options,
     return Status::Error(PointName(block, singular_point) + " is not determined by its rays");
   if (WriteScaled(plan, &layout, &reduction) >= 0)
     return Status::Error("an exterior-orientation parameter has no weight");
-  const int n = 6 * static_cast<int>(layout.free_images.size());
+  const int cameras_size = 6 * static_cast<int>(layout.free_images.size());
+  const int n = cameras_size + layout.num_global;
   system->reduced_matrix = Eigen::MatrixXd::Zero(n, n);
   for (size_t k = 0; k < layout.pairs.size(); ++k) {
     const auto [b1, b2] = layout.pairs[k];
     system->reduced_matrix.block<6, 6>(6 * b1, 6 * b2) = reduction.blocks[k];
     system->reduced_matrix.block<6, 6>(6 * b2, 6 * b1) = reduction.blocks[k].transpose();
   }
+  system->reduced_matrix.topRightCorner(cameras_size, layout.num_global) = reduction.border;
+  system->reduced_matrix.bottomLeftCorner(layout.num_global, cameras_size) =
+      reduction.border.transpose();
+  system->reduced_matrix.bottomRightCorner(layout.num_global, layout.num_global) =
+      reduction.corner;
   system->reduced_rhs = reduction.r;
   for (size_t b = 0; b < layout.free_images.size(); ++b) {
     for (int c = 0; c < 6; ++c) {
@@ -884,6 +936,8 @@ Status LinearizeTaylorBundle(const TaylorBundleOptions& options,
   for (size_t b = 0; b < layout.free_images.size(); ++b)
     system->correction.segment<6>(dense.image_columns[layout.free_images[b]]) =
         d_e.segment<6>(6 * b);
+  system->correction.segment(dense.global_column, layout.num_global) =
+      d_e.tail(layout.num_global);
   for (size_t q = 0; q < layout.free_points.size(); ++q)
     system->correction.segment<3>(dense.point_columns[layout.free_points[q]]) = d_p[q];
   return Status::Ok();

@@ -14,20 +14,29 @@
 //
 // Unknowns: per image not held constant its X0, Y0, Z0 (m), omega, phi, kappa (rad, seed angles,
 // used directly as the lecture does: singular only at phi = +-90 deg); per tie or control point
-// not held constant X, Y, Z (m). Every observation equation is linearised as in eqs. 9-16,
+// not held constant X, Y, Z (m); the self-calibrated cameras' estimated parameters and the
+// estimated lever arm (m). Every observation equation is linearised as in eqs. 9-16,
 //
 //   F(p) ~ F(p0) - A d,   p = p0 - d,   A = dF/dp,
 //
 // with A from eqs. 17-28 for the exterior orientation (TaylorPartials: eq. 21 corrected, or as
 // printed), the ground-point partials dF/dX = -dF/dX0 (docs/taylor_derivatives.md, "Ground-point
 // partials"), and the identity (and R^T l's derivative) for the priors. The camera model enters on
-// the observation side: for the ArcGIS frame model (kFrame) the measured film point is corrected
-// (affinity, principal point, distortion, Polarity) into the ideal image plane once, a constant
-// with the interior orientation fixed. The COLMAP forward models distort the ideal point, so
+// the observation side: for the ArcGIS frame model (kFrame) with fixed interior orientation the
+// measured film point is corrected (affinity, principal point, distortion, Polarity) into the
+// ideal image plane once, a constant. The COLMAP forward models distort the ideal point, so
 // their equation stays in pixels: F = model(a, b) - observation of the ray's normalised
 // coordinates (a, b), its rows the lecture's rows of (a, b) (written with c = 1) times the
 // model's 2 x 2 derivative d model / d(a, b) at the current point (chain rule; the one model of
 // core/camera_models.h, differentiated by a Jet). Its cost is then BundleAdjust's, exactly.
+//
+// Self-calibration (config.calibrated_params) and an estimated lever arm
+// (config.estimate_lever_arm): the camera's estimated parameters and the lever arm's x, y, z are
+// global unknowns, the last columns of the reduced system (a dense border). A self-calibrated
+// camera's marks, kFrame too, go through the model per mark as the forward models do, and the
+// same Jet carries a derivative per estimated parameter: for kFrame F = c (a, b) - ideal(film;
+// calibration), so dF/dc = (a, b) and dF/dk = -d ideal/dk. The lever arm's rows are R^T in the
+// camera-position priors.
 //
 // Normal equations (A^T P A) d = A^T P F, assembled by hand and reduced to the cameras (the
 // classical reduced normal equations): with N = [U W; W^T V] (U cameras, V points, block-diagonal
@@ -35,6 +44,8 @@
 //
 //   S = U - sum_p W_p V_p^-1 W_p^T,   r = g_e - sum_p W_p V_p^-1 g_p,
 //
+// (U and W_p with the global columns below the camera blocks' rows: a point's global rows are the
+// sum of its marks'),
 // S d_e = r is solved by a sparse Cholesky factor of the Jacobi-scaled S, the images ordered by AMD
 // on the image graph (CHOLMOD's supernodal LL^T, the pattern analysed once per round and
 // refactorised per iteration; or Eigen::SimplicialLDLT, the first implementation, kept as the
@@ -56,13 +67,13 @@
 // num_threads threads; the result does not depend on the thread count, bit for bit.
 //
 // Supported: kFrame cameras (any distortion model or table, affinity, Polarity) and the COLMAP
-// models (SIMPLE_PINHOLE ... OPENCV_FISHEYE), each with fixed interior orientation; control, check
-// and tie points; GNSS camera positions with an applied (not estimated) lever arm; attitude priors;
+// models (SIMPLE_PINHOLE ... OPENCV_FISHEYE), with fixed or self-calibrated interior orientation;
+// control, check and tie points; GNSS camera positions with a lever arm, applied or estimated;
+// attitude priors;
 // images and points held constant; the relative gauge (COLMAP's convention) when nothing ties the
 // block to the ground; rejection rounds, data snooping and accuracy estimation as in BundleAdjust;
 // the camera table's earth-curvature correction (ApplyECC: each point seen lowered by D^2 / (2R),
-// the centre's partials chained through the drop; TaylorPoseLinearization). Not supported, refused
-// with the reason: self-calibration and an estimated lever arm.
+// the centre's partials chained through the drop; TaylorPoseLinearization).
 //
 // Robust losses (tie_loss, on tie marks as in BundleAdjust): iteratively reweighted least squares
 // in the same normal equations. Each linearisation weights a tie mark by rho'(s) (s its squared
@@ -209,9 +220,9 @@ struct TaylorBundleOptions {
 // The Taylor options that minimise the same objective as `ceres` and take the same steps between
 // rounds (accuracies, robust tie loss, rejection, snooping, statistics, threads, progress; the
 // lever arm is the config's, BundleAdjustmentConfig::lever_arm_m). An error would name what the
-// Taylor path does not do; no field of BundleAdjustmentOptions is refused today (an estimated
-// lever arm, a config matter, is refused by TaylorBundleAdjust). The Taylor options keep their own
-// flat fields rather than BundleAdjustmentOptions' parts: they take only a few fields of each.
+// Taylor path does not do; no field of BundleAdjustmentOptions is refused today. The Taylor
+// options keep their own flat fields rather than BundleAdjustmentOptions' parts: they take only a
+// few fields of each.
 Status TaylorBundleOptionsFromBundleOptions(const BundleAdjustmentOptions& ceres,
                                             TaylorPartials partials, TaylorBundleOptions* options);
 
@@ -256,7 +267,9 @@ struct TaylorBundleSummary {
   int redundancy = 0;   // scalar observations - unknowns (count)
   int num_images = 0, num_points = 0, num_marks = 0;  // in the final round
   int num_rejected_marks = 0;
-  int num_camera_unknowns = 0;  // exterior-orientation unknowns, i.e. of the reduced system (count)
+  // Unknowns of the reduced system: the exterior orientations' and the global ones (estimated
+  // calibration, lever arm) (count).
+  int num_camera_unknowns = 0;
   int reduced_nonzeros = 0;     // stored (upper) entries of the reduced normal matrix (count)
   // Largest components of the last correction (m, rad).
   double last_position_correction_m = 0.0;
@@ -337,15 +350,20 @@ Eigen::Vector3d TaylorAntennaPosition(const ExteriorOrientation& eo, const Eigen
 
 // One linearisation of the whole block at its current values, dense, for tests and teaching
 // (small blocks only). Unknowns in order: per image not held constant its six parameters, then
-// per point in the adjustment and not held constant its three. The relative gauge's fixed
+// the global unknowns (each self-calibrated camera's estimated parameters, in index order, then
+// the estimated lever arm's x, y, z), then per point in the adjustment and not held constant its
+// three. The relative gauge's fixed
 // coordinate keeps its column, zeroed, and a zero correction. Plain least squares: the dense rows
 // carry no robust loss's weights (the reduced system and the correction do).
 struct TaylorBundleLinearSystem {
   std::vector<int> image_columns;  // per Block::images: first column, or -1 (held constant)
   std::vector<int> point_columns;  // per Block::points: first column, or -1 (not an unknown)
+  // Per Block::cameras: the column of its first estimated parameter, or -1 (held constant).
+  std::vector<int> camera_columns;
+  int lever_column = -1;           // the estimated lever arm's x column, or -1
   Eigen::MatrixXd jacobian;        // whitened A: rows observation equations, columns unknowns
   Eigen::VectorXd residual;        // whitened F (computed - observed) at the current values
-  Eigen::MatrixXd reduced_matrix;  // S (camera columns), as assembled block by block
+  Eigen::MatrixXd reduced_matrix;  // S (camera and global columns), as assembled block by block
   Eigen::VectorXd reduced_rhs;     // r
   Eigen::VectorXd correction;      // d: cameras from S d_e = r, points back-substituted
 };

@@ -71,6 +71,27 @@ void BuildLayout(const Block& block, const Plan& plan, Layout* layout) {
     for (const bool fixed : plan.image_fixed[i]) layout->num_unknowns -= fixed;
   }
   OrderImagesToReduceFill(block, plan, layout);
+  // The global columns, after the camera blocks: each self-calibrated camera's parameters, then
+  // the lever arm.
+  layout->camera_global.assign(block.cameras.size(), -1);
+  for (size_t c = 0; c < block.cameras.size(); ++c) {
+    if (plan.calibrated[c].empty()) continue;
+    layout->camera_global[c] = layout->num_global;
+    for (const int index : plan.calibrated[c]) {
+      layout->global_camera.push_back(static_cast<int>(c));
+      layout->global_param.push_back(index);
+    }
+    layout->num_global += static_cast<int>(plan.calibrated[c].size());
+  }
+  if (plan.estimate_lever) {
+    layout->lever_global = layout->num_global;
+    for (int axis = 0; axis < 3; ++axis) {
+      layout->global_camera.push_back(-1);
+      layout->global_param.push_back(axis);
+    }
+    layout->num_global += 3;
+  }
+  layout->num_unknowns += layout->num_global;
   for (size_t p = 0; p < block.points.size(); ++p) {
     if (!plan.point_in_problem[p] || plan.point_constant[p]) continue;
     layout->point_block[p] = static_cast<int>(layout->free_points.size());
@@ -136,13 +157,17 @@ void BuildLayout(const Block& block, const Plan& plan, Layout* layout) {
             pair_of(layout->mark_block[marks[a]], layout->mark_block[marks[c]]);
   }
 
-  // The sparse pattern (upper triangle) and where each block's columns start in it.
-  const int size = 6 * static_cast<int>(num_blocks);
+  // The sparse pattern (upper triangle) and where each block's columns start in it. The global
+  // columns are dense: column 6 B + j holds rows 0 .. 6 B + j, in order.
+  const int cameras_size = 6 * static_cast<int>(num_blocks);
+  const int size = cameras_size + layout->num_global;
   std::vector<Eigen::Triplet<double, int>> entries;
   for (const auto& [b1, b2] : layout->pairs)
     for (int c = 0; c < 6; ++c)
       for (int r = 0; r < (b1 == b2 ? c + 1 : 6); ++r)
         entries.emplace_back(6 * b1 + r, 6 * b2 + c, 1.0);
+  for (int column = cameras_size; column < size; ++column)
+    for (int r = 0; r <= column; ++r) entries.emplace_back(r, column, 1.0);
   layout->S.resize(size, size);
   layout->S.setFromTriplets(entries.begin(), entries.end());
   layout->S.makeCompressed();
@@ -179,66 +204,127 @@ double MarkCost(const Plan& plan, int m, double s, double* weight_factor) {
   return rho[0];
 }
 
+// A mark's equation through its camera's model (core/camera_models.h CameraModelResidual, r =
+// observed - computed) at the ray's normalised coordinates (a, b) = (fu, fv) and its camera's
+// current parameters: F = -r. With row_u, the rows of (a, b) in row_u, row_v become
+// -dr/d(a, b) times them (a 2-derivative Jet); with calib_u too, calib_u, calib_v receive
+// -dr/d(the estimated parameters, in `estimated` order) (a Jet with a derivative per parameter).
+template <int kDerivatives>
+void ModelEquationRows(const BlockCamera& camera, const double* params,
+                       const std::vector<int>& estimated, const double* observation,
+                       double* row_u, double* row_v, double* fu, double* fv, double* calib_u,
+                       double* calib_v) {
+  using Jet = ceres::Jet<double, kDerivatives>;
+  const Jet ab[2] = {Jet(*fu, 0), Jet(*fv, 1)};
+  Jet p[kMaxCameraModelParams];
+  for (size_t k = 0; k < camera.params.size(); ++k) p[k] = Jet(params[k]);
+  if (calib_u != nullptr)
+    for (size_t j = 0; j < estimated.size(); ++j) p[estimated[j]].v[2 + j] = 1.0;
+  Jet residual[2];
+  CameraModelResidual(camera.model, p, ab, observation, camera.data(), residual);
+  *fu = -residual[0].a;
+  *fv = -residual[1].a;
+  for (int c = 0; c < 6; ++c) {
+    const double u = row_u[c], v = row_v[c];
+    row_u[c] = -(residual[0].v[0] * u + residual[0].v[1] * v);
+    row_v[c] = -(residual[1].v[0] * u + residual[1].v[1] * v);
+  }
+  if (calib_u != nullptr) {
+    for (size_t j = 0; j < estimated.size(); ++j) {
+      calib_u[j] = -residual[0].v[2 + j];
+      calib_v[j] = -residual[1].v[2 + j];
+    }
+  }
+}
+
 // One mark's observation equation at the pose of its image, in the seed's sign (eqs. 7-8:
 // F = computed - observed, p = p0 - d) and the camera model's unit (um for kFrame, pixels for a
-// forward model), with, when row_u is not null, its rows dF/d(X0, Y0, Z0, omega, phi, kappa).
-// False when the point is not in front of the camera (*w_m: its w).
-//   kFrame: c (a, b) against the mark's ideal film point (eqs. 17-28).
-//   Forward models (COLMAP): the pose's equation is written with c = 1 against the observation
-//   0, so F0 = (a, b), the ray's normalised coordinates, and rows0 = d(a, b)/dp; the mark's
-//   equation is F = model(a, b) - observation = -r(a, b), r the residual "observed - computed" of
-//   the one model (core/camera_models.h CameraModelResidual), and its rows -J rows0 with
-//   J = dr/d(a, b), by a 2-derivative Jet.
+// forward model), with, when row_u is not null, its rows dF/d(X0, Y0, Z0, omega, phi, kappa), and
+// when calib_u is not null too, its rows dF/d(the camera's estimated parameters, plan.calibrated
+// order). False when the point is not in front of the camera (*w_m: its w).
+//   kFrame with fixed interior orientation: c (a, b) against the mark's ideal film point
+//   (eqs. 17-28).
+//   Through the camera's model (Frame::model_camera: the forward models, and a self-calibrated
+//   kFrame camera): the pose's equation is written with c = 1 against the observation 0, so
+//   F0 = (a, b), the ray's normalised coordinates, and rows0 = d(a, b)/dp; the mark's equation is
+//   F = -r(a, b; calibration), r the residual "observed - computed" of the one model
+//   (ModelEquationRows); its rows -J rows0 with J = dr/d(a, b), and the calibration's -dr/dk by
+//   the same Jet. For kFrame, r = ideal(observation; k) - c (a, b): F = c (a, b) - ideal, whose
+//   rows are the lecture's at c, and dF/dc = a, dF/dk = -d ideal/dk for the film correction's k.
 bool MarkEquation(const TaylorPoseLinearization& pose, const Block& block, const Plan& plan,
                   const Frame& frame, const State& state, int m, double* row_u, double* row_v,
-                  double* fu, double* fv, double* w_m) {
+                  double* fu, double* fv, double* w_m, double* calib_u = nullptr,
+                  double* calib_v = nullptr) {
   const BlockMark& mark = block.marks[m];
   const double* point = state.points[mark.point].data();
   const bool in_front =
       row_u != nullptr ? pose.Linearize(point, plan.ideal_um[m].data(), row_u, row_v, fu, fv, w_m)
                        : pose.Residual(point, plan.ideal_um[m].data(), fu, fv, w_m);
-  const BlockCamera* camera = frame.forward_camera[mark.image];
+  const BlockCamera* camera = frame.model_camera[mark.image];
   if (!in_front || camera == nullptr) return in_front;
-  using Jet = ceres::Jet<double, 2>;
-  const Jet ab[2] = {Jet(*fu, 0), Jet(*fv, 1)};
-  Jet params[kMaxCameraModelParams];
-  for (size_t k = 0; k < camera->params.size(); ++k) params[k] = Jet(camera->params[k]);
-  Jet residual[2];
-  CameraModelResidual(camera->model, params, ab, mark.observation.data(), camera->data(), residual);
-  *fu = -residual[0].a;
-  *fv = -residual[1].a;
-  if (row_u != nullptr) {
-    for (int c = 0; c < 6; ++c) {
-      const double u = row_u[c], v = row_v[c];
-      row_u[c] = -(residual[0].v[0] * u + residual[0].v[1] * v);
-      row_v[c] = -(residual[1].v[0] * u + residual[1].v[1] * v);
-    }
+  const int c = frame.camera_index[mark.image];
+  const double* params = state.cameras[c].data();
+  if (row_u == nullptr) {
+    const double ab[2] = {*fu, *fv};
+    double residual[2];
+    CameraModelResidual(camera->model, params, ab, mark.observation.data(), camera->data(),
+                        residual);
+    *fu = -residual[0];
+    *fv = -residual[1];
+  } else if (calib_u != nullptr && !plan.calibrated[c].empty()) {
+    ModelEquationRows<2 + kMaxCameraModelParams>(*camera, params, plan.calibrated[c],
+                                                 mark.observation.data(), row_u, row_v, fu, fv,
+                                                 calib_u, calib_v);
+  } else {
+    ModelEquationRows<2>(*camera, params, plan.calibrated[c], mark.observation.data(), row_u,
+                         row_v, fu, fv, nullptr, nullptr);
   }
   return std::isfinite(*fu) && std::isfinite(*fv);
 }
 
-// Marks: eqs. 7-8 with eqs. 17-28 for the camera and dF/dX = -dF/dX0 for the point, image by
-// image on num_threads threads: each image's camera sums (U, g_e) and its marks' W, g_p parts and
-// F are its own. The point sums (V, g_p) follow point by point over its marks in mark order. False
-// when a point is not in front of its camera (normal->behind_mark: the first such mark).
+// The global column of mark k's camera's first estimated parameter, or -1.
+int MarkGlobal(const Block& block, const Layout& layout, const Frame& frame, int k) {
+  return layout.camera_global[frame.camera_index[block.marks[layout.marks[k]].image]];
+}
+
+// Marks: eqs. 7-8 with eqs. 17-28 for the camera, dF/dX = -dF/dX0 for the point and the model's
+// calibration rows (MarkEquation), image by image on num_threads threads: each image's camera
+// sums (U, g_e, its coupling with the calibration) and its marks' W, g_p parts and F are its own;
+// its calibration sums are added in image order. The point sums (V, g_p, the calibration's
+// coupling) follow point by point over its marks in mark order. False when a point is not in
+// front of its camera (normal->behind_mark: the first such mark).
 bool LinearizeMarks(TaylorPartials partials, const Block& block, const Plan& plan,
                     const Layout& layout, const Frame& frame, const State& state, int num_threads,
                     Normal* normal) {
   const size_t num_images = block.images.size();
+  const int G = layout.num_global;
   std::vector<double> image_ssr(num_images, 0.0);
   std::vector<int> image_behind(num_images, -1);
   std::vector<double> image_behind_w(num_images, 0.0);
+  // Per image of a self-calibrated camera: its marks' share of the calibration's block, right-hand
+  // side and the weight of their rows.
+  std::vector<Eigen::MatrixXd> image_Ugg(G > 0 ? num_images : 0);
+  std::vector<Eigen::VectorXd> image_gg(G > 0 ? num_images : 0);
+  std::vector<double> image_weight(num_images, 0.0);
   ParallelFor(num_images, num_threads, [&](size_t i) {
     const TaylorPoseLinearization pose(partials, state.eo[i].data(), frame.focal_um[i],
                                        frame.earth_radius_m[i]);
     const int b = layout.image_block[i];
+    const int global = layout.camera_global[frame.camera_index[i]];
+    const int K = global >= 0 ? static_cast<int>(plan.calibrated[frame.camera_index[i]].size()) : 0;
     Matrix6d U = Matrix6d::Zero();
     Vector6d ge = Vector6d::Zero();
-    double ssr = 0.0;
+    Eigen::Matrix<double, 6, Eigen::Dynamic> Ueg = Eigen::Matrix<double, 6, Eigen::Dynamic>::Zero(6, K);
+    Eigen::MatrixXd Ugg = Eigen::MatrixXd::Zero(K, K);
+    Eigen::VectorXd gg = Eigen::VectorXd::Zero(K);
+    Eigen::Matrix<double, 2, Eigen::Dynamic> A_g(2, K);
+    double ssr = 0.0, weight_rows = 0.0;
     for (const int k : layout.image_marks[i]) {
       const int m = layout.marks[k];
       double row_u[6], row_v[6], fu, fv, w;
-      if (!MarkEquation(pose, block, plan, frame, state, m, row_u, row_v, &fu, &fv, &w)) {
+      double calib_u[kMaxCameraModelParams], calib_v[kMaxCameraModelParams];
+      if (!MarkEquation(pose, block, plan, frame, state, m, row_u, row_v, &fu, &fv, &w,
+                        K > 0 ? calib_u : nullptr, calib_v)) {
         image_behind[i] = m;
         image_behind_w[i] = w;
         return;
@@ -263,10 +349,27 @@ bool LinearizeMarks(TaylorPartials partials, const Block& block, const Plan& pla
       }
       normal->W[k].noalias() = weighted_Ae_T * A_p;
       normal->gp_mark[k].noalias() = weight * A_p.transpose() * F;
+      if (K > 0) {
+        for (int j = 0; j < K; ++j) {
+          A_g(0, j) = calib_u[j];
+          A_g(1, j) = calib_v[j];
+        }
+        if (b >= 0) Ueg.noalias() += weighted_Ae_T * A_g;
+        Ugg.noalias() += weight * A_g.transpose() * A_g;
+        gg.noalias() += weight * A_g.transpose() * F;
+        normal->Wg[k].noalias() = weight * A_g.transpose() * A_p;
+        weight_rows += 2.0 * weight;
+      }
     }
     if (b >= 0) {
       normal->U[b] = U;
       normal->ge[b] = ge;
+      if (K > 0) normal->Ueg[b].middleCols(global, K) = Ueg;
+    }
+    if (K > 0) {
+      image_Ugg[i] = std::move(Ugg);
+      image_gg[i] = std::move(gg);
+      image_weight[i] = weight_rows;
     }
     image_ssr[i] = ssr;
   });
@@ -279,13 +382,36 @@ bool LinearizeMarks(TaylorPartials partials, const Block& block, const Plan& pla
   }
   if (normal->behind_mark >= 0) return false;
   for (size_t i = 0; i < num_images; ++i) normal->weighted_ssr += image_ssr[i];
+  // The calibration's own sums in image order, and the size measure of its corrections.
+  if (G > 0) {
+    std::vector<double> camera_weight(block.cameras.size(), 0.0);
+    for (size_t i = 0; i < num_images; ++i) {
+      const int c = frame.camera_index[i];
+      const int global = layout.camera_global[c];
+      if (global < 0 || image_Ugg[i].size() == 0) continue;
+      const int K = static_cast<int>(image_gg[i].size());
+      normal->Ugg.block(global, global, K, K) += image_Ugg[i];
+      normal->gg.segment(global, K) += image_gg[i];
+      camera_weight[c] += image_weight[i];
+    }
+    for (int j = 0; j < G; ++j) {
+      const int c = layout.global_camera[j];
+      if (c < 0) continue;
+      const double focal = CameraModelFocal(block.cameras[c].model, state.cameras[c].data());
+      normal->global_angle_per_unit[j] =
+          camera_weight[c] > 0.0 ? std::sqrt(normal->Ugg(j, j) / camera_weight[c]) / focal : 0.0;
+    }
+  }
   // V_p = sum w A_p^T A_p: A_e's first three columns are -A_p, so it is minus the top of W.
   ParallelFor(layout.free_points.size(), num_threads, [&](size_t q) {
     Eigen::Matrix3d V = Eigen::Matrix3d::Zero();
     Eigen::Vector3d gp = Eigen::Vector3d::Zero();
+    if (G > 0) normal->Wg_point[q].setZero(G, 3);
     for (const int k : layout.point_all_marks[q]) {
       V -= normal->W[k].topRows<3>();
       gp += normal->gp_mark[k];
+      const int global = G > 0 ? MarkGlobal(block, layout, frame, k) : -1;
+      if (global >= 0) normal->Wg_point[q].middleRows(global, normal->Wg[k].rows()) += normal->Wg[k];
     }
     normal->V[q] = V;
     normal->gp[q] = gp;
@@ -303,15 +429,20 @@ void DenseMarkRows(TaylorPartials partials, const Block& block, const Plan& plan
                                        frame.focal_um[mark.image],
                                        frame.earth_radius_m[mark.image]);
     double row_u[6], row_v[6], fu, fv, w;
-    if (!MarkEquation(pose, block, plan, frame, state, m, row_u, row_v, &fu, &fv, &w))
+    double calib_u[kMaxCameraModelParams], calib_v[kMaxCameraModelParams];
+    const int global = MarkGlobal(block, layout, frame, static_cast<int>(k));
+    if (!MarkEquation(pose, block, plan, frame, state, m, row_u, row_v, &fu, &fv, &w,
+                      global >= 0 ? calib_u : nullptr, calib_v))
       continue;  // not reached: LinearizeMarks succeeded at the same values
     Matrix23 A_p;
     PointPartialsFromCentrePartials(row_u, row_v, &A_p);
     const double s = 1.0 / plan.mark_sigma[m];
     const double point_u[3] = {A_p(0, 0), A_p(0, 1), A_p(0, 2)};
     const double point_v[3] = {A_p(1, 0), A_p(1, 1), A_p(1, 2)};
-    dense->Add(mark.image, row_u, mark.point, point_u, s, fu);
-    dense->Add(mark.image, row_v, mark.point, point_v, s, fv);
+    const int K =
+        global >= 0 ? static_cast<int>(plan.calibrated[frame.camera_index[mark.image]].size()) : 0;
+    dense->Add(mark.image, row_u, mark.point, point_u, s, fu, global, calib_u, K);
+    dense->Add(mark.image, row_v, mark.point, point_v, s, fv, global, calib_v, K);
   }
 }
 
@@ -343,33 +474,46 @@ void LinearizeImagePriors(const Block& block, const Plan& plan, const Layout& la
                           const Frame& frame, const State& state, bool cost_only, Normal* normal,
                           DenseRows* dense) {
   for (size_t i = 0; i < block.images.size(); ++i) {
+    // An image held constant keeps its priors in the cost (as in BundleAdjust's problem) and its
+    // position prior's rows in the lever arm's columns.
     const int b = layout.image_block[i];
-    if (b < 0) continue;
     if (plan.image_prior[i]) {
       Eigen::Matrix<double, 3, 6> A = Eigen::Matrix<double, 3, 6>::Zero();
       A.leftCols<3>().setIdentity();
       Eigen::Vector3d antenna = state.eo[i].head<3>();
+      Eigen::Matrix3d A_lever = Eigen::Matrix3d::Zero();  // d antenna / d lever = R^T
       if (frame.use_lever) {
         ExteriorOrientation eo;
         eo.parameters = state.eo[i];
         Eigen::Matrix3d d_angles;
-        antenna = TaylorAntennaPosition(eo, frame.lever, &d_angles);
+        antenna = TaylorAntennaPosition(eo, state.lever, &d_angles);
         A.rightCols<3>() = d_angles;
+        A_lever = RotationFromAngles(RotationConvention::kSeed, eo.angles_seed_rad()).transpose();
       }
       Eigen::Vector3d F = antenna - frame.measured[i];
       Eigen::Vector3d weight = plan.image_prior_sigma[i].cwiseAbs2().cwiseInverse();
       const int rows = ImagePriorRows(plan, i);  // 2: a position without height (X, Y only)
       if (rows < 3) F.z() = weight.z() = 0.0;
       normal->weighted_ssr += weight.dot(F.cwiseAbs2());
-      if (!cost_only) {
+      const int lever = layout.lever_global;
+      if (!cost_only && b >= 0) {
         normal->U[b].noalias() += A.transpose() * weight.asDiagonal() * A;
         normal->ge[b].noalias() += A.transpose() * weight.cwiseProduct(F);
+        if (lever >= 0)
+          normal->Ueg[b].middleCols<3>(lever).noalias() +=
+              A.transpose() * weight.asDiagonal() * A_lever;
+      }
+      if (!cost_only && lever >= 0) {
+        normal->Ugg.block<3, 3>(lever, lever).noalias() +=
+            A_lever.transpose() * weight.asDiagonal() * A_lever;
+        normal->gg.segment<3>(lever).noalias() += A_lever.transpose() * weight.cwiseProduct(F);
       }
       if (dense != nullptr) {
         for (int axis = 0; axis < rows; ++axis) {
           const Vector6d row = A.row(axis).transpose();
+          const Eigen::Vector3d lever_row = A_lever.row(axis).transpose();
           dense->Add(static_cast<int>(i), row.data(), -1, nullptr, std::sqrt(weight[axis]),
-                     F[axis]);
+                     F[axis], lever, lever_row.data(), 3);
         }
       }
     }
@@ -379,7 +523,7 @@ void LinearizeImagePriors(const Block& block, const Plan& plan, const Layout& la
         F[k] = WrapAngle(state.eo[i][3 + k] - (*block.images[i].measured_angles_rad)[k]);
       const Eigen::Vector3d weight = plan.image_attitude_sigma[i].cwiseAbs2().cwiseInverse();
       normal->weighted_ssr += weight.dot(F.cwiseAbs2());
-      if (!cost_only) {
+      if (!cost_only && b >= 0) {
         normal->U[b].bottomRightCorner<3, 3>().diagonal() += weight;
         normal->ge[b].tail<3>() += weight.cwiseProduct(F);
       }
@@ -408,6 +552,13 @@ bool Linearize(TaylorPartials partials, const Block& block, const Plan& plan, co
   normal->W.resize(layout.marks.size());
   normal->gp_mark.resize(layout.marks.size());
   normal->f.resize(layout.marks.size());
+  const int G = layout.num_global;
+  normal->Ueg.assign(G > 0 ? num_blocks : 0, Eigen::MatrixXd::Zero(6, G));
+  normal->Ugg.setZero(G, G);
+  normal->gg.setZero(G);
+  normal->Wg.resize(G > 0 ? layout.marks.size() : 0);
+  normal->Wg_point.resize(G > 0 ? num_points : 0);
+  normal->global_angle_per_unit.assign(G, 0.0);
   normal->weighted_ssr = 0.0;
   normal->behind_mark = -1;
   if (!LinearizeMarks(partials, block, plan, layout, frame, state, num_threads, normal))
@@ -465,11 +616,16 @@ Matrix Damped(const Matrix& N, double lambda) {
   return damped;
 }
 
-// Eliminates the free points first .. last - 1 into (blocks, r), which hold this chunk's sums.
-// Returns the first singular free point, or -1.
+// Eliminates the free points first .. last - 1 into (blocks, border, corner, r), which hold this
+// chunk's sums. A point's rows in the global columns are the sum of its marks' (Wg_point): with
+// W_p = [W_cameras; Wg_p], S's border loses W_a V^-1 Wg_p^T per mark a and its corner
+// Wg_p V^-1 Wg_p^T. Returns the first singular free point, or -1.
 int ReduceChunk(const Normal& normal, const Layout& layout, int first, int last, double lambda,
-                std::vector<Matrix6d>* blocks, Eigen::VectorXd* r, std::vector<Matrix63>* Y,
+                std::vector<Matrix6d>* blocks, Eigen::MatrixXd* border, Eigen::MatrixXd* corner,
+                Eigen::VectorXd* r, std::vector<Matrix63>* Y,
                 std::vector<Eigen::Matrix3d>* V_inverses) {
+  const int G = layout.num_global;
+  const int cameras_size = 6 * static_cast<int>(layout.free_images.size());
   for (int q = first; q < last; ++q) {
     const Eigen::LDLT<Eigen::Matrix3d> ldlt(Damped(normal.V[q], lambda));
     const Eigen::Vector3d d = ldlt.vectorD();
@@ -502,6 +658,15 @@ int ReduceChunk(const Normal& normal, const Layout& layout, int first, int last,
         }
       }
     }
+    if (G > 0) {
+      const Eigen::MatrixX3d& Wg = normal.Wg_point[q];
+      const Eigen::MatrixX3d Yg = Wg * V_inverse;
+      for (int a = 0; a < n; ++a)
+        border->middleRows<6>(6 * layout.mark_block[marks[a]]).noalias() -=
+            (*Y)[a] * Wg.transpose();
+      corner->noalias() -= Yg * Wg.transpose();
+      r->segment(cameras_size, G).noalias() -= Yg * normal.gp[q];
+    }
   }
   return -1;
 }
@@ -514,30 +679,44 @@ int ReduceChunk(const Normal& normal, const Layout& layout, int first, int last,
 // Returns the first free point whose block V_p is singular (its rays fix no point), or -1.
 int Reduce(const Normal& normal, const Layout& layout, Reduction* reduction) {
   const int num_blocks = static_cast<int>(layout.free_images.size());
+  const int G = layout.num_global;
+  const int cameras_size = 6 * num_blocks;
   const double lambda = reduction->damping;
   reduction->blocks.assign(layout.pairs.size(), Matrix6d::Zero());
-  reduction->r.resize(6 * num_blocks);
+  reduction->r.resize(cameras_size + G);
+  reduction->border.resize(cameras_size, G);
   for (int b = 0; b < num_blocks; ++b) {
     reduction->blocks[layout.diagonal_pair[b]] = Damped(normal.U[b], lambda);
     reduction->r.segment<6>(6 * b) = normal.ge[b];
+    if (G > 0) reduction->border.middleRows<6>(6 * b) = normal.Ueg[b];
   }
+  reduction->corner = Damped(normal.Ugg, lambda);
+  reduction->r.tail(G) = normal.gg;
   reduction->V_inverse.resize(layout.free_points.size());
   reduction->chunk_blocks.resize(kReductionChunks - 1);
+  reduction->chunk_border.resize(kReductionChunks - 1);
+  reduction->chunk_corner.resize(kReductionChunks - 1);
   reduction->chunk_r.resize(kReductionChunks - 1);
   reduction->Y.resize(kReductionChunks);
   std::vector<int> singular(kReductionChunks, -1);
   ParallelFor(kReductionChunks, reduction->num_threads, [&](size_t chunk) {
     std::vector<Matrix6d>* blocks = &reduction->blocks;
+    Eigen::MatrixXd* border = &reduction->border;
+    Eigen::MatrixXd* corner = &reduction->corner;
     Eigen::VectorXd* r = &reduction->r;
     if (chunk > 0) {
       blocks = &reduction->chunk_blocks[chunk - 1];
+      border = &reduction->chunk_border[chunk - 1];
+      corner = &reduction->chunk_corner[chunk - 1];
       r = &reduction->chunk_r[chunk - 1];
       blocks->assign(layout.pairs.size(), Matrix6d::Zero());
-      r->setZero(6 * num_blocks);
+      border->setZero(cameras_size, G);
+      corner->setZero(G, G);
+      r->setZero(cameras_size + G);
     }
-    singular[chunk] =
-        ReduceChunk(normal, layout, layout.chunk_start[chunk], layout.chunk_start[chunk + 1],
-                    lambda, blocks, r, &reduction->Y[chunk], &reduction->V_inverse);
+    singular[chunk] = ReduceChunk(normal, layout, layout.chunk_start[chunk],
+                                  layout.chunk_start[chunk + 1], lambda, blocks, border, corner,
+                                  r, &reduction->Y[chunk], &reduction->V_inverse);
   });
   for (int chunk = 0; chunk < kReductionChunks; ++chunk)
     if (singular[chunk] >= 0) return layout.free_points[singular[chunk]];
@@ -546,8 +725,13 @@ int Reduce(const Normal& normal, const Layout& layout, Reduction* reduction) {
     for (int chunk = 1; chunk < kReductionChunks; ++chunk)
       reduction->blocks[k] += reduction->chunk_blocks[chunk - 1][k];
   });
-  for (int chunk = 1; chunk < kReductionChunks; ++chunk)
+  for (int chunk = 1; chunk < kReductionChunks; ++chunk) {
     reduction->r += reduction->chunk_r[chunk - 1];
+    if (G > 0) {
+      reduction->border += reduction->chunk_border[chunk - 1];
+      reduction->corner += reduction->chunk_corner[chunk - 1];
+    }
+  }
   return -1;
 }
 
@@ -563,15 +747,25 @@ double PredictedDecrease(const Layout& layout, const Normal& normal, double lamb
     dg += d_p[q].dot(normal.gp[q]);
     dDd += d_p[q].dot(normal.V[q].diagonal().cwiseProduct(d_p[q]));
   }
+  const Eigen::VectorXd d_g = d_e.tail(layout.num_global);
+  dg += d_g.dot(normal.gg);
+  dDd += d_g.dot(normal.Ugg.diagonal().cwiseProduct(d_g));
   return 0.5 * (dg + lambda * dDd);
 }
 
 // Writes the Jacobi-scaled S into layout->S (fixed components: their row and column zero, 1 on
-// the diagonal, which removes them exactly) and sets the scale. Returns the first camera column
+// the diagonal, which removes them exactly) and sets the scale. Returns the first column of S
 // without weight (a zero diagonal), or -1.
 int WriteScaled(const Plan& plan, Layout* layout, Reduction* reduction) {
   const int num_blocks = static_cast<int>(layout->free_images.size());
-  reduction->scale.resize(6 * num_blocks);
+  const int G = layout->num_global;
+  const int cameras_size = 6 * num_blocks;
+  reduction->scale.resize(cameras_size + G);
+  for (int j = 0; j < G; ++j) {
+    const double d = reduction->corner(j, j);
+    if (!(d > 0.0) || !std::isfinite(d)) return cameras_size + j;
+    reduction->scale[cameras_size + j] = 1.0 / std::sqrt(d);
+  }
   for (int b = 0; b < num_blocks; ++b) {
     const Matrix6d& diagonal = reduction->blocks[layout->diagonal_pair[b]];
     for (int r = 0; r < 6; ++r) {
@@ -601,6 +795,19 @@ int WriteScaled(const Plan& plan, Layout* layout, Reduction* reduction) {
         }
       }
     }
+  }
+  // The global columns, dense: rows 0 .. 6 B - 1 from the border, then the corner's upper part.
+  const int* outer = layout->S.outerIndexPtr();
+  for (int j = 0; j < G; ++j) {
+    double* column = values + outer[cameras_size + j];
+    const double s_j = s[cameras_size + j];
+    for (int b = 0; b < num_blocks; ++b)
+      for (int r = 0; r < 6; ++r)
+        column[6 * b + r] = IsFixed(plan, *layout, b, r)
+                                ? 0.0
+                                : reduction->border(6 * b + r, j) * s[6 * b + r] * s_j;
+    for (int i = 0; i <= j; ++i)
+      column[cameras_size + i] = reduction->corner(i, j) * s[cameras_size + i] * s_j;
   }
   return -1;
 }
@@ -650,6 +857,8 @@ void SolveCorrections(const Plan& plan, const Layout& layout, const Normal& norm
                       const Reduction& reduction, Eigen::VectorXd* d_e,
                       std::vector<Eigen::Vector3d>* d_p) {
   const Eigen::VectorXd& s = reduction.scale;
+  const int G = layout.num_global;
+  const int cameras_size = 6 * static_cast<int>(layout.free_images.size());
   Eigen::VectorXd rhs = s.cwiseProduct(reduction.r);
   for (int b = 0; b < static_cast<int>(layout.free_images.size()); ++b)
     for (int c = 0; c < 6; ++c)
@@ -662,6 +871,7 @@ void SolveCorrections(const Plan& plan, const Layout& layout, const Normal& norm
     Eigen::Vector3d t = normal.gp[q];
     for (const int k : layout.point_marks[q])
       t.noalias() -= normal.W[k].transpose() * d_e->segment<6>(6 * layout.mark_block[k]);
+    if (G > 0) t.noalias() -= normal.Wg_point[q].transpose() * d_e->segment(cameras_size, G);
     (*d_p)[q] = reduction.V_inverse[q] * t;
   });
 }

@@ -49,9 +49,11 @@ inline void PointPartialsFromCentrePartials(const double* row_u, const double* r
 // sigmas, and how the block is tied to the ground) are BundleAdjust's plan
 // (internal::MakeBundlePlan); the Taylor adjustment adds only what is its own.
 struct Plan : BundlePlan {
-  // Per mark: the corrected (ideal) image-plane point (um) of a kFrame camera's mark; zero for a
-  // forward model's mark (its equation is F = observation - model(a, b), Frame::forward_camera).
+  // Per mark: the corrected (ideal) image-plane point (um) of a kFrame camera's mark, constant
+  // with its interior orientation; zero for a mark whose camera's model is evaluated per mark (a
+  // forward model, or a self-calibrated kFrame camera: Frame::model_camera).
   std::vector<Eigen::Vector2d> ideal_um;
+  bool estimate_lever = false;  // the lever arm's three unknowns (config.estimate_lever_arm)
   std::vector<char> image_constant;  // held constant (config or the relative gauge's first image)
   std::vector<char> point_constant;
   std::vector<std::array<bool, 6>> image_fixed;  // components held fixed of a free image
@@ -63,7 +65,11 @@ struct Plan : BundlePlan {
 };
 
 // The unknowns and the sparsity of the reduced normal matrix of one round. Camera block b is
-// image free_images[b], columns 6 b .. 6 b + 5. The reduced matrix is stored as its upper triangle
+// image free_images[b], columns 6 b .. 6 b + 5. The global unknowns (each self-calibrated camera's
+// estimated parameters in plan.calibrated order, then the estimated lever arm) follow as the last
+// num_global columns, 6 B + j (B camera blocks): a dense border of S that couples with every
+// camera block and with the points (eliminated as the cameras' columns are). The reduced matrix
+// is stored as its upper triangle
 // in a compressed sparse column matrix whose pattern is built once per round; pairs[k] = (b1, b2),
 // b1 <= b2, is a 6 x 6 block of it and value_start[k][c] the position in its value array of row
 // 6 b1 of column 6 b2 + c (the block's rows of a column are contiguous).
@@ -84,6 +90,14 @@ struct Layout {
   std::vector<int> diagonal_pair;  // per camera block
   std::vector<std::pair<int, int>> pairs;
   std::vector<std::array<int, 6>> value_start;
+  // The global columns: per camera the first of its estimated parameters (j, its column 6 B + j)
+  // or -1; the lever arm's first or -1; their count. Per global column: its camera (-1: the lever
+  // arm) and parameter index (the lever's axis).
+  std::vector<int> camera_global;
+  int lever_global = -1;
+  int num_global = 0;
+  std::vector<int> global_camera;
+  std::vector<int> global_param;
   SparseMatrix S;
   int num_observations = 0;
   int num_unknowns = 0;
@@ -91,8 +105,10 @@ struct Layout {
 
 // The values being adjusted, relative to the block's centroid.
 struct State {
-  std::vector<Vector6d> eo;             // per image
-  std::vector<Eigen::Vector3d> points;  // per point
+  std::vector<Vector6d> eo;                  // per image
+  std::vector<Eigen::Vector3d> points;       // per point
+  std::vector<std::vector<double>> cameras;  // per camera: its parameters (core/camera_models.h)
+  Eigen::Vector3d lever = Eigen::Vector3d::Zero();  // the lever arm (m, camera frame)
 };
 
 // The block's fixed data in the centred frame.
@@ -101,19 +117,20 @@ struct Frame {
   double extent_m = 1.0;                  // RMS distance of cameras and points from the centroid
   std::vector<Eigen::Vector3d> surveyed;  // per point (control points), centred
   std::vector<Eigen::Vector3d> measured;  // per image (camera positions), centred
-  // Per image: the seed's focal length c (um) of a kFrame camera, whose marks enter as their
-  // ideal film points (Plan::ideal_um); 1 for a forward (COLMAP) model, whose pose equations are
-  // written for the ray's normalised coordinates (a, b) and mapped to pixels per mark
-  // (forward_camera).
+  // Per image: the seed's focal length c (um) of a kFrame camera with fixed interior orientation,
+  // whose marks enter as their ideal film points (Plan::ideal_um); 1 for a camera whose model is
+  // evaluated per mark (model_camera), whose pose equations are written for the ray's normalised
+  // coordinates (a, b) and mapped to the observation's unit per mark.
   std::vector<double> focal_um;
-  // Per image: its camera when the camera is a forward model (observation = model(a, b): core/
-  // camera_models.h CameraModelResidual), null for kFrame. Points into the block.
-  std::vector<const BlockCamera*> forward_camera;
+  // Per image: its camera when the camera's model is evaluated per mark (core/camera_models.h
+  // CameraModelResidual, on State::cameras): a forward (COLMAP) model, or a self-calibrated
+  // kFrame camera; null for a kFrame camera with fixed interior orientation. Points into the block.
+  std::vector<const BlockCamera*> model_camera;
+  std::vector<int> camera_index;  // per image: its camera (index into Block::cameras)
   // Per image: its camera's earth-curvature radius (m; BlockCamera::earth_curvature_radius_m),
   // 0 without ApplyECC. The drop depends on X - X0, Y - Y0 only: the centred frame keeps it.
   std::vector<double> earth_radius_m;
-  Eigen::Vector3d lever = Eigen::Vector3d::Zero();
-  bool use_lever = false;
+  bool use_lever = false;  // the camera-position priors apply State::lever
 };
 
 // The normal equations of one linearisation (seed sign: N d = A^T P F, p = p0 - d).
@@ -125,6 +142,20 @@ struct Normal {
   std::vector<Matrix63> W;               // per mark of the round: w A_e^T A_p
   std::vector<Eigen::Vector3d> gp_mark;  // per mark of the round: w A_p^T F
   std::vector<Eigen::Vector2d> f;        // per mark of the round: F (um)
+  // The global columns (Layout::num_global, G; all empty when G = 0): per camera block its
+  // 6 x G coupling w A_e^T A_g; their own G x G block and right-hand side; per mark of a
+  // self-calibrated camera w A_g^T A_p (its camera's estimated parameters x 3; empty otherwise);
+  // per free point the sum of its marks' ones at their columns (G x 3).
+  std::vector<Eigen::MatrixXd> Ueg;
+  Eigen::MatrixXd Ugg;
+  Eigen::VectorXd gg;
+  std::vector<Eigen::MatrixX3d> Wg;
+  std::vector<Eigen::MatrixX3d> Wg_point;
+  // Per global column: the correction's size measure (MeasureCorrections). A calibration
+  // parameter: the RMS image shift of a unit correction over the camera's marks (sqrt of its
+  // diagonal of N over the weight of those rows) divided by the camera's focal length in the
+  // observation unit, i.e. rad of view per unit; the lever arm: 0 (a position, m).
+  std::vector<double> global_angle_per_unit;
   double weighted_ssr = 0.0;             // F^T P F over every observation
   int behind_mark = -1;                  // a mark whose point is not in front of its camera
   double behind_w = 0.0;
@@ -134,19 +165,24 @@ struct Normal {
 struct DenseRows {
   std::vector<int> image_columns;  // per image: first column or -1
   std::vector<int> point_columns;  // per point: first column or -1
+  int global_column = -1;          // first global column (Layout's global column 0)
   int num_columns = 0;
   std::vector<Eigen::VectorXd> rows;
   std::vector<double> residuals;
 
-  // One equation: sqrt_weight times (eo_row at the image's columns, point_row at the point's) and
-  // times F. image / point -1 (or a null row): no such part.
+  // One equation: sqrt_weight times (eo_row at the image's columns, point_row at the point's,
+  // global_row's global_count entries at global columns global .. global + global_count - 1) and
+  // times F. image / point / global -1 (or a null row): no such part.
   void Add(int image, const double* eo_row, int point, const double* point_row, double sqrt_weight,
-           double f) {
+           double f, int global = -1, const double* global_row = nullptr, int global_count = 0) {
     Eigen::VectorXd row = Eigen::VectorXd::Zero(num_columns);
     if (image >= 0 && eo_row != nullptr && image_columns[image] >= 0)
       for (int k = 0; k < 6; ++k) row[image_columns[image] + k] = sqrt_weight * eo_row[k];
     if (point >= 0 && point_row != nullptr && point_columns[point] >= 0)
       for (int k = 0; k < 3; ++k) row[point_columns[point] + k] = sqrt_weight * point_row[k];
+    if (global >= 0 && global_row != nullptr)
+      for (int k = 0; k < global_count; ++k)
+        row[global_column + global + k] = sqrt_weight * global_row[k];
     rows.push_back(std::move(row));
     residuals.push_back(sqrt_weight * f);
   }
@@ -161,10 +197,13 @@ struct Reduction {
   // Per chunk but the first (which writes into blocks and r): partial S blocks and r; and per
   // chunk the scratch W V^-1 of the marks of one point.
   std::vector<std::vector<Matrix6d>> chunk_blocks;
+  std::vector<Eigen::MatrixXd> chunk_border, chunk_corner;
   std::vector<Eigen::VectorXd> chunk_r;
   std::vector<std::vector<Matrix63>> Y;
   std::vector<Matrix6d> blocks;  // per pair: the reduced matrix S (unscaled)
-  Eigen::VectorXd r;             // reduced right-hand side (unscaled)
+  Eigen::MatrixXd border;        // S's camera x global block (6 B x G, unscaled)
+  Eigen::MatrixXd corner;        // S's global x global block (G x G, unscaled)
+  Eigen::VectorXd r;             // reduced right-hand side (unscaled; 6 B + G)
   Eigen::VectorXd scale;         // Jacobi scale 1 / sqrt(diag S); 1 where fixed
   // Natural order: the camera blocks are already in a fill-reducing order (BuildLayout).
   Eigen::SimplicialLDLT<SparseMatrix, Eigen::Upper, Eigen::NaturalOrdering<int>> ldlt;
@@ -212,16 +251,16 @@ double PredictedDecrease(const Layout& layout, const Normal& normal, double lamb
                          const Eigen::VectorXd& d_e, const std::vector<Eigen::Vector3d>& d_p);
 
 // Writes the Jacobi-scaled S into layout->S (fixed components: their row and column zero, 1 on
-// the diagonal, which removes them exactly) and sets the scale. Returns the first camera column
-// without weight (a zero diagonal), or -1.
+// the diagonal, which removes them exactly) and sets the scale. Returns the first column of S
+// without weight (a zero diagonal: 6 b + c a camera's, 6 B + j a global one), or -1.
 int WriteScaled(const Plan& plan, Layout* layout, Reduction* reduction);
 
 // Factorises the scaled S (reduction->solver). False when it is not positive definite to
 // min_pivot_ratio.
 bool Factorize(double min_pivot_ratio, const Layout& layout, Reduction* reduction);
 
-// Solves S d_e = r (through the scaled factorisation) and back-substitutes
-// d_p = V_p^-1 (g_p - W_p^T d_e).
+// Solves S d_e = r (through the scaled factorisation; d_e: 6 B camera then G global components)
+// and back-substitutes d_p = V_p^-1 (g_p - W_p^T d_e).
 void SolveCorrections(const Plan& plan, const Layout& layout, const Normal& normal,
                       const Reduction& reduction, Eigen::VectorXd* d_e,
                       std::vector<Eigen::Vector3d>* d_p);

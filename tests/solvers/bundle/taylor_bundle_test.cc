@@ -49,6 +49,15 @@ BundleAdjustmentOptions CeresOptions() {
   return options;
 }
 
+// Ceres with its tolerances at 1e-14, for comparisons at the minimum itself.
+BundleAdjustmentOptions TightCeresOptions() {
+  BundleAdjustmentOptions options = CeresOptions();
+  options.solver.function_tolerance = 1e-14;
+  options.solver.parameter_tolerance = 1e-14;
+  options.solver.gradient_tolerance = 1e-14;
+  return options;
+}
+
 TaylorBundleOptions TaylorOptions(TaylorPartials partials = TaylorPartials::kCorrected) {
   TaylorBundleOptions options;
   options.partials = partials;
@@ -104,6 +113,14 @@ SyntheticBlockOptions NoiseFree(SyntheticBlockOptions o) {
   o.mark_sigma_px = 0.0;
   o.gnss_sigma_m = Eigen::Vector3d::Zero();
   o.control_sigma_m = 0.0;
+  return o;
+}
+
+// The small block of the linearisation tests: 2 lines x 3 images with `tie_points` tie points.
+SyntheticBlockOptions SixImages(SyntheticBlockOptions o, int tie_points) {
+  o.num_lines = 2;
+  o.images_per_line = 3;
+  o.num_tie_points = tie_points;
   return o;
 }
 
@@ -290,10 +307,7 @@ void CheckReductionAgainstFullSystem(
 }
 
 TEST(TaylorBundleNormalEquations, ReducedEqualTheFullOnes) {
-  SyntheticBlockOptions o = TaylorBlockOptions();
-  o.num_lines = 2;
-  o.images_per_line = 3;
-  o.num_tie_points = 49;
+  SyntheticBlockOptions o = SixImages(TaylorBlockOptions(), 49);
   TestBlock data = MakeTestBlock(o);
   // Attitude priors too, and a lever arm on the camera positions.
   for (size_t i = 0; i < data.block.images.size(); ++i) {
@@ -343,10 +357,7 @@ SyntheticBlockOptions ForwardModelBlock(const ForwardModel& model) {
 TEST(TaylorBundlePartials, ForwardModelRowsMatchCentralDifferences) {
   for (const ForwardModel& model : ForwardModels()) {
     SCOPED_TRACE(EnumName(model.type));
-    SyntheticBlockOptions o = ForwardModelBlock(model);
-    o.num_lines = 2;
-    o.images_per_line = 3;
-    o.num_tie_points = 30;
+    const SyntheticBlockOptions o = SixImages(ForwardModelBlock(model), 30);
     const TestBlock data = MakeTestBlock(o);
     TaylorBundleLinearSystem system;
     ASSERT_TRUE(
@@ -878,15 +889,6 @@ TEST(TaylorBundle, RefusesWhatItDoesNotDo) {
   const TestBlock data = MakeTestBlock(TaylorBlockOptions());
   {
     Block block = data.block;
-    BundleAdjustmentConfig config;
-    ASSERT_TRUE(BundleAdjustmentConfig::FromCalibrationNames(block, {"FocalLength"}, &config).ok());
-    TaylorBundleResult result;
-    const Status status = TaylorBundleAdjust(TaylorOptions(), config, &block, &result);
-    ASSERT_FALSE(status.ok());
-    EXPECT_NE(status.message().find("self-calibration"), std::string::npos) << status.message();
-  }
-  {
-    Block block = data.block;
     block.cameras[0].model = CameraModelType::kSimpleRadial;
     block.cameras[0].params = {0.0, 3000.0, 2000.0, 0.0};
     TaylorBundleResult result;
@@ -928,16 +930,6 @@ TEST(TaylorBundle, RefusesWhatItDoesNotDo) {
     options.tie_loss = LossType::kTukey;
     EXPECT_FALSE(options.IsValid(&loss_why));
     EXPECT_NE(loss_why.find("tie loss"), std::string::npos) << loss_why;
-    // An estimated lever arm is the config's: TaylorBundleAdjust refuses it.
-    BundleAdjustmentConfig estimate_lever;
-    estimate_lever.estimate_lever_arm = true;
-    Block block = data.block;
-    TaylorBundleResult result;
-    EXPECT_FALSE(TaylorBundleAdjust(TaylorOptions(), estimate_lever, &block, &result).ok());
-    BundleAdjustmentResult adjustment;
-    EXPECT_FALSE(BundleAdjustWithSolver(PoseSolver::kTaylor, BundleAdjustmentOptions(),
-                                        estimate_lever, &block, &adjustment)
-                     .ok());
     ceres = BundleAdjustmentOptions();
     ceres.accuracies.camera_m = Eigen::Vector3d(1.0, 2.0, 3.0);
     ASSERT_TRUE(
@@ -1226,6 +1218,375 @@ TEST(TaylorBundle, HonoursTheEarthCurvatureCorrectionAsBundleAdjustDoes) {
     }
     EXPECT_LT(largest, 1e-4);  // m; the corrected and the uncorrected minima are centimetres apart
   }
+}
+
+}  // namespace
+}  // namespace photopose
+
+namespace photopose {
+namespace {
+
+// ------------------------------------------------------------------ self-calibration, lever arm
+
+// A self-calibrating config: `names` (core/camera_models.h's, or COLMAP's) for every camera, and
+// the lever arm estimated when asked (starting from `lever`).
+BundleAdjustmentConfig CalibrationConfig(const Block& block, const std::vector<std::string>& names,
+                                         bool estimate_lever = false,
+                                         const Eigen::Vector3d& lever = Eigen::Vector3d::Zero()) {
+  BundleAdjustmentConfig config;
+  if (!names.empty()) {
+    const Status parsed = BundleAdjustmentConfig::FromCalibrationNames(block, names, &config);
+    EXPECT_TRUE(parsed.ok()) << parsed.message();
+  }
+  if (estimate_lever) {
+    config.estimate_lever_arm = true;
+    config.lever_arm_m = lever;
+  }
+  return config;
+}
+
+// kFrame: every parameter the tables' polynomial model has but K0 (equal to a change of c) and
+// the affinity and skew (not in the seed's table).
+const std::vector<std::string> kFrameCalibration = {"FocalLength", "PrincipalX", "PrincipalY",
+                                                    "K1",          "K2",         "K3",
+                                                    "P1",          "P2"};
+
+// The whitened residual of a block linearised under `config`.
+Eigen::VectorXd WhitenedResidual(const Block& block, const BundleAdjustmentConfig& config) {
+  TaylorBundleLinearSystem system;
+  const Status status = LinearizeTaylorBundle(TaylorOptions(), config, block, &system);
+  EXPECT_TRUE(status.ok()) << status.message();
+  return system.residual;
+}
+
+// Every column of the linearised system (exterior orientations, points, the camera's estimated
+// parameters, the lever arm) against central differences of the whitened residual. The step of a
+// calibration or lever column moves the residual by about 1e-3 of a sigma (h = 1e-3 / the
+// column's largest entry): the parameters span twelve orders of magnitude (c in um, K3 in mm^-6).
+// Returns the largest relative difference of a column.
+double WorstColumnAgainstCentralDifferences(const Block& block,
+                                            const BundleAdjustmentConfig& config) {
+  TaylorBundleLinearSystem system;
+  const Status status = LinearizeTaylorBundle(TaylorOptions(), config, block, &system);
+  EXPECT_TRUE(status.ok()) << status.message();
+  if (!status.ok()) return 1.0;
+  double worst = 0.0;
+  const auto check = [&](int column, const Eigen::VectorXd& plus, const Eigen::VectorXd& minus,
+                         double h, const std::string& what) {
+    const Eigen::VectorXd numeric = (plus - minus) / (2.0 * h);
+    const double scale = std::max(numeric.cwiseAbs().maxCoeff(), 1e-300);
+    const double error = (numeric - system.jacobian.col(column)).cwiseAbs().maxCoeff() / scale;
+    EXPECT_LT(error, kPartialRelativeTolerance) << what;
+    worst = std::max(worst, error);
+  };
+  for (size_t i = 0; i < block.images.size(); ++i) {
+    if (system.image_columns[i] < 0) continue;
+    for (int k = 0; k < 6; ++k) {
+      const double h = k < 3 ? 1e-3 : 1e-6;  // m, rad
+      Block plus = block, minus = block;
+      plus.images[i].eo->parameters[k] += h;
+      minus.images[i].eo->parameters[k] -= h;
+      check(system.image_columns[i] + k, WhitenedResidual(plus, config),
+            WhitenedResidual(minus, config), h, "image " + std::to_string(i));
+    }
+  }
+  for (size_t p = 0; p < block.points.size(); p += 7) {
+    if (system.point_columns[p] < 0 || !block.points[p].position_m) continue;
+    for (int k = 0; k < 3; ++k) {
+      Block plus = block, minus = block;
+      (*plus.points[p].position_m)[k] += 1e-3;
+      (*minus.points[p].position_m)[k] -= 1e-3;
+      check(system.point_columns[p] + k, WhitenedResidual(plus, config),
+            WhitenedResidual(minus, config), 1e-3, "point " + std::to_string(p));
+    }
+  }
+  for (size_t c = 0; c < block.cameras.size(); ++c) {
+    if (system.camera_columns[c] < 0) continue;
+    for (size_t j = 0; j < config.calibrated_params[c].size(); ++j) {
+      std::vector<int> indices = config.calibrated_params[c];
+      std::sort(indices.begin(), indices.end());
+      const int column = system.camera_columns[c] + static_cast<int>(j);
+      const double h = 1e-3 / system.jacobian.col(column).cwiseAbs().maxCoeff();
+      Block plus = block, minus = block;
+      plus.cameras[c].params[indices[j]] += h;
+      minus.cameras[c].params[indices[j]] -= h;
+      check(column, WhitenedResidual(plus, config), WhitenedResidual(minus, config), h,
+            "camera parameter " + std::to_string(indices[j]));
+    }
+  }
+  if (system.lever_column >= 0) {
+    for (int k = 0; k < 3; ++k) {
+      const int column = system.lever_column + k;
+      const double h = 1e-3 / system.jacobian.col(column).cwiseAbs().maxCoeff();
+      BundleAdjustmentConfig plus = config, minus = config;
+      (*plus.lever_arm_m)[k] += h;
+      (*minus.lever_arm_m)[k] -= h;
+      check(column, WhitenedResidual(block, plus), WhitenedResidual(block, minus), h,
+            "lever arm " + std::to_string(k));
+    }
+  }
+  return worst;
+}
+
+// The calibration's and the lever arm's columns: the kFrame film correction's partials (ideal
+// point by a Jet of FrameCorrectFilmPoint inside CameraModelResidual, c on the collinearity
+// side), the COLMAP models' (the same Jet with a derivative per parameter), and R^T for the lever
+// arm; the exterior-orientation and point columns of the self-calibrated cameras again (they now
+// go through the model per mark).
+TEST(TaylorBundlePartials, CalibrationAndLeverArmColumnsMatchCentralDifferences) {
+  struct Case {
+    const char* name;
+    SyntheticBlockOptions block;
+    std::vector<std::string> calibrate;
+    bool lever;
+  };
+  SyntheticBlockOptions frame = TaylorBlockOptions();
+  frame.camera_params = {24000.0, 15.0, -10.0, 0.0, -2e-5, 3e-8, -1e-11, 2e-6, -1e-6, 0.0, 0.0};
+  const std::vector<Case> cases = {
+      {"kFrame, c, xp, yp, K1-K3, P1, P2, lever arm", frame, kFrameCalibration, true},
+      {"OPENCV, f, cx, cy, k1, k2, p1, p2", ForwardModelBlock(ForwardModels()[4]),
+       {"f", "cx", "cy", "k1", "k2", "p1", "p2"}, false},
+      {"SIMPLE_RADIAL, f, k, lever arm", ForwardModelBlock(ForwardModels()[2]), {"f", "k"}, true},
+  };
+  std::printf("  %-46s %s\n", "camera, estimated", "largest relative difference of a column");
+  for (const Case& c : cases) {
+    SCOPED_TRACE(c.name);
+    const TestBlock data = MakeTestBlock(SixImages(c.block, 30));
+    const BundleAdjustmentConfig config = CalibrationConfig(
+        data.block, c.calibrate, c.lever, Eigen::Vector3d(0.05, -0.1, 0.3));
+    const double worst = WorstColumnAgainstCentralDifferences(data.block, config);
+    std::printf("  %-46s %.2e\n", c.name, worst);
+    EXPECT_LT(worst, kPartialRelativeTolerance);
+  }
+}
+
+// The border of global columns in the reduction (their coupling with every camera block, the
+// points eliminated through them, the back-substitution) against the full normal equations.
+TEST(TaylorBundleNormalEquations, ReducedEqualTheFullOnesWithCalibrationAndLeverArm) {
+  SyntheticBlockOptions o = SixImages(TaylorBlockOptions(), 49);
+  TestBlock data = MakeTestBlock(o);
+  CheckReductionAgainstFullSystem(
+      data, TaylorOptions(),
+      CalibrationConfig(data.block, kFrameCalibration, true, Eigen::Vector3d(0.1, 0.2, 0.3)));
+  // An image held constant: its marks still enter the calibration's columns, its camera-position
+  // prior the lever arm's.
+  BundleAdjustmentConfig held =
+      CalibrationConfig(data.block, {"FocalLength", "K1"}, true, Eigen::Vector3d(0.1, 0.2, 0.3));
+  held.constant_images = {0, 4};
+  CheckReductionAgainstFullSystem(data, TaylorOptions(), held);
+  // A relative COLMAP block with f and k.
+  SyntheticBlockOptions colmap = SixImages(ForwardModelBlock(ForwardModels()[2]), 49);
+  colmap.gnss = false;
+  colmap.num_control_points = 0;
+  colmap.check_layout.clear();
+  colmap.num_check_points = 0;
+  const TestBlock relative = MakeTestBlock(colmap);
+  CheckReductionAgainstFullSystem(relative, TaylorOptions(),
+                                  CalibrationConfig(relative.block, {"f", "k"}));
+}
+
+// Taylor against Ceres on self-calibrating blocks: the same minimum (cost, centres), the same
+// calibration with the same sigmas and correlations, the same lever arm.
+struct CalibrationScenario {
+  const char* name;
+  SyntheticBlockOptions block;
+  std::vector<std::string> calibrate;
+  bool lever = false;
+  // The start's interior orientation off the simulated one: per parameter index, the offset.
+  std::vector<std::pair<int, double>> offsets;
+};
+
+// The cost to 1e-9 relative: both solvers at their minimum, tolerances tightened.
+constexpr double kCostRelativeAgreement = 1e-9;
+// Calibration sigmas and correlations to 1e-6 relative (one code evaluated at solutions ~1e-9
+// apart); the calibration Ceres reaches from the Taylor solution within 1e-6 of its sigmas (the
+// Taylor solution is the minimum).
+constexpr double kCalibrationRelativeAgreement = 1e-6;
+// Calibration values of the two solvers from the same start, relative to max(|value|, sigma) (P1,
+// P2 are zero in the simulation, their estimates noise): Ceres stops where the cost no longer
+// resolves a step, with the 8 correlated frame parameters ~2e-6 of a sigma from the minimum (the
+// worst measured: the principal point's y, 1e-5 um of 5.6 um).
+constexpr double kCalibrationValueAgreement = 1e-5;
+
+std::vector<CalibrationScenario> CalibrationScenarios() {
+  std::vector<CalibrationScenario> scenarios;
+  {
+    // 4 lines of 6 images over 30 m of relief (c against the heights: the GNSS centres and the
+    // relief separate them).
+    CalibrationScenario s{"kFrame c, xp, yp, K1-K3, P1, P2", TaylorBlockOptions(),
+                          kFrameCalibration};
+    s.block.num_lines = 4;
+    s.block.images_per_line = 6;
+    s.block.num_tie_points = 600;
+    s.block.terrain_relief_m = 30.0;
+    s.offsets = {{kFrameFocal, 50.0}, {kFramePrincipalX, 20.0}, {kFrameK1, 5e-6}};
+    scenarios.push_back(s);
+  }
+  {
+    CalibrationScenario s{"kFrame c, K1, estimated lever arm", TaylorBlockOptions(),
+                          {"FocalLength", "K1"}, true};
+    s.block.num_lines = 4;
+    s.block.images_per_line = 6;
+    s.block.num_tie_points = 400;
+    s.block.terrain_relief_m = 30.0;
+    s.offsets = {{kFrameFocal, 30.0}};
+    scenarios.push_back(s);
+  }
+  {
+    CalibrationScenario s{"OPENCV fx, fy, k1, k2", ForwardModelBlock(ForwardModels()[4]),
+                          {"f", "k1", "k2"}};
+    s.block.num_lines = 4;
+    s.block.images_per_line = 6;
+    s.block.num_tie_points = 400;
+    s.block.terrain_relief_m = 30.0;
+    s.offsets = {{0, 20.0}, {1, -15.0}, {4, 0.01}};
+    scenarios.push_back(s);
+  }
+  {
+    CalibrationScenario s{"SIMPLE_RADIAL f, k, relative", ForwardModelBlock(ForwardModels()[2]),
+                          {"f", "k"}};
+    s.block.num_lines = 4;
+    s.block.images_per_line = 6;
+    s.block.num_tie_points = 400;
+    s.block.terrain_relief_m = 30.0;
+    s.block.gnss = false;
+    s.block.num_control_points = 0;
+    s.block.check_layout.clear();
+    s.block.num_check_points = 0;
+    s.offsets = {{0, 30.0}, {3, 0.01}};
+    scenarios.push_back(s);
+  }
+  return scenarios;
+}
+
+TEST(TaylorBundleVsCeres, SameSelfCalibrationAndLeverArm) {
+  std::printf("  %-36s %9s %9s %9s %9s %9s %9s %9s %7s %s\n", "block", "cost rel", "centre m",
+              "calib rel", "polished", "sigma rel", "lever m", "cov rel", "iter", "s T/C");
+  for (const CalibrationScenario& scenario : CalibrationScenarios()) {
+    SCOPED_TRACE(scenario.name);
+    TestBlock data = MakeTestBlock(scenario.block);
+    for (const auto& [index, offset] : scenario.offsets)
+      data.block.cameras[0].params[index] += offset;
+    const Eigen::Vector3d lever(0.05, -0.1, 0.3);
+    if (scenario.lever) {
+      for (size_t i = 0; i < data.block.images.size(); ++i) {
+        const Eigen::Vector3d offset = TaylorAntennaPosition(data.truth.eo[i], lever, nullptr) -
+                                       data.truth.eo[i].center_in_ground();
+        *data.block.images[i].measured_center_m += offset;
+      }
+    }
+    // The lever arm starts at zero, 0.33 m off.
+    const BundleAdjustmentConfig config =
+        CalibrationConfig(data.block, scenario.calibrate, scenario.lever);
+    const BundleAdjustmentOptions ceres_options = TightCeresOptions();
+    Block ceres_block = data.block, taylor_block = data.block;
+    BundleAdjustmentResult ceres;
+    TaylorBundleResult taylor;
+    const Status ceres_status = BundleAdjust(ceres_options, config, &ceres_block, &ceres);
+    const Status taylor_status = TaylorBundleAdjust(TaylorOptions(), config, &taylor_block, &taylor);
+    ASSERT_TRUE(ceres_status.ok()) << ceres_status.message();
+    ASSERT_TRUE(taylor_status.ok()) << taylor_status.message();
+    ASSERT_TRUE(ceres.summary.IsSolutionUsable()) << ceres.summary.BriefReport();
+    ASSERT_TRUE(taylor.summary.IsSolutionUsable()) << taylor.summary.BriefReport();
+    EXPECT_EQ(taylor.summary.redundancy, ceres.summary.redundancy);
+    const double cost_relative =
+        std::abs(taylor.summary.final_cost - ceres.summary.final_cost) / ceres.summary.final_cost;
+    double centre = 0.0, covariance = 0.0;
+    for (size_t i = 0; i < data.block.images.size(); ++i) {
+      centre = std::max(centre, (ceres_block.images[i].eo->center_in_ground() -
+                                 taylor_block.images[i].eo->center_in_ground())
+                                    .norm());
+      if (!ceres.images[i].has_covariance) continue;
+      const Vector6d c = ceres.images[i].covariance.diagonal();
+      const Vector6d t = taylor.adjustment.images[i].covariance.diagonal();
+      for (int k = 0; k < 6; ++k)
+        if (c[k] > 0.0) covariance = std::max(covariance, std::abs(t[k] - c[k]) / c[k]);
+    }
+    const std::vector<BundleCalibrationResult>& cc = ceres.calibration;
+    const std::vector<BundleCalibrationResult>& tc = taylor.adjustment.calibration;
+    ASSERT_EQ(tc.size(), cc.size());
+    ASSERT_EQ(cc.size(), 1u);
+    double calibration = 0.0, sigma = 0.0;
+    ASSERT_EQ(tc[0].values.size(), cc[0].values.size());
+    ASSERT_EQ(tc[0].sigmas.size(), cc[0].sigmas.size());
+    for (size_t j = 0; j < cc[0].values.size(); ++j) {
+      EXPECT_EQ(tc[0].names[j], cc[0].names[j]);
+      EXPECT_EQ(taylor_block.cameras[0].params[cc[0].indices[j]], tc[0].values[j]);
+      calibration = std::max(calibration, std::abs(tc[0].values[j] - cc[0].values[j]) /
+                                              std::max(std::abs(cc[0].values[j]), cc[0].sigmas[j]));
+      sigma = std::max(sigma, std::abs(tc[0].sigmas[j] - cc[0].sigmas[j]) / cc[0].sigmas[j]);
+    }
+    // Ceres started at the Taylor solution: how far it moves the calibration (in its sigmas).
+    Block polished_block = taylor_block;
+    BundleAdjustmentResult polished;
+    ASSERT_TRUE(BundleAdjust(ceres_options, config, &polished_block, &polished).ok());
+    ASSERT_TRUE(polished.summary.IsSolutionUsable()) << polished.summary.BriefReport();
+    double moved = 0.0;
+    for (size_t j = 0; j < cc[0].values.size(); ++j)
+      moved = std::max(moved, std::abs(polished.calibration[0].values[j] - tc[0].values[j]) /
+                                  cc[0].sigmas[j]);
+    EXPECT_LT((tc[0].correlation - cc[0].correlation).cwiseAbs().maxCoeff(),
+              kCalibrationRelativeAgreement);
+    double lever_difference = 0.0;
+    ASSERT_EQ(taylor.adjustment.lever_arm_m.has_value(), ceres.lever_arm_m.has_value());
+    if (ceres.lever_arm_m) {
+      lever_difference = (*taylor.adjustment.lever_arm_m - *ceres.lever_arm_m).norm();
+      std::printf("  lever arm estimated from zero: %.3f %.3f %.3f m (simulated %.3f %.3f %.3f)\n",
+                  (*taylor.adjustment.lever_arm_m)[0], (*taylor.adjustment.lever_arm_m)[1],
+                  (*taylor.adjustment.lever_arm_m)[2], lever[0], lever[1], lever[2]);
+    }
+    std::printf("  %-36s %9.2e %9.2e %9.2e %9.2e %9.2e %9.2e %9.2e %3d/%-3d %.2f/%.2f\n",
+                scenario.name, cost_relative, centre, calibration, moved, sigma, lever_difference,
+                covariance, taylor.summary.iterations, ceres.summary.iterations,
+                taylor.summary.time_seconds, ceres.summary.time_seconds);
+    EXPECT_LT(cost_relative, kCostRelativeAgreement);
+    EXPECT_LT(centre, kRelativeAgreement * data.size_m);
+    EXPECT_LT(calibration, kCalibrationValueAgreement);
+    EXPECT_LT(moved, kCalibrationRelativeAgreement);
+    EXPECT_LT(sigma, kCalibrationRelativeAgreement);
+    EXPECT_LT(lever_difference, kRelativeAgreement * data.size_m);
+    EXPECT_LT(covariance, kCovarianceRelativeAgreement);
+  }
+}
+
+// An image held constant keeps its camera-position prior in the cost, as in BundleAdjust's
+// problem (a constant residual, but part of the cost, sigma0 and the estimated lever arm's rows).
+TEST(TaylorBundleVsCeres, ImagesHeldConstantKeepTheirPriorsInTheCost) {
+  const TestBlock data = MakeTestBlock(TaylorBlockOptions());
+  for (const bool estimate_lever : {false, true}) {
+    SCOPED_TRACE(estimate_lever ? "estimated lever arm" : "no lever arm");
+    BundleAdjustmentConfig config = CalibrationConfig(data.block, {}, estimate_lever);
+    config.constant_images = {0, 5};
+    const BundleAdjustmentOptions ceres_options = TightCeresOptions();
+    Block ceres_block = data.block, taylor_block = data.block;
+    BundleAdjustmentResult ceres;
+    TaylorBundleResult taylor;
+    ASSERT_TRUE(BundleAdjust(ceres_options, config, &ceres_block, &ceres).ok());
+    ASSERT_TRUE(TaylorBundleAdjust(TaylorOptions(), config, &taylor_block, &taylor).ok());
+    ASSERT_TRUE(ceres.summary.IsSolutionUsable()) << ceres.summary.BriefReport();
+    ASSERT_TRUE(taylor.summary.IsSolutionUsable()) << taylor.summary.BriefReport();
+    EXPECT_EQ(taylor.summary.redundancy, ceres.summary.redundancy);
+    EXPECT_NEAR(taylor.summary.final_cost, ceres.summary.final_cost,
+                kCostRelativeAgreement * ceres.summary.final_cost);
+    EXPECT_EQ(taylor_block.images[0].eo->parameters, data.block.images[0].eo->parameters);
+  }
+}
+
+// What no observation determines fails the round and names it; nothing is written.
+TEST(TaylorBundle, AnUndeterminedLeverArmOrCalibrationIsNamed) {
+  SyntheticBlockOptions o = TaylorBlockOptions();
+  o.gnss = false;  // no camera positions: nothing sees the lever arm
+  const TestBlock data = MakeTestBlock(o);
+  Block block = data.block;
+  TaylorBundleResult result;
+  ASSERT_TRUE(TaylorBundleAdjust(TaylorOptions(), CalibrationConfig(block, {}, true), &block,
+                                 &result)
+                  .ok());
+  EXPECT_EQ(result.summary.termination_type, SolverTermination::kFailure);
+  EXPECT_NE(result.summary.message.find("the lever arm's x (camera frame) has no weight"),
+            std::string::npos)
+      << result.summary.message;
+  ExpectUntouched(data.block, block, result);
 }
 
 }  // namespace

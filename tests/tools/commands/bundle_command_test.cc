@@ -282,6 +282,52 @@ TEST(BundleCommand, TaylorSolverAdjustsAColmapModelAsCeres) {
       << refused.err;
 }
 
+// --solver=taylor self-calibrates and estimates the lever arm (issue 23 item 3) to the Ceres
+// adjustment's minimum: the same cost, calibration with the same sigmas, the same lever arm.
+TEST(BundleCommand, TaylorSolverSelfCalibratesAsCeres) {
+  const std::string dir = ScratchDir();
+  const std::string block = SimulateBlock(dir, "--tie_blunders=0");
+  std::map<std::string, nlohmann::json> reports;
+  for (const char* solver : {"ceres", "taylor"}) {
+    const std::string report = dir + "/calibrated_" + solver + ".json";
+    const CliRun run = RunCli("bundle " + TableArgs(block) +
+                                  " --quiet --rejection_threshold=0 --calibrate=FocalLength,K1 "
+                                  "--lever_arm=0,0,0 --estimate_lever_arm --solver=" +
+                                  solver + " --report=" + report,
+                              dir);
+    ASSERT_EQ(run.exit_code, 0) << solver << ": " << run.err;
+    reports[solver] = nlohmann::json::parse(ReadFile(report));
+  }
+  const nlohmann::json& ceres = reports["ceres"];
+  const nlohmann::json& taylor = reports["taylor"];
+  EXPECT_EQ(taylor["summary"]["redundancy"], ceres["summary"]["redundancy"]);
+  // The cost to 1e-9 (measured 7.5e-13).
+  EXPECT_NEAR(taylor["summary"]["final_cost"].get<double>(),
+              ceres["summary"]["final_cost"].get<double>(),
+              1e-9 * ceres["summary"]["final_cost"].get<double>());
+  ASSERT_EQ(ceres["calibration"].size(), 1u);
+  ASSERT_EQ(taylor["calibration"].size(), 1u);
+  const nlohmann::json& cp = ceres["calibration"][0]["parameters"];
+  const nlohmann::json& tp = taylor["calibration"][0]["parameters"];
+  ASSERT_EQ(cp.size(), 2u);
+  ASSERT_EQ(tp.size(), 2u);
+  for (size_t k = 0; k < cp.size(); ++k) {
+    EXPECT_EQ(tp[k]["name"], cp[k]["name"]);
+    const double value = cp[k]["value"].get<double>(), sigma = cp[k]["sigma"].get<double>();
+    // Ceres stops (relative cost change 1e-10) with the calibration a little off the minimum:
+    // measured 3e-6 of max(|value|, sigma) (K1), the Taylor cost 7.5e-13 lower.
+    EXPECT_NEAR(tp[k]["value"].get<double>(), value, 3e-5 * std::max(std::abs(value), sigma))
+        << cp[k]["name"];
+    EXPECT_NEAR(tp[k]["sigma"].get<double>(), sigma, 1e-6 * sigma) << cp[k]["name"];
+  }
+  ASSERT_TRUE(ceres.contains("lever_arm_m"));
+  ASSERT_TRUE(taylor.contains("lever_arm_m"));
+  for (int axis = 0; axis < 3; ++axis)
+    EXPECT_NEAR(taylor["lever_arm_m"][axis].get<double>(), ceres["lever_arm_m"][axis].get<double>(),
+                1e-4)  // m; measured 8.4e-6 (z), where Ceres stops
+        << axis;
+}
+
 // The marks of each image of a block by point id, to compare models across a run.
 std::set<std::pair<std::string, std::string>> ImagePointPairs(const Block& block) {
   std::set<std::pair<std::string, std::string>> pairs;
