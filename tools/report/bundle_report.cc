@@ -320,18 +320,24 @@ json BundleReportJson(const Block& block, const BundleAdjustmentResult& result,
     json flagged = json::array(), uncontrolled = json::array();
     std::vector<double> image_mdb(block.images.size(), 0.0);
     std::vector<double> image_external(block.images.size(), 0.0);
+    std::vector<Eigen::Vector3d> control_mdb(block.points.size(), Eigen::Vector3d::Constant(kNaN));
     for (const BundleObservationDiagnostics& d : result.observations) {
-      const json row = {{"group", EnumName(d.group)},
-                        {"item", BundleItemName(block, d.group, d.item)},
-                        {"axis", BundleAxisName(d.group, d.axis)},
-                        {"residual", Number(d.residual)},
-                        {"sigma", Number(d.sigma)},
-                        {"redundancy", Number(d.redundancy)},
-                        {"normalized_residual", Number(d.normalized)},
-                        {"mdb", Number(d.mdb)},
-                        {"external_m", Number(d.external_m)}};
-      if (d.rejected) flagged.push_back(row);
-      if (d.redundancy < o.statistics.uncontrolled_redundancy) uncontrolled.push_back(row);
+      const bool is_uncontrolled = d.redundancy < o.statistics.uncontrolled_redundancy;
+      // A row only for the few listed (millions of observations at a thousand images).
+      if (d.rejected || is_uncontrolled) {
+        const json row = {{"group", EnumName(d.group)},
+                          {"item", BundleItemName(block, d.group, d.item)},
+                          {"axis", BundleAxisName(d.group, d.axis)},
+                          {"residual", Number(d.residual)},
+                          {"sigma", Number(d.sigma)},
+                          {"redundancy", Number(d.redundancy)},
+                          {"normalized_residual", Number(d.normalized)},
+                          {"mdb", Number(d.mdb)},
+                          {"external_m", Number(d.external_m)}};
+        if (d.rejected) flagged.push_back(row);
+        if (is_uncontrolled) uncontrolled.push_back(row);
+      }
+      if (d.group == kControlPoints) control_mdb[d.item][d.axis] = d.mdb;
       if (d.group == kTieMarks || d.group == kControlMarks) {
         const int image = block.marks[d.item].image;
         image_mdb[image] = std::max(image_mdb[image], d.mdb);
@@ -347,10 +353,7 @@ json BundleReportJson(const Block& block, const BundleAdjustmentResult& result,
     json per_control = json::array();
     for (size_t p = 0; p < block.points.size(); ++p) {
       if (block.points[p].role != PointRole::kControl) continue;
-      Eigen::Vector3d mdb = Eigen::Vector3d::Constant(kNaN);
-      for (const BundleObservationDiagnostics& d : result.observations)
-        if (d.group == kControlPoints && d.item == static_cast<int>(p)) mdb[d.axis] = d.mdb;
-      per_control.push_back({{"point_id", block.points[p].id}, {"mdb_m", Vector3(mdb)}});
+      per_control.push_back({{"point_id", block.points[p].id}, {"mdb_m", Vector3(control_mdb[p])}});
     }
     report["diagnostics"] = {{"critical_value", result.critical_value},
                              {"delta0", result.delta0},
