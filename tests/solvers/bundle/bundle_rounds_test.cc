@@ -466,5 +466,26 @@ TEST(BatchSnooping, CorrelatedBlundersOfOnePointWaitForTheNextRound) {
   EXPECT_NE(rounds[0], rounds[1]);
 }
 
+TEST(BatchSnooping, StopsWhereTheBlockCouldNotLoseTheNextAsOneAtATime) {
+  // Four control points, no camera positions, two of the control points wrong: the block holds
+  // without one of them, not without both; both snooping modes remove one and stop, saying why.
+  SyntheticBlockOptions o = ScatteredBlunders(0, 2, 0);
+  o.gnss = false;
+  o.num_control_points = 4;
+  SnoopingRuns runs;
+  RunBoth(o, &runs);
+  ASSERT_EQ(runs.truth.blunder_control_points.size(), 2u);
+  EXPECT_EQ(Removals(runs.batch), Removals(runs.one));
+  EXPECT_NEAR(runs.batch.summary.final_cost, runs.one.summary.final_cost,
+              kSameCost * runs.one.summary.final_cost);
+  for (const BundleAdjustmentResult* result : {&runs.batch, &runs.one}) {
+    ASSERT_EQ(result->snooping.size(), 1u);
+    EXPECT_EQ(result->snooping[0].group, kControlPoints);
+    EXPECT_NE(result->summary.message.find("data snooping stopped: removing control_points"),
+              std::string::npos)
+        << result->summary.message;
+  }
+}
+
 }  // namespace
 }  // namespace photopose::internal
