@@ -515,6 +515,7 @@ class BundleRobustnessOptions:
     max_rejection_rounds: int  # count
     snoop: bool
     max_snooping_removals: int  # count
+    snooping_batch: bool  # several removals per round where the round's statistics decide them
     def validate(self) -> None: ...
 
 class BundleStatisticsOptions:
@@ -609,6 +610,10 @@ class BundleAdjustmentSummary:
     def datum_description(self) -> str: ...
     @property
     def rounds(self) -> int: ...
+    @property
+    def snooping_rounds(self) -> int: ...  # count
+    @property
+    def snooping_seconds(self) -> float: ...  # s
     @property
     def iterations(self) -> int: ...
     @property
@@ -780,6 +785,8 @@ class BundleSnoopingStep:
     def normalized(self) -> float: ...
     @property
     def residual(self) -> float: ...
+    @property
+    def round(self) -> int: ...  # 1-based
 
 class BundleAdjustmentResult:
     """The adjustment's result: summary (termination, sigma0, redundancy, timings), per image and per

@@ -69,7 +69,9 @@ default). A per-row accuracy of the tables overrides its row's default.)doc");
       .def_readwrite("rejection_threshold", &BundleRobustnessOptions::rejection_threshold, "unitless")
       .def_readwrite("max_rejection_rounds", &BundleRobustnessOptions::max_rejection_rounds, "count")
       .def_readwrite("snoop", &BundleRobustnessOptions::snoop)
-      .def_readwrite("max_snooping_removals", &BundleRobustnessOptions::max_snooping_removals, "count");
+      .def_readwrite("max_snooping_removals", &BundleRobustnessOptions::max_snooping_removals, "count")
+      .def_readwrite("snooping_batch", &BundleRobustnessOptions::snooping_batch,
+                     "several removals per round where the round's statistics decide them");
   DefValidate(rob, "BundleRobustnessOptions");
 
   auto stats = BindStruct<BundleStatisticsOptions>(m, "BundleStatisticsOptions",
@@ -157,6 +159,8 @@ void BindBundleProgressAndSummary(py::module_& m) {
       .def_readonly("datum", &BundleAdjustmentSummary::datum, "'absolute' or 'relative'")
       .def_readonly("datum_description", &BundleAdjustmentSummary::datum_description)
       .def_readonly("rounds", &BundleAdjustmentSummary::rounds)
+      .def_readonly("snooping_rounds", &BundleAdjustmentSummary::snooping_rounds, "count")
+      .def_readonly("snooping_seconds", &BundleAdjustmentSummary::snooping_seconds, "s")
       .def_readonly("iterations", &BundleAdjustmentSummary::iterations)
       .def_readonly("initial_cost", &BundleAdjustmentSummary::initial_cost)
       .def_readonly("final_cost", &BundleAdjustmentSummary::final_cost)
@@ -273,6 +277,7 @@ void BindBundleResultParts(py::module_& m) {
       .def_readonly("axis", &BundleSnoopingStep::axis)
       .def_readonly("normalized", &BundleSnoopingStep::normalized)
       .def_readonly("residual", &BundleSnoopingStep::residual)
+      .def_readonly("round", &BundleSnoopingStep::round, "1-based")
       .def("__repr__", [](const py::object& self) { return PropertiesRepr(self); });
 }
 

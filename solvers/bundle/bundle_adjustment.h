@@ -145,6 +145,13 @@ struct BundleRobustnessOptions {
   // (count). Replaces the rejection rounds above.
   bool snoop = false;
   int max_snooping_removals = 200;
+  // Batch snooping: one round's statistics remove every observation one-at-a-time snooping would
+  // remove next, as far as the round can tell: of the rejected observations (the 64 largest |w|),
+  // the one with the largest |w| conditioned on those already taken, while it exceeds k(alpha)
+  // (with sigma0 and k of the block without them), beats every other observation's |w| and
+  // correlates at most 0.3 with each taken (internal/bundle_rounds.h, docs/diagnostics.md §2).
+  // false: one removal per round, a fresh adjustment and statistics each time.
+  bool snooping_batch = true;
 
   bool IsValid(std::string* why) const;
 };
@@ -405,6 +412,9 @@ struct BundleSnoopingStep {
   int axis = 0;
   double normalized = 0.0;  // |w| of the removed observation
   double residual = 0.0;    // its residual (unit of its group)
+  // The adjustment round (1-based) whose statistics chose it; with batch snooping |w| and the
+  // residual are conditioned on the removals chosen before it in that round.
+  int round = 0;
 };
 
 struct BundleImageResult {
@@ -470,6 +480,11 @@ struct BundleAdjustmentSummary {
   BundleDatum datum = BundleDatum::kControl;
   std::string datum_description;  // in words, for the report
   int rounds = 0;                 // adjustment rounds (rejections re-adjust)
+  // Rounds whose statistics data snooping examined (count): one per removal one at a time, fewer
+  // with batch snooping (BundleRobustnessOptions::snooping_batch).
+  int snooping_rounds = 0;
+  // Of statistics_seconds: batch snooping's candidates and their cofactors, over all rounds (s).
+  double snooping_seconds = 0.0;
   int iterations = 0;             // over all rounds
   double initial_cost = 0.0;      // 1/2 sum of squared whitened residuals, first round start
   double final_cost = 0.0;        // at the end of the last round

@@ -2,9 +2,11 @@
 // rounds, data snooping, variance components.
 #include "solvers/bundle/internal/bundle_rounds.h"
 
+#include <Eigen/Dense>
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <limits>
 #include <sstream>
 #include <string>
 #include <vector>
@@ -65,7 +67,7 @@ void ScaleGroup(int g, double factor, BundlePlan* plan) {
 
 // Data snooping: removes the observation with the largest rejected |w|, if the block still holds
 // without it. Returns whether one was removed.
-bool SnoopOne(RoundChanges* a) {
+bool SnoopOne(RoundChanges* a, int r) {
   BundleAdjustmentResult* result = a->result;
   if (result->observations.empty() && !result->groups.empty())
     result->summary.message = "data snooping needs the covariance; it was not computed";
@@ -86,7 +88,59 @@ bool SnoopOne(RoundChanges* a) {
     return false;
   }
   result->snooping.push_back(
-      {worst->group, worst->item, worst->axis, std::abs(worst->normalized), worst->residual});
+      {worst->group, worst->item, worst->axis, std::abs(worst->normalized), worst->residual, r});
+  *a->plan = std::move(trial);
+  return true;
+}
+
+// Batch data snooping: the removals ChooseSnoopingBatch predicts from this round's statistics,
+// each checked to leave a block that holds. Returns whether any was removed; false with the
+// candidates not computed (the caller then snoops one at a time).
+bool SnoopBatch(RoundChanges* a, int r, bool* computed) {
+  BundleAdjustmentResult* result = a->result;
+  const SnoopingCandidates& candidates = a->variance->snooping;
+  *computed = candidates.computed;
+  if (!candidates.computed) return false;
+  const int left = a->options.robustness.max_snooping_removals -
+                   static_cast<int>(result->snooping.size());
+  const std::vector<SnoopingChoice> choices =
+      ChooseSnoopingBatch(candidates, a->options.statistics, left);
+  const auto record = [&](const SnoopingChoice& choice) {
+    const BundleObservationDiagnostics& d =
+        result->observations[candidates.observation[choice.row]];
+    result->snooping.push_back(
+        {d.group, d.item, d.axis, choice.normalized, choice.residual * d.sigma, r});
+  };
+  // All at once when the block holds without them (one copy and check of the plan, not one per
+  // removal), else one by one up to the first it cannot lose.
+  BundlePlan trial = *a->plan;
+  for (const SnoopingChoice& choice : choices)
+    RemoveObservation(result->observations[candidates.observation[choice.row]], &trial);
+  if (!choices.empty() && RecheckBundlePlan(a->config, a->block, &trial).ok()) {
+    for (const SnoopingChoice& choice : choices) record(choice);
+    *a->plan = std::move(trial);
+    return true;
+  }
+  trial = *a->plan;
+  int removed = 0;
+  for (const SnoopingChoice& choice : choices) {
+    const BundleObservationDiagnostics& d =
+        result->observations[candidates.observation[choice.row]];
+    BundlePlan next = trial;
+    RemoveObservation(d, &next);
+    const Status still = RecheckBundlePlan(a->config, a->block, &next);
+    if (!still.ok()) {
+      // The first of the round ends snooping as one at a time would; a later one waits.
+      if (removed == 0)
+        result->summary.message = "data snooping stopped: removing " + std::string(EnumName(d.group)) +
+                                  " #" + std::to_string(d.item) + " would leave " + still.message();
+      break;
+    }
+    record(choice);
+    trial = std::move(next);
+    ++removed;
+  }
+  if (removed == 0) return false;
   *a->plan = std::move(trial);
   return true;
 }
@@ -192,6 +246,95 @@ bool RescaleGroups(RoundChanges* a) {
 
 }  // namespace
 
+ConditionedTest ConditionedSnoopingTest(const SnoopingCandidates& candidates,
+                                        const std::vector<int>& taken,
+                                        const BundleStatisticsOptions& options) {
+  const Eigen::MatrixXd& Q = candidates.Qvv;
+  const int n = static_cast<int>(candidates.v.size());
+  std::vector<int> A;  // rows taken
+  std::vector<char> in_A(n, 0);
+  for (const int c : taken)
+    for (int row = candidates.first_row[c]; row < candidates.first_row[c + 1]; ++row) {
+      A.push_back(row);
+      in_A[row] = 1;
+    }
+  const int m = static_cast<int>(A.size());
+  ConditionedTest test;
+  test.residual = candidates.v;
+  Eigen::VectorXd q = Q.diagonal();
+  double drop = 0.0;  // v_A^T Q_AA^-1 v_A
+  if (m > 0) {
+    Eigen::MatrixXd Q_AA(m, m), Q_nA(n, m);
+    Eigen::VectorXd v_A(m);
+    for (int i = 0; i < m; ++i) {
+      v_A[i] = candidates.v[A[i]];
+      Q_nA.col(i) = Q.col(A[i]);
+      for (int j = 0; j < m; ++j) Q_AA(i, j) = Q(A[i], A[j]);
+    }
+    const Eigen::LDLT<Eigen::MatrixXd> ldlt(Q_AA);
+    const Eigen::VectorXd u = ldlt.solve(v_A);
+    const Eigen::MatrixXd K = ldlt.solve(Q_nA.transpose());  // Q_AA^-1 Q_A.
+    drop = v_A.dot(u);
+    test.residual -= Q_nA * u;
+    q -= (Q_nA.cwiseProduct(K.transpose())).rowwise().sum();
+  }
+  const int redundancy = candidates.redundancy - m;
+  const double ssq = candidates.sigma0 * candidates.sigma0 * candidates.redundancy - drop;
+  const double sigma0 = redundancy > 0 ? std::sqrt(std::max(ssq, 0.0) / redundancy) : 0.0;
+  test.s0 = std::isfinite(sigma0) ? std::max(1.0, sigma0) : 1.0;
+  test.critical_value = SnoopingCriticalValue(options, candidates.num_tested - m, nullptr);
+  test.normalized.resize(n);
+  for (int row = 0; row < n; ++row) {
+    test.normalized[row] = !in_A[row] && q[row] > kZeroRedundancy
+                               ? std::abs(test.residual[row]) / (test.s0 * std::sqrt(q[row]))
+                               : std::numeric_limits<double>::quiet_NaN();
+  }
+  return test;
+}
+
+std::vector<SnoopingChoice> ChooseSnoopingBatch(const SnoopingCandidates& candidates,
+                                                const BundleStatisticsOptions& options,
+                                                int max_removals) {
+  std::vector<SnoopingChoice> choices;
+  std::vector<int> taken;
+  const int num_candidates = static_cast<int>(candidates.first_row.size()) - 1;
+  const Eigen::MatrixXd& Q = candidates.Qvv;
+  const double s0 = std::isfinite(candidates.sigma0) ? std::max(1.0, candidates.sigma0) : 1.0;
+  std::vector<char> is_taken(std::max(num_candidates, 0), 0);
+  while (static_cast<int>(choices.size()) < max_removals) {
+    const ConditionedTest test = ConditionedSnoopingTest(candidates, taken, options);
+    SnoopingChoice best;
+    for (int c = 0; c < num_candidates; ++c) {
+      if (is_taken[c]) continue;
+      for (int row = candidates.first_row[c]; row < candidates.first_row[c + 1]; ++row) {
+        const double w = test.normalized[row];
+        if (std::isfinite(w) && w > best.normalized) best = {c, row, w, test.residual[row]};
+      }
+    }
+    if (best.candidate < 0 || !(best.normalized > test.critical_value)) break;
+    if (!taken.empty()) {
+      // An observation outside the candidates would come first.
+      if (!(best.normalized > candidates.outside * s0 / test.s0)) break;
+      // Rows with a zero redundancy number (untested, residual 0) have no correlation to speak of.
+      double correlation = 0.0;
+      for (int row = candidates.first_row[best.candidate];
+           row < candidates.first_row[best.candidate + 1]; ++row) {
+        if (!(Q(row, row) > kZeroRedundancy)) continue;
+        for (const int c : taken)
+          for (int other = candidates.first_row[c]; other < candidates.first_row[c + 1]; ++other)
+            if (Q(other, other) > kZeroRedundancy)
+              correlation = std::max(correlation, std::abs(Q(row, other)) /
+                                                      std::sqrt(Q(row, row) * Q(other, other)));
+      }
+      if (!(correlation <= kMaxSnoopingCorrelation)) break;
+    }
+    choices.push_back(best);
+    taken.push_back(best.candidate);
+    is_taken[best.candidate] = 1;
+  }
+  return choices;
+}
+
 // The sigmas in use are the estimates; the report's stated accuracy stays what the user stated.
 void ReportEstimatedAccuracies(const RoundChanges& a) {
   for (BundleGroupStatistics& group : a.result->groups) {
@@ -235,7 +378,11 @@ RoundChange ChangeAfterRound(RoundChanges* a, int r) {
   if (r >= a->max_rounds) return RoundChange::kNone;
   // 1. Blunders.
   if (a->options.robustness.snoop) {
-    if (SnoopOne(a)) return RoundChange::kMarksRemoved;
+    ++a->result->summary.snooping_rounds;
+    bool batch_computed = false;
+    if (a->options.robustness.snooping_batch && SnoopBatch(a, r, &batch_computed))
+      return RoundChange::kMarksRemoved;
+    if (!batch_computed && SnoopOne(a, r)) return RoundChange::kMarksRemoved;
   } else if (a->rejections_done < a->rejection_rounds) {
     const auto start = std::chrono::steady_clock::now();
     const Rejection rejection = RejectMarks(a, r);

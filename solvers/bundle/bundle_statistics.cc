@@ -7,6 +7,7 @@
 #include <Eigen/SparseCore>
 #include <algorithm>
 #include <array>
+#include <chrono>
 #include <cmath>
 #include <limits>
 #include <memory>
@@ -26,9 +27,6 @@ namespace {
 
 constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
 constexpr double kInfinity = std::numeric_limits<double>::infinity();
-// A redundancy number below this is zero in all but rounding: the observation is not checked at
-// all and its normalized residual is undefined.
-constexpr double kZeroRedundancy = 1e-6;
 
 std::string Format3(double value) {
   std::ostringstream os;
@@ -38,6 +36,15 @@ std::string Format3(double value) {
 }
 
 }  // namespace
+
+double SnoopingCriticalValue(const BundleStatisticsOptions& options, int num_tested,
+                             double* alpha_each) {
+  const double alpha = options.snooping_family_wise
+                           ? options.snooping_alpha / std::max(1, num_tested)
+                           : options.snooping_alpha;
+  if (alpha_each != nullptr) *alpha_each = alpha;
+  return NormalQuantile(1.0 - 0.5 * alpha);
+}
 
 // ------------------------------------------------------------------ the steps of the statistics
 namespace {
@@ -170,11 +177,8 @@ void SetTestLevel(const BundleAdjustmentOptions& options, const GroupVariance& v
                   BundleAdjustmentResult* result) {
   int num_tested = 0;
   for (int g = 0; g < kNumBundleGroups; ++g) num_tested += variance.scalar_rows[g];
-  const double alpha_each = options.statistics.snooping_family_wise
-                                ? options.statistics.snooping_alpha / std::max(1, num_tested)
-                                : options.statistics.snooping_alpha;
-  result->alpha_per_observation = alpha_each;
-  result->critical_value = NormalQuantile(1.0 - 0.5 * alpha_each);
+  result->critical_value =
+      SnoopingCriticalValue(options.statistics, num_tested, &result->alpha_per_observation);
   result->delta0 = result->critical_value + NormalQuantile(options.statistics.snooping_power);
 }
 
@@ -373,6 +377,120 @@ void ObservationDiagnostics(const BundleAdjustmentOptions& options, const Block&
   }
   for (int g = 0; g < kNumBundleGroups; ++g)
     variance->redundancy[g] = variance->scalar_rows[g] - sums[g].leverage;
+}
+
+// Batch data snooping's candidates (internal/bundle_statistics.h, SnoopingCandidates): the
+// observations the w-test rejects, the largest |w| first, and the cofactors of their rows. Left
+// not computed (the rounds then snoop one at a time) when a row cannot be evaluated or the solve
+// fails.
+void FindSnoopingCandidates(const BundleRound& round, const ReducedNormals& reduced,
+                            const GroupVariance& variance, const BundleAdjustmentResult& result,
+                            SnoopingCandidates* out) {
+  const auto start = std::chrono::steady_clock::now();
+  *out = SnoopingCandidates();
+  const auto key = [](int group, int item) {
+    return static_cast<int64_t>(item) * kNumBundleGroups + group;
+  };
+  std::unordered_map<int64_t, double> worst;  // per rejected observation, its largest |w|
+  for (const BundleObservationDiagnostics& d : result.observations) {
+    if (!d.rejected) continue;
+    double& w = worst[key(d.group, d.item)];
+    w = std::max(w, std::abs(d.normalized));
+  }
+  std::vector<std::pair<double, int64_t>> ranked;
+  ranked.reserve(worst.size());
+  for (const auto& [observation, w] : worst) ranked.emplace_back(w, observation);
+  std::sort(ranked.begin(), ranked.end(), [](const auto& a, const auto& b) {
+    return a.first != b.first ? a.first > b.first : a.second < b.second;
+  });
+  out->num_flagged = static_cast<int>(ranked.size());
+  if (ranked.size() > static_cast<size_t>(kMaxSnoopingCandidates))
+    ranked.resize(kMaxSnoopingCandidates);
+  const int num_candidates = static_cast<int>(ranked.size());
+  std::unordered_map<int64_t, int> candidate_of;
+  for (int c = 0; c < num_candidates; ++c) candidate_of[ranked[c].second] = c;
+  // Each candidate row's diagnostics (by axis), and the largest |w| outside the candidates.
+  std::vector<std::array<int, 3>> diagnostics_of(num_candidates, {-1, -1, -1});
+  for (size_t k = 0; k < result.observations.size(); ++k) {
+    const BundleObservationDiagnostics& d = result.observations[k];
+    const auto found = candidate_of.find(key(d.group, d.item));
+    if (found != candidate_of.end())
+      diagnostics_of[found->second][std::clamp(d.axis, 0, 2)] = static_cast<int>(k);
+    else if (std::isfinite(d.normalized))
+      out->outside = std::max(out->outside, std::abs(d.normalized));
+  }
+  // The candidates' rows: residual blocks evaluated, in candidate order.
+  std::vector<std::vector<int>> residuals_of(num_candidates);
+  for (size_t r = 0; r < round.residuals.size(); ++r) {
+    const ResidualInfo& info = round.residuals[r];
+    const auto found = candidate_of.find(key(info.group, info.item));
+    if (found != candidate_of.end()) residuals_of[found->second].push_back(static_cast<int>(r));
+  }
+  struct Row {
+    int block_rows;  // index into `evaluated`
+    int row;
+  };
+  std::vector<BlockRows> evaluated;
+  std::vector<Row> rows;
+  out->first_row.push_back(0);
+  for (int c = 0; c < num_candidates; ++c) {
+    for (const int r : residuals_of[c]) {
+      const ResidualInfo& info = round.residuals[r];
+      evaluated.emplace_back();
+      if (!EvaluateBlockRows(round, reduced, info, &evaluated.back())) return;
+      for (int row = 0; row < info.rows; ++row) {
+        const int d = diagnostics_of[c][std::clamp(info.first_axis + row, 0, 2)];
+        if (d < 0) return;
+        rows.push_back({static_cast<int>(evaluated.size()) - 1, row});
+        out->observation.push_back(d);
+      }
+    }
+    out->first_row.push_back(static_cast<int>(rows.size()));
+  }
+  // G: per row, g_a = E_a - W V^-1 q_a in the e columns; J_a Qxx J_b^T = g_a^T C g_b plus the
+  // point's own q_a^T V^-1 q_b when a and b share it.
+  const int n = static_cast<int>(rows.size());
+  Eigen::MatrixXd G = Eigen::MatrixXd::Zero(reduced.size, n);
+  out->v.resize(n);
+  for (int a = 0; a < n; ++a) {
+    const BlockRows& br = evaluated[rows[a].block_rows];
+    const int row = rows[a].row;
+    out->v[a] = br.residuals[row];
+    for (size_t k = 0; k < br.e_columns.size(); ++k) G(br.e_columns[k], a) += br.J_e(row, k);
+    if (br.point < 0) continue;
+    const int p = br.point;
+    const Eigen::VectorXd WVq =
+        reduced.W[p] * (reduced.V_inverse[p] * br.J_p.row(row).transpose());
+    int at = 0;
+    for (const int b : reduced.W_blocks[p]) {
+      const int size = reduced.C.block_size(b);
+      G.block(reduced.e_offset[b], a, size, 1) -= WVq.segment(at, size);
+      at += size;
+    }
+  }
+  Eigen::MatrixXd H = Eigen::MatrixXd::Zero(n, n);
+  if (reduced.size > 0 && n > 0) {
+    const Eigen::MatrixXd CG = reduced.C.Solve(G);
+    if (!CG.allFinite()) return;
+    H.noalias() = G.transpose() * CG;
+  }
+  for (int a = 0; a < n; ++a) {
+    const BlockRows& ra = evaluated[rows[a].block_rows];
+    if (ra.point < 0) continue;
+    for (int b = 0; b < n; ++b) {
+      const BlockRows& rb = evaluated[rows[b].block_rows];
+      if (rb.point != ra.point) continue;
+      H(a, b) += (ra.J_p.row(rows[a].row) * reduced.V_inverse[ra.point] *
+                  rb.J_p.row(rows[b].row).transpose())
+                     .value();
+    }
+  }
+  out->Qvv = Eigen::MatrixXd::Identity(n, n) - 0.5 * (H + H.transpose());
+  out->sigma0 = result.summary.sigma0;
+  out->redundancy = result.summary.redundancy;
+  for (int g = 0; g < kNumBundleGroups; ++g) out->num_tested += variance.scalar_rows[g];
+  out->computed = true;
+  out->seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
 }
 
 // Self-calibration: the estimated parameters of each calibrated camera, with their sigmas and
@@ -677,6 +795,12 @@ Status ComputeBundleStatistics(const BundleAdjustmentOptions& options, const Blo
                            result, variance);
     CalibrationResults(options, block, plan, state, &reduced, variance_factor, result);
     WeaklyDeterminedParameters(options, block, plan, state, round, reduced, result);
+    if (options.robustness.snoop && options.robustness.snooping_batch &&
+        options.statistics.observation_diagnostics)
+    {
+      FindSnoopingCandidates(round, reduced, *variance, *result, &variance->snooping);
+      summary.snooping_seconds += variance->snooping.seconds;
+    }
   } else {
     for (int g = 0; g < kNumBundleGroups; ++g) variance->redundancy[g] = kNaN;
     CalibrationResults(options, block, plan, state, nullptr, variance_factor, result);

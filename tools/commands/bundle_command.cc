@@ -72,6 +72,7 @@ DEFINE_double(bundle_rejection_threshold, 4.5, "Marks whose normalized residual 
 DEFINE_int32(bundle_max_rejection_rounds, 3, "Largest number of rejection rounds.");
 DEFINE_bool(bundle_estimate_accuracies, false, "Estimate every group's accuracy from the data (variance component estimation) and adjust with the estimates.");
 DEFINE_bool(bundle_snoop, false, "Data snooping: remove the most significant rejected observation (marks, control points, camera positions), adjust again, repeat.");
+DEFINE_bool(bundle_snooping_batch, true, "With --snoop: remove in one round every observation that one-at-a-time snooping would remove next as far as the round's statistics can tell (the largest w-test conditioned on those already taken, weakly correlated with them); false removes one per round, each after a fresh adjustment and statistics.");
 DEFINE_double(bundle_alpha, 0.001, "Significance level of the w-test per observation (two-sided).");
 DEFINE_bool(bundle_cross_validate, false, "Leave each control point out in turn and report its error as a check point.");
 DEFINE_string(bundle_statistics, "full", "Posterior covariances, redundancy numbers, reliability and the verdicts that need them: full (at every block size, by selected inversion of the reduced camera system's sparse factor), none (group RMS and check points only), or dense (the dense inverse, for comparison; n^2 memory in the reduced parameters).");
@@ -306,6 +307,7 @@ int OptionsFromFlags(const char* command, BundleRun* run) {
   robustness.max_rejection_rounds = FLAGS_bundle_max_rejection_rounds;
   options.statistics.estimate_accuracies = FLAGS_bundle_estimate_accuracies;
   robustness.snoop = FLAGS_bundle_snoop;
+  robustness.snooping_batch = FLAGS_bundle_snooping_batch;
   options.statistics.snooping_alpha = FLAGS_bundle_alpha;
   if (!ParseEnum(FLAGS_bundle_statistics, &options.statistics.covariances))
     return BadInput(command, EnumFlagError<BundleCovarianceMethod>("--statistics", FLAGS_bundle_statistics));

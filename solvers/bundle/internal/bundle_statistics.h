@@ -19,12 +19,56 @@
 
 namespace photopose::internal {
 
+// A redundancy number below this is zero in all but rounding: the observation is not checked at
+// all and its normalized residual is undefined.
+constexpr double kZeroRedundancy = 1e-6;
+
+// The w-test's critical value k(alpha) with num_tested scalar observations in the block: alpha
+// for the whole block (Bonferroni: alpha / n per observation, options.snooping_family_wise) or per
+// observation; *alpha_each (may be null) receives the level per observation.
+double SnoopingCriticalValue(const BundleStatisticsOptions& options, int num_tested,
+                             double* alpha_each);
+
+// Batch data snooping (BundleRobustnessOptions::snooping_batch, internal/bundle_rounds.h): the
+// observations of a round whose w-test rejects them (every row of each), the largest |w| first, at
+// most kMaxSnoopingCandidates of them, with the cofactor matrix of their whitened residuals
+//   Qvv_ab = delta_ab - J_a Qxx J_b^T
+// (Qll = I: whitened rows are independent). J_a Qxx J_b^T = g_a^T C g_b + [p_a = p_b] q_a^T V^-1 q_b
+// with g_a = E_a - W V^-1 q_a (the row's e part with its point eliminated, q_a = J_p,a^T); the
+// pairs of different images off S's pattern come from C G = S^-1 G, one solve through the factor
+// for all rows (cost ~ rows x nnz(L)), never a dense inverse.
+struct SnoopingCandidates {
+  bool computed = false;
+  // Per candidate: its rows are first_row[c] .. first_row[c + 1] - 1 (size candidates + 1).
+  std::vector<int> first_row;
+  // Per row: the index of its diagnostics in BundleAdjustmentResult::observations, its whitened
+  // residual (unitless).
+  std::vector<int> observation;
+  Eigen::VectorXd v;
+  Eigen::MatrixXd Qvv;  // rows x rows, unitless
+  // The largest |w| of a row of no candidate (unitless; 0 when there is none): an observation
+  // left out by the bound, or one the w-test accepts.
+  double outside = 0.0;
+  // The round's sigma0 (unitless), redundancy and tested rows (count): sigma0 and k(alpha) once
+  // observations are out.
+  double sigma0 = 0.0;
+  int redundancy = 0;
+  int num_tested = 0;
+  int num_flagged = 0;  // observations the w-test rejects (count; candidates are the first ones)
+  double seconds = 0.0;  // their computation (s)
+};
+// At most this many candidates per round: the solve costs ~3 rows each times nnz(L), the choice
+// among them (internal/bundle_rounds.h) a dense factorisation of at most 3 x 64 rows per step.
+constexpr int kMaxSnoopingCandidates = 64;
+
 // Per group, what variance component estimation needs: the whitened sum of squares and the
-// redundancy (sum of redundancy numbers; NaN when not computed).
+// redundancy (sum of redundancy numbers; NaN when not computed); and what batch data snooping
+// needs (`snooping`, computed with options.robustness.snoop and snooping_batch).
 struct GroupVariance {
   double whitened_ssq[kNumBundleGroups] = {};
   double redundancy[kNumBundleGroups] = {};
   int scalar_rows[kNumBundleGroups] = {};
+  SnoopingCandidates snooping;
 };
 
 // Everything the result reports about a converged round: residuals, groups, covariances,

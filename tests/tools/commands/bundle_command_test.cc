@@ -254,6 +254,34 @@ TEST(BundleCommand, TaylorSolverSnoopsAndEstimatesAsCeres) {
       << refused.err;
 }
 
+// --snooping_batch (on by default) removes the blunders in fewer rounds; =false one per round; the
+// same observations either way.
+TEST(BundleCommand, SnoopingBatchRemovesWhatOneAtATimeRemovesInFewerRounds) {
+  const std::string dir = ScratchDir();
+  const std::string block = SimulateBlock(dir);
+  std::map<std::string, nlohmann::json> reports;
+  for (const char* batch : {"true", "false"}) {
+    const std::string report = dir + "/batch_" + batch + ".json";
+    const CliRun run = RunCli("bundle " + TableArgs(block) + " --quiet --snoop --snooping_batch=" +
+                                  batch + " --out=" + dir + "/frames_" + batch +
+                                  ".csv --report=" + report,
+                              dir);
+    ASSERT_EQ(run.exit_code, 0) << batch << ": " << run.err;
+    reports[batch] = nlohmann::json::parse(ReadFile(report));
+  }
+  std::map<std::string, std::set<std::string>> removed;
+  for (auto& [batch, report] : reports)
+    for (const nlohmann::json& step : report["snooping"])
+      removed[batch].insert(step["group"].get<std::string>() + " " + step["item"].get<std::string>());
+  EXPECT_GE(removed["false"].size(), 4u);  // the four tie blunders
+  EXPECT_EQ(removed["true"], removed["false"]);
+  // One at a time: a round per removal and the last; in a batch, the four in one.
+  EXPECT_EQ(reports["false"]["summary"]["rounds"].get<int>(),
+            static_cast<int>(removed["false"].size()) + 1);
+  EXPECT_LT(reports["true"]["summary"]["rounds"].get<int>(),
+            reports["false"]["summary"]["rounds"].get<int>());
+}
+
 // --solver=taylor adjusts a COLMAP model (relative, pixels) to the Ceres minimum, freeing the gauge
 // first as Ceres does; Gauss-Newton cannot free it, so an explicit --relative_gauge=free is refused.
 TEST(BundleCommand, TaylorSolverAdjustsAColmapModelAsCeres) {
@@ -572,8 +600,11 @@ TEST(BundleCommand, BalProblemIsAdjusted) {
 TEST(BundleCommand, RowsCountedUpGiveTheSameFramesWithPixelRowsUp) {
   const std::string dir = ScratchDir();
   const std::string down_marks = testing::WriteExampleMarksWithRowsUp(dir);
+  // One thread: the frames are compared to 1e-9 m, and Ceres' sums over two threads differ from
+  // run to run by up to 1e-6 m here (the same input gives different frames).
   const std::string common = "bundle --cameras=" + SourcePath("examples/cameras.csv") +
-                             " --points=" + SourcePath("examples/points.csv") + " --quiet";
+                             " --points=" + SourcePath("examples/points.csv") +
+                             " --quiet --threads=1";
   CliRun run = RunCli(common + " --marks=" + down_marks + " --out=" + dir + "/down.csv", dir);
   ASSERT_EQ(run.exit_code, 0) << run.err;
   run = RunCli(common + " --marks=" + dir + "/marks_up.csv --pixel_rows_up --out=" + dir +
@@ -613,7 +644,7 @@ TEST(BundleCommand, RowsCountedUpGiveTheSameFramesWithPixelRowsUp) {
   cameras[0].affine_b = {-1824 * 2.41, 0.0, 2.41};
   ASSERT_TRUE(WriteCameraTable(dir + "/cameras_up.csv", cameras).ok());
   run = RunCli("bundle --cameras=" + dir + "/cameras_up.csv --points=" +
-                   SourcePath("examples/points.csv") + " --quiet --marks=" + dir +
+                   SourcePath("examples/points.csv") + " --quiet --threads=1 --marks=" + dir +
                    "/marks_up.csv --pixel_rows_up --out=" + dir + "/affine.csv --out_cameras=" +
                    dir + "/cameras_out.csv",
                dir);
@@ -624,10 +655,12 @@ TEST(BundleCommand, RowsCountedUpGiveTheSameFramesWithPixelRowsUp) {
     EXPECT_NEAR(written[0].affine_a[k], cameras[0].affine_a[k], 1e-9) << k;
     EXPECT_NEAR(written[0].affine_b[k], cameras[0].affine_b[k], 1e-9) << k;
   }
-  // The same pixel -> film map by another path of arithmetic: the same frames to 1e-6 m / rad.
+  // The same pixel -> film map by another path of arithmetic: the same frames to 1e-5 m / rad.
+  // Each run stops once its corrections fall below 0.001 mm (the bundle's position tolerance), so
+  // two paths that differ only by rounding end up to a few of those apart (1.6e-6 m measured).
   for (const auto& [raster, frame] : ReadFrames(dir + "/affine.csv"))
     for (int k = 0; k < 6; ++k)
-      EXPECT_NEAR(frame.eo.parameters[k], down.at(raster).eo.parameters[k], 1e-6) << raster << k;
+      EXPECT_NEAR(frame.eo.parameters[k], down.at(raster).eo.parameters[k], 1e-5) << raster << k;
   run = RunCli("bundle --bal=" + SharedDataPath("bal_dubrovnik/dubrovnik-3-7-pre.txt") +
                    " --pixel_rows_up --report=" + dir + "/r.json",
                dir);
