@@ -146,6 +146,8 @@ json BundleReportJson(const Block& block, const BundleAdjustmentResult& result,
                        {"final_cost", Number(s.final_cost)},
                        {"time_seconds", s.time_seconds},
                        {"statistics_seconds", s.statistics_seconds},
+                       {"snooping_rounds", s.snooping_rounds},
+                       {"snooping_seconds", s.snooping_seconds},
                        {"statistics",
                         {{"covariances", EnumName(o.statistics.covariances)},
                          {"factorization_seconds", s.factorization_seconds},
@@ -375,7 +377,8 @@ json BundleReportJson(const Block& block, const BundleAdjustmentResult& result,
                        {"item", BundleItemName(block, step.group, step.item)},
                        {"axis", BundleAxisName(step.group, step.axis)},
                        {"normalized_residual", step.normalized},
-                       {"residual", step.residual}});
+                       {"residual", step.residual},
+                       {"round", step.round}});
     }
     report["snooping"] = steps;
   }

@@ -280,6 +280,15 @@ TEST(BundleCommand, SnoopingBatchRemovesWhatOneAtATimeRemovesInFewerRounds) {
             static_cast<int>(removed["false"].size()) + 1);
   EXPECT_LT(reports["true"]["summary"]["rounds"].get<int>(),
             reports["false"]["summary"]["rounds"].get<int>());
+  // The report says which round's statistics found each removal, and how many rounds snooped.
+  std::set<int> batch_rounds, single_rounds;
+  for (const nlohmann::json& step : reports["true"]["snooping"]) batch_rounds.insert(step["round"].get<int>());
+  for (const nlohmann::json& step : reports["false"]["snooping"]) single_rounds.insert(step["round"].get<int>());
+  EXPECT_EQ(single_rounds.size(), removed["false"].size());
+  EXPECT_LT(batch_rounds.size(), single_rounds.size());
+  EXPECT_LT(reports["true"]["summary"]["snooping_rounds"].get<int>(),
+            reports["false"]["summary"]["snooping_rounds"].get<int>());
+  EXPECT_GE(reports["true"]["summary"]["snooping_seconds"].get<double>(), 0.0);
 }
 
 // --solver=taylor adjusts a COLMAP model (relative, pixels) to the Ceres minimum, freeing the gauge
