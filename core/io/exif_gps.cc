@@ -210,7 +210,8 @@ Status ReadImageGps(const std::string& name, OpenImage open_image, ExifGps* gps,
 }
 
 // exiv2 over bytes in memory (its MemIo: nothing is mapped).
-Exiv2::Image::AutoPtr OpenBytes(std::string_view bytes) {
+// (The pointer's type is never named: exiv2 0.27 spells it std::auto_ptr, deprecated.)
+auto OpenBytes(std::string_view bytes) {
   return Exiv2::ImageFactory::open(reinterpret_cast<const Exiv2::byte*>(bytes.data()),
                                    static_cast<long>(bytes.size()));
 }
@@ -228,12 +229,12 @@ Status ReadFileGps(const std::string& path, ExifGps* gps, bool* found) {
     return Status::Error(EscapeForMessage(path) + ": not a regular file (an image file is needed)");
   std::string bytes;
   Status read;
-  const auto open = [&]() -> Exiv2::Image::AutoPtr {
-    Exiv2::Image::AutoPtr image = Exiv2::ImageFactory::open(path);
+  const auto open = [&]() {
+    auto image = Exiv2::ImageFactory::open(path);
     if (image.get() != nullptr && image->imageType() == Exiv2::ImageType::jpeg) return image;
     image.reset();
     read = ReadTextFile(path == "-" ? "./-" : path, &bytes);  // "-" is a file here, not stdin
-    if (!read.ok()) return Exiv2::Image::AutoPtr();
+    if (!read.ok()) return image;  // null
     return OpenBytes(bytes);
   };
   const Status status = ReadImageGps(EscapeForMessage(path), open, gps, found);
