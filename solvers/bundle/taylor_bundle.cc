@@ -999,7 +999,8 @@ Status TaylorBundleAdjust(const TaylorBundleOptions& options,
   // Rounds: adjust; then, as BundleAdjust (internal/bundle_rounds.h), the statistics of the
   // solution, blunders out (rejection rounds or data snooping) or the groups rescaled (variance
   // components), and adjust again, until neither changes.
-  const BundleAdjustmentOptions adjustment_options = AdjustmentOptionsOf(options);
+  BundleAdjustmentOptions adjustment_options = AdjustmentOptionsOf(options);
+  std::string stalled;  // the message of a robust round that stalled (internal::TieLossStalled)
   internal::GroupVariance variance;
   internal::RoundChanges changes(adjustment_options, config, *block, &plan, &out, &variance);
   Statistics statistics(adjustment_options, config, *block, plan);
@@ -1019,8 +1020,17 @@ Status TaylorBundleAdjust(const TaylorBundleOptions& options,
     reduction->solver = options.linear_solver;
     reduction->num_threads = context.num_threads;
     std::string message;
-    const SolverTermination type = RunRound(context, round, /*free_gauge=*/false, &layout, &state,
-                                            &normal, reduction.get(), result, &message);
+    SolverTermination type = RunRound(context, round, /*free_gauge=*/false, &layout, &state,
+                                      &normal, reduction.get(), result, &message);
+    if (internal::TieLossStalled(type, plan.tie_loss ? options.tie_loss : LossType::kNone)) {
+      // Stalled: on from here as least squares, this round and the rest, statistics included.
+      plan.tie_loss.reset();
+      adjustment_options.robustness.tie_loss = LossType::kNone;
+      statistics.built = false;
+      stalled = internal::TieLossStalledMessage(round, options.tie_loss, options.max_iterations);
+      type = RunRound(context, round, /*free_gauge=*/false, &layout, &state, &normal,
+                      reduction.get(), result, &message);
+    }
     summary.round_seconds.push_back(SecondsSince(round_start));
     if (type != SolverTermination::kConverged) {
       summary.sigma0 = kNaN;
@@ -1031,7 +1041,7 @@ Status TaylorBundleAdjust(const TaylorBundleOptions& options,
       }
       return finish(type, "round " + std::to_string(round) + ": " + message);
     }
-    summary.message = message;
+    summary.message = stalled.empty() ? message : stalled;
     summary.pivot_ratio = reduction->pivot_ratio;  // undamped: RunRound converges on no other
     summary.sigma0 =
         summary.redundancy > 0 ? std::sqrt(normal.weighted_ssr / summary.redundancy) : kNaN;

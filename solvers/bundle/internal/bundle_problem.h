@@ -109,6 +109,15 @@ inline int ImagePriorRows(const BundlePlan& plan, size_t image) {
 // `column` of image `image`'s e block: the relative gauge's scale image lacks its held coordinate.
 int OrientationComponent(const BundlePlan& plan, int image, int column);
 
+// The rule for a robust round that stopped at its iteration limit (both solvers; the reason is at
+// its definition in bundle_problem.cc): true when a round that ended with `termination` under the
+// tie loss `tie_loss` has stalled and goes on from where it stopped as least squares, and so do
+// the rounds after it.
+bool TieLossStalled(SolverTermination termination, LossType tie_loss);
+// The summary's message for it: "round 1: the huber tie loss stalled (no convergence in 100
+// iterations: ...); adjusted by least squares from there, blunders left to the rejection".
+std::string TieLossStalledMessage(int round, LossType tie_loss, int stalled_iterations);
+
 // A relative block's gauge in words: "image 'A' held fixed and the X coordinate of image 'B'
 // fixes the scale" (the datum description and the covariance datum).
 std::string RelativeGaugeInWords(const Block& block, const BundlePlan& plan);
