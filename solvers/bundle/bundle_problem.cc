@@ -36,6 +36,24 @@ int OrientationComponent(const BundlePlan& plan, int image, int column) {
   return column >= held ? column + 1 : column;
 }
 
+std::string UnknownName(const Block& block, UnknownKind kind, int index, int component) {
+  switch (kind) {
+    case UnknownKind::kOrientation: {
+      static const char* const kNames[] = {"X", "Y", "Z", "omega", "phi", "kappa"};
+      return "image '" + block.images[index].name + "': " + kNames[std::clamp(component, 0, 5)];
+    }
+    case UnknownKind::kCalibration:
+      return "camera '" + block.cameras[index].camera_id + "': the self-calibrated " +
+             CameraModelParamNames(block.cameras[index].model)[component];
+    case UnknownKind::kLeverArm: {
+      static const char* const kAxes[] = {"x", "y", "z"};
+      return std::string("the lever arm's ") + kAxes[std::clamp(component, 0, 2)] +
+             " (camera frame)";
+    }
+  }
+  return "";
+}
+
 // A robust round that reached its iteration limit has stalled, not failed: on a tie point whose
 // marks disagree with no majority (one of two marks gross, two of three), the misfit can sit in
 // either mark, and with both residuals outside the loss's quadratic zone the robust cost is almost

@@ -222,16 +222,14 @@ std::string BehindMessage(const Block& block, const Normal& normal, const std::s
   return os.str();
 }
 
-// A global column in words: "camera 'c1': the self-calibrated K1" or "the lever arm's z (camera
-// frame)", as BundleAdjust's statistics name them.
+// A global column in words (internal::UnknownName): a camera's self-calibrated parameter or a
+// component of the lever arm.
 std::string GlobalName(const Block& block, const Layout& layout, int j) {
   const int c = layout.global_camera[j];
-  if (c < 0) {
-    static const char* const kAxes[] = {"x", "y", "z"};
-    return std::string("the lever arm's ") + kAxes[layout.global_param[j]] + " (camera frame)";
-  }
-  return "camera " + Quoted(block.cameras[c].camera_id) + ": the self-calibrated " +
-         CameraModelParamNames(block.cameras[c].model)[layout.global_param[j]];
+  return c < 0 ? internal::UnknownName(block, internal::UnknownKind::kLeverArm, 0,
+                                       layout.global_param[j])
+               : internal::UnknownName(block, internal::UnknownKind::kCalibration, c,
+                                       layout.global_param[j]);
 }
 
 // One Gauss-Newton correction from the linearisation `normal`: the points eliminated, the
@@ -253,9 +251,9 @@ bool SolveStep(const Context& ctx, const std::string& at, const Normal& normal, 
     return false;
   }
   if (weightless >= 0) {
-    *message = "image " + Quoted(ctx.block.images[layout->free_images[weightless / 6]].name) +
-               ": parameter " + std::to_string(weightless % 6 + 1) +
-               " of its exterior orientation has no weight" + at;
+    *message = internal::UnknownName(ctx.block, internal::UnknownKind::kOrientation,
+                                     layout->free_images[weightless / 6], weightless % 6) +
+               " has no weight (no observation depends on it)" + at;
     return false;
   }
   if (!Factorize(ctx.options.min_pivot_ratio, *layout, reduction)) {

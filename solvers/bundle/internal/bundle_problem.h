@@ -109,6 +109,18 @@ inline int ImagePriorRows(const BundlePlan& plan, size_t image) {
 // `column` of image `image`'s e block: the relative gauge's scale image lacks its held coordinate.
 int OrientationComponent(const BundlePlan& plan, int image, int column);
 
+// The kinds of unknown an adjustment names in its messages.
+enum class UnknownKind {
+  kOrientation,  // of an image: component 0..5 = X, Y, Z, omega, phi, kappa
+  kCalibration,  // of a camera: component = index into its model's parameters
+  kLeverArm,     // component 0..2 = x, y, z in the camera frame
+};
+
+// An unknown in words, the one wording of both solvers' messages: "image 'IMG_12': omega",
+// "camera 'c1': the self-calibrated K1", "the lever arm's z (camera frame)". `index` is the image
+// or the camera (unused for the lever arm).
+std::string UnknownName(const Block& block, UnknownKind kind, int index, int component);
+
 // The rule for a robust round that stopped at its iteration limit (both solvers; the reason is at
 // its definition in bundle_problem.cc): true when a round that ended with `termination` under the
 // tie loss `tie_loss` has stalled and goes on from where it stopped as least squares, and so do
