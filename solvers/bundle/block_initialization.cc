@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <sstream>
 
+#include "core/units.h"
 #include "solvers/bundle/triangulation.h"
 
 namespace photopose {
@@ -25,10 +26,10 @@ Status ResectionInputFromKnownPoints(const Block& block, int image, ResectionInp
 
 std::string BlockInitializationSummary::BriefReport() const {
   std::ostringstream os;
-  os << images_given << " images with initial values, " << images_resected << " resected, "
-     << not_oriented.size() << " not oriented; " << points_given << " tie points with coordinates, "
-     << points_triangulated << " intersected, " << points_not_triangulated << " not; " << rounds
-     << " rounds";
+  os << FormatCount(images_given, "image") << " with initial values, " << images_resected
+     << " resected, " << not_oriented.size() << " not oriented; "
+     << FormatCount(points_given, "tie point") << " with coordinates, " << points_triangulated
+     << " intersected, " << points_not_triangulated << " not; " << FormatCount(rounds, "round");
   return os.str();
 }
 

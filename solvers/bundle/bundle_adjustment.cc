@@ -361,16 +361,8 @@ bool SolveInFreeGaugeFirst(Adjustment* a, int r, ceres::Solver::Summary* ceres_s
   return false;
 }
 
-// A robust round that reached its iteration limit has stalled, not failed: on a tie point whose
-// marks disagree with no majority (one of two marks gross, two of three), the misfit can sit in
-// either mark, and with both residuals outside the loss's quadratic zone the robust cost is almost
-// linear along the point's move. Ceres models a concave loss by reweighting alone (no second-order
-// correction for rho'' < 0), a curvature the linear cost does not have, so every step goes a
-// fraction of the way: the cost falls by the same amount each iteration (step quality 2: the
-// model predicts half the actual decrease) for hundreds or thousands of iterations (measured in
-// docs/performance.md, "Robust tie loss"). The data cannot say which mark is wrong; least squares
-// splits the misfit between them, where the rejection's w-tests see it. So the round goes on from
-// where it stopped as least squares, and so do the rounds after it; the summary's message says so.
+// A robust round that stalled (internal::TieLossStalled) goes on from where it stopped as least
+// squares, and so do the rounds after it; the summary's message says so.
 void ContinueWithoutTieLoss(Adjustment* a, int r, ceres::Solver::Summary* ceres_summary) {
   BundleAdjustmentSummary& summary = a->result->summary;
   const int stalled_iterations = static_cast<int>(ceres_summary->iterations.size()) - 1;
@@ -381,11 +373,7 @@ void ContinueWithoutTieLoss(Adjustment* a, int r, ceres::Solver::Summary* ceres_
   summary.problem_build_seconds += SecondsSince(build_start);
   Solve(a, r, /*free_gauge=*/false, ceres_summary);
   summary.iterations += static_cast<int>(ceres_summary->iterations.size()) - 1;
-  summary.message = "round " + std::to_string(r) + ": the " + EnumName(loss) +
-                    " tie loss stalled (no convergence in " + std::to_string(stalled_iterations) +
-                    " iterations: tie marks outside its quadratic zone on points whose marks "
-                    "disagree); adjusted by least squares from there, blunders left to the "
-                    "rejection";
+  summary.message = internal::TieLossStalledMessage(r, loss, stalled_iterations);
 }
 
 // Builds and solves round r; the summary's iteration counts, costs and redundancy follow.
@@ -408,8 +396,11 @@ void SolveRound(Adjustment* a, int r, ceres::Solver::Summary* ceres_summary) {
     if (r == 1 && free_iterations == 0) summary.initial_cost = ceres_summary->initial_cost;
     summary.iterations += static_cast<int>(ceres_summary->iterations.size()) - 1;
   }
-  if (ceres_summary->termination_type == ceres::NO_CONVERGENCE && !a->cancelled &&
-      a->build_options.robustness.tie_loss != LossType::kNone) {
+  const SolverTermination ended =
+      ceres_summary->termination_type == ceres::CONVERGENCE      ? SolverTermination::kConverged
+      : ceres_summary->termination_type == ceres::NO_CONVERGENCE ? SolverTermination::kNoConvergence
+                                                                 : SolverTermination::kFailure;
+  if (!a->cancelled && internal::TieLossStalled(ended, a->build_options.robustness.tie_loss)) {
     ContinueWithoutTieLoss(a, r, ceres_summary);
   }
   summary.iterations += free_iterations;

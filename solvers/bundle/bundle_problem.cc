@@ -36,6 +36,46 @@ int OrientationComponent(const BundlePlan& plan, int image, int column) {
   return column >= held ? column + 1 : column;
 }
 
+std::string UnknownName(const Block& block, UnknownKind kind, int index, int component) {
+  switch (kind) {
+    case UnknownKind::kOrientation: {
+      static const char* const kNames[] = {"X", "Y", "Z", "omega", "phi", "kappa"};
+      return "image '" + block.images[index].name + "': " + kNames[std::clamp(component, 0, 5)];
+    }
+    case UnknownKind::kCalibration:
+      return "camera '" + block.cameras[index].camera_id + "': the self-calibrated " +
+             CameraModelParamNames(block.cameras[index].model)[component];
+    case UnknownKind::kLeverArm: {
+      static const char* const kAxes[] = {"x", "y", "z"};
+      return std::string("the lever arm's ") + kAxes[std::clamp(component, 0, 2)] +
+             " (camera frame)";
+    }
+  }
+  return "";
+}
+
+// A robust round that reached its iteration limit has stalled, not failed: on a tie point whose
+// marks disagree with no majority (one of two marks gross, two of three), the misfit can sit in
+// either mark, and with both residuals outside the loss's quadratic zone the robust cost is almost
+// linear along the point's move. Reweighting (Ceres models a concave loss by it alone, with no
+// second-order correction for rho'' < 0; the Taylor solver is iteratively reweighted least
+// squares) gives a curvature the linear cost does not have, so every step goes a fraction of the
+// way: the cost falls by the same amount each iteration (step quality 2: the model predicts half
+// the actual decrease) for hundreds or thousands of iterations (measured in docs/performance.md,
+// "Robust tie loss"). The data cannot say which mark is wrong; least squares splits the misfit
+// between them, where the rejection's w-tests see it. A round that failed otherwise (a singular
+// system, no decrease) stays a failure.
+bool TieLossStalled(SolverTermination termination, LossType tie_loss) {
+  return termination == SolverTermination::kNoConvergence && tie_loss != LossType::kNone;
+}
+
+std::string TieLossStalledMessage(int round, LossType tie_loss, int stalled_iterations) {
+  return "round " + std::to_string(round) + ": the " + std::string(EnumName(tie_loss)) +
+         " tie loss stalled (no convergence in " + std::to_string(stalled_iterations) +
+         " iterations: tie marks outside its quadratic zone on points whose marks disagree); "
+         "adjusted by least squares from there, blunders left to the rejection";
+}
+
 std::string RelativeGaugeInWords(const Block& block, const BundlePlan& plan) {
   const char* axes = "XYZ";
   return "image '" + block.images[plan.relative_fixed_image].name + "' held fixed and the " +

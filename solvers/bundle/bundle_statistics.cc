@@ -655,28 +655,20 @@ Eigen::Matrix3d PropagatedCheckPointCovariance(const Block& block, const BundleS
   return N_inverse + A * reduced.C.Solve(A.transpose());
 }
 
-// The parameter of tangent component t of e block b, in words: "image 'IMG_12': omega", "camera
-// 'c1': the self-calibrated K1", "the lever arm's z (camera frame)"; empty when not known.
+// The parameter of tangent component t of e block b, in words (UnknownName); empty when not known.
 std::string ParameterName(const Block& block, const BundlePlan& plan, const BundleState& state,
                           const BundleRound& round, int b, int t) {
   if (b < 0 || t < 0) return "";
   const double* e = round.e_blocks[b];
-  for (size_t i = 0; i < block.images.size(); ++i) {
-    if (state.eo[i].data() != e) continue;
-    static const char* const kNames[] = {"X", "Y", "Z", "omega", "phi", "kappa"};
-    const int component = OrientationComponent(plan, static_cast<int>(i), t);
-    return "image '" + block.images[i].name + "': " + kNames[std::min(component, 5)];
-  }
-  for (size_t c = 0; c < block.cameras.size(); ++c) {
-    if (state.cameras[c].data() != e || t >= static_cast<int>(plan.calibrated[c].size())) continue;
-    const std::vector<std::string> names = CameraModelParamNames(block.cameras[c].model);
-    return "camera '" + block.cameras[c].camera_id + "': the self-calibrated " +
-           names[plan.calibrated[c][t]];
-  }
-  if (e == state.lever.data()) {
-    static const char* const kAxes[] = {"x", "y", "z"};
-    return std::string("the lever arm's ") + kAxes[std::min(t, 2)] + " (camera frame)";
-  }
+  for (size_t i = 0; i < block.images.size(); ++i)
+    if (state.eo[i].data() == e)
+      return UnknownName(block, UnknownKind::kOrientation, static_cast<int>(i),
+                         OrientationComponent(plan, static_cast<int>(i), t));
+  for (size_t c = 0; c < block.cameras.size(); ++c)
+    if (state.cameras[c].data() == e && t < static_cast<int>(plan.calibrated[c].size()))
+      return UnknownName(block, UnknownKind::kCalibration, static_cast<int>(c),
+                         plan.calibrated[c][t]);
+  if (e == state.lever.data()) return UnknownName(block, UnknownKind::kLeverArm, 0, t);
   return "";
 }
 

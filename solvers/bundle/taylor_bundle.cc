@@ -222,16 +222,14 @@ std::string BehindMessage(const Block& block, const Normal& normal, const std::s
   return os.str();
 }
 
-// A global column in words: "camera 'c1': the self-calibrated K1" or "the lever arm's z (camera
-// frame)", as BundleAdjust's statistics name them.
+// A global column in words (internal::UnknownName): a camera's self-calibrated parameter or a
+// component of the lever arm.
 std::string GlobalName(const Block& block, const Layout& layout, int j) {
   const int c = layout.global_camera[j];
-  if (c < 0) {
-    static const char* const kAxes[] = {"x", "y", "z"};
-    return std::string("the lever arm's ") + kAxes[layout.global_param[j]] + " (camera frame)";
-  }
-  return "camera " + Quoted(block.cameras[c].camera_id) + ": the self-calibrated " +
-         CameraModelParamNames(block.cameras[c].model)[layout.global_param[j]];
+  return c < 0 ? internal::UnknownName(block, internal::UnknownKind::kLeverArm, 0,
+                                       layout.global_param[j])
+               : internal::UnknownName(block, internal::UnknownKind::kCalibration, c,
+                                       layout.global_param[j]);
 }
 
 // One Gauss-Newton correction from the linearisation `normal`: the points eliminated, the
@@ -253,9 +251,9 @@ bool SolveStep(const Context& ctx, const std::string& at, const Normal& normal, 
     return false;
   }
   if (weightless >= 0) {
-    *message = "image " + Quoted(ctx.block.images[layout->free_images[weightless / 6]].name) +
-               ": parameter " + std::to_string(weightless % 6 + 1) +
-               " of its exterior orientation has no weight" + at;
+    *message = internal::UnknownName(ctx.block, internal::UnknownKind::kOrientation,
+                                     layout->free_images[weightless / 6], weightless % 6) +
+               " has no weight (no observation depends on it)" + at;
     return false;
   }
   if (!Factorize(ctx.options.min_pivot_ratio, *layout, reduction)) {
@@ -999,7 +997,8 @@ Status TaylorBundleAdjust(const TaylorBundleOptions& options,
   // Rounds: adjust; then, as BundleAdjust (internal/bundle_rounds.h), the statistics of the
   // solution, blunders out (rejection rounds or data snooping) or the groups rescaled (variance
   // components), and adjust again, until neither changes.
-  const BundleAdjustmentOptions adjustment_options = AdjustmentOptionsOf(options);
+  BundleAdjustmentOptions adjustment_options = AdjustmentOptionsOf(options);
+  std::string stalled;  // the message of a robust round that stalled (internal::TieLossStalled)
   internal::GroupVariance variance;
   internal::RoundChanges changes(adjustment_options, config, *block, &plan, &out, &variance);
   Statistics statistics(adjustment_options, config, *block, plan);
@@ -1019,8 +1018,17 @@ Status TaylorBundleAdjust(const TaylorBundleOptions& options,
     reduction->solver = options.linear_solver;
     reduction->num_threads = context.num_threads;
     std::string message;
-    const SolverTermination type = RunRound(context, round, /*free_gauge=*/false, &layout, &state,
-                                            &normal, reduction.get(), result, &message);
+    SolverTermination type = RunRound(context, round, /*free_gauge=*/false, &layout, &state,
+                                      &normal, reduction.get(), result, &message);
+    if (internal::TieLossStalled(type, plan.tie_loss ? options.tie_loss : LossType::kNone)) {
+      // Stalled: on from here as least squares, this round and the rest, statistics included.
+      plan.tie_loss.reset();
+      adjustment_options.robustness.tie_loss = LossType::kNone;
+      statistics.built = false;
+      stalled = internal::TieLossStalledMessage(round, options.tie_loss, options.max_iterations);
+      type = RunRound(context, round, /*free_gauge=*/false, &layout, &state, &normal,
+                      reduction.get(), result, &message);
+    }
     summary.round_seconds.push_back(SecondsSince(round_start));
     if (type != SolverTermination::kConverged) {
       summary.sigma0 = kNaN;
@@ -1031,7 +1039,7 @@ Status TaylorBundleAdjust(const TaylorBundleOptions& options,
       }
       return finish(type, "round " + std::to_string(round) + ": " + message);
     }
-    summary.message = message;
+    summary.message = stalled.empty() ? message : stalled;
     summary.pivot_ratio = reduction->pivot_ratio;  // undamped: RunRound converges on no other
     summary.sigma0 =
         summary.redundancy > 0 ? std::sqrt(normal.weighted_ssr / summary.redundancy) : kNaN;

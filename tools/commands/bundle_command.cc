@@ -247,27 +247,38 @@ int CheckInputChoice(const char* command, BundleRun* run) {
   return kGoOn;
 }
 
-// The progress line of every iteration, on stderr: "photopose bundle: round 1 iteration   1:
-// cost 895984  sigma0 14.2136  step 254  taken quality 1.00 radius 30000  solve 0.00 of 0.01 s
-// 0.0 s" (tools/benchmarks/bundle_scaling.sh reads "iteration N:" and "solve A of B s").
-// Numbers through the report kit (tools/report/html_kit.h): fixed notation, never an exponent.
+// The longest progress line (characters): a terminal's width, no wrapping.
+constexpr size_t kMaxProgressLine = 119;
+
+// The progress line of every iteration, on stderr, at most kMaxProgressLine characters, the
+// essentials first: "photopose bundle: round 1 iteration   1: cost 895984  sigma0 14.2136  step 254
+// 0.0 s", then as far as they fit, from Ceres: "  solve 0.00 of 0.01 s" (the linear solve's and
+// the iteration's seconds; tools/benchmarks/bundle_scaling.sh reads "iteration N:" and "solve A of
+// B s"), "  REJECTED" for a step not taken, "  quality 1.00" (the step's), "  radius 30000" (the
+// trust region's).
+// Numbers through core/units.h: fixed notation, never an exponent.
 // Never cancels (returns true): the CLI has no way to ask for it.
 bool PrintProgress(const BundleIterationInfo& info) {
   char iteration[16];
   std::snprintf(iteration, sizeof(iteration), "%3d", info.iteration);
-  std::ostringstream line;
-  line << "photopose bundle: round " << info.round << (info.free_gauge ? " (free gauge)" : "")
-       << " iteration " << iteration << ": cost " << FormatSignificant(info.cost, 6) << "  sigma0 "
-       << FormatUnitless(info.sigma0, 4) << "  step " << FormatSignificant(info.step_norm, 3);
+  std::string line = "photopose bundle: round " + std::to_string(info.round) +
+                     (info.free_gauge ? " (free gauge)" : "") + " iteration " + iteration +
+                     ": cost " + FormatSignificant(info.cost, 6) + "  sigma0 " +
+                     FormatUnitless(info.sigma0, 4) + "  step " +
+                     FormatSignificant(info.step_norm, 3) + "  " +
+                     FormatUnitless(info.elapsed_seconds, 1) + " s";
   if (std::isfinite(info.trust_region_radius)) {
-    line << "  " << (info.step_successful ? "taken" : "REJECTED") << " quality "
-         << FormatUnitless(info.step_quality, 2) << " radius "
-         << FormatSignificant(info.trust_region_radius, 2) << "  solve "
-         << FormatUnitless(info.linear_solver_seconds, 2) << " of "
-         << FormatUnitless(info.iteration_seconds, 2) << " s";
+    for (const std::string& more :
+         {"  solve " + FormatUnitless(info.linear_solver_seconds, 2) + " of " +
+              FormatUnitless(info.iteration_seconds, 2) + " s",
+          std::string(info.step_successful ? "" : "  REJECTED"),
+          "  quality " + FormatUnitless(info.step_quality, 2),
+          "  radius " + FormatSignificant(info.trust_region_radius, 2)}) {
+      if (line.size() + more.size() > kMaxProgressLine) break;
+      line += more;
+    }
   }
-  line << "  " << FormatUnitless(info.elapsed_seconds, 1) << " s\n";
-  std::cerr << line.str();
+  std::cerr << line + "\n";
   return true;
 }
 

@@ -304,6 +304,20 @@ BlockSolverStatistics BlockSolverStatisticsOf(
   return st;
 }
 
+// The corrected Taylor solver among `solvers`, the baseline of the "x Taylor" time ratio (and of
+// the simulated blocks' position offsets): the one without a loss when it runs without one, else
+// its first loss; -1 when it is not compared. The one rule of both comparisons.
+int TaylorBaseline(const std::vector<BlockSolverVariant>& solvers) {
+  int taylor = -1;
+  for (size_t s = 0; s < solvers.size(); ++s) {
+    const BlockSolverVariant& v = solvers[s];
+    if (v.solver != PoseSolver::kTaylor) continue;
+    if (taylor < 0 || (v.loss == LossType::kNone && solvers[taylor].loss != LossType::kNone))
+      taylor = static_cast<int>(s);
+  }
+  return taylor;
+}
+
 }  // namespace
 
 Status RunBlockComparison(const BlockComparisonOptions& options, BlockComparisonResult* result) {
@@ -334,15 +348,7 @@ Status RunBlockComparison(const BlockComparisonOptions& options, BlockComparison
   });
   for (const Status& error : errors) PHOTOPOSE_RETURN_IF_ERROR(error);
 
-  // The corrected Taylor solver, when compared, is the baseline of time and position offsets:
-  // without a loss when it runs without one, else its first loss.
-  int taylor = -1;
-  for (size_t s = 0; s < num_solvers; ++s) {
-    const BlockSolverVariant& v = options.solvers[s];
-    if (v.solver != PoseSolver::kTaylor) continue;
-    if (taylor < 0 || (v.loss == LossType::kNone && options.solvers[taylor].loss != LossType::kNone))
-      taylor = static_cast<int>(s);
-  }
+  const int taylor = TaylorBaseline(options.solvers);
   result->statistics.assign(num_settings, {});
   for (size_t setting = 0; setting < num_settings; ++setting) {
     std::vector<BlockSolverStatistics>& row = result->statistics[setting];
@@ -363,7 +369,8 @@ Status RunBlockDatasetComparison(const BlockDatasetOptions& options, const Block
   result->num_points = static_cast<int>(block.points.size());
   result->num_marks = static_cast<int>(block.marks.size());
   std::vector<std::vector<Eigen::Vector3d>> centres(options.solvers.size());
-  int reference = -1, taylor = -1;
+  int reference = -1;
+  const int taylor = TaylorBaseline(options.solvers);
   for (size_t s = 0; s < options.solvers.size(); ++s) {
     const BlockSolverVariant& variant = options.solvers[s];
     BlockDatasetSolverSummary summary;
@@ -382,7 +389,6 @@ Status RunBlockDatasetComparison(const BlockDatasetOptions& options, const Block
       summary.check_rmse_m = adjusted.num_check_points > 0 ? adjusted.check_rmse_total_m : kNaN;
       for (const BlockImage& image : copy.images) centres[s].push_back(image.eo->center_in_ground());
       if (reference < 0 && variant.solver == PoseSolver::kCeres) reference = static_cast<int>(s);
-      if (variant.solver == PoseSolver::kTaylor) taylor = static_cast<int>(s);
     }
     result->solvers.push_back(summary);
   }
@@ -393,8 +399,9 @@ Status RunBlockDatasetComparison(const BlockDatasetOptions& options, const Block
   result->reference = reference >= 0 ? result->solvers[reference].name : "";
   for (size_t s = 0; s < result->solvers.size(); ++s) {
     BlockDatasetSolverSummary& summary = result->solvers[s];
-    summary.time_ratio_to_taylor =
-        taylor >= 0 ? summary.seconds / result->solvers[taylor].seconds : kNaN;
+    summary.time_ratio_to_taylor = taylor >= 0 && result->solvers[taylor].success
+                                       ? summary.seconds / result->solvers[taylor].seconds
+                                       : kNaN;
     if (!summary.success || reference < 0) {
       summary.offset_rms_m = summary.offset_max_m = kNaN;
       continue;

@@ -109,6 +109,27 @@ inline int ImagePriorRows(const BundlePlan& plan, size_t image) {
 // `column` of image `image`'s e block: the relative gauge's scale image lacks its held coordinate.
 int OrientationComponent(const BundlePlan& plan, int image, int column);
 
+// The kinds of unknown an adjustment names in its messages.
+enum class UnknownKind {
+  kOrientation,  // of an image: component 0..5 = X, Y, Z, omega, phi, kappa
+  kCalibration,  // of a camera: component = index into its model's parameters
+  kLeverArm,     // component 0..2 = x, y, z in the camera frame
+};
+
+// An unknown in words, the one wording of both solvers' messages: "image 'IMG_12': omega",
+// "camera 'c1': the self-calibrated K1", "the lever arm's z (camera frame)". `index` is the image
+// or the camera (unused for the lever arm).
+std::string UnknownName(const Block& block, UnknownKind kind, int index, int component);
+
+// The rule for a robust round that stopped at its iteration limit (both solvers; the reason is at
+// its definition in bundle_problem.cc): true when a round that ended with `termination` under the
+// tie loss `tie_loss` has stalled and goes on from where it stopped as least squares, and so do
+// the rounds after it.
+bool TieLossStalled(SolverTermination termination, LossType tie_loss);
+// The summary's message for it: "round 1: the huber tie loss stalled (no convergence in 100
+// iterations: ...); adjusted by least squares from there, blunders left to the rejection".
+std::string TieLossStalledMessage(int round, LossType tie_loss, int stalled_iterations);
+
 // A relative block's gauge in words: "image 'A' held fixed and the X coordinate of image 'B'
 // fixes the scale" (the datum description and the covariance datum).
 std::string RelativeGaugeInWords(const Block& block, const BundlePlan& plan);

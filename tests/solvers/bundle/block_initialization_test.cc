@@ -74,6 +74,21 @@ TEST(BlockInitialization, AnImageWithNothingToOrientItFromIsNamedWithTheReason) 
   EXPECT_TRUE(block.marks.empty());
 }
 
+// The brief report counts in words that agree with the count: "1 round", "2 rounds".
+TEST(BlockInitialization, TheBriefReportSaysOneRoundNotOneRounds) {
+  BlockInitializationSummary summary;
+  summary.images_given = 1;
+  summary.points_given = 1;
+  summary.rounds = 1;
+  EXPECT_EQ(summary.BriefReport(),
+            "1 image with initial values, 0 resected, 0 not oriented; 1 tie point with "
+            "coordinates, 0 intersected, 0 not; 1 round");
+  summary.images_given = 12;
+  summary.rounds = 2;
+  EXPECT_NE(summary.BriefReport().find("12 images with initial values"), std::string::npos);
+  EXPECT_NE(summary.BriefReport().find("; 2 rounds"), std::string::npos);
+}
+
 TEST(BlockInitialization, RefusesInvalidOptions) {
   Block block;
   BlockInitializationOptions options;

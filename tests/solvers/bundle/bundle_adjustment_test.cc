@@ -754,44 +754,73 @@ SyntheticBlockOptions SmallHuberBlock(uint64_t seed) {
   return o;
 }
 
-TEST(BundleAdjustment, ASmallHuberBlockThatStallsGoesOnByLeastSquares) {
-  // 134 of these 200 blocks stopped at Ceres' 100 iterations with no convergence (the Huber
-  // loss's reweighted steps crawl on tie points whose marks disagree; ContinueWithoutTieLoss).
-  // Now each is adjusted, its centres within 5 sigma of the truth, or refused with a reason
-  // (rejection leaving an image too few marks): never no_convergence, never wrong as if right.
+// Both solvers over the same blocks: adjusted, stalled (and gone on by least squares) and refused.
+struct HuberRegressionCounts {
+  int adjusted = 0, stalled = 0, refused = 0;
+  double worst_sigmas = 0.0;           // the largest centre error of a usable result (sigma)
+  std::vector<int> stalled_iterations;  // per stalled block: its iterations in all
+};
+
+HuberRegressionCounts RunSmallHuberBlocks(PoseSolver solver) {
   BundleAdjustmentOptions options = QuietOptions();
   options.robustness.tie_loss = LossType::kHuber;
-  int adjusted = 0, stalled = 0, refused = 0;
+  HuberRegressionCounts counts;
   for (uint64_t seed = 1; seed <= 200; ++seed) {
     SCOPED_TRACE("seed " + std::to_string(seed));
     Block block;
     SyntheticBlockTruth truth;
-    ASSERT_TRUE(MakeSyntheticBlock(SmallHuberBlock(seed), &block, &truth).ok());
+    EXPECT_TRUE(MakeSyntheticBlock(SmallHuberBlock(seed), &block, &truth).ok());
     BundleAdjustmentResult result;
-    ASSERT_TRUE(BundleAdjust(options, BundleAdjustmentConfig(), &block, &result).ok());
+    EXPECT_TRUE(
+        BundleAdjustWithSolver(solver, options, BundleAdjustmentConfig(), &block, &result).ok());
     const BundleAdjustmentSummary& s = result.summary;
-    ASSERT_NE(s.termination, SolverTermination::kNoConvergence) << s.message;
-    if (s.termination != SolverTermination::kConverged) {
-      ++refused;
+    EXPECT_NE(s.termination, SolverTermination::kNoConvergence) << s.message;
+    if (!s.IsSolutionUsable()) {
+      ++counts.refused;
       EXPECT_NE(s.message.find("too few to orient it"), std::string::npos) << s.message;
       continue;
     }
-    ++adjusted;
+    ++counts.adjusted;
     if (s.message.find("huber tie loss stalled") != std::string::npos) {
-      ++stalled;
+      ++counts.stalled;
+      counts.stalled_iterations.push_back(s.iterations);
       EXPECT_NE(s.message.find("adjusted by least squares from there"), std::string::npos);
     }
+    // No usable result with a camera centre more than 5 sigma from the truth.
     for (size_t i = 0; i < block.images.size(); ++i) {
-      ASSERT_TRUE(result.images[i].has_covariance) << i;
+      EXPECT_TRUE(result.images[i].has_covariance) << i;
+      if (!result.images[i].has_covariance) continue;
       const Eigen::Vector3d error =
           block.images[i].eo->center_in_ground() - truth.eo[i].center_in_ground();
       const Eigen::Matrix3d covariance = result.images[i].covariance.topLeftCorner<3, 3>();
-      EXPECT_LT(std::sqrt(error.dot(covariance.inverse() * error)), 5.0) << "image " << i;
+      const double sigmas = std::sqrt(error.dot(covariance.inverse() * error));
+      EXPECT_LT(sigmas, 5.0) << "image " << i;
+      counts.worst_sigmas = std::max(counts.worst_sigmas, sigmas);
     }
   }
-  EXPECT_GE(adjusted, 195);
-  EXPECT_GT(stalled, 100);  // the path is taken (134 blocks when measured)
-  EXPECT_LE(refused, 5);
+  std::vector<int>& its = counts.stalled_iterations;
+  std::sort(its.begin(), its.end());
+  std::printf(
+      "%s: %d adjusted (%d after a stalled robust round: median %d, at most %d iterations), %d "
+      "refused of 200; centres within %.2f sigma\n",
+      EnumName(solver), counts.adjusted, counts.stalled, its.empty() ? 0 : its[its.size() / 2],
+      its.empty() ? 0 : its.back(), counts.refused, counts.worst_sigmas);
+  return counts;
+}
+
+TEST(BundleAdjustment, ASmallHuberBlockThatStallsGoesOnByLeastSquares) {
+  // 134 of these 200 blocks stopped at Ceres' 100 iterations with no convergence, and 152 at the
+  // Taylor solver's limit (the Huber loss's reweighted steps crawl on tie points whose marks
+  // disagree; internal::TieLossStalled). Now each is adjusted, its centres within 5 sigma of the
+  // truth, or refused with a reason (rejection leaving an image too few marks): never
+  // no_convergence, never wrong as if right; by either solver.
+  for (const PoseSolver solver : {PoseSolver::kCeres, PoseSolver::kTaylor}) {
+    SCOPED_TRACE(EnumName(solver));
+    const HuberRegressionCounts counts = RunSmallHuberBlocks(solver);
+    EXPECT_GE(counts.adjusted, 195);
+    EXPECT_GT(counts.stalled, 100);  // the path is taken (measured: docs/performance.md)
+    EXPECT_LE(counts.refused, 5);
+  }
 }
 
 TEST(BundleAdjustment, TiePointsWithoutStartAreLeftOutAndNamed) {

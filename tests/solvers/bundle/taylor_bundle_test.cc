@@ -1572,21 +1572,49 @@ TEST(TaylorBundleVsCeres, ImagesHeldConstantKeepTheirPriorsInTheCost) {
   }
 }
 
-// What no observation determines fails the round and names it; nothing is written.
-TEST(TaylorBundle, AnUndeterminedLeverArmOrCalibrationIsNamed) {
+// What no observation determines fails the round and names it; nothing is written. The Taylor
+// solver (its reduced system's weightless column) and BundleAdjust (its statistics' factorisation)
+// find it by different means but name it with the same words (internal::UnknownName).
+TEST(TaylorBundleVsCeres, AnUndeterminedLeverArmIsNamedAlikeByBoth) {
   SyntheticBlockOptions o = TaylorBlockOptions();
   o.gnss = false;  // no camera positions: nothing sees the lever arm
   const TestBlock data = MakeTestBlock(o);
-  Block block = data.block;
-  TaylorBundleResult result;
-  ASSERT_TRUE(TaylorBundleAdjust(TaylorOptions(), CalibrationConfig(block, {}, true), &block,
-                                 &result)
-                  .ok());
-  EXPECT_EQ(result.summary.termination_type, SolverTermination::kFailure);
-  EXPECT_NE(result.summary.message.find("the lever arm's x (camera frame) has no weight"),
+  const BundleAdjustmentConfig config = CalibrationConfig(data.block, {}, true);
+  Block taylor_block = data.block, ceres_block = data.block;
+  TaylorBundleResult taylor;
+  ASSERT_TRUE(TaylorBundleAdjust(TaylorOptions(), config, &taylor_block, &taylor).ok());
+  EXPECT_EQ(taylor.summary.termination_type, SolverTermination::kFailure);
+  EXPECT_NE(taylor.summary.message.find("the lever arm's x (camera frame) has no weight"),
             std::string::npos)
-      << result.summary.message;
-  ExpectUntouched(data.block, block, result);
+      << taylor.summary.message;
+  ExpectUntouched(data.block, taylor_block, taylor);
+  BundleAdjustmentResult ceres;
+  ASSERT_TRUE(BundleAdjust(TightCeresOptions(), config, &ceres_block, &ceres).ok());
+  EXPECT_EQ(ceres.summary.termination, SolverTermination::kFailure);
+  EXPECT_NE(ceres.summary.message.find("the lever arm's x (camera frame) is not determined"),
+            std::string::npos)
+      << ceres.summary.message;
+}
+
+// A self-calibrated parameter no mark constrains (a camera with no image): both name it alike.
+TEST(TaylorBundleVsCeres, AnUndeterminedCalibrationIsNamedAlikeByBoth) {
+  const TestBlock data = MakeTestBlock(TaylorBlockOptions());
+  Block block = data.block;
+  BlockCamera unused = block.cameras[0];
+  unused.camera_id = "unused";
+  block.cameras.push_back(unused);
+  BundleAdjustmentConfig config;
+  config.calibrated_params.resize(block.cameras.size());
+  config.calibrated_params.back() = {0};
+  Block taylor_block = block, ceres_block = block;
+  TaylorBundleResult taylor;
+  BundleAdjustmentResult ceres;
+  ASSERT_TRUE(TaylorBundleAdjust(TaylorOptions(), config, &taylor_block, &taylor).ok());
+  ASSERT_TRUE(BundleAdjust(TightCeresOptions(), config, &ceres_block, &ceres).ok());
+  const std::string name =
+      "camera 'unused': the self-calibrated " + CameraModelParamNames(unused.model)[0];
+  EXPECT_NE(taylor.summary.message.find(name), std::string::npos) << taylor.summary.message;
+  EXPECT_NE(ceres.summary.message.find(name), std::string::npos) << ceres.summary.message;
 }
 
 }  // namespace
