@@ -4,6 +4,7 @@
 
 #include <Eigen/Dense>
 #include <algorithm>
+#include <limits>
 #include <cmath>
 #include <unordered_map>
 
@@ -92,10 +93,22 @@ void BuildLayout(const Block& block, const Plan& plan, Layout* layout) {
     layout->num_global += 3;
   }
   layout->num_unknowns += layout->num_global;
-  for (size_t p = 0; p < block.points.size(); ++p) {
-    if (!plan.point_in_problem[p] || plan.point_constant[p]) continue;
+  // The free points in the order of their first camera block (in the fill-reducing order), so
+  // that points eliminated one after another share images: their blocks of S stay in the cache.
+  std::vector<int> first_block(block.points.size(), std::numeric_limits<int>::max());
+  for (size_t m = 0; m < block.marks.size(); ++m) {
+    const int b = layout->image_block[block.marks[m].image];
+    int& first = first_block[block.marks[m].point];
+    if (plan.mark_used[m] && b >= 0) first = std::min(first, b);
+  }
+  std::vector<int> points;
+  for (size_t p = 0; p < block.points.size(); ++p)
+    if (plan.point_in_problem[p] && !plan.point_constant[p]) points.push_back(static_cast<int>(p));
+  std::stable_sort(points.begin(), points.end(),
+                   [&](int a, int b) { return first_block[a] < first_block[b]; });
+  for (const int p : points) {
     layout->point_block[p] = static_cast<int>(layout->free_points.size());
-    layout->free_points.push_back(static_cast<int>(p));
+    layout->free_points.push_back(p);
     layout->num_unknowns += 3;
     if (plan.point_prior[p]) layout->num_observations += 3;
   }
