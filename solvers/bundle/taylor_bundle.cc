@@ -579,6 +579,7 @@ BundleAdjustmentOptions AdjustmentOptionsOf(const TaylorBundleOptions& options) 
   out.robustness.rejection_threshold = options.rejection_threshold;
   out.robustness.max_rejection_rounds = options.max_rejection_rounds;
   out.robustness.snoop = options.snoop;
+  out.robustness.snooping_batch = options.snooping_batch;
   out.robustness.tie_loss = options.tie_loss;
   out.robustness.tie_loss_scale_sigmas = options.tie_loss_scale_sigmas;
   out.robustness.max_snooping_removals = options.max_snooping_removals;
@@ -770,6 +771,7 @@ Status TaylorBundleOptionsFromBundleOptions(const BundleAdjustmentOptions& ceres
   options->rejection_threshold = ceres.robustness.rejection_threshold;
   options->max_rejection_rounds = ceres.robustness.max_rejection_rounds;
   options->snoop = ceres.robustness.snoop;
+  options->snooping_batch = ceres.robustness.snooping_batch;
   options->tie_loss = ceres.robustness.tie_loss;
   options->tie_loss_scale_sigmas = ceres.robustness.tie_loss_scale_sigmas;
   options->max_snooping_removals = ceres.robustness.max_snooping_removals;

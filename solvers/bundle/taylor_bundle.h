@@ -184,6 +184,8 @@ struct TaylorBundleOptions {
   LossType tie_loss = LossType::kNone;
   double tie_loss_scale_sigmas = 3.0;
   bool snoop = false;
+  // As BundleRobustnessOptions::snooping_batch: several removals per round's statistics.
+  bool snooping_batch = true;
   int max_snooping_removals = 200;
   // Corrections per round, taken or refused (count). With the corrected partials a block converges
   // in 3-6; the as-printed partials converge linearly and can need several times more.

@@ -256,6 +256,17 @@ TEST(BundleCommand, TaylorSolverSnoopsAndEstimatesAsCeres) {
   }
   EXPECT_NEAR(taylor["summary"]["sigma0"].get<double>(), ceres["summary"]["sigma0"].get<double>(),
               1e-6 * ceres["summary"]["sigma0"].get<double>());
+  // --snooping_batch=false reaches the Taylor path too: one removal per round, the same removals.
+  const std::string single_report = dir + "/taylor_single.json";
+  const CliRun single = RunCli("bundle " + TableArgs(block) +
+                                   " --quiet --snoop --snooping_batch=false --estimate_accuracies "
+                                   "--solver=taylor --report=" + single_report,
+                               dir);
+  ASSERT_EQ(single.exit_code, 0) << single.err;
+  const nlohmann::json one_at_a_time = nlohmann::json::parse(ReadFile(single_report));
+  ASSERT_EQ(one_at_a_time["snooping"].size(), taylor["snooping"].size());
+  EXPECT_GT(one_at_a_time["summary"]["snooping_rounds"].get<int>(),
+            taylor["summary"]["snooping_rounds"].get<int>());
 
   const CliRun refused = RunCli("bundle " + TableArgs(block) + " --quiet --solver=taylor " +
                                     "--cross_validate --report=" + dir + "/cv.json",
