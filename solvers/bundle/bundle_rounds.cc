@@ -11,15 +11,10 @@
 #include <string>
 #include <vector>
 
+#include "core/units.h"
+
 namespace photopose::internal {
 namespace {
-
-std::string FormatNumber3(double value) {
-  std::ostringstream os;
-  os.precision(3);
-  os << value;
-  return os.str();
-}
 
 // Removes one observation found by data snooping: a mark, or the whole prior of a control point,
 // camera position or attitude.
@@ -351,7 +346,7 @@ void ReportEstimatedAccuracies(const RoundChanges& a) {
     } else {
       std::ostringstream message;
       message << "not estimated: the rest of the block checks it too little (redundancy "
-              << FormatNumber3(r) << " < " << FormatNumber3(a.options.statistics.min_variance_redundancy)
+              << FormatSignificant(r, 3) << " < " << FormatSignificant(a.options.statistics.min_variance_redundancy, 3)
               << ")";
       group.estimation_message = message.str();
     }

@@ -18,6 +18,7 @@
 #include "core/parallel.h"
 #include "core/rotation.h"
 #include "core/statistics.h"
+#include "core/units.h"
 #include "cost_functions/exterior_orientation_manifold.h"
 #include "solvers/bundle/internal/inner_constraints.h"
 #include "solvers/bundle/triangulation.h"
@@ -27,13 +28,6 @@ namespace {
 
 constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
 constexpr double kInfinity = std::numeric_limits<double>::infinity();
-
-std::string Format3(double value) {
-  std::ostringstream os;
-  os.precision(3);
-  os << value;
-  return os.str();
-}
 
 }  // namespace
 
@@ -528,7 +522,7 @@ void CalibrationResults(const BundleAdjustmentOptions& options, const Block& blo
           if (b > a && std::abs(calibration.correlation(a, b)) > options.statistics.high_correlation) {
             calibration.high_correlations.push_back(calibration.names[a] + "~" +
                                                     calibration.names[b] + ": " +
-                                                    Format3(calibration.correlation(a, b)));
+                                                    FormatSignificant(calibration.correlation(a, b), 3));
           }
         }
       }
@@ -541,10 +535,10 @@ void CalibrationResults(const BundleAdjustmentOptions& options, const Block& blo
 
 std::string OverfitMessage(const BundleGroupStatistics& group, const char* accuracy) {
   std::ostringstream message;
-  message << EnumName(group.group) << " over-fitted: residual RMS " << Format3(group.ratio)
+  message << EnumName(group.group) << " over-fitted: residual RMS " << FormatSignificant(group.ratio, 3)
           << " of the " << accuracy << " accuracy";
   if (std::isfinite(group.redundancy_share))
-    message << ", redundancy share " << Format3(group.redundancy_share);
+    message << ", redundancy share " << FormatSignificant(group.redundancy_share, 3);
   message << ". The adjustment bends to these priors: too few or too weak tie points, or a "
              "stated accuracy that is too loose.";
   if (group.group == kControlPoints)
