@@ -129,63 +129,67 @@ json GeoreferenceJson(const Block& block, const GeoreferenceResult& g) {
           {"time_seconds", {{"prepare", g.prepare_seconds}, {"evaluate", g.evaluate_seconds}}}};
 }
 
-}  // namespace
-
-json BundleReportJson(const Block& block, const BundleAdjustmentResult& result,
-                      const BundleReportContext& context) {
+// "summary": termination, costs, counts, the datum and the time breakdown.
+void SummaryJson(const Block& block, const BundleAdjustmentResult& result,
+                 const BundleReportContext& context, json* report) {
   const BundleAdjustmentSummary& s = result.summary;
   const BundleAdjustmentOptions& o = context.options;
-  json report;
-  report["summary"] = {{"termination", EnumName(s.termination)},
-                       {"message", s.message},
-                       {"sigma0", Number(s.sigma0)},
-                       {"redundancy", s.redundancy},
-                       {"rounds", s.rounds},
-                       {"iterations", s.iterations},
-                       {"initial_cost", Number(s.initial_cost)},
-                       {"final_cost", Number(s.final_cost)},
-                       {"time_seconds", s.time_seconds},
-                       {"statistics_seconds", s.statistics_seconds},
-                       {"snooping_rounds", s.snooping_rounds},
-                       {"snooping_seconds", s.snooping_seconds},
-                       {"statistics",
-                        {{"covariances", EnumName(o.statistics.covariances)},
-                         {"factorization_seconds", s.factorization_seconds},
-                         {"inversion_seconds", s.inversion_seconds},
-                         {"inverse_entries", s.covariance_entries},
-                         {"memory_bytes", s.covariance_memory_bytes}}},
-                       {"time_breakdown",
-                        {{"read_seconds", context.read_seconds},
-                         {"initialization_seconds", context.initialization_seconds},
-                         {"plan_seconds", s.plan_seconds},
-                         {"setup_seconds", s.plan_seconds + s.problem_build_seconds +
-                                               s.solver_preprocessing_seconds},
-                         {"round_seconds", s.round_seconds},
-                         {"rejection_seconds", s.rejection_seconds},
-                         {"statistics_seconds", s.statistics_seconds},
-                         {"problem_build_seconds", s.problem_build_seconds},
-                         {"solver_preprocessing_seconds", s.solver_preprocessing_seconds},
-                         {"residual_evaluation_seconds", s.residual_evaluation_seconds},
-                         {"jacobian_evaluation_seconds", s.jacobian_evaluation_seconds},
-                         {"linear_solver_seconds", s.linear_solver_seconds},
-                         {"schur_structure", s.schur_structure},
-                         {"solver", EnumName(s.solver)}}},
-                       {"num_images", s.num_images},
-                       {"num_points", s.num_points},
-                       {"num_marks", s.num_marks},
-                       {"num_rejected_marks", s.num_rejected_marks},
-                       {"tie_points_left_out", s.tie_points_left_out},
-                       {"num_images_initialized", context.num_images_initialized},
-                       {"datum", EnumName(s.datum)},
-                       {"datum_description", s.datum_description},
-                       {"covariance_datum", s.covariance_datum}};
+  (*report)["summary"] = {{"termination", EnumName(s.termination)},
+                          {"message", s.message},
+                          {"sigma0", Number(s.sigma0)},
+                          {"redundancy", s.redundancy},
+                          {"rounds", s.rounds},
+                          {"iterations", s.iterations},
+                          {"initial_cost", Number(s.initial_cost)},
+                          {"final_cost", Number(s.final_cost)},
+                          {"time_seconds", s.time_seconds},
+                          {"statistics_seconds", s.statistics_seconds},
+                          {"snooping_rounds", s.snooping_rounds},
+                          {"snooping_seconds", s.snooping_seconds},
+                          {"statistics",
+                           {{"covariances", EnumName(o.statistics.covariances)},
+                            {"factorization_seconds", s.factorization_seconds},
+                            {"inversion_seconds", s.inversion_seconds},
+                            {"inverse_entries", s.covariance_entries},
+                            {"memory_bytes", s.covariance_memory_bytes}}},
+                          {"time_breakdown",
+                           {{"read_seconds", context.read_seconds},
+                            {"initialization_seconds", context.initialization_seconds},
+                            {"plan_seconds", s.plan_seconds},
+                            {"setup_seconds", s.plan_seconds + s.problem_build_seconds +
+                                                  s.solver_preprocessing_seconds},
+                            {"round_seconds", s.round_seconds},
+                            {"rejection_seconds", s.rejection_seconds},
+                            {"statistics_seconds", s.statistics_seconds},
+                            {"problem_build_seconds", s.problem_build_seconds},
+                            {"solver_preprocessing_seconds", s.solver_preprocessing_seconds},
+                            {"residual_evaluation_seconds", s.residual_evaluation_seconds},
+                            {"jacobian_evaluation_seconds", s.jacobian_evaluation_seconds},
+                            {"linear_solver_seconds", s.linear_solver_seconds},
+                            {"schur_structure", s.schur_structure},
+                            {"solver", EnumName(s.solver)}}},
+                          {"num_images", s.num_images},
+                          {"num_points", s.num_points},
+                          {"num_marks", s.num_marks},
+                          {"num_rejected_marks", s.num_rejected_marks},
+                          {"tie_points_left_out", s.tie_points_left_out},
+                          {"num_images_initialized", context.num_images_initialized},
+                          {"datum", EnumName(s.datum)},
+                          {"datum_description", s.datum_description},
+                          {"covariance_datum", s.covariance_datum}};
+}
+
+// "groups": each group of the objective against its stated accuracy.
+void GroupsJson(const Block& block, const BundleAdjustmentResult& result,
+                const BundleReportContext& context, json* report) {
+  const BundleAdjustmentOptions& o = context.options;
   json groups = json::array();
   for (const BundleGroupStatistics& g : result.groups) {
     json group = {{"name", EnumName(g.group)},
                   {"count", g.count},
                   {"unit", g.unit},
-                  {"stated_accuracy", g.num_axes == 2 ? Number(g.stated_accuracy.x())
-                                                      : Vector3(g.stated_accuracy)},
+                  {"stated_accuracy",
+                   g.num_axes == 2 ? Number(g.stated_accuracy.x()) : Vector3(g.stated_accuracy)},
                   {"rms", g.num_axes == 2 ? json::array({Number(g.rms.x()), Number(g.rms.y())})
                                           : Vector3(g.rms)},
                   {"rms_total", Number(g.rms_total)},
@@ -196,16 +200,20 @@ json BundleReportJson(const Block& block, const BundleAdjustmentResult& result,
                   {"num_fixed", g.num_fixed},
                   {"message", g.message}};
     if (o.statistics.estimate_accuracies) {
-      group["estimated_accuracy"] = g.num_axes == 2 ? Number(g.estimated_accuracy.x())
-                                                    : Vector3(g.estimated_accuracy);
+      group["estimated_accuracy"] =
+          g.num_axes == 2 ? Number(g.estimated_accuracy.x()) : Vector3(g.estimated_accuracy);
       group["estimated_accuracy_relative_standard_error"] =
           Number(g.estimated_accuracy_standard_error);
       group["estimation_message"] = g.estimation_message;
     }
     groups.push_back(group);
   }
-  report["groups"] = groups;
+  (*report)["groups"] = groups;
+}
 
+// "control_points", "check_points" and their RMSE per axis.
+void SurveyedPointsJson(const Block& block, const BundleAdjustmentResult& result,
+                        const BundleReportContext& context, json* report) {
   json control = json::array(), check = json::array();
   for (size_t p = 0; p < block.points.size(); ++p) {
     const BlockPoint& point = block.points[p];
@@ -216,25 +224,29 @@ json BundleReportJson(const Block& block, const BundleAdjustmentResult& result,
                 {"num_images", r.num_observations},
                 {"surveyed", point.surveyed_m ? Vector3(*point.surveyed_m) : json(nullptr)},
                 {"error_m", r.error_m ? Vector3(*r.error_m) : json(nullptr)},
-                {"sigma_m", r.has_covariance ? Vector3(r.covariance.diagonal().cwiseSqrt())
-                                             : json(nullptr)},
+                {"sigma_m",
+                 r.has_covariance ? Vector3(r.covariance.diagonal().cwiseSqrt()) : json(nullptr)},
                 {"fixed", IsHeldFixed(point)},
                 {"message", r.message}};
     (point.role == PointRole::kControl ? control : check).push_back(row);
   }
-  report["control_points"] = control;
-  report["check_points"] = check;
-  report["control_rmse_m"] = {{"x", Number(result.control_rmse_m.x())},
-                              {"y", Number(result.control_rmse_m.y())},
-                              {"z", Number(result.control_rmse_m.z())},
-                              {"total", Number(result.control_rmse_total_m)},
-                              {"count", result.num_control_points}};
-  report["check_rmse_m"] = {{"x", Number(result.check_rmse_m.x())},
-                            {"y", Number(result.check_rmse_m.y())},
-                            {"z", Number(result.check_rmse_m.z())},
-                            {"total", Number(result.check_rmse_total_m)},
-                            {"count", result.num_check_points}};
+  (*report)["control_points"] = control;
+  (*report)["check_points"] = check;
+  (*report)["control_rmse_m"] = {{"x", Number(result.control_rmse_m.x())},
+                                 {"y", Number(result.control_rmse_m.y())},
+                                 {"z", Number(result.control_rmse_m.z())},
+                                 {"total", Number(result.control_rmse_total_m)},
+                                 {"count", result.num_control_points}};
+  (*report)["check_rmse_m"] = {{"x", Number(result.check_rmse_m.x())},
+                               {"y", Number(result.check_rmse_m.y())},
+                               {"z", Number(result.check_rmse_m.z())},
+                               {"total", Number(result.check_rmse_total_m)},
+                               {"count", result.num_check_points}};
+}
 
+// "images": each image's pose, its precision and its marks' RMS.
+void ImagesJson(const Block& block, const BundleAdjustmentResult& result,
+                const BundleReportContext& context, json* report) {
   json images = json::array();
   for (size_t i = 0; i < block.images.size(); ++i) {
     const BlockImage& image = block.images[i];
@@ -248,8 +260,9 @@ json BundleReportJson(const Block& block, const BundleAdjustmentResult& result,
                 {"unit", r.unit}};
     if (image.eo) {
       Eigen::Vector3d angles, sigmas;
-      ReportedAngles(block.cameras[image.camera], *image.eo, r.has_covariance ? &r.covariance : nullptr,
-                     context.rotation, &angles, &sigmas);
+      ReportedAngles(block.cameras[image.camera], *image.eo,
+                     r.has_covariance ? &r.covariance : nullptr, context.rotation, &angles,
+                     &sigmas);
       row["pose"] = {{"X", image.eo->parameters[0]},
                      {"Y", image.eo->parameters[1]},
                      {"Z", image.eo->parameters[2]},
@@ -258,18 +271,19 @@ json BundleReportJson(const Block& block, const BundleAdjustmentResult& result,
                      {"kappa_deg", angles[2]},
                      {"convention", EnumName(context.rotation)}};
       if (r.has_covariance) {
-        row["sigma"] = {{"X", std::sqrt(r.covariance(0, 0))},
-                        {"Y", std::sqrt(r.covariance(1, 1))},
-                        {"Z", std::sqrt(r.covariance(2, 2))},
-                        {"omega_deg", Number(sigmas[0])},
-                        {"phi_deg", Number(sigmas[1])},
-                        {"kappa_deg", Number(sigmas[2])}};
+        row["sigma"] = {{"X", std::sqrt(r.covariance(0, 0))}, {"Y", std::sqrt(r.covariance(1, 1))},
+                        {"Z", std::sqrt(r.covariance(2, 2))}, {"omega_deg", Number(sigmas[0])},
+                        {"phi_deg", Number(sigmas[1])},       {"kappa_deg", Number(sigmas[2])}};
       }
     }
     images.push_back(row);
   }
-  report["images"] = images;
+  (*report)["images"] = images;
+}
 
+// "calibration", "weakly_determined", "lever_arm_m".
+void CalibrationJson(const Block& block, const BundleAdjustmentResult& result,
+                     const BundleReportContext& context, json* report) {
   json calibration = json::array();
   for (const BundleCalibrationResult& c : result.calibration) {
     json correlation = json::array();
@@ -290,13 +304,17 @@ json BundleReportJson(const Block& block, const BundleAdjustmentResult& result,
                            {"correlation", correlation},
                            {"high_correlations", c.high_correlations}});
   }
-  report["calibration"] = calibration;
+  (*report)["calibration"] = calibration;
   json weak = json::array();
   for (const BundleWeakParameter& w : result.weakly_determined)
     weak.push_back({{"parameter", w.parameter}, {"sigma_inflation", Number(w.sigma_inflation)}});
-  report["weakly_determined"] = weak;
-  if (result.lever_arm_m) report["lever_arm_m"] = Vector3(*result.lever_arm_m);
+  (*report)["weakly_determined"] = weak;
+  if (result.lever_arm_m) (*report)["lever_arm_m"] = Vector3(*result.lever_arm_m);
+}
 
+// "rejected_marks" and "rejected_check_marks".
+void RejectedJson(const Block& block, const BundleAdjustmentResult& result,
+                  const BundleReportContext& context, json* report) {
   json rejected = json::array();
   for (const BundleRejectedMark& r : result.rejected_marks) {
     const BlockMark& mark = block.marks[r.mark];
@@ -305,7 +323,7 @@ json BundleReportJson(const Block& block, const BundleAdjustmentResult& result,
                         {"round", r.round},
                         {"normalized_residual", Number(r.whitened_residual)}});
   }
-  report["rejected_marks"] = rejected;
+  (*report)["rejected_marks"] = rejected;
   json rejected_check = json::array();
   for (const BundleRejectedCheckMark& r : result.rejected_check_marks) {
     const BlockMark& mark = block.marks[r.mark];
@@ -314,10 +332,14 @@ json BundleReportJson(const Block& block, const BundleAdjustmentResult& result,
                               {"normalized_residual", Number(r.normalized)},
                               {"residual", {Number(r.residual.x()), Number(r.residual.y())}}});
   }
-  report["rejected_check_marks"] = rejected_check;
+  (*report)["rejected_check_marks"] = rejected_check;
+}
 
-  // Diagnostics (observation_diagnostics): the rejected, the uncontrolled and the reliability
-  // per image and control point.
+// "diagnostics" (observation_diagnostics): the rejected, the uncontrolled and the reliability
+// per image and control point.
+void DiagnosticsJson(const Block& block, const BundleAdjustmentResult& result,
+                     const BundleReportContext& context, json* report) {
+  const BundleAdjustmentOptions& o = context.options;
   if (!result.observations.empty()) {
     json flagged = json::array(), uncontrolled = json::array();
     std::vector<double> image_mdb(block.images.size(), 0.0);
@@ -357,19 +379,25 @@ json BundleReportJson(const Block& block, const BundleAdjustmentResult& result,
       if (block.points[p].role != PointRole::kControl) continue;
       per_control.push_back({{"point_id", block.points[p].id}, {"mdb_m", Vector3(control_mdb[p])}});
     }
-    report["diagnostics"] = {{"critical_value", result.critical_value},
-                             {"delta0", result.delta0},
-                             {"alpha", o.statistics.snooping_alpha},
-                             {"alpha_per_observation", result.alpha_per_observation},
-                             {"family_wise", o.statistics.snooping_family_wise},
-                             {"power", o.statistics.snooping_power},
-                             {"num_observations", result.observations.size()},
-                             {"num_uncontrolled", result.num_uncontrolled},
-                             {"rejected", flagged},
-                             {"uncontrolled", uncontrolled},
-                             {"images", per_image},
-                             {"control_points", per_control}};
+    (*report)["diagnostics"] = {{"critical_value", result.critical_value},
+                                {"delta0", result.delta0},
+                                {"alpha", o.statistics.snooping_alpha},
+                                {"alpha_per_observation", result.alpha_per_observation},
+                                {"family_wise", o.statistics.snooping_family_wise},
+                                {"power", o.statistics.snooping_power},
+                                {"num_observations", result.observations.size()},
+                                {"num_uncontrolled", result.num_uncontrolled},
+                                {"rejected", flagged},
+                                {"uncontrolled", uncontrolled},
+                                {"images", per_image},
+                                {"control_points", per_control}};
   }
+}
+
+// "snooping": the data-snooping removals, round by round.
+void SnoopingJson(const Block& block, const BundleAdjustmentResult& result,
+                  const BundleReportContext& context, json* report) {
+  const BundleAdjustmentOptions& o = context.options;
   if (!result.snooping.empty() || o.robustness.snoop) {
     json steps = json::array();
     for (const BundleSnoopingStep& step : result.snooping) {
@@ -380,8 +408,13 @@ json BundleReportJson(const Block& block, const BundleAdjustmentResult& result,
                        {"residual", step.residual},
                        {"round", step.round}});
     }
-    report["snooping"] = steps;
+    (*report)["snooping"] = steps;
   }
+}
+
+// "cross_validation": each control point left out in turn, when run.
+void CrossValidationJson(const Block& block, const BundleAdjustmentResult& result,
+                         const BundleReportContext& context, json* report) {
   if (context.cross_validation != nullptr) {
     const BundleCrossValidationResult& cv = *context.cross_validation;
     json points = json::array();
@@ -394,43 +427,70 @@ json BundleReportJson(const Block& block, const BundleAdjustmentResult& result,
                         {"normalized", Number(p.normalized)},
                         {"stands_out", p.stands_out}});
     }
-    report["cross_validation"] = {{"points", points},
-                                  {"count", cv.count},
-                                  {"rmse_m", {{"x", Number(cv.rmse_m.x())},
-                                              {"y", Number(cv.rmse_m.y())},
-                                              {"z", Number(cv.rmse_m.z())},
-                                              {"total", Number(cv.rmse_total_m)}}},
-                                  {"threshold", cv.threshold},
-                                  {"time_seconds", cv.time_seconds}};
+    (*report)["cross_validation"] = {{"points", points},
+                                     {"count", cv.count},
+                                     {"rmse_m",
+                                      {{"x", Number(cv.rmse_m.x())},
+                                       {"y", Number(cv.rmse_m.y())},
+                                       {"z", Number(cv.rmse_m.z())},
+                                       {"total", Number(cv.rmse_total_m)}}},
+                                     {"threshold", cv.threshold},
+                                     {"time_seconds", cv.time_seconds}};
   }
+}
+
+// "options", "inputs", "outputs", "command_line" and "georeference": how the run was asked for.
+void OptionsJson(const Block& block, const BundleAdjustmentResult& result,
+                 const BundleReportContext& context, json* report) {
+  const BundleAdjustmentOptions& o = context.options;
   const BundleAccuracies& a = o.accuracies;
-  report["options"] = {{"input", context.input_kind},
-                       {"pixel_origin", EnumName(block.pixel_origin)},
-                       {"pixel_rows", EnumName(context.pixel_rows)},
-                       {"rotation", EnumName(context.rotation)},
-                       {"jacobian", EnumName(o.solver.jacobian)},
-                       {"linear_solver", EnumName(o.solver.linear_solver)},
-                       {"tie_accuracy_px", a.tie_px},
-                       {"marker_projection_accuracy_px", a.marker_projection_px},
-                       {"tie_accuracy_film_um", a.tie_film_um},
-                       {"marker_projection_accuracy_film_um", a.marker_projection_film_um},
-                       {"marker_accuracy_m", a.marker_m},
-                       {"camera_accuracy_m", Vector3(a.camera_m)},
-                       {"camera_positions_are_priors", a.camera_positions_are_priors},
-                       {"attitude_accuracy_deg", a.attitude_deg ? json(*a.attitude_deg) : json(nullptr)},
-                       {"lever_arm_m", context.config.lever_arm_m ? Vector3(*context.config.lever_arm_m) : json(nullptr)},
-                       {"estimate_lever_arm", context.config.estimate_lever_arm},
-                       {"calibrate", context.calibrate},
-                       {"rejection_threshold", o.robustness.rejection_threshold},
-                       {"estimate_accuracies", o.statistics.estimate_accuracies},
-                       {"snoop", o.robustness.snoop},
-                       {"snooping_alpha", o.statistics.snooping_alpha},
-                       {"max_iterations", o.solver.max_iterations},
-                       {"num_threads", o.solver.num_threads}};
-  report["inputs"] = context.inputs;
-  report["outputs"] = context.outputs;
-  report["command_line"] = context.command_line;
-  if (context.georeference != nullptr) report["georeference"] = GeoreferenceJson(block, *context.georeference);
+  (*report)["options"] = {
+      {"input", context.input_kind},
+      {"pixel_origin", EnumName(block.pixel_origin)},
+      {"pixel_rows", EnumName(context.pixel_rows)},
+      {"rotation", EnumName(context.rotation)},
+      {"jacobian", EnumName(o.solver.jacobian)},
+      {"linear_solver", EnumName(o.solver.linear_solver)},
+      {"tie_accuracy_px", a.tie_px},
+      {"marker_projection_accuracy_px", a.marker_projection_px},
+      {"tie_accuracy_film_um", a.tie_film_um},
+      {"marker_projection_accuracy_film_um", a.marker_projection_film_um},
+      {"marker_accuracy_m", a.marker_m},
+      {"camera_accuracy_m", Vector3(a.camera_m)},
+      {"camera_positions_are_priors", a.camera_positions_are_priors},
+      {"attitude_accuracy_deg", a.attitude_deg ? json(*a.attitude_deg) : json(nullptr)},
+      {"lever_arm_m",
+       context.config.lever_arm_m ? Vector3(*context.config.lever_arm_m) : json(nullptr)},
+      {"estimate_lever_arm", context.config.estimate_lever_arm},
+      {"calibrate", context.calibrate},
+      {"rejection_threshold", o.robustness.rejection_threshold},
+      {"estimate_accuracies", o.statistics.estimate_accuracies},
+      {"snoop", o.robustness.snoop},
+      {"snooping_alpha", o.statistics.snooping_alpha},
+      {"max_iterations", o.solver.max_iterations},
+      {"num_threads", o.solver.num_threads}};
+  (*report)["inputs"] = context.inputs;
+  (*report)["outputs"] = context.outputs;
+  (*report)["command_line"] = context.command_line;
+  if (context.georeference != nullptr)
+    (*report)["georeference"] = GeoreferenceJson(block, *context.georeference);
+}
+
+}  // namespace
+
+json BundleReportJson(const Block& block, const BundleAdjustmentResult& result,
+                      const BundleReportContext& context) {
+  json report;
+  SummaryJson(block, result, context, &report);
+  GroupsJson(block, result, context, &report);
+  SurveyedPointsJson(block, result, context, &report);
+  ImagesJson(block, result, context, &report);
+  CalibrationJson(block, result, context, &report);
+  RejectedJson(block, result, context, &report);
+  DiagnosticsJson(block, result, context, &report);
+  SnoopingJson(block, result, context, &report);
+  CrossValidationJson(block, result, context, &report);
+  OptionsJson(block, result, context, &report);
   return report;
 }
 
