@@ -344,6 +344,18 @@ TEST(CompareCommand, BlockDatasetModeComparesTheSolversOnOneBlock) {
                         dir);
   EXPECT_EQ(run.exit_code, 0) << run.err;
   EXPECT_NE(run.out.find("ceres_analytic/none"), std::string::npos) << run.out;
+  // Without control points and frames no image can be oriented: each named, then one closing line
+  // saying nothing was written.
+  run = testing::RunCli("compare --scenarios=block --losses=none --cameras=" + b +
+                            "/cameras.csv --marks=" + b + "/marks.csv --csv=" + dir + "/none.csv",
+                        dir);
+  EXPECT_EQ(run.exit_code, 1) << run.err;
+  EXPECT_NE(run.err.find(": not oriented: "), std::string::npos) << run.err;
+  EXPECT_NE(run.err.find("photopose compare: 18 images could not be oriented; nothing compared, "
+                         "nothing written\n"),
+            std::string::npos)
+      << run.err;
+  EXPECT_FALSE(std::filesystem::exists(dir + "/none.csv"));
 }
 
 }  // namespace
