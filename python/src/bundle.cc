@@ -371,7 +371,7 @@ arm) with the reason. Raises photopose.Error for invalid options or a block the
 adjustment cannot use; a failed or unconverged adjustment is result.summary.termination with the
 block unchanged. progress(info: BundleIterationInfo) is called after every iteration (from the
 adjusting thread, with the GIL); returning False stops the adjustment after that iteration
-(result.summary.termination 'cancelled', the block unchanged; the Taylor solvers ignore it); an
+(result.summary.termination 'cancelled', the block unchanged; the Taylor solvers too); an
 exception it raises stops it too and is raised when the call returns.)doc");
 }
 

@@ -172,8 +172,8 @@ struct PythonBlock {
 // adjustments, a ResectionProgress from resect_images; anything else is a TypeError), called from
 // the library's threads with the GIL taken for the call alone. The first exception it raises stops
 // further calls and is raised again when the call returns. It cancels the call, as the callback
-// returning False does: resect_images' images not yet started, the Ceres adjustment after the
-// iteration (termination "cancelled"; the Taylor solvers ignore it and run to their end).
+// returning False does: resect_images' images not yet started, the adjustment (Ceres or Taylor)
+// after the iteration (termination "cancelled").
 class ProgressRelay {
  public:
   // `takes` names what the callback receives, for the TypeError ("a BundleIterationInfo").

@@ -163,7 +163,8 @@ def test_progress_exception_is_raised_after_the_adjustment():
     np.testing.assert_array_equal(block.image_parameters, start)  # the adjustment stopped there
 
 
-def test_progress_returning_false_cancels_the_adjustment():
+@pytest.mark.parametrize("solver, first_iteration", [("ceres", 0), ("taylor", 1)])
+def test_progress_returning_false_cancels_the_adjustment(solver, first_iteration):
     block, _ = pp.simulate_block(seed=4, num_lines=2, images_per_line=5)
     start = block.image_parameters.copy()
     calls = []
@@ -172,13 +173,14 @@ def test_progress_returning_false_cancels_the_adjustment():
         calls.append(info.iteration)
         return len(calls) < 2  # None (no return) or True goes on; False stops
 
-    result = pp.bundle_adjust(block, progress=stop_after_two)
+    result = pp.bundle_adjust(block, progress=stop_after_two, solver=solver)
     assert result.summary.termination == "cancelled"
-    assert "cancelled by the progress hook" in result.summary.message
-    assert calls == [0, 1]
+    assert "cancelled by the progress hook after iteration" in result.summary.message
+    assert calls == [first_iteration, first_iteration + 1]
     np.testing.assert_array_equal(block.image_parameters, start)
     # The same block adjusted without stopping: a callback returning None goes on.
-    assert pp.bundle_adjust(block, progress=lambda info: None).summary.termination == "converged"
+    assert (pp.bundle_adjust(block, progress=lambda info: None, solver=solver).summary.termination
+            == "converged")
 
 
 def test_bundle_adjust_releases_the_gil(assert_releases_gil):

@@ -24,13 +24,28 @@ Status ResectionInputFromKnownPoints(const Block& block, int image, ResectionInp
 
 }  // namespace
 
+namespace {
+
+std::string ImagesPart(const BlockInitializationSummary& s) {
+  return FormatCount(s.images_given, "image") + " with initial values, " +
+         std::to_string(s.images_resected) + " resected, " +
+         std::to_string(s.not_oriented.size()) + " not oriented";
+}
+
+}  // namespace
+
+std::string BlockInitializationSummary::ImagesReport() const {
+  return ImagesPart(*this) + "; " + FormatCount(rounds, "round");
+}
+
+std::string BlockInitializationSummary::TiePointsReport() const {
+  return FormatCount(points_given, "tie point") + " with coordinates, " +
+         std::to_string(points_triangulated) + " intersected, " +
+         std::to_string(points_not_triangulated) + " not";
+}
+
 std::string BlockInitializationSummary::BriefReport() const {
-  std::ostringstream os;
-  os << FormatCount(images_given, "image") << " with initial values, " << images_resected
-     << " resected, " << not_oriented.size() << " not oriented; "
-     << FormatCount(points_given, "tie point") << " with coordinates, " << points_triangulated
-     << " intersected, " << points_not_triangulated << " not; " << FormatCount(rounds, "round");
-  return os.str();
+  return ImagesPart(*this) + "; " + TiePointsReport() + "; " + FormatCount(rounds, "round");
 }
 
 Status InitializeBlock(const BlockInitializationOptions& options, Block* block,

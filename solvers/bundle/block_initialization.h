@@ -51,6 +51,12 @@ struct BlockInitializationSummary {
   std::vector<std::pair<int, std::string>> not_oriented;
   // Tie points left without coordinates (too few rays, weak intersection, misfit).
   int points_not_triangulated = 0;
+  // "12 images with initial values, 3 resected, 0 not oriented; 2 rounds".
+  std::string ImagesReport() const;
+  // "120 tie points with coordinates, 40 intersected, 1 not".
+  std::string TiePointsReport() const;
+  // Both in one line: "12 images with initial values, 3 resected, 0 not oriented; 120 tie points
+  // with coordinates, 40 intersected, 1 not; 2 rounds".
   std::string BriefReport() const;
 };
 

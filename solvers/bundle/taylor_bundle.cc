@@ -497,7 +497,11 @@ SolverTermination RunRound(const Context& ctx, int round, bool free_gauge, Layou
       info.sigma0 = redundancy > 0 ? std::sqrt(normal->weighted_ssr / redundancy) : kNaN;
       info.step_norm = std::sqrt(step_squared);
       info.elapsed_seconds = SecondsSince(ctx.start);
-      options.progress(info);
+      info.free_gauge = free_gauge;
+      if (!options.progress(info)) {
+        *message = "cancelled by the progress hook after iteration " + std::to_string(iteration);
+        return SolverTermination::kCancelled;
+      }
     }
     if (converged) {
       // The tolerances, in fixed notation (the corrections themselves are below them and would
@@ -539,9 +543,11 @@ void SummarizeRound(const Block& block, const Plan& plan, const Layout& layout, 
 // (internal::MoveToRelativeGauge), where the round goes on from the moved state. When the free
 // solve fails or no similarity reaches the gauge, *state is left at the start and the round
 // solves in the gauge from there. The free solve's structures are freed before the round builds
-// its own. Returns the free solve's iterations.
+// its own. Returns the free solve's iterations; *ended is how the free solve ended, and *message
+// says why when the progress hook cancelled it.
 int SolveInFreeGaugeFirst(const Context& ctx, Plan* plan, State* state,
-                          TaylorBundleResult* result) {
+                          TaylorBundleResult* result, SolverTermination* ended,
+                          std::string* message) {
   const int first = plan->relative_fixed_image;
   const int second = plan->relative_scale_image;
   const int axis = plan->relative_scale_axis;
@@ -561,10 +567,10 @@ int SolveInFreeGaugeFirst(const Context& ctx, Plan* plan, State* state,
     Reduction reduction;
     reduction.solver = ctx.options.linear_solver;
     reduction.num_threads = ctx.num_threads;
-    std::string message;
     type = RunRound(ctx, 1, /*free_gauge=*/true, &layout, state, &normal, &reduction, result,
-                    &message);
+                    message);
   }
+  *ended = type;
   plan->image_constant[first] = held_first;
   plan->image_fixed[second][axis] = held_axis;
   if (type != SolverTermination::kConverged ||
@@ -1010,12 +1016,20 @@ Status TaylorBundleAdjust(const TaylorBundleOptions& options,
   bool marks_removed_only = false;
   for (int round = 1;; ++round) {
     const Clock::time_point round_start = Clock::now();
+    SolverTermination free_ended = SolverTermination::kConverged;
+    std::string free_message;
     if (round == 1 && plan.datum == BundleDatum::kRelative &&
         options.free_gauge_for_relative_blocks &&
         options.damping == TaylorDamping::kLevenbergMarquardt)
-      summary.free_gauge_iterations = SolveInFreeGaugeFirst(context, &plan, &state, result);
+      summary.free_gauge_iterations =
+          SolveInFreeGaugeFirst(context, &plan, &state, result, &free_ended, &free_message);
     BuildLayout(*block, plan, &layout);
     SummarizeRound(*block, plan, layout, round, &summary);
+    if (free_ended == SolverTermination::kCancelled) {
+      summary.round_seconds.push_back(SecondsSince(round_start));
+      summary.sigma0 = kNaN;
+      return finish(free_ended, "round 1: " + free_message + " (free gauge)");
+    }
     reduction = std::make_unique<Reduction>();
     reduction->solver = options.linear_solver;
     reduction->num_threads = context.num_threads;

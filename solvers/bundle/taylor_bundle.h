@@ -213,8 +213,11 @@ struct TaylorBundleOptions {
   // reliability, check points. Units and limits as in BundleStatisticsOptions.
   BundleStatisticsOptions statistics;
   // Called after every Gauss-Newton correction (may be empty); the fields as BundleAdjust fills
-  // them (round, iteration, cost, sigma0, step_norm = |d| over all unknowns, elapsed).
-  std::function<void(const BundleIterationInfo&)> progress;
+  // them (round, iteration, cost, sigma0, step_norm = |d| over all unknowns, elapsed, free_gauge).
+  // Returning false stops the adjustment after that correction, as BundleAdjust's hook does: the
+  // summary's termination is kCancelled ("round R: cancelled by the progress hook after iteration
+  // N") and the block is left as it was given.
+  std::function<bool(const BundleIterationInfo&)> progress;
 
   bool IsValid(std::string* why) const;
 };

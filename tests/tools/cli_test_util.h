@@ -4,8 +4,13 @@
 #include <gtest/gtest.h>
 
 #include "tests/support/temp_dir.h"
+#include <fcntl.h>
+#include <poll.h>
+#include <signal.h>
 #include <sys/wait.h>
+#include <unistd.h>
 
+#include <chrono>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
@@ -64,6 +69,124 @@ inline CliRun RunCliWith(const std::string& arguments, const std::string& dir,
 
 inline CliRun RunCli(const std::string& arguments, const std::string& dir) {
   return RunCliWith(arguments, dir, CliOptions());
+}
+
+// The executable run in the background, for tests that signal it while it works: stdin from
+// /dev/null, stdout to dir/cli_stdout.txt, stderr read through a pipe as it comes.
+class BackgroundCli {
+ public:
+  BackgroundCli(const std::vector<std::string>& arguments, const std::string& dir) {
+    int pipe_fds[2];
+    if (pipe(pipe_fds) != 0) return;
+    const std::string cli = CliPath(), out = dir + "/cli_stdout.txt";
+    std::vector<std::string> args = {cli};
+    args.insert(args.end(), arguments.begin(), arguments.end());
+    std::vector<char*> argv;
+    for (std::string& arg : args) argv.push_back(arg.data());
+    argv.push_back(nullptr);
+    pid_ = fork();
+    if (pid_ == 0) {
+      const int in = open("/dev/null", O_RDONLY);
+      const int stdout_fd = open(out.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
+      if (in < 0 || stdout_fd < 0) _exit(127);
+      dup2(in, 0);
+      dup2(stdout_fd, 1);
+      dup2(pipe_fds[1], 2);
+      close(pipe_fds[0]);
+      // As from a terminal: the test may run where SIGINT is ignored (a script's background job),
+      // which the executable would inherit and keep.
+      signal(SIGINT, SIG_DFL);
+      signal(SIGTERM, SIG_DFL);
+      execv(cli.c_str(), argv.data());
+      _exit(127);
+    }
+    close(pipe_fds[1]);
+    err_fd_ = pipe_fds[0];
+  }
+  BackgroundCli(const BackgroundCli&) = delete;
+  BackgroundCli& operator=(const BackgroundCli&) = delete;
+  ~BackgroundCli() {
+    if (pid_ > 0 && !reaped_) {
+      kill(pid_, SIGKILL);
+      waitpid(pid_, nullptr, 0);
+    }
+    if (err_fd_ >= 0) close(err_fd_);
+  }
+
+  bool started() const { return pid_ > 0 && err_fd_ >= 0; }
+  // stderr as read so far.
+  const std::string& err() const { return err_; }
+
+  // Reads stderr until a complete line containing `text` has arrived (true), or stderr ends or
+  // `timeout_seconds` pass (false).
+  bool WaitForLine(const std::string& text, int timeout_seconds) {
+    const auto end = std::chrono::steady_clock::now() + std::chrono::seconds(timeout_seconds);
+    for (;;) {
+      for (size_t at = err_.find(text); at != std::string::npos; at = err_.find(text, at + 1))
+        if (err_.find('\n', at) != std::string::npos) return true;
+      if (!ReadSome(end)) return false;
+    }
+  }
+
+  void Signal(int signal_number) { kill(pid_, signal_number); }
+
+  // Reads the rest of stderr and reaps the process; after `timeout_seconds` it is killed
+  // (SIGKILL). Returns the wait status.
+  int Wait(int timeout_seconds) {
+    const auto end = std::chrono::steady_clock::now() + std::chrono::seconds(timeout_seconds);
+    while (ReadSome(end)) {
+    }
+    if (std::chrono::steady_clock::now() >= end) kill(pid_, SIGKILL);
+    int status = 0;
+    waitpid(pid_, &status, 0);
+    reaped_ = true;
+    return status;
+  }
+
+ private:
+  // One read of stderr, waiting until `end`; false at its end or at the timeout.
+  bool ReadSome(std::chrono::steady_clock::time_point end) {
+    const auto left = std::chrono::duration_cast<std::chrono::milliseconds>(
+        end - std::chrono::steady_clock::now());
+    if (left.count() <= 0) return false;
+    pollfd poll_fd = {err_fd_, POLLIN, 0};
+    if (poll(&poll_fd, 1, static_cast<int>(left.count())) <= 0) return false;
+    char buffer[4096];
+    const ssize_t n = read(err_fd_, buffer, sizeof(buffer));
+    if (n <= 0) return false;
+    err_.append(buffer, static_cast<size_t>(n));
+    return true;
+  }
+
+  pid_t pid_ = -1;
+  int err_fd_ = -1;
+  bool reaped_ = false;
+  std::string err_;
+};
+
+// Runs `photopose <arguments>` in the background, sends it `signal_number` once a complete stderr
+// line containing `line` has come, and waits for its end (killed after `timeout_seconds` of either
+// wait). exit_code is -1 unless it exited (a crash, a signal's default action, never started);
+// a run that never printed `line` fails the test.
+inline CliRun RunCliAndSignal(const std::vector<std::string>& arguments, const std::string& dir,
+                              const std::string& line, int signal_number,
+                              int timeout_seconds = 120) {
+  BackgroundCli background(arguments, dir);
+  CliRun run;
+  if (!background.started()) {
+    ADD_FAILURE() << "photopose did not start";
+    return run;
+  }
+  if (background.WaitForLine(line, timeout_seconds)) {
+    background.Signal(signal_number);
+  } else {
+    ADD_FAILURE() << "no line '" << line << "' on stderr";
+  }
+  const int status = background.Wait(timeout_seconds);
+  run.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+  run.out = ReadFile(dir + "/cli_stdout.txt");
+  run.err = background.err();
+  return run;
 }
 
 // The first line of a text (without its line end).

@@ -105,8 +105,10 @@ constexpr char kUsage[] =
     "Minimises reprojection errors^2 / tie accuracy^2 + control residuals^2 / marker accuracy^2 +\n"
     "camera position residuals^2 / camera accuracy^2 (Metashape's reference settings) and reports,\n"
     "per group, whether the block bends to its priors (over-fitting). Images without initial values\n"
-    "are oriented by resection and the tie points triangulated first. Exit status: 0 converged,\n"
-    "1 not converged or some image could not be oriented (each named), 2 bad input or usage.\n";
+    "are oriented by resection and the tie points triangulated first. Ctrl-C (SIGINT) or SIGTERM\n"
+    "cancels the run after the current iteration: nothing is written, exit status 130 or 143\n"
+    "(docs/cli.md). Exit status: 0 converged, 1 not converged or some image could not be oriented\n"
+    "(each named), 2 bad input or usage.\n";
 
 const CommandFlags& BundleFlags() {
   static const CommandFlags* const kFlags = new CommandFlags{
@@ -257,7 +259,8 @@ constexpr size_t kMaxProgressLine = 119;
 // B s"), "  REJECTED" for a step not taken, "  quality 1.00" (the step's), "  radius 30000" (the
 // trust region's).
 // Numbers through core/units.h: fixed notation, never an exponent.
-// Never cancels (returns true): the CLI has no way to ask for it.
+// Returns false (the adjustment stops after this iteration) once SIGINT or SIGTERM asked the run
+// to stop (CancelOnSignals).
 bool PrintProgress(const BundleIterationInfo& info) {
   char iteration[16];
   std::snprintf(iteration, sizeof(iteration), "%3d", info.iteration);
@@ -279,8 +282,11 @@ bool PrintProgress(const BundleIterationInfo& info) {
     }
   }
   std::cerr << line + "\n";
-  return true;
+  return !CancelRequested();
 }
+
+// The hook of --quiet: no line, only the cancellation.
+bool CancelWhenAsked(const BundleIterationInfo&) { return !CancelRequested(); }
 
 // The flags -> the options (accuracies, robustness, statistics, solver), the lever arm of the
 // config, the --calibrate names and the block solver.
@@ -329,7 +335,7 @@ int OptionsFromFlags(const char* command, BundleRun* run) {
   if (FLAGS_bundle_relative_gauge != "free" && FLAGS_bundle_relative_gauge != "fixed")
     return BadInput(command, "--relative_gauge must be free or fixed, not '" + FLAGS_bundle_relative_gauge + "'");
   solver.free_gauge_for_relative_blocks = FLAGS_bundle_relative_gauge == "free";
-  if (!FLAGS_bundle_quiet) solver.progress = PrintProgress;
+  solver.progress = FLAGS_bundle_quiet ? CancelWhenAsked : PrintProgress;
   if (const Status valid = Validate(options); !valid.ok()) return BadInput(command, valid.message());
   for (const std::string& name : SplitCommaList(FLAGS_bundle_calibrate))
     if (!name.empty()) run->calibrate.push_back(name);
@@ -655,7 +661,11 @@ int InitializeBundleBlock(const char* command, BundleRun* run) {
       return kExitSomeFailed;
     }
   }
-  if (!FLAGS_bundle_quiet) std::cerr << "photopose bundle: initial values: " << initialization.BriefReport() << "\n";
+  // Two lines, each within kMaxProgressLine for counts up to six digits.
+  if (!FLAGS_bundle_quiet) {
+    std::cerr << "photopose bundle: initial values: " << initialization.ImagesReport() << "\n"
+              << "photopose bundle: initial values: " << initialization.TiePointsReport() << "\n";
+  }
   return kGoOn;
 }
 
@@ -708,6 +718,7 @@ int CheckSigma0(const char* command, BundleRun* run) {
     Block block = run->block;
     const Status again = BundleAdjustWithSolver(run->solver, search, run->config, &block, &searched,
                                                 nullptr, run->taylor_damping);
+    if (CancelRequested()) return kGoOn;  // the caller reports it
     if (again.ok() && searched.summary.IsSolutionUsable()) {
       run->block = std::move(block);
       result = std::move(searched);
@@ -764,9 +775,11 @@ int AdjustBundleBlock(const char* command, BundleRun* run) {
     if (!writable.ok()) return BadInput(command, "--out_colmap: " + writable.message());
   }
   const Status adjusted = BundleAdjustWithSolver(run->solver, run->options, run->config, &run->block, &result, nullptr, run->taylor_damping);
+  if (CancelRequested()) return ReportCancelled(command, "during the adjustment");
   if (!adjusted.ok()) return BadInput(command, adjusted.message());
   const int checked = CheckSigma0(command, run);
   if (checked != kGoOn) return checked;
+  if (CancelRequested()) return ReportCancelled(command, "during the search for gross errors");
   if (run->tables && result.summary.datum == BundleDatum::kRelative) {
     return BadInput(command, "no datum: the block has no control points and no camera positions, so it has no ground coordinates to write; give --points with control points or --frames with camera positions");
   }
@@ -776,6 +789,7 @@ int AdjustBundleBlock(const char* command, BundleRun* run) {
   }
   if (result.summary.IsSolutionUsable() && FLAGS_bundle_cross_validate) {
     const Status cv = CrossValidateControlPoints(run->options, run->config, run->block, result, FLAGS_bundle_threads, &run->cross_validation);
+    if (CancelRequested()) return ReportCancelled(command, "during the cross-validation");
     if (!cv.ok()) return BadInput(command, cv.message());
     run->context.cross_validation = &run->cross_validation;
   }
@@ -858,7 +872,7 @@ Status WriteBundleOutputs(const BundleRun& run, bool usable) {
       }
     }
   }
-  if (status.ok()) status = final_outputs.Commit();
+  if (status.ok()) status = CommitUnlessCancelled(&final_outputs);
   return status;
 }
 
@@ -911,12 +925,14 @@ int RunBundle(int argc, char** argv) {
   run.context.command_line = "photopose bundle";
   for (int i = 0; i < argc; ++i) run.context.command_line += std::string(" ") + argv[i];
 
+  CancelOnSignals();
   OutputFiles outputs;
   int code = CheckInputChoice(kCommand, &run);
   if (code == kGoOn) code = OptionsFromFlags(kCommand, &run);
   if (code == kGoOn) code = DeclareFiles(kCommand, parsed, &run, &outputs);
   const auto read_start = std::chrono::steady_clock::now();
   if (code == kGoOn) code = ReadBundleBlock(kCommand, &run);
+  if (code == kGoOn && CancelRequested()) return ReportCancelled(kCommand, "while reading the block");
   if (code != kGoOn) return code;
   run.context.read_seconds = SecondsSince(read_start);
   {
@@ -924,9 +940,11 @@ int RunBundle(int argc, char** argv) {
     const auto initialization_start = std::chrono::steady_clock::now();
     code = InitializeBundleBlock(kCommand, &run);
     run.context.initialization_seconds = SecondsSince(initialization_start);
+    if (code == kGoOn && CancelRequested()) return ReportCancelled(kCommand, "while computing the initial values");
     if (code == kGoOn) code = AdjustBundleBlock(kCommand, &run);
     if (code != kGoOn) return code;
   }
+  if (CancelRequested()) return ReportCancelled(kCommand, "after the adjustment");
   for (const auto& [label, path] : run.written) run.context.outputs.push_back(path);
   run.context.options = run.options;
   if (run.georeference) run.context.georeference = &run.georeferenced;
@@ -941,6 +959,7 @@ int RunBundle(int argc, char** argv) {
   outputs.Abort();
   const auto write_start = std::chrono::steady_clock::now();
   const Status written = WriteBundleOutputs(run, usable);
+  if (CancelRequested() && !written.ok()) return ReportCancelled(kCommand, "before writing");
   if (!written.ok()) return BadInput(kCommand, written.message());
   const double write_seconds = SecondsSince(write_start);
   if (!FLAGS_bundle_quiet) std::fprintf(stderr, "photopose bundle: outputs written in %.3f s\n", write_seconds);

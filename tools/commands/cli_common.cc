@@ -1,6 +1,7 @@
 #include "tools/commands/cli_common.h"
 
 #include <gflags/gflags.h>
+#include <signal.h>
 #include <sys/stat.h>
 
 #include <algorithm>
@@ -8,6 +9,7 @@
 #include <cmath>
 #include <cstdio>
 #include <iostream>
+#include <iterator>
 #include <sstream>
 #include <string_view>
 
@@ -17,6 +19,48 @@ namespace photopose::cli {
 namespace {
 
 std::atomic<bool> g_solving{false};
+
+// The signal that asked the run to stop (0: none). Written by the signal handler, read by the
+// progress hooks on any thread: a lock-free atomic is async-signal-safe (C++17 [support.signal]).
+std::atomic<int> g_cancel_signal{0};
+static_assert(std::atomic<int>::is_always_lock_free,
+              "the cancellation flag is written by a signal handler");
+
+void SetAction(int signal_number, void (*handler)(int)) {
+  struct sigaction action = {};
+  action.sa_handler = handler;
+  sigemptyset(&action.sa_mask);
+  // Both signals blocked while the handler runs; interrupted reads and writes restart.
+  sigaddset(&action.sa_mask, SIGINT);
+  sigaddset(&action.sa_mask, SIGTERM);
+  action.sa_flags = SA_RESTART;
+  sigaction(signal_number, &action, nullptr);
+}
+
+// The signals CancelOnSignals handles: SIGINT and SIGTERM, unless the process started with one of
+// them ignored. Written before the handlers are installed, only read by them.
+constexpr int kCancelSignals[] = {SIGINT, SIGTERM};
+bool g_handled[std::size(kCancelSignals)] = {};
+
+// The first SIGINT or SIGTERM: recorded, and the signals handled get their default action back,
+// so that a second one ends the process (sigaction is async-signal-safe).
+extern "C" void OnCancelSignal(int signal_number) {
+  int none = 0;
+  g_cancel_signal.compare_exchange_strong(none, signal_number);
+  for (size_t k = 0; k < std::size(kCancelSignals); ++k)
+    if (g_handled[k]) SetAction(kCancelSignals[k], SIG_DFL);
+}
+
+const char* SignalName(int signal_number) {
+  switch (signal_number) {
+    case SIGINT:
+      return "SIGINT";
+    case SIGTERM:
+      return "SIGTERM";
+    default:
+      return "a signal";
+  }
+}
 
 bool IsHelp(const std::string& arg) {
   return arg == "--help" || arg == "-h" || arg == "--helpfull" || arg == "-help";
@@ -317,6 +361,37 @@ void ProgressLine::operator()(size_t done, size_t total) {
   if (!last && done > 0)
     *out_ << ", about " << static_cast<long>(elapsed * (total - done) / done + 0.5) << " s left";
   *out_ << "\n";
+}
+
+void CancelOnSignals() {
+  // A signal ignored from the start stays ignored: a background job of a script is meant to be
+  // immune to Ctrl-C (POSIX shells start it with SIGINT ignored).
+  for (size_t k = 0; k < std::size(kCancelSignals); ++k) {
+    struct sigaction current = {};
+    g_handled[k] = sigaction(kCancelSignals[k], nullptr, &current) != 0 ||
+                   current.sa_handler != SIG_IGN;
+  }
+  for (size_t k = 0; k < std::size(kCancelSignals); ++k)
+    if (g_handled[k]) SetAction(kCancelSignals[k], &OnCancelSignal);
+}
+
+bool CancelRequested() { return g_cancel_signal.load() != 0; }
+
+int CancelledExitCode(int signal_number) { return 128 + signal_number; }
+
+int ReportCancelled(const std::string& command, const std::string& when) {
+  const int signal_number = g_cancel_signal.load();
+  std::cerr << "photopose " << command << ": cancelled by " << SignalName(signal_number)
+            << (when.empty() ? "" : " ") << when << "; nothing written\n";
+  return CancelledExitCode(signal_number);
+}
+
+Status CommitUnlessCancelled(OutputFiles* outputs) {
+  if (CancelRequested()) {
+    outputs->Abort();
+    return Status::Error("cancelled before the outputs were written");
+  }
+  return outputs->Commit();
 }
 
 void SetSolving(bool solving) { g_solving = solving; }

@@ -13,6 +13,7 @@
 #include <vector>
 
 #include "core/enum_names.h"
+#include "core/io/output_files.h"
 #include "core/status.h"
 
 namespace photopose::cli {
@@ -135,6 +136,28 @@ class ProgressLine {
   double next_seconds_;  // when the next line is due (s since start_)
   bool printed_ = false;
 };
+
+// Cancellation by SIGINT (Ctrl-C) and SIGTERM (docs/cli.md, "Cancelling a run"). A command whose
+// long steps have progress hooks calls CancelOnSignals() once, before its work: the first SIGINT or
+// SIGTERM then only records the signal in a lock-free atomic that the hooks read (CancelRequested)
+// and gives both signals back their default action, so that a second one ends the process at once.
+// The command stops at the next hook (or at the end of a step without one), writes nothing (no
+// output replaced, no temporary left) and returns ReportCancelled(). A command that does not call
+// CancelOnSignals keeps the default action: a signal ends it at once. A signal the process started
+// with ignored (SIGINT in a script's background job) stays ignored.
+void CancelOnSignals();
+// Whether a signal asked the run to stop (async-signal-safe, any thread).
+bool CancelRequested();
+// Prints "photopose <command>: cancelled by SIGINT <when>; nothing written" on stderr (one line;
+// `when` may be empty) and returns the exit status of the signal: 128 + its number, 130 for
+// SIGINT and 143 for SIGTERM, as a shell reports a process that the signal ended.
+int ReportCancelled(const std::string& command, const std::string& when);
+// Commits `outputs` unless a signal asked the run to stop, in which case every temporary is
+// removed, nothing is written and the status is an error (the caller reports the cancellation).
+// A signal that arrives during the renames themselves is too late: the run ends as written.
+Status CommitUnlessCancelled(OutputFiles* outputs);
+// The exit status of a cancelled run (128 + the signal's number), for tests.
+int CancelledExitCode(int signal_number);
 
 // Marks the run as solving for its lifetime.
 class ScopedSolving {

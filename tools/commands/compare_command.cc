@@ -181,7 +181,8 @@ constexpr char kUsage[] =
     "      [--reference=frames.csv] [--rotation=rxryrz|opk|pok] [--csv=F] [--html=F]\n"
     "  photopose compare --cameras=C.csv --gcp_list=gcp_list.txt ...\n\n"
     "Exit status: 0 the comparison ran (solver failures are results, shown in the tables), 2 bad\n"
-    "input or usage. docs/comparison.md explains every column.\n";
+    "input or usage; Ctrl-C (SIGINT) or SIGTERM cancels the run: nothing is written, 130 or 143\n"
+    "(docs/cli.md). docs/comparison.md explains every column.\n";
 
 // The user's flag names that belong to one mode only.
 const char* const kMonteCarloFlags[] = {"scenarios",      "noise_px",     "outlier_fractions",
@@ -330,16 +331,20 @@ Status WriteOutputs(const std::string& csv, const std::string& html,
         {FLAGS_compare_markdown, markdown}}) {
     if (!path.empty()) PHOTOPOSE_RETURN_IF_ERROR(outputs->Stage(path, contents));
   }
-  return outputs->Commit();
+  return CommitUnlessCancelled(outputs);
 }
 
 // Runs one comparison engine (RunMonteCarlo, RunDatasetComparison, RunBlockComparison) as the
-// solving phase of the run, with a progress line on stderr counting `items`.
+// solving phase of the run, with a progress line on stderr counting `items`; SIGINT or SIGTERM
+// stops it at the hook's next call (the caller reports it: FailedOrCancelled).
 template <typename Options, typename Result>
 Status RunWithProgress(const char* items, Status (*run)(const Options&, Result*), Options* options,
                        Result* result) {
   ProgressLine progress("compare", items);
-  options->progress = [&progress](size_t done, size_t total) { progress(done, total); };
+  options->progress = [&progress](size_t done, size_t total) {
+    progress(done, total);
+    return !CancelRequested();
+  };
   Status status;
   {
     const ScopedSolving solving;
@@ -347,6 +352,13 @@ Status RunWithProgress(const char* items, Status (*run)(const Options&, Result*)
   }
   options->progress = nullptr;  // `progress` ends here
   return status;
+}
+
+// The end of a run whose step failed or was cancelled by a signal: the one line and exit status
+// of either.
+int FailedOrCancelled(const Status& status, const std::string& when) {
+  if (CancelRequested()) return ReportCancelled(kCommand, when);
+  return BadInput(kCommand, status.message());
 }
 
 // Prints the tables (and the notes under them) on stdout, then writes every requested output.
@@ -450,11 +462,11 @@ int RunMonteCarloMode(const std::vector<SolverVariant>& solvers, const Resection
 
   MonteCarloResult result;
   const Status status = RunWithProgress("trials", &RunMonteCarlo, &options, &result);
-  if (!status.ok()) return BadInput(kCommand, status.message());
+  if (!status.ok() || CancelRequested()) return FailedOrCancelled(status, "while comparing");
   const Status written =
       PrintAndWrite(MonteCarloTables(options, result), MonteCarloNotes(options),
                     MonteCarloCsv(result), MonteCarloHtml(options, result, command_line), &outputs);
-  if (!written.ok()) return BadInput(kCommand, written.message());
+  if (!written.ok()) return FailedOrCancelled(written, "before writing");
   PrintSweepSummary(static_cast<long long>(result.settings.size()), options.trials, "trial",
                     static_cast<long long>(result.solver_names.size()), result.wall_seconds);
   return kExitSuccess;
@@ -502,10 +514,10 @@ int RunDatasetMode(const std::vector<SolverVariant>& solvers, const ResectionOpt
 
   DatasetComparisonResult result;
   const Status status = RunWithProgress("solvers", &RunDatasetComparison, &options, &result);
-  if (!status.ok()) return BadInput(kCommand, status.message());
+  if (!status.ok() || CancelRequested()) return FailedOrCancelled(status, "while comparing");
   const Status written = PrintAndWrite(DatasetTables(result), {}, DatasetCsv(result),
                                        DatasetHtml(result, command_line), &outputs);
-  if (!written.ok()) return BadInput(kCommand, written.message());
+  if (!written.ok()) return FailedOrCancelled(written, "before writing");
   const size_t images = result.summaries.empty() ? 0 : result.summaries.front().images;
   std::cout << WrapText("compare: " + FormatCount(images, "image") + " x " +
                             FormatCount(result.solver_names.size(), "solver") + "; " +
@@ -562,11 +574,11 @@ int RunBlockMode(const std::string& command_line, const ParsedFlags& parsed) {
 
   BlockComparisonResult result;
   const Status status = RunWithProgress("blocks", &RunBlockComparison, &options, &result);
-  if (!status.ok()) return BadInput(kCommand, status.message());
+  if (!status.ok() || CancelRequested()) return FailedOrCancelled(status, "while comparing");
   const Status written = PrintAndWrite(BlockComparisonTables(options, result), {},
                                        BlockComparisonCsv(result),
                                        BlockComparisonHtml(options, result, command_line), &outputs);
-  if (!written.ok()) return BadInput(kCommand, written.message());
+  if (!written.ok()) return FailedOrCancelled(written, "before writing");
   PrintSweepSummary(static_cast<long long>(result.settings.size()), options.trials, "block",
                     static_cast<long long>(result.solver_names.size()), result.wall_seconds);
   return kExitSuccess;
@@ -615,14 +627,23 @@ int RunBlockDatasetMode(const std::string& command_line, const ParsedFlags& pars
       for (const auto& [image, reason] : initialization.not_oriented)
         std::cerr << "photopose compare: " << block.images[image].name
                   << ": not oriented: " << reason << "\n";
+      std::cerr << "photopose compare: " << FormatCount(initialization.not_oriented.size(), "image")
+                << " could not be oriented; nothing compared, nothing written\n";
       return kExitSomeFailed;
     }
+    if (CancelRequested()) return ReportCancelled(kCommand, "while computing the initial values");
+    ProgressLine progress(kCommand, "solvers");
+    options.progress = [&progress](size_t done, size_t total) {
+      progress(done, total);
+      return !CancelRequested();
+    };
     const Status status = RunBlockDatasetComparison(options, block, &result);
-    if (!status.ok()) return BadInput(kCommand, status.message());
+    options.progress = nullptr;  // `progress` ends here
+    if (!status.ok() || CancelRequested()) return FailedOrCancelled(status, "while comparing");
   }
   const Status written = PrintAndWrite({BlockDatasetTable(result)}, {}, BlockDatasetCsv(result),
                                        BlockDatasetHtml(result, command_line), &outputs);
-  if (!written.ok()) return BadInput(kCommand, written.message());
+  if (!written.ok()) return FailedOrCancelled(written, "before writing");
   std::cout << "compare: a block of " << result.num_images << " images x "
             << result.solvers.size() << " solvers; " << WrittenFiles() << "\n";
   return kExitSuccess;
@@ -635,6 +656,7 @@ int RunCompare(int argc, char** argv) {
   if (const std::optional<int> done = StartCommand(argc, argv, kUsage, CompareFlags(), &parsed)) return *done;
   std::string command_line = "photopose compare";
   for (int i = 0; i < argc; ++i) command_line += " " + QuoteForShell(argv[i]);
+  CancelOnSignals();
 
   const bool dataset = !FLAGS_compare_cameras.empty() || !FLAGS_compare_points.empty() ||
                        !FLAGS_compare_marks.empty() || !FLAGS_compare_gcp_list.empty();

@@ -60,8 +60,9 @@ constexpr char kUsage[] =
     "solved; a pose an undetectable blunder could move by more than 3 sigma is flagged weak\n"
     "(refused with --strict). A pose that no redundant mark checks is not reported. Nothing is\n"
     "written when no image is resected. A run longer than 2 s prints a progress line on stderr\n"
-    "every 5 s. Exit status: 0 every image resected, 1 some image could not be (each says why),\n"
-    "2 bad input or usage.\n";
+    "every 5 s. Ctrl-C (SIGINT) or SIGTERM cancels the run: nothing is written, exit status 130 or\n"
+    "143 (docs/cli.md). Exit status: 0 every image resected, 1 some image could not be (each says\n"
+    "why), 2 bad input or usage.\n";
 
 // Every numeric flag's range (docs/formats.md, "Limits and refusals").
 const CommandFlags& ResectFlags() {
@@ -204,6 +205,7 @@ std::vector<std::string> PrintResults(const ResectionJob& prepared, RotationConv
 int RunResect(int argc, char** argv) {
   ParsedFlags parsed;
   if (const std::optional<int> done = StartCommand(argc, argv, kUsage, ResectFlags(), &parsed)) return *done;
+  CancelOnSignals();
   ResectionJobOptions job;
   std::string why;
   if (!JobFromFlags(&job, &why)) return BadInput("resect", why);
@@ -216,18 +218,21 @@ int RunResect(int argc, char** argv) {
   const Status read = PrepareResectionJob(job, &prepared);
   if (!read.ok()) return BadInput("resect", read.message());
   if (prepared.inputs.empty()) return BadInput("resect", "no image has marks");
+  if (CancelRequested()) return ReportCancelled("resect", "while reading the inputs");
   // A progress line on stderr when the batch runs longer than a couple of seconds.
   ProgressLine progress_line("resect", "images");
   ResectionBatchOptions batch;
   batch.num_threads = FLAGS_threads;
+  // SIGINT / SIGTERM stop the batch at the hook's next call: no image is started after it.
   batch.progress = [&progress_line](const ResectionProgress& progress) {
     progress_line(progress.images_done, progress.images_total);
-    return true;
+    return !CancelRequested();
   };
   std::vector<ResectionResult> results;
   {
     const ScopedSolving solving;
     const Status resected = ResectImages(job.resection, prepared.inputs, batch, &results);
+    if (CancelRequested()) return ReportCancelled("resect", "while resecting");
     if (!resected.ok()) return BadInput("resect", resected.message());
   }
   const std::vector<std::string> failed = PrintResults(prepared, job.files.rotation, results);
@@ -248,7 +253,8 @@ int RunResect(int argc, char** argv) {
       return WriteResectionReport(path, job, prepared, results, written);
     });
   }
-  if (status.ok()) status = outputs.Commit();
+  if (status.ok()) status = CommitUnlessCancelled(&outputs);
+  if (CancelRequested() && !status.ok()) return ReportCancelled("resect", "before writing");
   if (!status.ok()) return BadInput("resect", status.message());
   std::string summary = "photopose resect: " + std::to_string(results.size() - failed.size()) +
                         " of " + std::to_string(results.size()) + " images resected";

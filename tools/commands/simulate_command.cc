@@ -225,6 +225,15 @@ Status FormatSimulatedBlock(const Block& block, const SyntheticBlockTruth& truth
   return Status::Ok();
 }
 
+// The closing line's end: the folder and every file written into it ("wrote sim: cameras.csv,
+// points.csv, ..., truth/frames.csv").
+std::string FilesWritten(const std::vector<FolderFile>& files) {
+  std::string names;
+  for (const FolderFile& file : files)
+    names += (names.empty() ? "" : ", ") + file.relative_path;
+  return "wrote " + FLAGS_out_dir + ": " + names;
+}
+
 int RunSimulateBlock(const ParsedFlags& parsed, RotationConvention rotation) {
   SyntheticBlockOptions options;
   std::string why;
@@ -244,12 +253,12 @@ int RunSimulateBlock(const ParsedFlags& parsed, RotationConvention rotation) {
     checks += point.role == PointRole::kCheck;
     ties += point.role == PointRole::kTie;
   }
+  const size_t blunders = truth.blunder_marks.size() + truth.blunder_control_points.size() +
+                         truth.blunder_gnss_images.size();
   std::cout << "simulate: block, seed " << FLAGS_sim_seed << ": " << block.images.size()
             << " images, " << ties << " tie points, " << controls << " control and " << checks
-            << " check points, " << block.marks.size() << " marks, "
-            << truth.blunder_marks.size() + truth.blunder_control_points.size() +
-                   truth.blunder_gnss_images.size()
-            << " blunders; wrote " << files.size() << " files to " << FLAGS_out_dir << "\n";
+            << " check points, " << block.marks.size() << " marks, " << blunders << " blunders; "
+            << FilesWritten(files) << "\n";
   return kExitSuccess;
 }
 
@@ -318,7 +327,7 @@ int RunSimulate(int argc, char** argv) {
   if (!written.ok()) return BadInput("simulate", written.message());
   std::cout << "simulate: " << EnumName(scenario) << ", seed " << FLAGS_sim_seed << ": "
             << scene.true_frames.size() << " images, " << scene.points.size() << " points, "
-            << scene.marks.size() << " marks written to " << FLAGS_out_dir << "\n";
+            << scene.marks.size() << " marks; " << FilesWritten(files) << "\n";
   return kExitSuccess;
 }
 

@@ -336,16 +336,22 @@ Status RunBlockComparison(const BlockComparisonOptions& options, BlockComparison
   std::vector<std::vector<TrialOutcome>> outcomes(jobs);
   std::vector<Status> errors(jobs, Status::Ok());
   std::atomic<size_t> done{0};
+  std::atomic<bool> cancelled{false};
   std::mutex progress_mutex;
   ParallelFor(jobs, options.num_threads, [&](size_t job) {
+    if (cancelled.load()) return;
     errors[job] = RunTrial(options, result->settings[job / trials], static_cast<int>(job % trials),
                            &outcomes[job]);
     const size_t finished = ++done;
     if (options.progress) {
       const std::lock_guard<std::mutex> lock(progress_mutex);
-      options.progress(finished, jobs);
+      if (!options.progress(finished, jobs)) cancelled = true;
     }
   });
+  if (cancelled) {
+    return Status::Error("cancelled by the progress hook after " + std::to_string(done.load()) +
+                         " of " + std::to_string(jobs) + " blocks");
+  }
   for (const Status& error : errors) PHOTOPOSE_RETURN_IF_ERROR(error);
 
   const int taylor = TaylorBaseline(options.solvers);
@@ -391,6 +397,10 @@ Status RunBlockDatasetComparison(const BlockDatasetOptions& options, const Block
       if (reference < 0 && variant.solver == PoseSolver::kCeres) reference = static_cast<int>(s);
     }
     result->solvers.push_back(summary);
+    if (options.progress && !options.progress(s + 1, options.solvers.size())) {
+      return Status::Error("cancelled by the progress hook after " + std::to_string(s + 1) +
+                           " of " + std::to_string(options.solvers.size()) + " solvers");
+    }
   }
   if (reference < 0) {
     for (size_t s = 0; s < options.solvers.size() && reference < 0; ++s)

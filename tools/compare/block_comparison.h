@@ -45,8 +45,9 @@ struct BlockComparisonOptions {
   int trials = 5;                             // blocks per setting
   uint64_t seed = 1;                          // of the first block; trial t uses seed + t
   int num_threads = 1;                        // blocks solved in parallel
-  // Progress: (done, total) blocks; may be empty.
-  std::function<void(size_t, size_t)> progress;
+  // Progress: (done, total) blocks; may be empty. Returning false cancels the run: no block
+  // starts after it, and RunBlockComparison returns an error that says so (no result).
+  std::function<bool(size_t, size_t)> progress;
 
   bool IsValid(std::string* why) const;
 };
@@ -97,6 +98,10 @@ Status RunBlockComparison(const BlockComparisonOptions& options, BlockComparison
 struct BlockDatasetOptions {
   std::vector<BlockSolverVariant> solvers;
   int num_threads = 1;  // of each adjustment
+  // Called after each solver with (solvers done, solvers in all); may be empty. Returning false
+  // cancels the run: no solver starts after it, and RunBlockDatasetComparison returns an error
+  // that says so (no result).
+  std::function<bool(size_t, size_t)> progress;
 };
 
 struct BlockDatasetSolverSummary {

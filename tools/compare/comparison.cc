@@ -572,12 +572,18 @@ Status RunMonteCarlo(const MonteCarloOptions& options, MonteCarloResult* result)
   std::vector<int> images(num_tasks, 0);
   std::vector<Status> statuses(num_tasks);
   std::atomic<size_t> done{0};
+  std::atomic<bool> cancelled{false};
   ParallelFor(num_tasks, options.num_threads, [&](size_t task) {
+    if (cancelled.load()) return;
     const size_t setting = task / options.trials;
     const int trial = static_cast<int>(task % options.trials);
     statuses[task] = RunTrial(options, settings[setting], trial, &outcomes[task], &images[task]);
-    if (options.progress) options.progress(++done, num_tasks);
+    if (options.progress && !options.progress(++done, num_tasks)) cancelled = true;
   });
+  if (cancelled) {
+    return Status::Error("cancelled by the progress hook after " + std::to_string(done.load()) +
+                         " of " + std::to_string(num_tasks) + " trials");
+  }
   for (size_t task = 0; task < num_tasks; ++task) {
     if (!statuses[task].ok()) {
       const size_t setting = task / options.trials;
@@ -659,7 +665,11 @@ Status RunDatasetComparison(const DatasetComparisonOptions& options,
   for (const SolverVariant& v : options.solvers) {
     results.push_back(
         ResectImages(v.ApplyTo(options.job.resection), job.inputs, options.num_threads));
-    if (options.progress) options.progress(results.size(), options.solvers.size());
+    if (options.progress && !options.progress(results.size(), options.solvers.size())) {
+      return Status::Error("cancelled by the progress hook after " +
+                           std::to_string(results.size()) + " of " +
+                           std::to_string(options.solvers.size()) + " solvers");
+    }
   }
   const double threshold = MarkThresholdSigmas(options.job.resection.test.confidence);
 

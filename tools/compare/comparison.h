@@ -147,8 +147,10 @@ struct MonteCarloOptions {
   int num_threads = 1;           // trials run in parallel (0: all cores)
   bool keep_samples = false;     // keep every solve's outcome in MonteCarloResult (tests, CSV)
   // Called after every trial with (trials done, trials in all), from the worker threads (so it
-  // must be thread-safe); may be empty. The command prints a progress line from it.
-  std::function<void(size_t, size_t)> progress;
+  // must be thread-safe); may be empty. The command prints a progress line from it. Returning
+  // false cancels the run: no trial starts after it, and RunMonteCarlo returns an error that
+  // says so (no result).
+  std::function<bool(size_t, size_t)> progress;
 
   bool IsValid(std::string* why) const;
 };
@@ -283,8 +285,10 @@ struct DatasetComparisonOptions {
   // Optional frames table with a reference orientation (same --rotation convention).
   std::string reference_path;
   int num_threads = 1;  // images in parallel (0: all cores)
-  // Called after each solver with (solvers done, solvers in all); may be empty.
-  std::function<void(size_t, size_t)> progress;
+  // Called after each solver with (solvers done, solvers in all); may be empty. Returning false
+  // cancels the run: no solver starts after it, and RunDatasetComparison returns an error that
+  // says so (no result).
+  std::function<bool(size_t, size_t)> progress;
 
   bool IsValid(std::string* why) const;
 };

@@ -837,6 +837,44 @@ TEST(TaylorBundle, FailsCleanly) {
   }
 }
 
+// A progress hook that returns false stops the Taylor bundle as it stops BundleAdjust: after that
+// correction, termination kCancelled (not a failure), the hook not called again, the block as
+// given. For an absolute block (stopped after its second correction) and a relative one (stopped
+// in its free-gauge solve, which must not go on in the gauge).
+TEST(TaylorBundle, AProgressHookReturningFalseCancelsTheAdjustment) {
+  SyntheticBlockOptions relative = TaylorBlockOptions();
+  relative.gnss = false;
+  relative.num_control_points = 0;
+  relative.check_layout.clear();
+  relative.num_check_points = 0;
+  for (const SyntheticBlockOptions& o : {TaylorBlockOptions(), relative}) {
+    const bool is_relative = o.num_control_points == 0;
+    SCOPED_TRACE(is_relative ? "relative block" : "absolute block");
+    const TestBlock data = MakeTestBlock(o);
+    Block block = data.block;
+    const int stop_after = is_relative ? 1 : 2;
+    std::vector<BundleIterationInfo> calls;
+    TaylorBundleOptions options = TaylorOptions();
+    options.progress = [&](const BundleIterationInfo& info) {
+      calls.push_back(info);
+      return static_cast<int>(calls.size()) < stop_after;
+    };
+    TaylorBundleResult result;
+    ASSERT_TRUE(TaylorBundleAdjust(options, BundleAdjustmentConfig(), &block, &result).ok());
+    EXPECT_EQ(result.summary.termination_type, SolverTermination::kCancelled)
+        << result.summary.message;
+    EXPECT_EQ(result.adjustment.summary.termination, SolverTermination::kCancelled);
+    EXPECT_NE(result.summary.message.find("round 1: cancelled by the progress hook after "
+                                          "iteration " + std::to_string(stop_after)),
+              std::string::npos)
+        << result.summary.message;
+    ASSERT_EQ(static_cast<int>(calls.size()), stop_after);
+    EXPECT_EQ(calls.back().free_gauge, is_relative);
+    EXPECT_EQ(result.summary.rounds, 1);
+    ExpectUntouched(data.block, block, result);
+  }
+}
+
 // A relative block solved first without a gauge (as BundleAdjust does) reaches the minimum of
 // COLMAP's gauge: the first image exactly at its given pose, the scale image's coordinate as given,
 // the cost and every pose of the held-gauge solve, in fewer iterations. Here the first image's

@@ -1,6 +1,7 @@
 // End-to-end tests of `photopose bundle` (with `photopose simulate --scenario=block`): the
 // executable as a user runs it.
 #include <gtest/gtest.h>
+#include <signal.h>
 
 #include <algorithm>
 #include <cmath>
@@ -11,6 +12,7 @@
 #include <set>
 #include <sstream>
 #include <string>
+#include <tuple>
 
 #include "core/block.h"
 #include "core/io/block_tables.h"
@@ -99,6 +101,44 @@ TEST(BundleCommand, SimulatedBlockAdjustsToItsTruthWithEveryBlunderFound) {
   EXPECT_NE(ReadFile(dir + "/points.csv").find("PointID"), std::string::npos);
 }
 
+// Ctrl-C (SIGINT) or SIGTERM in the middle of an adjustment (issue 24): the run stops at the next
+// iteration, writes nothing (the old --out untouched, no --report created, no temporary left) and
+// says so in one line, exit status 128 + the signal. The signal is sent once a progress line shows
+// the adjustment under way; a block of 120 images on one thread leaves it many iterations and its
+// statistics to go. Ceres' hook with SIGINT, the Taylor solver's with SIGTERM.
+TEST(BundleCommand, ASignalCancelsTheRunAndNothingIsWritten) {
+  for (const auto& [signal_number, exit_code, name, solver] :
+       {std::tuple<int, int, const char*, const char*>{SIGINT, 130, "SIGINT", "ceres"},
+        {SIGTERM, 143, "SIGTERM", "taylor"}}) {
+    SCOPED_TRACE(name);
+    const std::string dir = ScratchDir() + "/" + solver;
+    std::filesystem::create_directories(dir);
+    const CliRun simulated =
+        RunCli("simulate --scenario=block --lines=6 --images_per_line=20 --tie_points=6000 "
+               "--seed=3 --tie_blunders=6 --out_dir=" + dir + "/block",
+               dir);
+    ASSERT_EQ(simulated.exit_code, 0) << simulated.err;
+    const std::string block = dir + "/block";
+    const std::string out = dir + "/frames.csv";
+    testing::WriteFile(out, "old output\n");
+    const CliRun run = testing::RunCliAndSignal(
+        {"bundle", "--cameras=" + block + "/cameras.csv", "--points=" + block + "/points.csv",
+         "--marks=" + block + "/marks.csv", "--frames=" + block + "/frames.csv", "--out=" + out,
+         "--report=" + dir + "/report.json", "--threads=1", std::string("--solver=") + solver},
+        dir, " iteration ", signal_number);
+    EXPECT_EQ(run.exit_code, exit_code) << run.err;
+    const std::regex cancelled(std::string("photopose bundle: cancelled by ") + name +
+                               " [a-z ]+; nothing written\n$");
+    EXPECT_TRUE(std::regex_search(run.err, cancelled)) << run.err;
+    EXPECT_EQ(ReadFile(out), "old output\n");
+    EXPECT_FALSE(std::filesystem::exists(dir + "/report.json"));
+    for (const auto& entry : std::filesystem::directory_iterator(dir))
+      EXPECT_NE(entry.path().filename().string().front(), '.') << "left behind: " << entry.path();
+    // Nothing of the results on stdout either: no closing summary.
+    EXPECT_EQ(run.out.find("wrote"), std::string::npos) << run.out;
+  }
+}
+
 // The camera table's ApplyECC is honoured: the wide block of EarthCurvatureBlockOptions (800 m,
 // 10 mm lens) whose marks were generated with the earth-curvature drop, written twice with ApplyECC true and false
 // and otherwise the same tables. The frames and points written differ; with the correction the
@@ -135,6 +175,19 @@ TEST(BundleCommand, ProgressAndSummaryLinesPrintNoExponent) {
   }
   EXPECT_GE(progress, 2) << run.err;
   EXPECT_NE(run.err.find("photopose bundle: round 1 iteration   0: cost "), std::string::npos)
+      << run.err;
+  // Every other line on stderr under 120 characters too (those that name the test's files aside):
+  // the initial values in two lines, images and tie points.
+  std::istringstream all(run.err);
+  for (std::string line; std::getline(all, line);)
+    if (line.find(dir) == std::string::npos) EXPECT_LT(line.size(), 120u) << line;
+  EXPECT_TRUE(std::regex_search(
+      run.err, std::regex("(^|\n)photopose bundle: initial values: 18 images with initial values, 0 "
+                           "resected, 0 not oriented; [0-9]+ rounds?\n")))
+      << run.err;
+  EXPECT_TRUE(std::regex_search(
+      run.err, std::regex("\nphotopose bundle: initial values: [0-9]+ tie points with "
+                           "coordinates, [0-9]+ intersected, [0-9]+ not\n")))
       << run.err;
 }
 

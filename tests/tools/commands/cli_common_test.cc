@@ -3,12 +3,17 @@
 
 #include <gflags/gflags.h>
 #include <gtest/gtest.h>
+#include <signal.h>
+#include <unistd.h>
 
 #include <cmath>
+#include <filesystem>
+#include <cstdlib>
 #include <limits>
 #include <optional>
 #include <sstream>
 #include <string>
+#include <tuple>
 #include <vector>
 
 #include "tests/tools/cli_test_util.h"
@@ -42,6 +47,84 @@ TEST(ProgressLineTest, PrintsWhenDueAndTheEndOnlyAfterALine) {
   later(1, 2);
   later(2, 2);
   EXPECT_EQ(quiet.str(), "");
+}
+
+// Both signals with their default action, as a program started from a terminal has them (a test
+// may run where SIGINT is ignored: a script's background job).
+void DefaultSignalActions() {
+  signal(SIGINT, SIG_DFL);
+  signal(SIGTERM, SIG_DFL);
+}
+
+// Cancellation by signals, each case in a child process of its own (the handlers and the flag are
+// the process's): the first SIGINT or SIGTERM only sets the flag the hooks read; the run reports
+// it in one line and exits 128 + the signal; a second signal ends the process by its default
+// action; a signal ignored from the start stays ignored.
+TEST(CancelTest, TheFirstSignalSetsTheFlagAndTheSecondEndsTheProcess) {
+  for (const auto& [signal_number, exit_code, name] :
+       {std::tuple<int, int, const char*>{SIGINT, 130, "SIGINT"}, {SIGTERM, 143, "SIGTERM"}}) {
+    SCOPED_TRACE(name);
+    EXPECT_EQ(CancelledExitCode(signal_number), exit_code);
+    EXPECT_EXIT(
+        {
+          DefaultSignalActions();
+          CancelOnSignals();
+          if (CancelRequested()) std::_Exit(3);
+          raise(signal_number);  // handled: the process goes on
+          if (!CancelRequested()) std::_Exit(4);
+          std::_Exit(ReportCancelled("bundle", "during the adjustment"));
+        },
+        ::testing::ExitedWithCode(exit_code),
+        std::string("photopose bundle: cancelled by ") + name +
+            " during the adjustment; nothing written");
+    EXPECT_EXIT(
+        {
+          DefaultSignalActions();
+          CancelOnSignals();
+          raise(signal_number);
+          raise(signal_number == SIGINT ? SIGTERM : SIGINT);  // the second, either of the two
+          std::_Exit(5);
+        },
+        ::testing::KilledBySignal(signal_number == SIGINT ? SIGTERM : SIGINT), "");
+    EXPECT_EXIT(
+        {
+          DefaultSignalActions();
+          signal(signal_number, SIG_IGN);
+          CancelOnSignals();
+          raise(signal_number);  // ignored: no cancellation
+          std::_Exit(CancelRequested() ? 6 : 7);
+        },
+        ::testing::ExitedWithCode(7), "");
+  }
+}
+
+// A transaction is committed unless a signal asked the run to stop: then nothing is written and
+// no temporary is left.
+TEST(CancelTest, CommitUnlessCancelledWritesNothingOnceCancelled) {
+  const std::string dir = ScratchDir();
+  const std::string path = dir + "/out.csv";
+  WriteFile(path, "old\n");
+  EXPECT_EXIT(
+      {
+        DefaultSignalActions();
+        CancelOnSignals();
+        OutputFiles outputs;
+        if (!outputs.AddOutput("--out", path).ok() || !outputs.Stage(path, "new\n").ok())
+          std::_Exit(3);
+        raise(SIGTERM);
+        const Status committed = CommitUnlessCancelled(&outputs);
+        std::_Exit(committed.ok() ? 4 : ReportCancelled("resect", "before writing"));
+      },
+      ::testing::ExitedWithCode(143), "cancelled by SIGTERM before writing; nothing written");
+  EXPECT_EQ(testing::ReadFile(path), "old\n");
+  for (const auto& entry : std::filesystem::directory_iterator(dir))
+    EXPECT_EQ(entry.path().filename().string(), "out.csv") << "left behind: " << entry.path();
+  // Without a signal the same transaction is written.
+  OutputFiles outputs;
+  ASSERT_TRUE(outputs.AddOutput("--out", path).ok());
+  ASSERT_TRUE(outputs.Stage(path, "new\n").ok());
+  ASSERT_TRUE(CommitUnlessCancelled(&outputs).ok());
+  EXPECT_EQ(testing::ReadFile(path), "new\n");
 }
 
 TEST(FlagRangeTest, StatesItsEndsAndRefusesWhatLiesOutside) {

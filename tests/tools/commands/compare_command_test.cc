@@ -1,5 +1,6 @@
 // End-to-end tests of `photopose compare`: the executable as a user runs it.
 #include <gtest/gtest.h>
+#include <signal.h>
 
 #include <algorithm>
 #include <cmath>
@@ -54,6 +55,24 @@ size_t LongestLine(const std::string& out, const std::string& dir) {
 constexpr char kSmallSweep[] =
     "compare --scenarios=nadir --trials=6 --seed=5 --noise_px=0.5 --outlier_fractions=0,0.2 "
     "--control_points=20 --initial_errors=5:2 --losses=none,cauchy";
+
+// Ctrl-C (SIGINT) during a Monte-Carlo sweep: no trial starts after the next progress call, no
+// table is printed, no --csv written, exit status 130. The signal follows the first progress line
+// (after 2 s), of a sweep far longer than that.
+TEST(CompareCommand, SigintCancelsTheSweepAndNothingIsWritten) {
+  const std::string dir = ScratchDir();
+  const CliRun run = testing::RunCliAndSignal(
+      {"compare", "--scenarios=nadir", "--trials=100000", "--threads=1", "--solvers=taylor",
+       "--losses=none", "--csv=" + dir + "/c.csv"},
+      dir, " trials (", SIGINT);
+  EXPECT_EQ(run.exit_code, 130) << run.err;
+  EXPECT_NE(run.err.find("photopose compare: cancelled by SIGINT while comparing; nothing "
+                         "written\n"),
+            std::string::npos)
+      << run.err;
+  EXPECT_FALSE(std::filesystem::exists(dir + "/c.csv"));
+  EXPECT_EQ(run.out, "");
+}
 
 TEST(CompareCommand, MonteCarloRunsWritesEveryOutputAndAgreesWithTheEngine) {
   const std::string dir = ScratchDir();
@@ -325,6 +344,18 @@ TEST(CompareCommand, BlockDatasetModeComparesTheSolversOnOneBlock) {
                         dir);
   EXPECT_EQ(run.exit_code, 0) << run.err;
   EXPECT_NE(run.out.find("ceres_analytic/none"), std::string::npos) << run.out;
+  // Without control points and frames no image can be oriented: each named, then one closing line
+  // saying nothing was written.
+  run = testing::RunCli("compare --scenarios=block --losses=none --cameras=" + b +
+                            "/cameras.csv --marks=" + b + "/marks.csv --csv=" + dir + "/none.csv",
+                        dir);
+  EXPECT_EQ(run.exit_code, 1) << run.err;
+  EXPECT_NE(run.err.find(": not oriented: "), std::string::npos) << run.err;
+  EXPECT_NE(run.err.find("photopose compare: 18 images could not be oriented; nothing compared, "
+                         "nothing written\n"),
+            std::string::npos)
+      << run.err;
+  EXPECT_FALSE(std::filesystem::exists(dir + "/none.csv"));
 }
 
 }  // namespace

@@ -59,6 +59,11 @@ TEST(SimulateCommand, WritesTheLibrarysSceneForTheSameFlags) {
   // One image sees its 12 + 3 points once each.
   ASSERT_EQ(scene.marks.size(), 15u);
   EXPECT_NE(run.out.find("1 images, 15 points, 15 marks"), std::string::npos) << run.out;
+  // The closing line names every file written.
+  EXPECT_NE(run.out.find("; wrote " + dir + "/d: cameras.csv, points.csv, marks.csv, "
+                         "frames_approx.csv, truth/frames.csv, truth/outliers.csv\n"),
+            std::string::npos)
+      << run.out;
 
   std::vector<ImageMark> marks;
   ASSERT_TRUE(ReadImageMarks(dir + "/d/marks.csv", &marks).ok());
@@ -129,6 +134,12 @@ TEST(SimulateCommand, BlockScenarioWritesTheBlockItsTruthAndColmap) {
   // 2 lines x 3 images; two tie blunders.
   EXPECT_NE(run.out.find("6 images"), std::string::npos) << run.out;
   EXPECT_NE(run.out.find(" 2 blunders"), std::string::npos) << run.out;
+  // The closing line names every file written.
+  EXPECT_NE(run.out.find("; wrote " + dir + "/b: cameras.csv, points.csv, marks.csv, frames.csv, "
+                         "truth/frames.csv, truth/points.csv, truth/blunders.csv, "
+                         "colmap/cameras.txt, colmap/images.txt, colmap/points3D.txt\n"),
+            std::string::npos)
+      << run.out;
   EXPECT_EQ(ReadFrames(dir + "/b/truth/frames.csv").size(), 6u);
   // The measured positions (GNSS, on by default) with their accuracy, one row per image.
   const auto measured = ReadFrames(dir + "/b/frames.csv");

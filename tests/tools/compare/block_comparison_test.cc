@@ -63,6 +63,7 @@ TEST(BlockComparison, OneSettingPerAxisValueAndFiguresPerSolver) {
   options.progress = [&](size_t done, size_t total) {
     ++progress_calls;
     EXPECT_LE(done, total);
+    return true;
   };
   BlockComparisonResult result;
   const Status status = RunBlockComparison(options, &result);
@@ -117,7 +118,8 @@ TEST(BlockComparison, WithoutTaylorThereIsNoReference) {
 // A dataset block compared with and without a loss: "x Taylor" is against the Taylor solver
 // without a loss (taylor), whatever follows it in the list (taylor/huber once was the baseline,
 // and taylor showed 0.86 against itself); so taylor's own ratio is exactly 1.
-TEST(BlockComparison, OnADatasetTheTaylorRowsOwnRatioIsOne) {
+// The dataset of the tests below: 2 lines of 4 images, 120 tie points.
+Block DatasetBlock() {
   SyntheticBlockOptions o;
   o.seed = 5;
   o.num_lines = 2;
@@ -125,7 +127,12 @@ TEST(BlockComparison, OnADatasetTheTaylorRowsOwnRatioIsOne) {
   o.num_tie_points = 120;
   Block block;
   SyntheticBlockTruth truth;
-  ASSERT_TRUE(MakeSyntheticBlock(o, &block, &truth).ok());
+  EXPECT_TRUE(MakeSyntheticBlock(o, &block, &truth).ok());
+  return block;
+}
+
+TEST(BlockComparison, OnADatasetTheTaylorRowsOwnRatioIsOne) {
+  const Block block = DatasetBlock();
   BlockDatasetOptions options;
   ASSERT_TRUE(
       ParseBlockSolverVariants("taylor,ceres_analytic", "none,huber", &options.solvers).ok());
@@ -138,6 +145,41 @@ TEST(BlockComparison, OnADatasetTheTaylorRowsOwnRatioIsOne) {
   EXPECT_EQ(result.solvers[0].time_ratio_to_taylor, 1.0);
   for (const BlockDatasetSolverSummary& s : result.solvers)
     EXPECT_EQ(s.time_ratio_to_taylor, s.seconds / result.solvers[0].seconds) << s.name;
+}
+
+// A hook that returns false cancels the run: no block (sweep) or solver (dataset) starts after
+// it, and the call fails saying so.
+TEST(BlockComparison, AProgressHookReturningFalseCancelsTheRun) {
+  BlockComparisonOptions sweep;
+  ASSERT_TRUE(ParseBlockSolverVariants("taylor", "none", &sweep.solvers).ok());
+  sweep.noise_px = {0.5, 1.0};
+  sweep.tie_points = {120};
+  sweep.lines = 2;
+  sweep.images_per_line = 4;
+  sweep.trials = 2;
+  sweep.num_threads = 1;
+  int calls = 0;
+  sweep.progress = [&](size_t, size_t) { return ++calls < 1; };
+  BlockComparisonResult sweep_result;
+  const Status swept = RunBlockComparison(sweep, &sweep_result);
+  ASSERT_FALSE(swept.ok());
+  EXPECT_EQ(swept.message(), "cancelled by the progress hook after 1 of 4 blocks");
+  EXPECT_EQ(calls, 1);
+
+  const Block block = DatasetBlock();
+  BlockDatasetOptions dataset;
+  ASSERT_TRUE(ParseBlockSolverVariants("taylor,ceres_analytic", "none", &dataset.solvers).ok());
+  std::vector<size_t> done;
+  dataset.progress = [&](size_t d, size_t total) {
+    done.push_back(d);
+    EXPECT_EQ(total, 2u);
+    return false;
+  };
+  BlockDatasetResult dataset_result;
+  const Status compared = RunBlockDatasetComparison(dataset, block, &dataset_result);
+  ASSERT_FALSE(compared.ok());
+  EXPECT_EQ(compared.message(), "cancelled by the progress hook after 1 of 2 solvers");
+  EXPECT_EQ(done, std::vector<size_t>{1});
 }
 
 TEST(BlockComparison, RefusesInvalidOptionsWithTheReason) {

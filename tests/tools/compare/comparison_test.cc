@@ -305,12 +305,30 @@ TEST(ComparisonMonteCarlo, ReportsProgressPerTrial) {
     const std::lock_guard<std::mutex> lock(mutex);
     done.push_back(d);
     total = t;
+    return true;
   };
   MonteCarloResult result;
   ASSERT_TRUE(RunMonteCarlo(options, &result).ok());
   EXPECT_EQ(total, 7u);
   ASSERT_EQ(done.size(), 7u);
   EXPECT_EQ(*std::max_element(done.begin(), done.end()), 7u);
+}
+
+// A hook that returns false cancels the run: no trial starts after it (one thread: exactly the
+// trials before), and the call fails saying so, with no result.
+TEST(ComparisonMonteCarlo, AProgressHookReturningFalseCancelsTheRun) {
+  MonteCarloOptions options;
+  options.trials = 7;
+  options.num_threads = 1;
+  options.solvers = Variants("taylor", "none");
+  int calls = 0;
+  options.progress = [&](size_t, size_t) { return ++calls < 3; };
+  MonteCarloResult result;
+  const Status status = RunMonteCarlo(options, &result);
+  ASSERT_FALSE(status.ok());
+  EXPECT_EQ(status.message(), "cancelled by the progress hook after 3 of 7 trials");
+  EXPECT_EQ(calls, 3);
+  EXPECT_TRUE(result.settings.empty());
 }
 
 TEST(ComparisonMonteCarlo, RejectsInvalidOptions) {
@@ -370,6 +388,25 @@ TEST(ComparisonDataset, EverySolverOnTheExampleWithItsTruthAsReference) {
   EXPECT_EQ(tables[0].rows.size(), 4u);
   EXPECT_EQ(tables[1].rows.size(), result.solves.size());
   EXPECT_EQ(testing::CountLines(DatasetCsv(result)), 1 + static_cast<int>(result.solves.size()));
+}
+
+// A hook that returns false after the first solver cancels the dataset comparison.
+TEST(ComparisonDataset, AProgressHookReturningFalseCancelsTheRun) {
+  DatasetComparisonOptions options;
+  options.job.files.cameras = testing::SourcePath("examples/cameras.csv");
+  options.job.files.points = testing::SourcePath("examples/points.csv");
+  options.job.files.marks = testing::SourcePath("examples/marks.csv");
+  options.solvers = Variants("taylor,ceres_analytic", "none");
+  std::vector<size_t> done;
+  options.progress = [&](size_t d, size_t) {
+    done.push_back(d);
+    return false;
+  };
+  DatasetComparisonResult result;
+  const Status status = RunDatasetComparison(options, &result);
+  ASSERT_FALSE(status.ok());
+  EXPECT_EQ(status.message(), "cancelled by the progress hook after 1 of 2 solvers");
+  EXPECT_EQ(done, std::vector<size_t>{1});
 }
 
 TEST(ComparisonDataset, UnreadableInputIsAnError) {
