@@ -500,9 +500,18 @@ std::string RenderSmallMultiplesSvg(const LinePlot& plot) {
     frame.height = kHeight - kTop - kBottom;
     frame.svg_height = kHeight;
     svg << "<g font-size=\"10\">";
-    if (s < plot.series.size())
-      svg << SvgText(frame.left + panel / 2, kTop - 6, plot.series[s].label, "middle",
-                     " font-weight=\"bold\"");
+    if (s < plot.series.size()) {
+      // A title wider than its panel (bold 10 px: about 6.2 px per character in any sans font)
+      // is fitted to the panel plus 5 px each side, less than the gap and the right margin, so
+      // that neighbouring titles never meet and the last never leaves the page.
+      const std::string& title = plot.series[s].label;
+      const double room = panel + 10.0;
+      std::string fit;
+      if (6.2 * static_cast<double>(title.size()) > 0.85 * room)
+        fit = " textLength=\"" + Coordinate(room) + "\" lengthAdjust=\"spacingAndGlyphs\"";
+      svg << SvgText(frame.left + panel / 2, kTop - 6, title, "middle",
+                     " font-weight=\"bold\"" + fit);
+    }
     // Tick labels of y on the first panel only; its grid lines in every one.
     svg << SvgAxes(frame, &x_axis, s == 0 ? &y_axis : nullptr, "", "");
     if (s > 0)

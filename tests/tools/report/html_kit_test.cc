@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <regex>
 #include <string>
 #include <vector>
 
@@ -213,6 +214,27 @@ TEST(HtmlKit, SmallMultiplesDrawOnePanelPerSeriesSideBySideOnSharedAxes) {
   EXPECT_EQ(Count(svg, ">2</text>"), 2u);
   EXPECT_EQ(Count(svg, ">0.5</text>"), 1u);
   EXPECT_EQ(Count(svg, ">1</text>"), 3u);
+}
+
+TEST(HtmlKit, SmallMultiplesFitLongPanelTitlesToTheirPanels) {
+  // Six panels of (700 - 62 - 6 - 5 x 18) / 6 = 90.3 px: a 20-character title (about 124 px in
+  // bold 10 px) is fitted to 100.3 px, which ends 5 px right of the last panel, inside the 700;
+  // a short one is left at its own width.
+  LinePlot plot;
+  plot.x_label = "noise (px)";
+  plot.y_label = "RMSE (m)";
+  for (const char* label : {"a", "b", "c", "d", "e", "ceres_autodiff/huber"})
+    plot.series.push_back({label, {0, 1}, {0.1, 0.2}});
+  const std::string svg = RenderSmallMultiplesSvg(plot);
+  EXPECT_EQ(Count(svg, "lengthAdjust=\"spacingAndGlyphs\""), 1u);
+  const size_t title = svg.find(">ceres_autodiff/huber</text>");
+  ASSERT_NE(title, std::string::npos);
+  const std::string element = svg.substr(svg.rfind("<text", title), title - svg.rfind("<text", title));
+  std::smatch x, length;
+  ASSERT_TRUE(std::regex_search(element, x, std::regex(R"re( x="([0-9.]+)")re")));
+  ASSERT_TRUE(std::regex_search(element, length, std::regex(R"re(textLength="([0-9.]+)")re")));
+  EXPECT_NEAR(std::stod(length[1]), 100.3, 0.1);
+  EXPECT_LE(std::stod(x[1]) + std::stod(length[1]) / 2, 700.0 - 1.0);
 }
 
 TEST(HtmlKit, SectionedTableHasOneHeaderAndAHeadingRowPerSection) {
