@@ -107,6 +107,7 @@ class RansacOptions:
     local_optimization: bool
     max_lo_iterations: int  # count
     max_exhaustive_samples: int  # count
+    stop_enumeration_when_all_inliers: bool
     def validate(self) -> None: ...
 
 class AbsolutePoseRansacOptions:
@@ -209,6 +210,8 @@ class ResectionSummary:
     def ransac_trials(self) -> int: ...
     @property
     def ransac_exhaustive(self) -> bool: ...
+    @property
+    def ransac_stopped_early(self) -> bool: ...
     @property
     def adjustments(self) -> int: ...
     @property

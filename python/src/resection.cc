@@ -74,7 +74,9 @@ void BindConsensusOptions(py::module_& m) {
       .def_readwrite("seed", &RansacOptions::seed)
       .def_readwrite("local_optimization", &RansacOptions::local_optimization)
       .def_readwrite("max_lo_iterations", &RansacOptions::max_lo_iterations, "count")
-      .def_readwrite("max_exhaustive_samples", &RansacOptions::max_exhaustive_samples, "count");
+      .def_readwrite("max_exhaustive_samples", &RansacOptions::max_exhaustive_samples, "count")
+      .def_readwrite("stop_enumeration_when_all_inliers",
+                     &RansacOptions::stop_enumeration_when_all_inliers);
   DefValidate(ransac, "RansacOptions");
 
   auto consensus = BindStruct<AbsolutePoseRansacOptions>(
@@ -188,6 +190,7 @@ void BindResectionResult(py::module_& m) {
       .def_readonly("used_approximate", &ResectionSummary::used_approximate)
       .def_readonly("ransac_trials", &ResectionSummary::ransac_trials)
       .def_readonly("ransac_exhaustive", &ResectionSummary::ransac_exhaustive)
+      .def_readonly("ransac_stopped_early", &ResectionSummary::ransac_stopped_early)
       .def_readonly("adjustments", &ResectionSummary::adjustments)
       .def_readonly("iterations", &ResectionSummary::iterations)
       .def_readonly("initial_cost", &ResectionSummary::initial_cost)

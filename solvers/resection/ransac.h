@@ -17,7 +17,9 @@
 // Small data sets are not sampled but enumerated: when the number of distinct minimal samples
 // C(n, m) is at most RansacOptions::max_exhaustive_samples, every sample is tried once, in
 // lexicographic order, and the adaptive rule is not used. The result is then the same for every
-// seed (a surveyor's four to fifteen control points: C(15, 3) = 455).
+// seed (a surveyor's four to fifteen control points: C(15, 3) = 455). With
+// stop_enumeration_when_all_inliers the enumeration ends at the first model that every datum
+// fits, as the adaptive rule would.
 //
 // The Estimator concept (duck-typed; solvers/resection/absolute_pose.h has the resection one):
 //
@@ -77,6 +79,12 @@ struct RansacOptions {
   // Enumerate every minimal sample, instead of drawing, when there are at most this many (>= 0;
   // 0 never enumerates). Enumeration ignores max_trials, min_trials and the seed.
   int max_exhaustive_samples = 1000;
+  // Stop an enumeration at the first model whose inliers (after local optimisation) are all the
+  // data: what the adaptive rule does when drawing (an inlier ratio of 1 needs one trial), since
+  // no later sample can have more inliers. The enumeration then returns that model, not the
+  // lowest-scoring one of every sample: for a caller that fits all the data by least squares
+  // next (solvers/resection/resection.cc), not for one that keeps the consensus pose.
+  bool stop_enumeration_when_all_inliers = false;
 
   bool IsValid(std::string* why) const {
     auto fail = [why](const char* message) {
@@ -99,7 +107,9 @@ struct RansacSummary {
   int num_inliers = 0;  // inliers of the returned model
   double score = std::numeric_limits<double>::infinity();  // its MSAC cost (data units squared)
   int num_lo_steps = 0;                                    // RefineModel calls
-  bool exhaustive = false;  // every minimal sample was tried (no random draws)
+  bool exhaustive = false;  // the minimal samples were enumerated (no random draws): all of them,
+                            // unless stopped_early
+  bool stopped_early = false;  // the enumeration stopped at a model with every datum an inlier
   bool success = false;  // a model with >= kMinimalSampleSize inliers was found
   std::string message;   // why it failed, or a note on success
 
@@ -107,7 +117,8 @@ struct RansacSummary {
     std::ostringstream out;
     out << "RANSAC " << (success ? "succeeded" : "failed") << ": " << num_inliers << " inliers, "
         << num_trials << " trials, " << num_models << " models, " << num_lo_steps
-        << " LO steps, score " << score << (exhaustive ? ", exhaustive" : "");
+        << " LO steps, score " << score << (exhaustive ? ", exhaustive" : "")
+        << (stopped_early ? " (stopped at a model with every datum an inlier)" : "");
     if (!message.empty()) out << " (" << message << ")";
     return out.str();
   }
@@ -307,6 +318,11 @@ RansacSummary Ransac(const RansacOptions& options, const Estimator& estimator,
         best_num_inliers = collect_inliers(best);
         if (inliers == previous_inliers) break;
       }
+    }
+    if (summary.exhaustive && options.stop_enumeration_when_all_inliers &&
+        best_num_inliers == n) {
+      summary.stopped_early = true;
+      break;
     }
     trial_budget = internal::RequiredTrials(static_cast<double>(best_num_inliers) / n, kSampleSize,
                                             options.confidence, options.max_trials);

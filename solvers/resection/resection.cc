@@ -30,6 +30,8 @@ constexpr double kEccCenterTolerance = 1e-4;
 constexpr int kMaxEccPasses = 5;
 // Two P3P poses closer than this fraction of the distance to the points are one pose.
 constexpr double kSameP3PPose = 1e-6;
+// Fewest marks for which the consensus may stop at a model every mark fits (ResectionOptions).
+constexpr size_t kMinMarksToStopConsensus = 6;
 
 double SecondsSince(Clock::time_point start) {
   return std::chrono::duration<double>(Clock::now() - start).count();
@@ -183,19 +185,33 @@ struct CompetingPose {
   double distance_sigmas = 0.0;  // from the accepted pose, in its standard deviations
 };
 
-// Marks within `threshold` whitened units of the pose `eo` (in front of the camera).
-std::vector<char> ConsensusAt(const ResectionInput& input, const std::vector<double>& weights,
-                              const ExteriorOrientation& eo, double threshold) {
-  const std::vector<Eigen::Vector3d> points = CameraPoints(input, eo.center_in_ground());
+// Whether at least `min_size` marks lie within `threshold` whitened units of the pose `eo` (in
+// front of the camera). When so, *fits flags them (1) and the rest (0). The search asks only
+// whether a set can reach the accepted set's size, so the count stops as soon as the marks left
+// cannot bring it there (*fits then partly written). Each mark's test is the one of the whole
+// set: its ground point lowered by the earth-curvature drop at this centre (CameraPoints), one
+// SeedProjector projection, the whitened residual norm against the threshold.
+bool ConsensusAt(const ResectionInput& input, const std::vector<double>& weights,
+                 const ExteriorOrientation& eo, double threshold, int min_size,
+                 std::vector<char>* fits) {
+  const int n = static_cast<int>(input.points_in_ground.size());
+  fits->resize(n);
+  if (min_size > n) return false;
+  const bool lowered = input.earth_radius_m > 0.0;
+  const Eigen::Vector3d center = eo.center_in_ground();
   const SeedProjector projector(eo.data(), input.focal_length);
-  std::vector<char> fits(points.size(), 0);
-  for (size_t i = 0; i < points.size(); ++i) {
+  int misses_left = n - min_size;  // marks that may still fail before the set is too small
+  for (int i = 0; i < n; ++i) {
+    Eigen::Vector3d point = input.points_in_ground[i];
+    if (lowered) point.z() -= EarthCurvatureDrop(center, point, input.earth_radius_m);
     double xy[2];
-    if (!projector.Project(points[i].data(), xy, nullptr, nullptr, nullptr)) continue;
-    fits[i] = (input.image_plane[i] - Eigen::Vector2d(xy[0], xy[1])).norm() / weights[i] <=
-              threshold;
+    const bool fit =
+        projector.Project(point.data(), xy, nullptr, nullptr, nullptr) &&
+        (input.image_plane[i] - Eigen::Vector2d(xy[0], xy[1])).norm() / weights[i] <= threshold;
+    (*fits)[i] = fit ? 1 : 0;
+    if (!fit && --misses_left < 0) return false;
   }
-  return fits;
+  return true;
 }
 
 // Looks for a consensus set other than `accepted`, at least as large, that passes the tests the
@@ -204,7 +220,9 @@ std::vector<char> ConsensusAt(const ResectionInput& input, const std::vector<dou
 // triples with a mark outside `accepted` (any competitor has one), all of them or a seeded random
 // max_exhaustive_samples; each hypothesis's marks within twice the threshold (a three-point pose
 // carries the noise of three marks) are adjusted, then the marks within the threshold of that
-// adjustment, until the set settles.
+// adjustment, until the set settles. A set smaller than `accepted` ends a hypothesis, and a set
+// met before is not adjusted again: a hypothesis costs P3P and a count that stops once the set
+// can no longer reach the accepted size.
 bool FindCompetingPose(const ResectionOptions& options, const ResectionInput& input,
                        const std::vector<double>& weights, const std::vector<char>& accepted,
                        const ExteriorOrientation& eo, const Vector6d& sigmas,
@@ -237,32 +255,43 @@ bool FindCompetingPose(const ResectionOptions& options, const ResectionInput& in
       if (i != j && j != k && i != k) triples.push_back({i, j, k});
     }
   }
+  // Each mark's bearing normalised once (SolveP3P's own normalisation, so the same poses).
+  std::vector<Eigen::Vector3d> unit_bearings(n);
+  std::vector<char> has_bearing(n);
+  for (int i = 0; i < n; ++i) {
+    const Eigen::Vector2d& xy = input.image_plane[i];
+    has_bearing[i] =
+        UnitBearing(Eigen::Vector3d(xy.x(), xy.y(), -input.focal_length), &unit_bearings[i]);
+  }
   std::set<std::vector<char>> tried = {accepted};
+  std::vector<PoseCandidate> solutions;
+  solutions.reserve(4);
+  std::vector<char> set, next;
   for (const std::array<int, 3>& triple : triples) {
-    std::array<Eigen::Vector3d, 3> bearings, points;
-    for (int t = 0; t < 3; ++t) {
-      const Eigen::Vector2d& xy = input.image_plane[triple[t]];
-      bearings[t] = Eigen::Vector3d(xy.x(), xy.y(), -input.focal_length);
-      points[t] = input.points_in_ground[triple[t]];
-    }
-    std::vector<PoseCandidate> solutions;
-    SolveP3P(bearings, points, &solutions);
+    if (!has_bearing[triple[0]] || !has_bearing[triple[1]] || !has_bearing[triple[2]]) continue;
+    const std::array<Eigen::Vector3d, 3> bearings = {
+        unit_bearings[triple[0]], unit_bearings[triple[1]], unit_bearings[triple[2]]};
+    const std::array<Eigen::Vector3d, 3> points = {input.points_in_ground[triple[0]],
+                                                   input.points_in_ground[triple[1]],
+                                                   input.points_in_ground[triple[2]]};
+    solutions.clear();
+    SolveP3PUnitBearings(bearings, points, &solutions);
     for (const PoseCandidate& solution : solutions) {
       ExteriorOrientation hypothesis;
       hypothesis.set_center_in_ground(solution.center_in_ground);
       hypothesis.set_angles_seed_rad(
           AnglesFromRotation(RotationConvention::kSeed, solution.R_camera_from_ground));
-      std::vector<char> set = ConsensusAt(input, weights, hypothesis, 2.0 * threshold);
+      bool large = ConsensusAt(input, weights, hypothesis, 2.0 * threshold, size, &set);
       bool settled = false;
       for (int pass = 0; pass < kMaxSettlingPasses && !settled; ++pass) {
-        if (std::count(set.begin(), set.end(), 1) < size || !tried.insert(set).second) break;
+        if (!large || !tried.insert(set).second) break;
         ResectionSummary ignored;
         std::vector<Eigen::Vector3d> adjusted_points;
         if (!Adjust(options, input, weights, Indices(set), &hypothesis, &adjusted_points, &ignored))
           break;
-        const std::vector<char> next = ConsensusAt(input, weights, hypothesis, threshold);
-        settled = next == set;
-        if (!settled) set = next;
+        large = ConsensusAt(input, weights, hypothesis, threshold, size, &next);
+        settled = large && next == set;
+        if (!settled) set.swap(next);
       }
       if (!settled || !SetFitsItsAccuracy(options, input, weights, set, /*snoop=*/true, &hypothesis)) continue;
       const double distance = PoseDistanceSigmas(hypothesis, eo, sigmas);
@@ -302,7 +331,10 @@ std::string ResectionSummary::BriefReport() const {
   std::ostringstream os;
   os << EnumName(termination) << ", "
      << (used_approximate ? "approximate pose given"
-                          : (ransac_exhaustive ? "consensus of every minimal sample" : "RANSAC"))
+                          : (!ransac_exhaustive ? "RANSAC"
+                             : ransac_stopped_early
+                                 ? "consensus of the minimal samples in order, up to one every mark fits"
+                                 : "consensus of every minimal sample"))
      << ", trials " << ransac_trials << ", adjustments " << adjustments << ", iterations "
      << iterations << ", cost " << initial_cost << " -> " << final_cost << ", "
      << total_seconds * 1e3 << " ms";
@@ -423,12 +455,37 @@ bool ImageResection::InitialValues() {
   AbsolutePoseRansacOptions consensus = options_.consensus;
   consensus.inlier_threshold = threshold_;
   consensus.score = marks_.stated ? ConsensusScore::kMsac : ConsensusScore::kLeastMedian;
+  // Stopping at a model every mark fits decides nothing only where the all-marks check below
+  // speaks for every mark (stated accuracy), and six marks leave a least squares of all marks no
+  // second minimum within the threshold of every one of them to fall into from another start.
+  consensus.ransac.stop_enumeration_when_all_inliers =
+      consensus.ransac.stop_enumeration_when_all_inliers && marks_.stated &&
+      n >= kMinMarksToStopConsensus;
   RansacSummary ransac;
-  const Status status =
+  Status status =
       EstimateAbsolutePoseRansac(consensus, input_.image_plane, input_.points_in_ground,
                                  marks_.weights, input_.focal_length, &eo_, &candidate_, &ransac);
   summary.ransac_trials = ransac.num_trials;
   summary.ransac_exhaustive = ransac.exhaustive;
+  if (status.ok() && ransac.stopped_early) {
+    // Every mark fits the stopping model. The full enumeration ends with all marks as candidates
+    // at their least squares too whenever that least squares passes the tests: its best model
+    // then fits all, or the all-marks check below takes all back. Otherwise it runs in full.
+    ExteriorOrientation all_marks = eo_;
+    if (SetFitsItsAccuracy(options_, input_, marks_.weights, std::vector<char>(n, 1),
+                           /*snoop=*/true, &all_marks)) {
+      candidate_.assign(n, 1);
+      eo_ = all_marks;
+      summary.ransac_stopped_early = true;
+      summary.ransac_seconds = SecondsSince(ransac_start);
+      return true;
+    }
+    consensus.ransac.stop_enumeration_when_all_inliers = false;
+    status = EstimateAbsolutePoseRansac(consensus, input_.image_plane, input_.points_in_ground,
+                                        marks_.weights, input_.focal_length, &eo_, &candidate_,
+                                        &ransac);
+    summary.ransac_trials += ransac.num_trials;
+  }
   summary.ransac_seconds = SecondsSince(ransac_start);
   if (!status.ok()) return Fail("no initial pose: " + status.message());
   // Four marks and no stated accuracy: the data cannot say which would not fit; all are taken.

@@ -8,6 +8,12 @@
 //      result does not depend on the seed. Its threshold comes from the marks' stated accuracy:
 //      sqrt of the chi-square(2) quantile at the test confidence (3.72 sigma at 0.999). With no
 //      accuracy stated the consensus is by least median of squares, which needs no threshold.
+//      With stated accuracy and six or more marks the enumeration stops at the first model that
+//      every mark fits (consensus.ransac.stop_enumeration_when_all_inliers, on by default) when
+//      the least squares of all marks then passes the global test and the snooping: the marks
+//      the full enumeration leads to are then all of them too (its best model fits all, or the
+//      all-marks check below takes all back), so only the start of that least squares differs.
+//      When the check fails the enumeration runs in full.
 //   2. Decisions, repeated until nothing changes: least squares over the candidates
 //      (solvers/resection/pose_refinement.h); every mark left out that fits within the threshold at that
 //      solution is taken back (so when all marks fit the least-squares solution of all, all are
@@ -68,9 +74,14 @@ namespace photopose {
 // Composed as PoseLib composes its options: every knob of every stage is reachable.
 struct ResectionOptions {
   // The consensus when no approximate pose is given: RANSAC (seed, trials, exhaustive limit, local
-  // optimisation) and its Gauss-Newton iterations. Its inlier_threshold and score are set per image
-  // from the tests below and the marks' accuracy.
-  AbsolutePoseRansacOptions consensus;
+  // optimisation, stopping the enumeration at a model every mark fits: on here, honoured with
+  // stated accuracy and six or more marks, step 1 above) and its Gauss-Newton iterations. Its
+  // inlier_threshold and score are set per image from the tests below and the marks' accuracy.
+  AbsolutePoseRansacOptions consensus = [] {
+    AbsolutePoseRansacOptions defaults;
+    defaults.ransac.stop_enumeration_when_all_inliers = true;
+    return defaults;
+  }();
   // The confidence of the consensus threshold and of every test.
   OutlierTestOptions test;
   // The least-squares refinement: solver, Jacobian, loss (none by default), Ceres and Taylor
@@ -99,7 +110,11 @@ struct ResectionSummary {
   std::string message;            // why it failed (with its numbers), empty on success
   bool used_approximate = false;  // initial pose from the caller, not the consensus
   int ransac_trials = 0;          // minimal samples tried
-  bool ransac_exhaustive = false;  // every minimal sample was tried
+  bool ransac_exhaustive = false;  // the minimal samples were enumerated: every one of them, unless
+                                   // ransac_stopped_early
+  // The enumeration stopped at the first model every mark fits, and the least squares of all
+  // marks passed the tests (step 1).
+  bool ransac_stopped_early = false;
   int adjustments = 0;            // least-squares adjustments (each rejection or readmission adds one)
   int iterations = 0;             // refinement iterations over all adjustments
   double initial_cost = 0.0;      // 1/2 sum of squared whitened residuals, first adjustment start

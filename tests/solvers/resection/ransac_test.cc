@@ -265,6 +265,45 @@ TEST(RansacTest, FewDataAreEnumeratedAndDoNotDependOnTheSeed) {
   }
 }
 
+// stop_enumeration_when_all_inliers: an enumeration ends at the first model every datum fits (as
+// the adaptive rule does when drawing), and runs in full while none does.
+TEST(RansacTest, EnumerationStopsAtTheFirstModelEveryDatumFits) {
+  RansacOptions options;
+  options.stop_enumeration_when_all_inliers = true;
+  // 30 points, no outlier, the noise shrunk to a tenth (0.025 of the threshold), so that a good
+  // pair's line, refined, fits every point.
+  LineData clean = MakeLineData(6, 30, 0.0);
+  for (Eigen::Vector2d& p : clean.points) p.y() = 0.7 * p.x() - 0.2 + 0.1 * (p.y() - 0.7 * p.x() + 0.2);
+  const LineEstimator estimator(clean.points, kThreshold);
+  Line line;
+  std::vector<char> mask;
+  RansacSummary summary = Ransac(options, estimator, &line, &mask);
+  ASSERT_TRUE(summary.success);
+  EXPECT_TRUE(summary.exhaustive);
+  EXPECT_TRUE(summary.stopped_early);
+  EXPECT_LT(summary.num_trials, 435);
+  EXPECT_EQ(summary.num_inliers, 30);
+  EXPECT_EQ(std::count(mask.begin(), mask.end(), 1), 30);
+  EXPECT_NE(summary.BriefReport().find("stopped"), std::string::npos) << summary.BriefReport();
+  // Off (the default): every one of the C(30, 2) = 435 pairs.
+  summary = Ransac(RansacOptions(), estimator, &line, &mask);
+  EXPECT_FALSE(summary.stopped_early);
+  EXPECT_EQ(summary.num_trials, 435);
+  // With an outlier no model fits every datum: the enumeration runs in full, as without the stop.
+  const LineData dirty = MakeLineData(7, 30, 0.1);
+  const LineEstimator with_outliers(dirty.points, kThreshold);
+  Line full;
+  std::vector<char> full_mask;
+  const RansacSummary reference = Ransac(RansacOptions(), with_outliers, &full, &full_mask);
+  summary = Ransac(options, with_outliers, &line, &mask);
+  EXPECT_FALSE(summary.stopped_early);
+  EXPECT_EQ(summary.num_trials, 435);
+  EXPECT_EQ(line.a, full.a);
+  EXPECT_EQ(line.b, full.b);
+  EXPECT_EQ(mask, full_mask);
+  EXPECT_EQ(summary.score, reference.score);
+}
+
 TEST(RansacTest, TrialBounds) {
   const LineData clean = MakeLineData(3, 200, 0.0);
   const LineEstimator estimator(clean.points, kThreshold);
