@@ -1,12 +1,16 @@
 // The Taylor bundle's per-mark and per-point storage (solvers/bundle/internal/taylor_normals.h):
 // IndexLists against a vector of vectors built from the same entries, a mark's W and g_p part
-// made from its stored rows (MarkW, MarkGp) against the products written out by hand.
+// made from its stored rows (MarkW, MarkGp) against the products written out by hand, and
+// BuildLayout's image order and mark lists against the same things made the plain way.
 #include "solvers/bundle/internal/taylor_normals.h"
 
 #include <gtest/gtest.h>
 
+#include <Eigen/OrderingMethods>
 #include <random>
 #include <vector>
+
+#include "core/simulation/synthetic_block.h"
 
 namespace photopose::internal::taylor {
 namespace {
@@ -82,6 +86,99 @@ TEST(MarkRows, WAndGradientPartAreTheHandWrittenProducts) {
   const Eigen::Matrix3d V = -W.topRows<3>();
   EXPECT_NEAR((V - V.transpose()).cwiseAbs().maxCoeff(), 0.0, kProductAgreement);
   EXPECT_GT(V.diagonal().minCoeff(), 0.0);
+}
+
+// A plan for BuildLayout alone: every mark used but every fifth, the first image and the control
+// points held constant, no priors, no calibration.
+Plan LayoutPlan(const Block& block) {
+  Plan plan;
+  plan.mark_used.assign(block.marks.size(), 1);
+  for (size_t m = 0; m < block.marks.size(); m += 5) plan.mark_used[m] = 0;
+  plan.point_in_problem.assign(block.points.size(), 1);
+  plan.point_constant.assign(block.points.size(), 0);
+  for (size_t p = 0; p < block.points.size(); ++p)
+    plan.point_constant[p] = block.points[p].role == PointRole::kControl;
+  plan.point_prior.assign(block.points.size(), 0);
+  plan.image_constant.assign(block.images.size(), 0);
+  plan.image_constant[0] = 1;
+  plan.image_fixed.assign(block.images.size(), std::array<bool, 6>{});
+  plan.image_prior.assign(block.images.size(), 0);
+  plan.image_prior_height.assign(block.images.size(), 1);
+  plan.image_attitude.assign(block.images.size(), 0);
+  plan.calibrated.assign(block.cameras.size(), {});
+  return plan;
+}
+
+TEST(BuildLayout, ImageOrderAndMarkListsAsMadeThePlainWay) {
+  SyntheticBlockOptions options;
+  options.num_lines = 3;
+  options.images_per_line = 6;
+  options.num_tie_points = 150;
+  Block block;
+  SyntheticBlockTruth truth;
+  const Status made = MakeSyntheticBlock(options, &block, &truth);
+  ASSERT_TRUE(made.ok()) << made.message();
+  block.BuildIndex();
+  const Plan plan = LayoutPlan(block);
+  Layout layout;
+  BuildLayout(block, plan, &layout);
+
+  // The fill-reducing order: AMD on the graph with an entry for every two images of every free
+  // point (each pair as often as points share it), as it was built before it was built pair by
+  // pair.
+  std::vector<int> free_images, block_of(block.images.size(), -1);
+  for (size_t i = 0; i < block.images.size(); ++i) {
+    if (plan.image_constant[i]) continue;
+    block_of[i] = static_cast<int>(free_images.size());
+    free_images.push_back(static_cast<int>(i));
+  }
+  const int num_blocks = static_cast<int>(free_images.size());
+  std::vector<Eigen::Triplet<double, int>> entries;
+  for (size_t p = 0; p < block.points.size(); ++p) {
+    if (plan.point_constant[p]) continue;
+    std::vector<int> seen;
+    for (const int m : block.marks_of_point[p])
+      if (plan.mark_used[m] && block_of[block.marks[m].image] >= 0)
+        seen.push_back(block_of[block.marks[m].image]);
+    for (const int b1 : seen)
+      for (const int b2 : seen) entries.emplace_back(b1, b2, 1.0);
+  }
+  for (int b = 0; b < num_blocks; ++b) entries.emplace_back(b, b, 1.0);
+  SparseMatrix graph(num_blocks, num_blocks);
+  graph.setFromTriplets(entries.begin(), entries.end());
+  Eigen::PermutationMatrix<Eigen::Dynamic, Eigen::Dynamic, int> order;
+  Eigen::AMDOrdering<int>()(graph, order);
+  std::vector<int> expected_order(num_blocks);
+  for (int k = 0; k < num_blocks; ++k) expected_order[k] = free_images[order.indices()[k]];
+  ASSERT_GT(num_blocks, 10);
+  EXPECT_EQ(layout.free_images, expected_order);
+
+  // The mark lists: positions in layout.marks, in mark order.
+  ASSERT_EQ(layout.image_marks.size(), block.images.size());
+  ASSERT_EQ(layout.point_marks.size(), layout.free_points.size());
+  std::vector<std::vector<int>> image_marks(block.images.size());
+  std::vector<std::vector<int>> point_marks(layout.free_points.size());
+  std::vector<std::vector<int>> point_all_marks(layout.free_points.size());
+  int k = 0;
+  for (size_t m = 0; m < block.marks.size(); ++m) {
+    if (!plan.mark_used[m]) continue;
+    ASSERT_EQ(layout.marks[k], static_cast<int>(m));
+    const int q = layout.point_block[block.marks[m].point];
+    image_marks[block.marks[m].image].push_back(k);
+    if (q >= 0) point_all_marks[q].push_back(k);
+    if (q >= 0 && layout.image_block[block.marks[m].image] >= 0) point_marks[q].push_back(k);
+    ++k;
+  }
+  ASSERT_EQ(static_cast<size_t>(k), layout.marks.size());
+  const auto as_vector = [](IndexLists::List list) { return std::vector<int>(list.begin(), list.end()); };
+  for (size_t i = 0; i < block.images.size(); ++i)
+    EXPECT_EQ(as_vector(layout.image_marks[i]), image_marks[i]) << "image " << i;
+  for (size_t q = 0; q < layout.free_points.size(); ++q) {
+    EXPECT_EQ(as_vector(layout.point_marks[q]), point_marks[q]) << "point " << q;
+    EXPECT_EQ(as_vector(layout.point_all_marks[q]), point_all_marks[q]) << "point " << q;
+    const size_t n = point_marks[q].size();
+    EXPECT_EQ(layout.point_pairs[q].size(), n * (n + 1) / 2) << "point " << q;
+  }
 }
 
 }  // namespace
