@@ -11,6 +11,7 @@
 #include <vector>
 
 #include "core/simulation/synthetic_block.h"
+#include "tests/support/exact_block.h"
 
 namespace photopose::internal::taylor {
 namespace {
@@ -114,10 +115,7 @@ TEST(BuildLayout, ImageOrderAndMarkListsAsMadeThePlainWay) {
   options.num_lines = 3;
   options.images_per_line = 6;
   options.num_tie_points = 150;
-  Block block;
-  SyntheticBlockTruth truth;
-  const Status made = MakeSyntheticBlock(options, &block, &truth);
-  ASSERT_TRUE(made.ok()) << made.message();
+  Block block = photopose::testing::MakeExactBlock(options).block;
   block.BuildIndex();
   const Plan plan = LayoutPlan(block);
   Layout layout;
