@@ -1114,7 +1114,13 @@ Status BundleAdjustWithSolver(PoseSolver solver, const BundleAdjustmentOptions& 
   TaylorBundleResult local;
   TaylorBundleResult& taylor = taylor_result != nullptr ? *taylor_result : local;
   const Status status = TaylorBundleAdjust(taylor_options, config, block, &taylor);
-  *result = taylor.adjustment;
+  // Moved when the caller keeps no Taylor result: a copy would hold the per-observation
+  // diagnostics twice (3.4 million of 72 bytes at 1000 images).
+  if (taylor_result != nullptr) {
+    *result = taylor.adjustment;
+  } else {
+    *result = std::move(taylor.adjustment);
+  }
   return status;
 }
 

@@ -33,17 +33,26 @@ int TriangleIndex(int a, int c, int n) { return a * n - a * (a - 1) / 2 + (c - a
 void OrderImagesToReduceFill(const Block& block, const Plan& plan, Layout* layout) {
   const int num_blocks = static_cast<int>(layout->free_images.size());
   if (num_blocks < 3) return;
+  // The graph's pattern: every two camera blocks that see a common free point, each pair once.
+  // Taken image by image (a stamp per block marks the neighbours found), so the graph is made
+  // from its ~100 neighbours per image; a triplet per pair of every point's images (the sum of
+  // n^2 over the points: 27 million at 1000 images) held 0.8 GB for a second before the first
+  // round. AMD reads only the pattern, so the order is the same.
   std::vector<Eigen::Triplet<double, int>> entries;
-  std::vector<int> seen;
-  for (size_t p = 0; p < block.points.size(); ++p) {
-    if (!plan.point_in_problem[p] || plan.point_constant[p]) continue;
-    seen.clear();
-    for (const int m : block.marks_of_point[p]) {
-      const int b = layout->image_block[block.marks[m].image];
-      if (plan.mark_used[m] && b >= 0) seen.push_back(b);
+  std::vector<int> stamp(num_blocks, -1);
+  for (size_t i = 0; i < block.images.size(); ++i) {
+    const int b1 = layout->image_block[i];
+    if (b1 < 0) continue;
+    for (const int m : block.marks_of_image[i]) {
+      const int p = block.marks[m].point;
+      if (!plan.mark_used[m] || !plan.point_in_problem[p] || plan.point_constant[p]) continue;
+      for (const int m2 : block.marks_of_point[p]) {
+        const int b2 = layout->image_block[block.marks[m2].image];
+        if (!plan.mark_used[m2] || b2 < 0 || stamp[b2] == b1) continue;
+        stamp[b2] = b1;
+        entries.emplace_back(b1, b2, 1.0);
+      }
     }
-    for (const int b1 : seen)
-      for (const int b2 : seen) entries.emplace_back(b1, b2, 1.0);
   }
   for (int b = 0; b < num_blocks; ++b) entries.emplace_back(b, b, 1.0);
   SparseMatrix graph(num_blocks, num_blocks);
@@ -114,26 +123,50 @@ void BuildLayout(const Block& block, const Plan& plan, Layout* layout) {
   }
   for (size_t i = 0; i < block.images.size(); ++i)
     layout->num_observations += ImagePriorRows(plan, i) + 3 * plan.image_attitude[i];
-  layout->point_marks.assign(layout->free_points.size(), {});
-  layout->point_all_marks.assign(layout->free_points.size(), {});
-  layout->image_marks.assign(block.images.size(), {});
-  for (size_t m = 0; m < block.marks.size(); ++m) {
-    if (!plan.mark_used[m]) continue;
-    const int k = static_cast<int>(layout->marks.size());
-    layout->marks.push_back(static_cast<int>(m));
-    layout->num_observations += 2;
-    const int b = layout->image_block[block.marks[m].image];
-    const int q = layout->point_block[block.marks[m].point];
-    layout->mark_block.push_back(b);
-    layout->mark_point.push_back(q);
-    layout->image_marks[block.marks[m].image].push_back(k);
-    if (q >= 0) layout->point_all_marks[q].push_back(k);
-    if (q >= 0 && b >= 0) layout->point_marks[q].push_back(k);
+  layout->point_marks.Reset(layout->free_points.size());
+  layout->point_all_marks.Reset(layout->free_points.size());
+  layout->image_marks.Reset(block.images.size());
+  // Two passes over the marks: each list's length, then its entries.
+  for (int pass = 0; pass < 2; ++pass) {
+    size_t num_used = 0;
+    for (size_t m = 0; m < block.marks.size(); ++m) {
+      if (!plan.mark_used[m]) continue;
+      const int image = block.marks[m].image;
+      const int b = layout->image_block[image];
+      const int q = layout->point_block[block.marks[m].point];
+      if (pass == 0) {
+        ++num_used;
+        layout->image_marks.Count(image);
+        if (q >= 0) layout->point_all_marks.Count(q);
+        if (q >= 0 && b >= 0) layout->point_marks.Count(q);
+        continue;
+      }
+      const int k = static_cast<int>(layout->marks.size());
+      layout->marks.push_back(static_cast<int>(m));
+      layout->num_observations += 2;
+      layout->mark_block.push_back(b);
+      layout->mark_point.push_back(q);
+      layout->image_marks.Add(image, k);
+      if (q >= 0) layout->point_all_marks.Add(q, k);
+      if (q >= 0 && b >= 0) layout->point_marks.Add(q, k);
+    }
+    if (pass == 0) {
+      layout->marks.reserve(num_used);
+      layout->mark_block.reserve(num_used);
+      layout->mark_point.reserve(num_used);
+      layout->image_marks.Allocate();
+      layout->point_all_marks.Allocate();
+      layout->point_marks.Allocate();
+    }
   }
+  layout->image_marks.Finish();
+  layout->point_all_marks.Finish();
+  layout->point_marks.Finish();
   // Chunks of about equal elimination work (a point's is about n^2 for its n marks).
   double total_work = 0.0;
-  for (const std::vector<int>& marks : layout->point_marks)
-    total_work += 1.0 + static_cast<double>(marks.size()) * marks.size();
+  for (size_t q = 0; q < layout->point_marks.size(); ++q)
+    total_work += 1.0 + static_cast<double>(layout->point_marks[q].size()) *
+                            layout->point_marks[q].size();
   layout->chunk_start.assign(1, 0);
   double work = 0.0;
   for (size_t q = 0; q < layout->point_marks.size(); ++q) {
@@ -158,12 +191,17 @@ void BuildLayout(const Block& block, const Plan& plan, Layout* layout) {
   };
   for (int b = 0; b < static_cast<int>(num_blocks); ++b)
     layout->diagonal_pair.push_back(pair_of(b, b));
-  layout->point_pairs.assign(layout->free_points.size(), {});
+  layout->point_pairs.Reset(layout->free_points.size());
   for (size_t q = 0; q < layout->free_points.size(); ++q) {
-    const std::vector<int>& marks = layout->point_marks[q];
+    const int n = static_cast<int>(layout->point_marks[q].size());
+    layout->point_pairs.Count(q, n * (n + 1) / 2);
+  }
+  layout->point_pairs.Allocate();
+  layout->point_pairs.Finish();
+  for (size_t q = 0; q < layout->free_points.size(); ++q) {
+    const IndexLists::List marks = layout->point_marks[q];
     const int n = static_cast<int>(marks.size());
-    std::vector<int>& ids = layout->point_pairs[q];
-    ids.resize(n * (n + 1) / 2);
+    int* ids = layout->point_pairs.Entries(q);
     for (int a = 0; a < n; ++a)
       for (int c = a; c < n; ++c)
         ids[TriangleIndex(a, c, n)] =
@@ -343,7 +381,6 @@ bool LinearizeMarks(TaylorPartials partials, const Block& block, const Plan& pla
         return;
       }
       const Eigen::Vector2d F(fu, fv);
-      normal->f[k] = F;
       double weight = 1.0 / (plan.mark_sigma[m] * plan.mark_sigma[m]);
       double factor = 1.0;
       ssr += MarkCost(plan, m, weight * F.squaredNorm(), &factor);
@@ -360,8 +397,7 @@ bool LinearizeMarks(TaylorPartials partials, const Block& block, const Plan& pla
         U.noalias() += weighted_Ae_T * A_e;
         ge.noalias() += weighted_Ae_T * F;
       }
-      normal->W[k].noalias() = weighted_Ae_T * A_p;
-      normal->gp_mark[k].noalias() = weight * A_p.transpose() * F;
+      normal->marks[k] = MarkRows{A_e, F, weight};
       if (K > 0) {
         for (int j = 0; j < K; ++j) {
           A_g(0, j) = calib_u[j];
@@ -421,8 +457,8 @@ bool LinearizeMarks(TaylorPartials partials, const Block& block, const Plan& pla
     Eigen::Vector3d gp = Eigen::Vector3d::Zero();
     if (G > 0) normal->Wg_point[q].setZero(G, 3);
     for (const int k : layout.point_all_marks[q]) {
-      V -= normal->W[k].topRows<3>();
-      gp += normal->gp_mark[k];
+      V -= MarkW(normal->marks[k]).topRows<3>();
+      gp += MarkGp(normal->marks[k]);
       const int global = G > 0 ? MarkGlobal(block, layout, frame, k) : -1;
       if (global >= 0) normal->Wg_point[q].middleRows(global, normal->Wg[k].rows()) += normal->Wg[k];
     }
@@ -562,9 +598,7 @@ bool Linearize(TaylorPartials partials, const Block& block, const Plan& plan, co
   normal->ge.assign(num_blocks, Vector6d::Zero());
   normal->V.assign(num_points, Eigen::Matrix3d::Zero());
   normal->gp.assign(num_points, Eigen::Vector3d::Zero());
-  normal->W.resize(layout.marks.size());
-  normal->gp_mark.resize(layout.marks.size());
-  normal->f.resize(layout.marks.size());
+  normal->marks.resize(layout.marks.size());
   const int G = layout.num_global;
   normal->Ueg.assign(G > 0 ? num_blocks : 0, Eigen::MatrixXd::Zero(6, G));
   normal->Ugg.setZero(G, G);
@@ -635,7 +669,7 @@ Matrix Damped(const Matrix& N, double lambda) {
 // Wg_p V^-1 Wg_p^T. Returns the first singular free point, or -1.
 int ReduceChunk(const Normal& normal, const Layout& layout, int first, int last, double lambda,
                 std::vector<Matrix6d>* blocks, Eigen::MatrixXd* border, Eigen::MatrixXd* corner,
-                Eigen::VectorXd* r, std::vector<Matrix63>* Y,
+                Eigen::VectorXd* r, std::vector<Matrix63>* W, std::vector<Matrix63>* Y,
                 std::vector<Eigen::Matrix3d>* V_inverses) {
   const int G = layout.num_global;
   const int cameras_size = 6 * static_cast<int>(layout.free_images.size());
@@ -646,12 +680,14 @@ int ReduceChunk(const Normal& normal, const Layout& layout, int first, int last,
       return q;
     const Eigen::Matrix3d V_inverse = ldlt.solve(Eigen::Matrix3d::Identity());
     (*V_inverses)[q] = V_inverse;
-    const std::vector<int>& marks = layout.point_marks[q];
-    const std::vector<int>& ids = layout.point_pairs[q];
+    const IndexLists::List marks = layout.point_marks[q];
+    const IndexLists::List ids = layout.point_pairs[q];
     const int n = static_cast<int>(marks.size());
+    W->resize(n);
     Y->resize(n);
     for (int a = 0; a < n; ++a) {
-      (*Y)[a].noalias() = normal.W[marks[a]] * V_inverse;
+      (*W)[a] = MarkW(normal.marks[marks[a]]);
+      (*Y)[a].noalias() = (*W)[a] * V_inverse;
       r->segment<6>(6 * layout.mark_block[marks[a]]).noalias() -= (*Y)[a] * normal.gp[q];
     }
     for (int a = 0; a < n; ++a) {
@@ -661,7 +697,7 @@ int ReduceChunk(const Normal& normal, const Layout& layout, int first, int last,
         const int kc = marks[c];
         const int bc = layout.mark_block[kc];
         Matrix6d& block = (*blocks)[ids[TriangleIndex(a, c, n)]];
-        const Matrix6d M = (*Y)[a] * normal.W[kc].transpose();  // W_a V^-1 W_c^T
+        const Matrix6d M = (*Y)[a] * (*W)[c].transpose();  // W_a V^-1 W_c^T
         if (a == c || ba < bc) {
           block -= M;
         } else if (ba > bc) {
@@ -710,6 +746,7 @@ int Reduce(const Normal& normal, const Layout& layout, Reduction* reduction) {
   reduction->chunk_border.resize(kReductionChunks - 1);
   reduction->chunk_corner.resize(kReductionChunks - 1);
   reduction->chunk_r.resize(kReductionChunks - 1);
+  reduction->W.resize(kReductionChunks);
   reduction->Y.resize(kReductionChunks);
   std::vector<int> singular(kReductionChunks, -1);
   ParallelFor(kReductionChunks, reduction->num_threads, [&](size_t chunk) {
@@ -729,7 +766,8 @@ int Reduce(const Normal& normal, const Layout& layout, Reduction* reduction) {
     }
     singular[chunk] = ReduceChunk(normal, layout, layout.chunk_start[chunk],
                                   layout.chunk_start[chunk + 1], lambda, blocks, border, corner,
-                                  r, &reduction->Y[chunk], &reduction->V_inverse);
+                                  r, &reduction->W[chunk], &reduction->Y[chunk],
+                                  &reduction->V_inverse);
   });
   for (int chunk = 0; chunk < kReductionChunks; ++chunk)
     if (singular[chunk] >= 0) return layout.free_points[singular[chunk]];
@@ -883,7 +921,7 @@ void SolveCorrections(const Plan& plan, const Layout& layout, const Normal& norm
   ParallelFor(layout.free_points.size(), reduction.num_threads, [&](size_t q) {
     Eigen::Vector3d t = normal.gp[q];
     for (const int k : layout.point_marks[q])
-      t.noalias() -= normal.W[k].transpose() * d_e->segment<6>(6 * layout.mark_block[k]);
+      t.noalias() -= MarkW(normal.marks[k]).transpose() * d_e->segment<6>(6 * layout.mark_block[k]);
     if (G > 0) t.noalias() -= normal.Wg_point[q].transpose() * d_e->segment(cameras_size, G);
     (*d_p)[q] = reduction.V_inverse[q] * t;
   });

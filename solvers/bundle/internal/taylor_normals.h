@@ -64,6 +64,51 @@ struct Plan : BundlePlan {
   std::shared_ptr<const ceres::LossFunction> tie_loss;
 };
 
+// Lists of indices, one per item (a free point, an image), stored end to end: list i is
+// items[start[i]] .. items[start[i + 1] - 1]. One allocation of exactly the entries, where a vector
+// per item costs its 24-byte header, an allocation and the slack of its growth.
+class IndexLists {
+ public:
+  // A list: iterable, indexable, sized.
+  struct List {
+    const int* first;
+    const int* last;
+    const int* begin() const { return first; }
+    const int* end() const { return last; }
+    size_t size() const { return static_cast<size_t>(last - first); }
+    int operator[](size_t k) const { return first[k]; }
+  };
+
+  // Starts `num_lists` empty lists; then Count every entry, Allocate, and Add them in the same
+  // order (each list keeps its entries in the order added).
+  void Reset(size_t num_lists) {
+    start_.assign(num_lists + 1, 0);
+    items_.clear();
+    fill_.clear();
+  }
+  void Count(size_t list, int entries = 1) { start_[list + 1] += entries; }
+  void Allocate() {
+    for (size_t i = 1; i < start_.size(); ++i) start_[i] += start_[i - 1];
+    items_.assign(static_cast<size_t>(start_.back()), 0);
+    fill_.assign(start_.begin(), start_.end() - 1);
+  }
+  void Add(size_t list, int item) { items_[static_cast<size_t>(fill_[list]++)] = item; }
+  // After the last Add: frees the fill positions.
+  void Finish() { std::vector<int>().swap(fill_); }
+  // List i's entries to write in place (Count reserved them, Allocate made them).
+  int* Entries(size_t i) { return items_.data() + start_[i]; }
+
+  size_t size() const { return start_.empty() ? 0 : start_.size() - 1; }
+  List operator[](size_t i) const {
+    return {items_.data() + start_[i], items_.data() + start_[i + 1]};
+  }
+
+ private:
+  std::vector<int> start_;
+  std::vector<int> items_;
+  std::vector<int> fill_;
+};
+
 // The unknowns and the sparsity of the reduced normal matrix of one round. Camera block b is
 // image free_images[b], columns 6 b .. 6 b + 5. The global unknowns (each self-calibrated camera's
 // estimated parameters in plan.calibrated order, then the estimated lever arm) follow as the last
@@ -81,11 +126,10 @@ struct Layout {
   std::vector<int> marks;                     // the marks of the round (indices into Block::marks)
   std::vector<int> mark_block;                // per mark of the round: camera block or -1
   std::vector<int> mark_point;                // per mark of the round: free point or -1
-  std::vector<std::vector<int>> point_marks;  // per free point: positions in `marks` of its
-                                              // marks in free images
-  std::vector<std::vector<int>> point_pairs;  // per free point: pair of each (a <= c) of those
-  std::vector<std::vector<int>> point_all_marks;  // per free point: positions of all its marks
-  std::vector<std::vector<int>> image_marks;      // per image: positions in `marks` of its marks
+  IndexLists point_marks;      // per free point: positions in `marks` of its marks in free images
+  IndexLists point_pairs;      // per free point: pair of each (a <= c) of those
+  IndexLists point_all_marks;  // per free point: positions of all its marks
+  IndexLists image_marks;      // per image: positions in `marks` of its marks
   std::vector<int> chunk_start;    // kReductionChunks + 1 boundaries in the free points
   std::vector<int> diagonal_pair;  // per camera block
   std::vector<std::pair<int, int>> pairs;
@@ -133,15 +177,44 @@ struct Frame {
   bool use_lever = false;  // the camera-position priors apply State::lever
 };
 
+// One mark's linearised observation equation: its rows dF/d(X0, Y0, Z0, omega, phi, kappa)
+// (the point's rows are minus the first three: PointPartialsFromCentrePartials), F (the
+// observation unit) and its weight w (1 / sigma^2 times the tie loss's rho' at the linearisation
+// point; 1 / observation unit^2).
+struct MarkRows {
+  Matrix26 A_e;
+  Eigen::Vector2d f;
+  double weight = 0.0;
+};
+
+// The mark's share of the camera-point block of N, w A_e^T A_p (6 x 3), and of the point's
+// right-hand side, w A_p^T F: the same arithmetic wherever they are needed, so every use sees the
+// same bits.
+inline Matrix23 MarkPointRows(const MarkRows& rows) {
+  return -rows.A_e.leftCols<3>();  // dF/dX = -dF/dX0 (PointPartialsFromCentrePartials)
+}
+inline Matrix63 MarkW(const MarkRows& rows) {
+  const Eigen::Matrix<double, 6, 2> weighted_Ae_T = rows.weight * rows.A_e.transpose();
+  Matrix63 W;
+  W.noalias() = weighted_Ae_T * MarkPointRows(rows);
+  return W;
+}
+inline Eigen::Vector3d MarkGp(const MarkRows& rows) {
+  Eigen::Vector3d gp;
+  gp.noalias() = rows.weight * MarkPointRows(rows).transpose() * rows.f;
+  return gp;
+}
+
 // The normal equations of one linearisation (seed sign: N d = A^T P F, p = p0 - d).
 struct Normal {
   std::vector<Matrix6d> U;  // per camera block
   std::vector<Vector6d> ge;
   std::vector<Eigen::Matrix3d> V;  // per free point
   std::vector<Eigen::Vector3d> gp;
-  std::vector<Matrix63> W;               // per mark of the round: w A_e^T A_p
-  std::vector<Eigen::Vector3d> gp_mark;  // per mark of the round: w A_p^T F
-  std::vector<Eigen::Vector2d> f;        // per mark of the round: F (um)
+  // Per mark of the round: its rows and weight (MarkRows), 120 bytes; the mark's W = w A_e^T A_p
+  // and g_p part w A_p^T F are made from them when needed (MarkW, MarkGp) rather than kept
+  // (184 bytes a mark with F: 110 MB at 1.7 million marks).
+  std::vector<MarkRows> marks;
   // The global columns (Layout::num_global, G; all empty when G = 0): per camera block its
   // 6 x G coupling w A_e^T A_g; their own G x G block and right-hand side; per mark of a
   // self-calibrated camera w A_g^T A_p (its camera's estimated parameters x 3; empty otherwise);
@@ -195,11 +268,11 @@ struct Reduction {
   double damping = 0.0;                    // lambda of the reduction (unitless)
   std::vector<Eigen::Matrix3d> V_inverse;  // per free point (of V_p + lambda diag V_p)
   // Per chunk but the first (which writes into blocks and r): partial S blocks and r; and per
-  // chunk the scratch W V^-1 of the marks of one point.
+  // chunk the scratch W and W V^-1 of the marks of one point.
   std::vector<std::vector<Matrix6d>> chunk_blocks;
   std::vector<Eigen::MatrixXd> chunk_border, chunk_corner;
   std::vector<Eigen::VectorXd> chunk_r;
-  std::vector<std::vector<Matrix63>> Y;
+  std::vector<std::vector<Matrix63>> W, Y;
   std::vector<Matrix6d> blocks;  // per pair: the reduced matrix S (unscaled)
   Eigen::MatrixXd border;        // S's camera x global block (6 B x G, unscaled)
   Eigen::MatrixXd corner;        // S's global x global block (G x G, unscaled)
