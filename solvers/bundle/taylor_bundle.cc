@@ -1,7 +1,9 @@
 // The Taylor bundle adjustment (taylor_bundle.h): options, the plan (internal::MakeBundlePlan plus
 // its own ideal film points), the Gauss-Newton rounds, rejection and the results. The normal
 // equations (layout, linearisation, elimination, factorisation, covariances) are the other stage,
-// in taylor_bundle_normals.cc. About 800 lines: one stage per file, each step a named function.
+// in taylor_bundle_normals.cc. About 1100 lines, one file on purpose: the rounds, the
+// Levenberg-Marquardt step control, the free gauge and the results share one context (Context),
+// and each step is a named function; the normal equations are the other stage.
 #include "solvers/bundle/taylor_bundle.h"
 
 #include <glog/logging.h>

@@ -1,5 +1,7 @@
 // The normal equations of the Taylor bundle adjustment (internal/taylor_normals.h): layout,
-// linearisation, elimination of the points, factorisation.
+// linearisation, elimination of the points, factorisation. About 930 lines, one file on purpose:
+// the one stage of the Taylor solver that touches every mark, each step a named function over the
+// same layout (internal/taylor_normals.h), so that its memory per mark is visible in one place.
 #include <ceres/jet.h>
 
 #include <Eigen/Dense>
