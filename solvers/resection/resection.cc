@@ -636,12 +636,7 @@ bool ImageResection::Statistics() {
   const double confidence = options_.test.confidence;
   if (stats_.redundancy > 0) {
     result_.has_covariance = true;
-    // With stated accuracies that passed the global test, the a-priori variance factor 1 stands
-    // unless the data say worse: sigma0 from 2 to 10 degrees of freedom scatters widely (with two,
-    // below 0.3 one time in 12), and sigma0^2 N^-1 then shrank the sigmas of a correct pose until
-    // the truth lay 5 to 15 of them away. Estimated accuracies have only the data's sigma0.
-    const double variance_factor = marks_.stated ? std::max(1.0, s0_squared_) : s0_squared_;
-    result_.covariance = variance_factor * stats_.cofactor;
+    result_.covariance = s0_squared_ * stats_.cofactor;
     result_.standard_deviations = result_.covariance.diagonal().cwiseSqrt();
   }
   const double critical =

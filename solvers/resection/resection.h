@@ -34,8 +34,7 @@
 //        warning, or refused under refuse_weak.
 //   4. Statistics: per mark its residual (in its own unit), normalized residual, redundancy number,
 //      MDB and status; sigma0 (for every image that reached an adjustment, solved or not) and the
-//      covariance s^2 N^-1 over the accepted marks, s = max(1, sigma0) with stated accuracy (the
-//      a-priori factor unless the data say worse), sigma0 when estimated.
+//      covariance sigma0^2 N^-1 over the accepted marks.
 // Without stated accuracy (sigma = 0: the block initialization's initial values only; photopose
 // resect always states one) sigma0 comes from the data, with Pope's tau test, and there is no
 // global test and no ambiguity search: a blunder then inflates sigma0 and may hide itself.
@@ -155,8 +154,7 @@ constexpr EnumNameTable<MarkStatus> EnumNames(MarkStatus) {
 struct ResectionResult {
   bool success = false;
   ExteriorOrientation eo;
-  // s^2 N^-1 over the accepted marks (m, rad; seed angles), s = max(1, sigma0) with stated
-  // accuracy, sigma0 when estimated. Not given (has_covariance false)
+  // sigma0^2 N^-1 over the accepted marks (m, rad; seed angles). Not given (has_covariance false)
   // for a pose without redundancy.
   bool has_covariance = false;
   Matrix6d covariance = Matrix6d::Zero();

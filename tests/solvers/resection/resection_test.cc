@@ -919,36 +919,6 @@ TEST(Resection, NoFewPointImageIsReportedSolvedFarFromTheTruth) {
   EXPECT_GT(total.images, 2500);
 }
 
-// Clean images of 4-6 control points whose 1 px noise is what the marks state: the truth lies
-// within kWrongPoseSigmas of every reported pose, weak or not. The covariance was sigma0^2 N^-1,
-// and sigma0 from 2-6 degrees of freedom falls far enough below 1 that correct poses had the truth
-// 5-15 of their sigmas away (the count with sigma0^2 is printed beside).
-TEST(Resection, CleanFewPointPosesHaveSigmasThatHoldTheTruth) {
-  uint64_t seed = 60000;
-  for (const Scenario scenario : {Scenario::kNadir, Scenario::kOblique}) {
-    for (const int n : {4, 5, 6}) {
-      int solved = 0, far = 0, far_with_sigma0 = 0;
-      for (int k = 0; k < 200; ++k, ++seed) {
-        const SyntheticScene scene = Scene(scenario, 1.0, 0.0, seed, n, 0);
-        const Inputs inputs = FewPointImage(scenario, n, /*blunders=*/0, seed);
-        if (inputs.inputs[0].image_plane.size() != static_cast<size_t>(n)) continue;
-        const ResectionResult r = ResectImage(ResectionOptions(), inputs.inputs[0]);
-        if (!r.success) continue;
-        ++solved;
-        ASSERT_TRUE(r.accuracy_stated);  // the default 1 px
-        const double distance = DistanceSigmas(r, scene.true_frames[0].eo);
-        far += distance > kWrongPoseSigmas;
-        // The same pose with the former sigma0^2 N^-1.
-        far_with_sigma0 += distance * std::max(1.0, r.sigma0) / r.sigma0 > kWrongPoseSigmas;
-      }
-      std::printf("%s, %d clean points: %d solved, %d beyond %.0f sigma (%d with sigma0^2 N^-1)\n",
-                  EnumName(scenario), n, solved, far, kWrongPoseSigmas, far_with_sigma0);
-      EXPECT_GT(solved, 150) << EnumName(scenario) << ", " << n << " points";
-      EXPECT_EQ(far, 0) << EnumName(scenario) << ", " << n << " points";
-    }
-  }
-}
-
 // ------------------------------------------------------------------ honest convergence
 
 // The 5000-image clean run of the issue: nadir, 10 control points, 1 px noise, default options;
