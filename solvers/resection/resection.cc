@@ -683,9 +683,13 @@ bool ImageResection::NotAmbiguous() {
   // The same marks at a second pose: searched where the geometry is weak (a pose strong by its
   // reliability has one minimum within reach) and when no approximate pose chose one.
   const bool weak = result_.max_pose_shift_sigmas > options_.weak_pose_shift_sigmas;
+  // Its distance in the a-priori sigmas unless the data say worse: sigma0 near 0 (marks without
+  // noise) would make a rounding difference of the same minimum "many sigmas" away.
+  const Vector6d sigmas =
+      (std::max(1.0, s0_squared_) * stats_.cofactor.diagonal()).cwiseSqrt();
   const bool same_set = !other_set && weak && !input_.approximate.has_value() &&
                         FindOtherMinimum(options_, input_, marks_.weights, candidate_, eo_,
-                                         result_.standard_deviations, &competitor);
+                                         sigmas, &competitor);
   if (!other_set && !same_set) return true;
   result_.ambiguous = true;
   result_.competing_eo = competitor.eo;
