@@ -101,8 +101,13 @@ def test_options_as_keywords_and_attributes():
     options.refinement.loss = "huber"
     assert options.refinement.solver == "taylor" and "loss='huber'" in repr(options)
     truth, points, xy, focal = synthetic_image(noise_um=0.5)
+    three = pp.ResectionInput(xy[:3], points[:3], focal, sigma=0.5, approximate=truth)
+    # The Taylor solver has no robust loss: refused, not ignored.
+    with pytest.raises(pp.Error, match="no robust loss"):
+        pp.resect(three, options)
+    options.refinement.loss = "none"
     # Three marks: allowed without redundancy, the approximate pose choosing among P3P's poses.
-    result = pp.resect(pp.ResectionInput(xy[:3], points[:3], focal, sigma=0.5, approximate=truth), options)
+    result = pp.resect(three, options)
     assert result.success and not result.has_covariance and result.weak, result.summary.message
     with pytest.raises(TypeError, match="unexpected keyword argument 'confidence'"):
         pp.ResectionOptions(confidence=0.9)

@@ -785,6 +785,7 @@ Status TaylorBundleOptionsFromBundleOptions(const BundleAdjustmentOptions& ceres
   options->max_snooping_removals = ceres.robustness.max_snooping_removals;
   options->statistics = ceres.statistics;
   options->num_threads = ceres.solver.num_threads;
+  options->max_iterations = ceres.solver.max_iterations;
   options->free_gauge_for_relative_blocks = ceres.solver.free_gauge_for_relative_blocks;
   options->progress = ceres.solver.progress;
   return Status::Ok();

@@ -223,8 +223,9 @@ struct TaylorBundleOptions {
 };
 
 // The Taylor options that minimise the same objective as `ceres` and take the same steps between
-// rounds (accuracies, robust tie loss, rejection, snooping, statistics, threads, progress; the
-// lever arm is the config's, BundleAdjustmentConfig::lever_arm_m). An error would name what the
+// rounds (accuracies, robust tie loss, rejection, snooping, statistics, threads, progress, the
+// iterations per round; the lever arm is the config's, BundleAdjustmentConfig::lever_arm_m). Ceres'
+// derivative path and linear solver have no Taylor counterpart and are not read. An error would name what the
 // Taylor path does not do; no field of BundleAdjustmentOptions is refused today. The Taylor
 // options keep their own flat fields rather than BundleAdjustmentOptions' parts: they take only a
 // few fields of each.

@@ -397,6 +397,13 @@ bool PoseRefinementOptions::IsValid(std::string* why) const {
     if (why != nullptr) *why = "loss_scale must be positive and finite";
     return false;
   }
+  // The Taylor solvers are plain least squares (the seed's): a loss would be ignored, not applied.
+  if (solver != PoseSolver::kCeres && loss != LossType::kNone) {
+    if (why != nullptr)
+      *why = "the Taylor solvers have no robust loss: loss must be none with them (the loss is "
+             "for the Ceres solver)";
+    return false;
+  }
   return ceres.IsValid(why) && taylor.IsValid(why);
 }
 

@@ -34,7 +34,7 @@
 DEFINE_string(bundle_cameras, "", "Camera table (CSV, ArcGIS frame-camera schema): the interior orientation of every CameraID.");
 DEFINE_string(bundle_marks, "", "Image marks (CSV: Raster, PointID, Column and Row in pixels or FilmX and FilmY in micrometres, optional Accuracy in the mark's own unit and CameraID). A point with marks but no row in --points is a tie point.");
 DEFINE_string(bundle_points, "", "Ground points (CSV: PointID, X, Y, Z in metres, optional AccuracyX/Y/Z in metres, all three 0 holding a control point fixed, and Role control|check|tie). Optional for a block held by camera positions.");
-DEFINE_string(bundle_frames, "", "Frames table: PerspectiveX/Y/Z are the measured camera positions (priors with --camera_accuracy or per-row AccuracyX/Y/Z, otherwise initial values only) and Omega/Phi/Kappa initial values (priors with --attitude_accuracy or per-row AccuracyOmega/Phi/Kappa). Images without a row are oriented by resection.");
+DEFINE_string(bundle_frames, "", "Frames table: PerspectiveX/Y/Z are the measured camera positions: priors with their per-row AccuracyX/Y/Z, else with --camera_accuracy (10 m by default, Metashape's: give a large value for positions that are initial values only) and Omega/Phi/Kappa initial values (priors with --attitude_accuracy or per-row AccuracyOmega/Phi/Kappa). Images without a row are oriented by resection.");
 DEFINE_string(bundle_colmap_model, "", "A COLMAP model folder to adjust instead of the tables: binary (cameras.bin, images.bin, points3D.bin) when all three are there, else text (cameras.txt, images.txt, points3D.txt).");
 DEFINE_string(bundle_bal, "", "A BAL problem file to adjust instead of the tables.");
 DEFINE_string(bundle_opensfm, "", "An OpenSfM / OpenDroneMap reconstruction to adjust instead of the tables: reconstruction.json or the folder holding it (ODM: <project>/opensfm), tracks.csv beside it. Georeferenced like --colmap_model with --geo, --gcp_list, --frames, --points or --model_gps.");
@@ -345,6 +345,14 @@ int OptionsFromFlags(const char* command, BundleRun* run) {
   run->context.calibrate = run->calibrate;
   if (!ParseEnum(FLAGS_bundle_solver, &run->solver))
     return BadInput(command, EnumFlagError<PoseSolver>("--solver", FLAGS_bundle_solver));
+  // What only the Ceres solver uses is refused with the Taylor solvers, never silently ignored
+  // (--max_iterations and --loss apply to both).
+  if (run->solver != PoseSolver::kCeres) {
+    for (const char* flag : {"jacobian", "linear_solver"}) {
+      if (FlagGiven((std::string("bundle_") + flag).c_str()))
+        return BadInput(command, "--" + std::string(flag) + " is for --solver=ceres; --solver=" + FLAGS_bundle_solver + " builds and solves its own normal equations with the seed's partials");
+    }
+  }
   if (run->solver != PoseSolver::kCeres && FLAGS_bundle_cross_validate)
     return BadInput(command, "--solver=" + FLAGS_bundle_solver + " does not cross-validate (the left-out adjustments are Ceres'); use --solver=ceres for --cross_validate");
   if (!FLAGS_bundle_taylor_damping.empty()) {
@@ -698,19 +706,57 @@ const BundleGroupStatistics* GroupAbsorbingGrossErrors(const BundleAdjustmentRes
   return nullptr;
 }
 
+// An observation of the diagnostics in words: "mark of point 'P' in image 'I'", "control point
+// 'C'", "camera_positions of image 'I'".
+std::string ObservationName(const Block& block, const BundleObservationDiagnostics& d) {
+  if (d.group == kTieMarks || d.group == kControlMarks) {
+    const BlockMark& mark = block.marks[d.item];
+    return "mark of point '" + block.points[mark.point].id + "' in image '" + block.images[mark.image].name + "'";
+  }
+  if (d.group == kControlPoints) return "control point '" + block.points[d.item].id + "'";
+  return std::string(EnumName(d.group)) + " of image '" + block.images[d.item].name + "'";
+}
+
+// The same alarm from the w-test: an observation of what was surveyed (control marks, control
+// points, camera positions, attitudes) beyond the block's critical value is a gross error the
+// rejection rounds never remove (they take tie marks only). With many tie marks sigma0 stays near 1
+// whatever such an error does: one control point 0.5 m off among five moved a simulated block by
+// up to 0.5 m (30 of its 2 cm sigmas) at sigma0 1.19. The worst such observation, or nullptr
+// (also without diagnostics: --statistics=none).
+const BundleObservationDiagnostics* WorstSurveyedRejection(const BundleAdjustmentResult& result) {
+  const BundleObservationDiagnostics* worst = nullptr;
+  for (const BundleObservationDiagnostics& d : result.observations) {
+    if (!d.rejected || d.group == kTieMarks) continue;
+    if (worst == nullptr || std::abs(d.normalized) > std::abs(worst->normalized)) worst = &d;
+  }
+  return worst;
+}
+
 int CheckSigma0(const char* command, BundleRun* run) {
   BundleAdjustmentResult& result = run->result;
   if (!result.summary.IsSolutionUsable()) return kGoOn;
   const BundleGroupStatistics* absorbing = GroupAbsorbingGrossErrors(result);
-  if (!(result.summary.sigma0 > kSigma0Bound) && absorbing == nullptr) return kGoOn;
+  const BundleObservationDiagnostics* surveyed = WorstSurveyedRejection(result);
+  if (!(result.summary.sigma0 > kSigma0Bound) && absorbing == nullptr && surveyed == nullptr)
+    return kGoOn;
   if (!run->options.robustness.snoop) {
-    if (absorbing != nullptr) {
+    // The alarm that says the most first: sigma0, an absorbed estimate, the w-test.
+    if (result.summary.sigma0 > kSigma0Bound) {
+      std::cerr << "photopose bundle: sigma0 " << FormatUnitless(result.summary.sigma0, 2) << " is above "
+                << FormatUnitless(kSigma0Bound, 0);
+    } else if (absorbing != nullptr) {
       std::cerr << "photopose bundle: " << EnumName(absorbing->group) << " estimated at "
                 << FormatUnitless(absorbing->estimated_accuracy.x() / absorbing->stated_accuracy.x(), 1)
                 << " times the stated accuracy";
     } else {
-      std::cerr << "photopose bundle: sigma0 " << FormatUnitless(result.summary.sigma0, 2) << " is above "
-                << FormatUnitless(kSigma0Bound, 0);
+      int flagged = 0;
+      for (const BundleObservationDiagnostics& d : result.observations)
+        flagged += d.rejected && d.group != kTieMarks;
+      std::cerr << "photopose bundle: sigma0 " << FormatUnitless(result.summary.sigma0, 2) << ", but the w-test flags "
+                << flagged << (flagged == 1 ? " observation" : " observations")
+                << " of what was surveyed (control marks, control points, camera positions, attitudes; worst: "
+                << ObservationName(run->block, *surveyed) << ", |w| " << FormatUnitless(std::abs(surveyed->normalized), 1)
+                << " > " << FormatUnitless(result.critical_value, 2) << ")";
     }
     std::cerr << ": the block disagrees with its stated accuracies by more than noise; searching every group for gross errors (data snooping, at most "
               << kSearchRemovals << " removals)\n";
@@ -745,16 +791,7 @@ int CheckSigma0(const char* command, BundleRun* run) {
   std::sort(worst.begin(), worst.end(), [](const auto* a, const auto* b) { return std::abs(a->normalized) > std::abs(b->normalized); });
   for (size_t k = 0; k < worst.size() && k < 3; ++k) {
     const BundleObservationDiagnostics& d = *worst[k];
-    std::string item;
-    if (d.group == kTieMarks || d.group == kControlMarks) {
-      const BlockMark& mark = run->block.marks[d.item];
-      item = "mark of point '" + run->block.points[mark.point].id + "' in image '" + run->block.images[mark.image].name + "'";
-    } else if (d.group == kControlPoints) {
-      item = "control point '" + run->block.points[d.item].id + "'";
-    } else {
-      item = std::string(EnumName(d.group)) + " of image '" + run->block.images[d.item].name + "'";
-    }
-    why << (k == 0 ? "; worst: " : ", ") << item << " |w| " << FormatUnitless(std::abs(d.normalized), 1);
+    why << (k == 0 ? "; worst: " : ", ") << ObservationName(run->block, d) << " |w| " << FormatUnitless(std::abs(d.normalized), 1);
   }
   why << (FLAGS_bundle_force ? " (outputs written because of --force)" : "; check them, state other accuracies, or give --force to write the outputs anyway");
   std::cerr << "photopose bundle: " << why.str() << "\n";

@@ -332,6 +332,11 @@ void PrintHelp(const std::string& usage, const CommandFlags& flags) {
             << kMaxFlagFileDepth << " levels deep at most.\n";
 }
 
+bool FlagGiven(const char* gflag) {
+  gflags::CommandLineFlagInfo info;
+  return gflags::GetCommandLineFlagInfo(gflag, &info) && !info.is_default;
+}
+
 int BadInput(const std::string& subcommand, const std::string& message) {
   std::cerr << "photopose " << subcommand << ": " << EscapeForMessage(message) << "\n";
   return kExitBadInput;

@@ -99,6 +99,11 @@ std::vector<std::string> NumericFlagsWithoutRange(const CommandFlags& flags);
 // Prints the usage text and the command's flags with their help texts and ranges.
 void PrintHelp(const std::string& usage, const CommandFlags& flags);
 
+// Whether the gflag (its internal name: "bundle_jacobian", "loss") was given on the command line
+// or in a flag file, whatever its value: a flag the chosen path cannot use is refused only when
+// the user gave it, never for its default.
+bool FlagGiven(const char* gflag);
+
 
 // The refusal of an enumerated flag's value, naming the accepted ones from the enum's table
 // (core/enum_names.h): "--rotation must be rxryrz (alias seed), opk or pok, not 'x'".

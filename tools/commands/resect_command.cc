@@ -136,6 +136,14 @@ bool JobFromFlags(ResectionJobOptions* job, std::string* why) {
   if (!(FLAGS_max_fiducial_residual > 0.0) || !std::isfinite(FLAGS_max_fiducial_residual))
     return fail("--max_fiducial_residual must be a positive number of micrometres");
   if (FLAGS_threads < 0) return fail("--threads must be >= 0");
+  // What only the Ceres solver uses is refused with the Taylor solvers, never silently ignored.
+  if (refinement.solver != PoseSolver::kCeres) {
+    for (const char* flag : {"loss", "loss_scale", "jacobian", "ceres_minimizer"}) {
+      if (FlagGiven(flag))
+        return fail("--" + std::string(flag) + " is for --solver=ceres; --solver=" + FLAGS_solver +
+                    " is the seed's least squares with its own partials");
+    }
+  }
   refinement.loss_scale = FLAGS_loss_scale;
   options.test.confidence = FLAGS_confidence;
   options.consensus.ransac.seed = FLAGS_seed;

@@ -795,17 +795,70 @@ TEST(Resection, TwoPosesThatFitAreAmbiguousNotSolved) {
     SyntheticScene scene = Scene(Scenario::kOblique, 1.0, 0.0, 9000 + seed, 5, 0);
     const Inputs inputs = FewPointImage(Scenario::kOblique, 5, 1, 9000 + seed);
     const ResectionResult r = ResectImage(ResectionOptions(), inputs.inputs[0]);
-    if (!r.ambiguous) continue;
+    if (!r.ambiguous || r.competing_inliers == r.inliers) continue;  // the same marks: below
     ++ambiguous;
     EXPECT_FALSE(r.success);
     EXPECT_NE(r.summary.message.find("ambiguous"), std::string::npos) << r.summary.message;
-    EXPECT_NE(r.competing_inliers, r.inliers);
     const int first = static_cast<int>(std::count(r.inliers.begin(), r.inliers.end(), 1));
     EXPECT_GE(std::count(r.competing_inliers.begin(), r.competing_inliers.end(), 1), first);
     EXPECT_GT(PoseError(r.eo, r.competing_eo).head<3>().norm(), 0.0);
   }
   std::printf("five points, one 40 px blunder, 300 oblique images: %d ambiguous\n", ambiguous);
   EXPECT_GT(ambiguous, 0);  // the configuration occurs: the search is exercised
+}
+
+// Four control points on flat ground 3.3 km away, seen 6 degrees below the horizon along one row
+// of a 4000 x 4000 px, 4 um, 24 mm frame (nearly one line: 700 m long, 30 m wide), 1 px noise:
+// the marks fit the true pose (sigma0 1.05) and one 6.6 km away, looking the other way (sigma0
+// 0.37). The consensus took the better fit and reported it solved (weak) with sigmas of 5-54 m.
+// Now the image is ambiguous with both poses; approximate values choose the true one.
+TEST(Resection, TheSameMarksFittingTwoPosesAreAmbiguous) {
+  const std::array<std::array<double, 2>, 4> column_row = {{{2928.0957883178367, 210.72866305550804},
+                                                            {2743.696885118379, 210.78991708924798},
+                                                            {1652.8580664985075, 209.50985260131114},
+                                                            {2195.474751563141, 205.00143470928805}}};
+  const std::array<Eigen::Vector3d, 4> ground = {
+      Eigen::Vector3d(500329.2695760428, 3996679.8503593034, 100.0),
+      Eigen::Vector3d(500232.88916315703, 3996680.4556793417, 100.0),
+      Eigen::Vector3d(499653.37082858686, 3996672.144925622, 100.0),
+      Eigen::Vector3d(499941.84851210355, 3996701.6574651306, 100.0)};
+  constexpr double kPixelUm = 4.0, kHalfSizePx = 2000.0;
+  ResectionInput input;
+  input.raster = "horizon";
+  input.focal_length = 24000.0;  // um
+  for (int k = 0; k < 4; ++k) {
+    input.image_plane.emplace_back((column_row[k][0] - kHalfSizePx) * kPixelUm,
+                                   (kHalfSizePx - column_row[k][1]) * kPixelUm);
+    input.points_in_ground.push_back(ground[k]);
+    input.sigma.push_back(1.0);  // px
+    input.observation_units_per_unit.push_back(kPixelUm);
+    input.units.push_back(MarkUnit::kPixel);
+  }
+  ExteriorOrientation truth;
+  truth.set_center_in_ground(Eigen::Vector3d(499918.78320026427, 3999984.0295172357, 436.72648949089194));
+  truth.set_angles_seed_rad(Eigen::Vector3d(DegreesToRadians(100.80770084050357),
+                                            DegreesToRadians(-0.35506309624451793),
+                                            DegreesToRadians(1.3527884336547764)));
+  for (const PoseSolver solver : {PoseSolver::kCeres, PoseSolver::kTaylor}) {
+    ResectionOptions options;
+    options.refinement.solver = solver;
+    const ResectionResult r = ResectImage(options, input);
+    EXPECT_FALSE(r.success) << EnumName(solver);
+    EXPECT_TRUE(r.ambiguous) << EnumName(solver) << ": " << r.summary.message;
+    EXPECT_NE(r.summary.message.find("fit two poses"), std::string::npos) << r.summary.message;
+    EXPECT_EQ(r.competing_inliers, r.inliers);
+    // One of the two poses is the truth (within 20 m: the configuration is weak), the other km off.
+    const double first = (r.eo.center_in_ground() - truth.center_in_ground()).norm();
+    const double second = (r.competing_eo.center_in_ground() - truth.center_in_ground()).norm();
+    EXPECT_LT(std::min(first, second), 20.0) << EnumName(solver);
+    EXPECT_GT(std::max(first, second), 1000.0) << EnumName(solver);
+    // Approximate values choose a pose: the true one from the truth.
+    ResectionInput chosen = input;
+    chosen.approximate = truth;
+    const ResectionResult c = ResectImage(options, chosen);
+    EXPECT_TRUE(c.success) << EnumName(solver) << ": " << c.summary.message;
+    EXPECT_LT((c.eo.center_in_ground() - truth.center_in_ground()).norm(), 20.0) << EnumName(solver);
+  }
 }
 
 // Reliability in the verdict: every accepted mark has its MDB (px) and pose shift; a pose beyond

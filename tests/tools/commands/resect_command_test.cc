@@ -758,6 +758,29 @@ TEST(ResectCommand, MissingFileAndUsageErrors) {
   EXPECT_EQ(run.exit_code, 2);
 }
 
+// The Taylor solvers are the seed's least squares: a Ceres-only flag given with them is refused
+// before any work, naming it (it was ignored: --solver=taylor --loss=cauchy ran least squares).
+TEST(ResectCommand, CeresOnlyFlagsAreRefusedWithTheTaylorSolvers) {
+  const std::string dir = ScratchDir();
+  for (const std::string solver : {"taylor", "taylor_as_printed"}) {
+    for (const std::string flag : {"--loss=cauchy", "--loss_scale=3", "--jacobian=autodiff",
+                                   "--ceres_minimizer=problem"}) {
+      const CliRun run = RunCli("resect " + ExampleArgs() + " --out=" + dir + "/o.csv --solver=" +
+                                    solver + " " + flag,
+                                dir);
+      EXPECT_EQ(run.exit_code, 2) << solver << " " << flag << ": " << run.err;
+      const std::string name = flag.substr(0, flag.find('='));
+      EXPECT_NE(run.err.find(name + " is for --solver=ceres"), std::string::npos) << run.err;
+      EXPECT_FALSE(std::filesystem::exists(dir + "/o.csv"));
+    }
+  }
+  // With Ceres they are taken.
+  const CliRun ceres = RunCli("resect " + ExampleArgs() + " --out=" + dir +
+                                  "/o.csv --solver=ceres --loss=cauchy --jacobian=autodiff",
+                              dir);
+  EXPECT_NE(ceres.exit_code, 2) << ceres.err;
+}
+
 TEST(ResectCommand, AcceptsAFlagfile) {
   const std::string dir = ScratchDir();
   WriteFile(dir + "/flags", "--cameras=" + SourcePath("examples/cameras.csv") + "\n--points=" +
