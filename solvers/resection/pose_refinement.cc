@@ -6,22 +6,16 @@
 #include <Eigen/Dense>
 #include <algorithm>
 #include <cmath>
-#include <cstdio>
 #include <limits>
 #include <memory>
 
 #include "core/rotation.h"
+#include "core/units.h"
 
 namespace photopose {
 namespace {
 
 constexpr double kInfinity = std::numeric_limits<double>::infinity();
-
-std::string Format(const char* format, double value) {
-  char buffer[64];
-  std::snprintf(buffer, sizeof(buffer), format, value);
-  return buffer;
-}
 
 // One image's observations in a frame centred on their ground points: large projected coordinates
 // would otherwise cost digits and make relative step tolerances meaningless.
@@ -223,7 +217,7 @@ SolverTermination RefineWithTinySolver(const PoseRefinementOptions& options,
           (limit ? "Ceres TinySolver: no convergence in " +
                        std::to_string(ceres_options.max_iterations) + " iterations"
                  : std::string("Ceres TinySolver: stopped short of the minimum")) +
-          " (a step of " + Format("%.3g", remaining) + " standard deviations remains)";
+          " (a step of " + FormatSignificant(remaining, 3) + " standard deviations remains)";
       return SolverTermination::kNoConvergence;
     }
   }
@@ -295,7 +289,7 @@ SolverTermination RefineWithCeresProblem(const PoseRefinementOptions& options,
     return SolverTermination::kFailure;
   }
   if (remaining <= ceres_options.step_tolerance_sigmas) return SolverTermination::kConverged;
-  *message = "Ceres: " + summary.message + " (a step of " + Format("%.3g", remaining) +
+  *message = "Ceres: " + summary.message + " (a step of " + FormatSignificant(remaining, 3) +
              " standard deviations remains)";
   return summary.termination_type == ceres::NO_CONVERGENCE ? SolverTermination::kNoConvergence
                                                            : SolverTermination::kFailure;

@@ -16,6 +16,7 @@
 
 #include "core/collinearity.h"
 #include "core/rotation.h"
+#include "core/units.h"
 
 namespace photopose {
 namespace {
@@ -548,8 +549,8 @@ Status TaylorResection(const TaylorResectionOptions& options,
   if (!converged) {
     std::ostringstream os;
     os << "no convergence in " << options.max_iterations << " iterations (last correction "
-       << summary.last_position_correction_m << " m, " << summary.last_angle_correction_rad
-       << " rad)";
+       << FormatSignificant(summary.last_position_correction_m, 3) << " m, "
+       << FormatSignificant(summary.last_angle_correction_rad, 3) << " rad)";
     return finish(SolverTermination::kNoConvergence, os.str());
   }
 
