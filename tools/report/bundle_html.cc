@@ -72,20 +72,9 @@ std::string UtcNow() {
   return buffer;
 }
 
-// Chi-square(3) level above which a check point's error e^T C^-1 e stands out (0.1 %).
-constexpr double kCheckPointLevel = 0.999;
 // A group whose RMS / stated lies outside [1 / kWeightFactor, kWeightFactor] has a stated accuracy
 // that the data contradict (unitless): said in the verdicts, with the estimate when there is one.
 constexpr double kWeightFactor = 2.0;
-
-// A check point's normalized error e^T C^-1 e (chi-square(3) when the covariance is honest); NaN
-// without a covariance.
-double NormalizedError(const BundlePointResult& r) {
-  if (!r.error_m || !r.has_covariance) return std::nan("");
-  const Eigen::LDLT<Eigen::Matrix3d> ldlt(r.covariance);
-  if (ldlt.info() != Eigen::Success || !(ldlt.vectorD().minCoeff() > 0.0)) return std::nan("");
-  return r.error_m->dot(ldlt.solve(*r.error_m));
-}
 
 // ------------------------------------------------------------------ 1. overview
 
@@ -248,24 +237,11 @@ std::string VerdictsHtml(const Block& block, const BundleAdjustmentResult& resul
   }
   // Check points.
   if (result.num_check_points > 0 || !result.rejected_check_marks.empty()) {
-    const double level = ChiSquaredQuantile(kCheckPointLevel, 3.0);
-    std::vector<std::string> out_of_tolerance, not_intersected;
-    for (size_t p = 0; p < block.points.size() && p < result.points.size(); ++p) {
-      if (block.points[p].role != PointRole::kCheck) continue;
-      const BundlePointResult& r = result.points[p];
-      if (!r.error_m) {
-        not_intersected.push_back(block.points[p].id + " " + r.message);
-        continue;
-      }
-      const double normalized = NormalizedError(r);
-      if (!(normalized > level)) continue;
-      const std::vector<std::string> miss =
-          FormatLengthsWithUnit({r.error_m->norm(), std::sqrt(r.covariance.trace())});
-      out_of_tolerance.push_back(
-          block.points[p].id + " misses by " + miss[0] + " where its sigma is " + miss[1] +
-          " (e^T C^-1 e = " + FormatUnitless(normalized, 1) + " > " + FormatUnitless(level, 1) +
-          "): check its surveyed coordinates and its marks");
-    }
+    const std::vector<std::string> out_of_tolerance = CheckPointsOutOfTolerance(block, result);
+    std::vector<std::string> not_intersected;
+    for (size_t p = 0; p < block.points.size() && p < result.points.size(); ++p)
+      if (block.points[p].role == PointRole::kCheck && !result.points[p].error_m)
+        not_intersected.push_back(block.points[p].id + " " + result.points[p].message);
     const bool bad = !out_of_tolerance.empty() || !not_intersected.empty();
     const std::vector<std::string> rmse =
         FormatLengthsWithUnit({result.check_rmse_m.x(), result.check_rmse_m.y(),
@@ -351,7 +327,7 @@ std::string PointsHtml(const Block& block, const BundleAdjustmentResult& result)
                      FormatLength(r.error_m->y(), unit), FormatLength(r.error_m->z(), unit),
                      FormatLength(r.error_m->norm(), unit),
                      r.has_covariance ? FormatLength(std::sqrt(r.covariance.trace()), unit) : "n/a",
-                     r.has_covariance ? FormatUnitless(NormalizedError(r), 1) : "n/a"});
+                     r.has_covariance ? FormatUnitless(CheckPointNormalizedError(r), 1) : "n/a"});
     }
     return out;
   };

@@ -1,5 +1,6 @@
 #include "tools/report/bundle_report.h"
 
+#include <Eigen/Cholesky>
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
@@ -7,6 +8,8 @@
 #include <sstream>
 
 #include "core/io/csv.h"
+#include "core/statistics.h"
+#include "core/units.h"
 #include "tools/report/comparison_html.h"
 
 namespace photopose::cli {
@@ -597,6 +600,31 @@ std::string GrossErrorsAbsorbed(const BundleGroupStatistics& group) {
   return text + ". Check the group's observations with the largest |w|, or state its accuracy.";
 }
 
+double CheckPointNormalizedError(const BundlePointResult& r) {
+  if (!r.error_m || !r.has_covariance) return std::nan("");
+  const Eigen::LDLT<Eigen::Matrix3d> ldlt(r.covariance);
+  if (ldlt.info() != Eigen::Success || !(ldlt.vectorD().minCoeff() > 0.0)) return std::nan("");
+  return r.error_m->dot(ldlt.solve(*r.error_m));
+}
+
+std::vector<std::string> CheckPointsOutOfTolerance(const Block& block,
+                                                   const BundleAdjustmentResult& result) {
+  const double level = ChiSquaredQuantile(kCheckPointLevel, 3.0);
+  std::vector<std::string> out;
+  for (size_t p = 0; p < block.points.size() && p < result.points.size(); ++p) {
+    if (block.points[p].role != PointRole::kCheck) continue;
+    const BundlePointResult& r = result.points[p];
+    const double normalized = CheckPointNormalizedError(r);
+    if (!(normalized > level)) continue;
+    const std::vector<std::string> miss =
+        FormatLengthsWithUnit({r.error_m->norm(), std::sqrt(r.covariance.trace())});
+    out.push_back(block.points[p].id + " misses by " + miss[0] + " where its sigma is " + miss[1] +
+                  " (e^T C^-1 e = " + FormatUnitless(normalized, 1) + " > " +
+                  FormatUnitless(level, 1) + "): check its surveyed coordinates and its marks");
+  }
+  return out;
+}
+
 std::string WeaklyDeterminedWarning(const BundleAdjustmentResult& result) {
   const std::vector<BundleWeakParameter>& weak = result.weakly_determined;
   if (weak.empty()) return "";
@@ -728,6 +756,8 @@ std::vector<std::string> BundleConsoleLines(const Block& block, const BundleAdju
                     FormatLength(result.check_rmse_m.y(), unit) + " Z " +
                     FormatLength(result.check_rmse_m.z(), unit) + " total " +
                     FormatLength(result.check_rmse_total_m, unit) + " " + LengthUnitName(unit));
+    for (const std::string& miss : CheckPointsOutOfTolerance(block, result))
+      lines.push_back("warning: check point " + miss);
   }
   if (!result.rejected_marks.empty())
     lines.push_back(std::to_string(result.rejected_marks.size()) +

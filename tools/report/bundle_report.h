@@ -58,6 +58,18 @@ std::string GrossErrorsAbsorbed(const BundleGroupStatistics& group);
 // HTML page state it.
 std::string WeaklyDeterminedWarning(const BundleAdjustmentResult& result);
 
+// Chi-square(3) level above which a check point's error e^T C^-1 e stands out (0.1 % of honest
+// cases): the one rule of the page's verdict, its table notes and the console's warnings.
+inline constexpr double kCheckPointLevel = 0.999;
+// A check point's normalized error e^T C^-1 e (chi-square(3) when the covariance is honest); NaN
+// without an error or a covariance.
+double CheckPointNormalizedError(const BundlePointResult& r);
+// Each check point whose error stands out (above the kCheckPointLevel quantile), in words: "P7
+// misses by 12.3 cm where its sigma is 1.8 cm (e^T C^-1 e = 46.8 > 16.3): check its surveyed
+// coordinates and its marks".
+std::vector<std::string> CheckPointsOutOfTolerance(const Block& block,
+                                                   const BundleAdjustmentResult& result);
+
 // The JSON report; every key is documented in docs/formats.md.
 nlohmann::json BundleReportJson(const Block& block, const BundleAdjustmentResult& result,
                                 const BundleReportContext& context);

@@ -103,6 +103,44 @@ TEST(BundleReport, AGroupLinePrintsItsLengthsInOneUnit) {
       << GrossErrorsAbsorbed(points);
 }
 
+// A check point whose error its covariance cannot explain (e^T C^-1 e above the chi-square(3)
+// 99.9 % quantile, 16.27) is named on the console as on the page; one within it is not.
+TEST(BundleReport, ACheckPointBeyondItsCovarianceIsNamedOnTheConsole) {
+  Block block;
+  for (const char* id : {"C1", "K1", "K2"}) {
+    BlockPoint point;
+    point.id = id;
+    point.role = id[0] == 'C' ? PointRole::kControl : PointRole::kCheck;
+    block.points.push_back(point);
+  }
+  BundleAdjustmentResult result;
+  result.points.resize(3);
+  for (BundlePointResult& r : result.points) {
+    r.has_covariance = true;
+    r.covariance = Eigen::Matrix3d::Identity() * 1e-4;  // 1 cm per axis
+  }
+  result.points[0].error_m = Eigen::Vector3d(0.10, 0.0, 0.0);  // control: not tested here
+  result.points[1].error_m = Eigen::Vector3d(0.05, 0.0, 0.0);  // 25 > 16.27
+  result.points[2].error_m = Eigen::Vector3d(0.02, 0.02, 0.0);  // 8 < 16.27
+  result.num_check_points = 2;
+  result.check_rmse_m = Eigen::Vector3d(0.038, 0.014, 0.0);
+  result.check_rmse_total_m = 0.041;
+  EXPECT_NEAR(CheckPointNormalizedError(result.points[1]), 25.0, 1e-9);
+  const std::vector<std::string> misses = CheckPointsOutOfTolerance(block, result);
+  ASSERT_EQ(misses.size(), 1u);
+  EXPECT_EQ(misses[0].rfind("K1 misses by ", 0), 0u) << misses[0];
+  EXPECT_NE(misses[0].find("(e^T C^-1 e = 25.0 > 16.3)"), std::string::npos) << misses[0];
+  size_t warnings = 0;
+  for (const std::string& line : BundleConsoleLines(block, result, BundleReportContext()))
+    if (line.rfind("warning: check point ", 0) == 0) {
+      ++warnings;
+      EXPECT_EQ(line, "warning: check point " + misses[0]);
+    }
+  EXPECT_EQ(warnings, 1u);
+  result.points[1].has_covariance = false;  // no covariance: nothing to test against
+  EXPECT_TRUE(CheckPointsOutOfTolerance(block, result).empty());
+}
+
 // The README's example with --estimate_accuracies: the control marks' gross errors (5 % of the
 // marks, 20-200 px) stay in and the estimation makes 0.5 px into 18.6 px. The report says so in
 // words; an estimate within the factor says nothing.
