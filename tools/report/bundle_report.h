@@ -65,7 +65,7 @@ inline constexpr double kCheckPointLevel = 0.999;
 // without an error or a covariance.
 double CheckPointNormalizedError(const BundlePointResult& r);
 // Each check point whose error stands out (above the kCheckPointLevel quantile), in words: "P7
-// misses by 12.3 cm where its sigma is 1.8 cm (e^T C^-1 e = 46.8 > 16.3): check its surveyed
+// misses by 12.3 cm where its sigma is 1.80 cm (e^T C^-1 e = 46.8 > 16.3): check its surveyed
 // coordinates and its marks".
 std::vector<std::string> CheckPointsOutOfTolerance(const Block& block,
                                                    const BundleAdjustmentResult& result);
