@@ -128,7 +128,7 @@ TEST(BundleReport, ACheckPointBeyondItsCovarianceIsNamedOnTheConsole) {
   EXPECT_NEAR(CheckPointNormalizedError(result.points[1]), 25.0, 1e-9);
   const std::vector<std::string> misses = CheckPointsOutOfTolerance(block, result);
   ASSERT_EQ(misses.size(), 1u);
-  EXPECT_EQ(misses[0], 
+  EXPECT_EQ(misses[0],
             "K1 misses by 50.0 mm where its sigma is 17.3 mm (e^T C^-1 e = 25.0 > 16.3): check its "
             "surveyed coordinates and its marks");
   EXPECT_NE(misses[0].find("(e^T C^-1 e = 25.0 > 16.3)"), std::string::npos) << misses[0];
