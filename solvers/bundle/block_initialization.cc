@@ -48,6 +48,79 @@ std::string BlockInitializationSummary::BriefReport() const {
   return ImagesPart(*this) + "; " + TiePointsReport() + "; " + FormatCount(rounds, "round");
 }
 
+namespace {
+
+// Resects every image without orientation that sees enough known points; for each image left,
+// why (last_reason). True when an image was oriented.
+bool ResectImagesFromKnownPoints(const BlockInitializationOptions& options, Block* block,
+                                 std::vector<std::string>* last_reason,
+                                 BlockInitializationSummary* summary) {
+  bool changed = false;
+  for (int i = 0; i < static_cast<int>(block->images.size()); ++i) {
+    BlockImage& image = block->images[i];
+    if (image.eo) continue;
+    ResectionInput input;
+    const Status made = ResectionInputFromKnownPoints(*block, i, &input);
+    if (!made.ok()) {
+      (*last_reason)[i] = made.message();
+      continue;
+    }
+    const int known = static_cast<int>(input.points_in_ground.size());
+    if (known < options.min_marks_for_resection) {
+      (*last_reason)[i] = "it sees " + std::to_string(known) +
+                          " points with known coordinates; resection needs " +
+                          std::to_string(options.min_marks_for_resection);
+      continue;
+    }
+    const ResectionResult result = ResectImage(options.resection, input);
+    if (!result.success) {
+      (*last_reason)[i] = "resection from " + std::to_string(known) +
+                          " known points failed: " + result.summary.message;
+      continue;
+    }
+    image.eo = result.eo;
+    ++summary->images_resected;
+    changed = true;
+  }
+  return changed;
+}
+
+// Intersects every tie point without coordinates seen by two oriented images whose rays meet it
+// within options.max_ray_misfit_rad. True when a point was intersected.
+bool IntersectTiePoints(const BlockInitializationOptions& options, Block* block,
+                        BlockInitializationSummary* summary) {
+  TriangulationOptions triangulation;
+  triangulation.min_intersection_angle_rad = options.min_intersection_angle_rad;
+  MarkSigmaDefaults mark_defaults;
+  mark_defaults.pixel_px = options.default_sigma_px;
+  mark_defaults.film_um = options.default_sigma_um;
+  mark_defaults.film_from_pixel_size = false;
+  bool changed = false;
+  for (size_t p = 0; p < block->points.size(); ++p) {
+    BlockPoint& point = block->points[p];
+    if (point.role != PointRole::kTie || point.position_m) continue;
+    const std::vector<RayObservation> rays = PointRays(*block, static_cast<int>(p), mark_defaults);
+    if (rays.size() < 2) continue;
+    TriangulationResult result;
+    if (!TriangulatePoint(triangulation, rays, &result).ok()) continue;
+    // The RMS angle by which the rays miss the point: whitened residuals times the marks'
+    // sigma over the focal length (both in the observation unit of each camera).
+    double angle_sum = 0.0;
+    for (const RayObservation& ray : rays) {
+      const double focal = CameraModelFocal(ray.camera->model, ray.camera->params.data());
+      angle_sum += ray.sigma / focal;
+    }
+    const double misfit_rad = result.rms_whitened * angle_sum / rays.size();
+    if (!(misfit_rad <= options.max_ray_misfit_rad)) continue;
+    point.position_m = result.point_m;
+    ++summary->points_triangulated;
+    changed = true;
+  }
+  return changed;
+}
+
+}  // namespace
+
 Status InitializeBlock(const BlockInitializationOptions& options, Block* block,
                        BlockInitializationSummary* summary) {
   *summary = BlockInitializationSummary();
@@ -63,65 +136,13 @@ Status InitializeBlock(const BlockInitializationOptions& options, Block* block,
     summary->points_given += point.role == PointRole::kTie && point.position_m.has_value();
 
   std::vector<std::string> last_reason(num_images);
-  TriangulationOptions triangulation;
-  triangulation.min_intersection_angle_rad = options.min_intersection_angle_rad;
-  MarkSigmaDefaults mark_defaults;
-  mark_defaults.pixel_px = options.default_sigma_px;
-  mark_defaults.film_um = options.default_sigma_um;
-  mark_defaults.film_from_pixel_size = false;
   for (int round = 0; round < options.max_rounds; ++round) {
-    bool changed = false;
-    // Resect every image without orientation that sees enough known points.
-    for (int i = 0; i < num_images; ++i) {
-      BlockImage& image = block->images[i];
-      if (image.eo) continue;
-      ResectionInput input;
-      const Status made = ResectionInputFromKnownPoints(*block, i, &input);
-      if (!made.ok()) {
-        last_reason[i] = made.message();
-        continue;
-      }
-      const int known = static_cast<int>(input.points_in_ground.size());
-      if (known < options.min_marks_for_resection) {
-        last_reason[i] = "it sees " + std::to_string(known) +
-                         " points with known coordinates; resection needs " +
-                         std::to_string(options.min_marks_for_resection);
-        continue;
-      }
-      const ResectionResult result = ResectImage(options.resection, input);
-      if (!result.success) {
-        last_reason[i] = "resection from " + std::to_string(known) +
-                         " known points failed: " + result.summary.message;
-        continue;
-      }
-      image.eo = result.eo;
-      ++summary->images_resected;
-      changed = true;
-    }
-    // Intersect every tie point without coordinates seen by two oriented images.
-    for (size_t p = 0; p < block->points.size(); ++p) {
-      BlockPoint& point = block->points[p];
-      if (point.role != PointRole::kTie || point.position_m) continue;
-      const std::vector<RayObservation> rays =
-          PointRays(*block, static_cast<int>(p), mark_defaults);
-      if (rays.size() < 2) continue;
-      TriangulationResult result;
-      if (!TriangulatePoint(triangulation, rays, &result).ok()) continue;
-      // The RMS angle by which the rays miss the point: whitened residuals times the marks'
-      // sigma over the focal length (both in the observation unit of each camera).
-      double angle_sum = 0.0;
-      for (const RayObservation& ray : rays) {
-        const double focal = CameraModelFocal(ray.camera->model, ray.camera->params.data());
-        angle_sum += ray.sigma / focal;
-      }
-      const double misfit_rad = result.rms_whitened * angle_sum / rays.size();
-      if (!(misfit_rad <= options.max_ray_misfit_rad)) continue;
-      point.position_m = result.point_m;
-      ++summary->points_triangulated;
-      changed = true;
-    }
+    // Both steps every round: images resected from the points known so far, then points
+    // intersected from the images oriented so far.
+    const bool resected = ResectImagesFromKnownPoints(options, block, &last_reason, summary);
+    const bool intersected = IntersectTiePoints(options, block, summary);
     summary->rounds = round + 1;
-    if (!changed) break;
+    if (!resected && !intersected) break;
   }
   for (int i = 0; i < num_images; ++i) {
     if (block->images[i].eo) continue;

@@ -1,6 +1,6 @@
 // The statistics of a converged bundle adjustment round: residuals per group, covariances from
 // the reduced normal matrix, redundancy numbers, normalized residuals and reliability (Baarda,
-// Foerstner), self-calibration correlations, check points. About 820 lines, one file on purpose:
+// Foerstner), self-calibration correlations, check points. About 920 lines, one file on purpose:
 // the steps in the order they are computed, each a named function, sharing one round's rows; the
 // reduced normals they start from are in reduced_normals.cc, the selected inversion in
 // selected_inversion.cc.
@@ -262,6 +262,116 @@ BundleObservationDiagnostics RowDiagnostics(const BundleAdjustmentResult& result
   return d;
 }
 
+// What ObservationDiagnostics' groups share: the round and its reduced normals, and the per-row
+// arrays each group writes its own rows of.
+struct DiagnosticsPass {
+  const Block& block;
+  const BundlePlan& plan;
+  const BundleRound& round;
+  const ReducedNormals& reduced;
+  const InnerConstraintTransform* inner;
+  double variance_factor;
+  bool diagnostics;
+  double s0;                 // the normalized residuals' yardstick
+  std::vector<int> centres;  // CentreComponents
+  // Per residual block of the round: its first wanted row (every row with the diagnostics, else
+  // all but the tie marks'), one past the last at the end; whether it was evaluated.
+  std::vector<int64_t> first_row;
+  std::vector<char> evaluated;
+  std::vector<double> leverage;  // per wanted row
+  // Per wanted row, with the diagnostics: its entry, made where its leverage is computed.
+  BundleObservationDiagnostics* observations = nullptr;
+  BundleAdjustmentResult* result;
+
+  void Group(size_t order);
+  bool AnyRowWanted(int begin, int end) const;
+  void DiagnoseRows(int begin, int end, const std::vector<BlockRows>& rows,
+                    const SupportCovariance& support);
+};
+
+std::vector<int64_t> FirstWantedRows(const BundleRound& round, bool diagnostics) {
+  std::vector<int64_t> first_row(round.residuals.size() + 1, 0);
+  for (size_t r = 0; r < round.residuals.size(); ++r) {
+    const ResidualInfo& info = round.residuals[r];
+    const bool wanted = diagnostics || info.group != kTieMarks;
+    first_row[r + 1] = first_row[r] + (wanted ? info.rows : 0);
+  }
+  return first_row;
+}
+
+// Group `order`: a point (in reduced.point_order: neighbours share images) with its covariance
+// set, or after the points a residual block without a point (a prior); its rows evaluated and
+// diagnosed through their support's covariance.
+void DiagnosticsPass::Group(size_t order) {
+  const int num_points = static_cast<int>(reduced.V_inverse.size());
+  const int first_other = reduced.point_residual_start[num_points];
+  const size_t g = static_cast<int>(order) < num_points ? reduced.point_order[order] : order;
+  const int begin = static_cast<int>(g) < num_points
+                        ? reduced.point_residual_start[g]
+                        : first_other + static_cast<int>(g) - num_points;
+  const int end =
+      static_cast<int>(g) < num_points ? reduced.point_residual_start[g + 1] : begin + 1;
+  const int point = static_cast<int>(g) < num_points ? static_cast<int>(g) : -1;
+  SupportCovariance support;
+  if (point >= 0) {
+    // The point's covariance (V^-1 + V^-1 W^T C W V^-1, in the datum).
+    if (!MakeSupportCovariance(reduced, point, {}, &support)) return;
+    Eigen::Matrix3d covariance = PointCovariance(reduced, support, point);
+    if (inner != nullptr) covariance = inner->Point(point, covariance);
+    BundlePointResult& point_result = result->points[round.point_of_block[point]];
+    point_result.covariance = variance_factor * covariance;
+    point_result.has_covariance = true;
+  }
+  if (!AnyRowWanted(begin, end)) return;
+  thread_local std::vector<BlockRows> rows;
+  if (rows.size() < static_cast<size_t>(end - begin)) rows.resize(end - begin);
+  for (int k = begin; k < end; ++k) {
+    const int r = reduced.residual_order[k];
+    evaluated[r] = EvaluateBlockRows(round, reduced, round.residuals[r], &rows[k - begin]);
+  }
+  // A prior's support is its own e blocks.
+  if (point < 0 && (!evaluated[reduced.residual_order[begin]] ||
+                    !MakeSupportCovariance(reduced, point, rows[0].e_blocks, &support)))
+    return;
+  DiagnoseRows(begin, end, rows, support);
+}
+
+// A tie point's rows are wanted only with the diagnostics (the others are priors).
+bool DiagnosticsPass::AnyRowWanted(int begin, int end) const {
+  bool any = false;
+  for (int k = begin; k < end && !any; ++k) {
+    const int r = reduced.residual_order[k];
+    any = first_row[r + 1] > first_row[r];
+  }
+  return any;
+}
+
+// The leverages of the group's wanted rows (rows[k - begin] those of its k-th residual block),
+// and with the diagnostics their entries.
+void DiagnosticsPass::DiagnoseRows(int begin, int end, const std::vector<BlockRows>& rows,
+                                   const SupportCovariance& support) {
+  Eigen::VectorXd largest;
+  for (int k = begin; k < end; ++k) {
+    const int r = reduced.residual_order[k];
+    if (!evaluated[r] || first_row[r + 1] == first_row[r]) continue;
+    const Eigen::VectorXd h =
+        Leverages(reduced, support, rows[k - begin], diagnostics ? &centres : nullptr,
+                  diagnostics ? &largest : nullptr);
+    // Only the first info.rows rows are observations (a control point's Z prior block has a
+    // zero row beside it).
+    const ResidualInfo& info = round.residuals[r];
+    for (int row = 0; row < info.rows; ++row) {
+      const int64_t at = first_row[r] + row;
+      leverage[at] = h[row];
+      if (diagnostics) {
+        observations[at] =
+            RowDiagnostics(*result, info, row, rows[k - begin].residuals[row],
+                           RowScale(block, plan, info, row), h[row], s0, largest[row]);
+      }
+    }
+  }
+}
+
 // Leverages per group (variance->redundancy) and, with `diagnostics`, every observation's
 // diagnostics. Without them the tie marks' share is the remainder (the sum of all redundancy
 // numbers is the redundancy), which spares their rows.
@@ -276,100 +386,49 @@ void ObservationDiagnostics(const BundleAdjustmentOptions& options, const Block&
                             const InnerConstraintTransform* inner, double variance_factor,
                             bool diagnostics, GroupSums* sums, BundleAdjustmentResult* result,
                             GroupVariance* variance) {
-  const std::vector<int> centres = CentreComponents(block, plan, state, reduced);
   // The yardstick of the normalized residuals: the stated accuracies (sigma0 = 1), or the
   // a-posteriori sigma0 when the data say they were optimistic (Pope's tau-test then).
   const double sigma0 = result->summary.sigma0;
-  const double s0 = std::isfinite(sigma0) ? std::max(1.0, sigma0) : 1.0;
-  // The rows wanted: every row with the diagnostics, else all but the tie marks'.
+  DiagnosticsPass pass{block,
+                       plan,
+                       round,
+                       reduced,
+                       inner,
+                       variance_factor,
+                       diagnostics,
+                       std::isfinite(sigma0) ? std::max(1.0, sigma0) : 1.0,
+                       CentreComponents(block, plan, state, reduced),
+                       FirstWantedRows(round, diagnostics),
+                       std::vector<char>(round.residuals.size(), 0),
+                       {},
+                       nullptr,
+                       result};
   const size_t num_residuals = round.residuals.size();
-  std::vector<int64_t> first_row(num_residuals + 1, 0);
-  for (size_t r = 0; r < num_residuals; ++r) {
-    const ResidualInfo& info = round.residuals[r];
-    const bool wanted = diagnostics || info.group != kTieMarks;
-    first_row[r + 1] = first_row[r] + (wanted ? info.rows : 0);
-  }
-  std::vector<double> leverage(first_row.back(), kNaN);
-  std::vector<char> evaluated(num_residuals, 0);
-  // With the diagnostics each row's entry is made where its leverage is computed, in its place
-  // in the round's order: the rows of residual blocks that could not be evaluated are dropped
+  pass.leverage.assign(pass.first_row.back(), kNaN);
+  // With the diagnostics the rows of residual blocks that could not be evaluated are dropped
   // afterwards. (Per-row arrays of the whitened residual and the centre shift, listed afterwards,
   // held 16 bytes more per row at the statistics' peak: 55 MB at 1000 images.)
   const size_t first_observation = result->observations.size();
   if (diagnostics)
-    result->observations.resize(first_observation + static_cast<size_t>(first_row.back()));
-  BundleObservationDiagnostics* const observations = result->observations.data() + first_observation;
-
+    result->observations.resize(first_observation + static_cast<size_t>(pass.first_row.back()));
+  pass.observations = result->observations.data() + first_observation;
   // Groups: one per point, then one per residual block without a point.
   const int num_points = static_cast<int>(reduced.V_inverse.size());
   const int first_other = reduced.point_residual_start[num_points];
   const int num_groups = num_points + static_cast<int>(reduced.residual_order.size()) - first_other;
-  ParallelForChunks(num_groups, options.solver.num_threads, 64, [&](size_t order) {
-    // The points in reduced.point_order (neighbours share images), then the priors.
-    const size_t g = static_cast<int>(order) < num_points ? reduced.point_order[order] : order;
-    const int begin = static_cast<int>(g) < num_points ? reduced.point_residual_start[g]
-                                                       : first_other + static_cast<int>(g) - num_points;
-    const int end = static_cast<int>(g) < num_points ? reduced.point_residual_start[g + 1] : begin + 1;
-    const int point = static_cast<int>(g) < num_points ? static_cast<int>(g) : -1;
-    SupportCovariance support;
-    if (point >= 0) {
-      // The point's covariance (V^-1 + V^-1 W^T C W V^-1, in the datum).
-      if (!MakeSupportCovariance(reduced, point, {}, &support)) return;
-      Eigen::Matrix3d covariance = PointCovariance(reduced, support, point);
-      if (inner != nullptr) covariance = inner->Point(point, covariance);
-      BundlePointResult& point_result = result->points[round.point_of_block[point]];
-      point_result.covariance = variance_factor * covariance;
-      point_result.has_covariance = true;
-    }
-    // A tie point's rows are wanted only with the diagnostics (the others are priors).
-    bool any = false;
-    for (int k = begin; k < end && !any; ++k) {
-      const int r = reduced.residual_order[k];
-      any = first_row[r + 1] > first_row[r];
-    }
-    if (!any) return;
-    thread_local std::vector<BlockRows> rows;
-    if (rows.size() < static_cast<size_t>(end - begin)) rows.resize(end - begin);
-    for (int k = begin; k < end; ++k) {
-      const int r = reduced.residual_order[k];
-      evaluated[r] = EvaluateBlockRows(round, reduced, round.residuals[r], &rows[k - begin]);
-    }
-    // A prior's support is its own e blocks.
-    if (point < 0 && (!evaluated[reduced.residual_order[begin]] ||
-                      !MakeSupportCovariance(reduced, point, rows[0].e_blocks, &support)))
-      return;
-    Eigen::VectorXd largest;
-    for (int k = begin; k < end; ++k) {
-      const int r = reduced.residual_order[k];
-      if (!evaluated[r] || first_row[r + 1] == first_row[r]) continue;
-      const Eigen::VectorXd h = Leverages(reduced, support, rows[k - begin],
-                                          diagnostics ? &centres : nullptr,
-                                          diagnostics ? &largest : nullptr);
-      // Only the first info.rows rows are observations (a control point's Z prior block has a
-      // zero row beside it).
-      const ResidualInfo& info = round.residuals[r];
-      for (int row = 0; row < info.rows; ++row) {
-        const int64_t at = first_row[r] + row;
-        leverage[at] = h[row];
-        if (diagnostics) {
-          observations[at] =
-              RowDiagnostics(*result, info, row, rows[k - begin].residuals[row],
-                             RowScale(block, plan, info, row), h[row], s0, largest[row]);
-        }
-      }
-    }
-  });
+  ParallelForChunks(num_groups, options.solver.num_threads, 64,
+                    [&](size_t order) { pass.Group(order); });
   // In the round's order: the group sums, and the rows listed (those evaluated, moved up over
   // the ones that were not).
   size_t listed = first_observation;
   for (size_t r = 0; r < num_residuals; ++r) {
     const ResidualInfo& info = round.residuals[r];
-    if (first_row[r + 1] == first_row[r] || !evaluated[r]) continue;
+    if (pass.first_row[r + 1] == pass.first_row[r] || !pass.evaluated[r]) continue;
     for (int row = 0; row < info.rows; ++row) {
-      const int64_t at = first_row[r] + row;
-      sums[info.group].leverage += leverage[at];
+      const int64_t at = pass.first_row[r] + row;
+      sums[info.group].leverage += pass.leverage[at];
       if (!diagnostics) continue;
-      const BundleObservationDiagnostics& d = observations[at];
+      const BundleObservationDiagnostics& d = pass.observations[at];
       if (d.redundancy < options.statistics.uncontrolled_redundancy) ++result->num_uncontrolled;
       result->observations[listed++] = d;
     }
@@ -386,22 +445,19 @@ void ObservationDiagnostics(const BundleAdjustmentOptions& options, const Block&
     variance->redundancy[g] = variance->scalar_rows[g] - sums[g].leverage;
 }
 
-// Batch data snooping's candidates (internal/bundle_statistics.h, SnoopingCandidates): the
-// observations the w-test rejects, the largest |w| first, and the cofactors of their rows. Left
-// not computed (the rounds then snoop one at a time) when a row cannot be evaluated or the solve
-// fails.
-void FindSnoopingCandidates(const BundleRound& round, const ReducedNormals& reduced,
-                            const GroupVariance& variance, const BundleAdjustmentResult& result,
-                            SnoopingCandidates* out) {
-  const auto start = std::chrono::steady_clock::now();
-  *out = SnoopingCandidates();
-  const auto key = [](int group, int item) {
-    return static_cast<int64_t>(item) * kNumBundleGroups + group;
-  };
+// An observation (a mark, a point's prior, ...) as one key: its group and item.
+int64_t ObservationKey(int group, int item) {
+  return static_cast<int64_t>(item) * kNumBundleGroups + group;
+}
+
+// The observations the w-test rejects, the largest |w| first (ties by key), at most
+// kMaxSnoopingCandidates of them: (|w|, key). *num_flagged: all of them.
+std::vector<std::pair<double, int64_t>> RankRejected(const BundleAdjustmentResult& result,
+                                                     int* num_flagged) {
   std::unordered_map<int64_t, double> worst;  // per rejected observation, its largest |w|
   for (const BundleObservationDiagnostics& d : result.observations) {
     if (!d.rejected) continue;
-    double& w = worst[key(d.group, d.item)];
+    double& w = worst[ObservationKey(d.group, d.item)];
     w = std::max(w, std::abs(d.normalized));
   }
   std::vector<std::pair<double, int64_t>> ranked;
@@ -410,59 +466,61 @@ void FindSnoopingCandidates(const BundleRound& round, const ReducedNormals& redu
   std::sort(ranked.begin(), ranked.end(), [](const auto& a, const auto& b) {
     return a.first != b.first ? a.first > b.first : a.second < b.second;
   });
-  out->num_flagged = static_cast<int>(ranked.size());
+  *num_flagged = static_cast<int>(ranked.size());
   if (ranked.size() > static_cast<size_t>(kMaxSnoopingCandidates))
     ranked.resize(kMaxSnoopingCandidates);
-  const int num_candidates = static_cast<int>(ranked.size());
-  std::unordered_map<int64_t, int> candidate_of;
-  for (int c = 0; c < num_candidates; ++c) candidate_of[ranked[c].second] = c;
-  // Each candidate row's diagnostics (by axis), and the largest |w| outside the candidates.
-  std::vector<std::array<int, 3>> diagnostics_of(num_candidates, {-1, -1, -1});
-  for (size_t k = 0; k < result.observations.size(); ++k) {
-    const BundleObservationDiagnostics& d = result.observations[k];
-    const auto found = candidate_of.find(key(d.group, d.item));
-    if (found != candidate_of.end())
-      diagnostics_of[found->second][std::clamp(d.axis, 0, 2)] = static_cast<int>(k);
-    else if (std::isfinite(d.normalized))
-      out->outside = std::max(out->outside, std::abs(d.normalized));
-  }
-  // The candidates' rows: residual blocks evaluated, in candidate order.
+  return ranked;
+}
+
+// A candidate's row: its residual block's rows (an index into the evaluated ones) and the row.
+struct CandidateRow {
+  int block_rows;
+  int row;
+};
+
+// The candidates' rows (residual blocks evaluated, in candidate order) with their diagnostics
+// (out->observation, out->first_row). False when a residual block cannot be evaluated or a row
+// has no diagnostics.
+bool CandidateRows(const BundleRound& round, const ReducedNormals& reduced,
+                   const std::unordered_map<int64_t, int>& candidate_of,
+                   const std::vector<std::array<int, 3>>& diagnostics_of,
+                   std::vector<BlockRows>* evaluated, std::vector<CandidateRow>* rows,
+                   SnoopingCandidates* out) {
+  const int num_candidates = static_cast<int>(diagnostics_of.size());
   std::vector<std::vector<int>> residuals_of(num_candidates);
   for (size_t r = 0; r < round.residuals.size(); ++r) {
     const ResidualInfo& info = round.residuals[r];
-    const auto found = candidate_of.find(key(info.group, info.item));
+    const auto found = candidate_of.find(ObservationKey(info.group, info.item));
     if (found != candidate_of.end()) residuals_of[found->second].push_back(static_cast<int>(r));
   }
-  struct Row {
-    int block_rows;  // index into `evaluated`
-    int row;
-  };
-  std::vector<BlockRows> evaluated;
-  std::vector<Row> rows;
   out->first_row.push_back(0);
   for (int c = 0; c < num_candidates; ++c) {
     for (const int r : residuals_of[c]) {
       const ResidualInfo& info = round.residuals[r];
-      evaluated.emplace_back();
-      if (!EvaluateBlockRows(round, reduced, info, &evaluated.back())) return;
+      evaluated->emplace_back();
+      if (!EvaluateBlockRows(round, reduced, info, &evaluated->back())) return false;
       for (int row = 0; row < info.rows; ++row) {
         const int d = diagnostics_of[c][std::clamp(info.first_axis + row, 0, 2)];
-        if (d < 0) return;
-        rows.push_back({static_cast<int>(evaluated.size()) - 1, row});
+        if (d < 0) return false;
+        rows->push_back({static_cast<int>(evaluated->size()) - 1, row});
         out->observation.push_back(d);
       }
     }
-    out->first_row.push_back(static_cast<int>(rows.size()));
+    out->first_row.push_back(static_cast<int>(rows->size()));
   }
-  // G: per row, g_a = E_a - W V^-1 q_a in the e columns; J_a Qxx J_b^T = g_a^T C g_b plus the
-  // point's own q_a^T V^-1 q_b when a and b share it.
+  return true;
+}
+
+// The rows' cofactors J_a Qxx J_b^T = g_a^T C g_b, plus the point's own q_a^T V^-1 q_b when a
+// and b share it, with g_a = E_a - W V^-1 q_a in the e columns (q_a = J_p,a^T). False when the
+// solve with the factor fails.
+bool CandidateCofactors(const ReducedNormals& reduced, const std::vector<BlockRows>& evaluated,
+                        const std::vector<CandidateRow>& rows, Eigen::MatrixXd* H) {
   const int n = static_cast<int>(rows.size());
   Eigen::MatrixXd G = Eigen::MatrixXd::Zero(reduced.size, n);
-  out->v.resize(n);
   for (int a = 0; a < n; ++a) {
     const BlockRows& br = evaluated[rows[a].block_rows];
     const int row = rows[a].row;
-    out->v[a] = br.residuals[row];
     for (size_t k = 0; k < br.e_columns.size(); ++k) G(br.e_columns[k], a) += br.J_e(row, k);
     if (br.point < 0) continue;
     const int p = br.point;
@@ -475,11 +533,11 @@ void FindSnoopingCandidates(const BundleRound& round, const ReducedNormals& redu
       at += size;
     }
   }
-  Eigen::MatrixXd H = Eigen::MatrixXd::Zero(n, n);
+  *H = Eigen::MatrixXd::Zero(n, n);
   if (reduced.size > 0 && n > 0) {
     const Eigen::MatrixXd CG = reduced.C.Solve(G);
-    if (!CG.allFinite()) return;
-    H.noalias() = G.transpose() * CG;
+    if (!CG.allFinite()) return false;
+    H->noalias() = G.transpose() * CG;
   }
   for (int a = 0; a < n; ++a) {
     const BlockRows& ra = evaluated[rows[a].block_rows];
@@ -487,11 +545,45 @@ void FindSnoopingCandidates(const BundleRound& round, const ReducedNormals& redu
     for (int b = 0; b < n; ++b) {
       const BlockRows& rb = evaluated[rows[b].block_rows];
       if (rb.point != ra.point) continue;
-      H(a, b) += (ra.J_p.row(rows[a].row) * reduced.V_inverse[ra.point] *
-                  rb.J_p.row(rows[b].row).transpose())
-                     .value();
+      (*H)(a, b) += (ra.J_p.row(rows[a].row) * reduced.V_inverse[ra.point] *
+                     rb.J_p.row(rows[b].row).transpose())
+                        .value();
     }
   }
+  return true;
+}
+
+// Batch data snooping's candidates (internal/bundle_statistics.h, SnoopingCandidates): the
+// observations the w-test rejects, the largest |w| first, and the cofactors of their rows. Left
+// not computed (the rounds then snoop one at a time) when a row cannot be evaluated or the solve
+// fails.
+void FindSnoopingCandidates(const BundleRound& round, const ReducedNormals& reduced,
+                            const GroupVariance& variance, const BundleAdjustmentResult& result,
+                            SnoopingCandidates* out) {
+  const auto start = std::chrono::steady_clock::now();
+  *out = SnoopingCandidates();
+  const std::vector<std::pair<double, int64_t>> ranked = RankRejected(result, &out->num_flagged);
+  const int num_candidates = static_cast<int>(ranked.size());
+  std::unordered_map<int64_t, int> candidate_of;
+  for (int c = 0; c < num_candidates; ++c) candidate_of[ranked[c].second] = c;
+  // Each candidate row's diagnostics (by axis), and the largest |w| outside the candidates.
+  std::vector<std::array<int, 3>> diagnostics_of(num_candidates, {-1, -1, -1});
+  for (size_t k = 0; k < result.observations.size(); ++k) {
+    const BundleObservationDiagnostics& d = result.observations[k];
+    const auto found = candidate_of.find(ObservationKey(d.group, d.item));
+    if (found != candidate_of.end())
+      diagnostics_of[found->second][std::clamp(d.axis, 0, 2)] = static_cast<int>(k);
+    else if (std::isfinite(d.normalized))
+      out->outside = std::max(out->outside, std::abs(d.normalized));
+  }
+  std::vector<BlockRows> evaluated;
+  std::vector<CandidateRow> rows;
+  if (!CandidateRows(round, reduced, candidate_of, diagnostics_of, &evaluated, &rows, out)) return;
+  const int n = static_cast<int>(rows.size());
+  out->v.resize(n);
+  for (int a = 0; a < n; ++a) out->v[a] = evaluated[rows[a].block_rows].residuals[rows[a].row];
+  Eigen::MatrixXd H;
+  if (!CandidateCofactors(reduced, evaluated, rows, &H)) return;
   out->Qvv = Eigen::MatrixXd::Identity(n, n) - 0.5 * (H + H.transpose());
   out->sigma0 = result.summary.sigma0;
   out->redundancy = result.summary.redundancy;

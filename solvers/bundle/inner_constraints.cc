@@ -22,95 +22,92 @@ Eigen::Matrix<double, 6, 7> OrientationSimilarityRows(const Vector6d& eo,
   return G;
 }
 
-Status InnerConstraintTransform::Compute(BundleRelativeCovariance datum, const Block& block,
-                                         const BundlePlan& plan, const BundleState& state,
-                                         const BundleRound& round, const ReducedNormals& reduced,
-                                         int num_threads) {
-  const bool on_points = datum == BundleRelativeCovariance::kInnerPoints;
-  const size_t num_images = block.images.size();
-  const size_t num_points = round.point_blocks.size();
-  // The datum's positions: their centroid and RMS spread condition G.
+namespace {
+
+// The datum's positions: the round's points, or the centres of the images in the round (the held
+// first image too).
+std::vector<Eigen::Vector3d> DatumPositions(bool on_points, const Block& block,
+                                            const BundlePlan& plan, const BundleState& state,
+                                            const BundleRound& round,
+                                            const ReducedNormals& reduced) {
   std::vector<Eigen::Vector3d> positions;
   if (on_points) {
     for (const double* X : round.point_blocks) positions.emplace_back(X[0], X[1], X[2]);
-  } else {
-    for (size_t i = 0; i < num_images; ++i) {
-      const bool in_round = reduced.e_index.count(state.eo[i].data()) ||
-                            static_cast<int>(i) == plan.relative_fixed_image;
-      if (in_round) positions.push_back(state.eo[i].head<3>());
-    }
+    return positions;
   }
-  const char* what = on_points ? "adjusted points" : "camera centres";
-  if (positions.size() < 3)
-    return Status::Error(std::string("the inner constraints on the ") + what +
-                         " need three of them, the block has " +
-                         std::to_string(positions.size()));
-  Eigen::Vector3d centroid = Eigen::Vector3d::Zero();
-  for (const auto& p : positions) centroid += p;
-  centroid /= static_cast<double>(positions.size());
-  double extent = 0.0;
-  for (const auto& p : positions) extent += (p - centroid).squaredNorm();
-  extent = std::sqrt(extent / positions.size());
-  if (!(extent > 0.0)) extent = 1.0;
+  for (size_t i = 0; i < block.images.size(); ++i) {
+    const bool in_round = reduced.e_index.count(state.eo[i].data()) ||
+                          static_cast<int>(i) == plan.relative_fixed_image;
+    if (in_round) positions.push_back(state.eo[i].head<3>());
+  }
+  return positions;
+}
 
-  // G per image (the held first image too) and per point.
-  image_G_.assign(num_images, Eigen::Matrix<double, 6, 7>::Zero());
-  image_M_.assign(num_images, Eigen::Matrix<double, 6, 7>::Zero());
-  for (size_t i = 0; i < num_images; ++i)
-    image_G_[i] = OrientationSimilarityRows(state.eo[i], centroid, extent);
-  centroid_ = centroid;
-  extent_ = extent;
-  point_blocks_ = &round.point_blocks;
+// The positions' centroid and RMS spread (1 when they coincide), which condition G.
+void CentroidAndExtent(const std::vector<Eigen::Vector3d>& positions, Eigen::Vector3d* centroid,
+                       double* extent) {
+  *centroid = Eigen::Vector3d::Zero();
+  for (const auto& p : positions) *centroid += p;
+  *centroid /= static_cast<double>(positions.size());
+  *extent = 0.0;
+  for (const auto& p : positions) *extent += (p - *centroid).squaredNorm();
+  *extent = std::sqrt(*extent / positions.size());
+  if (!(*extent > 0.0)) *extent = 1.0;
+}
 
-  // Y = C_g W G: the right-hand side W G on the round's parameters, the points eliminated
-  // (r_e = b_e - sum_p W_p V_p^-1 b_p), the reduced system solved, the points back-substituted
-  // (y_p = V_p^-1 (b_p - W_p^T y_e)). Held parameters have no rows in C_g: Y is zero there.
-  std::vector<int> image_block(num_images, -1);
-  for (size_t i = 0; i < num_images; ++i) {
+// Per image of the block: its e block in the round, or -1.
+std::vector<int> ImageBlocks(const Block& block, const BundleState& state,
+                             const ReducedNormals& reduced) {
+  std::vector<int> image_block(block.images.size(), -1);
+  for (size_t i = 0; i < block.images.size(); ++i) {
     const auto found = reduced.e_index.find(state.eo[i].data());
     if (found != reduced.e_index.end()) image_block[i] = found->second;
   }
-  Eigen::MatrixXd rhs = Eigen::MatrixXd::Zero(reduced.size, 7);
-  Eigen::Matrix<double, 7, 7> GtWG = Eigen::Matrix<double, 7, 7>::Zero();
+  return image_block;
+}
+
+}  // namespace
+
+void InnerConstraintTransform::RightHandSide(bool on_points, const BundlePlan& plan,
+                                             const BundleRound& round,
+                                             const ReducedNormals& reduced,
+                                             const std::vector<int>& image_block,
+                                             Eigen::MatrixXd* rhs,
+                                             Eigen::Matrix<double, 7, 7>* GtWG) const {
+  *rhs = Eigen::MatrixXd::Zero(reduced.size, 7);
+  *GtWG = Eigen::Matrix<double, 7, 7>::Zero();
   if (on_points) {
-    for (size_t k = 0; k < num_points; ++k) {
+    for (size_t k = 0; k < round.point_blocks.size(); ++k) {
       const Eigen::Matrix<double, 3, 7> G = PointRows(static_cast<int>(k));
-      GtWG += G.transpose() * G;
+      *GtWG += G.transpose() * G;
       const Eigen::MatrixXd WV_b = reduced.W[k] * (reduced.V_inverse[k] * G);
       int row = 0;
       for (const int b : reduced.W_blocks[k]) {
         const int size = reduced.C.block_size(b);
-        rhs.middleRows(reduced.e_offset[b], size) -= WV_b.middleRows(row, size);
+        rhs->middleRows(reduced.e_offset[b], size) -= WV_b.middleRows(row, size);
         row += size;
       }
     }
-  } else {
-    for (size_t i = 0; i < num_images; ++i) {
-      const bool in_round = image_block[i] >= 0 || static_cast<int>(i) == plan.relative_fixed_image;
-      if (!in_round) continue;
-      GtWG += image_G_[i].topRows<3>().transpose() * image_G_[i].topRows<3>();
-      if (image_block[i] < 0) continue;
-      const int b = image_block[i];
-      for (int c = 0; c < round.e_sizes[b]; ++c) {
-        const int k = OrientationComponent(plan, static_cast<int>(i), c);
-        if (k < 3) rhs.row(reduced.e_offset[b] + c) = image_G_[i].row(k);
-      }
+    return;
+  }
+  for (size_t i = 0; i < image_block.size(); ++i) {
+    const bool in_round = image_block[i] >= 0 || static_cast<int>(i) == plan.relative_fixed_image;
+    if (!in_round) continue;
+    *GtWG += image_G_[i].topRows<3>().transpose() * image_G_[i].topRows<3>();
+    if (image_block[i] < 0) continue;
+    const int b = image_block[i];
+    for (int c = 0; c < round.e_sizes[b]; ++c) {
+      const int k = OrientationComponent(plan, static_cast<int>(i), c);
+      if (k < 3) rhs->row(reduced.e_offset[b] + c) = image_G_[i].row(k);
     }
   }
-  const Eigen::SelfAdjointEigenSolver<Eigen::Matrix<double, 7, 7>> eigen(GtWG);
-  // G^T W G's eigenvalues are the squared singular values of the datum check's Jacobian.
-  if (!(eigen.eigenvalues()[0] > kDatumConditioning * kDatumConditioning * eigen.eigenvalues()[6]))
-    return Status::Error(std::string("the inner constraints on the ") + what +
-                         " do not fix the seven similarity parameters (they lie on one line)");
-  const Eigen::Matrix<double, 7, 7> A = eigen.eigenvectors() *
-                                        eigen.eigenvalues().cwiseInverse().asDiagonal() *
-                                        eigen.eigenvectors().transpose();
-  const Eigen::MatrixXd y_e = reduced.C.Solve(rhs);
-  if (!y_e.allFinite()) return Status::Error("the reduced system could not be solved for the datum");
-  // y_p, kept in point_M_ until A is known.
+}
+
+void InnerConstraintTransform::BackSubstitutePoints(bool on_points, const ReducedNormals& reduced,
+                                                    const Eigen::MatrixXd& y_e, int num_threads) {
   std::vector<Eigen::Matrix<double, 3, 7>>& y_p = point_M_;
-  y_p.resize(num_points);
-  ParallelFor(num_points, num_threads, [&](size_t k) {
+  y_p.resize(reduced.W.size());
+  ParallelFor(y_p.size(), num_threads, [&](size_t k) {
     Eigen::Matrix<double, 3, 7> b =
         on_points ? PointRows(static_cast<int>(k)) : Eigen::Matrix<double, 3, 7>::Zero();
     int row = 0;
@@ -122,14 +119,21 @@ Status InnerConstraintTransform::Compute(BundleRelativeCovariance datum, const B
     }
     y_p[k] = reduced.V_inverse[k] * b;
   });
+}
 
-  // G^T W Y, then Q = A G^T W Y A and M = Y A.
+void InnerConstraintTransform::MakeTransform(bool on_points, const BundlePlan& plan,
+                                             const BundleRound& round,
+                                             const ReducedNormals& reduced,
+                                             const std::vector<int>& image_block,
+                                             const Eigen::MatrixXd& y_e,
+                                             const Eigen::Matrix<double, 7, 7>& A) {
+  const std::vector<Eigen::Matrix<double, 3, 7>>& y_p = point_M_;
   Eigen::Matrix<double, 7, 7> GtWY = Eigen::Matrix<double, 7, 7>::Zero();
   if (on_points) {
-    for (size_t k = 0; k < num_points; ++k)
+    for (size_t k = 0; k < y_p.size(); ++k)
       GtWY += PointRows(static_cast<int>(k)).transpose() * y_p[k];
   }
-  for (size_t i = 0; i < num_images; ++i) {
+  for (size_t i = 0; i < image_block.size(); ++i) {
     const int b = image_block[i];
     if (b < 0) continue;
     Eigen::Matrix<double, 6, 7> Y = Eigen::Matrix<double, 6, 7>::Zero();
@@ -138,9 +142,56 @@ Status InnerConstraintTransform::Compute(BundleRelativeCovariance datum, const B
     if (!on_points) GtWY += image_G_[i].topRows<3>().transpose() * Y.topRows<3>();
     image_M_[i] = Y * A;
   }
-  for (size_t k = 0; k < num_points; ++k) point_M_[k] = (y_p[k] * A).eval();
+  for (size_t k = 0; k < point_M_.size(); ++k) point_M_[k] = (point_M_[k] * A).eval();
   Q_ = A * GtWY * A;
   Q_ = 0.5 * (Q_ + Q_.transpose()).eval();
+}
+
+Status InnerConstraintTransform::Compute(BundleRelativeCovariance datum, const Block& block,
+                                         const BundlePlan& plan, const BundleState& state,
+                                         const BundleRound& round, const ReducedNormals& reduced,
+                                         int num_threads) {
+  const bool on_points = datum == BundleRelativeCovariance::kInnerPoints;
+  const std::vector<Eigen::Vector3d> positions =
+      DatumPositions(on_points, block, plan, state, round, reduced);
+  const char* what = on_points ? "adjusted points" : "camera centres";
+  if (positions.size() < 3)
+    return Status::Error(std::string("the inner constraints on the ") + what +
+                         " need three of them, the block has " + std::to_string(positions.size()));
+  Eigen::Vector3d centroid;
+  double extent = 1.0;
+  CentroidAndExtent(positions, &centroid, &extent);
+
+  // G per image (the held first image too) and per point.
+  image_G_.assign(block.images.size(), Eigen::Matrix<double, 6, 7>::Zero());
+  image_M_.assign(block.images.size(), Eigen::Matrix<double, 6, 7>::Zero());
+  for (size_t i = 0; i < block.images.size(); ++i)
+    image_G_[i] = OrientationSimilarityRows(state.eo[i], centroid, extent);
+  centroid_ = centroid;
+  extent_ = extent;
+  point_blocks_ = &round.point_blocks;
+
+  // Y = C_g W G: the right-hand side W G on the round's parameters, the points eliminated
+  // (r_e = b_e - sum_p W_p V_p^-1 b_p), the reduced system solved, the points back-substituted
+  // (y_p = V_p^-1 (b_p - W_p^T y_e)). Held parameters have no rows in C_g: Y is zero there.
+  const std::vector<int> image_block = ImageBlocks(block, state, reduced);
+  Eigen::MatrixXd rhs;
+  Eigen::Matrix<double, 7, 7> GtWG;
+  RightHandSide(on_points, plan, round, reduced, image_block, &rhs, &GtWG);
+  const Eigen::SelfAdjointEigenSolver<Eigen::Matrix<double, 7, 7>> eigen(GtWG);
+  // G^T W G's eigenvalues are the squared singular values of the datum check's Jacobian.
+  if (!(eigen.eigenvalues()[0] > kDatumConditioning * kDatumConditioning * eigen.eigenvalues()[6]))
+    return Status::Error(std::string("the inner constraints on the ") + what +
+                         " do not fix the seven similarity parameters (they lie on one line)");
+  const Eigen::Matrix<double, 7, 7> A = eigen.eigenvectors() *
+                                        eigen.eigenvalues().cwiseInverse().asDiagonal() *
+                                        eigen.eigenvectors().transpose();
+  const Eigen::MatrixXd y_e = reduced.C.Solve(rhs);
+  if (!y_e.allFinite())
+    return Status::Error("the reduced system could not be solved for the datum");
+  BackSubstitutePoints(on_points, reduced, y_e, num_threads);  // y_p, in point_M_ until A is known
+  // G^T W Y, then Q = A G^T W Y A and M = Y A.
+  MakeTransform(on_points, plan, round, reduced, image_block, y_e, A);
 
   std::ostringstream words;
   words << "inner constraints on the " << positions.size() << " " << what

@@ -202,15 +202,10 @@ void GroupResidualsByPoint(const BundleRound& round, int num_threads, ReducedNor
 // whatever the number of threads.
 constexpr int kPointsPerChunk = 1024;
 
-}  // namespace
-
-void BuildReducedNormals(const BundleRound& round, const SelectedInversionOptions& options,
-                         int num_threads, ReducedNormals* reduced) {
-  *reduced = ReducedNormals();
-  const int num_blocks = static_cast<int>(round.e_blocks.size());
+// Every variable block of the round: the e blocks, their columns one after another, then the
+// points. Returns the first column of each e block, and S's size after the last.
+std::vector<int> IndexVariables(const BundleRound& round, ReducedNormals* reduced) {
   const ceres::Problem& problem = *round.problem;
-  int offset = 0;
-  std::vector<int> block_start;
   const auto add_variable = [&](double* values, int e_block, int point) {
     VariableBlock& v = reduced->variables[values];
     v.e_block = e_block;
@@ -223,7 +218,9 @@ void BuildReducedNormals(const BundleRound& round, const SelectedInversionOption
       manifold->PlusJacobian(values, v.plus_jacobian.data());
     }
   };
-  for (int b = 0; b < num_blocks; ++b) {
+  int offset = 0;
+  std::vector<int> block_start;
+  for (int b = 0; b < static_cast<int>(round.e_blocks.size()); ++b) {
     reduced->e_index[round.e_blocks[b]] = b;
     reduced->e_offset.push_back(offset);
     block_start.push_back(offset);
@@ -232,131 +229,151 @@ void BuildReducedNormals(const BundleRound& round, const SelectedInversionOption
   }
   block_start.push_back(offset);
   reduced->size = offset;
-  const int num_points = static_cast<int>(round.point_blocks.size());
-  for (int p = 0; p < num_points; ++p) {
+  for (int p = 0; p < static_cast<int>(round.point_blocks.size()); ++p) {
     reduced->point_index[round.point_blocks[p]] = p;
     add_variable(round.point_blocks[p], -1, p);
   }
-  GroupResidualsByPoint(round, num_threads, reduced);
+  return block_start;
+}
+
+// A point's rows of J_e^T J_p per e block (e block, e_size x 3); kept across points for their
+// memory.
+using PointParts = std::vector<std::pair<int, Eigen::MatrixXd>>;
+
+// Point p's residual blocks: their J_e^T J_e into the pair sums, *V = J_p^T J_p and *parts. False
+// when one cannot be evaluated. One loop on purpose: each residual block's rows are evaluated
+// once and used at once, while they are in the cache.
+bool AccumulatePointRows(const BundleRound& round, const ReducedNormals& reduced, int p,
+                         BlockRows* rows, PairSums* pairs, Eigen::Matrix3d* V, PointParts* parts) {
+  *V = Eigen::Matrix3d::Zero();
+  parts->clear();
+  for (int k = reduced.point_residual_start[p]; k < reduced.point_residual_start[p + 1]; ++k) {
+    if (!EvaluateBlockRows(round, reduced, round.residuals[reduced.residual_order[k]], rows))
+      return false;
+    AddCameraPart(*rows, round.e_sizes, pairs);
+    const bool mark = rows->rows == 2;  // 2 x 6 on an image, 2 x 3 on the point: unrolled
+    if (mark) {
+      const Eigen::Map<const Matrix23> J_p(rows->J_p.data());
+      V->noalias() += J_p.transpose() * J_p;
+    } else {
+      V->noalias() += rows->J_p.transpose() * rows->J_p;
+    }
+    int column = 0;
+    for (const int e : rows->e_blocks) {
+      const int size = round.e_sizes[e];
+      auto found = std::find_if(parts->begin(), parts->end(),
+                                [&](const auto& part) { return part.first == e; });
+      if (found == parts->end()) {
+        parts->emplace_back(e, Eigen::MatrixXd::Zero(size, 3));
+        found = parts->end() - 1;
+      }
+      if (mark && size == 6)
+        Eigen::Map<Matrix63>(found->second.data()).noalias() +=
+            Eigen::Map<const Matrix26>(rows->J_e.data() + 2 * column).transpose() *
+            Eigen::Map<const Matrix23>(rows->J_p.data());
+      else
+        found->second.noalias() += rows->J_e.middleCols(column, size).transpose() * rows->J_p;
+      column += size;
+    }
+  }
+  return true;
+}
+
+// Point p eliminated: V^-1 (false when V is not positive definite), W = its parts in ascending e
+// block order, and W V^-1 W^T subtracted from the pair sums.
+bool EliminatePoint(int p, const Eigen::Matrix3d& V, PointParts* parts, ReducedNormals* reduced,
+                    PairSums* pairs) {
+  const Eigen::LDLT<Eigen::Matrix3d> ldlt(V);
+  if (ldlt.info() != Eigen::Success || !(ldlt.vectorD().minCoeff() > 0.0)) return false;
+  reduced->V_inverse[p] = ldlt.solve(Eigen::Matrix3d::Identity());
+  std::sort(parts->begin(), parts->end(),
+            [](const auto& x, const auto& y) { return x.first < y.first; });
+  std::vector<int> start(parts->size() + 1, 0);
+  for (size_t k = 0; k < parts->size(); ++k) {
+    reduced->W_blocks[p].push_back((*parts)[k].first);
+    start[k + 1] = start[k] + static_cast<int>((*parts)[k].second.rows());
+  }
+  Eigen::MatrixXd& W = reduced->W[p];
+  W.resize(start.back(), 3);
+  for (size_t k = 0; k < parts->size(); ++k)
+    W.middleRows(start[k], (*parts)[k].second.rows()) = (*parts)[k].second;
+  const Eigen::MatrixXd WV = W * reduced->V_inverse[p];
+  for (size_t k = 0; k < parts->size(); ++k) {
+    for (size_t l = k; l < parts->size(); ++l) {
+      Eigen::MatrixXd& block = (*pairs)((*parts)[k].first, (*parts)[l].first);
+      if (block.rows() == 6 && block.cols() == 6)  // two images: unrolled
+        Eigen::Map<Matrix6d>(block.data()).noalias() -=
+            WV.block<6, 3>(start[k], 0) * W.block<6, 3>(start[l], 0).transpose();
+      else
+        block.noalias() -= WV.middleRows(start[k], start[k + 1] - start[k]) *
+                           W.middleRows(start[l], start[l + 1] - start[l]).transpose();
+    }
+  }
+  return true;
+}
+
+// The points chunk by chunk, a wave of chunks at a time on the threads; each chunk's sums of S
+// (J_e^T J_e of its rows less W V^-1 W^T of its points) added to *total in chunk order. Per point:
+// whether its rows were evaluated, and whether it is determined.
+void ReducePoints(const BundleRound& round, int num_threads, ReducedNormals* reduced,
+                  PairSums* total, std::vector<char>* evaluated, std::vector<char>* determined) {
+  const int num_blocks = static_cast<int>(round.e_blocks.size());
+  const int num_points = static_cast<int>(round.point_blocks.size());
   reduced->V_inverse.resize(num_points);
   reduced->W_blocks.resize(num_points);
   reduced->W.resize(num_points);
-
-  // The points chunk by chunk, a wave of chunks at a time on the threads; each chunk's sums of S
-  // (J_e^T J_e of its rows less W V^-1 W^T of its points) added to the total in chunk order.
-  PairSums total(round.e_sizes, num_blocks);
+  evaluated->assign(num_points, 1);
+  determined->assign(num_points, 1);
   const int num_chunks = (num_points + kPointsPerChunk - 1) / kPointsPerChunk;
   const int wave = ResolveThreadCount(num_threads);
-  std::vector<char> evaluated(num_points, 1), determined(num_points, 1);
   for (int first_chunk = 0; first_chunk < num_chunks; first_chunk += wave) {
     const int chunks = std::min(wave, num_chunks - first_chunk);
     std::vector<PairSums> sums(chunks, PairSums(round.e_sizes, num_blocks));
     ParallelFor(chunks, num_threads, [&](size_t c) {
-      PairSums& pairs = sums[c];
       BlockRows rows;
-      std::vector<std::pair<int, Eigen::MatrixXd>> parts;  // (e block, its rows of J_e^T J_p)
+      PointParts parts;
       const int begin = (first_chunk + static_cast<int>(c)) * kPointsPerChunk;
       const int end = std::min(num_points, begin + kPointsPerChunk);
       for (int at = begin; at < end; ++at) {
         const int p = reduced->point_order[at];
-        Eigen::Matrix3d V = Eigen::Matrix3d::Zero();
-        parts.clear();
-        for (int k = reduced->point_residual_start[p]; k < reduced->point_residual_start[p + 1]; ++k) {
-          if (!EvaluateBlockRows(round, *reduced, round.residuals[reduced->residual_order[k]], &rows)) {
-            evaluated[p] = 0;
-            break;
-          }
-          AddCameraPart(rows, round.e_sizes, &pairs);
-          const bool mark = rows.rows == 2;  // 2 x 6 on an image, 2 x 3 on the point: unrolled
-          if (mark) {
-            const Eigen::Map<const Matrix23> J_p(rows.J_p.data());
-            V.noalias() += J_p.transpose() * J_p;
-          } else {
-            V.noalias() += rows.J_p.transpose() * rows.J_p;
-          }
-          int column = 0;
-          for (const int e : rows.e_blocks) {
-            const int size = round.e_sizes[e];
-            auto found = std::find_if(parts.begin(), parts.end(),
-                                      [&](const auto& part) { return part.first == e; });
-            if (found == parts.end()) {
-              parts.emplace_back(e, Eigen::MatrixXd::Zero(size, 3));
-              found = parts.end() - 1;
-            }
-            if (mark && size == 6)
-              Eigen::Map<Matrix63>(found->second.data()).noalias() +=
-                  Eigen::Map<const Matrix26>(rows.J_e.data() + 2 * column).transpose() *
-                  Eigen::Map<const Matrix23>(rows.J_p.data());
-            else
-              found->second.noalias() += rows.J_e.middleCols(column, size).transpose() * rows.J_p;
-            column += size;
-          }
-        }
-        if (!evaluated[p]) continue;
-        const Eigen::LDLT<Eigen::Matrix3d> ldlt(V);
-        if (ldlt.info() != Eigen::Success || !(ldlt.vectorD().minCoeff() > 0.0)) {
-          determined[p] = 0;
-          continue;
-        }
-        reduced->V_inverse[p] = ldlt.solve(Eigen::Matrix3d::Identity());
-        std::sort(parts.begin(), parts.end(),
-                  [](const auto& x, const auto& y) { return x.first < y.first; });
-        std::vector<int> start(parts.size() + 1, 0);
-        for (size_t k = 0; k < parts.size(); ++k) {
-          reduced->W_blocks[p].push_back(parts[k].first);
-          start[k + 1] = start[k] + static_cast<int>(parts[k].second.rows());
-        }
-        Eigen::MatrixXd& W = reduced->W[p];
-        W.resize(start.back(), 3);
-        for (size_t k = 0; k < parts.size(); ++k)
-          W.middleRows(start[k], parts[k].second.rows()) = parts[k].second;
-        const Eigen::MatrixXd WV = W * reduced->V_inverse[p];
-        for (size_t k = 0; k < parts.size(); ++k) {
-          for (size_t l = k; l < parts.size(); ++l) {
-            Eigen::MatrixXd& block = pairs(parts[k].first, parts[l].first);
-            if (block.rows() == 6 && block.cols() == 6)  // two images: unrolled
-              Eigen::Map<Matrix6d>(block.data()).noalias() -=
-                  WV.block<6, 3>(start[k], 0) * W.block<6, 3>(start[l], 0).transpose();
-            else
-              block.noalias() -= WV.middleRows(start[k], start[k + 1] - start[k]) *
-                                 W.middleRows(start[l], start[l + 1] - start[l]).transpose();
-          }
-        }
+        Eigen::Matrix3d V;
+        if (!AccumulatePointRows(round, *reduced, p, &rows, &sums[c], &V, &parts))
+          (*evaluated)[p] = 0;
+        else if (!EliminatePoint(p, V, &parts, reduced, &sums[c]))
+          (*determined)[p] = 0;
       }
     });
-    for (PairSums& chunk : sums) total.Add(std::move(chunk));
+    for (PairSums& chunk : sums) total->Add(std::move(chunk));
   }
-  // The residual blocks without a point (priors on e blocks), in round order.
+}
+
+// The residual blocks without a point (priors on e blocks), in round order, into the sums. False
+// when one cannot be evaluated.
+bool AddRowsWithoutPoint(const BundleRound& round, const ReducedNormals& reduced, PairSums* total) {
   BlockRows rows;
-  bool all_evaluated = std::find(evaluated.begin(), evaluated.end(), 0) == evaluated.end();
-  for (size_t k = reduced->point_residual_start[num_points];
-       all_evaluated && k < reduced->residual_order.size(); ++k) {
-    all_evaluated =
-        EvaluateBlockRows(round, *reduced, round.residuals[reduced->residual_order[k]], &rows);
-    if (all_evaluated) AddCameraPart(rows, round.e_sizes, &total);
+  const size_t num_points = round.point_blocks.size();
+  for (size_t k = reduced.point_residual_start[num_points]; k < reduced.residual_order.size();
+       ++k) {
+    if (!EvaluateBlockRows(round, reduced, round.residuals[reduced.residual_order[k]], &rows))
+      return false;
+    AddCameraPart(rows, round.e_sizes, total);
   }
-  if (!all_evaluated) {
-    reduced->message = "a residual could not be evaluated at the solution";
-    return;
-  }
-  const auto undetermined = std::find(determined.begin(), determined.end(), 0);
-  if (undetermined != determined.end()) {
-    reduced->message = "a point is not determined by its rays";
-    reduced->singular = true;
-    reduced->undetermined_point = static_cast<int>(undetermined - determined.begin());
-    return;
-  }
-  if (offset == 0) {
-    reduced->ok = true;
-    return;
-  }
+  return true;
+}
+
+// S from the sums (which are emptied) and its selected inverse; a singular S's block and
+// component named.
+void FactorReducedNormals(const BundleRound& round, const std::vector<int>& block_start,
+                          const SelectedInversionOptions& options, PairSums* total,
+                          ReducedNormals* reduced) {
+  const int size = reduced->size;
   std::vector<Eigen::Triplet<double, int>> entries;
-  total.Triplets(block_start, &entries);
-  total = PairSums(round.e_sizes, num_blocks);
-  SelectedInverse::SparseMatrix S(offset, offset);
+  total->Triplets(block_start, &entries);
+  *total = PairSums(round.e_sizes, static_cast<int>(round.e_blocks.size()));
+  SelectedInverse::SparseMatrix S(size, size);
   S.setFromTriplets(entries.begin(), entries.end());
   std::vector<Eigen::Triplet<double, int>>().swap(entries);
-  reduced->S_nonzeros = 2 * S.nonZeros() - offset;
+  reduced->S_nonzeros = 2 * S.nonZeros() - size;
   const Status status = reduced->C.Compute(S, block_start, options);
   if (!status.ok()) {
     reduced->message = status.message();
@@ -373,6 +390,36 @@ void BuildReducedNormals(const BundleRound& round, const SelectedInversionOption
     return;
   }
   reduced->ok = true;
+}
+
+}  // namespace
+
+void BuildReducedNormals(const BundleRound& round, const SelectedInversionOptions& options,
+                         int num_threads, ReducedNormals* reduced) {
+  *reduced = ReducedNormals();
+  const std::vector<int> block_start = IndexVariables(round, reduced);
+  GroupResidualsByPoint(round, num_threads, reduced);
+  PairSums total(round.e_sizes, static_cast<int>(round.e_blocks.size()));
+  std::vector<char> evaluated, determined;
+  ReducePoints(round, num_threads, reduced, &total, &evaluated, &determined);
+  const bool all_evaluated = std::find(evaluated.begin(), evaluated.end(), 0) == evaluated.end() &&
+                             AddRowsWithoutPoint(round, *reduced, &total);
+  if (!all_evaluated) {
+    reduced->message = "a residual could not be evaluated at the solution";
+    return;
+  }
+  const auto undetermined = std::find(determined.begin(), determined.end(), 0);
+  if (undetermined != determined.end()) {
+    reduced->message = "a point is not determined by its rays";
+    reduced->singular = true;
+    reduced->undetermined_point = static_cast<int>(undetermined - determined.begin());
+    return;
+  }
+  if (reduced->size == 0) {
+    reduced->ok = true;
+    return;
+  }
+  FactorReducedNormals(round, block_start, options, &total, reduced);
 }
 
 int SupportCovariance::Offset(int e_block) const {

@@ -91,6 +91,92 @@ void TakahashiPanel(int j0, int j1, const int* Lp, const int* Li, const double* 
   }
 }
 
+// S_upper's upper triangle scaled to D S D (D = diag(scale)), every stored entry kept (a block's
+// structural zeros too, so that its columns share one pattern in L).
+SelectedInverse::SparseMatrix ScaledUpperTriangle(const SelectedInverse::SparseMatrix& S_upper,
+                                                  const Eigen::VectorXd& scale) {
+  using SparseMatrix = SelectedInverse::SparseMatrix;
+  const int n = static_cast<int>(S_upper.cols());
+  int64_t nnz = 0;
+  for (int col = 0; col < n; ++col)
+    for (SparseMatrix::InnerIterator it(S_upper, col); it; ++it) nnz += it.row() <= col;
+  SparseMatrix A(n, n);
+  A.resizeNonZeros(static_cast<Eigen::Index>(nnz));
+  int* Ap = A.outerIndexPtr();
+  int* Ai = A.innerIndexPtr();
+  double* Ax = A.valuePtr();
+  int64_t k = 0;
+  for (int col = 0; col < n; ++col) {
+    Ap[col] = static_cast<int>(k);
+    for (SparseMatrix::InnerIterator it(S_upper, col); it; ++it) {
+      if (it.row() > col) continue;
+      Ai[k] = it.row();
+      Ax[k++] = scale[it.row()] * it.value() * scale[col];
+    }
+  }
+  Ap[n] = static_cast<int>(k);
+  return A;
+}
+
+// Approximate minimum degree on the block graph of S_upper, expanded block by block: the
+// permutation of S's columns, and per block its first permuted column (*first).
+Status BlockAmdOrder(const SelectedInverse::SparseMatrix& S_upper,
+                     const std::vector<int>& block_start, CholmodFactor* factor,
+                     std::vector<int>* permutation, std::vector<int>* first) {
+  const int n = static_cast<int>(S_upper.cols());
+  const int num_blocks = static_cast<int>(block_start.size()) - 1;
+  std::vector<int> block_of(n);
+  for (int b = 0; b < num_blocks; ++b)
+    for (int col = block_start[b]; col < block_start[b + 1]; ++col) block_of[col] = b;
+  std::vector<std::vector<int>> block_rows(num_blocks);
+  for (int col = 0; col < n; ++col) {
+    for (SelectedInverse::SparseMatrix::InnerIterator it(S_upper, col); it; ++it) {
+      if (it.row() > col) continue;
+      const int a = block_of[it.row()], b = block_of[col];
+      if (block_rows[b].empty() || block_rows[b].back() != a) block_rows[b].push_back(a);
+    }
+  }
+  std::vector<int> block_column_start(num_blocks + 1, 0), block_pattern;
+  for (int b = 0; b < num_blocks; ++b) {
+    std::vector<int>& rows = block_rows[b];
+    std::sort(rows.begin(), rows.end());
+    rows.erase(std::unique(rows.begin(), rows.end()), rows.end());
+    block_pattern.insert(block_pattern.end(), rows.begin(), rows.end());
+    block_column_start[b + 1] = static_cast<int>(block_pattern.size());
+    rows = std::vector<int>();
+  }
+  std::vector<int> block_order;
+  const Status ordered =
+      factor->AmdOrder(num_blocks, block_column_start, block_pattern, &block_order);
+  if (!ordered.ok()) return Status::Error("selected inversion: " + ordered.message());
+  permutation->clear();
+  permutation->reserve(n);
+  first->assign(num_blocks, 0);
+  for (const int b : block_order) {
+    (*first)[b] = static_cast<int>(permutation->size());
+    for (int col = block_start[b]; col < block_start[b + 1]; ++col) permutation->push_back(col);
+  }
+  return Status::Ok();
+}
+
+// Takahashi, backwards, one block of S (a panel of columns J with one pattern R below it) at a
+// time: Z_RJ = -Z_RR L_RJ L_JJ^-1 and Z_JJ = (L_JJ^-T - Z_RJ^T L_RJ) L_JJ^-1. The products need
+// Z_ik for i, k in R; they lie in the columns i of R (L's pattern is closed: R is a clique of the
+// filled graph), found by walking each such column once per panel with R marked. panel_end: per
+// first permuted column of a block one past its last, 0 elsewhere; z: zero on L's pattern.
+void InvertOnPattern(const CholmodFactor::Columns& L, const std::vector<int>& panel_end,
+                     std::vector<double>* z) {
+  const int n = static_cast<int>(panel_end.size());
+  std::vector<int> position(n, -1);
+  int j1 = n;
+  while (j1 > 0) {
+    int j0 = j1 - 1;
+    while (panel_end[j0] == 0) --j0;  // the block's first column
+    TakahashiPanel(j0, j1, L.column_start, L.row, L.value, &position, z);
+    j1 = j0;
+  }
+}
+
 }  // namespace
 
 // The factor A = P^T L L^T P (simplicial, packed, each column's rows ascending with the diagonal
@@ -118,6 +204,12 @@ SelectedInverse::~SelectedInverse() = default;
 SelectedInverse::SelectedInverse(SelectedInverse&&) noexcept = default;
 SelectedInverse& SelectedInverse::operator=(SelectedInverse&&) noexcept = default;
 
+Status SelectedInverse::Singular(int column) {
+  singular_ = true;
+  singular_column_ = column;
+  return Status::Error("the reduced normal matrix is singular (not positive definite)");
+}
+
 Status SelectedInverse::Compute(const SparseMatrix& S_upper, const std::vector<int>& block_start,
                                 const SelectedInversionOptions& options) {
   sparse_.reset();
@@ -125,118 +217,70 @@ Status SelectedInverse::Compute(const SparseMatrix& S_upper, const std::vector<i
   factorization_seconds_ = inversion_seconds_ = 0.0;
   singular_ = false;
   singular_column_ = -1;
-  // A singular S: the column found, and the one message of every such case.
-  const auto singular = [this](int column) {
-    singular_ = true;
-    singular_column_ = column;
-    return Status::Error("the reduced normal matrix is singular (not positive definite)");
-  };
   const int n = static_cast<int>(S_upper.cols());
   if (S_upper.rows() != n || block_start.empty() || block_start.front() != 0 ||
       block_start.back() != n)
     return Status::Error("selected inversion: the blocks do not partition the matrix");
   block_start_ = block_start;
-  const int num_blocks = static_cast<int>(block_start.size()) - 1;
   // Jacobi scaling first: camera parameters in mixed units (um next to mm^-6) give diagonals
   // twenty orders of magnitude apart, which would hide a real rank defect or fake one.
   scale_.resize(n);
   for (int c = 0; c < n; ++c) {
     const double d = S_upper.coeff(c, c);
     if (!std::isfinite(d)) return Status::Error("the reduced normal matrix is not finite");
-    if (!(d > 0.0)) return singular(c);  // a column without weight
+    if (!(d > 0.0)) return Singular(c);  // a column without weight
     scale_[c] = 1.0 / std::sqrt(d);
   }
-  const Clock::time_point start = Clock::now();
-  if (options.dense) {
-    Eigen::MatrixXd A = Eigen::MatrixXd::Zero(n, n);
-    for (int col = 0; col < n; ++col) {
-      for (SparseMatrix::InnerIterator it(S_upper, col); it; ++it) {
-        if (it.row() > col) continue;
-        A(it.row(), col) = A(col, it.row()) = scale_[it.row()] * it.value() * scale_[col];
-      }
-    }
-    const Eigen::LDLT<Eigen::MatrixXd> ldlt(A);
-    const double pivot = ldlt.vectorD().minCoeff();
-    if (ldlt.info() != Eigen::Success || !(pivot > 0.0) ||
-        !(pivot > options.min_pivot_ratio * ldlt.vectorD().maxCoeff())) {
-      // Eigen's LDL^T picks its pivots by size, which would name any member of the undetermined
-      // combination; a Cholesky in the blocks' own order names the last of it, as the sparse
-      // factor does in its order (A's diagonal is 1: the first pivot <= the ratio).
-      Eigen::MatrixXd L = A;
-      for (int k = 0; k < n; ++k) {
-        const double d = L(k, k) - L.row(k).head(k).squaredNorm();
-        if (!(d > options.min_pivot_ratio)) return singular(k);
-        L(k, k) = std::sqrt(d);
-        for (int i = k + 1; i < n; ++i)
-          L(i, k) = (L(i, k) - L.row(i).head(k).dot(L.row(k).head(k))) / L(k, k);
-      }
-      return singular(-1);
-    }
-    factorization_seconds_ = SecondsSince(start);
-    if (options.factor_only) return Status::Ok();
-    dense_ = scale_.asDiagonal() * ldlt.solve(Eigen::MatrixXd::Identity(n, n)) *
-             scale_.asDiagonal();
-    inversion_seconds_ = SecondsSince(start) - factorization_seconds_;
-    if (!dense_.allFinite()) return singular(-1);
-    return Status::Ok();
-  }
+  return options.dense ? ComputeDense(S_upper, options) : ComputeSparse(S_upper, options);
+}
 
-  auto sparse = std::make_unique<Sparse>();
-  CholmodFactor& factor = sparse->factor;
-  // The scaled upper triangle, every stored entry kept (a block's structural zeros too, so that
-  // its columns share one pattern in L).
-  int64_t nnz = 0;
-  for (int col = 0; col < n; ++col)
-    for (SparseMatrix::InnerIterator it(S_upper, col); it; ++it) nnz += it.row() <= col;
-  SparseMatrix A(n, n);
-  A.resizeNonZeros(static_cast<Eigen::Index>(nnz));
-  {
-    int* Ap = A.outerIndexPtr();
-    int* Ai = A.innerIndexPtr();
-    double* Ax = A.valuePtr();
-    int64_t k = 0;
-    for (int col = 0; col < n; ++col) {
-      Ap[col] = static_cast<int>(k);
-      for (SparseMatrix::InnerIterator it(S_upper, col); it; ++it) {
-        if (it.row() > col) continue;
-        Ai[k] = it.row();
-        Ax[k++] = scale_[it.row()] * it.value() * scale_[col];
-      }
-    }
-    Ap[n] = static_cast<int>(k);
-  }
-  // Approximate minimum degree on the block graph, expanded block by block.
-  std::vector<int> block_of(n);
-  for (int b = 0; b < num_blocks; ++b)
-    for (int col = block_start[b]; col < block_start[b + 1]; ++col) block_of[col] = b;
-  std::vector<std::vector<int>> block_rows(num_blocks);
+Status SelectedInverse::ComputeDense(const SparseMatrix& S_upper,
+                                     const SelectedInversionOptions& options) {
+  const Clock::time_point start = Clock::now();
+  const int n = size();
+  Eigen::MatrixXd A = Eigen::MatrixXd::Zero(n, n);
   for (int col = 0; col < n; ++col) {
     for (SparseMatrix::InnerIterator it(S_upper, col); it; ++it) {
       if (it.row() > col) continue;
-      const int a = block_of[it.row()], b = block_of[col];
-      if (block_rows[b].empty() || block_rows[b].back() != a) block_rows[b].push_back(a);
+      A(it.row(), col) = A(col, it.row()) = scale_[it.row()] * it.value() * scale_[col];
     }
   }
-  std::vector<int> block_column_start(num_blocks + 1, 0), block_pattern;
-  for (int b = 0; b < num_blocks; ++b) {
-    std::vector<int>& rows = block_rows[b];
-    std::sort(rows.begin(), rows.end());
-    rows.erase(std::unique(rows.begin(), rows.end()), rows.end());
-    block_pattern.insert(block_pattern.end(), rows.begin(), rows.end());
-    block_column_start[b + 1] = static_cast<int>(block_pattern.size());
-    rows = std::vector<int>();
+  const Eigen::LDLT<Eigen::MatrixXd> ldlt(A);
+  const double pivot = ldlt.vectorD().minCoeff();
+  if (ldlt.info() != Eigen::Success || !(pivot > 0.0) ||
+      !(pivot > options.min_pivot_ratio * ldlt.vectorD().maxCoeff())) {
+    // Eigen's LDL^T picks its pivots by size, which would name any member of the undetermined
+    // combination; a Cholesky in the blocks' own order names the last of it, as the sparse
+    // factor does in its order (A's diagonal is 1: the first pivot <= the ratio).
+    Eigen::MatrixXd L = A;
+    for (int k = 0; k < n; ++k) {
+      const double d = L(k, k) - L.row(k).head(k).squaredNorm();
+      if (!(d > options.min_pivot_ratio)) return Singular(k);
+      L(k, k) = std::sqrt(d);
+      for (int i = k + 1; i < n; ++i)
+        L(i, k) = (L(i, k) - L.row(i).head(k).dot(L.row(k).head(k))) / L(k, k);
+    }
+    return Singular(-1);
   }
-  std::vector<int> block_order;
-  const Status ordered =
-      factor.AmdOrder(num_blocks, block_column_start, block_pattern, &block_order);
-  if (!ordered.ok()) return Status::Error("selected inversion: " + ordered.message());
+  factorization_seconds_ = SecondsSince(start);
+  if (options.factor_only) return Status::Ok();
+  dense_ = scale_.asDiagonal() * ldlt.solve(Eigen::MatrixXd::Identity(n, n)) * scale_.asDiagonal();
+  inversion_seconds_ = SecondsSince(start) - factorization_seconds_;
+  if (!dense_.allFinite()) return Singular(-1);
+  return Status::Ok();
+}
+
+Status SelectedInverse::ComputeSparse(const SparseMatrix& S_upper,
+                                      const SelectedInversionOptions& options) {
+  const Clock::time_point start = Clock::now();
+  const int n = size();
+  auto sparse = std::make_unique<Sparse>();
+  CholmodFactor& factor = sparse->factor;
+  SparseMatrix A = ScaledUpperTriangle(S_upper, scale_);
   std::vector<int> permutation;
-  permutation.reserve(n);
-  sparse->first.assign(num_blocks, 0);
-  for (const int b : block_order) {
-    sparse->first[b] = static_cast<int>(permutation.size());
-    for (int col = block_start[b]; col < block_start[b + 1]; ++col) permutation.push_back(col);
-  }
+  const Status ordered =
+      BlockAmdOrder(S_upper, block_start_, &factor, &permutation, &sparse->first);
+  if (!ordered.ok()) return ordered;
   // Exactly this order; a simplicial L L^T for the recursion.
   const Status analysed = factor.Analyze(A, permutation);
   if (!analysed.ok()) return Status::Error("selected inversion: " + analysed.message());
@@ -246,41 +290,27 @@ Status SelectedInverse::Compute(const SparseMatrix& S_upper, const std::vector<i
     if (!factor.not_positive_definite())
       return Status::Error("selected inversion: " + factored.message());
     const int column = factor.bad_pivot_column();
-    return singular(column >= 0 ? permutation[column] : -1);
+    return Singular(column >= 0 ? permutation[column] : -1);
   }
   factorization_seconds_ = SecondsSince(start);
   if (!(factor.pivot_ratio() > options.min_pivot_ratio)) {
     const int column = factor.smallest_pivot_column();
-    return singular(column >= 0 ? permutation[column] : -1);
+    return Singular(column >= 0 ? permutation[column] : -1);
   }
   if (options.factor_only) return Status::Ok();
 
-  // Takahashi, backwards, one block of S (a panel of columns J with one pattern R below it) at a
-  // time: Z_RJ = -Z_RR L_RJ L_JJ^-1 and Z_JJ = (L_JJ^-T - Z_RJ^T L_RJ) L_JJ^-1. The products need
-  // Z_ik for i, k in R; they lie in the columns i of R (L's pattern is closed: R is a clique of
-  // the filled graph), found by walking each such column once per panel with R marked.
   const Clock::time_point inversion_start = Clock::now();
   sparse->L = factor.columns();
-  const int* Lp = sparse->L.column_start;
-  const int* Li = sparse->L.row;
-  const double* Lx = sparse->L.value;
-  sparse->z.assign(static_cast<size_t>(n > 0 ? Lp[n] : 0), 0.0);
-  std::vector<int> position(n, -1);
+  sparse->z.assign(static_cast<size_t>(n > 0 ? sparse->L.column_start[n] : 0), 0.0);
   std::vector<int> panel_end(n, 0);  // per first column of a block: one past its last
-  for (int b = 0; b < num_blocks; ++b) {
+  for (int b = 0; b < num_blocks(); ++b) {
     const int first = sparse->first[b];
     panel_end[first] = first + block_size(b);
   }
-  int j1 = n;
-  while (j1 > 0) {
-    int j0 = j1 - 1;
-    while (panel_end[j0] == 0) --j0;  // the block's first column
-    TakahashiPanel(j0, j1, Lp, Li, Lx, &position, &sparse->z);
-    j1 = j0;
-  }
+  InvertOnPattern(sparse->L, panel_end, &sparse->z);
   inversion_seconds_ = SecondsSince(inversion_start);
   for (const double value : sparse->z)
-    if (!std::isfinite(value)) return singular(-1);
+    if (!std::isfinite(value)) return Singular(-1);
   sparse_ = std::move(sparse);
   return Status::Ok();
 }

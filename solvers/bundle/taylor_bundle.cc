@@ -1,7 +1,7 @@
 // The Taylor bundle adjustment (taylor_bundle.h): options, the plan (internal::MakeBundlePlan plus
 // its own ideal film points), the Gauss-Newton rounds, rejection and the results. The normal
 // equations (layout, linearisation, elimination, factorisation, covariances) are the other stage,
-// in taylor_bundle_normals.cc. About 1100 lines, one file on purpose: the rounds, the
+// in taylor_bundle_normals.cc. About 1270 lines, one file on purpose: the rounds, the
 // Levenberg-Marquardt step control, the free gauge and the results share one context (Context),
 // and each step is a named function; the normal equations are the other stage.
 #include "solvers/bundle/taylor_bundle.h"
@@ -381,6 +381,129 @@ bool DecideStep(const Context& ctx, const Layout& layout, const Normal& normal, 
   return false;
 }
 
+// A round's limits on the corrections: the position tolerance (at least what the coordinates'
+// doubles resolve, m) and the angle tolerance (rad), and the distance (m) beyond which a
+// Gauss-Newton step has diverged.
+struct RoundTolerances {
+  double position_m = 0.0;
+  double angle_rad = 0.0;
+  double divergence_m = 0.0;
+  bool Below(double position, double angle) const {
+    return position <= position_m && angle <= angle_rad;
+  }
+};
+
+RoundTolerances TolerancesOfRound(const Context& ctx, const Layout& layout, const State& state) {
+  const TaylorBundleOptions& options = ctx.options;
+  double max_norm = 0.0;
+  for (const int i : layout.free_images)
+    max_norm = std::max(max_norm, state.eo[i].head<3>().norm());
+  for (const int p : layout.free_points) max_norm = std::max(max_norm, state.points[p].norm());
+  RoundTolerances tolerances;
+  tolerances.position_m =
+      std::max(options.position_tolerance_m,
+               kPositionResolutionFactor * kEpsilon * (ctx.frame.extent_m + max_norm));
+  tolerances.angle_rad = options.angle_tolerance_rad;
+  tolerances.divergence_m =
+      options.divergence_distance_factor * std::max(ctx.frame.extent_m, max_norm);
+  return tolerances;
+}
+
+// Solves the step with the record's damping and measures it: the record's largest corrections,
+// the summary's count and last corrections, *step_squared. False on failure (*message).
+bool SolveAndMeasureStep(const Context& ctx, const std::string& at, const Normal& normal,
+                         Layout* layout, Reduction* reduction, Eigen::VectorXd* d_e,
+                         std::vector<Eigen::Vector3d>* d_p, TaylorBundleIteration* record,
+                         double* step_squared, TaylorBundleSummary* summary, std::string* message) {
+  reduction->damping = record->damping;
+  if (!SolveStep(ctx, at, normal, layout, reduction, d_e, d_p, message)) return false;
+  double max_position = 0.0, max_angle = 0.0;
+  MeasureCorrections(*layout, normal, *d_e, *d_p, &max_position, &max_angle, step_squared);
+  summary->iterations += 1;
+  summary->last_position_correction_m = record->max_position_correction_m = max_position;
+  summary->last_angle_correction_rad = record->max_angle_correction_rad = max_angle;
+  if (std::isfinite(*step_squared)) return true;
+  *message = "the correction is not finite" + at;
+  return false;
+}
+
+// After a damped step that met the tolerances: a damped step can be small because lambda is
+// large, so the undamped step at the current linearisation decides, and checks the datum (a
+// singular S fails as in Gauss-Newton). False on failure (*message); else *converged, and when
+// converged the undamped step's largest corrections in *position (m) and *angle (rad).
+bool UndampedStepConverges(const Context& ctx, const std::string& at, const Normal& normal,
+                           const RoundTolerances& tolerances, Layout* layout, Reduction* reduction,
+                           Eigen::VectorXd* d_e, std::vector<Eigen::Vector3d>* d_p, bool* converged,
+                           double* position, double* angle, std::string* message) {
+  reduction->damping = 0.0;
+  if (!SolveStep(ctx, at, normal, layout, reduction, d_e, d_p, message)) return false;
+  double gn_position = 0.0, gn_angle = 0.0, gn_squared = 0.0;
+  MeasureCorrections(*layout, normal, *d_e, *d_p, &gn_position, &gn_angle, &gn_squared);
+  *converged = tolerances.Below(gn_position, gn_angle);
+  if (*converged) {
+    *position = gn_position;
+    *angle = gn_angle;
+  }
+  return true;
+}
+
+// Takes the step (d_e, d_p) solved at the linearisation of cost `record->cost`: Gauss-Newton
+// applies it (false when it diverged: *message); Levenberg-Marquardt takes or refuses it by its
+// gain ratio (DecideStep: record->taken, record->gain_ratio; the next *lambda and *nu).
+bool TakeStep(const Context& ctx, const Layout& layout, const Normal& normal,
+              const RoundTolerances& tolerances, const std::string& at, const Eigen::VectorXd& d_e,
+              const std::vector<Eigen::Vector3d>& d_p, State* state, double* lambda, double* nu,
+              TaylorBundleIteration* record, TaylorBundleSummary* summary, std::string* message) {
+  if (ctx.options.damping == TaylorDamping::kLevenbergMarquardt) {
+    record->taken = DecideStep(ctx, layout, normal, record->cost, record->damping, d_e, d_p, state,
+                               lambda, nu, &record->gain_ratio);
+    if (!record->taken) summary->refused_steps += 1;
+    return true;
+  }
+  ApplyCorrections(layout, d_e, d_p, state);
+  return !Diverged(ctx, layout, *state, tolerances.divergence_m, at, message);
+}
+
+// Why the linearisation after a taken step failed.
+std::string RelinearizationFailure(const Block& block, const Normal& normal, int iteration) {
+  return normal.behind_mark >= 0
+             ? BehindMessage(block, normal,
+                             "after iteration " + std::to_string(iteration) + " (diverged)")
+             : "the residuals are not finite after iteration " + std::to_string(iteration);
+}
+
+// The progress hook after an iteration; false when it cancels the adjustment.
+bool ProgressContinues(const Context& ctx, int round, int iteration, bool free_gauge,
+                       int redundancy, const Normal& normal, double step_squared,
+                       const TaylorBundleSummary& summary) {
+  if (!ctx.options.progress) return true;
+  BundleIterationInfo info;
+  info.round = round;
+  info.iteration = iteration;
+  info.cost = summary.final_cost;
+  info.sigma0 = redundancy > 0 ? std::sqrt(normal.weighted_ssr / redundancy) : kNaN;
+  info.step_norm = std::sqrt(step_squared);
+  info.elapsed_seconds = SecondsSince(ctx.start);
+  info.free_gauge = free_gauge;
+  return ctx.options.progress(info);
+}
+
+// The tolerances, in fixed notation (the corrections themselves are below them and would print
+// as zeros): 0.001 mm and 0.0002 arc seconds by default.
+std::string ConvergedMessage(const RoundTolerances& tolerances) {
+  return Format("corrections below the tolerances (%.4f mm, %.4f arc seconds)",
+                1e3 * tolerances.position_m, kArcSecondsPerRadian * tolerances.angle_rad);
+}
+
+std::string NoConvergenceMessage(const TaylorBundleOptions& options, int round,
+                                 const TaylorBundleSummary& summary) {
+  std::ostringstream os;
+  os << "no convergence in " << options.max_iterations << " iterations of round " << round
+     << " (last correction " << summary.last_position_correction_m << " m, "
+     << summary.last_angle_correction_rad << " rad)";
+  return os.str();
+}
+
 // One round from *state: Gauss-Newton (eqs. 9-16) or Levenberg-Marquardt on the same normal
 // equations (options.damping). On kConvergence *state is the solution and *normal its
 // linearisation; otherwise *message says why it stopped. free_gauge (a relative block's first
@@ -393,23 +516,11 @@ SolverTermination RunRound(const Context& ctx, int round, bool free_gauge, Layou
   const TaylorBundleOptions& options = ctx.options;
   TaylorBundleSummary& summary = result->summary;
   const int redundancy = layout->num_observations - layout->num_unknowns;
-  double max_norm = 0.0;
-  for (const int i : layout->free_images)
-    max_norm = std::max(max_norm, state->eo[i].head<3>().norm());
-  for (const int p : layout->free_points) max_norm = std::max(max_norm, state->points[p].norm());
-  const double position_tolerance_m =
-      std::max(options.position_tolerance_m,
-               kPositionResolutionFactor * kEpsilon * (ctx.frame.extent_m + max_norm));
-  const double divergence_m =
-      options.divergence_distance_factor * std::max(ctx.frame.extent_m, max_norm);
-  const auto below_tolerance = [&](double position, double angle) {
-    return position <= position_tolerance_m && angle <= options.angle_tolerance_rad;
-  };
+  const RoundTolerances tolerances = TolerancesOfRound(ctx, *layout, *state);
   const auto linearize = [&]() {
     return Linearize(options.partials, ctx.block, ctx.plan, *layout, ctx.frame, *state,
                      ctx.num_threads, normal, nullptr);
   };
-
   if (!linearize()) {
     *message =
         normal->behind_mark >= 0
@@ -434,52 +545,26 @@ SolverTermination RunRound(const Context& ctx, int round, bool free_gauge, Layou
     // damped.
     if (free_gauge) lambda = std::max(lambda, options.free_gauge_min_damping);
     const double step_lambda = damped && (iteration > 1 || free_gauge) ? lambda : 0.0;
-    reduction->damping = step_lambda;
-    if (!SolveStep(ctx, at, *normal, layout, reduction, &d_e, &d_p, message))
+    TaylorBundleIteration record{round, iteration, cost, 0.0, 0.0, 0.0, step_lambda, 1.0, true};
+    double step_squared = 0.0;
+    if (!SolveAndMeasureStep(ctx, at, *normal, layout, reduction, &d_e, &d_p, &record,
+                             &step_squared, &summary, message))
       return SolverTermination::kFailure;
-    double max_position = 0.0, max_angle = 0.0, step_squared = 0.0;
-    MeasureCorrections(*layout, *normal, d_e, d_p, &max_position, &max_angle, &step_squared);
-    summary.iterations += 1;
-    summary.last_position_correction_m = max_position;
-    summary.last_angle_correction_rad = max_angle;
-    if (!std::isfinite(step_squared)) {
-      *message = "the correction is not finite" + at;
+    bool converged =
+        tolerances.Below(record.max_position_correction_m, record.max_angle_correction_rad);
+    if (!TakeStep(ctx, *layout, *normal, tolerances, at, d_e, d_p, state, &lambda, &nu, &record,
+                  &summary, message))
       return SolverTermination::kFailure;
-    }
-    TaylorBundleIteration record{round, iteration,   cost, max_position, max_angle,
-                                 0.0,   step_lambda, 1.0,  true};
-    bool converged = below_tolerance(max_position, max_angle);
-    bool relinearize = true;
-    if (damped) {
-      record.taken = DecideStep(ctx, *layout, *normal, cost, step_lambda, d_e, d_p, state, &lambda,
-                                &nu, &record.gain_ratio);
-      relinearize = record.taken;
-      if (!record.taken) summary.refused_steps += 1;
-    } else {
-      ApplyCorrections(*layout, d_e, d_p, state);
-      if (Diverged(ctx, *layout, *state, divergence_m, at, message))
-        return SolverTermination::kFailure;
-    }
-    if (relinearize && !linearize()) {
-      *message = normal->behind_mark >= 0
-                     ? BehindMessage(ctx.block, *normal,
-                                     "after iteration " + std::to_string(iteration) + " (diverged)")
-                     : "the residuals are not finite after iteration " + std::to_string(iteration);
+    if (record.taken && !linearize()) {
+      *message = RelinearizationFailure(ctx.block, *normal, iteration);
       return SolverTermination::kFailure;
     }
     if (damped && converged && step_lambda > 0.0 && !free_gauge) {
-      // A damped step can be small because lambda is large: the undamped step at the current
-      // linearisation decides, and checks the datum (a singular S fails as in Gauss-Newton).
-      reduction->damping = 0.0;
-      if (!SolveStep(ctx, at, *normal, layout, reduction, &d_e, &d_p, message))
+      if (!UndampedStepConverges(ctx, at, *normal, tolerances, layout, reduction, &d_e, &d_p,
+                                 &converged, &summary.last_position_correction_m,
+                                 &summary.last_angle_correction_rad, message))
         return SolverTermination::kFailure;
-      double gn_position = 0.0, gn_angle = 0.0, gn_squared = 0.0;
-      MeasureCorrections(*layout, *normal, d_e, d_p, &gn_position, &gn_angle, &gn_squared);
-      converged = below_tolerance(gn_position, gn_angle);
-      if (converged) {
-        summary.last_position_correction_m = max_position = gn_position;
-        summary.last_angle_correction_rad = max_angle = gn_angle;
-      } else {
+      if (!converged) {
         lambda = std::min(lambda, options.initial_damping);
         nu = 2.0;
       }
@@ -491,34 +576,17 @@ SolverTermination RunRound(const Context& ctx, int round, bool free_gauge, Layou
     record.seconds = SecondsSince(iteration_start);
     summary.iteration_seconds += record.seconds;
     result->history.push_back(record);
-    if (options.progress) {
-      BundleIterationInfo info;
-      info.round = round;
-      info.iteration = iteration;
-      info.cost = summary.final_cost;
-      info.sigma0 = redundancy > 0 ? std::sqrt(normal->weighted_ssr / redundancy) : kNaN;
-      info.step_norm = std::sqrt(step_squared);
-      info.elapsed_seconds = SecondsSince(ctx.start);
-      info.free_gauge = free_gauge;
-      if (!options.progress(info)) {
-        *message = "cancelled by the progress hook after iteration " + std::to_string(iteration);
-        return SolverTermination::kCancelled;
-      }
+    if (!ProgressContinues(ctx, round, iteration, free_gauge, redundancy, *normal, step_squared,
+                           summary)) {
+      *message = "cancelled by the progress hook after iteration " + std::to_string(iteration);
+      return SolverTermination::kCancelled;
     }
     if (converged) {
-      // The tolerances, in fixed notation (the corrections themselves are below them and would
-      // print as zeros): 0.001 mm and 0.0002 arc seconds by default.
-      *message =
-          Format("corrections below the tolerances (%.4f mm, %.4f arc seconds)",
-                 1e3 * position_tolerance_m, kArcSecondsPerRadian * options.angle_tolerance_rad);
+      *message = ConvergedMessage(tolerances);
       return SolverTermination::kConverged;
     }
   }
-  std::ostringstream os;
-  os << "no convergence in " << options.max_iterations << " iterations of round " << round
-     << " (last correction " << summary.last_position_correction_m << " m, "
-     << summary.last_angle_correction_rad << " rad)";
-  *message = os.str();
+  *message = NoConvergenceMessage(options, round, summary);
   return SolverTermination::kNoConvergence;
 }
 
@@ -846,21 +914,11 @@ Eigen::Vector3d TaylorAntennaPosition(const ExteriorOrientation& eo, const Eigen
   return eo.center_in_ground() + offset;
 }
 
-Status LinearizeTaylorBundle(const TaylorBundleOptions& options,
-                             const BundleAdjustmentConfig& config, const Block& input,
-                             TaylorBundleLinearSystem* system) {
-  CHECK(system != nullptr);
-  *system = TaylorBundleLinearSystem();
-  PHOTOPOSE_RETURN_IF_ERROR(CheckBlock(input));
-  Block block = input;
-  block.BuildIndex();
-  Plan plan;
-  PHOTOPOSE_RETURN_IF_ERROR(Prepare(options, config, block, &plan));
-  State state;
-  const Frame frame = MakeFrame(config, block, plan, &state);
-  Layout layout;
-  BuildLayout(block, plan, &layout);
+namespace {
 
+// LinearizeTaylorBundle's columns: the free images' six, the global columns, the free points'
+// three, in this order.
+DenseRows DenseColumns(const Block& block, const Layout& layout) {
   DenseRows dense;
   dense.image_columns.assign(block.images.size(), -1);
   dense.point_columns.assign(block.points.size(), -1);
@@ -874,13 +932,13 @@ Status LinearizeTaylorBundle(const TaylorBundleOptions& options,
     dense.point_columns[p] = dense.num_columns;
     dense.num_columns += 3;
   }
-  Normal normal;
-  const int num_threads = ResolveThreadCount(options.num_threads);
-  if (!Linearize(options.partials, block, plan, layout, frame, state, num_threads, &normal,
-                 &dense)) {
-    return Status::Error(normal.behind_mark >= 0 ? BehindMessage(block, normal, "")
-                                                 : "the residuals are not finite");
-  }
+  return dense;
+}
+
+// The whitened observation equations into the system: its columns, J (the fixed components'
+// columns zero) and the residuals.
+void CopyObservationEquations(const Block& block, const Plan& plan, const Layout& layout,
+                              const DenseRows& dense, TaylorBundleLinearSystem* system) {
   system->image_columns = dense.image_columns;
   system->point_columns = dense.point_columns;
   system->camera_columns.assign(block.cameras.size(), -1);
@@ -898,15 +956,12 @@ Status LinearizeTaylorBundle(const TaylorBundleOptions& options,
     for (int c = 0; c < 6; ++c)
       if (IsFixed(plan, layout, static_cast<int>(b), c))
         system->jacobian.col(dense.image_columns[layout.free_images[b]] + c).setZero();
+}
 
-  Reduction reduction;
-  reduction.solver = options.linear_solver;
-  reduction.num_threads = num_threads;
-  const int singular_point = Reduce(normal, layout, &reduction);
-  if (singular_point >= 0)
-    return Status::Error(PointName(block, singular_point) + " is not determined by its rays");
-  if (WriteScaled(plan, &layout, &reduction) >= 0)
-    return Status::Error("an exterior-orientation parameter has no weight");
+// The reduced camera system as a dense matrix and right-hand side, a fixed component's row and
+// column those of the identity.
+void CopyReducedSystem(const Plan& plan, const Layout& layout, const Reduction& reduction,
+                       TaylorBundleLinearSystem* system) {
   const int cameras_size = 6 * static_cast<int>(layout.free_images.size());
   const int n = cameras_size + layout.num_global;
   system->reduced_matrix = Eigen::MatrixXd::Zero(n, n);
@@ -931,6 +986,169 @@ Status LinearizeTaylorBundle(const TaylorBundleOptions& options,
       system->reduced_rhs[column] = 0.0;
     }
   }
+}
+
+// The step in the system's columns.
+void CopyCorrection(const Layout& layout, const DenseRows& dense, const Eigen::VectorXd& d_e,
+                    const std::vector<Eigen::Vector3d>& d_p, TaylorBundleLinearSystem* system) {
+  system->correction.resize(dense.num_columns);
+  for (size_t b = 0; b < layout.free_images.size(); ++b)
+    system->correction.segment<6>(dense.image_columns[layout.free_images[b]]) =
+        d_e.segment<6>(6 * b);
+  system->correction.segment(dense.global_column, layout.num_global) = d_e.tail(layout.num_global);
+  for (size_t q = 0; q < layout.free_points.size(); ++q)
+    system->correction.segment<3>(dense.point_columns[layout.free_points[q]]) = d_p[q];
+}
+
+// The end of a Taylor adjustment: its termination, message and time in both summaries. A block
+// left at its input values keeps no statistics (an earlier round's would not describe it).
+Status FinishAdjustment(SolverTermination type, const std::string& message, Clock::time_point start,
+                        TaylorBundleResult* result) {
+  TaylorBundleSummary& summary = result->summary;
+  BundleAdjustmentResult& out = result->adjustment;
+  if (type != SolverTermination::kConverged) {
+    out.images.clear();
+    out.points.clear();
+    out.groups.clear();
+    out.observations.clear();
+    out.mark_residuals.clear();
+  }
+  summary.termination_type = type;
+  summary.message = message;
+  summary.time_seconds = SecondsSince(start);
+  FillBundleSummary(summary, &out.summary);
+  return Status::Ok();
+}
+
+// A block or options refused before any round: the status returned, its message in the summaries.
+Status RefuseAdjustment(const Status& status, Clock::time_point start, TaylorBundleResult* result) {
+  result->summary.message = status.message();
+  result->summary.time_seconds = SecondsSince(start);
+  FillBundleSummary(result->summary, &result->adjustment.summary);
+  return status;
+}
+
+// The summary's words on the adjustment before its first round: the datum, the tie points left
+// out, the solver's settings.
+void DescribeAdjustment(const Context& context, TaylorBundleSummary* summary) {
+  summary->datum = context.plan.datum;
+  summary->datum_description = context.plan.datum_description;
+  for (const int p : context.plan.tie_points_left_out)
+    summary->tie_points_left_out.push_back(context.block.points[p].id);
+  summary->message.clear();
+  summary->damping = context.options.damping;
+  summary->linear_solver = context.options.linear_solver;
+  summary->num_threads = context.num_threads;
+}
+
+// What a round of TaylorBundleAdjust carries from one round to the next.
+struct Rounds {
+  Plan* plan;
+  State* state;
+  BundleAdjustmentOptions* adjustment_options;  // the statistics' and rounds' options
+  Statistics* statistics;
+  std::string stalled;  // the message of a robust round that stalled (internal::TieLossStalled)
+  Layout layout;
+  Normal normal;
+  std::unique_ptr<Reduction> reduction;
+};
+
+// One round's adjustment (a relative block's first in a free gauge first, when asked), its time
+// in the summary. kConverged, or how the adjustment ends with *message its words ("round N: ...",
+// what is undetermined named as BundleAdjust names it).
+SolverTermination AdjustRound(const Context& context, int round, Rounds* rounds,
+                              TaylorBundleResult* result, std::string* message) {
+  const TaylorBundleOptions& options = context.options;
+  TaylorBundleSummary& summary = result->summary;
+  const Clock::time_point round_start = Clock::now();
+  SolverTermination free_ended = SolverTermination::kConverged;
+  std::string free_message;
+  if (round == 1 && rounds->plan->datum == BundleDatum::kRelative &&
+      options.free_gauge_for_relative_blocks &&
+      options.damping == TaylorDamping::kLevenbergMarquardt)
+    summary.free_gauge_iterations = SolveInFreeGaugeFirst(context, rounds->plan, rounds->state,
+                                                          result, &free_ended, &free_message);
+  BuildLayout(context.block, *rounds->plan, &rounds->layout);
+  SummarizeRound(context.block, *rounds->plan, rounds->layout, round, &summary);
+  if (free_ended == SolverTermination::kCancelled) {
+    summary.round_seconds.push_back(SecondsSince(round_start));
+    *message = "round 1: " + free_message + " (free gauge)";
+    return free_ended;
+  }
+  rounds->reduction = std::make_unique<Reduction>();
+  rounds->reduction->solver = options.linear_solver;
+  rounds->reduction->num_threads = context.num_threads;
+  SolverTermination type =
+      RunRound(context, round, /*free_gauge=*/false, &rounds->layout, rounds->state,
+               &rounds->normal, rounds->reduction.get(), result, message);
+  if (internal::TieLossStalled(type, rounds->plan->tie_loss ? options.tie_loss : LossType::kNone)) {
+    // Stalled: on from here as least squares, this round and the rest, statistics included.
+    rounds->plan->tie_loss.reset();
+    rounds->adjustment_options->robustness.tie_loss = LossType::kNone;
+    rounds->statistics->built = false;
+    rounds->stalled =
+        internal::TieLossStalledMessage(round, options.tie_loss, options.max_iterations);
+    type = RunRound(context, round, /*free_gauge=*/false, &rounds->layout, rounds->state,
+                    &rounds->normal, rounds->reduction.get(), result, message);
+  }
+  summary.round_seconds.push_back(SecondsSince(round_start));
+  if (type == SolverTermination::kConverged) return type;
+  if (rounds->reduction->singular) {
+    const Status named = rounds->statistics->NameUndetermined(*rounds->state, context.frame);
+    if (!named.ok()) *message = named.message() + " (" + *message + ")";
+  }
+  *message = "round " + std::to_string(round) + ": " + *message;
+  return type;
+}
+
+// Without covariances the determinacy is checked by the statistics' own rule
+// (CheckBundleDeterminacy: the reduced system of the Ceres problem factorised once more, 11 s of
+// a 1000-image block). The last round's undamped factorisation has already shown S regular; when
+// its pivot ratio clears the statistics' bound by kDeterminedMargin the check is skipped,
+// otherwise that rule decides and names what is undetermined.
+Status CheckDeterminacyWithoutCovariances(const BundleAdjustmentOptions& adjustment_options,
+                                          Statistics* statistics, TaylorBundleSummary* summary) {
+  const double statistics_bound = internal::SelectedInversionOptions().min_pivot_ratio;
+  if (adjustment_options.statistics.covariances != BundleCovarianceMethod::kNone ||
+      summary->pivot_ratio >= kDeterminedMargin * statistics_bound)
+    return Status::Ok();
+  return statistics->CheckDeterminacy(summary);
+}
+
+}  // namespace
+
+Status LinearizeTaylorBundle(const TaylorBundleOptions& options,
+                             const BundleAdjustmentConfig& config, const Block& input,
+                             TaylorBundleLinearSystem* system) {
+  CHECK(system != nullptr);
+  *system = TaylorBundleLinearSystem();
+  PHOTOPOSE_RETURN_IF_ERROR(CheckBlock(input));
+  Block block = input;
+  block.BuildIndex();
+  Plan plan;
+  PHOTOPOSE_RETURN_IF_ERROR(Prepare(options, config, block, &plan));
+  State state;
+  const Frame frame = MakeFrame(config, block, plan, &state);
+  Layout layout;
+  BuildLayout(block, plan, &layout);
+  DenseRows dense = DenseColumns(block, layout);
+  Normal normal;
+  const int num_threads = ResolveThreadCount(options.num_threads);
+  if (!Linearize(options.partials, block, plan, layout, frame, state, num_threads, &normal,
+                 &dense)) {
+    return Status::Error(normal.behind_mark >= 0 ? BehindMessage(block, normal, "")
+                                                 : "the residuals are not finite");
+  }
+  CopyObservationEquations(block, plan, layout, dense, system);
+  Reduction reduction;
+  reduction.solver = options.linear_solver;
+  reduction.num_threads = num_threads;
+  const int singular_point = Reduce(normal, layout, &reduction);
+  if (singular_point >= 0)
+    return Status::Error(PointName(block, singular_point) + " is not determined by its rays");
+  if (WriteScaled(plan, &layout, &reduction) >= 0)
+    return Status::Error("an exterior-orientation parameter has no weight");
+  CopyReducedSystem(plan, layout, reduction, system);
   if (!Factorize(options.min_pivot_ratio, layout, &reduction)) {
     if (!reduction.failure.empty())
       return Status::Error("the reduced normal matrix could not be factorised: " +
@@ -941,14 +1159,7 @@ Status LinearizeTaylorBundle(const TaylorBundleOptions& options,
   Eigen::VectorXd d_e;
   std::vector<Eigen::Vector3d> d_p;
   SolveCorrections(plan, layout, normal, reduction, &d_e, &d_p);
-  system->correction.resize(dense.num_columns);
-  for (size_t b = 0; b < layout.free_images.size(); ++b)
-    system->correction.segment<6>(dense.image_columns[layout.free_images[b]]) =
-        d_e.segment<6>(6 * b);
-  system->correction.segment(dense.global_column, layout.num_global) =
-      d_e.tail(layout.num_global);
-  for (size_t q = 0; q < layout.free_points.size(); ++q)
-    system->correction.segment<3>(dense.point_columns[layout.free_points[q]]) = d_p[q];
+  CopyCorrection(layout, dense, d_e, d_p, system);
   return Status::Ok();
 }
 
@@ -963,142 +1174,71 @@ Status TaylorBundleAdjust(const TaylorBundleOptions& options,
   TaylorBundleSummary& summary = result->summary;
   summary.partials = options.partials;
   summary.sigma0 = kNaN;
-  auto refuse = [&](const Status& status) {
-    summary.message = status.message();
-    summary.time_seconds = SecondsSince(start);
-    FillBundleSummary(summary, &result->adjustment.summary);
-    return status;
-  };
   const Status checked = CheckBlock(*block);
-  if (!checked.ok()) return refuse(checked);
+  if (!checked.ok()) return RefuseAdjustment(checked, start, result);
   block->BuildIndex();
   Plan plan;
   const Status prepared = Prepare(options, config, *block, &plan);
-  if (!prepared.ok()) return refuse(prepared);
-  summary.datum = plan.datum;
-  summary.datum_description = plan.datum_description;
-  for (const int p : plan.tie_points_left_out)
-    summary.tie_points_left_out.push_back(block->points[p].id);
-  summary.message.clear();
-
+  if (!prepared.ok()) return RefuseAdjustment(prepared, start, result);
   State state;
   const Frame frame = MakeFrame(config, *block, plan, &state);
   const Context context{options, *block, plan,
                         frame,   start,  ThreadsForMarks(options.num_threads, plan)};
-  summary.damping = options.damping;
-  summary.linear_solver = options.linear_solver;
-  summary.num_threads = context.num_threads;
+  DescribeAdjustment(context, &summary);
   BundleAdjustmentResult& out = result->adjustment;
-  auto finish = [&](SolverTermination type, const std::string& message) {
-    if (type != SolverTermination::kConverged) {
-      // An earlier round's statistics do not describe a block left at its input values.
-      out.images.clear();
-      out.points.clear();
-      out.groups.clear();
-      out.observations.clear();
-      out.mark_residuals.clear();
-    }
-    summary.termination_type = type;
-    summary.message = message;
-    summary.time_seconds = SecondsSince(start);
-    FillBundleSummary(summary, &out.summary);
-    return Status::Ok();
-  };
 
   // Rounds: adjust; then, as BundleAdjust (internal/bundle_rounds.h), the statistics of the
   // solution, blunders out (rejection rounds or data snooping) or the groups rescaled (variance
   // components), and adjust again, until neither changes.
   BundleAdjustmentOptions adjustment_options = AdjustmentOptionsOf(options);
-  std::string stalled;  // the message of a robust round that stalled (internal::TieLossStalled)
   internal::GroupVariance variance;
   internal::RoundChanges changes(adjustment_options, config, *block, &plan, &out, &variance);
   Statistics statistics(adjustment_options, config, *block, plan);
-  Layout layout;
-  Normal normal;
-  std::unique_ptr<Reduction> reduction;
+  Rounds rounds{&plan, &state, &adjustment_options, &statistics, {}, {}, {}, {}};
   bool marks_removed_only = false;
   for (int round = 1;; ++round) {
-    const Clock::time_point round_start = Clock::now();
-    SolverTermination free_ended = SolverTermination::kConverged;
-    std::string free_message;
-    if (round == 1 && plan.datum == BundleDatum::kRelative &&
-        options.free_gauge_for_relative_blocks &&
-        options.damping == TaylorDamping::kLevenbergMarquardt)
-      summary.free_gauge_iterations =
-          SolveInFreeGaugeFirst(context, &plan, &state, result, &free_ended, &free_message);
-    BuildLayout(*block, plan, &layout);
-    SummarizeRound(*block, plan, layout, round, &summary);
-    if (free_ended == SolverTermination::kCancelled) {
-      summary.round_seconds.push_back(SecondsSince(round_start));
-      summary.sigma0 = kNaN;
-      return finish(free_ended, "round 1: " + free_message + " (free gauge)");
-    }
-    reduction = std::make_unique<Reduction>();
-    reduction->solver = options.linear_solver;
-    reduction->num_threads = context.num_threads;
     std::string message;
-    SolverTermination type = RunRound(context, round, /*free_gauge=*/false, &layout, &state,
-                                      &normal, reduction.get(), result, &message);
-    if (internal::TieLossStalled(type, plan.tie_loss ? options.tie_loss : LossType::kNone)) {
-      // Stalled: on from here as least squares, this round and the rest, statistics included.
-      plan.tie_loss.reset();
-      adjustment_options.robustness.tie_loss = LossType::kNone;
-      statistics.built = false;
-      stalled = internal::TieLossStalledMessage(round, options.tie_loss, options.max_iterations);
-      type = RunRound(context, round, /*free_gauge=*/false, &layout, &state, &normal,
-                      reduction.get(), result, &message);
-    }
-    summary.round_seconds.push_back(SecondsSince(round_start));
+    const SolverTermination type = AdjustRound(context, round, &rounds, result, &message);
     if (type != SolverTermination::kConverged) {
       summary.sigma0 = kNaN;
-      if (reduction->singular) {
-        // Named as BundleAdjust names it: the image and parameter, or the point, undetermined.
-        const Status named = statistics.NameUndetermined(state, frame);
-        if (!named.ok()) message = named.message() + " (" + message + ")";
-      }
-      return finish(type, "round " + std::to_string(round) + ": " + message);
+      return FinishAdjustment(type, message, start, result);
     }
-    summary.message = stalled.empty() ? message : stalled;
-    summary.pivot_ratio = reduction->pivot_ratio;  // undamped: RunRound converges on no other
+    summary.message = rounds.stalled.empty() ? message : rounds.stalled;
+    summary.pivot_ratio =
+        rounds.reduction->pivot_ratio;  // undamped: RunRound converges on no other
     summary.sigma0 =
-        summary.redundancy > 0 ? std::sqrt(normal.weighted_ssr / summary.redundancy) : kNaN;
+        summary.redundancy > 0 ? std::sqrt(rounds.normal.weighted_ssr / summary.redundancy) : kNaN;
     // The round's structures are freed first: the statistics' own peak comes after them.
-    layout = Layout();
-    normal = Normal();
-    reduction.reset();
+    rounds.layout = Layout();
+    rounds.normal = Normal();
+    rounds.reduction.reset();
     const Status determined =
         statistics.Compute(state, frame, marks_removed_only, &summary, &out, &variance);
     if (!determined.ok()) {
       summary.sigma0 = kNaN;
-      return finish(SolverTermination::kFailure,
-                    "round " + std::to_string(round) + ": " + determined.message());
+      return FinishAdjustment(SolverTermination::kFailure,
+                              "round " + std::to_string(round) + ": " + determined.message(), start,
+                              result);
     }
     const internal::RoundChange change = internal::ChangeAfterRound(&changes, round);
     if (change == internal::RoundChange::kFailed)
-      return finish(SolverTermination::kFailure, out.summary.message);
+      return FinishAdjustment(SolverTermination::kFailure, out.summary.message, start, result);
     if (change == internal::RoundChange::kNone) break;
     marks_removed_only = change == internal::RoundChange::kMarksRemoved;
   }
-  // Without covariances the determinacy is checked by the statistics' own rule
-  // (CheckBundleDeterminacy: the reduced system of the Ceres problem factorised once more, 11 s
-  // of a 1000-image block). The last round's undamped factorisation has already shown S regular;
-  // when its pivot ratio clears the statistics' bound by kDeterminedMargin the check is skipped,
-  // otherwise that rule decides and names what is undetermined.
-  const double statistics_bound = internal::SelectedInversionOptions().min_pivot_ratio;
-  if (adjustment_options.statistics.covariances == BundleCovarianceMethod::kNone &&
-      !(summary.pivot_ratio >= kDeterminedMargin * statistics_bound)) {
-    const Status determined = statistics.CheckDeterminacy(&summary);
-    if (!determined.ok()) {
-      summary.sigma0 = kNaN;
-      return finish(SolverTermination::kFailure,
-                    "round " + std::to_string(summary.rounds) + ": " + determined.message());
-    }
+  const Status determined =
+      CheckDeterminacyWithoutCovariances(adjustment_options, &statistics, &summary);
+  if (!determined.ok()) {
+    summary.sigma0 = kNaN;
+    return FinishAdjustment(SolverTermination::kFailure,
+                            "round " + std::to_string(summary.rounds) + ": " + determined.message(),
+                            start, result);
   }
   summary.num_rejected_marks = static_cast<int>(out.rejected_marks.size());
   if (adjustment_options.statistics.estimate_accuracies)
     internal::ReportEstimatedAccuracies(changes);
   WriteBack(plan, state, frame, block);
-  return finish(SolverTermination::kConverged, summary.message);
+  return FinishAdjustment(SolverTermination::kConverged, summary.message, start, result);
 }
 
 Status BundleAdjustWithSolver(PoseSolver solver, const BundleAdjustmentOptions& options,

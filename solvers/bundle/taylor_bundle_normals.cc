@@ -1,5 +1,5 @@
 // The normal equations of the Taylor bundle adjustment (internal/taylor_normals.h): layout,
-// linearisation, elimination of the points, factorisation. About 930 lines, one file on purpose:
+// linearisation, elimination of the points, factorisation. About 990 lines, one file on purpose:
 // the one stage of the Taylor solver that touches every mark, each step a named function over the
 // same layout (internal/taylor_normals.h), so that its memory per mark is visible in one place.
 #include <ceres/jet.h>
@@ -69,12 +69,10 @@ void OrderImagesToReduceFill(const Block& block, const Plan& plan, Layout* layou
   layout->free_images = std::move(images);
 }
 
-}  // namespace
-
-void BuildLayout(const Block& block, const Plan& plan, Layout* layout) {
-  *layout = Layout();
+// The camera blocks: every image whose pose is an unknown, in a fill-reducing order; six columns
+// each, less the fixed components.
+void NumberFreeImages(const Block& block, const Plan& plan, Layout* layout) {
   layout->image_block.assign(block.images.size(), -1);
-  layout->point_block.assign(block.points.size(), -1);
   for (size_t i = 0; i < block.images.size(); ++i) {
     if (plan.image_constant[i]) continue;
     layout->image_block[i] = static_cast<int>(layout->free_images.size());
@@ -83,8 +81,11 @@ void BuildLayout(const Block& block, const Plan& plan, Layout* layout) {
     for (const bool fixed : plan.image_fixed[i]) layout->num_unknowns -= fixed;
   }
   OrderImagesToReduceFill(block, plan, layout);
-  // The global columns, after the camera blocks: each self-calibrated camera's parameters, then
-  // the lever arm.
+}
+
+// The global columns, after the camera blocks: each self-calibrated camera's parameters, then the
+// lever arm.
+void NumberGlobalColumns(const Block& block, const Plan& plan, Layout* layout) {
   layout->camera_global.assign(block.cameras.size(), -1);
   for (size_t c = 0; c < block.cameras.size(); ++c) {
     if (plan.calibrated[c].empty()) continue;
@@ -104,8 +105,13 @@ void BuildLayout(const Block& block, const Plan& plan, Layout* layout) {
     layout->num_global += 3;
   }
   layout->num_unknowns += layout->num_global;
-  // The free points in the order of their first camera block (in the fill-reducing order), so
-  // that points eliminated one after another share images: their blocks of S stay in the cache.
+}
+
+// The free points in the order of their first camera block (in the fill-reducing order), so that
+// points eliminated one after another share images: their blocks of S stay in the cache. Counts
+// the points' and images' prior rows.
+void NumberFreePoints(const Block& block, const Plan& plan, Layout* layout) {
+  layout->point_block.assign(block.points.size(), -1);
   std::vector<int> first_block(block.points.size(), std::numeric_limits<int>::max());
   for (size_t m = 0; m < block.marks.size(); ++m) {
     const int b = layout->image_block[block.marks[m].image];
@@ -125,10 +131,14 @@ void BuildLayout(const Block& block, const Plan& plan, Layout* layout) {
   }
   for (size_t i = 0; i < block.images.size(); ++i)
     layout->num_observations += ImagePriorRows(plan, i) + 3 * plan.image_attitude[i];
+}
+
+// The marks of the round and their lists per point and per image, in two passes over the marks:
+// each list's length, then its entries.
+void ListMarks(const Block& block, const Plan& plan, Layout* layout) {
   layout->point_marks.Reset(layout->free_points.size());
   layout->point_all_marks.Reset(layout->free_points.size());
   layout->image_marks.Reset(block.images.size());
-  // Two passes over the marks: each list's length, then its entries.
   for (int pass = 0; pass < 2; ++pass) {
     size_t num_used = 0;
     for (size_t m = 0; m < block.marks.size(); ++m) {
@@ -164,7 +174,11 @@ void BuildLayout(const Block& block, const Plan& plan, Layout* layout) {
   layout->image_marks.Finish();
   layout->point_all_marks.Finish();
   layout->point_marks.Finish();
-  // Chunks of about equal elimination work (a point's is about n^2 for its n marks).
+}
+
+// Chunks of the free points of about equal elimination work (a point's is about n^2 for its n
+// marks).
+void SplitPointsIntoChunks(Layout* layout) {
   double total_work = 0.0;
   for (size_t q = 0; q < layout->point_marks.size(); ++q)
     total_work += 1.0 + static_cast<double>(layout->point_marks[q].size()) *
@@ -180,8 +194,11 @@ void BuildLayout(const Block& block, const Plan& plan, Layout* layout) {
   }
   while (static_cast<int>(layout->chunk_start.size()) <= kReductionChunks)
     layout->chunk_start.push_back(static_cast<int>(layout->free_points.size()));
+}
 
-  // Block pairs: the diagonal, and every two images that see a common free point.
+// Block pairs: the diagonal, and every two images that see a common free point; per free point
+// the pair of each two of its marks.
+void ListBlockPairs(Layout* layout) {
   std::unordered_map<long long, int> pair_index;
   const long long num_blocks = static_cast<long long>(layout->free_images.size());
   auto pair_of = [&](int b1, int b2) {
@@ -209,10 +226,12 @@ void BuildLayout(const Block& block, const Plan& plan, Layout* layout) {
         ids[TriangleIndex(a, c, n)] =
             pair_of(layout->mark_block[marks[a]], layout->mark_block[marks[c]]);
   }
+}
 
-  // The sparse pattern (upper triangle) and where each block's columns start in it. The global
-  // columns are dense: column 6 B + j holds rows 0 .. 6 B + j, in order.
-  const int cameras_size = 6 * static_cast<int>(num_blocks);
+// The sparse pattern of S (upper triangle) and where each block's columns start in it. The global
+// columns are dense: column 6 B + j holds rows 0 .. 6 B + j, in order.
+void BuildPattern(Layout* layout) {
+  const int cameras_size = 6 * static_cast<int>(layout->free_images.size());
   const int size = cameras_size + layout->num_global;
   std::vector<Eigen::Triplet<double, int>> entries;
   for (const auto& [b1, b2] : layout->pairs)
@@ -236,6 +255,19 @@ void BuildLayout(const Block& block, const Plan& plan, Layout* layout) {
       layout->value_start[k][c] = static_cast<int>(std::lower_bound(begin, end, 6 * b1) - inner);
     }
   }
+}
+
+}  // namespace
+
+void BuildLayout(const Block& block, const Plan& plan, Layout* layout) {
+  *layout = Layout();
+  NumberFreeImages(block, plan, layout);
+  NumberGlobalColumns(block, plan, layout);
+  NumberFreePoints(block, plan, layout);
+  ListMarks(block, plan, layout);
+  SplitPointsIntoChunks(layout);
+  ListBlockPairs(layout);
+  BuildPattern(layout);
 }
 
 // ------------------------------------------------------------------ the linearisation
@@ -340,120 +372,120 @@ int MarkGlobal(const Block& block, const Layout& layout, const Frame& frame, int
   return layout.camera_global[frame.camera_index[block.marks[layout.marks[k]].image]];
 }
 
-// Marks: eqs. 7-8 with eqs. 17-28 for the camera, dF/dX = -dF/dX0 for the point and the model's
-// calibration rows (MarkEquation), image by image on num_threads threads: each image's camera
-// sums (U, g_e, its coupling with the calibration) and its marks' W, g_p parts and F are its own;
-// its calibration sums are added in image order. The point sums (V, g_p, the calibration's
-// coupling) follow point by point over its marks in mark order. False when a point is not in
-// front of its camera (normal->behind_mark: the first such mark).
-bool LinearizeMarks(TaylorPartials partials, const Block& block, const Plan& plan,
-                    const Layout& layout, const Frame& frame, const State& state, int num_threads,
-                    Normal* normal) {
-  const size_t num_images = block.images.size();
-  const int G = layout.num_global;
-  std::vector<double> image_ssr(num_images, 0.0);
-  std::vector<int> image_behind(num_images, -1);
-  std::vector<double> image_behind_w(num_images, 0.0);
-  // Per image of a self-calibrated camera: its marks' share of the calibration's block, right-hand
-  // side and the weight of their rows.
-  std::vector<Eigen::MatrixXd> image_Ugg(G > 0 ? num_images : 0);
-  std::vector<Eigen::VectorXd> image_gg(G > 0 ? num_images : 0);
-  std::vector<double> image_weight(num_images, 0.0);
-  ParallelFor(num_images, num_threads, [&](size_t i) {
-    const TaylorPoseLinearization pose(partials, state.eo[i].data(), frame.focal_um[i],
-                                       frame.earth_radius_m[i]);
-    const int b = layout.image_block[i];
-    const int global = layout.camera_global[frame.camera_index[i]];
-    const int K = global >= 0 ? static_cast<int>(plan.calibrated[frame.camera_index[i]].size()) : 0;
-    Matrix6d U = Matrix6d::Zero();
-    Vector6d ge = Vector6d::Zero();
-    Eigen::Matrix<double, 6, Eigen::Dynamic> Ueg = Eigen::Matrix<double, 6, Eigen::Dynamic>::Zero(6, K);
-    Eigen::MatrixXd Ugg = Eigen::MatrixXd::Zero(K, K);
-    Eigen::VectorXd gg = Eigen::VectorXd::Zero(K);
-    Eigen::Matrix<double, 2, Eigen::Dynamic> A_g(2, K);
-    double ssr = 0.0, weight_rows = 0.0;
-    for (const int k : layout.image_marks[i]) {
-      const int m = layout.marks[k];
-      double row_u[6], row_v[6], fu, fv, w;
-      double calib_u[kMaxCameraModelParams], calib_v[kMaxCameraModelParams];
-      if (!MarkEquation(pose, block, plan, frame, state, m, row_u, row_v, &fu, &fv, &w,
-                        K > 0 ? calib_u : nullptr, calib_v)) {
-        image_behind[i] = m;
-        image_behind_w[i] = w;
-        return;
-      }
-      const Eigen::Vector2d F(fu, fv);
-      double weight = 1.0 / (plan.mark_sigma[m] * plan.mark_sigma[m]);
-      double factor = 1.0;
-      ssr += MarkCost(plan, m, weight * F.squaredNorm(), &factor);
-      weight *= factor;
-      Matrix26 A_e;
-      for (int c = 0; c < 6; ++c) {
-        A_e(0, c) = row_u[c];
-        A_e(1, c) = row_v[c];
-      }
-      Matrix23 A_p;
-      PointPartialsFromCentrePartials(row_u, row_v, &A_p);
-      const Eigen::Matrix<double, 6, 2> weighted_Ae_T = weight * A_e.transpose();
-      if (b >= 0) {
-        U.noalias() += weighted_Ae_T * A_e;
-        ge.noalias() += weighted_Ae_T * F;
-      }
-      normal->marks[k] = MarkRows{A_e, F, weight};
-      if (K > 0) {
-        for (int j = 0; j < K; ++j) {
-          A_g(0, j) = calib_u[j];
-          A_g(1, j) = calib_v[j];
-        }
-        if (b >= 0) Ueg.noalias() += weighted_Ae_T * A_g;
-        Ugg.noalias() += weight * A_g.transpose() * A_g;
-        gg.noalias() += weight * A_g.transpose() * F;
-        normal->Wg[k].noalias() = weight * A_g.transpose() * A_p;
-        weight_rows += 2.0 * weight;
-      }
+// One image's share of its marks' normal equations, beside what LinearizeImageMarks writes into
+// Normal directly.
+struct ImageMarkSums {
+  double ssr = 0.0;       // the marks' weighted sum of squares (their cost, MarkCost)
+  int behind = -1;        // the first mark whose point is not in front of the camera, or -1
+  double behind_w = 0.0;  // its w
+  // A self-calibrated camera's image: its marks' share of the calibration's block and right-hand
+  // side, and the weight of their rows (empty, 0 otherwise).
+  Eigen::MatrixXd Ugg;
+  Eigen::VectorXd gg;
+  double weight = 0.0;
+};
+
+// Image i's marks (eqs. 7-8 with eqs. 17-28 for the camera, dF/dX = -dF/dX0 for the point, the
+// model's calibration rows: MarkEquation): its camera sums U, g_e and their coupling with the
+// calibration into `normal`, each mark's rows and calibration W, and the rest into `sums`. One
+// kernel on purpose: the body of the marks' loop is the Taylor bundle's hottest code.
+void LinearizeImageMarks(TaylorPartials partials, const Block& block, const Plan& plan,
+                         const Layout& layout, const Frame& frame, const State& state, size_t i,
+                         Normal* normal, ImageMarkSums* sums) {
+  const TaylorPoseLinearization pose(partials, state.eo[i].data(), frame.focal_um[i],
+                                     frame.earth_radius_m[i]);
+  const int b = layout.image_block[i];
+  const int global = layout.camera_global[frame.camera_index[i]];
+  const int K = global >= 0 ? static_cast<int>(plan.calibrated[frame.camera_index[i]].size()) : 0;
+  Matrix6d U = Matrix6d::Zero();
+  Vector6d ge = Vector6d::Zero();
+  Eigen::Matrix<double, 6, Eigen::Dynamic> Ueg =
+      Eigen::Matrix<double, 6, Eigen::Dynamic>::Zero(6, K);
+  Eigen::MatrixXd Ugg = Eigen::MatrixXd::Zero(K, K);
+  Eigen::VectorXd gg = Eigen::VectorXd::Zero(K);
+  Eigen::Matrix<double, 2, Eigen::Dynamic> A_g(2, K);
+  double ssr = 0.0, weight_rows = 0.0;
+  for (const int k : layout.image_marks[i]) {
+    const int m = layout.marks[k];
+    double row_u[6], row_v[6], fu, fv, w;
+    double calib_u[kMaxCameraModelParams], calib_v[kMaxCameraModelParams];
+    if (!MarkEquation(pose, block, plan, frame, state, m, row_u, row_v, &fu, &fv, &w,
+                      K > 0 ? calib_u : nullptr, calib_v)) {
+      sums->behind = m;
+      sums->behind_w = w;
+      return;
     }
+    const Eigen::Vector2d F(fu, fv);
+    double weight = 1.0 / (plan.mark_sigma[m] * plan.mark_sigma[m]);
+    double factor = 1.0;
+    ssr += MarkCost(plan, m, weight * F.squaredNorm(), &factor);
+    weight *= factor;
+    Matrix26 A_e;
+    for (int c = 0; c < 6; ++c) {
+      A_e(0, c) = row_u[c];
+      A_e(1, c) = row_v[c];
+    }
+    Matrix23 A_p;
+    PointPartialsFromCentrePartials(row_u, row_v, &A_p);
+    const Eigen::Matrix<double, 6, 2> weighted_Ae_T = weight * A_e.transpose();
     if (b >= 0) {
-      normal->U[b] = U;
-      normal->ge[b] = ge;
-      if (K > 0) normal->Ueg[b].middleCols(global, K) = Ueg;
+      U.noalias() += weighted_Ae_T * A_e;
+      ge.noalias() += weighted_Ae_T * F;
     }
+    normal->marks[k] = MarkRows{A_e, F, weight};
     if (K > 0) {
-      image_Ugg[i] = std::move(Ugg);
-      image_gg[i] = std::move(gg);
-      image_weight[i] = weight_rows;
-    }
-    image_ssr[i] = ssr;
-  });
-  for (size_t i = 0; i < num_images; ++i) {
-    if (image_behind[i] >= 0 &&
-        (normal->behind_mark < 0 || image_behind[i] < normal->behind_mark)) {
-      normal->behind_mark = image_behind[i];
-      normal->behind_w = image_behind_w[i];
+      for (int j = 0; j < K; ++j) {
+        A_g(0, j) = calib_u[j];
+        A_g(1, j) = calib_v[j];
+      }
+      if (b >= 0) Ueg.noalias() += weighted_Ae_T * A_g;
+      Ugg.noalias() += weight * A_g.transpose() * A_g;
+      gg.noalias() += weight * A_g.transpose() * F;
+      normal->Wg[k].noalias() = weight * A_g.transpose() * A_p;
+      weight_rows += 2.0 * weight;
     }
   }
-  if (normal->behind_mark >= 0) return false;
-  for (size_t i = 0; i < num_images; ++i) normal->weighted_ssr += image_ssr[i];
-  // The calibration's own sums in image order, and the size measure of its corrections.
-  if (G > 0) {
-    std::vector<double> camera_weight(block.cameras.size(), 0.0);
-    for (size_t i = 0; i < num_images; ++i) {
-      const int c = frame.camera_index[i];
-      const int global = layout.camera_global[c];
-      if (global < 0 || image_Ugg[i].size() == 0) continue;
-      const int K = static_cast<int>(image_gg[i].size());
-      normal->Ugg.block(global, global, K, K) += image_Ugg[i];
-      normal->gg.segment(global, K) += image_gg[i];
-      camera_weight[c] += image_weight[i];
-    }
-    for (int j = 0; j < G; ++j) {
-      const int c = layout.global_camera[j];
-      if (c < 0) continue;
-      const double focal = CameraModelFocal(block.cameras[c].model, state.cameras[c].data());
-      normal->global_angle_per_unit[j] =
-          camera_weight[c] > 0.0 ? std::sqrt(normal->Ugg(j, j) / camera_weight[c]) / focal : 0.0;
-    }
+  if (b >= 0) {
+    normal->U[b] = U;
+    normal->ge[b] = ge;
+    if (K > 0) normal->Ueg[b].middleCols(global, K) = Ueg;
   }
-  // V_p = sum w A_p^T A_p: A_e's first three columns are -A_p, so it is minus the top of W.
+  if (K > 0) {
+    sums->Ugg = std::move(Ugg);
+    sums->gg = std::move(gg);
+    sums->weight = weight_rows;
+  }
+  sums->ssr = ssr;
+}
+
+// The calibration's own sums in image order, and the size measure of its corrections.
+void AddCalibrationSums(const Block& block, const Layout& layout, const Frame& frame,
+                        const State& state, const std::vector<ImageMarkSums>& sums,
+                        Normal* normal) {
+  std::vector<double> camera_weight(block.cameras.size(), 0.0);
+  for (size_t i = 0; i < sums.size(); ++i) {
+    const int c = frame.camera_index[i];
+    const int global = layout.camera_global[c];
+    if (global < 0 || sums[i].Ugg.size() == 0) continue;
+    const int K = static_cast<int>(sums[i].gg.size());
+    normal->Ugg.block(global, global, K, K) += sums[i].Ugg;
+    normal->gg.segment(global, K) += sums[i].gg;
+    camera_weight[c] += sums[i].weight;
+  }
+  for (int j = 0; j < layout.num_global; ++j) {
+    const int c = layout.global_camera[j];
+    if (c < 0) continue;
+    const double focal = CameraModelFocal(block.cameras[c].model, state.cameras[c].data());
+    normal->global_angle_per_unit[j] =
+        camera_weight[c] > 0.0 ? std::sqrt(normal->Ugg(j, j) / camera_weight[c]) / focal : 0.0;
+  }
+}
+
+// The point sums (V, g_p, the calibration's coupling) point by point over its marks in mark order.
+// V_p = sum w A_p^T A_p: A_e's first three columns are -A_p, so it is minus the top of W.
+void SumPointNormals(const Block& block, const Layout& layout, const Frame& frame, int num_threads,
+                     Normal* normal) {
+  const int G = layout.num_global;
   ParallelFor(layout.free_points.size(), num_threads, [&](size_t q) {
     Eigen::Matrix3d V = Eigen::Matrix3d::Zero();
     Eigen::Vector3d gp = Eigen::Vector3d::Zero();
@@ -467,6 +499,29 @@ bool LinearizeMarks(TaylorPartials partials, const Block& block, const Plan& pla
     normal->V[q] = V;
     normal->gp[q] = gp;
   });
+}
+
+// Marks: image by image on num_threads threads (LinearizeImageMarks: each image's camera sums and
+// its marks' rows are its own), its calibration sums added in image order, then the point sums.
+// False when a point is not in front of its camera (normal->behind_mark: the first such mark).
+bool LinearizeMarks(TaylorPartials partials, const Block& block, const Plan& plan,
+                    const Layout& layout, const Frame& frame, const State& state, int num_threads,
+                    Normal* normal) {
+  const size_t num_images = block.images.size();
+  std::vector<ImageMarkSums> sums(num_images);
+  ParallelFor(num_images, num_threads, [&](size_t i) {
+    LinearizeImageMarks(partials, block, plan, layout, frame, state, i, normal, &sums[i]);
+  });
+  for (size_t i = 0; i < num_images; ++i) {
+    if (sums[i].behind >= 0 && (normal->behind_mark < 0 || sums[i].behind < normal->behind_mark)) {
+      normal->behind_mark = sums[i].behind;
+      normal->behind_w = sums[i].behind_w;
+    }
+  }
+  if (normal->behind_mark >= 0) return false;
+  for (size_t i = 0; i < num_images; ++i) normal->weighted_ssr += sums[i].ssr;
+  if (layout.num_global > 0) AddCalibrationSums(block, layout, frame, state, sums, normal);
+  SumPointNormals(block, layout, frame, num_threads, normal);
   return true;
 }
 

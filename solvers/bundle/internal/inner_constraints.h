@@ -65,6 +65,17 @@ class InnerConstraintTransform {
 
  private:
   Eigen::Matrix<double, 3, 7> PointRows(int p) const;  // G of point p
+  // Compute's steps once G is known (image_G_, PointRows): the right-hand side W G on the round's
+  // parameters with the points eliminated, and G^T W G; the points' y_p = V_p^-1 (b_p - W_p^T y_e)
+  // into point_M_; then M = Y A and Q = A G^T W Y A. image_block: per image its e block or -1.
+  void RightHandSide(bool on_points, const BundlePlan& plan, const BundleRound& round,
+                     const ReducedNormals& reduced, const std::vector<int>& image_block,
+                     Eigen::MatrixXd* rhs, Eigen::Matrix<double, 7, 7>* GtWG) const;
+  void BackSubstitutePoints(bool on_points, const ReducedNormals& reduced,
+                            const Eigen::MatrixXd& y_e, int num_threads);
+  void MakeTransform(bool on_points, const BundlePlan& plan, const BundleRound& round,
+                     const ReducedNormals& reduced, const std::vector<int>& image_block,
+                     const Eigen::MatrixXd& y_e, const Eigen::Matrix<double, 7, 7>& A);
 
   Eigen::Matrix<double, 7, 7> Q_ = Eigen::Matrix<double, 7, 7>::Zero();
   std::vector<Eigen::Matrix<double, 6, 7>> image_G_, image_M_;  // per image of the block

@@ -97,6 +97,12 @@ class SelectedInverse {
   // Block (a, b) of C into out(i, j) = out[i + j stride] (column-major, leading dimension
   // `stride`); false when off the pattern (out then partly written).
   bool CopyBlock(int a, int b, double* out, Eigen::Index stride) const;
+  // Compute's two paths on the scaled S (scale_, block_start_ set): the dense oracle, and the
+  // sparse factor with the recursion on its pattern.
+  Status ComputeDense(const SparseMatrix& S_upper, const SelectedInversionOptions& options);
+  Status ComputeSparse(const SparseMatrix& S_upper, const SelectedInversionOptions& options);
+  // A singular S: the column found (-1: none named), and the one message of every such case.
+  Status Singular(int column);
   struct Sparse;  // the CHOLMOD factor and the entries of Z (scaled, permuted) on its pattern
   std::unique_ptr<Sparse> sparse_;
   Eigen::MatrixXd dense_;         // the oracle: C itself

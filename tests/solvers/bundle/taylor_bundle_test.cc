@@ -870,6 +870,10 @@ TEST(TaylorBundle, AProgressHookReturningFalseCancelsTheAdjustment) {
         << result.summary.message;
     ASSERT_EQ(static_cast<int>(calls.size()), stop_after);
     EXPECT_EQ(calls.back().free_gauge, is_relative);
+    // A cancellation in the free gauge says so; the cancelled round's time is kept either way.
+    EXPECT_EQ(result.summary.message.find(" (free gauge)") != std::string::npos, is_relative)
+        << result.summary.message;
+    EXPECT_EQ(result.summary.round_seconds.size(), 1u);
     EXPECT_EQ(result.summary.rounds, 1);
     ExpectUntouched(data.block, block, result);
   }
