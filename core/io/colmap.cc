@@ -185,6 +185,9 @@ class ModelBuilder {
   Status Tracks() const;
 
  private:
+  // The POINTS2D of one image (the block's image_index): marks of the points in the model,
+  // unmatched keypoints into the extras.
+  Status ImageMarks(const colmap_io::ImageRecord& im, int image_index);
   // The file name of one of the three files ("cameras.txt"), for messages naming the other file.
   const char* FileName(int file) const { return ColmapFileNames(paths_.format)[file]; }
   // The line of a record for the block's messages (0 in a binary file: it has no lines).
@@ -328,37 +331,42 @@ Status ModelBuilder::Images() {
     image.line = LineOf(im.place);
     block_.images.push_back(std::move(image));
 
-    for (size_t k = 0; k < im.num_points2D; ++k) {
-      const colmap_io::Point2DRecord& entry = r_.points2D[im.points2D_begin + k];
-      const auto entry_error = [&](std::string_view field, std::string_view what) {
-        return RecordError(paths_, paths_.images, im.points2D_place, field, what, k,
-                           kPoint2DEntryBytes);
-      };
-      const Eigen::Vector2d xy(entry.x, entry.y);
-      for (int axis = 0; axis < 2; ++axis) {
-        const std::string outside = OutsideMessage(xy[axis], kMaxCoordinate, "px");
-        if (!outside.empty()) return entry_error(axis == 0 ? "POINTS2D X" : "POINTS2D Y", outside);
-      }
-      if (entry.point3D_id < 0) {
-        if (extras_ != nullptr)
-          extras_->unmatched.push_back({image_index, static_cast<int>(k), xy});
-        continue;
-      }
-      const int point = point_of_id_.Find(entry.point3D_id);
-      if (point < 0) {
-        return entry_error("POINTS2D POINT3D_ID", "point " + std::to_string(entry.point3D_id) +
-                                                      " is not in " + FileName(2));
-      }
-      mark_of_point2D_[im.points2D_begin + k] = static_cast<int>(block_.marks.size());
-      block_.marks.push_back(MakePixelMark(image_index, point, xy, LineOf(im.points2D_place)));
-      if (extras_ != nullptr) extras_->mark_keypoint_index.push_back(static_cast<int>(k));
-    }
+    PHOTOPOSE_RETURN_IF_ERROR(ImageMarks(im, image_index));
     if (extras_ != nullptr) {
       extras_->image_ids.push_back(im.id);
       extras_->num_keypoints.push_back(static_cast<int>(im.num_points2D));
     }
   }
   image_of_id_.Freeze();
+  return Status::Ok();
+}
+
+Status ModelBuilder::ImageMarks(const colmap_io::ImageRecord& im, int image_index) {
+  for (size_t k = 0; k < im.num_points2D; ++k) {
+    const colmap_io::Point2DRecord& entry = r_.points2D[im.points2D_begin + k];
+    const auto entry_error = [&](std::string_view field, std::string_view what) {
+      return RecordError(paths_, paths_.images, im.points2D_place, field, what, k,
+                         kPoint2DEntryBytes);
+    };
+    const Eigen::Vector2d xy(entry.x, entry.y);
+    for (int axis = 0; axis < 2; ++axis) {
+      const std::string outside = OutsideMessage(xy[axis], kMaxCoordinate, "px");
+      if (!outside.empty()) return entry_error(axis == 0 ? "POINTS2D X" : "POINTS2D Y", outside);
+    }
+    if (entry.point3D_id < 0) {
+      if (extras_ != nullptr)
+        extras_->unmatched.push_back({image_index, static_cast<int>(k), xy});
+      continue;
+    }
+    const int point = point_of_id_.Find(entry.point3D_id);
+    if (point < 0) {
+      return entry_error("POINTS2D POINT3D_ID", "point " + std::to_string(entry.point3D_id) +
+                                                    " is not in " + FileName(2));
+    }
+    mark_of_point2D_[im.points2D_begin + k] = static_cast<int>(block_.marks.size());
+    block_.marks.push_back(MakePixelMark(image_index, point, xy, LineOf(im.points2D_place)));
+    if (extras_ != nullptr) extras_->mark_keypoint_index.push_back(static_cast<int>(k));
+  }
   return Status::Ok();
 }
 
@@ -560,20 +568,10 @@ Status KeypointSlots(const Block& block, const ColmapModelExtras* extras,
   return Status::Ok();
 }
 
-// The records of a block (checked by CheckColmapModelWritable first).
-Status RecordsFromBlock(const Block& block, const ColmapModelExtras* extras,
-                        const ColmapWriteOptions& options, colmap_io::Records* records) {
-  const size_t num_images = block.images.size();
-  const size_t num_points = block.points.size();
-  const std::vector<char>& left_out = options.marks_left_out;
-  if (!left_out.empty() && left_out.size() != block.marks.size()) {
-    return Status::Error("ColmapWriteOptions::marks_left_out has " +
-                         std::to_string(left_out.size()) + " entries for " +
-                         std::to_string(block.marks.size()) + " marks");
-  }
-  const auto kept = [&](size_t m) { return left_out.empty() || !left_out[m]; };
-
-  const std::vector<long long> camera_ids = NumericIds(
+// The camera records, with the numeric ids of the block's cameras in *camera_ids.
+Status CameraRecords(const Block& block, const ColmapWriteOptions& options, std::vector<long long>* camera_ids,
+                     colmap_io::Records* records) {
+  *camera_ids = NumericIds(
       block.cameras, [](const BlockCamera& c) -> const std::string& { return c.camera_id; },
       options.format == ColmapFormat::kBinary ? kMaxBinaryId
                                               : std::numeric_limits<long long>::max());
@@ -582,31 +580,40 @@ Status RecordsFromBlock(const Block& block, const ColmapModelExtras* extras,
     colmap_io::CameraRecord& camera = records->cameras[c];
     PHOTOPOSE_RETURN_IF_ERROR(
         ColmapCameraFromBlockCamera(block.cameras[c], &camera.model, &camera.params));
-    camera.id = camera_ids[c];
+    camera.id = (*camera_ids)[c];
     camera.width = block.cameras[c].table.n_columns;
     camera.height = block.cameras[c].table.n_rows;
   }
+  return Status::Ok();
+}
 
-  std::vector<long long> offset, slot;
-  std::vector<int> keypoint_of_mark;
-  PHOTOPOSE_RETURN_IF_ERROR(KeypointSlots(block, extras, &offset, &slot, &keypoint_of_mark));
+// Which points and marks are written: the points with a position, and, when one of their marks
+// is left out, with at least two kept; a mark is in its point's track when it is kept and its
+// point written.
+struct WrittenTracks {
+  WrittenTracks(const Block& block, const std::vector<char>& left_out) : block(block), left_out(left_out) {
+    const size_t num_points = block.points.size();
+    std::vector<int> num_kept(num_points, 0), num_left_out(num_points, 0);
+    for (size_t m = 0; m < block.marks.size(); ++m)
+      ++(Kept(m) ? num_kept : num_left_out)[block.marks[m].point];
+    written.assign(num_points, 0);
+    for (size_t p = 0; p < num_points; ++p)
+      written[p] = block.points[p].position_m && (num_left_out[p] == 0 || num_kept[p] >= 2);
+  }
+  bool Kept(size_t m) const { return left_out.empty() || !left_out[m]; }
+  bool InTrack(size_t m) const { return Kept(m) && written[block.marks[m].point]; }
 
-  // The points written: with a position, and, when one of their marks is left out, with at least
-  // two kept.
-  std::vector<int> num_kept(num_points, 0), num_left_out(num_points, 0);
-  for (size_t m = 0; m < block.marks.size(); ++m)
-    ++(kept(m) ? num_kept : num_left_out)[block.marks[m].point];
-  std::vector<char> written(num_points, 0);
-  for (size_t p = 0; p < num_points; ++p)
-    written[p] = block.points[p].position_m && (num_left_out[p] == 0 || num_kept[p] >= 2);
-  const auto in_track = [&](size_t m) { return kept(m) && written[block.marks[m].point]; };
+  const Block& block;
+  const std::vector<char>& left_out;  // ColmapWriteOptions::marks_left_out
+  std::vector<char> written;          // one per point
+};
 
-  const std::vector<long long> point_ids = NumericIds(
-      block.points, [](const BlockPoint& p) -> const std::string& { return p.id; },
-      std::numeric_limits<long long>::max());
-
-  // Images with their POINTS2D: marks in pixels (a frame camera's film observations mapped to its
-  // pixels), unmatched keypoints as they were.
+// Images with their POINTS2D: marks in pixels (a frame camera's film observations mapped to its
+// pixels), unmatched keypoints as they were.
+Status ImageRecords(const Block& block, const ColmapModelExtras* extras, const std::vector<long long>& camera_ids,
+                    const std::vector<long long>& point_ids, const std::vector<long long>& offset,
+                    const std::vector<long long>& slot, const WrittenTracks& tracks, colmap_io::Records* records) {
+  const size_t num_images = block.images.size();
   records->images.resize(num_images);
   records->points2D.resize(slot.size());
   for (size_t i = 0; i < num_images; ++i) {
@@ -639,22 +646,28 @@ Status RecordsFromBlock(const Block& block, const ColmapModelExtras* extras,
         if (!status.ok())
           return Status::Error("mark " + std::to_string(m + 1) + ": " + status.message());
       }
-      entry = {pixel.x(), pixel.y(), in_track(m) ? point_ids[mark.point] : -1};
+      entry = {pixel.x(), pixel.y(), tracks.InTrack(m) ? point_ids[mark.point] : -1};
     }
   }
+  return Status::Ok();
+}
 
-  // Points with their tracks, in block mark order per point.
+// Points with their tracks, in block mark order per point.
+void PointRecords(const Block& block, const ColmapModelExtras* extras, const std::vector<long long>& point_ids,
+                  const std::vector<int>& keypoint_of_mark, const WrittenTracks& tracks,
+                  colmap_io::Records* records) {
+  const size_t num_points = block.points.size();
   std::vector<double> point_error;
-  MeanErrorsOfKeptMarks(block, left_out, &point_error);
+  MeanErrorsOfKeptMarks(block, tracks.left_out, &point_error);
   std::vector<size_t> track_offset(num_points + 1, 0);
   for (size_t m = 0; m < block.marks.size(); ++m)
-    if (in_track(m)) ++track_offset[block.marks[m].point + 1];
+    if (tracks.InTrack(m)) ++track_offset[block.marks[m].point + 1];
   for (size_t p = 0; p < num_points; ++p) track_offset[p + 1] += track_offset[p];
   records->tracks.resize(track_offset[num_points]);
   {
     std::vector<size_t> next(track_offset.begin(), track_offset.end() - 1);
     for (size_t m = 0; m < block.marks.size(); ++m) {
-      if (!in_track(m)) continue;
+      if (!tracks.InTrack(m)) continue;
       const BlockMark& mark = block.marks[m];
       records->tracks[next[mark.point]++] = {static_cast<uint32_t>(records->images[mark.image].id),
                                              static_cast<uint32_t>(keypoint_of_mark[m])};
@@ -662,7 +675,7 @@ Status RecordsFromBlock(const Block& block, const ColmapModelExtras* extras,
   }
   records->points.clear();
   for (size_t p = 0; p < num_points; ++p) {
-    if (!written[p]) continue;
+    if (!tracks.written[p]) continue;
     colmap_io::PointRecord point;
     point.id = point_ids[p];
     const Eigen::Vector3d& position = *block.points[p].position_m;
@@ -673,6 +686,28 @@ Status RecordsFromBlock(const Block& block, const ColmapModelExtras* extras,
     point.track_length = track_offset[p + 1] - track_offset[p];
     records->points.push_back(point);
   }
+}
+
+// The records of a block (checked by CheckColmapModelWritable first).
+Status RecordsFromBlock(const Block& block, const ColmapModelExtras* extras,
+                        const ColmapWriteOptions& options, colmap_io::Records* records) {
+  const std::vector<char>& left_out = options.marks_left_out;
+  if (!left_out.empty() && left_out.size() != block.marks.size()) {
+    return Status::Error("ColmapWriteOptions::marks_left_out has " +
+                         std::to_string(left_out.size()) + " entries for " +
+                         std::to_string(block.marks.size()) + " marks");
+  }
+  std::vector<long long> camera_ids;
+  PHOTOPOSE_RETURN_IF_ERROR(CameraRecords(block, options, &camera_ids, records));
+  std::vector<long long> offset, slot;
+  std::vector<int> keypoint_of_mark;
+  PHOTOPOSE_RETURN_IF_ERROR(KeypointSlots(block, extras, &offset, &slot, &keypoint_of_mark));
+  const WrittenTracks tracks(block, left_out);
+  const std::vector<long long> point_ids = NumericIds(
+      block.points, [](const BlockPoint& p) -> const std::string& { return p.id; },
+      std::numeric_limits<long long>::max());
+  PHOTOPOSE_RETURN_IF_ERROR(ImageRecords(block, extras, camera_ids, point_ids, offset, slot, tracks, records));
+  PointRecords(block, extras, point_ids, keypoint_of_mark, tracks, records);
   return Status::Ok();
 }
 

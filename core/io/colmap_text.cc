@@ -119,23 +119,9 @@ void AppendSpaceNumber(double value, std::string* text) {
   AppendNumber(value, text);
 }
 
-}  // namespace
-
-Status ParseTextFile(ModelFile file, std::string_view text, const ModelPaths& paths,
-                     Records* records) {
-  switch (file) {
-    case ModelFile::kCameras:
-      return ParseCameras(text, paths.cameras, records);
-    case ModelFile::kImages:
-      return ParseImages(text, paths.images, records);
-    case ModelFile::kPoints3D:
-      return ParsePoints(text, paths.points3D, records);
-  }
-  return Status::Error("unknown COLMAP file");
-}
-
-void FormatText(const Records& records, ColmapModelFiles* files) {
-  std::string& cameras = files->cameras;
+// cameras.txt.
+void FormatCamerasText(const Records& records, std::string* text) {
+  std::string& cameras = *text;
   cameras =
       "# Camera list with one line of data per camera:\n"
       "#   CAMERA_ID, MODEL, WIDTH, HEIGHT, PARAMS[]\n"
@@ -152,12 +138,15 @@ void FormatText(const Records& records, ColmapModelFiles* files) {
     for (const double value : camera.params) AppendSpaceNumber(value, &cameras);
     cameras += '\n';
   }
+}
 
+// images.txt: two lines per image, the second its POINTS2D.
+void FormatImagesText(const Records& records, std::string* text) {
+  std::string& images = *text;
   size_t num_observations = 0;
   for (const Point2DRecord& entry : records.points2D)
     if (entry.point3D_id >= 0) ++num_observations;
   const size_t num_images = records.images.size();
-  std::string& images = files->images;
   images.clear();
   images.reserve(200 * num_images + 40 * records.points2D.size());
   images +=
@@ -187,9 +176,12 @@ void FormatText(const Records& records, ColmapModelFiles* files) {
     }
     images += '\n';
   }
+}
 
+// points3D.txt: a line per point with its track.
+void FormatPointsText(const Records& records, std::string* text) {
+  std::string& points = *text;
   const size_t num_points = records.points.size();
-  std::string& points = files->points3D;
   points.clear();
   points.reserve(100 * num_points + 16 * records.tracks.size());
   points +=
@@ -216,6 +208,27 @@ void FormatText(const Records& records, ColmapModelFiles* files) {
     }
     points += '\n';
   }
+}
+
+}  // namespace
+
+Status ParseTextFile(ModelFile file, std::string_view text, const ModelPaths& paths,
+                     Records* records) {
+  switch (file) {
+    case ModelFile::kCameras:
+      return ParseCameras(text, paths.cameras, records);
+    case ModelFile::kImages:
+      return ParseImages(text, paths.images, records);
+    case ModelFile::kPoints3D:
+      return ParsePoints(text, paths.points3D, records);
+  }
+  return Status::Error("unknown COLMAP file");
+}
+
+void FormatText(const Records& records, ColmapModelFiles* files) {
+  FormatCamerasText(records, &files->cameras);
+  FormatImagesText(records, &files->images);
+  FormatPointsText(records, &files->points3D);
   files->format = ColmapFormat::kText;
 }
 

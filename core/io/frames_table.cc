@@ -156,6 +156,115 @@ Status ReadFrameRow(const CsvRowReader& row, const std::vector<size_t>& extra,
 }
 
 
+// The optional column groups of a frames table: each written when any frame needs it.
+struct FramesColumnGroups {
+  bool matrix = false;  // a frame's camera has OrientationType Matrix
+  bool covariance = false;
+  bool sigma0 = false;
+  bool center_accuracy = false;
+  bool attitude_accuracy = false;
+};
+
+// The camera of every frame (*cameras; nullptr: none in the options) and the optional column
+// groups the frames need.
+Status FrameCamerasAndGroups(const FramesTableOptions& options, const std::vector<FrameRecord>& frames,
+                             const std::string& path, std::vector<const FrameCamera*>* cameras,
+                             FramesColumnGroups* any) {
+  cameras->assign(frames.size(), nullptr);
+  for (size_t i = 0; i < frames.size(); ++i) {
+    const Status found = FindCamera(options, frames[i].camera_id, &(*cameras)[i]);
+    if (!found.ok())
+      return Status::Error(path + ": raster " + Quoted(frames[i].raster) +
+                           ": CameraID: " + found.message());
+    any->matrix = any->matrix || ((*cameras)[i] != nullptr &&
+                                  (*cameras)[i]->orientation_type == OrientationType::kMatrix);
+    any->covariance = any->covariance || frames[i].covariance.has_value();
+    any->sigma0 = any->sigma0 || frames[i].sigma0.has_value();
+    any->center_accuracy = any->center_accuracy || frames[i].center_accuracy_m.has_value();
+    any->attitude_accuracy = any->attitude_accuracy || frames[i].attitude_accuracy_deg.has_value();
+  }
+  return Status::Ok();
+}
+
+std::vector<std::string> FramesHeader(const FramesColumnGroups& any, const std::vector<std::string>& extra_names) {
+  std::vector<std::string> header = {"Raster",       "CameraID", "PerspectiveX", "PerspectiveY",
+                                     "PerspectiveZ", "Omega",    "Phi",          "Kappa"};
+  if (any.matrix) header.push_back("Matrix");
+  header.push_back("SRS");
+  if (any.covariance) header.insert(header.end(), SigmaColumns().begin(), SigmaColumns().end());
+  if (any.sigma0) header.push_back("Sigma0");
+  if (any.center_accuracy)
+    header.insert(header.end(), std::begin(kAccuracyColumns), std::end(kAccuracyColumns));
+  if (any.attitude_accuracy)
+    header.insert(header.end(), std::begin(kAttitudeAccuracyColumns),
+                  std::end(kAttitudeAccuracyColumns));
+  header.insert(header.end(), extra_names.begin(), extra_names.end());
+  return header;
+}
+
+// The six standard deviations of a frame (m, then degrees in the table's convention) from its
+// covariance in the seed's (m, rad); empty fields without one.
+void AppendSigmas(const FramesTableOptions& options, const FrameRecord& f, const AngleFlags& flags,
+                  RowFields* row) {
+  if (!f.covariance) {
+    for (int k = 0; k < 6; ++k) row->Text("");
+    return;
+  }
+  if (!f.covariance->allFinite() || (f.covariance->diagonal().array() < 0.0).any())
+    row->Fail("SigmaX", "covariance is not finite or has a negative variance");
+  const Matrix6d J = FileFromSeedJacobian(options.convention, flags, f.eo.angles_seed_rad());
+  const Vector6d variances = (J * *f.covariance * J.transpose()).diagonal();
+  for (int k = 0; k < 6; ++k) {
+    // Rounding can make a zero variance slightly negative.
+    const double sigma = std::sqrt(std::max(variances[k], 0.0));
+    row->Number(SigmaColumns()[k], k < 3 ? sigma : sigma * kDegreesPerRadian);
+  }
+}
+
+// One frame's row in the columns of FramesHeader.
+Status FrameRow(const FramesTableOptions& options, const FramesColumnGroups& any,
+                const std::vector<std::string>& extra_names, const std::string& path, const FrameRecord& f,
+                const FrameCamera* camera, std::vector<std::string>* fields) {
+  const AngleFlags flags = FlagsOf(camera);
+  const Eigen::Vector3d seed_angles = f.eo.angles_seed_rad();
+  RowFields row("raster " + Quoted(f.raster));
+  row.Text(f.raster);
+  row.Text(f.camera_id);
+  row.Number("PerspectiveX", f.eo.parameters[0]);
+  row.Number("PerspectiveY", f.eo.parameters[1]);
+  row.Number("PerspectiveZ", f.eo.parameters[2]);
+  const Eigen::Vector3d angles_deg =
+      ConventionAnglesFromSeed(options.convention, flags, seed_angles) * kDegreesPerRadian;
+  row.Number("Omega", angles_deg[0]);
+  row.Number("Phi", angles_deg[1]);
+  row.Number("Kappa", angles_deg[2]);
+  if (any.matrix) {
+    std::vector<double> matrix;
+    if (camera != nullptr && camera->orientation_type == OrientationType::kMatrix) {
+      const Eigen::Matrix<double, 3, 3, Eigen::RowMajor> R =
+          RotationFromAngles(RotationConvention::kSeed, seed_angles);
+      matrix.assign(R.data(), R.data() + 9);
+    }
+    row.NumberList("Matrix", matrix);
+  }
+  row.Text(f.srs);
+  if (any.covariance) AppendSigmas(options, f, flags, &row);
+  if (any.sigma0) row.OptionalNumber("Sigma0", f.sigma0);
+  const auto accuracies = [&row](const std::string_view(&columns)[3],
+                                 const std::optional<Eigen::Vector3d>& values) {
+    for (int k = 0; k < 3; ++k) {
+      if (values && !((*values)[k] > 0.0)) row.Fail(columns[k], "must be positive");
+      row.OptionalNumber(columns[k], values ? std::optional<double>((*values)[k]) : std::nullopt);
+    }
+  };
+  if (any.center_accuracy) accuracies(kAccuracyColumns, f.center_accuracy_m);
+  if (any.attitude_accuracy) accuracies(kAttitudeAccuracyColumns, f.attitude_accuracy_deg);
+  AppendExtraColumns(f, extra_names, row.fields());
+  PHOTOPOSE_RETURN_IF_ERROR(row.status(path));
+  *fields = std::move(*row.fields());
+  return Status::Ok();
+}
+
 }  // namespace
 
 // ------------------------------------------------------------------ frames table
@@ -198,91 +307,16 @@ Status ParseFramesTable(std::string_view text, const std::string& file_name,
 Status FormatFramesTable(const FramesTableOptions& options, const std::vector<FrameRecord>& frames,
                          const std::string& path, std::string* text) {
   // The camera of every frame first: it decides the AngleDirection and whether Matrix is written.
-  std::vector<const FrameCamera*> cameras(frames.size(), nullptr);
-  bool any_matrix = false, any_covariance = false, any_sigma0 = false;
-  bool any_center_accuracy = false, any_attitude_accuracy = false;
-  for (size_t i = 0; i < frames.size(); ++i) {
-    const Status found = FindCamera(options, frames[i].camera_id, &cameras[i]);
-    if (!found.ok())
-      return Status::Error(path + ": raster " + Quoted(frames[i].raster) +
-                           ": CameraID: " + found.message());
-    any_matrix = any_matrix || (cameras[i] != nullptr &&
-                                cameras[i]->orientation_type == OrientationType::kMatrix);
-    any_covariance = any_covariance || frames[i].covariance.has_value();
-    any_sigma0 = any_sigma0 || frames[i].sigma0.has_value();
-    any_center_accuracy = any_center_accuracy || frames[i].center_accuracy_m.has_value();
-    any_attitude_accuracy = any_attitude_accuracy || frames[i].attitude_accuracy_deg.has_value();
-  }
+  std::vector<const FrameCamera*> cameras;
+  FramesColumnGroups any;
+  PHOTOPOSE_RETURN_IF_ERROR(FrameCamerasAndGroups(options, frames, path, &cameras, &any));
   std::vector<std::string> extra_names;
   PHOTOPOSE_RETURN_IF_ERROR(CollectExtraColumnNames(path, frames, FrameColumns(), &extra_names));
-  std::vector<std::string> header = {"Raster",       "CameraID", "PerspectiveX", "PerspectiveY",
-                                     "PerspectiveZ", "Omega",    "Phi",          "Kappa"};
-  if (any_matrix) header.push_back("Matrix");
-  header.push_back("SRS");
-  if (any_covariance) header.insert(header.end(), SigmaColumns().begin(), SigmaColumns().end());
-  if (any_sigma0) header.push_back("Sigma0");
-  if (any_center_accuracy)
-    header.insert(header.end(), std::begin(kAccuracyColumns), std::end(kAccuracyColumns));
-  if (any_attitude_accuracy)
-    header.insert(header.end(), std::begin(kAttitudeAccuracyColumns),
-                  std::end(kAttitudeAccuracyColumns));
-  header.insert(header.end(), extra_names.begin(), extra_names.end());
-  std::string contents = CsvLine(header);
-
+  std::string contents = CsvLine(FramesHeader(any, extra_names));
+  std::vector<std::string> fields;
   for (size_t i = 0; i < frames.size(); ++i) {
-    const FrameRecord& f = frames[i];
-    const FrameCamera* camera = cameras[i];
-    const AngleFlags flags = FlagsOf(camera);
-    const Eigen::Vector3d seed_angles = f.eo.angles_seed_rad();
-    RowFields row("raster " + Quoted(f.raster));
-    row.Text(f.raster);
-    row.Text(f.camera_id);
-    row.Number("PerspectiveX", f.eo.parameters[0]);
-    row.Number("PerspectiveY", f.eo.parameters[1]);
-    row.Number("PerspectiveZ", f.eo.parameters[2]);
-    const Eigen::Vector3d angles_deg =
-        ConventionAnglesFromSeed(options.convention, flags, seed_angles) * kDegreesPerRadian;
-    row.Number("Omega", angles_deg[0]);
-    row.Number("Phi", angles_deg[1]);
-    row.Number("Kappa", angles_deg[2]);
-    if (any_matrix) {
-      std::vector<double> matrix;
-      if (camera != nullptr && camera->orientation_type == OrientationType::kMatrix) {
-        const Eigen::Matrix<double, 3, 3, Eigen::RowMajor> R =
-            RotationFromAngles(RotationConvention::kSeed, seed_angles);
-        matrix.assign(R.data(), R.data() + 9);
-      }
-      row.NumberList("Matrix", matrix);
-    }
-    row.Text(f.srs);
-    if (any_covariance) {
-      if (f.covariance) {
-        if (!f.covariance->allFinite() || (f.covariance->diagonal().array() < 0.0).any())
-          row.Fail("SigmaX", "covariance is not finite or has a negative variance");
-        const Matrix6d J = FileFromSeedJacobian(options.convention, flags, seed_angles);
-        const Vector6d variances = (J * *f.covariance * J.transpose()).diagonal();
-        for (int k = 0; k < 6; ++k) {
-          // Rounding can make a zero variance slightly negative.
-          const double sigma = std::sqrt(std::max(variances[k], 0.0));
-          row.Number(SigmaColumns()[k], k < 3 ? sigma : sigma * kDegreesPerRadian);
-        }
-      } else {
-        for (int k = 0; k < 6; ++k) row.Text("");
-      }
-    }
-    if (any_sigma0) row.OptionalNumber("Sigma0", f.sigma0);
-    const auto accuracies = [&row](const std::string_view(&columns)[3],
-                                   const std::optional<Eigen::Vector3d>& values) {
-      for (int k = 0; k < 3; ++k) {
-        if (values && !((*values)[k] > 0.0)) row.Fail(columns[k], "must be positive");
-        row.OptionalNumber(columns[k], values ? std::optional<double>((*values)[k]) : std::nullopt);
-      }
-    };
-    if (any_center_accuracy) accuracies(kAccuracyColumns, f.center_accuracy_m);
-    if (any_attitude_accuracy) accuracies(kAttitudeAccuracyColumns, f.attitude_accuracy_deg);
-    AppendExtraColumns(f, extra_names, row.fields());
-    PHOTOPOSE_RETURN_IF_ERROR(row.status(path));
-    contents += CsvLine(*row.fields());
+    PHOTOPOSE_RETURN_IF_ERROR(FrameRow(options, any, extra_names, path, frames[i], cameras[i], &fields));
+    contents += CsvLine(fields);
   }
   *text = std::move(contents);
   return Status::Ok();

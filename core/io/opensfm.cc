@@ -346,6 +346,115 @@ Status TracksInteger(const TracksContext& context, int line, const char* field,
   return Status::Ok();
 }
 
+// The first line of tracks.csv: the header of version 1 or 2 sets *version and *is_header; any
+// other line is data (version 0).
+Status TracksHeader(const TracksContext& context, std::string_view line, int line_number, int* version,
+                    bool* is_header) {
+  *is_header = false;
+  if (line.substr(0, kTracksHeader.size()) != kTracksHeader) return Status::Ok();
+  const std::string_view number = line.substr(kTracksHeader.size());
+  if (number == "1" || number == "2") {
+    *version = number[0] - '0';
+    *is_header = true;
+    return Status::Ok();
+  }
+  return TextError(context.path, line_number, "",
+                   "tracks version '" + TokenForMessage(number) +
+                       "' is not one photopose reads (1 or 2; no header: 0)");
+}
+
+// The tab-separated fields of a line.
+void SplitAtTabs(std::string_view line, std::vector<std::string_view>* fields) {
+  fields->clear();
+  size_t start = 0;
+  while (true) {
+    const size_t tab = line.find('\t', start);
+    fields->push_back(
+        line.substr(start, tab == std::string_view::npos ? line.size() - start : tab - start));
+    if (tab == std::string_view::npos) break;
+    start = tab + 1;
+  }
+}
+
+// The feature of a data line of the given version (its field count checked) and its normalised
+// image coordinates.
+Status ParseTracksFeature(const TracksContext& context, int line_number, int version,
+                          const std::vector<std::string_view>& fields, OpenSfmFeature* feature,
+                          Eigen::Vector2d* normalized) {
+  const int expected = TracksFieldCount(version);
+  if (static_cast<int>(fields.size()) != expected) {
+    return TextError(context.path, line_number, "",
+                     "expected " + std::to_string(expected) +
+                         " tab-separated fields (tracks version " + std::to_string(version) +
+                         "), found " + std::to_string(fields.size()));
+  }
+  int k = 2;
+  PHOTOPOSE_RETURN_IF_ERROR(
+      TracksInteger(context, line_number, "feature_id", fields[k++], &feature->feature_id));
+  PHOTOPOSE_RETURN_IF_ERROR(TracksNumber(context, line_number, "x", fields[k++], &normalized->x()));
+  PHOTOPOSE_RETURN_IF_ERROR(TracksNumber(context, line_number, "y", fields[k++], &normalized->y()));
+  if (version >= 1) {
+    PHOTOPOSE_RETURN_IF_ERROR(
+        TracksNumber(context, line_number, "scale", fields[k++], &feature->scale));
+  }
+  const char* const kColour[] = {"r", "g", "b"};
+  for (int c = 0; c < 3; ++c) {
+    PHOTOPOSE_RETURN_IF_ERROR(
+        TracksNumber(context, line_number, kColour[c], fields[k++], &feature->rgb[c]));
+    if (!(feature->rgb[c] >= 0.0 && feature->rgb[c] <= kMaxColour)) {
+      return TextError(context.path, line_number, kColour[c],
+                       FormatNumber(feature->rgb[c]) + " is out of range [0, 255]");
+    }
+  }
+  if (version == 2) {
+    PHOTOPOSE_RETURN_IF_ERROR(
+        TracksInteger(context, line_number, "segmentation", fields[k++], &feature->segmentation));
+    PHOTOPOSE_RETURN_IF_ERROR(
+        TracksInteger(context, line_number, "instance", fields[k++], &feature->instance));
+  }
+  return Status::Ok();
+}
+
+// The mark of a data line joins the block (in pixels, inside the coordinate range, at most one per
+// track and image); a line of an image or a point not in the reconstruction is counted and left.
+Status AddTracksMark(int line_number, const std::vector<std::string_view>& fields,
+                     const Eigen::Vector2d& normalized, const OpenSfmFeature& feature, TracksContext* context,
+                     Block* block, OpenSfmExtras* extras) {
+  const auto image = context->image_of_name.find(fields[0]);
+  if (image == context->image_of_name.end()) {
+    if (extras != nullptr) ++extras->tracks_of_other_images;
+    return Status::Ok();
+  }
+  const auto point = context->point_of_id.find(fields[1]);
+  if (point == context->point_of_id.end()) {
+    if (extras != nullptr) ++extras->tracks_of_other_points;
+    return Status::Ok();
+  }
+  const ImageScale& scale = context->scale_of_image[image->second];
+  const Eigen::Vector2d pixel(scale.size * normalized.x() + scale.half_width,
+                              scale.size * normalized.y() + scale.half_height);
+  for (int axis = 0; axis < 2; ++axis) {
+    if (!(std::abs(pixel[axis]) <= kMaxCoordinate)) {
+      return TextError(context->path, line_number, axis == 0 ? "x" : "y",
+                       FormatNumber(normalized[axis]) + " is " + FormatNumber(pixel[axis]) +
+                           " px, outside [" + FormatPlainNumber(-kMaxCoordinate) + ", " +
+                           FormatPlainNumber(kMaxCoordinate) + "] px");
+    }
+  }
+  const uint64_t pair = static_cast<uint64_t>(image->second) * block->points.size() +
+                        static_cast<uint64_t>(point->second);
+  const auto [seen, inserted] = context->line_of_pair.emplace(pair, line_number);
+  if (!inserted) {
+    return TextError(context->path, line_number, "track_id",
+                     "track '" + TokenForMessage(fields[1]) + "' is observed twice in image '" +
+                         TokenForMessage(fields[0]) + "' (first at line " +
+                         std::to_string(seen->second) + ")");
+  }
+  block->marks.push_back(MakePixelMark(image->second, point->second, pixel, line_number));
+  if (extras != nullptr) extras->mark_features.push_back(feature);
+  return Status::Ok();
+}
+
 Status ReadTracks(std::string_view text, TracksContext* context, Block* block,
                   OpenSfmExtras* extras) {
   TextLines lines(text);
@@ -357,94 +466,16 @@ Status ReadTracks(std::string_view text, TracksContext* context, Block* block,
   while (lines.Next(&line, &line_number)) {
     if (first) {
       first = false;
-      if (line.substr(0, kTracksHeader.size()) == kTracksHeader) {
-        const std::string_view number = line.substr(kTracksHeader.size());
-        if (number == "1" || number == "2") {
-          version = number[0] - '0';
-          continue;
-        }
-        return TextError(context->path, line_number, "",
-                         "tracks version '" + TokenForMessage(number) +
-                             "' is not one photopose reads (1 or 2; no header: 0)");
-      }
+      bool is_header = false;
+      PHOTOPOSE_RETURN_IF_ERROR(TracksHeader(*context, line, line_number, &version, &is_header));
+      if (is_header) continue;
     }
     if (line.find_first_not_of(" \t\r") == std::string_view::npos) continue;
-    fields.clear();
-    size_t start = 0;
-    while (true) {
-      const size_t tab = line.find('\t', start);
-      fields.push_back(
-          line.substr(start, tab == std::string_view::npos ? line.size() - start : tab - start));
-      if (tab == std::string_view::npos) break;
-      start = tab + 1;
-    }
-    const int expected = TracksFieldCount(version);
-    if (static_cast<int>(fields.size()) != expected) {
-      return TextError(context->path, line_number, "",
-                       "expected " + std::to_string(expected) +
-                           " tab-separated fields (tracks version " + std::to_string(version) +
-                           "), found " + std::to_string(fields.size()));
-    }
+    SplitAtTabs(line, &fields);
     OpenSfmFeature feature;
     Eigen::Vector2d normalized;
-    int k = 2;
-    PHOTOPOSE_RETURN_IF_ERROR(
-        TracksInteger(*context, line_number, "feature_id", fields[k++], &feature.feature_id));
-    PHOTOPOSE_RETURN_IF_ERROR(
-        TracksNumber(*context, line_number, "x", fields[k++], &normalized.x()));
-    PHOTOPOSE_RETURN_IF_ERROR(
-        TracksNumber(*context, line_number, "y", fields[k++], &normalized.y()));
-    if (version >= 1) {
-      PHOTOPOSE_RETURN_IF_ERROR(
-          TracksNumber(*context, line_number, "scale", fields[k++], &feature.scale));
-    }
-    const char* const kColour[] = {"r", "g", "b"};
-    for (int c = 0; c < 3; ++c) {
-      PHOTOPOSE_RETURN_IF_ERROR(
-          TracksNumber(*context, line_number, kColour[c], fields[k++], &feature.rgb[c]));
-      if (!(feature.rgb[c] >= 0.0 && feature.rgb[c] <= kMaxColour)) {
-        return TextError(context->path, line_number, kColour[c],
-                         FormatNumber(feature.rgb[c]) + " is out of range [0, 255]");
-      }
-    }
-    if (version == 2) {
-      PHOTOPOSE_RETURN_IF_ERROR(
-          TracksInteger(*context, line_number, "segmentation", fields[k++], &feature.segmentation));
-      PHOTOPOSE_RETURN_IF_ERROR(
-          TracksInteger(*context, line_number, "instance", fields[k++], &feature.instance));
-    }
-    const auto image = context->image_of_name.find(fields[0]);
-    if (image == context->image_of_name.end()) {
-      if (extras != nullptr) ++extras->tracks_of_other_images;
-      continue;
-    }
-    const auto point = context->point_of_id.find(fields[1]);
-    if (point == context->point_of_id.end()) {
-      if (extras != nullptr) ++extras->tracks_of_other_points;
-      continue;
-    }
-    const ImageScale& scale = context->scale_of_image[image->second];
-    const Eigen::Vector2d pixel(scale.size * normalized.x() + scale.half_width,
-                                scale.size * normalized.y() + scale.half_height);
-    for (int axis = 0; axis < 2; ++axis) {
-      if (!(std::abs(pixel[axis]) <= kMaxCoordinate)) {
-        return TextError(context->path, line_number, axis == 0 ? "x" : "y",
-                         FormatNumber(normalized[axis]) + " is " + FormatNumber(pixel[axis]) +
-                             " px, outside [" + FormatPlainNumber(-kMaxCoordinate) + ", " +
-                             FormatPlainNumber(kMaxCoordinate) + "] px");
-      }
-    }
-    const uint64_t pair = static_cast<uint64_t>(image->second) * block->points.size() +
-                          static_cast<uint64_t>(point->second);
-    const auto [seen, inserted] = context->line_of_pair.emplace(pair, line_number);
-    if (!inserted) {
-      return TextError(context->path, line_number, "track_id",
-                       "track '" + TokenForMessage(fields[1]) + "' is observed twice in image '" +
-                           TokenForMessage(fields[0]) + "' (first at line " +
-                           std::to_string(seen->second) + ")");
-    }
-    block->marks.push_back(MakePixelMark(image->second, point->second, pixel, line_number));
-    if (extras != nullptr) extras->mark_features.push_back(feature);
+    PHOTOPOSE_RETURN_IF_ERROR(ParseTracksFeature(*context, line_number, version, fields, &feature, &normalized));
+    PHOTOPOSE_RETURN_IF_ERROR(AddTracksMark(line_number, fields, normalized, feature, context, block, extras));
   }
   if (extras != nullptr) extras->tracks_version = version;
   return Status::Ok();
@@ -460,31 +491,25 @@ Status ReadReferenceLla(const JsonObject& object, OpenSfmReferenceLla* lla) {
   return object.NumberWithin("altitude", std::nullopt, kMaxCoordinate, "m", &lla->altitude_m);
 }
 
-Status ReadReconstruction(const Json& document, const std::string& file, Block* block,
-                          OpenSfmExtras* extras) {
-  if (!document.is_array()) {
-    return JsonError(file, "", "expected an array of reconstructions, found " + TypeName(document));
-  }
-  if (document.empty()) return JsonError(file, "", "holds no reconstruction (the array is empty)");
-  extras->further_reconstructions = static_cast<int>(
-      std::min<size_t>(document.size() - 1, static_cast<size_t>(std::numeric_limits<int>::max())));
-  const Json& first = document[0];
-  if (!first.is_object())
-    return JsonError(file, "[0]", "expected an object, found " + TypeName(first));
-  const JsonObject reconstruction{first, file, ""};
-
+// The reconstruction's "cameras" into the block (*camera_of_id: each camera's index by its id).
+Status ReadCameras(const JsonObject& reconstruction, const std::string& file, Block* block, OpenSfmExtras* extras,
+                   std::unordered_map<std::string, int>* camera_of_id) {
   const Json* cameras = nullptr;
   PHOTOPOSE_RETURN_IF_ERROR(reconstruction.Object("cameras", &cameras));
-  std::unordered_map<std::string, int> camera_of_id;
   for (const auto& [id, value] : cameras->items()) {
     BlockCamera camera;
     std::string type;
     PHOTOPOSE_RETURN_IF_ERROR(ReadCamera(file, "cameras", id, value, &camera, &type));
-    camera_of_id.emplace(id, static_cast<int>(block->cameras.size()));
+    camera_of_id->emplace(id, static_cast<int>(block->cameras.size()));
     block->cameras.push_back(std::move(camera));
     extras->projection_types.push_back(type);
   }
+  return Status::Ok();
+}
 
+// The reconstruction's "shots" into the block's images, their GPS positions and DOPs into extras.
+Status ReadShots(const JsonObject& reconstruction, const std::string& file,
+                 const std::unordered_map<std::string, int>& camera_of_id, Block* block, OpenSfmExtras* extras) {
   const Json* shots = nullptr;
   PHOTOPOSE_RETURN_IF_ERROR(reconstruction.Object("shots", &shots));
   for (const auto& [id, value] : shots->items()) {
@@ -520,31 +545,53 @@ Status ReadReconstruction(const Json& document, const std::string& file, Block* 
     extras->gps_position_m.push_back(has_gps ? std::optional<Eigen::Vector3d>(gps) : std::nullopt);
     extras->gps_dop_m.push_back(dop);
   }
+  return Status::Ok();
+}
 
+// The reconstruction's "points", when present, into the block's tie points, their colours into
+// extras.
+Status ReadPoints(const JsonObject& reconstruction, const std::string& file, Block* block, OpenSfmExtras* extras) {
   const Json* points = nullptr;
   if (reconstruction.Find("points") != nullptr)
     PHOTOPOSE_RETURN_IF_ERROR(reconstruction.Object("points", &points));
-  if (points != nullptr) {
-    block->points.reserve(points->size());
-    for (const auto& [id, value] : points->items()) {
-      const JsonObject object{value, file, DataKey("points", id)};
-      if (!value.is_object())
-        return JsonError(file, object.path, "expected an object, found " + TypeName(value));
-      Eigen::Vector3d coordinates, colour = Eigen::Vector3d::Zero();
-      bool has_colour = false;
-      PHOTOPOSE_RETURN_IF_ERROR(object.Vector3("coordinates", kMaxCoordinate, "m", &coordinates));
-      PHOTOPOSE_RETURN_IF_ERROR(object.Vector3("color", kMaxColour, "", &colour, &has_colour));
-      if (has_colour && colour.minCoeff() < 0.0)
-        return object.Error("color", "a colour is in [0, 255]");
-      BlockPoint point;
-      point.id = id;
-      point.role = PointRole::kTie;
-      point.position_m = coordinates;
-      block->points.push_back(std::move(point));
-      extras->point_rgb.push_back({colour.x(), colour.y(), colour.z()});
-    }
+  if (points == nullptr) return Status::Ok();
+  block->points.reserve(points->size());
+  for (const auto& [id, value] : points->items()) {
+    const JsonObject object{value, file, DataKey("points", id)};
+    if (!value.is_object())
+      return JsonError(file, object.path, "expected an object, found " + TypeName(value));
+    Eigen::Vector3d coordinates, colour = Eigen::Vector3d::Zero();
+    bool has_colour = false;
+    PHOTOPOSE_RETURN_IF_ERROR(object.Vector3("coordinates", kMaxCoordinate, "m", &coordinates));
+    PHOTOPOSE_RETURN_IF_ERROR(object.Vector3("color", kMaxColour, "", &colour, &has_colour));
+    if (has_colour && colour.minCoeff() < 0.0)
+      return object.Error("color", "a colour is in [0, 255]");
+    BlockPoint point;
+    point.id = id;
+    point.role = PointRole::kTie;
+    point.position_m = coordinates;
+    block->points.push_back(std::move(point));
+    extras->point_rgb.push_back({colour.x(), colour.y(), colour.z()});
   }
+  return Status::Ok();
+}
 
+Status ReadReconstruction(const Json& document, const std::string& file, Block* block,
+                          OpenSfmExtras* extras) {
+  if (!document.is_array()) {
+    return JsonError(file, "", "expected an array of reconstructions, found " + TypeName(document));
+  }
+  if (document.empty()) return JsonError(file, "", "holds no reconstruction (the array is empty)");
+  extras->further_reconstructions = static_cast<int>(
+      std::min<size_t>(document.size() - 1, static_cast<size_t>(std::numeric_limits<int>::max())));
+  const Json& first = document[0];
+  if (!first.is_object())
+    return JsonError(file, "[0]", "expected an object, found " + TypeName(first));
+  const JsonObject reconstruction{first, file, ""};
+  std::unordered_map<std::string, int> camera_of_id;
+  PHOTOPOSE_RETURN_IF_ERROR(ReadCameras(reconstruction, file, block, extras, &camera_of_id));
+  PHOTOPOSE_RETURN_IF_ERROR(ReadShots(reconstruction, file, camera_of_id, block, extras));
+  PHOTOPOSE_RETURN_IF_ERROR(ReadPoints(reconstruction, file, block, extras));
   if (const Json* reference = reconstruction.Find("reference_lla"); reference != nullptr) {
     if (!reference->is_object())
       return reconstruction.Error("reference_lla",
@@ -679,6 +726,114 @@ Status CheckExtras(const Block& block, const OpenSfmExtras& extras) {
   return Status::Ok();
 }
 
+// The block's cameras as the reconstruction's "cameras" (in the projection extras name when it
+// is exactly the camera).
+Status CamerasJson(const Block& block, const OpenSfmExtras* extras, Json* cameras) {
+  *cameras = Json::object();
+  for (size_t c = 0; c < block.cameras.size(); ++c) {
+    Json camera;
+    PHOTOPOSE_RETURN_IF_ERROR(CameraJson(
+        block.cameras[c], extras != nullptr ? &extras->projection_types[c] : nullptr, &camera));
+    (*cameras)[block.cameras[c].camera_id] = std::move(camera);
+  }
+  return Status::Ok();
+}
+
+// The block's images as the reconstruction's "shots" (each oriented, once, with a name tracks.csv
+// can hold), with the GPS positions and DOPs of extras.
+Status ShotsJson(const Block& block, const OpenSfmExtras* extras, Json* shots) {
+  *shots = Json::object();
+  for (size_t i = 0; i < block.images.size(); ++i) {
+    const BlockImage& image = block.images[i];
+    if (!image.eo) {
+      return Status::Error(
+          "image '" + TokenForMessage(image.name) +
+          "' has no exterior orientation: an OpenSfM reconstruction holds oriented "
+          "images only");
+    }
+    if (!IsTracksName(image.name))
+      return Status::Error("image '" + TokenForMessage(image.name) +
+                           "' has a name tracks.csv cannot hold");
+    if (shots->contains(image.name))
+      return Status::Error("image '" + TokenForMessage(image.name) + "' is in the block twice");
+    Eigen::Matrix3d R;
+    Eigen::Vector3d t;
+    ComputerVisionPoseFromEo(*image.eo, &R, &t);
+    const Eigen::Vector3d r = RotationVectorFromRotation(R);
+    Json shot = {{"rotation", {r.x(), r.y(), r.z()}},
+                 {"translation", {t.x(), t.y(), t.z()}},
+                 {"camera", block.cameras[image.camera].camera_id}};
+    if (extras != nullptr && extras->gps_position_m[i]) {
+      const Eigen::Vector3d& gps = *extras->gps_position_m[i];
+      shot["gps_position"] = {gps.x(), gps.y(), gps.z()};
+    }
+    if (extras != nullptr && extras->gps_dop_m[i]) shot["gps_dop"] = *extras->gps_dop_m[i];
+    (*shots)[image.name] = std::move(shot);
+  }
+  return Status::Ok();
+}
+
+// The block's points with a position as the reconstruction's "points" (each once, with an id
+// tracks.csv can hold), with the colours of extras.
+Status PointsJson(const Block& block, const OpenSfmExtras* extras, Json* points) {
+  *points = Json::object();
+  for (size_t p = 0; p < block.points.size(); ++p) {
+    const BlockPoint& point = block.points[p];
+    if (!point.position_m) continue;
+    if (!IsTracksName(point.id))
+      return Status::Error("point '" + TokenForMessage(point.id) +
+                           "' has an id tracks.csv cannot hold");
+    if (points->contains(point.id))
+      return Status::Error("point '" + TokenForMessage(point.id) + "' is in the block twice");
+    const std::array<double, 3> rgb =
+        extras != nullptr ? extras->point_rgb[p] : std::array<double, 3>{0.0, 0.0, 0.0};
+    const Eigen::Vector3d& X = *point.position_m;
+    (*points)[point.id] = {{"color", {rgb[0], rgb[1], rgb[2]}},
+                           {"coordinates", {X.x(), X.y(), X.z()}}};
+  }
+  return Status::Ok();
+}
+
+// tracks.csv, version 2: a line per mark of a point with a position, its feature from extras (or
+// the mark's index in its image as feature id).
+std::string TracksCsv(const Block& block, const OpenSfmExtras* extras) {
+  std::string tracks = std::string(kTracksHeader) + "2\n";
+  tracks.reserve(tracks.size() + 80 * block.marks.size());
+  std::vector<int> marks_in_image(block.images.size(), 0);
+  for (size_t m = 0; m < block.marks.size(); ++m) {
+    const BlockMark& mark = block.marks[m];
+    const BlockImage& image = block.images[mark.image];
+    const BlockPoint& point = block.points[mark.point];
+    const int index = marks_in_image[mark.image]++;
+    if (!point.position_m) continue;
+    const BlockCamera& camera = block.cameras[image.camera];
+    const ImageScale scale(camera.table.n_columns, camera.table.n_rows);
+    OpenSfmFeature feature;
+    if (extras != nullptr) {
+      feature = extras->mark_features[m];
+    } else {
+      feature.feature_id = index;
+    }
+    tracks += image.name;
+    tracks += '\t';
+    tracks += point.id;
+    tracks += '\t';
+    AppendInteger(feature.feature_id, &tracks);
+    for (const double value : {(mark.observation.x() - scale.half_width) / scale.size,
+                               (mark.observation.y() - scale.half_height) / scale.size,
+                               feature.scale, feature.rgb[0], feature.rgb[1], feature.rgb[2]}) {
+      tracks += '\t';
+      AppendNumber(value, &tracks);
+    }
+    tracks += '\t';
+    AppendInteger(feature.segmentation, &tracks);
+    tracks += '\t';
+    AppendInteger(feature.instance, &tracks);
+    tracks += '\n';
+  }
+  return tracks;
+}
+
 }  // namespace
 
 // ------------------------------------------------------------------ public
@@ -754,98 +909,16 @@ Status FormatOpenSfmReconstruction(const Block& block, const OpenSfmExtras* extr
   PHOTOPOSE_RETURN_IF_ERROR(CheckBlock(block));
   if (extras != nullptr) PHOTOPOSE_RETURN_IF_ERROR(CheckExtras(block, *extras));
   Json reconstruction = Json::object();
-  Json& cameras = reconstruction["cameras"] = Json::object();
-  for (size_t c = 0; c < block.cameras.size(); ++c) {
-    Json camera;
-    PHOTOPOSE_RETURN_IF_ERROR(CameraJson(
-        block.cameras[c], extras != nullptr ? &extras->projection_types[c] : nullptr, &camera));
-    cameras[block.cameras[c].camera_id] = std::move(camera);
-  }
-  Json& shots = reconstruction["shots"] = Json::object();
-  for (size_t i = 0; i < block.images.size(); ++i) {
-    const BlockImage& image = block.images[i];
-    if (!image.eo) {
-      return Status::Error(
-          "image '" + TokenForMessage(image.name) +
-          "' has no exterior orientation: an OpenSfM reconstruction holds oriented "
-          "images only");
-    }
-    if (!IsTracksName(image.name))
-      return Status::Error("image '" + TokenForMessage(image.name) +
-                           "' has a name tracks.csv cannot hold");
-    if (shots.contains(image.name))
-      return Status::Error("image '" + TokenForMessage(image.name) + "' is in the block twice");
-    Eigen::Matrix3d R;
-    Eigen::Vector3d t;
-    ComputerVisionPoseFromEo(*image.eo, &R, &t);
-    const Eigen::Vector3d r = RotationVectorFromRotation(R);
-    Json shot = {{"rotation", {r.x(), r.y(), r.z()}},
-                 {"translation", {t.x(), t.y(), t.z()}},
-                 {"camera", block.cameras[image.camera].camera_id}};
-    if (extras != nullptr && extras->gps_position_m[i]) {
-      const Eigen::Vector3d& gps = *extras->gps_position_m[i];
-      shot["gps_position"] = {gps.x(), gps.y(), gps.z()};
-    }
-    if (extras != nullptr && extras->gps_dop_m[i]) shot["gps_dop"] = *extras->gps_dop_m[i];
-    shots[image.name] = std::move(shot);
-  }
-  Json& points = reconstruction["points"] = Json::object();
-  for (size_t p = 0; p < block.points.size(); ++p) {
-    const BlockPoint& point = block.points[p];
-    if (!point.position_m) continue;
-    if (!IsTracksName(point.id))
-      return Status::Error("point '" + TokenForMessage(point.id) +
-                           "' has an id tracks.csv cannot hold");
-    if (points.contains(point.id))
-      return Status::Error("point '" + TokenForMessage(point.id) + "' is in the block twice");
-    const std::array<double, 3> rgb =
-        extras != nullptr ? extras->point_rgb[p] : std::array<double, 3>{0.0, 0.0, 0.0};
-    const Eigen::Vector3d& X = *point.position_m;
-    points[point.id] = {{"color", {rgb[0], rgb[1], rgb[2]}},
-                        {"coordinates", {X.x(), X.y(), X.z()}}};
-  }
+  PHOTOPOSE_RETURN_IF_ERROR(CamerasJson(block, extras, &reconstruction["cameras"]));
+  PHOTOPOSE_RETURN_IF_ERROR(ShotsJson(block, extras, &reconstruction["shots"]));
+  PHOTOPOSE_RETURN_IF_ERROR(PointsJson(block, extras, &reconstruction["points"]));
   if (extras != nullptr && extras->reference_lla) {
     const OpenSfmReferenceLla& lla = *extras->reference_lla;
     reconstruction["reference_lla"] = {{"latitude", lla.latitude_deg},
                                        {"longitude", lla.longitude_deg},
                                        {"altitude", lla.altitude_m}};
   }
-
-  std::string tracks = std::string(kTracksHeader) + "2\n";
-  tracks.reserve(tracks.size() + 80 * block.marks.size());
-  std::vector<int> marks_in_image(block.images.size(), 0);
-  for (size_t m = 0; m < block.marks.size(); ++m) {
-    const BlockMark& mark = block.marks[m];
-    const BlockImage& image = block.images[mark.image];
-    const BlockPoint& point = block.points[mark.point];
-    const int index = marks_in_image[mark.image]++;
-    if (!point.position_m) continue;
-    const BlockCamera& camera = block.cameras[image.camera];
-    const ImageScale scale(camera.table.n_columns, camera.table.n_rows);
-    OpenSfmFeature feature;
-    if (extras != nullptr) {
-      feature = extras->mark_features[m];
-    } else {
-      feature.feature_id = index;
-    }
-    tracks += image.name;
-    tracks += '\t';
-    tracks += point.id;
-    tracks += '\t';
-    AppendInteger(feature.feature_id, &tracks);
-    for (const double value : {(mark.observation.x() - scale.half_width) / scale.size,
-                               (mark.observation.y() - scale.half_height) / scale.size,
-                               feature.scale, feature.rgb[0], feature.rgb[1], feature.rgb[2]}) {
-      tracks += '\t';
-      AppendNumber(value, &tracks);
-    }
-    tracks += '\t';
-    AppendInteger(feature.segmentation, &tracks);
-    tracks += '\t';
-    AppendInteger(feature.instance, &tracks);
-    tracks += '\n';
-  }
-
+  std::string tracks = TracksCsv(block, extras);
   try {
     text->reconstruction_json = Json::array({std::move(reconstruction)}).dump() + "\n";
   } catch (const Json::exception&) {

@@ -197,7 +197,8 @@ void BindBundleProgressAndSummary(py::module_& m) {
 }
 
 // The parts of a result: per image, per point, per group, calibration, rejections, snooping.
-void BindBundleResultParts(py::module_& m) {
+// The per-item parts of a BundleAdjustmentResult: images, points, groups, calibrations.
+void BindBundleItemResults(py::module_& m) {
   py::class_<BundleImageResult>(m, "BundleImageResult")
       .def_readonly("adjusted", &BundleImageResult::adjusted)
       .def_readonly("message", &BundleImageResult::message)
@@ -249,7 +250,11 @@ void BindBundleResultParts(py::module_& m) {
       .def_readonly("correlation", &BundleCalibrationResult::correlation)
       .def_readonly("high_correlations", &BundleCalibrationResult::high_correlations)
       .def("__repr__", [](const py::object& self) { return PropertiesRepr(self); });
+}
 
+// What the rounds of a bundle took out or flagged: rejected marks, weak parameters, rejected
+// check marks, data-snooping steps.
+void BindBundleRejections(py::module_& m) {
   py::class_<BundleRejectedMark>(m, "BundleRejectedMark")
       .def_readonly("mark", &BundleRejectedMark::mark)
       .def_readonly("round", &BundleRejectedMark::round)
@@ -457,7 +462,8 @@ void BindBundle(py::module_& m) {
   BindBundleOptions(m);
   BindBundleConfig(m);
   BindBundleProgressAndSummary(m);
-  BindBundleResultParts(m);
+  BindBundleItemResults(m);
+  BindBundleRejections(m);
   BindBundleResult(m);
   BindBundleAdjust(m);
   BindBlockInitialization(m);

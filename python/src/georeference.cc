@@ -72,7 +72,35 @@ void BindPositionFiles(py::module_& m) {
 }
 
 // What ties a model to the ground, from files or arrays, and how it is georeferenced.
-void BindGeoreferenceInputs(py::module_& m) {
+// GeoreferenceInputs.set_positions: camera positions from arrays (a NaN z: no height; a NaN row of
+// accuracies: none stated).
+void SetPositionsFromArrays(GeoreferenceInputs& self, const std::string& crs, const std::vector<std::string>& images,
+                            const py::object& positions, const py::object& accuracies_m, const std::string& source) {
+  const std::vector<Eigen::Vector3d> xyz = Points3(positions, "positions");
+  if (xyz.size() != images.size())
+    throw py::value_error("positions: " + std::to_string(xyz.size()) + " rows for " +
+                          std::to_string(images.size()) + " images");
+  std::vector<Eigen::Vector3d> sigma;
+  if (!accuracies_m.is_none()) {
+    sigma = Points3(accuracies_m, "accuracies_m");
+    if (sigma.size() != images.size())
+      throw py::value_error("accuracies_m: " + std::to_string(sigma.size()) + " rows for " +
+                            std::to_string(images.size()) + " images");
+  }
+  self.positions_crs = crs;
+  self.positions_source = source;
+  self.positions.clear();
+  for (size_t i = 0; i < images.size(); ++i) {
+    CameraPositionMeasurement p;
+    p.image = images[i];
+    p.position = xyz[i];
+    p.has_height = !std::isnan(xyz[i].z());  // a NaN z: no height, as a geo.txt line "image x y"
+    if (!sigma.empty() && sigma[i].allFinite()) p.accuracy_m = sigma[i];
+    self.positions.push_back(p);
+  }
+}
+
+void BindCameraPositionMeasurement(py::module_& m) {
   auto position = BindStruct<CameraPositionMeasurement>(m, "CameraPositionMeasurement",
                                                         "A measured projection centre (GNSS) of an image, named as the block names it.");
   position.def_readwrite("image", &CameraPositionMeasurement::image)
@@ -81,7 +109,9 @@ void BindGeoreferenceInputs(py::module_& m) {
                      "False: position[2] is not read; the position constrains the horizontal only")
       .def_readwrite("accuracy_m", &CameraPositionMeasurement::accuracy_m, "one sigma east, north, up (m), or None")
       .def_readwrite("line", &CameraPositionMeasurement::line);
+}
 
+void BindGeoreferenceInputsClass(py::module_& m) {
   auto inputs = BindStruct<GeoreferenceInputs>(m, "GeoreferenceInputs", R"doc(
 What ties a model to the ground: camera positions in positions_crs and control / check points in
 control_crs with their marks (px, (0, 0) the top-left corner of the image). Fill it from files
@@ -97,31 +127,7 @@ arrays (set_positions).)doc");
       .def_readwrite("attitudes_not_used", &GeoreferenceInputs::attitudes_not_used,
                      "geo.txt yaw/pitch/roll read and not used (count)");
   inputs.def("set_positions",
-             [](GeoreferenceInputs& self, const std::string& crs, const std::vector<std::string>& images,
-                const py::object& positions, const py::object& accuracies_m, const std::string& source) {
-               const std::vector<Eigen::Vector3d> xyz = Points3(positions, "positions");
-               if (xyz.size() != images.size())
-                 throw py::value_error("positions: " + std::to_string(xyz.size()) + " rows for " +
-                                       std::to_string(images.size()) + " images");
-               std::vector<Eigen::Vector3d> sigma;
-               if (!accuracies_m.is_none()) {
-                 sigma = Points3(accuracies_m, "accuracies_m");
-                 if (sigma.size() != images.size())
-                   throw py::value_error("accuracies_m: " + std::to_string(sigma.size()) + " rows for " +
-                                         std::to_string(images.size()) + " images");
-               }
-               self.positions_crs = crs;
-               self.positions_source = source;
-               self.positions.clear();
-               for (size_t i = 0; i < images.size(); ++i) {
-                 CameraPositionMeasurement p;
-                 p.image = images[i];
-                 p.position = xyz[i];
-                 p.has_height = !std::isnan(xyz[i].z());  // a NaN z: no height, as a geo.txt line "image x y"
-                 if (!sigma.empty() && sigma[i].allFinite()) p.accuracy_m = sigma[i];
-                 self.positions.push_back(p);
-               }
-             },
+             &SetPositionsFromArrays,
              py::arg("crs"), py::arg("images"), py::arg("positions"), py::arg("accuracies_m") = py::none(),
              py::arg("source") = "arrays",
              "Camera positions: N image names, N x 3 coordinates in crs (GIS order; a NaN z: no height, "
@@ -148,7 +154,9 @@ arrays (set_positions).)doc");
              },
              py::arg("gcp_list"), py::arg("check_points") = std::vector<std::string>(),
              py::arg("source") = "gcp_list.txt", "Control (and check, as named) points with their marks.");
+}
 
+void BindGeoreferenceOptions(py::module_& m) {
   auto options = BindStruct<GeoreferenceOptions>(m, "GeoreferenceOptions", "How a model is georeferenced.");
   options.def_readwrite("out_crs", &GeoreferenceOptions::out_crs,
                         "empty: the control's CRS, else the positions' when projected, else the UTM zone of the centre")
@@ -288,7 +296,9 @@ usable pairs, pairs on a line, or a block the adjustment cannot use.)doc");
 // In this order: a function's signature names the classes bound before it.
 void BindGeoreference(py::module_& m) {
   BindPositionFiles(m);
-  BindGeoreferenceInputs(m);
+  BindCameraPositionMeasurement(m);
+  BindGeoreferenceInputsClass(m);
+  BindGeoreferenceOptions(m);
   BindGeoreferenceResult(m);
   BindGeoreferenceCalls(m);
 }

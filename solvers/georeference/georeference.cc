@@ -176,76 +176,94 @@ void MoveBlock(const Similarity3& s, Block* block) {
   }
 }
 
-}  // namespace
-
-Status PrepareGeoreference(const GeoreferenceOptions& options, const GeoreferenceInputs& inputs,
-                           Block* block, GeoreferenceResult* result) {
-  const auto start = std::chrono::steady_clock::now();
-  GeoreferenceResult out;
+// What makes a model unfit to be georeferenced, before any work: nothing to align it with, an
+// image without a pose, or a camera with the earth-curvature correction (the local frame holds the
+// curvature already).
+Status CheckModelCanBeGeoreferenced(const GeoreferenceInputs& inputs, const Block& block) {
   if (inputs.positions.empty() && inputs.control_points.empty())
     return Status::Error("georeferencing needs camera positions or control points");
-  for (size_t i = 0; i < block->images.size(); ++i) {
-    if (!block->images[i].eo)
-      return Status::Error("image '" + block->images[i].name + "' of the model has no pose; georeferencing moves a reconstructed model");
+  for (size_t i = 0; i < block.images.size(); ++i) {
+    if (!block.images[i].eo)
+      return Status::Error("image '" + block.images[i].name + "' of the model has no pose; georeferencing moves a reconstructed model");
   }
-  for (const BlockCamera& camera : block->cameras) {
+  for (const BlockCamera& camera : block.cameras) {
     if (camera.earth_curvature_radius_m() > 0.0)
       return Status::Error("camera '" + camera.camera_id + "': ApplyECC: a georeferenced block is adjusted in a local "
                            "East-North-Up frame, whose coordinates hold the earth's curvature already; the "
                            "earth-curvature correction would count it twice (set ApplyECC to false)");
   }
-  // 1. CRSs, the local frame, the measurements in it.
+  return Status::Ok();
+}
+
+// The measurements in the local frame (m, East-North-Up).
+struct LocalMeasurements {
+  // One per inputs.positions; a position without height at the lower placeholder height.
+  std::vector<Eigen::Vector3d> positions;
+  // One per inputs.positions: a position without height, the unit direction of its vertical; zero
+  // for a position with height.
+  std::vector<Eigen::Vector3d> verticals;
+  std::vector<size_t> without_height;  // indices into inputs.positions
+  std::vector<Eigen::Vector3d> control;  // one per inputs.control_points
+};
+
+// Step 1: the CRSs, the local frame, the measurements in it; the notes on heights and on inputs
+// not used. A position without height is placed at the lower placeholder height, its vertical's
+// direction found from the upper one.
+Status MeasurementsInLocalFrame(const GeoreferenceOptions& options, const GeoreferenceInputs& inputs,
+                                GeoreferenceResult* out, LocalMeasurements* local) {
   Eigen::Vector3d centre;
   PHOTOPOSE_RETURN_IF_ERROR(MeasurementCentre(inputs, &centre));
-  PHOTOPOSE_RETURN_IF_ERROR(ChooseOutputCrs(options, inputs, centre, &out));
-  PHOTOPOSE_RETURN_IF_ERROR(LocalFrame::Create(kGeographic3d, centre, &out.frame));
-  // A position without height at the lower placeholder height, its vertical's direction from the
-  // upper one.
-  std::vector<Eigen::Vector3d> positions_local, control_local, upper_local;
-  std::vector<size_t> without_height;  // indices into inputs.positions
+  PHOTOPOSE_RETURN_IF_ERROR(ChooseOutputCrs(options, inputs, centre, out));
+  PHOTOPOSE_RETURN_IF_ERROR(LocalFrame::Create(kGeographic3d, centre, &out->frame));
+  std::vector<Eigen::Vector3d> upper_local;
   for (size_t k = 0; k < inputs.positions.size(); ++k) {
     const CameraPositionMeasurement& m = inputs.positions[k];
-    positions_local.push_back(m.has_height ? m.position : AtHeight(m.position, kPlaceholderHeightsM[0]));
+    local->positions.push_back(m.has_height ? m.position : AtHeight(m.position, kPlaceholderHeightsM[0]));
     if (m.has_height) continue;
-    without_height.push_back(k);
+    local->without_height.push_back(k);
     upper_local.push_back(AtHeight(m.position, kPlaceholderHeightsM[1]));
   }
-  for (const GroundPoint& p : inputs.control_points) control_local.push_back(p.position);
-  std::vector<Eigen::Vector3d> vertical_local(inputs.positions.size(), Eigen::Vector3d::Zero());
-  if (!positions_local.empty()) {
-    Status moved = out.frame.ToLocal(inputs.positions_crs, &positions_local);
-    if (moved.ok()) moved = out.frame.ToLocal(inputs.positions_crs, &upper_local);
+  for (const GroundPoint& p : inputs.control_points) local->control.push_back(p.position);
+  local->verticals.assign(inputs.positions.size(), Eigen::Vector3d::Zero());
+  if (!local->positions.empty()) {
+    Status moved = out->frame.ToLocal(inputs.positions_crs, &local->positions);
+    if (moved.ok()) moved = out->frame.ToLocal(inputs.positions_crs, &upper_local);
     if (!moved.ok()) return Status::Error(inputs.positions_source + ": " + moved.message());
-    out.heights_notes.push_back(HeightsNote("camera positions", inputs.positions_crs));
-    for (size_t j = 0; j < without_height.size(); ++j) {
-      const size_t k = without_height[j];
-      vertical_local[k] = (upper_local[j] - positions_local[k]).normalized();
+    out->heights_notes.push_back(HeightsNote("camera positions", inputs.positions_crs));
+    for (size_t j = 0; j < local->without_height.size(); ++j) {
+      const size_t k = local->without_height[j];
+      local->verticals[k] = (upper_local[j] - local->positions[k]).normalized();
     }
-    if (!without_height.empty()) {
-      out.heights_notes.push_back(
-          "camera positions (" + inputs.positions_source + "): " + std::to_string(without_height.size()) +
+    if (!local->without_height.empty()) {
+      out->heights_notes.push_back(
+          "camera positions (" + inputs.positions_source + "): " + std::to_string(local->without_height.size()) +
           " without height: only their horizontal position is used (not in the similarity; in the "
           "adjustment a prior on the local East and North, the height free)");
     }
   }
-  if (!control_local.empty()) {
-    const Status moved = out.frame.ToLocal(inputs.control_crs, &control_local);
+  if (!local->control.empty()) {
+    const Status moved = out->frame.ToLocal(inputs.control_crs, &local->control);
     if (!moved.ok()) return Status::Error(inputs.control_source + ": " + moved.message());
-    out.heights_notes.push_back(HeightsNote("control", inputs.control_crs));
+    out->heights_notes.push_back(HeightsNote("control", inputs.control_crs));
   }
-  out.heights_notes.push_back(HeightsNote("outputs", out.out_crs));
+  out->heights_notes.push_back(HeightsNote("outputs", out->out_crs));
   const std::string attitudes = AttitudesNotUsedLine(inputs);
-  if (!attitudes.empty()) out.inputs_not_used.push_back(attitudes);
+  if (!attitudes.empty()) out->inputs_not_used.push_back(attitudes);
+  return Status::Ok();
+}
 
-  // 2. Matching; control points and marks join a copy of the block.
-  Block work = *block;
-  const ImageMatcher matcher(work);
-  std::vector<int> position_image(inputs.positions.size(), -1);
-  std::vector<char> has_position(work.images.size(), 0);
+// Step 2a: each camera position to its image of the model (*position_image: the image of each, or
+// -1), written into the image as its measured centre (a position without height: a point of its
+// vertical, placed after the similarity).
+Status MatchPositions(const GeoreferenceInputs& inputs, const LocalMeasurements& local,
+                      const ImageMatcher& matcher, Block* work, std::vector<int>* position_image,
+                      GeoreferenceResult* out) {
+  position_image->assign(inputs.positions.size(), -1);
+  std::vector<char> has_position(work->images.size(), 0);
   for (size_t k = 0; k < inputs.positions.size(); ++k) {
     const int image = matcher.Find(inputs.positions[k].image);
     if (image < 0) {
-      out.positions_unmatched.push_back(inputs.positions[k].image);
+      out->positions_unmatched.push_back(inputs.positions[k].image);
       continue;
     }
     if (has_position[image]) {
@@ -253,40 +271,51 @@ Status PrepareGeoreference(const GeoreferenceOptions& options, const Georeferenc
                            ": image '" + inputs.positions[k].image + "' has a position already");
     }
     has_position[image] = 1;
-    position_image[k] = image;
-    ++out.positions_matched;
-    BlockImage& target = work.images[image];
-    // Without height: a point of its vertical, placed after the similarity.
-    target.measured_center_m = positions_local[k];
+    (*position_image)[k] = image;
+    ++out->positions_matched;
+    BlockImage& target = work->images[image];
+    target.measured_center_m = local.positions[k];
     target.center_height_measured = inputs.positions[k].has_height;
-    out.positions_without_height += !inputs.positions[k].has_height;
+    out->positions_without_height += !inputs.positions[k].has_height;
     target.center_accuracy_m = inputs.positions[k].accuracy_m;
   }
-  out.images_without_position = static_cast<int>(std::count(has_position.begin(), has_position.end(), 0));
-  if (!inputs.positions.empty() && out.positions_matched == 0) {
+  out->images_without_position = static_cast<int>(std::count(has_position.begin(), has_position.end(), 0));
+  if (!inputs.positions.empty() && out->positions_matched == 0) {
     return Status::Error(inputs.positions_source + ": none of its " + std::to_string(inputs.positions.size()) +
                          " image names matches an image of the model (e.g. '" + inputs.positions[0].image +
-                         "' vs '" + (work.images.empty() ? std::string() : work.images[0].name) + "')");
+                         "' vs '" + (work->images.empty() ? std::string() : work->images[0].name) + "')");
   }
-  const int first_control = static_cast<int>(work.points.size());
-  // Point ids looked up by hash (Block::FindPoint scans): the model's, then the control's.
-  std::unordered_map<std::string, int> point_of_id;
-  for (int p = 0; p < first_control; ++p) point_of_id.emplace(work.points[p].id, p);
+  return Status::Ok();
+}
+
+// Step 2b: the control and check points join the block after its own points; *point_of_id holds
+// every point's index by id (looked up by hash: Block::FindPoint scans).
+Status AddControlPoints(const GeoreferenceInputs& inputs, const LocalMeasurements& local, Block* work,
+                        std::unordered_map<std::string, int>* point_of_id) {
+  for (size_t p = 0; p < work->points.size(); ++p) point_of_id->emplace(work->points[p].id, static_cast<int>(p));
   for (size_t k = 0; k < inputs.control_points.size(); ++k) {
     const GroundPoint& gp = inputs.control_points[k];
-    if (!point_of_id.emplace(gp.point_id, static_cast<int>(work.points.size())).second) {
+    if (!point_of_id->emplace(gp.point_id, static_cast<int>(work->points.size())).second) {
       return Status::Error(inputs.control_source + ":" + std::to_string(gp.line) + ": point '" + gp.point_id +
                            "': the model has a point of that id; rename the control point");
     }
     BlockPoint point;
     point.id = gp.point_id;
     point.role = gp.role;
-    point.surveyed_m = control_local[k];
+    point.surveyed_m = local.control[k];
     point.accuracy_m = gp.accuracy_m;
-    if (gp.role == PointRole::kTie) point.position_m = control_local[k];
+    if (gp.role == PointRole::kTie) point.position_m = local.control[k];
     point.line = gp.line;
-    work.points.push_back(point);
+    work->points.push_back(point);
   }
+  return Status::Ok();
+}
+
+// Step 2c: the control marks join the block (pixels on a COLMAP-model camera, inside the image);
+// the block's index is rebuilt and the control points without a mark are named.
+Status AddControlMarks(const GeoreferenceInputs& inputs, const ImageMatcher& matcher,
+                       const std::unordered_map<std::string, int>& point_of_id, int first_control,
+                       Block* work, GeoreferenceResult* out) {
   for (const ImageMark& mark : inputs.control_marks) {
     const int image = matcher.Find(mark.raster);
     const auto found = point_of_id.find(mark.point_id);
@@ -296,10 +325,10 @@ Status PrepareGeoreference(const GeoreferenceOptions& options, const Georeferenc
                            mark.point_id + "', which is not a control or check point");
     }
     if (image < 0) {
-      out.control_marks_unmatched.push_back(mark.raster + " (line " + std::to_string(mark.line) + ")");
+      out->control_marks_unmatched.push_back(mark.raster + " (line " + std::to_string(mark.line) + ")");
       continue;
     }
-    const BlockCamera& camera = work.cameras[work.images[image].camera];
+    const BlockCamera& camera = work->cameras[work->images[image].camera];
     if (!mark.column_row || camera.model == CameraModelType::kFrame) {
       return Status::Error(inputs.control_source + ":" + std::to_string(mark.line) +
                            ": control marks of a model are pixels (Column/Row) on a COLMAP-model camera");
@@ -307,65 +336,85 @@ Status PrepareGeoreference(const GeoreferenceOptions& options, const Georeferenc
     PHOTOPOSE_RETURN_IF_ERROR(CheckMarkInsideImage(inputs.control_source, mark, camera.table, PixelOrigin::kCorner));
     BlockMark block_mark = MakePixelMark(image, point, *mark.column_row, mark.line);
     block_mark.accuracy = mark.accuracy_px;
-    work.marks.push_back(block_mark);
-    ++out.control_marks_matched;
+    work->marks.push_back(block_mark);
+    ++out->control_marks_matched;
   }
-  work.BuildIndex();
-  for (size_t p = first_control; p < work.points.size(); ++p) {
-    if (work.marks_of_point[p].empty()) out.control_points_without_marks.push_back(work.points[p].id);
+  work->BuildIndex();
+  for (size_t p = first_control; p < work->points.size(); ++p) {
+    if (work->marks_of_point[p].empty()) out->control_points_without_marks.push_back(work->points[p].id);
   }
+  return Status::Ok();
+}
 
-  // 3. The similarity: camera centres <-> positions with a height (group 0), control intersected
-  // in the model <-> surveyed (group 1).
+// Step 3a: the pairs of the similarity: camera centres <-> positions with a height (group 0),
+// control intersected in the model (*in_model, one per point of `work`) <-> surveyed (group 1).
+std::vector<SimilarityCorrespondence> SimilarityPairs(const GeoreferenceOptions& options,
+                                                      const GeoreferenceInputs& inputs,
+                                                      const LocalMeasurements& local,
+                                                      const std::vector<int>& position_image, int first_control,
+                                                      const Block& work, GeoreferenceResult* out,
+                                                      std::vector<std::optional<Eigen::Vector3d>>* in_model) {
   std::vector<SimilarityCorrespondence> pairs;
   for (size_t k = 0; k < inputs.positions.size(); ++k) {
     if (position_image[k] < 0 || !inputs.positions[k].has_height) continue;
     SimilarityCorrespondence pair;
     pair.source = work.images[position_image[k]].eo->center_in_ground();
-    pair.target = positions_local[k];
+    pair.target = local.positions[k];
     pair.sigma_m = inputs.positions[k].accuracy_m ? inputs.positions[k].accuracy_m->mean() : options.default_camera_accuracy_m;
     pair.group = 0;
     pairs.push_back(pair);
-    out.similarity_labels.push_back("position " + work.images[position_image[k]].name);
+    out->similarity_labels.push_back("position " + work.images[position_image[k]].name);
   }
-  std::vector<std::optional<Eigen::Vector3d>> in_model(work.points.size());
+  in_model->assign(work.points.size(), std::nullopt);
   for (size_t p = first_control; p < work.points.size(); ++p) {
-    in_model[p] = IntersectInModel(work, static_cast<int>(p));
-    if (!in_model[p] || work.points[p].role != PointRole::kControl) continue;
+    (*in_model)[p] = IntersectInModel(work, static_cast<int>(p));
+    if (!(*in_model)[p] || work.points[p].role != PointRole::kControl) continue;
     SimilarityCorrespondence pair;
-    pair.source = *in_model[p];
+    pair.source = *(*in_model)[p];
     pair.target = *work.points[p].surveyed_m;
     // A point held fixed (accuracy 0) weighs as a default one here: the similarity only aligns
     // the model; the adjustment then holds it.
     pair.sigma_m = work.points[p].accuracy_m && !IsHeldFixed(work.points[p])
                        ? work.points[p].accuracy_m->mean()
                        : options.default_marker_accuracy_m;
-    pair.group = out.positions_matched > out.positions_without_height ? 1 : 0;
+    pair.group = out->positions_matched > out->positions_without_height ? 1 : 0;
     pairs.push_back(pair);
-    out.similarity_labels.push_back("control " + work.points[p].id);
+    out->similarity_labels.push_back("control " + work.points[p].id);
   }
-  const Status aligned = RobustSimilarity(options.similarity, pairs, &out.model_to_local, &out.similarity);
+  return pairs;
+}
+
+// Step 3b: the robust similarity of the pairs moves the block into the local frame; a position
+// without height then becomes the point of its vertical nearest to the image's centre (its
+// height is the model's, never a measurement; the prior leaves it free).
+Status AlignModel(const GeoreferenceOptions& options, const LocalMeasurements& local,
+                  const std::vector<int>& position_image, const std::vector<SimilarityCorrespondence>& pairs,
+                  Block* work, GeoreferenceResult* out) {
+  const Status aligned = RobustSimilarity(options.similarity, pairs, &out->model_to_local, &out->similarity);
   if (!aligned.ok()) {
     const std::string without_height =
-        out.positions_without_height > 0
-            ? "; " + std::to_string(out.positions_without_height) + " camera positions without height take no part in it"
+        out->positions_without_height > 0
+            ? "; " + std::to_string(out->positions_without_height) + " camera positions without height take no part in it"
             : "";
     return Status::Error("cannot align the model with the measurements (" + std::to_string(pairs.size()) +
                          " pairs of camera positions and control points intersected in the model" +
                          without_height + "): " + aligned.message());
   }
-  MoveBlock(out.model_to_local, &work);
-  // A position without height: the point of its vertical nearest to the image's centre, now in
-  // the local frame (its height is the model's, never a measurement; the prior leaves it free).
-  for (const size_t k : without_height) {
+  MoveBlock(out->model_to_local, work);
+  for (const size_t k : local.without_height) {
     if (position_image[k] < 0) continue;
-    BlockImage& image = work.images[position_image[k]];
-    const Eigen::Vector3d& d = vertical_local[k];
-    const Eigen::Vector3d& p0 = positions_local[k];
+    BlockImage& image = work->images[position_image[k]];
+    const Eigen::Vector3d& d = local.verticals[k];
+    const Eigen::Vector3d& p0 = local.positions[k];
     image.measured_center_m = p0 + d * d.dot(image.eo->center_in_ground() - p0);
   }
+  return Status::Ok();
+}
 
-  // Errors after the similarity, along the output CRS's level axes at each point.
+// Step 4: the control and check points' errors after the similarity, along the output CRS's level
+// axes at each point, and their RMSEs.
+Status ErrorsAfterSimilarity(const Block& work, int first_control,
+                             const std::vector<std::optional<Eigen::Vector3d>>& in_model, GeoreferenceResult* out) {
   std::vector<Eigen::Vector3d> surveyed;
   std::vector<int> surveyed_points;
   for (size_t p = first_control; p < work.points.size(); ++p) {
@@ -374,16 +423,43 @@ Status PrepareGeoreference(const GeoreferenceOptions& options, const Georeferenc
     surveyed_points.push_back(static_cast<int>(p));
   }
   std::vector<Eigen::Matrix3d> R_level;
-  PHOTOPOSE_RETURN_IF_ERROR(LevelAxes(out, surveyed, &R_level));
+  PHOTOPOSE_RETURN_IF_ERROR(LevelAxes(*out, surveyed, &R_level));
   for (size_t k = 0; k < surveyed_points.size(); ++k) {
     const int p = surveyed_points[k];
     GeoreferencePointError error;
     error.point = p;
-    if (in_model[p]) error.after_similarity_m = R_level[k] * (out.model_to_local.Apply(*in_model[p]) - surveyed[k]);
-    out.point_errors.push_back(error);
+    if (in_model[p]) error.after_similarity_m = R_level[k] * (out->model_to_local.Apply(*in_model[p]) - surveyed[k]);
+    out->point_errors.push_back(error);
   }
-  out.control_after_similarity = Rmse(work, out.point_errors, PointRole::kControl, false);
-  out.check_after_similarity = Rmse(work, out.point_errors, PointRole::kCheck, false);
+  out->control_after_similarity = Rmse(work, out->point_errors, PointRole::kControl, false);
+  out->check_after_similarity = Rmse(work, out->point_errors, PointRole::kCheck, false);
+  return Status::Ok();
+}
+
+}  // namespace
+
+Status PrepareGeoreference(const GeoreferenceOptions& options, const GeoreferenceInputs& inputs,
+                           Block* block, GeoreferenceResult* result) {
+  const auto start = std::chrono::steady_clock::now();
+  PHOTOPOSE_RETURN_IF_ERROR(CheckModelCanBeGeoreferenced(inputs, *block));
+  GeoreferenceResult out;
+  LocalMeasurements local;
+  PHOTOPOSE_RETURN_IF_ERROR(MeasurementsInLocalFrame(options, inputs, &out, &local));
+  // Matching; control points and marks join a copy of the block.
+  Block work = *block;
+  const ImageMatcher matcher(work);
+  std::vector<int> position_image;
+  PHOTOPOSE_RETURN_IF_ERROR(MatchPositions(inputs, local, matcher, &work, &position_image, &out));
+  const int first_control = static_cast<int>(work.points.size());
+  std::unordered_map<std::string, int> point_of_id;
+  PHOTOPOSE_RETURN_IF_ERROR(AddControlPoints(inputs, local, &work, &point_of_id));
+  PHOTOPOSE_RETURN_IF_ERROR(AddControlMarks(inputs, matcher, point_of_id, first_control, &work, &out));
+  // The similarity, and the errors after it.
+  std::vector<std::optional<Eigen::Vector3d>> in_model;
+  const std::vector<SimilarityCorrespondence> pairs =
+      SimilarityPairs(options, inputs, local, position_image, first_control, work, &out, &in_model);
+  PHOTOPOSE_RETURN_IF_ERROR(AlignModel(options, local, position_image, pairs, &work, &out));
+  PHOTOPOSE_RETURN_IF_ERROR(ErrorsAfterSimilarity(work, first_control, in_model, &out));
   work.crs = "local ENU (" + out.frame.definition() + ")";
   out.prepare_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   *block = std::move(work);

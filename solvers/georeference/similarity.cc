@@ -90,54 +90,59 @@ Status FitSimilarity(const std::vector<SimilarityCorrespondence>& pairs,
   return Status::Ok();
 }
 
-Status RobustSimilarity(const RobustSimilarityOptions& options,
-                        const std::vector<SimilarityCorrespondence>& pairs,
-                        Similarity3* similarity, RobustSimilaritySummary* summary) {
-  RobustSimilaritySummary result;
-  const int n = static_cast<int>(pairs.size());
-  result.inlier.assign(n, 1);
-  result.residual_m.assign(n, 0.0);
-  int num_groups = 0;
-  for (const SimilarityCorrespondence& pair : pairs) num_groups = std::max(num_groups, pair.group + 1);
-  result.group_scale.assign(num_groups, 0.0);
-  // Consistent input first: every pair must be usable.
-  Similarity3 all;
-  const Status fit_all = FitSimilarity(pairs, nullptr, &all);
-  if (!fit_all.ok()) {
-    result.message = fit_all.message();
-    *summary = result;
-    return fit_all;
-  }
-  auto normalised = [&](const Similarity3& s, std::vector<double>* r) {
+namespace {
+
+// The pairs' normalised residuals and the cost of a similarity on them, group by group.
+class GroupedResiduals {
+ public:
+  GroupedResiduals(const std::vector<SimilarityCorrespondence>& pairs, int num_groups)
+      : pairs_(pairs), num_groups_(num_groups) {}
+
+  // |target - s(source)| / sigma of every pair.
+  void Normalised(const Similarity3& s, std::vector<double>* r) const {
+    const int n = static_cast<int>(pairs_.size());
     r->resize(n);
-    for (int i = 0; i < n; ++i) (*r)[i] = (pairs[i].target - s.Apply(pairs[i].source)).norm() / pairs[i].sigma_m;
-  };
-  // The median of the normalised residuals over the groups' medians: the cost of a sample.
-  auto group_medians = [&](const std::vector<double>& r) {
-    std::vector<std::vector<double>> by_group(num_groups);
-    for (int i = 0; i < n; ++i) by_group[pairs[i].group].push_back(r[i]);
-    std::vector<double> medians(num_groups, 0.0);
-    for (int g = 0; g < num_groups; ++g) medians[g] = Median(by_group[g]);
+    for (int i = 0; i < n; ++i) (*r)[i] = (pairs_[i].target - s.Apply(pairs_[i].source)).norm() / pairs_[i].sigma_m;
+  }
+  // The median of the normalised residuals in each group.
+  std::vector<double> GroupMedians(const std::vector<double>& r) const {
+    std::vector<std::vector<double>> by_group(num_groups_);
+    for (size_t i = 0; i < pairs_.size(); ++i) by_group[pairs_[i].group].push_back(r[i]);
+    std::vector<double> medians(num_groups_, 0.0);
+    for (int g = 0; g < num_groups_; ++g) medians[g] = Median(by_group[g]);
     return medians;
-  };
-  auto cost = [&](const std::vector<double>& r) {
+  }
+  // The sum of the groups' medians: the cost of a sample.
+  double Cost(const std::vector<double>& r) const {
     double total = 0.0;
-    for (double m : group_medians(r)) total += m;
+    for (double m : GroupMedians(r)) total += m;
     return total;
-  };
+  }
+
+ private:
+  const std::vector<SimilarityCorrespondence>& pairs_;
+  int num_groups_;
+};
+
+// The minimal sample (a triple) whose similarity costs least, starting from `all` (the fit of
+// every pair): every triple, or a fixed seeded sequence of max_samples of them. Counts the samples
+// tried in *num_samples.
+Similarity3 BestMinimalSample(const RobustSimilarityOptions& options,
+                              const std::vector<SimilarityCorrespondence>& pairs,
+                              const GroupedResiduals& residuals_of, const Similarity3& all, int* num_samples) {
+  const int n = static_cast<int>(pairs.size());
   Similarity3 best = all;
   std::vector<double> residuals;
-  normalised(all, &residuals);
-  double best_cost = cost(residuals);
-  // Minimal samples: every triple, or a fixed sequence of them.
+  residuals_of.Normalised(all, &residuals);
+  double best_cost = residuals_of.Cost(residuals);
   const long long triples = static_cast<long long>(n) * (n - 1) * (n - 2) / 6;
   auto try_sample = [&](int a, int b, int c) {
     Similarity3 candidate;
     double spread = 0.0;
     if (!Umeyama(pairs, {a, b, c}, &candidate, &spread) || spread < 1e-3) return;
-    ++result.num_samples;
-    normalised(candidate, &residuals);
-    const double c_cost = cost(residuals);
+    ++*num_samples;
+    residuals_of.Normalised(candidate, &residuals);
+    const double c_cost = residuals_of.Cost(residuals);
     if (c_cost < best_cost) {
       best_cost = c_cost;
       best = candidate;
@@ -157,24 +162,60 @@ Status RobustSimilarity(const RobustSimilarityOptions& options,
       try_sample(a, b, c);
     }
   }
-  // Inliers by each group's robust scale, then least squares on them, repeated.
-  Similarity3 current = best;
+  return best;
+}
+
+// From `start`: inliers by each group's robust scale, then least squares on them, repeated until
+// the inliers repeat. Writes the inliers and the group scales into *result.
+Similarity3 RefineOnInliers(const RobustSimilarityOptions& options, const std::vector<SimilarityCorrespondence>& pairs,
+                            const GroupedResiduals& residuals_of, const Similarity3& start,
+                            RobustSimilaritySummary* result) {
+  const int n = static_cast<int>(pairs.size());
+  const int num_groups = static_cast<int>(result->group_scale.size());
+  Similarity3 current = start;
+  std::vector<double> residuals;
   for (int round = 0; round < options.refinement_rounds; ++round) {
-    normalised(current, &residuals);
-    const std::vector<double> medians = group_medians(residuals);
+    residuals_of.Normalised(current, &residuals);
+    const std::vector<double> medians = residuals_of.GroupMedians(residuals);
     std::vector<char> inlier(n, 0);
-    for (int g = 0; g < num_groups; ++g) result.group_scale[g] = 1.4826 * medians[g];
+    for (int g = 0; g < num_groups; ++g) result->group_scale[g] = 1.4826 * medians[g];
     for (int i = 0; i < n; ++i) {
-      const double scale = std::max(result.group_scale[pairs[i].group], 1.0);
+      const double scale = std::max(result->group_scale[pairs[i].group], 1.0);
       inlier[i] = residuals[i] <= options.outlier_sigmas * scale;
     }
     Similarity3 refit;
     if (!FitSimilarity(pairs, &inlier, &refit).ok()) break;
     current = refit;
-    const bool same = inlier == result.inlier;
-    result.inlier = inlier;
+    const bool same = inlier == result->inlier;
+    result->inlier = inlier;
     if (same && round > 0) break;
   }
+  return current;
+}
+
+}  // namespace
+
+Status RobustSimilarity(const RobustSimilarityOptions& options,
+                        const std::vector<SimilarityCorrespondence>& pairs,
+                        Similarity3* similarity, RobustSimilaritySummary* summary) {
+  RobustSimilaritySummary result;
+  const int n = static_cast<int>(pairs.size());
+  result.inlier.assign(n, 1);
+  result.residual_m.assign(n, 0.0);
+  int num_groups = 0;
+  for (const SimilarityCorrespondence& pair : pairs) num_groups = std::max(num_groups, pair.group + 1);
+  result.group_scale.assign(num_groups, 0.0);
+  // Consistent input first: every pair must be usable.
+  Similarity3 all;
+  const Status fit_all = FitSimilarity(pairs, nullptr, &all);
+  if (!fit_all.ok()) {
+    result.message = fit_all.message();
+    *summary = result;
+    return fit_all;
+  }
+  const GroupedResiduals residuals_of(pairs, num_groups);
+  const Similarity3 best = BestMinimalSample(options, pairs, residuals_of, all, &result.num_samples);
+  const Similarity3 current = RefineOnInliers(options, pairs, residuals_of, best, &result);
   for (int i = 0; i < n; ++i) result.residual_m[i] = (pairs[i].target - current.Apply(pairs[i].source)).norm();
   result.num_inliers = static_cast<int>(std::count(result.inlier.begin(), result.inlier.end(), 1));
   result.success = true;

@@ -13,39 +13,45 @@ namespace {
 // below it the null space is not one-dimensional and the solution is not unique.
 constexpr double kMinSingularValueRatio = 1e-6;  // eigenvalues of A^T A resolve ~1e-8 of sigma_max
 
-}  // namespace
-
-Status SolveDlt(const std::vector<Eigen::Vector3d>& bearings,
-                const std::vector<Eigen::Vector3d>& points_in_ground, PoseCandidate* pose) {
+// The unit bearings and the centroid of the ground points; an error names a zero or non-finite
+// bearing or a non-finite point.
+Status UnitBearingsAndCentroid(const std::vector<Eigen::Vector3d>& bearings,
+                               const std::vector<Eigen::Vector3d>& points_in_ground,
+                               std::vector<Eigen::Vector3d>* unit_bearings, Eigen::Vector3d* centroid) {
   const int n = static_cast<int>(points_in_ground.size());
-  if (bearings.size() != points_in_ground.size())
-    return Status::Error("DLT: " + std::to_string(bearings.size()) + " bearings for " +
-                         std::to_string(n) + " points");
-  if (n < kDltMinimumPoints)
-    return Status::Error("DLT: needs at least " + std::to_string(kDltMinimumPoints) +
-                         " points, got " + std::to_string(n));
-
-  std::vector<Eigen::Vector3d> unit_bearings(n);
-  Eigen::Vector3d centroid = Eigen::Vector3d::Zero();
+  unit_bearings->resize(n);
+  *centroid = Eigen::Vector3d::Zero();
   for (int i = 0; i < n; ++i) {
     const double norm = bearings[i].norm();
     if (!(norm > 0.0) || !std::isfinite(norm))
       return Status::Error("DLT: bearing " + std::to_string(i) + " is zero or not finite");
     if (!points_in_ground[i].allFinite())
       return Status::Error("DLT: point " + std::to_string(i) + " is not finite");
-    unit_bearings[i] = bearings[i] / norm;
-    centroid += points_in_ground[i];
+    (*unit_bearings)[i] = bearings[i] / norm;
+    *centroid += points_in_ground[i];
   }
-  centroid /= n;
+  *centroid /= n;
+  return Status::Ok();
+}
 
-  // Geometry of the ground points (solvers/resection/point_configuration.h): collinear or coplanar points
-  // leave the 12 entries of P undetermined (a plane leaves a three-dimensional null space), and
-  // near it the solution is set by rounding.
+// Geometry of the ground points (solvers/resection/point_configuration.h): collinear or coplanar
+// points leave the 12 entries of P undetermined (a plane leaves a three-dimensional null space),
+// and near it the solution is set by rounding.
+Status CheckSpread(const std::vector<Eigen::Vector3d>& points_in_ground) {
   const PointSpread spread = ComputePointSpread(points_in_ground);
   if (!(spread.extents_m[2] > 0.0)) return Status::Error("DLT: all points coincide");
   if (spread.collinear()) return Status::Error("DLT: the points are collinear");
   if (spread.coplanar())
     return Status::Error("DLT: the points are coplanar; the DLT needs a three-dimensional spread");
+  return Status::Ok();
+}
+
+// The projection P = [M | m] from the null vector of the design matrix, M acting on X - centroid
+// (~ R up to scale) and m ~ t + R centroid, with the sign that puts most points in front.
+Status LinearProjection(const std::vector<Eigen::Vector3d>& unit_bearings,
+                        const std::vector<Eigen::Vector3d>& points_in_ground, const Eigen::Vector3d& centroid,
+                        Eigen::Matrix3d* M, Eigen::Vector3d* m) {
+  const int n = static_cast<int>(points_in_ground.size());
   double mean_distance = 0.0;
   for (const Eigen::Vector3d& X : points_in_ground) mean_distance += (X - centroid).norm();
   mean_distance /= n;
@@ -81,33 +87,60 @@ Status SolveDlt(const std::vector<Eigen::Vector3d>& bearings,
   // P_normalised, row-major in the null vector; P acting on centred, scaled points.
   Eigen::Matrix<double, 3, 4> P;
   for (int r = 0; r < 3; ++r) P.row(r) = eigen.eigenvectors().col(0).segment<4>(4 * r).transpose();
-  Eigen::Matrix3d M = scale * P.leftCols<3>();  // ~ R, acting on X - centroid
-  Eigen::Vector3d m = P.col(3);                 // ~ t + R centroid
+  *M = scale * P.leftCols<3>();
+  *m = P.col(3);
 
   // The null vector's sign is arbitrary: take the one that puts most points in front.
   int front = 0;
   for (int i = 0; i < n; ++i)
-    front += unit_bearings[i].dot(M * (points_in_ground[i] - centroid) + m) > 0.0 ? 1 : -1;
+    front += unit_bearings[i].dot(*M * (points_in_ground[i] - centroid) + *m) > 0.0 ? 1 : -1;
   if (front < 0) {
-    M = -M;
-    m = -m;
+    *M = -*M;
+    *m = -*m;
   }
-  if (!(M.determinant() > 0.0))
-    return Status::Error("DLT: the linear solution is a reflection, not a camera");
-  const Eigen::JacobiSVD<Eigen::Matrix3d> svd_m(M, Eigen::ComputeFullU | Eigen::ComputeFullV);
-  const Eigen::Matrix3d R = svd_m.matrixU() * svd_m.matrixV().transpose();
+  return Status::Ok();
+}
 
-  // Translation for this rotation: minimise sum_i |(I - b_i b_i^T)(R (X_i - centroid) + t')|^2, the
-  // components of the camera-frame point off its ray; then centre = centroid - R^T t'.
+// Translation for the rotation R: minimise sum_i |(I - b_i b_i^T)(R (X_i - centroid) + t')|^2, the
+// components of the camera-frame point off its ray.
+Eigen::Vector3d TranslationForRotation(const std::vector<Eigen::Vector3d>& unit_bearings,
+                                       const std::vector<Eigen::Vector3d>& points_in_ground,
+                                       const Eigen::Vector3d& centroid, const Eigen::Matrix3d& R) {
   Eigen::Matrix3d normal = Eigen::Matrix3d::Zero();
   Eigen::Vector3d rhs = Eigen::Vector3d::Zero();
-  for (int i = 0; i < n; ++i) {
+  for (size_t i = 0; i < points_in_ground.size(); ++i) {
     const Eigen::Vector3d& b = unit_bearings[i];
     const Eigen::Matrix3d off_ray = Eigen::Matrix3d::Identity() - b * b.transpose();
     normal += off_ray;
     rhs -= off_ray * (R * (points_in_ground[i] - centroid));
   }
-  const Eigen::Vector3d t = normal.ldlt().solve(rhs);
+  return normal.ldlt().solve(rhs);
+}
+
+}  // namespace
+
+Status SolveDlt(const std::vector<Eigen::Vector3d>& bearings,
+                const std::vector<Eigen::Vector3d>& points_in_ground, PoseCandidate* pose) {
+  const int n = static_cast<int>(points_in_ground.size());
+  if (bearings.size() != points_in_ground.size())
+    return Status::Error("DLT: " + std::to_string(bearings.size()) + " bearings for " +
+                         std::to_string(n) + " points");
+  if (n < kDltMinimumPoints)
+    return Status::Error("DLT: needs at least " + std::to_string(kDltMinimumPoints) +
+                         " points, got " + std::to_string(n));
+  std::vector<Eigen::Vector3d> unit_bearings;
+  Eigen::Vector3d centroid;
+  PHOTOPOSE_RETURN_IF_ERROR(UnitBearingsAndCentroid(bearings, points_in_ground, &unit_bearings, &centroid));
+  PHOTOPOSE_RETURN_IF_ERROR(CheckSpread(points_in_ground));
+  Eigen::Matrix3d M;  // ~ R, acting on X - centroid
+  Eigen::Vector3d m;  // ~ t + R centroid
+  PHOTOPOSE_RETURN_IF_ERROR(LinearProjection(unit_bearings, points_in_ground, centroid, &M, &m));
+  if (!(M.determinant() > 0.0))
+    return Status::Error("DLT: the linear solution is a reflection, not a camera");
+  const Eigen::JacobiSVD<Eigen::Matrix3d> svd_m(M, Eigen::ComputeFullU | Eigen::ComputeFullV);
+  const Eigen::Matrix3d R = svd_m.matrixU() * svd_m.matrixV().transpose();
+  // Then centre = centroid - R^T t'.
+  const Eigen::Vector3d t = TranslationForRotation(unit_bearings, points_in_ground, centroid, R);
   if (!t.allFinite()) return Status::Error("DLT: the translation is undetermined");
 
   int in_front = 0;

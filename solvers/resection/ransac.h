@@ -224,6 +224,74 @@ class UniformSampler {
   std::vector<int> pool_;
 };
 
+// The best model of a Ransac run so far, with its score and inliers: what its loop keeps between
+// trials.
+template <typename Estimator>
+struct RansacBest {
+  using Model = typename Estimator::Model;
+
+  explicit RansacBest(int n) : mask(n, 0) {
+    inliers.reserve(n);
+    previous_inliers.reserve(n);
+  }
+
+  // Gathers the indices of the inliers of `model` into `inliers` (and `mask`), sets num_inliers.
+  void CollectInliers(const Estimator& estimator) {
+    num_inliers = estimator.Inliers(model, &mask);
+    inliers.clear();
+    const int n = static_cast<int>(mask.size());
+    for (int i = 0; i < n; ++i)
+      if (mask[i]) inliers.push_back(i);
+  }
+
+  Model model{};
+  bool found = false;
+  double score = std::numeric_limits<double>::infinity();  // MSAC cost of `model`
+  int num_inliers = 0;
+  std::vector<char> mask;  // the inliers of `model`, filled whenever it changed
+  std::vector<int> inliers, previous_inliers;
+};
+
+// Scores the models of one minimal sample; each that beats the best so far becomes the best.
+// Returns whether one did.
+template <typename Estimator>
+bool TakeBetterModel(const Estimator& estimator, const std::vector<typename Estimator::Model>& models,
+                     RansacBest<Estimator>* best) {
+  bool improved = false;
+  for (const typename Estimator::Model& model : models) {
+    const double score = estimator.ScoreModel(model, best->score);
+    if (!(score < best->score)) continue;
+    best->model = model;
+    best->score = score;
+    best->found = true;
+    improved = true;
+  }
+  return improved;
+}
+
+// Local optimisation of a new best model (its inliers collected): refined on its inliers and
+// re-scored, repeatedly while that lowers the score and changes the inlier set, at most
+// max_lo_iterations times. Counts the RefineModel calls in *num_lo_steps.
+template <typename Estimator>
+void LocallyOptimize(const RansacOptions& options, const Estimator& estimator, RansacBest<Estimator>* best,
+                     int* num_lo_steps) {
+  for (int round = 0; round < options.max_lo_iterations; ++round) {
+    if (best->num_inliers < Estimator::kMinimalSampleSize) break;
+    typename Estimator::Model refined = best->model;
+    estimator.RefineModel(best->inliers, &refined);
+    ++*num_lo_steps;
+    const double score = estimator.ScoreModel(refined, best->score);
+    if (!(score < best->score)) break;
+    best->model = refined;
+    best->score = score;
+    // A converged refinement on the same inliers would return the same model: stop when the
+    // inlier set repeats.
+    best->previous_inliers.swap(best->inliers);
+    best->CollectInliers(estimator);
+    if (best->inliers == best->previous_inliers) break;
+  }
+}
+
 }  // namespace internal
 
 // Robustly fits estimator's model. On success writes *best_model and *inlier_mask (num_data()
@@ -257,25 +325,8 @@ RansacSummary Ransac(const RansacOptions& options, const Estimator& estimator,
   int sample[kSampleSize];
   std::vector<Model> models;
   models.reserve(16);
-  std::vector<char> mask(n, 0);
-  std::vector<int> inliers, previous_inliers;
-  inliers.reserve(n);
-  previous_inliers.reserve(n);
-
-  Model best{};
-  bool have_best = false;
-  double best_score = std::numeric_limits<double>::infinity();
-  int best_num_inliers = 0;
+  internal::RansacBest<Estimator> best(n);
   int trial_budget = options.max_trials;
-
-  // Gathers the indices of the inliers of `model` into `inliers` and returns their count.
-  auto collect_inliers = [&](const Model& model) {
-    const int count = estimator.Inliers(model, &mask);
-    inliers.clear();
-    for (int i = 0; i < n; ++i)
-      if (mask[i]) inliers.push_back(i);
-    return count;
-  };
 
   while (summary.exhaustive || summary.num_trials < std::max(options.min_trials, trial_budget)) {
     if (summary.exhaustive) {
@@ -287,60 +338,34 @@ RansacSummary Ransac(const RansacOptions& options, const Estimator& estimator,
     models.clear();
     estimator.GenerateModels(sample, &models);
     summary.num_models += static_cast<int>(models.size());
-    bool improved = false;
-    for (const Model& model : models) {
-      const double score = estimator.ScoreModel(model, best_score);
-      if (!(score < best_score)) continue;
-      best = model;
-      best_score = score;
-      have_best = true;
-      improved = true;
-    }
-    if (!improved) continue;
+    if (!internal::TakeBetterModel(estimator, models, &best)) continue;
 
-    best_num_inliers = collect_inliers(best);
+    best.CollectInliers(estimator);
     // A model supported by no more than its own minimal sample has nothing to be refined on (and
     // in practice is a wrong model found before any good one): local optimisation would only
     // spend a full scoring pass on it.
-    if (options.local_optimization && best_num_inliers > kSampleSize) {
-      for (int round = 0; round < options.max_lo_iterations; ++round) {
-        if (best_num_inliers < kSampleSize) break;
-        Model refined = best;
-        estimator.RefineModel(inliers, &refined);
-        ++summary.num_lo_steps;
-        const double score = estimator.ScoreModel(refined, best_score);
-        if (!(score < best_score)) break;
-        best = refined;
-        best_score = score;
-        // A converged refinement on the same inliers would return the same model: stop when the
-        // inlier set repeats.
-        previous_inliers.swap(inliers);
-        best_num_inliers = collect_inliers(best);
-        if (inliers == previous_inliers) break;
-      }
-    }
-    if (summary.exhaustive && options.stop_enumeration_when_all_inliers &&
-        best_num_inliers == n) {
+    if (options.local_optimization && best.num_inliers > kSampleSize)
+      internal::LocallyOptimize(options, estimator, &best, &summary.num_lo_steps);
+    if (summary.exhaustive && options.stop_enumeration_when_all_inliers && best.num_inliers == n) {
       summary.stopped_early = true;
       break;
     }
-    trial_budget = internal::RequiredTrials(static_cast<double>(best_num_inliers) / n, kSampleSize,
+    trial_budget = internal::RequiredTrials(static_cast<double>(best.num_inliers) / n, kSampleSize,
                                             options.confidence, options.max_trials);
   }
 
-  summary.score = best_score;
-  summary.num_inliers = best_num_inliers;
-  if (!have_best || best_num_inliers < kSampleSize) {
-    summary.message = have_best ? "no model with at least " + std::to_string(kSampleSize) +
-                                      " inliers (best has " + std::to_string(best_num_inliers) + ")"
-                                : "no model could be generated from " +
-                                      std::to_string(summary.num_trials) + " samples";
+  summary.score = best.score;
+  summary.num_inliers = best.num_inliers;
+  if (!best.found || best.num_inliers < kSampleSize) {
+    summary.message = best.found ? "no model with at least " + std::to_string(kSampleSize) +
+                                       " inliers (best has " + std::to_string(best.num_inliers) + ")"
+                                 : "no model could be generated from " +
+                                       std::to_string(summary.num_trials) + " samples";
     return summary;
   }
   summary.success = true;
-  // `mask` was filled for `best` whenever best changed.
-  *best_model = best;
-  *inlier_mask = std::move(mask);
+  *best_model = best.model;
+  *inlier_mask = std::move(best.mask);
   return summary;
 }
 

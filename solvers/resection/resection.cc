@@ -234,29 +234,11 @@ bool ConsensusAt(const ResectionInput& input, const std::vector<double>& weights
   return true;
 }
 
-// Looks for a consensus set other than `accepted`, at least as large, that passes the tests the
-// accepted set passed (global test, no mark beyond the snooping value) and whose least-squares
-// pose lies more than options.ambiguous_pose_sigmas of `sigmas` from `eo`. Hypotheses: P3P on
-// triples with a mark outside `accepted` (any competitor has one), all of them or a seeded random
-// max_exhaustive_samples; each hypothesis's marks within twice the threshold (a three-point pose
-// carries the noise of three marks) are adjusted, then the marks within the threshold of that
-// adjustment, until the set settles. A set smaller than `accepted` ends a hypothesis, and a set
-// met before is not adjusted again: a hypothesis costs P3P and a count that stops once the set
-// can no longer reach the accepted size.
-bool FindCompetingPose(const ResectionOptions& options, const ResectionInput& input,
-                       const std::vector<double>& weights, const std::vector<char>& accepted,
-                       const ExteriorOrientation& eo, const Vector6d& sigmas,
-                       CompetingPose* competitor) {
+// The P3P triples FindCompetingPose tries: those with a mark outside `accepted`, all of them or a
+// seeded random max_exhaustive_samples (each drawn with its first mark outside).
+std::vector<std::array<int, 3>> CompetitorTriples(const ResectionOptions& options, const std::vector<char>& accepted,
+                                                  const std::vector<int>& outside) {
   const int n = static_cast<int>(accepted.size());
-  const int size = static_cast<int>(std::count(accepted.begin(), accepted.end(), 1));
-  std::vector<int> outside;
-  for (int i = 0; i < n; ++i)
-    if (!accepted[i]) outside.push_back(i);
-  if (outside.empty() || size < 4) return false;
-  const double confidence = options.test.confidence;
-  const double threshold = MarkThresholdSigmas(confidence);
-  constexpr int kMaxSettlingPasses = 4;
-
   std::vector<std::array<int, 3>> triples;
   const auto has_outside = [&](int i, int j, int k) { return !accepted[i] || !accepted[j] || !accepted[k]; };
   const long long all = static_cast<long long>(n) * (n - 1) * (n - 2) / 6;
@@ -275,6 +257,52 @@ bool FindCompetingPose(const ResectionOptions& options, const ResectionInput& in
       if (i != j && j != k && i != k) triples.push_back({i, j, k});
     }
   }
+  return triples;
+}
+
+// Settles the consensus set of a P3P hypothesis: its marks within twice the threshold (a
+// three-point pose carries the noise of three marks) adjusted, then the marks within the threshold
+// of that adjustment, until the set repeats (at most a few passes). A set smaller than `size`, or
+// one in *tried (every set met is added), ends it. True with the settled set in *set and its
+// least squares in *hypothesis.
+bool SettleConsensus(const ResectionOptions& options, const ResectionInput& input,
+                     const std::vector<double>& weights, double threshold, int size,
+                     ExteriorOrientation* hypothesis, std::set<std::vector<char>>* tried,
+                     std::vector<char>* set, std::vector<char>* next) {
+  constexpr int kMaxSettlingPasses = 4;
+  bool large = ConsensusAt(input, weights, *hypothesis, 2.0 * threshold, size, set);
+  bool settled = false;
+  for (int pass = 0; pass < kMaxSettlingPasses && !settled; ++pass) {
+    if (!large || !tried->insert(*set).second) break;
+    ResectionSummary ignored;
+    std::vector<Eigen::Vector3d> adjusted_points;
+    if (!Adjust(options, input, weights, Indices(*set), hypothesis, &adjusted_points, &ignored)) break;
+    large = ConsensusAt(input, weights, *hypothesis, threshold, size, next);
+    settled = large && *next == *set;
+    if (!settled) set->swap(*next);
+  }
+  return settled;
+}
+
+// Looks for a consensus set other than `accepted`, at least as large, that passes the tests the
+// accepted set passed (global test, no mark beyond the snooping value) and whose least-squares
+// pose lies more than options.ambiguous_pose_sigmas of `sigmas` from `eo`. Hypotheses: P3P on
+// triples with a mark outside `accepted` (any competitor has one), all of them or a seeded random
+// max_exhaustive_samples; each hypothesis's consensus set is settled (SettleConsensus). A set
+// smaller than `accepted` ends a hypothesis, and a set met before is not adjusted again: a
+// hypothesis costs P3P and a count that stops once the set can no longer reach the accepted size.
+bool FindCompetingPose(const ResectionOptions& options, const ResectionInput& input,
+                       const std::vector<double>& weights, const std::vector<char>& accepted,
+                       const ExteriorOrientation& eo, const Vector6d& sigmas,
+                       CompetingPose* competitor) {
+  const int n = static_cast<int>(accepted.size());
+  const int size = static_cast<int>(std::count(accepted.begin(), accepted.end(), 1));
+  std::vector<int> outside;
+  for (int i = 0; i < n; ++i)
+    if (!accepted[i]) outside.push_back(i);
+  if (outside.empty() || size < 4) return false;
+  const double threshold = MarkThresholdSigmas(options.test.confidence);
+  const std::vector<std::array<int, 3>> triples = CompetitorTriples(options, accepted, outside);
   // Each mark's bearing normalised once (SolveP3P's own normalisation, so the same poses).
   std::vector<Eigen::Vector3d> unit_bearings(n);
   std::vector<char> has_bearing(n);
@@ -301,19 +329,9 @@ bool FindCompetingPose(const ResectionOptions& options, const ResectionInput& in
       hypothesis.set_center_in_ground(solution.center_in_ground);
       hypothesis.set_angles_seed_rad(
           AnglesFromRotation(RotationConvention::kSeed, solution.R_camera_from_ground));
-      bool large = ConsensusAt(input, weights, hypothesis, 2.0 * threshold, size, &set);
-      bool settled = false;
-      for (int pass = 0; pass < kMaxSettlingPasses && !settled; ++pass) {
-        if (!large || !tried.insert(set).second) break;
-        ResectionSummary ignored;
-        std::vector<Eigen::Vector3d> adjusted_points;
-        if (!Adjust(options, input, weights, Indices(set), &hypothesis, &adjusted_points, &ignored))
-          break;
-        large = ConsensusAt(input, weights, hypothesis, threshold, size, &next);
-        settled = large && next == set;
-        if (!settled) set.swap(next);
-      }
-      if (!settled || !SetFitsItsAccuracy(options, input, weights, set, /*snoop=*/true, &hypothesis)) continue;
+      if (!SettleConsensus(options, input, weights, threshold, size, &hypothesis, &tried, &set, &next) ||
+          !SetFitsItsAccuracy(options, input, weights, set, /*snoop=*/true, &hypothesis))
+        continue;
       const double distance = PoseDistanceSigmas(hypothesis, eo, sigmas);
       if (!(distance > options.ambiguous_pose_sigmas)) continue;
       // Both sets together passing the global test: the competition is a mark at the margin of

@@ -257,8 +257,149 @@ std::string FormatPoint(int index) {
   return os.str();
 }
 
+// "point i <what> (w = W m)": the first point of an evaluation that is not in front of the camera.
+std::string NotInFront(const Evaluation& evaluation, const std::string& what) {
+  std::ostringstream os;
+  os << FormatPoint(evaluation.behind_index) << " " << what << " (w = " << evaluation.behind_w << " m)";
+  return os.str();
+}
+
 double ElapsedSeconds(std::chrono::steady_clock::time_point start) {
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+}
+
+// Whether the data can be resected: matching lengths, at least three points, a positive focal
+// length, finite values and positive sigmas. False with the reason in *why.
+bool InputsAreUsable(const std::vector<Eigen::Vector2d>& image_plane_um,
+                     const std::vector<Eigen::Vector3d>& points_in_ground,
+                     const std::vector<double>& sigmas_um, double focal_um,
+                     const ExteriorOrientation& initial, std::string* why) {
+  const int n = static_cast<int>(points_in_ground.size());
+  auto fail = [why](const std::string& message) {
+    *why = message;
+    return false;
+  };
+  if (image_plane_um.size() != points_in_ground.size()) {
+    return fail("image_plane_um and points_in_ground differ in length");
+  }
+  if (!sigmas_um.empty() && sigmas_um.size() != points_in_ground.size()) {
+    return fail("sigmas_um must be empty or have one entry per point");
+  }
+  if (n < 3) {
+    return fail("at least 3 points are needed for 6 unknowns (got " + std::to_string(n) + ")");
+  }
+  if (!(focal_um > 0.0) || !std::isfinite(focal_um)) {
+    return fail("focal_um must be positive and finite");
+  }
+  if (!initial.parameters.allFinite()) return fail("initial orientation is not finite");
+  for (int i = 0; i < n; ++i) {
+    if (!image_plane_um[i].allFinite())
+      return fail("image coordinates of " + FormatPoint(i) + " are not finite");
+    if (!points_in_ground[i].allFinite())
+      return fail("ground coordinates of " + FormatPoint(i) + " are not finite");
+    if (!sigmas_um.empty() && !(sigmas_um[i] > 0.0 && std::isfinite(sigmas_um[i]))) {
+      return fail("sigma of " + FormatPoint(i) + " must be positive and finite");
+    }
+  }
+  return true;
+}
+
+// The problem with its points relative to their centroid (*centroid, m) and their RMS distance
+// from it (*extent_m). False when the points are collinear (or coincide): the rotation about their
+// line is then undetermined (solvers/resection/point_configuration.h).
+bool MakeProblem(const TaylorResectionOptions& options, const std::vector<Eigen::Vector2d>& image_plane_um,
+                 const std::vector<Eigen::Vector3d>& points_in_ground, const std::vector<double>& sigmas_um,
+                 double focal_um, Problem* problem, Eigen::Vector3d* centroid, double* extent_m) {
+  const int n = static_cast<int>(points_in_ground.size());
+  *centroid = Eigen::Vector3d::Zero();
+  for (const Eigen::Vector3d& p : points_in_ground) *centroid += p;
+  *centroid /= n;
+  problem->centred_points.resize(n);
+  for (int i = 0; i < n; ++i) problem->centred_points[i] = points_in_ground[i] - *centroid;
+  const PointSpread spread = ComputePointSpread(points_in_ground);
+  if (spread.collinear(options.collinearity_tolerance)) return false;
+  *extent_m = spread.extents_m.norm();
+  problem->observed = &image_plane_um;
+  problem->focal = focal_um;
+  problem->as_printed = options.partials == TaylorPartials::kAsPrinted;
+  if (!sigmas_um.empty()) {
+    problem->weights.resize(n);
+    for (int i = 0; i < n; ++i) problem->weights[i] = 1.0 / (sigmas_um[i] * sigmas_um[i]);
+  }
+  return true;
+}
+
+// Gauss-Newton (eqs. 9-16) from *eo (centred) until the corrections fall below the tolerances.
+// Each pass: solve the normal equations built at the current approximation, apply the correction
+// (eqs. 9-14), and linearise again only if the correction was not yet negligible. After the last,
+// negligible, correction only the residuals are recomputed; *inverse, for the covariance, is the
+// normal matrix of the previous approximation, which differs from the final one by a correction
+// below the tolerances (a relative change ~1e-12 of A^T P A). Returns kConverged, or kFailure /
+// kNoConvergence with the reason in *message; fills the summary's costs, iterations and last
+// corrections.
+SolverTermination IterateGaussNewton(const TaylorResectionOptions& options, const Problem& problem,
+                                     double extent_m, Vector6d* eo, Matrix6d* inverse,
+                                     TaylorResectionSummary* summary, std::string* message) {
+  const double initial_distance_m = eo->head<3>().norm();
+  const double divergence_distance_m =
+      options.divergence_distance_factor * std::max(extent_m, initial_distance_m);
+  auto fail = [message](const std::string& why) {
+    *message = why;
+    return SolverTermination::kFailure;
+  };
+  Evaluation evaluation;
+  if (!Evaluate(problem, *eo, &evaluation))
+    return fail(NotInFront(evaluation, "is not in front of the camera at the initial orientation"));
+  if (!std::isfinite(evaluation.weighted_ssr)) return fail("initial residuals are not finite");
+  summary->initial_cost = 0.5 * evaluation.weighted_ssr;
+  summary->final_cost = summary->initial_cost;
+  for (int iteration = 1; iteration <= options.max_iterations; ++iteration) {
+    Vector6d delta;
+    double rcond;
+    if (!SolveNormalEquations(evaluation.normal, evaluation.rhs, options.min_reciprocal_condition,
+                              &delta, inverse, &rcond)) {
+      std::ostringstream os;
+      os << "normal matrix is singular or ill-conditioned at iteration " << iteration
+         << " (reciprocal condition " << rcond << "): the geometry does not determine the pose";
+      return fail(os.str());
+    }
+    if (!delta.allFinite()) {
+      return fail("correction is not finite at iteration " + std::to_string(iteration));
+    }
+    // Eqs. 9-14: unknown = approximation - correction.
+    *eo -= delta;
+    summary->iterations = iteration;
+    summary->last_position_correction_m = delta.head<3>().cwiseAbs().maxCoeff();
+    summary->last_angle_correction_rad = delta.tail<3>().cwiseAbs().maxCoeff();
+    const double distance_m = eo->head<3>().norm();
+    if (!(distance_m <= divergence_distance_m)) {
+      std::ostringstream os;
+      os << "diverged at iteration " << iteration << ": the camera moved " << distance_m
+         << " m from the centroid of the points";
+      return fail(os.str());
+    }
+    const double position_tolerance_m =
+        std::max(options.position_tolerance_m,
+                 kPositionResolutionFactor * kEpsilon * (extent_m + distance_m));
+    if (summary->last_position_correction_m <= position_tolerance_m &&
+        summary->last_angle_correction_rad <= options.angle_tolerance_rad) {
+      return SolverTermination::kConverged;
+    }
+    if (!Evaluate(problem, *eo, &evaluation)) {
+      return fail(NotInFront(evaluation, "went behind the camera at iteration " + std::to_string(iteration)) +
+                  ": diverged");
+    }
+    if (!std::isfinite(evaluation.weighted_ssr) || !evaluation.normal.allFinite()) {
+      return fail("residuals are not finite at iteration " + std::to_string(iteration));
+    }
+    summary->final_cost = 0.5 * evaluation.weighted_ssr;
+  }
+  std::ostringstream os;
+  os << "no convergence in " << options.max_iterations << " iterations (last correction "
+     << FormatSignificant(summary->last_position_correction_m, 3) << " m, "
+     << FormatSignificant(summary->last_angle_correction_rad, 3) << " rad)";
+  *message = os.str();
+  return SolverTermination::kNoConvergence;
 }
 
 }  // namespace
@@ -422,147 +563,35 @@ Status TaylorResection(const TaylorResectionOptions& options,
     return finish(SolverTermination::kFailure, message);
   };
 
-  // ---------------------------------------------------------------- input checks
   if (const Status valid = Validate(options, "invalid options: "); !valid.ok())
     return fail(valid.message());
   const int n = static_cast<int>(points_in_ground.size());
   summary.num_points = n;
   summary.degrees_of_freedom = 2 * n - 6;
-  if (image_plane_um.size() != points_in_ground.size()) {
-    return fail("image_plane_um and points_in_ground differ in length");
-  }
-  if (!sigmas_um.empty() && sigmas_um.size() != points_in_ground.size()) {
-    return fail("sigmas_um must be empty or have one entry per point");
-  }
-  if (n < 3) {
-    return fail("at least 3 points are needed for 6 unknowns (got " + std::to_string(n) + ")");
-  }
-  if (!(focal_um > 0.0) || !std::isfinite(focal_um)) {
-    return fail("focal_um must be positive and finite");
-  }
-  if (!initial.parameters.allFinite()) return fail("initial orientation is not finite");
-  for (int i = 0; i < n; ++i) {
-    if (!image_plane_um[i].allFinite())
-      return fail("image coordinates of " + FormatPoint(i) + " are not finite");
-    if (!points_in_ground[i].allFinite())
-      return fail("ground coordinates of " + FormatPoint(i) + " are not finite");
-    if (!sigmas_um.empty() && !(sigmas_um[i] > 0.0 && std::isfinite(sigmas_um[i]))) {
-      return fail("sigma of " + FormatPoint(i) + " must be positive and finite");
-    }
-  }
-
-  // ---------------------------------------------------------------- geometry
-  Eigen::Vector3d centroid = Eigen::Vector3d::Zero();
-  for (const Eigen::Vector3d& p : points_in_ground) centroid += p;
-  centroid /= n;
+  if (std::string why; !InputsAreUsable(image_plane_um, points_in_ground, sigmas_um, focal_um, initial, &why))
+    return fail(why);
   Problem problem;
-  problem.centred_points.resize(n);
-  for (int i = 0; i < n; ++i) problem.centred_points[i] = points_in_ground[i] - centroid;
-  // Collinear (or coincident) points leave the rotation about their line undetermined
-  // (solvers/resection/point_configuration.h).
-  const PointSpread spread = ComputePointSpread(points_in_ground);
-  if (spread.collinear(options.collinearity_tolerance)) {
+  Eigen::Vector3d centroid;
+  double extent_m = 0.0;
+  if (!MakeProblem(options, image_plane_um, points_in_ground, sigmas_um, focal_um, &problem, &centroid,
+                   &extent_m)) {
     return fail(
         "the control points are collinear (or coincide): the rotation about their line is "
         "undetermined");
   }
-  const double extent_m = spread.extents_m.norm();  // RMS distance from the centroid
-
-  problem.observed = &image_plane_um;
-  problem.focal = focal_um;
-  problem.as_printed = options.partials == TaylorPartials::kAsPrinted;
-  if (!sigmas_um.empty()) {
-    problem.weights.resize(n);
-    for (int i = 0; i < n; ++i) problem.weights[i] = 1.0 / (sigmas_um[i] * sigmas_um[i]);
-  }
-
   Vector6d eo = initial.parameters;
   eo.head<3>() -= centroid;
-  const double initial_distance_m = eo.head<3>().norm();
-  const double divergence_distance_m =
-      options.divergence_distance_factor * std::max(extent_m, initial_distance_m);
-
-  // ---------------------------------------------------------------- Gauss-Newton (eqs. 9-16)
-  Evaluation evaluation;
-  if (!Evaluate(problem, eo, &evaluation)) {
-    std::ostringstream os;
-    os << FormatPoint(evaluation.behind_index)
-       << " is not in front of the camera at the initial orientation (w = " << evaluation.behind_w
-       << " m)";
-    return fail(os.str());
-  }
-  if (!std::isfinite(evaluation.weighted_ssr)) return fail("initial residuals are not finite");
-  summary.initial_cost = 0.5 * evaluation.weighted_ssr;
-  summary.final_cost = summary.initial_cost;
-
-  // Each pass: solve the normal equations built at the current approximation, apply the correction
-  // (eqs. 9-14), and linearise again only if the correction was not yet negligible. After the last,
-  // negligible, correction only the residuals are recomputed; the covariance uses the normal matrix
-  // of the previous approximation, which differs from the final one by a correction below the
-  // tolerances (a relative change ~1e-12 of A^T P A).
-  bool converged = false;
   Matrix6d inverse;
-  for (int iteration = 1; iteration <= options.max_iterations; ++iteration) {
-    Vector6d delta;
-    double rcond;
-    if (!SolveNormalEquations(evaluation.normal, evaluation.rhs, options.min_reciprocal_condition,
-                              &delta, &inverse, &rcond)) {
-      std::ostringstream os;
-      os << "normal matrix is singular or ill-conditioned at iteration " << iteration
-         << " (reciprocal condition " << rcond << "): the geometry does not determine the pose";
-      return fail(os.str());
-    }
-    if (!delta.allFinite()) {
-      return fail("correction is not finite at iteration " + std::to_string(iteration));
-    }
-    // Eqs. 9-14: unknown = approximation - correction.
-    eo -= delta;
-    summary.iterations = iteration;
-    summary.last_position_correction_m = delta.head<3>().cwiseAbs().maxCoeff();
-    summary.last_angle_correction_rad = delta.tail<3>().cwiseAbs().maxCoeff();
-    const double distance_m = eo.head<3>().norm();
-    if (!(distance_m <= divergence_distance_m)) {
-      std::ostringstream os;
-      os << "diverged at iteration " << iteration << ": the camera moved " << distance_m
-         << " m from the centroid of the points";
-      return fail(os.str());
-    }
-    const double position_tolerance_m =
-        std::max(options.position_tolerance_m,
-                 kPositionResolutionFactor * kEpsilon * (extent_m + distance_m));
-    if (summary.last_position_correction_m <= position_tolerance_m &&
-        summary.last_angle_correction_rad <= options.angle_tolerance_rad) {
-      converged = true;
-      break;
-    }
-    if (!Evaluate(problem, eo, &evaluation)) {
-      std::ostringstream os;
-      os << FormatPoint(evaluation.behind_index) << " went behind the camera at iteration "
-         << iteration << " (w = " << evaluation.behind_w << " m): diverged";
-      return fail(os.str());
-    }
-    if (!std::isfinite(evaluation.weighted_ssr) || !evaluation.normal.allFinite()) {
-      return fail("residuals are not finite at iteration " + std::to_string(iteration));
-    }
-    summary.final_cost = 0.5 * evaluation.weighted_ssr;
-  }
-  if (!converged) {
-    std::ostringstream os;
-    os << "no convergence in " << options.max_iterations << " iterations (last correction "
-       << FormatSignificant(summary.last_position_correction_m, 3) << " m, "
-       << FormatSignificant(summary.last_angle_correction_rad, 3) << " rad)";
-    return finish(SolverTermination::kNoConvergence, os.str());
-  }
+  std::string message;
+  const SolverTermination iterated =
+      IterateGaussNewton(options, problem, extent_m, &eo, &inverse, &summary, &message);
+  if (iterated != SolverTermination::kConverged) return finish(iterated, message);
 
-  // ---------------------------------------------------------------- residuals and precision
+  // Residuals and precision at the converged orientation.
   std::vector<Eigen::Vector2d> residuals;
-  if (!EvaluateResiduals(problem, eo, &residuals, &evaluation)) {
-    std::ostringstream os;
-    os << FormatPoint(evaluation.behind_index)
-       << " is behind the camera at the converged orientation (w = " << evaluation.behind_w
-       << " m)";
-    return fail(os.str());
-  }
+  Evaluation evaluation;
+  if (!EvaluateResiduals(problem, eo, &residuals, &evaluation))
+    return fail(NotInFront(evaluation, "is behind the camera at the converged orientation"));
   if (!std::isfinite(evaluation.weighted_ssr)) return fail("final residuals are not finite");
   summary.final_cost = 0.5 * evaluation.weighted_ssr;
   double variance_factor = 1.0;
@@ -575,10 +604,10 @@ Status TaylorResection(const TaylorResectionOptions& options,
   eo.head<3>() += centroid;
   for (int k = 3; k < 6; ++k) eo[k] = WrapAngle(eo[k]);
   result->eo.parameters = eo;
-  char message[128];
-  std::snprintf(message, sizeof(message), "corrections below tolerance (%.3g m, %.3g rad)",
+  char converged[128];
+  std::snprintf(converged, sizeof(converged), "corrections below tolerance (%.3g m, %.3g rad)",
                 summary.last_position_correction_m, summary.last_angle_correction_rad);
-  return finish(SolverTermination::kConverged, message);
+  return finish(SolverTermination::kConverged, converged);
 }
 
 Status ApproximateVerticalOrientation(const std::vector<Eigen::Vector2d>& image_plane_um,
