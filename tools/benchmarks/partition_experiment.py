@@ -288,7 +288,7 @@ def partition(lines, k, halo):
     return subs
 
 
-def main():
+def parse_args():
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--photopose", default=os.environ.get("PHOTOPOSE", "build/photopose"))
     ap.add_argument("--work_dir", default="build/partition_experiment")
@@ -304,198 +304,246 @@ def main():
                     help="comma list of K:H (K sub-blocks, H halo lines into each neighbour)")
     ap.add_argument("--jobs", type=int, default=2, help="sub-block processes at a time")
     ap.add_argument("--threads", type=int, default=1, help="--threads of every bundle process")
-    a = ap.parse_args()
+    return ap.parse_args()
 
-    work = a.work_dir
-    shutil.rmtree(work, ignore_errors=True)
-    os.makedirs(work)
-    block = os.path.join(work, "block")
+
+class Block:
+    """The simulated block: its tables, their rows, the truth, the flight lines."""
+
+
+def simulate_block(a, work):
+    """Simulates the block into WORK/block and reads it back (checking the rotation convention)."""
+    b = Block()
+    b.dir = os.path.join(work, "block")
     subprocess.run([a.photopose, "simulate", "--scenario=block", f"--lines={a.lines}",
                     f"--images_per_line={a.images_per_line}", f"--tie_points={a.tie_points}",
                     f"--control_points={a.control_points}", f"--check_points={a.check_points}",
-                    f"--gnss_sigma={a.gnss_sigma}", f"--seed={a.seed}", f"--out_dir={block}"],
+                    f"--gnss_sigma={a.gnss_sigma}", f"--seed={a.seed}", f"--out_dir={b.dir}"],
                    check=True, stdout=subprocess.DEVNULL)
-    tables = {k: os.path.join(block, k + ".csv") for k in ("cameras", "marks", "points", "frames")}
-    truth_frames = poses(os.path.join(block, "truth", "frames.csv"))
-    truth_points = positions(os.path.join(block, "truth", "points.csv"))
-    miss = check_convention(block, truth_frames, truth_points)
-    point_rows = read_rows(tables["points"])
-    point_fields = list(point_rows[0].keys())
-    surveyed = {r["PointID"]: tuple(float(r[k]) for k in "XYZ")
-                for r in point_rows if r["Role"].lower() == "check"}
-    frame_rows = read_rows(tables["frames"])
-    frame_fields = list(frame_rows[0].keys())
-    with open(tables["marks"]) as f:
-        marks_header = f.readline()
+    b.tables = {k: os.path.join(b.dir, k + ".csv") for k in ("cameras", "marks", "points", "frames")}
+    b.truth_frames = poses(os.path.join(b.dir, "truth", "frames.csv"))
+    b.truth_points = positions(os.path.join(b.dir, "truth", "points.csv"))
+    miss = check_convention(b.dir, b.truth_frames, b.truth_points)
+    b.point_rows = read_rows(b.tables["points"])
+    b.point_fields = list(b.point_rows[0].keys())
+    b.surveyed = {r["PointID"]: tuple(float(r[k]) for k in "XYZ")
+                  for r in b.point_rows if r["Role"].lower() == "check"}
+    b.frame_rows = read_rows(b.tables["frames"])
+    b.frame_fields = list(b.frame_rows[0].keys())
+    with open(b.tables["marks"]) as f:
+        b.marks_header = f.readline()
         marks = [(line.split(",", 2), line) for line in f]
-    marks = [(fields[0], fields[1], line) for fields, line in marks]
-    num_marks = len(marks)
-    images = [r["Raster"] for r in frame_rows]
-    lines = sorted({line_of(r) for r in images})
-    print(f"block: {len(lines)} lines x {a.images_per_line} images, {a.tie_points} tie points, "
-          f"{num_marks} marks; true points meet their marks through the true rxryrz frames "
+    b.marks = [(fields[0], fields[1], line) for fields, line in marks]
+    b.images = [r["Raster"] for r in b.frame_rows]
+    b.lines = sorted({line_of(r) for r in b.images})
+    print(f"block: {len(b.lines)} lines x {a.images_per_line} images, {a.tie_points} tie points, "
+          f"{len(b.marks)} marks; true points meet their marks through the true rxryrz frames "
           f"within {miss:.2f} px", flush=True)
+    return b
 
-    rows = []  # one per solution; report_check_rmse_mm: the bundle report's own figure, a cross-check
 
-    def add_row(solution, k, halo, m, **extra):
-        row = {"solution": solution, "K": k, "halo_lines": halo,
-               "camera_rmse_mm": 1000 * m["camera_rmse_m"],
-               "attitude_rms_arcsec": ARCSEC * m["attitude_rms_rad"],
-               "check_rmse_mm": 1000 * m["check_rmse_m"], "tie_rmse_mm": 1000 * m["tie_rmse_m"]}
-        row.update(extra)
-        rows.append(row)
+def add_row(rows, solution, k, halo, m, **extra):
+    """One solution's row of the table; report_check_rmse_mm: the bundle report's own figure, a
+    cross-check."""
+    row = {"solution": solution, "K": k, "halo_lines": halo,
+           "camera_rmse_mm": 1000 * m["camera_rmse_m"],
+           "attitude_rms_arcsec": ARCSEC * m["attitude_rms_rad"],
+           "check_rmse_mm": 1000 * m["check_rmse_m"], "tie_rmse_mm": 1000 * m["tie_rmse_m"]}
+    row.update(extra)
+    rows.append(row)
 
-    # 1. The global adjustment, cold.
+
+def measure_output(out, b):
+    """measure() of the frames and points a bundle process wrote to `out`."""
+    return measure(poses(os.path.join(out, "frames.csv")),
+                   positions(os.path.join(out, "points.csv"), {"tie"}),
+                   positions(os.path.join(out, "points.csv"), {"check"}),
+                   b.truth_frames, b.truth_points, b.surveyed)
+
+
+def run_global(a, work, b, rows):
+    """1. The global adjustment, cold. Returns its frames and tie points."""
     gdir = os.path.join(work, "global")
     os.makedirs(gdir)
-    res, _ = run_jobs([("global", bundle_args(a.photopose, tables, gdir, a.threads),
+    res, _ = run_jobs([("global", bundle_args(a.photopose, b.tables, gdir, a.threads),
                         os.path.join(gdir, "log.txt"))], 1)
     grep = report(gdir)
     gframes = poses(os.path.join(gdir, "frames.csv"))
     gpoints = positions(os.path.join(gdir, "points.csv"), {"tie"})
-    gchecks = positions(os.path.join(gdir, "points.csv"), {"check"})
-    gm = measure(gframes, gpoints, gchecks, truth_frames, truth_points, surveyed)
-    cold = {"iterations": grep["summary"]["iterations"], "adjust_s": grep["summary"]["time_seconds"],
-            "wall_s": res["global"]["wall_s"], "rss_mb": res["global"]["rss_mb"]}
-    add_row("global (cold start)", 1, 0, gm, images_per_process=len(images),
-            iterations=cold["iterations"], adjust_s=cold["adjust_s"], wall_s=cold["wall_s"],
-            peak_rss_mb=cold["rss_mb"], report_check_rmse_mm=1000 * grep["check_rmse_m"]["total"],
+    add_row(rows, "global (cold start)", 1, 0, measure_output(gdir, b),
+            images_per_process=len(b.images), iterations=grep["summary"]["iterations"],
+            adjust_s=grep["summary"]["time_seconds"], wall_s=res["global"]["wall_s"],
+            peak_rss_mb=res["global"]["rss_mb"],
+            report_check_rmse_mm=1000 * grep["check_rmse_m"]["total"],
             initial_cost=grep["summary"]["initial_cost"])
+    return gframes, gpoints
 
-    for spec in a.partitions.split(","):
-        k, halo = (int(x) for x in spec.split(":"))
-        name = f"K{k}_H{halo}"
-        subs = partition(lines, k, halo)
-        t_split = time.monotonic()
-        jobs = []
-        for i, sub in enumerate(subs):
-            d = os.path.join(work, name, f"sub{i + 1}")
-            os.makedirs(d)
-            sub["dir"] = d
-            sub_images = {r for r in images if line_of(r) in sub["lines"]}
-            sub["images"] = sub_images
-            # A tie point goes in when three of the sub-block's images see it: two rays from the
-            # start angles may miss each other by more than `bundle`'s initialisation accepts (3
-            # degrees), and the run is refused; control and check points wherever one image sees them.
-            seen = {}
-            for raster, pid, _ in marks:
-                if raster in sub_images:
-                    seen[pid] = seen.get(pid, 0) + 1
-            known = {r["PointID"] for r in point_rows}
-            keep = {p for p, n in seen.items() if n >= 3 or p in known}
-            t = {"cameras": tables["cameras"]}
-            for key in ("marks", "points", "frames"):
-                t[key] = os.path.join(d, key + ".csv")
-            with open(t["marks"], "w") as f:
-                f.write(marks_header)
-                f.writelines(line for raster, pid, line in marks if raster in sub_images and pid in keep)
-            write_rows(t["points"], point_fields, [r for r in point_rows if r["PointID"] in keep])
-            write_rows(t["frames"], frame_fields, [r for r in frame_rows if r["Raster"] in sub_images])
-            jobs.append((f"sub{i + 1}", bundle_args(a.photopose, t, os.path.join(d, "out"), a.threads),
-                         os.path.join(d, "log.txt")))
-            os.makedirs(os.path.join(d, "out"))
-        split_s = time.monotonic() - t_split
-        res, phase_wall = run_jobs(jobs, a.jobs)
-        t_merge = time.monotonic()
 
-        # 3. Merge.
-        est_frames, est_ties, est_checks = {}, {}, {}
-        sub_iters = []
-        for i, sub in enumerate(subs):
-            out = os.path.join(sub["dir"], "out")
-            sub_iters.append(report(out)["summary"]["iterations"])
-            for img, pose in poses(os.path.join(out, "frames.csv")).items():
-                est_frames.setdefault(img, []).append((i, pose))
-            rays = {r["PointID"]: int(r["NumObservations"]) for r in read_rows(os.path.join(out, "points.csv"))}
-            for pid, p in positions(os.path.join(out, "points.csv"), {"tie"}).items():
-                est_ties.setdefault(pid, []).append((rays[pid], p))
-            for pid, p in positions(os.path.join(out, "points.csv"), {"check"}).items():
-                est_checks.setdefault(pid, []).append((rays[pid], p))
-        owner = {}
-        for i, sub in enumerate(subs):
-            for img in sub["images"]:
-                if line_of(img) in sub["core"]:
-                    owner[img] = i
-        owned = {img: next(p for j, p in ests if j == owner[img]) for img, ests in est_frames.items()}
-        averaged = {img: (tuple(sum(p[0][c] for _, p in ests) / len(ests) for c in range(3)),
-                          mean_rotation([p[1] for _, p in ests])) for img, ests in est_frames.items()}
-        mean_pt = lambda ps: tuple(sum(p[c] for p in ps) / len(ps) for c in range(3))
-        ties = {pid: mean_pt([p for _, p in ps]) for pid, ps in est_ties.items()}
-        checks = {pid: mean_pt([p for _, p in ps]) for pid, ps in est_checks.items()}
-        most_rays = lambda ps: max(ps, key=lambda e: e[0])[1]
-        ties_b = {pid: most_rays(ps) for pid, ps in est_ties.items()}
-        checks_b = {pid: most_rays(ps) for pid, ps in est_checks.items()}
-        missing = set(gpoints) - set(ties)
+def write_sub_block(a, b, sub, d):
+    """Writes a sub-block's tables into `d` and returns its bundle job."""
+    sub_images = {r for r in b.images if line_of(r) in sub["lines"]}
+    sub["images"] = sub_images
+    # A tie point goes in when three of the sub-block's images see it: two rays from the
+    # start angles may miss each other by more than `bundle`'s initialisation accepts (3
+    # degrees), and the run is refused; control and check points wherever one image sees them.
+    seen = {}
+    for raster, pid, _ in b.marks:
+        if raster in sub_images:
+            seen[pid] = seen.get(pid, 0) + 1
+    known = {r["PointID"] for r in b.point_rows}
+    keep = {p for p, n in seen.items() if n >= 3 or p in known}
+    t = {"cameras": b.tables["cameras"]}
+    for key in ("marks", "points", "frames"):
+        t[key] = os.path.join(d, key + ".csv")
+    with open(t["marks"], "w") as f:
+        f.write(b.marks_header)
+        f.writelines(line for raster, pid, line in b.marks if raster in sub_images and pid in keep)
+    write_rows(t["points"], b.point_fields, [r for r in b.point_rows if r["PointID"] in keep])
+    write_rows(t["frames"], b.frame_fields, [r for r in b.frame_rows if r["Raster"] in sub_images])
+    return bundle_args(a.photopose, t, os.path.join(d, "out"), a.threads)
 
-        merge_s = time.monotonic() - t_merge
-        # The seam: sub-block against sub-block where they overlap (every pair of estimates).
-        seam_c, seam_r, seam_t = [], [], []
-        for ests in est_frames.values():
-            for x in range(len(ests)):
-                for y in range(x + 1, len(ests)):
-                    (c1, r1), (c2, r2) = ests[x][1], ests[y][1]
-                    seam_c.append(dist(c1, c2))
-                    seam_r.append(rotation_angle(r1, r2))
-        for ps in est_ties.values():
-            for x in range(len(ps)):
-                for y in range(x + 1, len(ps)):
-                    seam_t.append(dist(ps[x][1], ps[y][1]))
-        seam = {"seam_centre_rms_mm": 1000 * rms(seam_c), "seam_centre_max_mm": 1000 * max(seam_c, default=0),
-                "seam_attitude_rms_arcsec": ARCSEC * rms(seam_r),
-                "seam_tie_rms_mm": 1000 * rms(seam_t), "seam_tie_max_mm": 1000 * max(seam_t, default=0),
-                "overlap_images": sum(len(e) > 1 for e in est_frames.values()),
-                "overlap_ties": sum(len(p) > 1 for p in est_ties.values())}
-        largest = max(len(s["images"]) for s in subs)
-        # The global adjustment's tie RMSE over the tie points the merge has (the others have
-        # fewer than three rays in every sub-block, and are the weakest).
-        seam["global_tie_rmse_same_points_mm"] = 1000 * rms(dist(gpoints[p], truth_points[p]) for p in ties)
-        common = dict(split_s=split_s, merge_s=merge_s, images_per_process=largest, iterations="/".join(map(str, sub_iters)),
-                      adjust_s=max(report(os.path.join(s["dir"], "out"))["summary"]["time_seconds"] for s in subs),
-                      wall_s=phase_wall, peak_rss_mb=max(r["rss_mb"] for r in res.values()),
-                      sum_cpu_s=sum(r["cpu_s"] for r in res.values()), **seam)
-        add_row(f"{name} merge A: owner's cameras, averaged points", k, halo,
-                measure(owned, ties, checks, truth_frames, truth_points, surveyed), **common)
-        add_row(f"{name} merge B: averaged cameras, points from most rays", k, halo,
-                measure(averaged, ties_b, checks_b, truth_frames, truth_points, surveyed))
-        if missing:
-            print(f"{name}: {len(missing)} tie points of the global adjustment are in no sub-block "
-                  "(seen by fewer than three images of every sub-block)")
 
-        # 4. The final global adjustment from merge B: merged angles (the centres stay the GNSS
-        # measurements: PerspectiveX/Y/Z is both the prior and the start), merged tie points as
-        # approximate values (Role tie).
-        fdir = os.path.join(work, name, "final")
-        os.makedirs(os.path.join(fdir, "out"))
-        warm = {"cameras": tables["cameras"], "marks": tables["marks"],
-                "points": os.path.join(fdir, "points.csv"), "frames": os.path.join(fdir, "frames.csv")}
-        warm_frames = []
-        for r in frame_rows:
-            r = dict(r)
-            r["Omega"], r["Phi"], r["Kappa"] = (repr(v) for v in angles_rxryrz(averaged[r["Raster"]][1]))
-            warm_frames.append(r)
-        write_rows(warm["frames"], frame_fields, warm_frames)
-        tie_rows = [{**{f: "" for f in point_fields}, "PointID": pid, "X": repr(p[0]), "Y": repr(p[1]),
-                     "Z": repr(p[2]), "Role": "tie"} for pid, p in ties_b.items()]
-        write_rows(warm["points"], point_fields, point_rows + tie_rows)
-        res, _ = run_jobs([("final", bundle_args(a.photopose, warm, os.path.join(fdir, "out"), a.threads),
-                            os.path.join(fdir, "log.txt"))], 1)
-        frep = report(os.path.join(fdir, "out"))
-        fframes = poses(os.path.join(fdir, "out", "frames.csv"))
-        fm = measure(fframes, positions(os.path.join(fdir, "out", "points.csv"), {"tie"}),
-                     positions(os.path.join(fdir, "out", "points.csv"), {"check"}),
-                     truth_frames, truth_points, surveyed)
-        to_cold = max(dist(c, gframes[img][0]) for img, (c, _) in fframes.items())
-        add_row(f"{name} merge B + final global", k, halo, fm, images_per_process=len(images),
-                iterations=frep["summary"]["iterations"], adjust_s=frep["summary"]["time_seconds"],
-                wall_s=res["final"]["wall_s"], peak_rss_mb=res["final"]["rss_mb"],
-                initial_cost=frep["summary"]["initial_cost"], max_centre_offset_from_cold_mm=1000 * to_cold,
-                report_check_rmse_mm=1000 * frep["check_rmse_m"]["total"])
-        print(f"{name}: sub-blocks of {sorted(len(s['images']) for s in subs)} images done in "
-              f"{phase_wall:.1f} s wall; final from the merge: {frep['summary']['iterations']} iterations, "
-              f"{frep['summary']['time_seconds']:.2f} s", flush=True)
+def adjust_sub_blocks(a, work, name, b, subs):
+    """2. Every sub-block's tables written and adjusted, --jobs at a time. Returns the processes'
+    figures, the phase's wall time and the time taken to write the tables."""
+    t_split = time.monotonic()
+    jobs = []
+    for i, sub in enumerate(subs):
+        d = os.path.join(work, name, f"sub{i + 1}")
+        os.makedirs(d)
+        sub["dir"] = d
+        jobs.append((f"sub{i + 1}", write_sub_block(a, b, sub, d), os.path.join(d, "log.txt")))
+        os.makedirs(os.path.join(d, "out"))
+    split_s = time.monotonic() - t_split
+    res, phase_wall = run_jobs(jobs, a.jobs)
+    return res, phase_wall, split_s
 
-    # Table and CSV.
+
+def collect_estimates(subs):
+    """Every sub-block's estimates: image -> [(sub-block, pose)], point -> [(rays, position)] for
+    tie and check points, and each sub-block's iterations."""
+    est_frames, est_ties, est_checks = {}, {}, {}
+    sub_iters = []
+    for i, sub in enumerate(subs):
+        out = os.path.join(sub["dir"], "out")
+        sub_iters.append(report(out)["summary"]["iterations"])
+        for img, pose in poses(os.path.join(out, "frames.csv")).items():
+            est_frames.setdefault(img, []).append((i, pose))
+        rays = {r["PointID"]: int(r["NumObservations"]) for r in read_rows(os.path.join(out, "points.csv"))}
+        for pid, p in positions(os.path.join(out, "points.csv"), {"tie"}).items():
+            est_ties.setdefault(pid, []).append((rays[pid], p))
+        for pid, p in positions(os.path.join(out, "points.csv"), {"check"}).items():
+            est_checks.setdefault(pid, []).append((rays[pid], p))
+    return est_frames, est_ties, est_checks, sub_iters
+
+
+def merge(subs, est_frames, est_ties, est_checks):
+    """3. The two merges: A (the owner's cameras, averaged points) and B (averaged cameras, points
+    from the sub-block with the most rays), each as (frames, ties, checks)."""
+    owner = {}
+    for i, sub in enumerate(subs):
+        for img in sub["images"]:
+            if line_of(img) in sub["core"]:
+                owner[img] = i
+    owned = {img: next(p for j, p in ests if j == owner[img]) for img, ests in est_frames.items()}
+    averaged = {img: (tuple(sum(p[0][c] for _, p in ests) / len(ests) for c in range(3)),
+                      mean_rotation([p[1] for _, p in ests])) for img, ests in est_frames.items()}
+    mean_pt = lambda ps: tuple(sum(p[c] for p in ps) / len(ps) for c in range(3))
+    ties = {pid: mean_pt([p for _, p in ps]) for pid, ps in est_ties.items()}
+    checks = {pid: mean_pt([p for _, p in ps]) for pid, ps in est_checks.items()}
+    most_rays = lambda ps: max(ps, key=lambda e: e[0])[1]
+    ties_b = {pid: most_rays(ps) for pid, ps in est_ties.items()}
+    checks_b = {pid: most_rays(ps) for pid, ps in est_checks.items()}
+    return (owned, ties, checks), (averaged, ties_b, checks_b)
+
+
+def seam_figures(est_frames, est_ties):
+    """The seam: sub-block against sub-block where they overlap (every pair of estimates)."""
+    seam_c, seam_r, seam_t = [], [], []
+    for ests in est_frames.values():
+        for x in range(len(ests)):
+            for y in range(x + 1, len(ests)):
+                (c1, r1), (c2, r2) = ests[x][1], ests[y][1]
+                seam_c.append(dist(c1, c2))
+                seam_r.append(rotation_angle(r1, r2))
+    for ps in est_ties.values():
+        for x in range(len(ps)):
+            for y in range(x + 1, len(ps)):
+                seam_t.append(dist(ps[x][1], ps[y][1]))
+    return {"seam_centre_rms_mm": 1000 * rms(seam_c), "seam_centre_max_mm": 1000 * max(seam_c, default=0),
+            "seam_attitude_rms_arcsec": ARCSEC * rms(seam_r),
+            "seam_tie_rms_mm": 1000 * rms(seam_t), "seam_tie_max_mm": 1000 * max(seam_t, default=0),
+            "overlap_images": sum(len(e) > 1 for e in est_frames.values()),
+            "overlap_ties": sum(len(p) > 1 for p in est_ties.values())}
+
+
+def final_global(a, work, name, b, averaged, ties_b):
+    """4. The final global adjustment from merge B: merged angles (the centres stay the GNSS
+    measurements: PerspectiveX/Y/Z is both the prior and the start), merged tie points as
+    approximate values (Role tie). Returns its output folder and the process's figures."""
+    fdir = os.path.join(work, name, "final")
+    os.makedirs(os.path.join(fdir, "out"))
+    warm = {"cameras": b.tables["cameras"], "marks": b.tables["marks"],
+            "points": os.path.join(fdir, "points.csv"), "frames": os.path.join(fdir, "frames.csv")}
+    warm_frames = []
+    for r in b.frame_rows:
+        r = dict(r)
+        r["Omega"], r["Phi"], r["Kappa"] = (repr(v) for v in angles_rxryrz(averaged[r["Raster"]][1]))
+        warm_frames.append(r)
+    write_rows(warm["frames"], b.frame_fields, warm_frames)
+    tie_rows = [{**{f: "" for f in b.point_fields}, "PointID": pid, "X": repr(p[0]), "Y": repr(p[1]),
+                 "Z": repr(p[2]), "Role": "tie"} for pid, p in ties_b.items()]
+    write_rows(warm["points"], b.point_fields, b.point_rows + tie_rows)
+    out = os.path.join(fdir, "out")
+    res, _ = run_jobs([("final", bundle_args(a.photopose, warm, out, a.threads),
+                        os.path.join(fdir, "log.txt"))], 1)
+    return out, res["final"]
+
+
+def run_partition(a, work, spec, b, gframes, gpoints, rows):
+    """Steps 2 to 4 for one partition K:H, its three rows added to `rows`."""
+    k, halo = (int(x) for x in spec.split(":"))
+    name = f"K{k}_H{halo}"
+    subs = partition(b.lines, k, halo)
+    res, phase_wall, split_s = adjust_sub_blocks(a, work, name, b, subs)
+    t_merge = time.monotonic()
+    est_frames, est_ties, est_checks, sub_iters = collect_estimates(subs)
+    (owned, ties, checks), (averaged, ties_b, checks_b) = merge(subs, est_frames, est_ties, est_checks)
+    missing = set(gpoints) - set(ties)
+    merge_s = time.monotonic() - t_merge
+    seam = seam_figures(est_frames, est_ties)
+    largest = max(len(s["images"]) for s in subs)
+    # The global adjustment's tie RMSE over the tie points the merge has (the others have
+    # fewer than three rays in every sub-block, and are the weakest).
+    seam["global_tie_rmse_same_points_mm"] = 1000 * rms(dist(gpoints[p], b.truth_points[p]) for p in ties)
+    common = dict(split_s=split_s, merge_s=merge_s, images_per_process=largest, iterations="/".join(map(str, sub_iters)),
+                  adjust_s=max(report(os.path.join(s["dir"], "out"))["summary"]["time_seconds"] for s in subs),
+                  wall_s=phase_wall, peak_rss_mb=max(r["rss_mb"] for r in res.values()),
+                  sum_cpu_s=sum(r["cpu_s"] for r in res.values()), **seam)
+    add_row(rows, f"{name} merge A: owner's cameras, averaged points", k, halo,
+            measure(owned, ties, checks, b.truth_frames, b.truth_points, b.surveyed), **common)
+    add_row(rows, f"{name} merge B: averaged cameras, points from most rays", k, halo,
+            measure(averaged, ties_b, checks_b, b.truth_frames, b.truth_points, b.surveyed))
+    if missing:
+        print(f"{name}: {len(missing)} tie points of the global adjustment are in no sub-block "
+              "(seen by fewer than three images of every sub-block)")
+    out, final = final_global(a, work, name, b, averaged, ties_b)
+    frep = report(out)
+    fframes = poses(os.path.join(out, "frames.csv"))
+    to_cold = max(dist(c, gframes[img][0]) for img, (c, _) in fframes.items())
+    add_row(rows, f"{name} merge B + final global", k, halo, measure_output(out, b),
+            images_per_process=len(b.images), iterations=frep["summary"]["iterations"],
+            adjust_s=frep["summary"]["time_seconds"], wall_s=final["wall_s"],
+            peak_rss_mb=final["rss_mb"], initial_cost=frep["summary"]["initial_cost"],
+            max_centre_offset_from_cold_mm=1000 * to_cold,
+            report_check_rmse_mm=1000 * frep["check_rmse_m"]["total"])
+    print(f"{name}: sub-blocks of {sorted(len(s['images']) for s in subs)} images done in "
+          f"{phase_wall:.1f} s wall; final from the merge: {frep['summary']['iterations']} iterations, "
+          f"{frep['summary']['time_seconds']:.2f} s", flush=True)
+
+
+def write_table(a, work, rows):
+    """The CSV of every figure and a Markdown table of the main ones on stdout."""
     fields = ["solution", "K", "halo_lines", "images_per_process", "camera_rmse_mm", "attitude_rms_arcsec",
               "check_rmse_mm", "tie_rmse_mm", "global_tie_rmse_same_points_mm", "seam_centre_rms_mm", "seam_centre_max_mm",
               "seam_attitude_rms_arcsec", "seam_tie_rms_mm", "seam_tie_max_mm", "overlap_images", "overlap_ties",
@@ -513,6 +561,19 @@ def main():
     for r in rows:
         print("| " + " | ".join(fmt(r.get(f, "")) for f in shown) + " |")
     print(f"\nwrote {path}")
+
+
+def main():
+    a = parse_args()
+    work = a.work_dir
+    shutil.rmtree(work, ignore_errors=True)
+    os.makedirs(work)
+    b = simulate_block(a, work)
+    rows = []  # one per solution
+    gframes, gpoints = run_global(a, work, b, rows)
+    for spec in a.partitions.split(","):
+        run_partition(a, work, spec, b, gframes, gpoints, rows)
+    write_table(a, work, rows)
 
 
 if __name__ == "__main__":

@@ -1,3 +1,7 @@
+// The engine of `photopose compare` for single images (tools/compare/comparison.h): the solver
+// variants, the Monte-Carlo mode and the dataset mode. About 830 lines, one file on purpose: both
+// modes run the same solver variants and reduce their solves by the same file-local measures (Rms,
+// Median, RmsNorm, the check residuals); each mode is a list of named steps.
 #include "core/io/block_tables.h"
 #include "tools/compare/comparison.h"
 
@@ -633,146 +637,197 @@ bool DatasetComparisonOptions::IsValid(std::string* why) const {
   return job.resection.IsValid(why);
 }
 
+namespace {
+
+// One solver's figures over the images of a dataset, gathered for its summary.
+struct DatasetTally {
+  int check_beyond = 0;
+  std::vector<double> sigma0, seconds, refinement, iterations, difference_position,
+      difference_rotation, reference_position, reference_rotation;
+  std::vector<Eigen::Vector2d> residuals, checks;
+};
+
+// The reference frames (--reference) by raster; none without one.
+Status ReadReferenceFrames(const DatasetComparisonOptions& options, const ResectionJob& job,
+                           std::map<std::string, ExteriorOrientation>* reference) {
+  if (options.reference_path.empty()) return Status::Ok();
+  std::vector<FrameCamera> cameras;
+  for (const BlockCamera& camera : job.block.cameras) cameras.push_back(camera.table);
+  FramesTableOptions frames_options;
+  frames_options.convention = options.job.files.rotation;
+  frames_options.cameras = &cameras;
+  std::vector<FrameRecord> frames;
+  PHOTOPOSE_RETURN_IF_ERROR(ReadFramesTable(options.reference_path, frames_options, &frames));
+  for (const FrameRecord& frame : frames) (*reference)[frame.raster] = frame.eo;
+  return Status::Ok();
+}
+
+// Every image by every solver. ResectImages gives image i the RANSAC seed seed + constant *
+// (i + 1) whatever the solver, so every solver starts from the same initial values.
+Status ResectWithEverySolver(const DatasetComparisonOptions& options, const ResectionJob& job,
+                             std::vector<std::vector<ResectionResult>>* results) {
+  for (const SolverVariant& v : options.solvers) {
+    results->push_back(
+        ResectImages(v.ApplyTo(options.job.resection), job.inputs, options.num_threads));
+    if (options.progress && !options.progress(results->size(), options.solvers.size())) {
+      return Status::Error("cancelled by the progress hook after " +
+                           std::to_string(results->size()) + " of " +
+                           std::to_string(options.solvers.size()) + " solvers");
+    }
+  }
+  return Status::Ok();
+}
+
+// The inlier residuals of a solved image: their RMS and largest into `solve`.
+std::vector<Eigen::Vector2d> InlierResiduals(const ResectionResult& r, DatasetSolve* solve) {
+  std::vector<Eigen::Vector2d> inlier_residuals;
+  for (size_t k = 0; k < r.residuals.size(); ++k) {
+    if (!r.inliers[k]) continue;
+    inlier_residuals.push_back(r.residuals[k]);
+    solve->max_px = std::max(solve->max_px, r.residuals[k].norm());
+  }
+  solve->rms_px = RmsNorm(inlier_residuals);
+  return inlier_residuals;
+}
+
+// The check residuals of a solved image within `threshold` times their accuracy (the mark's
+// stated accuracy, else sigma0, in the mark unit); those beyond are counted in `solve`.
+std::vector<Eigen::Vector2d> CheckResidualsWithin(const DatasetComparisonOptions& options,
+                                                  const ResectionJob& job, size_t i,
+                                                  const ResectionResult& r, double threshold,
+                                                  DatasetSolve* solve) {
+  std::vector<Eigen::Vector2d> check;
+  for (const CheckResidual& c : CheckResiduals(job, i, r.eo)) {
+    const std::optional<double> accuracy = job.block.marks[c.mark].accuracy;
+    const double sigma = accuracy ? *accuracy
+                         : options.job.input.default_accuracy > 0.0
+                             ? options.job.input.default_accuracy
+                         : r.accuracy_stated || !(r.sigma0 > 0.0) ? 1.0
+                                                                  : r.sigma0;
+    if (c.residual.norm() <= threshold * sigma) {
+      check.push_back(c.residual);
+    } else {
+      ++solve->num_check_beyond;
+    }
+  }
+  solve->check_rmse_px = RmsNorm(check);
+  solve->num_check = static_cast<int>(check.size());
+  return check;
+}
+
+// A solved image's pose against the reference solver's (`first`, unless it is the reference
+// itself) and against the reference frame (`reference`, when given for the image).
+void CompareSolvedPose(const ResectionResult& r, const ResectionResult* first,
+                       const ExteriorOrientation* reference, DatasetSolve* solve,
+                       DatasetTally* tally) {
+  if (first != nullptr && first->success) {
+    solve->has_difference = true;
+    solve->difference_position_m = (r.eo.center_in_ground() - first->eo.center_in_ground()).norm();
+    solve->difference_rotation_arcsec =
+        RotationErrorArcSeconds(first->eo.angles_seed_rad(), r.eo.angles_seed_rad());
+    tally->difference_position.push_back(solve->difference_position_m);
+    tally->difference_rotation.push_back(solve->difference_rotation_arcsec);
+  }
+  if (reference != nullptr) {
+    solve->has_reference = true;
+    solve->reference_position_m = (r.eo.center_in_ground() - reference->center_in_ground()).norm();
+    solve->reference_rotation_arcsec =
+        RotationErrorArcSeconds(reference->angles_seed_rad(), r.eo.angles_seed_rad());
+    tally->reference_position.push_back(solve->reference_position_m);
+    tally->reference_rotation.push_back(solve->reference_rotation_arcsec);
+  }
+}
+
+// Solver `s`'s solve of image i, its figures added to the solver's tally. `first`: the reference
+// solver's result of the image (nullptr for the reference solver itself).
+DatasetSolve DatasetSolveOf(const DatasetComparisonOptions& options, const ResectionJob& job,
+                            size_t i, size_t s, const ResectionResult& r,
+                            const ResectionResult* first, const ExteriorOrientation* reference,
+                            RotationConvention rotation, DatasetTally* tally) {
+  DatasetSolve solve;
+  solve.raster = job.inputs[i].raster;
+  solve.solver = static_cast<int>(s);
+  solve.success = r.success;
+  solve.message = r.summary.message;
+  solve.iterations = r.summary.iterations;
+  solve.seconds = r.summary.total_seconds;
+  solve.refinement_seconds = r.summary.refinement_seconds;
+  solve.num_observations = static_cast<int>(job.inputs[i].image_plane.size());
+  tally->seconds.push_back(r.summary.total_seconds);
+  tally->refinement.push_back(r.summary.refinement_seconds);
+  if (!r.success) return solve;
+  solve.eo = r.eo;
+  solve.angles_deg = OutputAnglesDeg(job, i, rotation, r.eo);
+  solve.standard_deviations = r.standard_deviations;
+  solve.sigma0 = r.sigma0;
+  solve.num_inliers = r.num_inliers;
+  const std::vector<Eigen::Vector2d> inliers = InlierResiduals(r, &solve);
+  tally->residuals.insert(tally->residuals.end(), inliers.begin(), inliers.end());
+  const double threshold = MarkThresholdSigmas(options.job.resection.test.confidence);
+  const std::vector<Eigen::Vector2d> check =
+      CheckResidualsWithin(options, job, i, r, threshold, &solve);
+  tally->checks.insert(tally->checks.end(), check.begin(), check.end());
+  tally->check_beyond += solve.num_check_beyond;
+  tally->sigma0.push_back(r.sigma0);
+  tally->iterations.push_back(r.summary.iterations);
+  CompareSolvedPose(r, first, reference, &solve, tally);
+  return solve;
+}
+
+DatasetSolverSummary SummaryOf(const std::string& solver, int images, const DatasetTally& t) {
+  DatasetSolverSummary summary;
+  summary.solver = solver;
+  summary.images = images;
+  summary.solved = static_cast<int>(t.sigma0.size());
+  summary.rms_sigma0 = Rms(t.sigma0);
+  summary.rms_px = RmsNorm(t.residuals);
+  summary.check_rmse_px = RmsNorm(t.checks);
+  summary.check_beyond = t.check_beyond;
+  summary.median_seconds = Median(t.seconds);
+  summary.median_refinement_seconds = Median(t.refinement);
+  summary.mean_iterations = Mean(t.iterations);
+  summary.compared = static_cast<int>(t.difference_position.size());
+  summary.difference_position_m = Rms(t.difference_position);
+  summary.difference_rotation_arcsec = Rms(t.difference_rotation);
+  summary.referenced = static_cast<int>(t.reference_position.size());
+  summary.reference_position_m = Rms(t.reference_position);
+  summary.reference_rotation_arcsec = Rms(t.reference_rotation);
+  return summary;
+}
+
+}  // namespace
+
 Status RunDatasetComparison(const DatasetComparisonOptions& options,
                             DatasetComparisonResult* result) {
   *result = DatasetComparisonResult();
   PHOTOPOSE_RETURN_IF_ERROR(Validate(options));
   ResectionJob job;
-  Status status = PrepareResectionJob(options.job, &job);
-  if (!status.ok()) return status;
+  PHOTOPOSE_RETURN_IF_ERROR(PrepareResectionJob(options.job, &job));
   if (job.inputs.empty()) return Status::Error("no image has marks");
   std::map<std::string, ExteriorOrientation> reference;
-  if (!options.reference_path.empty()) {
-    std::vector<FrameCamera> cameras;
-    for (const BlockCamera& camera : job.block.cameras) cameras.push_back(camera.table);
-    FramesTableOptions frames_options;
-    frames_options.convention = options.job.files.rotation;
-    frames_options.cameras = &cameras;
-    std::vector<FrameRecord> frames;
-    status = ReadFramesTable(options.reference_path, frames_options, &frames);
-    if (!status.ok()) return status;
-    for (const FrameRecord& frame : frames) reference[frame.raster] = frame.eo;
-    result->has_reference = true;
-  }
+  PHOTOPOSE_RETURN_IF_ERROR(ReadReferenceFrames(options, job, &reference));
+  result->has_reference = !options.reference_path.empty();
   result->rotation = options.job.files.rotation;
   for (const SolverVariant& v : options.solvers) result->solver_names.push_back(v.Name());
   const size_t reference_index = ReferenceSolverIndex(result->solver_names);
   result->reference_solver = result->solver_names[reference_index];
-
-  // ResectImages gives image i the RANSAC seed seed + constant * (i + 1) whatever the solver, so
-  // every solver starts from the same initial values.
   std::vector<std::vector<ResectionResult>> results;
-  for (const SolverVariant& v : options.solvers) {
-    results.push_back(
-        ResectImages(v.ApplyTo(options.job.resection), job.inputs, options.num_threads));
-    if (options.progress && !options.progress(results.size(), options.solvers.size())) {
-      return Status::Error("cancelled by the progress hook after " +
-                           std::to_string(results.size()) + " of " +
-                           std::to_string(options.solvers.size()) + " solvers");
-    }
-  }
-  const double threshold = MarkThresholdSigmas(options.job.resection.test.confidence);
+  PHOTOPOSE_RETURN_IF_ERROR(ResectWithEverySolver(options, job, &results));
 
   const size_t num_solvers = options.solvers.size();
-  std::vector<int> check_beyond(num_solvers, 0);
-  std::vector<std::vector<double>> sigma0(num_solvers), seconds(num_solvers),
-      refinement(num_solvers), iterations(num_solvers), difference_position(num_solvers),
-      difference_rotation(num_solvers), reference_position(num_solvers),
-      reference_rotation(num_solvers);
-  std::vector<std::vector<Eigen::Vector2d>> residuals(num_solvers), checks(num_solvers);
+  std::vector<DatasetTally> tallies(num_solvers);
   for (size_t i = 0; i < job.inputs.size(); ++i) {
-    const ResectionResult& first = results[reference_index][i];
     const auto ref = reference.find(job.inputs[i].raster);
+    const ExteriorOrientation* reference_eo = ref != reference.end() ? &ref->second : nullptr;
     for (size_t s = 0; s < num_solvers; ++s) {
-      const ResectionResult& r = results[s][i];
-      DatasetSolve solve;
-      solve.raster = job.inputs[i].raster;
-      solve.solver = static_cast<int>(s);
-      solve.success = r.success;
-      solve.message = r.summary.message;
-      solve.iterations = r.summary.iterations;
-      solve.seconds = r.summary.total_seconds;
-      solve.refinement_seconds = r.summary.refinement_seconds;
-      solve.num_observations = static_cast<int>(job.inputs[i].image_plane.size());
-      seconds[s].push_back(r.summary.total_seconds);
-      refinement[s].push_back(r.summary.refinement_seconds);
-      if (r.success) {
-        solve.eo = r.eo;
-        solve.angles_deg = OutputAnglesDeg(job, i, result->rotation, r.eo);
-        solve.standard_deviations = r.standard_deviations;
-        solve.sigma0 = r.sigma0;
-        solve.num_inliers = r.num_inliers;
-        std::vector<Eigen::Vector2d> inlier_residuals;
-        for (size_t k = 0; k < r.residuals.size(); ++k) {
-          if (!r.inliers[k]) continue;
-          inlier_residuals.push_back(r.residuals[k]);
-          solve.max_px = std::max(solve.max_px, r.residuals[k].norm());
-        }
-        solve.rms_px = RmsNorm(inlier_residuals);
-        residuals[s].insert(residuals[s].end(), inlier_residuals.begin(), inlier_residuals.end());
-        std::vector<Eigen::Vector2d> check;
-        for (const CheckResidual& c : CheckResiduals(job, i, r.eo)) {
-          // Beyond the consensus threshold: the mark's stated accuracy, else sigma0 (mark unit).
-          const std::optional<double> accuracy = job.block.marks[c.mark].accuracy;
-          const double sigma =
-              accuracy ? *accuracy
-                       : options.job.input.default_accuracy > 0.0 ? options.job.input.default_accuracy
-                       : r.accuracy_stated || !(r.sigma0 > 0.0) ? 1.0
-                                                                : r.sigma0;
-          if (c.residual.norm() <= threshold * sigma) {
-            check.push_back(c.residual);
-          } else {
-            ++solve.num_check_beyond;
-          }
-        }
-        solve.check_rmse_px = RmsNorm(check);
-        solve.num_check = static_cast<int>(check.size());
-        checks[s].insert(checks[s].end(), check.begin(), check.end());
-        check_beyond[s] += solve.num_check_beyond;
-        sigma0[s].push_back(r.sigma0);
-        iterations[s].push_back(r.summary.iterations);
-        if (s != reference_index && first.success) {
-          solve.has_difference = true;
-          solve.difference_position_m =
-              (r.eo.center_in_ground() - first.eo.center_in_ground()).norm();
-          solve.difference_rotation_arcsec =
-              RotationErrorArcSeconds(first.eo.angles_seed_rad(), r.eo.angles_seed_rad());
-          difference_position[s].push_back(solve.difference_position_m);
-          difference_rotation[s].push_back(solve.difference_rotation_arcsec);
-        }
-        if (ref != reference.end()) {
-          solve.has_reference = true;
-          solve.reference_position_m =
-              (r.eo.center_in_ground() - ref->second.center_in_ground()).norm();
-          solve.reference_rotation_arcsec =
-              RotationErrorArcSeconds(ref->second.angles_seed_rad(), r.eo.angles_seed_rad());
-          reference_position[s].push_back(solve.reference_position_m);
-          reference_rotation[s].push_back(solve.reference_rotation_arcsec);
-        }
-      }
-      result->solves.push_back(solve);
+      const ResectionResult* first = s != reference_index ? &results[reference_index][i] : nullptr;
+      result->solves.push_back(DatasetSolveOf(options, job, i, s, results[s][i], first,
+                                              reference_eo, result->rotation, &tallies[s]));
     }
   }
-  for (size_t s = 0; s < num_solvers; ++s) {
-    DatasetSolverSummary summary;
-    summary.solver = result->solver_names[s];
-    summary.images = static_cast<int>(job.inputs.size());
-    summary.solved = static_cast<int>(sigma0[s].size());
-    summary.rms_sigma0 = Rms(sigma0[s]);
-    summary.rms_px = RmsNorm(residuals[s]);
-    summary.check_rmse_px = RmsNorm(checks[s]);
-    summary.check_beyond = check_beyond[s];
-    summary.median_seconds = Median(seconds[s]);
-    summary.median_refinement_seconds = Median(refinement[s]);
-    summary.mean_iterations = Mean(iterations[s]);
-    summary.compared = static_cast<int>(difference_position[s].size());
-    summary.difference_position_m = Rms(difference_position[s]);
-    summary.difference_rotation_arcsec = Rms(difference_rotation[s]);
-    summary.referenced = static_cast<int>(reference_position[s].size());
-    summary.reference_position_m = Rms(reference_position[s]);
-    summary.reference_rotation_arcsec = Rms(reference_rotation[s]);
-    result->summaries.push_back(summary);
-  }
+  for (size_t s = 0; s < num_solvers; ++s)
+    result->summaries.push_back(
+        SummaryOf(result->solver_names[s], static_cast<int>(job.inputs.size()), tallies[s]));
   return Status::Ok();
 }
 

@@ -2,8 +2,9 @@
 // inline CSS and SVG, no script; page head, tables, number formats, plots and SVG primitives from
 // tools/report/html_kit.h, its pictures from tools/report/bundle_plots.h. Sections in the order a
 // surveyor reads them: overview, verdicts, control and check points, cameras, calibration,
-// residuals, rejected observations, diagnostics. About 870 lines, one file on purpose: one
-// function per section, in the page's order, so that the page reads top to bottom here.
+// residuals, rejected observations, diagnostics. About 950 lines, one file on purpose: one
+// function per section, in the page's order, each a list of named steps (its tables, verdicts and
+// plots) defined just above it, so that the page reads top to bottom here.
 #include <Eigen/Eigenvalues>
 #include <algorithm>
 #include <cmath>
@@ -78,28 +79,41 @@ constexpr double kWeightFactor = 2.0;
 
 // ------------------------------------------------------------------ 1. overview
 
-std::string OverviewHtml(const Block& block, const BundleAdjustmentResult& result,
-                         const BundleReportContext& context) {
-  const BundleAdjustmentSummary& s = result.summary;
+// What the overview says of the block's shape: its points, ground, heights and overlap.
+struct BlockShape {
   int num_tie = 0, num_control = 0, num_check = 0;
-  std::vector<Eigen::Vector2d> ground_plan;
-  std::vector<double> ground_z, images_per_tie;
+  std::vector<Eigen::Vector2d> ground_plan;  // every point with coordinates (m)
+  std::vector<double> images_per_tie;        // sorted
+  double mean_per_tie = 0.0;                 // NaN without tie points
+  double height = 0.0;                       // mean flying height above the median ground point (m)
+  double gsd_m = 0.0;                        // summed over num_gsd images (m per pixel)
+  int num_gsd = 0;
+};
+
+// The points by role, the ground (every point with coordinates: adjusted, else surveyed) and
+// how many images see each tie point.
+void CountPoints(const Block& block, BlockShape* shape, std::vector<double>* ground_z) {
   for (size_t p = 0; p < block.points.size(); ++p) {
     const BlockPoint& point = block.points[p];
-    if (point.role == PointRole::kTie) ++num_tie;
-    if (point.role == PointRole::kControl) ++num_control;
-    if (point.role == PointRole::kCheck) ++num_check;
+    if (point.role == PointRole::kTie) ++shape->num_tie;
+    if (point.role == PointRole::kControl) ++shape->num_control;
+    if (point.role == PointRole::kCheck) ++shape->num_check;
     if (point.role == PointRole::kTie && point.position_m)
-      images_per_tie.push_back(static_cast<double>(block.marks_of_point[p].size()));
-    // The ground: every point with coordinates (adjusted, else surveyed).
+      shape->images_per_tie.push_back(static_cast<double>(block.marks_of_point[p].size()));
     const std::optional<Eigen::Vector3d>& xyz = point.position_m ? point.position_m : point.surveyed_m;
     if (xyz) {
-      ground_plan.push_back(xyz->head<2>());
-      ground_z.push_back(xyz->z());
+      shape->ground_plan.push_back(xyz->head<2>());
+      ground_z->push_back(xyz->z());
     }
   }
-  double camera_z = 0.0, gsd_m = 0.0;
-  int num_oriented = 0, num_gsd = 0;
+}
+
+BlockShape BlockShapeOf(const Block& block) {
+  BlockShape shape;
+  std::vector<double> ground_z;
+  CountPoints(block, &shape, &ground_z);
+  double camera_z = 0.0;
+  int num_oriented = 0;
   std::sort(ground_z.begin(), ground_z.end());
   const double median_ground_z = ground_z.empty() ? std::nan("") : ground_z[ground_z.size() / 2];
   for (const BlockImage& image : block.images) {
@@ -112,60 +126,80 @@ std::string OverviewHtml(const Block& block, const BundleAdjustmentResult& resul
     const double pixel = camera.model == CameraModelType::kFrame ? camera.table.pixel_size_um : 1.0;
     const double height = image.eo->center_in_ground().z() - median_ground_z;
     if (focal > 0.0 && pixel > 0.0 && std::isfinite(height)) {
-      gsd_m += std::abs(height) * pixel / focal;
-      ++num_gsd;
+      shape.gsd_m += std::abs(height) * pixel / focal;
+      ++shape.num_gsd;
     }
   }
-  const double height =
-      num_oriented > 0 ? camera_z / num_oriented - median_ground_z : std::nan("");
-  std::sort(images_per_tie.begin(), images_per_tie.end());
+  shape.height = num_oriented > 0 ? camera_z / num_oriented - median_ground_z : std::nan("");
+  std::sort(shape.images_per_tie.begin(), shape.images_per_tie.end());
   double mean_per_tie = 0.0;
-  for (const double n : images_per_tie) mean_per_tie += n;
-  mean_per_tie = images_per_tie.empty() ? std::nan("") : mean_per_tie / images_per_tie.size();
+  for (const double n : shape.images_per_tie) mean_per_tie += n;
+  shape.mean_per_tie =
+      shape.images_per_tie.empty() ? std::nan("") : mean_per_tie / shape.images_per_tie.size();
+  return shape;
+}
 
-  std::vector<std::pair<std::string, std::string>> facts = {
+// The overview's facts about the run and the block.
+std::vector<std::pair<std::string, std::string>> OverviewFacts(const Block& block,
+                                                               const BundleAdjustmentResult& result,
+                                                               const BlockShape& shape) {
+  const BundleAdjustmentSummary& s = result.summary;
+  return {
       {"Date", UtcNow()},
       {"Software", std::string("photopose ") + PHOTOPOSE_VERSION},
       {"Images adjusted", std::to_string(s.num_images) + " of " +
                               FormatCount(static_cast<long long>(block.images.size()), "image")},
       {"Cameras", FormatCount(static_cast<long long>(block.cameras.size()), "camera")},
-      {"Points", FormatCount(num_tie, "tie point") + ", " +
-                     FormatCount(num_control, "control point") + ", " +
-                     FormatCount(num_check, "check point")},
+      {"Points", FormatCount(shape.num_tie, "tie point") + ", " +
+                     FormatCount(shape.num_control, "control point") + ", " +
+                     FormatCount(shape.num_check, "check point")},
       {"Marks used", FormatCount(s.num_marks, "mark") + " (" +
                          FormatCount(static_cast<long long>(result.rejected_marks.size() +
                                                             result.rejected_check_marks.size()),
                                      "mark") +
                          " rejected, see Rejected observations)"},
       {"Mean flying height above the median ground point",
-       std::isfinite(height) ? FormatSignificant(height, 4) + " m" : "n/a (no ground points)"},
+       std::isfinite(shape.height) ? FormatSignificant(shape.height, 4) + " m"
+                                   : "n/a (no ground points)"},
       {"Ground sample distance (mean over images)",
-       num_gsd > 0 ? FormatLengthWithUnit(gsd_m / num_gsd) + " per pixel"
-                   : "n/a (no pixel size or no ground points)"},
+       shape.num_gsd > 0 ? FormatLengthWithUnit(shape.gsd_m / shape.num_gsd) + " per pixel"
+                         : "n/a (no pixel size or no ground points)"},
       {"Images per tie point (mean, median)",
-       images_per_tie.empty()
+       shape.images_per_tie.empty()
            ? "n/a (no tie points)"
-           : FormatUnitless(mean_per_tie, 1) + ", " +
-                 FormatSignificant(images_per_tie[images_per_tie.size() / 2], 3)},
-      {"Area covered by the ground points (convex hull)", FormatArea(HullArea(ground_plan))},
+           : FormatUnitless(shape.mean_per_tie, 1) + ", " +
+                 FormatSignificant(shape.images_per_tie[shape.images_per_tie.size() / 2], 3)},
+      {"Area covered by the ground points (convex hull)", FormatArea(HullArea(shape.ground_plan))},
       {"Datum", s.datum_description},
-      {"Covariances (datum they refer to)", s.covariance_datum.empty() ? "n/a (not computed)" : s.covariance_datum},
+      {"Covariances (datum they refer to)",
+       s.covariance_datum.empty() ? "n/a (not computed)" : s.covariance_datum},
       {"sigma0 (unitless, 1 when the stated accuracies hold)", FormatUnitless(s.sigma0, 3)},
       {"Redundancy", FormatCount(s.redundancy, "observation") + " more than unknowns"},
       {"Adjustment time", FormatSignificant(s.time_seconds, 3) + " s (" +
                               FormatCount(s.rounds, "round") + ", " +
                               FormatCount(s.iterations, "iteration") + ")"},
   };
-  if (context.georeference != nullptr) {
-    const GeoreferenceResult& g = *context.georeference;
-    if (g.positions_without_height > 0)
-      facts.push_back({"Camera positions without height",
-                       FormatCount(g.positions_without_height, "position") +
-                           ": horizontal only (not in the similarity; heights free in the adjustment)"});
-    std::string not_used;
-    for (const std::string& line : g.inputs_not_used) not_used += (not_used.empty() ? "" : "; ") + line;
-    if (!not_used.empty()) facts.push_back({"Inputs read and not used", not_used});
-  }
+}
+
+// A georeferenced block's facts: camera positions without height, inputs read and not used.
+void GeoreferenceFacts(const GeoreferenceResult& g,
+                       std::vector<std::pair<std::string, std::string>>* facts) {
+  if (g.positions_without_height > 0)
+    facts->push_back(
+        {"Camera positions without height",
+         FormatCount(g.positions_without_height, "position") +
+             ": horizontal only (not in the similarity; heights free in the adjustment)"});
+  std::string not_used;
+  for (const std::string& line : g.inputs_not_used)
+    not_used += (not_used.empty() ? "" : "; ") + line;
+  if (!not_used.empty()) facts->push_back({"Inputs read and not used", not_used});
+}
+
+std::string OverviewHtml(const Block& block, const BundleAdjustmentResult& result,
+                         const BundleReportContext& context) {
+  std::vector<std::pair<std::string, std::string>> facts =
+      OverviewFacts(block, result, BlockShapeOf(block));
+  if (context.georeference != nullptr) GeoreferenceFacts(*context.georeference, &facts);
   std::ostringstream html;
   html << "<h2>1. Survey overview</h2>\n" << FactsTable("", facts);
   html << PlanViewHtml(block, result, context.georeference) << "\n";
@@ -174,31 +208,13 @@ std::string OverviewHtml(const Block& block, const BundleAdjustmentResult& resul
 
 // ------------------------------------------------------------------ 2. verdicts
 
-std::string VerdictsHtml(const Block& block, const BundleAdjustmentResult& result,
-                         const BundleReportContext& context) {
-  const BundleAdjustmentSummary& s = result.summary;
-  std::ostringstream html;
-  html << "<h2>2. Verdicts</h2>\n";
-  if (!s.IsSolutionUsable()) {
-    html << "<div class=\"verdict bad\"><b>Not adjusted:</b> " << HtmlEscape(s.message)
-         << "</div>\n";
-  }
-  // Over-fitting of the priors.
-  std::vector<std::string> overfit, weights;
-  for (const BundleGroupStatistics& g : result.groups) {
+// Over-fitting of the priors: none, or the groups the solution follows rather than the images.
+std::string OverfitVerdictHtml(const BundleAdjustmentResult& result,
+                               const BundleReportContext& context) {
+  std::vector<std::string> overfit;
+  for (const BundleGroupStatistics& g : result.groups)
     if (g.overfit) overfit.push_back(g.message);
-    if (g.count == 0 || !(g.ratio > 0.0)) continue;
-    if (g.ratio < 1.0 / kWeightFactor || g.ratio > kWeightFactor) {
-      std::string line = std::string(EnumName(g.group)) + ": RMS / stated " +
-                         FormatUnitless(g.ratio) + ", the stated " +
-                         FormatMarkValue(g.stated_accuracy.x(), g.unit) + " looks " +
-                         FormatUnitless(g.ratio < 1.0 ? 1.0 / g.ratio : g.ratio, 1) + " times too " +
-                         (g.ratio < 1.0 ? "pessimistic" : "optimistic");
-      if (std::isfinite(g.estimated_accuracy.x()))
-        line += "; estimated from the data: " + FormatMarkValue(g.estimated_accuracy.x(), g.unit);
-      weights.push_back(line + ".");
-    }
-  }
+  std::ostringstream html;
   if (overfit.empty()) {
     html << "<div class=\"verdict good\"><b>No prior group is over-fitted:</b> each is checked "
             "by the tie points (redundancy share at least "
@@ -211,6 +227,12 @@ std::string VerdictsHtml(const Block& block, const BundleAdjustmentResult& resul
     for (const std::string& m : overfit) html << "<li>" << HtmlEscape(m) << "</li>";
     html << "</ul></div>\n";
   }
+  return html.str();
+}
+
+// The groups held fixed, the groups that absorbed gross errors, the weakly determined parameters.
+std::string FixedGrossWeakVerdictsHtml(const BundleAdjustmentResult& result) {
+  std::ostringstream html;
   for (const BundleGroupStatistics& g : result.groups) {
     if (g.num_fixed == 0) continue;
     html << "<div class=\"verdict note\"><b>Held fixed:</b> "
@@ -227,48 +249,88 @@ std::string VerdictsHtml(const Block& block, const BundleAdjustmentResult& resul
   const std::string weak = WeaklyDeterminedWarning(result);
   if (!weak.empty())
     html << "<div class=\"verdict bad\"><b>Weakly determined:</b> " << HtmlEscape(weak) << "</div>\n";
-  if (!weights.empty()) {
-    html << "<div class=\"verdict note\"><b>Stated accuracies the data contradict</b> (RMS / "
-            "stated outside "
-         << FormatUnitless(1.0 / kWeightFactor) << " to " << FormatUnitless(kWeightFactor)
-         << "; set them to the estimate, e.g. with --estimate_accuracies):<ul>";
-    for (const std::string& w : weights) html << "<li>" << HtmlEscape(w) << "</li>";
-    html << "</ul></div>\n";
-  }
-  // Check points.
-  if (result.num_check_points > 0 || !result.rejected_check_marks.empty()) {
-    const std::vector<std::string> out_of_tolerance = CheckPointsOutOfTolerance(block, result);
-    std::vector<std::string> not_intersected;
-    for (size_t p = 0; p < block.points.size() && p < result.points.size(); ++p)
-      if (block.points[p].role == PointRole::kCheck && !result.points[p].error_m)
-        not_intersected.push_back(block.points[p].id + " " + result.points[p].message);
-    const bool bad = !out_of_tolerance.empty() || !not_intersected.empty();
-    const std::vector<std::string> rmse =
-        FormatLengthsWithUnit({result.check_rmse_m.x(), result.check_rmse_m.y(),
-                               result.check_rmse_m.z(), result.check_rmse_total_m});
-    html << "<div class=\"verdict " << (bad ? "bad" : "good") << "\"><b>Check points:</b> "
-         << FormatCount(result.num_check_points, "point") << " intersected, RMSE X " << rmse[0]
-         << ", Y " << rmse[1] << ", Z " << rmse[2] << ", total " << rmse[3] << ".";
-    if (!bad)
-      html << " Every error is within what its covariance allows (chi-square(3) at "
-           << FormatUnitless(100.0 * kCheckPointLevel, 1) << " %).";
-    if (!result.rejected_check_marks.empty())
-      html << " " << FormatCount(static_cast<long long>(result.rejected_check_marks.size()),
-                                 "check mark")
-           << " rejected by the w-test before intersecting (see Rejected observations).";
-    if (bad) {
-      html << "<ul>";
-      for (const std::string& m : out_of_tolerance) html << "<li>" << HtmlEscape(m) << "</li>";
-      for (const std::string& m : not_intersected) html << "<li>" << HtmlEscape(m) << "</li>";
-      html << "</ul>";
+  return html.str();
+}
+
+// The groups whose RMS / stated lies outside [1 / kWeightFactor, kWeightFactor], with the
+// estimate when there is one.
+std::string StatedAccuraciesVerdictHtml(const BundleAdjustmentResult& result) {
+  std::vector<std::string> weights;
+  for (const BundleGroupStatistics& g : result.groups) {
+    if (g.count == 0 || !(g.ratio > 0.0)) continue;
+    if (g.ratio < 1.0 / kWeightFactor || g.ratio > kWeightFactor) {
+      std::string line = std::string(EnumName(g.group)) + ": RMS / stated " +
+                         FormatUnitless(g.ratio) + ", the stated " +
+                         FormatMarkValue(g.stated_accuracy.x(), g.unit) + " looks " +
+                         FormatUnitless(g.ratio < 1.0 ? 1.0 / g.ratio : g.ratio, 1) +
+                         " times too " + (g.ratio < 1.0 ? "pessimistic" : "optimistic");
+      if (std::isfinite(g.estimated_accuracy.x()))
+        line += "; estimated from the data: " + FormatMarkValue(g.estimated_accuracy.x(), g.unit);
+      weights.push_back(line + ".");
     }
-    html << "</div>\n";
-  } else {
+  }
+  if (weights.empty()) return "";
+  std::ostringstream html;
+  html << "<div class=\"verdict note\"><b>Stated accuracies the data contradict</b> (RMS / "
+          "stated outside "
+       << FormatUnitless(1.0 / kWeightFactor) << " to " << FormatUnitless(kWeightFactor)
+       << "; set them to the estimate, e.g. with --estimate_accuracies):<ul>";
+  for (const std::string& w : weights) html << "<li>" << HtmlEscape(w) << "</li>";
+  html << "</ul></div>\n";
+  return html.str();
+}
+
+// The check points: their RMSE, those beyond their covariance or not intersected; or none.
+std::string CheckPointsVerdictHtml(const Block& block, const BundleAdjustmentResult& result,
+                                   const BundleReportContext& context) {
+  std::ostringstream html;
+  if (result.num_check_points == 0 && result.rejected_check_marks.empty()) {
     html << "<div class=\"verdict note\"><b>No check points:</b> nothing independent measures the "
             "block's accuracy"
          << (context.cross_validation != nullptr ? " (see the leave-one-out table below)" : "")
          << ".</div>\n";
+    return html.str();
   }
+  const std::vector<std::string> out_of_tolerance = CheckPointsOutOfTolerance(block, result);
+  std::vector<std::string> not_intersected;
+  for (size_t p = 0; p < block.points.size() && p < result.points.size(); ++p)
+    if (block.points[p].role == PointRole::kCheck && !result.points[p].error_m)
+      not_intersected.push_back(block.points[p].id + " " + result.points[p].message);
+  const bool bad = !out_of_tolerance.empty() || !not_intersected.empty();
+  const std::vector<std::string> rmse =
+      FormatLengthsWithUnit({result.check_rmse_m.x(), result.check_rmse_m.y(),
+                             result.check_rmse_m.z(), result.check_rmse_total_m});
+  html << "<div class=\"verdict " << (bad ? "bad" : "good") << "\"><b>Check points:</b> "
+       << FormatCount(result.num_check_points, "point") << " intersected, RMSE X " << rmse[0]
+       << ", Y " << rmse[1] << ", Z " << rmse[2] << ", total " << rmse[3] << ".";
+  if (!bad)
+    html << " Every error is within what its covariance allows (chi-square(3) at "
+         << FormatUnitless(100.0 * kCheckPointLevel, 1) << " %).";
+  if (!result.rejected_check_marks.empty())
+    html << " "
+         << FormatCount(static_cast<long long>(result.rejected_check_marks.size()), "check mark")
+         << " rejected by the w-test before intersecting (see Rejected observations).";
+  if (bad) {
+    html << "<ul>";
+    for (const std::string& m : out_of_tolerance) html << "<li>" << HtmlEscape(m) << "</li>";
+    for (const std::string& m : not_intersected) html << "<li>" << HtmlEscape(m) << "</li>";
+    html << "</ul>";
+  }
+  html << "</div>\n";
+  return html.str();
+}
+
+std::string VerdictsHtml(const Block& block, const BundleAdjustmentResult& result,
+                         const BundleReportContext& context) {
+  const BundleAdjustmentSummary& s = result.summary;
+  std::ostringstream html;
+  html << "<h2>2. Verdicts</h2>\n";
+  if (!s.IsSolutionUsable()) {
+    html << "<div class=\"verdict bad\"><b>Not adjusted:</b> " << HtmlEscape(s.message)
+         << "</div>\n";
+  }
+  html << OverfitVerdictHtml(result, context) << FixedGrossWeakVerdictsHtml(result)
+       << StatedAccuraciesVerdictHtml(result) << CheckPointsVerdictHtml(block, result, context);
   return html.str();
 }
 
@@ -360,24 +422,34 @@ std::string PointsHtml(const Block& block, const BundleAdjustmentResult& result)
 
 // ------------------------------------------------------------------ 4. cameras
 
-std::string CamerasHtml(const Block& block, const BundleAdjustmentResult& result) {
+// The cameras table's length units (of the sigmas, and of the differences to the measured
+// centres, which a position without height gives horizontally only) and its marks' RMS residual
+// column in the images' unit (px, um, or sigma for an image mixing both): in the header when every
+// image has the same, else in a unit column after it.
+struct CamerasColumns {
+  LengthUnit sigma_unit = LengthUnit::kMetre;
+  LengthUnit error_unit = LengthUnit::kMetre;
+  bool measured = false;  // some image has a measured centre: the comparison columns
+  ColumnsInUnits rms;
+  bool rms_unit_column = false;
+};
+
+CamerasColumns CamerasColumnsOf(const Block& block, const BundleAdjustmentResult& result) {
   std::vector<double> sigmas, errors;
   for (size_t i = 0; i < block.images.size() && i < result.images.size(); ++i) {
     const BundleImageResult& r = result.images[i];
     if (r.has_covariance)
       for (int a = 0; a < 3; ++a) sigmas.push_back(std::sqrt(r.covariance(a, a)));
     const BlockImage& image = block.images[i];
-    // A position without height is compared horizontally only.
     if (image.eo && image.measured_center_m)
       errors.push_back((image.eo->center_in_ground() - *image.measured_center_m)
                            .head(image.center_height_measured ? 3 : 2)
                            .norm());
   }
-  const LengthUnit sigma_unit = LengthUnitFor(LargestMagnitude(sigmas));
-  const LengthUnit error_unit = LengthUnitFor(LargestMagnitude(errors));
-  const std::string su = LengthUnitName(sigma_unit), eu = LengthUnitName(error_unit);
-  // The marks' RMS residual in the images' unit (px, um, or sigma for an image mixing both): in
-  // the header when every image has the same, else in a unit column after it.
+  CamerasColumns columns;
+  columns.sigma_unit = LengthUnitFor(LargestMagnitude(sigmas));
+  columns.error_unit = LengthUnitFor(LargestMagnitude(errors));
+  columns.measured = !errors.empty();
   std::vector<double> rms_residuals;
   std::vector<std::string> rms_kinds;
   for (size_t i = 0; i < block.images.size(); ++i) {
@@ -393,28 +465,63 @@ std::string CamerasHtml(const Block& block, const BundleAdjustmentResult& result
   const std::string first_kind = first == rms_kinds.end() ? "px" : *first;
   for (std::string& kind : rms_kinds)
     if (kind.empty()) kind = first_kind;
-  const ColumnsInUnits rms = FormatColumnsInUnits({rms_residuals}, rms_kinds);
-  const bool rms_unit_column = rms.unit.empty() && !rms_kinds.empty();
-  // Grouped columns, each quantity's unit named once above its axes: the table fits a 1280 px
-  // screen and the A4 width. The comparison with the measured centres only when there are some.
-  const bool measured = !errors.empty();
+  columns.rms = FormatColumnsInUnits({rms_residuals}, rms_kinds);
+  columns.rms_unit_column = columns.rms.unit.empty() && !rms_kinds.empty();
+  return columns;
+}
+
+// Grouped columns, each quantity's unit named once above its axes: the table fits a 1280 px
+// screen and the A4 width. The comparison with the measured centres only when there are some.
+void CamerasHeader(const CamerasColumns& c, std::vector<std::string>* header,
+                   std::vector<HeaderGroup>* groups) {
   const std::string rms_header =
-      rms_unit_column ? "RMS residual" : "RMS residual (" + rms.unit + ")";
-  std::vector<std::string> header = {"image", "marks", rms_header, "X",     "Y",   "Z",
-                                     "X",     "Y",     "Z",        "omega", "phi", "kappa"};
-  if (rms_unit_column) header.insert(header.begin() + 3, "unit");
-  std::vector<HeaderGroup> groups = {{"", rms_unit_column ? 4 : 3},
-                                     {"projection centre (m)", 3},
-                                     {"sigma of the centre (" + su + ")", 3},
-                                     {"sigma of the angles (arcsec)", 3}};
-  if (measured) {
-    header.insert(header.end(), {"X", "Y", "Z"});
-    groups.push_back({"adjusted - measured (" + eu + ")", 3});
+      c.rms_unit_column ? "RMS residual" : "RMS residual (" + c.rms.unit + ")";
+  *header = {"image", "marks", rms_header, "X", "Y", "Z", "X", "Y", "Z", "omega", "phi", "kappa"};
+  if (c.rms_unit_column) header->insert(header->begin() + 3, "unit");
+  *groups = {{"", c.rms_unit_column ? 4 : 3},
+             {"projection centre (m)", 3},
+             {"sigma of the centre (" + std::string(LengthUnitName(c.sigma_unit)) + ")", 3},
+             {"sigma of the angles (arcsec)", 3}};
+  if (c.measured) {
+    header->insert(header->end(), {"X", "Y", "Z"});
+    groups->push_back(
+        {"adjusted - measured (" + std::string(LengthUnitName(c.error_unit)) + ")", 3});
   }
+}
+
+// An adjusted image's row: marks, RMS residual, centre, its sigmas, the angles' sigmas and the
+// difference to the measured centre.
+std::vector<std::string> CameraRow(const BlockImage& image, const BundleImageResult& r, size_t i,
+                                   const CamerasColumns& c) {
+  const Eigen::Vector3d center = image.eo->center_in_ground();
+  std::vector<std::string> row = {image.name, std::to_string(r.num_marks), c.rms.texts[0][i]};
+  if (c.rms_unit_column) row.push_back(c.rms.units[i]);
+  for (int a = 0; a < 3; ++a) row.push_back(FormatCoordinate(center[a]));
+  for (int a = 0; a < 3; ++a)
+    row.push_back(r.has_covariance ? FormatLength(std::sqrt(r.covariance(a, a)), c.sigma_unit)
+                                   : "n/a");
+  for (int a = 3; a < 6; ++a)
+    row.push_back(r.has_covariance
+                      ? FormatArcSeconds(std::sqrt(r.covariance(a, a)) * kDegreesPerRadian)
+                      : "n/a");
+  if (c.measured) {
+    for (int a = 0; a < 3; ++a)
+      row.push_back(image.measured_center_m && (a < 2 || image.center_height_measured)
+                        ? FormatLength(center[a] - (*image.measured_center_m)[a], c.error_unit)
+                        : "n/a");
+  }
+  return row;
+}
+
+std::string CamerasHtml(const Block& block, const BundleAdjustmentResult& result) {
+  const CamerasColumns columns = CamerasColumnsOf(block, result);
+  std::vector<std::string> header;
+  std::vector<HeaderGroup> groups;
+  CamerasHeader(columns, &header, &groups);
   std::vector<std::vector<std::string>> rows;
   std::vector<std::string> notes = {
       "sigmas: sigma0-scaled, from the posterior covariance; angles: the seed's omega, phi, kappa"};
-  if (measured) notes.push_back("measured: the frames table's projection centre (GNSS)");
+  if (columns.measured) notes.push_back("measured: the frames table's projection centre (GNSS)");
   if (std::any_of(block.images.begin(), block.images.end(), [](const BlockImage& image) {
         return image.measured_center_m && !image.center_height_measured;
       }))
@@ -431,24 +538,7 @@ std::string CamerasHtml(const Block& block, const BundleAdjustmentResult& result
                       (r != nullptr && !r->message.empty() ? ": " + r->message : ""));
       continue;
     }
-    const Eigen::Vector3d c = image.eo->center_in_ground();
-    std::vector<std::string> row = {image.name, std::to_string(r->num_marks), rms.texts[0][i]};
-    if (rms_unit_column) row.push_back(rms.units[i]);
-    for (int a = 0; a < 3; ++a) row.push_back(FormatCoordinate(c[a]));
-    for (int a = 0; a < 3; ++a)
-      row.push_back(r->has_covariance ? FormatLength(std::sqrt(r->covariance(a, a)), sigma_unit)
-                                      : "n/a");
-    for (int a = 3; a < 6; ++a)
-      row.push_back(r->has_covariance
-                        ? FormatArcSeconds(std::sqrt(r->covariance(a, a)) * kDegreesPerRadian)
-                        : "n/a");
-    if (measured) {
-      for (int a = 0; a < 3; ++a)
-        row.push_back(image.measured_center_m && (a < 2 || image.center_height_measured)
-                          ? FormatLength(c[a] - (*image.measured_center_m)[a], error_unit)
-                          : "n/a");
-    }
-    rows.push_back(row);
+    rows.push_back(CameraRow(image, *r, i, columns));
   }
   std::ostringstream html;
   html << "<h2>4. Cameras</h2>\n"
@@ -563,105 +653,146 @@ std::string ResidualsHtml(const Block& block, const BundleAdjustmentResult& resu
 
 // ------------------------------------------------------------------ 7. rejected
 
+// Tie marks rejected after a round.
+std::string RejectedTieMarksHtml(const Block& block, const BundleAdjustmentResult& result) {
+  std::vector<std::vector<std::string>> rows;
+  for (const BundleRejectedMark& r : result.rejected_marks) {
+    const BlockMark& mark = block.marks[r.mark];
+    rows.push_back({block.points[mark.point].id, block.images[mark.image].name,
+                    std::to_string(mark.line), std::to_string(r.round),
+                    FormatUnitless(r.whitened_residual, 1)});
+  }
+  return HtmlTable("Tie marks rejected after a round (|v| / (sigma sigma0) above the threshold)",
+                   {"point", "image", "marks file line", "round", "|v| / (sigma sigma0)"}, rows);
+}
+
+// Check marks rejected by the w-test of their point's intersection, residuals in the mark's unit
+// (px or um): in the headers when every mark has the same.
+std::string RejectedCheckMarksHtml(const Block& block, const BundleAdjustmentResult& result) {
+  std::vector<std::vector<double>> residuals(2);
+  std::vector<std::string> kinds;
+  for (const BundleRejectedCheckMark& r : result.rejected_check_marks) {
+    residuals[0].push_back(r.residual.x());
+    residuals[1].push_back(r.residual.y());
+    kinds.push_back(EnumName(block.marks[r.mark].unit));
+  }
+  const ColumnsInUnits in_units = FormatColumnsInUnits(residuals, kinds);
+  const std::string u = in_units.unit.empty() ? "" : " (" + in_units.unit + ")";
+  std::vector<std::vector<std::string>> rows;
+  for (size_t k = 0; k < result.rejected_check_marks.size(); ++k) {
+    const BundleRejectedCheckMark& r = result.rejected_check_marks[k];
+    const BlockMark& mark = block.marks[r.mark];
+    rows.push_back({block.points[mark.point].id, block.images[mark.image].name,
+                    std::to_string(mark.line), FormatUnitless(r.normalized, 1),
+                    in_units.texts[0][k], in_units.texts[1][k]});
+    if (in_units.unit.empty()) rows.back().push_back(in_units.units[k]);
+  }
+  std::vector<std::string> header = {"point", "image",          "marks file line",
+                                     "|w|",   "residual x" + u, "residual y" + u};
+  if (in_units.unit.empty()) header.push_back("unit");
+  return HtmlTable(
+      "Check marks rejected by the w-test of their point's intersection (|w| above " +
+          FormatUnitless(result.critical_value > 0.0 ? result.critical_value : std::nan(""), 2) +
+          ")",
+      header, rows,
+      {"residuals: observed - computed in the mark's own unit, at the intersection that still "
+       "held the mark"});
+}
+
+// The observations data snooping removed, in order. Residuals in their group's unit, one per kind
+// (marks px or um, lengths mm, cm or m, attitudes arcsec): in the header when every step has the
+// same, else in a unit column.
+std::string SnoopingHtml(const Block& block, const BundleAdjustmentResult& result) {
+  std::map<BundleGroup, std::string> group_units;
+  for (const BundleGroupStatistics& g : result.groups) group_units[g.group] = g.unit;
+  std::vector<double> residuals;
+  std::vector<std::string> kinds;
+  for (const BundleSnoopingStep& step : result.snooping) {
+    residuals.push_back(step.residual);
+    const auto unit = group_units.find(step.group);
+    kinds.push_back(unit != group_units.end() ? unit->second : "");
+  }
+  const ColumnsInUnits in_units = FormatColumnsInUnits({residuals}, kinds);
+  std::vector<std::vector<std::string>> rows;
+  for (size_t k = 0; k < result.snooping.size(); ++k) {
+    const BundleSnoopingStep& step = result.snooping[k];
+    rows.push_back({std::to_string(k + 1), EnumName(step.group),
+                    BundleItemName(block, step.group, step.item),
+                    BundleAxisName(step.group, step.axis), FormatUnitless(step.normalized, 1),
+                    in_units.texts[0][k]});
+    if (in_units.unit.empty()) rows.back().push_back(in_units.units[k]);
+  }
+  std::vector<std::string> header = {
+      "step", "group", "observation",
+      "axis", "|w|",   in_units.unit.empty() ? "residual" : "residual (" + in_units.unit + ")"};
+  if (in_units.unit.empty()) header.push_back("unit");
+  return HtmlTable("Data snooping: observations removed, in order (|w| above " +
+                       FormatUnitless(result.critical_value) + ")",
+                   header, rows);
+}
+
 std::string RejectedHtml(const Block& block, const BundleAdjustmentResult& result) {
   std::ostringstream html;
   html << "<h2>7. Rejected observations</h2>\n";
-  bool any = false;
-  if (!result.rejected_marks.empty()) {
-    any = true;
+  if (!result.rejected_marks.empty()) html << RejectedTieMarksHtml(block, result);
+  if (!result.rejected_check_marks.empty()) html << RejectedCheckMarksHtml(block, result);
+  if (!result.snooping.empty()) html << SnoopingHtml(block, result);
+  const std::vector<std::string>& left_out = result.summary.tie_points_left_out;
+  if (!left_out.empty()) {
     std::vector<std::vector<std::string>> rows;
-    for (const BundleRejectedMark& r : result.rejected_marks) {
-      const BlockMark& mark = block.marks[r.mark];
-      rows.push_back({block.points[mark.point].id, block.images[mark.image].name,
-                      std::to_string(mark.line), std::to_string(r.round),
-                      FormatUnitless(r.whitened_residual, 1)});
-    }
-    html << HtmlTable("Tie marks rejected after a round (|v| / (sigma sigma0) above the threshold)",
-                      {"point", "image", "marks file line", "round", "|v| / (sigma sigma0)"}, rows);
-  }
-  if (!result.rejected_check_marks.empty()) {
-    any = true;
-    // Residuals in the mark's unit (px or um): in the headers when every mark has the same.
-    std::vector<std::vector<double>> residuals(2);
-    std::vector<std::string> kinds;
-    for (const BundleRejectedCheckMark& r : result.rejected_check_marks) {
-      residuals[0].push_back(r.residual.x());
-      residuals[1].push_back(r.residual.y());
-      kinds.push_back(EnumName(block.marks[r.mark].unit));
-    }
-    const ColumnsInUnits in_units = FormatColumnsInUnits(residuals, kinds);
-    const std::string u = in_units.unit.empty() ? "" : " (" + in_units.unit + ")";
-    std::vector<std::vector<std::string>> rows;
-    for (size_t k = 0; k < result.rejected_check_marks.size(); ++k) {
-      const BundleRejectedCheckMark& r = result.rejected_check_marks[k];
-      const BlockMark& mark = block.marks[r.mark];
-      rows.push_back({block.points[mark.point].id, block.images[mark.image].name,
-                      std::to_string(mark.line), FormatUnitless(r.normalized, 1),
-                      in_units.texts[0][k], in_units.texts[1][k]});
-      if (in_units.unit.empty()) rows.back().push_back(in_units.units[k]);
-    }
-    std::vector<std::string> header = {"point", "image",          "marks file line",
-                                       "|w|",   "residual x" + u, "residual y" + u};
-    if (in_units.unit.empty()) header.push_back("unit");
-    html << HtmlTable(
-        "Check marks rejected by the w-test of their point's intersection (|w| above " +
-            FormatUnitless(result.critical_value > 0.0 ? result.critical_value : std::nan(""), 2) +
-            ")",
-        header, rows,
-        {"residuals: observed - computed in the mark's own unit, at the intersection that still "
-         "held the mark"});
-  }
-  if (!result.snooping.empty()) {
-    any = true;
-    // Residuals in their group's unit, one per kind (marks px or um, lengths mm, cm or m,
-    // attitudes arcsec): in the header when every step has the same, else in a unit column.
-    std::map<BundleGroup, std::string> group_units;
-    for (const BundleGroupStatistics& g : result.groups) group_units[g.group] = g.unit;
-    std::vector<double> residuals;
-    std::vector<std::string> kinds;
-    for (const BundleSnoopingStep& step : result.snooping) {
-      residuals.push_back(step.residual);
-      const auto unit = group_units.find(step.group);
-      kinds.push_back(unit != group_units.end() ? unit->second : "");
-    }
-    const ColumnsInUnits in_units = FormatColumnsInUnits({residuals}, kinds);
-    std::vector<std::vector<std::string>> rows;
-    for (size_t k = 0; k < result.snooping.size(); ++k) {
-      const BundleSnoopingStep& step = result.snooping[k];
-      rows.push_back({std::to_string(k + 1), EnumName(step.group),
-                      BundleItemName(block, step.group, step.item),
-                      BundleAxisName(step.group, step.axis), FormatUnitless(step.normalized, 1),
-                      in_units.texts[0][k]});
-      if (in_units.unit.empty()) rows.back().push_back(in_units.units[k]);
-    }
-    std::vector<std::string> header = {
-        "step", "group", "observation",
-        "axis", "|w|",   in_units.unit.empty() ? "residual" : "residual (" + in_units.unit + ")"};
-    if (in_units.unit.empty()) header.push_back("unit");
-    html << HtmlTable("Data snooping: observations removed, in order (|w| above " +
-                          FormatUnitless(result.critical_value) + ")",
-                      header, rows);
-  }
-  if (!result.summary.tie_points_left_out.empty()) {
-    any = true;
-    std::vector<std::vector<std::string>> rows;
-    for (const std::string& id : result.summary.tie_points_left_out) rows.push_back({id});
+    for (const std::string& id : left_out) rows.push_back({id});
     html << HtmlTable("Tie points left out (no initial coordinates: rays too close to parallel)",
                       {"point"}, rows);
   }
-  if (!any) html << "<p>None: every mark and prior was kept.</p>\n";
+  if (result.rejected_marks.empty() && result.rejected_check_marks.empty() &&
+      result.snooping.empty() && left_out.empty())
+    html << "<p>None: every mark and prior was kept.</p>\n";
   return html.str();
 }
 
 // ------------------------------------------------------------------ 8. diagnostics
 
-std::string DiagnosticsHtml(const Block& block, const BundleAdjustmentResult& result,
+// One group's row of the diagnostics table (the unit column, when there is one, added by the
+// caller): count, stated, RMS, estimated, RMS / stated, redundancy share, verdict.
+std::vector<std::string> GroupRow(const BundleGroupStatistics& g, const ColumnsInUnits& in_units,
+                                  size_t k) {
+  if (g.fixed()) {
+    return {EnumName(g.group),
+            FormatCount(g.num_fixed, "held fixed", "held fixed"),
+            "0 (error-free)",
+            "n/a",
+            "n/a",
+            "n/a",
+            "n/a",
+            "fixed"};
+  }
+  const bool prior =
+      g.group == kControlPoints || g.group == kCameraPositions || g.group == kAttitudes;
+  std::string verdict = "fits";
+  if (g.num_fixed > 0) verdict += ", " + std::to_string(g.num_fixed) + " more held fixed";
+  if (g.overfit) {
+    verdict = "OVER-FITTED";
+  } else if (!prior) {
+    verdict = g.ratio > kWeightFactor || g.ratio < 1.0 / kWeightFactor ? "weight off" : "fits";
+  }
+  return {EnumName(g.group),
+          std::to_string(g.count),
+          in_units.texts[0][k],
+          in_units.texts[1][k],
+          std::isfinite(g.estimated_accuracy.x())
+              ? in_units.texts[2][k]
+              : (g.estimation_message.empty() ? "not asked" : "not estimated"),
+          FormatUnitless(g.ratio),
+          std::isfinite(g.redundancy_share) ? FormatUnitless(g.redundancy_share) : "n/a",
+          verdict};
+}
+
+// The groups of the objective against their stated accuracies. The stated, RMS and estimated
+// columns in one unit per kind of group (every length in mm, cm or m, chosen once from the
+// largest; marks in px or um; attitudes in arc seconds): named in the headers when every group
+// has it, else in a unit column; never in a cell.
+std::string GroupsTableHtml(const BundleAdjustmentResult& result,
                             const BundleReportContext& context) {
-  std::ostringstream html;
-  html << "<h2>8. Diagnostics</h2>\n";
-  // The stated, RMS and estimated columns in one unit per kind of group (every length in mm,
-  // cm or m, chosen once from the largest; marks in px or um; attitudes in arc seconds): named in
-  // the headers when every group has it, else in a unit column; never in a cell.
   std::vector<std::string> kinds;
   std::vector<std::vector<double>> values(3);  // stated, RMS, estimated
   for (const BundleGroupStatistics& g : result.groups) {
@@ -676,38 +807,7 @@ std::string DiagnosticsHtml(const Block& block, const BundleAdjustmentResult& re
   const std::string u = unit_column ? "" : " (" + in_units.unit + ")";
   std::vector<std::vector<std::string>> rows;
   for (size_t k = 0; k < result.groups.size(); ++k) {
-    const BundleGroupStatistics& g = result.groups[k];
-    const bool prior = g.group == kControlPoints || g.group == kCameraPositions ||
-                       g.group == kAttitudes;
-    std::vector<std::string> row;
-    if (g.fixed()) {
-      row = {EnumName(g.group),
-             FormatCount(g.num_fixed, "held fixed", "held fixed"),
-             "0 (error-free)",
-             "n/a",
-             "n/a",
-             "n/a",
-             "n/a",
-             "fixed"};
-    } else {
-      std::string verdict = "fits";
-      if (g.num_fixed > 0) verdict += ", " + std::to_string(g.num_fixed) + " more held fixed";
-      if (g.overfit) {
-        verdict = "OVER-FITTED";
-      } else if (!prior) {
-        verdict = g.ratio > kWeightFactor || g.ratio < 1.0 / kWeightFactor ? "weight off" : "fits";
-      }
-      row = {EnumName(g.group),
-             std::to_string(g.count),
-             in_units.texts[0][k],
-             in_units.texts[1][k],
-             std::isfinite(g.estimated_accuracy.x())
-                 ? in_units.texts[2][k]
-                 : (g.estimation_message.empty() ? "not asked" : "not estimated"),
-             FormatUnitless(g.ratio),
-             std::isfinite(g.redundancy_share) ? FormatUnitless(g.redundancy_share) : "n/a",
-             verdict};
-    }
+    std::vector<std::string> row = GroupRow(result.groups[k], in_units, k);
     if (unit_column) row.insert(row.begin() + 2, in_units.units[k]);
     rows.push_back(row);
   }
@@ -734,55 +834,65 @@ std::string DiagnosticsHtml(const Block& block, const BundleAdjustmentResult& re
                  "unit: of the row's stated, RMS and estimated accuracy; the "
                  "lengths of every group in one unit");
   }
-  html << HtmlTable("Groups of the objective: residuals against the stated accuracies", header,
-                    rows, notes);
-  if (!result.observations.empty()) {
-    std::map<std::string, std::vector<double>> redundancy;
-    for (const BundleObservationDiagnostics& d : result.observations)
-      redundancy[EnumName(d.group)].push_back(d.redundancy);
-    html << "<p>" << FormatCount(result.num_uncontrolled, "observation")
-         << " with a redundancy number below "
-         << FormatUnitless(context.options.statistics.uncontrolled_redundancy)
-         << ": a blunder there cannot be seen. The w-test's critical value is "
-         << FormatUnitless(result.critical_value) << "; smallest detectable errors use delta0 = "
-         << FormatUnitless(result.delta0) << ".</p>\n<div class=\"plots\">";
-    for (const auto& [group, values] : redundancy) {
-      HistogramPlot plot;
-      plot.title = "redundancy numbers, " + group;
-      plot.x_label = "redundancy number r (unitless, 0 to 1)";
-      plot.values = values;
-      plot.lo = 0.0;
-      plot.hi = 1.0;
-      html << RenderHistogramSvg(plot);
-    }
-    html << "</div>\n";
+  return HtmlTable("Groups of the objective: residuals against the stated accuracies", header, rows,
+                   notes);
+}
+
+// The uncontrolled observations, the test's figures and a histogram of the redundancy numbers
+// per group.
+std::string RedundancyHtml(const BundleAdjustmentResult& result,
+                           const BundleReportContext& context) {
+  std::map<std::string, std::vector<double>> redundancy;
+  for (const BundleObservationDiagnostics& d : result.observations)
+    redundancy[EnumName(d.group)].push_back(d.redundancy);
+  std::ostringstream html;
+  html << "<p>" << FormatCount(result.num_uncontrolled, "observation")
+       << " with a redundancy number below "
+       << FormatUnitless(context.options.statistics.uncontrolled_redundancy)
+       << ": a blunder there cannot be seen. The w-test's critical value is "
+       << FormatUnitless(result.critical_value)
+       << "; smallest detectable errors use delta0 = " << FormatUnitless(result.delta0)
+       << ".</p>\n<div class=\"plots\">";
+  for (const auto& [group, values] : redundancy) {
+    HistogramPlot plot;
+    plot.title = "redundancy numbers, " + group;
+    plot.x_label = "redundancy number r (unitless, 0 to 1)";
+    plot.values = values;
+    plot.lo = 0.0;
+    plot.hi = 1.0;
+    html << RenderHistogramSvg(plot);
   }
-  if (context.cross_validation != nullptr) {
-    const BundleCrossValidationResult& cv = *context.cross_validation;
-    std::vector<double> magnitudes;
-    for (const BundleCrossValidationPoint& p : cv.points)
-      if (p.ok) magnitudes.push_back(p.error_m.norm());
-    const LengthUnit unit = LengthUnitFor(LargestMagnitude(magnitudes));
-    const std::string u = LengthUnitName(unit);
-    std::vector<std::vector<std::string>> cv_rows;
-    for (const BundleCrossValidationPoint& p : cv.points) {
-      cv_rows.push_back({block.points[p.point].id, p.ok ? FormatLength(p.error_m.x(), unit) : "",
-                         p.ok ? FormatLength(p.error_m.y(), unit) : "",
-                         p.ok ? FormatLength(p.error_m.z(), unit) : "",
-                         p.ok ? FormatUnitless(p.normalized, 1) : "",
-                         p.stands_out ? "STANDS OUT" : (p.ok ? "fits" : p.message)});
-    }
-    html << HtmlTable("Leave-one-out control points: each adjusted as a check point; RMSE X " +
-                          FormatLength(cv.rmse_m.x(), unit) + ", Y " +
-                          FormatLength(cv.rmse_m.y(), unit) + ", Z " +
-                          FormatLength(cv.rmse_m.z(), unit) + " " + u,
-                      {"point", "error X (" + u + ")", "error Y (" + u + ")",
-                       "error Z (" + u + ")", "e^T C^-1 e", "verdict"},
-                      cv_rows,
-                      {"e^T C^-1 e: chi-square(3); stands out above " +
-                       FormatUnitless(cv.threshold, 1)});
+  html << "</div>\n";
+  return html.str();
+}
+
+// Each control point left out in turn: its error as a check point.
+std::string CrossValidationHtml(const Block& block, const BundleCrossValidationResult& cv) {
+  std::vector<double> magnitudes;
+  for (const BundleCrossValidationPoint& p : cv.points)
+    if (p.ok) magnitudes.push_back(p.error_m.norm());
+  const LengthUnit unit = LengthUnitFor(LargestMagnitude(magnitudes));
+  const std::string u = LengthUnitName(unit);
+  std::vector<std::vector<std::string>> cv_rows;
+  for (const BundleCrossValidationPoint& p : cv.points) {
+    cv_rows.push_back({block.points[p.point].id, p.ok ? FormatLength(p.error_m.x(), unit) : "",
+                       p.ok ? FormatLength(p.error_m.y(), unit) : "",
+                       p.ok ? FormatLength(p.error_m.z(), unit) : "",
+                       p.ok ? FormatUnitless(p.normalized, 1) : "",
+                       p.stands_out ? "STANDS OUT" : (p.ok ? "fits" : p.message)});
   }
-  const BundleAdjustmentSummary& s = result.summary;
+  return HtmlTable(
+      "Leave-one-out control points: each adjusted as a check point; RMSE X " +
+          FormatLength(cv.rmse_m.x(), unit) + ", Y " + FormatLength(cv.rmse_m.y(), unit) + ", Z " +
+          FormatLength(cv.rmse_m.z(), unit) + " " + u,
+      {"point", "error X (" + u + ")", "error Y (" + u + ")", "error Z (" + u + ")", "e^T C^-1 e",
+       "verdict"},
+      cv_rows, {"e^T C^-1 e: chi-square(3); stands out above " + FormatUnitless(cv.threshold, 1)});
+}
+
+// How the adjustment ran, and the command.
+std::string RunHtml(const BundleAdjustmentSummary& s, const BundleReportContext& context) {
+  std::ostringstream html;
   html << "<h3>Run</h3>\n<p>" << HtmlEscape(EnumName(s.termination)) << ": "
        << FormatCount(s.rounds, "round") << ", " << FormatCount(s.iterations, "iteration")
        << ", cost (half the sum of squared whitened residuals) "
@@ -790,7 +900,17 @@ std::string DiagnosticsHtml(const Block& block, const BundleAdjustmentResult& re
        << ", " << FormatSignificant(s.time_seconds, 3) << " s (statistics "
        << FormatSignificant(s.statistics_seconds, 3) << " s).</p>\n<p><code>"
        << HtmlEscape(context.command_line) << "</code></p>\n";
-  html << BundleGlossaryHtml();
+  return html.str();
+}
+
+std::string DiagnosticsHtml(const Block& block, const BundleAdjustmentResult& result,
+                            const BundleReportContext& context) {
+  std::ostringstream html;
+  html << "<h2>8. Diagnostics</h2>\n" << GroupsTableHtml(result, context);
+  if (!result.observations.empty()) html << RedundancyHtml(result, context);
+  if (context.cross_validation != nullptr)
+    html << CrossValidationHtml(block, *context.cross_validation);
+  html << RunHtml(result.summary, context) << BundleGlossaryHtml();
   return html.str();
 }
 

@@ -124,47 +124,69 @@ PlanData GeoreferencedPlanData(const Block& block, const BundleAdjustmentResult&
   return data;
 }
 
-// The plan view: tie points, cameras with 1-sigma error ellipses, control and check points with
-// their residual vectors, each exaggerated by a stated factor; the corner coordinates written.
-std::string PlanView(const PlanData& data) {
-  std::vector<Eigen::Vector2d> all = data.ties;
-  for (const PlanData::Camera& camera : data.cameras) all.push_back(camera.xy);
-  for (const PlanData::Surveyed& point : data.surveyed) all.push_back(point.xy);
-  if (all.empty()) return "<p>Nothing to draw.</p>";
-  Eigen::Vector2d lo = all.front(), hi = all.front();
-  for (const auto& p : all) {
-    lo = lo.cwiseMin(p);
-    hi = hi.cwiseMax(p);
-  }
-  Eigen::Vector2d span = (hi - lo).cwiseMax(1e-9);
-  const double scale = std::min((kPlanWidth - 2 * kPlanMargin) / span.x(),
-                                (kPlanHeight - 2 * kPlanMargin) / span.y());
-  auto X = [&](double x) { return kPlanMargin + (x - lo.x()) * scale; };
-  auto Y = [&](double y) { return kPlanHeight - kPlanMargin - (y - lo.y()) * scale; };
-  const double extent = std::max(span.x(), span.y());
+// The plan view's drawing frame: the data's bounding box (m) mapped onto the SVG, one scale for
+// both axes, north up.
+struct PlanFrame {
+  Eigen::Vector2d lo, hi, span;
+  double scale = 1.0;   // SVG units per metre
+  double extent = 0.0;  // the larger side of the bounding box (m)
+  double X(double x) const { return kPlanMargin + (x - lo.x()) * scale; }
+  double Y(double y) const { return kPlanHeight - kPlanMargin - (y - lo.y()) * scale; }
+};
 
-  // Exaggerations: the largest ellipse and vector drawn about 4 % of the extent.
+PlanFrame PlanFrameOf(const std::vector<Eigen::Vector2d>& all) {
+  PlanFrame frame;
+  frame.lo = all.front();
+  frame.hi = all.front();
+  for (const auto& p : all) {
+    frame.lo = frame.lo.cwiseMin(p);
+    frame.hi = frame.hi.cwiseMax(p);
+  }
+  frame.span = (frame.hi - frame.lo).cwiseMax(1e-9);
+  frame.scale = std::min((kPlanWidth - 2 * kPlanMargin) / frame.span.x(),
+                         (kPlanHeight - 2 * kPlanMargin) / frame.span.y());
+  frame.extent = std::max(frame.span.x(), frame.span.y());
+  return frame;
+}
+
+// The plan view's exaggerations: the largest ellipse and vector drawn about 4 % of the extent.
+struct PlanExaggerations {
+  double ellipse = 1.0;  // of the cameras' 1-sigma ellipses
+  double vector = 1.0;   // of the surveyed points' error vectors
+};
+
+PlanExaggerations PlanExaggerationsOf(const PlanData& data, double extent) {
   double largest_sigma = 0.0, largest_error = 0.0;
   for (const PlanData::Camera& camera : data.cameras)
     if (camera.covariance) largest_sigma = std::max(largest_sigma, std::sqrt(camera.covariance->trace()));
   for (const PlanData::Surveyed& point : data.surveyed)
     if (point.error) largest_error = std::max(largest_error, point.error->norm());
-  const double ellipse_factor = largest_sigma > 0.0 ? NiceAtMost(0.04 * extent / largest_sigma) : 1.0;
-  const double vector_factor = largest_error > 0.0 ? NiceAtMost(0.04 * extent / largest_error) : 1.0;
+  PlanExaggerations factors;
+  factors.ellipse = largest_sigma > 0.0 ? NiceAtMost(0.04 * extent / largest_sigma) : 1.0;
+  factors.vector = largest_error > 0.0 ? NiceAtMost(0.04 * extent / largest_error) : 1.0;
+  return factors;
+}
 
+// Tie points as grey dots.
+std::string PlanTiesSvg(const PlanData& data, const PlanFrame& f) {
   std::ostringstream svg;
-  svg << SvgOpen(kPlanWidth, kPlanHeight, "plan view") << "\n";
-  // Tie points.
   svg << "<g fill=\"#999\">";
   for (const Eigen::Vector2d& tie : data.ties)
-    svg << "<circle cx=\"" << F(X(tie.x()), "%.1f") << "\" cy=\"" << F(Y(tie.y()), "%.1f") << "\" r=\"0.8\"/>";
+    svg << "<circle cx=\"" << F(f.X(tie.x()), "%.1f") << "\" cy=\"" << F(f.Y(tie.y()), "%.1f")
+        << "\" r=\"0.8\"/>";
   svg << "</g>\n";
-  // Cameras and their ellipses.
+  return svg.str();
+}
+
+// Cameras as squares with their exaggerated 1-sigma ellipses.
+std::string PlanCamerasSvg(const PlanData& data, const PlanFrame& f, double ellipse_factor) {
+  std::ostringstream svg;
   for (const PlanData::Camera& camera : data.cameras) {
-    const double cx = X(camera.xy.x()), cy = Y(camera.xy.y());
+    const double cx = f.X(camera.xy.x()), cy = f.Y(camera.xy.y());
     if (camera.covariance) {
       const Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d> eigen(*camera.covariance);
-      const Eigen::Vector2d axes = eigen.eigenvalues().cwiseMax(0.0).cwiseSqrt() * ellipse_factor * scale;
+      const Eigen::Vector2d axes =
+          eigen.eigenvalues().cwiseMax(0.0).cwiseSqrt() * ellipse_factor * f.scale;
       const Eigen::Vector2d major = eigen.eigenvectors().col(1);
       const double angle = -std::atan2(major.y(), major.x()) * 180.0 / kPi;
       svg << "<ellipse cx=\"" << F(cx, "%.1f") << "\" cy=\"" << F(cy, "%.1f") << "\" rx=\""
@@ -176,16 +198,21 @@ std::string PlanView(const PlanData& data) {
         << "\" width=\"5\" height=\"5\" fill=\"#0072B2\"><title>" << HtmlEscape(camera.name)
         << "</title></rect>\n";
   }
-  // Control and check points with their residual vectors.
+  return svg.str();
+}
+
+// Control points (triangles) and check points (dots) with their exaggerated residual vectors.
+std::string PlanSurveyedSvg(const PlanData& data, const PlanFrame& f, double vector_factor) {
+  std::ostringstream svg;
   for (const PlanData::Surveyed& point : data.surveyed) {
-    const double px = X(point.xy.x()), py = Y(point.xy.y());
+    const double px = f.X(point.xy.x()), py = f.Y(point.xy.y());
     const bool control = point.control;
     const char* color = control ? "#D55E00" : "#009E73";
     if (point.error) {
       const Eigen::Vector2d& e = *point.error;
       svg << "<line x1=\"" << F(px, "%.1f") << "\" y1=\"" << F(py, "%.1f") << "\" x2=\""
-          << F(px + e.x() * vector_factor * scale, "%.1f") << "\" y2=\""
-          << F(py - e.y() * vector_factor * scale, "%.1f") << "\" stroke=\"" << color
+          << F(px + e.x() * vector_factor * f.scale, "%.1f") << "\" y2=\""
+          << F(py - e.y() * vector_factor * f.scale, "%.1f") << "\" stroke=\"" << color
           << "\" stroke-width=\"2\"/>";
     }
     if (control) {
@@ -198,23 +225,44 @@ std::string PlanView(const PlanData& data) {
     svg << "<title>" << HtmlEscape(point.id) << "</title>" << (control ? "</path>" : "</circle>")
         << "\n";
   }
-  // Scale bar and legend.
-  const double bar = NiceAtMost(0.25 * extent);
+  return svg.str();
+}
+
+// The scale bar (metres) and the legend with the exaggerations.
+std::string PlanScaleAndLegendSvg(const PlanFrame& f, const PlanExaggerations& factors) {
+  std::ostringstream svg;
+  const double bar = NiceAtMost(0.25 * f.extent);
   const double bar_y = kPlanHeight - 14.0;
   svg << "<line x1=\"" << kPlanMargin << "\" y1=\"" << bar_y << "\" x2=\""
-      << F(kPlanMargin + bar * scale, "%.1f") << "\" y2=\"" << bar_y
-      << "\" stroke=\"#222\" stroke-width=\"2\"/><text x=\"" << F(kPlanMargin + bar * scale + 6, "%.1f")
-      << "\" y=\"" << bar_y + 4 << "\" class=\"" << kAxisLabelClass << "\">"
-      << FormatSignificant(bar, 3) << " m (plan: east right, north up)</text>\n";
+      << F(kPlanMargin + bar * f.scale, "%.1f") << "\" y2=\"" << bar_y
+      << "\" stroke=\"#222\" stroke-width=\"2\"/><text x=\""
+      << F(kPlanMargin + bar * f.scale + 6, "%.1f") << "\" y=\"" << bar_y + 4 << "\" class=\""
+      << kAxisLabelClass << "\">" << FormatSignificant(bar, 3)
+      << " m (plan: east right, north up)</text>\n";
   svg << "<text x=\"" << kPlanWidth - 10 << "\" y=\"16\" text-anchor=\"end\">"
-      << "blue squares: cameras, ellipses 1-sigma x" << FormatSignificant(ellipse_factor, 3)
+      << "blue squares: cameras, ellipses 1-sigma x" << FormatSignificant(factors.ellipse, 3)
       << "; red triangles: control, green dots: check, vectors x"
-      << FormatSignificant(vector_factor, 3) << "; grey: tie points</text>\n";
-  svg << "</svg>";
+      << FormatSignificant(factors.vector, 3) << "; grey: tie points</text>\n";
+  return svg.str();
+}
+
+// The plan view: tie points, cameras with 1-sigma error ellipses, control and check points with
+// their residual vectors, each exaggerated by a stated factor; the corner coordinates written.
+std::string PlanView(const PlanData& data) {
+  std::vector<Eigen::Vector2d> all = data.ties;
+  for (const PlanData::Camera& camera : data.cameras) all.push_back(camera.xy);
+  for (const PlanData::Surveyed& point : data.surveyed) all.push_back(point.xy);
+  if (all.empty()) return "<p>Nothing to draw.</p>";
+  const PlanFrame frame = PlanFrameOf(all);
+  const PlanExaggerations factors = PlanExaggerationsOf(data, frame.extent);
+  const std::string svg = SvgOpen(kPlanWidth, kPlanHeight, "plan view") + "\n" +
+                          PlanTiesSvg(data, frame) + PlanCamerasSvg(data, frame, factors.ellipse) +
+                          PlanSurveyedSvg(data, frame, factors.vector) +
+                          PlanScaleAndLegendSvg(frame, factors) + "</svg>";
   std::string caption = data.caption.empty() ? std::string() : HtmlEscape(data.caption) + " ";
-  caption += "Lower left " + F(lo.x(), "%.2f") + ", " + F(lo.y(), "%.2f") + "; upper right " +
-             F(hi.x(), "%.2f") + ", " + F(hi.y(), "%.2f") + ".";
-  return svg.str() + "\n<p>" + caption + "</p>";
+  caption += "Lower left " + F(frame.lo.x(), "%.2f") + ", " + F(frame.lo.y(), "%.2f") +
+             "; upper right " + F(frame.hi.x(), "%.2f") + ", " + F(frame.hi.y(), "%.2f") + ".";
+  return svg + "\n<p>" + caption + "</p>";
 }
 
 }  // namespace

@@ -1,3 +1,8 @@
+// The bundle's outputs other than its page (tools/report/bundle_report.h): the JSON report, the
+// frames and points tables, the warnings the page shares, the console lines. About 850 lines, one
+// file on purpose: the report and the console say the same things (groups, check points, removed
+// observations, cross-validation) through the same file-local names and numbers, one function
+// per section.
 #include "tools/report/bundle_report.h"
 
 #include <Eigen/Cholesky>
@@ -639,64 +644,67 @@ std::string WeaklyDeterminedWarning(const BundleAdjustmentResult& result) {
                 "marks spread over the image) or hold them fixed.";
 }
 
-std::vector<std::string> BundleConsoleLines(const Block& block, const BundleAdjustmentResult& result,
-                                            const BundleReportContext& context) {
-  // Every number through the report kit's formatters (tools/report/html_kit.h): fixed units,
-  // never an exponent.
-  std::vector<std::string> lines;
-  const BundleAdjustmentSummary& s = result.summary;
-  {
-    std::ostringstream line;
-    line << "bundle: " << EnumName(s.termination) << ": " << FormatCount(s.num_images, "image")
-         << ", " << FormatCount(s.num_points, "point") << ", " << FormatCount(s.num_marks, "mark")
-         << ", " << FormatCount(s.rounds, "round") << ", " << FormatCount(s.iterations, "iteration")
-         << ", cost " << FormatSignificant(s.initial_cost, 6) << " -> "
-         << FormatSignificant(s.final_cost, 6) << ", sigma0 " << FormatUnitless(s.sigma0, 3)
-         << " (unitless; redundancy " << s.redundancy << ")";
-    if (s.num_rejected_marks > 0) line << ", " << FormatCount(s.num_rejected_marks, "mark") << " rejected";
-    if (!s.tie_points_left_out.empty())
-      line << ", " << FormatCount(static_cast<long long>(s.tie_points_left_out.size()), "tie point")
-           << " without initial coordinates left out";
-    line << ", " << FormatSignificant(s.time_seconds, 3) << " s";
-    if (!s.message.empty()) line << ": " << s.message;
-    lines.push_back(line.str());
+namespace {
+
+// The console's first line: how the adjustment ended, its size, costs, sigma0 and time.
+std::string ConsoleSummaryLine(const BundleAdjustmentSummary& s) {
+  std::ostringstream line;
+  line << "bundle: " << EnumName(s.termination) << ": " << FormatCount(s.num_images, "image")
+       << ", " << FormatCount(s.num_points, "point") << ", " << FormatCount(s.num_marks, "mark")
+       << ", " << FormatCount(s.rounds, "round") << ", " << FormatCount(s.iterations, "iteration")
+       << ", cost " << FormatSignificant(s.initial_cost, 6) << " -> "
+       << FormatSignificant(s.final_cost, 6) << ", sigma0 " << FormatUnitless(s.sigma0, 3)
+       << " (unitless; redundancy " << s.redundancy << ")";
+  if (s.num_rejected_marks > 0)
+    line << ", " << FormatCount(s.num_rejected_marks, "mark") << " rejected";
+  if (!s.tie_points_left_out.empty())
+    line << ", " << FormatCount(static_cast<long long>(s.tie_points_left_out.size()), "tie point")
+         << " without initial coordinates left out";
+  line << ", " << FormatSignificant(s.time_seconds, 3) << " s";
+  if (!s.message.empty()) line << ": " << s.message;
+  return line.str();
+}
+
+// Where the time went: the Ceres solve's parts, or the hand-written solver's rounds.
+std::string ConsoleTimeLine(const BundleAdjustmentSummary& s) {
+  auto seconds = [](double value) { return FormatSignificant(value, 3) + " s"; };
+  std::ostringstream time;
+  if (s.solver != PoseSolver::kCeres) {
+    // The hand-written normal equations: no Ceres solve, only its problem for the statistics.
+    double rounds = 0.0;
+    for (const double r : s.round_seconds) rounds += r;
+    time << "time: rounds " << seconds(rounds) << " (" << EnumName(s.solver)
+         << ": hand-written normal equations), problem for the statistics "
+         << seconds(s.problem_build_seconds) << ", statistics " << seconds(s.statistics_seconds);
+  } else {
+    time << "time: problem " << seconds(s.problem_build_seconds) << ", Ceres preprocessing "
+         << seconds(s.solver_preprocessing_seconds) << ", residuals "
+         << seconds(s.residual_evaluation_seconds) << ", Jacobians "
+         << seconds(s.jacobian_evaluation_seconds) << ", linear solves "
+         << seconds(s.linear_solver_seconds) << ", statistics " << seconds(s.statistics_seconds)
+         << "; Schur structure " << (s.schur_structure.empty() ? "n/a" : s.schur_structure);
   }
-  {
-    auto seconds = [](double value) { return FormatSignificant(value, 3) + " s"; };
-    std::ostringstream time;
-    if (s.solver != PoseSolver::kCeres) {
-      // The hand-written normal equations: no Ceres solve, only its problem for the statistics.
-      double rounds = 0.0;
-      for (const double r : s.round_seconds) rounds += r;
-      time << "time: rounds " << seconds(rounds) << " (" << EnumName(s.solver)
-           << ": hand-written normal equations), problem for the statistics "
-           << seconds(s.problem_build_seconds) << ", statistics " << seconds(s.statistics_seconds);
-    } else {
-      time << "time: problem " << seconds(s.problem_build_seconds) << ", Ceres preprocessing "
-           << seconds(s.solver_preprocessing_seconds) << ", residuals "
-           << seconds(s.residual_evaluation_seconds) << ", Jacobians "
-           << seconds(s.jacobian_evaluation_seconds) << ", linear solves "
-           << seconds(s.linear_solver_seconds) << ", statistics " << seconds(s.statistics_seconds)
-           << "; Schur structure " << (s.schur_structure.empty() ? "n/a" : s.schur_structure);
-    }
-    lines.push_back(time.str());
-  }
-  lines.push_back("datum: " + s.datum_description);
-  if (context.georeference != nullptr) {
-    const GeoreferenceResult& g = *context.georeference;
-    if (g.positions_without_height > 0)
-      lines.push_back("georeference: " + FormatCount(g.positions_without_height, "camera position") +
-                      " without height: horizontal only (not in the similarity; in the adjustment "
-                      "their heights are free)");
-    for (const std::string& line : g.inputs_not_used) lines.push_back("georeference: not used: " + line);
-  }
-  if (!s.covariance_datum.empty()) lines.push_back("covariances in " + s.covariance_datum);
+  return time.str();
+}
+
+// What the georeferencing did not use, or used horizontally only.
+void ConsoleGeoreferenceLines(const GeoreferenceResult& g, std::vector<std::string>* lines) {
+  if (g.positions_without_height > 0)
+    lines->push_back("georeference: " + FormatCount(g.positions_without_height, "camera position") +
+                     " without height: horizontal only (not in the similarity; in the adjustment "
+                     "their heights are free)");
+  for (const std::string& line : g.inputs_not_used)
+    lines->push_back("georeference: not used: " + line);
+}
+
+// One line per group of the objective (count, stated, RMS, RMS/stated), then its over-fitting.
+void ConsoleGroupLines(const BundleAdjustmentResult& result, std::vector<std::string>* lines) {
   for (const BundleGroupStatistics& g : result.groups) {
     std::ostringstream line;
     if (g.fixed()) {
       line << EnumName(g.group) << ": " << g.num_fixed
            << " held fixed (stated error-free): no residuals, no verdict";
-      lines.push_back(line.str());
+      lines->push_back(line.str());
       continue;
     }
     // One unit for the line's lengths (a group of metres: mm, cm or m for both).
@@ -707,21 +715,26 @@ std::vector<std::string> BundleConsoleLines(const Block& block, const BundleAdju
          << ", redundancy share " << FormatUnitless(g.redundancy_share)
          << (g.overfit ? "  OVERFIT" : "");
     if (g.num_fixed > 0) line << "; " << g.num_fixed << " more held fixed";
-    lines.push_back(line.str());
+    lines->push_back(line.str());
   }
   for (const BundleGroupStatistics& g : result.groups)
-    if (g.overfit) lines.push_back("warning: " + g.message);
-  if (!s.tie_points_left_out.empty()) {
-    std::string names;
-    for (size_t k = 0; k < s.tie_points_left_out.size() && k < 5; ++k)
-      names += (k ? ", " : "") + s.tie_points_left_out[k];
-    if (s.tie_points_left_out.size() > 5) names += ", ...";
-    lines.push_back("warning: " + std::to_string(s.tie_points_left_out.size()) +
-                    " tie points seen in two or more images could not be intersected (rays too "
-                    "close to parallel, or marks that do not meet) and were left out: " + names +
-                    " (report: summary.tie_points_left_out)");
-  }
-  // Advice from the estimated accuracies (the flag's value in the flag's own unit).
+    if (g.overfit) lines->push_back("warning: " + g.message);
+}
+
+// The tie points that could not be intersected, the first five by name.
+std::string TiePointsLeftOutWarning(const std::vector<std::string>& left_out) {
+  std::string names;
+  for (size_t k = 0; k < left_out.size() && k < 5; ++k) names += (k ? ", " : "") + left_out[k];
+  if (left_out.size() > 5) names += ", ...";
+  return "warning: " + std::to_string(left_out.size()) +
+         " tie points seen in two or more images could not be intersected (rays too "
+         "close to parallel, or marks that do not meet) and were left out: " +
+         names + " (report: summary.tie_points_left_out)";
+}
+
+// Advice from the estimated accuracies (the flag's value in the flag's own unit), and the groups
+// whose estimate says they absorbed gross errors.
+void ConsoleAccuracyLines(const BundleAdjustmentResult& result, std::vector<std::string>* lines) {
   static const std::pair<BundleGroup, const char*> kFlags[] = {
       {kTieMarks, "--tie_accuracy"},
       {kControlMarks, "--marker_projection_accuracy"},
@@ -730,7 +743,8 @@ std::vector<std::string> BundleConsoleLines(const Block& block, const BundleAdju
       {kAttitudes, "--attitude_accuracy"}};
   for (const BundleGroupStatistics& g : result.groups) {
     if (!std::isfinite(g.estimated_accuracy.x())) {
-      if (!g.estimation_message.empty()) lines.push_back(EnumName(g.group) + std::string(" accuracy ") + g.estimation_message);
+      if (!g.estimation_message.empty())
+        lines->push_back(EnumName(g.group) + std::string(" accuracy ") + g.estimation_message);
       continue;
     }
     for (const auto& [group, flag] : kFlags) {
@@ -741,37 +755,88 @@ std::vector<std::string> BundleConsoleLines(const Block& block, const BundleAdju
       line << EnumName(g.group) << ": " << values[0] << " stated, " << values[1] << " estimated (+-"
            << FormatUnitless(100.0 * g.estimated_accuracy_standard_error, 0) << " %): set " << flag
            << "=" << FormatSignificant(g.estimated_accuracy.x(), 2);
-      lines.push_back(line.str());
+      lines->push_back(line.str());
     }
     const std::string gross = GrossErrorsAbsorbed(g);
-    if (!gross.empty()) lines.push_back("warning: " + gross);
+    if (!gross.empty()) lines->push_back("warning: " + gross);
   }
+}
+
+// The control and check points' RMSE, and the check points beyond their covariance.
+void ConsolePointLines(const Block& block, const BundleAdjustmentResult& result,
+                       std::vector<std::string>* lines) {
   if (result.num_control_points > 0)
-    lines.push_back("control points: " + std::to_string(result.num_control_points) + ", RMSE " +
-                    FormatLengthWithUnit(result.control_rmse_total_m));
+    lines->push_back("control points: " + std::to_string(result.num_control_points) + ", RMSE " +
+                     FormatLengthWithUnit(result.control_rmse_total_m));
   if (result.num_check_points > 0) {
     const LengthUnit unit = LengthUnitFor(result.check_rmse_m.maxCoeff());
-    lines.push_back("check points: " + std::to_string(result.num_check_points) + ", RMSE X " +
-                    FormatLength(result.check_rmse_m.x(), unit) + " Y " +
-                    FormatLength(result.check_rmse_m.y(), unit) + " Z " +
-                    FormatLength(result.check_rmse_m.z(), unit) + " total " +
-                    FormatLength(result.check_rmse_total_m, unit) + " " + LengthUnitName(unit));
+    lines->push_back("check points: " + std::to_string(result.num_check_points) + ", RMSE X " +
+                     FormatLength(result.check_rmse_m.x(), unit) + " Y " +
+                     FormatLength(result.check_rmse_m.y(), unit) + " Z " +
+                     FormatLength(result.check_rmse_m.z(), unit) + " total " +
+                     FormatLength(result.check_rmse_total_m, unit) + " " + LengthUnitName(unit));
     for (const std::string& miss : CheckPointsOutOfTolerance(block, result))
-      lines.push_back("warning: check point " + miss);
+      lines->push_back("warning: check point " + miss);
   }
+}
+
+// What the adjustment left out: rejected marks and check marks, snooped observations.
+void ConsoleRemovedLines(const Block& block, const BundleAdjustmentResult& result,
+                         std::vector<std::string>* lines) {
   if (!result.rejected_marks.empty())
-    lines.push_back(std::to_string(result.rejected_marks.size()) +
-                    " marks rejected as blunders (listed in the report)");
+    lines->push_back(std::to_string(result.rejected_marks.size()) +
+                     " marks rejected as blunders (listed in the report)");
   for (const BundleRejectedCheckMark& r : result.rejected_check_marks) {
     const BlockMark& mark = block.marks[r.mark];
-    lines.push_back("check mark of '" + PointName(block, mark.point) + "' on image '" +
-                    block.images[mark.image].name + "' rejected by the w-test (|w| = " +
-                    FormatUnitless(r.normalized, 1) + "): check its measurement");
+    lines->push_back("check mark of '" + PointName(block, mark.point) + "' on image '" +
+                     block.images[mark.image].name + "' rejected by the w-test (|w| = " +
+                     FormatUnitless(r.normalized, 1) + "): check its measurement");
   }
   for (const BundleSnoopingStep& step : result.snooping)
-    lines.push_back("snooping removed the " + BundleItemName(block, step.group, step.item) + " (" +
-                    BundleAxisName(step.group, step.axis) + ", |w| = " +
-                    FormatUnitless(step.normalized, 1) + ")");
+    lines->push_back("snooping removed the " + BundleItemName(block, step.group, step.item) + " (" +
+                     BundleAxisName(step.group, step.axis) +
+                     ", |w| = " + FormatUnitless(step.normalized, 1) + ")");
+}
+
+// The leave-one-out RMSE of the control points and those that stand out.
+void ConsoleCrossValidationLines(const Block& block, const BundleCrossValidationResult& cv,
+                                 std::vector<std::string>* lines) {
+  const LengthUnit unit = LengthUnitFor(cv.rmse_m.maxCoeff());
+  lines->push_back("leave-one-out control points: " + std::to_string(cv.count) + ", RMSE X " +
+                   FormatLength(cv.rmse_m.x(), unit) + " Y " + FormatLength(cv.rmse_m.y(), unit) +
+                   " Z " + FormatLength(cv.rmse_m.z(), unit) + " " + LengthUnitName(unit));
+  for (const BundleCrossValidationPoint& p : cv.points) {
+    if (p.stands_out)
+      lines->push_back(
+          "control point '" + PointName(block, p.point) + "' stands out: left out, it misses by " +
+          FormatLengthWithUnit(p.error_m.norm()) + " (normalized " + FormatUnitless(p.normalized) +
+          " > " + FormatUnitless(cv.threshold) + "): check its coordinates and marks");
+    else if (!p.ok)
+      lines->push_back("control point '" + PointName(block, p.point) +
+                       "' not cross-validated: " + p.message);
+  }
+}
+
+}  // namespace
+
+std::vector<std::string> BundleConsoleLines(const Block& block,
+                                            const BundleAdjustmentResult& result,
+                                            const BundleReportContext& context) {
+  // Every number through the report kit's formatters (tools/report/html_kit.h): fixed units,
+  // never an exponent.
+  std::vector<std::string> lines;
+  const BundleAdjustmentSummary& s = result.summary;
+  lines.push_back(ConsoleSummaryLine(s));
+  lines.push_back(ConsoleTimeLine(s));
+  lines.push_back("datum: " + s.datum_description);
+  if (context.georeference != nullptr) ConsoleGeoreferenceLines(*context.georeference, &lines);
+  if (!s.covariance_datum.empty()) lines.push_back("covariances in " + s.covariance_datum);
+  ConsoleGroupLines(result, &lines);
+  if (!s.tie_points_left_out.empty())
+    lines.push_back(TiePointsLeftOutWarning(s.tie_points_left_out));
+  ConsoleAccuracyLines(result, &lines);
+  ConsolePointLines(block, result, &lines);
+  ConsoleRemovedLines(block, result, &lines);
   const std::string weak = WeaklyDeterminedWarning(result);
   if (!weak.empty()) lines.push_back("warning: weakly determined: " + weak);
   if (result.num_uncontrolled > 0)
@@ -779,23 +844,8 @@ std::vector<std::string> BundleConsoleLines(const Block& block, const BundleAdju
                     " observations are uncontrolled (redundancy number below " +
                     FormatUnitless(context.options.statistics.uncontrolled_redundancy) +
                     "): a blunder there cannot be seen; add images or points around them");
-  if (context.cross_validation != nullptr) {
-    const BundleCrossValidationResult& cv = *context.cross_validation;
-    const LengthUnit unit = LengthUnitFor(cv.rmse_m.maxCoeff());
-    lines.push_back("leave-one-out control points: " + std::to_string(cv.count) + ", RMSE X " +
-                    FormatLength(cv.rmse_m.x(), unit) + " Y " + FormatLength(cv.rmse_m.y(), unit) +
-                    " Z " + FormatLength(cv.rmse_m.z(), unit) + " " + LengthUnitName(unit));
-    for (const BundleCrossValidationPoint& p : cv.points) {
-      if (p.stands_out)
-        lines.push_back("control point '" + PointName(block, p.point) +
-                        "' stands out: left out, it misses by " + FormatLengthWithUnit(p.error_m.norm()) +
-                        " (normalized " + FormatUnitless(p.normalized) + " > " + FormatUnitless(cv.threshold) +
-                        "): check its coordinates and marks");
-      else if (!p.ok)
-        lines.push_back("control point '" + PointName(block, p.point) +
-                        "' not cross-validated: " + p.message);
-    }
-  }
+  if (context.cross_validation != nullptr)
+    ConsoleCrossValidationLines(block, *context.cross_validation, &lines);
   return lines;
 }
 

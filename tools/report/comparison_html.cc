@@ -259,14 +259,12 @@ std::string RenderHtmlTable(const TextTable& table) {
   return html;
 }
 
-std::string MonteCarloHtml(const MonteCarloOptions& options, const MonteCarloResult& result,
-                           const std::string& command_line) {
+namespace {
+
+// The Monte-Carlo page's Run section: the command, trials, sweep, solvers and the notes.
+std::string MonteCarloRunHtml(const MonteCarloOptions& options, const MonteCarloResult& result,
+                              const std::string& command_line) {
   std::ostringstream html;
-  const std::string title = "photopose compare: Monte-Carlo comparison of the pose solvers";
-  html << HtmlPageOpen(title, "Which pose solver to use: a Monte-Carlo comparison");
-  html << "<h2>Verdict</h2>\n";
-  for (Scenario scenario : options.scenarios) html << ScenarioVerdict(options, result, scenario);
-  html << "<h2>Glossary</h2>\n" << ComparisonGlossaryHtml();
   html << "<h2>Run</h2>\n<p>Command: <code>" << HtmlEscape(command_line) << "</code></p>\n";
   html << "<p>" << FormatCount(options.trials, "trial") << " per setting, sweep "
        << EnumName(options.sweep) << ", initial values " << EnumName(options.initial)
@@ -277,125 +275,175 @@ std::string MonteCarloHtml(const MonteCarloOptions& options, const MonteCarloRes
   for (const std::string& note : MonteCarloNotes(options))
     html << "<li>" << HtmlEscape(note) << "</li>\n";
   html << "</ul>\n";
+  return html.str();
+}
 
-  const std::vector<TextTable> tables = MonteCarloTables(options, result);
-  // Metric of a solver in a setting, for the plots.
-  struct Metric {
-    const char* name;
-    const char* unit_label;  // short: the row's title names the metric
-    bool log_y;
-    bool rate;
-    bool nees_reference;  // draw the dashed line at 6
-    bool length;          // a length (m) drawn in the unit of the largest (core/units.h)
-    double (*get)(const SolverStatistics&);
+// Metric of a solver in a setting, for the Monte-Carlo plots.
+struct Metric {
+  const char* name;
+  const char* unit_label;  // short: the row's title names the metric
+  bool log_y;
+  bool rate;
+  bool nees_reference;  // draw the dashed line at 6
+  bool length;          // a length (m) drawn in the unit of the largest (core/units.h)
+  double (*get)(const SolverStatistics&);
+};
+const Metric kPositionMetric{
+    "position RMSE", "RMSE", true, false, false, true, [](const SolverStatistics& s) {
+      return s.position_rmse_m;
+    }};
+const Metric kSuccessMetric{
+    "success rate", "success (0 to 1)", false, true, false, false, [](const SolverStatistics& s) {
+      return s.success_rate;
+    }};
+const Metric kNeesMetric{"mean NEES (sigma0 = 1)",
+                         "NEES (unitless)",
+                         true,
+                         false,
+                         true,
+                         false,
+                         [](const SolverStatistics& s) { return s.mean_nees_apriori; }};
+const Metric kIterationsMetric{
+    "mean iterations", "iterations", false, false, false, false, [](const SolverStatistics& s) {
+      return s.mean_iterations;
+    }};
+
+// A metric's value as plotted: lengths in the page's one unit.
+double PlottedValue(const Metric& metric, const SolverStatistics& s, LengthUnit position_unit) {
+  return metric.length ? LengthIn(metric.get(s), position_unit) : metric.get(s);
+}
+
+// One row of small multiples (a panel per solver): `metric` over the settings `along` the axis.
+std::string MetricPlotHtml(const MonteCarloResult& result, Scenario scenario,
+                           const std::string& axis, const Metric& metric,
+                           const std::vector<size_t>& along, LengthUnit position_unit) {
+  LinePlot plot;
+  plot.title = std::string(EnumName(scenario)) + ": " + metric.name + " vs " +
+               (axis == "initial" ? "initial error" : axis);
+  plot.x_label = AxisLabel(axis);
+  plot.y_label = metric.length
+                     ? std::string(metric.unit_label) + " (" + LengthUnitName(position_unit) + ")"
+                     : metric.unit_label;
+  plot.log_y = metric.log_y;
+  if (metric.rate) plot.y_min = 0.0, plot.y_max = 1.0;
+  if (metric.nees_reference) {
+    plot.reference_y = 6.0;
+    plot.reference_label = "6 (honest)";
+  }
+  // Logarithmic only when the values span more than a factor of 30; values below 1e-6 of
+  // the largest (noise 0: rounding) count as 0, which a linear axis shows as such.
+  double lo = std::numeric_limits<double>::infinity(), hi = 0.0;
+  for (size_t k : along)
+    for (const SolverStatistics& s : result.settings[k].solvers)
+      if (std::isfinite(PlottedValue(metric, s, position_unit)))
+        hi = std::max(hi, PlottedValue(metric, s, position_unit));
+  for (size_t k : along)
+    for (const SolverStatistics& s : result.settings[k].solvers) {
+      const double v = PlottedValue(metric, s, position_unit);
+      if (std::isfinite(v) && v > 1e-6 * hi) lo = std::min(lo, v);
+    }
+  if (plot.log_y && std::isfinite(lo) && hi < 30.0 * lo && lo > 0.0 && !(hi < 1e-3))
+    plot.log_y = false;
+  for (size_t s = 0; s < result.solver_names.size(); ++s) {
+    PlotSeries series;
+    series.label = result.solver_names[s];
+    for (size_t k : along) {
+      series.x.push_back(PlotX(result.settings[k].setting, axis));
+      series.y.push_back(PlottedValue(metric, result.settings[k].solvers[s], position_unit));
+    }
+    plot.series.push_back(series);
+  }
+  return "<div class=\"plots\">" + RenderSmallMultiplesSvg(plot) + "</div>\n";
+}
+
+// Time per solve at the scenario's baseline setting (the first of the scenario); the
+// refinement part is in the table.
+std::string BaselineTimeHtml(const MonteCarloResult& result, Scenario scenario) {
+  for (const SettingResult& setting : result.settings) {
+    if (setting.setting.scenario != scenario) continue;
+    BarPlot bars;
+    bars.title = std::string(EnumName(scenario)) + ": median time per solve (" +
+                 setting.setting.axis + " setting)";
+    bars.value_label = "microseconds per image (ResectImage wall time)";
+    for (const SolverStatistics& s : setting.solvers) {
+      bars.labels.push_back(s.solver);
+      bars.values.push_back(s.median_seconds * 1e6);
+    }
+    return "<div class=\"plots\">" + RenderBarPlotSvg(bars) + "</div>\n";
+  }
+  return "";
+}
+
+// Every setting of the scenario in one table: the header once, a section per setting.
+std::string ScenarioTableHtml(const MonteCarloResult& result, const std::vector<TextTable>& tables,
+                              Scenario scenario) {
+  std::vector<TableSection> sections;
+  const std::string prefix = std::string(EnumName(scenario)) + ": ";
+  std::vector<std::string> header;
+  for (size_t k = 0; k < result.settings.size(); ++k) {
+    if (result.settings[k].setting.scenario != scenario) continue;
+    const TextTable& table = tables[k];
+    if (header.empty()) header = table.header;
+    TableSection section;
+    section.heading =
+        table.title.rfind(prefix, 0) == 0 ? table.title.substr(prefix.size()) : table.title;
+    section.rows = table.rows;
+    section.notes = table.notes;
+    sections.push_back(std::move(section));
+  }
+  return HtmlSectionedTable(std::string(EnumName(scenario)) + ": every setting", header, sections);
+}
+
+// One scenario's section: a row of small multiples per metric and sweep axis, the baseline's
+// time, the table of every setting.
+std::string ScenarioHtml(const MonteCarloOptions& options, const MonteCarloResult& result,
+                         const std::vector<TextTable>& tables, Scenario scenario,
+                         LengthUnit position_unit) {
+  static const std::vector<std::pair<std::string, std::vector<Metric>>> kPlots = {
+      {"noise", {kPositionMetric, kNeesMetric}},
+      {"outliers", {kPositionMetric, kSuccessMetric}},
+      {"initial", {kSuccessMetric, kIterationsMetric}},
+      {"control", {kPositionMetric, kSuccessMetric}},
   };
-  const Metric position{"position RMSE", "RMSE", true, false, false, true,
-                        [](const SolverStatistics& s) { return s.position_rmse_m; }};
-  const Metric success{"success rate", "success (0 to 1)", false, true, false, false,
-                       [](const SolverStatistics& s) { return s.success_rate; }};
-  const Metric nees{"mean NEES (sigma0 = 1)", "NEES (unitless)", true, false, true, false,
-                    [](const SolverStatistics& s) { return s.mean_nees_apriori; }};
-  const Metric iterations{"mean iterations", "iterations", false, false, false, false,
-                          [](const SolverStatistics& s) { return s.mean_iterations; }};
+  std::ostringstream html;
+  html << "<h2>Scenario " << EnumName(scenario) << "</h2>\n";
+  for (const auto& [axis, metrics] : kPlots) {
+    const std::vector<size_t> along = SettingsAlongAxis(options, result, scenario, axis);
+    if (along.empty()) continue;
+    if (axis == "initial") {
+      html << "<p>Initial error: +-";
+      for (size_t k = 0; k < along.size(); ++k)
+        html << (k ? "/" : "")
+             << FormatScaledLength(result.settings[along[k]].setting.initial_error.position_m);
+      html << " in position with the angle errors on the x axis.</p>\n";
+    }
+    for (const Metric& metric : metrics)
+      html << MetricPlotHtml(result, scenario, axis, metric, along, position_unit);
+  }
+  html << BaselineTimeHtml(result, scenario) << ScenarioTableHtml(result, tables, scenario);
+  return html.str();
+}
+
+}  // namespace
+
+std::string MonteCarloHtml(const MonteCarloOptions& options, const MonteCarloResult& result,
+                           const std::string& command_line) {
+  std::ostringstream html;
+  const std::string title = "photopose compare: Monte-Carlo comparison of the pose solvers";
+  html << HtmlPageOpen(title, "Which pose solver to use: a Monte-Carlo comparison");
+  html << "<h2>Verdict</h2>\n";
+  for (Scenario scenario : options.scenarios) html << ScenarioVerdict(options, result, scenario);
+  html << "<h2>Glossary</h2>\n" << ComparisonGlossaryHtml();
+  html << MonteCarloRunHtml(options, result, command_line);
+  const std::vector<TextTable> tables = MonteCarloTables(options, result);
   // Every position plot of the page in one unit, that of the largest RMSE.
   std::vector<double> position_values;
   for (const SettingResult& setting : result.settings)
-    for (const SolverStatistics& s : setting.solvers) position_values.push_back(position.get(s));
+    for (const SolverStatistics& s : setting.solvers)
+      position_values.push_back(kPositionMetric.get(s));
   const LengthUnit position_unit = LengthUnitFor(LargestMagnitude(position_values));
-  auto value_of = [&](const Metric& metric, const SolverStatistics& s) {
-    return metric.length ? LengthIn(metric.get(s), position_unit) : metric.get(s);
-  };
-  const std::vector<std::pair<std::string, std::vector<Metric>>> plots = {
-      {"noise", {position, nees}},
-      {"outliers", {position, success}},
-      {"initial", {success, iterations}},
-      {"control", {position, success}},
-  };
-  for (Scenario scenario : options.scenarios) {
-    html << "<h2>Scenario " << EnumName(scenario) << "</h2>\n";
-    // One row of small multiples (a panel per solver) per metric and sweep axis.
-    for (const auto& [axis, metrics] : plots) {
-      const std::vector<size_t> along = SettingsAlongAxis(options, result, scenario, axis);
-      if (along.empty()) continue;
-      if (axis == "initial") {
-        html << "<p>Initial error: +-";
-        for (size_t k = 0; k < along.size(); ++k)
-          html << (k ? "/" : "")
-               << FormatScaledLength(result.settings[along[k]].setting.initial_error.position_m);
-        html << " in position with the angle errors on the x axis.</p>\n";
-      }
-      for (const Metric& metric : metrics) {
-        LinePlot plot;
-        plot.title = std::string(EnumName(scenario)) + ": " + metric.name + " vs " +
-                     (axis == "initial" ? "initial error" : axis);
-        plot.x_label = AxisLabel(axis);
-        plot.y_label = metric.length ? std::string(metric.unit_label) + " (" +
-                                           LengthUnitName(position_unit) + ")"
-                                     : metric.unit_label;
-        plot.log_y = metric.log_y;
-        if (metric.rate) plot.y_min = 0.0, plot.y_max = 1.0;
-        if (metric.nees_reference) {
-          plot.reference_y = 6.0;
-          plot.reference_label = "6 (honest)";
-        }
-        // Logarithmic only when the values span more than a factor of 30; values below 1e-6 of
-        // the largest (noise 0: rounding) count as 0, which a linear axis shows as such.
-        double lo = std::numeric_limits<double>::infinity(), hi = 0.0;
-        for (size_t k : along)
-          for (const SolverStatistics& s : result.settings[k].solvers)
-            if (std::isfinite(value_of(metric, s))) hi = std::max(hi, value_of(metric, s));
-        for (size_t k : along)
-          for (const SolverStatistics& s : result.settings[k].solvers) {
-            const double v = value_of(metric, s);
-            if (std::isfinite(v) && v > 1e-6 * hi) lo = std::min(lo, v);
-          }
-        if (plot.log_y && std::isfinite(lo) && hi < 30.0 * lo && lo > 0.0 && !(hi < 1e-3))
-          plot.log_y = false;
-        for (size_t s = 0; s < result.solver_names.size(); ++s) {
-          PlotSeries series;
-          series.label = result.solver_names[s];
-          for (size_t k : along) {
-            series.x.push_back(PlotX(result.settings[k].setting, axis));
-            series.y.push_back(value_of(metric, result.settings[k].solvers[s]));
-          }
-          plot.series.push_back(series);
-        }
-        html << "<div class=\"plots\">" << RenderSmallMultiplesSvg(plot) << "</div>\n";
-      }
-    }
-    // Time per solve at the scenario's baseline setting (the first of the scenario); the
-    // refinement part is in the table.
-    for (const SettingResult& setting : result.settings) {
-      if (setting.setting.scenario != scenario) continue;
-      BarPlot bars;
-      bars.title = std::string(EnumName(scenario)) + ": median time per solve (" +
-                   setting.setting.axis + " setting)";
-      bars.value_label = "microseconds per image (ResectImage wall time)";
-      for (const SolverStatistics& s : setting.solvers) {
-        bars.labels.push_back(s.solver);
-        bars.values.push_back(s.median_seconds * 1e6);
-      }
-      html << "<div class=\"plots\">" << RenderBarPlotSvg(bars) << "</div>\n";
-      break;
-    }
-    // Every setting of the scenario in one table: the header once, a section per setting.
-    std::vector<TableSection> sections;
-    const std::string prefix = std::string(EnumName(scenario)) + ": ";
-    std::vector<std::string> header;
-    for (size_t k = 0; k < result.settings.size(); ++k) {
-      if (result.settings[k].setting.scenario != scenario) continue;
-      const TextTable& table = tables[k];
-      if (header.empty()) header = table.header;
-      TableSection section;
-      section.heading = table.title.rfind(prefix, 0) == 0 ? table.title.substr(prefix.size())
-                                                          : table.title;
-      section.rows = table.rows;
-      section.notes = table.notes;
-      sections.push_back(std::move(section));
-    }
-    html << HtmlSectionedTable(std::string(EnumName(scenario)) + ": every setting", header,
-                               sections);
-  }
+  for (Scenario scenario : options.scenarios)
+    html << ScenarioHtml(options, result, tables, scenario, position_unit);
   html << HtmlPageClose();
   return html.str();
 }
@@ -449,93 +497,106 @@ std::string DatasetHtml(const DatasetComparisonResult& result, const std::string
 
 // ------------------------------------------------------------------ block comparisons
 
-std::string BlockComparisonHtml(const BlockComparisonOptions& options,
-                                const BlockComparisonResult& result,
-                                const std::string& command_line) {
-  // Solvers within this fraction of the best camera RMSE tie: with a few blocks per setting the
-  // RMSE itself is uncertain by several per cent (unitless).
-  constexpr double kTieFraction = 0.05;
-  std::ostringstream html;
-  html << HtmlPageOpen("photopose compare: blocks", "Which block solver to use");
-  // The verdict from the baseline setting.
-  html << "<h2>Verdict</h2>\n";
-  if (!result.statistics.empty()) {
-    const std::vector<BlockSolverStatistics>& base = result.statistics[0];
-    std::vector<double> rmse, seconds;
-    int most = 0;
-    for (const BlockSolverStatistics& st : base) most = std::max(most, st.successes);
-    for (const BlockSolverStatistics& st : base) {
-      rmse.push_back(st.successes == most && most > 0 ? st.camera_rmse_m : std::nan(""));
-      seconds.push_back(st.mean_seconds);
-    }
-    const std::vector<size_t> tied = TiedBest(rmse, kTieFraction);
-    std::vector<std::string> findings;
-    for (size_t s = 0; s < base.size(); ++s) {
-      const BlockSolverStatistics& st = base[s];
-      const std::string name = "<b>" + HtmlEscape(result.solver_names[s]) + "</b>";
-      if (st.successes < st.trials)
-        findings.push_back(name + " failed " + std::to_string(st.trials - st.successes) + " of " +
-                           std::to_string(st.trials) + " blocks.");
-      if (st.nees_count > 0 && !st.nees_interval_95.Contains(st.mean_nees))
-        findings.push_back(name + ": covariance not honest (mean NEES " +
-                           FormatUnitless(st.mean_nees) + ", expected " +
-                           FormatUnitless(st.nees_interval_95.lower) + " to " +
-                           FormatUnitless(st.nees_interval_95.upper) + ").");
-      if (result.solver_names[s] == "taylor_as_printed" && std::isfinite(st.max_position_offset_m))
-        findings.push_back(
-            "The partial derivatives as printed in the seed note (its eq. 21) move camera centres "
-            "by up to " + FormatLengthWithUnit(st.max_position_offset_m) +
-            " from the corrected linearisation in these blocks (camera RMSE " +
-            FormatLengthWithUnit(st.camera_rmse_m) + " against the truth).");
-    }
-    if (tied.empty()) {
-      html << "<div class=\"verdict bad\"><b>No solver adjusted a block at the baseline.</b>";
-    } else {
-      size_t fastest = tied.front();
-      for (const size_t k : tied)
-        if (seconds[k] < seconds[fastest]) fastest = k;
-      html << "<div class=\"verdict " << (findings.empty() ? "good" : "note") << "\"><b>Use "
-           << HtmlEscape(result.solver_names[fastest]) << ".</b> At the baseline ("
-           << HtmlEscape(result.settings[0].Label()) << ") ";
-      for (size_t k = 0; k < tied.size(); ++k)
-        html << (k == 0 ? "" : (k + 1 == tied.size() ? " and " : ", ")) << "<b>"
-             << HtmlEscape(result.solver_names[tied[k]]) << "</b>";
-      html << (tied.size() > 1 ? " tie for the most accurate camera positions (RMSE within " +
-                                     FormatUnitless(100.0 * kTieFraction, 0) + " % of "
-                               : " has the most accurate camera positions (RMSE ")
-           << FormatLengthWithUnit(base[tied.front()].camera_rmse_m) << ")";
-      if (tied.size() > 1)
-        html << "; " << HtmlEscape(result.solver_names[fastest]) << " is the fastest of them ("
-             << FormatSignificant(1e3 * base[fastest].mean_seconds, 3) << " ms per block)";
-      html << ".";
-    }
-    if (!findings.empty()) {
-      html << "<ul>";
-      for (const std::string& f : findings) html << "<li>" << f << "</li>";
-      html << "</ul>";
-    }
-    html << "</div>\n";
+namespace {
+
+// Solvers within this fraction of the best camera RMSE tie: with a few blocks per setting the
+// RMSE itself is uncertain by several per cent (unitless).
+constexpr double kBlockTieFraction = 0.05;
+
+// What the baseline setting says of each block solver beside its accuracy: failed blocks,
+// covariances that are not honest, what the printed partial derivatives cost.
+std::vector<std::string> BlockFindings(const BlockComparisonResult& result) {
+  const std::vector<BlockSolverStatistics>& base = result.statistics[0];
+  std::vector<std::string> findings;
+  for (size_t s = 0; s < base.size(); ++s) {
+    const BlockSolverStatistics& st = base[s];
+    const std::string name = "<b>" + HtmlEscape(result.solver_names[s]) + "</b>";
+    if (st.successes < st.trials)
+      findings.push_back(name + " failed " + std::to_string(st.trials - st.successes) + " of " +
+                         std::to_string(st.trials) + " blocks.");
+    if (st.nees_count > 0 && !st.nees_interval_95.Contains(st.mean_nees))
+      findings.push_back(name + ": covariance not honest (mean NEES " +
+                         FormatUnitless(st.mean_nees) + ", expected " +
+                         FormatUnitless(st.nees_interval_95.lower) + " to " +
+                         FormatUnitless(st.nees_interval_95.upper) + ").");
+    if (result.solver_names[s] == "taylor_as_printed" && std::isfinite(st.max_position_offset_m))
+      findings.push_back(
+          "The partial derivatives as printed in the seed note (its eq. 21) move camera centres "
+          "by up to " +
+          FormatLengthWithUnit(st.max_position_offset_m) +
+          " from the corrected linearisation in these blocks (camera RMSE " +
+          FormatLengthWithUnit(st.camera_rmse_m) + " against the truth).");
   }
-  html << "<h2>Glossary</h2>\n" << ComparisonGlossaryHtml()
-       << "<ul class=\"notes\">\n"
-       << "<li>Every solver adjusts the same simulated block from the same perturbed start "
-          "(core/simulation/synthetic_block.h), with the stated accuracies equal to the true "
-          "noise and the default rejection of marks beyond 4.5 sigma.</li>\n"
-       << "<li>Camera RMSE: per axis, over every image of the successful blocks, of the adjusted "
-          "centre minus the true one. Check RMSE: the check points intersected from the adjusted "
-          "images against their true positions.</li>\n"
-       << "<li>NEES here: of the camera centres (3 degrees of freedom; 3 when the reported "
-          "covariance is honest), with its 95 % interval.</li>\n"
-       << "<li>Time: one adjustment, single-threaded, including its statistics; x Taylor: the "
-          "ratio to the corrected Taylor solver in the same run.</li>\n</ul>\n";
-  // Small multiples: camera RMSE by solver, one panel per setting.
-  html << "<h2>Camera accuracy per setting</h2>\n<div class=\"plots\">\n";
-  // Every panel in one unit, that of the largest camera RMSE (core/units.h).
+  return findings;
+}
+
+// The verdict from the baseline setting: the fastest of the solvers tied for the most accurate
+// camera positions among those adjusting the most blocks, and the findings.
+std::string BlockVerdictHtml(const BlockComparisonResult& result) {
+  if (result.statistics.empty()) return "";
+  const std::vector<BlockSolverStatistics>& base = result.statistics[0];
+  std::vector<double> rmse, seconds;
+  int most = 0;
+  for (const BlockSolverStatistics& st : base) most = std::max(most, st.successes);
+  for (const BlockSolverStatistics& st : base) {
+    rmse.push_back(st.successes == most && most > 0 ? st.camera_rmse_m : std::nan(""));
+    seconds.push_back(st.mean_seconds);
+  }
+  const std::vector<size_t> tied = TiedBest(rmse, kBlockTieFraction);
+  const std::vector<std::string> findings = BlockFindings(result);
+  std::ostringstream html;
+  if (tied.empty()) {
+    html << "<div class=\"verdict bad\"><b>No solver adjusted a block at the baseline.</b>";
+  } else {
+    const size_t fastest = Fastest(seconds, tied);
+    html << "<div class=\"verdict " << (findings.empty() ? "good" : "note") << "\"><b>Use "
+         << HtmlEscape(result.solver_names[fastest]) << ".</b> At the baseline ("
+         << HtmlEscape(result.settings[0].Label()) << ") ";
+    for (size_t k = 0; k < tied.size(); ++k)
+      html << (k == 0 ? "" : (k + 1 == tied.size() ? " and " : ", ")) << "<b>"
+           << HtmlEscape(result.solver_names[tied[k]]) << "</b>";
+    html << (tied.size() > 1 ? " tie for the most accurate camera positions (RMSE within " +
+                                   FormatUnitless(100.0 * kBlockTieFraction, 0) + " % of "
+                             : " has the most accurate camera positions (RMSE ")
+         << FormatLengthWithUnit(base[tied.front()].camera_rmse_m) << ")";
+    if (tied.size() > 1)
+      html << "; " << HtmlEscape(result.solver_names[fastest]) << " is the fastest of them ("
+           << FormatSignificant(1e3 * base[fastest].mean_seconds, 3) << " ms per block)";
+    html << ".";
+  }
+  if (!findings.empty()) {
+    html << "<ul>";
+    for (const std::string& f : findings) html << "<li>" << f << "</li>";
+    html << "</ul>";
+  }
+  html << "</div>\n";
+  return html.str();
+}
+
+// How the block comparison measures: the same block and start for all, the RMSEs, NEES, time.
+std::string BlockComparisonNotesHtml() {
+  return "<ul class=\"notes\">\n"
+         "<li>Every solver adjusts the same simulated block from the same perturbed start "
+         "(core/simulation/synthetic_block.h), with the stated accuracies equal to the true "
+         "noise and the default rejection of marks beyond 4.5 sigma.</li>\n"
+         "<li>Camera RMSE: per axis, over every image of the successful blocks, of the adjusted "
+         "centre minus the true one. Check RMSE: the check points intersected from the adjusted "
+         "images against their true positions.</li>\n"
+         "<li>NEES here: of the camera centres (3 degrees of freedom; 3 when the reported "
+         "covariance is honest), with its 95 % interval.</li>\n"
+         "<li>Time: one adjustment, single-threaded, including its statistics; x Taylor: the "
+         "ratio to the corrected Taylor solver in the same run.</li>\n</ul>\n";
+}
+
+// Small multiples: camera RMSE by solver, one panel per setting, every panel in one unit, that
+// of the largest camera RMSE (core/units.h).
+std::string CameraAccuracyPlotsHtml(const BlockComparisonResult& result) {
   std::vector<double> camera_rmse;
   for (const auto& per_setting : result.statistics)
     for (const BlockSolverStatistics& st : per_setting)
       camera_rmse.push_back(st.successes > 0 ? st.camera_rmse_m : std::nan(""));
   const LengthUnit camera_unit = LengthUnitFor(LargestMagnitude(camera_rmse));
+  std::string html;
   for (size_t setting = 0; setting < result.settings.size(); ++setting) {
     BarPlot bars;
     bars.title = result.settings[setting].Label();
@@ -546,8 +607,22 @@ std::string BlockComparisonHtml(const BlockComparisonOptions& options,
       bars.values.push_back(
           st.successes > 0 ? LengthIn(st.camera_rmse_m, camera_unit) : std::nan(""));
     }
-    html << RenderBarPlotSvg(bars) << "\n";
+    html += RenderBarPlotSvg(bars) + "\n";
   }
+  return html;
+}
+
+}  // namespace
+
+std::string BlockComparisonHtml(const BlockComparisonOptions& options,
+                                const BlockComparisonResult& result,
+                                const std::string& command_line) {
+  std::ostringstream html;
+  html << HtmlPageOpen("photopose compare: blocks", "Which block solver to use");
+  html << "<h2>Verdict</h2>\n" << BlockVerdictHtml(result);
+  html << "<h2>Glossary</h2>\n" << ComparisonGlossaryHtml() << BlockComparisonNotesHtml();
+  html << "<h2>Camera accuracy per setting</h2>\n<div class=\"plots\">\n"
+       << CameraAccuracyPlotsHtml(result);
   html << "</div>\n<h2>Tables</h2>\n";
   for (const TextTable& table : BlockComparisonTables(options, result))
     html << RenderHtmlTable(table) << "\n";

@@ -249,8 +249,10 @@ std::string MonteCarloCsv(const MonteCarloResult& result) {
   return csv.str();
 }
 
-std::vector<TextTable> DatasetTables(const DatasetComparisonResult& result) {
-  std::vector<TextTable> tables;
+namespace {
+
+// The dataset comparison's table of solvers: one row per solver over every image.
+TextTable DatasetSummaryTable(const DatasetComparisonResult& result) {
   const size_t reference = ReferenceSolverIndex(result.solver_names);
   const double reference_seconds = result.summaries[reference].median_seconds;
   TextTable summary;
@@ -298,8 +300,40 @@ std::vector<TextTable> DatasetTables(const DatasetComparisonResult& result) {
           "| and of the rotation angle between the two." +
           (result.has_reference ? " d_frames pos, d_frames rot: the same to the reference frames."
                                 : "")};
-  tables.push_back(summary);
+  return summary;
+}
 
+// One row of the per-image table: an image as one solver oriented it.
+std::vector<Cell> DatasetImageRow(const DatasetComparisonResult& result, const DatasetSolve& s) {
+  std::vector<Cell> row = {Text(s.raster), Text(result.solver_names[s.solver]),
+                           Text(s.success ? "ok" : "failed")};
+  if (s.success) {
+    for (int k = 0; k < 3; ++k) row.push_back(Text(FormatCoordinate(s.eo.parameters[k])));
+    for (int k = 0; k < 3; ++k) row.push_back(Text(FormatDegrees(s.angles_deg[k])));
+    row.push_back(Text(FormatUnitless(s.sigma0, 3)));
+    row.push_back(Text(std::to_string(s.num_inliers) + "/" + std::to_string(s.num_observations)));
+    row.push_back(Value(s.rms_px));
+    row.push_back(Value(s.check_rmse_px));
+    row.push_back(Text(std::to_string(s.num_check_beyond)));
+  } else {
+    for (int k = 0; k < 9; ++k) row.push_back(Text("-"));
+    row.push_back(Value(kNaN));
+    row.push_back(Value(kNaN));
+    row.push_back(Text("-"));
+  }
+  row.push_back(Text(std::to_string(s.iterations)));
+  row.push_back(Text(Microseconds(s.seconds)));
+  row.push_back(Value(s.has_difference ? s.difference_position_m : kNaN));
+  row.push_back(Value(s.has_difference ? ArcsecondsToDegrees(s.difference_rotation_arcsec) : kNaN));
+  if (result.has_reference) {
+    row.push_back(Value(s.has_reference ? s.reference_position_m : kNaN));
+    row.push_back(Value(s.has_reference ? ArcsecondsToDegrees(s.reference_rotation_arcsec) : kNaN));
+  }
+  return row;
+}
+
+// The dataset comparison's per-image table: every image by every solver, failures in the notes.
+TextTable DatasetImageTable(const DatasetComparisonResult& result) {
   TextTable images;
   images.title = std::string("Per image (angles in the ") + EnumName(result.rotation) +
                  " convention)";
@@ -315,42 +349,18 @@ std::vector<TextTable> DatasetTables(const DatasetComparisonResult& result) {
     image_columns.push_back(ValueColumn("d_frames rot", "deg"));
   }
   std::vector<std::vector<Cell>> image_cells;
-  for (const DatasetSolve& s : result.solves) {
-    std::vector<Cell> row = {Text(s.raster), Text(result.solver_names[s.solver]),
-                             Text(s.success ? "ok" : "failed")};
-    if (s.success) {
-      for (int k = 0; k < 3; ++k) row.push_back(Text(FormatCoordinate(s.eo.parameters[k])));
-      for (int k = 0; k < 3; ++k) row.push_back(Text(FormatDegrees(s.angles_deg[k])));
-      row.push_back(Text(FormatUnitless(s.sigma0, 3)));
-      row.push_back(
-          Text(std::to_string(s.num_inliers) + "/" + std::to_string(s.num_observations)));
-      row.push_back(Value(s.rms_px));
-      row.push_back(Value(s.check_rmse_px));
-      row.push_back(Text(std::to_string(s.num_check_beyond)));
-    } else {
-      for (int k = 0; k < 9; ++k) row.push_back(Text("-"));
-      row.push_back(Value(kNaN));
-      row.push_back(Value(kNaN));
-      row.push_back(Text("-"));
-    }
-    row.push_back(Text(std::to_string(s.iterations)));
-    row.push_back(Text(Microseconds(s.seconds)));
-    row.push_back(Value(s.has_difference ? s.difference_position_m : kNaN));
-    row.push_back(
-        Value(s.has_difference ? ArcsecondsToDegrees(s.difference_rotation_arcsec) : kNaN));
-    if (result.has_reference) {
-      row.push_back(Value(s.has_reference ? s.reference_position_m : kNaN));
-      row.push_back(
-          Value(s.has_reference ? ArcsecondsToDegrees(s.reference_rotation_arcsec) : kNaN));
-    }
-    image_cells.push_back(row);
-  }
+  for (const DatasetSolve& s : result.solves) image_cells.push_back(DatasetImageRow(result, s));
   FillTable(image_columns, image_cells, &images);
   for (const DatasetSolve& s : result.solves)
     if (!s.success)
       images.notes.push_back(s.raster + " " + result.solver_names[s.solver] + ": " + s.message);
-  tables.push_back(images);
-  return tables;
+  return images;
+}
+
+}  // namespace
+
+std::vector<TextTable> DatasetTables(const DatasetComparisonResult& result) {
+  return {DatasetSummaryTable(result), DatasetImageTable(result)};
 }
 
 std::string DatasetCsv(const DatasetComparisonResult& result) {

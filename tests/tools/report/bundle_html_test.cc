@@ -244,6 +244,38 @@ TEST_F(BundleHtmlTest, AFailedAdjustmentSaysSoFirst) {
 
 // Every term the report uses without explaining it in place is in its glossary, and the glossary
 // is on the page.
+// What the adjustment left out and what the data cannot carry, each in its place: a tie mark
+// rejected after a round in section 7 with its file line, round and |v|; a group whose estimate
+// is far above its statement and the parameters that trade off with others among the verdicts.
+TEST_F(BundleHtmlTest, RejectedTieMarksAbsorbedGrossErrorsAndWeakParametersAreShown) {
+  const int mark = 3;
+  const BlockMark& m = block_.marks[mark];
+  result_.rejected_marks = {BundleRejectedMark{mark, 2, 7.26}};
+  result_.groups = {Group(kTieMarks, "px", 0.5, 2.0)};
+  result_.groups[0].estimated_accuracy = Eigen::Vector3d::Constant(2.1);  // 4.2 x the stated
+  result_.weakly_determined = {BundleWeakParameter{"image 'IMG_1': omega", 12.6}};
+  result_.summary.tie_points_left_out = {"T_far"};
+  const std::string html = BundleReportHtml(block_, result_, context_);
+  const std::string rejected = TableWithCaption(html, "Tie marks rejected after a round");
+  ASSERT_FALSE(rejected.empty());
+  EXPECT_GT(html.find(rejected), html.find("<h2>7. Rejected observations</h2>"));
+  EXPECT_NE(rejected.find("<td>" + block_.points[m.point].id + "</td><td>" +
+                          block_.images[m.image].name + "</td><td>" + std::to_string(m.line) +
+                          "</td><td>2</td><td>7.3</td>"),
+            std::string::npos)
+      << rejected;
+  EXPECT_FALSE(TableWithCaption(html, "Tie points left out").empty());
+  EXPECT_EQ(html.find("None: every mark and prior was kept."), std::string::npos);
+  const size_t verdicts = html.find("<h2>2. Verdicts</h2>");
+  const size_t gross = html.find("<b>Gross errors absorbed:</b> tie_marks: the estimated accuracy");
+  const size_t weak = html.find("<b>Weakly determined:</b> 1 parameter trade off");
+  EXPECT_GT(gross, verdicts);
+  EXPECT_GT(weak, gross);
+  EXPECT_LT(weak, html.find("<h2>3. Control and check points</h2>"));
+  EXPECT_NE(html.find("image &#39;IMG_1&#39;: omega (sigma 13 times", weak), std::string::npos)
+      << html.substr(weak, 300);
+}
+
 TEST(BundleHtml, TheGlossaryExplainsTheReportsTerms) {
   const std::string glossary = BundleGlossaryHtml();
   EXPECT_EQ(glossary.rfind("<h3>Terms</h3>\n<dl class=\"glossary\">", 0), 0u);

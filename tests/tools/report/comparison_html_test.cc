@@ -95,5 +95,45 @@ TEST(ComparisonHtml, TheGlossaryExplainsEveryColumnOfTheTables) {
   EXPECT_GE(columns, 30u);
 }
 
+// The block page's verdict at the baseline: among the solvers that adjusted the most blocks, those
+// within 5 % of the best camera RMSE tie, and the fastest of them is the one to use; a solver that
+// failed blocks is named in the findings and cannot be recommended however accurate.
+TEST(ComparisonHtml, TheBlockVerdictRecommendsTheFastestOfTheTiedSolvers) {
+  BlockComparisonOptions options;
+  options.trials = 4;
+  BlockComparisonResult result;
+  result.settings = {BlockSetting()};
+  result.solver_names = {"taylor", "ceres_analytic", "ceres_autodiff", "lucky"};
+  auto solver = [](int successes, double rmse_m, double seconds) {
+    BlockSolverStatistics st;
+    st.trials = 4;
+    st.successes = successes;
+    st.camera_rmse_m = rmse_m;
+    st.mean_seconds = seconds;
+    return st;
+  };
+  // taylor and ceres_analytic tie (0.0100 and 0.0104 m), ceres_autodiff is 10 % off, lucky is the
+  // most accurate but failed a block.
+  result.statistics = {{solver(4, 0.0100, 0.030), solver(4, 0.0104, 0.020),
+                        solver(4, 0.0110, 0.001), solver(3, 0.0050, 0.001)}};
+  const std::string html = BlockComparisonHtml(options, result, "photopose compare");
+  const size_t verdict = html.find("<div class=\"verdict");
+  ASSERT_NE(verdict, std::string::npos) << html;
+  const std::string text = html.substr(verdict, html.find("</div>", verdict) - verdict);
+  for (const char* expected :
+       {"<b>Use ceres_analytic.</b>",
+        "<b>taylor</b> and <b>ceres_analytic</b> tie for the most accurate",
+        "ceres_analytic is the fastest of them (20 ms per block)",
+        "<b>lucky</b> failed 1 of 4 blocks."})
+    EXPECT_NE(text.find(expected), std::string::npos) << expected << " in " << text;
+  EXPECT_EQ(text.find("<b>ceres_autodiff</b>"), std::string::npos) << text;
+  EXPECT_NE(text.find("verdict note"), std::string::npos) << "findings make it a note: " << text;
+  // No solver adjusted a block: none is recommended.
+  for (BlockSolverStatistics& st : result.statistics[0]) st.successes = 0;
+  const std::string none = BlockComparisonHtml(options, result, "photopose compare");
+  EXPECT_NE(none.find("<b>No solver adjusted a block at the baseline.</b>"), std::string::npos);
+  EXPECT_EQ(none.find("<b>Use "), std::string::npos);
+}
+
 }  // namespace
 }  // namespace photopose::cli
