@@ -76,6 +76,7 @@ Status WriteResectionReport(const std::string& path, const ResectionJobOptions& 
                                                                 : json(nullptr)},
       {"default_film_accuracy_um", options.input.default_film_accuracy_um},
       {"strict", o.refuse_weak},
+      {"consensus_after_frames", o.consensus_after_approximate},
       {"weak_pose_shift_sigmas", o.weak_pose_shift_sigmas},
       {"ambiguous_pose_sigmas", o.ambiguous_pose_sigmas},
       {"detection_power", o.detection_power},
@@ -92,7 +93,9 @@ Status WriteResectionReport(const std::string& path, const ResectionJobOptions& 
                   {"success", r.success},
                   {"message", s.message},
                   {"termination", EnumName(s.termination)},
-                  {"initial_values", s.used_approximate ? "frames" : "consensus"},
+                  {"initial_values", s.used_approximate                ? "frames"
+                                     : s.consensus_after_approximate ? "consensus_after_frames"
+                                                                     : "consensus"},
                   {"consensus",
                    {{"trials", s.ransac_trials},
                     {"exhaustive", s.ransac_exhaustive},
@@ -107,6 +110,7 @@ Status WriteResectionReport(const std::string& path, const ResectionJobOptions& 
                   {"sigma0", r.sigma0},
                   {"degrees_of_freedom", r.degrees_of_freedom},
                   {"warnings", r.warnings}};
+    if (s.consensus_after_approximate) image["frames_start_abandoned"] = s.approximate_message;
     if (r.ambiguous) {
       const auto pose = [&](const ExteriorOrientation& eo, const std::vector<char>& inliers) {
         json ids = json::array();
@@ -159,6 +163,7 @@ Status WriteResectionReport(const std::string& path, const ResectionJobOptions& 
         for (int row = 0; row < 6; ++row)
           for (int col = 0; col < 6; ++col) covariance.push_back(r.covariance(row, col));
         image["covariance_seed"] = covariance;  // row-major, X0 Y0 Z0 (m) omega phi kappa (rad)
+        image["covariance_factor"] = r.covariance_factor;
         image["standard_deviations"] = {{"X", r.standard_deviations[0]},
                                         {"Y", r.standard_deviations[1]},
                                         {"Z", r.standard_deviations[2]},
