@@ -498,7 +498,8 @@ TEST(BatchSnooping, StopsWhereTheBlockCouldNotLoseTheNextAsOneAtATime) {
 // never adjusted with its blunder or without a good mark. Before (the worst |w| removed, one per
 // point and round) the blunder on a three-ray point along the flight line, where the x rows of
 // the three marks correlate near 1, dragged the point so that a good mark had the largest |w|:
-// measured 16 of 48 cases wrong with Ceres and 16 with Taylor.
+// measured 4 of these 24 cases wrong with Ceres and 4 with Taylor (a good mark removed, the
+// blunder kept). Now 16 removed right and 8 points unresolved with either solver.
 TEST(RejectionRounds, AThreeRayPointsBlunderIsRemovedOrThePointIsUnresolved) {
   Block clean;
   SyntheticBlockTruth truth;
