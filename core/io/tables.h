@@ -79,9 +79,10 @@ struct FrameRecord {
   std::string camera_id;  // CameraID
   ExteriorOrientation eo; // internal seed convention, converted on reading / writing
   std::string srs;        // SRS, kept as written
-  // Optional 6x6 covariance of eo.parameters (X0, Y0, Z0 in m; seed omega, phi, kappa in rad),
-  // already scaled by sigma0^2. The writer propagates it to the angles of the convention written
-  // and writes the standard deviations.
+  // Optional 6x6 covariance of eo.parameters (X0, Y0, Z0 in m; seed omega, phi, kappa in rad), as
+  // the solver reports it (resection: a-priori with stated accuracies, sigma0^2-scaled without;
+  // bundle: sigma0^2-scaled). The writer propagates it to the angles of the convention written and
+  // writes the standard deviations.
   std::optional<Matrix6d> covariance;
   std::optional<double> sigma0;  // a posteriori sigma0 (unitless)
   // Accuracy of the exterior orientation as measured (GNSS / IMU), one sigma per component, all

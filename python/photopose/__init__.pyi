@@ -171,6 +171,7 @@ class ResectionOptions:
     detection_power: float  # (0, 1)
     weak_pose_shift_sigmas: float  # standard deviations of a pose parameter
     refuse_weak: bool
+    consensus_after_approximate: bool  # try the consensus start when the approximate pose does not solve the image
     def validate(self) -> None: ...
 
 class ResectionInput:
@@ -207,6 +208,10 @@ class ResectionSummary:
     @property
     def used_approximate(self) -> bool: ...
     @property
+    def consensus_after_approximate(self) -> bool: ...  # the approximate pose was tried first and abandoned for the consensus start
+    @property
+    def approximate_message(self) -> str: ...  # what the abandoned approximate start gave
+    @property
     def ransac_trials(self) -> int: ...
     @property
     def ransac_exhaustive(self) -> bool: ...
@@ -231,7 +236,8 @@ class ResectionSummary:
 
 class ResectionResult:
     """The resection of one image: success (never a pose on failure: summary.message says why), the pose
-    (seed angles), its 6 x 6 covariance (m, rad) and standard deviations, sigma0, and per mark (input
+    (seed angles), its 6 x 6 covariance (m, rad: a-priori with stated accuracies, sigma0^2 times it
+    without; covariance_factor says which) and standard deviations, sigma0, and per mark (input
     order) residuals (N x 2, the mark's unit, image-plane axes), normalized residuals, redundancy
     numbers, minimal detectable blunders, pose shifts (sigmas) and status."""
     @property
@@ -244,6 +250,10 @@ class ResectionResult:
     def covariance(self) -> numpy.ndarray: ...  # 6 x 6 (m^2, rad^2; X0, Y0, Z0, seed omega, phi, kappa)
     @property
     def standard_deviations(self) -> numpy.ndarray: ...  # 6 (m, rad)
+    @property
+    def covariance_factor(self) -> float: ...  # the covariance over N^-1: 1 with stated accuracies, sigma0^2 without
+    @property
+    def sigma_upper_factor(self) -> float: ...  # how many times the true sigmas may exceed the reported ones at 95 % (1 with stated accuracies)
     @property
     def accuracy_stated(self) -> bool: ...
     @property

@@ -146,7 +146,9 @@ refinement (solver, Jacobian, loss), and the verdict's limits.)doc");
       .def_readwrite("detection_power", &ResectionOptions::detection_power, "(0, 1)")
       .def_readwrite("weak_pose_shift_sigmas", &ResectionOptions::weak_pose_shift_sigmas,
                      "standard deviations of a pose parameter")
-      .def_readwrite("refuse_weak", &ResectionOptions::refuse_weak);
+      .def_readwrite("refuse_weak", &ResectionOptions::refuse_weak)
+      .def_readwrite("consensus_after_approximate", &ResectionOptions::consensus_after_approximate,
+                     "try the consensus start when the approximate pose does not solve the image");
   DefValidate(options, "ResectionOptions");
 }
 
@@ -188,6 +190,10 @@ void BindResectionResult(py::module_& m) {
                        "'converged', 'no_convergence', 'failure' or 'cancelled'")
       .def_readonly("message", &ResectionSummary::message, "why it failed, with its numbers")
       .def_readonly("used_approximate", &ResectionSummary::used_approximate)
+      .def_readonly("consensus_after_approximate", &ResectionSummary::consensus_after_approximate,
+                    "the approximate pose was tried first and abandoned for the consensus start")
+      .def_readonly("approximate_message", &ResectionSummary::approximate_message,
+                    "what the abandoned approximate start gave")
       .def_readonly("ransac_trials", &ResectionSummary::ransac_trials)
       .def_readonly("ransac_exhaustive", &ResectionSummary::ransac_exhaustive)
       .def_readonly("ransac_stopped_early", &ResectionSummary::ransac_stopped_early)
@@ -204,7 +210,8 @@ void BindResectionResult(py::module_& m) {
 
   py::class_<ResectionResult> result(m, "ResectionResult", R"doc(
 The resection of one image: success (never a pose on failure: summary.message says why), the pose
-(seed angles), its 6 x 6 covariance (m, rad) and standard deviations, sigma0, and per mark (input
+(seed angles), its 6 x 6 covariance (m, rad: a-priori with stated accuracies, sigma0^2 times it
+without; covariance_factor says which) and standard deviations, sigma0, and per mark (input
 order) residuals (N x 2, the mark's unit, image-plane axes), normalized residuals, redundancy
 numbers, minimal detectable blunders, pose shifts (sigmas) and status.)doc");
   result.def_readonly("success", &ResectionResult::success)
@@ -215,6 +222,11 @@ numbers, minimal detectable blunders, pose shifts (sigmas) and status.)doc");
       .def_property_readonly("standard_deviations",
                              [](const ResectionResult& r) { return Vector6d(r.standard_deviations); },
                              "6 (m, rad)")
+      .def_readonly("covariance_factor", &ResectionResult::covariance_factor,
+                    "the covariance over N^-1: 1 with stated accuracies, sigma0^2 without")
+      .def_readonly("sigma_upper_factor", &ResectionResult::sigma_upper_factor,
+                    "how many times the true sigmas may exceed the reported ones at 95 % (1 with "
+                    "stated accuracies)")
       .def_readonly("accuracy_stated", &ResectionResult::accuracy_stated)
       .def_readonly("sigma0", &ResectionResult::sigma0)
       .def_readonly("degrees_of_freedom", &ResectionResult::degrees_of_freedom)

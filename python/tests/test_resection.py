@@ -92,6 +92,22 @@ def test_resection_from_numpy_arrays():
     np.testing.assert_allclose(again.eo.parameters, result.eo.parameters, atol=1e-9)
 
 
+def test_covariance_is_a_priori_with_stated_accuracy_and_scaled_without():
+    """The library's one rule (PoseCovarianceFactor): with sigma stated the covariance is N^-1, sigma0
+    reported beside; without, sigma0^2 N^-1, and few degrees of freedom say how far to trust it."""
+    _, points, xy, focal = synthetic_image(seed=5, n=5)
+    stated = pp.resect(pp.ResectionInput(xy, points, focal, sigma=1.0, units="um"))
+    estimated = pp.resect(pp.ResectionInput(xy, points, focal, units="um"))
+    assert stated.success and estimated.success, (stated.summary.message, estimated.summary.message)
+    assert stated.accuracy_stated and not estimated.accuracy_stated
+    assert stated.covariance_factor == 1.0 and stated.sigma_upper_factor == 1.0
+    assert estimated.covariance_factor == pytest.approx(estimated.sigma0 ** 2, rel=1e-12)
+    np.testing.assert_allclose(estimated.covariance, estimated.sigma0 ** 2 * stated.covariance,
+                               rtol=1e-6, atol=1e-6 * np.abs(estimated.covariance).max())
+    assert estimated.degrees_of_freedom == 4 and estimated.sigma_upper_factor > 2.0
+    assert any(w.startswith("uncertain sigmas:") for w in estimated.warnings)
+
+
 def test_options_as_keywords_and_attributes():
     options = pp.ResectionOptions(allow_no_redundancy=True,
                                   test=pp.OutlierTestOptions(confidence=0.99))

@@ -466,6 +466,21 @@ struct BundleRejectedMark {
   double whitened_residual = 0.0;  // |v| / (sigma sigma0) when rejected
 };
 
+// A tie point whose marks disagree beyond the rejection threshold but whose blundered mark the
+// block cannot single out (internal/bundle_rounds.h, RejectMarks): removing its worst mark would
+// not explain the disagreement more than 1 / snooping_alpha times better (likelihood ratio) than
+// removing runner_up_mark. All its marks are left out (in rejected_marks); the point is not
+// adjusted and not written to the points table.
+struct BundleUnresolvedPoint {
+  int point = -1;           // index into Block::points
+  int round = 0;            // the round after which it was left out
+  int worst_mark = -1;      // the mark with the largest normalized residual (Block::marks)
+  int runner_up_mark = -1;  // the other mark whose removal explains the point nearly as well
+  // The drop of the sum of squares each removal gives, w_x^2 + w_y^2 (unitless).
+  double worst_drop = 0.0;
+  double runner_up_drop = 0.0;
+};
+
 // A mark of a check point rejected by the w-test of its intersection (solvers/bundle/check_points.h).
 struct BundleRejectedCheckMark {
   int mark = -1;            // index into Block::marks
@@ -546,6 +561,8 @@ struct BundleAdjustmentResult {
   // Weakly determined parameters of an absolute block, the worst first (empty without covariances).
   std::vector<BundleWeakParameter> weakly_determined;
   std::vector<BundleRejectedMark> rejected_marks;
+  // Tie points the rejection could not resolve, all their marks left out (in rejected_marks).
+  std::vector<BundleUnresolvedPoint> unresolved_points;
   // Check marks rejected by the w-test of their point's intersection, in order of rejection.
   std::vector<BundleRejectedCheckMark> rejected_check_marks;
   std::optional<Eigen::Vector3d> lever_arm_m;  // estimated (or applied) lever arm

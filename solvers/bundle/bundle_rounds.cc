@@ -166,28 +166,76 @@ std::vector<double> RejectionScores(const RoundChanges& a, double* limit) {
   return score;
 }
 
+// Per tie mark with diagnostics, the drop of the block's sum of squares its removal gives, about
+// w_x^2 + w_y^2 (its rows' normalized residuals; the x-y correlation within a mark left out);
+// NaN where a row has no w (redundancy number ~0) or without diagnostics.
+std::vector<double> RemovalDrops(const RoundChanges& a) {
+  std::vector<double> drop(a.block.marks.size(), std::numeric_limits<double>::quiet_NaN());
+  for (const BundleObservationDiagnostics& d : a.result->observations) {
+    if (d.group != kTieMarks) continue;
+    double& t = drop[d.item];
+    t = (d.axis == 0 ? 0.0 : t) + d.normalized * d.normalized;
+  }
+  return drop;
+}
+
 // A rejection round: marks beyond the threshold (normalized residuals when known, whitened
 // residuals in units of max(1, sigma0) otherwise), one per point and round, its worst: a blunder
 // in one mark of a track pulls the point and raises its other marks' residuals too, and those
-// recover once it is gone. kFailed when the block no longer holds (the summary says why).
+// recover once it is gone.
+// The worst is removed only when the block can tell it from the point's other marks. Removing
+// mark k drops the sum of squares by T_k (RemovalDrops), so the likelihood ratio of "the blunder
+// is in k" against "in j" is exp((T_k - T_j) / 2); k goes when T_k - T_j exceeds -2 ln(alpha)
+// (statistics.snooping_alpha: 13.8 at 0.001) for every other mark j of the point in use. Where it
+// does not, removing another mark would explain the point as well: three rays whose residuals
+// are one pattern (cameras on one line: the x rows correlate near 1), or two rays. The point is
+// then unresolved: all its marks leave the adjustment (rejected_marks) and it is listed
+// (unresolved_points), neither adjusted with its blunder nor without a good mark. Without
+// diagnostics (statistics none) the worst is removed as before. kFailed when the block no longer
+// holds (the summary says why).
 enum class Rejection { kNone, kRemoved, kFailed };
 
 Rejection RejectMarks(RoundChanges* a, int r) {
   const Block& block = a->block;
   double limit = 0.0;
   const std::vector<double> score = RejectionScores(*a, &limit);
+  const std::vector<double> drop = RemovalDrops(*a);
+  const double separable = -2.0 * std::log(a->options.statistics.snooping_alpha);
   BundlePlan trial = *a->plan;
   std::vector<BundleRejectedMark> rejected;
+  std::vector<BundleUnresolvedPoint> unresolved;
   std::vector<int> worst_of_point(block.points.size(), -1);
   for (size_t m = 0; m < block.marks.size(); ++m) {
     if (!trial.mark_used[m] || !(score[m] > limit)) continue;
     int& worst = worst_of_point[block.marks[m].point];
     if (worst < 0 || score[m] > score[worst]) worst = static_cast<int>(m);
   }
-  for (size_t m = 0; m < block.marks.size(); ++m) {
-    if (worst_of_point[block.marks[m].point] != static_cast<int>(m)) continue;
-    trial.mark_used[m] = 0;
-    rejected.push_back({static_cast<int>(m), r, score[m]});
+  for (size_t p = 0; p < block.points.size(); ++p) {
+    const int worst = worst_of_point[p];
+    if (worst < 0) continue;
+    // The point's other mark in use that removing would explain it best.
+    int runner_up = -1;
+    if (std::isfinite(drop[worst])) {
+      for (const int m : block.marks_of_point[p]) {
+        if (m == worst || !trial.mark_used[m]) continue;
+        const double t = std::isfinite(drop[m]) ? drop[m] : drop[worst];  // untestable: no better
+        if (runner_up < 0 || t > (std::isfinite(drop[runner_up]) ? drop[runner_up] : drop[worst]))
+          runner_up = m;
+      }
+    }
+    const double runner_up_drop =
+        runner_up < 0 ? 0.0 : (std::isfinite(drop[runner_up]) ? drop[runner_up] : drop[worst]);
+    if (runner_up < 0 || drop[worst] - runner_up_drop > separable) {
+      trial.mark_used[worst] = 0;
+      rejected.push_back({worst, r, score[worst]});
+      continue;
+    }
+    unresolved.push_back({static_cast<int>(p), r, worst, runner_up, drop[worst], runner_up_drop});
+    for (const int m : block.marks_of_point[p]) {
+      if (!trial.mark_used[m]) continue;
+      trial.mark_used[m] = 0;
+      rejected.push_back({m, r, score[m]});
+    }
   }
   ++a->rejections_done;
   if (rejected.empty()) return Rejection::kNone;
@@ -201,6 +249,8 @@ Rejection RejectMarks(RoundChanges* a, int r) {
   }
   a->result->rejected_marks.insert(a->result->rejected_marks.end(), rejected.begin(),
                                    rejected.end());
+  a->result->unresolved_points.insert(a->result->unresolved_points.end(), unresolved.begin(),
+                                      unresolved.end());
   *a->plan = std::move(trial);
   return Rejection::kRemoved;
 }

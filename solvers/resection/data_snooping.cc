@@ -136,6 +136,17 @@ bool FailsGlobalTest(double omega, double confidence, int redundancy) {
   return omega > GlobalTestCriticalValue(confidence, redundancy);
 }
 
+double PoseCovarianceFactor(bool accuracy_stated, double omega, int redundancy) {
+  if (accuracy_stated || redundancy <= 0) return 1.0;
+  return omega / redundancy;
+}
+
+double SigmaUpperFactor(double confidence, int redundancy) {
+  if (redundancy <= 0) return std::numeric_limits<double>::infinity();
+  // The lower quantile through the same cache as the global test's (any p: chi-square(r)).
+  return std::sqrt(redundancy / GlobalTestCriticalValue(1.0 - confidence, redundancy));
+}
+
 Status ComputePoseAdjustmentStatistics(const std::vector<Eigen::Vector2d>& image_plane,
                                        const std::vector<Eigen::Vector3d>& points_in_ground,
                                        const std::vector<double>& sigmas, double focal,

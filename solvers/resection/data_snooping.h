@@ -68,6 +68,27 @@ double DetectableBiasSigmas(double confidence, double power);
 // quantile at confidence >= 0.5 never is).
 bool FailsGlobalTest(double omega, double confidence, int redundancy);
 
+// The factor f of a pose's covariance f N^-1 (N the whitened normal matrix): the one rule of every
+// resection's covariance (ResectImage, TaylorResection, the comparison's NEES). With the marks'
+// accuracy stated, 1: the a-priori covariance, sigma0 = 1, whose estimate sigma0_hat^2 = Omega / r
+// is tested by the global test and reported beside, not multiplied in (Foerstner and Wrobel,
+// Photogrammetric Computer Vision, 2016: the estimated variance factor serves the test; at two to
+// four degrees of freedom it scatters by factors of several, and sigmas scaled by it go with it:
+// with noise exactly as stated, 45 of 1200 four- and five-point poses lay beyond 5 of such sigmas).
+// Without a stated accuracy sigma0_hat^2 = Omega / r, the only figure there is (r > 0); 1 without
+// redundancy.
+double PoseCovarianceFactor(bool accuracy_stated, double omega, int redundancy);
+// Fewest degrees of freedom whose sigma0_hat the standard deviations may rest on without a warning
+// (count): at 5 the true sigmas may still be up to SigmaUpperFactor = 2.1 times those reported.
+inline constexpr int kMinSigmaDegreesOfFreedom = 5;
+// Confidence of SigmaUpperFactor (one-sided).
+inline constexpr double kSigmaUpperFactorConfidence = 0.95;
+// With sigma0 estimated from r degrees of freedom (r sigma0_hat^2 / sigma^2 ~ chi-square(r)): the
+// factor by which the true standard deviations may exceed the reported ones at `confidence`
+// (one-sided), sqrt(r / q), q the chi-square(r) quantile at 1 - confidence: 4.4 at r = 2, 2.4 at
+// r = 4, 1.6 at r = 10 (0.95). Infinite for r <= 0.
+double SigmaUpperFactor(double confidence, int redundancy);
+
 struct PoseAdjustmentStatistics {
   int num_used = 0;
   int redundancy = 0;   // 2 num_used - 6

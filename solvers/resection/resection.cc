@@ -450,6 +450,7 @@ bool ResectionOptions::IsValid(std::string* why) const {
 std::string ResectionSummary::BriefReport() const {
   std::ostringstream os;
   os << EnumName(termination) << ", "
+     << (consensus_after_approximate ? "approximate pose abandoned (" + approximate_message + "), " : "")
      << (used_approximate ? "approximate pose given"
                           : (!ransac_exhaustive ? "RANSAC"
                              : ransac_stopped_early
@@ -761,8 +762,21 @@ bool ImageResection::Statistics() {
   const double confidence = options_.test.confidence;
   if (stats_.redundancy > 0) {
     result_.has_covariance = true;
-    result_.covariance = s0_squared_ * stats_.cofactor;
+    result_.covariance_factor =
+        PoseCovarianceFactor(marks_.stated, stats_.omega, stats_.redundancy);
+    result_.covariance = result_.covariance_factor * stats_.cofactor;
     result_.standard_deviations = result_.covariance.diagonal().cwiseSqrt();
+    if (!marks_.stated) {
+      result_.sigma_upper_factor = SigmaUpperFactor(kSigmaUpperFactorConfidence, stats_.redundancy);
+      if (stats_.redundancy < kMinSigmaDegreesOfFreedom)
+        result_.warnings.push_back(
+            "uncertain sigmas: without a stated accuracy the standard deviations rest on sigma0 "
+            "from " + std::to_string(stats_.redundancy) + " degrees of freedom; at " +
+            Number(100.0 * kSigmaUpperFactorConfidence) + "% the true ones may be up to " +
+            Number(result_.sigma_upper_factor) + " times larger; state the marks' Accuracy");
+    }
+  } else {
+    result_.sigma_upper_factor = std::numeric_limits<double>::infinity();
   }
   const double critical =
       stats_.num_used >= 5
@@ -863,12 +877,48 @@ ResectionResult ImageResection::Solved() {
 
 }  // namespace
 
-ResectionResult ResectImage(const ResectionOptions& options, const ResectionInput& input) {
+namespace {
+
+ResectionResult ResectFromItsStart(const ResectionOptions& options, const ResectionInput& input) {
   ImageResection image(options, input);
   if (!image.CheckInput() || !image.InitialValues() || !image.DecideMarks() || !image.Verdict() ||
       !image.Statistics() || !image.NotAmbiguous() || !image.Reliability())
     return image.Failed();
   return image.Solved();
+}
+
+}  // namespace
+
+ResectionResult ResectImage(const ResectionOptions& options, const ResectionInput& input) {
+  ResectionResult given = ResectFromItsStart(options, input);
+  // An approximate pose far off (hundreds of metres, tens of degrees) leads the least squares
+  // nowhere or to another minimum; the consensus needs no start. Tried only when the given start
+  // did not solve the image with every mark, and taken only when it does better: solved where
+  // the given start failed, or with more marks accepted.
+  const size_t n = input.image_plane.size();
+  if (!options.consensus_after_approximate || !input.approximate.has_value() ||
+      (given.success && given.num_inliers == static_cast<int>(n)))
+    return given;
+  ResectionInput without = input;
+  without.approximate.reset();
+  ResectionResult consensus = ResectFromItsStart(options, without);
+  const bool better =
+      consensus.success && (!given.success || consensus.num_inliers > given.num_inliers);
+  if (!better) return given;
+  ResectionSummary& summary = consensus.summary;
+  summary.consensus_after_approximate = true;
+  summary.approximate_message = given.success ? "kept " + std::to_string(given.num_inliers) +
+                                                    " of " + std::to_string(n) + " marks"
+                                              : given.summary.message;
+  summary.total_seconds += given.summary.total_seconds;
+  consensus.warnings.insert(
+      consensus.warnings.begin(),
+      "approximate pose abandoned: from it " +
+          (given.success ? "the resection " + summary.approximate_message
+                         : "the image was not solved (" + given.summary.message + ")") +
+          "; solved from the consensus start with " + std::to_string(consensus.num_inliers) +
+          " of " + std::to_string(n) + " marks");
+  return consensus;
 }
 
 bool ResectionBatchOptions::IsValid(std::string* why) const {

@@ -2,7 +2,10 @@
 // Space resection of one or many images: the robust path of photopose, built for the surveyor's
 // four to ten control points per image as much as for hundreds.
 //
-//   1. Initial values: the approximate pose when given (every mark a candidate); otherwise a
+//   1. Initial values: the approximate pose when given (every mark a candidate; when the image
+//      is not solved from it, or solved with marks left out, the consensus start is tried too and
+//      taken when it solves the image with more marks: an approximate pose 500 m or 90 degrees
+//      off does not converge, or converges elsewhere); otherwise a
 //      consensus over minimal samples (LO-RANSAC over P3P and the DLT, solvers/resection/absolute_pose.h),
 //      which tries every sample when there are few (C(n, 3) <= max_exhaustive_samples), so the
 //      result does not depend on the seed. Its threshold comes from the marks' stated accuracy:
@@ -40,7 +43,9 @@
 //        warning, or refused under refuse_weak.
 //   4. Statistics: per mark its residual (in its own unit), normalized residual, redundancy number,
 //      MDB and status; sigma0 (for every image that reached an adjustment, solved or not) and the
-//      covariance sigma0^2 N^-1 over the accepted marks.
+//      covariance f N^-1 over the accepted marks, f by PoseCovarianceFactor (data_snooping.h): 1
+//      with stated accuracy (the a-priori covariance; the global test has passed), sigma0^2
+//      without, with a warning when sigma0 rests on fewer than kMinSigmaDegreesOfFreedom.
 // Without stated accuracy (sigma = 0: the block initialization's initial values only; photopose
 // resect always states one) sigma0 comes from the data, with Pope's tau test, and there is no
 // global test and no ambiguity search: a blunder then inflates sigma0 and may hide itself.
@@ -101,6 +106,10 @@ struct ResectionOptions {
   double weak_pose_shift_sigmas = 3.0;
   // Refuse weak poses (photopose resect --strict) instead of reporting them with a warning.
   bool refuse_weak = false;
+  // When an approximate pose is given and the image is not solved from it with every mark, try
+  // the consensus start too and keep it when it solves the image with more marks (step 1;
+  // ResectionSummary::consensus_after_approximate). Off: the approximate pose's result as it is.
+  bool consensus_after_approximate = true;
 
   bool IsValid(std::string* why) const;
 };
@@ -109,6 +118,12 @@ struct ResectionSummary {
   SolverTermination termination = SolverTermination::kFailure;
   std::string message;            // why it failed (with its numbers), empty on success
   bool used_approximate = false;  // initial pose from the caller, not the consensus
+  // The caller's approximate pose was tried first and the result is from the consensus start
+  // (used_approximate false): from the approximate pose the image was not solved, or kept fewer
+  // marks; approximate_message says what that start gave ("no convergence in ...", "kept 5 of
+  // 8 marks").
+  bool consensus_after_approximate = false;
+  std::string approximate_message;
   int ransac_trials = 0;          // minimal samples tried
   bool ransac_exhaustive = false;  // the minimal samples were enumerated: every one of them, unless
                                    // ransac_stopped_early
@@ -169,11 +184,19 @@ constexpr EnumNameTable<MarkStatus> EnumNames(MarkStatus) {
 struct ResectionResult {
   bool success = false;
   ExteriorOrientation eo;
-  // sigma0^2 N^-1 over the accepted marks (m, rad; seed angles). Not given (has_covariance false)
-  // for a pose without redundancy.
+  // covariance_factor N^-1 over the accepted marks (m, rad; seed angles). Not given
+  // (has_covariance false) for a pose without redundancy.
   bool has_covariance = false;
   Matrix6d covariance = Matrix6d::Zero();
   Vector6d standard_deviations = Vector6d::Zero();
+  // The covariance's factor over N^-1 (PoseCovarianceFactor, data_snooping.h; unitless with stated
+  // accuracies, the marks' unit squared without): 1 with stated accuracies (the a-priori
+  // covariance, sigma0 = 1), sigma0^2 when the accuracy comes from the data.
+  double covariance_factor = 1.0;
+  // The factor by which the true standard deviations may exceed standard_deviations at 95 %
+  // (SigmaUpperFactor, data_snooping.h; unitless): 1 with stated accuracies, above 1 when they
+  // rest on sigma0 from degrees_of_freedom (4.4 at 2, 2.4 at 4); infinite without covariance.
+  double sigma_upper_factor = 1.0;
   // The marks' accuracy was stated (tests with known sigma) or estimated from the data.
   bool accuracy_stated = false;
   // A-posteriori sigma0 = sqrt(Omega / r): unitless with stated accuracies (1 = as stated), in the
@@ -211,7 +234,8 @@ struct ResectionResult {
   ExteriorOrientation competing_eo;
   std::vector<char> competing_inliers;
   // Findings that do not stop the solution, one sentence each (stated accuracy too optimistic,
-  // four marks that cannot be tested, no redundancy allowed).
+  // four marks that cannot be tested, sigmas on sigma0 from fewer than kMinSigmaDegreesOfFreedom,
+  // no redundancy allowed).
   std::vector<std::string> warnings;
   // Not resected: a batch's progress hook cancelled the batch before this image started
   // (ResectImages with ResectionBatchOptions::progress). No pose and no statistics; success is

@@ -1,5 +1,6 @@
 #include "solvers/resection/taylor_resection.h"
 
+#include "solvers/resection/data_snooping.h"
 #include "solvers/resection/point_configuration.h"
 
 #include <glog/logging.h>
@@ -594,12 +595,12 @@ Status TaylorResection(const TaylorResectionOptions& options,
     return fail(NotInFront(evaluation, "is behind the camera at the converged orientation"));
   if (!std::isfinite(evaluation.weighted_ssr)) return fail("final residuals are not finite");
   summary.final_cost = 0.5 * evaluation.weighted_ssr;
-  double variance_factor = 1.0;
-  if (summary.degrees_of_freedom > 0) {
+  if (summary.degrees_of_freedom > 0)
     summary.sigma0 = std::sqrt(evaluation.weighted_ssr / summary.degrees_of_freedom);
-    variance_factor = summary.sigma0 * summary.sigma0;
-  }
-  result->covariance = variance_factor * inverse;
+  // The one rule of a resection's covariance: a-priori with stated sigmas, sigma0^2 without.
+  result->covariance = PoseCovarianceFactor(/*accuracy_stated=*/!sigmas_um.empty(),
+                                            evaluation.weighted_ssr, summary.degrees_of_freedom) *
+                       inverse;
   result->residuals_um = std::move(residuals);
   eo.head<3>() += centroid;
   for (int k = 3; k < 6; ++k) eo[k] = WrapAngle(eo[k]);

@@ -126,10 +126,12 @@ struct TaylorResectionSummary {
 struct TaylorResectionResult {
   // The estimate; all NaN unless the solver converged. Angles wrapped to (-pi, pi].
   ExteriorOrientation eo;
-  // sigma0^2 (A^T P A)^-1, order X0, Y0, Z0 (m), omega, phi, kappa (rad), with A from the last
+  // f (A^T P A)^-1, order X0, Y0, Z0 (m), omega, phi, kappa (rad), with A from the last
   // linearisation (within the tolerances of the estimate) and the selected partials (so the
-  // as-printed variant reports its own, wrong, covariance). With zero redundancy the factor
-  // sigma0^2 is replaced by 1. All NaN unless the solver converged.
+  // as-printed variant reports its own, wrong, covariance). f by PoseCovarianceFactor
+  // (data_snooping.h), as every resection: 1 with sigmas given (the a-priori covariance; the
+  // caller tests sigma0 against them), sigma0^2 (um^2) with unit weights (empty sigmas), 1 with
+  // zero redundancy. All NaN unless the solver converged.
   Matrix6d covariance = Matrix6d::Zero();
   // Observed minus computed image-plane coordinates at the estimate (um), one per point, i.e.
   // -(Fu, Fv). Empty unless the solver converged.

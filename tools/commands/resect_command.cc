@@ -202,7 +202,9 @@ std::vector<std::string> PrintResults(const ResectionJob& prepared, RotationConv
       std::printf("sigma0=none (no redundancy)  ");
     }
     std::printf("inliers=%d/%zu  %s%s\n", r.num_inliers, r.inliers.size(),
-                r.summary.used_approximate ? "(from --frames)" : "(consensus)",
+                r.summary.used_approximate              ? "(from --frames)"
+                : r.summary.consensus_after_approximate ? "(consensus, --frames start abandoned)"
+                                                        : "(consensus)",
                 r.weak ? "  WEAK" : "");
   }
   return failed;

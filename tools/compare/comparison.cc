@@ -150,8 +150,10 @@ Status RunTrial(const MonteCarloOptions& options, const SweepSetting& setting, i
         outcome.degrees_of_freedom = result.degrees_of_freedom;
         if (setting.noise_px > 0.0 && result.has_covariance) {
           outcome.nees = NormalizedEstimationErrorSquared(result.eo, truth, result.covariance);
-          const double factor = result.degrees_of_freedom > 0 ? result.sigma0 * result.sigma0 : 1.0;
-          outcome.nees_apriori = outcome.nees * factor;
+          // The covariance is covariance_factor N^-1 (the resection's one rule,
+          // PoseCovarianceFactor): times the factor, the NEES is that of N^-1.
+          outcome.nees_apriori = outcome.nees * result.covariance_factor;
+          outcome.accuracy_stated = result.accuracy_stated;
         } else {
           outcome.nees = outcome.nees_apriori = kNaN;
         }
@@ -236,8 +238,13 @@ SolverStatistics Aggregate(const std::string& name,
     if (std::isfinite(o->nees) && std::isfinite(o->nees_apriori)) {
       nees.push_back(o->nees);
       nees_apriori.push_back(o->nees_apriori);
+      // The a-priori covariance (stated accuracy): chi-square(6), mean 6; sigma0 from r: 6 F(6, r),
+      // mean 6 r / (r - 2) (none for r <= 2).
       const double r = o->degrees_of_freedom;
-      if (r > 2.0) expected.push_back(6.0 * r / (r - 2.0));
+      if (o->accuracy_stated)
+        expected.push_back(6.0);
+      else if (r > 2.0)
+        expected.push_back(6.0 * r / (r - 2.0));
     }
   }
   stats.success_rate =

@@ -190,7 +190,8 @@ struct SolveOutcome {
   double difference_rotation_arcsec = std::numeric_limits<double>::quiet_NaN();
   double success_threshold_m = 0.0;  // success_sigmas * design sigma of this image (m)
   double nees = 0.0;                 // with the solver's covariance (NaN when not available)
-  double nees_apriori = 0.0;         // with the covariance / sigma0^2
+  double nees_apriori = 0.0;         // with N^-1: the covariance / its covariance_factor
+  bool accuracy_stated = false;      // the solver's covariance is N^-1 (ResectionResult)
   double check_rmse_px = 0.0;        // check points, observed - projected (pixels)
   int num_check = 0;
   double reprojection_rmse_px = 0.0;  // uncontaminated control observations (pixels)
@@ -231,8 +232,9 @@ struct SolverStatistics {
   int nees_count = 0;
   NeesInterval nees_interval_95;
   NeesInterval nees_interval_99;
-  // The expected mean NEES with sigma0 estimated: the mean of 6 r / (r - 2) over the samples, r
-  // the redundancy 2 n - 6 (samples with r <= 2 left out).
+  // The expected mean NEES of the solver's covariance: 6 per sample with stated accuracy (the
+  // a-priori covariance), 6 r / (r - 2) with sigma0 from the data, r the redundancy 2 n - 6
+  // (samples with r <= 2 left out); their mean.
   double expected_nees = 0.0;
   // Why samples were not solved: the solver's message with numbers and quoted names replaced by
   // '#' and '...', most frequent first, with their counts.

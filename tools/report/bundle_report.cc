@@ -332,6 +332,18 @@ void RejectedJson(const Block& block, const BundleAdjustmentResult& result,
                         {"normalized_residual", Number(r.whitened_residual)}});
   }
   (*report)["rejected_marks"] = rejected;
+  json unresolved = json::array();
+  for (const BundleUnresolvedPoint& u : result.unresolved_points) {
+    const BlockMark& worst = block.marks[u.worst_mark];
+    const BlockMark& runner_up = block.marks[u.runner_up_mark];
+    unresolved.push_back({{"point_id", block.points[u.point].id},
+                          {"round", u.round},
+                          {"worst_raster", block.images[worst.image].name},
+                          {"worst_drop", Number(u.worst_drop)},
+                          {"runner_up_raster", block.images[runner_up.image].name},
+                          {"runner_up_drop", Number(u.runner_up_drop)}});
+  }
+  (*report)["unresolved_points"] = unresolved;
   json rejected_check = json::array();
   for (const BundleRejectedCheckMark& r : result.rejected_check_marks) {
     const BlockMark& mark = block.marks[r.mark];
@@ -508,8 +520,11 @@ Status FormatBundlePoints(const Block& block, const BundleAdjustmentResult& resu
   std::vector<int> rows;
   std::vector<Eigen::Vector3d> estimate, surveyed;  // block frame; NaN where there is none
   const Eigen::Vector3d none = Eigen::Vector3d::Constant(std::numeric_limits<double>::quiet_NaN());
+  std::vector<char> unresolved(block.points.size(), 0);
+  for (const BundleUnresolvedPoint& u : result.unresolved_points) unresolved[u.point] = 1;
   for (size_t p = 0; p < block.points.size(); ++p) {
     const BlockPoint& point = block.points[p];
+    if (unresolved[p]) continue;  // not adjusted: no estimate to write (the report lists it)
     const BundlePointResult* r = p < result.points.size() ? &result.points[p] : nullptr;
     std::optional<Eigen::Vector3d> value = point.position_m;
     if (point.role == PointRole::kCheck)
@@ -786,6 +801,12 @@ void ConsoleRemovedLines(const Block& block, const BundleAdjustmentResult& resul
   if (!result.rejected_marks.empty())
     lines->push_back(std::to_string(result.rejected_marks.size()) +
                      " marks rejected as blunders (listed in the report)");
+  for (const BundleUnresolvedPoint& u : result.unresolved_points)
+    lines->push_back("warning: tie point '" + PointName(block, u.point) +
+                     "' unresolved: its marks disagree, but leaving out its mark on image '" +
+                     block.images[block.marks[u.worst_mark].image].name + "' or on image '" +
+                     block.images[block.marks[u.runner_up_mark].image].name +
+                     "' explains it nearly as well; left out with all its marks, not adjusted");
   for (const BundleRejectedCheckMark& r : result.rejected_check_marks) {
     const BlockMark& mark = block.marks[r.mark];
     lines->push_back("check mark of '" + PointName(block, mark.point) + "' on image '" +

@@ -77,6 +77,7 @@ json OptionsJson(const ResectionJobOptions& options) {
        options.input.default_accuracy > 0.0 ? json(options.input.default_accuracy) : json(nullptr)},
       {"default_film_accuracy_um", options.input.default_film_accuracy_um},
       {"strict", o.refuse_weak},
+      {"consensus_after_frames", o.consensus_after_approximate},
       {"weak_pose_shift_sigmas", o.weak_pose_shift_sigmas},
       {"ambiguous_pose_sigmas", o.ambiguous_pose_sigmas},
       {"detection_power", o.detection_power},
@@ -92,7 +93,9 @@ json ImageSummaryJson(const ResectionJob& job, size_t i, const ResectionResult& 
           {"success", r.success},
           {"message", s.message},
           {"termination", EnumName(s.termination)},
-          {"initial_values", s.used_approximate ? "frames" : "consensus"},
+          {"initial_values", s.used_approximate                ? "frames"
+                             : s.consensus_after_approximate ? "consensus_after_frames"
+                                                             : "consensus"},
           {"consensus",
            {{"trials", s.ransac_trials},
             {"exhaustive", s.ransac_exhaustive},
@@ -169,6 +172,7 @@ void PoseJson(const ResectionJob& job, size_t i, RotationConvention rotation,
   for (int row = 0; row < 6; ++row)
     for (int col = 0; col < 6; ++col) covariance.push_back(r.covariance(row, col));
   (*image)["covariance_seed"] = covariance;  // row-major, X0 Y0 Z0 (m) omega phi kappa (rad)
+  (*image)["covariance_factor"] = r.covariance_factor;
   (*image)["standard_deviations"] = {
       {"X", r.standard_deviations[0]}, {"Y", r.standard_deviations[1]},
       {"Z", r.standard_deviations[2]}, {"omega_deg", (*angle_sigmas)[0]},
@@ -230,6 +234,8 @@ Status ImageJson(const ResectionJobOptions& options, const ResectionJob& job, si
                  const ResectionResult& r, json* image) {
   const RotationConvention rotation = options.files.rotation;
   *image = ImageSummaryJson(job, i, r);
+  if (r.summary.consensus_after_approximate)
+    (*image)["frames_start_abandoned"] = r.summary.approximate_message;
   if (r.ambiguous) {
     (*image)["ambiguous_poses"] = {
         AmbiguousPoseJson(job, i, rotation, r.eo, r.inliers),

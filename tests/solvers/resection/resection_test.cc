@@ -19,6 +19,7 @@
 #include "core/rotation.h"
 #include "core/simulation/portable_random.h"
 #include "core/simulation/synthetic_scene.h"
+#include "core/statistics.h"
 #include "solvers/resection/p3p.h"
 #include "solvers/resection/taylor_resection.h"
 #include "tests/support/temp_dir.h"
@@ -511,9 +512,9 @@ TEST(Resection, CovarianceMatchesTheMonteCarloScatter) {
     const ResectionResult r = ResectImage(ResectionOptions(), inputs.inputs[0]);
     ASSERT_TRUE(r.success);
     const Vector6d e = PoseError(r.eo, clean.true_frames[0].eo);
-    // The covariance scaled by sigma0^2; with known sigma use the a-priori one for NEES.
-    const Matrix6d prior = r.covariance / (r.sigma0 * r.sigma0);
-    nees_sum += e.dot(prior.ldlt().solve(e));
+    // Known sigma: the reported covariance is the a-priori one.
+    ASSERT_EQ(r.covariance_factor, 1.0);
+    nees_sum += e.dot(r.covariance.ldlt().solve(e));
   }
   const double mean_nees = nees_sum / kTrials;
   // Mean of 150 chi^2_6: sd = sqrt(2*6/150) = 0.28; 99% interval about 6 +- 0.75.
@@ -923,6 +924,164 @@ TEST(Resection, NoFewPointImageIsReportedSolvedFarFromTheTruth) {
   EXPECT_GT(total.images, 2500);
 }
 
+// ------------------------------------------------------------------ honest sigmas
+
+// The pose error e (wrapped angles) against the reported covariance: e^T C^-1 e.
+double Nees(const ResectionResult& r, const ExteriorOrientation& truth) {
+  const Vector6d e = PoseError(r.eo, truth);
+  return e.dot(r.covariance.ldlt().solve(e));
+}
+
+// Four- and five-point images (2 and 4 degrees of freedom) with 1 px noise and 1 px stated: the
+// reported covariance is the a-priori one, so the NEES of the solved poses is chi-square(6) and
+// the poses beyond the quantiles of 3 and 5 sigma (two-sided normal probabilities) are as many as
+// chi-square(6) expects, within binomial tolerance. With sigma0^2 N^-1 (before) sigma0 of 2-4
+// degrees of freedom shrank the sigmas: of the 1192 solved, 207 beyond the 3-sigma quantile (3.2
+// expected) and 105 beyond the 5-sigma one; now 7 and 1 (a second minimum, below).
+TEST(Resection, StatedAccuracySigmasMatchTheChiSquareTails) {
+  constexpr int kImages = 1200;
+  const double p3 = std::erfc(3.0 / std::sqrt(2.0));  // 0.0027
+  const double p5 = std::erfc(5.0 / std::sqrt(2.0));  // 5.7e-7
+  const double q3 = ChiSquaredQuantile(1.0 - p3, 6.0), q5 = ChiSquaredQuantile(1.0 - p5, 6.0);
+  int solved = 0, beyond3 = 0, beyond5 = 0;
+  int scaled_beyond3 = 0, scaled_beyond5 = 0;  // with sigma0^2 N^-1, the former rule
+  double nees_sum = 0.0;  // over the poses within the 5-sigma quantile
+  int in_mean = 0;
+  for (int k = 0; k < kImages; ++k) {
+    const int n = 4 + k % 2;
+    const SyntheticScene scene = Scene(Scenario::kNadir, 1.0, 0.0, 70000 + k, n, 0);
+    const Inputs inputs = InputsOf(scene, false);
+    ASSERT_TRUE(inputs.inputs[0].sigma.size() == static_cast<size_t>(n) &&
+                inputs.inputs[0].sigma[0] == 1.0);  // stated: the noise's 1 px
+    const ResectionResult r = ResectImage(WithSeed(k), inputs.inputs[0]);
+    if (!r.success) continue;  // the global test's false alarms, ambiguities
+    ASSERT_TRUE(r.has_covariance);
+    EXPECT_EQ(r.covariance_factor, 1.0);
+    EXPECT_EQ(r.sigma_upper_factor, 1.0);
+    ++solved;
+    const double nees = Nees(r, scene.true_frames[0].eo);
+    if (!(nees > q5)) nees_sum += nees, ++in_mean;
+    beyond3 += nees > q3;
+    beyond5 += nees > q5;
+    if (nees > q5)
+      std::printf("seed %d, %d points: NEES %.3g, weak %d, sigma0 %.3g, %s\n", 70000 + k, n, nees,
+                  r.weak, r.sigma0, r.summary.BriefReport().c_str());
+    const double scaled = nees / (r.sigma0 * r.sigma0);
+    scaled_beyond3 += scaled > q3;
+    scaled_beyond5 += scaled > q5;
+  }
+  std::printf("%d of %d four- and five-point images solved: mean NEES %.2f, %d beyond the 3-sigma "
+              "quantile (%.1f expected), %d beyond the 5-sigma one (%.4f expected); with sigma0^2 "
+              "N^-1: %d and %d\n",
+              solved, kImages, nees_sum / in_mean, beyond3, solved * p3, beyond5, solved * p5,
+              scaled_beyond3, scaled_beyond5);
+  ASSERT_GT(solved, kImages * 9 / 10);
+  // Binomial(solved, p): at most mean + 5 standard deviations (+1 for the discreteness).
+  const auto upper = [solved](double p) {
+    return solved * p + 5.0 * std::sqrt(solved * p * (1.0 - p)) + 1.0;
+  };
+  EXPECT_LE(beyond3, upper(p3));
+  EXPECT_LE(beyond5, upper(p5));
+  // The former rule fails the same bound: the test tells the two apart.
+  EXPECT_GT(scaled_beyond5, upper(p5));
+  // The mean of chi-square(6) within its 5-sigma quantile: 6, standard error sqrt(12 / solved) =
+  // 0.1; the poses of four points are not quite linear, so 6 +- 0.6. (Left out: seed 70768, four
+  // points that converged to a second minimum, flagged weak, NEES 6.5e6.)
+  EXPECT_NEAR(nees_sum / in_mean, 6.0, 0.6);
+}
+
+// Without a stated accuracy the covariance is sigma0^2 N^-1 (nothing else exists) and says how far
+// it can be trusted: the same marks with 1 px stated give N^-1 itself; below
+// kMinSigmaDegreesOfFreedom a warning gives the 95 % factor sqrt(r / chi-square_0.05(r)).
+TEST(Resection, WithoutStatedAccuracyTheSigmasSayTheirDegreesOfFreedom) {
+  for (const int n : {5, 8}) {
+    const Inputs stated = FewPointImage(Scenario::kNadir, n, 0, 900 + n);
+    ResectionInputOptions from_data;
+    from_data.default_accuracy = 0.0;
+    const Inputs estimated = FewPointImage(Scenario::kNadir, n, 0, 900 + n, from_data);
+    const ResectionResult a = ResectImage(ResectionOptions(), stated.inputs[0]);
+    const ResectionResult b = ResectImage(ResectionOptions(), estimated.inputs[0]);
+    ASSERT_TRUE(a.success && b.success) << a.summary.message << " / " << b.summary.message;
+    ASSERT_TRUE(a.accuracy_stated && !b.accuracy_stated);
+    const int r = 2 * n - 6;
+    ASSERT_EQ(b.degrees_of_freedom, r);
+    EXPECT_EQ(a.covariance_factor, 1.0);
+    EXPECT_NEAR(b.covariance_factor, b.sigma0 * b.sigma0, 1e-12 * b.covariance_factor);
+    // Both weight the marks alike (1 px, 1 unit): the covariances differ by sigma0^2 alone.
+    EXPECT_LE((b.covariance - b.sigma0 * b.sigma0 * a.covariance).cwiseAbs().maxCoeff(),
+              1e-6 * b.covariance.cwiseAbs().maxCoeff());
+    const double factor = std::sqrt(r / ChiSquaredQuantile(0.05, r));
+    EXPECT_NEAR(b.sigma_upper_factor, factor, 1e-9) << r;
+    const auto warning = std::find_if(b.warnings.begin(), b.warnings.end(), [](const std::string& w) {
+      return w.rfind("uncertain sigmas:", 0) == 0;
+    });
+    const bool warned = warning != b.warnings.end();
+    EXPECT_EQ(warned, r < kMinSigmaDegreesOfFreedom) << r;
+    if (warned) EXPECT_NE(warning->find(std::to_string(r) + " degrees of freedom"), std::string::npos)
+        << *warning;
+  }
+}
+
+// ------------------------------------------------------------------ approximate values far off
+
+// An approximate pose 500 m or 90 degrees off, with either solver: from it the least squares
+// does not converge (Taylor), or a control point is behind the camera; the consensus start solves
+// the image, and the result says which start it took and what the given one gave. Where the
+// given start converges (both solvers from 500 m, Ceres from 90 degrees in kappa or phi) it is
+// kept. Before: not solved, for 5 of these 16 (the test's printout says why each).
+TEST(Resection, AFarApproximatePoseFallsBackToTheConsensusStart) {
+  const SyntheticScene scene = Scene(Scenario::kOblique, 1.0, 0.0, 3);
+  const Inputs inputs = InputsOf(scene, true);
+  ResectionInput consensus_only = inputs.inputs[0];
+  consensus_only.approximate.reset();
+  const ResectionResult reference = ResectImage(ResectionOptions(), consensus_only);
+  ASSERT_TRUE(reference.success) << reference.summary.message;
+  struct Start {
+    const char* what;
+    int parameter;
+    double offset;
+  };
+  int fallbacks = 0;
+  for (const PoseSolver solver : {PoseSolver::kCeres, PoseSolver::kTaylor}) {
+    ResectionOptions options;
+    options.refinement.solver = solver;
+    for (const Start& start :
+         {Start{"X - 500 m", 0, -500.0}, Start{"Y + 500 m", 1, 500.0}, Start{"X + 500 m", 0, 500.0},
+          Start{"Z - 500 m", 2, -500.0}, Start{"kappa + 90 deg", 5, M_PI / 2},
+          Start{"omega + 90 deg", 3, M_PI / 2}, Start{"phi + 90 deg", 4, M_PI / 2},
+          Start{"kappa + 180 deg", 5, M_PI}}) {
+      SCOPED_TRACE(std::string(EnumName(solver)) + ", " + start.what);
+      ResectionInput input = inputs.inputs[0];
+      input.approximate->parameters[start.parameter] += start.offset;
+      const ResectionResult r = ResectImage(options, input);
+      ASSERT_TRUE(r.success) << r.summary.BriefReport();
+      EXPECT_LT((r.eo.center_in_ground() - reference.eo.center_in_ground()).norm(), kSamePositionM);
+      EXPECT_NE(r.summary.used_approximate, r.summary.consensus_after_approximate);
+      if (!r.summary.consensus_after_approximate) continue;
+      ++fallbacks;
+      EXPECT_FALSE(r.summary.approximate_message.empty());
+      EXPECT_TRUE(!r.warnings.empty() &&
+                  r.warnings[0].rfind("approximate pose abandoned: from it the image was not "
+                                      "solved (", 0) == 0);
+      EXPECT_NE(r.summary.BriefReport().find("approximate pose abandoned ("), std::string::npos);
+      // Without the fallback the given start's failure is the result.
+      ResectionOptions without = options;
+      without.consensus_after_approximate = false;
+      const ResectionResult given = ResectImage(without, input);
+      EXPECT_FALSE(given.success);
+      EXPECT_EQ(given.summary.message, r.summary.approximate_message);
+      std::printf("%s, %s: %s\n", EnumName(solver), start.what,
+                  r.summary.approximate_message.c_str());
+    }
+  }
+  EXPECT_GE(fallbacks, 4);
+  // A good start is used as it is.
+  const ResectionResult good = ResectImage(ResectionOptions(), inputs.inputs[0]);
+  ASSERT_TRUE(good.success);
+  EXPECT_TRUE(good.summary.used_approximate);
+  EXPECT_FALSE(good.summary.consensus_after_approximate);
+}
+
 // ------------------------------------------------------------------ honest convergence
 
 // The 5000-image clean run of the issue: nadir, 10 control points, 1 px noise, default options;
@@ -965,10 +1124,12 @@ TEST(Resection, FiveThousandCleanImagesAreSolvedButTheGlobalTestsFalseAlarms) {
 TEST(Resection, NoConvergenceIsReportedAsSuch) {
   const SyntheticScene scene = Scene(Scenario::kOblique, 1.0, 0.0, 3);
   Inputs inputs = InputsOf(scene, true);
-  // Far approximate values and one iteration allowed: no convergence, said so.
+  // Far approximate values and one iteration allowed: no convergence, said so (the consensus
+  // start, which would solve it, not tried).
   inputs.inputs[0].approximate->parameters[2] += 200.0;
   ResectionOptions options;
   options.refinement.ceres.max_iterations = 1;
+  options.consensus_after_approximate = false;
   const ResectionResult r = ResectImage(options, inputs.inputs[0]);
   EXPECT_FALSE(r.success);
   EXPECT_EQ(r.summary.termination, SolverTermination::kNoConvergence) << r.summary.message;
