@@ -19,6 +19,7 @@
 #include "core/rotation.h"
 #include "core/statistics.h"
 #include "core/units.h"
+#include "solvers/bundle/check_points.h"
 #include "solvers/bundle/internal/bundle_problem.h"
 #include "solvers/bundle/internal/bundle_rounds.h"
 #include "solvers/bundle/internal/bundle_statistics.h"
@@ -586,10 +587,8 @@ BundleCrossValidationPoint LeaveOneOut(const BundleAdjustmentOptions& one,
   out.ok = true;
   out.error_m = *point.error_m;
   out.num_images = point.num_observations;
-  Eigen::Matrix3d C = point.covariance;
-  const Eigen::Vector3d surveyed_sigma =
-      adjusted.points[p].accuracy_m.value_or(Eigen::Vector3d::Constant(marker_m));
-  C += surveyed_sigma.cwiseAbs2().asDiagonal();
+  const Eigen::Matrix3d C =
+      SurveyedPointErrorCovariance(adjusted.points[p], point.covariance, marker_m);
   out.normalized = out.error_m.dot(C.ldlt().solve(out.error_m));
   out.stands_out = out.normalized > threshold;
   return out;

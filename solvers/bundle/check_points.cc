@@ -212,4 +212,14 @@ void TabulateControlAndCheckPoints(const Block& adjusted, const BundleAccuracies
                                           variance_factor, nullptr, result);
 }
 
+Eigen::Matrix3d SurveyedPointErrorCovariance(const BlockPoint& point,
+                                             const Eigen::Matrix3d& estimate_covariance_m2,
+                                             double default_marker_m) {
+  const Eigen::Vector3d surveyed_sigma_m =
+      point.accuracy_m.value_or(Eigen::Vector3d::Constant(default_marker_m));
+  Eigen::Matrix3d covariance = estimate_covariance_m2;
+  covariance.diagonal() += surveyed_sigma_m.cwiseAbs2();
+  return covariance;
+}
+
 }  // namespace photopose

@@ -33,4 +33,15 @@ namespace photopose {
 void TabulateControlAndCheckPoints(const Block& adjusted, const BundleAccuracies& accuracies,
                                    double variance_factor, BundleAdjustmentResult* result);
 
+// The covariance (m^2) of the error e = estimate - surveyed of a surveyed point that the estimate
+// leaves out (a check point's intersection; a control point left out by the cross-validation):
+// the estimate's covariance plus the surveyed coordinates' own, diag(a^2), a the point's stated
+// accuracy per axis (m), the default marker accuracy `default_marker_m` when it states none, 0
+// when it is stated error-free. The one rule behind the check-point verdict (e^T C^-1 e against
+// chi-square(3)) and the leave-one-out test: a check point surveyed to 3 cm is not expected to
+// meet an intersection of 1 cm sigma within 1 cm.
+Eigen::Matrix3d SurveyedPointErrorCovariance(const BlockPoint& point,
+                                             const Eigen::Matrix3d& estimate_covariance_m2,
+                                             double default_marker_m);
+
 }  // namespace photopose

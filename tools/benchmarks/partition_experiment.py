@@ -148,7 +148,9 @@ def positions(path, roles=None):
         role = row.get("Role", "").lower()
         if roles is None or role in roles:
             p = [float(row[k]) for k in ("X", "Y", "Z")]
-            if role == "check" and row.get("ErrorX", ""):
+            if role == "check" and "ErrorX" in row:  # a bundle output, not the truth
+                if not row["ErrorX"]:
+                    continue  # not intersected: its X, Y, Z are the surveyed ones, not an estimate
                 p = [p[i] + float(row["Error" + k]) for i, k in enumerate("XYZ")]
             out[row["PointID"]] = tuple(p)
     return out
@@ -385,13 +387,15 @@ def write_sub_block(a, b, sub, d):
     sub["images"] = sub_images
     # A tie point goes in when three of the sub-block's images see it: two rays from the
     # start angles may miss each other by more than `bundle`'s initialisation accepts (3
-    # degrees), and the run is refused; control and check points wherever one image sees them.
+    # degrees), and the run is refused; control points wherever one image sees them, check points
+    # where two do (one ray intersects nothing: a sub-block cannot check it).
     seen = {}
     for raster, pid, _ in b.marks:
         if raster in sub_images:
             seen[pid] = seen.get(pid, 0) + 1
-    known = {r["PointID"] for r in b.point_rows}
-    keep = {p for p, n in seen.items() if n >= 3 or p in known}
+    role = {r["PointID"]: r["Role"].lower() for r in b.point_rows}
+    keep = {p for p, n in seen.items()
+            if n >= 3 or role.get(p) == "control" or (role.get(p) == "check" and n >= 2)}
     t = {"cameras": b.tables["cameras"]}
     for key in ("marks", "points", "frames"):
         t[key] = os.path.join(d, key + ".csv")

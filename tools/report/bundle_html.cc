@@ -230,8 +230,10 @@ std::string OverfitVerdictHtml(const BundleAdjustmentResult& result,
   return html.str();
 }
 
-// The groups held fixed, the groups that absorbed gross errors, the weakly determined parameters.
-std::string FixedGrossWeakVerdictsHtml(const BundleAdjustmentResult& result) {
+// The groups held fixed, the groups that absorbed gross errors, control points removed on an
+// assumed accuracy, the weakly determined parameters.
+std::string FixedGrossWeakVerdictsHtml(const Block& block, const BundleAdjustmentResult& result,
+                                       const BundleReportContext& context) {
   std::ostringstream html;
   for (const BundleGroupStatistics& g : result.groups) {
     if (g.num_fixed == 0) continue;
@@ -246,6 +248,11 @@ std::string FixedGrossWeakVerdictsHtml(const BundleAdjustmentResult& result) {
       html << "<div class=\"verdict bad\"><b>Gross errors absorbed:</b> " << HtmlEscape(gross)
            << "</div>\n";
   }
+  const std::string assumed =
+      ControlRemovedOnAssumedAccuracy(block, result, context.options.accuracies.marker_m);
+  if (!assumed.empty())
+    html << "<div class=\"verdict bad\"><b>Control removed on an assumed accuracy:</b> "
+         << HtmlEscape(assumed) << "</div>\n";
   const std::string weak = WeaklyDeterminedWarning(result);
   if (!weak.empty())
     html << "<div class=\"verdict bad\"><b>Weakly determined:</b> " << HtmlEscape(weak) << "</div>\n";
@@ -291,7 +298,8 @@ std::string CheckPointsVerdictHtml(const Block& block, const BundleAdjustmentRes
          << ".</div>\n";
     return html.str();
   }
-  const std::vector<std::string> out_of_tolerance = CheckPointsOutOfTolerance(block, result);
+  const std::vector<std::string> out_of_tolerance =
+      CheckPointsOutOfTolerance(block, result, context.options.accuracies.marker_m);
   std::vector<std::string> not_intersected;
   for (size_t p = 0; p < block.points.size() && p < result.points.size(); ++p)
     if (block.points[p].role == PointRole::kCheck && !result.points[p].error_m)
@@ -329,7 +337,7 @@ std::string VerdictsHtml(const Block& block, const BundleAdjustmentResult& resul
     html << "<div class=\"verdict bad\"><b>Not adjusted:</b> " << HtmlEscape(s.message)
          << "</div>\n";
   }
-  html << OverfitVerdictHtml(result, context) << FixedGrossWeakVerdictsHtml(result)
+  html << OverfitVerdictHtml(result, context) << FixedGrossWeakVerdictsHtml(block, result, context)
        << StatedAccuraciesVerdictHtml(result) << CheckPointsVerdictHtml(block, result, context);
   return html.str();
 }
@@ -350,13 +358,17 @@ std::vector<std::string> RmseRow(const std::string& name, const std::vector<Eige
   return row;
 }
 
-std::string PointsHtml(const Block& block, const BundleAdjustmentResult& result) {
+// default_marker_m: the surveyed accuracy of a control or check point that states none (m).
+std::string PointsHtml(const Block& block, const BundleAdjustmentResult& result,
+                       double default_marker_m) {
   std::vector<double> magnitudes;
   for (size_t p = 0; p < block.points.size() && p < result.points.size(); ++p) {
     const BundlePointResult& r = result.points[p];
     if (block.points[p].role == PointRole::kTie) continue;
     if (r.error_m) magnitudes.push_back(r.error_m->norm());
     if (r.has_covariance) magnitudes.push_back(std::sqrt(r.covariance.trace()));
+    if (r.has_covariance && block.points[p].role == PointRole::kCheck)
+      magnitudes.push_back(CheckPointErrorSigma(block.points[p], r, default_marker_m));
   }
   const LengthUnit unit = LengthUnitFor(LargestMagnitude(magnitudes));
   const std::string u = LengthUnitName(unit);
@@ -385,11 +397,21 @@ std::string PointsHtml(const Block& block, const BundleAdjustmentResult& result)
       vertical.x.push_back(static_cast<double>(vertical.x.size() + 1));
       vertical.y.push_back(LengthIn(r.error_m->z(), unit));
       vertical.labels.push_back(point.id);
-      out.push_back({point.id, std::to_string(r.num_observations), FormatLength(r.error_m->x(), unit),
-                     FormatLength(r.error_m->y(), unit), FormatLength(r.error_m->z(), unit),
-                     FormatLength(r.error_m->norm(), unit),
-                     r.has_covariance ? FormatLength(std::sqrt(r.covariance.trace()), unit) : "n/a",
-                     r.has_covariance ? FormatUnitless(CheckPointNormalizedError(r), 1) : "n/a"});
+      // A check point: the sigma of its error and the test (the intersection's covariance plus
+      // the surveyed coordinates'); a control point: its adjusted sigma, no test (its error is a
+      // residual of the adjustment, not an independent miss).
+      const bool check = role == PointRole::kCheck;
+      const double sigma = check ? CheckPointErrorSigma(point, r, default_marker_m)
+                                 : std::sqrt(r.covariance.trace());
+      out.push_back(
+          {point.id, std::to_string(r.num_observations), FormatLength(r.error_m->x(), unit),
+           FormatLength(r.error_m->y(), unit), FormatLength(r.error_m->z(), unit),
+           FormatLength(r.error_m->norm(), unit),
+           r.has_covariance ? FormatLength(sigma, unit) : "n/a",
+           !check ? "n/a"
+           : r.has_covariance
+               ? FormatUnitless(CheckPointNormalizedError(point, r, default_marker_m), 1)
+               : "n/a"});
     }
     return out;
   };
@@ -408,11 +430,17 @@ std::string PointsHtml(const Block& block, const BundleAdjustmentResult& result)
                      RmseRow("check (intersected - surveyed)", check_errors, unit)},
                     {"control points take part in the adjustment, so their errors are small by "
                      "construction; check points do not, and measure the block's accuracy"});
-  html << HtmlTable("Control points: adjusted minus surveyed", header, control_rows);
+  html << HtmlTable("Control points: adjusted minus surveyed", header, control_rows,
+                    {"sigma: square root of the trace of the adjusted point's covariance "
+                     "(sigma0-scaled); e^T C^-1 e n/a: a control point's error is a residual of "
+                     "the adjustment, not an independent miss"});
   html << HtmlTable("Check points: intersected from the adjusted images minus surveyed", header,
                     check_rows,
-                    {"sigma: square root of the trace of the point's covariance (sigma0-scaled)",
-                     "e^T C^-1 e: the error against its covariance, chi-square with 3 degrees of "
+                    {"sigma: of the error, square root of the trace of C = the intersection's "
+                     "covariance (sigma0-scaled) plus the surveyed coordinates' (their stated "
+                     "accuracy, " + FormatLengthWithUnit(default_marker_m) +
+                         " where none is stated)",
+                     "e^T C^-1 e: the error against C, chi-square with 3 degrees of "
                      "freedom when both are honest (above " +
                          FormatUnitless(ChiSquaredQuantile(kCheckPointLevel, 3.0), 1) +
                          " in 0.1 % of cases)"});
@@ -956,7 +984,8 @@ std::string BundleReportHtml(const Block& block, const BundleAdjustmentResult& r
        << FormatCount(s.num_points, "point") << ", " << FormatCount(s.num_marks, "mark")
        << "; photopose " << PHOTOPOSE_VERSION << "</p>\n";
   html << OverviewHtml(block, result, context) << VerdictsHtml(block, result, context)
-       << PointsHtml(block, result) << CamerasHtml(block, result)
+       << PointsHtml(block, result, context.options.accuracies.marker_m)
+       << CamerasHtml(block, result)
        << CalibrationHtml(block, result) << ResidualsHtml(block, result)
        << RejectedHtml(block, result) << DiagnosticsHtml(block, result, context);
   html << HtmlPageClose();

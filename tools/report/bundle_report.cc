@@ -15,6 +15,7 @@
 #include "core/io/csv.h"
 #include "core/statistics.h"
 #include "core/units.h"
+#include "solvers/bundle/check_points.h"
 #include "tools/report/comparison_html.h"
 
 namespace photopose::cli {
@@ -236,6 +237,18 @@ void SurveyedPointsJson(const Block& block, const BundleAdjustmentResult& result
                  r.has_covariance ? Vector3(r.covariance.diagonal().cwiseSqrt()) : json(nullptr)},
                 {"fixed", IsHeldFixed(point)},
                 {"message", r.message}};
+    if (point.role == PointRole::kCheck) {
+      // The console's and the page's test: the error against the intersection's covariance plus
+      // the surveyed coordinates'.
+      const double marker_m = context.options.accuracies.marker_m;
+      const bool tested = r.error_m && r.has_covariance;
+      row["error_sigma_m"] =
+          tested ? Vector3(SurveyedPointErrorCovariance(point, r.covariance, marker_m)
+                               .diagonal()
+                               .cwiseSqrt())
+                 : json(nullptr);
+      row["normalized_error"] = Number(CheckPointNormalizedError(point, r, marker_m));
+    }
     (point.role == PointRole::kControl ? control : check).push_back(row);
   }
   (*report)["control_points"] = control;
@@ -427,6 +440,10 @@ void SnoopingJson(const Block& block, const BundleAdjustmentResult& result,
                        {"normalized_residual", step.normalized},
                        {"residual", step.residual},
                        {"round", step.round}});
+      // A control point tested against --marker_accuracy, not its own (the console warns).
+      if (step.group == kControlPoints && step.item >= 0 &&
+          step.item < static_cast<int>(block.points.size()))
+        steps.back()["accuracy_stated"] = block.points[step.item].accuracy_m.has_value();
     }
     (*report)["snooping"] = steps;
   }
@@ -620,29 +637,64 @@ std::string GrossErrorsAbsorbed(const BundleGroupStatistics& group) {
   return text + ". Check the group's observations with the largest |w|, or state its accuracy.";
 }
 
-double CheckPointNormalizedError(const BundlePointResult& r) {
+double CheckPointNormalizedError(const BlockPoint& point, const BundlePointResult& r,
+                                 double default_marker_m) {
   if (!r.error_m || !r.has_covariance) return std::nan("");
-  const Eigen::LDLT<Eigen::Matrix3d> ldlt(r.covariance);
+  const Eigen::LDLT<Eigen::Matrix3d> ldlt(
+      SurveyedPointErrorCovariance(point, r.covariance, default_marker_m));
   if (ldlt.info() != Eigen::Success || !(ldlt.vectorD().minCoeff() > 0.0)) return std::nan("");
   return r.error_m->dot(ldlt.solve(*r.error_m));
 }
 
+double CheckPointErrorSigma(const BlockPoint& point, const BundlePointResult& r,
+                            double default_marker_m) {
+  if (!r.has_covariance) return std::nan("");
+  return std::sqrt(SurveyedPointErrorCovariance(point, r.covariance, default_marker_m).trace());
+}
+
 std::vector<std::string> CheckPointsOutOfTolerance(const Block& block,
-                                                   const BundleAdjustmentResult& result) {
+                                                   const BundleAdjustmentResult& result,
+                                                   double default_marker_m) {
   const double level = ChiSquaredQuantile(kCheckPointLevel, 3.0);
   std::vector<std::string> out;
   for (size_t p = 0; p < block.points.size() && p < result.points.size(); ++p) {
-    if (block.points[p].role != PointRole::kCheck) continue;
+    const BlockPoint& point = block.points[p];
+    if (point.role != PointRole::kCheck) continue;
     const BundlePointResult& r = result.points[p];
-    const double normalized = CheckPointNormalizedError(r);
+    const double normalized = CheckPointNormalizedError(point, r, default_marker_m);
     if (!(normalized > level)) continue;
-    const std::vector<std::string> miss =
-        FormatLengthsWithUnit({r.error_m->norm(), std::sqrt(r.covariance.trace())});
+    const std::vector<std::string> miss = FormatLengthsWithUnit(
+        {r.error_m->norm(), CheckPointErrorSigma(point, r, default_marker_m)});
     out.push_back(block.points[p].id + " misses by " + miss[0] + " where its sigma is " + miss[1] +
                   " (e^T C^-1 e = " + FormatUnitless(normalized, 1) + " > " +
                   FormatUnitless(level, 1) + "): check its surveyed coordinates and its marks");
   }
   return out;
+}
+
+std::string ControlRemovedOnAssumedAccuracy(const Block& block,
+                                            const BundleAdjustmentResult& result,
+                                            double default_marker_m) {
+  std::vector<int> removed;
+  for (const BundleSnoopingStep& step : result.snooping)
+    if (step.group == kControlPoints && step.item >= 0 &&
+        step.item < static_cast<int>(block.points.size()) &&
+        !block.points[step.item].accuracy_m &&
+        std::find(removed.begin(), removed.end(), step.item) == removed.end())
+      removed.push_back(step.item);
+  if (removed.empty()) return "";
+  int unstated = 0;
+  for (const BlockPoint& point : block.points)
+    if (point.role == PointRole::kControl && !point.accuracy_m) ++unstated;
+  std::string ids;
+  for (size_t k = 0; k < removed.size() && k < 5; ++k)
+    ids += (k == 0 ? "'" : ", '") + block.points[removed[k]].id + "'";
+  if (removed.size() > 5) ids += ", ...";
+  return "data snooping removed " + std::to_string(removed.size()) + " of " +
+         std::to_string(unstated) + " control points whose accuracy the points table does not " +
+         "state (" + ids + "): they were tested against --marker_accuracy, " +
+         FormatLengthWithUnit(default_marker_m) + ". If they were surveyed less accurately, " +
+         "they are not blunders: state AccuracyX/Y/Z or --marker_accuracy and adjust again.";
 }
 
 std::string WeaklyDeterminedWarning(const BundleAdjustmentResult& result) {
@@ -777,9 +829,10 @@ void ConsoleAccuracyLines(const BundleAdjustmentResult& result, std::vector<std:
   }
 }
 
-// The control and check points' RMSE, and the check points beyond their covariance.
+// The control and check points' RMSE, and the check points beyond their covariance
+// (`default_marker_m`: the surveyed accuracy of a point that states none).
 void ConsolePointLines(const Block& block, const BundleAdjustmentResult& result,
-                       std::vector<std::string>* lines) {
+                       double default_marker_m, std::vector<std::string>* lines) {
   if (result.num_control_points > 0)
     lines->push_back("control points: " + std::to_string(result.num_control_points) + ", RMSE " +
                      FormatLengthWithUnit(result.control_rmse_total_m));
@@ -790,14 +843,15 @@ void ConsolePointLines(const Block& block, const BundleAdjustmentResult& result,
                      FormatLength(result.check_rmse_m.y(), unit) + " Z " +
                      FormatLength(result.check_rmse_m.z(), unit) + " total " +
                      FormatLength(result.check_rmse_total_m, unit) + " " + LengthUnitName(unit));
-    for (const std::string& miss : CheckPointsOutOfTolerance(block, result))
+    for (const std::string& miss :
+         CheckPointsOutOfTolerance(block, result, default_marker_m))
       lines->push_back("warning: check point " + miss);
   }
 }
 
 // What the adjustment left out: rejected marks and check marks, snooped observations.
 void ConsoleRemovedLines(const Block& block, const BundleAdjustmentResult& result,
-                         std::vector<std::string>* lines) {
+                         double default_marker_m, std::vector<std::string>* lines) {
   if (!result.rejected_marks.empty())
     lines->push_back(std::to_string(result.rejected_marks.size()) +
                      " marks rejected as blunders (listed in the report)");
@@ -817,6 +871,8 @@ void ConsoleRemovedLines(const Block& block, const BundleAdjustmentResult& resul
     lines->push_back("snooping removed the " + BundleItemName(block, step.group, step.item) + " (" +
                      BundleAxisName(step.group, step.axis) +
                      ", |w| = " + FormatUnitless(step.normalized, 1) + ")");
+  const std::string assumed = ControlRemovedOnAssumedAccuracy(block, result, default_marker_m);
+  if (!assumed.empty()) lines->push_back("warning: " + assumed);
 }
 
 // The leave-one-out RMSE of the control points and those that stand out.
@@ -856,8 +912,8 @@ std::vector<std::string> BundleConsoleLines(const Block& block,
   if (!s.tie_points_left_out.empty())
     lines.push_back(TiePointsLeftOutWarning(s.tie_points_left_out));
   ConsoleAccuracyLines(result, &lines);
-  ConsolePointLines(block, result, &lines);
-  ConsoleRemovedLines(block, result, &lines);
+  ConsolePointLines(block, result, context.options.accuracies.marker_m, &lines);
+  ConsoleRemovedLines(block, result, context.options.accuracies.marker_m, &lines);
   const std::string weak = WeaklyDeterminedWarning(result);
   if (!weak.empty()) lines.push_back("warning: weakly determined: " + weak);
   if (result.num_uncontrolled > 0)

@@ -61,14 +61,27 @@ std::string WeaklyDeterminedWarning(const BundleAdjustmentResult& result);
 // Chi-square(3) level above which a check point's error e^T C^-1 e stands out (0.1 % of honest
 // cases): the one rule of the page's verdict, its table notes and the console's warnings.
 inline constexpr double kCheckPointLevel = 0.999;
-// A check point's normalized error e^T C^-1 e (chi-square(3) when the covariance is honest); NaN
-// without an error or a covariance.
-double CheckPointNormalizedError(const BundlePointResult& r);
+// A check point's normalized error e^T C^-1 e, C the covariance of the error: the intersection's
+// plus the surveyed coordinates' (SurveyedPointErrorCovariance, solvers/bundle/check_points.h;
+// `default_marker_m` the accuracy of a point that states none). Chi-square(3) when both are
+// honest; NaN without an error or a covariance.
+double CheckPointNormalizedError(const BlockPoint& point, const BundlePointResult& r,
+                                 double default_marker_m);
+// The standard deviation of a check point's error, sqrt(trace C) with C as above (m).
+double CheckPointErrorSigma(const BlockPoint& point, const BundlePointResult& r,
+                            double default_marker_m);
 // Each check point whose error stands out (above the kCheckPointLevel quantile), in words: "P7
 // misses by 12.3 cm where its sigma is 1.80 cm (e^T C^-1 e = 46.8 > 16.3): check its surveyed
 // coordinates and its marks".
 std::vector<std::string> CheckPointsOutOfTolerance(const Block& block,
-                                                   const BundleAdjustmentResult& result);
+                                                   const BundleAdjustmentResult& result,
+                                                   double default_marker_m);
+// Control points without a stated accuracy whose coordinates data snooping removed, in words
+// (empty when none): the w-test judged them against the default `default_marker_m` (m), which
+// may only be a wrong assumption, not a blunder.
+std::string ControlRemovedOnAssumedAccuracy(const Block& block,
+                                            const BundleAdjustmentResult& result,
+                                            double default_marker_m);
 
 // The JSON report; every key is documented in docs/formats.md.
 nlohmann::json BundleReportJson(const Block& block, const BundleAdjustmentResult& result,

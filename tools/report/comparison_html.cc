@@ -629,6 +629,7 @@ std::string BlockComparisonHtml(const BlockComparisonOptions& options,
   html << "<p>" << FormatCount(static_cast<long long>(result.settings.size() * options.trials),
                                "block")
        << " in " << FormatSignificant(result.wall_seconds, 3) << " s.</p>\n"
+       << "<h2>Run</h2>\n<p>Command: <code>" << HtmlEscape(command_line) << "</code></p>\n"
        << HtmlPageClose();
   return html.str();
 }

@@ -200,5 +200,25 @@ TEST(CheckPoints, CheckMarksTakeTheControlMarksSigmaTheVarianceComponentsSet) {
               0.01 * kScale * kScale);
 }
 
+// The error of a surveyed point against an estimate that left it out carries both covariances:
+// the estimate's and the surveyed coordinates' (stated, else the default marker accuracy; none
+// when stated error-free).
+TEST(CheckPoints, TheErrorCovarianceAddsTheSurveyedAccuracy) {
+  Eigen::Matrix3d estimate;
+  estimate << 4e-4, 1e-4, 0.0, 1e-4, 9e-4, 0.0, 0.0, 0.0, 1e-4;
+  BlockPoint point;
+  point.role = PointRole::kCheck;
+  const Eigen::Matrix3d unstated = SurveyedPointErrorCovariance(point, estimate, 0.005);
+  EXPECT_TRUE(unstated.isApprox(estimate + 2.5e-5 * Eigen::Matrix3d::Identity(), 1e-15))
+      << unstated;
+  point.accuracy_m = Eigen::Vector3d(0.01, 0.02, 0.03);
+  const Eigen::Matrix3d stated = SurveyedPointErrorCovariance(point, estimate, 0.005);
+  EXPECT_TRUE(stated.isApprox(estimate + Eigen::Vector3d(1e-4, 4e-4, 9e-4).asDiagonal().toDenseMatrix(),
+                              1e-15))
+      << stated;
+  point.accuracy_m = Eigen::Vector3d::Zero();  // error-free: the estimate's alone
+  EXPECT_EQ(SurveyedPointErrorCovariance(point, estimate, 0.005), estimate);
+}
+
 }  // namespace
 }  // namespace photopose

@@ -5,6 +5,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <regex>
 #include <string>
 #include <vector>
@@ -103,44 +104,94 @@ TEST(BundleReport, AGroupLinePrintsItsLengthsInOneUnit) {
       << GrossErrorsAbsorbed(points);
 }
 
+// A control point without a stated accuracy that data snooping removed was judged against the
+// default --marker_accuracy: the console says so, naming it; one with its own accuracy is a
+// blunder by its own standard and is not in the warning.
+TEST(BundleReport, ControlRemovedOnAnAssumedAccuracyIsSaid) {
+  Block block;
+  for (const char* id : {"C1", "C2", "C3", "T1"}) {
+    BlockPoint point;
+    point.id = id;
+    point.role = id[0] == 'C' ? PointRole::kControl : PointRole::kTie;
+    block.points.push_back(point);
+  }
+  block.points[2].accuracy_m = Eigen::Vector3d::Constant(0.02);  // C3 states its own
+  BundleAdjustmentResult result;
+  result.points.resize(4);
+  EXPECT_EQ(ControlRemovedOnAssumedAccuracy(block, result, 0.005), "");
+  BundleSnoopingStep c1x, c1z, c3;
+  c1x.group = c1z.group = c3.group = kControlPoints;
+  c1x.item = c1z.item = 0;
+  c1z.axis = 2;
+  c3.item = 2;
+  result.snooping = {c3};
+  EXPECT_EQ(ControlRemovedOnAssumedAccuracy(block, result, 0.005), "") << "C3 states its own";
+  result.snooping = {c1x, c3, c1z};
+  const std::string expected =
+      "data snooping removed 1 of 2 control points whose accuracy the points table does not state "
+      "('C1'): they were tested against --marker_accuracy, 5.0 mm. If they were surveyed less "
+      "accurately, they are not blunders: state AccuracyX/Y/Z or --marker_accuracy and adjust "
+      "again.";
+  EXPECT_EQ(ControlRemovedOnAssumedAccuracy(block, result, 0.005), expected);
+  BundleReportContext context;
+  context.options.accuracies.marker_m = 0.005;
+  const std::vector<std::string> lines = BundleConsoleLines(block, result, context);
+  EXPECT_NE(std::find(lines.begin(), lines.end(), "warning: " + expected), lines.end());
+}
+
 // A check point whose error its covariance cannot explain (e^T C^-1 e above the chi-square(3)
-// 99.9 % quantile, 16.27) is named on the console as on the page; one within it is not.
+// 99.9 % quantile, 16.27) is named on the console as on the page; one within it is not. C is the
+// intersection's covariance plus the surveyed coordinates': a point surveyed to 3 cm that misses
+// by 6 cm is within it, though the intersection alone (1 cm) would call it out.
 TEST(BundleReport, ACheckPointBeyondItsCovarianceIsNamedOnTheConsole) {
   Block block;
-  for (const char* id : {"C1", "K1", "K2"}) {
+  for (const char* id : {"C1", "K1", "K2", "K3", "K4"}) {
     BlockPoint point;
     point.id = id;
     point.role = id[0] == 'C' ? PointRole::kControl : PointRole::kCheck;
     block.points.push_back(point);
   }
+  block.points[3].accuracy_m = Eigen::Vector3d::Constant(0.03);  // K3: surveyed to 3 cm
+  block.points[4].accuracy_m = Eigen::Vector3d::Zero();          // K4: stated error-free
   BundleAdjustmentResult result;
-  result.points.resize(3);
+  result.points.resize(5);
   for (BundlePointResult& r : result.points) {
     r.has_covariance = true;
     r.covariance = Eigen::Matrix3d::Identity() * 1e-4;  // 1 cm per axis
   }
-  result.points[0].error_m = Eigen::Vector3d(0.10, 0.0, 0.0);  // control: not tested here
-  result.points[1].error_m = Eigen::Vector3d(0.05, 0.0, 0.0);  // 25 > 16.27
-  result.points[2].error_m = Eigen::Vector3d(0.02, 0.02, 0.0);  // 8 < 16.27
-  result.num_check_points = 2;
-  result.check_rmse_m = Eigen::Vector3d(0.038, 0.014, 0.0);
-  result.check_rmse_total_m = 0.041;
-  EXPECT_NEAR(CheckPointNormalizedError(result.points[1]), 25.0, 1e-9);
-  const std::vector<std::string> misses = CheckPointsOutOfTolerance(block, result);
-  ASSERT_EQ(misses.size(), 1u);
+  result.points[0].error_m = Eigen::Vector3d(0.10, 0.0, 0.0);   // control: not tested here
+  result.points[1].error_m = Eigen::Vector3d(0.05, 0.0, 0.0);   // 0.05^2 / (1e-4 + 0.005^2) = 20
+  result.points[2].error_m = Eigen::Vector3d(0.02, 0.02, 0.0);  // 6.4 < 16.27
+  result.points[3].error_m = Eigen::Vector3d(0.06, 0.0, 0.0);   // 0.06^2 / (1e-4 + 9e-4) = 3.6
+  result.points[4].error_m = Eigen::Vector3d(0.05, 0.0, 0.0);   // 0.05^2 / 1e-4 = 25
+  result.num_check_points = 4;
+  const double marker_m = 0.005;  // the default marker accuracy of a point that states none
+  EXPECT_NEAR(CheckPointNormalizedError(block.points[1], result.points[1], marker_m), 20.0, 1e-9);
+  EXPECT_NEAR(CheckPointNormalizedError(block.points[3], result.points[3], marker_m), 3.6, 1e-9);
+  EXPECT_NEAR(CheckPointNormalizedError(block.points[4], result.points[4], marker_m), 25.0, 1e-9);
+  const std::vector<std::string> misses = CheckPointsOutOfTolerance(block, result, marker_m);
+  ASSERT_EQ(misses.size(), 2u);
   EXPECT_EQ(misses[0],
-            "K1 misses by 50.0 mm where its sigma is 17.3 mm (e^T C^-1 e = 25.0 > 16.3): check its "
+            "K1 misses by 50.0 mm where its sigma is 19.4 mm (e^T C^-1 e = 20.0 > 16.3): check its "
             "surveyed coordinates and its marks");
-  EXPECT_NE(misses[0].find("(e^T C^-1 e = 25.0 > 16.3)"), std::string::npos) << misses[0];
+  EXPECT_EQ(misses[1],
+            "K4 misses by 50.0 mm where its sigma is 17.3 mm (e^T C^-1 e = 25.0 > 16.3): check its "
+            "surveyed coordinates and its marks");
+  // The console takes the run's default marker accuracy from its options.
+  BundleReportContext context;
+  context.options.accuracies.marker_m = marker_m;
   size_t warnings = 0;
-  for (const std::string& line : BundleConsoleLines(block, result, BundleReportContext()))
+  for (const std::string& line : BundleConsoleLines(block, result, context))
     if (line.rfind("warning: check point ", 0) == 0) {
+      EXPECT_EQ(line, "warning: check point " + misses[warnings]);
       ++warnings;
-      EXPECT_EQ(line, "warning: check point " + misses[0]);
     }
-  EXPECT_EQ(warnings, 1u);
+  EXPECT_EQ(warnings, 2u);
+  // A larger default accuracy explains K1 (0.05^2 / (1e-4 + 0.02^2) = 5), not K4 (stated 0).
+  EXPECT_EQ(CheckPointsOutOfTolerance(block, result, 0.02).size(), 1u);
   result.points[1].has_covariance = false;  // no covariance: nothing to test against
-  EXPECT_TRUE(CheckPointsOutOfTolerance(block, result).empty());
+  result.points[4].has_covariance = false;
+  EXPECT_TRUE(CheckPointsOutOfTolerance(block, result, marker_m).empty());
 }
 
 // The README's example with --estimate_accuracies: the control marks' gross errors (5 % of the

@@ -128,6 +128,9 @@ TEST(ComparisonHtml, TheBlockVerdictRecommendsTheFastestOfTheTiedSolvers) {
     EXPECT_NE(text.find(expected), std::string::npos) << expected << " in " << text;
   EXPECT_EQ(text.find("<b>ceres_autodiff</b>"), std::string::npos) << text;
   EXPECT_NE(text.find("verdict note"), std::string::npos) << "findings make it a note: " << text;
+  // The command that made the page is on it, escaped, as on the other comparison pages.
+  const std::string run = BlockComparisonHtml(options, result, "photopose compare --trials=4 <x>");
+  EXPECT_NE(run.find("<code>photopose compare --trials=4 &lt;x&gt;</code>"), std::string::npos);
   // No solver adjusted a block: none is recommended.
   for (BlockSolverStatistics& st : result.statistics[0]) st.successes = 0;
   const std::string none = BlockComparisonHtml(options, result, "photopose compare");
