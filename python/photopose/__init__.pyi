@@ -539,6 +539,7 @@ class BundleStatisticsOptions:
     relative_covariance: str  # a relative block's covariance datum: 'points', 'centres' or 'first_image'
     overfit_ratio: float
     overfit_redundancy_share: float
+    checked_redundancy_share: float  # above it a prior group's small RMS is a loose accuracy, not over-fitting
     high_correlation: float
     observation_diagnostics: bool
     snooping_alpha: float

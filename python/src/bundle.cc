@@ -83,6 +83,8 @@ default). A per-row accuracy of the tables overrides its row's default.)doc");
                      "a relative block's covariance datum: 'points', 'centres' or 'first_image'")
       .def_readwrite("overfit_ratio", &BundleStatisticsOptions::overfit_ratio)
       .def_readwrite("overfit_redundancy_share", &BundleStatisticsOptions::overfit_redundancy_share)
+      .def_readwrite("checked_redundancy_share", &BundleStatisticsOptions::checked_redundancy_share,
+                     "above it a prior group's small RMS is a loose accuracy, not over-fitting")
       .def_readwrite("high_correlation", &BundleStatisticsOptions::high_correlation)
       .def_readwrite("observation_diagnostics", &BundleStatisticsOptions::observation_diagnostics)
       .def_readwrite("snooping_alpha", &BundleStatisticsOptions::snooping_alpha)

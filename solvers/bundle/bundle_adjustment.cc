@@ -117,6 +117,8 @@ bool BundleStatisticsOptions::IsValid(std::string* why) const {
     return Fail(why, "overfit_ratio must be in (0, 1)");
   if (!(overfit_redundancy_share >= 0.0 && overfit_redundancy_share < 1.0))
     return Fail(why, "overfit_redundancy_share must be in [0, 1)");
+  if (!(checked_redundancy_share >= overfit_redundancy_share && checked_redundancy_share <= 1.0))
+    return Fail(why, "checked_redundancy_share must be in [overfit_redundancy_share, 1]");
   if (!(high_correlation > 0.0 && high_correlation < 1.0))
     return Fail(why, "high_correlation must be in (0, 1)");
   if (max_variance_iterations < 1) return Fail(why, "max_variance_iterations must be >= 1");

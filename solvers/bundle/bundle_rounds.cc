@@ -389,6 +389,7 @@ void ReportEstimatedAccuracies(const RoundChanges& a) {
     if (a.group_estimable[g]) {
       // The verdict's ratio is against the accuracy in use, the estimate (before the rescale).
       if (group.overfit) group.message = OverfitMessage(group, "estimated");
+      else if (!group.message.empty()) group.message = LooseAccuracyMessage(group, "estimated");
       group.estimated_accuracy = group.stated_accuracy;
       group.estimated_accuracy_standard_error = 1.0 / std::sqrt(2.0 * r);
       group.stated_accuracy /= a.group_scale[g];

@@ -651,6 +651,17 @@ std::string OverfitMessage(const BundleGroupStatistics& group, const char* accur
   return message.str();
 }
 
+std::string LooseAccuracyMessage(const BundleGroupStatistics& group, const char* accuracy) {
+  std::ostringstream message;
+  message << EnumName(group.group) << ": residual RMS " << FormatSignificant(group.ratio, 3)
+          << " of the " << accuracy << " accuracy, redundancy share "
+          << FormatSignificant(group.redundancy_share, 3)
+          << ". The block checks these priors and they fit better than " << accuracy
+          << ": the accuracy is loose, not over-fitted; stated as measured, they would weigh "
+             "more.";
+  return message.str();
+}
+
 namespace {
 
 // Control points in the round held fixed (no parameter block adjusted: stated error-free or in the
@@ -694,10 +705,15 @@ void GroupStatistics(const BundleAdjustmentOptions& options, const GroupSums* su
     group.redundancy_share = variance.redundancy[g] / rows;
     const bool prior = g == kControlPoints || g == kCameraPositions || g == kAttitudes;
     const bool share_known = std::isfinite(group.redundancy_share);
-    if (prior && (group.ratio < options.statistics.overfit_ratio ||
-                  (share_known && group.redundancy_share < options.statistics.overfit_redundancy_share))) {
+    const BundleStatisticsOptions& so = options.statistics;
+    const bool follows_priors = share_known && group.redundancy_share < so.overfit_redundancy_share;
+    const bool below = group.ratio < so.overfit_ratio;
+    const bool checked = share_known && group.redundancy_share >= so.checked_redundancy_share;
+    if (prior && (follows_priors || (below && !checked))) {
       group.overfit = true;
       group.message = OverfitMessage(group, "stated");
+    } else if (prior && below) {
+      group.message = LooseAccuracyMessage(group, "stated");
     }
     result->groups.push_back(group);
   }

@@ -211,16 +211,40 @@ std::string OverviewHtml(const Block& block, const BundleAdjustmentResult& resul
 // Over-fitting of the priors: none, or the groups the solution follows rather than the images.
 std::string OverfitVerdictHtml(const BundleAdjustmentResult& result,
                                const BundleReportContext& context) {
-  std::vector<std::string> overfit;
-  for (const BundleGroupStatistics& g : result.groups)
+  std::vector<std::string> overfit, loose;
+  for (const BundleGroupStatistics& g : result.groups) {
     if (g.overfit) overfit.push_back(g.message);
+    else if (!g.message.empty()) loose.push_back(g.message);
+  }
+  const BundleStatisticsOptions& so = context.options.statistics;
   std::ostringstream html;
-  if (overfit.empty()) {
+  bool judged = true;  // every weighted prior group has its redundancy share
+  for (const BundleGroupStatistics& g : result.groups) {
+    const bool prior =
+        g.group == kControlPoints || g.group == kCameraPositions || g.group == kAttitudes;
+    if (prior && g.count > 0 && !std::isfinite(g.redundancy_share)) judged = false;
+  }
+  if (overfit.empty() && !judged) {
+    html << "<div class=\"verdict note\"><b>Over-fitting not judged:</b> the redundancy shares "
+            "that say whether the tie points check the priors need the statistics, which this "
+            "run did not compute.</div>\n";
+  } else if (overfit.empty()) {
+    // True of every prior group: none follows its priors (share below the first limit), none
+    // has an RMS well below its accuracy unless the block checks it (share above the second).
     html << "<div class=\"verdict good\"><b>No prior group is over-fitted:</b> each is checked "
             "by the tie points (redundancy share at least "
-         << FormatUnitless(context.options.statistics.overfit_redundancy_share)
-         << ") and fits within its stated accuracy (RMS / stated at least "
-         << FormatUnitless(context.options.statistics.overfit_ratio) << ").</div>\n";
+         << FormatUnitless(so.overfit_redundancy_share) << "), and each fits within its stated "
+         << "accuracy (RMS / stated at least " << FormatUnitless(so.overfit_ratio) << ")"
+         << (loose.empty() ? "" : " or, where it fits better, is checked by the block (share at "
+                                  "least " + FormatUnitless(so.checked_redundancy_share) +
+                                      "): its accuracy is loose, as noted below")
+         << ".</div>\n";
+    if (!loose.empty()) {
+      html << "<div class=\"verdict note\"><b>Loose stated accuracies</b> (the data fit them "
+              "better than stated; stated as measured they would weigh more):<ul>";
+      for (const std::string& m : loose) html << "<li>" << HtmlEscape(m) << "</li>";
+      html << "</ul></div>\n";
+    }
   } else {
     html << "<div class=\"verdict bad\"><b>Over-fitted prior groups</b> (the solution follows "
             "them rather than the images, so their residuals say little about their accuracy):<ul>";
@@ -431,9 +455,8 @@ std::string PointsHtml(const Block& block, const BundleAdjustmentResult& result,
                     {"control points take part in the adjustment, so their errors are small by "
                      "construction; check points do not, and measure the block's accuracy"});
   html << HtmlTable("Control points: adjusted minus surveyed", header, control_rows,
-                    {"sigma: square root of the trace of the adjusted point's covariance "
-                     "(sigma0-scaled); e^T C^-1 e n/a: a control point's error is a residual of "
-                     "the adjustment, not an independent miss"});
+                    {"sigma: of the adjusted point; e^T C^-1 e n/a: a control point's error is a "
+                     "residual of the adjustment, not an independent miss"});
   html << HtmlTable("Check points: intersected from the adjusted images minus surveyed", header,
                     check_rows,
                     {"sigma: of the error, square root of the trace of C = the intersection's "
@@ -800,12 +823,20 @@ std::vector<std::string> GroupRow(const BundleGroupStatistics& g, const ColumnsI
   if (g.num_fixed > 0) verdict += ", " + std::to_string(g.num_fixed) + " more held fixed";
   if (g.overfit) {
     verdict = "OVER-FITTED";
-  } else if (!prior) {
-    verdict = g.ratio > kWeightFactor || g.ratio < 1.0 / kWeightFactor ? "weight off" : "fits";
+  } else if (prior && !g.message.empty()) {
+    verdict = "loose";  // checked by the block, RMS well below the stated accuracy
+  } else if (prior && !std::isfinite(g.redundancy_share)) {
+    verdict = "not judged";  // no statistics: no redundancy share
+  } else if (g.ratio > kWeightFactor || g.ratio < 1.0 / kWeightFactor) {
+    verdict = "weight off";
   }
+  // A group stated differently per axis (GNSS 3/3/6 cm) shows X/Y/Z: its RMS / stated is the
+  // whitened ratio over all three, which X alone would not explain.
+  std::string stated = in_units.texts[0][k];
+  if (StatedPerAxis(g)) stated += "/" + in_units.texts[3][k] + "/" + in_units.texts[4][k];
   return {EnumName(g.group),
           std::to_string(g.count),
-          in_units.texts[0][k],
+          stated,
           in_units.texts[1][k],
           std::isfinite(g.estimated_accuracy.x())
               ? in_units.texts[2][k]
@@ -822,13 +853,16 @@ std::vector<std::string> GroupRow(const BundleGroupStatistics& g, const ColumnsI
 std::string GroupsTableHtml(const BundleAdjustmentResult& result,
                             const BundleReportContext& context) {
   std::vector<std::string> kinds;
-  std::vector<std::vector<double>> values(3);  // stated, RMS, estimated
+  // stated (X), RMS, estimated, and the stated Y and Z of a group whose axes differ
+  std::vector<std::vector<double>> values(5);
   for (const BundleGroupStatistics& g : result.groups) {
     kinds.push_back(g.unit);
     const bool fixed = g.fixed();
     values[0].push_back(fixed ? std::nan("") : g.stated_accuracy.x());
     values[1].push_back(fixed ? std::nan("") : g.rms_total);
     values[2].push_back(fixed ? std::nan("") : g.estimated_accuracy.x());
+    values[3].push_back(fixed ? std::nan("") : g.stated_accuracy.y());
+    values[4].push_back(fixed ? std::nan("") : g.stated_accuracy.z());
   }
   const ColumnsInUnits in_units = FormatColumnsInUnits(values, kinds);
   const bool unit_column = in_units.unit.empty() && !result.groups.empty();
@@ -847,15 +881,32 @@ std::string GroupsTableHtml(const BundleAdjustmentResult& result,
                                      "RMS / stated",
                                      "redundancy share",
                                      "verdict"};
+  // The notes of what the table shows: a verdict's or a notation's note only when a row uses it.
+  const auto shown = [&rows](const std::string& verdict) {
+    for (const std::vector<std::string>& row : rows)
+      if (row.back() == verdict) return true;
+    return false;
+  };
+  const BundleStatisticsOptions& so = context.options.statistics;
   std::vector<std::string> notes = {
       "redundancy share: the group's summed redundancy numbers over its observations, how much "
       "of it the rest of the block checks (0 to 1)",
-      "over-fitted: a prior group whose RMS / stated is below " +
-          FormatUnitless(context.options.statistics.overfit_ratio) +
-          " or whose redundancy share is below " +
-          FormatUnitless(context.options.statistics.overfit_redundancy_share),
+      "over-fitted: a prior group whose redundancy share is below " +
+          FormatUnitless(so.overfit_redundancy_share) + ", or whose RMS / stated is below " +
+          FormatUnitless(so.overfit_ratio) + " with a share below " +
+          FormatUnitless(so.checked_redundancy_share),
       "weight off: RMS / stated outside " + FormatUnitless(1.0 / kWeightFactor) + " to " +
           FormatUnitless(kWeightFactor)};
+  if (std::any_of(result.groups.begin(), result.groups.end(), StatedPerAxis))
+    notes.insert(notes.begin(), "stated: X/Y/Z where a group's axes differ (RMS / stated is the "
+                                "whitened ratio over all of them)");
+  if (shown("loose"))
+    notes.push_back("loose: RMS / stated below " + FormatUnitless(so.overfit_ratio) +
+                    " in a prior group the block checks (share at least " +
+                    FormatUnitless(so.checked_redundancy_share) +
+                    "): its stated accuracy is looser than the data");
+  if (shown("not judged"))
+    notes.push_back("not judged: no redundancy share (statistics turned off)");
   if (unit_column) {
     header.insert(header.begin() + 2, "unit");
     notes.insert(notes.begin(),

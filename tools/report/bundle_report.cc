@@ -637,6 +637,11 @@ std::string GrossErrorsAbsorbed(const BundleGroupStatistics& group) {
   return text + ". Check the group's observations with the largest |w|, or state its accuracy.";
 }
 
+bool StatedPerAxis(const BundleGroupStatistics& g) {
+  const Eigen::Vector3d& a = g.stated_accuracy;
+  return g.num_axes == 3 && a.y() > 0.0 && a.z() > 0.0 && (a.x() != a.y() || a.x() != a.z());
+}
+
 double CheckPointNormalizedError(const BlockPoint& point, const BundlePointResult& r,
                                  double default_marker_m) {
   if (!r.error_m || !r.has_covariance) return std::nan("");
@@ -775,10 +780,16 @@ void ConsoleGroupLines(const BundleAdjustmentResult& result, std::vector<std::st
       continue;
     }
     // One unit for the line's lengths (a group of metres: mm, cm or m for both).
-    const std::vector<std::string> values =
-        FormatMarkValues({g.stated_accuracy.x(), g.rms_total}, g.unit);
-    line << EnumName(g.group) << ": " << g.count << ", stated " << values[0] << ", RMS "
-         << values[1] << ", RMS/stated " << FormatUnitless(g.ratio)
+    const ValuesInOneUnit values = FormatInOneUnit(
+        {g.stated_accuracy.x(), g.rms_total, g.stated_accuracy.y(), g.stated_accuracy.z()},
+        g.unit);
+    const std::string unit = values.unit.empty() ? "" : " " + values.unit;
+    const std::string stated =
+        StatedPerAxis(g) ? "stated X/Y/Z " + values.texts[0] + "/" + values.texts[2] + "/" +
+                               values.texts[3] + unit
+                         : "stated " + values.texts[0] + unit;
+    line << EnumName(g.group) << ": " << g.count << ", " << stated << ", RMS " << values.texts[1]
+         << unit << ", RMS/stated " << FormatUnitless(g.ratio)
          << ", redundancy share " << FormatUnitless(g.redundancy_share)
          << (g.overfit ? "  OVERFIT" : "");
     if (g.num_fixed > 0) line << "; " << g.num_fixed << " more held fixed";
@@ -786,6 +797,7 @@ void ConsoleGroupLines(const BundleAdjustmentResult& result, std::vector<std::st
   }
   for (const BundleGroupStatistics& g : result.groups)
     if (g.overfit) lines->push_back("warning: " + g.message);
+    else if (!g.message.empty()) lines->push_back("note: " + g.message);
 }
 
 // The tie points that could not be intersected, the first five by name.

@@ -61,6 +61,11 @@ std::string WeaklyDeterminedWarning(const BundleAdjustmentResult& result);
 // Chi-square(3) level above which a check point's error e^T C^-1 e stands out (0.1 % of honest
 // cases): the one rule of the page's verdict, its table notes and the console's warnings.
 inline constexpr double kCheckPointLevel = 0.999;
+// Whether a three-axis group's stated accuracy differs between its axes (GNSS at 3/3/6 cm; every
+// axis with rows): the console and the page then show it as X/Y/Z, since its RMS / stated is the
+// whitened ratio over all three axes, which the X accuracy alone would not explain.
+bool StatedPerAxis(const BundleGroupStatistics& g);
+
 // A check point's normalized error e^T C^-1 e, C the covariance of the error: the intersection's
 // plus the surveyed coordinates' (SurveyedPointErrorCovariance, solvers/bundle/check_points.h;
 // `default_marker_m` the accuracy of a point that states none). Chi-square(3) when both are

@@ -98,6 +98,10 @@ struct GroupVariance {
 // `accuracy` ("stated", or "estimated" once variance components replaced it) accuracy, its
 // redundancy share, and what to do.
 std::string OverfitMessage(const BundleGroupStatistics& group, const char* accuracy);
+// The note of a prior group the block checks (redundancy share at least checked_redundancy_share)
+// whose residual RMS is well below its `accuracy` accuracy: the accuracy is loose, the solution
+// does not bend to it.
+std::string LooseAccuracyMessage(const BundleGroupStatistics& group, const char* accuracy);
 
 // The images' and cameras' own uncertainty carried into the covariance of a check point: given
 // its rays, the marks they come from (indices into Block::marks) and its intersection, the

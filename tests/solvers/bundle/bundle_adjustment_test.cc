@@ -321,6 +321,34 @@ TEST(BundleAdjustment, FewTiePointsFlagTheCameraPositionsAsOverfitted) {
   }
 }
 
+// Camera positions good to 3 cm stated as 3 m (start values given a loose accuracy) fit far better
+// than stated, but the tie points check them (redundancy share near 1): the accuracy is loose, the
+// solution does not bend to them. Not over-fitted, and the note says which it is; stated as
+// measured, the same positions are neither.
+TEST(BundleAdjustment, ALooseAccuracyTheBlockChecksIsNotOverfitted) {
+  for (const double stated_m : {3.0, 0.0}) {
+    SmallBlockOptions o;
+    o.gnss_noise_m = 0.03;
+    o.stated_gnss_m = stated_m;  // 0: the true noise
+    SmallBlock data = MakeSmallBlock(o);
+    BundleAdjustmentResult result;
+    ASSERT_TRUE(BundleAdjust(QuietOptions(), BundleAdjustmentConfig(), &data.block, &result).ok());
+    ASSERT_TRUE(result.summary.IsSolutionUsable()) << result.summary.BriefReport();
+    const BundleGroupStatistics* cameras = FindGroup(result, kCameraPositions);
+    ASSERT_NE(cameras, nullptr);
+    EXPECT_FALSE(cameras->overfit) << result.FullReport(data.block);
+    if (stated_m > 0.0) {
+      EXPECT_LT(cameras->ratio, 0.5) << result.FullReport(data.block);
+      EXPECT_GE(cameras->redundancy_share, 0.5) << result.FullReport(data.block);
+      EXPECT_NE(cameras->message.find("the accuracy is loose, not over-fitted"), std::string::npos)
+          << cameras->message;
+    } else {
+      EXPECT_GT(cameras->ratio, 0.5) << result.FullReport(data.block);
+      EXPECT_EQ(cameras->message, "");
+    }
+  }
+}
+
 // Control points stated error-free (AccuracyX/Y/Z 0) are held fixed: the same adjustment as with
 // them in the config's constant points, bit for bit; they stay on their survey, form the datum of a
 // block without camera positions, add no observation, and their group is "fixed" without a verdict.

@@ -104,6 +104,32 @@ TEST(BundleReport, AGroupLinePrintsItsLengthsInOneUnit) {
       << GrossErrorsAbsorbed(points);
 }
 
+// GNSS stated at 3/3/6 cm: the line shows X/Y/Z, so that RMS/stated (whitened over the three
+// axes) can be read against them; equal axes keep one figure.
+TEST(BundleReport, AGroupStatedPerAxisShowsEachAxis) {
+  BundleAdjustmentResult result;
+  result.summary.datum_description = "absolute";
+  result.groups.push_back(Group(kCameraPositions, "m", 0.03, 0.0413));
+  result.groups.back().num_axes = 3;
+  result.groups.back().stated_accuracy = Eigen::Vector3d(0.03, 0.03, 0.06);
+  result.groups.back().ratio = 0.97;
+  result.groups.push_back(Group(kControlPoints, "m", 0.005, 0.004));
+  result.groups.back().num_axes = 3;
+  const std::vector<std::string> lines = BundleConsoleLines(Block(), result, BundleReportContext());
+  const auto has = [&](const std::string& text) {
+    for (const std::string& line : lines)
+      if (line.find(text) != std::string::npos) return true;
+    return false;
+  };
+  EXPECT_TRUE(has("camera_positions: 12, stated X/Y/Z 30.0/30.0/60.0 mm, RMS 41.3 mm, "
+                  "RMS/stated 0.97"));
+  EXPECT_TRUE(has("control_points: 12, stated 5.0 mm, RMS 4.0 mm,"));
+  EXPECT_TRUE(StatedPerAxis(result.groups[0]));
+  EXPECT_FALSE(StatedPerAxis(result.groups[1]));
+  result.groups[0].stated_accuracy.z() = 0.0;  // positions without height: no Z rows
+  EXPECT_FALSE(StatedPerAxis(result.groups[0]));
+}
+
 // A control point without a stated accuracy that data snooping removed was judged against the
 // default --marker_accuracy: the console says so, naming it; one with its own accuracy is a
 // blunder by its own standard and is not in the warning.
