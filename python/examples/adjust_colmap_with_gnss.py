@@ -41,10 +41,14 @@ if geo.check_after_adjustment["count"] > 0:
 if not result.summary.is_solution_usable():
     sys.exit(1)
 
-pp.write_colmap_model(block, out_dir)                  # in the local ENU frame, ids kept
+# The writer of `photopose bundle --out_colmap`: the model's own points and tracks in the local
+# ENU frame (ids kept, rejected marks out of the tracks, the control left out), georeference.json
+# beside it naming that frame.
+pp.write_adjusted_colmap_model(block, out_dir, result, geo)
 poses = geo.output_poses(block)                        # X0, Y0, Z0 in the output CRS, angles to its level frame
 frames = [pp.FrameRecord(raster=name, camera_id=block.cameras[c].camera_id, srs=geo.out_crs,
                          eo=pp.ExteriorOrientation(poses[i, :3], poses[i, 3:]), sigma0=result.summary.sigma0)
           for i, (name, c) in enumerate(zip(block.image_names, block.image_cameras))]
 pp.write_frames_table(f"{out_dir}/frames.csv", frames, rotation="opk")
-print(f"wrote {out_dir}/cameras.txt, images.txt, points3D.txt (local frame) and frames.csv ({geo.out_crs})")
+print(f"wrote {out_dir}/cameras.txt, images.txt, points3D.txt (local frame), georeference.json and "
+      f"frames.csv ({geo.out_crs})")

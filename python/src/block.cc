@@ -522,7 +522,9 @@ void BindBlockFiles(py::module_& m) {
     const std::string path = PathArgument(directory, "directory");
     CallWithoutGil([&] { return ReadColmapModel(path, &out.block, &*out.colmap); });
     return out;
-  }, py::arg("directory"), "A COLMAP text model (cameras.txt, images.txt, points3D.txt).");
+  }, py::arg("directory"),
+        "A COLMAP model, binary (cameras.bin, images.bin, points3D.bin) when those are there, else "
+        "text (cameras.txt, images.txt, points3D.txt).");
   m.def("read_bal_problem", [](const py::object& path) {
     PythonBlock out;
     const std::string p = PathArgument(path, "path");
@@ -537,6 +539,16 @@ void BindBlockFiles(py::module_& m) {
   }, py::arg("path"), "A Bundler v0.3 .out file.");
   m.def("write_colmap_model", [](const PythonBlock& b, const py::object& directory) {
     const std::string path = PathArgument(directory, "directory");
+    // Control joined by georeferencing: the extras describe the model's part alone.
+    if (b.colmap && (b.colmap->point_rgb.size() != b.block.points.size() ||
+                     b.colmap->mark_keypoint_index.size() != b.block.marks.size())) {
+      ThrowIfError(Status::Error(
+          "write_colmap_model: the block has " + std::to_string(b.block.points.size()) +
+          " points and " + std::to_string(b.block.marks.size()) + " marks, the COLMAP model it was read from " +
+          std::to_string(b.colmap->point_rgb.size()) + " and " + std::to_string(b.colmap->mark_keypoint_index.size()) +
+          " (georeferencing joined control to it): write it with write_adjusted_colmap_model(block, directory, "
+          "adjustment, georeference), which leaves the control out"));
+    }
     CallWithoutGil([&] { return WriteColmapModel(path, b.block, b.colmap ? &*b.colmap : nullptr); });
   }, py::arg("block"), py::arg("directory"),
      "Writes the block as a COLMAP text model (ids, keypoints and colours of a model read with "

@@ -161,7 +161,9 @@ void DefValidate(py::class_<T>& cls, const char* name) {
 // ------------------------------------------------------------------ the block
 // photopose.Block: a Block (core/block.h) and, when it was read from a COLMAP model, what the model
 // holds beyond it (ids, keypoint indices, colours), handed back to WriteColmapModel. The Python
-// API never adds or removes images, points or marks, so the two stay the same size.
+// API never removes images, points or marks; georeferencing (prepare_georeference,
+// georeference_block) appends the control after them, so the extras describe the block's first
+// points and marks: write_adjusted_colmap_model writes that part (ModelPartOfBlock).
 struct PythonBlock {
   Block block;
   std::optional<ColmapModelExtras> colmap;
@@ -288,6 +290,7 @@ PHOTOPOSE_PYTHON_ENUM(photopose::MarkStatus)
 PHOTOPOSE_PYTHON_ENUM(photopose::BundleLinearSolver)
 PHOTOPOSE_PYTHON_ENUM(photopose::BundleDatum)
 PHOTOPOSE_PYTHON_ENUM(photopose::BundleGroup)
+PHOTOPOSE_PYTHON_ENUM(photopose::ColmapFormat)
 PHOTOPOSE_PYTHON_ENUM(photopose::BundleCovarianceMethod)
 PHOTOPOSE_PYTHON_ENUM(photopose::BundleRelativeCovariance)
 

@@ -8,6 +8,7 @@
 #include "common.h"
 #include "core/io/exif_gps.h"
 #include "core/io/tables.h"
+#include "solvers/georeference/adjusted_colmap_model.h"
 #include "solvers/georeference/georeference.h"
 
 namespace photopose::python {
@@ -207,6 +208,10 @@ ENU frame; to_output_crs and output_poses bring coordinates and poses into the o
       .def_property_readonly("errors_after_adjustment_m", [](const GeoreferenceResult& r) {
         return OptionalRowsArray(r.point_errors.size(), 3, [&](size_t i) { return r.point_errors[i].after_adjustment_m; });
       }, "K x 3 estimate - surveyed (m, level axes), NaN where not computed")
+      .def_readonly("model_points", &GeoreferenceResult::model_points,
+                    "the model's own points: the block's first ones (the control follows)")
+      .def_readonly("model_marks", &GeoreferenceResult::model_marks,
+                    "the model's own marks: the block's first ones (the control marks follow)")
       .def_readonly("evaluated", &GeoreferenceResult::evaluated)
       .def_readonly("prepare_seconds", &GeoreferenceResult::prepare_seconds)
       .def_readonly("evaluate_seconds", &GeoreferenceResult::evaluate_seconds)
@@ -289,6 +294,23 @@ Georeferences and adjusts a model in place (GeoreferenceBlock): (GeoreferenceRes
 BundleAdjustmentResult). The block ends in the local ENU frame; result.to_output_crs and
 result.output_poses give the output CRS. Raises photopose.Error on unknown CRSs, fewer than three
 usable pairs, pairs on a line, or a block the adjustment cannot use.)doc");
+  m.def("write_adjusted_colmap_model",
+        [](const PythonBlock& block, const py::object& directory, const BundleAdjustmentResult& adjustment,
+           const GeoreferenceResult* georeference, ColmapFormat format) {
+          const std::string path = PathArgument(directory, "directory");
+          CallWithoutGil([&] {
+            return WriteAdjustedColmapModel(path, block.block, adjustment, georeference,
+                                            block.colmap ? &*block.colmap : nullptr, format);
+          });
+        },
+        py::arg("block"), py::arg("directory"), py::arg("adjustment"), py::arg("georeference") = py::none(),
+        py::kw_only(), py::arg("format") = ColmapFormat::kText, R"doc(
+Writes an adjusted block as the COLMAP model it was read from (WriteAdjustedColmapModel, the writer
+of `photopose bundle --out_colmap`): the marks the adjustment left out (rejected, snooped) leave
+the tracks; with a georeference (georeference_block's or prepare_georeference's result) the control
+points and marks it added are left out and georeference.json beside the model names its local
+East-North-Up frame. format is 'text' or 'binary'; ids, keypoints and colours of a model read with
+read_colmap_model are kept.)doc");
 }
 
 }  // namespace

@@ -124,3 +124,30 @@ def test_image_gps_from_bytes(tmp_path):
         pp.parse_image_gps(data[:4])
     with pytest.raises(TypeError):
         pp.parse_image_gps("not bytes")
+
+
+def test_a_block_with_control_joined_is_written_by_the_adjusted_model_writer(tmp_path):
+    block, truth, checks = georeference_model(tmp_path, num_control_points=5, num_check_points=4)
+    model_points, model_marks = block.num_points, block.num_marks
+    write_geo_txt(tmp_path / "geo.txt", block.image_names, truth.image_parameters[:, :3], (0.03, 0.03, 0.05))
+    inputs = pp.GeoreferenceInputs()
+    inputs.set_positions_from_geo_txt(pp.read_geo_txt(tmp_path / "geo.txt"))
+    inputs.set_control_from_gcp_list(pp.read_gcp_list(tmp_path / "gcp_list.txt"), check_points=checks)
+    geo = pp.prepare_georeference(block, inputs)
+    assert (geo.model_points, geo.model_marks) == (model_points, model_marks)
+    assert block.num_points == model_points + 9 and block.num_marks > model_marks
+    assert block.point_roles[model_points:].count("check") == 4
+    # write_colmap_model writes a block as it is: one with control joined no longer fits the
+    # model's ids and keypoints, and it says which writer to use.
+    with pytest.raises(pp.Error, match="write_adjusted_colmap_model"):
+        pp.write_colmap_model(block, tmp_path / "as_is")
+    result = pp.bundle_adjust(block)
+    assert result.summary.is_solution_usable()
+    pp.write_adjusted_colmap_model(block, tmp_path / "adjusted", result, geo, format="binary")
+    assert sorted(p.name for p in (tmp_path / "adjusted").iterdir()) == [
+        "cameras.bin", "georeference.json", "images.bin", "points3D.bin"]
+    written = pp.read_colmap_model(tmp_path / "adjusted")
+    assert written.num_points == model_points and written.point_ids == block.point_ids[:model_points]
+    np.testing.assert_allclose(written.point_positions, block.point_positions[:model_points], atol=1e-9)
+    with pytest.raises(ValueError, match="binary"):
+        pp.write_adjusted_colmap_model(block, tmp_path / "other", result, geo, format="jpeg")

@@ -451,6 +451,8 @@ Status PrepareGeoreference(const GeoreferenceOptions& options, const Georeferenc
   std::vector<int> position_image;
   PHOTOPOSE_RETURN_IF_ERROR(MatchPositions(inputs, local, matcher, &work, &position_image, &out));
   const int first_control = static_cast<int>(work.points.size());
+  out.model_points = work.points.size();
+  out.model_marks = work.marks.size();
   std::unordered_map<std::string, int> point_of_id;
   PHOTOPOSE_RETURN_IF_ERROR(AddControlPoints(inputs, local, &work, &point_of_id));
   PHOTOPOSE_RETURN_IF_ERROR(AddControlMarks(inputs, matcher, point_of_id, first_control, &work, &out));

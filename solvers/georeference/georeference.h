@@ -129,6 +129,10 @@ struct GeoreferenceResult {
   CrsInfo out_crs_info;
   std::string out_crs_reason;  // why this output CRS ("--out_crs", "the control's CRS", ...)
   LocalFrame frame;            // the local ENU frame the block is adjusted in
+  // The model's own points and marks: the first ones of the block; the control points and marks
+  // PrepareGeoreference added follow them (ModelPartOfBlock, adjusted_colmap_model.h).
+  size_t model_points = 0;
+  size_t model_marks = 0;
   std::vector<std::string> heights_notes;  // per input CRS: how its heights were treated
   // Inputs read and not used, one line each with its count and reason ("geo.txt: 12 attitudes
   // (yaw pitch roll) read and not used (...)"); empty when everything read is used.

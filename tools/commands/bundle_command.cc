@@ -25,6 +25,7 @@
 #include "solvers/bundle/block_initialization.h"
 #include "solvers/bundle/bundle_adjustment.h"
 #include "solvers/bundle/taylor_bundle.h"
+#include "solvers/georeference/adjusted_colmap_model.h"
 #include "solvers/georeference/georeference.h"
 #include "tools/report/bundle_report.h"
 #include "tools/report/html_kit.h"
@@ -171,7 +172,6 @@ struct BundleRun {
   // A model georeferenced with positions and/or control (--geo, --gcp_list, --frames, --points).
   bool georeference = false;
   GeoreferenceResult georeferenced;
-  size_t model_points = 0, model_marks = 0;  // the model's own, before control joined it
   ColmapFormat colmap_in_format = ColmapFormat::kText;   // of --colmap_model
   ColmapFormat colmap_out_format = ColmapFormat::kText;  // of --out_colmap
   BundleAdjustmentResult result;
@@ -429,7 +429,7 @@ int DeclareFiles(const char* command, const ParsedFlags& parsed, BundleRun* run,
     std::vector<std::string> names;
     for (const char* name : ColmapFileNames(run->colmap_out_format)) names.push_back(name);
     // A georeferenced model is written in the local frame, with that frame beside it.
-    if (run->georeference) names.push_back("georeference.json");
+    if (run->georeference) names.push_back(kGeoreferenceJsonName);
     for (const std::string& name : names) {
       const std::string path = FLAGS_bundle_out_colmap + "/" + name;
       const Status declared = outputs->AddOutput("--out_colmap", path);
@@ -609,8 +609,6 @@ int ReadBundleBlock(const char* command, BundleRun* run) {
   } else if (!FLAGS_bundle_colmap_model.empty()) {
     const Status read = ReadColmapModel(FLAGS_bundle_colmap_model, &block, &run->colmap_extras, &run->colmap_in_format);
     if (!read.ok()) return BadInput(command, read.message());
-    run->model_points = block.points.size();
-    run->model_marks = block.marks.size();
     if (run->georeference) {
       const int code = GeoreferenceModel(command, run);
       if (code != kGoOn) return code;
@@ -629,8 +627,6 @@ int ReadBundleBlock(const char* command, BundleRun* run) {
                   << extras.tracks_of_other_points << " of points the reconstruction does not have";
       std::cerr << "\n";
     }
-    run->model_points = block.points.size();
-    run->model_marks = block.marks.size();
     run->opensfm_extras = std::move(extras);
     if (run->georeference) {
       const int code = GeoreferenceModel(command, run);
@@ -678,17 +674,6 @@ int InitializeBundleBlock(const char* command, BundleRun* run) {
               << "photopose bundle: initial values: " << initialization.TiePointsReport() << "\n";
   }
   return kGoOn;
-}
-
-// The block as the COLMAP model it was read from holds it: without the control points and marks
-// a georeferencing added (they follow the model's own, see PrepareGeoreference).
-Block ModelPart(const BundleRun& run) {
-  if (!run.georeference) return run.block;
-  Block model = run.block;
-  model.points.resize(run.model_points);
-  model.marks.resize(run.model_marks);
-  model.BuildIndex();
-  return model;
 }
 
 // sigma0 far above 1 is no small misstatement of accuracies but gross errors (issue 20): above
@@ -810,8 +795,9 @@ int AdjustBundleBlock(const char* command, BundleRun* run) {
   BundleAdjustmentResult& result = run->result;
   // A model the block cannot be written as is refused now, not after the adjustment.
   if (!FLAGS_bundle_out_colmap.empty()) {
-    const Status writable = CheckColmapModelWritable(
-        ModelPart(*run), FLAGS_bundle_colmap_model.empty() ? nullptr : &run->colmap_extras);
+    const Status writable = CheckAdjustedColmapModelWritable(
+        run->block, run->georeference ? &run->georeferenced : nullptr,
+        FLAGS_bundle_colmap_model.empty() ? nullptr : &run->colmap_extras);
     if (!writable.ok()) return BadInput(command, "--out_colmap: " + writable.message());
   }
   const Status adjusted = BundleAdjustWithSolver(run->solver, run->options, run->config, &run->block, &result, nullptr, run->taylor_damping);
@@ -886,30 +872,17 @@ Status WriteBundleOutputs(const BundleRun& run, bool usable) {
                                    [&](const std::string& path) { return WriteCameraTable(path, cameras); });
     }
     if (status.ok() && !FLAGS_bundle_out_colmap.empty()) {
-      // Marks the adjustment left out leave the tracks (kept as keypoints, their indices stay).
-      ColmapWriteOptions colmap_options;
-      colmap_options.format = run.colmap_out_format;
-      // A georeferenced model without the control it was given (ModelPart): the model's own marks
-      // come first, so the removed ones among them are the first entries.
-      const Block model_part = ModelPart(run);
-      colmap_options.marks_left_out = result.RemovedMarks(block.marks.size());
-      colmap_options.marks_left_out.resize(model_part.marks.size());
-      ColmapModelFiles model;
-      status = FormatColmapModel(model_part, FLAGS_bundle_colmap_model.empty() ? nullptr : &run.colmap_extras, colmap_options, &model);
+      // The library's one writer (solvers/georeference/adjusted_colmap_model.h): rejected marks
+      // out of the tracks; a georeferenced model without its control, georeference.json beside it.
+      AdjustedColmapModelFiles model;
+      status = FormatAdjustedColmapModel(block, result, run.georeference ? &run.georeferenced : nullptr,
+                                         FLAGS_bundle_colmap_model.empty() ? nullptr : &run.colmap_extras,
+                                         run.colmap_out_format, &model);
       const std::array<const char*, 3> names = ColmapFileNames(run.colmap_out_format);
-      stage(FLAGS_bundle_out_colmap + "/" + names[0], model.cameras);
-      stage(FLAGS_bundle_out_colmap + "/" + names[1], model.images);
-      stage(FLAGS_bundle_out_colmap + "/" + names[2], model.points3D);
-      if (run.georeference) {
-        const GeoreferenceResult& g = run.georeferenced;
-        const nlohmann::json frame = {
-            {"frame", "local East-North-Up (m) of this model's coordinates"},
-            {"local_to_epsg4979_proj_pipeline_inverse", g.frame.definition()},
-            {"origin_lon_lat_h", {g.frame.origin_lon_lat_h().x(), g.frame.origin_lon_lat_h().y(), g.frame.origin_lon_lat_h().z()}},
-            {"note", "the PROJ pipeline maps EPSG:4979 (longitude, latitude in degrees, ellipsoidal height in m) to this frame; run it inverted (e.g. cs2cs/cct -I) to get geographic coordinates, then to any CRS"},
-            {"out_crs", g.out_crs}};
-        stage(FLAGS_bundle_out_colmap + "/georeference.json", frame.dump(2) + "\n");
-      }
+      stage(FLAGS_bundle_out_colmap + "/" + names[0], model.model.cameras);
+      stage(FLAGS_bundle_out_colmap + "/" + names[1], model.model.images);
+      stage(FLAGS_bundle_out_colmap + "/" + names[2], model.model.points3D);
+      if (run.georeference) stage(FLAGS_bundle_out_colmap + "/" + kGeoreferenceJsonName, model.georeference_json);
     }
   }
   if (status.ok()) status = CommitUnlessCancelled(&final_outputs);
