@@ -1,5 +1,5 @@
 // The engine of `photopose compare` for single images (tools/compare/comparison.h): the solver
-// variants, the Monte-Carlo mode and the dataset mode. About 830 lines, one file on purpose: both
+// variants, the Monte-Carlo mode and the dataset mode. One file past ~800 lines on purpose: both
 // modes run the same solver variants and reduce their solves by the same file-local measures (Rms,
 // Median, RmsNorm, the check residuals); each mode is a list of named steps.
 #include "core/io/block_tables.h"
