@@ -31,9 +31,37 @@ enum class FilmCoordinateSystem : int {
   kXLeftYDown = 3,  // +x left, +y down
   kXDownYRight = 4  // +x down, +y right
 };
+// The camera table's FilmCoordinateSystem values: the numbers 1-4 (written), the ArcGIS names
+// accepted as aliases.
+inline constexpr EnumNameEntry<FilmCoordinateSystem> kFilmCoordinateSystemNames[] = {
+    {FilmCoordinateSystem::kXRightYUp, "1"},
+    {FilmCoordinateSystem::kXUpYLeft, "2"},
+    {FilmCoordinateSystem::kXLeftYDown, "3"},
+    {FilmCoordinateSystem::kXDownYRight, "4"},
+    {FilmCoordinateSystem::kXRightYUp, "X_RIGHT_Y_UP"},
+    {FilmCoordinateSystem::kXUpYLeft, "X_UP_Y_LEFT"},
+    {FilmCoordinateSystem::kXLeftYDown, "X_LEFT_Y_DOWN"},
+    {FilmCoordinateSystem::kXDownYRight, "X_DOWN_Y_RIGHT"}};
+constexpr EnumNameTable<FilmCoordinateSystem> EnumNames(FilmCoordinateSystem) {
+  return EnumNameTable<FilmCoordinateSystem>(kFilmCoordinateSystemNames);
+}
 
 enum class DistortionType { kDistortionModel, kDistortionTable };
+// The camera table's DistortionType values.
+inline constexpr EnumNameEntry<DistortionType> kDistortionTypeNames[] = {
+    {DistortionType::kDistortionModel, "DistortionModel"},
+    {DistortionType::kDistortionTable, "DistortionTable"}};
+constexpr EnumNameTable<DistortionType> EnumNames(DistortionType) {
+  return EnumNameTable<DistortionType>(kDistortionTypeNames);
+}
+
 enum class OrientationType { kOpk, kMatrix };
+// The camera table's OrientationType values.
+inline constexpr EnumNameEntry<OrientationType> kOrientationTypeNames[] = {
+    {OrientationType::kOpk, "OPK"}, {OrientationType::kMatrix, "Matrix"}};
+constexpr EnumNameTable<OrientationType> EnumNames(OrientationType) {
+  return EnumNameTable<OrientationType>(kOrientationTypeNames);
+}
 // Where pixel (0, 0) is: the top-left corner of the top-left pixel, or its centre.
 enum class PixelOrigin { kCorner, kCenter };
 inline constexpr EnumNameEntry<PixelOrigin> kPixelOriginNames[] = {{PixelOrigin::kCorner, "corner"},

@@ -4,7 +4,7 @@
 // A film camera's fiducial marks have calibrated film coordinates (camera table FilmFiducials, um).
 // A scan places them at some pixel position in every image, differently each time (the film sits in
 // the scanner a little shifted and turned, the scan may shrink). A measured-fiducials table says
-// where they were found:
+// where they were found (read by core/io/fiducials_table.h):
 //
 //   Raster, FiducialID, Column, Row        (pixels, the marks' pixel convention)
 //
@@ -24,17 +24,13 @@
 
 namespace photopose {
 
-// One row of the measured-fiducials table.
+// One row of the measured-fiducials table (core/io/fiducials_table.h).
 struct MeasuredFiducial {
   std::string raster;
   int fiducial_id = 0;  // 1-based index into the camera's FilmFiducials
   Eigen::Vector2d column_row = Eigen::Vector2d::Zero();  // pixels
   int line = 0;                                          // source line, for messages
 };
-
-// Reads Raster, FiducialID, Column, Row (CSV rules of docs/formats.md). A fiducial measured twice
-// in one image is an error naming both lines.
-Status ReadMeasuredFiducials(const std::string& path, std::vector<MeasuredFiducial>* fiducials);
 
 // The least-squares affine pixel -> film, x = A0 + A1 col + A2 row, y = B0 + B1 col + B2 row, of at
 // least three point pairs that are not collinear; coefficients in the order A0, A1, A2, B0, B1, B2.

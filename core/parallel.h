@@ -1,9 +1,8 @@
 #pragma once
 // The one way photopose runs independent work items on several threads, and the one reading of a
-// thread count (0: every core). Used by the resection of many images
-// (solvers/resection/resection.h), the control-point cross-validation of the bundle adjustment
-// (solvers/bundle/bundle_adjustment.h), the trials of the comparison tool, and, for the count
-// alone, the Ceres solver options of the bundle adjustment.
+// thread count (0: every core). For work that splits into items which share nothing but read-only
+// inputs and write to their own slots (images, trials, chunks of rows); no other file starts a
+// std::thread. Code that hands the threads to a library (Ceres) takes only the count from here.
 
 #include <algorithm>
 #include <atomic>

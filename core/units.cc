@@ -33,16 +33,7 @@ double LargestMagnitude(const std::vector<double>& values) {
   return largest;
 }
 
-const char* LengthUnitName(LengthUnit unit) {
-  switch (unit) {
-    case LengthUnit::kMillimetre:
-      return "mm";
-    case LengthUnit::kCentimetre:
-      return "cm";
-    default:
-      return "m";
-  }
-}
+const char* LengthUnitName(LengthUnit unit) { return EnumName(unit); }
 
 double LengthIn(double value_m, LengthUnit unit) {
   switch (unit) {

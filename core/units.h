@@ -13,6 +13,7 @@
 #include <vector>
 
 #include "core/camera_models.h"
+#include "core/enum_names.h"
 
 namespace photopose {
 
@@ -20,12 +21,17 @@ namespace photopose {
 std::string ReportFixed(double value, int digits);
 
 enum class LengthUnit { kMillimetre, kCentimetre, kMetre };
+inline constexpr EnumNameEntry<LengthUnit> kLengthUnitNames[] = {
+    {LengthUnit::kMillimetre, "mm"}, {LengthUnit::kCentimetre, "cm"}, {LengthUnit::kMetre, "m"}};
+constexpr EnumNameTable<LengthUnit> EnumNames(LengthUnit) {
+  return EnumNameTable<LengthUnit>(kLengthUnitNames);
+}
 // mm below 0.1 m, cm below 10 m, m from there (of the largest magnitude, m).
 LengthUnit LengthUnitFor(double largest_magnitude_m);
 // The largest finite magnitude of `values` (0 when there is none): what LengthUnitFor takes for a
 // column.
 double LargestMagnitude(const std::vector<double>& values);
-const char* LengthUnitName(LengthUnit unit);  // "mm", "cm", "m"
+const char* LengthUnitName(LengthUnit unit);  // "mm", "cm", "m": EnumName(unit)
 // The value (m) in `unit` as a number (for plots).
 double LengthIn(double value_m, LengthUnit unit);
 // The value (m) in `unit` without the unit: mm and cm with one decimal, m with three.

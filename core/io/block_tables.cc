@@ -10,6 +10,7 @@
 
 #include "core/geodesy/crs.h"
 #include "core/io/csv.h"
+#include "core/io/fiducials_table.h"
 #include "core/io/output_files.h"
 #include "core/types.h"
 

@@ -28,34 +28,10 @@ namespace {
 
 // ------------------------------------------------------------------ camera table
 
-const std::vector<Spelling<FilmCoordinateSystem>>& FilmCoordinateSystemSpellings() {
-  static const auto* const kSpellings = new std::vector<Spelling<FilmCoordinateSystem>>{
-      {"1", FilmCoordinateSystem::kXRightYUp},
-      {"2", FilmCoordinateSystem::kXUpYLeft},
-      {"3", FilmCoordinateSystem::kXLeftYDown},
-      {"4", FilmCoordinateSystem::kXDownYRight},
-      {"X_RIGHT_Y_UP", FilmCoordinateSystem::kXRightYUp},
-      {"X_UP_Y_LEFT", FilmCoordinateSystem::kXUpYLeft},
-      {"X_LEFT_Y_DOWN", FilmCoordinateSystem::kXLeftYDown},
-      {"X_DOWN_Y_RIGHT", FilmCoordinateSystem::kXDownYRight}};
-  return *kSpellings;
-}
-const std::vector<Spelling<DistortionType>>& DistortionTypeSpellings() {
-  static const auto* const kSpellings = new std::vector<Spelling<DistortionType>>{
-      {"DistortionModel", DistortionType::kDistortionModel},
-      {"DistortionTable", DistortionType::kDistortionTable}};
-  return *kSpellings;
-}
-const std::vector<Spelling<OrientationType>>& OrientationTypeSpellings() {
-  static const auto* const kSpellings = new std::vector<Spelling<OrientationType>>{
-      {"OPK", OrientationType::kOpk}, {"Matrix", OrientationType::kMatrix}};
-  return *kSpellings;
-}
-const std::vector<Spelling<bool>>& BooleanSpellings() {
-  static const auto* const kSpellings = new std::vector<Spelling<bool>>{
-      {"true", true}, {"false", false}, {"1", true}, {"0", false}, {"yes", true}, {"no", false}};
-  return *kSpellings;
-}
+// ApplyECC's spellings ("true" and "false" written). A bool has no EnumNames of its own (no
+// namespace to find it in), so the reader is handed this table.
+constexpr EnumNameEntry<bool> kBooleanNames[] = {{true, "true"}, {false, "false"}, {true, "1"},
+                                                 {false, "0"},   {true, "yes"},    {false, "no"}};
 
 // NRows and NColumns, when given, describe an image: kMinImageSidePx to kMaxImageSidePx.
 Status CheckImageSize(const FrameCamera& camera, std::string* column) {
@@ -217,7 +193,7 @@ Status ReadAffine(const CsvRowReader& row, FrameCamera* camera) {
 
 Status ReadDistortion(const CsvRowReader& row, FrameCamera* camera) {
   PHOTOPOSE_RETURN_IF_ERROR(
-      ReadEnum(row, "DistortionType", DistortionTypeSpellings(), 2, &camera->distortion_type));
+      ReadEnum(row, "DistortionType", EnumNames(DistortionType{}), &camera->distortion_type));
   std::vector<double> values;
   PHOTOPOSE_RETURN_IF_ERROR(ReadNumberList(row, "Radial", &values));
   if (values.size() == 4) {
@@ -256,8 +232,8 @@ Status ReadCameraRow(const CsvRowReader& row, const std::vector<size_t>& extra,
   PHOTOPOSE_RETURN_IF_ERROR(ReadCount(row, "NBands", &c.n_bands));
   c.pixel_type = std::string(row.Text("PixelType"));
   c.block_name = std::string(row.Text("BlockName"));
-  PHOTOPOSE_RETURN_IF_ERROR(ReadEnum(row, "FilmCoordinateSystem", FilmCoordinateSystemSpellings(),
-                                     8, &c.film_coordinate_system));
+  PHOTOPOSE_RETURN_IF_ERROR(ReadEnum(row, "FilmCoordinateSystem",
+                                     EnumNames(FilmCoordinateSystem{}), &c.film_coordinate_system));
   PHOTOPOSE_RETURN_IF_ERROR(ReadAffine(row, &c));
   PHOTOPOSE_RETURN_IF_ERROR(ReadSign(row, "AffineDirection", &c.affine_direction));
   PHOTOPOSE_RETURN_IF_ERROR(ReadDistortion(row, &c));
@@ -271,11 +247,12 @@ Status ReadCameraRow(const CsvRowReader& row, const std::vector<size_t>& extra,
   for (size_t i = 0; i + 1 < fiducials.size(); i += 2)
     c.film_fiducials_um.emplace_back(fiducials[i], fiducials[i + 1]);
   PHOTOPOSE_RETURN_IF_ERROR(
-      ReadEnum(row, "OrientationType", OrientationTypeSpellings(), 2, &c.orientation_type));
+      ReadEnum(row, "OrientationType", EnumNames(OrientationType{}), &c.orientation_type));
   PHOTOPOSE_RETURN_IF_ERROR(ReadSign(row, "AngleDirection", &c.angle_direction));
   PHOTOPOSE_RETURN_IF_ERROR(ReadSign(row, "Polarity", &c.polarity));
   PHOTOPOSE_RETURN_IF_ERROR(ReadNumber(row, "AverageZ", &c.average_z_m));
-  PHOTOPOSE_RETURN_IF_ERROR(ReadEnum(row, "ApplyECC", BooleanSpellings(), 6, &c.apply_ecc));
+  PHOTOPOSE_RETURN_IF_ERROR(
+      ReadEnum(row, "ApplyECC", EnumNameTable<bool>(kBooleanNames), &c.apply_ecc));
   PHOTOPOSE_RETURN_IF_ERROR(ReadNumberOr(row, "EarthRadius", c.earth_radius_m, &c.earth_radius_m));
   c.srs = std::string(row.Text("SRS"));
   c.extra_columns = ReadExtraColumns(row, extra);
@@ -285,20 +262,6 @@ Status ReadCameraRow(const CsvRowReader& row, const std::vector<size_t>& extra,
   if (!valid.ok()) return row.Error(column, valid.message());
   *camera = std::move(c);
   return Status::Ok();
-}
-
-const char* FilmCoordinateSystemText(FilmCoordinateSystem fcs) {
-  switch (fcs) {
-    case FilmCoordinateSystem::kXRightYUp:
-      return "1";
-    case FilmCoordinateSystem::kXUpYLeft:
-      return "2";
-    case FilmCoordinateSystem::kXLeftYDown:
-      return "3";
-    case FilmCoordinateSystem::kXDownYRight:
-      return "4";
-  }
-  return "1";
 }
 
 std::string CountText(int count) { return count > 0 ? std::to_string(count) : std::string(); }
@@ -364,15 +327,14 @@ Status FormatCameraTable(const std::vector<FrameCamera>& cameras, const std::str
     row.Text(CountText(c.n_bands));
     row.Text(c.pixel_type);
     row.Text(c.block_name);
-    row.Text(FilmCoordinateSystemText(c.film_coordinate_system));
+    row.Text(EnumName(c.film_coordinate_system));
     const Names& affine = AffineColumns();
     for (int i = 0; i < 6; ++i) {
       const double value = i < 3 ? c.affine_a[i] : c.affine_b[i - 3];
       row.OptionalNumber(affine[i], c.has_affine ? std::optional<double>(value) : std::nullopt);
     }
     row.Text(SignText(c.affine_direction));
-    row.Text(c.distortion_type == DistortionType::kDistortionTable ? "DistortionTable"
-                                                                   : "DistortionModel");
+    row.Text(EnumName(c.distortion_type));
     row.NumberList("Radial", {c.radial_k.begin(), c.radial_k.end()});
     row.NumberList("Tangential", {c.tangential_p.begin(), c.tangential_p.end()});
     row.NumberList("RadialDistances", c.radial_distances_um);
@@ -386,7 +348,7 @@ Status FormatCameraTable(const std::vector<FrameCamera>& cameras, const std::str
       fiducials += (i == 0 ? "" : ";") + FormatNumber(f.x()) + " " + FormatNumber(f.y());
     }
     row.Text(fiducials);
-    row.Text(c.orientation_type == OrientationType::kMatrix ? "Matrix" : "OPK");
+    row.Text(EnumName(c.orientation_type));
     row.Text(SignText(c.angle_direction));
     row.Text(SignText(c.polarity));
     row.OptionalNumber("AverageZ", c.average_z_m);

@@ -1,5 +1,5 @@
 // COLMAP models (colmap.h): records -> block with every check of a value and a reference, and
-// block -> records. About 900 lines, one file on purpose: the format's one pair (core/io rule), and
+// block -> records. One file past ~800 lines on purpose: the format's one pair (core/io rule), and
 // both directions beside each other so that a camera model or a frame convention has one home;
 // the byte layouts alone are in colmap_text.cc and colmap_binary.cc.
 #include "core/io/colmap.h"

@@ -33,11 +33,18 @@
 #include <string_view>
 #include <vector>
 
+#include "core/enum_names.h"
 #include "core/status.h"
 
 namespace photopose {
 
+// Where a position was read: the EXIF GPS tags or DJI's XMP (drone-dji:*).
 enum class ExifGpsSource { kExif, kDjiXmp };
+inline constexpr EnumNameEntry<ExifGpsSource> kExifGpsSourceNames[] = {
+    {ExifGpsSource::kExif, "exif"}, {ExifGpsSource::kDjiXmp, "dji_xmp"}};
+constexpr EnumNameTable<ExifGpsSource> EnumNames(ExifGpsSource) {
+  return EnumNameTable<ExifGpsSource>(kExifGpsSourceNames);
+}
 
 struct ExifGps {
   // Longitude (deg, east positive), latitude (deg, north positive), height (m, as written).

@@ -1,5 +1,5 @@
 // OpenSfM / ODM reconstructions (opensfm.h): reconstruction.json and tracks.csv -> block, and back.
-// About 870 lines, one file on purpose: the format's one pair (core/io rule), with its JSON fields,
+// One file past ~800 lines on purpose: the format's one pair (core/io rule), with its JSON fields,
 // cameras, tracks, shots and writer as the sections below.
 #include "core/io/opensfm.h"
 

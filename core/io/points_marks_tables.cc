@@ -28,12 +28,6 @@ namespace {
 
 // ------------------------------------------------------------------ ground points and marks
 
-const std::vector<Spelling<PointRole>>& RoleSpellings() {
-  static const auto* const kSpellings = new std::vector<Spelling<PointRole>>{
-      {"control", PointRole::kControl}, {"check", PointRole::kCheck}, {"tie", PointRole::kTie}};
-  return *kSpellings;
-}
-
 // A point's AccuracyX/Y/Z (m): unlike a frame's, 0 is a value (all three 0: held fixed, the rule
 // of core/block.h, InvalidPointAccuracyAxis).
 constexpr ValueRange kPointAccuracyRange{0.0, kMaxCoordinate, false, false, "m"};
@@ -82,7 +76,7 @@ Status ReadPointRow(const CsvRowReader& row, const PointTableColumns& c, GroundP
     if (axis >= 0) return row.Error(c.accuracy[axis].csv, MixedAccuracyProblem(accuracy, axis));
     p.accuracy_m = accuracy;
   }
-  PHOTOPOSE_RETURN_IF_ERROR(ReadEnum(row, c.role.csv, RoleSpellings(), 3, &p.role));
+  PHOTOPOSE_RETURN_IF_ERROR(ReadEnum(row, c.role.csv, EnumNames(PointRole{}), &p.role));
   *point = std::move(p);
   return Status::Ok();
 }
@@ -247,7 +241,7 @@ Status FormatGroundPoints(const std::vector<GroundPoint>& points, const std::str
                          p.accuracy_m ? std::optional<double>((*p.accuracy_m)[i]) : std::nullopt,
                          &kPointAccuracyRange);
     }
-    row.Text(p.role == PointRole::kCheck ? "check" : p.role == PointRole::kTie ? "tie" : "control");
+    row.Text(EnumName(p.role));
     PHOTOPOSE_RETURN_IF_ERROR(row.status(path));
     contents += CsvLine(*row.fields());
   }

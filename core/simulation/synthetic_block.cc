@@ -1,5 +1,5 @@
 // The one synthetic block generator (synthetic_block.h) of the tests, the benchmarks and
-// `photopose simulate`. About 1000 lines, one file on purpose: its options' checks, the flight,
+// `photopose simulate`. One file past ~800 lines on purpose: its options' checks, the flight,
 // terrain and point layout, then the steps of MakeSyntheticBlock in order (each on its own random
 // stream), and the truth as text; splitting it would scatter one seed's draws over several files.
 #include "core/simulation/synthetic_block.h"

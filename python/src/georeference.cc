@@ -22,8 +22,6 @@ py::dict RmseDict(const GeoreferenceRmse& r) {
   return d;
 }
 
-const char* SourceName(ExifGpsSource source) { return source == ExifGpsSource::kExif ? "exif" : "dji_xmp"; }
-
 // Camera positions from files: ODM's geo.txt, the images' GPS tags.
 void BindPositionFiles(py::module_& m) {
   auto geo_record = BindStruct<GeoTxtRecord>(m, "GeoTxtRecord", "A line of ODM's geo.txt.");
@@ -45,7 +43,7 @@ void BindPositionFiles(py::module_& m) {
   py::class_<ExifGps> exif(m, "ExifGps", "The GPS position an image file carries (EXIF or DJI XMP).");
   exif.def_readonly("lon_lat_height", &ExifGps::lon_lat_height,
                     "longitude, latitude (deg), height (m, as written: the CRS decides what it is)")
-      .def_property_readonly("source", [](const ExifGps& g) { return SourceName(g.source); }, "'exif' or 'dji_xmp'")
+      .def_property_readonly("source", [](const ExifGps& g) { return EnumName(g.source); }, "'exif' or 'dji_xmp'")
       .def_readonly("rtk_sigma_enu_m", &ExifGps::rtk_sigma_enu_m, "DJI RTK one sigma east, north, up (m), or None")
       .def_readonly("rtk_flag", &ExifGps::rtk_flag, "DJI RtkFlag (50 fixed), or None")
       .def("__repr__", [](const py::object& self) { return PropertiesRepr(self); });

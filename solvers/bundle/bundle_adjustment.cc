@@ -1,8 +1,7 @@
 // BundleAdjust and CrossValidateControlPoints (bundle_adjustment.h): options and reports, the
 // rounds (solve, snooping or rejection, variance components) as named steps, the cross-validation.
 // The plan and the Ceres problem are in bundle_problem.cc, the statistics in bundle_statistics.cc.
-// About 800 lines because it also holds the public types' methods (IsValid, BriefReport,
-// FullReport).
+// It also holds the public types' methods (IsValid, BriefReport, FullReport).
 #include "solvers/bundle/bundle_adjustment.h"
 
 #include <ceres/ceres.h>

@@ -1,7 +1,7 @@
 // The bundle adjustment's plan and its Ceres problem (internal/bundle_problem.h): what is unknown
 // and what fixes the datum (the plan: datum checks, calibration, marks, points, priors,
 // connectivity), then the problem built once per adjustment from that plan and updated per round,
-// the relative gauge, and Ceres' solver options. About 810 lines, one file on purpose: the plan's
+// the relative gauge, and Ceres' solver options. One file past ~800 lines on purpose: the plan's
 // checks and the problem's blocks are the two halves of one decision (what is a parameter, what
 // is held), and both solvers take them from here.
 #include "solvers/bundle/internal/bundle_problem.h"

@@ -1,6 +1,6 @@
 // The statistics of a converged bundle adjustment round: residuals per group, covariances from
 // the reduced normal matrix, redundancy numbers, normalized residuals and reliability (Baarda,
-// Foerstner), self-calibration correlations, check points. About 920 lines, one file on purpose:
+// Foerstner), self-calibration correlations, check points. One file past ~800 lines on purpose:
 // the steps in the order they are computed, each a named function, sharing one round's rows; the
 // reduced normals they start from are in reduced_normals.cc, the selected inversion in
 // selected_inversion.cc.

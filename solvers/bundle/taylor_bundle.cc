@@ -1,7 +1,7 @@
 // The Taylor bundle adjustment (taylor_bundle.h): options, the plan (internal::MakeBundlePlan plus
 // its own ideal film points), the Gauss-Newton rounds, rejection and the results. The normal
 // equations (layout, linearisation, elimination, factorisation, covariances) are the other stage,
-// in taylor_bundle_normals.cc. About 1270 lines, one file on purpose: the rounds, the
+// in taylor_bundle_normals.cc. One file past ~800 lines on purpose: the rounds, the
 // Levenberg-Marquardt step control, the free gauge and the results share one context (Context),
 // and each step is a named function; the normal equations are the other stage.
 #include "solvers/bundle/taylor_bundle.h"

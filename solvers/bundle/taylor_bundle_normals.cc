@@ -1,5 +1,5 @@
 // The normal equations of the Taylor bundle adjustment (internal/taylor_normals.h): layout,
-// linearisation, elimination of the points, factorisation. About 990 lines, one file on purpose:
+// linearisation, elimination of the points, factorisation. One file past ~800 lines on purpose:
 // the one stage of the Taylor solver that touches every mark, each step a named function over the
 // same layout (internal/taylor_normals.h), so that its memory per mark is visible in one place.
 #include <ceres/jet.h>

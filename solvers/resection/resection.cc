@@ -1,6 +1,6 @@
 // Single-image resection (resection.h): input checks and weights, initial values (approximate pose
 // or consensus), adjustment with rejection, the verdict, per-mark statistics, the search for a
-// competing pose and the reliability. About 970 lines, one file on purpose: the steps of one
+// competing pose and the reliability. One file past ~800 lines on purpose: the steps of one
 // image's resection in the order they run (ImageResection), and the batch over images.
 #include "solvers/resection/resection.h"
 

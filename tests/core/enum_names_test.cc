@@ -9,6 +9,8 @@
 #include "core/camera.h"
 #include "core/pixel_rows.h"
 #include "core/camera_models.h"
+#include "core/io/exif_gps.h"
+#include "core/units.h"
 #include "core/rotation.h"
 #include "core/simulation/synthetic_scene.h"
 #include "core/termination.h"
@@ -81,12 +83,13 @@ TEST(EnumNames, ListsTheChoicesWithTheirAliases) {
 
 // ------------------------------------------------------------------ every table of photopose
 
-// Every value 0..n-1 of the enum (n its number of names) has a name that parses back to it (in
+// Every value first..first+n-1 of the enum (n its number of names; first 0 unless the enum's
+// values are numbered otherwise) has a name that parses back to it (in
 // any case when the table ignores case); every alias parses to its value; names and aliases are
 // unique (after case folding where the table folds); and an unknown name is refused while
 // EnumChoices lists every name.
 template <typename Enum>
-void ExpectTableRoundTrips(const char* what) {
+void ExpectTableRoundTrips(const char* what, int first = 0) {
   SCOPED_TRACE(what);
   const EnumNameTable<Enum> table = EnumNames(Enum{});
   const bool fold = table.match() == NameMatch::kIgnoreCase;
@@ -107,10 +110,10 @@ void ExpectTableRoundTrips(const char* what) {
   }
   const int n = static_cast<int>(values.size());
   ASSERT_GT(n, 0);
-  EXPECT_EQ(*values.begin(), 0);
-  EXPECT_EQ(*values.rbegin(), n - 1) << "the values are not 0..n-1";
+  EXPECT_EQ(*values.begin(), first);
+  EXPECT_EQ(*values.rbegin(), first + n - 1) << "the values are not first..first+n-1";
   const std::string choices = EnumChoices<Enum>();
-  for (int k = 0; k < n; ++k) {
+  for (int k = first; k < first + n; ++k) {
     const Enum value = static_cast<Enum>(k);
     const std::string name = EnumName(value);
     ASSERT_NE(name, "?") << "value " << k << " has no name";
@@ -148,6 +151,12 @@ TEST(EnumNames, EveryTableRoundTrips) {
   ExpectTableRoundTrips<BundleGroup>("BundleGroup");
   ExpectTableRoundTrips<cli::SweepType>("SweepType");
   ExpectTableRoundTrips<cli::InitialValues>("InitialValues");
+  ExpectTableRoundTrips<PointRole>("PointRole");
+  ExpectTableRoundTrips<FilmCoordinateSystem>("FilmCoordinateSystem", /*first=*/1);
+  ExpectTableRoundTrips<DistortionType>("DistortionType");
+  ExpectTableRoundTrips<OrientationType>("OrientationType");
+  ExpectTableRoundTrips<ExifGpsSource>("ExifGpsSource");
+  ExpectTableRoundTrips<LengthUnit>("LengthUnit");
 }
 
 // The spellings every output and report prints (JSON keys and values, CSV, console), and the
@@ -178,6 +187,15 @@ TEST(EnumNames, PrintedNamesAndAliasesAreThoseOfTheFormats) {
   EXPECT_EQ(EnumChoices<Scenario>(), "nadir, oblique or uav_block");
   EXPECT_EQ(EnumChoices<cli::SweepType>(), "axes or grid");
   EXPECT_EQ(EnumChoices<cli::InitialValues>(), "frames or ransac");
+  EXPECT_EQ(EnumChoices<PointRole>(), "control, check or tie");
+  EXPECT_EQ(EnumChoices<FilmCoordinateSystem>(),
+            "1 (alias X_RIGHT_Y_UP), 2 (alias X_UP_Y_LEFT), 3 (alias X_LEFT_Y_DOWN) or 4 (alias "
+            "X_DOWN_Y_RIGHT)");
+  EXPECT_EQ(EnumChoices<DistortionType>(), "DistortionModel or DistortionTable");
+  EXPECT_EQ(EnumChoices<OrientationType>(), "OPK or Matrix");
+  EXPECT_EQ(EnumChoices<ExifGpsSource>(), "exif or dji_xmp");
+  EXPECT_EQ(EnumChoices<LengthUnit>(), "mm, cm or m");
+  EXPECT_STREQ(LengthUnitName(LengthUnit::kCentimetre), "cm");
 }
 
 }  // namespace

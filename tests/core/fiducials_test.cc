@@ -2,11 +2,7 @@
 
 #include <gtest/gtest.h>
 
-#include "tests/support/temp_dir.h"
-
 #include <cmath>
-#include <filesystem>
-#include <fstream>
 
 namespace photopose {
 namespace {
@@ -103,31 +99,6 @@ TEST(Fiducials, BadInputIsNamed) {
   EXPECT_NE(FitFiducials(camera, Measure(Rc30()), FiducialFitOptions(), "f.csv", &fit)
                 .message()
                 .find("has no FilmFiducials"),
-            std::string::npos);
-}
-
-TEST(Fiducials, TheTableIsReadWithItsChecks) {
-  const std::filesystem::path dir = testing::ScratchRoot();
-  std::filesystem::create_directories(dir);
-  const std::string path = (dir / "fiducials_test.csv").string();
-  std::ofstream(path) << "Raster,FiducialID,Column,Row\nscan_017.tif,1,448.8,10838.3\n"
-                         "scan_017.tif,2,11047.2,10884.4\n";
-  std::vector<MeasuredFiducial> fiducials;
-  ASSERT_TRUE(ReadMeasuredFiducials(path, &fiducials).ok());
-  ASSERT_EQ(fiducials.size(), 2u);
-  EXPECT_EQ(fiducials[1].fiducial_id, 2);
-  EXPECT_EQ(fiducials[1].line, 3);
-  EXPECT_EQ(fiducials[1].column_row, Eigen::Vector2d(11047.2, 10884.4));
-  std::ofstream(path) << "Raster,FiducialID,Column,Row\nscan_017.tif,1,448.8,10838.3\n"
-                         "scan_017.tif,1,11047.2,10884.4\n";
-  EXPECT_EQ(ReadMeasuredFiducials(path, &fiducials).message(),
-            path + ":3: FiducialID: fiducial 1 of image 'scan_017.tif' is measured twice (first "
-                   "on line 2)");
-  std::ofstream(path) << "Raster,FiducialID,Column,Row\nscan_017.tif,0,448.8,10838.3\n";
-  EXPECT_NE(ReadMeasuredFiducials(path, &fiducials).message().find(":2: FiducialID:"),
-            std::string::npos);
-  std::ofstream(path) << "Raster,FiducialID,Column\nscan_017.tif,1,448.8\n";
-  EXPECT_NE(ReadMeasuredFiducials(path, &fiducials).message().find(":1: Row: required column"),
             std::string::npos);
 }
 

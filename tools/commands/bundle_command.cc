@@ -1,5 +1,5 @@
 // photopose bundle: the weighted bundle adjustment of a block (solvers/bundle/bundle_adjustment.h).
-// About 980 lines, one file on purpose: the command's steps in the order they run (flags, inputs,
+// One file past ~800 lines on purpose: the command's steps in the order they run (flags, inputs,
 // georeferencing, initial values, adjustment, checks, outputs, closing summary), each a named
 // function over one BundleRun; the formats and reports it calls live in core/io and tools/report.
 #include <gflags/gflags.h>

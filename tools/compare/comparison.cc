@@ -1,5 +1,5 @@
 // The engine of `photopose compare` for single images (tools/compare/comparison.h): the solver
-// variants, the Monte-Carlo mode and the dataset mode. About 830 lines, one file on purpose: both
+// variants, the Monte-Carlo mode and the dataset mode. One file past ~800 lines on purpose: both
 // modes run the same solver variants and reduce their solves by the same file-local measures (Rms,
 // Median, RmsNorm, the check residuals); each mode is a list of named steps.
 #include "core/io/block_tables.h"
@@ -99,6 +99,66 @@ double SuccessThreshold(const ResectionInput& input, const std::vector<char>& is
   return success_sigmas * std::sqrt(covariance.topLeftCorner<3, 3>().trace());
 }
 
+// What one solve of image `image` by solver `solver` shows against the truth: solved or why not,
+// its errors, NEES, and the RMS of its clean control and check residuals. The paired differences
+// to the reference solver are added by AddPairedDifferences.
+SolveOutcome OutcomeOfSolve(const SweepSetting& setting, const ResectionJob& job, int trial,
+                            size_t image, size_t solver, const ResectionResult& result,
+                            const ExteriorOrientation& truth, const std::vector<char>& is_outlier,
+                            double threshold) {
+  SolveOutcome outcome;
+  outcome.trial = trial;
+  outcome.image = static_cast<int>(image);
+  outcome.solver = static_cast<int>(solver);
+  outcome.solved = result.success;
+  outcome.message = result.summary.message;
+  outcome.success_threshold_m = threshold;
+  outcome.iterations = result.summary.iterations;
+  outcome.total_seconds = result.summary.total_seconds;
+  outcome.refinement_seconds = result.summary.refinement_seconds;
+  if (!result.success) return outcome;
+  outcome.position_error_m = (result.eo.center_in_ground() - truth.center_in_ground()).norm();
+  outcome.rotation_error_arcsec =
+      RotationErrorArcSeconds(truth.angles_seed_rad(), result.eo.angles_seed_rad());
+  outcome.success = outcome.position_error_m <= threshold;
+  outcome.sigma0 = result.sigma0;
+  outcome.degrees_of_freedom = result.degrees_of_freedom;
+  if (setting.noise_px > 0.0 && result.has_covariance) {
+    outcome.nees = NormalizedEstimationErrorSquared(result.eo, truth, result.covariance);
+    // The covariance is covariance_factor N^-1 (the resection's one rule,
+    // PoseCovarianceFactor): times the factor, the NEES is that of N^-1.
+    outcome.nees_apriori = outcome.nees * result.covariance_factor;
+    outcome.accuracy_stated = result.accuracy_stated;
+  } else {
+    outcome.nees = outcome.nees_apriori = kNaN;
+  }
+  std::vector<Eigen::Vector2d> clean;
+  for (size_t k = 0; k < result.residuals.size(); ++k)
+    if (!is_outlier[k]) clean.push_back(result.residuals[k]);
+  outcome.reprojection_rmse_px = RmsNorm(clean);
+  outcome.num_reprojection = static_cast<int>(clean.size());
+  std::vector<Eigen::Vector2d> check;
+  for (const CheckResidual& c : CheckResiduals(job, image, result.eo)) check.push_back(c.residual);
+  outcome.check_rmse_px = RmsNorm(check);
+  outcome.num_check = static_cast<int>(check.size());
+  return outcome;
+}
+
+// Paired differences to the reference solver on the same data and start: one image's solves,
+// whose outcomes start at outcomes[first].
+void AddPairedDifferences(const std::vector<ResectionResult>& results, size_t reference,
+                          size_t first, std::vector<SolveOutcome>* outcomes) {
+  const ResectionResult& base = results[reference];
+  for (size_t s = 0; s < results.size(); ++s) {
+    if (s == reference || !base.success || !results[s].success) continue;
+    SolveOutcome& outcome = (*outcomes)[first + s];
+    outcome.difference_position_m =
+        (results[s].eo.center_in_ground() - base.eo.center_in_ground()).norm();
+    outcome.difference_rotation_arcsec =
+        RotationErrorArcSeconds(base.eo.angles_seed_rad(), results[s].eo.angles_seed_rad());
+  }
+}
+
 // Runs every solver on every image of one trial.
 Status RunTrial(const MonteCarloOptions& options, const SweepSetting& setting, int trial,
                 std::vector<SolveOutcome>* outcomes, int* images) {
@@ -130,55 +190,10 @@ Status RunTrial(const MonteCarloOptions& options, const SweepSetting& setting, i
       // One RANSAC stream per image and trial, the same for every solver.
       resection.consensus.ransac.seed = scene_options.seed * 1000003ull + i;
       results[s] = ResectImage(resection, input);
-      const ResectionResult& result = results[s];
-      SolveOutcome outcome;
-      outcome.trial = trial;
-      outcome.image = static_cast<int>(i);
-      outcome.solver = static_cast<int>(s);
-      outcome.solved = result.success;
-      outcome.message = result.summary.message;
-      outcome.success_threshold_m = threshold;
-      outcome.iterations = result.summary.iterations;
-      outcome.total_seconds = result.summary.total_seconds;
-      outcome.refinement_seconds = result.summary.refinement_seconds;
-      if (result.success) {
-        outcome.position_error_m = (result.eo.center_in_ground() - truth.center_in_ground()).norm();
-        outcome.rotation_error_arcsec =
-            RotationErrorArcSeconds(truth.angles_seed_rad(), result.eo.angles_seed_rad());
-        outcome.success = outcome.position_error_m <= threshold;
-        outcome.sigma0 = result.sigma0;
-        outcome.degrees_of_freedom = result.degrees_of_freedom;
-        if (setting.noise_px > 0.0 && result.has_covariance) {
-          outcome.nees = NormalizedEstimationErrorSquared(result.eo, truth, result.covariance);
-          // The covariance is covariance_factor N^-1 (the resection's one rule,
-          // PoseCovarianceFactor): times the factor, the NEES is that of N^-1.
-          outcome.nees_apriori = outcome.nees * result.covariance_factor;
-          outcome.accuracy_stated = result.accuracy_stated;
-        } else {
-          outcome.nees = outcome.nees_apriori = kNaN;
-        }
-        std::vector<Eigen::Vector2d> clean;
-        for (size_t k = 0; k < result.residuals.size(); ++k)
-          if (!is_outlier[k]) clean.push_back(result.residuals[k]);
-        outcome.reprojection_rmse_px = RmsNorm(clean);
-        outcome.num_reprojection = static_cast<int>(clean.size());
-        std::vector<Eigen::Vector2d> check;
-        for (const CheckResidual& c : CheckResiduals(job, i, result.eo)) check.push_back(c.residual);
-        outcome.check_rmse_px = RmsNorm(check);
-        outcome.num_check = static_cast<int>(check.size());
-      }
-      outcomes->push_back(outcome);
+      outcomes->push_back(
+          OutcomeOfSolve(setting, job, trial, i, s, results[s], truth, is_outlier, threshold));
     }
-    // Paired differences to the reference solver on the same data and start.
-    const ResectionResult& base = results[reference];
-    for (size_t s = 0; s < options.solvers.size(); ++s) {
-      if (s == reference || !base.success || !results[s].success) continue;
-      SolveOutcome& outcome = (*outcomes)[first + s];
-      outcome.difference_position_m =
-          (results[s].eo.center_in_ground() - base.eo.center_in_ground()).norm();
-      outcome.difference_rotation_arcsec =
-          RotationErrorArcSeconds(base.eo.angles_seed_rad(), results[s].eo.angles_seed_rad());
-    }
+    AddPairedDifferences(results, reference, first, outcomes);
   }
   return Status::Ok();
 }
@@ -190,90 +205,116 @@ std::string FailureKind(const std::string& message) {
   return message.substr(0, message.find(':'));
 }
 
-SolverStatistics Aggregate(const std::string& name,
-                           const std::vector<const SolveOutcome*>& samples) {
-  SolverStatistics stats;
-  stats.solver = name;
-  stats.samples = static_cast<int>(samples.size());
-  std::vector<double> position, rotation, iterations, thresholds, seconds, refinement, nees,
-      nees_apriori, expected, all_seconds, all_refinement, difference_position, difference_rotation;
-  double check_ssq = 0.0, reprojection_ssq = 0.0;
-  int check_count = 0, reprojection_count = 0;
-  // Per kind of failure: how many, the first message, and whether all messages were the same.
+// One solver's solves gathered before they are reduced (Aggregate): the measures of the solved
+// ones, the pooled squared residuals, and per kind of failure how many, the first message, and
+// whether all messages were the same.
+struct SolverSamples {
   struct Failures {
     int count = 0;
     std::string first;
     bool same = true;
   };
+  int solved = 0, successes = 0;
+  std::vector<double> position, rotation, iterations, thresholds, seconds, refinement, nees,
+      nees_apriori, expected, all_seconds, all_refinement, difference_position, difference_rotation;
+  double check_ssq = 0.0, reprojection_ssq = 0.0;
+  int check_count = 0, reprojection_count = 0;
   std::map<std::string, Failures> failures;
-  for (const SolveOutcome* o : samples) {
-    all_seconds.push_back(o->total_seconds);
-    all_refinement.push_back(o->refinement_seconds);
-    if (std::isfinite(o->success_threshold_m)) thresholds.push_back(o->success_threshold_m);
-    if (!o->solved) {
-      Failures& kind = failures[FailureKind(o->message)];
-      if (kind.count++ == 0) kind.first = o->message;
-      kind.same = kind.same && o->message == kind.first;
-      continue;
-    }
-    ++stats.solved;
-    stats.successes += o->success;
-    seconds.push_back(o->total_seconds);
-    refinement.push_back(o->refinement_seconds);
-    position.push_back(o->position_error_m);
-    rotation.push_back(o->rotation_error_arcsec);
-    if (std::isfinite(o->difference_position_m)) {
-      difference_position.push_back(o->difference_position_m);
-      difference_rotation.push_back(o->difference_rotation_arcsec);
-    }
-    iterations.push_back(o->iterations);
-    if (o->num_check > 0) {
-      check_ssq += o->check_rmse_px * o->check_rmse_px * o->num_check;
-      check_count += o->num_check;
-    }
-    if (o->num_reprojection > 0) {
-      reprojection_ssq += o->reprojection_rmse_px * o->reprojection_rmse_px * o->num_reprojection;
-      reprojection_count += o->num_reprojection;
-    }
-    if (std::isfinite(o->nees) && std::isfinite(o->nees_apriori)) {
-      nees.push_back(o->nees);
-      nees_apriori.push_back(o->nees_apriori);
-      // The a-priori covariance (stated accuracy): chi-square(6), mean 6; sigma0 from r: 6 F(6, r),
-      // mean 6 r / (r - 2) (none for r <= 2).
-      const double r = o->degrees_of_freedom;
-      if (o->accuracy_stated)
-        expected.push_back(6.0);
-      else if (r > 2.0)
-        expected.push_back(6.0 * r / (r - 2.0));
-    }
+
+  void AddFailure(const std::string& message) {
+    Failures& kind = failures[FailureKind(message)];
+    if (kind.count++ == 0) kind.first = message;
+    kind.same = kind.same && message == kind.first;
   }
+
+  void AddSolved(const SolveOutcome& o) {
+    ++solved;
+    successes += o.success;
+    seconds.push_back(o.total_seconds);
+    refinement.push_back(o.refinement_seconds);
+    position.push_back(o.position_error_m);
+    rotation.push_back(o.rotation_error_arcsec);
+    if (std::isfinite(o.difference_position_m)) {
+      difference_position.push_back(o.difference_position_m);
+      difference_rotation.push_back(o.difference_rotation_arcsec);
+    }
+    iterations.push_back(o.iterations);
+    if (o.num_check > 0) {
+      check_ssq += o.check_rmse_px * o.check_rmse_px * o.num_check;
+      check_count += o.num_check;
+    }
+    if (o.num_reprojection > 0) {
+      reprojection_ssq += o.reprojection_rmse_px * o.reprojection_rmse_px * o.num_reprojection;
+      reprojection_count += o.num_reprojection;
+    }
+    if (!std::isfinite(o.nees) || !std::isfinite(o.nees_apriori)) return;
+    nees.push_back(o.nees);
+    nees_apriori.push_back(o.nees_apriori);
+    // The a-priori covariance (stated accuracy): chi-square(6), mean 6; sigma0 from r: 6 F(6, r),
+    // mean 6 r / (r - 2) (none for r <= 2).
+    const double r = o.degrees_of_freedom;
+    if (o.accuracy_stated)
+      expected.push_back(6.0);
+    else if (r > 2.0)
+      expected.push_back(6.0 * r / (r - 2.0));
+  }
+
+  void Add(const SolveOutcome& o) {
+    all_seconds.push_back(o.total_seconds);
+    all_refinement.push_back(o.refinement_seconds);
+    if (std::isfinite(o.success_threshold_m)) thresholds.push_back(o.success_threshold_m);
+    if (o.solved)
+      AddSolved(o);
+    else
+      AddFailure(o.message);
+  }
+};
+
+// The failures of `samples` by kind, most frequent first: the message when every one of its kind
+// read the same, else "kind, e.g. first message".
+std::vector<std::pair<std::string, int>> FailureReasons(const SolverSamples& samples) {
+  std::vector<std::pair<std::string, int>> reasons;
+  for (const auto& [kind, f] : samples.failures)
+    reasons.emplace_back(f.same ? f.first : kind + ", e.g. " + f.first, f.count);
+  std::stable_sort(reasons.begin(), reasons.end(),
+                   [](const auto& a, const auto& b) { return a.second > b.second; });
+  return reasons;
+}
+
+SolverStatistics Aggregate(const std::string& name,
+                           const std::vector<const SolveOutcome*>& samples) {
+  SolverSamples gathered;
+  for (const SolveOutcome* o : samples) gathered.Add(*o);
+  const SolverSamples& g = gathered;
+  SolverStatistics stats;
+  stats.solver = name;
+  stats.samples = static_cast<int>(samples.size());
+  stats.solved = g.solved;
+  stats.successes = g.successes;
   stats.success_rate =
       stats.samples > 0 ? static_cast<double>(stats.successes) / stats.samples : kNaN;
-  stats.position_rmse_m = Rms(position);
-  stats.rotation_rmse_arcsec = Rms(rotation);
-  stats.difference_position_rmse_m = Rms(difference_position);
-  stats.difference_rotation_rmse_arcsec = Rms(difference_rotation);
-  stats.check_rmse_px = check_count > 0 ? std::sqrt(check_ssq / check_count) : kNaN;
+  stats.position_rmse_m = Rms(g.position);
+  stats.rotation_rmse_arcsec = Rms(g.rotation);
+  stats.difference_position_rmse_m = Rms(g.difference_position);
+  stats.difference_rotation_rmse_arcsec = Rms(g.difference_rotation);
+  stats.check_rmse_px = g.check_count > 0 ? std::sqrt(g.check_ssq / g.check_count) : kNaN;
   stats.reprojection_rmse_px =
-      reprojection_count > 0 ? std::sqrt(reprojection_ssq / reprojection_count) : kNaN;
-  stats.mean_iterations = Mean(iterations);
-  stats.mean_success_threshold_m = Mean(thresholds);
-  stats.median_seconds = Median(seconds.empty() ? all_seconds : seconds);
-  stats.median_refinement_seconds = Median(refinement.empty() ? all_refinement : refinement);
-  stats.nees_count = static_cast<int>(nees.size());
-  stats.mean_nees = Mean(nees);
-  stats.mean_nees_apriori = Mean(nees_apriori);
-  stats.expected_nees = Mean(expected);
+      g.reprojection_count > 0 ? std::sqrt(g.reprojection_ssq / g.reprojection_count) : kNaN;
+  stats.mean_iterations = Mean(g.iterations);
+  stats.mean_success_threshold_m = Mean(g.thresholds);
+  stats.median_seconds = Median(g.seconds.empty() ? g.all_seconds : g.seconds);
+  stats.median_refinement_seconds = Median(g.refinement.empty() ? g.all_refinement : g.refinement);
+  stats.nees_count = static_cast<int>(g.nees.size());
+  stats.mean_nees = Mean(g.nees);
+  stats.mean_nees_apriori = Mean(g.nees_apriori);
+  stats.expected_nees = Mean(g.expected);
   if (stats.nees_count > 0) {
     stats.nees_interval_95 = MeanNeesInterval(stats.nees_count, 0.95);
     stats.nees_interval_99 = MeanNeesInterval(stats.nees_count, 0.99);
   } else {
     stats.nees_interval_95 = stats.nees_interval_99 = NeesInterval{kNaN, kNaN};
   }
-  for (const auto& [kind, f] : failures)
-    stats.failure_reasons.emplace_back(f.same ? f.first : kind + ", e.g. " + f.first, f.count);
-  std::stable_sort(stats.failure_reasons.begin(), stats.failure_reasons.end(),
-                   [](const auto& a, const auto& b) { return a.second > b.second; });
+  stats.failure_reasons = FailureReasons(g);
   return stats;
 }
 

@@ -2,7 +2,7 @@
 // inline CSS and SVG, no script; page head, tables, number formats, plots and SVG primitives from
 // tools/report/html_kit.h, its pictures from tools/report/bundle_plots.h. Sections in the order a
 // surveyor reads them: overview, verdicts, control and check points, cameras, calibration,
-// residuals, rejected observations, diagnostics. About 950 lines, one file on purpose: one
+// residuals, rejected observations, diagnostics. One file past ~800 lines on purpose: one
 // function per section, in the page's order, each a list of named steps (its tables, verdicts and
 // plots) defined just above it, so that the page reads top to bottom here.
 #include <Eigen/Eigenvalues>

@@ -1,6 +1,6 @@
 // The bundle's outputs other than its page (tools/report/bundle_report.h): the JSON report, the
-// frames and points tables, the warnings the page shares, the console lines. About 850 lines, one
-// file on purpose: the report and the console say the same things (groups, check points, removed
+// frames and points tables, the warnings the page shares, the console lines. One file past ~800
+// lines on purpose: the report and the console say the same things (groups, check points, removed
 // observations, cross-validation) through the same file-local names and numbers, one function
 // per section.
 #include "tools/report/bundle_report.h"

@@ -20,6 +20,7 @@
 #include <map>
 #include <string_view>
 
+#include "core/enum_names.h"
 #include "core/io/csv.h"
 #include "core/io/text_scanner.h"
 #include "core/io/tables.h"
@@ -228,30 +229,26 @@ inline std::string Where(const std::string& path, int line) {
   return line > 0 ? path + ":" + std::to_string(line) + ": " : path + ": ";
 }
 
-// One accepted spelling of an enumerated column value.
-template <typename Enum>
-struct Spelling {
-  const char* text;
-  Enum value;
-};
-
-// Reads an enumerated column: spellings are compared with FoldedName(); an empty field keeps
-// *value. The error lists the first `num_listed` spellings.
+// Reads an enumerated column by the value's name table (core/enum_names.h; EnumNames(Enum{}) for
+// an enum): every name and alias is compared with FoldedName(), the tables' rule for names, so
+// "x_right_y_up" reads as X_RIGHT_Y_UP; an empty field keeps *value. The error lists every entry
+// of the table in its order, aliases included.
 template <typename Enum, typename Column>
-Status ReadEnum(const CsvRowReader& row, const Column& column,
-                const std::vector<Spelling<Enum>>& spellings, size_t num_listed, Enum* value) {
+Status ReadEnum(const CsvRowReader& row, const Column& column, const EnumNameTable<Enum>& names,
+                Enum* value) {
   const std::string_view text = row.Text(column);
   if (text.empty()) return Status::Ok();
   const std::string folded = FoldedName(text);
-  for (const Spelling<Enum>& spelling : spellings) {
-    if (FoldedName(spelling.text) == folded) {
-      *value = spelling.value;
+  for (const EnumNameEntry<Enum>& entry : names) {
+    if (FoldedName(entry.name) == folded) {
+      *value = entry.value;
       return Status::Ok();
     }
   }
   std::string listed;
-  for (size_t i = 0; i < std::min(num_listed, spellings.size()); ++i)
-    listed += (i == 0 ? "" : i + 1 == num_listed ? " or " : ", ") + std::string(spellings[i].text);
+  const size_t count = static_cast<size_t>(names.end() - names.begin());
+  for (size_t i = 0; i < count; ++i)
+    listed += (i == 0 ? "" : i + 1 == count ? " or " : ", ") + std::string(names.begin()[i].name);
   return row.Error(column, Quoted(text) + " is not " + listed);
 }
 

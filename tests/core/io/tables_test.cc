@@ -17,7 +17,7 @@
 #include <vector>
 
 #include "core/io/csv.h"
-#include "core/fiducials.h"
+#include "core/io/fiducials_table.h"
 #include "tests/test_data.h"
 
 namespace photopose {
