@@ -8,6 +8,7 @@
 #include "core/io/bal.h"
 #include "core/io/block_tables.h"
 #include "core/io/colmap.h"
+#include "core/io/csv.h"
 #include "core/io/tables.h"
 #include "core/simulation/synthetic_block.h"
 #include "solvers/resection/resection.h"
@@ -22,6 +23,58 @@ constexpr const char* kPointsName = "points";
 constexpr const char* kMarksName = "marks";
 constexpr const char* kFramesName = "frames";
 
+// A number that comes in as a double (an array element, a record's field), refused by the rule the
+// table readers apply to a field's text (ParseFiniteNumber, core/io/csv.h): a NaN Row of the
+// fourth mark reads "marks:4: Row: 'nan' is not a finite number", as the marks table says it.
+// Checked before the block is assembled, whose own checks would misname a NaN (a mark "outside
+// the image", at its Column).
+void CheckFinite(double value, const char* table, int line, const char* column) {
+  if (std::isfinite(value)) return;
+  double number = 0.0;
+  std::string why;
+  ParseFiniteNumber(FormatNumber(value), &number, &why);
+  throw StatusError(std::string(table) + (line > 0 ? ":" + std::to_string(line) : "") + ": " +
+                    column + ": " + why);
+}
+
+template <int N>
+void CheckFinite(const Eigen::Matrix<double, N, 1>& values, const char* table, int line,
+                 const char* const (&columns)[N]) {
+  for (int k = 0; k < N; ++k) CheckFinite(values[k], table, line, columns[k]);
+}
+
+// Every number of a record, under its table's column names (docs/formats.md).
+void CheckFiniteRecord(const GroundPoint& p) {
+  CheckFinite(p.position, kPointsName, p.line, {"X", "Y", "Z"});
+  if (p.accuracy_m)
+    CheckFinite(*p.accuracy_m, kPointsName, p.line, {"AccuracyX", "AccuracyY", "AccuracyZ"});
+}
+
+void CheckFiniteRecord(const ImageMark& m) {
+  if (m.column_row) CheckFinite(*m.column_row, kMarksName, m.line, {"Column", "Row"});
+  if (m.film_um) CheckFinite(*m.film_um, kMarksName, m.line, {"FilmX", "FilmY"});
+  if (m.accuracy_px) CheckFinite(*m.accuracy_px, kMarksName, m.line, "Accuracy");
+}
+
+void CheckFiniteRecord(const FrameRecord& f) {
+  CheckFinite(f.eo.center_in_ground(), kFramesName, f.line,
+              {"PerspectiveX", "PerspectiveY", "PerspectiveZ"});
+  CheckFinite(f.eo.angles_seed_rad(), kFramesName, f.line, {"Omega", "Phi", "Kappa"});
+  if (f.center_accuracy_m)
+    CheckFinite(*f.center_accuracy_m, kFramesName, f.line, {"AccuracyX", "AccuracyY", "AccuracyZ"});
+  if (f.attitude_accuracy_deg)
+    CheckFinite(*f.attitude_accuracy_deg, kFramesName, f.line,
+                {"AccuracyOmega", "AccuracyPhi", "AccuracyKappa"});
+}
+
+void CheckFiniteRecords(const std::vector<GroundPoint>& points,
+                        const std::vector<ImageMark>& marks,
+                        const std::vector<FrameRecord>& frames) {
+  for (const GroundPoint& p : points) CheckFiniteRecord(p);
+  for (const ImageMark& m : marks) CheckFiniteRecord(m);
+  for (const FrameRecord& f : frames) CheckFiniteRecord(f);
+}
+
 PythonBlock Assemble(BlockTables tables) {
   PythonBlock out;
   CallWithoutGil([&] { return AssembleBlock(tables, &out.block); });
@@ -32,6 +85,7 @@ PythonBlock FromTables(std::vector<FrameCamera> cameras, std::vector<GroundPoint
                        std::vector<ImageMark> marks, std::vector<FrameRecord> frames,
                        RotationConvention frames_rotation, PixelOrigin pixel_origin,
                        const std::string& crs, PixelRows pixel_rows) {
+  CheckFiniteRecords(points, marks, frames);
   BlockTables tables;
   tables.cameras = std::move(cameras);
   tables.points = std::move(points);
@@ -96,14 +150,15 @@ PythonBlock FromArrays(const std::vector<FrameCamera>& cameras, const py::object
   const auto accuracies = OptionalRows3(point_accuracy, "point_accuracy_m", point_ids.size());
   std::vector<GroundPoint> points(point_ids.size());
   for (size_t i = 0; i < points.size(); ++i) {
-    if (accuracies[i] && InvalidPointAccuracyAxis(*accuracies[i]) >= 0)
-      throw py::value_error("point_accuracy_m: row " + std::to_string(i) +
-                            " is neither positive on every axis nor 0 on all three (held fixed)");
     points[i].point_id = point_ids[i];
     points[i].position = positions[i];
     points[i].accuracy_m = accuracies[i];
     points[i].role = roles[i];
     points[i].line = static_cast<int>(i) + 1;
+    CheckFiniteRecord(points[i]);  // before the accuracy's sign: an infinite one is not finite
+    if (accuracies[i] && InvalidPointAccuracyAxis(*accuracies[i]) >= 0)
+      throw py::value_error("point_accuracy_m: row " + std::to_string(i) +
+                            " is neither positive on every axis nor 0 on all three (held fixed)");
   }
 
   const std::vector<std::string> rasters = Strings(mark_rasters_value, "mark_rasters");
@@ -133,6 +188,7 @@ PythonBlock FromArrays(const std::vector<FrameCamera>& cameras, const py::object
     if (!camera_ids.empty()) marks[i].camera_id = camera_ids[i];
     marks[i].line = static_cast<int>(i) + 1;
   }
+  for (size_t i = 0; i < frames.size(); ++i) frames[i].line = static_cast<int>(i) + 1;
   return FromTables(cameras, std::move(points), std::move(marks), std::move(frames),
                     frames_rotation, pixel_origin, crs, pixel_rows);
 }
@@ -291,7 +347,9 @@ accuracies (N x 3, N or a scalar, m; NaN: not stated); M marks: raster names, po
 M x 2 measurements, in pixels (mark_unit 'px', Column/Row) or film micrometres ('um'), with their
 accuracy (M or a scalar, the mark's unit; NaN: not stated); pixel_rows 'up' for a Row counted up
 from the bottom edge (turned to rows counted down with the cameras' NRows, as are their A0-B2).
-Errors name the row: "marks:4: ..." is the fourth mark.)doc");
+Errors name the row and the table's column: "marks:4: Row: 'nan' is not a finite number" is the
+fourth mark, "frames:2: ..." the second frames record; every number must be finite (NaN only
+where it means "not stated").)doc");
   block.def("copy", [](const PythonBlock& b) { return PythonBlock(b); }, "A deep copy.");
   block.def("__copy__", [](const PythonBlock& b) { return PythonBlock(b); });
   block.def("__deepcopy__", [](const PythonBlock& b, const py::dict&) { return PythonBlock(b); });

@@ -126,6 +126,55 @@ def test_from_arrays_errors_name_the_row():
         pp.Block.from_arrays(None, None, None, None, None, None)
 
 
+@pytest.mark.parametrize("value", [np.nan, np.inf, -np.inf])
+def test_from_arrays_refuses_a_number_that_is_not_finite_as_the_tables_do(tmp_path, value):
+    camera = pp.FrameCamera(camera_id="c", focal_length_um=8800.0, pixel_size_um=2.4, n_rows=3000,
+                            n_columns=4000)
+    points = np.array([[0.0, 0.0, 0.0], [10.0, 0.0, 0.0]])
+    marks = np.array([[10.0, 10.0], [20.0, 20.0]])
+
+    def refusal(**changes):
+        arrays = dict(points=points.copy(), marks=marks.copy())
+        kwargs = {}
+        for name, change in changes.items():
+            if name in arrays:
+                arrays[name] = change(arrays[name])
+            else:
+                kwargs[name] = change
+        with pytest.raises(pp.Error) as error:
+            pp.Block.from_arrays([camera], ["A", "B"], arrays["points"], ["i", "i"], ["A", "B"],
+                                 arrays["marks"], **kwargs)
+        return str(error.value)
+
+    def at(array, index):
+        array[index] = value
+        return array
+
+    text = repr(float(value)).lower()
+    assert refusal(marks=lambda m: at(m, (1, 1))) == f"marks:2: Row: '{text}' is not a finite number"
+    assert refusal(marks=lambda m: at(m, (0, 0))) == f"marks:1: Column: '{text}' is not a finite number"
+    assert refusal(marks=lambda m: at(m, (1, 0)), mark_unit="um") == \
+        f"marks:2: FilmX: '{text}' is not a finite number"
+    assert refusal(points=lambda p: at(p, (1, 2))) == f"points:2: Z: '{text}' is not a finite number"
+    frame = pp.FrameRecord(raster="i", camera_id="c",
+                           eo=pp.ExteriorOrientation(center_in_ground=(0.0, 0.0, 100.0)))
+    bad_frame = pp.FrameRecord(raster="i", camera_id="c",
+                               eo=pp.ExteriorOrientation(center_in_ground=(0.0, value, 100.0)))
+    assert refusal(frames=[frame, bad_frame]) == \
+        f"frames:2: PerspectiveY: '{text}' is not a finite number"
+    if not np.isnan(value):  # NaN accuracies mean "not stated"
+        assert refusal(mark_accuracy=np.array([1.0, value])) == \
+            f"marks:2: Accuracy: '{text}' is not a finite number"
+        assert refusal(point_accuracy_m=np.array([[0.01, value, 0.01], [0.01, 0.01, 0.01]])) == \
+            f"points:1: AccuracyY: '{text}' is not a finite number"
+    # The marks table refuses the same value with the same words, at its own line.
+    marks_csv = tmp_path / "marks.csv"
+    marks_csv.write_text(f"Raster,PointID,Column,Row\ni,A,10,10\ni,B,20,{text}\n")
+    with pytest.raises(pp.Error) as error:
+        pp.read_image_marks(marks_csv)
+    assert str(error.value) == f"{marks_csv}:3: Row: '{text}' is not a finite number"
+
+
 def test_table_writers_read_back(tmp_path, example_files):
     cameras = pp.read_camera_table(example_files[0])
     pp.write_camera_table(tmp_path / "cameras.csv", cameras)
