@@ -603,7 +603,7 @@ TEST(BundleCommand, AccuracyAndDatumFlagsTheBlockCannotUseAreRefused) {
   }
   // Where they act they are taken: the frames' Omega/Phi/Kappa become attitude priors, and a
   // relative model holds COLMAP's gauge from the start.
-  CliRun run = RunCli(tables + " --quiet --attitude_accuracy=1", dir);
+  CliRun run = RunCli(tables + " --quiet --attitude_accuracy=30", dir);
   ASSERT_EQ(run.exit_code, 0) << run.err;
   const nlohmann::json report = nlohmann::json::parse(ReadFile(dir + "/r.json"));
   int attitudes = 0;
