@@ -31,4 +31,11 @@ struct MarkSigmaDefaults {
 double MarkSigma(const BlockMark& mark, const BlockCamera& camera,
                  const MarkSigmaDefaults& defaults);
 
+// True when MarkSigma gives `mark` its group's film_um: a film mark without an accuracy of its
+// own whose camera does not turn pixel_px into micrometres (no kFrame camera with a PixelSize, or
+// film_from_pixel_size off). The CLI refuses --film_tie_accuracy and
+// --film_marker_projection_accuracy for a block without such a mark.
+bool TakesFilmDefault(const BlockMark& mark, const BlockCamera& camera,
+                      const MarkSigmaDefaults& defaults);
+
 }  // namespace photopose

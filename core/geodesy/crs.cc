@@ -32,10 +32,27 @@ ContextPtr NewContext() {
   return context;
 }
 
+// PROJ's reason for the context's last error. PROJ words its generic code (PROJ_ERR_OTHER, which
+// it also gives for a database code it does not have) as "Unknown error (code 4096)": that is said
+// as what it is.
 std::string ProjReason(PJ_CONTEXT* context) {
   const int code = proj_context_errno(context);
   const char* text = code != 0 ? proj_context_errno_string(context, code) : nullptr;
-  return text != nullptr ? std::string(text) : std::string("PROJ does not know it");
+  if (text == nullptr) return "PROJ does not know it";
+  const std::string reason = text;
+  if (reason.rfind("Unknown error", 0) == 0)
+    return "PROJ gives no reason (its error code " + std::to_string(code) + ")";
+  return reason;
+}
+
+// An AUTHORITY:CODE reference into PROJ's database (EPSG:32632, ESRI:102100, an OGC URN): one word
+// with a colon, neither a "+proj=" string nor WKT.
+bool IsDatabaseReference(const std::string& definition) {
+  if (definition.empty() || definition.front() == '+' || definition.find(':') == std::string::npos)
+    return false;
+  return std::none_of(definition.begin(), definition.end(), [](char c) {
+    return std::isspace(static_cast<unsigned char>(c)) || c == '[' || c == '(' || c == '=';
+  });
 }
 
 std::string Lowercase(std::string text) {
@@ -85,6 +102,11 @@ Status CreateCrs(PJ_CONTEXT* context, const std::string& text, CrsInfo* info, Pj
   };
   if (result.definition.empty()) return fail("empty");
   PjPtr crs(proj_create(context, result.definition.c_str()));
+  if (!crs && IsDatabaseReference(result.definition)) {
+    // PROJ answers a code its database lacks with its generic error: name the database.
+    return Status::Error("CRS '" + text + "' is not known to PROJ (proj.db)" +
+                         (result.definition != text ? " (read as '" + result.definition + "')" : std::string()));
+  }
   if (!crs) return fail(ProjReason(context));
   if (!proj_is_crs(crs.get())) return fail("not a coordinate reference system");
   PJ* horizontal = crs.get();

@@ -88,6 +88,7 @@ void SetPositionsFromArrays(GeoreferenceInputs& self, const std::string& crs, co
   }
   self.positions_crs = crs;
   self.positions_source = source;
+  self.positions_crs_line = 0;
   self.positions.clear();
   for (size_t i = 0; i < images.size(); ++i) {
     CameraPositionMeasurement p;

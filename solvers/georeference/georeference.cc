@@ -195,6 +195,26 @@ Status CheckModelCanBeGeoreferenced(const GeoreferenceInputs& inputs, const Bloc
   return Status::Ok();
 }
 
+// Every CRS the chain will use resolved before any work; one PROJ does not know is named with
+// where it was given: its source and line (a geo.txt's or gcp_list.txt's first line), or the
+// source alone when it was given beside it, or as the output CRS.
+Status CheckCrssKnown(const GeoreferenceOptions& options, const GeoreferenceInputs& inputs) {
+  const auto known = [](const std::string& crs, const std::string& where) {
+    CrsInfo info;
+    const Status resolved = ResolveCrs(crs, &info);
+    return resolved.ok() ? resolved : Status::Error(where + ": " + resolved.message());
+  };
+  const auto at = [](const std::string& source, int line) {
+    return line > 0 ? source + ":" + std::to_string(line) : source;
+  };
+  if (!inputs.positions.empty())
+    PHOTOPOSE_RETURN_IF_ERROR(known(inputs.positions_crs, at(inputs.positions_source, inputs.positions_crs_line)));
+  if (!inputs.control_points.empty())
+    PHOTOPOSE_RETURN_IF_ERROR(known(inputs.control_crs, at(inputs.control_source, inputs.control_crs_line)));
+  if (!options.out_crs.empty()) PHOTOPOSE_RETURN_IF_ERROR(known(options.out_crs, "the output CRS"));
+  return Status::Ok();
+}
+
 // The measurements in the local frame (m, East-North-Up).
 struct LocalMeasurements {
   // One per inputs.positions; a position without height at the lower placeholder height.
@@ -442,6 +462,7 @@ Status PrepareGeoreference(const GeoreferenceOptions& options, const Georeferenc
                            Block* block, GeoreferenceResult* result) {
   const auto start = std::chrono::steady_clock::now();
   PHOTOPOSE_RETURN_IF_ERROR(CheckModelCanBeGeoreferenced(inputs, *block));
+  PHOTOPOSE_RETURN_IF_ERROR(CheckCrssKnown(options, inputs));
   GeoreferenceResult out;
   LocalMeasurements local;
   PHOTOPOSE_RETURN_IF_ERROR(MeasurementsInLocalFrame(options, inputs, &out, &local));
@@ -578,6 +599,7 @@ std::string AttitudesNotUsedLine(const GeoreferenceInputs& inputs) {
 void SetPositionsFromGeoTxt(const GeoTxt& geo, const std::string& source, GeoreferenceInputs* inputs) {
   inputs->positions_crs = geo.crs;
   inputs->positions_source = source;
+  inputs->positions_crs_line = 1;  // the CRS is the file's first line (core/io/tables.h)
   inputs->positions.clear();
   inputs->attitudes_not_used = 0;
   inputs->attitude_names = "yaw pitch roll";
@@ -600,6 +622,7 @@ void SetPositionsFromFrames(const std::vector<FrameRecord>& frames, const std::s
                             const std::string& source, GeoreferenceInputs* inputs) {
   inputs->positions_crs = crs;
   inputs->positions_source = source;
+  inputs->positions_crs_line = 0;
   inputs->positions.clear();
   // A frames row always has an attitude (Omega/Phi/Kappa or Matrix; core/io/tables.h).
   inputs->attitudes_not_used = static_cast<int>(frames.size());
@@ -620,6 +643,7 @@ void SetPositionsFromGps(const std::vector<std::string>& images,
                          const std::string& source, GeoreferenceInputs* inputs) {
   inputs->positions_crs = crs;
   inputs->positions_source = source;
+  inputs->positions_crs_line = 0;
   inputs->positions.clear();
   inputs->attitudes_not_used = 0;
   inputs->attitude_names.clear();
@@ -644,6 +668,7 @@ Status SetControlFromGcpList(const GcpList& gcp_list, const std::vector<std::str
   }
   inputs->control_crs = gcp_list.crs;
   inputs->control_source = source;
+  inputs->control_crs_line = 1;  // the CRS is the file's first line (core/io/tables.h)
   inputs->control_points = std::move(points);
   inputs->control_marks = gcp_list.marks;
   return Status::Ok();

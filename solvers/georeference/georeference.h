@@ -53,6 +53,9 @@ struct CameraPositionMeasurement {
 struct GeoreferenceInputs {
   std::string positions_crs;
   std::string positions_source;  // file name, for messages and reports
+  // The line of positions_source that names positions_crs (1: a geo.txt's first line), for
+  // messages; 0: the CRS was given beside the source (a --crs flag, an argument).
+  int positions_crs_line = 0;
   std::vector<CameraPositionMeasurement> positions;
   // Attitudes the positions' source gives and the chain does not use (the model gives every
   // image's attitude): their count, the source's names for them and why. The Set* functions fill
@@ -64,6 +67,7 @@ struct GeoreferenceInputs {
   std::string attitudes_not_used_reason;  // GeoTxtAttitudesNotUsedReason, ...
   std::string control_crs;
   std::string control_source;
+  int control_crs_line = 0;  // as positions_crs_line (1: a gcp_list.txt's first line)
   std::vector<GroundPoint> control_points;  // control / check as their role says
   std::vector<ImageMark> control_marks;     // pixels, (0, 0) the top-left corner of the image
 };
@@ -166,7 +170,8 @@ struct GeoreferenceResult {
 // Steps 1-3: `block` (a model in its own frame, every image with an exterior orientation) is moved
 // into the local frame, gets the camera positions as measured centres (accuracy per row, else
 // `default_camera_accuracy_m` when given, else the bundle's default) and the control points and
-// marks. Fails (nothing changed) on unknown CRSs, fewer than three usable pairs, pairs on a line,
+// marks. Fails (nothing changed) on unknown CRSs (named with the source and line that gave them,
+// or as the output CRS), fewer than three usable pairs, pairs on a line,
 // a control point id that a model point already has, marks outside their images, or a camera with
 // the earth-curvature correction (ApplyECC): the local frame is Cartesian, the earth's curvature
 // is in its coordinates already, and the correction would count it twice.

@@ -73,5 +73,34 @@ TEST(MarkSigma, FilmDefaultAsGivenWhenThePixelSizeIsNotToBeUsed) {
   EXPECT_NEAR(MarkSigma(Mark(MarkUnit::kPixel, 9.0), FrameCamera(9.0), defaults), 4.5, kTolerance);
 }
 
+// TakesFilmDefault says exactly when MarkSigma returns film_um: a film default no other value can
+// equal (0.123 um) tells.
+TEST(TakesFilmDefault, ExactlyWhenMarkSigmaReturnsTheFilmDefault) {
+  constexpr double kFilmDefaultUm = 0.123;
+  BlockMark own = Mark(MarkUnit::kFilm, 1.0);
+  own.accuracy = 2.0;
+  BlockCamera colmap = FrameCamera(9.0);
+  colmap.model = CameraModelType::kSimpleRadial;
+  MarkSigmaDefaults no_pixel_size = Defaults(0.5, kFilmDefaultUm);
+  no_pixel_size.film_from_pixel_size = false;
+  const struct {
+    BlockMark mark;
+    BlockCamera camera;
+    MarkSigmaDefaults defaults;
+    bool takes;
+  } cases[] = {
+      {Mark(MarkUnit::kFilm, 1.0), FrameCamera(0.0), Defaults(0.5, kFilmDefaultUm), true},
+      {Mark(MarkUnit::kFilm, 1.0), colmap, Defaults(0.5, kFilmDefaultUm), true},
+      {Mark(MarkUnit::kFilm, 1.0), FrameCamera(9.0), no_pixel_size, true},
+      {Mark(MarkUnit::kFilm, 1.0), FrameCamera(9.0), Defaults(0.5, kFilmDefaultUm), false},
+      {own, FrameCamera(0.0), Defaults(0.5, kFilmDefaultUm), false},
+      {Mark(MarkUnit::kPixel, 1.0), FrameCamera(0.0), Defaults(0.5, kFilmDefaultUm), false},
+  };
+  for (const auto& c : cases) {
+    EXPECT_EQ(TakesFilmDefault(c.mark, c.camera, c.defaults), c.takes);
+    EXPECT_EQ(MarkSigma(c.mark, c.camera, c.defaults) == kFilmDefaultUm, c.takes);
+  }
+}
+
 }  // namespace
 }  // namespace photopose

@@ -616,6 +616,27 @@ TEST_F(BadInputCatalogue, BundleRefusesInputsItDoesNotReadAndOutputsItCannotWrit
   EXPECT_TRUE(fs::is_empty(root_ + "/model"));
 }
 
+// A CRS PROJ does not know: one line that says so (PROJ's own words are "Unknown error (code
+// 4096)") and names where it was given: the flag, or the file and line (the first line of a
+// geo.txt or gcp_list.txt).
+TEST_F(BadInputCatalogue, BundleNamesAnUnknownCrsAndWhereItWasGiven) {
+  fs::create_directory(work_ + "/model");
+  WriteFile(work_ + "/model/cameras.txt", kColmapCameras);
+  WriteFile(work_ + "/model/images.txt", kColmapImages);
+  WriteFile(work_ + "/model/points3D.txt", kColmapPoints);
+  WriteFile(work_ + "/unknown_geo.txt", "EPSG:999999\na.jpg 600000 5300000 500\n");
+  WriteFile(work_ + "/unknown_gcp_list.txt", "EPSG:999999\n600000 5300000 500 60 60 a.jpg G1\n");
+  WriteFile(work_ + "/geo.txt", "EPSG:32632\na.jpg 600000 5300000 500\n");
+  const std::string model = "bundle --colmap_model=model --report=r.json ";
+  const std::string unknown = ": CRS 'EPSG:999999' is not known to PROJ (proj.db)";
+  ExpectRefused(model + "--geo=unknown_geo.txt", 2, "photopose bundle: unknown_geo.txt:1" + unknown);
+  ExpectRefused(model + "--gcp_list=unknown_gcp_list.txt", 2,
+                "photopose bundle: unknown_gcp_list.txt:1" + unknown);
+  ExpectRefused(model + "--geo=geo.txt --out_crs=EPSG:999999", 2, "photopose bundle: --out_crs" + unknown);
+  ExpectRefused(model + "--frames=frames.csv --crs=EPSG:999999", 2, "photopose bundle: --crs" + unknown);
+  ExpectRefused(model + "--images=. --exif_crs=EPSG:999999", 2, "photopose bundle: --exif_crs" + unknown);
+}
+
 // ------------------------------------------------------------------ guard
 
 TEST_F(BadInputCatalogue, RunningOutOfMemoryIsOneLineNotAnAbort) {

@@ -22,6 +22,8 @@
 #include "core/io/exif_gps.h"
 #include "core/io/output_files.h"
 #include "core/io/tables.h"
+#include "core/geodesy/crs.h"
+#include "core/mark_weight.h"
 #include "solvers/bundle/block_initialization.h"
 #include "solvers/bundle/bundle_adjustment.h"
 #include "solvers/bundle/taylor_bundle.h"
@@ -223,11 +225,6 @@ int CheckInputChoice(const char* command, BundleRun* run) {
   if (run->tables && (!FLAGS_bundle_crs.empty() || !FLAGS_bundle_out_crs.empty()))
     return BadInput(command, "--crs and --out_crs georeference a --colmap_model; the tables are adjusted in their own ground frame");
   run->georeference = model && measurements;
-  gflags::CommandLineFlagInfo relative_covariance;
-  if ((run->tables || run->georeference) &&
-      gflags::GetCommandLineFlagInfo("bundle_relative_covariance", &relative_covariance) &&
-      !relative_covariance.is_default)
-    return BadInput(command, "--relative_covariance chooses the datum of a relative block's covariances (a model without positions or control, or --bal); this block's datum is its control points and camera positions");
   if (model) {
     if (!FLAGS_bundle_gcp_list.empty() && !FLAGS_bundle_points.empty())
       return BadInput(command, "give the control as --gcp_list or as --points with --marks, not both");
@@ -246,6 +243,14 @@ int CheckInputChoice(const char* command, BundleRun* run) {
     return BadInput(command, "--out_colmap_format is the format of --out_colmap: give --out_colmap too");
   if (!FLAGS_bundle_bal.empty() && !FLAGS_bundle_out_colmap.empty())
     return BadInput(command, "--out_colmap: a BAL problem has no image size and counts pixels from the image centre, which a COLMAP model cannot hold; write --out, --out_points or --report");
+  // A CRS given by a flag is resolved now, named by its flag (the CRSs files name are named with
+  // their file and line by PrepareGeoreference).
+  for (const auto& [flag, crs] : {std::pair<const char*, const std::string&>{"--crs", FLAGS_bundle_crs},
+                                  {"--out_crs", FLAGS_bundle_out_crs}, {"--exif_crs", FLAGS_bundle_exif_crs}}) {
+    CrsInfo info;
+    if (const Status known = crs.empty() ? Status::Ok() : ResolveCrs(crs, &info); !known.ok())
+      return BadInput(command, std::string(flag) + ": " + known.message());
+  }
   run->context.input_kind = run->tables ? "tables" : !FLAGS_bundle_colmap_model.empty() ? "colmap" : !FLAGS_bundle_opensfm.empty() ? "opensfm" : "bal";
   if (!ParseEnum(FLAGS_bundle_rotation, &run->context.rotation))
     return BadInput(command, EnumFlagError<RotationConvention>("--rotation", FLAGS_bundle_rotation));
@@ -365,9 +370,7 @@ int OptionsFromFlags(const char* command, BundleRun* run) {
   }
   const bool gauss_newton = run->solver == PoseSolver::kTaylorAsPrinted ||
                             (run->taylor_damping && *run->taylor_damping == TaylorDamping::kNone);
-  gflags::CommandLineFlagInfo relative_gauge;
-  if (gauss_newton && FLAGS_bundle_relative_gauge == "free" &&
-      gflags::GetCommandLineFlagInfo("bundle_relative_gauge", &relative_gauge) && !relative_gauge.is_default)
+  if (gauss_newton && FLAGS_bundle_relative_gauge == "free" && FlagGiven("bundle_relative_gauge"))
     return BadInput(command, "--relative_gauge=free needs a damped solver (the free directions stay still only under Levenberg-Marquardt's damping); Gauss-Newton holds COLMAP's gauge from the start");
   return kGoOn;
 }
@@ -588,6 +591,41 @@ int GeoreferenceModel(const char* command, BundleRun* run) {
   return kGoOn;
 }
 
+// The accuracy and datum flags this block cannot use, refused when given (issue 21: a flag
+// silently ignored is a defect): the one rule of what each needs, run once the block is read (film
+// marks and measured attitudes are in its data), before the georeferencing and any adjustment.
+// A given flag is one set on the command line or in a flag file (FlagGiven), even to its default.
+int RefuseFlagsWithoutEffect(const char* command, const BundleRun& run) {
+  const std::string models = "the marks of --colmap_model, --opensfm and --bal are pixels";
+  // A block with control points or camera positions has them as its datum: the tables (a table
+  // block without either is refused after the adjustment) and a georeferenced model.
+  if (run.tables || run.georeference) {
+    const char* const datum = "; this block's datum is its control points and camera positions";
+    if (FlagGiven("bundle_relative_covariance"))
+      return BadInput(command, std::string("--relative_covariance chooses the datum of a relative block's covariances (a model without positions or control, or --bal)") + datum);
+    if (FlagGiven("bundle_relative_gauge"))
+      return BadInput(command, std::string("--relative_gauge chooses how a relative block's gauge is held while it is solved (a model without positions or control, or --bal)") + datum);
+  }
+  // The defaults only some marks and images take (core/mark_weight.h, TakesFilmDefault; the
+  // attitude prior of PlanImagePriors, solvers/bundle/bundle_problem.cc).
+  const Block& block = run.block;
+  bool film_tie = false, film_control = false, attitude = false;
+  const MarkSigmaDefaults defaults;
+  for (const BlockMark& mark : block.marks) {
+    if (!TakesFilmDefault(mark, block.cameras[block.images[mark.image].camera], defaults)) continue;
+    (block.points[mark.point].role == PointRole::kTie ? film_tie : film_control) = true;
+  }
+  for (const BlockImage& image : block.images)
+    attitude = attitude || (image.measured_angles_rad && !image.attitude_accuracy_rad);
+  if (FlagGiven("bundle_film_tie_accuracy") && !film_tie)
+    return BadInput(command, "--film_tie_accuracy is the accuracy of tie marks in film coordinates (FilmX/FilmY) without an Accuracy, on a camera without a pixel size; no mark of this block is one" + (run.tables ? std::string() : " (" + models + ")"));
+  if (FlagGiven("bundle_film_marker_projection_accuracy") && !film_control)
+    return BadInput(command, "--film_marker_projection_accuracy is the accuracy of control and check marks in film coordinates (FilmX/FilmY) without an Accuracy, on a camera without a pixel size; no mark of this block is one" + (run.tables ? std::string() : " (" + models + ", and so are a model's control marks)"));
+  if (FlagGiven("bundle_attitude_accuracy") && !attitude)
+    return BadInput(command, "--attitude_accuracy is the accuracy of measured attitudes without AccuracyOmega/Phi/Kappa (a frames table's Omega/Phi/Kappa with the tables); no image of this block has one" + (run.tables ? std::string(FLAGS_bundle_frames.empty() ? " (no --frames)" : " (every row of --frames has AccuracyOmega/Phi/Kappa)") : std::string(" (the attitudes of --colmap_model, --opensfm and --bal are unknowns of the adjustment, and those of --geo or --frames beside a model are read and not used)")));
+  return kGoOn;
+}
+
 // Reads the block (tables, COLMAP model or BAL problem) and the calibrated parameters.
 int ReadBundleBlock(const char* command, BundleRun* run) {
   Block& block = run->block;
@@ -609,10 +647,6 @@ int ReadBundleBlock(const char* command, BundleRun* run) {
   } else if (!FLAGS_bundle_colmap_model.empty()) {
     const Status read = ReadColmapModel(FLAGS_bundle_colmap_model, &block, &run->colmap_extras, &run->colmap_in_format);
     if (!read.ok()) return BadInput(command, read.message());
-    if (run->georeference) {
-      const int code = GeoreferenceModel(command, run);
-      if (code != kGoOn) return code;
-    }
   } else if (!FLAGS_bundle_opensfm.empty()) {
     OpenSfmExtras extras;
     const Status read = ReadOpenSfmReconstruction(FLAGS_bundle_opensfm, &block, &extras);
@@ -628,13 +662,14 @@ int ReadBundleBlock(const char* command, BundleRun* run) {
       std::cerr << "\n";
     }
     run->opensfm_extras = std::move(extras);
-    if (run->georeference) {
-      const int code = GeoreferenceModel(command, run);
-      if (code != kGoOn) return code;
-    }
   } else {
     const Status read = ReadBalProblem(FLAGS_bundle_bal, &block);
     if (!read.ok()) return BadInput(command, read.message());
+  }
+  if (const int refused = RefuseFlagsWithoutEffect(command, *run); refused != kGoOn) return refused;
+  if (run->georeference) {
+    const int code = GeoreferenceModel(command, run);
+    if (code != kGoOn) return code;
   }
   if (block.images.empty()) return BadInput(command, "the block has no image with marks");
   const Status calibration = BundleAdjustmentConfig::FromCalibrationNames(block, run->calibrate, &run->config);

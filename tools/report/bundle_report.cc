@@ -569,9 +569,10 @@ Status FormatBundlePoints(const Block& block, const BundleAdjustmentResult& resu
     PHOTOPOSE_RETURN_IF_ERROR(transform(&estimate_out));
     PHOTOPOSE_RETURN_IF_ERROR(transform(&surveyed_out));
   }
+  const std::string srs = BundlePointsSrs(block, georeference);
   std::string text = CsvLine({"PointID", "X", "Y", "Z", "SigmaX", "SigmaY", "SigmaZ", "Role",
                               "NumObservations", "SurveyedX", "SurveyedY", "SurveyedZ", "ErrorX",
-                              "ErrorY", "ErrorZ"});
+                              "ErrorY", "ErrorZ", "SRS"});
   auto triple = [](const Eigen::Vector3d& x, std::vector<std::string>* fields) {
     for (int k = 0; k < 3; ++k) fields->push_back(std::isfinite(x[k]) ? FormatNumber(x[k]) : std::string());
   };
@@ -590,10 +591,23 @@ Status FormatBundlePoints(const Block& block, const BundleAdjustmentResult& resu
     fields.push_back(std::to_string(r != nullptr ? r->num_observations : 0));
     triple(surveyed_out[k], &fields);
     triple(r != nullptr && r->error_m && point.role != PointRole::kTie ? Eigen::Vector3d(R_level[k] * *r->error_m) : none, &fields);
+    fields.push_back(srs);
     text += CsvLine(fields);
   }
   *csv = std::move(text);
   return Status::Ok();
+}
+
+std::string BundlePointsSrs(const Block& block, const GeoreferenceResult* georeference) {
+  if (georeference != nullptr) return georeference->out_crs_info.definition;
+  if (!block.crs.empty()) return block.crs;
+  std::string named;
+  for (const BlockCamera& camera : block.cameras) {
+    if (camera.table.srs.empty()) continue;
+    if (!named.empty() && named != camera.table.srs) return "";
+    named = camera.table.srs;
+  }
+  return named;
 }
 
 std::vector<FrameRecord> BundleFrames(const Block& block, const BundleAdjustmentResult& result) {

@@ -105,11 +105,17 @@ std::string BundleGlossaryHtml();
 // The points table: PointID, X, Y, Z (the estimate of every point: adjusted tie and control
 // points, intersected check points; empty for a check point that could not be intersected),
 // SigmaX, SigmaY, SigmaZ (m), Role, NumObservations, SurveyedX, SurveyedY, SurveyedZ (control and
-// check points, as surveyed), ErrorX, ErrorY, ErrorZ (m; estimate - surveyed). With `georeference`
-// the coordinates are in its output CRS and the sigmas and errors along its level axes (m);
-// without, in the block's ground frame.
+// check points, as surveyed), ErrorX, ErrorY, ErrorZ (m; estimate - surveyed), SRS (the CRS of
+// X, Y, Z and Surveyed*, as the frames table's SRS: BundlePointsSrs). With `georeference` the
+// coordinates are in its output CRS and the sigmas and errors along its level axes (m); without,
+// in the block's ground frame.
 Status FormatBundlePoints(const Block& block, const BundleAdjustmentResult& result,
                           const GeoreferenceResult* georeference, std::string* csv);
+// The points table's SRS: the output CRS of a georeferenced model as PROJ was given it (the frames
+// table's SRS, GeoreferencedFrames); else the block's CRS as read; else the SRS its cameras' table
+// rows name when they all name the same one (a frames row's SRS falls back the other way: its
+// camera's, else the block's, BundleFrames); else empty.
+std::string BundlePointsSrs(const Block& block, const GeoreferenceResult* georeference);
 
 // The frames records of the adjusted images: eo, covariance, Sigma0, NumObservations (marks
 // used) and RmsResidual (their RMS, in the marks' unit) as extra columns.

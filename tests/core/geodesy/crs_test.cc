@@ -32,7 +32,16 @@ TEST(Crs, UnknownCrsIsAnErrorNamingIt) {
   CrsInfo info;
   const Status unknown = ResolveCrs("EPSG:999999", &info);
   ASSERT_FALSE(unknown.ok());
-  EXPECT_NE(unknown.message().find("CRS 'EPSG:999999'"), std::string::npos) << unknown.message();
+  // PROJ's own words for it are "Unknown error (code 4096)": the message says what it is.
+  EXPECT_EQ(unknown.message(), "CRS 'EPSG:999999' is not known to PROJ (proj.db)");
+  const Status other_authority = ResolveCrs("ESRI:999999", &info);
+  EXPECT_EQ(other_authority.message(), "CRS 'ESRI:999999' is not known to PROJ (proj.db)");
+  // Not a database code: PROJ's reason, never "Unknown error".
+  const Status syntax = ResolveCrs("+proj=nosuchprojection", &info);
+  ASSERT_FALSE(syntax.ok());
+  EXPECT_EQ(syntax.message().rfind("CRS '+proj=nosuchprojection': ", 0), 0u) << syntax.message();
+  EXPECT_EQ(syntax.message().find("Unknown error"), std::string::npos) << syntax.message();
+  EXPECT_EQ(syntax.message().find("proj.db"), std::string::npos) << syntax.message();
   EXPECT_FALSE(ResolveCrs("", &info).ok());
   EXPECT_FALSE(ResolveCrs("WGS84 UTM 61N", &info).ok());
   // A conversion is not a CRS until PROJ is told so; a transformation pipeline never is.

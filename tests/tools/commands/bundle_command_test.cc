@@ -560,6 +560,60 @@ TEST(BundleCommand, RelativeCovarianceDatumIsChosenAndReported) {
       << run.err;
 }
 
+// Issue 21: an accuracy or datum flag the block cannot use is refused when given (exit 2, one
+// line, before the adjustment: no iteration line, nothing written); where it acts it is taken.
+TEST(BundleCommand, AccuracyAndDatumFlagsTheBlockCannotUseAreRefused) {
+  const std::string dir = ScratchDir();
+  const std::string block = SimulateBlock(dir);
+  const std::string out = " --out=" + dir + "/f.csv --report=" + dir + "/r.json";
+  const std::string tables = "bundle " + TableArgs(block) + out;
+  const std::string no_frames = "bundle --cameras=" + block + "/cameras.csv --points=" + block +
+                                "/points.csv --marks=" + block + "/marks.csv" + out;
+  const std::string model = "bundle --colmap_model=" + block + "/colmap" + out;
+  const std::string absolute = "; this block's datum is its control points and camera positions";
+  const std::vector<std::pair<std::string, std::string>> cases = {
+      {tables + " --relative_gauge=fixed",
+       "photopose bundle: --relative_gauge chooses how a relative block's gauge is held while it "
+       "is solved (a model without positions or control, or --bal)" + absolute},
+      // Given at its default value it is still given: refused all the same.
+      {tables + " --relative_gauge=free", "--relative_gauge chooses"},
+      {tables + " --film_tie_accuracy=3",
+       "photopose bundle: --film_tie_accuracy is the accuracy of tie marks in film coordinates "
+       "(FilmX/FilmY) without an Accuracy, on a camera without a pixel size; no mark of this block "
+       "is one"},
+      {tables + " --film_marker_projection_accuracy=2",
+       "photopose bundle: --film_marker_projection_accuracy is the accuracy of control and check "
+       "marks in film coordinates (FilmX/FilmY) without an Accuracy, on a camera without a pixel "
+       "size; no mark of this block is one"},
+      {no_frames + " --attitude_accuracy=1",
+       "photopose bundle: --attitude_accuracy is the accuracy of measured attitudes without "
+       "AccuracyOmega/Phi/Kappa (a frames table's Omega/Phi/Kappa with the tables); no image of "
+       "this block has one (no --frames)"},
+      {model + " --attitude_accuracy=1", "(the attitudes of --colmap_model, --opensfm and --bal are unknowns"},
+      {model + " --film_tie_accuracy=3", "no mark of this block is one (the marks of --colmap_model, --opensfm and --bal are pixels)"},
+  };
+  for (const auto& [arguments, message] : cases) {
+    const CliRun run = RunCli(arguments, dir);
+    EXPECT_EQ(run.exit_code, 2) << arguments << "\n" << run.err;
+    EXPECT_NE(run.err.find(message), std::string::npos) << arguments << "\n" << run.err;
+    EXPECT_EQ(run.err.find("iteration"), std::string::npos) << arguments << "\n" << run.err;
+    EXPECT_EQ(std::count(run.err.begin(), run.err.end(), '\n'), 1) << arguments << "\n" << run.err;
+    EXPECT_FALSE(std::filesystem::exists(dir + "/f.csv")) << arguments;
+    EXPECT_FALSE(std::filesystem::exists(dir + "/r.json")) << arguments;
+  }
+  // Where they act they are taken: the frames' Omega/Phi/Kappa become attitude priors, and a
+  // relative model holds COLMAP's gauge from the start.
+  CliRun run = RunCli(tables + " --quiet --attitude_accuracy=30", dir);
+  ASSERT_EQ(run.exit_code, 0) << run.err;
+  const nlohmann::json report = nlohmann::json::parse(ReadFile(dir + "/r.json"));
+  int attitudes = 0;
+  for (const nlohmann::json& group : report.at("groups"))
+    if (group.at("name") == "attitudes") attitudes = group.at("count").get<int>();
+  EXPECT_GT(attitudes, 0) << report.at("groups");
+  run = RunCli(model + " --quiet --relative_gauge=fixed", dir);
+  EXPECT_EQ(run.exit_code, 0) << run.err;
+}
+
 TEST(BundleCommand, BinaryColmapModelInBinaryOutUnlessAsked) {
   const std::string dir = ScratchDir();
   const std::string block = SimulateBlock(dir);
@@ -1013,7 +1067,7 @@ TEST(BundleCommand, ControlPointsWithAccuracyZeroAreHeldFixed) {
   const auto adjusted = SplitCsvText(ReadFile(dir + "/adjusted.csv"));
   ASSERT_EQ(CsvText({adjusted[0]}),
             "PointID,X,Y,Z,SigmaX,SigmaY,SigmaZ,Role,NumObservations,SurveyedX,SurveyedY,SurveyedZ,"
-            "ErrorX,ErrorY,ErrorZ\n");
+            "ErrorX,ErrorY,ErrorZ,SRS\n");
   int fixed = 0, tie = 0;
   for (size_t r = 1; r < adjusted.size(); ++r) {
     const auto& row = adjusted[r];
@@ -1107,6 +1161,15 @@ TEST(BundleCommand, FilmMarksOfACameraWithoutPixelSizeAreAdjustedInMicrometres) 
   EXPECT_NE(run.out.find(", stated 5.00 um, RMS "), std::string::npos) << run.out;  // --film_tie_accuracy
   EXPECT_NE(run.out.find(", stated 2.50 um, RMS "), std::string::npos) << run.out;
   EXPECT_EQ(run.out.find("px"), std::string::npos) << run.out;
+  // Film marks without an Accuracy on a camera without a pixel size: the film flags are taken.
+  const CliRun stated = RunCli("bundle --cameras=" + dir + "/cameras.csv --points=" + block +
+                                   "/points.csv --marks=" + dir + "/marks.csv --frames=" + block +
+                                   "/frames.csv --out=" + dir + "/frames.csv --quiet "
+                                   "--film_tie_accuracy=4 --film_marker_projection_accuracy=2",
+                               dir);
+  ASSERT_EQ(stated.exit_code, 0) << stated.err;
+  EXPECT_NE(stated.out.find(", stated 4.00 um, RMS "), std::string::npos) << stated.out;
+  EXPECT_NE(stated.out.find(", stated 2.00 um, RMS "), std::string::npos) << stated.out;
 }
 
 // An image whose marks all lie on one ground line (tests/support/singular_block.h), as a COLMAP

@@ -2,6 +2,7 @@
 // a user with a COLMAP reconstruction, a geo.txt and a gcp_list.txt runs it.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cstdio>
 #include <filesystem>
 #include <nlohmann/json.hpp>
@@ -93,7 +94,7 @@ TEST(BundleGeoreference, DomedColmapModelWithGeoTxtAndGcpListComesOutInUtm) {
   std::istringstream lines(points);
   std::string header;
   std::getline(lines, header);
-  EXPECT_EQ(header, "PointID,X,Y,Z,SigmaX,SigmaY,SigmaZ,Role,NumObservations,SurveyedX,SurveyedY,SurveyedZ,ErrorX,ErrorY,ErrorZ");
+  EXPECT_EQ(header, "PointID,X,Y,Z,SigmaX,SigmaY,SigmaZ,Role,NumObservations,SurveyedX,SurveyedY,SurveyedZ,ErrorX,ErrorY,ErrorZ,SRS");
   int checks_seen = 0;
   for (std::string line; std::getline(lines, line);) {
     if (line.find(",check,") == std::string::npos) continue;
@@ -101,7 +102,7 @@ TEST(BundleGeoreference, DomedColmapModelWithGeoTxtAndGcpListComesOutInUtm) {
     std::stringstream fields(line);
     std::string field;
     while (std::getline(fields, field, ',')) v.push_back(field.empty() || !std::isdigit(static_cast<unsigned char>(field.back())) ? 0.0 : std::atof(field.c_str()));
-    ASSERT_EQ(v.size(), 15u) << line;
+    ASSERT_EQ(v.size(), 16u) << line;
     EXPECT_GT(v[1], 600000.0);    // easting of 11.2 E in zone 32
     EXPECT_GT(v[2], 5290000.0);   // northing of 47.8 N
     EXPECT_NEAR(v[1] - v[9], v[12], 0.002) << line;  // X - SurveyedX = ErrorX (grid and metres agree to k)
@@ -109,6 +110,27 @@ TEST(BundleGeoreference, DomedColmapModelWithGeoTxtAndGcpListComesOutInUtm) {
     ++checks_seen;
   }
   EXPECT_EQ(checks_seen, 4);
+  // The points table says its CRS as the frames table does (SRS: what PROJ was given for ODM's
+  // "WGS84 UTM 32N"), on every row; read back, it is the points table photopose reads.
+  std::vector<FrameRecord> frames;
+  ASSERT_TRUE(ReadFramesTable(dir + "/frames.csv", FramesTableOptions(), &frames).ok());
+  ASSERT_FALSE(frames.empty());
+  EXPECT_EQ(frames[0].srs, "EPSG:32632");
+  CsvTable table;
+  ASSERT_TRUE(CsvTable::Read(dir + "/points.csv", CsvOptions(), &table).ok());
+  ASSERT_TRUE(table.HasColumn("SRS"));
+  ASSERT_FALSE(table.rows().empty());
+  for (const CsvRow& row : table.rows()) {
+    const CsvRowReader fields(table, row);
+    EXPECT_EQ(fields.Text("SRS"), frames[0].srs) << row.line;
+  }
+  CrsInfo srs;
+  ASSERT_TRUE(ResolveCrs(std::string(CsvRowReader(table, table.rows()[0]).Text("SRS")), &srs).ok());
+  EXPECT_EQ(srs.name, g.at("out_crs_name").get<std::string>());
+  std::vector<GroundPoint> read_back;
+  const Status read = ReadGroundPoints(dir + "/points.csv", &read_back);
+  ASSERT_TRUE(read.ok()) << read.message();
+  EXPECT_EQ(read_back.size(), table.rows().size());
   EXPECT_NE(ReadFile(dir + "/frames.csv").find("EPSG:32632"), std::string::npos);
   EXPECT_NE(ReadFile(dir + "/out/georeference.json").find("+proj=topocentric"), std::string::npos);
   // The page's plan view is drawn in the grid, its corners in UTM coordinates.
@@ -212,7 +234,15 @@ TEST(BundleGeoreference, RefusesWhatItCannotUseBeforeAnyWork) {
   WriteFile(dir + "/frames.csv", "Raster,PerspectiveX,PerspectiveY,PerspectiveZ,Omega,Phi,Kappa\na.jpg,1,2,3,0,0,0\n");
   const std::vector<Case> cases = {
       {model + " --frames=" + dir + "/frames.csv", "--crs is needed"},
-      {model + " --geo=" + dir + "/bad_geo.txt", "CRS 'EPSG:999999'"},
+      {model + " --geo=" + dir + "/bad_geo.txt", dir + "/bad_geo.txt:1: CRS 'EPSG:999999' is not known to PROJ (proj.db)"},
+      {model + " --geo=" + dir + "/geo.txt --out_crs=EPSG:999999", "--out_crs: CRS 'EPSG:999999' is not known to PROJ (proj.db)"},
+      // Flags this block cannot use (issue 21): no measured attitude (geo.txt's are not used), an
+      // absolute datum, no film mark.
+      {model + " --geo=" + dir + "/geo.txt --attitude_accuracy=1", "--attitude_accuracy is the accuracy of measured attitudes"},
+      {model + " --geo=" + dir + "/geo.txt --relative_gauge=fixed", "--relative_gauge chooses how a relative block's gauge is held while it is solved (a model without positions or control, or --bal); this block's datum is its control points and camera positions"},
+      {model + " --geo=" + dir + "/geo.txt --relative_covariance=points", "this block's datum is its control points and camera positions"},
+      {model + " --gcp_list=" + dir + "/gcp_list.txt --film_tie_accuracy=3", "--film_tie_accuracy is the accuracy of tie marks in film coordinates"},
+      {model + " --gcp_list=" + dir + "/gcp_list.txt --film_marker_projection_accuracy=2", "(the marks of --colmap_model, --opensfm and --bal are pixels, and so are a model's control marks)"},
       {model + " --geo=" + dir + "/geo.txt --frames=" + dir + "/frames.csv --crs=EPSG:4326", "give the camera positions once"},
       {model + " --out_crs=EPSG:32632", "nothing is georeferenced"},
       {model + " --geo=" + dir + "/geo.txt --check_points=GCP_1", "--check_points names points of --gcp_list"},
@@ -227,6 +257,7 @@ TEST(BundleGeoreference, RefusesWhatItCannotUseBeforeAnyWork) {
     const CliRun run = RunCli("bundle" + c.arguments + " --quiet", dir);
     EXPECT_EQ(run.exit_code, 2) << c.arguments << "\n" << run.err;
     EXPECT_NE(run.err.find(c.message), std::string::npos) << c.arguments << "\n" << run.err;
+    EXPECT_EQ(std::count(run.err.begin(), run.err.end(), '\n'), 1) << c.arguments << "\n" << run.err;
     EXPECT_FALSE(std::filesystem::exists(dir + "/f.csv")) << c.arguments;
   }
 }
