@@ -178,6 +178,19 @@ Status ResolveCrs(const std::string& text, CrsInfo* info) {
   return CreateCrs(context.get(), text, info, nullptr);
 }
 
+Status SameCrs(const std::string& a, const std::string& b, bool* same) {
+  ContextPtr context = NewContext();
+  if (!context) return Status::Error("PROJ: cannot create a context");
+  PjPtr crs_a, crs_b;
+  PHOTOPOSE_RETURN_IF_ERROR(CreateCrs(context.get(), a, nullptr, &crs_a));
+  PHOTOPOSE_RETURN_IF_ERROR(CreateCrs(context.get(), b, nullptr, &crs_b));
+  // Compared as CreateCrs hands them to the transformations (a 2D CRS promoted to 3D), so two
+  // texts are the same exactly when photopose would transform their coordinates alike.
+  *same = proj_is_equivalent_to_with_ctx(context.get(), crs_a.get(), crs_b.get(),
+                                         PJ_COMP_EQUIVALENT_EXCEPT_AXIS_ORDER_GEOGCRS) != 0;
+  return Status::Ok();
+}
+
 std::string UtmCrsFor(double longitude_deg, double latitude_deg) {
   int zone = static_cast<int>(std::floor((longitude_deg + 180.0) / 6.0)) + 1;
   zone = std::clamp(zone, 1, 60);

@@ -50,6 +50,13 @@ struct CrsInfo {
 // ODM's "WGS84 UTM <zone><N|S>". Errors name the text and PROJ's reason.
 Status ResolveCrs(const std::string& text, CrsInfo* info);
 
+// Whether two CRS texts name the same CRS as photopose uses it: PROJ's equivalence
+// (proj_is_equivalent_to, names and the authority's axis order of a geographic CRS aside) of the
+// two CRSs after a 2D one is given its height axis ("EPSG:32632" and "WGS84 UTM 32N" are the same;
+// so are EPSG:4326 and EPSG:4979, whose heights both pass as ellipsoidal). Errors as ResolveCrs,
+// naming the text PROJ does not know.
+Status SameCrs(const std::string& a, const std::string& b, bool* same);
+
 // "EPSG:326zz" (north) or "EPSG:327zz" (south): the WGS84 UTM zone of a longitude / latitude
 // (degrees); the Norway and Svalbard exceptions are not applied.
 std::string UtmCrsFor(double longitude_deg, double latitude_deg);

@@ -7,6 +7,7 @@
 #include <map>
 #include <unordered_map>
 
+#include "core/io/csv.h"
 #include "core/rotation.h"
 #include "solvers/bundle/triangulation.h"
 
@@ -456,6 +457,64 @@ Status ErrorsAfterSimilarity(const Block& work, int first_control,
   return Status::Ok();
 }
 
+// The one CRS of a frames table's positions (SetPositionsFromFrames): a row's SRS, else
+// `given_crs`; every row in the same CRS. Each distinct SRS text is resolved once.
+Status FramesTableCrs(const std::vector<FrameRecord>& frames, const std::string& given_crs,
+                      const std::string& given_name, const std::string& source, std::string* crs) {
+  const FrameRecord* first_stated = nullptr;  // the first row with an SRS
+  for (const FrameRecord& frame : frames) {
+    if (!frame.srs.empty()) {
+      first_stated = &frame;
+      break;
+    }
+  }
+  if (first_stated == nullptr && given_crs.empty())
+    return Status::Error(source + ": no SRS column value and no " + given_name +
+                         ": the coordinate system of the positions is unknown");
+  const auto row_where = [&](const FrameRecord& frame) {
+    return source + ":" + std::to_string(frame.line) + ": SRS: ";
+  };
+  // Every row is compared with the given CRS, else with the first row that states one.
+  const std::string reference = given_crs.empty() ? first_stated->srs : given_crs;
+  const std::string reference_words = given_crs.empty()
+                                          ? "line " + std::to_string(first_stated->line) + "'s '" +
+                                                TokenForMessage(first_stated->srs) + "'"
+                                          : given_name + "=" + TokenForMessage(given_crs);
+  if (given_crs.empty()) {
+    CrsInfo info;
+    const Status known = ResolveCrs(reference, &info);
+    if (!known.ok()) return Status::Error(row_where(*first_stated) + known.message());
+  }
+  std::map<std::string, bool> same_as_reference = {{reference, true}};  // by SRS text
+  for (const FrameRecord& frame : frames) {
+    if (frame.srs.empty()) {
+      if (given_crs.empty())
+        return Status::Error(row_where(frame) + "empty, and " + reference_words +
+                             " names one: give every row's SRS, or " + given_name +
+                             " for the rows without one");
+      continue;
+    }
+    auto it = same_as_reference.find(frame.srs);
+    if (it == same_as_reference.end()) {
+      CrsInfo info;
+      const Status known = ResolveCrs(frame.srs, &info);
+      if (!known.ok()) return Status::Error(row_where(frame) + known.message());
+      bool same = false;
+      const Status compared = SameCrs(reference, frame.srs, &same);
+      if (!compared.ok())
+        return Status::Error(row_where(frame) + "cannot be compared with " + reference_words +
+                             ": " + compared.message());
+      it = same_as_reference.emplace(frame.srs, same).first;
+    }
+    if (!it->second)
+      return Status::Error(row_where(frame) + "'" + TokenForMessage(frame.srs) +
+                           "' is another CRS than " + reference_words +
+                           ": the positions of a frames table are in one CRS");
+  }
+  *crs = reference;
+  return Status::Ok();
+}
+
 }  // namespace
 
 Status PrepareGeoreference(const GeoreferenceOptions& options, const GeoreferenceInputs& inputs,
@@ -618,8 +677,11 @@ void SetPositionsFromGeoTxt(const GeoTxt& geo, const std::string& source, Georef
   }
 }
 
-void SetPositionsFromFrames(const std::vector<FrameRecord>& frames, const std::string& crs,
-                            const std::string& source, GeoreferenceInputs* inputs) {
+Status SetPositionsFromFrames(const std::vector<FrameRecord>& frames, const std::string& given_crs,
+                              const std::string& given_name, const std::string& source,
+                              GeoreferenceInputs* inputs) {
+  std::string crs;
+  PHOTOPOSE_RETURN_IF_ERROR(FramesTableCrs(frames, given_crs, given_name, source, &crs));
   inputs->positions_crs = crs;
   inputs->positions_source = source;
   inputs->positions_crs_line = 0;
@@ -636,6 +698,7 @@ void SetPositionsFromFrames(const std::vector<FrameRecord>& frames, const std::s
     m.line = frame.line;
     inputs->positions.push_back(m);
   }
+  return Status::Ok();
 }
 
 void SetPositionsFromGps(const std::vector<std::string>& images,

@@ -79,11 +79,18 @@ struct GeoreferenceInputs {
 // convention that turns them into the camera's omega/phi/kappa (GeoTxtAttitudesNotUsedReason).
 // A line without z gives a position without height (has_height false).
 void SetPositionsFromGeoTxt(const GeoTxt& geo, const std::string& source, GeoreferenceInputs* inputs);
-// The camera positions of a frames table (PerspectiveX/Y/Z in `crs`, AccuracyX/Y/Z when given);
-// its Omega/Phi/Kappa are counted in inputs->attitudes_not_used and not used
-// (FramesAttitudesNotUsedReason).
-void SetPositionsFromFrames(const std::vector<FrameRecord>& frames, const std::string& crs,
-                            const std::string& source, GeoreferenceInputs* inputs);
+// The camera positions of a frames table (PerspectiveX/Y/Z, AccuracyX/Y/Z when given); its
+// Omega/Phi/Kappa are counted in inputs->attitudes_not_used and not used
+// (FramesAttitudesNotUsedReason). The positions' CRS is each row's SRS, else `given_crs` (the
+// caller's, e.g. the CLI's --crs; empty: none), and one for every row: a row whose SRS names
+// another CRS (SameCrs) than `given_crs` or than the first row with an SRS, a row without SRS
+// when `given_crs` is empty beside rows with one, an SRS PROJ does not know, and a table with no
+// SRS value and no `given_crs` are errors naming `source`, the line and SRS (`given_name`, e.g.
+// "--crs", is how they name `given_crs`). inputs->positions_crs is `given_crs` when given, else
+// the first row's SRS.
+Status SetPositionsFromFrames(const std::vector<FrameRecord>& frames, const std::string& given_crs,
+                              const std::string& given_name, const std::string& source,
+                              GeoreferenceInputs* inputs);
 // Why geo.txt and frames-table attitudes are read and not used, as the reports say it.
 std::string GeoTxtAttitudesNotUsedReason();
 std::string FramesAttitudesNotUsedReason();

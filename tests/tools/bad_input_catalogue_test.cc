@@ -586,10 +586,33 @@ TEST_F(BadInputCatalogue, BundleRefusesInputsItDoesNotReadAndOutputsItCannotWrit
   ExpectRefused("bundle --bal=p.txt --points=points.csv --report=r.json", 2,
                 "photopose bundle: --bal holds its own points and poses: --geo, --gcp_list, "
                 "--points and --frames are read with the tables or --colmap_model");
-  // With a COLMAP model, --frames are camera positions to georeference it with: in a stated CRS.
-  ExpectRefused("bundle --colmap_model=model --frames=missing.csv --report=r.json", 2,
-                "photopose bundle: --crs is needed: --points and --frames carry no coordinate "
-                "system (e.g. --crs=EPSG:32632)");
+  // With a COLMAP model, --points and --frames georeference it: in a stated CRS, which a points
+  // table cannot state itself.
+  ExpectRefused("bundle --colmap_model=model --points=points.csv --marks=marks.csv --report=r.json", 2,
+                "photopose bundle: --crs is needed: a points table has no SRS column, so --points "
+                "carry no coordinate system (e.g. --crs=EPSG:32632)");
+  // A frames table states its own in its SRS column: read, and refused when --crs names another,
+  // when its rows name two, or when neither it nor --crs names one.
+  fs::create_directory(work_ + "/model");
+  WriteFile(work_ + "/model/cameras.txt", kColmapCameras);
+  WriteFile(work_ + "/model/images.txt", kColmapImages);
+  WriteFile(work_ + "/model/points3D.txt", kColmapPoints);
+  WriteFile(work_ + "/gnss.csv",
+            "Raster,CameraID,PerspectiveX,PerspectiveY,PerspectiveZ,Omega,Phi,Kappa,SRS\n"
+            "a.jpg,1,500000,5300000,600,0,0,0,EPSG:32632\n"
+            "b.jpg,1,500010,5300000,600,0,0,0,EPSG:32633\n");
+  ExpectRefused("bundle --colmap_model=model --frames=gnss.csv --crs=EPSG:32633 --report=r.json", 2,
+                "photopose bundle: --frames gnss.csv:2: SRS: 'EPSG:32632' is another CRS than "
+                "--crs=EPSG:32633: the positions of a frames table are in one CRS");
+  ExpectRefused("bundle --colmap_model=model --frames=gnss.csv --report=r.json", 2,
+                "photopose bundle: --frames gnss.csv:3: SRS: 'EPSG:32633' is another CRS than "
+                "line 2's 'EPSG:32632': the positions of a frames table are in one CRS");
+  WriteFile(work_ + "/gnss.csv",
+            "Raster,CameraID,PerspectiveX,PerspectiveY,PerspectiveZ,Omega,Phi,Kappa,SRS\n"
+            "a.jpg,1,500000,5300000,600,0,0,0,\n");
+  ExpectRefused("bundle --colmap_model=model --frames=gnss.csv --report=r.json", 2,
+                "photopose bundle: --frames gnss.csv: no SRS column value and no --crs: the "
+                "coordinate system of the positions is unknown");
   ExpectRefused("bundle --cameras=c.csv --marks=m.csv --geo=geo.txt --report=r.json", 2,
                 "photopose bundle: --geo and --gcp_list georeference a --colmap_model; with the "
                 "tables give --frames and --points");

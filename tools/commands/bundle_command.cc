@@ -46,7 +46,7 @@ DEFINE_string(bundle_geo, "", "With --colmap_model: camera positions as an OpenD
 DEFINE_string(bundle_images, "", "With --colmap_model or --opensfm: the folder of the images (names as the model gives them); their EXIF GPS tags (or DJI's XMP drone-dji tags) are the camera positions, DJI's RtkStdLon/RtkStdLat/RtkStdHgt their accuracies where present.");
 DEFINE_string(bundle_exif_crs, "", "With --images: the CRS of the images' GPS positions. Default EPSG:4979 (WGS84, heights above the ellipsoid); EPSG:4326+5773 takes the heights as EGM96 (sea level, as the EXIF standard defines GPSAltitude). Which one a camera writes depends on its make and firmware.");
 DEFINE_string(bundle_gcp_list, "", "With --colmap_model: ground control as an OpenDroneMap gcp_list.txt (first line the CRS; X Y Z px py image [name]); points named in --check_points are check points.");
-DEFINE_string(bundle_crs, "", "With --colmap_model: the CRS of --points and --frames (EPSG:<code>, a +proj string, WKT; X = easting or longitude first).");
+DEFINE_string(bundle_crs, "", "With --colmap_model: the CRS of --points, and of the --frames rows without an SRS value (EPSG:<code>, a +proj string, WKT; X = easting or longitude first); a frames row whose SRS names another CRS is refused.");
 DEFINE_string(bundle_out_crs, "", "CRS of the outputs of a georeferenced model (--out, --out_points); default: the control's CRS, else the positions' CRS when projected, else the WGS84 UTM zone of the block's centre.");
 DEFINE_string(bundle_check_points, "", "Comma list of --gcp_list point names used as check points (held out of the adjustment, compared with it).");
 DEFINE_string(bundle_out, "", "Output frames table (CSV) of the adjusted images with SigmaX..SigmaKappa, Sigma0, NumObservations and RmsResidual.");
@@ -104,7 +104,7 @@ constexpr char kUsage[] =
     "                        [--snoop] [--cross_validate] [--threads=N] [--quiet]\n"
     "   or: photopose bundle --colmap_model=DIR [--out_colmap=DIR] [--out_colmap_format=text|binary]\n"
     "                        [--calibrate=LIST] ...\n"
-    "   or: photopose bundle --colmap_model=DIR | --opensfm=DIR [--geo=geo.txt | --frames=F.csv --crs=EPSG:N\n"
+    "   or: photopose bundle --colmap_model=DIR | --opensfm=DIR [--geo=geo.txt | --frames=F.csv [--crs=EPSG:N]\n"
     "                        | --images=DIR [--exif_crs=EPSG:N] | --model_gps] [--gcp_list=gcp_list.txt [--check_points=A,B] | --points=P.csv\n"
     "                        --marks=M.csv --crs=EPSG:N] [--out_crs=EPSG:N] --out=F.csv ...   (georeferencing)\n"
     "   or: photopose bundle --bal=problem.txt ...\n\n"
@@ -230,8 +230,9 @@ int CheckInputChoice(const char* command, BundleRun* run) {
       return BadInput(command, "give the control as --gcp_list or as --points with --marks, not both");
     if (!FLAGS_bundle_points.empty() && FLAGS_bundle_marks.empty())
       return BadInput(command, "--points with --colmap_model needs --marks (the control points' image marks)");
-    if ((!FLAGS_bundle_points.empty() || !FLAGS_bundle_frames.empty()) && FLAGS_bundle_crs.empty())
-      return BadInput(command, "--crs is needed: --points and --frames carry no coordinate system (e.g. --crs=EPSG:32632)");
+    // A frames table may name its CRS in its SRS column (PositionsFromFrames); a points table has none.
+    if (!FLAGS_bundle_points.empty() && FLAGS_bundle_crs.empty())
+      return BadInput(command, "--crs is needed: a points table has no SRS column, so --points carry no coordinate system (e.g. --crs=EPSG:32632)");
     if (!FLAGS_bundle_crs.empty() && FLAGS_bundle_points.empty() && FLAGS_bundle_frames.empty())
       return BadInput(command, "--crs names the CRS of --points and --frames, and neither is given (geo.txt and gcp_list.txt name their own)");
     if (!FLAGS_bundle_out_crs.empty() && !run->georeference)
@@ -511,14 +512,16 @@ int PositionsFromGeoTxt(const char* command, GeoreferenceInputs* inputs) {
   return kGoOn;
 }
 
-// --frames (with --crs): PerspectiveX/Y/Z of a frames table as the camera positions; its
-// Omega/Phi/Kappa are recorded as read and not used (GeoreferenceResult::inputs_not_used).
+// --frames: PerspectiveX/Y/Z of a frames table as the camera positions, in the CRS of its SRS
+// column or --crs (one CRS: SetPositionsFromFrames); its Omega/Phi/Kappa are recorded as read and
+// not used (GeoreferenceResult::inputs_not_used).
 int PositionsFromFrames(const char* command, GeoreferenceInputs* inputs) {
   std::vector<FrameRecord> frames;
   FramesTableOptions frames_options;
   const Status read = ReadFramesTable(FLAGS_bundle_frames, frames_options, &frames);
   if (!read.ok()) return BadInput(command, read.message());
-  SetPositionsFromFrames(frames, FLAGS_bundle_crs, FLAGS_bundle_frames, inputs);
+  const Status positions = SetPositionsFromFrames(frames, FLAGS_bundle_crs, "--crs", FLAGS_bundle_frames, inputs);
+  if (!positions.ok()) return BadInput(command, "--frames " + positions.message());
   return kGoOn;
 }
 

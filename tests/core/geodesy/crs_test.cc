@@ -48,6 +48,31 @@ TEST(Crs, UnknownCrsIsAnErrorNamingIt) {
   EXPECT_FALSE(ResolveCrs("+proj=pipeline +step +proj=unitconvert +xy_in=deg +xy_out=rad", &info).ok());
 }
 
+// Two texts are the same CRS when PROJ finds them equivalent as photopose uses them: spelled
+// differently (ODM's zone, a WKT PROJ writes, a 2D CRS given its height axis) they are the same;
+// a neighbouring zone, a datum or a vertical datum more is another CRS.
+TEST(Crs, SameCrsComparesWhatTheTextsNameNotHowTheyAreSpelled) {
+  const auto same = [](const std::string& a, const std::string& b) {
+    bool result = false;
+    const Status compared = SameCrs(a, b, &result);
+    EXPECT_TRUE(compared.ok()) << a << " / " << b << ": " << compared.message();
+    return result;
+  };
+  EXPECT_TRUE(same("EPSG:32632", "EPSG:32632"));
+  EXPECT_TRUE(same("EPSG:32632", "WGS84 UTM 32N"));
+  EXPECT_TRUE(same("epsg:32632", " EPSG:32632 "));
+  EXPECT_TRUE(same("EPSG:4326", "EPSG:4979"));  // heights pass as ellipsoidal in both
+  EXPECT_FALSE(same("EPSG:32632", "EPSG:32633"));
+  EXPECT_FALSE(same("EPSG:32632", "EPSG:32732"));
+  EXPECT_FALSE(same("EPSG:32632", "EPSG:25832"));       // ETRS89, not WGS84
+  EXPECT_FALSE(same("EPSG:32632", "EPSG:32632+5773"));  // EGM96 heights
+  EXPECT_FALSE(same("EPSG:4326", "EPSG:32632"));
+  bool result = true;
+  const Status unknown = SameCrs("EPSG:32632", "EPSG:999999", &result);
+  ASSERT_FALSE(unknown.ok());
+  EXPECT_NE(unknown.message().find("CRS 'EPSG:999999'"), std::string::npos) << unknown.message();
+}
+
 TEST(Crs, UtmZoneOfAPlace) {
   EXPECT_EQ(UtmCrsFor(11.2, 47.8), "EPSG:32632");
   EXPECT_EQ(UtmCrsFor(-70.6, -33.4), "EPSG:32719");

@@ -204,7 +204,7 @@ TEST(Georeference, FramesTableAttitudesAreReportedAsReadAndNotUsed) {
   }
   frames[1].center_accuracy_m = Eigen::Vector3d(0.02, 0.02, 0.04);
   GeoreferenceInputs inputs;
-  SetPositionsFromFrames(frames, "EPSG:32632", "frames.csv", &inputs);
+  ASSERT_TRUE(SetPositionsFromFrames(frames, "EPSG:32632", "--crs", "frames.csv", &inputs).ok());
   ASSERT_EQ(inputs.positions.size(), 3u);
   EXPECT_EQ(inputs.positions_crs, "EPSG:32632");
   EXPECT_EQ(inputs.positions[1].position, Eigen::Vector3d(500010.0, 5300000.0, 600.0));
@@ -216,6 +216,59 @@ TEST(Georeference, FramesTableAttitudesAreReportedAsReadAndNotUsed) {
   // Positions of another source leave nothing of the frames table's count behind.
   SetPositionsFromGps({}, {}, "EPSG:4979", "GPS tags", &inputs);
   EXPECT_EQ(AttitudesNotUsedLine(inputs), "");
+}
+
+// Three frames rows at lines 2-4 with the given SRS values.
+std::vector<FrameRecord> FramesWithSrs(const std::vector<std::string>& srs) {
+  std::vector<FrameRecord> frames(srs.size());
+  for (size_t k = 0; k < frames.size(); ++k) {
+    frames[k].raster = "img" + std::to_string(k) + ".jpg";
+    frames[k].eo.set_center_in_ground(Eigen::Vector3d(500000.0 + 10.0 * k, 5300000.0, 600.0));
+    frames[k].srs = srs[k];
+    frames[k].line = static_cast<int>(k) + 2;
+  }
+  return frames;
+}
+
+// The CRS of a frames table's positions: its rows' SRS, else the given CRS; one CRS for all rows,
+// compared by what the texts name (SameCrs), every refusal naming the file, the line and SRS.
+TEST(Georeference, FramesTablePositionsAreInTheirSrsOrTheGivenCrsAndInOneCrs) {
+  const auto crs_of = [](const std::vector<std::string>& srs, const std::string& given) {
+    GeoreferenceInputs inputs;
+    const Status set = SetPositionsFromFrames(FramesWithSrs(srs), given, "--crs", "F.csv", &inputs);
+    return set.ok() ? "ok " + inputs.positions_crs : set.message();
+  };
+  // The table's own SRS, without --crs; with an --crs that names the same CRS, however spelled.
+  EXPECT_EQ(crs_of({"EPSG:32632", "EPSG:32632", "EPSG:32632"}, ""), "ok EPSG:32632");
+  EXPECT_EQ(crs_of({"EPSG:32632", "WGS84 UTM 32N", "EPSG:32632"}, ""), "ok EPSG:32632");
+  EXPECT_EQ(crs_of({"EPSG:32632", "EPSG:32632", "EPSG:32632"}, "WGS84 UTM 32N"), "ok WGS84 UTM 32N");
+  // --crs for the rows without SRS: all of them, or some beside rows naming the same CRS.
+  EXPECT_EQ(crs_of({"", "", ""}, "EPSG:32632"), "ok EPSG:32632");
+  EXPECT_EQ(crs_of({"", "EPSG:32632", ""}, "EPSG:32632"), "ok EPSG:32632");
+  // Refused: --crs naming another CRS than a row; two rows in two CRSs; a row without SRS beside
+  // rows with one and no --crs; an SRS PROJ does not know; nothing naming the CRS.
+  EXPECT_EQ(crs_of({"EPSG:32632", "EPSG:32632", "EPSG:32632"}, "EPSG:32633"),
+            "F.csv:2: SRS: 'EPSG:32632' is another CRS than --crs=EPSG:32633: the positions of a frames table are "
+            "in one CRS");
+  EXPECT_EQ(crs_of({"", "", "EPSG:32632"}, "EPSG:32633"),
+            "F.csv:4: SRS: 'EPSG:32632' is another CRS than --crs=EPSG:32633: the positions of a frames table are "
+            "in one CRS");
+  EXPECT_EQ(crs_of({"EPSG:32632", "EPSG:32632", "EPSG:32633"}, ""),
+            "F.csv:4: SRS: 'EPSG:32633' is another CRS than line 2's 'EPSG:32632': the positions of a frames "
+            "table are in one CRS");
+  EXPECT_EQ(crs_of({"", "EPSG:32632", ""}, ""),
+            "F.csv:2: SRS: empty, and line 3's 'EPSG:32632' names one: give every row's SRS, or --crs for the "
+            "rows without one");
+  EXPECT_EQ(crs_of({"EPSG:32632", "EPSG:999999", "EPSG:32632"}, "").rfind("F.csv:3: SRS: CRS 'EPSG:999999': ", 0), 0u);
+  EXPECT_EQ(crs_of({"EPSG:999999", "EPSG:32632", "EPSG:32632"}, "").rfind("F.csv:2: SRS: CRS 'EPSG:999999': ", 0), 0u);
+  EXPECT_EQ(crs_of({"", "", ""}, ""),
+            "F.csv: no SRS column value and no --crs: the coordinate system of the positions is unknown");
+  // A refusal leaves the inputs as they were.
+  GeoreferenceInputs inputs;
+  inputs.positions_crs = "EPSG:4979";
+  EXPECT_FALSE(SetPositionsFromFrames(FramesWithSrs({"EPSG:32632", "EPSG:32633"}), "", "--crs", "F.csv", &inputs).ok());
+  EXPECT_EQ(inputs.positions_crs, "EPSG:4979");
+  EXPECT_TRUE(inputs.positions.empty());
 }
 
 // ------------------------------------------------------------------ positions without height

@@ -8,6 +8,7 @@
 #include <nlohmann/json.hpp>
 #include <sstream>
 
+#include "core/geodesy/crs.h"
 #include "core/io/colmap.h"
 #include "core/io/opensfm.h"
 #include "core/io/csv.h"
@@ -221,6 +222,85 @@ TEST(BundleGeoreference, FramesTableAttitudesWithAModelAreReportedAsNotUsed) {
   EXPECT_LT(WorstCentreErrors(scene, dir + "/frames.csv", "EPSG:32632").y(), 0.1);
 }
 
+// The scene's camera positions as a frames table in UTM zone 32N, row k's SRS srs[k] (a missing
+// entry: the last one); `column` false leaves the SRS column out.
+void WriteUtmFrames(const testing::GeoreferenceScene& scene, const std::string& path,
+                    const std::vector<std::string>& srs, bool column = true) {
+  std::vector<Eigen::Vector3d> utm;
+  for (const CameraPositionMeasurement& m : scene.inputs.positions) utm.push_back(m.position);
+  CrsTransform to_utm;
+  ASSERT_TRUE(CrsTransform::Create(scene.inputs.positions_crs, "EPSG:32632", &to_utm).ok());
+  ASSERT_TRUE(to_utm.Forward(&utm).ok());
+  std::string frames = std::string("Raster,CameraID,PerspectiveX,PerspectiveY,PerspectiveZ,Omega,Phi,Kappa,") +
+                       (column ? "SRS," : "") + "AccuracyX,AccuracyY,AccuracyZ\n";
+  for (size_t k = 0; k < utm.size(); ++k) {
+    const CameraPositionMeasurement& m = scene.inputs.positions[k];
+    frames += m.image + ",UAV," + Number(utm[k].x()) + "," + Number(utm[k].y()) + "," + Number(utm[k].z()) + ",0,0,0," +
+              (column ? srs[std::min(k, srs.size() - 1)] + "," : "") + Number(m.accuracy_m->x()) + "," +
+              Number(m.accuracy_m->y()) + "," + Number(m.accuracy_m->z()) + "\n";
+  }
+  WriteFile(path, frames);
+}
+
+// A frames table's SRS column is the CRS of its positions: without --crs it is used, and the run
+// gives what the same table without the column gives with --crs naming that CRS; an --crs naming
+// another CRS, rows in two CRSs and a table with no CRS at all are refused at the file, line and
+// field, before any output.
+TEST(BundleGeoreference, FramesTableSrsIsTheCrsOfItsPositions) {
+  const testing::GeoreferenceScene scene = testing::MakeGeoreferenceScene(0.5);
+  const std::string dir = ScratchDir();
+  const std::string checks = WriteScene(scene, dir);
+  WriteUtmFrames(scene, dir + "/with_srs.csv", {"EPSG:32632"});
+  WriteUtmFrames(scene, dir + "/without_srs.csv", {}, false);
+  WriteUtmFrames(scene, dir + "/empty_srs.csv", {""});
+  WriteUtmFrames(scene, dir + "/two_zones.csv", {"EPSG:32632", "EPSG:32632", "EPSG:32632", "WGS84 UTM 33N"});
+  const std::string common = "bundle --colmap_model=" + dir + "/model --gcp_list=" + dir + "/gcp_list.txt --check_points=" +
+                             checks + " --quiet";
+  const CliRun own = RunCli(common + " --frames=" + dir + "/with_srs.csv --report=" + dir + "/own.json --out=" + dir + "/own.csv", dir);
+  ASSERT_EQ(own.exit_code, 0) << own.err;
+  const CliRun flag = RunCli(common + " --frames=" + dir + "/without_srs.csv --crs=EPSG:32632 --report=" + dir +
+                                 "/flag.json --out=" + dir + "/flag.csv",
+                             dir);
+  ASSERT_EQ(flag.exit_code, 0) << flag.err;
+  const nlohmann::json g_own = nlohmann::json::parse(ReadFile(dir + "/own.json")).at("georeference");
+  const nlohmann::json g_flag = nlohmann::json::parse(ReadFile(dir + "/flag.json")).at("georeference");
+  EXPECT_EQ(g_own.at("positions_matched"), 24);
+  EXPECT_EQ(g_own.at("heights")[0].get<std::string>().rfind("camera positions (EPSG:32632, WGS 84 / UTM zone 32N)", 0), 0u)
+      << g_own.at("heights");
+  // The same positions in the same CRS: the same figures (to the last digits Ceres' threads may
+  // sum in another order, docs/cli.md).
+  EXPECT_EQ(g_own.at("positions_matched"), g_flag.at("positions_matched"));
+  EXPECT_EQ(g_own.at("check_after_adjustment").at("count"), g_flag.at("check_after_adjustment").at("count"));
+  EXPECT_NEAR(g_own.at("check_after_adjustment").at("rmse_total_m").get<double>(),
+              g_flag.at("check_after_adjustment").at("rmse_total_m").get<double>(), 1e-9);
+  EXPECT_LT(WorstCentreErrors(scene, dir + "/own.csv", "EPSG:32632").y(), 0.1);
+  // The same CRS spelled otherwise by --crs is no conflict.
+  const CliRun agreeing = RunCli(common + " --frames=" + dir + "/with_srs.csv --crs='WGS84 UTM 32N' --out=" + dir + "/agree.csv", dir);
+  EXPECT_EQ(agreeing.exit_code, 0) << agreeing.err;
+
+  const std::string frames = common + " --out=" + dir + "/f.csv --frames=" + dir;
+  const std::vector<std::pair<std::string, std::string>> refused = {
+      {frames + "/with_srs.csv --crs=EPSG:32633",
+       "photopose bundle: --frames " + dir + "/with_srs.csv:2: SRS: 'EPSG:32632' is another CRS than --crs=EPSG:32633: "
+       "the positions of a frames table are in one CRS\n"},
+      {frames + "/two_zones.csv",
+       "photopose bundle: --frames " + dir + "/two_zones.csv:5: SRS: 'WGS84 UTM 33N' is another CRS than line 2's "
+       "'EPSG:32632': the positions of a frames table are in one CRS\n"},
+      {frames + "/empty_srs.csv",
+       "photopose bundle: --frames " + dir + "/empty_srs.csv: no SRS column value and no --crs: the coordinate "
+       "system of the positions is unknown\n"},
+      {frames + "/without_srs.csv",
+       "photopose bundle: --frames " + dir + "/without_srs.csv: no SRS column value and no --crs: the coordinate "
+       "system of the positions is unknown\n"},
+  };
+  for (const auto& [arguments, message] : refused) {
+    const CliRun run = RunCli(arguments, dir);
+    EXPECT_EQ(run.exit_code, 2) << arguments << "\n" << run.err;
+    EXPECT_EQ(run.err, message) << arguments;
+    EXPECT_FALSE(std::filesystem::exists(dir + "/f.csv")) << arguments;
+  }
+}
+
 TEST(BundleGeoreference, RefusesWhatItCannotUseBeforeAnyWork) {
   const testing::GeoreferenceScene scene = testing::MakeGeoreferenceScene(0.0, 2, 5);
   const std::string dir = ScratchDir();
@@ -231,9 +311,10 @@ TEST(BundleGeoreference, RefusesWhatItCannotUseBeforeAnyWork) {
     std::string message;
   };
   WriteFile(dir + "/bad_geo.txt", "EPSG:999999\na.jpg 1 2 3\n");
-  WriteFile(dir + "/frames.csv", "Raster,PerspectiveX,PerspectiveY,PerspectiveZ,Omega,Phi,Kappa\na.jpg,1,2,3,0,0,0\n");
+  WriteFile(dir + "/frames.csv", "Raster,CameraID,PerspectiveX,PerspectiveY,PerspectiveZ,Omega,Phi,Kappa\na.jpg,1,1,2,3,0,0,0\n");
   const std::vector<Case> cases = {
-      {model + " --frames=" + dir + "/frames.csv", "--crs is needed"},
+      {model + " --frames=" + dir + "/frames.csv", "no SRS column value and no --crs"},
+      {model + " --points=" + dir + "/frames.csv --marks=" + dir + "/frames.csv", "--crs is needed: a points table has no SRS column"},
       {model + " --geo=" + dir + "/bad_geo.txt", dir + "/bad_geo.txt:1: CRS 'EPSG:999999' is not known to PROJ (proj.db)"},
       {model + " --geo=" + dir + "/geo.txt --out_crs=EPSG:999999", "--out_crs: CRS 'EPSG:999999' is not known to PROJ (proj.db)"},
       // Flags this block cannot use (issue 21): no measured attitude (geo.txt's are not used), an
