@@ -259,8 +259,8 @@ TEST(Georeference, FramesTablePositionsAreInTheirSrsOrTheGivenCrsAndInOneCrs) {
   EXPECT_EQ(crs_of({"", "EPSG:32632", ""}, ""),
             "F.csv:2: SRS: empty, and line 3's 'EPSG:32632' names one: give every row's SRS, or --crs for the "
             "rows without one");
-  EXPECT_EQ(crs_of({"EPSG:32632", "EPSG:999999", "EPSG:32632"}, "").rfind("F.csv:3: SRS: CRS 'EPSG:999999': ", 0), 0u);
-  EXPECT_EQ(crs_of({"EPSG:999999", "EPSG:32632", "EPSG:32632"}, "").rfind("F.csv:2: SRS: CRS 'EPSG:999999': ", 0), 0u);
+  EXPECT_EQ(crs_of({"EPSG:32632", "EPSG:999999", "EPSG:32632"}, "").rfind("F.csv:3: SRS: CRS 'EPSG:999999' is not known to PROJ (proj.db)", 0), 0u);
+  EXPECT_EQ(crs_of({"EPSG:999999", "EPSG:32632", "EPSG:32632"}, "").rfind("F.csv:2: SRS: CRS 'EPSG:999999' is not known to PROJ (proj.db)", 0), 0u);
   EXPECT_EQ(crs_of({"", "", ""}, ""),
             "F.csv: no SRS column value and no --crs: the coordinate system of the positions is unknown");
   // A refusal leaves the inputs as they were.
