@@ -115,7 +115,8 @@ void BindGeoreferenceInputsClass(py::module_& m) {
   auto inputs = BindStruct<GeoreferenceInputs>(m, "GeoreferenceInputs", R"doc(
 What ties a model to the ground: camera positions in positions_crs and control / check points in
 control_crs with their marks (px, (0, 0) the top-left corner of the image). Fill it from files
-(set_positions_from_geo_txt, set_positions_from_images_gps, set_control_from_gcp_list) or from
+(set_positions_from_geo_txt, set_positions_from_frames, set_positions_from_images_gps,
+set_control_from_gcp_list) or from
 arrays (set_positions).)doc");
   inputs.def_readwrite("positions_crs", &GeoreferenceInputs::positions_crs)
       .def_readwrite("positions_source", &GeoreferenceInputs::positions_source)
@@ -136,6 +137,17 @@ arrays (set_positions).)doc");
   inputs.def("set_positions_from_geo_txt", [](GeoreferenceInputs& self, const GeoTxt& geo, const std::string& source) {
     SetPositionsFromGeoTxt(geo, source, &self);
   }, py::arg("geo"), py::arg("source") = "geo.txt", "The camera positions of a geo.txt (its yaw/pitch/roll are not used).");
+  inputs.def("set_positions_from_frames",
+             [](GeoreferenceInputs& self, const std::vector<FrameRecord>& frames, const std::string& crs,
+                const std::string& source) {
+               ThrowIfError(SetPositionsFromFrames(frames, crs, "crs", source, &self));
+             },
+             py::arg("frames"), py::arg("crs") = "", py::arg("source") = "frames table",
+             "The camera positions of a frames table (read_frames_table; PerspectiveX/Y/Z, AccuracyX/Y/Z "
+             "when given; Omega/Phi/Kappa counted in attitudes_not_used). Their CRS is each row's SRS, "
+             "else crs, and one for all rows: a row in another CRS, a row without SRS beside rows with one "
+             "and no crs, an SRS PROJ does not know, or no SRS and no crs raise photopose.Error naming "
+             "source, the line and SRS.");
   inputs.def("set_positions_from_images_gps",
              [](GeoreferenceInputs& self, const std::vector<std::string>& images,
                 const std::vector<std::optional<ExifGps>>& gps, const std::string& crs) {

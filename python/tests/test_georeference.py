@@ -151,3 +151,29 @@ def test_a_block_with_control_joined_is_written_by_the_adjusted_model_writer(tmp
     np.testing.assert_allclose(written.point_positions, block.point_positions[:model_points], atol=1e-9)
     with pytest.raises(ValueError, match="binary"):
         pp.write_adjusted_colmap_model(block, tmp_path / "other", result, geo, format="jpeg")
+
+
+def test_frames_table_positions_take_their_srs_and_refuse_two_crs(scene, tmp_path):
+    block, _, measured = scene
+    rows = "".join(f"{n},1,{x:.4f},{y:.4f},{z:.4f},0,0,0,0.03,0.03,0.05,{'EPSG:32633' if i else 'WGS84 UTM 33N'}\n"
+                   for i, (n, (x, y, z)) in enumerate(zip(block.image_names, measured)))
+    header = "Raster,CameraID,PerspectiveX,PerspectiveY,PerspectiveZ,Omega,Phi,Kappa,AccuracyX,AccuracyY,AccuracyZ,SRS\n"
+    (tmp_path / "gnss.csv").write_text(header + rows)
+    inputs = pp.GeoreferenceInputs()
+    inputs.set_positions_from_frames(pp.read_frames_table(tmp_path / "gnss.csv"), source="gnss.csv")
+    # Two spellings of one CRS are one; the positions and accuracies as in the geo.txt.
+    assert inputs.positions_crs == "WGS84 UTM 33N" and len(inputs.positions) == 24
+    geo = pp.GeoreferenceInputs()
+    geo.set_positions_from_geo_txt(pp.read_geo_txt(tmp_path / "geo.txt"))
+    for a, b in zip(inputs.positions, geo.positions):
+        assert a.image == b.image
+        np.testing.assert_allclose(a.position, b.position, atol=1e-9)
+        np.testing.assert_allclose(a.accuracy_m, b.accuracy_m)
+    # A row in another CRS is refused at its line and field; so is a crs naming another one.
+    (tmp_path / "two.csv").write_text(header + rows.replace("EPSG:32633", "EPSG:32632", 1))
+    with pytest.raises(pp.Error, match=r"two\.csv:3: SRS: 'EPSG:32632' is another CRS"):
+        pp.GeoreferenceInputs().set_positions_from_frames(pp.read_frames_table(tmp_path / "two.csv"),
+                                                          source="two.csv")
+    with pytest.raises(pp.Error, match=r"gnss\.csv:2: SRS: 'WGS84 UTM 33N' is another CRS than crs=EPSG:32632"):
+        pp.GeoreferenceInputs().set_positions_from_frames(pp.read_frames_table(tmp_path / "gnss.csv"),
+                                                          crs="EPSG:32632", source="gnss.csv")
