@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
 #include <limits>
 
 namespace photopose {
@@ -88,6 +89,52 @@ std::string FormatMarkValue(double value, const std::string& kind) {
   return FormatMarkValues({value}, kind)[0];
 }
 
+namespace {
+
+// Decimals that give `magnitude` (> 0, in the unit it is printed in) two significant digits.
+int DecimalsForTwoDigits(double magnitude) {
+  return 1 - static_cast<int>(std::floor(std::log10(magnitude)));
+}
+
+// The smallest finite non-zero magnitude of `values`, or 0 when there is none.
+double SmallestNonZeroMagnitude(const std::vector<double>& values) {
+  double smallest = 0.0;
+  for (const double v : values)
+    if (std::isfinite(v) && v != 0.0 && (smallest == 0.0 || std::abs(v) < smallest))
+      smallest = std::abs(v);
+  return smallest;
+}
+
+}  // namespace
+
+ValuesInOneUnit FormatRowInOneUnit(const std::vector<double>& values, const std::string& kind) {
+  ValuesInOneUnit out;
+  const double smallest = SmallestNonZeroMagnitude(values);
+  // The unit and the values in it (`scale` times the kind's unit).
+  double scale = 1.0;
+  int least_decimals = 2;  // marks in px, um or sigma
+  if (kind == "m") {
+    LengthUnit unit = LengthUnitFor(LargestMagnitude(values));
+    while (unit != LengthUnit::kMillimetre && smallest > 0.0 &&
+           DecimalsForTwoDigits(LengthIn(smallest, unit)) > kMaxRowDecimals)
+      unit = unit == LengthUnit::kMetre ? LengthUnit::kCentimetre : LengthUnit::kMillimetre;
+    out.unit = LengthUnitName(unit);
+    scale = LengthIn(1.0, unit);
+    least_decimals = 1;
+  } else if (kind == "deg") {
+    out.unit = "arcsec";
+    scale = 3600.0;
+    least_decimals = 1;
+  } else {
+    out.unit = kind;
+  }
+  const int decimals = smallest > 0.0 ? std::clamp(DecimalsForTwoDigits(scale * smallest),
+                                                   least_decimals, kMaxRowDecimals)
+                                      : least_decimals;
+  for (const double v : values) out.texts.push_back(ReportFixed(scale * v, decimals));
+  return out;
+}
+
 ColumnsInUnits FormatColumnsInUnits(const std::vector<std::vector<double>>& columns,
                                     const std::vector<std::string>& row_kinds) {
   ColumnsInUnits out;
@@ -171,8 +218,15 @@ CoefficientTexts FormatCoefficient(double value, double sigma) {
   const int exponent =
       magnitude > 0.0 && magnitude < 1e-3 ? static_cast<int>(std::floor(std::log10(magnitude))) : 0;
   const double scale = std::pow(10.0, -exponent);
-  return {FormatSignificant(value * scale, 6), FormatSignificant(sigma * scale, 3),
-          exponent != 0 ? "10^" + std::to_string(exponent) : ""};
+  const std::string power = exponent != 0 ? "10^" + std::to_string(exponent) : "";
+  if (!(std::isfinite(sigma) && sigma > 0.0) || !std::isfinite(value))
+    return {FormatSignificant(value * scale, 6), FormatSignificant(sigma * scale, 3), power};
+  // The sigma to two significant digits, the value to the same decimals: no digit the sigma
+  // says is noise beyond the one after its first.
+  const int decimals = std::clamp(DecimalsForTwoDigits(sigma * scale), 0, kMaxCoefficientDecimals);
+  std::string text = ReportFixed(value * scale, decimals);
+  if (std::strtod(text.c_str(), nullptr) == 0.0) text = ReportFixed(0.0, decimals);  // no "-0.00"
+  return {text, ReportFixed(sigma * scale, decimals), power};
 }
 
 std::string CameraParamUnit(CameraModelType model, const std::string& name) {
@@ -186,6 +240,12 @@ std::string CameraParamUnit(CameraModelType model, const std::string& name) {
   }
   if (name == "f" || name == "fx" || name == "fy" || name == "cx" || name == "cy") return "px";
   return "unitless";
+}
+
+std::string Utf8UnitName(const std::string& unit) {
+  if (unit == "um") return "\u00b5m";
+  if (unit == "us") return "\u00b5s";
+  return unit;
 }
 
 std::string FormatCount(long long count, const std::string& singular, const std::string& plural) {

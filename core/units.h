@@ -66,6 +66,18 @@ std::vector<std::string> FormatMarkValues(const std::vector<double>& values,
 // One value: FormatMarkValues({value}, kind).
 std::string FormatMarkValue(double value, const std::string& kind);
 
+// The figures of one row read together (one group of an adjustment: its stated, RMS and
+// estimated accuracy) in one unit chosen from the row's own magnitudes, so that every value shown
+// has at least two significant digits, at most kMaxRowDecimals decimals and never an exponent.
+// Lengths ("m"): the unit of the largest (LengthUnitFor), a smaller one (cm, then mm) when the
+// smallest would need more decimals in it (10 m beside 0.04 mm); other kinds in their unit as
+// FormatInOneUnit (px, um, sigma, arc seconds). Decimals: those that give the smallest non-zero
+// magnitude two significant digits, at least one (two for marks), at most kMaxRowDecimals:
+// {0.0005, 0.0021} m reads "0.50", "2.10" mm; {10} m "10.0" m; {0.004} m "4.0" mm. The same values
+// give the same texts wherever they are printed (console and page).
+inline constexpr int kMaxRowDecimals = 4;
+ValuesInOneUnit FormatRowInOneUnit(const std::vector<double>& values, const std::string& kind);
+
 // Columns of a table whose rows are of different kinds (e.g. the groups of an adjustment: marks in
 // px, points in m, attitudes in deg), the columns of one row read together (stated, RMS,
 // estimated): every value of one kind, over all the columns, in one unit (FormatInOneUnit), so
@@ -95,11 +107,14 @@ std::string FormatSignificant(double value, int significant = 3);
 // unit below that range, the largest above it; 0 in the base unit ("0 m"); "n/a" when not finite.
 std::string FormatScaledLength(double value_m);
 std::string FormatScaledAngle(double value_deg);
-// A calibration value and its sigma (units of core/camera_models.h) with 6 and 3 significant
-// digits (FormatSignificant); small coefficients (magnitude of the larger below 1e-3, e.g. K1 ~
-// 1e-4 mm^-2, K2 ~ 1e-7 mm^-4) in the power of ten of the larger, named in `scale` ("10^-4"; empty
+// A calibration value and its sigma (units of core/camera_models.h) at the sigma's precision: the
+// sigma to two significant digits, the value to the same decimals ("24012.3" +- "1.2"; at most
+// kMaxCoefficientDecimals); without a positive sigma, the value to 6 significant digits
+// (FormatSignificant). Small coefficients (magnitude of the larger below 1e-3, e.g. K1 ~ 1e-4
+// mm^-2, K2 ~ 1e-7 mm^-4) in the power of ten of the larger, named in `scale` ("10^-4"; empty
 // when not scaled), so that both keep their digits without an exponent. The unit of a camera
 // parameter: CameraParamUnit.
+inline constexpr int kMaxCoefficientDecimals = 8;
 struct CoefficientTexts {
   std::string value;
   std::string sigma;  // "n/a" when not finite
@@ -110,6 +125,11 @@ CoefficientTexts FormatCoefficient(double value, double sigma);
 // "mm^-4", "mm^-6", "mm^-1" for the frame model, "px" for the focal lengths and principal points
 // of the pixel models, "unitless" for the rest.
 std::string CameraParamUnit(CameraModelType model, const std::string& name);
+
+// A unit as it reads in UTF-8 text (the HTML pages, whose head declares UTF-8): "um" -> "µm",
+// "us" -> "µs"; any other unchanged. The ASCII names stay where a program reads them (JSON, CSV
+// headers, file formats) and on the console, whose encoding is not known.
+std::string Utf8UnitName(const std::string& unit);
 
 // "1 image", "12 images".
 std::string FormatCount(long long count, const std::string& singular,

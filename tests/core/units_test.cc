@@ -73,6 +73,52 @@ TEST(Units, ColumnsOfSeveralKindsTakeOneUnitPerKind) {
   EXPECT_EQ(FormatColumnsInUnits({{}}, {}).unit, "");
 }
 
+// The figures of one row (a group's stated, RMS, estimated accuracy): the unit from the row's own
+// magnitudes, every value with at least two significant digits, at most four decimals, never an
+// exponent.
+TEST(Units, ARowTakesItsOwnUnitAndTwoSignificantDigits) {
+  // An RMS of 0.5 mm beside 2.1 mm: not "0.1 cm" and "0.2 cm".
+  ValuesInOneUnit row = FormatRowInOneUnit({0.0005, 0.0021}, "m");
+  EXPECT_EQ(row.unit, "mm");
+  EXPECT_EQ(row.texts, (std::vector<std::string>{"0.50", "2.10"}));
+  row = FormatRowInOneUnit({0.004, 0.002}, "m");  // not "0.004 / 0.002 m"
+  EXPECT_EQ(row.unit, "mm");
+  EXPECT_EQ(row.texts, (std::vector<std::string>{"4.0", "2.0"}));
+  row = FormatRowInOneUnit({10.0, std::nan("")}, "m");  // a stated 10 m, nothing estimated
+  EXPECT_EQ(row.unit, "m");
+  EXPECT_EQ(row.texts, (std::vector<std::string>{"10.0", "n/a"}));
+  row = FormatRowInOneUnit({0.5, 0.04}, "m");
+  EXPECT_EQ(row.unit, "cm");
+  EXPECT_EQ(row.texts, (std::vector<std::string>{"50.0", "4.0"}));
+  // 10 m beside 0.04 mm: in m the smallest would need six decimals, in cm it needs four.
+  row = FormatRowInOneUnit({10.0, 0.00004}, "m");
+  EXPECT_EQ(row.unit, "cm");
+  EXPECT_EQ(row.texts, (std::vector<std::string>{"1000.0000", "0.0040"}));
+  // Zero has no significant digit to keep; below 4 decimals in mm the value rounds.
+  EXPECT_EQ(FormatRowInOneUnit({0.0, 0.003}, "m").texts, (std::vector<std::string>{"0.0", "3.0"}));
+  EXPECT_EQ(FormatRowInOneUnit({1e-9}, "m").texts[0], "0.0000");
+  // Marks keep two decimals, more for a small figure; attitudes in arc seconds.
+  EXPECT_EQ(FormatRowInOneUnit({0.5, 0.43}, "px").texts,
+            (std::vector<std::string>{"0.50", "0.43"}));
+  EXPECT_EQ(FormatRowInOneUnit({0.5, 0.004}, "px").texts,
+            (std::vector<std::string>{"0.5000", "0.0040"}));
+  row = FormatRowInOneUnit({0.01, 0.005}, "deg");
+  EXPECT_EQ(row.unit, "arcsec");
+  EXPECT_EQ(row.texts, (std::vector<std::string>{"36.0", "18.0"}));
+  EXPECT_EQ(FormatRowInOneUnit({0.01, 0.0000214}, "deg").texts,
+            (std::vector<std::string>{"36.000", "0.077"}));
+  for (const double v : {1e-12, 3e-7, 0.0123, 7.0, 12345.6})
+    for (const std::string& text : FormatRowInOneUnit({v, 2 * v}, "m").texts)
+      EXPECT_EQ(text.find_first_of("eE"), std::string::npos) << text;
+}
+
+TEST(Units, MicroUnitsReadAsMicroInUtf8) {
+  EXPECT_EQ(Utf8UnitName("um"), "\u00b5m");
+  EXPECT_EQ(Utf8UnitName("us"), "\u00b5s");
+  EXPECT_EQ(Utf8UnitName("mm"), "mm");
+  EXPECT_EQ(Utf8UnitName(""), "");
+}
+
 // Values someone chose: at most 4 significant digits, scaled into 0.1 to 1000 of a unit.
 TEST(Units, ChosenValuesTakeTheUnitThatKeepsThemReadable) {
   EXPECT_EQ(FormatScaledLength(5.0), "5 m");
@@ -110,17 +156,27 @@ TEST(Units, NumbersNeverTakeAnExponent) {
   EXPECT_EQ(FormatCount(2, "check mark"), "2 check marks");
 }
 
-// Calibration values: small coefficients in a power of ten named beside the unit, value and sigma
-// with their digits; the unit of each parameter from the camera model.
+// Calibration values: small coefficients in a power of ten named beside the unit, the value at its
+// sigma's precision (the sigma to two significant digits, the value to the same decimals); the
+// unit of each parameter from the camera model.
 TEST(Units, SmallCoefficientsTakeANamedPowerOfTen) {
   const CoefficientTexts k1 = FormatCoefficient(-1.234567e-4, 2.5e-7);
   EXPECT_EQ(k1.scale, "10^-4");
-  EXPECT_EQ(k1.value, "-1.23457");
+  EXPECT_EQ(k1.value, "-1.2346");
   EXPECT_EQ(k1.sigma, "0.0025");
   const CoefficientTexts focal = FormatCoefficient(24012.3456, 1.23);
   EXPECT_EQ(focal.scale, "");
   EXPECT_EQ(focal.value, "24012.3");
-  EXPECT_EQ(focal.sigma, "1.23");
+  EXPECT_EQ(focal.sigma, "1.2");
+  const CoefficientTexts principal = FormatCoefficient(-12.345678, 0.0456);
+  EXPECT_EQ(principal.value, "-12.346");
+  EXPECT_EQ(principal.sigma, "0.046");
+  const CoefficientTexts loose = FormatCoefficient(24012.3456, 123.4);
+  EXPECT_EQ(loose.value, "24012");
+  EXPECT_EQ(loose.sigma, "123");
+  EXPECT_EQ(FormatCoefficient(-0.00001, 0.01).value, "0.000");  // no "-0.000"
+  // Without a sigma: the value to 6 significant digits.
+  EXPECT_EQ(FormatCoefficient(24012.3456, std::nan("")).value, "24012.3");
   EXPECT_EQ(FormatCoefficient(3e-9, std::nan("")).scale, "10^-9");
   EXPECT_EQ(FormatCoefficient(3e-9, std::nan("")).sigma, "n/a");
   EXPECT_EQ(FormatCoefficient(0.0, 0.0).scale, "");

@@ -64,6 +64,16 @@ std::string FormatArea(double area_m2) {
   return FormatSignificant(area_m2, 3) + " m\u00b2";
 }
 
+// Columns in units (core/units.h FormatColumnsInUnits) with their units as the page reads them
+// (Utf8UnitName: um as µm).
+ColumnsInUnits PageColumnsInUnits(const std::vector<std::vector<double>>& columns,
+                                  const std::vector<std::string>& row_kinds) {
+  ColumnsInUnits in_units = FormatColumnsInUnits(columns, row_kinds);
+  in_units.unit = Utf8UnitName(in_units.unit);
+  for (std::string& unit : in_units.units) unit = Utf8UnitName(unit);
+  return in_units;
+}
+
 std::string UtcNow() {
   const std::time_t now = std::time(nullptr);
   std::tm utc{};
@@ -181,9 +191,21 @@ std::vector<std::pair<std::string, std::string>> OverviewFacts(const Block& bloc
   };
 }
 
-// A georeferenced block's facts: camera positions without height, inputs read and not used.
+// A georeferenced block's facts: the output CRS and the local frame the block was adjusted in,
+// camera positions without height, inputs read and not used.
 void GeoreferenceFacts(const GeoreferenceResult& g,
                        std::vector<std::pair<std::string, std::string>>* facts) {
+  const CrsInfo& crs = g.out_crs_info;
+  std::string out_crs = crs.name.empty() ? g.out_crs : crs.name;
+  if (!crs.name.empty() && !g.out_crs.empty() && g.out_crs != crs.name)
+    out_crs += " (" + g.out_crs + ")";
+  if (!g.out_crs_reason.empty()) out_crs += "; " + g.out_crs_reason;
+  facts->push_back({"Output CRS (the points and frames files)", out_crs});
+  const Eigen::Vector3d& origin = g.frame.origin_lon_lat_h();
+  facts->push_back({"Adjusted in", "the local East-North-Up frame (m), origin " +
+                                       ReportFixed(origin.x(), 6) + " E, " +
+                                       ReportFixed(origin.y(), 6) + " N, ellipsoidal height " +
+                                       FormatCoordinate(origin.z()) + " m (WGS 84)"});
   if (g.positions_without_height > 0)
     facts->push_back(
         {"Camera positions without height",
@@ -199,7 +221,11 @@ std::string OverviewHtml(const Block& block, const BundleAdjustmentResult& resul
                          const BundleReportContext& context) {
   std::vector<std::pair<std::string, std::string>> facts =
       OverviewFacts(block, result, BlockShapeOf(block));
-  if (context.georeference != nullptr) GeoreferenceFacts(*context.georeference, &facts);
+  if (context.georeference != nullptr) {
+    GeoreferenceFacts(*context.georeference, &facts);
+  } else if (const std::string srs = BundlePointsSrs(block, nullptr); !srs.empty()) {
+    facts.push_back({"Coordinate reference system (as the tables name it)", srs});
+  }
   std::ostringstream html;
   html << "<h2>1. Survey overview</h2>\n" << FactsTable("", facts);
   html << PlanViewHtml(block, result, context.georeference) << "\n";
@@ -218,12 +244,7 @@ std::string OverfitVerdictHtml(const BundleAdjustmentResult& result,
   }
   const BundleStatisticsOptions& so = context.options.statistics;
   std::ostringstream html;
-  bool judged = true;  // every weighted prior group has its redundancy share
-  for (const BundleGroupStatistics& g : result.groups) {
-    const bool prior =
-        g.group == kControlPoints || g.group == kCameraPositions || g.group == kAttitudes;
-    if (prior && g.count > 0 && !std::isfinite(g.redundancy_share)) judged = false;
-  }
+  const bool judged = std::all_of(result.groups.begin(), result.groups.end(), OverfitJudged);
   if (overfit.empty() && !judged) {
     html << "<div class=\"verdict note\"><b>Over-fitting not judged:</b> the redundancy shares "
             "that say whether the tie points check the priors need the statistics, which this "
@@ -290,13 +311,14 @@ std::string StatedAccuraciesVerdictHtml(const BundleAdjustmentResult& result) {
   for (const BundleGroupStatistics& g : result.groups) {
     if (g.count == 0 || !(g.ratio > 0.0)) continue;
     if (g.ratio < 1.0 / kWeightFactor || g.ratio > kWeightFactor) {
+      const GroupFigures figures = FormatGroupFigures(g);
+      const std::string unit = " " + Utf8UnitName(figures.unit);
       std::string line = std::string(EnumName(g.group)) + ": RMS / stated " +
-                         FormatUnitless(g.ratio) + ", the stated " +
-                         FormatMarkValue(g.stated_accuracy.x(), g.unit) + " looks " +
-                         FormatUnitless(g.ratio < 1.0 ? 1.0 / g.ratio : g.ratio, 1) +
+                         FormatUnitless(g.ratio) + ", the stated " + figures.stated + unit +
+                         " looks " + FormatUnitless(g.ratio < 1.0 ? 1.0 / g.ratio : g.ratio, 1) +
                          " times too " + (g.ratio < 1.0 ? "pessimistic" : "optimistic");
       if (std::isfinite(g.estimated_accuracy.x()))
-        line += "; estimated from the data: " + FormatMarkValue(g.estimated_accuracy.x(), g.unit);
+        line += "; estimated from the data: " + figures.estimated + unit;
       weights.push_back(line + ".");
     }
   }
@@ -516,7 +538,7 @@ CamerasColumns CamerasColumnsOf(const Block& block, const BundleAdjustmentResult
   const std::string first_kind = first == rms_kinds.end() ? "px" : *first;
   for (std::string& kind : rms_kinds)
     if (kind.empty()) kind = first_kind;
-  columns.rms = FormatColumnsInUnits({rms_residuals}, rms_kinds);
+  columns.rms = PageColumnsInUnits({rms_residuals}, rms_kinds);
   columns.rms_unit_column = columns.rms.unit.empty() && !rms_kinds.empty();
   return columns;
 }
@@ -612,7 +634,7 @@ std::string CalibrationHtml(const Block& block, const BundleAdjustmentResult& re
     for (size_t k = 0; k < c.names.size(); ++k) {
       const CoefficientTexts texts =
           FormatCoefficient(c.values[k], k < c.sigmas.size() ? c.sigmas[k] : std::nan(""));
-      const std::string unit = CameraParamUnit(camera.model, c.names[k]);
+      const std::string unit = Utf8UnitName(CameraParamUnit(camera.model, c.names[k]));
       rows.push_back({c.names[k], texts.value, texts.sigma,
                       texts.scale.empty() ? unit : texts.scale + " " + unit});
     }
@@ -671,7 +693,7 @@ std::string ResidualsHtml(const Block& block, const BundleAdjustmentResult& resu
     } else if (kind == "deg") {
       scale[group] = {"arcsec", 3600.0};
     } else {
-      scale[group] = {kind.empty() ? "unitless" : kind, 1.0};
+      scale[group] = {kind.empty() ? "unitless" : Utf8UnitName(kind), 1.0};
     }
   }
   std::ostringstream html;
@@ -727,7 +749,7 @@ std::string RejectedCheckMarksHtml(const Block& block, const BundleAdjustmentRes
     residuals[1].push_back(r.residual.y());
     kinds.push_back(EnumName(block.marks[r.mark].unit));
   }
-  const ColumnsInUnits in_units = FormatColumnsInUnits(residuals, kinds);
+  const ColumnsInUnits in_units = PageColumnsInUnits(residuals, kinds);
   const std::string u = in_units.unit.empty() ? "" : " (" + in_units.unit + ")";
   std::vector<std::vector<std::string>> rows;
   for (size_t k = 0; k < result.rejected_check_marks.size(); ++k) {
@@ -763,7 +785,7 @@ std::string SnoopingHtml(const Block& block, const BundleAdjustmentResult& resul
     const auto unit = group_units.find(step.group);
     kinds.push_back(unit != group_units.end() ? unit->second : "");
   }
-  const ColumnsInUnits in_units = FormatColumnsInUnits({residuals}, kinds);
+  const ColumnsInUnits in_units = PageColumnsInUnits({residuals}, kinds);
   std::vector<std::vector<std::string>> rows;
   for (size_t k = 0; k < result.snooping.size(); ++k) {
     const BundleSnoopingStep& step = result.snooping[k];
@@ -804,9 +826,9 @@ std::string RejectedHtml(const Block& block, const BundleAdjustmentResult& resul
 // ------------------------------------------------------------------ 8. diagnostics
 
 // One group's row of the diagnostics table (the unit column, when there is one, added by the
-// caller): count, stated, RMS, estimated, RMS / stated, redundancy share, verdict.
-std::vector<std::string> GroupRow(const BundleGroupStatistics& g, const ColumnsInUnits& in_units,
-                                  size_t k) {
+// caller): count, stated, RMS, estimated, RMS / stated, redundancy share, verdict; its figures
+// as the console prints them (FormatGroupFigures).
+std::vector<std::string> GroupRow(const BundleGroupStatistics& g, const GroupFigures& figures) {
   if (g.fixed()) {
     return {EnumName(g.group),
             FormatCount(g.num_fixed, "held fixed", "held fixed"),
@@ -825,52 +847,52 @@ std::vector<std::string> GroupRow(const BundleGroupStatistics& g, const ColumnsI
     verdict = "OVER-FITTED";
   } else if (prior && !g.message.empty()) {
     verdict = "loose";  // checked by the block, RMS well below the stated accuracy
-  } else if (prior && !std::isfinite(g.redundancy_share)) {
+  } else if (!OverfitJudged(g)) {
     verdict = "not judged";  // no statistics: no redundancy share
   } else if (g.ratio > kWeightFactor || g.ratio < 1.0 / kWeightFactor) {
     verdict = "weight off";
   }
   // A group stated differently per axis (GNSS 3/3/6 cm) shows X/Y/Z: its RMS / stated is the
   // whitened ratio over all three, which X alone would not explain.
-  std::string stated = in_units.texts[0][k];
-  if (StatedPerAxis(g)) stated += "/" + in_units.texts[3][k] + "/" + in_units.texts[4][k];
   return {EnumName(g.group),
           std::to_string(g.count),
-          stated,
-          in_units.texts[1][k],
+          figures.stated,
+          figures.rms,
           std::isfinite(g.estimated_accuracy.x())
-              ? in_units.texts[2][k]
+              ? figures.estimated
               : (g.estimation_message.empty() ? "not asked" : "not estimated"),
           FormatUnitless(g.ratio),
           std::isfinite(g.redundancy_share) ? FormatUnitless(g.redundancy_share) : "n/a",
           verdict};
 }
 
-// The groups of the objective against their stated accuracies. The stated, RMS and estimated
-// columns in one unit per kind of group (every length in mm, cm or m, chosen once from the
-// largest; marks in px or um; attitudes in arc seconds): named in the headers when every group
-// has it, else in a unit column; never in a cell.
+// The groups of the objective against their stated accuracies. Each group's stated, RMS and
+// estimated figures in the unit its own values call for (FormatGroupFigures: a control-point
+// group in mm beside camera positions in m; marks in px or um; attitudes in arc seconds): named
+// in the headers when every group has the same, else in a unit column; never in a cell.
 std::string GroupsTableHtml(const BundleAdjustmentResult& result,
                             const BundleReportContext& context) {
-  std::vector<std::string> kinds;
-  // stated (X), RMS, estimated, and the stated Y and Z of a group whose axes differ
-  std::vector<std::vector<double>> values(5);
+  std::vector<GroupFigures> figures;
+  std::vector<std::string> units;
   for (const BundleGroupStatistics& g : result.groups) {
-    kinds.push_back(g.unit);
-    const bool fixed = g.fixed();
-    values[0].push_back(fixed ? std::nan("") : g.stated_accuracy.x());
-    values[1].push_back(fixed ? std::nan("") : g.rms_total);
-    values[2].push_back(fixed ? std::nan("") : g.estimated_accuracy.x());
-    values[3].push_back(fixed ? std::nan("") : g.stated_accuracy.y());
-    values[4].push_back(fixed ? std::nan("") : g.stated_accuracy.z());
+    figures.push_back(FormatGroupFigures(g));
+    units.push_back(g.fixed() ? "" : Utf8UnitName(figures.back().unit));
   }
-  const ColumnsInUnits in_units = FormatColumnsInUnits(values, kinds);
-  const bool unit_column = in_units.unit.empty() && !result.groups.empty();
-  const std::string u = unit_column ? "" : " (" + in_units.unit + ")";
+  // A fixed group shows no figure: it takes any unit.
+  std::string common;
+  bool unit_column = false;
+  for (const std::string& unit : units) {
+    if (unit.empty()) continue;
+    if (common.empty())
+      common = unit;
+    else if (unit != common)
+      unit_column = true;
+  }
+  const std::string u = unit_column || common.empty() ? "" : " (" + common + ")";
   std::vector<std::vector<std::string>> rows;
   for (size_t k = 0; k < result.groups.size(); ++k) {
-    std::vector<std::string> row = GroupRow(result.groups[k], in_units, k);
-    if (unit_column) row.insert(row.begin() + 2, in_units.units[k]);
+    std::vector<std::string> row = GroupRow(result.groups[k], figures[k]);
+    if (unit_column) row.insert(row.begin() + 2, units[k].empty() ? "n/a" : units[k]);
     rows.push_back(row);
   }
   std::vector<std::string> header = {"group",
@@ -910,8 +932,8 @@ std::string GroupsTableHtml(const BundleAdjustmentResult& result,
   if (unit_column) {
     header.insert(header.begin() + 2, "unit");
     notes.insert(notes.begin(),
-                 "unit: of the row's stated, RMS and estimated accuracy; the "
-                 "lengths of every group in one unit");
+                 "unit: of the row's stated, RMS and estimated accuracy, chosen from the "
+                 "row's own values (every one with two significant digits)");
   }
   return HtmlTable("Groups of the objective: residuals against the stated accuracies", header, rows,
                    notes);

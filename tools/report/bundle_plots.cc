@@ -293,7 +293,7 @@ std::string DistortionPlot(const BlockCamera& camera) {
   LinePlot plot;
   plot.title = "radial distortion, camera " + camera.camera_id;
   plot.x_label = frame ? "radius from the principal point (mm)" : "radius (px)";
-  plot.y_label = frame ? "distortion (um)" : "distortion (px)";
+  plot.y_label = frame ? "distortion (" + Utf8UnitName("um") + ")" : "distortion (px)";
   PlotSeries series;
   series.label = "along x";
   constexpr int kSteps = 40;
@@ -355,14 +355,16 @@ std::string ImageResidualPlot(const Block& block, const BundleAdjustmentResult& 
   const double factor = largest > 0.0 ? NiceAtMost(0.45 * cell / largest) : 1.0;
   const std::string exaggeration = "; vectors x" + FormatSignificant(factor, 3);
   // Ticks along x; along y only for film (y up like the plot; pixel rows grow down).
+  const std::string film = Utf8UnitName("um");
   svg << SvgAxes(frame, &x_axis, frame_model ? &y_axis : nullptr,
-                 (frame_model ? "film x (um)" : "column (px)") + exaggeration,
-                 frame_model ? "film y (um)" : "row (px)");
+                 (frame_model ? "film x (" + film + ")" : "column (px)") + exaggeration,
+                 frame_model ? "film y (" + film + ")" : "row (px)");
   for (int r = 0; r < kRows; ++r)
     for (int c = 0; c < kCols; ++c) {
       const int k = r * kCols + c;
       if (count[k] == 0) continue;
       const Eigen::Vector2d mean = sum[k] / count[k];
+      const ValuesInOneUnit mean_text = FormatInOneUnit({mean.norm()}, unit);
       const double x = frame.left + (c + 0.5) * frame.width / kCols;
       // Film y grows up, pixel rows down: draw each as its image shows it.
       const double y = frame_model ? frame.top + frame.height - (r + 0.5) * frame.height / kRows
@@ -371,8 +373,8 @@ std::string ImageResidualPlot(const Block& block, const BundleAdjustmentResult& 
       svg << "<line x1=\"" << ReportNumber(x, "%.1f") << "\" y1=\"" << ReportNumber(y, "%.1f")
           << "\" x2=\"" << ReportNumber(x + mean.x() * factor, "%.1f") << "\" y2=\""
           << ReportNumber(y + dy, "%.1f") << "\" stroke=\"" << PlotColor(1)
-          << "\" stroke-width=\"2\"><title>" << count[k] << " marks, mean "
-          << FormatMarkValue(mean.norm(), unit) << "</title></line>"
+          << "\" stroke-width=\"2\"><title>" << count[k] << " marks, mean " << mean_text.texts[0]
+          << " " << Utf8UnitName(mean_text.unit) << "</title></line>"
           << "<circle cx=\"" << ReportNumber(x, "%.1f") << "\" cy=\"" << ReportNumber(y, "%.1f")
           << "\" r=\"1.5\" fill=\"#555\"/>";
     }

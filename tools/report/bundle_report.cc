@@ -204,7 +204,7 @@ void GroupsJson(const Block& block, const BundleAdjustmentResult& result,
                   {"rms_total", Number(g.rms_total)},
                   {"ratio", Number(g.ratio)},
                   {"redundancy_share", Number(g.redundancy_share)},
-                  {"overfit", g.overfit},
+                  {"overfit", OverfitJudged(g) ? json(g.overfit) : json(nullptr)},
                   {"fixed", g.fixed()},
                   {"num_fixed", g.num_fixed},
                   {"message", g.message}};
@@ -639,10 +639,11 @@ bool AbsorbsGrossErrors(const BundleGroupStatistics& group) {
 std::string GrossErrorsAbsorbed(const BundleGroupStatistics& group) {
   if (!AbsorbsGrossErrors(group)) return "";
   const double stated = group.stated_accuracy.x(), estimated = group.estimated_accuracy.x();
-  const std::vector<std::string> values = FormatMarkValues({estimated, stated}, group.unit);
+  const GroupFigures figures = FormatGroupFigures(group);
   std::string text = std::string(EnumName(group.group)) + ": the estimated accuracy " +
-                     values[0] + " is " + FormatUnitless(estimated / stated, 1) +
-                     " times the stated " + values[1] +
+                     figures.estimated + " " + figures.unit + " is " +
+                     FormatUnitless(estimated / stated, 1) + " times the stated " +
+                     figures.stated_x + " " + figures.unit +
                      ": gross errors are far likelier than a misstated accuracy, and the "
                      "estimation absorbed them into every observation of the group (sigma0 "
                      "ends near 1 and does not show them)";
@@ -654,6 +655,30 @@ std::string GrossErrorsAbsorbed(const BundleGroupStatistics& group) {
 bool StatedPerAxis(const BundleGroupStatistics& g) {
   const Eigen::Vector3d& a = g.stated_accuracy;
   return g.num_axes == 3 && a.y() > 0.0 && a.z() > 0.0 && (a.x() != a.y() || a.x() != a.z());
+}
+
+GroupFigures FormatGroupFigures(const BundleGroupStatistics& g) {
+  const bool per_axis = StatedPerAxis(g);
+  std::vector<double> values = {g.stated_accuracy.x(), g.rms_total, g.estimated_accuracy.x()};
+  if (per_axis) {
+    values.push_back(g.stated_accuracy.y());
+    values.push_back(g.stated_accuracy.z());
+  }
+  const ValuesInOneUnit row = FormatRowInOneUnit(values, g.unit);
+  GroupFigures figures;
+  figures.unit = row.unit;
+  figures.stated_x = row.texts[0];
+  figures.stated = per_axis ? row.texts[0] + "/" + row.texts[3] + "/" + row.texts[4] : row.texts[0];
+  figures.rms = row.texts[1];
+  figures.estimated = row.texts[2];
+  return figures;
+}
+
+bool OverfitJudged(const BundleGroupStatistics& g) {
+  const bool prior =
+      g.group == kControlPoints || g.group == kCameraPositions || g.group == kAttitudes;
+  // Flagged on its RMS / stated alone, the group was judged; not flagged without a share, not.
+  return g.overfit || !(prior && g.count > 0 && !std::isfinite(g.redundancy_share));
 }
 
 double CheckPointNormalizedError(const BlockPoint& point, const BundlePointResult& r,
@@ -793,19 +818,14 @@ void ConsoleGroupLines(const BundleAdjustmentResult& result, std::vector<std::st
       lines->push_back(line.str());
       continue;
     }
-    // One unit for the line's lengths (a group of metres: mm, cm or m for both).
-    const ValuesInOneUnit values = FormatInOneUnit(
-        {g.stated_accuracy.x(), g.rms_total, g.stated_accuracy.y(), g.stated_accuracy.z()},
-        g.unit);
-    const std::string unit = values.unit.empty() ? "" : " " + values.unit;
-    const std::string stated =
-        StatedPerAxis(g) ? "stated X/Y/Z " + values.texts[0] + "/" + values.texts[2] + "/" +
-                               values.texts[3] + unit
-                         : "stated " + values.texts[0] + unit;
-    line << EnumName(g.group) << ": " << g.count << ", " << stated << ", RMS " << values.texts[1]
-         << unit << ", RMS/stated " << FormatUnitless(g.ratio)
-         << ", redundancy share " << FormatUnitless(g.redundancy_share)
-         << (g.overfit ? "  OVERFIT" : "");
+    // The group's figures as the page's groups table shows them (one unit for the line).
+    const GroupFigures figures = FormatGroupFigures(g);
+    const std::string unit = " " + figures.unit;
+    line << EnumName(g.group) << ": " << g.count << ", stated "
+         << (StatedPerAxis(g) ? "X/Y/Z " : "") << figures.stated << unit << ", RMS " << figures.rms
+         << unit << ", RMS/stated " << FormatUnitless(g.ratio) << ", redundancy share "
+         << FormatUnitless(g.redundancy_share) << (g.overfit ? "  OVERFIT" : "")
+         << (OverfitJudged(g) ? "" : " (over-fitting not judged: no statistics)");
     if (g.num_fixed > 0) line << "; " << g.num_fixed << " more held fixed";
     lines->push_back(line.str());
   }
@@ -843,9 +863,9 @@ void ConsoleAccuracyLines(const BundleAdjustmentResult& result, std::vector<std:
     for (const auto& [group, flag] : kFlags) {
       if (g.group != group) continue;
       std::ostringstream line;
-      const std::vector<std::string> values =
-          FormatMarkValues({g.stated_accuracy.x(), g.estimated_accuracy.x()}, g.unit);
-      line << EnumName(g.group) << ": " << values[0] << " stated, " << values[1] << " estimated (+-"
+      const GroupFigures figures = FormatGroupFigures(g);
+      line << EnumName(g.group) << ": " << figures.stated_x << " " << figures.unit << " stated, "
+           << figures.estimated << " " << figures.unit << " estimated (+-"
            << FormatUnitless(100.0 * g.estimated_accuracy_standard_error, 0) << " %): set " << flag
            << "=" << FormatSignificant(g.estimated_accuracy.x(), 2);
       lines->push_back(line.str());

@@ -66,6 +66,28 @@ inline constexpr double kCheckPointLevel = 0.999;
 // whitened ratio over all three axes, which the X accuracy alone would not explain.
 bool StatedPerAxis(const BundleGroupStatistics& g);
 
+// A group's figures as the console and the page print them, one rule for both, so that a value
+// reads the same in each: stated (X, or X/Y/Z when StatedPerAxis), RMS and estimated accuracy in
+// the one unit and decimals FormatRowInOneUnit (core/units.h) chooses from the group's own shown
+// values (a control-point group in mm beside camera positions in m), without the unit; "n/a" where
+// not finite. `unit` is the ASCII name ("um"); a page shows Utf8UnitName(unit).
+struct GroupFigures {
+  std::string unit;       // "px", "um", "sigma", "mm", "cm", "m" or "arcsec"
+  std::string stated_x;   // the X axis's (a mark group's one) stated accuracy
+  std::string stated;     // stated_x, or "X/Y/Z" when StatedPerAxis
+  std::string rms;        // rms_total
+  std::string estimated;  // estimated_accuracy X; "n/a" when not estimated
+};
+GroupFigures FormatGroupFigures(const BundleGroupStatistics& g);
+
+// Whether a group's over-fitting was judged: false for a weighted prior group (control points,
+// camera positions, attitudes) without a redundancy share (the statistics were not computed,
+// --statistics=none) that is not flagged, whose `overfit` false is then no verdict: the JSON
+// writes its `overfit` as null, the page says "not judged", the console line says so. A prior
+// group flagged on its RMS / stated alone (below overfit_ratio, not known to be checked) was
+// judged; mark groups and fixed groups are judged (never over-fitted).
+bool OverfitJudged(const BundleGroupStatistics& g);
+
 // A check point's normalized error e^T C^-1 e, C the covariance of the error: the intersection's
 // plus the surveyed coordinates' (SurveyedPointErrorCovariance, solvers/bundle/check_points.h;
 // `default_marker_m` the accuracy of a point that states none). Chi-square(3) when both are

@@ -97,7 +97,8 @@ std::string ScenarioVerdict(const MonteCarloOptions& options, const MonteCarloRe
   html << ", success " << FormatUnitless(100.0 * base[fastest].success_rate, 0) << " %)";
   if (tied.size() > 1)
     html << "; " << HtmlEscape(result.solver_names[fastest]) << " is the fastest of them ("
-         << FormatSignificant(1e6 * base[fastest].median_seconds, 3) << " us per image)";
+         << FormatSignificant(1e6 * base[fastest].median_seconds, 3) << " " << Utf8UnitName("us")
+         << " per image)";
   html << ".";
   // Honest covariances.
   std::vector<size_t> honest, optimistic;
@@ -159,7 +160,8 @@ std::string DatasetVerdict(const DatasetComparisonResult& result) {
        << ")";
   if (tied.size() > 1)
     html << "; " << HtmlEscape(best.solver) << " is the fastest of them ("
-         << FormatSignificant(1e6 * best.median_seconds, 3) << " us per image)";
+         << FormatSignificant(1e6 * best.median_seconds, 3) << " " << Utf8UnitName("us")
+         << " per image)";
   html << ".";
   if (most_solved < best.images)
     html << " " << FormatCount(best.images - most_solved, "image")
@@ -230,7 +232,25 @@ std::string ComparisonGlossaryHtml() {
   return HtmlGlossary(kTerms);
 }
 
-std::string RenderHtmlTable(const TextTable& table) {
+namespace {
+
+// A table's header as the page reads it: a unit in parentheses ("time (us)") in its UTF-8 name
+// (Utf8UnitName: "time (µs)"); the console and Markdown tables keep the ASCII one.
+std::vector<std::string> PageHeader(std::vector<std::string> header) {
+  for (std::string& name : header)
+    for (const char* unit : {"us", "um"}) {
+      const std::string ascii = std::string("(") + unit + ")";
+      const size_t at = name.find(ascii);
+      if (at != std::string::npos) name.replace(at, ascii.size(), "(" + Utf8UnitName(unit) + ")");
+    }
+  return header;
+}
+
+}  // namespace
+
+std::string RenderHtmlTable(const TextTable& table_in) {
+  TextTable table = table_in;
+  table.header = PageHeader(table.header);
   // Naming columns, repeated in every block: the first (first two for per-image tables).
   const size_t num_keys = std::min<size_t>(
       table.header.size(), !table.header.empty() && table.header[0] == "image" ? 2 : 1);
@@ -383,7 +403,7 @@ std::string ScenarioTableHtml(const MonteCarloResult& result, const std::vector<
   for (size_t k = 0; k < result.settings.size(); ++k) {
     if (result.settings[k].setting.scenario != scenario) continue;
     const TextTable& table = tables[k];
-    if (header.empty()) header = table.header;
+    if (header.empty()) header = PageHeader(table.header);
     TableSection section;
     section.heading =
         table.title.rfind(prefix, 0) == 0 ? table.title.substr(prefix.size()) : table.title;

@@ -5,6 +5,7 @@
 #include <regex>
 #include <string>
 
+#include "core/geodesy/crs.h"
 #include "core/simulation/synthetic_block.h"
 #include "solvers/bundle/bundle_adjustment.h"
 #include "solvers/bundle/check_points.h"
@@ -166,10 +167,10 @@ std::string TableWithCaption(const std::string& html, const std::string& caption
   return html.substr(open, html.find("</table>", at) + 8 - open);
 }
 
-// The diagnostics' group table reads by column: every length in one unit chosen once for the
-// table (not 5.0 mm in one row and 50.0 cm in the next), the unit in its own column when the
-// groups are of different kinds, never in a cell.
-TEST_F(BundleHtmlTest, TheGroupTableTakesOneUnitPerColumn) {
+// The diagnostics' group table: each group's figures in the unit its own values call for (control
+// points in mm beside camera positions in cm, not "0.5 / 0.3 cm"), the unit in its own column when
+// the rows differ, never in a cell.
+TEST_F(BundleHtmlTest, TheGroupTableTakesOneUnitPerRow) {
   result_.groups = {Group(kTieMarks, "px", 0.5, 0.43), Group(kControlPoints, "m", 0.005, 0.003),
                     Group(kCameraPositions, "m", 0.5, 0.2), Group(kAttitudes, "deg", 0.01, 0.005)};
   result_.groups[2].estimated_accuracy = Eigen::Vector3d::Constant(0.21);
@@ -183,7 +184,7 @@ TEST_F(BundleHtmlTest, TheGroupTableTakesOneUnitPerColumn) {
   EXPECT_NE(table.find("<td>tie_marks</td><td>12</td><td>px</td><td>0.50</td><td>0.43</td>"),
             std::string::npos)
       << table;
-  EXPECT_NE(table.find("<td>control_points</td><td>12</td><td>cm</td><td>0.5</td><td>0.3</td>"),
+  EXPECT_NE(table.find("<td>control_points</td><td>12</td><td>mm</td><td>5.0</td><td>3.0</td>"),
             std::string::npos)
       << table;
   EXPECT_NE(table.find("<td>camera_positions</td><td>12</td><td>cm</td><td>50.0</td><td>20.0</td>"
@@ -198,6 +199,21 @@ TEST_F(BundleHtmlTest, TheGroupTableTakesOneUnitPerColumn) {
   EXPECT_FALSE(
       std::regex_search(table, with_unit, std::regex("<td>[-0-9.]+ (mm|cm|m|px|um|arcsec)</td>")))
       << with_unit.str();
+  // The row's figures are the console's (FormatGroupFigures): the same group, the same texts.
+  const GroupFigures figures = FormatGroupFigures(result_.groups[1]);
+  EXPECT_NE(table.find("<td>" + figures.unit + "</td><td>" + figures.stated + "</td><td>" +
+                       figures.rms + "</td>"),
+            std::string::npos);
+  // A film mark group's unit reads as µm on the page.
+  result_.groups = {Group(kTieMarks, "um", 2.0, 1.7), Group(kControlPoints, "m", 0.005, 0.0005)};
+  const std::string film =
+      TableWithCaption(BundleReportHtml(block_, result_, context_), "Groups of the objective");
+  EXPECT_NE(film.find("<td>tie_marks</td><td>12</td><td>\u00b5m</td><td>2.00</td><td>1.70</td>"),
+            std::string::npos)
+      << film;
+  EXPECT_NE(film.find("<td>control_points</td><td>12</td><td>mm</td><td>5.00</td><td>0.50</td>"),
+            std::string::npos)
+      << film;
 
   // Groups of one kind: the unit in the headers, no unit column.
   result_.groups = {Group(kTieMarks, "px", 0.5, 0.43), Group(kControlMarks, "px", 0.5, 1.7)};
@@ -223,13 +239,58 @@ TEST_F(BundleHtmlTest, ColumnsMixingKindsTakeAUnitColumn) {
   EXPECT_NE(html.find("<th>RMS residual</th><th>unit</th>"), std::string::npos);
   EXPECT_NE(
       html.find("<td>" + block_.images[0].name + "</td><td>" +
-                std::to_string(result_.images[0].num_marks) + "</td><td>1.25</td><td>um</td>"),
+                std::to_string(result_.images[0].num_marks) + "</td><td>1.25</td><td>\u00b5m</td>"),
       std::string::npos);
   const std::string snooping = TableWithCaption(html, "Data snooping");
   EXPECT_NE(snooping.find("<th>|w|</th><th>residual</th><th>unit</th>"), std::string::npos)
       << snooping;
   EXPECT_NE(snooping.find("<td>9.5</td><td>3.25</td><td>px</td>"), std::string::npos) << snooping;
   EXPECT_NE(snooping.find("<td>5.1</td><td>42.1</td><td>mm</td>"), std::string::npos) << snooping;
+}
+
+// The overview names the CRS: a georeferenced block's output CRS (PROJ's name, as given, why) and
+// the local frame it was adjusted in; a block of tables the CRS they name.
+TEST_F(BundleHtmlTest, TheOverviewNamesTheCrs) {
+  block_.crs = "EPSG:32632";
+  std::string overview = BundleReportHtml(block_, result_, context_);
+  EXPECT_NE(overview.find("<td>Coordinate reference system (as the tables name it)</td>"
+                          "<td>EPSG:32632</td>"),
+            std::string::npos);
+  block_.crs.clear();
+  overview = BundleReportHtml(block_, result_, context_);
+  EXPECT_EQ(overview.find("Coordinate reference system"), std::string::npos);
+
+  GeoreferenceResult georeference;
+  georeference.out_crs = "EPSG:4326";
+  ASSERT_TRUE(ResolveCrs(georeference.out_crs, &georeference.out_crs_info).ok());
+  georeference.out_crs_reason = "asked (--out_crs)";
+  ASSERT_TRUE(
+      LocalFrame::Create("EPSG:4979", Eigen::Vector3d(11.2, 47.8, 500.0), &georeference.frame)
+          .ok());
+  context_.georeference = &georeference;
+  overview = BundleReportHtml(block_, result_, context_);
+  EXPECT_NE(overview.find("<td>Output CRS (the points and frames files)</td><td>" +
+                          georeference.out_crs_info.name + " (EPSG:4326); asked (--out_crs)</td>"),
+            std::string::npos);
+  EXPECT_NE(overview.find("<td>Adjusted in</td><td>the local East-North-Up frame (m), origin "
+                          "11.200000 E, 47.800000 N, ellipsoidal height 500.000 m (WGS 84)</td>"),
+            std::string::npos);
+  context_.georeference = nullptr;
+}
+
+// The calibration table: each value at its sigma's precision, the film unit as µm.
+TEST_F(BundleHtmlTest, CalibrationValuesKeepTheirSigmasPrecision) {
+  BundleCalibrationResult calibration;
+  calibration.camera = 0;
+  calibration.names = {"FocalLength", "K1"};
+  calibration.values = {24012.3456, -1.234567e-4};
+  calibration.sigmas = {1.23, 2.5e-7};
+  result_.calibration = {calibration};
+  const std::string html = BundleReportHtml(block_, result_, context_);
+  EXPECT_NE(html.find("<td>FocalLength</td><td>24012.3</td><td>1.2</td><td>\u00b5m</td>"),
+            std::string::npos);
+  EXPECT_NE(html.find("<td>K1</td><td>-1.2346</td><td>0.0025</td><td>10^-4 mm^-2</td>"),
+            std::string::npos);
 }
 
 TEST_F(BundleHtmlTest, AFailedAdjustmentSaysSoFirst) {

@@ -6,6 +6,7 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <cmath>
 #include <regex>
 #include <string>
 #include <vector>
@@ -69,15 +70,17 @@ TEST(BundleReport, ConsoleLinesNeverPrintAnExponent) {
   };
   EXPECT_TRUE(has("check points: 31, RMSE X 0.1 Y 0.0 Z 0.0 total 0.1 mm"));
   EXPECT_TRUE(has("control points: 143, RMSE 0.1 mm"));
-  EXPECT_TRUE(has("control_points: 12, stated 5.0 mm, RMS 0.1 mm"));
+  // The group's own figures: two significant digits for the smallest (0.070 mm, not 0.1 mm).
+  EXPECT_TRUE(has("control_points: 12, stated 5.000 mm, RMS 0.070 mm"));
   EXPECT_TRUE(has("cost 57108300 -> 0.000025, sigma0 0.000 (unitless; redundancy 1276)"));
   EXPECT_TRUE(has("1 image, 143 points"));
-  EXPECT_TRUE(has("attitudes: 36.0 arcsec stated, 0.1 arcsec estimated (+-12 %)"));
+  EXPECT_TRUE(has("attitudes: 36.000 arcsec stated, 0.077 arcsec estimated (+-12 %)"));
   EXPECT_TRUE(has("time: problem 0.000061 s"));
 }
 
 // One unit per line: a group's stated accuracy, RMS and estimate are printed in the unit the
-// largest of them calls for, not each in its own (no "stated 10.000 m, RMS 278.7 cm").
+// largest of them calls for, not each in its own (no "stated 10.000 m, RMS 278.7 cm"), with the
+// decimals that give the smallest two significant digits; each group in its own unit.
 TEST(BundleReport, AGroupLinePrintsItsLengthsInOneUnit) {
   BundleAdjustmentResult result;
   result.summary.datum_description = "absolute";
@@ -91,15 +94,16 @@ TEST(BundleReport, AGroupLinePrintsItsLengthsInOneUnit) {
       if (line.find(text) != std::string::npos) return true;
     return false;
   };
-  EXPECT_TRUE(has("camera_positions: 12, stated 10.000 m, RMS 2.787 m, RMS/stated 0.28"));
-  EXPECT_TRUE(has("camera_positions: 10.000 m stated, 3.100 m estimated (+-20 %): set "
-                  "--camera_accuracy=3.1"));
-  EXPECT_TRUE(has("control_points: 12, stated 0.5 cm, RMS 25.0 cm, RMS/stated 50.00"));
+  EXPECT_TRUE(has("camera_positions: 12, stated 10.0 m, RMS 2.8 m, RMS/stated 0.28"));
+  EXPECT_TRUE(
+      has("camera_positions: 10.0 m stated, 3.1 m estimated (+-20 %): set "
+          "--camera_accuracy=3.1"));
+  EXPECT_TRUE(has("control_points: 12, stated 0.50 cm, RMS 25.00 cm, RMS/stated 50.00"));
   // The gross-error warning's two accuracies too.
   BundleGroupStatistics points = Group(kControlPoints, "m", 0.005, 0.25);
   points.estimated_accuracy = Eigen::Vector3d::Constant(0.26);
-  EXPECT_NE(GrossErrorsAbsorbed(points).find("the estimated accuracy 26.0 cm is 52.0 times the "
-                                             "stated 0.5 cm"),
+  EXPECT_NE(GrossErrorsAbsorbed(points).find("the estimated accuracy 26.00 cm is 52.0 times the "
+                                             "stated 0.50 cm"),
             std::string::npos)
       << GrossErrorsAbsorbed(points);
 }
@@ -244,6 +248,73 @@ TEST(BundleReport, AnEstimateFarAboveTheStatedAccuracyIsCalledGrossErrors) {
   EXPECT_EQ(GrossErrorsAbsorbed(marks), "");
   marks.estimated_accuracy = Eigen::Vector3d::Constant(std::nan(""));  // not estimated
   EXPECT_EQ(GrossErrorsAbsorbed(marks), "");
+}
+
+// A group's figures as the console and the page print them: the unit from the group's own values
+// (a control-point group in mm whatever the camera positions beside it), every figure with two
+// significant digits (the RMS of 0.5 mm is not "0.1 cm", 2.1 mm not "0.2 cm").
+TEST(BundleReport, AGroupsFiguresTakeTheirOwnUnitAndTwoSignificantDigits) {
+  BundleGroupStatistics points = Group(kControlPoints, "m", 0.005, 0.0005);
+  points.estimated_accuracy = Eigen::Vector3d::Constant(0.0021);
+  GroupFigures figures = FormatGroupFigures(points);
+  EXPECT_EQ(figures.unit, "mm");
+  EXPECT_EQ(figures.stated, "5.00");
+  EXPECT_EQ(figures.rms, "0.50");
+  EXPECT_EQ(figures.estimated, "2.10");
+  // The same group on the console: the same texts.
+  BundleAdjustmentResult result;
+  result.groups = {Group(kCameraPositions, "m", 10.0, 12.0), points};
+  const std::vector<std::string> lines = BundleConsoleLines(Block(), result, BundleReportContext());
+  EXPECT_NE(std::find_if(lines.begin(), lines.end(),
+                         [](const std::string& line) {
+                           return line.rfind("control_points: 12, stated 5.00 mm, RMS 0.50 mm,",
+                                             0) == 0;
+                         }),
+            lines.end());
+  EXPECT_EQ(FormatGroupFigures(result.groups[0]).stated, "10.0");
+  EXPECT_EQ(FormatGroupFigures(result.groups[0]).unit, "m");
+  // Not estimated: "n/a"; a film mark group keeps its ASCII unit name (the page shows µm).
+  figures = FormatGroupFigures(Group(kTieMarks, "um", 2.0, 1.234));
+  EXPECT_EQ(figures.estimated, "n/a");
+  EXPECT_EQ(figures.unit, "um");
+  EXPECT_EQ(figures.rms, "1.23");
+}
+
+// Without statistics (--statistics=none) no prior group has a redundancy share and no over-fitting
+// verdict was made: the JSON's `overfit` is null there, not false; a mark group and a judged prior
+// group keep their boolean.
+TEST(BundleReport, OverfitIsNullWhenNotJudged) {
+  BundleAdjustmentResult result;
+  result.groups = {Group(kTieMarks, "px", 0.5, 0.4), Group(kControlPoints, "m", 0.005, 0.004),
+                   Group(kCameraPositions, "m", 0.05, 0.04)};
+  result.groups[0].redundancy_share = std::nan("");
+  result.groups[1].redundancy_share = std::nan("");
+  result.groups[2].redundancy_share = 0.6;
+  EXPECT_TRUE(OverfitJudged(result.groups[0]));
+  EXPECT_FALSE(OverfitJudged(result.groups[1]));
+  EXPECT_TRUE(OverfitJudged(result.groups[2]));
+  const nlohmann::json report = BundleReportJson(Block(), result, BundleReportContext());
+  ASSERT_EQ(report["groups"].size(), 3u);
+  EXPECT_EQ(report["groups"][0]["overfit"], false);
+  EXPECT_TRUE(report["groups"][1]["overfit"].is_null());
+  EXPECT_EQ(report["groups"][2]["overfit"], false);
+  // The console says so too.
+  bool said = false;
+  for (const std::string& line : BundleConsoleLines(Block(), result, BundleReportContext()))
+    said = said || (line.rfind("control_points:", 0) == 0 &&
+                    line.find("over-fitting not judged") != std::string::npos);
+  EXPECT_TRUE(said);
+  // Flagged on its RMS / stated alone (0.28 of a 10 m statement, no share): a verdict, true.
+  result.groups[2].redundancy_share = std::nan("");
+  result.groups[2].overfit = true;
+  EXPECT_TRUE(OverfitJudged(result.groups[2]));
+  EXPECT_EQ(BundleReportJson(Block(), result, BundleReportContext())["groups"][2]["overfit"], true);
+  // A fixed group (every point held fixed) is never over-fitted: judged.
+  BundleGroupStatistics fixed = Group(kControlPoints, "m", 0.0, 0.0);
+  fixed.count = 0;
+  fixed.num_fixed = 4;
+  fixed.redundancy_share = std::nan("");
+  EXPECT_TRUE(OverfitJudged(fixed));
 }
 
 }  // namespace

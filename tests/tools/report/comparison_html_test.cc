@@ -46,6 +46,21 @@ TEST(ComparisonHtml, WideTablesSplitIntoBlocksRepeatingTheNamingColumns) {
   EXPECT_EQ(Count(RenderHtmlTable(table), "<table>"), 1u);
 }
 
+// The page names micro units as µs and µm; the table as the console and Markdown hold it keeps
+// the ASCII names.
+TEST(ComparisonHtml, MicroUnitsReadAsMicroOnThePage) {
+  TextTable table;
+  table.header = {"solver", "time (us)", "refine (us)", "residual (um)", "pos RMSE (mm)"};
+  table.rows = {{"taylor", "12.5", "3.1", "0.42", "1.0"}};
+  const std::string html = RenderHtmlTable(table);
+  EXPECT_NE(html.find("<th>time (\u00b5s)</th><th>refine (\u00b5s)</th><th>residual "
+                      "(\u00b5m)</th><th>pos RMSE (mm)</th>"),
+            std::string::npos)
+      << html;
+  EXPECT_EQ(table.header[1], "time (us)");
+  EXPECT_NE(RenderText(table).find("time (us)"), std::string::npos);
+}
+
 TEST(ComparisonHtml, TheGlossaryExplainsEveryTermThePagesUse) {
   const std::string glossary = ComparisonGlossaryHtml();
   for (const char* term : {"taylor_as_printed", "taylor", "ceres_analytic", "ceres_autodiff",

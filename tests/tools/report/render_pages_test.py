@@ -107,7 +107,7 @@ class PageText(html.parser.HTMLParser):
 
 
 # A unit named in an axis title: "(px)", "(mm)", "(unitless, 0 to 1)", ...
-UNIT_IN_LABEL = re.compile(r"\([^()]*\b(px|um|mm|cm|m|arcsec|deg|sigma|unitless)\b[^()]*\)")
+UNIT_IN_LABEL = re.compile(r"\([^()]*\b(px|µm|um|mm|cm|m|arcsec|deg|sigma|unitless)\b[^()]*\)")
 # Text a reader cannot use: an exponent, or a fixed value smaller than its decimals show
 # (0.000003: a length or angle in the wrong unit).
 SCIENTIFIC = re.compile(r"[0-9.][eE][+-]?[0-9]")
