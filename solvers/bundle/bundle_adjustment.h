@@ -380,10 +380,12 @@ struct BundleGroupStatistics {
   // 0..1): how much of it the rest of the block checks. NaN when not computed.
   double redundancy_share = 0.0;
   // A prior group with redundancy share < overfit_redundancy_share, or with ratio < overfit_ratio
-  // and a share below checked_redundancy_share (BundleStatisticsOptions).
+  // and a share below checked_redundancy_share (BundleStatisticsOptions). Without statistics (share
+  // NaN) a ratio below overfit_ratio is no verdict: false, and `message` says it was not judged.
   bool overfit = false;
   // The over-fitting warning; for a checked prior group with ratio < overfit_ratio, the note that
-  // its stated accuracy is loose; else empty.
+  // its stated accuracy is loose; for one with an unknown share, that it was not judged; else
+  // empty.
   std::string message;
   // Items of the group held fixed (control points stated error-free, core/block.h IsHeldFixed, or
   // in BundleAdjustmentConfig::constant_points): no observations, so not in count, RMS, ratio or

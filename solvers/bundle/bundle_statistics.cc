@@ -662,6 +662,16 @@ std::string LooseAccuracyMessage(const BundleGroupStatistics& group, const char*
   return message.str();
 }
 
+std::string OverfitNotJudgedMessage(const BundleGroupStatistics& group, const char* accuracy) {
+  std::ostringstream message;
+  message << EnumName(group.group) << ": residual RMS " << FormatSignificant(group.ratio, 3)
+          << " of the " << accuracy
+          << " accuracy; without the redundancy share (statistics not computed) it cannot be told "
+             "whether the adjustment bends to these priors (over-fitted) or their accuracy is loose: "
+             "not judged.";
+  return message.str();
+}
+
 namespace {
 
 // Control points in the round held fixed (no parameter block adjusted: stated error-free or in the
@@ -709,11 +719,13 @@ void GroupStatistics(const BundleAdjustmentOptions& options, const GroupSums* su
     const bool follows_priors = share_known && group.redundancy_share < so.overfit_redundancy_share;
     const bool below = group.ratio < so.overfit_ratio;
     const bool checked = share_known && group.redundancy_share >= so.checked_redundancy_share;
-    if (prior && (follows_priors || (below && !checked))) {
+    if (prior && (follows_priors || (below && share_known && !checked))) {
       group.overfit = true;
       group.message = OverfitMessage(group, "stated");
-    } else if (prior && below) {
+    } else if (prior && below && checked) {
       group.message = LooseAccuracyMessage(group, "stated");
+    } else if (prior && below) {
+      group.message = OverfitNotJudgedMessage(group, "stated");
     }
     result->groups.push_back(group);
   }

@@ -677,8 +677,8 @@ GroupFigures FormatGroupFigures(const BundleGroupStatistics& g) {
 bool OverfitJudged(const BundleGroupStatistics& g) {
   const bool prior =
       g.group == kControlPoints || g.group == kCameraPositions || g.group == kAttitudes;
-  // Flagged on its RMS / stated alone, the group was judged; not flagged without a share, not.
-  return g.overfit || !(prior && g.count > 0 && !std::isfinite(g.redundancy_share));
+  // Without a redundancy share the library makes no verdict (BundleGroupStatistics::overfit).
+  return !(prior && g.count > 0 && !std::isfinite(g.redundancy_share));
 }
 
 double CheckPointNormalizedError(const BlockPoint& point, const BundlePointResult& r,

@@ -82,10 +82,10 @@ GroupFigures FormatGroupFigures(const BundleGroupStatistics& g);
 
 // Whether a group's over-fitting was judged: false for a weighted prior group (control points,
 // camera positions, attitudes) without a redundancy share (the statistics were not computed,
-// --statistics=none) that is not flagged, whose `overfit` false is then no verdict: the JSON
-// writes its `overfit` as null, the page says "not judged", the console line says so. A prior
-// group flagged on its RMS / stated alone (below overfit_ratio, not known to be checked) was
-// judged; mark groups and fixed groups are judged (never over-fitted).
+// --statistics=none), whose `overfit` false is then no verdict (the library flags nothing without
+// a share: an RMS well below the stated accuracy may be over-fitting or a loose accuracy): the
+// JSON writes its `overfit` as null, the page says "not judged", the console line says so; mark
+// groups and fixed groups are judged (never over-fitted).
 bool OverfitJudged(const BundleGroupStatistics& g);
 
 // A check point's normalized error e^T C^-1 e, C the covariance of the error: the intersection's

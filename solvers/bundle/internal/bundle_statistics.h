@@ -102,6 +102,10 @@ std::string OverfitMessage(const BundleGroupStatistics& group, const char* accur
 // whose residual RMS is well below its `accuracy` accuracy: the accuracy is loose, the solution
 // does not bend to it.
 std::string LooseAccuracyMessage(const BundleGroupStatistics& group, const char* accuracy);
+// The note of a prior group whose residual RMS is well below its `accuracy` accuracy when its
+// redundancy share is unknown (statistics not computed): over-fitted and loose cannot be told
+// apart, no verdict (overfit false).
+std::string OverfitNotJudgedMessage(const BundleGroupStatistics& group, const char* accuracy);
 
 // The images' and cameras' own uncertainty carried into the covariance of a check point: given
 // its rays, the marks they come from (indices into Block::marks) and its intersection, the

@@ -347,6 +347,22 @@ TEST(BundleAdjustment, ALooseAccuracyTheBlockChecksIsNotOverfitted) {
       EXPECT_EQ(cameras->message, "");
     }
   }
+  // Without statistics the share is unknown: the same loose 3 m statement is then no verdict (not
+  // flagged over-fitted on its RMS alone), and the message says it was not judged.
+  SmallBlockOptions o;
+  o.gnss_noise_m = 0.03;
+  o.stated_gnss_m = 3.0;
+  SmallBlock data = MakeSmallBlock(o);
+  BundleAdjustmentOptions options = QuietOptions();
+  options.statistics.covariances = BundleCovarianceMethod::kNone;
+  BundleAdjustmentResult result;
+  ASSERT_TRUE(BundleAdjust(options, BundleAdjustmentConfig(), &data.block, &result).ok());
+  const BundleGroupStatistics* cameras = FindGroup(result, kCameraPositions);
+  ASSERT_NE(cameras, nullptr);
+  EXPECT_FALSE(std::isfinite(cameras->redundancy_share));
+  EXPECT_LT(cameras->ratio, 0.5);
+  EXPECT_FALSE(cameras->overfit);
+  EXPECT_NE(cameras->message.find("not judged"), std::string::npos) << cameras->message;
 }
 
 // Control points stated error-free (AccuracyX/Y/Z 0) are held fixed: the same adjustment as with
