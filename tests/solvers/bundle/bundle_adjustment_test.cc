@@ -1145,6 +1145,28 @@ TEST(BundleAdjustment, WhatNeedsTheStatisticsIsRefusedWithoutThem) {
   }
 }
 
+// A step's notice ends in the summary with either solver (the Taylor path dropped the rounds'
+// notices at its next round): variance components stopped at their iteration limit say so.
+TEST(BundleAdjustment, BothSolversSayWhenTheVarianceComponentsDidNotSettle) {
+  SmallBlockOptions o;
+  o.stated_mark_px = 2.0;  // four times the noise: the tie marks' factor is far from 1
+  const SmallBlock data = MakeSmallBlock(o);
+  for (const PoseSolver solver : {PoseSolver::kCeres, PoseSolver::kTaylor}) {
+    SCOPED_TRACE(EnumName(solver));
+    BundleAdjustmentOptions options = QuietOptions();
+    options.statistics.estimate_accuracies = true;
+    options.statistics.max_variance_iterations = 1;
+    Block block = data.block;
+    BundleAdjustmentResult result;
+    ASSERT_TRUE(
+        BundleAdjustWithSolver(solver, options, BundleAdjustmentConfig(), &block, &result).ok());
+    EXPECT_TRUE(result.summary.IsSolutionUsable()) << result.summary.BriefReport();
+    EXPECT_NE(result.summary.message.find("variance components did not settle in 1 iterations"),
+              std::string::npos)
+        << result.summary.message;
+  }
+}
+
 // ------------------------------------------------------------------ block diagnostics
 
 SmallBlockOptions Block48() {
