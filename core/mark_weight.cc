@@ -17,4 +17,9 @@ bool TakesFilmDefault(const BlockMark& mark, const BlockCamera& camera,
            camera.table.pixel_size_um > 0.0);
 }
 
+bool TakesPixelDefault(const BlockMark& mark, const BlockCamera& camera,
+                       const MarkSigmaDefaults& defaults) {
+  return !mark.accuracy && !TakesFilmDefault(mark, camera, defaults);
+}
+
 }  // namespace photopose

@@ -38,4 +38,10 @@ double MarkSigma(const BlockMark& mark, const BlockCamera& camera,
 bool TakesFilmDefault(const BlockMark& mark, const BlockCamera& camera,
                       const MarkSigmaDefaults& defaults);
 
+// True when MarkSigma gives `mark` its group's pixel_px (times the observation units or the pixel
+// size): a mark without an accuracy of its own that does not take the film default. The CLI
+// refuses --tie_accuracy and --marker_projection_accuracy for a block without such a mark.
+bool TakesPixelDefault(const BlockMark& mark, const BlockCamera& camera,
+                       const MarkSigmaDefaults& defaults);
+
 }  // namespace photopose

@@ -142,6 +142,17 @@ def test_options_config_and_errors():
     bad.robustness.max_rejection_rounds = -1
     with pytest.raises(pp.Error):
         pp.bundle_adjust(block, bad)
+    # What needs the statistics is refused without them, as the CLI refuses --snoop with
+    # --statistics=none (never skipped in silence).
+    needs = pp.BundleAdjustmentOptions()
+    needs.statistics.covariances = "none"
+    needs.robustness.snoop = True
+    with pytest.raises(pp.Error, match=r"data snooping \(robustness.snoop\) needs the statistics"):
+        pp.bundle_adjust(block, needs)
+    needs.robustness.snoop = False
+    needs.statistics.estimate_accuracies = True
+    with pytest.raises(pp.Error, match=r"statistics.estimate_accuracies\) needs the statistics"):
+        pp.bundle_adjust(block, needs)
     with pytest.raises(TypeError, match="progress: expected a callable"):
         pp.bundle_adjust(block, progress=3)
     with pytest.raises(TypeError):

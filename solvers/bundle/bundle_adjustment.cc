@@ -150,7 +150,23 @@ bool BundleAdjustmentOptions::IsValid(std::string* why) const {
     return Fail(why, "every accuracy must be positive and finite");
   if (a.attitude_deg && !Positive(*a.attitude_deg))
     return Fail(why, "the attitude accuracy must be positive");
-  return robustness.IsValid(why) && solver.IsValid(why) && statistics.IsValid(why);
+  if (!(robustness.IsValid(why) && solver.IsValid(why) && statistics.IsValid(why))) return false;
+  // What needs the statistics, refused without them rather than skipped in silence (both solvers:
+  // TaylorBundleOptions::IsValid checks its fields by this rule).
+  const bool covariances = statistics.covariances != BundleCovarianceMethod::kNone;
+  if (robustness.snoop && !covariances)
+    return Fail(why, "data snooping (robustness.snoop) needs the statistics: the w-test of an "
+                     "observation divides by its redundancy number, which comes from the "
+                     "covariances, and statistics.covariances is none");
+  if (robustness.snoop && !statistics.observation_diagnostics)
+    return Fail(why, "data snooping (robustness.snoop) needs the w-test of every observation, and "
+                     "statistics.observation_diagnostics is off");
+  if (statistics.estimate_accuracies && !covariances)
+    return Fail(why, "variance component estimation (statistics.estimate_accuracies) needs the "
+                     "statistics: a group's variance factor divides by its redundancy, the sum of "
+                     "its redundancy numbers from the covariances, and statistics.covariances is "
+                     "none");
+  return true;
 }
 
 Status BundleAdjustmentConfig::FromCalibrationNames(const Block& block,
@@ -604,6 +620,11 @@ Status CrossValidateControlPoints(const BundleAdjustmentOptions& options,
   const Clock::time_point start = Clock::now();
   *result = BundleCrossValidationResult();
   PHOTOPOSE_RETURN_IF_ERROR(Validate(options, "invalid options: "));
+  if (options.statistics.covariances == BundleCovarianceMethod::kNone)
+    return Status::Error(
+        "invalid options: cross-validation needs the statistics: a left-out control point's "
+        "normalized error weighs its error by the intersection's covariance, which takes the "
+        "images' own from the covariances, and statistics.covariances is none");
   if (config.lever_arm_m && !config.lever_arm_m->allFinite())
     return Status::Error("invalid options: the lever arm must be finite");
   std::vector<char> rejected;

@@ -142,7 +142,8 @@ struct BundleRobustnessOptions {
   // Data snooping: while the largest |w_i| exceeds k(alpha) (BundleStatisticsOptions::
   // snooping_alpha), remove that observation (a mark, or the whole prior of a control point, camera
   // position or attitude) and adjust again, one at a time, at most max_snooping_removals times
-  // (count). Replaces the rejection rounds above.
+  // (count). Replaces the rejection rounds above. Needs the covariances and the observation
+  // diagnostics (BundleStatisticsOptions; BundleAdjustmentOptions::IsValid refuses it without).
   bool snoop = false;
   int max_snooping_removals = 200;
   // Batch snooping: one round's statistics remove every observation one-at-a-time snooping would
@@ -254,7 +255,8 @@ struct BundleStatisticsOptions {
   // variance factor s_g^2 = (its whitened residuals' sum of squares) / (its redundancy, the sum of
   // its redundancy numbers) rescales the group's accuracies, and the block is adjusted again, until
   // every estimated factor is 1 within variance_tolerance or max_variance_iterations is reached.
-  // Needs the covariances (not kNone). A group whose redundancy is below
+  // Needs the covariances (not kNone: BundleAdjustmentOptions::IsValid refuses it without). A
+  // group whose redundancy is below
   // min_variance_redundancy is not estimated (its accuracy stays as stated, and says why).
   bool estimate_accuracies = false;
   int max_variance_iterations = 20;     // count
@@ -303,7 +305,9 @@ struct BundleAdjustmentOptions {
   BundleStatisticsOptions statistics;  // covariances, verdicts, diagnostics, variance components
   BundleSolverOptions solver;          // how the minimum is found
 
-  // Checks every part (the accuracies here, the others by their own IsValid).
+  // Checks every part (the accuracies here, the others by their own IsValid), then what one part
+  // needs of another: data snooping and variance components need the covariances (and snooping
+  // the observation diagnostics).
   bool IsValid(std::string* why) const;
 };
 
@@ -652,7 +656,8 @@ struct BundleCrossValidationResult {
 // Each control point of the adjusted block in turn becomes a check point; the block is adjusted
 // again without it (warm-started from `adjusted`, the marks rejected by `full` left out) and its
 // error recorded. Runs num_threads adjustments in parallel (0: all cores). A point whose removal
-// leaves no datum is reported as not cross-validated.
+// leaves no datum is reported as not cross-validated. Needs the covariances (an error with
+// statistics.covariances kNone: the normalized error would take the images as error-free).
 Status CrossValidateControlPoints(const BundleAdjustmentOptions& options,
                                   const BundleAdjustmentConfig& config, const Block& adjusted,
                                   const BundleAdjustmentResult& full, int num_threads,

@@ -16,6 +16,15 @@
 namespace photopose::internal {
 namespace {
 
+// Why a step that needs the covariances (snooping's w-test, a group's redundancy) could not take
+// them: the statistics turned off, or their computation failed (the statistics' own message, "no
+// covariances: ...", says why).
+std::string CovariancesMissing(const BundleAdjustmentOptions& options) {
+  return options.statistics.covariances == BundleCovarianceMethod::kNone
+             ? "the statistics are turned off (covariances none)"
+             : "they were not computed";
+}
+
 // Removes one observation found by data snooping: a mark, or the whole prior of a control point,
 // camera position or attitude.
 void RemoveObservation(const BundleObservationDiagnostics& d, BundlePlan* plan) {
@@ -65,7 +74,9 @@ void ScaleGroup(int g, double factor, BundlePlan* plan) {
 bool SnoopOne(RoundChanges* a, int r) {
   BundleAdjustmentResult* result = a->result;
   if (result->observations.empty() && !result->groups.empty())
-    result->summary.message = "data snooping needs the covariance; it was not computed";
+    AddRoundNotice("data snooping not done: its w-test needs the covariances; " +
+                       CovariancesMissing(a->options),
+                   &result->summary.message);
   const BundleObservationDiagnostics* worst = nullptr;
   for (const BundleObservationDiagnostics& d : result->observations) {
     if (!d.rejected) continue;
@@ -78,8 +89,9 @@ bool SnoopOne(RoundChanges* a, int r) {
   RemoveObservation(*worst, &trial);
   const Status still = RecheckBundlePlan(a->config, a->block, &trial);
   if (!still.ok()) {
-    result->summary.message = "data snooping stopped: removing " + std::string(EnumName(worst->group)) + " #" +
-                              std::to_string(worst->item) + " would leave " + still.message();
+    AddRoundNotice("data snooping stopped: removing " + std::string(EnumName(worst->group)) +
+                       " #" + std::to_string(worst->item) + " would leave " + still.message(),
+                   &result->summary.message);
     return false;
   }
   result->snooping.push_back(
@@ -127,8 +139,9 @@ bool SnoopBatch(RoundChanges* a, int r, bool* computed) {
     if (!still.ok()) {
       // The first of the round ends snooping as one at a time would; a later one waits.
       if (removed == 0)
-        result->summary.message = "data snooping stopped: removing " + std::string(EnumName(d.group)) +
-                                  " #" + std::to_string(d.item) + " would leave " + still.message();
+        AddRoundNotice("data snooping stopped: removing " + std::string(EnumName(d.group)) + " #" +
+                           std::to_string(d.item) + " would leave " + still.message(),
+                       &result->summary.message);
       break;
     }
     record(choice);
@@ -263,7 +276,9 @@ bool RescaleGroups(RoundChanges* a) {
   const GroupVariance& variance = *a->variance;
   BundleAdjustmentResult* result = a->result;
   if (!std::isfinite(variance.redundancy[0]) && variance.scalar_rows[0] > 0) {
-    result->summary.message = "accuracies not estimated: the covariance was not computed";
+    AddRoundNotice("accuracies not estimated: a group's redundancy needs the covariances; " +
+                       CovariancesMissing(options),
+                   &result->summary.message);
     return false;
   }
   double factors[kNumBundleGroups];
@@ -277,8 +292,9 @@ bool RescaleGroups(RoundChanges* a) {
   ++result->variance_iterations;
   if (!changed) return false;
   if (result->variance_iterations >= options.statistics.max_variance_iterations) {
-    result->summary.message = "variance components did not settle in " +
-                              std::to_string(result->variance_iterations) + " iterations";
+    AddRoundNotice("variance components did not settle in " +
+                       std::to_string(result->variance_iterations) + " iterations",
+                   &result->summary.message);
     return false;
   }
   for (int g = 0; g < kNumBundleGroups; ++g) {
@@ -290,6 +306,11 @@ bool RescaleGroups(RoundChanges* a) {
 }
 
 }  // namespace
+
+void AddRoundNotice(const std::string& notice, std::string* message) {
+  if (message->find(notice) != std::string::npos) return;
+  *message += (message->empty() ? "" : "; ") + notice;
+}
 
 ConditionedTest ConditionedSnoopingTest(const SnoopingCandidates& candidates,
                                         const std::vector<int>& taken,
@@ -394,6 +415,9 @@ void ReportEstimatedAccuracies(const RoundChanges& a) {
       group.estimated_accuracy_standard_error = 1.0 / std::sqrt(2.0 * r);
       group.stated_accuracy /= a.group_scale[g];
       group.ratio *= a.group_scale[g];
+    } else if (!std::isfinite(r)) {
+      group.estimation_message =
+          "not estimated: its redundancy needs the covariances; " + CovariancesMissing(a.options);
     } else {
       std::ostringstream message;
       message << "not estimated: the rest of the block checks it too little (redundancy "

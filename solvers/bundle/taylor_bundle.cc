@@ -800,17 +800,11 @@ bool TaylorBundleOptions::IsValid(std::string* why) const {
   auto positive = [](double v) { return v > 0.0 && std::isfinite(v); };
   if (partials != TaylorPartials::kCorrected && partials != TaylorPartials::kAsPrinted)
     return fail("partials is not a TaylorPartials value");
-  // The accuracies are checked by the rule BundleAdjust applies to the same struct.
-  BundleAdjustmentOptions objective;
-  objective.accuracies = accuracies;
-  objective.statistics = statistics;
-  objective.robustness.tie_loss = tie_loss;
-  objective.robustness.tie_loss_scale_sigmas = tie_loss_scale_sigmas;
-  if (const Status valid = Validate(objective); !valid.ok()) return fail(valid.message());
-  if (!(rejection_threshold >= 0.0) || !std::isfinite(rejection_threshold))
-    return fail("the rejection threshold must be >= 0 (0: no rejection)");
-  if (max_rejection_rounds < 0) return fail("max_rejection_rounds must be >= 0");
-  if (max_snooping_removals < 0) return fail("max_snooping_removals must be >= 0");
+  // The accuracies, the loss, the rejection and snooping limits, the threads, the statistics and
+  // what needs them (snooping, variance components) are checked by the rule BundleAdjust applies
+  // to the options the rounds run with.
+  if (const Status valid = Validate(AdjustmentOptionsOf(*this)); !valid.ok())
+    return fail(valid.message());
   if (max_iterations < 1) return fail("max_iterations must be at least 1");
   if (damping != TaylorDamping::kNone && damping != TaylorDamping::kLevenbergMarquardt)
     return fail("damping is not a TaylorDamping value");
@@ -822,7 +816,6 @@ bool TaylorBundleOptions::IsValid(std::string* why) const {
     return fail("min_gain_ratio must be in [0, 1)");
   if (!(max_damping > initial_damping) || !std::isfinite(max_damping))
     return fail("max_damping must be finite and greater than initial_damping");
-  if (num_threads < 0) return fail("num_threads must be >= 0 (0: every core)");
   if (partials == TaylorPartials::kAsPrinted && damping != TaylorDamping::kNone)
     return fail(
         "the as-printed partials are not the derivative of the objective, so Levenberg-Marquardt's "
@@ -1196,6 +1189,10 @@ Status TaylorBundleAdjust(const TaylorBundleOptions& options,
   Statistics statistics(adjustment_options, config, *block, plan);
   Rounds rounds{&plan, &state, &adjustment_options, &statistics, {}, {}, {}, {}};
   bool marks_removed_only = false;
+  // The steps' notices (snooping not done or stopped, accuracies not estimated, variance
+  // components not settled) are the adjustment's, not a round's: kept past the next round, whose
+  // statistics start the message again.
+  std::string notices;
   for (int round = 1;; ++round) {
     std::string message;
     const SolverTermination type = AdjustRound(context, round, &rounds, result, &message);
@@ -1220,9 +1217,12 @@ Status TaylorBundleAdjust(const TaylorBundleOptions& options,
                               "round " + std::to_string(round) + ": " + determined.message(), start,
                               result);
     }
+    const size_t said = out.summary.message.size();  // the round's statistics' own words
     const internal::RoundChange change = internal::ChangeAfterRound(&changes, round);
     if (change == internal::RoundChange::kFailed)
       return FinishAdjustment(SolverTermination::kFailure, out.summary.message, start, result);
+    if (out.summary.message.size() > said)
+      internal::AddRoundNotice(out.summary.message.substr(said == 0 ? 0 : said + 2), &notices);
     if (change == internal::RoundChange::kNone) break;
     marks_removed_only = change == internal::RoundChange::kMarksRemoved;
   }
@@ -1235,6 +1235,7 @@ Status TaylorBundleAdjust(const TaylorBundleOptions& options,
                             start, result);
   }
   summary.num_rejected_marks = static_cast<int>(out.rejected_marks.size());
+  if (!notices.empty()) internal::AddRoundNotice(notices, &summary.message);
   if (adjustment_options.statistics.estimate_accuracies)
     internal::ReportEstimatedAccuracies(changes);
   WriteBack(plan, state, frame, block);

@@ -73,22 +73,35 @@ TEST(MarkSigma, FilmDefaultAsGivenWhenThePixelSizeIsNotToBeUsed) {
   EXPECT_NEAR(MarkSigma(Mark(MarkUnit::kPixel, 9.0), FrameCamera(9.0), defaults), 4.5, kTolerance);
 }
 
+// A COLMAP camera (pixels) with a pixel size that must not enter.
+BlockCamera ColmapCamera() {
+  BlockCamera camera = FrameCamera(9.0);
+  camera.model = CameraModelType::kSimpleRadial;
+  return camera;
+}
+
+MarkSigmaDefaults WithoutPixelSize(MarkSigmaDefaults defaults) {
+  defaults.film_from_pixel_size = false;
+  return defaults;
+}
+
+// A mark, its camera and defaults, and whether it takes the default a test is about.
+struct TakesCase {
+  BlockMark mark;
+  BlockCamera camera;
+  MarkSigmaDefaults defaults;
+  bool takes;
+};
+
 // TakesFilmDefault says exactly when MarkSigma returns film_um: a film default no other value can
 // equal (0.123 um) tells.
 TEST(TakesFilmDefault, ExactlyWhenMarkSigmaReturnsTheFilmDefault) {
   constexpr double kFilmDefaultUm = 0.123;
   BlockMark own = Mark(MarkUnit::kFilm, 1.0);
   own.accuracy = 2.0;
-  BlockCamera colmap = FrameCamera(9.0);
-  colmap.model = CameraModelType::kSimpleRadial;
-  MarkSigmaDefaults no_pixel_size = Defaults(0.5, kFilmDefaultUm);
-  no_pixel_size.film_from_pixel_size = false;
-  const struct {
-    BlockMark mark;
-    BlockCamera camera;
-    MarkSigmaDefaults defaults;
-    bool takes;
-  } cases[] = {
+  const BlockCamera colmap = ColmapCamera();
+  const MarkSigmaDefaults no_pixel_size = WithoutPixelSize(Defaults(0.5, kFilmDefaultUm));
+  const TakesCase cases[] = {
       {Mark(MarkUnit::kFilm, 1.0), FrameCamera(0.0), Defaults(0.5, kFilmDefaultUm), true},
       {Mark(MarkUnit::kFilm, 1.0), colmap, Defaults(0.5, kFilmDefaultUm), true},
       {Mark(MarkUnit::kFilm, 1.0), FrameCamera(9.0), no_pixel_size, true},
@@ -99,6 +112,31 @@ TEST(TakesFilmDefault, ExactlyWhenMarkSigmaReturnsTheFilmDefault) {
   for (const auto& c : cases) {
     EXPECT_EQ(TakesFilmDefault(c.mark, c.camera, c.defaults), c.takes);
     EXPECT_EQ(MarkSigma(c.mark, c.camera, c.defaults) == kFilmDefaultUm, c.takes);
+  }
+}
+
+// TakesPixelDefault says exactly when MarkSigma depends on the pixel default: two pixel defaults
+// give two sigmas for such a mark and one for every other.
+TEST(TakesPixelDefault, ExactlyWhenMarkSigmaDependsOnThePixelDefault) {
+  BlockMark own = Mark(MarkUnit::kPixel, 1.0);
+  own.accuracy = 0.7;
+  const BlockCamera colmap = ColmapCamera();
+  const MarkSigmaDefaults no_pixel_size = WithoutPixelSize(Defaults(0.5, 2.5));
+  const TakesCase cases[] = {
+      {Mark(MarkUnit::kPixel, 1.0), colmap, Defaults(0.5, 2.5), true},
+      {Mark(MarkUnit::kPixel, 6.0), FrameCamera(6.0), Defaults(0.5, 2.5), true},
+      {Mark(MarkUnit::kFilm, 1.0), FrameCamera(9.0), Defaults(0.5, 2.5), true},
+      {Mark(MarkUnit::kFilm, 1.0), FrameCamera(0.0), Defaults(0.5, 2.5), false},
+      {Mark(MarkUnit::kFilm, 1.0), colmap, Defaults(0.5, 2.5), false},
+      {Mark(MarkUnit::kFilm, 1.0), FrameCamera(9.0), no_pixel_size, false},
+      {own, colmap, Defaults(0.5, 2.5), false},
+  };
+  for (const auto& c : cases) {
+    MarkSigmaDefaults other = c.defaults;
+    other.pixel_px *= 3.0;
+    EXPECT_EQ(TakesPixelDefault(c.mark, c.camera, c.defaults), c.takes);
+    EXPECT_EQ(MarkSigma(c.mark, c.camera, c.defaults) != MarkSigma(c.mark, c.camera, other),
+              c.takes);
   }
 }
 

@@ -15,6 +15,7 @@
 #include <filesystem>
 #include <fstream>
 #include <map>
+#include <nlohmann/json.hpp>
 #include <sstream>
 #include <string>
 #include <vector>
@@ -36,6 +37,19 @@ inline std::string ReadFile(const std::string& path) {
   std::stringstream s;
   s << in.rdbuf();
   return s.str();
+}
+
+// Each group of a `bundle --report` by name: the first axis of its stated accuracy, in the
+// group's unit (a prior group's X).
+inline std::map<std::string, double> StatedAccuracies(const std::string& report_path) {
+  std::map<std::string, double> stated;
+  const nlohmann::json report = nlohmann::json::parse(ReadFile(report_path));
+  for (const nlohmann::json& group : report.at("groups")) {
+    const nlohmann::json& a = group.at("stated_accuracy");
+    stated[group.at("name").get<std::string>()] =
+        a.is_array() ? a[0].get<double>() : a.get<double>();
+  }
+  return stated;
 }
 
 inline void WriteFile(const std::string& path, const std::string& text) {

@@ -345,6 +345,16 @@ int OptionsFromFlags(const char* command, BundleRun* run) {
     return BadInput(command, "--relative_gauge must be free or fixed, not '" + FLAGS_bundle_relative_gauge + "'");
   solver.free_gauge_for_relative_blocks = FLAGS_bundle_relative_gauge == "free";
   solver.progress = FLAGS_bundle_quiet ? CancelWhenAsked : PrintProgress;
+  // What needs the statistics is refused without them, never skipped in silence: the rule of
+  // BundleAdjustmentOptions::IsValid and CrossValidateControlPoints, said in the flags' names.
+  if (options.statistics.covariances == BundleCovarianceMethod::kNone) {
+    const std::pair<bool, std::string> needs[] = {
+        {FLAGS_bundle_snoop, "--snoop needs the statistics (the w-test divides each residual by its observation's redundancy number, from the covariances)"},
+        {FLAGS_bundle_estimate_accuracies, "--estimate_accuracies needs the statistics (a group's variance factor divides by its redundancy, the sum of its redundancy numbers, from the covariances)"},
+        {FLAGS_bundle_cross_validate, "--cross_validate needs the statistics (a left-out control point's normalized error takes the images' uncertainty from the covariances)"}};
+    for (const auto& [asked, why] : needs)
+      if (asked) return BadInput(command, why + "; --statistics=none computes none: give --statistics=full or leave the flag out");
+  }
   if (const Status valid = Validate(options); !valid.ok()) return BadInput(command, valid.message());
   for (const std::string& name : SplitCommaList(FLAGS_bundle_calibrate))
     if (!name.empty()) run->calibrate.push_back(name);
@@ -564,7 +574,8 @@ int ReadGeoreferenceInputs(const char* command, const BundleRun& run, Georeferen
   return ControlFromFiles(command, inputs);
 }
 
-// Moves the model into the local frame of its positions and control (PrepareGeoreference).
+// Moves the model into the local frame of its positions and control (PrepareGeoreference);
+// printed by PrintGeoreference once the flags are checked against the block it gives.
 int GeoreferenceModel(const char* command, BundleRun* run) {
   GeoreferenceInputs inputs;
   const int code = ReadGeoreferenceInputs(command, *run, &inputs);
@@ -575,8 +586,13 @@ int GeoreferenceModel(const char* command, BundleRun* run) {
   options.default_marker_accuracy_m = run->options.accuracies.marker_m;
   const Status prepared = PrepareGeoreference(options, inputs, &run->block, &run->georeferenced);
   if (!prepared.ok()) return BadInput(command, prepared.message());
-  const GeoreferenceResult& g = run->georeferenced;
   if (!inputs.positions.empty()) run->options.accuracies.camera_positions_are_priors = true;
+  return kGoOn;
+}
+
+// The georeferencing's lines on stderr (unless --quiet): the output CRS, what matched, the
+// similarity.
+void PrintGeoreference(const GeoreferenceResult& g) {
   if (!FLAGS_bundle_quiet) {
     std::cerr << "photopose bundle: georeference: output CRS " << g.out_crs << " (" << g.out_crs_info.name
               << ", " << g.out_crs_reason << "); " << g.positions_matched << " camera positions matched";
@@ -591,13 +607,13 @@ int GeoreferenceModel(const char* command, BundleRun* run) {
     if (g.check_after_similarity.count > 0) std::cerr << "; check RMSE after it " << FormatLengthWithUnit(g.check_after_similarity.total_m);
     std::cerr << "\n";
   }
-  return kGoOn;
 }
 
 // The accuracy and datum flags this block cannot use, refused when given (issue 21: a flag
-// silently ignored is a defect): the one rule of what each needs, run once the block is read (film
-// marks and measured attitudes are in its data), before the georeferencing and any adjustment.
-// A given flag is one set on the command line or in a flag file (FlagGiven), even to its default.
+// silently ignored is a defect): the one rule of what each needs, run once the block is read and,
+// for a model, georeferenced (its camera positions and control are then in the block; nothing is
+// printed before), before any adjustment. A given flag is one set on the command line or in a
+// flag file (FlagGiven), even to its default.
 int RefuseFlagsWithoutEffect(const char* command, const BundleRun& run) {
   const std::string models = "the marks of --colmap_model, --opensfm and --bal are pixels";
   // A block with control points or camera positions has them as its datum: the tables (a table
@@ -609,21 +625,46 @@ int RefuseFlagsWithoutEffect(const char* command, const BundleRun& run) {
     if (FlagGiven("bundle_relative_gauge"))
       return BadInput(command, std::string("--relative_gauge chooses how a relative block's gauge is held while it is solved (a model without positions or control, or --bal)") + datum);
   }
-  // The defaults only some marks and images take (core/mark_weight.h, TakesFilmDefault; the
-  // attitude prior of PlanImagePriors, solvers/bundle/bundle_problem.cc).
+  // The defaults only some marks, points and images take: a mark's (core/mark_weight.h,
+  // TakesPixelDefault, TakesFilmDefault; check marks take the control marks' defaults,
+  // solvers/bundle/check_points.h), a control or check point's without AccuracyX/Y/Z (its prior
+  // in MakeBundlePlan, the check points' and the cross-validation's SurveyedPointErrorCovariance,
+  // the similarity of PrepareGeoreference), a measured position's and attitude's without their
+  // own accuracies (PlanImagePriors, solvers/bundle/bundle_problem.cc; the similarity).
   const Block& block = run.block;
-  bool film_tie = false, film_control = false, attitude = false;
+  bool tie_marks = false, control_marks = false, tie_pixel = false, control_pixel = false;
+  bool film_tie = false, film_control = false, surveyed = false, surveyed_default = false;
+  bool positions = false, position_default = false, attitude = false;
   const MarkSigmaDefaults defaults;
   for (const BlockMark& mark : block.marks) {
-    if (!TakesFilmDefault(mark, block.cameras[block.images[mark.image].camera], defaults)) continue;
-    (block.points[mark.point].role == PointRole::kTie ? film_tie : film_control) = true;
+    const BlockCamera& camera = block.cameras[block.images[mark.image].camera];
+    const bool tie = block.points[mark.point].role == PointRole::kTie;
+    (tie ? tie_marks : control_marks) = true;
+    if (TakesPixelDefault(mark, camera, defaults)) (tie ? tie_pixel : control_pixel) = true;
+    if (TakesFilmDefault(mark, camera, defaults)) (tie ? film_tie : film_control) = true;
   }
-  for (const BlockImage& image : block.images)
+  for (const BlockPoint& point : block.points) {
+    if (point.role == PointRole::kTie) continue;
+    surveyed = true;
+    surveyed_default = surveyed_default || !point.accuracy_m;
+  }
+  for (const BlockImage& image : block.images) {
+    positions = positions || image.measured_center_m.has_value();
+    position_default = position_default || (image.measured_center_m && !image.center_accuracy_m);
     attitude = attitude || (image.measured_angles_rad && !image.attitude_accuracy_rad);
+  }
+  if (FlagGiven("bundle_tie_accuracy") && !tie_pixel)
+    return BadInput(command, std::string("--tie_accuracy is the accuracy of tie marks without an Accuracy (pixels, or film coordinates on a camera with a pixel size); no mark of this block is one") + (tie_marks ? " (every tie mark has its own Accuracy or takes --film_tie_accuracy)" : " (it has no tie marks)"));
+  if (FlagGiven("bundle_marker_projection_accuracy") && !control_pixel)
+    return BadInput(command, std::string("--marker_projection_accuracy is the accuracy of control and check marks without an Accuracy (pixels, or film coordinates on a camera with a pixel size); no mark of this block is one") + (control_marks ? " (every control and check mark has its own Accuracy or takes --film_marker_projection_accuracy)" : " (it has no control or check marks)"));
   if (FlagGiven("bundle_film_tie_accuracy") && !film_tie)
     return BadInput(command, "--film_tie_accuracy is the accuracy of tie marks in film coordinates (FilmX/FilmY) without an Accuracy, on a camera without a pixel size; no mark of this block is one" + (run.tables ? std::string() : " (" + models + ")"));
   if (FlagGiven("bundle_film_marker_projection_accuracy") && !film_control)
     return BadInput(command, "--film_marker_projection_accuracy is the accuracy of control and check marks in film coordinates (FilmX/FilmY) without an Accuracy, on a camera without a pixel size; no mark of this block is one" + (run.tables ? std::string() : " (" + models + ", and so are a model's control marks)"));
+  if (FlagGiven("bundle_marker_accuracy") && !surveyed_default)
+    return BadInput(command, std::string("--marker_accuracy is the accuracy of control and check point coordinates without AccuracyX/Y/Z; no point of this block is one") + (surveyed ? " (every control and check point has its own AccuracyX/Y/Z)" : run.tables ? " (no control or check point in --points)" : " (no control: --gcp_list, or --points with --crs, give it beside a model)"));
+  if (FlagGiven("bundle_camera_accuracy") && !position_default)
+    return BadInput(command, std::string("--camera_accuracy is the accuracy of measured camera positions without their own (AccuracyX/Y/Z, a geo.txt's or RTK accuracies); no image of this block has one") + (positions ? " (every camera position has its own accuracy)" : run.tables ? " (no --frames)" : " (no camera positions: --geo, --frames, --images or --model_gps give them beside a model)"));
   if (FlagGiven("bundle_attitude_accuracy") && !attitude)
     return BadInput(command, "--attitude_accuracy is the accuracy of measured attitudes without AccuracyOmega/Phi/Kappa (a frames table's Omega/Phi/Kappa with the tables); no image of this block has one" + (run.tables ? std::string(FLAGS_bundle_frames.empty() ? " (no --frames)" : " (every row of --frames has AccuracyOmega/Phi/Kappa)") : std::string(" (the attitudes of --colmap_model, --opensfm and --bal are unknowns of the adjustment, and those of --geo or --frames beside a model are read and not used)")));
   return kGoOn;
@@ -669,11 +710,12 @@ int ReadBundleBlock(const char* command, BundleRun* run) {
     const Status read = ReadBalProblem(FLAGS_bundle_bal, &block);
     if (!read.ok()) return BadInput(command, read.message());
   }
-  if (const int refused = RefuseFlagsWithoutEffect(command, *run); refused != kGoOn) return refused;
   if (run->georeference) {
     const int code = GeoreferenceModel(command, run);
     if (code != kGoOn) return code;
   }
+  if (const int refused = RefuseFlagsWithoutEffect(command, *run); refused != kGoOn) return refused;
+  if (run->georeference) PrintGeoreference(run->georeferenced);
   if (block.images.empty()) return BadInput(command, "the block has no image with marks");
   const Status calibration = BundleAdjustmentConfig::FromCalibrationNames(block, run->calibrate, &run->config);
   if (!calibration.ok()) return BadInput(command, "--calibrate: " + calibration.message());
@@ -781,8 +823,15 @@ int CheckSigma0(const char* command, BundleRun* run) {
                 << ObservationName(run->block, *surveyed) << ", |w| " << FormatUnitless(std::abs(surveyed->normalized), 1)
                 << " > " << FormatUnitless(result.critical_value, 2) << ")";
     }
-    std::cerr << ": the block disagrees with its stated accuracies by more than noise; searching every group for gross errors (data snooping, at most "
-              << kSearchRemovals << " removals)\n";
+    std::cerr << ": the block disagrees with its stated accuracies by more than noise";
+  }
+  // Data snooping needs the statistics: with --statistics=none (only sigma0 can give the alarm then)
+  // the block is not searched, and the failure below says so.
+  const bool searchable = run->options.statistics.covariances != BundleCovarianceMethod::kNone;
+  if (!run->options.robustness.snoop && !searchable)
+    std::cerr << "; not searched for gross errors (data snooping needs the statistics, and --statistics=none computes none)\n";
+  if (!run->options.robustness.snoop && searchable) {
+    std::cerr << "; searching every group for gross errors (data snooping, at most " << kSearchRemovals << " removals)\n";
     BundleAdjustmentOptions search = run->options;
     search.robustness.snoop = true;
     search.robustness.max_snooping_removals = kSearchRemovals;
@@ -804,8 +853,13 @@ int CheckSigma0(const char* command, BundleRun* run) {
     if (g.count > 0 && g.ratio > kSigma0Bound) groups.push_back(&g);
   std::sort(groups.begin(), groups.end(), [](const auto* a, const auto* b) { return a->ratio > b->ratio; });
   std::ostringstream why;
-  why << "sigma0 " << FormatUnitless(result.summary.sigma0, 2) << " stays above " << FormatUnitless(kSigma0Bound, 0)
-      << " after the search for gross errors: the stated accuracies do not describe these data";
+  if (searchable) {
+    why << "sigma0 " << FormatUnitless(result.summary.sigma0, 2) << " stays above " << FormatUnitless(kSigma0Bound, 0)
+        << " after the search for gross errors: the stated accuracies do not describe these data";
+  } else {
+    why << "sigma0 " << FormatUnitless(result.summary.sigma0, 2) << " is above " << FormatUnitless(kSigma0Bound, 0)
+        << " and the block was not searched for gross errors (--statistics=none): the stated accuracies do not describe these data, or gross errors are in them";
+  }
   for (size_t k = 0; k < groups.size(); ++k)
     why << (k == 0 ? "; groups to blame: " : ", ") << EnumName(groups[k]->group) << " (RMS/stated " << FormatUnitless(groups[k]->ratio, 2) << ")";
   std::vector<const BundleObservationDiagnostics*> worst;

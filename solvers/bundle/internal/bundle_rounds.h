@@ -6,6 +6,7 @@
 // interface.
 
 #include <Eigen/Core>
+#include <string>
 #include <vector>
 
 #include "core/block.h"
@@ -91,6 +92,10 @@ enum class RoundChange {
 // rejected marks is added to result->summary.rejection_seconds. kFailed sets the summary's
 // termination and message.
 RoundChange ChangeAfterRound(RoundChanges* changes, int r);
+// A step's notice (snooping not done or stopped, accuracies not estimated, variance components not
+// settled) added to a summary's message after what it says already (the statistics' reason when the
+// covariances are missing, an earlier notice), once, so that no notice hides another.
+void AddRoundNotice(const std::string& notice, std::string* message);
 // After the last round, with estimate_accuracies: each group's estimated accuracy (the sigmas in
 // use) and its standard error, the stated accuracy the user's, or why it was not estimated.
 void ReportEstimatedAccuracies(const RoundChanges& changes);

@@ -1095,6 +1095,94 @@ TEST(BundleAdjustment, RefusesBlocksItCannotAdjust) {
   }
 }
 
+// Issue 22: what needs the statistics is refused without them, never skipped in silence (data
+// snooping with covariances none ran no test and kept 20 blunders): by BundleAdjust, the Taylor
+// path and the cross-validation, naming the option; the same request with the statistics runs.
+TEST(BundleAdjustment, WhatNeedsTheStatisticsIsRefusedWithoutThem) {
+  const SmallBlock data = MakeSmallBlock(SmallBlockOptions());
+  const struct {
+    bool snoop;
+    bool estimate;
+    bool diagnostics;
+    BundleCovarianceMethod without;  // the statistics the request is refused with
+    std::string message;
+  } cases[] = {
+      {true, false, true, BundleCovarianceMethod::kNone,
+       "invalid options: data snooping (robustness.snoop) needs the statistics"},
+      {false, true, true, BundleCovarianceMethod::kNone,
+       "invalid options: variance component estimation (statistics.estimate_accuracies) needs the "
+       "statistics"},
+      {true, false, false, BundleCovarianceMethod::kSelectedInversion,
+       "invalid options: data snooping (robustness.snoop) needs the w-test of every observation, "
+       "and statistics.observation_diagnostics is off"},
+  };
+  for (const PoseSolver solver : {PoseSolver::kCeres, PoseSolver::kTaylor}) {
+    for (const auto& c : cases) {
+      SCOPED_TRACE(std::string(EnumName(solver)) + ": " + c.message);
+      BundleAdjustmentOptions options = QuietOptions();
+      options.robustness.snoop = c.snoop;
+      options.statistics.estimate_accuracies = c.estimate;
+      options.statistics.observation_diagnostics = c.diagnostics;
+      options.statistics.covariances = c.without;
+      Block block = data.block;
+      BundleAdjustmentResult result;
+      const Status refused =
+          BundleAdjustWithSolver(solver, options, BundleAdjustmentConfig(), &block, &result);
+      ASSERT_FALSE(refused.ok());
+      EXPECT_EQ(refused.message().rfind(c.message, 0), 0u) << refused.message();
+      options.statistics.covariances = BundleCovarianceMethod::kSelectedInversion;
+      options.statistics.observation_diagnostics = true;
+      const Status adjusted =
+          BundleAdjustWithSolver(solver, options, BundleAdjustmentConfig(), &block, &result);
+      ASSERT_TRUE(adjusted.ok()) << adjusted.message();
+      EXPECT_TRUE(result.summary.IsSolutionUsable()) << result.summary.BriefReport();
+    }
+  }
+  // The cross-validation: refused after an adjustment without statistics, run after one with.
+  for (const BundleCovarianceMethod method :
+       {BundleCovarianceMethod::kNone, BundleCovarianceMethod::kSelectedInversion}) {
+    BundleAdjustmentOptions options = QuietOptions();
+    options.statistics.covariances = method;
+    Block block = data.block;
+    BundleAdjustmentResult full;
+    ASSERT_TRUE(BundleAdjust(options, BundleAdjustmentConfig(), &block, &full).ok());
+    BundleCrossValidationResult cv;
+    const Status status =
+        CrossValidateControlPoints(options, BundleAdjustmentConfig(), block, full, 1, &cv);
+    if (method == BundleCovarianceMethod::kNone) {
+      ASSERT_FALSE(status.ok());
+      EXPECT_EQ(status.message().rfind("invalid options: cross-validation needs the statistics", 0),
+                0u)
+          << status.message();
+    } else {
+      ASSERT_TRUE(status.ok()) << status.message();
+      EXPECT_GT(cv.count, 0);
+    }
+  }
+}
+
+// A step's notice ends in the summary with either solver (the Taylor path dropped the rounds'
+// notices at its next round): variance components stopped at their iteration limit say so.
+TEST(BundleAdjustment, BothSolversSayWhenTheVarianceComponentsDidNotSettle) {
+  SmallBlockOptions o;
+  o.stated_mark_px = 2.0;  // four times the noise: the tie marks' factor is far from 1
+  const SmallBlock data = MakeSmallBlock(o);
+  for (const PoseSolver solver : {PoseSolver::kCeres, PoseSolver::kTaylor}) {
+    SCOPED_TRACE(EnumName(solver));
+    BundleAdjustmentOptions options = QuietOptions();
+    options.statistics.estimate_accuracies = true;
+    options.statistics.max_variance_iterations = 1;
+    Block block = data.block;
+    BundleAdjustmentResult result;
+    ASSERT_TRUE(
+        BundleAdjustWithSolver(solver, options, BundleAdjustmentConfig(), &block, &result).ok());
+    EXPECT_TRUE(result.summary.IsSolutionUsable()) << result.summary.BriefReport();
+    EXPECT_NE(result.summary.message.find("variance components did not settle in 1 iterations"),
+              std::string::npos)
+        << result.summary.message;
+  }
+}
+
 // ------------------------------------------------------------------ block diagnostics
 
 SmallBlockOptions Block48() {

@@ -489,6 +489,77 @@ TEST(BatchSnooping, StopsWhereTheBlockCouldNotLoseTheNextAsOneAtATime) {
   }
 }
 
+// ------------------------------------------------------------------ the steps' notices
+
+// The round a step sees when its statistics have no covariances: one tie-mark group of 10 rows,
+// redundancy NaN, the statistics' own message in the summary.
+struct RoundWithoutCovariances {
+  explicit RoundWithoutCovariances(BundleCovarianceMethod method, const std::string& said) {
+    options.statistics.covariances = method;
+    options.robustness.snoop = true;
+    options.statistics.estimate_accuracies = true;
+    result.groups.resize(1);
+    result.groups[0].group = kTieMarks;
+    result.groups[0].count = 10;
+    result.summary.message = said;
+    variance.scalar_rows[kTieMarks] = 10;
+    variance.whitened_ssq[kTieMarks] = 10.0;
+    for (double& r : variance.redundancy) r = std::nan("");
+  }
+  BundleAdjustmentOptions options;
+  BundleAdjustmentConfig config;
+  Block block;  // read only when an observation is removed: none is here
+  BundlePlan plan;
+  BundleAdjustmentResult result;
+  GroupVariance variance;
+};
+
+// Issue 22: without covariances snooping and the variance components cannot run; each says so
+// after the statistics' own reason, neither hides the other (the accuracies' notice overwrote
+// snooping's), and a group's estimation message gives the true reason (it said "the rest of the
+// block checks it too little (redundancy n/a < 5)").
+TEST(RoundNotices, WithoutCovariancesEveryStepSaysWhyAndNoneHidesAnother) {
+  const struct {
+    BundleCovarianceMethod method;
+    std::string said;    // the statistics' message (internal/bundle_statistics.h)
+    std::string reason;  // why the covariances are missing, as the notices give it
+  } cases[] = {
+      {BundleCovarianceMethod::kNone, "covariances not computed (statistics turned off)",
+       "the statistics are turned off (covariances none)"},
+      {BundleCovarianceMethod::kSelectedInversion,
+       "no covariances: a point is not determined by its rays", "they were not computed"},
+  };
+  for (const auto& c : cases) {
+    SCOPED_TRACE(c.said);
+    RoundWithoutCovariances a(c.method, c.said);
+    RoundChanges changes(a.options, a.config, a.block, &a.plan, &a.result, &a.variance);
+    EXPECT_EQ(ChangeAfterRound(&changes, 1), RoundChange::kNone);
+    EXPECT_EQ(a.result.summary.message,
+              c.said + "; data snooping not done: its w-test needs the covariances; " + c.reason +
+                  "; accuracies not estimated: a group's redundancy needs the covariances; " +
+                  c.reason);
+    // A notice said once, however often its step runs.
+    ChangeAfterRound(&changes, 2);
+    EXPECT_EQ(a.result.summary.message.find("data snooping not done"),
+              a.result.summary.message.rfind("data snooping not done"));
+    ReportEstimatedAccuracies(changes);
+    EXPECT_EQ(a.result.groups[0].estimation_message,
+              "not estimated: its redundancy needs the covariances; " + c.reason);
+  }
+  // With covariances, a group the block checks too little says so with its redundancy.
+  RoundWithoutCovariances a(BundleCovarianceMethod::kSelectedInversion, "");
+  a.options.robustness.snoop = false;
+  a.variance.redundancy[kTieMarks] = 3.0;
+  RoundChanges changes(a.options, a.config, a.block, &a.plan, &a.result, &a.variance);
+  EXPECT_EQ(ChangeAfterRound(&changes, 1), RoundChange::kNone);
+  EXPECT_EQ(a.result.summary.message, "");
+  ReportEstimatedAccuracies(changes);
+  EXPECT_EQ(a.result.groups[0].estimation_message.rfind(
+                "not estimated: the rest of the block checks it too little (redundancy 3", 0),
+            0u)
+      << a.result.groups[0].estimation_message;
+}
+
 // ------------------------------------------------------------------ rejection rounds
 
 // A tie point seen by exactly three images with a 20-50 px blunder on one mark, in four

@@ -49,6 +49,25 @@ std::string TableArgs(const std::string& block) {
          "/marks.csv --frames=" + block + "/frames.csv";
 }
 
+// Copies the CSV table `from` to `to` without the columns named.
+void CopyWithoutColumns(const std::string& from, const std::string& to,
+                        const std::set<std::string>& names) {
+  const std::vector<std::vector<std::string>> rows = SplitCsvText(ReadFile(from));
+  ASSERT_FALSE(rows.empty()) << from;
+  std::string text;
+  for (const std::vector<std::string>& row : rows) {
+    if (row.size() != rows[0].size()) continue;  // the empty last line
+    bool first = true;
+    for (size_t k = 0; k < row.size(); ++k) {
+      if (names.count(rows[0][k])) continue;
+      text += (first ? "" : ",") + row[k];
+      first = false;
+    }
+    text += "\n";
+  }
+  testing::WriteFile(to, text);
+}
+
 TEST(BundleCommand, SimulatedBlockAdjustsToItsTruthWithEveryBlunderFound) {
   const std::string dir = ScratchDir();
   const std::string block = SimulateBlock(dir);
@@ -591,6 +610,33 @@ TEST(BundleCommand, AccuracyAndDatumFlagsTheBlockCannotUseAreRefused) {
        "this block has one (no --frames)"},
       {model + " --attitude_accuracy=1", "(the attitudes of --colmap_model, --opensfm and --bal are unknowns"},
       {model + " --film_tie_accuracy=3", "no mark of this block is one (the marks of --colmap_model, --opensfm and --bal are pixels)"},
+      // The simulated tables state every mark's, point's and position's accuracy: no default is
+      // taken (issue 21 audit: these four were accepted and ignored).
+      {tables + " --tie_accuracy=2",
+       "photopose bundle: --tie_accuracy is the accuracy of tie marks without an Accuracy (pixels, "
+       "or film coordinates on a camera with a pixel size); no mark of this block is one (every "
+       "tie mark has its own Accuracy or takes --film_tie_accuracy)"},
+      {tables + " --marker_projection_accuracy=1",
+       "photopose bundle: --marker_projection_accuracy is the accuracy of control and check marks "
+       "without an Accuracy (pixels, or film coordinates on a camera with a pixel size); no mark of "
+       "this block is one (every control and check mark has its own Accuracy or takes "
+       "--film_marker_projection_accuracy)"},
+      {tables + " --marker_accuracy=0.01",
+       "photopose bundle: --marker_accuracy is the accuracy of control and check point coordinates "
+       "without AccuracyX/Y/Z; no point of this block is one (every control and check point has "
+       "its own AccuracyX/Y/Z)"},
+      {tables + " --camera_accuracy=0.1",
+       "photopose bundle: --camera_accuracy is the accuracy of measured camera positions without "
+       "their own (AccuracyX/Y/Z, a geo.txt's or RTK accuracies); no image of this block has one "
+       "(every camera position has its own accuracy)"},
+      {no_frames + " --camera_accuracy=0.1", "no image of this block has one (no --frames)"},
+      {model + " --marker_accuracy=0.01",
+       "no point of this block is one (no control: --gcp_list, or --points with --crs, give it "
+       "beside a model)"},
+      {model + " --marker_projection_accuracy=1", "no mark of this block is one (it has no control or check marks)"},
+      {model + " --camera_accuracy=1",
+       "no image of this block has one (no camera positions: --geo, --frames, --images or "
+       "--model_gps give them beside a model)"},
   };
   for (const auto& [arguments, message] : cases) {
     const CliRun run = RunCli(arguments, dir);
@@ -611,6 +657,59 @@ TEST(BundleCommand, AccuracyAndDatumFlagsTheBlockCannotUseAreRefused) {
     if (group.at("name") == "attitudes") attitudes = group.at("count").get<int>();
   EXPECT_GT(attitudes, 0) << report.at("groups");
   run = RunCli(model + " --quiet --relative_gauge=fixed", dir);
+  EXPECT_EQ(run.exit_code, 0) << run.err;
+  // Tables without their Accuracy columns take the four defaults, and each flag changes its
+  // group's stated accuracy by its ratio to the default (1 px, 0.5 px, 5 mm, 10 m).
+  const std::string plain = dir + "/plain";
+  std::filesystem::create_directories(plain);
+  CopyWithoutColumns(block + "/marks.csv", plain + "/marks.csv", {"Accuracy"});
+  CopyWithoutColumns(block + "/points.csv", plain + "/points.csv", {"AccuracyX", "AccuracyY", "AccuracyZ"});
+  CopyWithoutColumns(block + "/frames.csv", plain + "/frames.csv", {"AccuracyX", "AccuracyY", "AccuracyZ"});
+  const std::string plain_tables = "bundle --cameras=" + block + "/cameras.csv --points=" + plain +
+                                   "/points.csv --marks=" + plain + "/marks.csv --frames=" + plain +
+                                   "/frames.csv" + out + " --quiet";
+  std::map<std::string, double> stated[2];
+  for (const int flagged : {0, 1}) {
+    run = RunCli(plain_tables + (flagged ? " --tie_accuracy=0.7 --marker_projection_accuracy=0.6 "
+                                           "--marker_accuracy=0.02 --camera_accuracy=0.3"
+                                         : ""),
+                 dir);
+    ASSERT_EQ(run.exit_code, 0) << run.err;
+    stated[flagged] = testing::StatedAccuracies(dir + "/r.json");
+  }
+  const std::map<std::string, double> ratio = {{"tie_marks", 0.7}, {"control_marks", 1.2},
+                                               {"control_points", 4.0}, {"camera_positions", 0.03}};
+  for (const auto& [group, expected] : ratio) {
+    ASSERT_GT(stated[0][group], 0.0) << group;
+    EXPECT_NEAR(stated[1][group] / stated[0][group], expected, 1e-9) << group;
+  }
+}
+
+// Issue 22: data snooping, variance components and the cross-validation need the statistics;
+// with --statistics=none each is refused before any work (it was ignored: --snoop kept 20
+// blunders in), with either solver.
+TEST(BundleCommand, StatisticsNoneRefusesWhatNeedsThem) {
+  const std::string dir = ScratchDir();
+  const std::string block = SimulateBlock(dir);
+  const std::string common = "bundle " + TableArgs(block) + " --out=" + dir + "/f.csv --report=" +
+                             dir + "/r.json --statistics=none";
+  const std::vector<std::pair<std::string, std::string>> cases = {
+      {" --snoop", "photopose bundle: --snoop needs the statistics (the w-test divides each residual by its observation's redundancy number, from the covariances); --statistics=none computes none: give --statistics=full or leave the flag out\n"},
+      {" --estimate_accuracies", "photopose bundle: --estimate_accuracies needs the statistics (a group's variance factor divides by its redundancy, the sum of its redundancy numbers, from the covariances); --statistics=none computes none: give --statistics=full or leave the flag out\n"},
+      {" --snoop --estimate_accuracies", "photopose bundle: --snoop needs the statistics"},
+      {" --cross_validate", "photopose bundle: --cross_validate needs the statistics (a left-out control point's normalized error takes the images' uncertainty from the covariances); --statistics=none computes none"},
+  };
+  for (const std::string solver : {"", " --solver=taylor"}) {
+    for (const auto& [flags, message] : cases) {
+      const CliRun run = RunCli(common + solver + flags, dir);
+      EXPECT_EQ(run.exit_code, 2) << solver << flags << "\n" << run.err;
+      EXPECT_EQ(run.err.rfind(message, 0), 0u) << solver << flags << "\n" << run.err;
+      EXPECT_EQ(std::count(run.err.begin(), run.err.end(), '\n'), 1) << run.err;
+      EXPECT_FALSE(std::filesystem::exists(dir + "/r.json")) << solver << flags;
+    }
+  }
+  // Turned off explicitly, each is no request: the run goes on.
+  const CliRun run = RunCli(common + " --snoop=false --estimate_accuracies=false --quiet", dir);
   EXPECT_EQ(run.exit_code, 0) << run.err;
 }
 
@@ -868,6 +967,30 @@ TEST(BundleCommand, ABlockWithNothingToOrientItFromIsRefusedWithTheReason) {
 // Accuracies stated 10 times too optimistic: sigma0 near 10, no gross error to find. The search
 // (snooping in every group) runs, sigma0 stays above 3: not adjusted, the group to blame named,
 // only the report written; with --force every output, still exit 1.
+// The same block with --statistics=none: sigma0 gives the alarm, but data snooping needs the
+// statistics, so the block is not searched and the failure says so (it claimed "after the search
+// for gross errors" of a search that could test nothing).
+TEST(BundleCommand, Sigma0FarAboveOneWithoutStatisticsSaysTheBlockWasNotSearched) {
+  const std::string dir = ScratchDir();
+  const std::string block = SimulateBlock(dir);
+  const CliRun run = RunCli("bundle --colmap_model=" + block + "/colmap --tie_accuracy=0.05 --out=" +
+                                dir + "/frames.csv --report=" + dir + "/report.json --quiet "
+                                "--statistics=none",
+                            dir);
+  EXPECT_EQ(run.exit_code, 1) << run.err;
+  EXPECT_NE(run.err.find("the block disagrees with its stated accuracies by more than noise; not "
+                         "searched for gross errors (data snooping needs the statistics, and "
+                         "--statistics=none computes none)\n"),
+            std::string::npos)
+      << run.err;
+  EXPECT_EQ(run.err.find("searching every group"), std::string::npos) << run.err;
+  EXPECT_EQ(run.err.find("after the search"), std::string::npos) << run.err;
+  EXPECT_NE(run.err.find("and the block was not searched for gross errors (--statistics=none)"),
+            std::string::npos)
+      << run.err;
+  EXPECT_FALSE(std::filesystem::exists(dir + "/frames.csv"));
+}
+
 TEST(BundleCommand, Sigma0FarAboveOneAfterTheSearchIsAFailureNamingTheGroup) {
   const std::string dir = ScratchDir();
   const std::string block = SimulateBlock(dir);

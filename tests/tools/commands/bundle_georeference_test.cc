@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <cstdio>
 #include <filesystem>
+#include <map>
 #include <nlohmann/json.hpp>
 #include <sstream>
 
@@ -301,6 +302,40 @@ TEST(BundleGeoreference, FramesTableSrsIsTheCrsOfItsPositions) {
   }
 }
 
+// The accuracy defaults a georeferenced model's measurements take are accepted, each where it
+// acts: the gcp_list's points and marks state none, nor do geo.txt's lines without height. A
+// refusal comes before the georeferencing's lines: one line on stderr without --quiet too.
+TEST(BundleGeoreference, AccuracyDefaultsTakenWhereTheMeasurementsStateNone) {
+  const testing::GeoreferenceScene scene = testing::MakeGeoreferenceScene(0.0, 2, 5);
+  const std::string dir = ScratchDir();
+  WriteScene(scene, dir, 0, 2);  // every second geo.txt line without height (and accuracy)
+  const std::string model = "bundle --colmap_model=" + dir + "/model --geo=" + dir +
+                            "/geo.txt --gcp_list=" + dir + "/gcp_list.txt --report=" + dir +
+                            "/r.json --quiet";
+  std::map<std::string, double> stated[2];
+  for (const int flagged : {0, 1}) {
+    const CliRun run = RunCli(model + (flagged ? " --marker_accuracy=0.02 "
+                                                 "--marker_projection_accuracy=0.8 "
+                                                 "--camera_accuracy=0.5"
+                                               : ""),
+                              dir);
+    ASSERT_EQ(run.exit_code, 0) << run.err;
+    stated[flagged] = testing::StatedAccuracies(dir + "/r.json");
+  }
+  // Every control point and mark takes the default: the ratio of the flags to 5 mm and 0.5 px.
+  EXPECT_NEAR(stated[1]["control_points"] / stated[0]["control_points"], 4.0, 1e-9);
+  EXPECT_NEAR(stated[1]["control_marks"] / stated[0]["control_marks"], 1.6, 1e-9);
+  // Half the positions take it (the others keep theirs): the group's mean moves.
+  EXPECT_LT(stated[1]["camera_positions"], stated[0]["camera_positions"]);
+
+  const CliRun refused = RunCli("bundle --colmap_model=" + dir + "/model --geo=" + dir +
+                                    "/geo.txt --out=" + dir + "/f.csv --marker_accuracy=0.01",
+                                dir);
+  EXPECT_EQ(refused.exit_code, 2) << refused.err;
+  EXPECT_EQ(refused.err.rfind("photopose bundle: --marker_accuracy is the accuracy", 0), 0u) << refused.err;
+  EXPECT_EQ(std::count(refused.err.begin(), refused.err.end(), '\n'), 1) << refused.err;
+}
+
 TEST(BundleGeoreference, RefusesWhatItCannotUseBeforeAnyWork) {
   const testing::GeoreferenceScene scene = testing::MakeGeoreferenceScene(0.0, 2, 5);
   const std::string dir = ScratchDir();
@@ -324,6 +359,12 @@ TEST(BundleGeoreference, RefusesWhatItCannotUseBeforeAnyWork) {
       {model + " --geo=" + dir + "/geo.txt --relative_covariance=points", "this block's datum is its control points and camera positions"},
       {model + " --gcp_list=" + dir + "/gcp_list.txt --film_tie_accuracy=3", "--film_tie_accuracy is the accuracy of tie marks in film coordinates"},
       {model + " --gcp_list=" + dir + "/gcp_list.txt --film_marker_projection_accuracy=2", "(the marks of --colmap_model, --opensfm and --bal are pixels, and so are a model's control marks)"},
+      // Defaults no measurement takes (issue 21 audit): every geo.txt line states its accuracy,
+      // a gcp_list gives no camera positions, geo.txt no control.
+      {model + " --geo=" + dir + "/geo.txt --camera_accuracy=1", "--camera_accuracy is the accuracy of measured camera positions without their own (AccuracyX/Y/Z, a geo.txt's or RTK accuracies); no image of this block has one (every camera position has its own accuracy)"},
+      {model + " --gcp_list=" + dir + "/gcp_list.txt --camera_accuracy=1", "no image of this block has one (no camera positions: --geo, --frames, --images or --model_gps give them beside a model)"},
+      {model + " --geo=" + dir + "/geo.txt --marker_accuracy=0.01", "--marker_accuracy is the accuracy of control and check point coordinates without AccuracyX/Y/Z; no point of this block is one (no control: --gcp_list, or --points with --crs, give it beside a model)"},
+      {model + " --geo=" + dir + "/geo.txt --marker_projection_accuracy=1", "no mark of this block is one (it has no control or check marks)"},
       {model + " --geo=" + dir + "/geo.txt --frames=" + dir + "/frames.csv --crs=EPSG:4326", "give the camera positions once"},
       {model + " --out_crs=EPSG:32632", "nothing is georeferenced"},
       {model + " --geo=" + dir + "/geo.txt --check_points=GCP_1", "--check_points names points of --gcp_list"},
