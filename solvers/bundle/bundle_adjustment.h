@@ -455,6 +455,9 @@ struct BundlePointResult {
   // the covariance was computed; the measurements' part alone otherwise).
   Eigen::Matrix3d covariance = Eigen::Matrix3d::Zero();
   bool has_covariance = false;
+  // False for a check point whose covariance is the measurements' part alone (the images and
+  // cameras taken as error-free: no statistics): too small to test its error against.
+  bool covariance_complete = false;
   // Control points: adjusted - surveyed; check points: intersected - surveyed (m).
   std::optional<Eigen::Vector3d> error_m;
   std::string message;  // e.g. why a check point could not be intersected

@@ -292,8 +292,9 @@ bool RescaleGroups(RoundChanges* a) {
   ++result->variance_iterations;
   if (!changed) return false;
   if (result->variance_iterations >= options.statistics.max_variance_iterations) {
-    AddRoundNotice("variance components did not settle in " +
-                       std::to_string(result->variance_iterations) + " iterations",
+    const int n = result->variance_iterations;
+    AddRoundNotice("variance components did not settle in " + std::to_string(n) +
+                       (n == 1 ? " iteration" : " iterations"),
                    &result->summary.message);
     return false;
   }

@@ -217,6 +217,7 @@ void OrientationAndFixedPointCovariances(const Block& block, const BundlePlan& p
     if (!plan.point_in_problem[p] || adjusted[p]) continue;
     result->points[p].covariance.setZero();
     result->points[p].has_covariance = true;
+    result->points[p].covariance_complete = true;
   }
 }
 
@@ -321,6 +322,7 @@ void DiagnosticsPass::Group(size_t order) {
     BundlePointResult& point_result = result->points[round.point_of_block[point]];
     point_result.covariance = variance_factor * covariance;
     point_result.has_covariance = true;
+    point_result.covariance_complete = true;
   }
   if (!AnyRowWanted(begin, end)) return;
   thread_local std::vector<BlockRows> rows;

@@ -144,6 +144,7 @@ bool TabulateCheckPoint(const Block& block, int p, const std::vector<const Vecto
   table->covariance = covariance ? covariance(rays, marks, intersection) : intersection.covariance;
   table->covariance *= variance_factor;
   table->has_covariance = true;
+  table->covariance_complete = static_cast<bool>(covariance);
   return true;
 }
 

@@ -413,7 +413,7 @@ std::string PointsHtml(const Block& block, const BundleAdjustmentResult& result,
     if (block.points[p].role == PointRole::kTie) continue;
     if (r.error_m) magnitudes.push_back(r.error_m->norm());
     if (r.has_covariance) magnitudes.push_back(std::sqrt(r.covariance.trace()));
-    if (r.has_covariance && block.points[p].role == PointRole::kCheck)
+    if (r.has_covariance && r.covariance_complete && block.points[p].role == PointRole::kCheck)
       magnitudes.push_back(CheckPointErrorSigma(block.points[p], r, default_marker_m));
   }
   const LengthUnit unit = LengthUnitFor(LargestMagnitude(magnitudes));
@@ -453,9 +453,9 @@ std::string PointsHtml(const Block& block, const BundleAdjustmentResult& result,
           {point.id, std::to_string(r.num_observations), FormatLength(r.error_m->x(), unit),
            FormatLength(r.error_m->y(), unit), FormatLength(r.error_m->z(), unit),
            FormatLength(r.error_m->norm(), unit),
-           r.has_covariance ? FormatLength(sigma, unit) : "n/a",
+           r.has_covariance && std::isfinite(sigma) ? FormatLength(sigma, unit) : "n/a",
            !check ? "n/a"
-           : r.has_covariance
+           : r.has_covariance && r.covariance_complete
                ? FormatUnitless(CheckPointNormalizedError(point, r, default_marker_m), 1)
                : "n/a"});
     }

@@ -241,13 +241,16 @@ void SurveyedPointsJson(const Block& block, const BundleAdjustmentResult& result
       // The console's and the page's test: the error against the intersection's covariance plus
       // the surveyed coordinates'.
       const double marker_m = context.options.accuracies.marker_m;
-      const bool tested = r.error_m && r.has_covariance;
+      const bool tested = r.error_m && r.has_covariance && r.covariance_complete;
       row["error_sigma_m"] =
           tested ? Vector3(SurveyedPointErrorCovariance(point, r.covariance, marker_m)
                                .diagonal()
                                .cwiseSqrt())
                  : json(nullptr);
       row["normalized_error"] = Number(CheckPointNormalizedError(point, r, marker_m));
+      // False without statistics: sigma_m is then the intersection's alone (the images taken as
+      // error-free), and the error is not tested (error_sigma_m, normalized_error null).
+      row["covariance_complete"] = r.has_covariance && r.covariance_complete;
     }
     (point.role == PointRole::kControl ? control : check).push_back(row);
   }
@@ -683,7 +686,7 @@ bool OverfitJudged(const BundleGroupStatistics& g) {
 
 double CheckPointNormalizedError(const BlockPoint& point, const BundlePointResult& r,
                                  double default_marker_m) {
-  if (!r.error_m || !r.has_covariance) return std::nan("");
+  if (!r.error_m || !r.has_covariance || !r.covariance_complete) return std::nan("");
   const Eigen::LDLT<Eigen::Matrix3d> ldlt(
       SurveyedPointErrorCovariance(point, r.covariance, default_marker_m));
   if (ldlt.info() != Eigen::Success || !(ldlt.vectorD().minCoeff() > 0.0)) return std::nan("");
@@ -692,7 +695,7 @@ double CheckPointNormalizedError(const BlockPoint& point, const BundlePointResul
 
 double CheckPointErrorSigma(const BlockPoint& point, const BundlePointResult& r,
                             double default_marker_m) {
-  if (!r.has_covariance) return std::nan("");
+  if (!r.has_covariance || !r.covariance_complete) return std::nan("");
   return std::sqrt(SurveyedPointErrorCovariance(point, r.covariance, default_marker_m).trace());
 }
 

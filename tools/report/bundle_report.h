@@ -91,10 +91,11 @@ bool OverfitJudged(const BundleGroupStatistics& g);
 // A check point's normalized error e^T C^-1 e, C the covariance of the error: the intersection's
 // plus the surveyed coordinates' (SurveyedPointErrorCovariance, solvers/bundle/check_points.h;
 // `default_marker_m` the accuracy of a point that states none). Chi-square(3) when both are
-// honest; NaN without an error or a covariance.
+// honest; NaN without an error or a covariance, or with the intersection's covariance alone
+// (BundlePointResult::covariance_complete false: no statistics, the images taken as error-free).
 double CheckPointNormalizedError(const BlockPoint& point, const BundlePointResult& r,
                                  double default_marker_m);
-// The standard deviation of a check point's error, sqrt(trace C) with C as above (m).
+// The standard deviation of a check point's error, sqrt(trace C) with C as above (m); NaN as above.
 double CheckPointErrorSigma(const BlockPoint& point, const BundlePointResult& r,
                             double default_marker_m);
 // Each check point whose error stands out (above the kCheckPointLevel quantile), in words: "P7

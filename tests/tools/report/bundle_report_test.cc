@@ -187,6 +187,7 @@ TEST(BundleReport, ACheckPointBeyondItsCovarianceIsNamedOnTheConsole) {
   result.points.resize(5);
   for (BundlePointResult& r : result.points) {
     r.has_covariance = true;
+    r.covariance_complete = true;
     r.covariance = Eigen::Matrix3d::Identity() * 1e-4;  // 1 cm per axis
   }
   result.points[0].error_m = Eigen::Vector3d(0.10, 0.0, 0.0);   // control: not tested here
@@ -219,6 +220,18 @@ TEST(BundleReport, ACheckPointBeyondItsCovarianceIsNamedOnTheConsole) {
   EXPECT_EQ(warnings, 2u);
   // A larger default accuracy explains K1 (0.05^2 / (1e-4 + 0.02^2) = 5), not K4 (stated 0).
   EXPECT_EQ(CheckPointsOutOfTolerance(block, result, 0.02).size(), 1u);
+  // The intersection's covariance alone (no statistics: the images taken as error-free) is too
+  // small to test against: no verdict, null in the JSON, flagged there as incomplete.
+  result.points[1].covariance_complete = false;
+  EXPECT_TRUE(std::isnan(CheckPointNormalizedError(block.points[1], result.points[1], marker_m)));
+  EXPECT_TRUE(std::isnan(CheckPointErrorSigma(block.points[1], result.points[1], marker_m)));
+  ASSERT_EQ(CheckPointsOutOfTolerance(block, result, marker_m).size(), 1u);
+  const nlohmann::json json = BundleReportJson(block, result, context);
+  ASSERT_EQ(json["check_points"].size(), 4u);
+  EXPECT_EQ(json["check_points"][0]["covariance_complete"], false);
+  EXPECT_TRUE(json["check_points"][0]["normalized_error"].is_null());
+  EXPECT_TRUE(json["check_points"][0]["error_sigma_m"].is_null());
+  EXPECT_EQ(json["check_points"][1]["covariance_complete"], true);
   result.points[1].has_covariance = false;  // no covariance: nothing to test against
   result.points[4].has_covariance = false;
   EXPECT_TRUE(CheckPointsOutOfTolerance(block, result, marker_m).empty());
