@@ -1193,6 +1193,7 @@ TEST(BundleAdjustment, BothSolversSayWhenTheVarianceComponentsDidNotSettle) {
     EXPECT_NE(result.summary.message.find("variance components did not settle in 1 iteration"),
               std::string::npos)
         << result.summary.message;
+    EXPECT_EQ(result.summary.message.find("1 iterations"), std::string::npos) << result.summary.message;
   }
 }
 
