@@ -357,6 +357,11 @@ enum BundleGroup : int {
   kAttitudes,        // measured attitudes (priors)
 };
 constexpr int kNumBundleGroups = 5;
+// The groups of priors (measured coordinates of the unknowns), the ones an over-fitting verdict is
+// about; the mark groups are observations of the images.
+constexpr bool IsPriorGroup(BundleGroup g) {
+  return g == kControlPoints || g == kCameraPositions || g == kAttitudes;
+}
 inline constexpr EnumNameEntry<BundleGroup> kBundleGroupNames[] = {
     {kTieMarks, "tie_marks"},
     {kControlMarks, "control_marks"},

@@ -715,7 +715,7 @@ void GroupStatistics(const BundleAdjustmentOptions& options, const GroupSums* su
     const int rows = variance.scalar_rows[g];
     group.ratio = std::sqrt(variance.whitened_ssq[g] / rows);
     group.redundancy_share = variance.redundancy[g] / rows;
-    const bool prior = g == kControlPoints || g == kCameraPositions || g == kAttitudes;
+    const bool prior = IsPriorGroup(static_cast<BundleGroup>(g));
     const bool share_known = std::isfinite(group.redundancy_share);
     const BundleStatisticsOptions& so = options.statistics;
     const bool follows_priors = share_known && group.redundancy_share < so.overfit_redundancy_share;

@@ -839,16 +839,14 @@ std::vector<std::string> GroupRow(const BundleGroupStatistics& g, const GroupFig
             "n/a",
             "fixed"};
   }
-  const bool prior =
-      g.group == kControlPoints || g.group == kCameraPositions || g.group == kAttitudes;
   std::string verdict = "fits";
   if (g.num_fixed > 0) verdict += ", " + std::to_string(g.num_fixed) + " more held fixed";
   if (g.overfit) {
     verdict = "OVER-FITTED";
-  } else if (prior && !g.message.empty()) {
-    verdict = "loose";  // checked by the block, RMS well below the stated accuracy
   } else if (!OverfitJudged(g)) {
-    verdict = "not judged";  // no statistics: no redundancy share
+    verdict = "not judged";  // no statistics: no redundancy share (its message may say the RMS)
+  } else if (IsPriorGroup(g.group) && !g.message.empty()) {
+    verdict = "loose";  // checked by the block, RMS well below the stated accuracy
   } else if (g.ratio > kWeightFactor || g.ratio < 1.0 / kWeightFactor) {
     verdict = "weight off";
   }

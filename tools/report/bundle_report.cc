@@ -678,10 +678,8 @@ GroupFigures FormatGroupFigures(const BundleGroupStatistics& g) {
 }
 
 bool OverfitJudged(const BundleGroupStatistics& g) {
-  const bool prior =
-      g.group == kControlPoints || g.group == kCameraPositions || g.group == kAttitudes;
   // Without a redundancy share the library makes no verdict (BundleGroupStatistics::overfit).
-  return !(prior && g.count > 0 && !std::isfinite(g.redundancy_share));
+  return !(IsPriorGroup(g.group) && g.count > 0 && !std::isfinite(g.redundancy_share));
 }
 
 double CheckPointNormalizedError(const BlockPoint& point, const BundlePointResult& r,

@@ -229,6 +229,23 @@ TEST_F(BundleHtmlTest, TheGroupTableTakesOneUnitPerRow) {
   EXPECT_EQ(marks.find("<th>unit</th>"), std::string::npos) << marks;
 }
 
+// The groups table's verdict: a prior group the block checks whose RMS is well below its stated
+// accuracy is "loose"; the same figures without statistics (no redundancy share, the library's
+// message saying so) are "not judged", never "loose".
+TEST_F(BundleHtmlTest, AGroupWithoutARedundancyShareIsNotJudgedNotLoose) {
+  BundleGroupStatistics cameras = testing::GroupOf(kCameraPositions, "m", 10.0, 2.8, 0.9);
+  cameras.message = "camera_positions: residual RMS 0.28 of the stated accuracy, loose";
+  result_.groups = {Group(kTieMarks, "px", 0.5, 0.43), cameras};
+  std::string table =
+      TableWithCaption(BundleReportHtml(block_, result_, context_), "Groups of the objective");
+  EXPECT_NE(table.find("<td>loose</td></tr>"), std::string::npos) << table;
+  result_.groups[1].redundancy_share = std::nan("");
+  result_.groups[1].message = "camera_positions: residual RMS 0.28 of the stated accuracy; not judged.";
+  table = TableWithCaption(BundleReportHtml(block_, result_, context_), "Groups of the objective");
+  EXPECT_NE(table.find("<td>not judged</td></tr>"), std::string::npos) << table;
+  EXPECT_EQ(table.find("<td>loose</td>"), std::string::npos) << table;
+}
+
 // Columns whose rows are of different kinds take a unit column: an image measured on film among
 // pixel images, data snooping that removed a mark and a control point's coordinate.
 TEST_F(BundleHtmlTest, ColumnsMixingKindsTakeAUnitColumn) {
