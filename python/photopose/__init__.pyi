@@ -709,6 +709,8 @@ class BundlePointResult:
     @property
     def has_covariance(self) -> bool: ...
     @property
+    def covariance_complete(self) -> bool: ...  # False: a check point's intersection alone (no statistics)
+    @property
     def error_m(self) -> Optional[numpy.ndarray]: ...  # adjusted or intersected - surveyed (m)
     @property
     def message(self) -> str: ...

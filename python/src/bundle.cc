@@ -218,6 +218,9 @@ void BindBundleItemResults(py::module_& m) {
       .def_property_readonly("covariance", [](const BundlePointResult& r) { return Eigen::Matrix3d(r.covariance); },
                              "3 x 3 (m^2)")
       .def_readonly("has_covariance", &BundlePointResult::has_covariance)
+      .def_readonly("covariance_complete", &BundlePointResult::covariance_complete,
+                    "False for a check point whose covariance is the intersection's alone (no "
+                    "statistics: the images taken as error-free)")
       .def_readonly("error_m", &BundlePointResult::error_m, "adjusted or intersected - surveyed (m)")
       .def_readonly("message", &BundlePointResult::message)
       .def("__repr__", [](const py::object& self) { return PropertiesRepr(self); });

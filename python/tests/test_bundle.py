@@ -324,3 +324,16 @@ def test_rejected_check_marks(tmp_path):
     assert rejected.normalized > 3.0 and 20.0 < abs(rejected.residual[0]) < 40.0
     assert abs(rejected.residual[1]) < abs(rejected.residual[0]) / 4.0
     assert repr(rejected).startswith(f"BundleRejectedCheckMark(mark={rejected.mark}, normalized=")
+
+
+def test_check_points_say_whether_their_covariance_is_complete():
+    # With the statistics, a check point's covariance carries the images' own; without, it is the
+    # intersection's alone, too small to judge its error by (the reports leave it untested).
+    for covariances, complete in (("full", True), ("none", False)):
+        block, _ = pp.simulate_block(seed=4, num_lines=2, images_per_line=5, num_check_points=2)
+        options = pp.BundleAdjustmentOptions()
+        options.statistics.covariances = covariances
+        result = pp.bundle_adjust(block, options)
+        checks = [r for r, role in zip(result.points, block.point_roles) if role == "check"]
+        assert len(checks) == 2
+        assert all(r.has_covariance and r.covariance_complete == complete for r in checks)
