@@ -6,6 +6,7 @@
 #include <random>
 
 #include "core/camera.h"
+#include "tests/support/ordered_draws.h"
 
 namespace photopose {
 namespace {
@@ -125,7 +126,7 @@ TEST(CameraModels, InversionsRoundTripForEveryModel) {
   std::uniform_real_distribution<double> u(-1.0, 1.0);
   const std::vector<double> table_r = {2000.0, 5000.0, 9000.0}, table_d = {3.0, -4.0, 12.0};
   for (int trial = 0; trial < 200; ++trial) {
-    const Eigen::Vector2d ab(0.4 * u(rng), 0.3 * u(rng));
+    const Eigen::Vector2d ab = DrawLastFirst<2>([&](int i) { return (i == 0 ? 0.4 : 0.3) * u(rng); });
     struct Case {
       CameraModelType type;
       std::vector<double> params;

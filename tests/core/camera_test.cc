@@ -1,4 +1,5 @@
 #include "core/camera.h"
+#include "tests/support/ordered_draws.h"
 
 #include <gtest/gtest.h>
 
@@ -66,7 +67,7 @@ TEST(Camera, PixelFilmRoundTripForAllFilmSystemsWithAndWithoutDistortion) {
         camera.tangential_p = {2e-6, -3e-6};
       }
       for (int i = 0; i < 500; ++i) {
-        const Eigen::Vector2d pixel(col(rng), row(rng));
+        const Eigen::Vector2d pixel = DrawLastFirst<2>([&](int i) { return i == 0 ? col(rng) : row(rng); });
         Eigen::Vector2d film, back;
         ASSERT_TRUE(FilmFromPixel(camera, pixel, PixelOrigin::kCorner, &film).ok());
         ASSERT_TRUE(PixelFromFilm(camera, film, PixelOrigin::kCorner, &back).ok());

@@ -1,4 +1,5 @@
 #include "core/collinearity.h"
+#include "tests/support/ordered_draws.h"
 
 #include <gtest/gtest.h>
 
@@ -65,7 +66,7 @@ TEST(Collinearity, ClosedFormPartialsMatchCentralDifferences) {
   for (int trial = 0; trial < 200; ++trial) {
     double eo[6] = {50 * u(rng), 50 * u(rng), 500 + 50 * u(rng), 0.8 * u(rng), 0.5 * u(rng), kPi * u(rng)};
     const Eigen::Matrix3d R = RotationFromAngles(RotationConvention::kSeed, {eo[3], eo[4], eo[5]});
-    const Eigen::Vector3d ray(0.5 * u(rng), 0.5 * u(rng), -1.0);
+    const Eigen::Vector3d ray = DrawLastFirst<3>([&](int i) { return i == 2 ? -1.0 : 0.5 * u(rng); });
     const Eigen::Vector3d p = Eigen::Vector3d(eo[0], eo[1], eo[2]) + R.transpose() * (600.0 * ray);
     double point[3] = {p.x(), p.y(), p.z()};
     double xy[2], d_eo[12], d_point[6], d_focal[2];
@@ -87,7 +88,7 @@ TEST(Collinearity, ProjectAndIntersectRoundTrip) {
   std::mt19937_64 rng(2);
   std::uniform_real_distribution<double> col(0.0, 5472.0), row(0.0, 3648.0);
   for (int i = 0; i < 200; ++i) {
-    const Eigen::Vector2d pixel(col(rng), row(rng));
+    const Eigen::Vector2d pixel = DrawLastFirst<2>([&](int i) { return i == 0 ? col(rng) : row(rng); });
     Eigen::Vector3d ground;
     ASSERT_TRUE(IntersectRayWithPlane(camera, eo, pixel, PixelOrigin::kCorner, 20.0, &ground).ok());
     EXPECT_NEAR(ground.z(), 20.0, 1e-12);
@@ -150,7 +151,7 @@ TEST(Collinearity, EarthCurvaturePartialsMatchCentralDifferences) {
   for (int trial = 0; trial < 200; ++trial) {
     double eo[6] = {50 * u(rng), 50 * u(rng), 800 + 50 * u(rng), 0.6 * u(rng), 0.4 * u(rng), kPi * u(rng)};
     const Eigen::Matrix3d R = RotationFromAngles(RotationConvention::kSeed, {eo[3], eo[4], eo[5]});
-    const Eigen::Vector3d ray(0.6 * u(rng), 0.6 * u(rng), -1.0);
+    const Eigen::Vector3d ray = DrawLastFirst<3>([&](int i) { return i == 2 ? -1.0 : 0.6 * u(rng); });
     const Eigen::Vector3d p = Eigen::Vector3d(eo[0], eo[1], eo[2]) + R.transpose() * (900.0 * ray);
     const double point[3] = {p.x(), p.y(), p.z()};
     double xy[2], d_eo[12], d_point[6], d_focal[2];

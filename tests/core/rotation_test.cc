@@ -6,6 +6,7 @@
 #include <random>
 
 #include "core/types.h"
+#include "tests/support/ordered_draws.h"
 
 namespace photopose {
 namespace {
@@ -17,7 +18,7 @@ constexpr double kAngleTolerance = 1e-11;
 
 Eigen::Vector3d RandomAngles(std::mt19937_64* rng) {
   std::uniform_real_distribution<double> u(-1.0, 1.0);
-  return Eigen::Vector3d(kPi * u(*rng), 0.5 * kPi * 0.999 * u(*rng), kPi * u(*rng));
+  return DrawLastFirst<3>([&](int i) { return (i == 1 ? 0.5 * kPi * 0.999 : kPi) * u(*rng); });
 }
 
 TEST(Rotation, SeedMatrixIsEquationOneElementByElement) {
@@ -202,8 +203,8 @@ TEST(Rotation, ComputerVisionPoseByHand) {
   std::mt19937_64 rng(5);
   std::uniform_real_distribution<double> u(-1.0, 1.0);
   for (int trial = 0; trial < 100; ++trial) {
-    const Eigen::Vector3d r(3.0 * u(rng), 3.0 * u(rng), 3.0 * u(rng));
-    const Eigen::Vector3d t(100.0 * u(rng), 100.0 * u(rng), 100.0 * u(rng));
+    const Eigen::Vector3d r = DrawLastFirst<3>([&](int) { return 3.0 * u(rng); });
+    const Eigen::Vector3d t = DrawLastFirst<3>([&](int) { return 100.0 * u(rng); });
     const Eigen::Matrix3d R_cv = RotationFromRotationVector(r);
     Eigen::Matrix3d R_back;
     Eigen::Vector3d t_back;
@@ -222,8 +223,8 @@ TEST(Rotation, RotationVectorByHandAndBack) {
   std::mt19937_64 rng(9);
   std::uniform_real_distribution<double> u(-1.0, 1.0);
   for (int trial = 0; trial < 100; ++trial) {
-    const Eigen::Vector3d r =
-        Eigen::Vector3d(u(rng), u(rng), u(rng)).normalized() * 3.0 * std::abs(u(rng));
+    const double angle = 3.0 * std::abs(u(rng));  // drawn first (tests/support/ordered_draws.h)
+    const Eigen::Vector3d r = DrawLastFirst<3>([&](int) { return u(rng); }).normalized() * angle;
     EXPECT_LT((RotationVectorFromRotation(RotationFromRotationVector(r)) - r).norm(), 1e-12);
   }
 }

@@ -7,6 +7,7 @@
 #include <random>
 
 #include "core/rotation.h"
+#include "tests/support/ordered_draws.h"
 
 namespace photopose {
 namespace {
@@ -35,9 +36,9 @@ RandomView MakeRandomView(std::mt19937_64* rng) {
   const double phi = DegreesToRadians(60.0) * u(*rng) * 0.5;
   const double kappa = kPi * u(*rng);
   const Eigen::Matrix3d R = RotationFromAngles(RotationConvention::kSeed, {omega, phi, kappa});
-  const Eigen::Vector3d center(1000.0 * u(*rng) + 5e5, 1000.0 * u(*rng) + 4e6, 300.0 + 200 * u(*rng));
+  const Eigen::Vector3d center = DrawLastFirst<3>([&](int i) { return i == 2 ? 300.0 + 200 * u(*rng) : 1000.0 * u(*rng) + (i == 0 ? 5e5 : 4e6); });
   // A ray inside a +-35 deg field of view, 100-1000 m long, in front of the camera (w < 0).
-  const Eigen::Vector3d ray_camera = Eigen::Vector3d(0.7 * u(*rng), 0.7 * u(*rng), -1.0).normalized();
+  const Eigen::Vector3d ray_camera = DrawLastFirst<3>([&](int i) { return i == 2 ? -1.0 : 0.7 * u(*rng); }).normalized();
   const double range = 550.0 + 450.0 * u(*rng);
   const Eigen::Vector3d point = center + R.transpose() * (range * ray_camera);
   view.eo[0] = center.x();
@@ -60,8 +61,8 @@ RandomView MakeRandomView(std::mt19937_64* rng) {
   p[kFrameP2] = 1e-5 * u(*rng);
   p[kFrameAffinity] = 1e-3 * u(*rng);
   p[kFrameSkew] = 1e-3 * u(*rng);
-  view.film_um = Eigen::Vector2d(6000.0 * u(*rng), 4000.0 * u(*rng));
-  view.observed_um = Eigen::Vector2d(6000.0 * u(*rng), 4000.0 * u(*rng));
+  view.film_um = DrawLastFirst<2>([&](int i) { return (i == 0 ? 6000.0 : 4000.0) * u(*rng); });
+  view.observed_um = DrawLastFirst<2>([&](int i) { return (i == 0 ? 6000.0 : 4000.0) * u(*rng); });
   return view;
 }
 
@@ -132,7 +133,7 @@ std::vector<ModelCase> ModelCases(const RandomView& view, std::mt19937_64* rng,
   std::vector<ModelCase> cases;
   const double f = 3000.0 * (1.0 + 0.1 * u(*rng));
   const double cx = 2000.0 + 20.0 * u(*rng), cy = 1500.0 + 20.0 * u(*rng);
-  const Eigen::Vector2d pixel(2000.0 + 1500.0 * u(*rng), 1500.0 + 1000.0 * u(*rng));
+  const Eigen::Vector2d pixel = DrawLastFirst<2>([&](int i) { return i == 0 ? 2000.0 + 1500.0 * u(*rng) : 1500.0 + 1000.0 * u(*rng); });
   cases.push_back({CameraModelType::kSimplePinhole, {f, cx, cy}, {}, pixel});
   cases.push_back({CameraModelType::kPinhole, {f, f * 1.01, cx, cy}, {}, pixel});
   cases.push_back({CameraModelType::kSimpleRadial, {f, cx, cy, 0.05 * u(*rng)}, {}, pixel});

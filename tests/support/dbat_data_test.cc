@@ -15,6 +15,7 @@
 #include "core/collinearity.h"
 #include "core/rotation.h"
 #include "tests/test_data.h"
+#include "tests/support/ordered_draws.h"
 
 namespace photopose::testing {
 namespace {
@@ -128,8 +129,8 @@ TEST(DbatData, ConversionRoundTripsAndMatchesDbatsResidual) {
   station.angles_rad = {-0.15, 0.02, 3.1};
   const ExteriorOrientation eo = EoFromDbat(station.center_m, station.angles_rad);
   for (int k = 0; k < 50; ++k) {
-    const Eigen::Vector2d xy(1136 + 1100 * unit(rng), 852 + 820 * unit(rng));
-    const Eigen::Vector3d X(0.5 + 0.5 * unit(rng), 0.5 + 0.5 * unit(rng), 0.05 * unit(rng));
+    const Eigen::Vector2d xy = DrawLastFirst<2>([&](int i) { return i == 0 ? 1136 + 1100 * unit(rng) : 852 + 820 * unit(rng); });
+    const Eigen::Vector3d X = DrawLastFirst<3>([&](int i) { return i == 2 ? 0.05 * unit(rng) : 0.5 + 0.5 * unit(rng); });
     Eigen::Vector2d film;
     ASSERT_TRUE(FilmFromPixel(camera.table, xy, PixelOrigin::kCorner, &film).ok());
     const Eigen::Vector2d mine = PhotoposeResidualUm(camera, eo, X, film);

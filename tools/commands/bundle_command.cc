@@ -828,6 +828,7 @@ int CheckSigma0(const char* command, BundleRun* run) {
   // Data snooping needs the statistics: with --statistics=none (only sigma0 can give the alarm then)
   // the block is not searched, and the failure below says so.
   const bool searchable = run->options.statistics.covariances != BundleCovarianceMethod::kNone;
+  std::string search_failure;  // why the search's own adjustment gave no usable result
   if (!run->options.robustness.snoop && !searchable)
     std::cerr << "; not searched for gross errors (data snooping needs the statistics, and --statistics=none computes none)\n";
   if (!run->options.robustness.snoop && searchable) {
@@ -844,16 +845,26 @@ int CheckSigma0(const char* command, BundleRun* run) {
       run->block = std::move(block);
       result = std::move(searched);
       run->options = search;
+    } else {
+      search_failure = again.ok() ? "its adjustment gave no usable solution (" + searched.summary.message + ")"
+                                  : again.message();
+      std::cerr << "photopose bundle: the search for gross errors failed: " << search_failure
+                << "; the adjustment without it is kept\n";
     }
   }
-  if (!(result.summary.sigma0 > kSigma0Bound)) return kGoOn;
+  // A search that could not run leaves the alarm standing, whatever sigma0 is.
+  if (!(result.summary.sigma0 > kSigma0Bound) && search_failure.empty()) return kGoOn;
   // The groups whose residuals are furthest beyond their stated accuracy, and the worst observations.
   std::vector<const BundleGroupStatistics*> groups;
   for (const BundleGroupStatistics& g : result.groups)
     if (g.count > 0 && g.ratio > kSigma0Bound) groups.push_back(&g);
   std::sort(groups.begin(), groups.end(), [](const auto* a, const auto* b) { return a->ratio > b->ratio; });
   std::ostringstream why;
-  if (searchable) {
+  if (!search_failure.empty()) {
+    why << "the block disagrees with its stated accuracies (sigma0 " << FormatUnitless(result.summary.sigma0, 2)
+        << ") and the search for gross errors failed (" << search_failure
+        << "): the stated accuracies do not describe these data, or gross errors are in them";
+  } else if (searchable) {
     why << "sigma0 " << FormatUnitless(result.summary.sigma0, 2) << " stays above " << FormatUnitless(kSigma0Bound, 0)
         << " after the search for gross errors: the stated accuracies do not describe these data";
   } else {

@@ -17,6 +17,7 @@
 #include "tests/support/block_expect.h"
 #include "tests/support/temp_dir.h"
 #include "tests/test_data.h"
+#include "tests/support/ordered_draws.h"
 
 namespace photopose {
 namespace {
@@ -95,10 +96,11 @@ TEST(ColmapIo, ResidualsEqualColmapsOwnProjection) {
   std::vector<Eigen::Vector2d> expected;
   const int kImages = 5;
   for (int i = 0; i < kImages; ++i) {
-    Eigen::Quaterniond q(Eigen::AngleAxisd(0.5 * unit(rng), Eigen::Vector3d(unit(rng), unit(rng),
-                                                                            unit(rng)).normalized()));
-    const Eigen::Vector3d t(unit(rng), unit(rng), 8.0 + unit(rng));
-    const Eigen::Vector3d X(unit(rng), unit(rng), unit(rng));
+    // The axis drawn before the angle (tests/support/ordered_draws.h).
+    const Eigen::Vector3d axis = DrawLastFirst<3>([&](int) { return unit(rng); }).normalized();
+    const Eigen::Quaterniond q(Eigen::AngleAxisd(0.5 * unit(rng), axis));
+    const Eigen::Vector3d t = DrawLastFirst<3>([&](int k) { return (k == 2 ? 8.0 : 0.0) + unit(rng); });
+    const Eigen::Vector3d X = DrawLastFirst<3>([&](int) { return unit(rng); });
     const Eigen::Vector2d pixel = ColmapOpenCvPixel(q, t, params, X);
     expected.push_back(pixel);
     images += std::to_string(i + 1);

@@ -19,6 +19,7 @@
 #include "core/io/csv.h"
 #include "core/io/fiducials_table.h"
 #include "tests/test_data.h"
+#include "tests/support/ordered_draws.h"
 
 namespace photopose {
 namespace {
@@ -774,7 +775,7 @@ TEST_F(TablesTest, FramesCovarianceMatchesMonteCarloInOpk) {
   constexpr int kSamples = 40000;
   Eigen::Vector3d sum_squares = Eigen::Vector3d::Zero();
   for (int s = 0; s < kSamples; ++s) {
-    const Eigen::Vector3d z(normal(rng), normal(rng), normal(rng));
+    const Eigen::Vector3d z = DrawLastFirst<3>([&](int) { return normal(rng); });
     const Eigen::Vector3d opk = AnglesFromRotation(
         RotationConvention::kOpk, RotationFromAngles(RotationConvention::kSeed, mean_seed + L * z));
     for (int i = 0; i < 3; ++i) sum_squares[i] += std::pow(WrapAngle(opk[i] - mean_opk[i]), 2);

@@ -22,6 +22,7 @@
 #include "test_data.h"
 #include "tests/support/dbat_data.h"
 #include "tests/support/singular_block.h"
+#include "tests/support/ordered_draws.h"
 
 namespace photopose {
 namespace {
@@ -102,7 +103,7 @@ SmallBlock MakeSmallBlock(const SmallBlockOptions& o) {
       image.eo = start;
       if (o.gnss) {
         image.measured_center_m = eo.center_in_ground() +
-                                  o.gnss_noise_m * Eigen::Vector3d(gauss(rng), gauss(rng), gauss(rng));
+                                  o.gnss_noise_m * DrawLastFirst<3>([&](int) { return gauss(rng); });
         image.center_accuracy_m =
             Eigen::Vector3d::Constant(o.stated_gnss_m > 0.0 ? o.stated_gnss_m : o.gnss_noise_m);
       }
@@ -114,10 +115,10 @@ SmallBlock MakeSmallBlock(const SmallBlockOptions& o) {
     point.id = id;
     point.role = role;
     if (role == PointRole::kTie) {
-      point.position_m = X + o.start_point_error_m * Eigen::Vector3d(uniform(rng), uniform(rng), uniform(rng));
+      point.position_m = X + o.start_point_error_m * DrawLastFirst<3>([&](int) { return uniform(rng); });
     } else {
       // Surveyed with the stated accuracy.
-      point.surveyed_m = X + o.control_noise_m * Eigen::Vector3d(gauss(rng), gauss(rng), gauss(rng));
+      point.surveyed_m = X + o.control_noise_m * DrawLastFirst<3>([&](int) { return gauss(rng); });
       point.accuracy_m = Eigen::Vector3d::Constant(0.005);
     }
     block.points.push_back(point);
@@ -150,7 +151,7 @@ SmallBlock MakeSmallBlock(const SmallBlockOptions& o) {
       Eigen::Vector2d pixel;
       if (!PixelFromFilm(cam.table, film, PixelOrigin::kCorner, &pixel).ok()) continue;
       if (pixel.x() < 0 || pixel.y() < 0 || pixel.x() > 6000 || pixel.y() > 4000) continue;
-      pixel += o.noise_px * Eigen::Vector2d(gauss(rng), gauss(rng));
+      pixel += o.noise_px * DrawLastFirst<2>([&](int) { return gauss(rng); });
       BlockMark mark;
       mark.image = static_cast<int>(i);
       mark.point = static_cast<int>(p);

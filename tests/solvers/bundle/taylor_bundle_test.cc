@@ -13,6 +13,7 @@
 
 #include "core/rotation.h"
 #include "core/simulation/synthetic_block.h"
+#include "tests/support/ordered_draws.h"
 
 namespace photopose {
 namespace {
@@ -189,9 +190,9 @@ TEST(TaylorBundlePartials, PointPartialsMatchCentralDifferences) {
     for (int k = 0; k < 8; ++k) {
       // A point imaged within +- 0.6 c, at a random depth in front of the camera.
       const double D = depth(rng);
-      const Eigen::Vector3d ray(0.6 * unit(rng), 0.6 * unit(rng), -1.0);
+      const Eigen::Vector3d ray = DrawLastFirst<3>([&](int i) { return i == 2 ? -1.0 : 0.6 * unit(rng); });
       const Eigen::Vector3d point = eo.center_in_ground() + R.transpose() * (D * ray.normalized());
-      const Eigen::Vector2d observed(100.0 * unit(rng), 100.0 * unit(rng));
+      const Eigen::Vector2d observed = DrawLastFirst<2>([&](int) { return 100.0 * unit(rng); });
       for (const TaylorPartials partials :
            {TaylorPartials::kCorrected, TaylorPartials::kAsPrinted}) {
         Eigen::Matrix<double, 2, 6> d_eo;
@@ -570,7 +571,7 @@ TEST(TaylorBundleVsCeres, SameMinimumOnSimulatedBlocks) {
       for (size_t i = 0; i < data.block.images.size(); ++i) {
         data.block.images[i].measured_angles_rad =
             data.truth.eo[i].angles_seed_rad() +
-            sigma * Eigen::Vector3d(gauss(rng), gauss(rng), gauss(rng));
+            sigma * DrawLastFirst<3>([&](int) { return gauss(rng); });
         data.block.images[i].attitude_accuracy_rad = Eigen::Vector3d::Constant(sigma);
       }
     }

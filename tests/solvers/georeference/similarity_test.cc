@@ -5,6 +5,7 @@
 #include <Eigen/Geometry>
 
 #include "core/simulation/portable_random.h"
+#include "tests/support/ordered_draws.h"
 
 namespace photopose {
 namespace {
@@ -23,8 +24,8 @@ std::vector<SimilarityCorrespondence> Pairs(int n, double noise_m, uint64_t seed
   std::vector<SimilarityCorrespondence> pairs;
   for (int i = 0; i < n; ++i) {
     SimilarityCorrespondence pair;
-    pair.source = Eigen::Vector3d(random.Uniform(-5, 5), random.Uniform(-5, 5), random.Uniform(-0.5, 0.5));
-    pair.target = truth.Apply(pair.source) + noise_m * Eigen::Vector3d(random.Uniform(-1, 1), random.Uniform(-1, 1), random.Uniform(-1, 1));
+    pair.source = DrawLastFirst<3>([&](int i) { return i < 2 ? random.Uniform(-5, 5) : random.Uniform(-0.5, 0.5); });
+    pair.target = truth.Apply(pair.source) + noise_m * DrawLastFirst<3>([&](int) { return random.Uniform(-1, 1); });
     pair.sigma_m = noise_m > 0 ? noise_m : 0.01;
     pairs.push_back(pair);
   }

@@ -19,6 +19,7 @@
 #include "core/simulation/synthetic_scene.h"
 #include "core/types.h"
 #include "solvers/resection/resection.h"
+#include "tests/support/ordered_draws.h"
 
 namespace photopose {
 namespace {
@@ -101,15 +102,15 @@ Correspondences SimpleScene(uint64_t seed, int n, const Eigen::Vector3d& angles,
   const Eigen::Matrix3d R = RotationFromAngles(RotationConvention::kSeed, angles);
   for (int i = 0; i < n; ++i) {
     const Eigen::Vector3d ray =
-        R.transpose() * Eigen::Vector3d(45000.0 * unit(rng), 30000.0 * unit(rng), -c.focal_um);
+        R.transpose() * DrawLastFirst<3>([&](int i) { return i == 2 ? -c.focal_um : (i == 0 ? 45000.0 : 30000.0) * unit(rng); });
     const double height = 50.0 + 15.0 * unit(rng);
     const Eigen::Vector3d X =
         c.truth.center_in_ground() + (height - c.truth.center_in_ground().z()) / ray.z() * ray;
     double xy[2];
     EXPECT_TRUE(ProjectToImagePlane(c.truth.data(), X.data(), c.focal_um, xy));
     c.points_in_ground.push_back(X);
-    c.image_plane_um.emplace_back(xy[0] + noise_um * gaussian(rng),
-                                  xy[1] + noise_um * gaussian(rng));
+    const Eigen::Vector2d noisy = xy + noise_um * DrawLastFirst<2>([&](int) { return gaussian(rng); });
+    c.image_plane_um.emplace_back(noisy[0], noisy[1]);
     c.is_outlier.push_back(0);
   }
   return c;
@@ -160,7 +161,7 @@ TEST(AbsolutePoseEstimatorTest, NormalEquationsMatchProjectWithJacobians) {
     for (int k = 0; k < 200; ++k) {
       // Wide-angle and oblique rays (up to 45 deg off axis), depths 50-1500 m.
       const double depth = 775.0 + 725.0 * unit(rng);
-      const Eigen::Vector3d point(depth * unit(rng), depth * unit(rng), -depth);
+      const Eigen::Vector3d point = DrawLastFirst<3>([&](int i) { return i == 2 ? -depth : depth * unit(rng); });
       const double observed[2] = {focal * 0.4 * unit(rng), focal * 0.4 * unit(rng)};
       double xy[2];
       Eigen::Matrix<double, 2, 6, Eigen::RowMajor> J;
@@ -275,7 +276,7 @@ TEST(AbsolutePoseEstimatorTest, GaussNewtonConvergesEvenAtGimbalLock) {
     std::vector<Eigen::Vector2d> image;
     std::vector<Eigen::Vector3d> ground;
     for (int i = 0; i < 60; ++i) {
-      const Eigen::Vector2d xy(45000.0 * unit(rng), 30000.0 * unit(rng));
+      const Eigen::Vector2d xy = DrawLastFirst<2>([&](int i) { return (i == 0 ? 45000.0 : 30000.0) * unit(rng); });
       const double depth = 800.0 + 400.0 * unit(rng);
       ground.push_back(center + R_true.transpose() *
                                     (depth * Eigen::Vector3d(xy.x(), xy.y(), -focal).normalized()));

@@ -10,6 +10,7 @@
 
 #include "core/rotation.h"
 #include "core/types.h"
+#include "tests/support/ordered_draws.h"
 
 namespace photopose {
 namespace {
@@ -107,7 +108,7 @@ TEST(DltTest, NoisyBearingsGiveAnInitialValue) {
   std::normal_distribution<double> noise(0.0, 3.0 / 100500.0);  // 0.5 px of 6 um at c = 100.5 mm
   Scene s = RandomScene(&rng, 100);
   for (Eigen::Vector3d& b : s.bearings)
-    b = (b + Eigen::Vector3d(noise(rng), noise(rng), 0)).normalized();
+    b = (b + DrawLastFirst<3>([&](int i) { return i == 2 ? 0.0 : noise(rng); })).normalized();
   PoseCandidate pose;
   ASSERT_TRUE(SolveDlt(s.bearings, s.points, &pose).ok());
   ExpectPose(s, pose, kNoisyTolerance);
@@ -134,7 +135,7 @@ TEST(DltTest, CoplanarPointsAreAnError) {
   s.center = Eigen::Vector3d(10, 20, 850);
   s.scale = 800;
   for (int i = 0; i < 30; ++i) {
-    const Eigen::Vector3d p(10 + 300 * unit(rng), 20 + 300 * unit(rng), 50.0);
+    const Eigen::Vector3d p = DrawLastFirst<3>([&](int i) { return i == 2 ? 50.0 : (i == 0 ? 10 : 20) + 300 * unit(rng); });
     s.points.push_back(p);
     s.bearings.push_back((s.R * (p - s.center)).normalized());
   }

@@ -24,6 +24,7 @@
 #include "solvers/resection/taylor_resection.h"
 #include "tests/support/temp_dir.h"
 #include "tests/test_data.h"
+#include "tests/support/ordered_draws.h"
 
 namespace photopose {
 namespace {
@@ -506,7 +507,7 @@ TEST(Resection, CovarianceMatchesTheMonteCarloScatter) {
     ASSERT_TRUE(MakeSyntheticScene(options, &clean).ok());
     std::mt19937_64 rng(1000 + t);
     std::normal_distribution<double> n(0.0, 0.5);
-    for (auto& mark : clean.marks) *mark.column_row += Eigen::Vector2d(n(rng), n(rng));
+    for (auto& mark : clean.marks) *mark.column_row += DrawLastFirst<2>([&](int) { return n(rng); });
     for (auto& mark : clean.marks) mark.accuracy_px = 0.5;
     const Inputs inputs = InputsOf(clean, true);
     const ResectionResult r = ResectImage(ResectionOptions(), inputs.inputs[0]);

@@ -17,6 +17,7 @@
 #include "core/collinearity.h"
 #include "core/rotation.h"
 #include "test_data.h"
+#include "tests/support/ordered_draws.h"
 
 namespace photopose {
 namespace {
@@ -60,7 +61,7 @@ Scene MakeScene(std::mt19937_64* rng, const Eigen::Vector3d& center, const Eigen
   std::uniform_real_distribution<double> height(-0.5 * relief_m, 0.5 * relief_m);
   while (static_cast<int>(scene.ground_m.size()) < n) {
     const Eigen::Vector3d ray =
-        R.transpose() * Eigen::Vector3d(image(*rng), image(*rng), -focal_um);
+        R.transpose() * DrawLastFirst<3>([&](int i) { return i == 2 ? -focal_um : image(*rng); });
     if (!(ray.z() < -1e-3 * ray.norm())) continue;
     const double z = height(*rng);
     const double t = (z - center.z()) / ray.z();
@@ -145,13 +146,13 @@ Scene RandomPoseScene(std::mt19937_64* rng) {
   Scene scene;
   scene.focal_um = 150000.0;
   scene.truth.set_center_in_ground(
-      Eigen::Vector3d(coordinate(*rng), coordinate(*rng), coordinate(*rng)));
-  scene.truth.set_angles_seed_rad(Eigen::Vector3d(tilt(*rng), tilt(*rng), kappa(*rng)));
+      DrawLastFirst<3>([&](int) { return coordinate(*rng); }));
+  scene.truth.set_angles_seed_rad(DrawLastFirst<3>([&](int i) { return i == 2 ? kappa(*rng) : tilt(*rng); }));
   const Eigen::Matrix3d R =
       RotationFromAngles(RotationConvention::kSeed, scene.truth.angles_seed_rad());
   std::uniform_real_distribution<double> image(-0.6 * scene.focal_um, 0.6 * scene.focal_um);
   for (int i = 0; i < kPointsPerPose; ++i) {
-    const Eigen::Vector3d ray_in_camera(image(*rng), image(*rng), -scene.focal_um);
+    const Eigen::Vector3d ray_in_camera = DrawLastFirst<3>([&](int i) { return i == 2 ? -scene.focal_um : image(*rng); });
     const Eigen::Vector3d point =
         scene.truth.center_in_ground() + depth(*rng) * (R.transpose() * ray_in_camera.normalized());
     scene.ground_m.push_back(point);
@@ -583,7 +584,7 @@ std::vector<Eigen::Vector2d> AddNoise(std::mt19937_64* rng,
                                       const std::vector<Eigen::Vector2d>& image, double sigma_um) {
   std::normal_distribution<double> noise(0.0, sigma_um);
   std::vector<Eigen::Vector2d> noisy = image;
-  for (Eigen::Vector2d& p : noisy) p += Eigen::Vector2d(noise(*rng), noise(*rng));
+  for (Eigen::Vector2d& p : noisy) p += DrawLastFirst<2>([&](int) { return noise(*rng); });
   return noisy;
 }
 
@@ -817,8 +818,8 @@ TEST(TaylorResectionSynthetic, RandomObliquePosesAsPrintedSometimesFails) {
   int corrected_max_iterations = 0, printed_not_converged = 0, printed_failed = 0,
       printed_spurious = 0;
   for (int pose = 0; pose < kPoses; ++pose) {
-    const Eigen::Vector3d angles(DegreesToRadians(tilt(rng)), DegreesToRadians(tilt(rng)),
-                                 DegreesToRadians(kappa(rng)));
+    const Eigen::Vector3d angles =
+        DrawLastFirst<3>([&](int i) { return DegreesToRadians(i == 2 ? kappa(rng) : tilt(rng)); });
     const Scene scene = MakeScene(&rng, Eigen::Vector3d(500.0, 300.0, 800.0), angles, 12, kFocalUm,
                                   kHalfFormatUm, 30.0);
     rates.push_back(AsPrintedRate(scene));
