@@ -248,6 +248,10 @@ std::string Utf8UnitName(const std::string& unit) {
   return unit;
 }
 
+std::string UnitNameFor(const std::string& unit, UnitText text) {
+  return text == UnitText::kUtf8 ? Utf8UnitName(unit) : unit;
+}
+
 std::string FormatCount(long long count, const std::string& singular, const std::string& plural) {
   return std::to_string(count) + " " +
          (count == 1 ? singular : (plural.empty() ? singular + "s" : plural));

@@ -130,6 +130,11 @@ std::string CameraParamUnit(CameraModelType model, const std::string& name);
 // "us" -> "µs"; any other unchanged. The ASCII names stay where a program reads them (JSON, CSV
 // headers, file formats) and on the console, whose encoding is not known.
 std::string Utf8UnitName(const std::string& unit);
+// Where a text that names a unit is read: kAscii on the console and in files, kUtf8 on a page;
+// UnitNameFor gives the unit's name there (Utf8UnitName on a page, unchanged otherwise). For a
+// sentence shared by the console and a page (a warning in words).
+enum class UnitText { kAscii, kUtf8 };
+std::string UnitNameFor(const std::string& unit, UnitText text);
 
 // "1 image", "12 images".
 std::string FormatCount(long long count, const std::string& singular,

@@ -214,6 +214,28 @@ std::vector<char> BundleAdjustmentResult::RemovedMarks(size_t num_marks) const {
   return removed;
 }
 
+bool StatedPerAxis(const BundleGroupStatistics& g) {
+  const Eigen::Vector3d& a = g.stated_accuracy;
+  return g.num_axes == 3 && a.y() > 0.0 && a.z() > 0.0 && (a.x() != a.y() || a.x() != a.z());
+}
+
+BundleGroupFigures FormatGroupFigures(const BundleGroupStatistics& g) {
+  const bool per_axis = StatedPerAxis(g);
+  std::vector<double> values = {g.stated_accuracy.x(), g.rms_total, g.estimated_accuracy.x()};
+  if (per_axis) {
+    values.push_back(g.stated_accuracy.y());
+    values.push_back(g.stated_accuracy.z());
+  }
+  const ValuesInOneUnit row = FormatRowInOneUnit(values, g.unit);
+  BundleGroupFigures figures;
+  figures.unit = row.unit;
+  figures.stated_x = row.texts[0];
+  figures.stated = per_axis ? row.texts[0] + "/" + row.texts[3] + "/" + row.texts[4] : row.texts[0];
+  figures.rms = row.texts[1];
+  figures.estimated = row.texts[2];
+  return figures;
+}
+
 std::string BundleAdjustmentResult::FullReport(const Block& block) const {
   auto seconds = [](double value) { return FormatSignificant(value, 3) + " s"; };
   std::ostringstream os;
@@ -233,23 +255,23 @@ std::string BundleAdjustmentResult::FullReport(const Block& block) const {
          << " held fixed (no residuals, no verdict)\n";
       continue;
     }
-    // Stated and RMS in one unit: the group's (px, um, sigma), mm/cm/m, or arc seconds.
-    const std::vector<std::string> values =
-        FormatMarkValues({g.stated_accuracy.x(), g.rms_total}, g.unit);
-    os << "  " << EnumName(g.group) << ": " << g.count << ", " << values[0] << ", " << values[1]
-       << ", " << FormatUnitless(g.ratio) << ", " << FormatUnitless(g.redundancy_share)
-       << (g.overfit ? "  OVERFIT" : "");
+    // Stated and RMS in the unit of the group's own figures, as the CLI prints them.
+    const BundleGroupFigures figures = FormatGroupFigures(g);
+    const std::string unit = " " + figures.unit;
+    os << "  " << EnumName(g.group) << ": " << g.count << ", " << (StatedPerAxis(g) ? "X/Y/Z " : "")
+       << figures.stated << unit << ", " << figures.rms << unit << ", " << FormatUnitless(g.ratio)
+       << ", " << FormatUnitless(g.redundancy_share) << (g.overfit ? "  OVERFIT" : "");
     if (g.num_fixed > 0) os << "; " << g.num_fixed << " more held fixed";
     os << "\n";
     if (!g.message.empty()) os << "    " << g.message << "\n";
   }
   for (const BundleGroupStatistics& g : groups) {
     if (std::isfinite(g.estimated_accuracy.x())) {
-      const std::vector<std::string> values =
-          FormatMarkValues({g.estimated_accuracy.x(), g.stated_accuracy.x()}, g.unit);
-      os << "  " << EnumName(g.group) << " accuracy estimated from the data: " << values[0]
-         << " (stated " << values[1] << ", relative standard error "
-         << FormatUnitless(g.estimated_accuracy_standard_error) << ")\n";
+      const BundleGroupFigures figures = FormatGroupFigures(g);
+      os << "  " << EnumName(g.group) << " accuracy estimated from the data: " << figures.estimated
+         << " " << figures.unit << " (stated " << figures.stated_x << " " << figures.unit
+         << ", relative standard error " << FormatUnitless(g.estimated_accuracy_standard_error)
+         << ")\n";
     } else if (!g.estimation_message.empty()) {
       os << "  " << EnumName(g.group) << ": " << g.estimation_message << "\n";
     }

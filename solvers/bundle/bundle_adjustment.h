@@ -410,6 +410,27 @@ struct BundleGroupStatistics {
   std::string estimation_message;
 };
 
+// Whether a three-axis group's stated accuracy differs between its axes (GNSS at 3/3/6 cm; every
+// axis with rows): reports then show it as X/Y/Z, since its RMS / stated is the whitened ratio
+// over all three axes, which the X accuracy alone would not explain.
+bool StatedPerAxis(const BundleGroupStatistics& g);
+
+// A group's figures as every report prints them (FullReport, the CLI's console lines and HTML
+// page), one rule for all, so that a value reads the same in each: stated (X, or X/Y/Z when
+// StatedPerAxis), RMS and estimated accuracy in the one unit and decimals FormatRowInOneUnit
+// (core/units.h) chooses from the group's own values (a control-point group in mm beside camera
+// positions in m; a stated 10 m beside an RMS of 0.5 mm each with two significant digits), without
+// the unit; "n/a" where not finite. `unit` is the ASCII name ("um"); a page shows
+// Utf8UnitName(unit).
+struct BundleGroupFigures {
+  std::string unit;       // "px", "um", "sigma", "mm", "cm", "m" or "arcsec"
+  std::string stated_x;   // the X axis's (a mark group's one) stated accuracy
+  std::string stated;     // stated_x, or "X/Y/Z" when StatedPerAxis
+  std::string rms;        // rms_total
+  std::string estimated;  // estimated_accuracy X; "n/a" when not estimated
+};
+BundleGroupFigures FormatGroupFigures(const BundleGroupStatistics& g);
+
 // The diagnostics of one scalar observation (observation_diagnostics).
 struct BundleObservationDiagnostics {
   BundleGroup group = kTieMarks;

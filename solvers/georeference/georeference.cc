@@ -517,6 +517,10 @@ Status FramesTableCrs(const std::vector<FrameRecord>& frames, const std::string&
 
 }  // namespace
 
+std::string GeoreferenceErrorAxes(const CrsInfo& out_crs_info) {
+  return out_crs_info.projected ? "grid east, grid north, up" : "east, north, up";
+}
+
 Status PrepareGeoreference(const GeoreferenceOptions& options, const GeoreferenceInputs& inputs,
                            Block* block, GeoreferenceResult* result) {
   const auto start = std::chrono::steady_clock::now();

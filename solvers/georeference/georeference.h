@@ -128,6 +128,10 @@ struct GeoreferencePointError {
   std::optional<Eigen::Vector3d> after_adjustment_m;  // adjusted (control) or intersected (check)
 };
 
+// The axes of GeoreferencePointError, GeoreferenceRmse and their reports, in words: "grid east,
+// grid north, up" in a projected output CRS, "east, north, up" otherwise (E, N, U for short).
+std::string GeoreferenceErrorAxes(const CrsInfo& out_crs_info);
+
 // Per-axis RMSE (m) over the points of one role that have the error.
 struct GeoreferenceRmse {
   int count = 0;

@@ -117,6 +117,10 @@ TEST(Units, MicroUnitsReadAsMicroInUtf8) {
   EXPECT_EQ(Utf8UnitName("us"), "\u00b5s");
   EXPECT_EQ(Utf8UnitName("mm"), "mm");
   EXPECT_EQ(Utf8UnitName(""), "");
+  // A sentence shared by the console (ASCII) and a page (UTF-8).
+  EXPECT_EQ(UnitNameFor("um", UnitText::kAscii), "um");
+  EXPECT_EQ(UnitNameFor("um", UnitText::kUtf8), "\u00b5m");
+  EXPECT_EQ(UnitNameFor("px", UnitText::kUtf8), "px");
 }
 
 // Values someone chose: at most 4 significant digits, scaled into 0.1 to 1000 of a unit.

@@ -191,12 +191,17 @@ std::vector<std::pair<std::string, std::string>> OverviewFacts(const Block& bloc
   };
 }
 
+// The output CRS of a georeferenced block by PROJ's name, else as given.
+std::string OutCrsName(const GeoreferenceResult& g) {
+  return g.out_crs_info.name.empty() ? g.out_crs : g.out_crs_info.name;
+}
+
 // A georeferenced block's facts: the output CRS and the local frame the block was adjusted in,
 // camera positions without height, inputs read and not used.
 void GeoreferenceFacts(const GeoreferenceResult& g,
                        std::vector<std::pair<std::string, std::string>>* facts) {
   const CrsInfo& crs = g.out_crs_info;
-  std::string out_crs = crs.name.empty() ? g.out_crs : crs.name;
+  std::string out_crs = OutCrsName(g);
   if (!crs.name.empty() && !g.out_crs.empty() && g.out_crs != crs.name)
     out_crs += " (" + g.out_crs + ")";
   if (!g.out_crs_reason.empty()) out_crs += "; " + g.out_crs_reason;
@@ -288,7 +293,7 @@ std::string FixedGrossWeakVerdictsHtml(const Block& block, const BundleAdjustmen
          << (g.fixed() ? "" : "; the verdict above covers the weighted ones only") << ".</div>\n";
   }
   for (const BundleGroupStatistics& g : result.groups) {
-    const std::string gross = GrossErrorsAbsorbed(g);
+    const std::string gross = GrossErrorsAbsorbed(g, UnitText::kUtf8);
     if (!gross.empty())
       html << "<div class=\"verdict bad\"><b>Gross errors absorbed:</b> " << HtmlEscape(gross)
            << "</div>\n";
@@ -311,7 +316,7 @@ std::string StatedAccuraciesVerdictHtml(const BundleAdjustmentResult& result) {
   for (const BundleGroupStatistics& g : result.groups) {
     if (g.count == 0 || !(g.ratio > 0.0)) continue;
     if (g.ratio < 1.0 / kWeightFactor || g.ratio > kWeightFactor) {
-      const GroupFigures figures = FormatGroupFigures(g);
+      const BundleGroupFigures figures = FormatGroupFigures(g);
       const std::string unit = " " + Utf8UnitName(figures.unit);
       std::string line = std::string(EnumName(g.group)) + ": RMS / stated " +
                          FormatUnitless(g.ratio) + ", the stated " + figures.stated + unit +
@@ -404,9 +409,95 @@ std::vector<std::string> RmseRow(const std::string& name, const std::vector<Eige
   return row;
 }
 
+// A georeferenced block's control and check errors in the output CRS (along its level axes at
+// each point: E, N, U), after the similarity alone and after the adjustment side by side, so that
+// a reader sees what the adjustment bought; the figures of the JSON's "georeference" section.
+// Each stage's lengths in the one unit its largest error calls for, named above its columns.
+struct GeoreferenceStageUnits {
+  LengthUnit after_similarity = LengthUnit::kMetre;
+  LengthUnit after_adjustment = LengthUnit::kMetre;
+};
+
+GeoreferenceStageUnits GeoreferenceStageUnitsOf(const GeoreferenceResult& g) {
+  std::vector<double> similarity, adjustment;
+  for (const GeoreferencePointError& e : g.point_errors) {
+    if (e.after_similarity_m) similarity.push_back(e.after_similarity_m->norm());
+    if (e.after_adjustment_m) adjustment.push_back(e.after_adjustment_m->norm());
+  }
+  return {LengthUnitFor(LargestMagnitude(similarity)), LengthUnitFor(LargestMagnitude(adjustment))};
+}
+
+// A role's RMSE at one stage: count, E, N, U, total; "n/a" without a point.
+void AppendRmseCells(const GeoreferenceRmse& rmse, LengthUnit unit, std::vector<std::string>* row) {
+  row->push_back(std::to_string(rmse.count));
+  for (int a = 0; a < 3; ++a)
+    row->push_back(rmse.count > 0 ? FormatLength(rmse.rmse_m[a], unit) : "n/a");
+  row->push_back(rmse.count > 0 ? FormatLength(rmse.total_m, unit) : "n/a");
+}
+
+std::string GeoreferenceRmseHtml(const GeoreferenceResult& g, const GeoreferenceStageUnits& units) {
+  std::vector<std::vector<std::string>> rows(2);
+  rows[0] = {"control"};
+  AppendRmseCells(g.control_after_similarity, units.after_similarity, &rows[0]);
+  AppendRmseCells(g.control_after_adjustment, units.after_adjustment, &rows[0]);
+  rows[1] = {"check"};
+  AppendRmseCells(g.check_after_similarity, units.after_similarity, &rows[1]);
+  AppendRmseCells(g.check_after_adjustment, units.after_adjustment, &rows[1]);
+  const std::vector<HeaderGroup> groups = {
+      {"", 1},
+      {"after the similarity (" + std::string(LengthUnitName(units.after_similarity)) + ")", 5},
+      {"after the adjustment (" + std::string(LengthUnitName(units.after_adjustment)) + ")", 5}};
+  return HtmlTable(
+      "Root mean square errors in " + OutCrsName(g) +
+          ": after the similarity and after the adjustment",
+      {"points", "count", "E", "N", "U", "total", "count", "E", "N", "U", "total"}, rows,
+      {"E, N, U: " + GeoreferenceErrorAxes(g.out_crs_info) + " of " + OutCrsName(g) +
+           " at each point; count: the points with an error at that stage",
+       "after the similarity: the model's points moved by the similarity alone (fitted to the "
+       "camera positions and control); after the adjustment: control points adjusted, check "
+       "points intersected from the adjusted images. Control points take part in both, so their "
+       "errors are small by construction; check points measure the block's accuracy"},
+      groups);
+}
+
+// Each control and check point's errors at both stages: control points first, then check points.
+std::string GeoreferencePointErrorsHtml(const Block& block, const GeoreferenceResult& g,
+                                        const GeoreferenceStageUnits& units) {
+  std::vector<std::vector<std::string>> rows;
+  bool not_intersected = false;
+  const auto cells = [&](const std::optional<Eigen::Vector3d>& e, LengthUnit unit,
+                         std::vector<std::string>* row) {
+    for (int a = 0; a < 3; ++a) row->push_back(e ? FormatLength((*e)[a], unit) : "n/a");
+    not_intersected = not_intersected || !e;
+  };
+  for (const PointRole role : {PointRole::kControl, PointRole::kCheck}) {
+    for (const GeoreferencePointError& e : g.point_errors) {
+      const BlockPoint& point = block.points[e.point];
+      if (point.role != role) continue;
+      std::vector<std::string> row = {point.id, role == PointRole::kControl ? "control" : "check"};
+      cells(e.after_similarity_m, units.after_similarity, &row);
+      cells(e.after_adjustment_m, units.after_adjustment, &row);
+      rows.push_back(row);
+    }
+  }
+  std::vector<std::string> notes = {"error: estimate minus surveyed, along E, N, U as above"};
+  if (not_intersected)
+    notes.push_back(
+        "n/a: no estimate at that stage (the point is not intersected: fewer than two of its "
+        "rays, or rays that do not meet; see the tables below)");
+  return HtmlTable(
+      "Each point's error in " + OutCrsName(g) + ": after the similarity and after the adjustment",
+      {"point", "role", "E", "N", "U", "E", "N", "U"}, rows, notes,
+      {{"", 2},
+       {"after the similarity (" + std::string(LengthUnitName(units.after_similarity)) + ")", 3},
+       {"after the adjustment (" + std::string(LengthUnitName(units.after_adjustment)) + ")", 3}});
+}
+
 // default_marker_m: the surveyed accuracy of a control or check point that states none (m).
+// `georeference` (may be null): a georeferenced block's errors in the output CRS, after the
+// similarity and after the adjustment, in place of the RMSE table of the local frame.
 std::string PointsHtml(const Block& block, const BundleAdjustmentResult& result,
-                       double default_marker_m) {
+                       double default_marker_m, const GeoreferenceResult* georeference) {
   std::vector<double> magnitudes;
   for (size_t p = 0; p < block.points.size() && p < result.points.size(); ++p) {
     const BundlePointResult& r = result.points[p];
@@ -469,26 +560,40 @@ std::string PointsHtml(const Block& block, const BundleAdjustmentResult& result,
   html << "<h2>3. Control and check points</h2>\n";
   const auto control_rows = point_rows(PointRole::kControl, &control_errors);
   const auto check_rows = point_rows(PointRole::kCheck, &check_errors);
-  html << HtmlTable("Root mean square errors",
-                    {"points", "count", "X (" + u + ")", "Y (" + u + ")", "Z (" + u + ")",
-                     "XY (" + u + ")", "total (" + u + ")"},
-                    {RmseRow("control (adjusted - surveyed)", control_errors, unit),
-                     RmseRow("check (intersected - surveyed)", check_errors, unit)},
-                    {"control points take part in the adjustment, so their errors are small by "
-                     "construction; check points do not, and measure the block's accuracy"});
-  html << HtmlTable("Control points: adjusted minus surveyed", header, control_rows,
-                    {"sigma: of the adjusted point; e^T C^-1 e n/a: a control point's error is a "
-                     "residual of the adjustment, not an independent miss"});
+  const bool georeferenced = georeference != nullptr && georeference->evaluated;
+  if (georeferenced) {
+    const GeoreferenceStageUnits units = GeoreferenceStageUnitsOf(*georeference);
+    html << GeoreferenceRmseHtml(*georeference, units)
+         << GeoreferencePointErrorsHtml(block, *georeference, units);
+  } else {
+    html << HtmlTable("Root mean square errors",
+                      {"points", "count", "X (" + u + ")", "Y (" + u + ")", "Z (" + u + ")",
+                       "XY (" + u + ")", "total (" + u + ")"},
+                      {RmseRow("control (adjusted - surveyed)", control_errors, unit),
+                       RmseRow("check (intersected - surveyed)", check_errors, unit)},
+                      {"control points take part in the adjustment, so their errors are small by "
+                       "construction; check points do not, and measure the block's accuracy"});
+  }
+  // A georeferenced block's tables below are in the local frame it was adjusted in.
+  const std::string local_frame =
+      georeferenced ? "X, Y, Z: the local East-North-Up frame the block was adjusted in (the "
+                      "tables above: " + OutCrsName(*georeference) + ")"
+                    : "";
+  std::vector<std::string> control_notes = {
+      "sigma: of the adjusted point; e^T C^-1 e n/a: a control point's error is a residual of "
+      "the adjustment, not an independent miss"};
+  if (georeferenced) control_notes.insert(control_notes.begin(), local_frame);
+  html << HtmlTable("Control points: adjusted minus surveyed", header, control_rows, control_notes);
+  std::vector<std::string> check_notes = {
+      "sigma: of the error, square root of the trace of C = the intersection's covariance "
+      "(sigma0-scaled) plus the surveyed coordinates' (their stated accuracy, " +
+          FormatLengthWithUnit(default_marker_m) + " where none is stated)",
+      "e^T C^-1 e: the error against C, chi-square with 3 degrees of freedom when both are "
+      "honest (above " +
+          FormatUnitless(ChiSquaredQuantile(kCheckPointLevel, 3.0), 1) + " in 0.1 % of cases)"};
+  if (georeferenced) check_notes.insert(check_notes.begin(), local_frame);
   html << HtmlTable("Check points: intersected from the adjusted images minus surveyed", header,
-                    check_rows,
-                    {"sigma: of the error, square root of the trace of C = the intersection's "
-                     "covariance (sigma0-scaled) plus the surveyed coordinates' (their stated "
-                     "accuracy, " + FormatLengthWithUnit(default_marker_m) +
-                         " where none is stated)",
-                     "e^T C^-1 e: the error against C, chi-square with 3 degrees of "
-                     "freedom when both are honest (above " +
-                         FormatUnitless(ChiSquaredQuantile(kCheckPointLevel, 3.0), 1) +
-                         " in 0.1 % of cases)"});
+                    check_rows, check_notes);
   if (!vertical.x.empty()) html << "<div class=\"plots\">" << RenderScatterPlotSvg(vertical) << "</div>\n";
   return html.str();
 }
@@ -828,7 +933,8 @@ std::string RejectedHtml(const Block& block, const BundleAdjustmentResult& resul
 // One group's row of the diagnostics table (the unit column, when there is one, added by the
 // caller): count, stated, RMS, estimated, RMS / stated, redundancy share, verdict; its figures
 // as the console prints them (FormatGroupFigures).
-std::vector<std::string> GroupRow(const BundleGroupStatistics& g, const GroupFigures& figures) {
+std::vector<std::string> GroupRow(const BundleGroupStatistics& g,
+                                  const BundleGroupFigures& figures) {
   if (g.fixed()) {
     return {EnumName(g.group),
             FormatCount(g.num_fixed, "held fixed", "held fixed"),
@@ -870,7 +976,7 @@ std::vector<std::string> GroupRow(const BundleGroupStatistics& g, const GroupFig
 // in the headers when every group has the same, else in a unit column; never in a cell.
 std::string GroupsTableHtml(const BundleAdjustmentResult& result,
                             const BundleReportContext& context) {
-  std::vector<GroupFigures> figures;
+  std::vector<BundleGroupFigures> figures;
   std::vector<std::string> units;
   for (const BundleGroupStatistics& g : result.groups) {
     figures.push_back(FormatGroupFigures(g));
@@ -1055,7 +1161,7 @@ std::string BundleReportHtml(const Block& block, const BundleAdjustmentResult& r
        << FormatCount(s.num_points, "point") << ", " << FormatCount(s.num_marks, "mark")
        << "; photopose " << PHOTOPOSE_VERSION << "</p>\n";
   html << OverviewHtml(block, result, context) << VerdictsHtml(block, result, context)
-       << PointsHtml(block, result, context.options.accuracies.marker_m)
+       << PointsHtml(block, result, context.options.accuracies.marker_m, context.georeference)
        << CamerasHtml(block, result)
        << CalibrationHtml(block, result) << ResidualsHtml(block, result)
        << RejectedHtml(block, result) << DiagnosticsHtml(block, result, context);

@@ -116,7 +116,7 @@ json GeoreferenceJson(const Block& block, const GeoreferenceResult& g) {
   return {{"out_crs", g.out_crs},
           {"out_crs_name", g.out_crs_info.name},
           {"out_crs_reason", g.out_crs_reason},
-          {"error_axes", g.out_crs_info.projected ? "grid east, grid north, up (m)" : "east, north, up (m)"},
+          {"error_axes", GeoreferenceErrorAxes(g.out_crs_info) + " (m)"},
           {"local_frame", {{"definition", g.frame.definition()},
                            {"origin_lon_lat_h", {g.frame.origin_lon_lat_h().x(), g.frame.origin_lon_lat_h().y(), g.frame.origin_lon_lat_h().z()}},
                            {"note", "the other sections of this report (images, points, groups) are in this local East-North-Up frame (m)"}}},
@@ -639,42 +639,21 @@ bool AbsorbsGrossErrors(const BundleGroupStatistics& group) {
   return stated > 0.0 && estimated > kGrossErrorFactor * stated;
 }
 
-std::string GrossErrorsAbsorbed(const BundleGroupStatistics& group) {
+std::string GrossErrorsAbsorbed(const BundleGroupStatistics& group, UnitText unit_text) {
   if (!AbsorbsGrossErrors(group)) return "";
   const double stated = group.stated_accuracy.x(), estimated = group.estimated_accuracy.x();
-  const GroupFigures figures = FormatGroupFigures(group);
+  const BundleGroupFigures figures = FormatGroupFigures(group);
+  const std::string unit = UnitNameFor(figures.unit, unit_text);
   std::string text = std::string(EnumName(group.group)) + ": the estimated accuracy " +
-                     figures.estimated + " " + figures.unit + " is " +
+                     figures.estimated + " " + unit + " is " +
                      FormatUnitless(estimated / stated, 1) + " times the stated " +
-                     figures.stated_x + " " + figures.unit +
+                     figures.stated_x + " " + unit +
                      ": gross errors are far likelier than a misstated accuracy, and the "
                      "estimation absorbed them into every observation of the group (sigma0 "
                      "ends near 1 and does not show them)";
   if (group.group == kControlMarks)
     text += "; check marks are tested with this accuracy too";
   return text + ". Check the group's observations with the largest |w|, or state its accuracy.";
-}
-
-bool StatedPerAxis(const BundleGroupStatistics& g) {
-  const Eigen::Vector3d& a = g.stated_accuracy;
-  return g.num_axes == 3 && a.y() > 0.0 && a.z() > 0.0 && (a.x() != a.y() || a.x() != a.z());
-}
-
-GroupFigures FormatGroupFigures(const BundleGroupStatistics& g) {
-  const bool per_axis = StatedPerAxis(g);
-  std::vector<double> values = {g.stated_accuracy.x(), g.rms_total, g.estimated_accuracy.x()};
-  if (per_axis) {
-    values.push_back(g.stated_accuracy.y());
-    values.push_back(g.stated_accuracy.z());
-  }
-  const ValuesInOneUnit row = FormatRowInOneUnit(values, g.unit);
-  GroupFigures figures;
-  figures.unit = row.unit;
-  figures.stated_x = row.texts[0];
-  figures.stated = per_axis ? row.texts[0] + "/" + row.texts[3] + "/" + row.texts[4] : row.texts[0];
-  figures.rms = row.texts[1];
-  figures.estimated = row.texts[2];
-  return figures;
 }
 
 bool OverfitJudged(const BundleGroupStatistics& g) {
@@ -820,7 +799,7 @@ void ConsoleGroupLines(const BundleAdjustmentResult& result, std::vector<std::st
       continue;
     }
     // The group's figures as the page's groups table shows them (one unit for the line).
-    const GroupFigures figures = FormatGroupFigures(g);
+    const BundleGroupFigures figures = FormatGroupFigures(g);
     const std::string unit = " " + figures.unit;
     line << EnumName(g.group) << ": " << g.count << ", stated "
          << (StatedPerAxis(g) ? "X/Y/Z " : "") << figures.stated << unit << ", RMS " << figures.rms
@@ -864,14 +843,14 @@ void ConsoleAccuracyLines(const BundleAdjustmentResult& result, std::vector<std:
     for (const auto& [group, flag] : kFlags) {
       if (g.group != group) continue;
       std::ostringstream line;
-      const GroupFigures figures = FormatGroupFigures(g);
+      const BundleGroupFigures figures = FormatGroupFigures(g);
       line << EnumName(g.group) << ": " << figures.stated_x << " " << figures.unit << " stated, "
            << figures.estimated << " " << figures.unit << " estimated (+-"
            << FormatUnitless(100.0 * g.estimated_accuracy_standard_error, 0) << " %): set " << flag
            << "=" << FormatSignificant(g.estimated_accuracy.x(), 2);
       lines->push_back(line.str());
     }
-    const std::string gross = GrossErrorsAbsorbed(g);
+    const std::string gross = GrossErrorsAbsorbed(g, UnitText::kAscii);
     if (!gross.empty()) lines->push_back("warning: " + gross);
   }
 }

@@ -12,6 +12,7 @@
 #include "core/block.h"
 #include "core/pixel_rows.h"
 #include "core/rotation.h"
+#include "core/units.h"
 #include "core/io/tables.h"
 #include "solvers/bundle/bundle_adjustment.h"
 #include "solvers/georeference/georeference.h"
@@ -48,10 +49,10 @@ const char* BundleAxisName(BundleGroup group, int axis);
 // observation of the group, so sigma0 ends near 1 and does not show them). `photopose bundle`
 // then searches for them as it does when sigma0 stays above 3 (data snooping); GrossErrorsAbsorbed
 // states, in words, what is still so after that search, with the remedy. Empty otherwise. The
-// console and the HTML page state it.
+// console (unit_text kAscii) and the HTML page (kUtf8: "µm") state it.
 constexpr double kGrossErrorFactor = 3.0;
 bool AbsorbsGrossErrors(const BundleGroupStatistics& group);
-std::string GrossErrorsAbsorbed(const BundleGroupStatistics& group);
+std::string GrossErrorsAbsorbed(const BundleGroupStatistics& group, UnitText unit_text);
 
 // The weakly determined parameters of a result (BundleAdjustmentResult::weakly_determined) in
 // words, the worst five named, with what it means; empty when there are none. The console and the
@@ -61,25 +62,9 @@ std::string WeaklyDeterminedWarning(const BundleAdjustmentResult& result);
 // Chi-square(3) level above which a check point's error e^T C^-1 e stands out (0.1 % of honest
 // cases): the one rule of the page's verdict, its table notes and the console's warnings.
 inline constexpr double kCheckPointLevel = 0.999;
-// Whether a three-axis group's stated accuracy differs between its axes (GNSS at 3/3/6 cm; every
-// axis with rows): the console and the page then show it as X/Y/Z, since its RMS / stated is the
-// whitened ratio over all three axes, which the X accuracy alone would not explain.
-bool StatedPerAxis(const BundleGroupStatistics& g);
-
-// A group's figures as the console and the page print them, one rule for both, so that a value
-// reads the same in each: stated (X, or X/Y/Z when StatedPerAxis), RMS and estimated accuracy in
-// the one unit and decimals FormatRowInOneUnit (core/units.h) chooses from the group's own shown
-// values (a control-point group in mm beside camera positions in m), without the unit; "n/a" where
-// not finite. `unit` is the ASCII name ("um"); a page shows Utf8UnitName(unit).
-struct GroupFigures {
-  std::string unit;       // "px", "um", "sigma", "mm", "cm", "m" or "arcsec"
-  std::string stated_x;   // the X axis's (a mark group's one) stated accuracy
-  std::string stated;     // stated_x, or "X/Y/Z" when StatedPerAxis
-  std::string rms;        // rms_total
-  std::string estimated;  // estimated_accuracy X; "n/a" when not estimated
-};
-GroupFigures FormatGroupFigures(const BundleGroupStatistics& g);
-
+// A group's figures and whether its stated accuracy is shown per axis: the library's
+// FormatGroupFigures and StatedPerAxis (solvers/bundle/bundle_adjustment.h), which FullReport uses
+// too.
 // Whether a group's over-fitting was judged: false for a weighted prior group (control points,
 // camera positions, attitudes) without a redundancy share (the statistics were not computed,
 // --statistics=none), whose `overfit` false is then no verdict (the library flags nothing without

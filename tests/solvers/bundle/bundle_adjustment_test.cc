@@ -20,6 +20,7 @@
 #include "solvers/bundle/check_points.h"
 #include "solvers/resection/resection.h"
 #include "test_data.h"
+#include "tests/support/bundle_groups.h"
 #include "tests/support/dbat_data.h"
 #include "tests/support/singular_block.h"
 #include "tests/support/ordered_draws.h"
@@ -567,6 +568,80 @@ TEST(BundleAdjustment, FullReportPrintsFixedUnitsWithoutExponents) {
       << report;
   EXPECT_TRUE(std::regex_search(report, std::regex("K1 = -?[0-9.]+ \\+- [0-9.]+ 10\\^-[0-9]+ mm\\^-2\n")))
       << report;
+}
+
+// A group's figures (FormatGroupFigures): the unit from the group's own values (a control-point
+// group in mm whatever the camera positions beside it), every figure with two significant digits
+// (the RMS of 0.5 mm is not "0.1 cm", 2.1 mm not "0.2 cm"); "n/a" when not estimated; a film
+// mark group keeps its ASCII unit name (a page shows µm).
+TEST(BundleAdjustment, AGroupsFiguresTakeTheirOwnUnitAndTwoSignificantDigits) {
+  BundleGroupStatistics points = testing::GroupOf(kControlPoints, "m", 0.005, 0.0005, 0.5);
+  points.estimated_accuracy = Eigen::Vector3d::Constant(0.0021);
+  BundleGroupFigures figures = FormatGroupFigures(points);
+  EXPECT_EQ(figures.unit, "mm");
+  EXPECT_EQ(figures.stated, "5.00");
+  EXPECT_EQ(figures.rms, "0.50");
+  EXPECT_EQ(figures.estimated, "2.10");
+  figures = FormatGroupFigures(testing::GroupOf(kCameraPositions, "m", 10.0, 12.0, 0.5));
+  EXPECT_EQ(figures.stated, "10.0");
+  EXPECT_EQ(figures.unit, "m");
+  figures = FormatGroupFigures(testing::GroupOf(kTieMarks, "um", 2.0, 1.234, 0.5));
+  EXPECT_EQ(figures.estimated, "n/a");
+  EXPECT_EQ(figures.unit, "um");
+  EXPECT_EQ(figures.rms, "1.23");
+}
+
+// GNSS stated at 3/3/6 cm: stated per axis (X/Y/Z), so that RMS/stated (whitened over the three
+// axes) can be read against them; equal axes, or positions without height (no Z rows), keep one.
+TEST(BundleAdjustment, AGroupStatedDifferentlyPerAxisShowsEachAxis) {
+  BundleGroupStatistics gnss = testing::GroupOf(kCameraPositions, "m", 0.03, 0.0413, 0.5);
+  gnss.num_axes = 3;
+  gnss.stated_accuracy = Eigen::Vector3d(0.03, 0.03, 0.06);
+  EXPECT_TRUE(StatedPerAxis(gnss));
+  EXPECT_EQ(FormatGroupFigures(gnss).stated, "30.0/30.0/60.0");
+  EXPECT_EQ(FormatGroupFigures(gnss).stated_x, "30.0");
+  BundleGroupStatistics points = testing::GroupOf(kControlPoints, "m", 0.005, 0.004, 0.5);
+  points.num_axes = 3;
+  EXPECT_FALSE(StatedPerAxis(points));
+  gnss.stated_accuracy.z() = 0.0;
+  EXPECT_FALSE(StatedPerAxis(gnss));
+}
+
+// FullReport prints each group's figures as the CLI does (FormatGroupFigures): a control-point
+// group with an RMS of 0.5 mm beside camera positions stated at 10 m, each in its own unit with
+// two significant digits (one unit for the whole table would print the RMS as "0.001 m"); a group
+// stated per axis as X/Y/Z; the estimate in its group's unit.
+TEST(BundleAdjustment, FullReportPrintsEachGroupInItsOwnUnit) {
+  BundleAdjustmentResult result;
+  result.groups = {testing::GroupOf(kCameraPositions, "m", 10.0, 2.8, 0.5),
+                   testing::GroupOf(kControlPoints, "m", 0.005, 0.0005, 0.5),
+                   testing::GroupOf(kAttitudes, "deg", 0.01, 0.005, 0.5)};
+  result.groups[1].num_axes = 3;
+  result.groups[1].stated_accuracy = Eigen::Vector3d(0.005, 0.005, 0.01);
+  result.groups[1].estimated_accuracy = Eigen::Vector3d::Constant(0.0021);
+  result.groups[1].estimated_accuracy_standard_error = 0.2;
+  const std::string report = result.FullReport(Block());
+  EXPECT_NE(report.find("  camera_positions: 12, 10.0 m, 2.8 m, 0.28, 0.50\n"), std::string::npos)
+      << report;
+  EXPECT_NE(report.find("  control_points: 12, X/Y/Z 5.00/5.00/10.00 mm, 0.50 mm, 0.10, 0.50\n"),
+            std::string::npos)
+      << report;
+  EXPECT_NE(report.find("  attitudes: 12, 36.0 arcsec, 18.0 arcsec, 0.50, 0.50\n"),
+            std::string::npos)
+      << report;
+  EXPECT_NE(report.find("  control_points accuracy estimated from the data: 2.10 mm (stated 5.00 "
+                        "mm, relative standard error 0.20)\n"),
+            std::string::npos)
+      << report;
+  // The same texts as the CLI's (FormatGroupFigures), whatever they are.
+  for (const BundleGroupStatistics& g : result.groups) {
+    const BundleGroupFigures figures = FormatGroupFigures(g);
+    EXPECT_NE(report.find(std::string(EnumName(g.group)) + ": 12, " +
+                          (StatedPerAxis(g) ? "X/Y/Z " : "") + figures.stated + " " +
+                          figures.unit + ", " + figures.rms + " " + figures.unit + ", "),
+              std::string::npos)
+        << report;
+  }
 }
 
 TEST(BundleAdjustment, CameraPositionCovarianceIsHonest) {

@@ -6,6 +6,7 @@
 #include <cstdio>
 #include <filesystem>
 #include <map>
+#include <regex>
 #include <nlohmann/json.hpp>
 #include <sstream>
 
@@ -15,6 +16,7 @@
 #include "core/io/csv.h"
 #include "core/io/tables.h"
 #include "tests/support/georeference_scene.h"
+#include "tests/support/page_tables.h"
 #include "tests/support/geotagged_jpeg.h"
 #include "tests/tools/cli_test_util.h"
 
@@ -23,8 +25,10 @@ namespace {
 
 using testing::CliRun;
 using testing::ReadFile;
+using testing::RowNumbers;
 using testing::RunCli;
 using testing::ScratchDir;
+using testing::TableWithCaption;
 using testing::WriteFile;
 
 std::string Number(double value) {
@@ -63,6 +67,25 @@ std::string WriteScene(const testing::GeoreferenceScene& scene, const std::strin
     if (p.role == PointRole::kCheck) checks += (checks.empty() ? "" : ",") + p.point_id;
   WriteFile(dir + "/gcp_list.txt", gcp);
   return checks;
+}
+
+// The length unit a page's column group names ("after the similarity (cm)"), in metres; NaN when
+// the group is not there.
+double StageUnitMetres(const std::string& table, const std::string& stage) {
+  std::smatch unit;
+  if (!std::regex_search(table, unit, std::regex(">" + stage + " \\((mm|cm|m)\\)<"))) return std::nan("");
+  return unit[1] == "mm" ? 0.001 : unit[1] == "cm" ? 0.01 : 1.0;
+}
+
+// A figure the page printed in a unit of `unit_m` metres against the JSON's (m): within half its
+// last decimal (mm and cm one decimal, m three).
+void ExpectPrinted(double printed, double unit_m, const nlohmann::json& value, const std::string& what) {
+  const double half_last_decimal = unit_m == 1.0 ? 0.0005 : 0.05 * unit_m;
+  if (value.is_null()) {
+    EXPECT_TRUE(std::isnan(printed)) << what;
+    return;
+  }
+  EXPECT_NEAR(printed * unit_m, value.get<double>(), half_last_decimal + 1e-12) << what;
 }
 
 TEST(BundleGeoreference, DomedColmapModelWithGeoTxtAndGcpListComesOutInUtm) {
@@ -138,6 +161,40 @@ TEST(BundleGeoreference, DomedColmapModelWithGeoTxtAndGcpListComesOutInUtm) {
   // The page's plan view is drawn in the grid, its corners in UTM coordinates.
   const std::string html = ReadFile(dir + "/report.html");
   EXPECT_NE(html.find("Grid of WGS 84 / UTM zone 32N (WGS84 UTM 32N): easting and northing (m). Lower left 66"), std::string::npos);
+  // The page's control and check errors in UTM after the similarity and after the adjustment are
+  // the JSON's, as printed: the RMSE per axis and each point's errors.
+  const std::string rmse = TableWithCaption(html, "Root mean square errors in WGS 84 / UTM zone 32N");
+  ASSERT_FALSE(rmse.empty());
+  const double stage_unit_m[2] = {StageUnitMetres(rmse, "after the similarity"),
+                                  StageUnitMetres(rmse, "after the adjustment")};
+  const char* const kStages[2] = {"_after_similarity", "_after_adjustment"};
+  double check_total_m[2] = {0.0, 0.0};
+  for (const std::string role : {"control", "check"}) {
+    const std::vector<double> cells = RowNumbers(rmse, "<td>" + role + "</td>");
+    ASSERT_EQ(cells.size(), 10u) << rmse;
+    for (int k = 0; k < 2; ++k) {
+      const nlohmann::json& figures = g.at(role + kStages[k]);
+      EXPECT_EQ(cells[5 * k], figures.at("count").get<double>()) << role << kStages[k];
+      for (int a = 0; a < 3; ++a) ExpectPrinted(cells[5 * k + 1 + a], stage_unit_m[k], figures.at("rmse_m")[a], role + kStages[k]);
+      ExpectPrinted(cells[5 * k + 4], stage_unit_m[k], figures.at("rmse_total_m"), role + kStages[k]);
+      if (role == "check") check_total_m[k] = cells[5 * k + 4] * stage_unit_m[k];
+    }
+  }
+  EXPECT_GT(check_total_m[0], 3.0 * check_total_m[1]);  // what the adjustment bought, on the page
+  const std::string errors = TableWithCaption(html, "Each point&#39;s error in WGS 84 / UTM zone 32N");
+  ASSERT_FALSE(errors.empty());
+  ASSERT_FALSE(g.at("points").empty());
+  for (const nlohmann::json& point : g.at("points")) {
+    const std::string id = point.at("id");
+    const std::vector<double> cells = RowNumbers(errors, "<td>" + id + "</td><td>" + point.at("role").get<std::string>() + "</td>");
+    ASSERT_EQ(cells.size(), 6u) << id << errors;
+    for (int a = 0; a < 3; ++a) {
+      const nlohmann::json& similarity = point.at("error_after_similarity_m");
+      const nlohmann::json& adjustment = point.at("error_after_adjustment_m");
+      ExpectPrinted(cells[a], stage_unit_m[0], similarity.is_null() ? similarity : similarity[a], id);
+      ExpectPrinted(cells[3 + a], stage_unit_m[1], adjustment.is_null() ? adjustment : adjustment[a], id);
+    }
+  }
   Block written;
   ASSERT_TRUE(ReadColmapModel(dir + "/out", &written).ok());
   EXPECT_EQ(written.points.size(), scene.model.points.size());  // the model's points, no control added

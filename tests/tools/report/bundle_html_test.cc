@@ -10,11 +10,14 @@
 #include "solvers/bundle/bundle_adjustment.h"
 #include "solvers/bundle/check_points.h"
 #include "tests/support/bundle_groups.h"
+#include "tests/support/page_tables.h"
 #include "tools/report/bundle_report.h"
 #include "tools/report/html_kit.h"
 
 namespace photopose::cli {
 namespace {
+
+using testing::TableWithCaption;
 
 class BundleHtmlTest : public ::testing::Test {
  protected:
@@ -159,14 +162,6 @@ BundleGroupStatistics Group(BundleGroup group, const std::string& unit, double s
   return testing::GroupOf(group, unit, stated, rms, 0.5);
 }
 
-// The <table> whose caption starts with `caption`, or "".
-std::string TableWithCaption(const std::string& html, const std::string& caption) {
-  const size_t at = html.find("<caption>" + caption);
-  if (at == std::string::npos) return "";
-  const size_t open = html.rfind("<table", at);
-  return html.substr(open, html.find("</table>", at) + 8 - open);
-}
-
 // The diagnostics' group table: each group's figures in the unit its own values call for (control
 // points in mm beside camera positions in cm, not "0.5 / 0.3 cm"), the unit in its own column when
 // the rows differ, never in a cell.
@@ -200,7 +195,7 @@ TEST_F(BundleHtmlTest, TheGroupTableTakesOneUnitPerRow) {
       std::regex_search(table, with_unit, std::regex("<td>[-0-9.]+ (mm|cm|m|px|um|arcsec)</td>")))
       << with_unit.str();
   // The row's figures are the console's (FormatGroupFigures): the same group, the same texts.
-  const GroupFigures figures = FormatGroupFigures(result_.groups[1]);
+  const BundleGroupFigures figures = FormatGroupFigures(result_.groups[1]);
   EXPECT_NE(table.find("<td>" + figures.unit + "</td><td>" + figures.stated + "</td><td>" +
                        figures.rms + "</td>"),
             std::string::npos);
@@ -293,6 +288,100 @@ TEST_F(BundleHtmlTest, TheOverviewNamesTheCrs) {
                           "11.200000 E, 47.800000 N, ellipsoidal height 500.000 m (WGS 84)</td>"),
             std::string::npos);
   context_.georeference = nullptr;
+}
+
+// A georeferenced block: section 3 shows the control and check errors in the output CRS (E, N,
+// U) after the similarity and after the adjustment side by side, each stage in the unit of its own
+// errors (cm before, mm after here), RMSE per role and each point's errors, n/a where a stage has
+// none; the RMSE table of the local frame gives way to it and the local tables say their frame.
+TEST_F(BundleHtmlTest, AGeoreferencedBlockShowsItsErrorsAfterTheSimilarityAndTheAdjustment) {
+  GeoreferenceResult g;
+  g.out_crs = "EPSG:32632";
+  ASSERT_TRUE(ResolveCrs(g.out_crs, &g.out_crs_info).ok());
+  ASSERT_TRUE(
+      LocalFrame::Create("EPSG:4979", Eigen::Vector3d(11.2, 47.8, 500.0), &g.frame).ok());
+  std::vector<std::string> check_ids;
+  for (size_t p = 0; p < block_.points.size(); ++p) {
+    const PointRole role = block_.points[p].role;
+    if (role == PointRole::kTie) continue;
+    GeoreferencePointError e;
+    e.point = static_cast<int>(p);
+    if (role == PointRole::kControl) {
+      e.after_similarity_m = Eigen::Vector3d(0.12, -0.05, 0.30);
+      e.after_adjustment_m = Eigen::Vector3d(0.002, -0.001, 0.004);
+    } else {
+      e.after_similarity_m = Eigen::Vector3d(0.20, 0.10, -0.45);
+      // The second check point is not intersected after the adjustment.
+      if (check_ids.empty()) e.after_adjustment_m = Eigen::Vector3d(0.008, -0.006, 0.012);
+      check_ids.push_back(block_.points[p].id);
+    }
+    g.point_errors.push_back(e);
+  }
+  ASSERT_EQ(check_ids.size(), 2u);
+  // The RMSEs of those errors (EvaluateGeoreference's), by hand: total sqrt(E^2 + N^2 + U^2).
+  g.control_after_similarity = {4, Eigen::Vector3d(0.12, 0.05, 0.30), std::sqrt(0.1069)};
+  g.control_after_adjustment = {4, Eigen::Vector3d(0.002, 0.001, 0.004), std::sqrt(21e-6)};
+  g.check_after_similarity = {2, Eigen::Vector3d(0.20, 0.10, 0.45), std::sqrt(0.2525)};
+  g.check_after_adjustment = {1, Eigen::Vector3d(0.008, 0.006, 0.012), std::sqrt(244e-6)};
+  g.evaluated = true;
+  context_.georeference = &g;
+  const std::string html = BundleReportHtml(block_, result_, context_);
+  context_.georeference = nullptr;
+  const std::string rmse = TableWithCaption(html, "Root mean square errors in WGS 84 / UTM zone 32N");
+  ASSERT_NE(rmse, "") << html;
+  EXPECT_NE(rmse.find("<th colspan=\"5\" class=\"group\">after the similarity (cm)</th>"
+                      "<th colspan=\"5\" class=\"group\">after the adjustment (mm)</th>"),
+            std::string::npos)
+      << rmse;
+  EXPECT_NE(rmse.find("<td>control</td><td>4</td><td>12.0</td><td>5.0</td><td>30.0</td>"
+                      "<td>32.7</td><td>4</td><td>2.0</td><td>1.0</td><td>4.0</td><td>4.6</td>"),
+            std::string::npos)
+      << rmse;
+  EXPECT_NE(rmse.find("<td>check</td><td>2</td><td>20.0</td><td>10.0</td><td>45.0</td>"
+                      "<td>50.2</td><td>1</td><td>8.0</td><td>6.0</td><td>12.0</td><td>15.6</td>"),
+            std::string::npos)
+      << rmse;
+  // The notes under the table name the axes.
+  const size_t rmse_at = html.find(rmse);
+  EXPECT_LT(html.find("E, N, U: grid east, grid north, up of WGS 84 / UTM zone 32N", rmse_at),
+            html.find("<table", rmse_at + 1));
+  const std::string points = TableWithCaption(html, "Each point&#39;s error in WGS 84 / UTM zone 32N");
+  ASSERT_NE(points, "") << html;
+  EXPECT_NE(points.find("<td>" + check_ids[0] + "</td><td>check</td><td>20.0</td><td>10.0</td>"
+                        "<td>-45.0</td><td>8.0</td><td>-6.0</td><td>12.0</td>"),
+            std::string::npos)
+      << points;
+  EXPECT_NE(points.find("<td>" + check_ids[1] + "</td><td>check</td><td>20.0</td><td>10.0</td>"
+                        "<td>-45.0</td><td>n/a</td><td>n/a</td><td>n/a</td>"),
+            std::string::npos)
+      << points;
+  // Control points first, then check points, as the tables below.
+  EXPECT_LT(points.find("<td>control</td>"), points.find("<td>check</td>"));
+  // The local frame's RMSE table gives way; the local tables name their frame.
+  EXPECT_EQ(html.find("<caption>Root mean square errors</caption>"), std::string::npos);
+  const size_t check_at = html.find("<caption>Check points: intersected");
+  ASSERT_NE(check_at, std::string::npos);
+  EXPECT_LT(html.find("X, Y, Z: the local East-North-Up frame the block was adjusted in", check_at),
+            html.find("</ul>", check_at));
+  // Without a georeference the page keeps its one RMSE table.
+  const std::string plain = BundleReportHtml(block_, result_, context_);
+  EXPECT_NE(plain.find("<caption>Root mean square errors</caption>"), std::string::npos);
+  EXPECT_EQ(plain.find("after the similarity"), std::string::npos);
+}
+
+// Film marks read as µm on the page, also in the sentences shared with the console (the gross
+// errors a group's estimated accuracy absorbed): no "um" after a number or in parentheses.
+TEST_F(BundleHtmlTest, FilmUnitsReadAsMicrometresOnThePage) {
+  result_.groups = {Group(kTieMarks, "um", 2.0, 7.5)};
+  result_.groups[0].estimated_accuracy = Eigen::Vector3d::Constant(8.0);  // 4 x the stated
+  result_.images[0].unit = "um";
+  const std::string html = BundleReportHtml(block_, result_, context_);
+  EXPECT_NE(html.find("<b>Gross errors absorbed:</b> tie_marks: the estimated accuracy 8.00 "
+                      "\u00b5m is 4.0 times the stated 2.00 \u00b5m"),
+            std::string::npos);
+  std::smatch ascii;
+  EXPECT_FALSE(std::regex_search(html, ascii, std::regex("[0-9] um\\b|\\(um\\)|>um<")))
+      << ascii.str();
 }
 
 // The calibration table: each value at its sigma's precision, the film unit as µm.
