@@ -109,8 +109,8 @@ Correspondences SimpleScene(uint64_t seed, int n, const Eigen::Vector3d& angles,
     double xy[2];
     EXPECT_TRUE(ProjectToImagePlane(c.truth.data(), X.data(), c.focal_um, xy));
     c.points_in_ground.push_back(X);
-    const Eigen::Vector2d noisy = xy + noise_um * DrawLastFirst<2>([&](int) { return gaussian(rng); });
-    c.image_plane_um.emplace_back(noisy[0], noisy[1]);
+    const Eigen::Vector2d noise = noise_um * DrawLastFirst<2>([&](int) { return gaussian(rng); });
+    c.image_plane_um.emplace_back(xy[0] + noise[0], xy[1] + noise[1]);
     c.is_outlier.push_back(0);
   }
   return c;
