@@ -109,7 +109,7 @@ Correspondences SimpleScene(uint64_t seed, int n, const Eigen::Vector3d& angles,
     double xy[2];
     EXPECT_TRUE(ProjectToImagePlane(c.truth.data(), X.data(), c.focal_um, xy));
     c.points_in_ground.push_back(X);
-    const Eigen::Vector2d noisy = xy + noise_um * DrawLastFirst<2>([&](int) { return gaussian(rng); });
+    const Eigen::Vector2d noisy = Eigen::Vector2d(xy[0], xy[1]) + noise_um * DrawLastFirst<2>([&](int) { return gaussian(rng); });
     c.image_plane_um.emplace_back(noisy[0], noisy[1]);
     c.is_outlier.push_back(0);
   }
