@@ -14,6 +14,13 @@ import sys
 
 import photopose as pp
 
+
+def rmse_text(figures):
+    """A role's RMSE at one stage (GeoreferenceResult.check_after_adjustment, ...): total_m is None
+    when no point has an error at that stage (count 0)."""
+    return "n/a" if figures["total_m"] is None else f"{figures['total_m']:.3f} m"
+
+
 model_dir, geo_txt, out_dir = sys.argv[1:4]
 block = pp.read_colmap_model(model_dir)
 inputs = pp.GeoreferenceInputs()
@@ -35,9 +42,8 @@ for group in result.groups:
     verdict = "OVERFIT: " + group.message if group.overfit else "ok"
     print(f"{group.group}: n={group.count} rms={group.rms_total:.4f} {group.unit} "
           f"ratio={group.ratio:.2f} redundancy share={group.redundancy_share:.2f} {verdict}")
-if geo.check_after_adjustment["count"] > 0:
-    print(f"check RMSE {geo.check_after_similarity['total_m']:.3f} m after the similarity, "
-          f"{geo.check_after_adjustment['total_m']:.3f} m after the adjustment")
+print(f"check RMSE {rmse_text(geo.check_after_similarity)} after the similarity, "
+      f"{rmse_text(geo.check_after_adjustment)} after the adjustment")
 if not result.summary.is_solution_usable():
     sys.exit(1)
 

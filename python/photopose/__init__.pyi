@@ -1035,13 +1035,13 @@ class GeoreferenceResult:
     @property
     def similarity_residuals_m(self) -> numpy.ndarray: ...
     @property
-    def control_after_similarity(self) -> dict: ...  # count, rmse_m (level axes), total_m
+    def control_after_similarity(self) -> dict: ...  # count; rmse_m (level axes, m), total_m (m): None when count is 0
     @property
-    def check_after_similarity(self) -> dict: ...
+    def check_after_similarity(self) -> dict: ...  # as control_after_similarity
     @property
-    def control_after_adjustment(self) -> dict: ...
+    def control_after_adjustment(self) -> dict: ...  # as control_after_similarity
     @property
-    def check_after_adjustment(self) -> dict: ...
+    def check_after_adjustment(self) -> dict: ...  # as control_after_similarity
     @property
     def error_points(self) -> numpy.ndarray: ...  # indices into the block's points
     @property

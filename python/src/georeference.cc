@@ -14,11 +14,16 @@
 namespace photopose::python {
 namespace {
 
+// count, rmse_m, total_m; without a point (count 0) the figures are None, never a zero.
 py::dict RmseDict(const GeoreferenceRmse& r) {
   py::dict d;
   d["count"] = r.count;
-  d["rmse_m"] = r.rmse_m;
-  d["total_m"] = r.total_m;
+  d["rmse_m"] = py::none();
+  d["total_m"] = py::none();
+  if (r.count > 0) {
+    d["rmse_m"] = r.rmse_m;
+    d["total_m"] = r.total_m;
+  }
   return d;
 }
 

@@ -42,6 +42,8 @@ def test_adjust_colmap_with_gnss(source_dir, tmp_path):
                       tmp_path / "out")
     assert "camera_positions: n=24" in out and "round 1 iteration 1" in out, out
     assert "output CRS EPSG:32633" in out and "24 positions matched" in out, out
+    # No check point: the example's line says n/a (the result's None), never 0.000 m.
+    assert "check RMSE n/a after the similarity, n/a after the adjustment" in out, out
     adjusted = {f.raster: f for f in pp.read_frames_table(tmp_path / "out" / "frames.csv", rotation="opk")}
     for i, name in enumerate(block.image_names):
         assert adjusted[name].srs == "EPSG:32633"

@@ -64,6 +64,12 @@ def test_same_poses_as_the_cli(scene, tmp_path, cli):
     # Local frame <-> output CRS: the block's centres, moved out, are the output poses' centres.
     np.testing.assert_allclose(geo.to_output_crs(block.image_centers), poses[:, :3], atol=1e-6)
     assert "out_crs='EPSG:32633'" in repr(geo)
+    # No control and no check point: no RMSE at any stage, None rather than a 0 that reads as no
+    # error; the repr names no figure.
+    for figures in (geo.control_after_similarity, geo.check_after_similarity,
+                    geo.control_after_adjustment, geo.check_after_adjustment):
+        assert figures == {"count": 0, "rmse_m": None, "total_m": None}, figures
+    assert "control=0, check=0)" in repr(geo) and "rmse" not in repr(geo), repr(geo)
 
 
 def test_bad_inputs_raise_with_the_library_message(scene, tmp_path):
@@ -135,6 +141,12 @@ def test_a_block_with_control_joined_is_written_by_the_adjusted_model_writer(tmp
     inputs.set_control_from_gcp_list(pp.read_gcp_list(tmp_path / "gcp_list.txt"), check_points=checks)
     geo = pp.prepare_georeference(block, inputs)
     assert (geo.model_points, geo.model_marks) == (model_points, model_marks)
+    # With points at a stage, figures: rmse_m per axis and total_m (m); not evaluated yet, none after
+    # the adjustment.
+    check = geo.check_after_similarity
+    assert check["count"] == 4 and check["rmse_m"].shape == (3,), check
+    assert check["total_m"] == pytest.approx(np.linalg.norm(check["rmse_m"]))
+    assert geo.check_after_adjustment == {"count": 0, "rmse_m": None, "total_m": None}
     assert block.num_points == model_points + 9 and block.num_marks > model_marks
     assert block.point_roles[model_points:].count("check") == 4
     # write_colmap_model writes a block as it is: one with control joined no longer fits the

@@ -24,6 +24,7 @@
 // adjustment, then 5 (EvaluateGeoreference).
 
 #include <Eigen/Core>
+#include <limits>
 #include <optional>
 #include <string>
 #include <vector>
@@ -132,11 +133,13 @@ struct GeoreferencePointError {
 // grid north, up" in a projected output CRS, "east, north, up" otherwise (E, N, U for short).
 std::string GeoreferenceErrorAxes(const CrsInfo& out_crs_info);
 
-// Per-axis RMSE (m) over the points of one role that have the error.
+// Per-axis RMSE (m) over the points of one role that have the error. Without such a point
+// (count 0) there is no figure: rmse_m and total_m are NaN, never a zero that reads as no error
+// (the JSON's null, Python's None, "n/a" on the page and the console).
 struct GeoreferenceRmse {
   int count = 0;
-  Eigen::Vector3d rmse_m = Eigen::Vector3d::Zero();
-  double total_m = 0.0;
+  Eigen::Vector3d rmse_m = Eigen::Vector3d::Constant(std::numeric_limits<double>::quiet_NaN());
+  double total_m = std::numeric_limits<double>::quiet_NaN();
 };
 
 struct GeoreferenceResult {

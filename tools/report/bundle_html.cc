@@ -26,14 +26,6 @@ namespace {
 
 // ------------------------------------------------------------------ helpers
 
-// A key-value table (two columns, no header row).
-std::string FactsTable(const std::string& title,
-                       const std::vector<std::pair<std::string, std::string>>& facts) {
-  std::vector<std::vector<std::string>> rows;
-  for (const auto& [key, value] : facts) rows.push_back({key, value});
-  return HtmlTable(title, {"item", "value"}, rows);
-}
-
 // The area (m^2) of the convex hull of plan points (Andrew's monotone chain).
 double HullArea(std::vector<Eigen::Vector2d> points) {
   if (points.size() < 3) return 0.0;
@@ -72,6 +64,37 @@ ColumnsInUnits PageColumnsInUnits(const std::vector<std::vector<double>>& column
   in_units.unit = Utf8UnitName(in_units.unit);
   for (std::string& unit : in_units.units) unit = Utf8UnitName(unit);
   return in_units;
+}
+
+// A georeferenced block's errors (the output CRS's E, N, U) as the page prints them, in section
+// 3's tables and in the check points' verdict of section 2 (the same cells): each stage's lengths
+// in the one unit its largest error calls for, named above its columns.
+struct GeoreferenceStageUnits {
+  LengthUnit after_similarity = LengthUnit::kMetre;
+  LengthUnit after_adjustment = LengthUnit::kMetre;
+};
+
+GeoreferenceStageUnits GeoreferenceStageUnitsOf(const GeoreferenceResult& g) {
+  std::vector<double> similarity, adjustment;
+  for (const GeoreferencePointError& e : g.point_errors) {
+    if (e.after_similarity_m) similarity.push_back(e.after_similarity_m->norm());
+    if (e.after_adjustment_m) adjustment.push_back(e.after_adjustment_m->norm());
+  }
+  return {LengthUnitFor(LargestMagnitude(similarity)), LengthUnitFor(LargestMagnitude(adjustment))};
+}
+
+// A role's RMSE at one stage in `unit` (without it): E, N, U, total; "n/a" without a point.
+std::vector<std::string> RmseCells(const GeoreferenceRmse& rmse, LengthUnit unit) {
+  std::vector<std::string> cells;
+  for (int a = 0; a < 3; ++a)
+    cells.push_back(rmse.count > 0 ? FormatLength(rmse.rmse_m[a], unit) : "n/a");
+  cells.push_back(rmse.count > 0 ? FormatLength(rmse.total_m, unit) : "n/a");
+  return cells;
+}
+
+// The output CRS of a georeferenced block by PROJ's name, else as given.
+std::string OutCrsName(const GeoreferenceResult& g) {
+  return g.out_crs_info.name.empty() ? g.out_crs : g.out_crs_info.name;
 }
 
 std::string UtcNow() {
@@ -191,11 +214,6 @@ std::vector<std::pair<std::string, std::string>> OverviewFacts(const Block& bloc
   };
 }
 
-// The output CRS of a georeferenced block by PROJ's name, else as given.
-std::string OutCrsName(const GeoreferenceResult& g) {
-  return g.out_crs_info.name.empty() ? g.out_crs : g.out_crs_info.name;
-}
-
 // A georeferenced block's facts: the output CRS and the local frame the block was adjusted in,
 // camera positions without height, inputs read and not used.
 void GeoreferenceFacts(const GeoreferenceResult& g,
@@ -232,7 +250,7 @@ std::string OverviewHtml(const Block& block, const BundleAdjustmentResult& resul
     facts.push_back({"Coordinate reference system (as the tables name it)", srs});
   }
   std::ostringstream html;
-  html << "<h2>1. Survey overview</h2>\n" << FactsTable("", facts);
+  html << "<h2>1. Survey overview</h2>\n" << HtmlFactsTable("", facts);
   html << PlanViewHtml(block, result, context.georeference) << "\n";
   return html.str();
 }
@@ -338,6 +356,30 @@ std::string StatedAccuraciesVerdictHtml(const BundleAdjustmentResult& result) {
   return html.str();
 }
 
+// The check points' count and RMSE as the verdict says them: a georeferenced block's after the
+// adjustment along the output CRS's E, N, U (the cells of section 3's table, RmseCells), else the
+// local frame's X, Y, Z; no figure when no check point was intersected.
+std::string CheckPointsRmseText(const BundleAdjustmentResult& result,
+                                const GeoreferenceResult* georeference) {
+  if (georeference != nullptr && georeference->evaluated) {
+    const GeoreferenceRmse& rmse = georeference->check_after_adjustment;
+    std::string text = FormatCount(rmse.count, "point") + " intersected";
+    if (rmse.count == 0) return text;
+    const LengthUnit unit = GeoreferenceStageUnitsOf(*georeference).after_adjustment;
+    const std::vector<std::string> cells = RmseCells(rmse, unit);
+    const std::string u = std::string(" ") + LengthUnitName(unit);
+    return text + ", RMSE after the adjustment in " + OutCrsName(*georeference) + " (" +
+           GeoreferenceErrorAxes(georeference->out_crs_info) + "): E " + cells[0] + u + ", N " +
+           cells[1] + u + ", U " + cells[2] + u + ", total " + cells[3] + u;
+  }
+  std::string text = FormatCount(result.num_check_points, "point") + " intersected";
+  if (result.num_check_points == 0) return text;
+  const std::vector<std::string> rmse =
+      FormatLengthsWithUnit({result.check_rmse_m.x(), result.check_rmse_m.y(),
+                             result.check_rmse_m.z(), result.check_rmse_total_m});
+  return text + ", RMSE X " + rmse[0] + ", Y " + rmse[1] + ", Z " + rmse[2] + ", total " + rmse[3];
+}
+
 // The check points: their RMSE, those beyond their covariance or not intersected; or none.
 std::string CheckPointsVerdictHtml(const Block& block, const BundleAdjustmentResult& result,
                                    const BundleReportContext& context) {
@@ -356,12 +398,8 @@ std::string CheckPointsVerdictHtml(const Block& block, const BundleAdjustmentRes
     if (block.points[p].role == PointRole::kCheck && !result.points[p].error_m)
       not_intersected.push_back(block.points[p].id + " " + result.points[p].message);
   const bool bad = !out_of_tolerance.empty() || !not_intersected.empty();
-  const std::vector<std::string> rmse =
-      FormatLengthsWithUnit({result.check_rmse_m.x(), result.check_rmse_m.y(),
-                             result.check_rmse_m.z(), result.check_rmse_total_m});
   html << "<div class=\"verdict " << (bad ? "bad" : "good") << "\"><b>Check points:</b> "
-       << FormatCount(result.num_check_points, "point") << " intersected, RMSE X " << rmse[0]
-       << ", Y " << rmse[1] << ", Z " << rmse[2] << ", total " << rmse[3] << ".";
+       << HtmlEscape(CheckPointsRmseText(result, context.georeference)) << ".";
   if (!bad)
     html << " Every error is within what its covariance allows (chi-square(3) at "
          << FormatUnitless(100.0 * kCheckPointLevel, 1) << " %).";
@@ -409,32 +447,15 @@ std::vector<std::string> RmseRow(const std::string& name, const std::vector<Eige
   return row;
 }
 
+// A role's RMSE at one stage: count, then RmseCells.
+void AppendRmseCells(const GeoreferenceRmse& rmse, LengthUnit unit, std::vector<std::string>* row) {
+  row->push_back(std::to_string(rmse.count));
+  for (const std::string& cell : RmseCells(rmse, unit)) row->push_back(cell);
+}
+
 // A georeferenced block's control and check errors in the output CRS (along its level axes at
 // each point: E, N, U), after the similarity alone and after the adjustment side by side, so that
 // a reader sees what the adjustment bought; the figures of the JSON's "georeference" section.
-// Each stage's lengths in the one unit its largest error calls for, named above its columns.
-struct GeoreferenceStageUnits {
-  LengthUnit after_similarity = LengthUnit::kMetre;
-  LengthUnit after_adjustment = LengthUnit::kMetre;
-};
-
-GeoreferenceStageUnits GeoreferenceStageUnitsOf(const GeoreferenceResult& g) {
-  std::vector<double> similarity, adjustment;
-  for (const GeoreferencePointError& e : g.point_errors) {
-    if (e.after_similarity_m) similarity.push_back(e.after_similarity_m->norm());
-    if (e.after_adjustment_m) adjustment.push_back(e.after_adjustment_m->norm());
-  }
-  return {LengthUnitFor(LargestMagnitude(similarity)), LengthUnitFor(LargestMagnitude(adjustment))};
-}
-
-// A role's RMSE at one stage: count, E, N, U, total; "n/a" without a point.
-void AppendRmseCells(const GeoreferenceRmse& rmse, LengthUnit unit, std::vector<std::string>* row) {
-  row->push_back(std::to_string(rmse.count));
-  for (int a = 0; a < 3; ++a)
-    row->push_back(rmse.count > 0 ? FormatLength(rmse.rmse_m[a], unit) : "n/a");
-  row->push_back(rmse.count > 0 ? FormatLength(rmse.total_m, unit) : "n/a");
-}
-
 std::string GeoreferenceRmseHtml(const GeoreferenceResult& g, const GeoreferenceStageUnits& units) {
   std::vector<std::vector<std::string>> rows(2);
   rows[0] = {"control"};

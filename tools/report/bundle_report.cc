@@ -86,10 +86,12 @@ const char* BundleAxisName(BundleGroup group, int axis) {
 
 namespace {
 
+// A role's RMSE at one stage; without a point (count 0) the figures are null, never a zero.
 json RmseJson(const GeoreferenceRmse& rmse) {
+  const bool figures = rmse.count > 0;
   return {{"count", rmse.count},
-          {"rmse_m", {rmse.rmse_m.x(), rmse.rmse_m.y(), rmse.rmse_m.z()}},
-          {"rmse_total_m", rmse.total_m}};
+          {"rmse_m", figures ? Vector3(rmse.rmse_m) : json(nullptr)},
+          {"rmse_total_m", figures ? Number(rmse.total_m) : json(nullptr)}};
 }
 
 // The "georeference" section: CRSs, the local frame, matching, the similarity and the control /

@@ -37,6 +37,7 @@ const char kStyle[] =
     "th.group{text-align:center}th.blank{background:none;border:none}"
     "tr.section th{text-align:left;background:#e3ebf5;white-space:normal}"
     "tr.note td{text-align:left;white-space:normal;color:#444}"
+    "table.facts td+td{white-space:normal;overflow-wrap:anywhere}"
     "ul.notes{font-size:0.85em;color:#444}"
     ".plots{display:flex;flex-wrap:wrap;gap:1em}svg{background:#fff;border:1px solid #ddd}"
     ".verdict{padding:0.75em 1em;border-radius:6px;margin:0.5em 0}"
@@ -218,8 +219,9 @@ namespace {
 
 // A table's opening, caption and a row of <th> cells; the rows of <td> cells; the notes as a
 // list under a table.
-std::string TableHead(const std::string& title, const std::vector<std::string>& header) {
-  std::string html = "<table>\n";
+std::string TableHead(const std::string& title, const std::vector<std::string>& header,
+                      const std::string& table_class = "") {
+  std::string html = table_class.empty() ? "<table>\n" : "<table class=\"" + table_class + "\">\n";
   if (!title.empty()) html += "<caption>" + HtmlEscape(title) + "</caption>\n";
   html += "<tr>";
   for (const auto& h : header) html += "<th>" + HtmlEscape(h) + "</th>";
@@ -264,6 +266,13 @@ std::string HtmlTable(const std::string& title, const std::vector<std::string>& 
     head.insert(head.rfind("<tr>"), row + "</tr>\n");
   }
   return head + TableRows(rows) + "</table>\n" + NotesList(notes);
+}
+
+std::string HtmlFactsTable(const std::string& title,
+                           const std::vector<std::pair<std::string, std::string>>& facts) {
+  std::vector<std::vector<std::string>> rows;
+  for (const auto& [item, value] : facts) rows.push_back({item, value});
+  return TableHead(title, {"item", "value"}, "facts") + TableRows(rows) + "</table>\n";
 }
 
 std::string HtmlSectionedTable(const std::string& title, const std::vector<std::string>& header,

@@ -23,8 +23,9 @@ namespace photopose::cli {
 
 // "<!DOCTYPE html>" ... "<body>" and the page's <h1>: the one stylesheet (classes: .plots for a row
 // of plots, ul.notes, .verdict with .good / .bad / .note, dl.glossary, p.meta for the line under
-// the heading) and its print variant (A4 pages, 12 mm margins: 186 mm = 703 CSS px of content;
-// plots and tables shrink to it, no plot or table row split across pages).
+// the heading, table.facts for a key-value table whose values wrap) and its print variant (A4
+// pages, 12 mm margins: 186 mm = 703 CSS px of content; plots and tables shrink to it, no plot or
+// table row split across pages).
 std::string HtmlPageOpen(const std::string& title, const std::string& heading);
 // "</body></html>" and a final newline.
 std::string HtmlPageClose();
@@ -51,6 +52,12 @@ std::string HtmlTable(const std::string& title, const std::vector<std::string>& 
                       const std::vector<std::vector<std::string>>& rows,
                       const std::vector<std::string>& notes = {},
                       const std::vector<HeaderGroup>& groups = {});
+
+// A key-value table (<table class="facts">, columns "item" and "value"; the caption left out when
+// `title` is empty), every cell escaped. Its values wrap, a long word (a path, a CRS definition)
+// anywhere, so that the table keeps to the page's width on the screen and on A4.
+std::string HtmlFactsTable(const std::string& title,
+                           const std::vector<std::pair<std::string, std::string>>& facts);
 
 // Rows of a table under a heading row that spans every column (e.g. one section per setting of a
 // sweep under one header), and notes on that section as rows spanning every column after them.

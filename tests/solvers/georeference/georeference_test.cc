@@ -369,6 +369,26 @@ TEST(Georeference, WithoutControlTheOtherImagesHeightsCarryTheVertical) {
   EXPECT_LT(CentreRms(scene, block, result), 0.05);
 }
 
+// Camera positions alone: no control or check point has an error at either stage, so there is no
+// RMSE (NaN: the JSON's null, Python's None, n/a on the page and the console), never a 0 that
+// reads as no error.
+TEST(Georeference, WithoutControlOrCheckPointsThereIsNoRmse) {
+  GeoreferenceScene scene = MakeGeoreferenceScene(0.0);
+  scene.inputs.control_points.clear();
+  scene.inputs.control_marks.clear();
+  Block block;
+  GeoreferenceResult result;
+  BundleAdjustmentResult adjustment;
+  ASSERT_TRUE(GeoreferenceTheScene(scene, &block, &result, &adjustment));
+  ASSERT_TRUE(result.evaluated);
+  for (const GeoreferenceRmse* rmse : {&result.control_after_similarity, &result.check_after_similarity,
+                                       &result.control_after_adjustment, &result.check_after_adjustment}) {
+    EXPECT_EQ(rmse->count, 0);
+    EXPECT_TRUE(std::isnan(rmse->total_m)) << rmse->total_m;
+    EXPECT_TRUE(rmse->rmse_m.array().isNaN().all()) << rmse->rmse_m.transpose();
+  }
+}
+
 // No height anywhere (and no control): refused before any work, saying why; too few positions
 // with a height for the similarity: refused, counting those without.
 TEST(Georeference, PositionsWithoutAnyHeightAreRefusedWithTheReason) {

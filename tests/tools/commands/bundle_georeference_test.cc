@@ -200,6 +200,39 @@ TEST(BundleGeoreference, DomedColmapModelWithGeoTxtAndGcpListComesOutInUtm) {
   EXPECT_EQ(written.points.size(), scene.model.points.size());  // the model's points, no control added
 }
 
+// Camera positions alone, no control and no check point: the JSON's RMSE figures are null (count
+// 0), never a 0 that reads as no error; the console prints no RMSE and the page n/a.
+TEST(BundleGeoreference, WithoutControlOrCheckPointsNoRmseReadsAsZero) {
+  const testing::GeoreferenceScene scene = testing::MakeGeoreferenceScene(2.0);
+  const std::string dir = ScratchDir();
+  WriteScene(scene, dir);
+  const CliRun run = RunCli("bundle --colmap_model=" + dir + "/model --geo=" + dir + "/geo.txt --out=" + dir +
+                                "/frames.csv --report=" + dir + "/report.json --html=" + dir + "/report.html",
+                            dir);
+  ASSERT_EQ(run.exit_code, 0) << run.err << run.out;
+  const nlohmann::json report = nlohmann::json::parse(ReadFile(dir + "/report.json"));
+  const nlohmann::json& g = report.at("georeference");
+  for (const std::string stage : {"control_after_similarity", "check_after_similarity", "control_after_adjustment",
+                                  "check_after_adjustment"}) {
+    EXPECT_EQ(g.at(stage).at("count"), 0) << stage;
+    EXPECT_TRUE(g.at(stage).at("rmse_m").is_null()) << stage << " " << g.at(stage);
+    EXPECT_TRUE(g.at(stage).at("rmse_total_m").is_null()) << stage << " " << g.at(stage);
+  }
+  EXPECT_NE(run.out.find("georeferenced in EPSG:32632 by the camera positions alone (no control point)"),
+            std::string::npos)
+      << run.out;
+  EXPECT_EQ(run.out.find("RMSE"), std::string::npos) << run.out;
+  EXPECT_EQ(run.err.find("RMSE"), std::string::npos) << run.err;
+  const std::string html = ReadFile(dir + "/report.html");
+  const std::string rmse = TableWithCaption(html, "Root mean square errors in WGS 84 / UTM zone 32N");
+  for (const std::string role : {"control", "check"})
+    EXPECT_NE(rmse.find("<td>" + role + "</td><td>0</td><td>n/a</td><td>n/a</td><td>n/a</td><td>n/a</td><td>0</td>"
+                        "<td>n/a</td><td>n/a</td><td>n/a</td><td>n/a</td>"),
+              std::string::npos)
+        << role << rmse;
+  EXPECT_NE(html.find("<b>No check points:</b>"), std::string::npos);
+}
+
 // The adjusted centres of a frames table in the output CRS (m) against the scene's truth there:
 // the largest height error and the largest horizontal one.
 Eigen::Vector2d WorstCentreErrors(const testing::GeoreferenceScene& scene, const std::string& frames_path,

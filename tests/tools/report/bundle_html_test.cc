@@ -294,15 +294,18 @@ TEST_F(BundleHtmlTest, TheOverviewNamesTheCrs) {
 // U) after the similarity and after the adjustment side by side, each stage in the unit of its own
 // errors (cm before, mm after here), RMSE per role and each point's errors, n/a where a stage has
 // none; the RMSE table of the local frame gives way to it and the local tables say their frame.
-TEST_F(BundleHtmlTest, AGeoreferencedBlockShowsItsErrorsAfterTheSimilarityAndTheAdjustment) {
+// A georeferenced block's errors in EPSG:32632 as EvaluateGeoreference gives them: each control
+// point (0.12, -0.05, 0.30) m after the similarity and (2, -1, 4) mm after the adjustment; each
+// check point (0.20, 0.10, -0.45) m after the similarity, the first (8, -6, 12) mm after the
+// adjustment, the second not intersected then. *check_ids: the check points' ids.
+GeoreferenceResult GeoreferencedErrors(const Block& block, std::vector<std::string>* check_ids) {
   GeoreferenceResult g;
   g.out_crs = "EPSG:32632";
-  ASSERT_TRUE(ResolveCrs(g.out_crs, &g.out_crs_info).ok());
-  ASSERT_TRUE(
+  EXPECT_TRUE(ResolveCrs(g.out_crs, &g.out_crs_info).ok());
+  EXPECT_TRUE(
       LocalFrame::Create("EPSG:4979", Eigen::Vector3d(11.2, 47.8, 500.0), &g.frame).ok());
-  std::vector<std::string> check_ids;
-  for (size_t p = 0; p < block_.points.size(); ++p) {
-    const PointRole role = block_.points[p].role;
+  for (size_t p = 0; p < block.points.size(); ++p) {
+    const PointRole role = block.points[p].role;
     if (role == PointRole::kTie) continue;
     GeoreferencePointError e;
     e.point = static_cast<int>(p);
@@ -312,18 +315,24 @@ TEST_F(BundleHtmlTest, AGeoreferencedBlockShowsItsErrorsAfterTheSimilarityAndThe
     } else {
       e.after_similarity_m = Eigen::Vector3d(0.20, 0.10, -0.45);
       // The second check point is not intersected after the adjustment.
-      if (check_ids.empty()) e.after_adjustment_m = Eigen::Vector3d(0.008, -0.006, 0.012);
-      check_ids.push_back(block_.points[p].id);
+      if (check_ids->empty()) e.after_adjustment_m = Eigen::Vector3d(0.008, -0.006, 0.012);
+      check_ids->push_back(block.points[p].id);
     }
     g.point_errors.push_back(e);
   }
-  ASSERT_EQ(check_ids.size(), 2u);
   // The RMSEs of those errors (EvaluateGeoreference's), by hand: total sqrt(E^2 + N^2 + U^2).
   g.control_after_similarity = {4, Eigen::Vector3d(0.12, 0.05, 0.30), std::sqrt(0.1069)};
   g.control_after_adjustment = {4, Eigen::Vector3d(0.002, 0.001, 0.004), std::sqrt(21e-6)};
   g.check_after_similarity = {2, Eigen::Vector3d(0.20, 0.10, 0.45), std::sqrt(0.2525)};
   g.check_after_adjustment = {1, Eigen::Vector3d(0.008, 0.006, 0.012), std::sqrt(244e-6)};
   g.evaluated = true;
+  return g;
+}
+
+TEST_F(BundleHtmlTest, AGeoreferencedBlockShowsItsErrorsAfterTheSimilarityAndTheAdjustment) {
+  std::vector<std::string> check_ids;
+  GeoreferenceResult g = GeoreferencedErrors(block_, &check_ids);
+  ASSERT_EQ(check_ids.size(), 2u);
   context_.georeference = &g;
   const std::string html = BundleReportHtml(block_, result_, context_);
   context_.georeference = nullptr;
@@ -367,6 +376,49 @@ TEST_F(BundleHtmlTest, AGeoreferencedBlockShowsItsErrorsAfterTheSimilarityAndThe
   const std::string plain = BundleReportHtml(block_, result_, context_);
   EXPECT_NE(plain.find("<caption>Root mean square errors</caption>"), std::string::npos);
   EXPECT_EQ(plain.find("after the similarity"), std::string::npos);
+}
+
+// The check points' verdict (section 2) of a georeferenced block gives section 3's figures: the
+// RMSE after the adjustment along the output CRS's E, N, U, in the same unit and digits, not the
+// local frame's X, Y, Z; without a check point intersected after the adjustment, no figure at all
+// (n/a in section 3), never a 0.
+TEST_F(BundleHtmlTest, TheCheckPointVerdictOfAGeoreferencedBlockGivesSection3sFigures) {
+  ASSERT_GT(result_.num_check_points, 0);
+  std::vector<std::string> check_ids;
+  GeoreferenceResult g = GeoreferencedErrors(block_, &check_ids);
+  context_.georeference = &g;
+  const std::string html = BundleReportHtml(block_, result_, context_);
+  const std::string rmse = TableWithCaption(html, "Root mean square errors in WGS 84 / UTM zone 32N");
+  ASSERT_NE(rmse, "") << html;
+  // Section 3's check row: count, E, N, U, total after the similarity, then after the adjustment.
+  const std::vector<double> cells = testing::RowNumbers(rmse, "<td>check</td>");
+  ASSERT_EQ(cells.size(), 10u) << rmse;
+  std::smatch verdict;
+  ASSERT_TRUE(std::regex_search(
+      html, verdict,
+      std::regex("<b>Check points:</b> ([0-9]+) points? intersected, RMSE after the adjustment in "
+                 "WGS 84 / UTM zone 32N \\(grid east, grid north, up\\): E ([-0-9.]+) (mm|cm|m), N "
+                 "([-0-9.]+) \\3, U ([-0-9.]+) \\3, total ([-0-9.]+) \\3\\.")))
+      << html.substr(html.find("<h2>2. Verdicts</h2>"), 3000);
+  EXPECT_EQ(std::stod(verdict[1]), cells[5]);
+  EXPECT_EQ(verdict[3], "mm");  // the unit named over section 3's columns after the adjustment
+  EXPECT_NE(rmse.find(">after the adjustment (mm)<"), std::string::npos) << rmse;
+  EXPECT_EQ(std::stod(verdict[2]), cells[6]);
+  EXPECT_EQ(std::stod(verdict[4]), cells[7]);
+  EXPECT_EQ(std::stod(verdict[5]), cells[8]);
+  EXPECT_EQ(std::stod(verdict[6]), cells[9]);
+  EXPECT_EQ(html.find("RMSE X "), std::string::npos);  // not the local frame's figures
+  // No check point intersected after the adjustment: the count alone, n/a in section 3.
+  g.check_after_adjustment = GeoreferenceRmse{};
+  for (GeoreferencePointError& e : g.point_errors)
+    if (block_.points[e.point].role == PointRole::kCheck) e.after_adjustment_m.reset();
+  const std::string none = BundleReportHtml(block_, result_, context_);
+  context_.georeference = nullptr;
+  EXPECT_NE(none.find("<b>Check points:</b> 0 points intersected."), std::string::npos)
+      << none.substr(none.find("<h2>2. Verdicts</h2>"), 3000);
+  EXPECT_NE(none.find("<td>check</td><td>2</td><td>20.0</td><td>10.0</td><td>45.0</td>"
+                      "<td>50.2</td><td>0</td><td>n/a</td><td>n/a</td><td>n/a</td><td>n/a</td>"),
+            std::string::npos);
 }
 
 // Film marks read as µm on the page, also in the sentences shared with the console (the gross

@@ -59,6 +59,21 @@ TEST(HtmlKit, TableEscapesCellsAndListsNotes) {
   EXPECT_EQ(HtmlTable("", {"a"}, {}).find("<caption>"), std::string::npos);
 }
 
+// A key-value table carries the class whose values wrap anywhere (a long path without spaces
+// stays within the page: the browser test renders one), and the stylesheet says so.
+TEST(HtmlKit, FactsTableCellsWrapALongPath) {
+  const std::string path = "/data/" + std::string(200, 'x') + "/geo.txt";
+  const std::string table = HtmlFactsTable("", {{"Input <a>", path}});
+  EXPECT_EQ(table.rfind("<table class=\"facts\">\n<tr><th>item</th><th>value</th></tr>\n", 0), 0u)
+      << table;
+  EXPECT_NE(table.find("<tr><td>Input &lt;a&gt;</td><td>" + path + "</td></tr>"), std::string::npos);
+  EXPECT_EQ(table.find("<caption>"), std::string::npos);
+  EXPECT_NE(HtmlFactsTable("t", {}).find("<caption>t</caption>"), std::string::npos);
+  const std::string head = HtmlPageOpen("t", "h");
+  EXPECT_NE(head.find("table.facts td+td{white-space:normal;overflow-wrap:anywhere}"),
+            std::string::npos);
+}
+
 TEST(HtmlKit, GroupedHeaderNamesAQuantityOnceOverItsAxes) {
   const std::string table = HtmlTable("t", {"image", "X", "Y", "Z"}, {{"a", "1", "2", "3"}}, {},
                                       {{"", 1}, {"centre (m)", 3}});

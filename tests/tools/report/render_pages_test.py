@@ -8,7 +8,8 @@ Per page:
     Chromium's stderr is the browser's complaint: an SVG attribute it cannot parse, ...);
   - every <svg> has class "plot" and a <text class="axis-label"> (tools/report/html_kit.h);
   - no number in the rendered text is in scientific notation;
-  - on a 1280 px wide screen no element reaches past the right edge (no sideways scrolling);
+  - on a 1280 px wide screen no element reaches past the right edge (no sideways scrolling), also
+    with a long path without spaces in the overview's key-value table (LONG_PATH);
   - printed, it is A4 (every page's MediaBox 595 x 842 pt), at most MAX_PRINTED_PAGES[NAME] pages
     long and, with the print stylesheet applied at the A4 content width (186 mm = 703 CSS px), no
     element reaches past the right edge;
@@ -235,6 +236,39 @@ def check_page(binary, name, path, shots, work, printed):
     return errors
 
 
+# An input's path without a space (the overview names inputs read and not used by their paths; a
+# CRS definition is as long): about 2400 px at the tables' font, wider than the screen and A4.
+LONG_PATH = "/srv/projects/" + "survey_2026_block_north_flight_07_images_and_gnss/" * 6 + "geo.txt"
+
+
+def long_path_failures(binary, source, work):
+    """The overview's key-value table (<table class="facts">, tools/report/html_kit.h) of the
+    bundle page `source` with a row holding LONG_PATH: it wraps within the screen and A4; the same
+    row in a plain table does not (else the path is too short to test anything). Returns the
+    number of failures, printed."""
+    row = "<tr><td>Inputs read and not used</td><td>%s: 3 attitudes read and not used</td></tr>" % (
+        LONG_PATH)
+    facts = source.find('<table class="facts">')
+    if facts < 0:
+        print("FAIL long path: no <table class=\"facts\"> on the bundle page")
+        return 1
+    end = source.find("</table>", facts)
+    pages = {"long_path_facts": (source[:end] + row + source[end:], True),
+             "long_path_plain": (source.replace("</body>", "<table>%s</table></body>" % row), False)}
+    failures = 0
+    for name, (page, should_fit) in pages.items():
+        path = os.path.join(work, name + ".html")
+        with open(path, "w", encoding="utf-8") as f:
+            f.write(page)
+        for print_layout, where in ((True, "A4"), (False, "the screen")):
+            report = overflow(binary, path, work, name, print_layout)
+            if report is None or ("wide=0" in report) != should_fit:
+                print("FAIL long path (%s) %s %s: %s" % (
+                    name, "reaches past" if should_fit else "passed as fitting", where, report))
+                failures += 1
+    return failures
+
+
 # The widest console line of `photopose compare` (characters): its tables keep to 100
 # (tools/report/comparison_tables.h kConsoleWidth); the issue's bound for a terminal is 160.
 MAX_CONSOLE_WIDTH = 160
@@ -329,6 +363,7 @@ def main():
                 print("FAIL width check: a 60-column table passed as fitting %s: %s" %
                       (where, report))
                 failures += 1
+        failures += long_path_failures(binary, source, w)
     failures += self_check()
     for name, command in pages.items():
         run = subprocess.run(command, capture_output=True, text=True, timeout=600)
