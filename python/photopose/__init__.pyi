@@ -832,15 +832,15 @@ class BundleAdjustmentResult:
     @property
     def num_check_points(self) -> int: ...
     @property
-    def check_rmse_m(self) -> numpy.ndarray: ...
+    def check_rmse_m(self) -> numpy.ndarray: ...  # x, y, z (m); NaN without a point
     @property
-    def check_rmse_total_m(self) -> float: ...
+    def check_rmse_total_m(self) -> float: ...  # m; NaN without a point
     @property
     def num_control_points(self) -> int: ...
     @property
-    def control_rmse_m(self) -> numpy.ndarray: ...
+    def control_rmse_m(self) -> numpy.ndarray: ...  # x, y, z (m); NaN without a point
     @property
-    def control_rmse_total_m(self) -> float: ...
+    def control_rmse_total_m(self) -> float: ...  # m; NaN without a point
     @property
     def mark_residuals(self) -> numpy.ndarray: ...  # M x 2 observed - computed (the mark's unit); NaN rows: not used.
     @property

@@ -121,6 +121,15 @@ def test_result_statistics_as_numpy(tmp_path):
     assert repr(result).startswith("BundleAdjustmentResult(")
 
 
+def test_no_check_point_no_rmse():
+    # Without a check point there is no RMSE: NaN, not a zero error.
+    block, _ = pp.simulate_block(seed=2, num_lines=2, images_per_line=5, num_check_points=0)
+    result = pp.bundle_adjust(block)
+    assert result.num_check_points == 0
+    assert np.isnan(result.check_rmse_total_m) and np.isnan(result.check_rmse_m).all()
+    assert result.num_control_points > 0 and np.isfinite(result.control_rmse_total_m)
+
+
 def test_options_config_and_errors():
     block, _ = pp.simulate_block(seed=3, num_lines=2, images_per_line=5)
     options = pp.BundleAdjustmentOptions(

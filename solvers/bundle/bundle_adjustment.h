@@ -611,14 +611,15 @@ struct BundleAdjustmentResult {
   // Check marks rejected by the w-test of their point's intersection, in order of rejection.
   std::vector<BundleRejectedCheckMark> rejected_check_marks;
   std::optional<Eigen::Vector3d> lever_arm_m;  // estimated (or applied) lever arm
-  // Check points intersected and compared: RMSE per axis and total (m); count.
+  // Check points intersected and compared: RMSE per axis and total (m); count. NaN without a
+  // point (no figure, not a zero error).
   int num_check_points = 0;
-  Eigen::Vector3d check_rmse_m = Eigen::Vector3d::Zero();
-  double check_rmse_total_m = 0.0;
-  // Control points: RMSE of adjusted - surveyed per axis and total (m).
+  Eigen::Vector3d check_rmse_m = Eigen::Vector3d::Constant(std::numeric_limits<double>::quiet_NaN());
+  double check_rmse_total_m = std::numeric_limits<double>::quiet_NaN();
+  // Control points: RMSE of adjusted - surveyed per axis and total (m); NaN without a point.
   int num_control_points = 0;
-  Eigen::Vector3d control_rmse_m = Eigen::Vector3d::Zero();
-  double control_rmse_total_m = 0.0;
+  Eigen::Vector3d control_rmse_m = Eigen::Vector3d::Constant(std::numeric_limits<double>::quiet_NaN());
+  double control_rmse_total_m = std::numeric_limits<double>::quiet_NaN();
   // Residual per mark used in the final round (observed - computed, in the mark's own unit); NaN
   // for marks not used (check marks, rejected marks, marks of images not adjusted).
   std::vector<Eigen::Vector2d> mark_residuals;

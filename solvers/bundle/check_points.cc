@@ -190,8 +190,10 @@ void TabulateControlAndCheckPoints(const Block& block, const std::vector<const V
     ++result->num_check_points;
     check_ssq += table.error_m->cwiseAbs2();
   }
-  result->control_rmse_m = result->check_rmse_m = Eigen::Vector3d::Zero();
-  result->control_rmse_total_m = result->check_rmse_total_m = 0.0;
+  // Without a point there is no RMSE (NaN: null in the JSON report), not a zero error.
+  const double kNaN = std::numeric_limits<double>::quiet_NaN();
+  result->control_rmse_m = result->check_rmse_m = Eigen::Vector3d::Constant(kNaN);
+  result->control_rmse_total_m = result->check_rmse_total_m = kNaN;
   if (result->num_control_points > 0) {
     result->control_rmse_m = (control_ssq / result->num_control_points).cwiseSqrt();
     result->control_rmse_total_m = std::sqrt(control_ssq.sum() / result->num_control_points);

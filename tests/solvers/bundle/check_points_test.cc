@@ -99,7 +99,8 @@ TEST(CheckPoints, OneRayIsReportedNotCountedAndRemovedControlLeavesTheRmse) {
   EXPECT_EQ(row.num_observations, 1);
   EXPECT_NE(row.message.find("not intersected"), std::string::npos) << row.message;
   EXPECT_EQ(result.num_control_points, 0);  // its coordinates were removed by snooping
-  EXPECT_EQ(result.control_rmse_total_m, 0.0);
+  EXPECT_TRUE(std::isnan(result.control_rmse_total_m)) << "no control point, no RMSE";
+  EXPECT_TRUE(result.control_rmse_m.array().isNaN().all());
 }
 
 // A check mark 40 um (10 px) off: the w-test of the intersection rejects it (and only it), the point is

@@ -335,5 +335,21 @@ TEST(BundleReport, OverfitIsNullWhenNotJudged) {
   EXPECT_TRUE(OverfitJudged(fixed));
 }
 
+// A block without check points (or control points) has no RMSE: null in the JSON, not a zero
+// error; with points, the figures.
+TEST(BundleReport, RmseIsNullWithoutAPoint) {
+  BundleAdjustmentResult result;
+  const nlohmann::json none = BundleReportJson(Block(), result, BundleReportContext());
+  for (const char* key : {"check_rmse_m", "control_rmse_m"})
+    for (const char* axis : {"x", "y", "z", "total"}) EXPECT_TRUE(none[key][axis].is_null()) << key << " " << axis;
+  result.num_check_points = 3;
+  result.check_rmse_m = Eigen::Vector3d(0.01, 0.02, 0.03);
+  result.check_rmse_total_m = 0.0216;
+  const nlohmann::json some = BundleReportJson(Block(), result, BundleReportContext());
+  EXPECT_DOUBLE_EQ(some["check_rmse_m"]["y"].get<double>(), 0.02);
+  EXPECT_DOUBLE_EQ(some["check_rmse_m"]["total"].get<double>(), 0.0216);
+  EXPECT_TRUE(some["control_rmse_m"]["total"].is_null());
+}
+
 }  // namespace
 }  // namespace photopose::cli
