@@ -4,12 +4,10 @@
 #include <cmath>
 #include <cstdio>
 
+#include "core/io/csv.h"
+
 namespace photopose {
 namespace {
-
-std::string Where(const std::string& file, int line, const std::string& column) {
-  return file + ":" + std::to_string(line) + ": " + column + ": ";
-}
 
 std::string Micrometres(double value) {
   char buffer[32];
@@ -46,14 +44,14 @@ Status FitFiducials(const FrameCamera& camera, const std::vector<MeasuredFiducia
   const std::string& raster = measured.front().raster;
   const int count = static_cast<int>(camera.film_fiducials_um.size());
   if (count == 0) {
-    return Status::Error(Where(file, measured.front().line, "FiducialID") + "camera '" +
+    return Status::Error(WhereInFile(file, measured.front().line, "FiducialID") + "camera '" +
                          camera.camera_id + "' of image '" + raster +
                          "' has no FilmFiducials in the camera table");
   }
   std::vector<Eigen::Vector2d> pixels, films;
   for (const MeasuredFiducial& f : measured) {
     if (f.fiducial_id > count) {
-      return Status::Error(Where(file, f.line, "FiducialID") + std::to_string(f.fiducial_id) +
+      return Status::Error(WhereInFile(file, f.line, "FiducialID") + std::to_string(f.fiducial_id) +
                            " is not a fiducial of camera '" + camera.camera_id + "' (it has " +
                            std::to_string(count) + ")");
     }
@@ -63,12 +61,12 @@ Status FitFiducials(const FrameCamera& camera, const std::vector<MeasuredFiducia
   FiducialFit result;
   const Status fitted = FitPixelToFilmAffine(pixels, films, options.pixel_origin, &result.affine);
   if (!fitted.ok())
-    return Status::Error(Where(file, measured.front().line, "Column") + "image '" + raster +
+    return Status::Error(WhereInFile(file, measured.front().line, "Column") + "image '" + raster +
                          "': " + fitted.message());
   const std::array<double, 6>& c = result.affine;
   const double det = c[1] * c[5] - c[2] * c[4];
   if (!(std::abs(det) > 0.0) || !std::isfinite(det))
-    return Status::Error(Where(file, measured.front().line, "Column") + "image '" + raster +
+    return Status::Error(WhereInFile(file, measured.front().line, "Column") + "image '" + raster +
                          "': the fitted affine is singular");
   const double shift = options.pixel_origin == PixelOrigin::kCenter ? 0.5 : 0.0;
   double ssq = 0.0;
@@ -87,7 +85,7 @@ Status FitFiducials(const FrameCamera& camera, const std::vector<MeasuredFiducia
   result.max_um = worst->residual_um.norm();
   result.redundancy = 2 * static_cast<int>(measured.size()) - 6;
   if (!(result.max_um <= options.max_residual_um)) {
-    return Status::Error(Where(file, worst->line, "Column") + "fiducial " +
+    return Status::Error(WhereInFile(file, worst->line, "Column") + "fiducial " +
                          std::to_string(worst->fiducial_id) + " of image '" + raster + "' is " +
                          Micrometres(result.max_um) + " from the affine fitted to the " +
                          std::to_string(measured.size()) + " fiducials (RMS " +

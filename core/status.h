@@ -23,6 +23,13 @@ class [[nodiscard]] Status {
   std::string message_;
 };
 
+// How an `IsValid(std::string* why)` says no: `why` (when not null) gets the reason, and false is
+// returned (`if (x < 0) return InvalidBecause(why, "x must be >= 0");`).
+inline bool InvalidBecause(std::string* why, std::string reason) {
+  if (why != nullptr) *why = std::move(reason);
+  return false;
+}
+
 // The outcome of `value.IsValid(&why)` (the XxxOptions convention, `bool IsValid(std::string*)`)
 // as a Status: Ok, or an Error reading `prefix` + why ("invalid options: the loss scale must be
 // positive").

@@ -170,14 +170,6 @@ Status FormatBlockTables(const Block& block, const BlockTableWriteOptions& optio
 
 namespace {
 
-std::string Where(const std::string& file, int line, const std::string& column) {
-  std::string where = file;
-  if (line > 0) where += ":" + std::to_string(line);
-  return where + ": " + (column.empty() ? "" : column + ": ");
-}
-
-std::string Quoted(const std::string& text) { return "'" + text + "'"; }
-
 // The earth-curvature correction lowers points by D^2 / (2R) below the tangent plane of a map
 // frame (projected or local, heights along the plumb line); in a geographic frame (degrees) or a
 // geocentric one (ECEF) it has no meaning. A camera with ApplyECC is refused when a CRS that
@@ -197,10 +189,12 @@ Status CheckEarthCurvatureFrame(const BlockTables& tables, const FrameCamera& ca
   for (const auto& [text, where] : named) {
     CrsInfo info;
     if (!ResolveCrs(text, &info).ok() || !(info.geographic || info.geocentric)) continue;
-    return Status::Error(Where(tables.cameras_file, 0, "ApplyECC") + "camera " +
-                         Quoted(camera.camera_id) + ": the earth-curvature correction needs a projected or "
-                         "local map frame, and the ground frame is " + (info.geographic ? "geographic" : "geocentric") +
-                         " (" + TokenForMessage(text) + ", " + where + ")");
+    return Status::Error(WhereInFile(tables.cameras_file, 0, "ApplyECC") + "camera " +
+                         QuotedForMessage(camera.camera_id) +
+                         ": the earth-curvature correction needs a projected or "
+                         "local map frame, and the ground frame is " +
+                         (info.geographic ? "geographic" : "geocentric") + " (" +
+                         TokenForMessage(text) + ", " + where + ")");
   }
   return Status::Ok();
 }
@@ -248,8 +242,9 @@ Status RowCountedDownAt(const BlockTables& tables, const FrameCamera& camera,
                         const std::string& file, int line, double* row) {
   if (tables.pixel_rows == PixelRows::kDown) return Status::Ok();
   if (camera.n_rows <= 0)
-    return Status::Error(Where(file, line, "Row") + "rows counted up need NRows in the camera " +
-                         "table (camera " + Quoted(camera.camera_id) + " has none)");
+    return Status::Error(WhereInFile(file, line, "Row") +
+                         "rows counted up need NRows in the camera " + "table (camera " +
+                         QuotedForMessage(camera.camera_id) + " has none)");
   *row = RowCountedDown(*row, camera.n_rows, tables.pixel_origin);
   return Status::Ok();
 }
@@ -297,21 +292,21 @@ class BlockAssembler {
 
 Status BlockAssembler::AddCameras() {
   if (tables_.cameras.empty())
-    return Status::Error(Where(tables_.cameras_file, 0, "") + "the camera table has no rows");
+    return Status::Error(WhereInFile(tables_.cameras_file, 0, "") + "the camera table has no rows");
   for (const FrameCamera& table : tables_.cameras) {
     const Status valid = table.IsValid();
     if (!valid.ok())
-      return Status::Error(Where(tables_.cameras_file, 0, "") + "camera " +
-                           Quoted(table.camera_id) + ": " + valid.message());
+      return Status::Error(WhereInFile(tables_.cameras_file, 0, "") + "camera " +
+                           QuotedForMessage(table.camera_id) + ": " + valid.message());
     if (result_.FindCamera(table.camera_id) >= 0)
-      return Status::Error(Where(tables_.cameras_file, 0, "CameraID") + "duplicate camera " +
-                           Quoted(table.camera_id));
+      return Status::Error(WhereInFile(tables_.cameras_file, 0, "CameraID") + "duplicate camera " +
+                           QuotedForMessage(table.camera_id));
     PHOTOPOSE_RETURN_IF_ERROR(CheckEarthCurvatureFrame(tables_, table));
     FrameCamera rows_down = table;
     if (tables_.pixel_rows == PixelRows::kUp) {
       const Status flipped = AffineWithRowsFlipped(&rows_down);
       if (!flipped.ok())
-        return Status::Error(Where(tables_.cameras_file, 0, "NRows") + flipped.message());
+        return Status::Error(WhereInFile(tables_.cameras_file, 0, "NRows") + flipped.message());
     }
     result_.cameras.push_back(CameraOf(rows_down));
   }
@@ -331,8 +326,8 @@ Status BlockAssembler::AddPoints() {
       point.accuracy_m = row.accuracy_m;
     }
     if (!point_index_.emplace(row.point_id, static_cast<int>(result_.points.size())).second)
-      return Status::Error(Where(tables_.points_file, row.line, "PointID") + "duplicate point " +
-                           Quoted(row.point_id));
+      return Status::Error(WhereInFile(tables_.points_file, row.line, "PointID") +
+                           "duplicate point " + QuotedForMessage(row.point_id));
     result_.points.push_back(std::move(point));
   }
   return Status::Ok();
@@ -342,15 +337,16 @@ Status BlockAssembler::FindCamera(const std::string& camera_id, const std::strin
                                   int* camera) const {
   *camera = result_.FindCamera(camera_id);
   if (*camera < 0)
-    return Status::Error(Where(file, line, "CameraID") + "unknown camera " + Quoted(camera_id));
+    return Status::Error(WhereInFile(file, line, "CameraID") + "unknown camera " +
+                         QuotedForMessage(camera_id));
   return Status::Ok();
 }
 
 Status BlockAssembler::TakeFrame(const FrameRecord& f, int mark_line, BlockImage* image) const {
   if (f.camera_id != result_.cameras[image->camera].camera_id) {
-    return Status::Error(Where(tables_.frames_file, f.line, "CameraID") + "image " +
-                         Quoted(image->name) + " is of camera " +
-                         Quoted(result_.cameras[image->camera].camera_id) +
+    return Status::Error(WhereInFile(tables_.frames_file, f.line, "CameraID") + "image " +
+                         QuotedForMessage(image->name) + " is of camera " +
+                         QuotedForMessage(result_.cameras[image->camera].camera_id) +
                          " in the marks (line " + std::to_string(mark_line) + ")");
   }
   image->line = f.line;
@@ -363,7 +359,7 @@ Status BlockAssembler::TakeFrame(const FrameRecord& f, int mark_line, BlockImage
         tables_.frames_rotation, result_.cameras[image->camera].table.angle_flags(),
         f.eo.angles_seed_rad(), *f.attitude_accuracy_deg);
     if (!image->attitude_accuracy_rad)
-      return Status::Error(Where(tables_.frames_file, f.line, "AccuracyOmega") +
+      return Status::Error(WhereInFile(tables_.frames_file, f.line, "AccuracyOmega") +
                            "cannot be converted: the angles are at a gimbal lock of the "
                            "convention");
   }
@@ -384,8 +380,9 @@ Status BlockAssembler::AddImage(const std::string& raster, const std::string& ma
   } else if (result_.cameras.size() == 1) {
     image.camera = 0;
   } else {
-    return Status::Error(Where(tables_.marks_file, mark_line, "CameraID") + "image " +
-                         Quoted(raster) + " names no camera and the camera table has several");
+    return Status::Error(WhereInFile(tables_.marks_file, mark_line, "CameraID") + "image " +
+                         QuotedForMessage(raster) +
+                         " names no camera and the camera table has several");
   }
   if (frame != frame_of_.end()) PHOTOPOSE_RETURN_IF_ERROR(TakeFrame(*frame->second, mark_line, &image));
   image_index_.emplace(raster, static_cast<int>(result_.images.size()));
@@ -403,10 +400,10 @@ Status BlockAssembler::AddImages() {
     }
     const BlockImage& image = result_.images[found->second];
     if (!mark.camera_id.empty() && mark.camera_id != result_.cameras[image.camera].camera_id) {
-      return Status::Error(Where(tables_.marks_file, mark.line, "CameraID") + "image " +
-                           Quoted(mark.raster) + " has marks of two cameras (" +
-                           Quoted(result_.cameras[image.camera].camera_id) + " and " +
-                           Quoted(mark.camera_id) + ")");
+      return Status::Error(WhereInFile(tables_.marks_file, mark.line, "CameraID") + "image " +
+                           QuotedForMessage(mark.raster) + " has marks of two cameras (" +
+                           QuotedForMessage(result_.cameras[image.camera].camera_id) + " and " +
+                           QuotedForMessage(mark.camera_id) + ")");
     }
   }
   for (const FrameRecord& frame : tables_.frames) {
@@ -425,8 +422,8 @@ Status BlockAssembler::FitScannedFilm() {
   for (const auto& [raster, measured] : fiducials_of) {
     const auto found = image_index_.find(raster);
     if (found == image_index_.end()) {
-      return Status::Error(Where(tables_.fiducials_file, measured.front().line, "Raster") +
-                           "image " + Quoted(raster) + " has no marks and no frames row");
+      return Status::Error(WhereInFile(tables_.fiducials_file, measured.front().line, "Raster") +
+                           "image " + QuotedForMessage(raster) + " has no marks and no frames row");
     }
     BlockImage& image = result_.images[found->second];
     const FrameCamera& camera = result_.cameras[image.camera].table;
@@ -450,7 +447,8 @@ Status BlockAssembler::PixelMark(const ImageMark& row, const FrameCamera& camera
   PHOTOPOSE_RETURN_IF_ERROR(
       RowCountedDownAt(tables_, camera, tables_.marks_file, row.line, &mark->measured.y()));
   const Status film = FilmFromPixel(camera, mark->measured, tables_.pixel_origin, &mark->observation);
-  if (!film.ok()) return Status::Error(Where(tables_.marks_file, row.line, "Column") + film.message());
+  if (!film.ok())
+    return Status::Error(WhereInFile(tables_.marks_file, row.line, "Column") + film.message());
   const Eigen::Vector2d corner = mark->measured + Eigen::Vector2d::Constant(origin_shift);
   if (!NearTheImage(camera, corner, tables_.max_outside_fraction)) {
     const Eigen::Vector2d size(camera.n_columns, camera.n_rows);
@@ -458,16 +456,16 @@ Status BlockAssembler::PixelMark(const ImageMark& row, const FrameCamera& camera
     for (int k = 0; k < 2; ++k)
       outside = std::max(outside, corner[k] < 0.0 ? -corner[k] : corner[k] - size[k]);
     return Status::Error(EscapeForMessage(
-        Where(tables_.marks_file, row.line, "Column") + "the mark of point '" + row.point_id +
+        WhereInFile(tables_.marks_file, row.line, "Column") + "the mark of point '" + row.point_id +
         "' in image '" + row.raster + "' lies " + FormatNumber(std::round(outside)) +
         " pixels outside the " + std::to_string(camera.n_columns) + " x " +
-        std::to_string(camera.n_rows) + " image of camera '" + camera.camera_id +
-        "' (at most " + FormatNumber(tables_.max_outside_fraction * 100.0) +
-        "% of the image size is allowed)"));
+        std::to_string(camera.n_rows) + " image of camera '" + camera.camera_id + "' (at most " +
+        FormatNumber(tables_.max_outside_fraction * 100.0) + "% of the image size is allowed)"));
   }
   const Status scale = FilmUmPerPixel(camera, mark->measured, tables_.pixel_origin,
                                       &mark->observation_units_per_unit);
-  if (!scale.ok()) return Status::Error(Where(tables_.marks_file, row.line, "Column") + scale.message());
+  if (!scale.ok())
+    return Status::Error(WhereInFile(tables_.marks_file, row.line, "Column") + scale.message());
   return Status::Ok();
 }
 
@@ -495,7 +493,7 @@ Status BlockAssembler::MarkOf(const ImageMark& row, const std::vector<FrameCamer
     return Status::Ok();
   }
   if (row.column_row) return PixelMark(row, pixel_cameras[mark->image], mark);
-  return Status::Error(Where(tables_.marks_file, row.line, "Column") +
+  return Status::Error(WhereInFile(tables_.marks_file, row.line, "Column") +
                        "the mark has neither Column/Row nor FilmX/FilmY");
 }
 

@@ -307,7 +307,7 @@ Status FormatCameraTable(const std::vector<FrameCamera>& cameras, const std::str
   std::string contents = CsvLine(header);
 
   for (const FrameCamera& c : cameras) {
-    const std::string record = "camera " + Quoted(c.camera_id);
+    const std::string record = "camera " + QuotedForMessage(c.camera_id);
     std::string column;
     const Status valid = CheckCameraTableFields(c, &column);
     if (!valid.ok()) {

@@ -39,7 +39,7 @@ std::vector<std::string_view> SplitOn(std::string_view text, char separator) {
   }
 }
 
-std::string Quoted(std::string_view text) { return "'" + TokenForMessage(text) + "'"; }
+std::string QuotedToken(std::string_view text) { return "'" + TokenForMessage(text) + "'"; }
 
 // Length of the UTF-8 sequence that starts at text[i] (1 to 4), or 0 when the bytes there are not
 // well-formed UTF-8 (RFC 3629: no overlong forms, no surrogates, nothing above U+10FFFF).
@@ -128,8 +128,8 @@ Status CsvHeader::SetNames(std::vector<std::string> names) {
     const auto [first, inserted] = column_by_name_.emplace(Normalized(name), i);
     if (!inserted) {
       return Error(header_line_, name,
-                   "column appears twice in the header (also as " + Quoted(header_[first->second]) +
-                       ")");
+                   "column appears twice in the header (also as " +
+                       QuotedToken(header_[first->second]) + ")");
     }
   }
   return Status::Ok();
@@ -416,7 +416,7 @@ Status CsvRowReader::NumberGroups(const CsvColumn& column, int group_size,
     const std::string group_name = "item " + std::to_string(g + 1);
     const std::vector<std::string_view> words = SplitWords(TrimBlanks(groups[g]));
     if (words.size() != static_cast<size_t>(group_size)) {
-      return Error(column, group_name + " " + Quoted(TrimBlanks(groups[g])) + " has " +
+      return Error(column, group_name + " " + QuotedToken(TrimBlanks(groups[g])) + " has " +
                                std::to_string(words.size()) + " numbers, expected " +
                                std::to_string(group_size) + " separated by spaces");
     }
@@ -544,6 +544,16 @@ size_t AppendEscapedCharacter(std::string_view text, size_t i, std::string* esca
 
 }  // namespace
 
+std::string QuotedForMessage(std::string_view name) { return "'" + EscapeForMessage(name) + "'"; }
+
+std::string WhereInFile(std::string_view file, int line, std::string_view column) {
+  std::string where(file);
+  if (line > 0) where += ":" + std::to_string(line);
+  where += ": ";
+  if (!column.empty()) where.append(column).append(": ");
+  return where;
+}
+
 std::string EscapeForMessage(std::string_view text) {
   std::string escaped;
   escaped.reserve(text.size());
@@ -572,15 +582,15 @@ bool ParseFiniteNumber(std::string_view text, double* value, std::string* why) {
   const std::from_chars_result result =
       std::from_chars(digits.data(), end, number, std::chars_format::general);
   if (result.ec == std::errc::result_out_of_range && result.ptr == end) {
-    *why = Quoted(text) + " is out of range";
+    *why = QuotedToken(text) + " is out of range";
     return false;
   }
   if (result.ec != std::errc() || result.ptr != end || digits.empty()) {
-    *why = Quoted(text) + " is not a number";
+    *why = QuotedToken(text) + " is not a number";
     return false;
   }
   if (!std::isfinite(number)) {
-    *why = Quoted(text) + " is not a finite number";
+    *why = QuotedToken(text) + " is not a finite number";
     return false;
   }
   *value = number;
@@ -602,12 +612,12 @@ bool ParseWholeNumber(std::string_view text, long long* value, std::string* why)
   double real = 0.0;
   if (!ParseFiniteNumber(text, &real, why)) return false;
   if (real != std::floor(real)) {
-    *why = Quoted(text) + " is not a whole number";
+    *why = QuotedToken(text) + " is not a whole number";
     return false;
   }
   constexpr double kLimit = 9.2e18;  // inside the range of long long
   if (std::abs(real) > kLimit) {
-    *why = Quoted(text) + " is out of range";
+    *why = QuotedToken(text) + " is out of range";
     return false;
   }
   *value = static_cast<long long>(real);

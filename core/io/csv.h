@@ -267,6 +267,12 @@ constexpr size_t kMaxEchoedCharacters = 40;
 // stays a line however long the token ("0000000000000000000000000000000000000000…(1048576
 // bytes)").
 std::string TokenForMessage(std::string_view token);
+// A name (an image, a point, a camera) as a message quotes it: 'name', escaped as
+// EscapeForMessage does, never cut (two long names that differ at the end stay told apart).
+std::string QuotedForMessage(std::string_view name);
+// Where a one-line message points: "file:line: column: ", the line left out when unknown (0 or
+// less), the column when empty.
+std::string WhereInFile(std::string_view file, int line, std::string_view column = {});
 
 // Parses a whole field as a finite decimal number (C locale, a leading '+' allowed). On failure
 // returns false and sets *why to a phrase about the text ("'abc' is not a number",

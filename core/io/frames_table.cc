@@ -49,7 +49,7 @@ Status FindCamera(const FramesTableOptions& options, const std::string& camera_i
       return Status::Ok();
     }
   }
-  return Status::Error("unknown camera " + Quoted(camera_id));
+  return Status::Error("unknown camera " + QuotedForMessage(camera_id));
 }
 
 AngleFlags FlagsOf(const FrameCamera* camera) {
@@ -107,7 +107,8 @@ Status ReadFrameSigmas(const CsvRowReader& row, const FramesTableOptions& option
     }
     double sigma = 0.0;
     PHOTOPOSE_RETURN_IF_ERROR(ReadRequiredNumber(row, names[i], &sigma));
-    if (sigma < 0.0) return row.Error(names[i], Quoted(row.Text(names[i])) + " is negative");
+    if (sigma < 0.0)
+      return row.Error(names[i], QuotedForMessage(row.Text(names[i])) + " is negative");
     if (i >= 3) sigma /= kDegreesPerRadian;
     variances[i] = sigma * sigma;
   }
@@ -146,7 +147,7 @@ Status ReadFrameRow(const CsvRowReader& row, const std::vector<size_t>& extra,
   PHOTOPOSE_RETURN_IF_ERROR(ReadFrameSigmas(row, options, camera, &f));
   PHOTOPOSE_RETURN_IF_ERROR(ReadNumber(row, "Sigma0", &f.sigma0));
   if (f.sigma0 && *f.sigma0 < 0.0)
-    return row.Error("Sigma0", Quoted(row.Text("Sigma0")) + " is negative");
+    return row.Error("Sigma0", QuotedForMessage(row.Text("Sigma0")) + " is negative");
   PHOTOPOSE_RETURN_IF_ERROR(ReadAccuracyTriple(row, kAccuracyColumns, &f.center_accuracy_m));
   PHOTOPOSE_RETURN_IF_ERROR(
       ReadAccuracyTriple(row, kAttitudeAccuracyColumns, &f.attitude_accuracy_deg));
@@ -174,7 +175,7 @@ Status FrameCamerasAndGroups(const FramesTableOptions& options, const std::vecto
   for (size_t i = 0; i < frames.size(); ++i) {
     const Status found = FindCamera(options, frames[i].camera_id, &(*cameras)[i]);
     if (!found.ok())
-      return Status::Error(path + ": raster " + Quoted(frames[i].raster) +
+      return Status::Error(path + ": raster " + QuotedForMessage(frames[i].raster) +
                            ": CameraID: " + found.message());
     any->matrix = any->matrix || ((*cameras)[i] != nullptr &&
                                   (*cameras)[i]->orientation_type == OrientationType::kMatrix);
@@ -227,7 +228,7 @@ Status FrameRow(const FramesTableOptions& options, const FramesColumnGroups& any
                 const FrameCamera* camera, std::vector<std::string>* fields) {
   const AngleFlags flags = FlagsOf(camera);
   const Eigen::Vector3d seed_angles = f.eo.angles_seed_rad();
-  RowFields row("raster " + Quoted(f.raster));
+  RowFields row("raster " + QuotedForMessage(f.raster));
   row.Text(f.raster);
   row.Text(f.camera_id);
   row.Number("PerspectiveX", f.eo.parameters[0]);

@@ -46,10 +46,10 @@ Status ReadCrsLine(const std::vector<std::string_view>& words, const std::string
   for (size_t i = 0; i < words.size(); ++i) *crs += (i ? " " : "") + std::string(words[i]);
   if (IsGcpCrs(*crs)) return Status::Ok();
   return Status::Error(EscapeForMessage(
-      Where(file_name, 1) +
+      WhereInFile(file_name, 1) +
       "CRS: the first line must name the coordinate system (EPSG:<code>, WGS84 UTM <zone><N|S>, "
       "or a +proj=... string), got " +
-      Quoted(*crs)));
+      QuotedForMessage(*crs)));
 }
 
 // The lines of a text after its first, split into words; blank and '#' lines skipped.
@@ -76,7 +76,7 @@ Status ParseGcpList(std::string_view text, const std::string& file_name, GcpList
   PHOTOPOSE_RETURN_IF_ERROR(CheckTextInput(text, file_name));
   const auto error = [&file_name](int line, std::string_view column, const std::string& what) {
     return Status::Error(EscapeForMessage(
-        Where(file_name, line) + (column.empty() ? "" : std::string(column) + ": ") + what));
+        WhereInFile(file_name, line) + (column.empty() ? "" : std::string(column) + ": ") + what));
   };
 
   GcpList result;
@@ -100,7 +100,8 @@ Status ParseGcpList(std::string_view text, const std::string& file_name, GcpList
       if (!ParseFiniteNumber(words[i], &numbers[i], &why)) return error(line, kNumberNames[i], why);
       const ValueRange& range = *RangeOf(kRangeColumns[i]);
       if (!InRange(numbers[i], range)) {
-        return error(line, kNumberNames[i], Quoted(words[i]) + " is outside " + RangeText(range));
+        return error(line, kNumberNames[i],
+                     QuotedForMessage(words[i]) + " is outside " + RangeText(range));
       }
     }
     const Eigen::Vector3d position(numbers[0], numbers[1], numbers[2]);
@@ -119,7 +120,7 @@ Status ParseGcpList(std::string_view text, const std::string& file_name, GcpList
     } else if (result.points[it->second].position != position) {
       const GroundPoint& first = result.points[it->second];
       return error(line, "name",
-                   "point " + Quoted(name) + " has other coordinates on line " +
+                   "point " + QuotedForMessage(name) + " has other coordinates on line " +
                        std::to_string(first.line) + " (" + FormatNumber(first.position.x()) + " " +
                        FormatNumber(first.position.y()) + " " + FormatNumber(first.position.z()) +
                        ")");
@@ -142,7 +143,7 @@ Status ParseGeoTxt(std::string_view text, const std::string& file_name, GeoTxt* 
   PHOTOPOSE_RETURN_IF_ERROR(CheckTextInput(text, file_name));
   const auto error = [&file_name](int line, std::string_view column, const std::string& what) {
     return Status::Error(EscapeForMessage(
-        Where(file_name, line) + (column.empty() ? "" : std::string(column) + ": ") + what));
+        WhereInFile(file_name, line) + (column.empty() ? "" : std::string(column) + ": ") + what));
   };
   GeoTxt result;
   std::map<std::string, int> line_of_image;
@@ -173,7 +174,8 @@ Status ParseGeoTxt(std::string_view text, const std::string& file_name, GeoTxt* 
     for (int i = 1; i <= (has_height ? 3 : 2); ++i) {
       const ValueRange& range = *RangeOf(i == 1 ? "X" : i == 2 ? "Y" : "Z");
       if (!InRange(numbers[i], range))
-        return error(line, kNames[i], Quoted(words[i]) + " is outside " + RangeText(range));
+        return error(line, kNames[i],
+                     QuotedForMessage(words[i]) + " is outside " + RangeText(range));
     }
     GeoTxtRecord record;
     record.image = std::string(words[0]);
@@ -185,21 +187,27 @@ Status ParseGeoTxt(std::string_view text, const std::string& file_name, GeoTxt* 
     if (n >= 7) {
       for (int i = 4; i <= 6; ++i) {
         if (std::abs(numbers[i]) > 360.0)
-          return error(line, kNames[i], Quoted(words[i]) + " is not an angle in degrees (at most 360 in magnitude)");
+          return error(line, kNames[i],
+                       QuotedForMessage(words[i]) +
+                           " is not an angle in degrees (at most 360 in magnitude)");
       }
       record.yaw_pitch_roll_deg = Eigen::Vector3d(numbers[4], numbers[5], numbers[6]);
     }
     if (n >= 9) {
       for (int i = 7; i <= 8; ++i) {
         if (!(numbers[i] > 0.0 && numbers[i] <= 1e6))
-          return error(line, kNames[i], Quoted(words[i]) + " must be a positive accuracy in metres (at most 1e6)");
+          return error(
+              line, kNames[i],
+              QuotedForMessage(words[i]) + " must be a positive accuracy in metres (at most 1e6)");
       }
       record.horizontal_accuracy_m = numbers[7];
       record.vertical_accuracy_m = numbers[8];
     }
     const auto [it, inserted] = line_of_image.emplace(record.image, line);
     if (!inserted) {
-      return error(line, "image", Quoted(record.image) + " is already on line " + std::to_string(it->second));
+      return error(
+          line, "image",
+          QuotedForMessage(record.image) + " is already on line " + std::to_string(it->second));
     }
     result.records.push_back(std::move(record));
     return Status::Ok();

@@ -131,7 +131,7 @@ Status ReadMarkRow(const CsvRowReader& row, const MarkTableColumns& c, ImageMark
 }
 
 std::string MarkDescription(std::string_view raster, std::string_view point_id) {
-  return "mark of point " + Quoted(point_id) + " in image " + Quoted(raster);
+  return "mark of point " + QuotedForMessage(point_id) + " in image " + QuotedForMessage(raster);
 }
 
 // Duplicate marks (a point marked twice in one image), found without a string, an allocation or
@@ -228,7 +228,7 @@ Status FormatGroundPoints(const std::vector<GroundPoint>& points, const std::str
                           std::string* text) {
   std::string contents = CsvLine(HeaderFields(PointColumns()));
   for (const GroundPoint& p : points) {
-    RowFields row("point " + Quoted(p.point_id));
+    RowFields row("point " + QuotedForMessage(p.point_id));
     if (p.point_id.empty()) row.Fail("PointID", "is empty");
     row.Text(p.point_id);
     row.Number("X", p.position.x());
@@ -402,8 +402,8 @@ Status CheckMarks(const std::string& marks_path, const std::vector<ImageMark>& m
   for (const GroundPoint& p : points) known.emplace(p.point_id, p.line);
   for (const ImageMark& m : marks) {
     if (known.count(m.point_id) == 0)
-      return Status::Error(Where(marks_path, m.line) + "PointID: unknown point " +
-                           Quoted(m.point_id));
+      return Status::Error(WhereInFile(marks_path, m.line) + "PointID: unknown point " +
+                           QuotedForMessage(m.point_id));
   }
   return Status::Ok();
 }
@@ -429,7 +429,7 @@ Status CheckMarkInsideImage(const std::string& marks_path, const ImageMark& mark
       const char* column =
           mark.column_row ? (k == 0 ? "Column" : "Row") : (k == 0 ? "FilmX" : "FilmY");
       return Status::Error(EscapeForMessage(
-          Where(marks_path, mark.line) + column + ": the mark of point '" + mark.point_id +
+          WhereInFile(marks_path, mark.line) + column + ": the mark of point '" + mark.point_id +
           "' in image '" + mark.raster + "' lies " + FormatNumber(std::round(outside)) +
           " pixels outside the " + std::to_string(camera.n_columns) + " x " +
           std::to_string(camera.n_rows) + " image of camera '" + camera.camera_id + "' (at most " +

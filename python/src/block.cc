@@ -544,7 +544,7 @@ void BindResectionInputs(py::class_<PythonBlock>& block) {
 }
 
 // ---------------------------------------------------------------- block files
-void BindBlockFiles(py::module_& m) {
+void BindBlockReaders(py::module_& m) {
   m.def("read_block",
         [](const py::object& cameras, const py::object& points, const py::object& marks,
            const py::object& gcp_list, const py::object& frames, const py::object& fiducials,
@@ -595,6 +595,9 @@ void BindBlockFiles(py::module_& m) {
     CallWithoutGil([&] { return ReadBundlerFile(p, &out.block); });
     return out;
   }, py::arg("path"), "A Bundler v0.3 .out file.");
+}
+
+void BindBlockWriters(py::module_& m) {
   m.def("write_colmap_model", [](const PythonBlock& b, const py::object& directory) {
     const std::string path = PathArgument(directory, "directory");
     // Control joined by georeferencing: the extras describe the model's part alone.
@@ -731,7 +734,8 @@ void BindBlock(py::module_& m) {
   BindPointAndMarkArrays(block);
   BindBlockEditing(block);
   BindResectionInputs(block);
-  BindBlockFiles(m);
+  BindBlockReaders(m);
+  BindBlockWriters(m);
   BindSyntheticBlockOptions(m);
   BindSyntheticBlock(m);
 }

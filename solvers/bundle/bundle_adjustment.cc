@@ -90,55 +90,55 @@ void AddSolverTimes(const ceres::Solver::Summary& ceres_summary, BundleAdjustmen
 
 namespace {
 
-bool Fail(std::string* why, const std::string& text) {
-  if (why != nullptr) *why = text;
-  return false;
-}
-
 bool Positive(double v) { return v > 0.0 && std::isfinite(v); }
 
 }  // namespace
 
 bool BundleRobustnessOptions::IsValid(std::string* why) const {
   if (!IsBundleTieLoss(tie_loss))
-    return Fail(why, "the tie loss must be " + EnumNameList(kBundleTieLosses) + ", not " +
-                         EnumName(tie_loss));
-  if (!Positive(tie_loss_scale_sigmas)) return Fail(why, "the tie loss scale must be positive");
+    return InvalidBecause(why, "the tie loss must be " + EnumNameList(kBundleTieLosses) + ", not " +
+                                   EnumName(tie_loss));
+  if (!Positive(tie_loss_scale_sigmas))
+    return InvalidBecause(why, "the tie loss scale must be positive");
   if (!(rejection_threshold >= 0.0) || !std::isfinite(rejection_threshold))
-    return Fail(why, "the rejection threshold must be >= 0 (0: no rejection)");
-  if (max_rejection_rounds < 0) return Fail(why, "max_rejection_rounds must be >= 0");
-  if (max_snooping_removals < 0) return Fail(why, "max_snooping_removals must be >= 0");
+    return InvalidBecause(why, "the rejection threshold must be >= 0 (0: no rejection)");
+  if (max_rejection_rounds < 0) return InvalidBecause(why, "max_rejection_rounds must be >= 0");
+  if (max_snooping_removals < 0) return InvalidBecause(why, "max_snooping_removals must be >= 0");
   return true;
 }
 
 bool BundleStatisticsOptions::IsValid(std::string* why) const {
   if (!(overfit_ratio > 0.0 && overfit_ratio < 1.0))
-    return Fail(why, "overfit_ratio must be in (0, 1)");
+    return InvalidBecause(why, "overfit_ratio must be in (0, 1)");
   if (!(overfit_redundancy_share >= 0.0 && overfit_redundancy_share < 1.0))
-    return Fail(why, "overfit_redundancy_share must be in [0, 1)");
+    return InvalidBecause(why, "overfit_redundancy_share must be in [0, 1)");
   if (!(checked_redundancy_share >= overfit_redundancy_share && checked_redundancy_share <= 1.0))
-    return Fail(why, "checked_redundancy_share must be in [overfit_redundancy_share, 1]");
+    return InvalidBecause(why, "checked_redundancy_share must be in [overfit_redundancy_share, 1]");
   if (!(high_correlation > 0.0 && high_correlation < 1.0))
-    return Fail(why, "high_correlation must be in (0, 1)");
-  if (max_variance_iterations < 1) return Fail(why, "max_variance_iterations must be >= 1");
-  if (!Positive(variance_tolerance)) return Fail(why, "variance_tolerance must be positive");
-  if (!(min_variance_redundancy >= 0.0)) return Fail(why, "min_variance_redundancy must be >= 0");
+    return InvalidBecause(why, "high_correlation must be in (0, 1)");
+  if (max_variance_iterations < 1)
+    return InvalidBecause(why, "max_variance_iterations must be >= 1");
+  if (!Positive(variance_tolerance))
+    return InvalidBecause(why, "variance_tolerance must be positive");
+  if (!(min_variance_redundancy >= 0.0))
+    return InvalidBecause(why, "min_variance_redundancy must be >= 0");
   if (!(snooping_alpha > 0.0 && snooping_alpha < 0.5))
-    return Fail(why, "snooping_alpha must be in (0, 0.5)");
+    return InvalidBecause(why, "snooping_alpha must be in (0, 0.5)");
   if (!(snooping_power > 0.0 && snooping_power < 1.0))
-    return Fail(why, "snooping_power must be in (0, 1)");
+    return InvalidBecause(why, "snooping_power must be in (0, 1)");
   if (!(uncontrolled_redundancy >= 0.0 && uncontrolled_redundancy < 1.0))
-    return Fail(why, "uncontrolled_redundancy must be in [0, 1)");
-  if (!(weak_sigma_inflation >= 1.0)) return Fail(why, "weak_sigma_inflation must be >= 1");
+    return InvalidBecause(why, "uncontrolled_redundancy must be in [0, 1)");
+  if (!(weak_sigma_inflation >= 1.0))
+    return InvalidBecause(why, "weak_sigma_inflation must be >= 1");
   return true;
 }
 
 bool BundleSolverOptions::IsValid(std::string* why) const {
-  if (max_iterations < 1) return Fail(why, "max_iterations must be >= 1");
+  if (max_iterations < 1) return InvalidBecause(why, "max_iterations must be >= 1");
   if (!Positive(function_tolerance) || !Positive(parameter_tolerance) ||
       !(gradient_tolerance >= 0.0))
-    return Fail(why, "tolerances must be positive");
-  if (num_threads < 0) return Fail(why, "num_threads must be >= 0");
+    return InvalidBecause(why, "tolerances must be positive");
+  if (num_threads < 0) return InvalidBecause(why, "num_threads must be >= 0");
   return true;
 }
 
@@ -147,25 +147,30 @@ bool BundleAdjustmentOptions::IsValid(std::string* why) const {
   if (!Positive(a.tie_px) || !Positive(a.marker_projection_px) || !Positive(a.tie_film_um) ||
       !Positive(a.marker_projection_film_um) || !Positive(a.marker_m) ||
       !Positive(a.camera_m.minCoeff()) || !a.camera_m.allFinite())
-    return Fail(why, "every accuracy must be positive and finite");
+    return InvalidBecause(why, "every accuracy must be positive and finite");
   if (a.attitude_deg && !Positive(*a.attitude_deg))
-    return Fail(why, "the attitude accuracy must be positive");
+    return InvalidBecause(why, "the attitude accuracy must be positive");
   if (!(robustness.IsValid(why) && solver.IsValid(why) && statistics.IsValid(why))) return false;
   // What needs the statistics, refused without them rather than skipped in silence (both solvers:
   // TaylorBundleOptions::IsValid checks its fields by this rule).
   const bool covariances = statistics.covariances != BundleCovarianceMethod::kNone;
   if (robustness.snoop && !covariances)
-    return Fail(why, "data snooping (robustness.snoop) needs the statistics: the w-test of an "
-                     "observation divides by its redundancy number, which comes from the "
-                     "covariances, and statistics.covariances is none");
+    return InvalidBecause(why,
+                          "data snooping (robustness.snoop) needs the statistics: the w-test of an "
+                          "observation divides by its redundancy number, which comes from the "
+                          "covariances, and statistics.covariances is none");
   if (robustness.snoop && !statistics.observation_diagnostics)
-    return Fail(why, "data snooping (robustness.snoop) needs the w-test of every observation, and "
-                     "statistics.observation_diagnostics is off");
+    return InvalidBecause(
+        why,
+        "data snooping (robustness.snoop) needs the w-test of every observation, and "
+        "statistics.observation_diagnostics is off");
   if (statistics.estimate_accuracies && !covariances)
-    return Fail(why, "variance component estimation (statistics.estimate_accuracies) needs the "
-                     "statistics: a group's variance factor divides by its redundancy, the sum of "
-                     "its redundancy numbers from the covariances, and statistics.covariances is "
-                     "none");
+    return InvalidBecause(
+        why,
+        "variance component estimation (statistics.estimate_accuracies) needs the "
+        "statistics: a group's variance factor divides by its redundancy, the sum of "
+        "its redundancy numbers from the covariances, and statistics.covariances is "
+        "none");
   return true;
 }
 

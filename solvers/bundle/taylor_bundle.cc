@@ -19,6 +19,7 @@
 #include <sstream>
 
 #include "core/camera_models.h"
+#include "core/io/csv.h"
 #include "core/parallel.h"
 #include "core/rotation.h"
 #include "solvers/bundle/internal/bundle_problem.h"
@@ -66,8 +67,6 @@ constexpr double kDeterminedMargin = 1e3;
 double SecondsSince(Clock::time_point start) {
   return std::chrono::duration<double>(Clock::now() - start).count();
 }
-
-std::string Quoted(const std::string& name) { return "'" + name + "'"; }
 
 Status CheckSupported(const BundleAdjustmentConfig& config, const Block& block) {
   for (const int i : config.constant_images)
@@ -179,14 +178,15 @@ Status Prepare(const TaylorBundleOptions& options, const BundleAdjustmentConfig&
   PHOTOPOSE_RETURN_IF_ERROR(CheckSupported(config, block));
   for (const BlockCamera& camera : block.cameras)
     if (!(CameraModelFocal(camera.model, camera.params.data()) > 0.0))
-      return Status::Error("camera " + Quoted(camera.camera_id) + " has no positive focal length");
+      return Status::Error("camera " + QuotedForMessage(camera.camera_id) +
+                           " has no positive focal length");
   return MakePlan(options, config, block, plan);
 }
 
 std::string MarkName(const Block& block, int m) {
   const BlockMark& mark = block.marks[m];
-  return "point " + Quoted(block.points[mark.point].id) + " in image " +
-         Quoted(block.images[mark.image].name);
+  return "point " + QuotedForMessage(block.points[mark.point].id) + " in image " +
+         QuotedForMessage(block.images[mark.image].name);
 }
 
 std::string Format(const char* format, double a, double b = 0.0) {
@@ -215,7 +215,9 @@ struct Context {
   int num_threads;  // resolved (>= 1)
 };
 
-std::string PointName(const Block& block, int p) { return "point " + Quoted(block.points[p].id); }
+std::string PointName(const Block& block, int p) {
+  return "point " + QuotedForMessage(block.points[p].id);
+}
 
 std::string BehindMessage(const Block& block, const Normal& normal, const std::string& when) {
   std::ostringstream os;
@@ -328,7 +330,7 @@ bool Diverged(const Context& ctx, const Layout& layout, const State& state, doub
   for (const int i : layout.free_images) {
     const double distance = state.eo[i].head<3>().norm();
     if (!(distance <= divergence_m)) {
-      *message = "diverged" + at + ": image " + Quoted(ctx.block.images[i].name) +
+      *message = "diverged" + at + ": image " + QuotedForMessage(ctx.block.images[i].name) +
                  Format(" moved %.0f m from the block's centroid", distance);
       return true;
     }
@@ -793,41 +795,39 @@ void FillBundleSummary(const TaylorBundleSummary& taylor, BundleAdjustmentSummar
 }  // namespace
 
 bool TaylorBundleOptions::IsValid(std::string* why) const {
-  auto fail = [why](const std::string& reason) {
-    if (why != nullptr) *why = reason;
-    return false;
-  };
   auto positive = [](double v) { return v > 0.0 && std::isfinite(v); };
   if (partials != TaylorPartials::kCorrected && partials != TaylorPartials::kAsPrinted)
-    return fail("partials is not a TaylorPartials value");
+    return InvalidBecause(why, "partials is not a TaylorPartials value");
   // The accuracies, the loss, the rejection and snooping limits, the threads, the statistics and
   // what needs them (snooping, variance components) are checked by the rule BundleAdjust applies
   // to the options the rounds run with.
   if (const Status valid = Validate(AdjustmentOptionsOf(*this)); !valid.ok())
-    return fail(valid.message());
-  if (max_iterations < 1) return fail("max_iterations must be at least 1");
+    return InvalidBecause(why, valid.message());
+  if (max_iterations < 1) return InvalidBecause(why, "max_iterations must be at least 1");
   if (damping != TaylorDamping::kNone && damping != TaylorDamping::kLevenbergMarquardt)
-    return fail("damping is not a TaylorDamping value");
+    return InvalidBecause(why, "damping is not a TaylorDamping value");
   if (linear_solver != TaylorLinearSolver::kCholmodSupernodal &&
       linear_solver != TaylorLinearSolver::kEigenLdlt)
-    return fail("linear_solver is not a TaylorLinearSolver value");
-  if (!positive(initial_damping)) return fail("initial_damping must be positive and finite");
+    return InvalidBecause(why, "linear_solver is not a TaylorLinearSolver value");
+  if (!positive(initial_damping))
+    return InvalidBecause(why, "initial_damping must be positive and finite");
   if (!(min_gain_ratio >= 0.0 && min_gain_ratio < 1.0))
-    return fail("min_gain_ratio must be in [0, 1)");
+    return InvalidBecause(why, "min_gain_ratio must be in [0, 1)");
   if (!(max_damping > initial_damping) || !std::isfinite(max_damping))
-    return fail("max_damping must be finite and greater than initial_damping");
+    return InvalidBecause(why, "max_damping must be finite and greater than initial_damping");
   if (partials == TaylorPartials::kAsPrinted && damping != TaylorDamping::kNone)
-    return fail(
+    return InvalidBecause(
+        why,
         "the as-printed partials are not the derivative of the objective, so Levenberg-Marquardt's "
         "gain ratio means nothing with them: use damping none (the lecture's Gauss-Newton)");
   if (!positive(position_tolerance_m))
-    return fail("position_tolerance_m must be positive and finite");
+    return InvalidBecause(why, "position_tolerance_m must be positive and finite");
   if (!positive(angle_tolerance_rad))
-    return fail("angle_tolerance_rad must be positive and finite");
+    return InvalidBecause(why, "angle_tolerance_rad must be positive and finite");
   if (!(divergence_distance_factor > 1.0) || !std::isfinite(divergence_distance_factor))
-    return fail("divergence_distance_factor must be finite and greater than 1");
+    return InvalidBecause(why, "divergence_distance_factor must be finite and greater than 1");
   if (!(min_pivot_ratio >= 0.0 && min_pivot_ratio < 1.0))
-    return fail("min_pivot_ratio must be in [0, 1)");
+    return InvalidBecause(why, "min_pivot_ratio must be in [0, 1)");
   return true;
 }
 

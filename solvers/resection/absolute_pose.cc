@@ -203,18 +203,12 @@ bool AddGaussNewtonTerms(const Eigen::Vector3d& camera_point, double observed_x_
 
 bool AbsolutePoseRansacOptions::IsValid(std::string* why) const {
   if (!ransac.IsValid(why)) return false;
-  if (!(inlier_threshold > 0.0) || !std::isfinite(inlier_threshold)) {
-    if (why != nullptr) *why = "inlier_threshold must be positive and finite";
-    return false;
-  }
-  if (lo_gauss_newton_iterations < 1) {
-    if (why != nullptr) *why = "lo_gauss_newton_iterations must be >= 1";
-    return false;
-  }
-  if (final_gauss_newton_iterations < 0) {
-    if (why != nullptr) *why = "final_gauss_newton_iterations must be >= 0";
-    return false;
-  }
+  if (!(inlier_threshold > 0.0) || !std::isfinite(inlier_threshold))
+    return InvalidBecause(why, "inlier_threshold must be positive and finite");
+  if (lo_gauss_newton_iterations < 1)
+    return InvalidBecause(why, "lo_gauss_newton_iterations must be >= 1");
+  if (final_gauss_newton_iterations < 0)
+    return InvalidBecause(why, "final_gauss_newton_iterations must be >= 0");
   return true;
 }
 

@@ -40,10 +40,8 @@ double PseudoInverseQuadraticForm(const Eigen::Matrix2d& M, const Eigen::Vector2
 }  // namespace
 
 bool OutlierTestOptions::IsValid(std::string* why) const {
-  if (!(confidence > 0.0 && confidence < 1.0)) {
-    if (why != nullptr) *why = "the test confidence must be in (0, 1)";
-    return false;
-  }
+  if (!(confidence > 0.0 && confidence < 1.0))
+    return InvalidBecause(why, "the test confidence must be in (0, 1)");
   return true;
 }
 

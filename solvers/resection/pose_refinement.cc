@@ -373,24 +373,19 @@ bool RefineWithTaylor(const PoseRefinementOptions& options,
 }  // namespace
 
 bool CeresPoseOptions::IsValid(std::string* why) const {
-  auto fail = [why](const char* text) {
-    if (why != nullptr) *why = text;
-    return false;
-  };
-  if (max_iterations < 1) return fail("max_iterations must be at least 1");
-  if (max_reweighting_rounds < 1) return fail("max_reweighting_rounds must be at least 1");
+  if (max_iterations < 1) return InvalidBecause(why, "max_iterations must be at least 1");
+  if (max_reweighting_rounds < 1)
+    return InvalidBecause(why, "max_reweighting_rounds must be at least 1");
   if (!(step_tolerance_sigmas > 0.0) || !std::isfinite(step_tolerance_sigmas))
-    return fail("step_tolerance_sigmas must be positive and finite");
+    return InvalidBecause(why, "step_tolerance_sigmas must be positive and finite");
   if (!(function_tolerance > 0.0) || !(parameter_tolerance > 0.0))
-    return fail("tolerances must be positive");
+    return InvalidBecause(why, "tolerances must be positive");
   return true;
 }
 
 bool PoseRefinementOptions::IsValid(std::string* why) const {
-  if (!(loss_scale > 0.0) || !std::isfinite(loss_scale)) {
-    if (why != nullptr) *why = "loss_scale must be positive and finite";
-    return false;
-  }
+  if (!(loss_scale > 0.0) || !std::isfinite(loss_scale))
+    return InvalidBecause(why, "loss_scale must be positive and finite");
   // The Taylor solvers are plain least squares (the seed's): a loss would be ignored, not applied.
   if (solver != PoseSolver::kCeres && loss != LossType::kNone) {
     if (why != nullptr)

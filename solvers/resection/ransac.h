@@ -87,16 +87,14 @@ struct RansacOptions {
   bool stop_enumeration_when_all_inliers = false;
 
   bool IsValid(std::string* why) const {
-    auto fail = [why](const char* message) {
-      if (why != nullptr) *why = message;
-      return false;
-    };
-    if (max_trials < 1) return fail("max_trials must be >= 1");
+    if (max_trials < 1) return InvalidBecause(why, "max_trials must be >= 1");
     if (min_trials < 0 || min_trials > max_trials)
-      return fail("min_trials must be in [0, max_trials]");
-    if (!(confidence > 0.0 && confidence < 1.0)) return fail("confidence must be in (0, 1)");
-    if (max_lo_iterations < 0) return fail("max_lo_iterations must be >= 0");
-    if (max_exhaustive_samples < 0) return fail("max_exhaustive_samples must be >= 0");
+      return InvalidBecause(why, "min_trials must be in [0, max_trials]");
+    if (!(confidence > 0.0 && confidence < 1.0))
+      return InvalidBecause(why, "confidence must be in (0, 1)");
+    if (max_lo_iterations < 0) return InvalidBecause(why, "max_lo_iterations must be >= 0");
+    if (max_exhaustive_samples < 0)
+      return InvalidBecause(why, "max_exhaustive_samples must be >= 0");
     return true;
   }
 };

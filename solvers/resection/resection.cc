@@ -436,14 +436,10 @@ bool FindOtherMinimum(const ResectionOptions& options, const ResectionInput& inp
 }  // namespace
 
 bool ResectionOptions::IsValid(std::string* why) const {
-  if (!(ambiguous_pose_sigmas > 0.0) || !(weak_pose_shift_sigmas > 0.0)) {
-    if (why != nullptr) *why = "ambiguous_pose_sigmas and weak_pose_shift_sigmas must be positive";
-    return false;
-  }
-  if (!(detection_power > 0.0 && detection_power < 1.0)) {
-    if (why != nullptr) *why = "the detection power must be in (0, 1)";
-    return false;
-  }
+  if (!(ambiguous_pose_sigmas > 0.0) || !(weak_pose_shift_sigmas > 0.0))
+    return InvalidBecause(why, "ambiguous_pose_sigmas and weak_pose_shift_sigmas must be positive");
+  if (!(detection_power > 0.0 && detection_power < 1.0))
+    return InvalidBecause(why, "the detection power must be in (0, 1)");
   return consensus.ransac.IsValid(why) && test.IsValid(why) && refinement.IsValid(why);
 }
 
@@ -922,15 +918,11 @@ ResectionResult ResectImage(const ResectionOptions& options, const ResectionInpu
 }
 
 bool ResectionBatchOptions::IsValid(std::string* why) const {
-  const auto fail = [why](const char* text) {
-    if (why != nullptr) *why = text;
-    return false;
-  };
-  if (num_threads < 0) return fail("num_threads must be >= 0 (0: all cores)");
+  if (num_threads < 0) return InvalidBecause(why, "num_threads must be >= 0 (0: all cores)");
   if (!(progress_fraction >= 0.0 && progress_fraction <= 1.0))
-    return fail("progress_fraction must be in [0, 1]");
+    return InvalidBecause(why, "progress_fraction must be in [0, 1]");
   if (!(progress_interval_seconds >= 0.0) || !std::isfinite(progress_interval_seconds))
-    return fail("progress_interval_seconds must be a finite number >= 0");
+    return InvalidBecause(why, "progress_interval_seconds must be a finite number >= 0");
   return true;
 }
 

@@ -276,30 +276,28 @@ bool InputsAreUsable(const std::vector<Eigen::Vector2d>& image_plane_um,
                      const std::vector<double>& sigmas_um, double focal_um,
                      const ExteriorOrientation& initial, std::string* why) {
   const int n = static_cast<int>(points_in_ground.size());
-  auto fail = [why](const std::string& message) {
-    *why = message;
-    return false;
-  };
   if (image_plane_um.size() != points_in_ground.size()) {
-    return fail("image_plane_um and points_in_ground differ in length");
+    return InvalidBecause(why, "image_plane_um and points_in_ground differ in length");
   }
   if (!sigmas_um.empty() && sigmas_um.size() != points_in_ground.size()) {
-    return fail("sigmas_um must be empty or have one entry per point");
+    return InvalidBecause(why, "sigmas_um must be empty or have one entry per point");
   }
   if (n < 3) {
-    return fail("at least 3 points are needed for 6 unknowns (got " + std::to_string(n) + ")");
+    return InvalidBecause(
+        why, "at least 3 points are needed for 6 unknowns (got " + std::to_string(n) + ")");
   }
   if (!(focal_um > 0.0) || !std::isfinite(focal_um)) {
-    return fail("focal_um must be positive and finite");
+    return InvalidBecause(why, "focal_um must be positive and finite");
   }
-  if (!initial.parameters.allFinite()) return fail("initial orientation is not finite");
+  if (!initial.parameters.allFinite())
+    return InvalidBecause(why, "initial orientation is not finite");
   for (int i = 0; i < n; ++i) {
     if (!image_plane_um[i].allFinite())
-      return fail("image coordinates of " + FormatPoint(i) + " are not finite");
+      return InvalidBecause(why, "image coordinates of " + FormatPoint(i) + " are not finite");
     if (!points_in_ground[i].allFinite())
-      return fail("ground coordinates of " + FormatPoint(i) + " are not finite");
+      return InvalidBecause(why, "ground coordinates of " + FormatPoint(i) + " are not finite");
     if (!sigmas_um.empty() && !(sigmas_um[i] > 0.0 && std::isfinite(sigmas_um[i]))) {
-      return fail("sigma of " + FormatPoint(i) + " must be positive and finite");
+      return InvalidBecause(why, "sigma of " + FormatPoint(i) + " must be positive and finite");
     }
   }
   return true;
@@ -406,28 +404,24 @@ SolverTermination IterateGaussNewton(const TaylorResectionOptions& options, cons
 }  // namespace
 
 bool TaylorResectionOptions::IsValid(std::string* why) const {
-  auto fail = [why](const char* reason) {
-    if (why != nullptr) *why = reason;
-    return false;
-  };
   if (partials != TaylorPartials::kCorrected && partials != TaylorPartials::kAsPrinted) {
-    return fail("partials is not a TaylorPartials value");
+    return InvalidBecause(why, "partials is not a TaylorPartials value");
   }
-  if (max_iterations < 1) return fail("max_iterations must be at least 1");
+  if (max_iterations < 1) return InvalidBecause(why, "max_iterations must be at least 1");
   if (!(position_tolerance_m > 0.0) || !std::isfinite(position_tolerance_m)) {
-    return fail("position_tolerance_m must be positive and finite");
+    return InvalidBecause(why, "position_tolerance_m must be positive and finite");
   }
   if (!(angle_tolerance_rad > 0.0) || !std::isfinite(angle_tolerance_rad)) {
-    return fail("angle_tolerance_rad must be positive and finite");
+    return InvalidBecause(why, "angle_tolerance_rad must be positive and finite");
   }
   if (!(collinearity_tolerance >= 0.0 && collinearity_tolerance < 1.0)) {
-    return fail("collinearity_tolerance must be in [0, 1)");
+    return InvalidBecause(why, "collinearity_tolerance must be in [0, 1)");
   }
   if (!(min_reciprocal_condition >= 0.0 && min_reciprocal_condition < 1.0)) {
-    return fail("min_reciprocal_condition must be in [0, 1)");
+    return InvalidBecause(why, "min_reciprocal_condition must be in [0, 1)");
   }
   if (!(divergence_distance_factor > 1.0) || !std::isfinite(divergence_distance_factor)) {
-    return fail("divergence_distance_factor must be finite and greater than 1");
+    return InvalidBecause(why, "divergence_distance_factor must be finite and greater than 1");
   }
   return true;
 }

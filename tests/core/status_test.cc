@@ -51,6 +51,14 @@ struct ScaleOptions {
   }
 };
 
+TEST(Status, InvalidBecauseGivesTheReasonWhereAskedAndSaysNo) {
+  std::string why = "before";
+  EXPECT_FALSE(InvalidBecause(&why, "x must be >= 0"));
+  EXPECT_EQ(why, "x must be >= 0");
+  // Without a place for the reason it still says no.
+  EXPECT_FALSE(InvalidBecause(nullptr, "x must be >= 0"));
+}
+
 TEST(Status, ValidateTurnsIsValidIntoAStatusWithItsReason) {
   ScaleOptions options;
   EXPECT_TRUE(Validate(options).ok());

@@ -297,11 +297,9 @@ bool PrintProgress(const BundleIterationInfo& info) {
 // The hook of --quiet: no line, only the cancellation.
 bool CancelWhenAsked(const BundleIterationInfo&) { return !CancelRequested(); }
 
-// The flags -> the options (accuracies, robustness, statistics, solver), the lever arm of the
-// config, the --calibrate names and the block solver.
-int OptionsFromFlags(const char* command, BundleRun* run) {
-  BundleAdjustmentOptions& options = run->options;
-  BundleAccuracies& acc = options.accuracies;
+// The accuracy flags -> options.accuracies, and the lever arm of the config.
+int AccuraciesFromFlags(const char* command, BundleRun* run) {
+  BundleAccuracies& acc = run->options.accuracies;
   acc.tie_px = FLAGS_bundle_tie_accuracy;
   acc.marker_projection_px = FLAGS_bundle_marker_projection_accuracy;
   acc.tie_film_um = FLAGS_bundle_film_tie_accuracy;
@@ -319,6 +317,55 @@ int OptionsFromFlags(const char* command, BundleRun* run) {
     run->config.lever_arm_m = lever;
   }
   run->config.estimate_lever_arm = FLAGS_bundle_estimate_lever_arm;
+  return kGoOn;
+}
+
+// --solver and --taylor_damping -> the block solver, with the flags that only one solver uses
+// refused for the other.
+int BlockSolverFromFlags(const char* command, BundleRun* run) {
+  if (!ParseEnum(FLAGS_bundle_solver, &run->solver))
+    return BadInput(command, EnumFlagError<PoseSolver>("--solver", FLAGS_bundle_solver));
+  // What only the Ceres solver uses is refused with the Taylor solvers, never silently ignored
+  // (--max_iterations and --loss apply to both).
+  if (run->solver != PoseSolver::kCeres) {
+    for (const char* flag : {"jacobian", "linear_solver"}) {
+      if (FlagGiven((std::string("bundle_") + flag).c_str()))
+        return BadInput(command,
+                        "--" + std::string(flag) +
+                            " is for --solver=ceres; --solver=" + FLAGS_bundle_solver +
+                            " builds and solves its own normal equations with the seed's partials");
+    }
+  }
+  if (run->solver != PoseSolver::kCeres && FLAGS_bundle_cross_validate)
+    return BadInput(command, "--solver=" + FLAGS_bundle_solver +
+                                 " does not cross-validate (the left-out adjustments are Ceres'); "
+                                 "use --solver=ceres for --cross_validate");
+  if (!FLAGS_bundle_taylor_damping.empty()) {
+    TaylorDamping damping;
+    if (!ParseEnum(FLAGS_bundle_taylor_damping, &damping))
+      return BadInput(
+          command, EnumFlagError<TaylorDamping>("--taylor_damping", FLAGS_bundle_taylor_damping));
+    if (run->solver == PoseSolver::kCeres)
+      return BadInput(command,
+                      "--taylor_damping is for --solver=taylor or taylor_as_printed; Ceres damps "
+                      "by its own trust region");
+    run->taylor_damping = damping;
+  }
+  const bool gauss_newton = run->solver == PoseSolver::kTaylorAsPrinted ||
+                            (run->taylor_damping && *run->taylor_damping == TaylorDamping::kNone);
+  if (gauss_newton && FLAGS_bundle_relative_gauge == "free" && FlagGiven("bundle_relative_gauge"))
+    return BadInput(
+        command,
+        "--relative_gauge=free needs a damped solver (the free directions stay still only under "
+        "Levenberg-Marquardt's damping); Gauss-Newton holds COLMAP's gauge from the start");
+  return kGoOn;
+}
+
+// The flags -> the options (accuracies, robustness, statistics, solver), the lever arm of the
+// config, the --calibrate names and the block solver.
+int OptionsFromFlags(const char* command, BundleRun* run) {
+  if (const int code = AccuraciesFromFlags(command, run); code != kGoOn) return code;
+  BundleAdjustmentOptions& options = run->options;
   BundleSolverOptions& solver = options.solver;
   if (!ParseEnum(FLAGS_bundle_jacobian, &solver.jacobian))
     return BadInput(command, EnumFlagError<JacobianType>("--jacobian", FLAGS_bundle_jacobian));
@@ -359,31 +406,7 @@ int OptionsFromFlags(const char* command, BundleRun* run) {
   for (const std::string& name : SplitCommaList(FLAGS_bundle_calibrate))
     if (!name.empty()) run->calibrate.push_back(name);
   run->context.calibrate = run->calibrate;
-  if (!ParseEnum(FLAGS_bundle_solver, &run->solver))
-    return BadInput(command, EnumFlagError<PoseSolver>("--solver", FLAGS_bundle_solver));
-  // What only the Ceres solver uses is refused with the Taylor solvers, never silently ignored
-  // (--max_iterations and --loss apply to both).
-  if (run->solver != PoseSolver::kCeres) {
-    for (const char* flag : {"jacobian", "linear_solver"}) {
-      if (FlagGiven((std::string("bundle_") + flag).c_str()))
-        return BadInput(command, "--" + std::string(flag) + " is for --solver=ceres; --solver=" + FLAGS_bundle_solver + " builds and solves its own normal equations with the seed's partials");
-    }
-  }
-  if (run->solver != PoseSolver::kCeres && FLAGS_bundle_cross_validate)
-    return BadInput(command, "--solver=" + FLAGS_bundle_solver + " does not cross-validate (the left-out adjustments are Ceres'); use --solver=ceres for --cross_validate");
-  if (!FLAGS_bundle_taylor_damping.empty()) {
-    TaylorDamping damping;
-    if (!ParseEnum(FLAGS_bundle_taylor_damping, &damping))
-      return BadInput(command, EnumFlagError<TaylorDamping>("--taylor_damping", FLAGS_bundle_taylor_damping));
-    if (run->solver == PoseSolver::kCeres)
-      return BadInput(command, "--taylor_damping is for --solver=taylor or taylor_as_printed; Ceres damps by its own trust region");
-    run->taylor_damping = damping;
-  }
-  const bool gauss_newton = run->solver == PoseSolver::kTaylorAsPrinted ||
-                            (run->taylor_damping && *run->taylor_damping == TaylorDamping::kNone);
-  if (gauss_newton && FLAGS_bundle_relative_gauge == "free" && FlagGiven("bundle_relative_gauge"))
-    return BadInput(command, "--relative_gauge=free needs a damped solver (the free directions stay still only under Levenberg-Marquardt's damping); Gauss-Newton holds COLMAP's gauge from the start");
-  return kGoOn;
+  return BlockSolverFromFlags(command, run);
 }
 
 // Outputs: checked before any work (never an input, never each other), written all or nothing.
@@ -797,80 +820,83 @@ const BundleObservationDiagnostics* WorstSurveyedRejection(const BundleAdjustmen
   return worst;
 }
 
-int CheckSigma0(const char* command, BundleRun* run) {
-  BundleAdjustmentResult& result = run->result;
-  if (!result.summary.IsSolutionUsable()) return kGoOn;
+// The alarm in words, the one that says the most first: sigma0, an absorbed estimate, the w-test.
+// Empty when none is raised.
+std::string Sigma0Alarm(const Block& block, const BundleAdjustmentResult& result) {
+  std::ostringstream alarm;
   const BundleGroupStatistics* absorbing = GroupAbsorbingGrossErrors(result);
   const BundleObservationDiagnostics* surveyed = WorstSurveyedRejection(result);
-  if (!(result.summary.sigma0 > kSigma0Bound) && absorbing == nullptr && surveyed == nullptr)
-    return kGoOn;
-  if (!run->options.robustness.snoop) {
-    // The alarm that says the most first: sigma0, an absorbed estimate, the w-test.
-    if (result.summary.sigma0 > kSigma0Bound) {
-      std::cerr << "photopose bundle: sigma0 " << FormatUnitless(result.summary.sigma0, 2) << " is above "
-                << FormatUnitless(kSigma0Bound, 0);
-    } else if (absorbing != nullptr) {
-      std::cerr << "photopose bundle: " << EnumName(absorbing->group) << " estimated at "
-                << FormatUnitless(absorbing->estimated_accuracy.x() / absorbing->stated_accuracy.x(), 1)
-                << " times the stated accuracy";
-    } else {
-      int flagged = 0;
-      for (const BundleObservationDiagnostics& d : result.observations)
-        flagged += d.rejected && d.group != kTieMarks;
-      std::cerr << "photopose bundle: sigma0 " << FormatUnitless(result.summary.sigma0, 2) << ", but the w-test flags "
-                << flagged << (flagged == 1 ? " observation" : " observations")
-                << " of what was surveyed (control marks, control points, camera positions, attitudes; worst: "
-                << ObservationName(run->block, *surveyed) << ", |w| " << FormatUnitless(std::abs(surveyed->normalized), 1)
-                << " > " << FormatUnitless(result.critical_value, 2) << ")";
-    }
-    std::cerr << ": the block disagrees with its stated accuracies by more than noise";
+  if (result.summary.sigma0 > kSigma0Bound) {
+    alarm << "sigma0 " << FormatUnitless(result.summary.sigma0, 2) << " is above "
+          << FormatUnitless(kSigma0Bound, 0);
+  } else if (absorbing != nullptr) {
+    alarm << EnumName(absorbing->group) << " estimated at "
+          << FormatUnitless(absorbing->estimated_accuracy.x() / absorbing->stated_accuracy.x(), 1)
+          << " times the stated accuracy";
+  } else if (surveyed != nullptr) {
+    int flagged = 0;
+    for (const BundleObservationDiagnostics& d : result.observations)
+      flagged += d.rejected && d.group != kTieMarks;
+    alarm << "sigma0 " << FormatUnitless(result.summary.sigma0, 2) << ", but the w-test flags "
+          << flagged << (flagged == 1 ? " observation" : " observations")
+          << " of what was surveyed (control marks, control points, camera positions, attitudes; "
+             "worst: "
+          << ObservationName(block, *surveyed) << ", |w| "
+          << FormatUnitless(std::abs(surveyed->normalized), 1) << " > "
+          << FormatUnitless(result.critical_value, 2) << ")";
   }
-  // Data snooping needs the statistics: with --statistics=none (only sigma0 can give the alarm then)
-  // the block is not searched, and the failure below says so.
-  const bool searchable = run->options.statistics.covariances != BundleCovarianceMethod::kNone;
-  std::string search_failure;  // why the search's own adjustment gave no usable result
-  if (!run->options.robustness.snoop && !searchable)
-    std::cerr << "; not searched for gross errors (data snooping needs the statistics, and --statistics=none computes none)\n";
-  if (!run->options.robustness.snoop && searchable) {
-    std::cerr << "; searching every group for gross errors (data snooping, at most " << kSearchRemovals << " removals)\n";
-    BundleAdjustmentOptions search = run->options;
-    search.robustness.snoop = true;
-    search.robustness.max_snooping_removals = kSearchRemovals;
-    BundleAdjustmentResult searched;
-    Block block = run->block;
-    const Status again = BundleAdjustWithSolver(run->solver, search, run->config, &block, &searched,
-                                                nullptr, run->taylor_damping);
-    if (CancelRequested()) return kGoOn;  // the caller reports it
-    if (again.ok() && searched.summary.IsSolutionUsable()) {
-      run->block = std::move(block);
-      result = std::move(searched);
-      run->options = search;
-    } else {
-      search_failure = again.ok() ? "its adjustment gave no usable solution (" + searched.summary.message + ")"
-                                  : again.message();
-      std::cerr << "photopose bundle: the search for gross errors failed: " << search_failure
-                << "; the adjustment without it is kept\n";
-    }
+  return alarm.str();
+}
+
+// The search for gross errors: the adjustment again with data snooping in every group. Its result
+// replaces the run's when usable; otherwise the reason it failed (the run's result is kept).
+std::string SearchForGrossErrors(BundleRun* run) {
+  std::cerr << "; searching every group for gross errors (data snooping, at most "
+            << kSearchRemovals << " removals)\n";
+  BundleAdjustmentOptions search = run->options;
+  search.robustness.snoop = true;
+  search.robustness.max_snooping_removals = kSearchRemovals;
+  BundleAdjustmentResult searched;
+  Block block = run->block;
+  const Status again = BundleAdjustWithSolver(run->solver, search, run->config, &block, &searched,
+                                              nullptr, run->taylor_damping);
+  if (CancelRequested()) return "";  // the caller reports it
+  if (again.ok() && searched.summary.IsSolutionUsable()) {
+    run->block = std::move(block);
+    run->result = std::move(searched);
+    run->options = search;
+    return "";
   }
-  // A search that could not run leaves the alarm standing, whatever sigma0 is.
-  if (!(result.summary.sigma0 > kSigma0Bound) && search_failure.empty()) return kGoOn;
-  // The groups whose residuals are furthest beyond their stated accuracy, and the worst observations.
-  std::vector<const BundleGroupStatistics*> groups;
-  for (const BundleGroupStatistics& g : result.groups)
-    if (g.count > 0 && g.ratio > kSigma0Bound) groups.push_back(&g);
-  std::sort(groups.begin(), groups.end(), [](const auto* a, const auto* b) { return a->ratio > b->ratio; });
+  const std::string failure =
+      again.ok() ? "its adjustment gave no usable solution (" + searched.summary.message + ")"
+                 : again.message();
+  std::cerr << "photopose bundle: the search for gross errors failed: " << failure
+            << "; the adjustment without it is kept\n";
+  return failure;
+}
+
+// Why the adjustment fails the check: the alarm that stands, the groups furthest beyond their
+// stated accuracy and the three worst observations.
+std::string Sigma0Failure(const BundleRun& run, const std::string& alarm,
+                          const std::string& search_failure, bool searchable) {
+  const BundleAdjustmentResult& result = run.result;
   std::ostringstream why;
   if (!search_failure.empty()) {
-    why << "the block disagrees with its stated accuracies (sigma0 " << FormatUnitless(result.summary.sigma0, 2)
-        << ") and the search for gross errors failed (" << search_failure
+    why << alarm << " and the search for gross errors failed (" << search_failure
         << "): the stated accuracies do not describe these data, or gross errors are in them";
   } else if (searchable) {
     why << "sigma0 " << FormatUnitless(result.summary.sigma0, 2) << " stays above " << FormatUnitless(kSigma0Bound, 0)
         << " after the search for gross errors: the stated accuracies do not describe these data";
   } else {
-    why << "sigma0 " << FormatUnitless(result.summary.sigma0, 2) << " is above " << FormatUnitless(kSigma0Bound, 0)
-        << " and the block was not searched for gross errors (--statistics=none): the stated accuracies do not describe these data, or gross errors are in them";
+    why << alarm
+        << " and the block was not searched for gross errors (--statistics=none): the stated "
+           "accuracies do not describe these data, or gross errors are in them";
   }
+  std::vector<const BundleGroupStatistics*> groups;
+  for (const BundleGroupStatistics& g : result.groups)
+    if (g.count > 0 && g.ratio > kSigma0Bound) groups.push_back(&g);
+  std::sort(groups.begin(), groups.end(),
+            [](const auto* a, const auto* b) { return a->ratio > b->ratio; });
   for (size_t k = 0; k < groups.size(); ++k)
     why << (k == 0 ? "; groups to blame: " : ", ") << EnumName(groups[k]->group) << " (RMS/stated " << FormatUnitless(groups[k]->ratio, 2) << ")";
   std::vector<const BundleObservationDiagnostics*> worst;
@@ -879,16 +905,42 @@ int CheckSigma0(const char* command, BundleRun* run) {
   std::sort(worst.begin(), worst.end(), [](const auto* a, const auto* b) { return std::abs(a->normalized) > std::abs(b->normalized); });
   for (size_t k = 0; k < worst.size() && k < 3; ++k) {
     const BundleObservationDiagnostics& d = *worst[k];
-    why << (k == 0 ? "; worst: " : ", ") << ObservationName(run->block, d) << " |w| " << FormatUnitless(std::abs(d.normalized), 1);
+    why << (k == 0 ? "; worst: " : ", ") << ObservationName(run.block, d) << " |w| "
+        << FormatUnitless(std::abs(d.normalized), 1);
   }
   why << (FLAGS_bundle_force ? " (outputs written because of --force)" : "; check them, state other accuracies, or give --force to write the outputs anyway");
-  std::cerr << "photopose bundle: " << why.str() << "\n";
+  return why.str();
+}
+
+int CheckSigma0(const char* command, BundleRun* run) {
+  if (!run->result.summary.IsSolutionUsable()) return kGoOn;
+  const std::string alarm = Sigma0Alarm(run->block, run->result);
+  if (alarm.empty()) return kGoOn;
+  // Data snooping needs the statistics: with --statistics=none (only sigma0 can give the alarm
+  // then) the block is not searched, and the failure below says so.
+  const bool searchable = run->options.statistics.covariances != BundleCovarianceMethod::kNone;
+  std::string search_failure;  // why the search's own adjustment gave no usable result
+  if (!run->options.robustness.snoop) {
+    std::cerr << "photopose bundle: " << alarm
+              << ": the block disagrees with its stated accuracies by more than noise";
+    if (!searchable)
+      std::cerr << "; not searched for gross errors (data snooping needs the statistics, and "
+                   "--statistics=none computes none)\n";
+    else
+      search_failure = SearchForGrossErrors(run);
+    if (CancelRequested()) return kGoOn;  // the caller reports it
+  }
+  // A search that could not run leaves the alarm standing, whatever sigma0 is.
+  BundleAdjustmentResult& result = run->result;
+  if (!(result.summary.sigma0 > kSigma0Bound) && search_failure.empty()) return kGoOn;
+  const std::string why = Sigma0Failure(*run, alarm, search_failure, searchable);
+  std::cerr << "photopose bundle: " << why << "\n";
   run->exit_code = kExitSomeFailed;
   if (!FLAGS_bundle_force) {
     result.summary.termination = SolverTermination::kFailure;
-    result.summary.message = why.str();
+    result.summary.message = why;
   } else {
-    result.summary.message = "FAILED the sigma0 check, written because of --force: " + why.str();
+    result.summary.message = "FAILED the sigma0 check, written because of --force: " + why;
   }
   return kGoOn;
 }

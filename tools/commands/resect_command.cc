@@ -93,10 +93,6 @@ std::string NameList(const std::vector<std::string>& names) {
 // The job (tables, input and resection options) from the flags; false (and *why) for a missing or
 // invalid one.
 bool JobFromFlags(ResectionJobOptions* job, std::string* why) {
-  const auto fail = [why](std::string text) {
-    *why = std::move(text);
-    return false;
-  };
   BlockFiles& files = job->files;
   files.cameras = FLAGS_cameras;
   files.points = FLAGS_points;
@@ -109,39 +105,43 @@ bool JobFromFlags(ResectionJobOptions* job, std::string* why) {
   files.pixel_rows = FLAGS_pixel_rows_up ? PixelRows::kUp : PixelRows::kDown;
   job->input.default_accuracy = FLAGS_default_accuracy;
   job->input.default_film_accuracy_um = FLAGS_default_film_accuracy;
-  if (FLAGS_cameras.empty()) return fail("--cameras is required");
+  if (FLAGS_cameras.empty()) return InvalidBecause(why, "--cameras is required");
   if (FLAGS_gcp_list.empty() && (FLAGS_points.empty() || FLAGS_marks.empty()))
-    return fail("--points and --marks (or --gcp_list) are required");
+    return InvalidBecause(why, "--points and --marks (or --gcp_list) are required");
   if (!FLAGS_gcp_list.empty() && (!FLAGS_points.empty() || !FLAGS_marks.empty()))
-    return fail("--gcp_list replaces --points and --marks; give one or the other");
+    return InvalidBecause(why, "--gcp_list replaces --points and --marks; give one or the other");
   if (!FLAGS_gcp_list.empty() && FLAGS_pixel_rows_up)
-    return fail("--pixel_rows_up: a gcp_list.txt counts pixel rows down from the top-left corner (OpenDroneMap's definition); it applies to --marks");
-  if (FLAGS_out.empty()) return fail("--out is required");
+    return InvalidBecause(why,
+                          "--pixel_rows_up: a gcp_list.txt counts pixel rows down from the "
+                          "top-left corner (OpenDroneMap's definition); it applies to --marks");
+  if (FLAGS_out.empty()) return InvalidBecause(why, "--out is required");
   if (!ParseEnum(FLAGS_rotation, &files.rotation))
-    return fail(EnumFlagError<RotationConvention>("--rotation", FLAGS_rotation));
+    return InvalidBecause(why, EnumFlagError<RotationConvention>("--rotation", FLAGS_rotation));
   ResectionOptions& options = job->resection;
   PoseRefinementOptions& refinement = options.refinement;
   if (!ParseEnum(FLAGS_solver, &refinement.solver))
-    return fail(EnumFlagError<PoseSolver>("--solver", FLAGS_solver));
+    return InvalidBecause(why, EnumFlagError<PoseSolver>("--solver", FLAGS_solver));
   if (!ParseEnum(FLAGS_jacobian, &refinement.jacobian))
-    return fail(EnumFlagError<JacobianType>("--jacobian", FLAGS_jacobian));
+    return InvalidBecause(why, EnumFlagError<JacobianType>("--jacobian", FLAGS_jacobian));
   if (!ParseEnum(FLAGS_loss, &refinement.loss))
-    return fail(EnumFlagError<LossType>("--loss", FLAGS_loss));
+    return InvalidBecause(why, EnumFlagError<LossType>("--loss", FLAGS_loss));
   if (!ParseEnum(FLAGS_ceres_minimizer, &refinement.ceres.minimizer))
-    return fail(EnumFlagError<CeresMinimizer>("--ceres_minimizer", FLAGS_ceres_minimizer));
+    return InvalidBecause(
+        why, EnumFlagError<CeresMinimizer>("--ceres_minimizer", FLAGS_ceres_minimizer));
   if (!(FLAGS_default_accuracy > 0.0) || !std::isfinite(FLAGS_default_accuracy))
-    return fail("--default_accuracy must be a positive number of pixels");
+    return InvalidBecause(why, "--default_accuracy must be a positive number of pixels");
   if (!(FLAGS_default_film_accuracy > 0.0) || !std::isfinite(FLAGS_default_film_accuracy))
-    return fail("--default_film_accuracy must be a positive number of micrometres");
+    return InvalidBecause(why, "--default_film_accuracy must be a positive number of micrometres");
   if (!(FLAGS_max_fiducial_residual > 0.0) || !std::isfinite(FLAGS_max_fiducial_residual))
-    return fail("--max_fiducial_residual must be a positive number of micrometres");
-  if (FLAGS_threads < 0) return fail("--threads must be >= 0");
+    return InvalidBecause(why, "--max_fiducial_residual must be a positive number of micrometres");
+  if (FLAGS_threads < 0) return InvalidBecause(why, "--threads must be >= 0");
   // What only the Ceres solver uses is refused with the Taylor solvers, never silently ignored.
   if (refinement.solver != PoseSolver::kCeres) {
     for (const char* flag : {"loss", "loss_scale", "jacobian", "ceres_minimizer"}) {
       if (FlagGiven(flag))
-        return fail("--" + std::string(flag) + " is for --solver=ceres; --solver=" + FLAGS_solver +
-                    " is the seed's least squares with its own partials");
+        return InvalidBecause(why, "--" + std::string(flag) +
+                                       " is for --solver=ceres; --solver=" + FLAGS_solver +
+                                       " is the seed's least squares with its own partials");
     }
   }
   refinement.loss_scale = FLAGS_loss_scale;

@@ -175,25 +175,22 @@ Status ParseBlockSolverVariants(const std::string& solvers, const std::string& l
 }
 
 bool BlockComparisonOptions::IsValid(std::string* why) const {
-  auto fail = [why](const std::string& text) {
-    if (why != nullptr) *why = text;
-    return false;
-  };
-  if (solvers.empty()) return fail("no solver");
+  if (solvers.empty()) return InvalidBecause(why, "no solver");
   if (noise_px.empty() || tie_blunders.empty() || tie_points.empty() || gnss_sigma_m.empty())
-    return fail("every sweep axis needs at least one value");
+    return InvalidBecause(why, "every sweep axis needs at least one value");
   for (const double v : noise_px)
-    if (!(v >= 0.0 && v <= 100.0)) return fail("noise must be in [0, 100] px");
+    if (!(v >= 0.0 && v <= 100.0)) return InvalidBecause(why, "noise must be in [0, 100] px");
   for (const int v : tie_blunders)
-    if (v < 0 || v > 100000) return fail("tie blunders must be in [0, 100000]");
+    if (v < 0 || v > 100000) return InvalidBecause(why, "tie blunders must be in [0, 100000]");
   for (const long long v : tie_points)
-    if (v < 10 || v > 1000000) return fail("tie points must be in [10, 1000000]");
+    if (v < 10 || v > 1000000) return InvalidBecause(why, "tie points must be in [10, 1000000]");
   for (const double v : gnss_sigma_m)
-    if (!(v > 0.0 && v <= 100.0)) return fail("GNSS sigma must be in (0, 100] m");
+    if (!(v > 0.0 && v <= 100.0)) return InvalidBecause(why, "GNSS sigma must be in (0, 100] m");
   if (lines < 1 || lines > 100 || images_per_line < 2 || images_per_line > 100)
-    return fail("a block has 1-100 lines of 2-100 images");
-  if (trials < 1 || trials > 10000) return fail("trials must be in [1, 10000]");
-  if (num_threads < 0 || num_threads > 1024) return fail("threads must be in [0, 1024]");
+    return InvalidBecause(why, "a block has 1-100 lines of 2-100 images");
+  if (trials < 1 || trials > 10000) return InvalidBecause(why, "trials must be in [1, 10000]");
+  if (num_threads < 0 || num_threads > 1024)
+    return InvalidBecause(why, "threads must be in [0, 1024]");
   return true;
 }
 

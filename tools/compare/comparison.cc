@@ -471,27 +471,26 @@ Status ParseInitialErrors(const std::string& text, std::vector<InitialError>* er
 }
 
 bool MonteCarloOptions::IsValid(std::string* why) const {
-  auto fail = [why](const std::string& text) {
-    if (why != nullptr) *why = text;
-    return false;
-  };
-  if (scenarios.empty()) return fail("no scenario");
+  if (scenarios.empty()) return InvalidBecause(why, "no scenario");
   if (noise_px.empty() || outlier_fractions.empty() || control_points.empty() ||
       initial_errors.empty())
-    return fail("every sweep axis needs at least one value");
+    return InvalidBecause(why, "every sweep axis needs at least one value");
   for (double noise : noise_px)
-    if (!(noise >= 0.0) || !std::isfinite(noise)) return fail("image noise must be >= 0 px");
+    if (!(noise >= 0.0) || !std::isfinite(noise))
+      return InvalidBecause(why, "image noise must be >= 0 px");
   for (double fraction : outlier_fractions)
-    if (!(fraction >= 0.0 && fraction < 1.0)) return fail("outlier fractions must be in [0, 1)");
+    if (!(fraction >= 0.0 && fraction < 1.0))
+      return InvalidBecause(why, "outlier fractions must be in [0, 1)");
   for (int count : control_points)
-    if (count < 3) return fail("every image needs at least 3 control points");
+    if (count < 3) return InvalidBecause(why, "every image needs at least 3 control points");
   for (const InitialError& e : initial_errors)
-    if (!(e.position_m >= 0.0) || !(e.angle_deg >= 0.0)) return fail("initial errors must be >= 0");
-  if (check_points < 0) return fail("check points must be >= 0");
-  if (trials < 1) return fail("trials must be at least 1");
-  if (solvers.empty()) return fail("no solver to compare");
-  if (!(success_sigmas > 0.0)) return fail("success_sigmas must be positive");
-  if (num_threads < 0) return fail("threads must be >= 0");
+    if (!(e.position_m >= 0.0) || !(e.angle_deg >= 0.0))
+      return InvalidBecause(why, "initial errors must be >= 0");
+  if (check_points < 0) return InvalidBecause(why, "check points must be >= 0");
+  if (trials < 1) return InvalidBecause(why, "trials must be at least 1");
+  if (solvers.empty()) return InvalidBecause(why, "no solver to compare");
+  if (!(success_sigmas > 0.0)) return InvalidBecause(why, "success_sigmas must be positive");
+  if (num_threads < 0) return InvalidBecause(why, "threads must be >= 0");
   return resection.IsValid(why);
 }
 
@@ -676,12 +675,8 @@ Status RunMonteCarlo(const MonteCarloOptions& options, MonteCarloResult* result)
 // ------------------------------------------------------------------ dataset mode
 
 bool DatasetComparisonOptions::IsValid(std::string* why) const {
-  auto fail = [why](const std::string& text) {
-    if (why != nullptr) *why = text;
-    return false;
-  };
-  if (solvers.empty()) return fail("no solver to compare");
-  if (num_threads < 0) return fail("threads must be >= 0");
+  if (solvers.empty()) return InvalidBecause(why, "no solver to compare");
+  if (num_threads < 0) return InvalidBecause(why, "threads must be >= 0");
   return job.resection.IsValid(why);
 }
 

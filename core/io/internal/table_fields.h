@@ -85,8 +85,6 @@ inline const Names& MarkColumns() {
 
 // ------------------------------------------------------------------ small helpers
 
-inline std::string Quoted(std::string_view text) { return "'" + EscapeForMessage(text) + "'"; }
-
 // ------------------------------------------------------------------ physical ranges
 
 // The values a numeric column may hold (docs/formats.md, "Limits and refusals"): readers refuse a
@@ -182,7 +180,7 @@ inline std::string ValueProblem(double value, const ValueRange* range) {
 inline Status CheckRange(const CsvRowReader& row, const TableColumn& column, std::string_view label,
                   std::string_view text, double value) {
   if (column.range == nullptr || InRange(value, *column.range)) return Status::Ok();
-  return row.Error(column.csv, std::string(label) + Quoted(text) + " is outside " +
+  return row.Error(column.csv, std::string(label) + QuotedForMessage(text) + " is outside " +
                                    RangeText(*column.range));
 }
 inline Status CheckRange(const CsvRowReader& row, std::string_view column, std::string_view label,
@@ -224,11 +222,6 @@ inline Status ReadNumberList(const CsvRowReader& row, std::string_view column,
   return Status::Ok();
 }
 
-// "path:line: " for a known line, else "path: ".
-inline std::string Where(const std::string& path, int line) {
-  return line > 0 ? path + ":" + std::to_string(line) + ": " : path + ": ";
-}
-
 // Reads an enumerated column by the value's name table (core/enum_names.h; EnumNames(Enum{}) for
 // an enum): every name and alias is compared with FoldedName(), the tables' rule for names, so
 // "x_right_y_up" reads as X_RIGHT_Y_UP; an empty field keeps *value. The error lists every entry
@@ -249,7 +242,7 @@ Status ReadEnum(const CsvRowReader& row, const Column& column, const EnumNameTab
   const size_t count = static_cast<size_t>(names.end() - names.begin());
   for (size_t i = 0; i < count; ++i)
     listed += (i == 0 ? "" : i + 1 == count ? " or " : ", ") + std::string(names.begin()[i].name);
-  return row.Error(column, Quoted(text) + " is not " + listed);
+  return row.Error(column, QuotedForMessage(text) + " is not " + listed);
 }
 
 // A number with a default for an empty field.
@@ -266,7 +259,7 @@ inline Status ReadPositive(const CsvRowReader& row, std::string_view column,
                     std::optional<double>* value) {
   PHOTOPOSE_RETURN_IF_ERROR(ReadNumber(row, column, value));
   if (*value && !(**value > 0.0))
-    return row.Error(column, Quoted(row.Text(column)) + " must be positive");
+    return row.Error(column, QuotedForMessage(row.Text(column)) + " must be positive");
   return Status::Ok();
 }
 
@@ -295,7 +288,7 @@ inline Status ReadSign(const CsvRowReader& row, std::string_view column, int* va
   PHOTOPOSE_RETURN_IF_ERROR(row.Integer(column, &number));
   if (!number) return Status::Ok();
   if (*number != 1 && *number != -1)
-    return row.Error(column, Quoted(row.Text(column)) + " must be -1 or +1");
+    return row.Error(column, QuotedForMessage(row.Text(column)) + " must be -1 or +1");
   *value = static_cast<int>(*number);
   return Status::Ok();
 }
@@ -305,7 +298,8 @@ inline Status ReadCount(const CsvRowReader& row, std::string_view column, int* v
   std::optional<long long> number;
   PHOTOPOSE_RETURN_IF_ERROR(row.Integer(column, &number));
   if (number && (*number <= 0 || *number > INT_MAX))
-    return row.Error(column, Quoted(row.Text(column)) + " must be a positive whole number");
+    return row.Error(column,
+                     QuotedForMessage(row.Text(column)) + " must be a positive whole number");
   *value = number ? static_cast<int>(*number) : 0;
   return Status::Ok();
 }
@@ -435,7 +429,7 @@ inline Status CheckUnique(const CsvRowReader& row, std::string_view column, std:
                    std::string_view kind, FirstLines* first_lines) {
   int first = 0;
   if (!first_lines->Seen(key, row.line(), &first)) return Status::Ok();
-  return row.Error(column, "duplicate " + std::string(kind) + " " + Quoted(key) +
+  return row.Error(column, "duplicate " + std::string(kind) + " " + QuotedForMessage(key) +
                                " (first on line " + std::to_string(first) + ")");
 }
 

@@ -441,5 +441,17 @@ TEST(EscapeForMessageTest, EscapesControlsAndNonUtf8OnlyAndIsIdempotent) {
             "t.csv:2: A: 'two\\nlines' is not a number");
 }
 
+TEST(MessagePlaceTest, QuotesANameEscapedAndWholeAndNamesFileLineColumn) {
+  const std::string long_name(60, 'x');
+  // A name is never cut (two long names that differ at their end stay told apart); a token is.
+  EXPECT_EQ(QuotedForMessage(long_name + "1"), "'" + long_name + "1'");
+  EXPECT_NE(TokenForMessage(long_name + "1"), long_name + "1");
+  EXPECT_EQ(QuotedForMessage("IMG\t1\n"), "'IMG\\t1\\n'");
+  EXPECT_EQ(WhereInFile("marks.csv", 12, "Row"), "marks.csv:12: Row: ");
+  EXPECT_EQ(WhereInFile("marks.csv", 12), "marks.csv:12: ");
+  EXPECT_EQ(WhereInFile("cameras.csv", 0, "ApplyECC"), "cameras.csv: ApplyECC: ");
+  EXPECT_EQ(WhereInFile("cameras.csv", -1), "cameras.csv: ");
+}
+
 }  // namespace
 }  // namespace photopose
