@@ -462,40 +462,49 @@ Status RecheckBundlePlan(const BundleAdjustmentConfig& config, const Block& bloc
 
 namespace {
 
+// An e block of the round: its tangent size, ambient size and manifold (null: none).
+void AddEBlock(double* values, int tangent, int ambient, const ceres::Manifold* manifold,
+               BundleRound* round) {
+  round->e_blocks.push_back(values);
+  round->e_sizes.push_back(tangent);
+  round->e_ambient_sizes.push_back(ambient);
+  round->e_manifolds.push_back(manifold);
+}
+
 // Exterior orientations with their manifold (one shared; the relative gauge's second image gets
 // one with a fixed coordinate).
 void AddOrientationBlocks(const BundleAdjustmentConfig& config, const Block& block,
                           const BundlePlan& plan, BundleState* state, BundleRound* round) {
-  ceres::Problem& problem = *round->problem;
+  ceres::Problem* problem = round->problem.get();  // null: a round of rows alone
   round->manifolds.emplace_back(new ExteriorOrientationManifold());
   ceres::Manifold* eo_manifold = round->manifolds.back().get();
   for (size_t i = 0; i < block.images.size(); ++i) {
     double* eo = state->eo[i].data();
-    problem.AddParameterBlock(eo, kExteriorOrientationSize);
+    if (problem != nullptr) problem->AddParameterBlock(eo, kExteriorOrientationSize);
     const bool constant = config.constant_images.count(static_cast<int>(i)) ||
                           static_cast<int>(i) == plan.relative_fixed_image;
     if (constant) {
-      problem.SetParameterBlockConstant(eo);
+      if (problem != nullptr) problem->SetParameterBlockConstant(eo);
       continue;
     }
+    ceres::Manifold* manifold = eo_manifold;
+    int tangent = kExteriorOrientationSize;
     if (static_cast<int>(i) == plan.relative_scale_image) {
       std::array<bool, 6> fixed{};
       fixed[plan.relative_scale_axis] = true;
       round->manifolds.emplace_back(new ExteriorOrientationManifold(fixed));
-      problem.SetManifold(eo, round->manifolds.back().get());
-      round->e_sizes.push_back(5);
-    } else {
-      problem.SetManifold(eo, eo_manifold);
-      round->e_sizes.push_back(6);
+      manifold = round->manifolds.back().get();
+      tangent = 5;
     }
-    round->e_blocks.push_back(eo);
+    if (problem != nullptr) problem->SetManifold(eo, manifold);
+    AddEBlock(eo, tangent, kExteriorOrientationSize, manifold, round);
   }
 }
 
 // Camera parameters: constant except the calibrated ones; the lever arm when used.
 void AddCameraBlocks(const BundleAdjustmentConfig& config, const Block& block,
                      const BundlePlan& plan, BundleState* state, BundleRound* round) {
-  ceres::Problem& problem = *round->problem;
+  ceres::Problem* problem = round->problem.get();  // null: a round of rows alone
   round->cameras.assign(block.cameras.size(), CollinearityCamera());
   for (size_t c = 0; c < block.cameras.size(); ++c) {
     double* params = state->cameras[c].data();
@@ -509,38 +518,37 @@ void AddCameraBlocks(const BundleAdjustmentConfig& config, const Block& block,
       round->cameras[c].constant_params = params;
       continue;
     }
-    problem.AddParameterBlock(params, n);
+    if (problem != nullptr) problem->AddParameterBlock(params, n);
+    ceres::Manifold* manifold = nullptr;
     if (static_cast<int>(free.size()) < n) {
       std::vector<int> constant;
       for (int k = 0; k < n; ++k)
         if (!std::binary_search(free.begin(), free.end(), k)) constant.push_back(k);
       round->manifolds.emplace_back(new ceres::SubsetManifold(n, constant));
-      problem.SetManifold(params, round->manifolds.back().get());
+      manifold = round->manifolds.back().get();
+      if (problem != nullptr) problem->SetManifold(params, manifold);
     }
-    round->e_blocks.push_back(params);
-    round->e_sizes.push_back(static_cast<int>(free.size()));
+    AddEBlock(params, static_cast<int>(free.size()), n, manifold, round);
   }
   double* lever = state->lever.data();
   if (plan.use_lever) {
-    problem.AddParameterBlock(lever, 3);
-    if (config.estimate_lever_arm) {
-      round->e_blocks.push_back(lever);
-      round->e_sizes.push_back(3);
-    } else {
-      problem.SetParameterBlockConstant(lever);
-    }
+    if (problem != nullptr) problem->AddParameterBlock(lever, 3);
+    if (config.estimate_lever_arm)
+      AddEBlock(lever, 3, 3, nullptr, round);
+    else if (problem != nullptr)
+      problem->SetParameterBlockConstant(lever);
   }
 }
 
 void AddPointBlocks(const BundleAdjustmentConfig& config, const Block& block,
                     const BundlePlan& plan, BundleState* state, BundleRound* round) {
-  ceres::Problem& problem = *round->problem;
+  ceres::Problem* problem = round->problem.get();  // null: a round of rows alone
   for (size_t p = 0; p < block.points.size(); ++p) {
     if (!plan.point_in_problem[p]) continue;
     double* point = state->points[p].data();
-    problem.AddParameterBlock(point, kPointSize);
+    if (problem != nullptr) problem->AddParameterBlock(point, kPointSize);
     if (config.constant_points.count(static_cast<int>(p))) {
-      problem.SetParameterBlockConstant(point);
+      if (problem != nullptr) problem->SetParameterBlockConstant(point);
       continue;
     }
     round->point_blocks.push_back(point);
@@ -548,84 +556,149 @@ void AddPointBlocks(const BundleAdjustmentConfig& config, const Block& block,
   }
 }
 
+// What residual block `info` is made of: its parameter blocks (in its cost's order) and, when
+// `cost` is not null, its cost (new; *inside: a mark's functor in it, may be null). The one rule of
+// both kinds of round: a problem's residual blocks are built by it, a round of rows alone makes
+// them by it when asked (ResidualBlockOf).
+void NewResidualBlock(JacobianType jacobian, const Block& block, const BundlePlan& plan,
+                      BundleState* state, const BundleRound& round, const ResidualInfo& info,
+                      std::vector<double*>* parameters, ceres::CostFunction** cost,
+                      CollinearityMarkFunctor** inside) {
+  parameters->clear();
+  switch (info.group) {
+    case kTieMarks:
+    case kControlMarks: {
+      const BlockMark& mark = block.marks[info.item];
+      const int camera_index = block.images[mark.image].camera;
+      const CollinearityCamera& camera = round.cameras[camera_index];
+      parameters->push_back(state->eo[mark.image].data());
+      parameters->push_back(state->points[mark.point].data());
+      if (camera.constant_params == nullptr)
+        parameters->push_back(state->cameras[camera_index].data());
+      if (cost != nullptr) {
+        *cost = CreateCollinearityMarkCost(
+            jacobian,
+            CollinearityMarkFunctor(&camera, mark.observation, 1.0 / plan.mark_sigma[info.item]),
+            inside);
+      }
+      return;
+    }
+    case kControlPoints: {
+      // Two rows at a time: XY (first axis 0), then Z (first axis 2).
+      const int p = info.item;
+      parameters->push_back(state->points[p].data());
+      if (cost == nullptr) return;
+      const Eigen::Vector3d& surveyed = *block.points[p].surveyed_m;
+      *cost = info.first_axis == 0 ? new GroundPointPriorRows(surveyed, plan.point_sigma[p], 0, 1)
+                                   : new GroundPointPriorRows(surveyed, plan.point_sigma[p], 2, -1);
+      return;
+    }
+    case kCameraPositions: {
+      const int i = info.item;
+      parameters->push_back(state->eo[i].data());
+      if (plan.use_lever) parameters->push_back(state->lever.data());
+      if (cost == nullptr) return;
+      const Eigen::Vector3d& measured = *block.images[i].measured_center_m;
+      *cost = plan.use_lever
+                  ? CameraPositionLeverArmPrior::Create(measured, plan.image_prior_sigma[i])
+                  : new CameraPositionPrior(measured, plan.image_prior_sigma[i]);
+      return;
+    }
+    case kAttitudes: {
+      const int i = info.item;
+      parameters->push_back(state->eo[i].data());
+      if (cost == nullptr) return;
+      *cost = new AttitudePrior(*block.images[i].measured_angles_rad, plan.image_attitude_sigma[i]);
+      return;
+    }
+    default:
+      LOG(FATAL) << "no residual block of group " << info.group;
+  }
+}
+
+// Residual block `info` into the round: built into its problem (the cost kept by the round, the
+// loss `loss`), or listed alone in a round of rows alone.
+void AddResidual(const BundleAdjustmentOptions& options, const Block& block, const BundlePlan& plan,
+                 BundleState* state, ResidualInfo info, const ceres::LossFunction* loss,
+                 BundleRound* round) {
+  if (round->problem != nullptr) {
+    thread_local std::vector<double*> parameters;
+    ceres::CostFunction* cost = nullptr;
+    CollinearityMarkFunctor** inside = info.group == kTieMarks || info.group == kControlMarks
+                                           ? &round->mark_functor[info.item]
+                                           : nullptr;
+    NewResidualBlock(options.solver.jacobian, block, plan, state, *round, info, &parameters, &cost,
+                     inside);
+    round->costs.emplace_back(cost);
+    info.id =
+        round->problem->AddResidualBlock(cost, const_cast<ceres::LossFunction*>(loss),
+                                         parameters.data(), static_cast<int>(parameters.size()));
+  }
+  round->residuals.push_back(info);
+}
+
 // The collinearity residual of every mark in use, weighted by its sigma; the tie loss on tie
 // marks.
 void AddMarkResiduals(const BundleAdjustmentOptions& options, const Block& block,
                       const BundlePlan& plan, BundleState* state, BundleRound* round) {
-  ceres::Problem& problem = *round->problem;
   const size_t num_used = std::count(plan.mark_used.begin(), plan.mark_used.end(), 1);
   round->residuals.reserve(num_used + 2 * block.points.size() + 2 * block.images.size());
-  round->costs.reserve(num_used + 2 * block.points.size() + 2 * block.images.size());
-  round->mark_functor.assign(block.marks.size(), nullptr);
+  if (round->problem != nullptr) {
+    round->costs.reserve(num_used + 2 * block.points.size() + 2 * block.images.size());
+    round->mark_functor.assign(block.marks.size(), nullptr);
+  }
   for (size_t m = 0; m < block.marks.size(); ++m) {
     if (!plan.mark_used[m]) continue;
-    const BlockMark& mark = block.marks[m];
-    const int camera_index = block.images[mark.image].camera;
-    const CollinearityCamera& camera = round->cameras[camera_index];
-    round->costs.emplace_back(CreateCollinearityMarkCost(
-        options.solver.jacobian,
-        CollinearityMarkFunctor(&camera, mark.observation, 1.0 / plan.mark_sigma[m]),
-        &round->mark_functor[m]));
-    ceres::LossFunction* loss = plan.mark_group[m] == kTieMarks ? round->tie_loss.get() : nullptr;
-    double* eo = state->eo[mark.image].data();
-    double* point = state->points[mark.point].data();
-    const ceres::ResidualBlockId id =
-        camera.constant_params != nullptr
-            ? problem.AddResidualBlock(round->costs.back().get(), loss, eo, point)
-            : problem.AddResidualBlock(round->costs.back().get(), loss, eo, point,
-                                       state->cameras[camera_index].data());
-    round->residuals.push_back({plan.mark_group[m], static_cast<int>(m), 2, 0, id});
+    const ceres::LossFunction* loss =
+        plan.mark_group[m] == kTieMarks ? round->tie_loss.get() : nullptr;
+    AddResidual(options, block, plan, state,
+                {plan.mark_group[m], static_cast<int>(m), 2, 0, nullptr}, loss, round);
   }
-}
-
-// Adds a prior's cost (kept by the round) to the problem.
-ceres::ResidualBlockId AddPrior(ceres::CostFunction* cost, const std::vector<double*>& parameters,
-                                BundleRound* round) {
-  round->costs.emplace_back(cost);
-  return round->problem->AddResidualBlock(cost, nullptr, parameters);
 }
 
 // Control-point priors (two rows at a time: XY, then Z), camera positions and attitudes.
-void AddPriorResiduals(const Block& block, const BundlePlan& plan, BundleState* state,
-                       BundleRound* round) {
-  double* lever = state->lever.data();
+void AddPriorResiduals(const BundleAdjustmentOptions& options, const Block& block,
+                       const BundlePlan& plan, BundleState* state, BundleRound* round) {
   for (size_t p = 0; p < block.points.size(); ++p) {
     if (!plan.point_in_problem[p] || !plan.point_prior[p]) continue;
-    double* point = state->points[p].data();
-    const Eigen::Vector3d& surveyed = *block.points[p].surveyed_m;
-    const ceres::ResidualBlockId xy =
-        AddPrior(new GroundPointPriorRows(surveyed, plan.point_sigma[p], 0, 1), {point}, round);
-    round->residuals.push_back({kControlPoints, static_cast<int>(p), 2, 0, xy});
-    const ceres::ResidualBlockId z =
-        AddPrior(new GroundPointPriorRows(surveyed, plan.point_sigma[p], 2, -1), {point}, round);
-    round->residuals.push_back({kControlPoints, static_cast<int>(p), 1, 2, z});
+    AddResidual(options, block, plan, state, {kControlPoints, static_cast<int>(p), 2, 0, nullptr},
+                nullptr, round);
+    AddResidual(options, block, plan, state, {kControlPoints, static_cast<int>(p), 1, 2, nullptr},
+                nullptr, round);
   }
-  // Camera positions and attitudes.
   for (size_t i = 0; i < block.images.size(); ++i) {
-    double* eo = state->eo[i].data();
+    // Without height the Z row has a zero weight (its sigma is infinite) and is not counted.
     if (plan.image_prior[i]) {
-      const Eigen::Vector3d& measured = *block.images[i].measured_center_m;
-      ceres::ResidualBlockId id;
-      std::vector<double*> parameters = {eo};
-      if (plan.use_lever) {
-        parameters.push_back(lever);
-        id = AddPrior(CameraPositionLeverArmPrior::Create(measured, plan.image_prior_sigma[i]),
-                      parameters, round);
-      } else {
-        id = AddPrior(new CameraPositionPrior(measured, plan.image_prior_sigma[i]), parameters,
-                      round);
-      }
-      // Without height the Z row has a zero weight (its sigma is infinite) and is not counted.
-      round->residuals.push_back(
-          {kCameraPositions, static_cast<int>(i), ImagePriorRows(plan, i), 0, id});
+      AddResidual(options, block, plan, state,
+                  {kCameraPositions, static_cast<int>(i), ImagePriorRows(plan, i), 0, nullptr},
+                  nullptr, round);
     }
     if (plan.image_attitude[i]) {
-      const ceres::ResidualBlockId id = AddPrior(
-          new AttitudePrior(*block.images[i].measured_angles_rad, plan.image_attitude_sigma[i]),
-          {eo}, round);
-      round->residuals.push_back({kAttitudes, static_cast<int>(i), 3, 0, id});
+      AddResidual(options, block, plan, state, {kAttitudes, static_cast<int>(i), 3, 0, nullptr},
+                  nullptr, round);
     }
   }
+}
+
+// The round's blocks, residuals and counts, into its problem when it has one.
+void FillBundleRound(const BundleAdjustmentOptions& options, const BundleAdjustmentConfig& config,
+                     const Block& block, const BundlePlan& plan, BundleState* state,
+                     BundleRound* round) {
+  round->block = &block;
+  round->plan = &plan;
+  round->state = state;
+  round->jacobian = options.solver.jacobian;
+  round->tie_loss.reset(
+      MakeLoss(options.robustness.tie_loss, options.robustness.tie_loss_scale_sigmas));
+  AddOrientationBlocks(config, block, plan, state, round);
+  AddCameraBlocks(config, block, plan, state, round);
+  AddPointBlocks(config, block, plan, state, round);
+  AddMarkResiduals(options, block, plan, state, round);
+  AddPriorResiduals(options, block, plan, state, round);
+  round->num_free_parameters = 3 * static_cast<int>(round->point_blocks.size());
+  for (const int size : round->e_sizes) round->num_free_parameters += size;
+  round->num_observations = 0;
+  for (const ResidualInfo& info : round->residuals) round->num_observations += info.rows;
 }
 
 }  // namespace
@@ -654,22 +727,45 @@ void BuildBundleRound(const BundleAdjustmentOptions& options, const BundleAdjust
   problem_options.cost_function_ownership = ceres::DO_NOT_TAKE_OWNERSHIP;
   problem_options.enable_fast_removal = false;
   round->problem = std::make_unique<ceres::Problem>(problem_options);
-  round->tie_loss.reset(
-      MakeLoss(options.robustness.tie_loss, options.robustness.tie_loss_scale_sigmas));
-  AddOrientationBlocks(config, block, plan, state, round);
-  AddCameraBlocks(config, block, plan, state, round);
-  AddPointBlocks(config, block, plan, state, round);
-  AddMarkResiduals(options, block, plan, state, round);
-  AddPriorResiduals(block, plan, state, round);
-  round->num_free_parameters = 3 * static_cast<int>(round->point_blocks.size());
-  for (const int size : round->e_sizes) round->num_free_parameters += size;
-  round->num_observations = 0;
-  for (const ResidualInfo& info : round->residuals) round->num_observations += info.rows;
+  FillBundleRound(options, config, block, plan, state, round);
+}
+
+void BuildBundleRoundRows(const BundleAdjustmentOptions& options,
+                          const BundleAdjustmentConfig& config, const Block& block,
+                          const BundlePlan& plan, BundleState* state, BundleRound* round) {
+  round->problem.reset();
+  *round = BundleRound();
+  FillBundleRound(options, config, block, plan, state, round);
+}
+
+const ceres::CostFunction* ResidualBlockOf(const BundleRound& round, const ResidualInfo& info,
+                                           std::unique_ptr<ceres::CostFunction>* made,
+                                           std::vector<double*>* parameters) {
+  if (round.problem != nullptr) {
+    round.problem->GetParameterBlocksForResidualBlock(info.id, parameters);
+    return round.problem->GetCostFunctionForResidualBlock(info.id);
+  }
+  ceres::CostFunction* cost = nullptr;
+  NewResidualBlock(round.jacobian, *round.block, *round.plan, round.state, round, info, parameters,
+                   &cost, nullptr);
+  made->reset(cost);
+  return cost;
+}
+
+void ResidualParameters(const BundleRound& round, const ResidualInfo& info,
+                        std::vector<double*>* parameters) {
+  if (round.problem != nullptr) {
+    round.problem->GetParameterBlocksForResidualBlock(info.id, parameters);
+    return;
+  }
+  NewResidualBlock(round.jacobian, *round.block, *round.plan, round.state, round, info, parameters,
+                   nullptr, nullptr);
 }
 
 bool UpdateBundleRound(const BundlePlan& plan, BundleRound* round) {
   // Only marks and the tie points they leave behind: a prior removed or a weight changed needs
-  // the problem built again.
+  // the problem built again; a round of rows alone is built again in any case (it is cheap).
+  if (round->problem == nullptr) return false;
   for (const ResidualInfo& info : round->residuals) {
     switch (info.group) {
       case kTieMarks:
@@ -766,12 +862,16 @@ void ApplyRelativeGauge(const BundlePlan& plan, BundleState* state, BundleRound*
   round->manifolds.emplace_back(new ExteriorOrientationManifold(axis));
   problem.SetManifold(scale, round->manifolds.back().get());
   for (size_t k = 0; k < round->e_blocks.size(); ++k) {
-    if (round->e_blocks[k] == scale) round->e_sizes[k] = 5;
+    if (round->e_blocks[k] != scale) continue;
+    round->e_sizes[k] = 5;
+    round->e_manifolds[k] = round->manifolds.back().get();
   }
   for (size_t k = 0; k < round->e_blocks.size(); ++k) {
     if (round->e_blocks[k] != fixed) continue;
     round->e_blocks.erase(round->e_blocks.begin() + k);
     round->e_sizes.erase(round->e_sizes.begin() + k);
+    round->e_ambient_sizes.erase(round->e_ambient_sizes.begin() + k);
+    round->e_manifolds.erase(round->e_manifolds.begin() + k);
     break;
   }
   round->num_free_parameters = 3 * static_cast<int>(round->point_blocks.size());

@@ -119,10 +119,13 @@ void TabulateResiduals(const Block& block, const BundlePlan& plan, const BundleS
   sums[kControlPoints].unit = sums[kCameraPositions].unit = "m";
   sums[kAttitudes].unit = "deg";
   std::vector<double> image_ssq(block.images.size(), 0.0);
+  std::unique_ptr<ceres::CostFunction> made;
+  std::vector<double*> parameters;
   for (const ResidualInfo& info : round.residuals) {
     double whitened[3] = {0.0, 0.0, 0.0};
-    double cost;
-    round.problem->EvaluateResidualBlock(info.id, false, &cost, whitened, nullptr);
+    // Without loss function (Ceres' EvaluateResidualBlock with apply_loss_function false).
+    const ceres::CostFunction* cost = ResidualBlockOf(round, info, &made, &parameters);
+    if (!cost->Evaluate(parameters.data(), whitened, nullptr)) std::fill_n(whitened, 3, kNaN);
     GroupSums& s = sums[info.group];
     variance->scalar_rows[info.group] += info.rows;
     for (int row = 0; row < info.rows; ++row)
@@ -313,10 +316,24 @@ void DiagnosticsPass::Group(size_t order) {
   const int end =
       static_cast<int>(g) < num_points ? reduced.point_residual_start[g + 1] : begin + 1;
   const int point = static_cast<int>(g) < num_points ? static_cast<int>(g) : -1;
+  const bool wanted = AnyRowWanted(begin, end);
+  // A point's rows are evaluated in any case: its W (its covariance's) is made from them.
+  if (point < 0 && !wanted) return;
+  thread_local std::vector<BlockRows> rows;
+  if (rows.size() < static_cast<size_t>(end - begin)) rows.resize(end - begin);
+  bool all_evaluated = true;
+  for (int k = begin; k < end; ++k) {
+    const int r = reduced.residual_order[k];
+    evaluated[r] = EvaluateBlockRows(round, reduced, round.residuals[r], &rows[k - begin]);
+    all_evaluated = all_evaluated && evaluated[r];
+  }
   SupportCovariance support;
   if (point >= 0) {
     // The point's covariance (V^-1 + V^-1 W^T C W V^-1, in the datum).
-    if (!MakeSupportCovariance(reduced, point, {}, &support)) return;
+    thread_local Eigen::MatrixXd W;
+    if (!all_evaluated) return;
+    PointW(round, reduced, point, rows.data(), &W);
+    if (!MakeSupportCovariance(reduced, point, &W, {}, &support)) return;
     Eigen::Matrix3d covariance = PointCovariance(reduced, support, point);
     if (inner != nullptr) covariance = inner->Point(point, covariance);
     BundlePointResult& point_result = result->points[round.point_of_block[point]];
@@ -324,16 +341,10 @@ void DiagnosticsPass::Group(size_t order) {
     point_result.has_covariance = true;
     point_result.covariance_complete = true;
   }
-  if (!AnyRowWanted(begin, end)) return;
-  thread_local std::vector<BlockRows> rows;
-  if (rows.size() < static_cast<size_t>(end - begin)) rows.resize(end - begin);
-  for (int k = begin; k < end; ++k) {
-    const int r = reduced.residual_order[k];
-    evaluated[r] = EvaluateBlockRows(round, reduced, round.residuals[r], &rows[k - begin]);
-  }
+  if (!wanted) return;
   // A prior's support is its own e blocks.
   if (point < 0 && (!evaluated[reduced.residual_order[begin]] ||
-                    !MakeSupportCovariance(reduced, point, rows[0].e_blocks, &support)))
+                    !MakeSupportCovariance(reduced, point, nullptr, rows[0].e_blocks, &support)))
     return;
   DiagnoseRows(begin, end, rows, support);
 }
@@ -514,20 +525,24 @@ bool CandidateRows(const BundleRound& round, const ReducedNormals& reduced,
 }
 
 // The rows' cofactors J_a Qxx J_b^T = g_a^T C g_b, plus the point's own q_a^T V^-1 q_b when a
-// and b share it, with g_a = E_a - W V^-1 q_a in the e columns (q_a = J_p,a^T). False when the
-// solve with the factor fails.
-bool CandidateCofactors(const ReducedNormals& reduced, const std::vector<BlockRows>& evaluated,
+// and b share it, with g_a = E_a - W V^-1 q_a in the e columns (q_a = J_p,a^T; W made again from
+// the point's rows, PointW). False when a row cannot be evaluated or the solve with the factor
+// fails.
+bool CandidateCofactors(const BundleRound& round, const ReducedNormals& reduced,
+                        const std::vector<BlockRows>& evaluated,
                         const std::vector<CandidateRow>& rows, Eigen::MatrixXd* H) {
   const int n = static_cast<int>(rows.size());
   Eigen::MatrixXd G = Eigen::MatrixXd::Zero(reduced.size, n);
+  std::vector<BlockRows> scratch;
+  Eigen::MatrixXd W;
   for (int a = 0; a < n; ++a) {
     const BlockRows& br = evaluated[rows[a].block_rows];
     const int row = rows[a].row;
     for (size_t k = 0; k < br.e_columns.size(); ++k) G(br.e_columns[k], a) += br.J_e(row, k);
     if (br.point < 0) continue;
     const int p = br.point;
-    const Eigen::VectorXd WVq =
-        reduced.W[p] * (reduced.V_inverse[p] * br.J_p.row(row).transpose());
+    if (!EvaluatePointW(round, reduced, p, &scratch, &W)) return false;
+    const Eigen::VectorXd WVq = W * (reduced.V_inverse[p] * br.J_p.row(row).transpose());
     int at = 0;
     for (const int b : reduced.W_blocks[p]) {
       const int size = reduced.C.block_size(b);
@@ -585,7 +600,7 @@ void FindSnoopingCandidates(const BundleRound& round, const ReducedNormals& redu
   out->v.resize(n);
   for (int a = 0; a < n; ++a) out->v[a] = evaluated[rows[a].block_rows].residuals[rows[a].row];
   Eigen::MatrixXd H;
-  if (!CandidateCofactors(reduced, evaluated, rows, &H)) return;
+  if (!CandidateCofactors(round, reduced, evaluated, rows, &H)) return;
   out->Qvv = Eigen::MatrixXd::Identity(n, n) - 0.5 * (H + H.transpose());
   out->sigma0 = result.summary.sigma0;
   out->redundancy = result.summary.redundancy;
@@ -764,7 +779,7 @@ Eigen::Matrix3d PropagatedCheckPointCovariance(const Block& block, const BundleS
       if (found == reduced.e_index.end()) return;
       const int offset = reduced.e_offset[found->second];
       const int tangent = round.e_sizes[found->second];
-      const ceres::Manifold* manifold = round.problem->GetManifold(const_cast<double*>(block_ptr));
+      const ceres::Manifold* manifold = round.e_manifolds[found->second];
       Eigen::MatrixXd P = Eigen::MatrixXd::Identity(J_ambient.cols(), tangent);
       if (manifold != nullptr) {
         Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor> Pr(

@@ -7,7 +7,6 @@
 #include <cmath>
 #include <sstream>
 
-#include "core/parallel.h"
 #include "core/rotation.h"
 
 namespace photopose::internal {
@@ -68,27 +67,27 @@ std::vector<int> ImageBlocks(const Block& block, const BundleState& state,
 
 }  // namespace
 
-void InnerConstraintTransform::RightHandSide(bool on_points, const BundlePlan& plan,
+bool InnerConstraintTransform::RightHandSide(bool on_points, const BundlePlan& plan,
                                              const BundleRound& round,
                                              const ReducedNormals& reduced,
-                                             const std::vector<int>& image_block,
+                                             const std::vector<int>& image_block, int num_threads,
                                              Eigen::MatrixXd* rhs,
                                              Eigen::Matrix<double, 7, 7>* GtWG) const {
   *rhs = Eigen::MatrixXd::Zero(reduced.size, 7);
   *GtWG = Eigen::Matrix<double, 7, 7>::Zero();
   if (on_points) {
-    for (size_t k = 0; k < round.point_blocks.size(); ++k) {
-      const Eigen::Matrix<double, 3, 7> G = PointRows(static_cast<int>(k));
+    // In point order, whatever the threads that make the points' W.
+    return ForEachPointW(round, reduced, num_threads, [&](int k, const Eigen::MatrixXd& W) {
+      const Eigen::Matrix<double, 3, 7> G = PointRows(k);
       *GtWG += G.transpose() * G;
-      const Eigen::MatrixXd WV_b = reduced.W[k] * (reduced.V_inverse[k] * G);
+      const Eigen::MatrixXd WV_b = W * (reduced.V_inverse[k] * G);
       int row = 0;
       for (const int b : reduced.W_blocks[k]) {
         const int size = reduced.C.block_size(b);
         rhs->middleRows(reduced.e_offset[b], size) -= WV_b.middleRows(row, size);
         row += size;
       }
-    }
-    return;
+    });
   }
   for (size_t i = 0; i < image_block.size(); ++i) {
     const bool in_round = image_block[i] >= 0 || static_cast<int>(i) == plan.relative_fixed_image;
@@ -101,20 +100,21 @@ void InnerConstraintTransform::RightHandSide(bool on_points, const BundlePlan& p
       if (k < 3) rhs->row(reduced.e_offset[b] + c) = image_G_[i].row(k);
     }
   }
+  return true;
 }
 
-void InnerConstraintTransform::BackSubstitutePoints(bool on_points, const ReducedNormals& reduced,
+bool InnerConstraintTransform::BackSubstitutePoints(bool on_points, const BundleRound& round,
+                                                    const ReducedNormals& reduced,
                                                     const Eigen::MatrixXd& y_e, int num_threads) {
   std::vector<Eigen::Matrix<double, 3, 7>>& y_p = point_M_;
-  y_p.resize(reduced.W.size());
-  ParallelFor(y_p.size(), num_threads, [&](size_t k) {
-    Eigen::Matrix<double, 3, 7> b =
-        on_points ? PointRows(static_cast<int>(k)) : Eigen::Matrix<double, 3, 7>::Zero();
+  y_p.resize(reduced.V_inverse.size());
+  return ForEachPointW(round, reduced, num_threads, [&](int k, const Eigen::MatrixXd& W) {
+    Eigen::Matrix<double, 3, 7> b = on_points ? PointRows(k) : Eigen::Matrix<double, 3, 7>::Zero();
     int row = 0;
     for (const int block_index : reduced.W_blocks[k]) {
       const int size = reduced.C.block_size(block_index);
-      b -= reduced.W[k].middleRows(row, size).transpose() *
-           y_e.middleRows(reduced.e_offset[block_index], size);
+      b -=
+          W.middleRows(row, size).transpose() * y_e.middleRows(reduced.e_offset[block_index], size);
       row += size;
     }
     y_p[k] = reduced.V_inverse[k] * b;
@@ -177,7 +177,8 @@ Status InnerConstraintTransform::Compute(BundleRelativeCovariance datum, const B
   const std::vector<int> image_block = ImageBlocks(block, state, reduced);
   Eigen::MatrixXd rhs;
   Eigen::Matrix<double, 7, 7> GtWG;
-  RightHandSide(on_points, plan, round, reduced, image_block, &rhs, &GtWG);
+  if (!RightHandSide(on_points, plan, round, reduced, image_block, num_threads, &rhs, &GtWG))
+    return Status::Error("a residual could not be evaluated at the solution");
   const Eigen::SelfAdjointEigenSolver<Eigen::Matrix<double, 7, 7>> eigen(GtWG);
   // G^T W G's eigenvalues are the squared singular values of the datum check's Jacobian.
   if (!(eigen.eigenvalues()[0] > kDatumConditioning * kDatumConditioning * eigen.eigenvalues()[6]))
@@ -189,7 +190,9 @@ Status InnerConstraintTransform::Compute(BundleRelativeCovariance datum, const B
   const Eigen::MatrixXd y_e = reduced.C.Solve(rhs);
   if (!y_e.allFinite())
     return Status::Error("the reduced system could not be solved for the datum");
-  BackSubstitutePoints(on_points, reduced, y_e, num_threads);  // y_p, in point_M_ until A is known
+  // y_p, in point_M_ until A is known.
+  if (!BackSubstitutePoints(on_points, round, reduced, y_e, num_threads))
+    return Status::Error("a residual could not be evaluated at the solution");
   // G^T W Y, then Q = A G^T W Y A and M = Y A.
   MakeTransform(on_points, plan, round, reduced, image_block, y_e, A);
 

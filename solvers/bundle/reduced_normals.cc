@@ -19,10 +19,8 @@ namespace photopose::internal {
 
 bool EvaluateBlockRows(const BundleRound& round, const ReducedNormals& reduced,
                        const ResidualInfo& info, BlockRows* out) {
-  const ceres::Problem& problem = *round.problem;
-  const ceres::CostFunction* cost = problem.GetCostFunctionForResidualBlock(info.id);
+  const ceres::CostFunction* cost = ResidualBlockOf(round, info, &out->made, &out->parameters);
   const int num_residuals = cost->num_residuals();
-  problem.GetParameterBlocksForResidualBlock(info.id, &out->parameters);
   const size_t num_parameters = out->parameters.size();
   // The ambient Jacobian of each variable block, one after another in out->ambient.
   std::vector<const VariableBlock*> variable(num_parameters, nullptr);
@@ -167,7 +165,7 @@ void GroupResidualsByPoint(const BundleRound& round, int num_threads, ReducedNor
   std::vector<int> point_of(num_residuals, -1), first_e_of(num_residuals, num_blocks);
   ParallelForChunks(num_residuals, num_threads, 4096, [&](size_t r) {
     thread_local std::vector<double*> parameters;
-    round.problem->GetParameterBlocksForResidualBlock(round.residuals[r].id, &parameters);
+    ResidualParameters(round, round.residuals[r], &parameters);
     for (const double* block_ptr : parameters) {
       const auto p = reduced->point_index.find(block_ptr);
       if (p != reduced->point_index.end()) point_of[r] = p->second;
@@ -205,13 +203,12 @@ constexpr int kPointsPerChunk = 1024;
 // Every variable block of the round: the e blocks, their columns one after another, then the
 // points. Returns the first column of each e block, and S's size after the last.
 std::vector<int> IndexVariables(const BundleRound& round, ReducedNormals* reduced) {
-  const ceres::Problem& problem = *round.problem;
-  const auto add_variable = [&](double* values, int e_block, int point) {
+  const auto add_variable = [&](double* values, int e_block, int point, int ambient,
+                                const ceres::Manifold* manifold) {
     VariableBlock& v = reduced->variables[values];
     v.e_block = e_block;
     v.point = point;
-    v.ambient = problem.ParameterBlockSize(values);
-    const ceres::Manifold* manifold = problem.GetManifold(values);
+    v.ambient = ambient;
     v.tangent = manifold != nullptr ? manifold->TangentSize() : v.ambient;
     if (manifold != nullptr) {
       v.plus_jacobian.assign(static_cast<size_t>(v.ambient) * v.tangent, 0.0);
@@ -225,13 +222,13 @@ std::vector<int> IndexVariables(const BundleRound& round, ReducedNormals* reduce
     reduced->e_offset.push_back(offset);
     block_start.push_back(offset);
     offset += round.e_sizes[b];
-    add_variable(round.e_blocks[b], b, -1);
+    add_variable(round.e_blocks[b], b, -1, round.e_ambient_sizes[b], round.e_manifolds[b]);
   }
   block_start.push_back(offset);
   reduced->size = offset;
   for (int p = 0; p < static_cast<int>(round.point_blocks.size()); ++p) {
     reduced->point_index[round.point_blocks[p]] = p;
-    add_variable(round.point_blocks[p], -1, p);
+    add_variable(round.point_blocks[p], -1, p, kPointSize, nullptr);
   }
   return block_start;
 }
@@ -239,6 +236,48 @@ std::vector<int> IndexVariables(const BundleRound& round, ReducedNormals* reduce
 // A point's rows of J_e^T J_p per e block (e block, e_size x 3); kept across points for their
 // memory.
 using PointParts = std::vector<std::pair<int, Eigen::MatrixXd>>;
+
+// One residual block's J_e^T J_p added to the point's parts (the part of an e block made at its
+// first residual block). The one arithmetic of W: the elimination and PointW.
+void AddPointParts(const BlockRows& rows, const std::vector<int>& e_sizes, PointParts* parts) {
+  const bool mark = rows.rows == 2;  // 2 x 6 on an image, 2 x 3 on the point: unrolled
+  int column = 0;
+  for (const int e : rows.e_blocks) {
+    const int size = e_sizes[e];
+    auto found = std::find_if(parts->begin(), parts->end(),
+                              [&](const auto& part) { return part.first == e; });
+    if (found == parts->end()) {
+      parts->emplace_back(e, Eigen::MatrixXd::Zero(size, 3));
+      found = parts->end() - 1;
+    }
+    if (mark && size == 6)
+      Eigen::Map<Matrix63>(found->second.data()).noalias() +=
+          Eigen::Map<const Matrix26>(rows.J_e.data() + 2 * column).transpose() *
+          Eigen::Map<const Matrix23>(rows.J_p.data());
+    else
+      found->second.noalias() += rows.J_e.middleCols(column, size).transpose() * rows.J_p;
+    column += size;
+  }
+}
+
+// The parts in ascending e block order, one under another: W (their rows x 3); *blocks (may be
+// null) receives their e blocks, *start (may be null) each one's first row of W and the end.
+void StackParts(PointParts* parts, std::vector<int>* blocks, std::vector<int>* start,
+                Eigen::MatrixXd* W) {
+  std::sort(parts->begin(), parts->end(),
+            [](const auto& x, const auto& y) { return x.first < y.first; });
+  int rows = 0;
+  for (const auto& part : *parts) rows += static_cast<int>(part.second.rows());
+  W->resize(rows, 3);
+  if (start != nullptr) start->assign(1, 0);
+  int at = 0;
+  for (const auto& [e, part] : *parts) {
+    if (blocks != nullptr) blocks->push_back(e);
+    W->middleRows(at, part.rows()) = part;
+    at += static_cast<int>(part.rows());
+    if (start != nullptr) start->push_back(at);
+  }
+}
 
 // Point p's residual blocks: their J_e^T J_e into the pair sums, *V = J_p^T J_p and *parts. False
 // when one cannot be evaluated. One loop on purpose: each residual block's rows are evaluated
@@ -251,52 +290,27 @@ bool AccumulatePointRows(const BundleRound& round, const ReducedNormals& reduced
     if (!EvaluateBlockRows(round, reduced, round.residuals[reduced.residual_order[k]], rows))
       return false;
     AddCameraPart(*rows, round.e_sizes, pairs);
-    const bool mark = rows->rows == 2;  // 2 x 6 on an image, 2 x 3 on the point: unrolled
-    if (mark) {
+    if (rows->rows == 2) {  // a mark: unrolled
       const Eigen::Map<const Matrix23> J_p(rows->J_p.data());
       V->noalias() += J_p.transpose() * J_p;
     } else {
       V->noalias() += rows->J_p.transpose() * rows->J_p;
     }
-    int column = 0;
-    for (const int e : rows->e_blocks) {
-      const int size = round.e_sizes[e];
-      auto found = std::find_if(parts->begin(), parts->end(),
-                                [&](const auto& part) { return part.first == e; });
-      if (found == parts->end()) {
-        parts->emplace_back(e, Eigen::MatrixXd::Zero(size, 3));
-        found = parts->end() - 1;
-      }
-      if (mark && size == 6)
-        Eigen::Map<Matrix63>(found->second.data()).noalias() +=
-            Eigen::Map<const Matrix26>(rows->J_e.data() + 2 * column).transpose() *
-            Eigen::Map<const Matrix23>(rows->J_p.data());
-      else
-        found->second.noalias() += rows->J_e.middleCols(column, size).transpose() * rows->J_p;
-      column += size;
-    }
+    AddPointParts(*rows, round.e_sizes, parts);
   }
   return true;
 }
 
 // Point p eliminated: V^-1 (false when V is not positive definite), W = its parts in ascending e
-// block order, and W V^-1 W^T subtracted from the pair sums.
+// block order (not kept: PointW makes it again), and W V^-1 W^T subtracted from the pair sums.
 bool EliminatePoint(int p, const Eigen::Matrix3d& V, PointParts* parts, ReducedNormals* reduced,
                     PairSums* pairs) {
   const Eigen::LDLT<Eigen::Matrix3d> ldlt(V);
   if (ldlt.info() != Eigen::Success || !(ldlt.vectorD().minCoeff() > 0.0)) return false;
   reduced->V_inverse[p] = ldlt.solve(Eigen::Matrix3d::Identity());
-  std::sort(parts->begin(), parts->end(),
-            [](const auto& x, const auto& y) { return x.first < y.first; });
-  std::vector<int> start(parts->size() + 1, 0);
-  for (size_t k = 0; k < parts->size(); ++k) {
-    reduced->W_blocks[p].push_back((*parts)[k].first);
-    start[k + 1] = start[k] + static_cast<int>((*parts)[k].second.rows());
-  }
-  Eigen::MatrixXd& W = reduced->W[p];
-  W.resize(start.back(), 3);
-  for (size_t k = 0; k < parts->size(); ++k)
-    W.middleRows(start[k], (*parts)[k].second.rows()) = (*parts)[k].second;
+  std::vector<int> start;
+  Eigen::MatrixXd W;
+  StackParts(parts, &reduced->W_blocks[p], &start, &W);
   const Eigen::MatrixXd WV = W * reduced->V_inverse[p];
   for (size_t k = 0; k < parts->size(); ++k) {
     for (size_t l = k; l < parts->size(); ++l) {
@@ -321,7 +335,6 @@ void ReducePoints(const BundleRound& round, int num_threads, ReducedNormals* red
   const int num_points = static_cast<int>(round.point_blocks.size());
   reduced->V_inverse.resize(num_points);
   reduced->W_blocks.resize(num_points);
-  reduced->W.resize(num_points);
   evaluated->assign(num_points, 1);
   determined->assign(num_points, 1);
   const int num_chunks = (num_points + kPointsPerChunk - 1) / kPointsPerChunk;
@@ -422,14 +435,57 @@ void BuildReducedNormals(const BundleRound& round, const SelectedInversionOption
   FactorReducedNormals(round, block_start, options, &total, reduced);
 }
 
+void PointW(const BundleRound& round, const ReducedNormals& reduced, int p, const BlockRows* rows,
+            Eigen::MatrixXd* W) {
+  thread_local PointParts parts;
+  parts.clear();
+  const int count = reduced.point_residual_start[p + 1] - reduced.point_residual_start[p];
+  for (int k = 0; k < count; ++k) AddPointParts(rows[k], round.e_sizes, &parts);
+  StackParts(&parts, nullptr, nullptr, W);
+}
+
+bool EvaluatePointW(const BundleRound& round, const ReducedNormals& reduced, int p,
+                    std::vector<BlockRows>* scratch, Eigen::MatrixXd* W) {
+  const int begin = reduced.point_residual_start[p];
+  const int count = reduced.point_residual_start[p + 1] - begin;
+  if (scratch->size() < static_cast<size_t>(count)) scratch->resize(count);
+  for (int k = 0; k < count; ++k) {
+    if (!EvaluateBlockRows(round, reduced, round.residuals[reduced.residual_order[begin + k]],
+                           &(*scratch)[k]))
+      return false;
+  }
+  PointW(round, reduced, p, scratch->data(), W);
+  return true;
+}
+
+bool ForEachPointW(const BundleRound& round, const ReducedNormals& reduced, int num_threads,
+                   const std::function<void(int p, const Eigen::MatrixXd& W)>& use) {
+  const int num_points = static_cast<int>(reduced.V_inverse.size());
+  const int wave = ResolveThreadCount(num_threads) * kPointsPerChunk;
+  std::vector<Eigen::MatrixXd> W(std::min(wave, num_points));
+  for (int first = 0; first < num_points; first += wave) {
+    const int count = std::min(wave, num_points - first);
+    std::vector<char> evaluated(count, 1);
+    ParallelForChunks(count, num_threads, kPointsPerChunk, [&](size_t k) {
+      thread_local std::vector<BlockRows> scratch;
+      evaluated[k] = EvaluatePointW(round, reduced, first + static_cast<int>(k), &scratch, &W[k]);
+    });
+    for (int k = 0; k < count; ++k) {
+      if (!evaluated[k]) return false;
+      use(first + k, W[k]);
+    }
+  }
+  return true;
+}
+
 int SupportCovariance::Offset(int e_block) const {
   const auto found = std::lower_bound(blocks.begin(), blocks.end(), e_block);
   if (found == blocks.end() || *found != e_block) return -1;
   return block_offset[found - blocks.begin()];
 }
 
-bool MakeSupportCovariance(const ReducedNormals& reduced, int p, const std::vector<int>& blocks,
-                           SupportCovariance* support) {
+bool MakeSupportCovariance(const ReducedNormals& reduced, int p, const Eigen::MatrixXd* W,
+                           const std::vector<int>& blocks, SupportCovariance* support) {
   support->blocks = p >= 0 ? reduced.W_blocks[p] : blocks;
   std::sort(support->blocks.begin(), support->blocks.end());
   support->block_offset.assign(support->blocks.size(), 0);
@@ -440,7 +496,7 @@ bool MakeSupportCovariance(const ReducedNormals& reduced, int p, const std::vect
   }
   if (!reduced.C.Blocks(support->blocks, &support->C)) return false;
   if (p >= 0) {
-    support->WV = reduced.W[p] * reduced.V_inverse[p];
+    support->WV = *W * reduced.V_inverse[p];
     support->T = support->C * support->WV;
     support->Q = support->WV.transpose() * support->T;
   } else {

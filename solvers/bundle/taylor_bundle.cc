@@ -669,10 +669,11 @@ BundleAdjustmentOptions AdjustmentOptionsOf(const TaylorBundleOptions& options) 
 
 // The statistics of each round's solution, by BundleAdjust's code
 // (internal::ComputeBundleStatistics) so that both solvers report one set of figures. That code
-// evaluates each observation's whitened rows through a round's Ceres problem: it is built here at
-// the first solution and never solved, and later rounds update it in place as BundleAdjust does
-// (its cost: statistics_setup_seconds). A second implementation of every row in Ceres' tangent
-// spaces behind an interface would be a second derivative path to keep in agreement with the first.
+// evaluates each observation's whitened rows by the cost functions of BundleAdjust's problem, made
+// when asked from the round's rows alone (internal::BuildBundleRoundRows, per round: its cost is
+// statistics_setup_seconds): no Ceres problem, which this solver never solves, and no cost object
+// held per mark. A second implementation of every row in Ceres' tangent spaces behind an
+// interface would be a second derivative path to keep in agreement with the first.
 struct Statistics {
   Statistics(const BundleAdjustmentOptions& options, const BundleAdjustmentConfig& config,
              const Block& block, const Plan& plan)
@@ -685,11 +686,10 @@ struct Statistics {
   const BundleAdjustmentConfig& config;
   const Block& block;
   const Plan& plan;
-  internal::BundleState ground;  // the solution in the ground frame; the problem points into it
-  internal::BundleRound round;
-  bool built = false;
+  internal::BundleState ground;  // the solution in the ground frame; the round points into it
+  internal::BundleRound round;   // rows alone
 
-  // The solution in the ground frame, in place: the problem holds pointers to these values.
+  // The solution in the ground frame, in place: the round holds pointers to these values.
   void SetGround(const State& state, const Frame& frame) {
     for (size_t i = 0; i < block.images.size(); ++i) {
       ground.eo[i] = state.eo[i];
@@ -697,7 +697,7 @@ struct Statistics {
     }
     for (size_t p = 0; p < block.points.size(); ++p)
       if (plan.point_in_problem[p]) ground.points[p] = state.points[p] + frame.centroid;
-    // In place: the problem's camera blocks point into these vectors.
+    // In place: the round's camera blocks point into these vectors.
     for (size_t c = 0; c < block.cameras.size(); ++c)
       std::copy(state.cameras[c].begin(), state.cameras[c].end(), ground.cameras[c].begin());
     ground.lever = state.lever;
@@ -705,14 +705,11 @@ struct Statistics {
 
   // An error when the normal matrix at the solution is singular (naming what is undetermined):
   // the adjustment then fails, as BundleAdjust's does.
-  Status Compute(const State& state, const Frame& frame, bool marks_removed_only,
-                 TaylorBundleSummary* summary, BundleAdjustmentResult* out,
-                 internal::GroupVariance* variance) {
+  Status Compute(const State& state, const Frame& frame, TaylorBundleSummary* summary,
+                 BundleAdjustmentResult* out, internal::GroupVariance* variance) {
     Clock::time_point start = Clock::now();
     SetGround(state, frame);
-    if (!(built && marks_removed_only && internal::UpdateBundleRound(plan, &round)))
-      internal::BuildBundleRound(options, config, block, plan, &ground, &round);
-    built = true;
+    internal::BuildBundleRoundRows(options, config, block, plan, &ground, &round);
     summary->statistics_setup_seconds += SecondsSince(start);
     start = Clock::now();
     out->summary.sigma0 = summary->sigma0;
@@ -726,12 +723,11 @@ struct Statistics {
   }
 
   // What a singular reduced normal matrix at `state` leaves undetermined, named as BundleAdjust
-  // names it (internal::CheckBundleDeterminacy on the Ceres problem of that state); Ok when that
-  // check finds S regular after all.
+  // names it (internal::CheckBundleDeterminacy on the round of that state); Ok when that check
+  // finds S regular after all.
   Status NameUndetermined(const State& state, const Frame& frame) {
     SetGround(state, frame);
-    internal::BuildBundleRound(options, config, block, plan, &ground, &round);
-    built = true;
+    internal::BuildBundleRoundRows(options, config, block, plan, &ground, &round);
     double factorization_seconds = 0.0;
     return internal::CheckBundleDeterminacy(block, plan, ground, round, options.solver.num_threads,
                                             &factorization_seconds);
@@ -1078,7 +1074,6 @@ SolverTermination AdjustRound(const Context& context, int round, Rounds* rounds,
     // Stalled: on from here as least squares, this round and the rest, statistics included.
     rounds->plan->tie_loss.reset();
     rounds->adjustment_options->robustness.tie_loss = LossType::kNone;
-    rounds->statistics->built = false;
     rounds->stalled =
         internal::TieLossStalledMessage(round, options.tie_loss, options.max_iterations);
     type = RunRound(context, round, /*free_gauge=*/false, &rounds->layout, rounds->state,
@@ -1188,7 +1183,6 @@ Status TaylorBundleAdjust(const TaylorBundleOptions& options,
   internal::RoundChanges changes(adjustment_options, config, *block, &plan, &out, &variance);
   Statistics statistics(adjustment_options, config, *block, plan);
   Rounds rounds{&plan, &state, &adjustment_options, &statistics, {}, {}, {}, {}};
-  bool marks_removed_only = false;
   // The steps' notices (snooping not done or stopped, accuracies not estimated, variance
   // components not settled) are the adjustment's, not a round's: kept past the next round, whose
   // statistics start the message again.
@@ -1209,8 +1203,7 @@ Status TaylorBundleAdjust(const TaylorBundleOptions& options,
     rounds.layout = Layout();
     rounds.normal = Normal();
     rounds.reduction.reset();
-    const Status determined =
-        statistics.Compute(state, frame, marks_removed_only, &summary, &out, &variance);
+    const Status determined = statistics.Compute(state, frame, &summary, &out, &variance);
     if (!determined.ok()) {
       summary.sigma0 = kNaN;
       return FinishAdjustment(SolverTermination::kFailure,
@@ -1224,7 +1217,6 @@ Status TaylorBundleAdjust(const TaylorBundleOptions& options,
     if (out.summary.message.size() > said)
       internal::AddRoundNotice(out.summary.message.substr(said == 0 ? 0 : said + 2), &notices);
     if (change == internal::RoundChange::kNone) break;
-    marks_removed_only = change == internal::RoundChange::kMarksRemoved;
   }
   const Status determined =
       CheckDeterminacyWithoutCovariances(adjustment_options, &statistics, &summary);
@@ -1259,7 +1251,7 @@ Status BundleAdjustWithSolver(PoseSolver solver, const BundleAdjustmentOptions& 
   TaylorBundleResult& taylor = taylor_result != nullptr ? *taylor_result : local;
   const Status status = TaylorBundleAdjust(taylor_options, config, block, &taylor);
   // Moved when the caller keeps no Taylor result: a copy would hold the per-observation
-  // diagnostics twice (3.4 million of 72 bytes at 1000 images).
+  // diagnostics twice (3.4 million of 64 bytes at 1000 images).
   if (taylor_result != nullptr) {
     *result = taylor.adjustment;
   } else {

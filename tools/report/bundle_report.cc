@@ -763,11 +763,12 @@ std::string ConsoleTimeLine(const BundleAdjustmentSummary& s) {
   auto seconds = [](double value) { return FormatSignificant(value, 3) + " s"; };
   std::ostringstream time;
   if (s.solver != PoseSolver::kCeres) {
-    // The hand-written normal equations: no Ceres solve, only its problem for the statistics.
+    // The hand-written normal equations: no Ceres solve and no Ceres problem, only the round's
+    // rows for the statistics (internal::BuildBundleRoundRows).
     double rounds = 0.0;
     for (const double r : s.round_seconds) rounds += r;
     time << "time: rounds " << seconds(rounds) << " (" << EnumName(s.solver)
-         << ": hand-written normal equations), problem for the statistics "
+         << ": hand-written normal equations), rows for the statistics "
          << seconds(s.problem_build_seconds) << ", statistics " << seconds(s.statistics_seconds);
   } else {
     time << "time: problem " << seconds(s.problem_build_seconds) << ", Ceres preprocessing "

@@ -154,7 +154,12 @@ Status RecheckBundlePlan(const BundleAdjustmentConfig& config, const Block& bloc
 BundleState StartState(const BundleAdjustmentConfig& config, const Block& block);
 
 // The Ceres problem of an adjustment's rounds and what it needs to stay alive. Built once; a
-// rejection round switches the rejected marks off in place (UpdateBundleRound).
+// rejection round switches the rejected marks off in place (UpdateBundleRound). Or a round of
+// rows alone, without a problem (BuildBundleRoundRows): what the statistics read of a round (its
+// residual blocks' costs and parameter blocks, ResidualBlockOf; its variable blocks), made when
+// asked by the rule a problem is built by, for an adjustment that never solves it (the Taylor
+// adjustment's statistics): no Ceres objects and no cost per mark held (about 190 bytes a mark
+// less).
 struct BundleRound {
   // Declared before the problem, which refers to them, so that they outlive it. The problem owns
   // none of them: Ceres keeps an ordered map of the cost functions it owns (48 bytes and a tree
@@ -164,13 +169,23 @@ struct BundleRound {
   std::vector<CollinearityCamera> cameras;             // per camera: what its marks' costs share
   std::vector<CollinearityMarkFunctor*> mark_functor;  // per mark (block order): inside its cost
   std::vector<std::unique_ptr<ceres::CostFunction>> costs;
-  std::unique_ptr<ceres::Problem> problem;
-  // The residual blocks in use (switched-off marks are not listed).
+  std::unique_ptr<ceres::Problem> problem;  // null: a round of rows alone
+  // What a round of rows alone makes its residual blocks from (ResidualBlockOf): the block, the
+  // plan, the values the parameter blocks point into, the collinearity costs' derivative path.
+  const Block* block = nullptr;
+  const BundlePlan* plan = nullptr;
+  BundleState* state = nullptr;
+  JacobianType jacobian = JacobianType::kAnalytic;
+  // The residual blocks in use (switched-off marks are not listed; id null in a round of rows
+  // alone).
   std::vector<ResidualInfo> residuals;
   // The variable blocks: exterior orientations, camera parameters, lever arm ("e" blocks, the
-  // reduced system) with their tangent sizes, then the points (eliminated).
+  // reduced system) with their tangent sizes, ambient sizes and manifolds (null: none), then the
+  // points (eliminated; 3 ambient and tangent, no manifold).
   std::vector<double*> e_blocks;
   std::vector<int> e_sizes;
+  std::vector<int> e_ambient_sizes;
+  std::vector<const ceres::Manifold*> e_manifolds;
   std::vector<double*> point_blocks;
   std::vector<int> point_of_block;  // point index of each point block
   int num_free_parameters = 0;
@@ -181,6 +196,21 @@ struct BundleRound {
 void BuildBundleRound(const BundleAdjustmentOptions& options, const BundleAdjustmentConfig& config,
                       const Block& block, const BundlePlan& plan, BundleState* state,
                       BundleRound* round);
+// The same round without a Ceres problem: its rows alone, for statistics that never solve it.
+// block, plan and *state must outlive it.
+void BuildBundleRoundRows(const BundleAdjustmentOptions& options,
+                          const BundleAdjustmentConfig& config, const Block& block,
+                          const BundlePlan& plan, BundleState* state, BundleRound* round);
+// The cost function of residual block `info` and its parameter blocks (ambient, in the cost's
+// order): the problem's own, or in a round of rows alone made for the call (owned by *made) by
+// the rule the problem is built by, so that both evaluate the same. Safe on several threads at
+// once, each with its own *made and *parameters.
+const ceres::CostFunction* ResidualBlockOf(const BundleRound& round, const ResidualInfo& info,
+                                           std::unique_ptr<ceres::CostFunction>* made,
+                                           std::vector<double*>* parameters);
+// Its parameter blocks alone.
+void ResidualParameters(const BundleRound& round, const ResidualInfo& info,
+                        std::vector<double*>* parameters);
 // Brings a built round up to `plan` after marks were rejected (plan.mark_used cleared; tie points
 // left with too few rays out of plan.point_in_problem), without building the problem again: the
 // marks get a zero weight (their residual blocks stay, with zero residuals and Jacobians, so that

@@ -68,10 +68,13 @@ class InnerConstraintTransform {
   // Compute's steps once G is known (image_G_, PointRows): the right-hand side W G on the round's
   // parameters with the points eliminated, and G^T W G; the points' y_p = V_p^-1 (b_p - W_p^T y_e)
   // into point_M_; then M = Y A and Q = A G^T W Y A. image_block: per image its e block or -1.
-  void RightHandSide(bool on_points, const BundlePlan& plan, const BundleRound& round,
+  // The points' W_p made again from their rows (ForEachPointW, on num_threads threads); false
+  // when a row cannot be evaluated.
+  bool RightHandSide(bool on_points, const BundlePlan& plan, const BundleRound& round,
                      const ReducedNormals& reduced, const std::vector<int>& image_block,
-                     Eigen::MatrixXd* rhs, Eigen::Matrix<double, 7, 7>* GtWG) const;
-  void BackSubstitutePoints(bool on_points, const ReducedNormals& reduced,
+                     int num_threads, Eigen::MatrixXd* rhs,
+                     Eigen::Matrix<double, 7, 7>* GtWG) const;
+  bool BackSubstitutePoints(bool on_points, const BundleRound& round, const ReducedNormals& reduced,
                             const Eigen::MatrixXd& y_e, int num_threads);
   void MakeTransform(bool on_points, const BundlePlan& plan, const BundleRound& round,
                      const ReducedNormals& reduced, const std::vector<int>& image_block,

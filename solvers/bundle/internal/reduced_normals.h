@@ -8,6 +8,8 @@
 
 #include <Eigen/Core>
 #include <cstdint>
+#include <functional>
+#include <memory>
 #include <string>
 #include <unordered_map>
 #include <vector>
@@ -49,7 +51,8 @@ struct ReducedNormals {
   std::vector<int> point_order;
   std::vector<Eigen::Matrix3d> V_inverse;       // per point block
   std::vector<std::vector<int>> W_blocks;       // per point block: e blocks it touches, ascending
-  std::vector<Eigen::MatrixXd> W;               // per point block: (their columns x 3) of J_e^T J_p
+  // A point's W (J_e^T J_p on its W_blocks) is not kept (144 bytes a mark, 247 MB at 1000
+  // images): PointW makes it again from the point's rows where it is needed.
   SelectedInverse C;                            // S^-1 (unscaled) on the filled pattern
   int64_t S_nonzeros = 0;                       // stored entries of S (both triangles)
   bool ok = false;
@@ -80,17 +83,35 @@ struct BlockRows {
   Eigen::Matrix<double, Eigen::Dynamic, 3> J_p;  // rows x 3, when `point` >= 0
   int point = -1;                                // index into the reduced point data, or -1
   // Scratch of the evaluation, kept to spare allocations when one BlockRows is reused.
+  std::unique_ptr<ceres::CostFunction> made;  // the cost made in a round of rows alone
   std::vector<double*> parameters;
   std::vector<double*> jacobians;
   std::vector<double> ambient;
 };
 // The rows of residual block `info` at the round's solution, without loss function. Calls the
-// cost function itself (Ceres' Problem::EvaluateResidualBlock resets the state of every parameter
-// block it touches, so two threads must not call it), with the manifolds' Jacobians of
-// reduced.variables: safe on several threads at once, each with its own `rows`. False when the
-// cost function fails.
+// cost function itself (ResidualBlockOf; Ceres' Problem::EvaluateResidualBlock resets the state of
+// every parameter block it touches, so two threads must not call it), with the manifolds'
+// Jacobians of reduced.variables: safe on several threads at once, each with its own `rows`.
+// False when the cost function fails.
 bool EvaluateBlockRows(const BundleRound& round, const ReducedNormals& reduced,
                        const ResidualInfo& info, BlockRows* rows);
+
+// Point p's W = J_e^T J_p (the columns of its W_blocks, in that order, x 3), made again from its
+// rows by the arithmetic of BuildReducedNormals' elimination (the same products summed in the
+// same order: the same bits). rows[k]: the rows of residual block
+// reduced.residual_order[reduced.point_residual_start[p] + k] (EvaluateBlockRows).
+void PointW(const BundleRound& round, const ReducedNormals& reduced, int p, const BlockRows* rows,
+            Eigen::MatrixXd* W);
+// The same with the point's rows evaluated here (`scratch`: the rows, kept to spare
+// allocations). False when a residual block cannot be evaluated.
+bool EvaluatePointW(const BundleRound& round, const ReducedNormals& reduced, int p,
+                    std::vector<BlockRows>* scratch, Eigen::MatrixXd* W);
+// Every point's W (EvaluatePointW), made on num_threads threads (0: every core) a wave of chunks
+// at a time and handed to `use` one point after another in point index order, on the calling
+// thread (a sum over the points in `use` is the same on any number of threads). False when a
+// residual block cannot be evaluated (`use` then sees only some points).
+bool ForEachPointW(const BundleRound& round, const ReducedNormals& reduced, int num_threads,
+                   const std::function<void(int p, const Eigen::MatrixXd& W)>& use);
 
 // What the rows of one point (or of a prior on e blocks alone) need of C: its submatrix on the e
 // blocks they touch (a point's: every pair of its images, which share it, so on the pattern of
@@ -104,10 +125,10 @@ struct SupportCovariance {
   Eigen::Matrix3d Q = Eigen::Matrix3d::Zero();  // WV^T C WV
   int Offset(int e_block) const;  // row of an e block in `C`, or -1
 };
-// For point block p (blocks: its W_blocks) or, with p = -1, the given e blocks. False when C is
-// not known on them.
-bool MakeSupportCovariance(const ReducedNormals& reduced, int p, const std::vector<int>& blocks,
-                           SupportCovariance* support);
+// For point block p (blocks: its W_blocks; W: its PointW) or, with p = -1 (W null), the given e
+// blocks. False when C is not known on them.
+bool MakeSupportCovariance(const ReducedNormals& reduced, int p, const Eigen::MatrixXd* W,
+                           const std::vector<int>& blocks, SupportCovariance* support);
 
 // Unscaled covariance of point block p: V^-1 + V^-1 W^T C W V^-1 (support: MakeSupportCovariance
 // of p).

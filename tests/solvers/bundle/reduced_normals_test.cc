@@ -54,14 +54,21 @@ void MakeRound(bool relative, RoundFixture* f, double tie_point_density_per_m2 =
   ASSERT_FALSE(f->round.residuals.empty());
 }
 
+// S factorised only, or inverted densely (the test oracle).
+SelectedInversionOptions InversionOptions(bool factor_only, bool dense) {
+  SelectedInversionOptions options;
+  options.factor_only = factor_only;
+  options.dense = dense;
+  return options;
+}
+
 // Every residual block's rows: residuals and tangent-space Jacobians as Ceres evaluates them.
 void ExpectRowsAsCeres(bool relative) {
   RoundFixture f;
   MakeRound(relative, &f);
   ReducedNormals reduced;
-  SelectedInversionOptions factor_only;
-  factor_only.factor_only = true;
-  BuildReducedNormals(f.round, factor_only, 1, &reduced);
+  BuildReducedNormals(f.round, InversionOptions(/*factor_only=*/true, /*dense=*/false), 1,
+                      &reduced);
   ceres::Problem& problem = *f.round.problem;
   int with_manifold = 0, compared = 0;
   BlockRows rows;
@@ -135,8 +142,19 @@ TEST(ReducedNormals, TheSameBitForBitOnOneAndOnSeveralThreads) {
     for (size_t p = 0; p < one.V_inverse.size(); ++p) {
       EXPECT_EQ(one.V_inverse[p], three.V_inverse[p]) << "point " << p;
       EXPECT_EQ(one.W_blocks[p], three.W_blocks[p]) << "point " << p;
-      EXPECT_EQ(one.W[p], three.W[p]) << "point " << p;
     }
+    // Every point's W, made again from its rows on 1 and on 3 threads.
+    std::vector<Eigen::MatrixXd> W_one, W_three;
+    ASSERT_TRUE(ForEachPointW(f.round, one, 1, [&](int p, const Eigen::MatrixXd& W) {
+      ASSERT_EQ(p, static_cast<int>(W_one.size()));
+      W_one.push_back(W);
+    }));
+    ASSERT_TRUE(ForEachPointW(f.round, three, 3, [&](int p, const Eigen::MatrixXd& W) {
+      ASSERT_EQ(p, static_cast<int>(W_three.size()));
+      W_three.push_back(W);
+    }));
+    ASSERT_EQ(W_one.size(), one.V_inverse.size());
+    EXPECT_EQ(W_one, W_three);
     const int num_blocks = one.C.num_blocks();
     ASSERT_GT(num_blocks, 1);
     Eigen::MatrixXd a, b;
@@ -150,6 +168,125 @@ TEST(ReducedNormals, TheSameBitForBitOnOneAndOnSeveralThreads) {
     std::sort(order.begin(), order.end());
     for (size_t r = 0; r < order.size(); ++r) ASSERT_EQ(order[r], static_cast<int>(r));
     EXPECT_EQ(order.size(), f.round.residuals.size());
+  }
+}
+
+// A point's W made again from its rows (PointW) against J_e^T J_p of the same rows written out
+// densely on the round's e columns, and the reduced matrix against U - sum W V^-1 W^T from them.
+TEST(ReducedNormals, PointWIsTheProductOfThePointsRows) {
+  // Summation order only: the products of the same rows, summed in another order.
+  constexpr double kSumAgreement = 1e-12;
+  for (const bool relative : {false, true}) {
+    SCOPED_TRACE(relative ? "relative" : "gnss");
+    RoundFixture f;
+    MakeRound(relative, &f);
+    ReducedNormals reduced;
+    BuildReducedNormals(f.round, InversionOptions(/*factor_only=*/false, /*dense=*/true), 2,
+                        &reduced);
+    ASSERT_TRUE(reduced.ok) << reduced.message;
+    const int n = reduced.size;
+    Eigen::MatrixXd S = Eigen::MatrixXd::Zero(n, n);  // U - sum W V^-1 W^T, densely
+    BlockRows rows;
+    for (const ResidualInfo& info : f.round.residuals) {
+      ASSERT_TRUE(EvaluateBlockRows(f.round, reduced, info, &rows));
+      for (size_t a = 0; a < rows.e_columns.size(); ++a)
+        for (size_t b = 0; b < rows.e_columns.size(); ++b)
+          S(rows.e_columns[a], rows.e_columns[b]) += rows.J_e.col(a).dot(rows.J_e.col(b));
+    }
+    std::vector<BlockRows> scratch;
+    int compared = 0;
+    for (int p = 0; p < static_cast<int>(reduced.V_inverse.size()); ++p) {
+      Eigen::MatrixXd expected = Eigen::MatrixXd::Zero(n, 3);  // J_e^T J_p on every e column
+      for (int k = reduced.point_residual_start[p]; k < reduced.point_residual_start[p + 1]; ++k) {
+        ASSERT_TRUE(EvaluateBlockRows(f.round, reduced,
+                                      f.round.residuals[reduced.residual_order[k]], &rows));
+        ASSERT_EQ(rows.point, p);
+        for (size_t a = 0; a < rows.e_columns.size(); ++a)
+          expected.row(rows.e_columns[a]) += rows.J_e.col(a).transpose() * rows.J_p;
+      }
+      Eigen::MatrixXd W;
+      ASSERT_TRUE(EvaluatePointW(f.round, reduced, p, &scratch, &W));
+      // W's rows are its W_blocks' columns, in that order.
+      Eigen::MatrixXd placed = Eigen::MatrixXd::Zero(n, 3);
+      int row = 0;
+      for (const int b : reduced.W_blocks[p]) {
+        const int size = f.round.e_sizes[b];
+        placed.middleRows(reduced.e_offset[b], size) = W.middleRows(row, size);
+        row += size;
+      }
+      ASSERT_EQ(row, W.rows());
+      EXPECT_LE((placed - expected).norm(), kSumAgreement * expected.norm()) << "point " << p;
+      S -= placed * reduced.V_inverse[p] * placed.transpose();
+      ++compared;
+    }
+    EXPECT_GT(compared, 50);
+    // The dense oracle's C is S^-1.
+    Eigen::MatrixXd C(n, n);
+    for (int a = 0; a < reduced.C.num_blocks(); ++a) {
+      for (int b = 0; b < reduced.C.num_blocks(); ++b) {
+        Eigen::MatrixXd block;
+        ASSERT_TRUE(reduced.C.Block(a, b, &block));
+        C.block(reduced.e_offset[a], reduced.e_offset[b], block.rows(), block.cols()) = block;
+      }
+    }
+    // S C = I to rounding, norm-wise (an inverse's backward error: conditioning does not enter).
+    // A W made otherwise (another order of its rows, a part left out) changes S by about W V^-1
+    // W^T, far above this.
+    constexpr double kInverseBackwardError = 1e-11;
+    const Eigen::MatrixXd identity = Eigen::MatrixXd::Identity(n, n);
+    EXPECT_LE((S * C - identity).norm(), kInverseBackwardError * S.norm() * C.norm());
+  }
+}
+
+// A round of rows alone (no Ceres problem, its costs made when asked) has every row, variable
+// block and entry of C of the round built into a problem, bit for bit.
+TEST(ReducedNormals, ARoundOfRowsAloneIsTheRoundOfTheProblem) {
+  for (const bool relative : {false, true}) {
+    SCOPED_TRACE(relative ? "relative" : "gnss");
+    RoundFixture f;
+    MakeRound(relative, &f);
+    // The plan's own gauge (the fixture's round is built without it and then moved into it).
+    BuildBundleRound(f.options, f.config, f.block, f.plan, &f.state, &f.round);
+    BundleRound rows_alone;
+    BuildBundleRoundRows(f.options, f.config, f.block, f.plan, &f.state, &rows_alone);
+    ASSERT_EQ(rows_alone.problem, nullptr);
+    EXPECT_TRUE(rows_alone.costs.empty());
+    ASSERT_EQ(rows_alone.residuals.size(), f.round.residuals.size());
+    EXPECT_EQ(rows_alone.e_blocks, f.round.e_blocks);
+    EXPECT_EQ(rows_alone.e_sizes, f.round.e_sizes);
+    EXPECT_EQ(rows_alone.point_blocks, f.round.point_blocks);
+    EXPECT_EQ(rows_alone.redundancy(), f.round.redundancy());
+    for (size_t k = 0; k < f.round.e_blocks.size(); ++k) {
+      EXPECT_EQ(rows_alone.e_ambient_sizes[k],
+                f.round.problem->ParameterBlockSize(f.round.e_blocks[k]));
+      EXPECT_EQ(f.round.e_manifolds[k], f.round.problem->GetManifold(f.round.e_blocks[k]));
+    }
+    ReducedNormals a, b;
+    BuildReducedNormals(f.round, SelectedInversionOptions(), 2, &a);
+    BuildReducedNormals(rows_alone, SelectedInversionOptions(), 2, &b);
+    ASSERT_TRUE(a.ok) << a.message;
+    ASSERT_TRUE(b.ok) << b.message;
+    BlockRows rows_a, rows_b;
+    for (size_t r = 0; r < f.round.residuals.size(); ++r) {
+      const ResidualInfo& info = f.round.residuals[r];
+      ASSERT_EQ(rows_alone.residuals[r].group, info.group);
+      ASSERT_EQ(rows_alone.residuals[r].item, info.item);
+      ASSERT_EQ(rows_alone.residuals[r].first_axis, info.first_axis);
+      ASSERT_TRUE(EvaluateBlockRows(f.round, a, info, &rows_a));
+      ASSERT_TRUE(EvaluateBlockRows(rows_alone, b, rows_alone.residuals[r], &rows_b));
+      EXPECT_EQ(rows_a.residuals, rows_b.residuals) << "residual " << r;
+      EXPECT_EQ(rows_a.e_columns, rows_b.e_columns) << "residual " << r;
+      EXPECT_EQ(rows_a.J_e, rows_b.J_e) << "residual " << r;
+      EXPECT_EQ(rows_a.point, rows_b.point) << "residual " << r;
+      if (rows_a.point >= 0) EXPECT_EQ(rows_a.J_p, rows_b.J_p) << "residual " << r;
+    }
+    ASSERT_EQ(a.C.num_blocks(), b.C.num_blocks());
+    Eigen::MatrixXd block_a, block_b;
+    for (int k = 0; k < a.C.num_blocks(); ++k) {
+      ASSERT_TRUE(a.C.Block(k, k, &block_a));
+      ASSERT_TRUE(b.C.Block(k, k, &block_b));
+      EXPECT_EQ(block_a, block_b) << "block " << k;
+    }
   }
 }
 
