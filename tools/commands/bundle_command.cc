@@ -230,6 +230,8 @@ int CheckInputChoice(const char* command, BundleRun* run) {
       return BadInput(command, "give the control as --gcp_list or as --points with --marks, not both");
     if (!FLAGS_bundle_points.empty() && FLAGS_bundle_marks.empty())
       return BadInput(command, "--points with --colmap_model needs --marks (the control points' image marks)");
+    if (!FLAGS_bundle_marks.empty() && FLAGS_bundle_points.empty())
+      return BadInput(command, "--marks beside --colmap_model or --opensfm are the control points' image marks: give their --points (with --crs) too");
     // A frames table may name its CRS in its SRS column (PositionsFromFrames); a points table has none.
     if (!FLAGS_bundle_points.empty() && FLAGS_bundle_crs.empty())
       return BadInput(command, "--crs is needed: a points table has no SRS column, so --points carry no coordinate system (e.g. --crs=EPSG:32632)");
@@ -985,7 +987,20 @@ Status WriteBundleOutputs(const BundleRun& run, bool usable) {
       stage(FLAGS_bundle_out_colmap + "/" + names[0], model.model.cameras);
       stage(FLAGS_bundle_out_colmap + "/" + names[1], model.model.images);
       stage(FLAGS_bundle_out_colmap + "/" + names[2], model.model.points3D);
-      if (run.georeference) stage(FLAGS_bundle_out_colmap + "/" + kGeoreferenceJsonName, model.georeference_json);
+      if (run.georeference) {
+        stage(FLAGS_bundle_out_colmap + "/" + kGeoreferenceJsonName, model.georeference_json);
+      } else if (!FLAGS_bundle_colmap_model.empty()) {
+        // A relative adjustment keeps the model's frame (its gauge moves it by the noise, issue
+        // 21): the georeference.json of a model georeferenced before goes with it, or the written
+        // model would lose what ties its coordinates to the Earth.
+        const std::string frame_json = FLAGS_bundle_colmap_model + "/" + kGeoreferenceJsonName;
+        std::error_code error;
+        if (std::filesystem::is_regular_file(frame_json, error)) {
+          std::string text;
+          status = ReadTextFile(frame_json, &text);
+          stage(FLAGS_bundle_out_colmap + "/" + kGeoreferenceJsonName, text);
+        }
+      }
     }
   }
   if (status.ok()) status = CommitUnlessCancelled(&final_outputs);
