@@ -1,4 +1,4 @@
-// OpenDroneMap's gcp_list.txt and geo.txt: read (core/io/tables.h).
+// OpenDroneMap's gcp_list.txt and geo.txt: read and written (core/io/tables.h).
 #include "core/io/tables.h"
 
 
@@ -65,6 +65,23 @@ Status ForEachDataLine(std::string_view text, Visit visit) {
     if (line > 1 && (words.empty() || words[0].front() == '#')) continue;
     PHOTOPOSE_RETURN_IF_ERROR(visit(line, words));
   }
+  return Status::Ok();
+}
+
+// A name written as one field of a gcp_list.txt / geo.txt line: not empty, no white space.
+bool IsOneWord(std::string_view name) {
+  return !name.empty() && std::none_of(name.begin(), name.end(),
+                                       [](char c) { return std::isspace(static_cast<unsigned char>(c)); });
+}
+
+// The first line of a gcp_list.txt / geo.txt written: the CRS, refused as ReadCrsLine refuses it.
+Status AppendCrsLine(const std::string& crs, const std::string& path, std::string* text) {
+  if (!IsGcpCrs(crs)) {
+    return Status::Error(EscapeForMessage(
+        path + ": CRS: " + QuotedForMessage(crs) +
+        " cannot be written as the first line (EPSG:<code>, WGS84 UTM <zone><N|S>, or a +proj=... string)"));
+  }
+  *text += crs + "\n";
   return Status::Ok();
 }
 
@@ -137,7 +154,75 @@ Status ParseGcpList(std::string_view text, const std::string& file_name, GcpList
   return Status::Ok();
 }
 
+Status FormatGcpList(const GcpList& gcp_list, const std::string& path, std::string* text) {
+  std::string out;
+  PHOTOPOSE_RETURN_IF_ERROR(AppendCrsLine(gcp_list.crs, path, &out));
+  std::map<std::string, const GroundPoint*> points;
+  for (const GroundPoint& point : gcp_list.points) points.emplace(point.point_id, &point);
+  for (const ImageMark& mark : gcp_list.marks) {
+    const auto error = [&](const std::string& what) {
+      return Status::Error(EscapeForMessage(path + ": mark of point " + QuotedForMessage(mark.point_id) + " in image " +
+                                            QuotedForMessage(mark.raster) + ": " + what));
+    };
+    if (!IsOneWord(mark.point_id) || !IsOneWord(mark.raster))
+      return error("names must be one word (the fields of a line are separated by white space)");
+    const auto point = points.find(mark.point_id);
+    if (point == points.end()) return error("the point is not in the list");
+    if (!mark.column_row) return error("a gcp_list.txt holds pixel marks (Column, Row) only");
+    if (!point->second->position.allFinite() || !mark.column_row->allFinite())
+      return error("a coordinate is not a finite number");
+    for (const double value : {point->second->position.x(), point->second->position.y(), point->second->position.z(),
+                               mark.column_row->x(), mark.column_row->y()}) {
+      AppendFormattedNumber(value, &out);
+      out += ' ';
+    }
+    out += mark.raster + " " + mark.point_id + "\n";
+  }
+  *text = std::move(out);
+  return Status::Ok();
+}
+
 // ------------------------------------------------------------------ geo.txt
+
+Status FormatGeoTxt(const GeoTxt& geo, const std::string& path, std::string* text) {
+  std::string out;
+  PHOTOPOSE_RETURN_IF_ERROR(AppendCrsLine(geo.crs, path, &out));
+  for (const GeoTxtRecord& record : geo.records) {
+    const auto error = [&](const std::string& what) {
+      return Status::Error(EscapeForMessage(path + ": image " + QuotedForMessage(record.image) + ": " + what));
+    };
+    if (!IsOneWord(record.image))
+      return error("the name must be one word (the fields of a line are separated by white space)");
+    const bool accuracies = record.horizontal_accuracy_m.has_value() || record.vertical_accuracy_m.has_value();
+    if (accuracies && !(record.horizontal_accuracy_m && record.vertical_accuracy_m))
+      return error("the accuracies come as two (horizontal vertical)");
+    if (!record.has_height && (accuracies || record.yaw_pitch_roll_deg))
+      return error("a line without height cannot give attitudes or accuracies (the fields are positional)");
+    const int numbers = record.has_height ? 3 : 2;
+    if (!record.position.head(numbers).allFinite()) return error("a coordinate is not a finite number");
+    out += record.image;
+    for (int i = 0; i < numbers; ++i) {
+      out += ' ';
+      AppendFormattedNumber(record.position[i], &out);
+    }
+    if (record.yaw_pitch_roll_deg || accuracies) {
+      const Eigen::Vector3d ypr = record.yaw_pitch_roll_deg.value_or(Eigen::Vector3d::Zero());
+      for (int i = 0; i < 3; ++i) {
+        out += ' ';
+        AppendFormattedNumber(ypr[i], &out);
+      }
+    }
+    if (accuracies) {
+      out += ' ';
+      AppendFormattedNumber(*record.horizontal_accuracy_m, &out);
+      out += ' ';
+      AppendFormattedNumber(*record.vertical_accuracy_m, &out);
+    }
+    out += '\n';
+  }
+  *text = std::move(out);
+  return Status::Ok();
+}
 
 Status ParseGeoTxt(std::string_view text, const std::string& file_name, GeoTxt* geo) {
   PHOTOPOSE_RETURN_IF_ERROR(CheckTextInput(text, file_name));

@@ -198,6 +198,12 @@ struct GcpList {
 };
 Status ReadGcpList(const std::string& path, GcpList* gcp_list);
 Status ParseGcpList(std::string_view text, const std::string& file_name, GcpList* gcp_list);
+// The text of a gcp_list.txt: the CRS line, then "X Y Z px py image name" per mark, in the order
+// of gcp_list.marks (each mark repeats its point's coordinates; numbers as FormatNumber, so they
+// read back exactly). Refused, naming `path` and the mark: a mark of a point not in the list, a
+// mark without Column/Row (a film mark), a number that is not finite, a CRS that ParseGcpList would refuse, an empty name or one
+// with white space (the fields are separated by it).
+Status FormatGcpList(const GcpList& gcp_list, const std::string& path, std::string* text);
 
 // ------------------------------------------------------------------ OpenDroneMap geo.txt
 // Camera positions. First line: the CRS (as in gcp_list.txt); then per line, positionally (ODM)
@@ -225,6 +231,13 @@ struct GeoTxt {
 };
 Status ReadGeoTxt(const std::string& path, GeoTxt* geo);
 Status ParseGeoTxt(std::string_view text, const std::string& file_name, GeoTxt* geo);
+// The text of a geo.txt: the CRS line, then per record "image x y" and, with a height, "z", then
+// "yaw pitch roll" (ODM's "0 0 0", not available, when absent and accuracies follow) and the two
+// accuracies when both are given (numbers as FormatNumber). Refused, naming `path` and the image:
+// a CRS that ParseGeoTxt would refuse, an empty image name or one with white space, a coordinate
+// that is not finite, accuracies on a
+// record without height (the fields are positional), one accuracy without the other.
+Status FormatGeoTxt(const GeoTxt& geo, const std::string& path, std::string* text);
 
 // ------------------------------------------------------------------ consistency
 // Checks that every mark names a known point. Messages name the file and line of the mark. (Cameras

@@ -173,6 +173,9 @@ struct BundleRun {
   OpenSfmExtras opensfm_extras;  // of --opensfm
   // A model georeferenced with positions and/or control (--geo, --gcp_list, --frames, --points).
   bool georeference = false;
+  // A relative adjustment of a model georeferenced before (its folder holds georeference.json):
+  // --out_colmap carries that file over, the frame being kept (issue 21).
+  bool carries_frame_json = false;
   GeoreferenceResult georeferenced;
   ColmapFormat colmap_in_format = ColmapFormat::kText;   // of --colmap_model
   ColmapFormat colmap_out_format = ColmapFormat::kText;  // of --out_colmap
@@ -230,6 +233,8 @@ int CheckInputChoice(const char* command, BundleRun* run) {
       return BadInput(command, "give the control as --gcp_list or as --points with --marks, not both");
     if (!FLAGS_bundle_points.empty() && FLAGS_bundle_marks.empty())
       return BadInput(command, "--points with --colmap_model needs --marks (the control points' image marks)");
+    if (!FLAGS_bundle_marks.empty() && FLAGS_bundle_points.empty())
+      return BadInput(command, "--marks beside --colmap_model or --opensfm are the control points' image marks: give their --points (with --crs) too");
     // A frames table may name its CRS in its SRS column (PositionsFromFrames); a points table has none.
     if (!FLAGS_bundle_points.empty() && FLAGS_bundle_crs.empty())
       return BadInput(command, "--crs is needed: a points table has no SRS column, so --points carry no coordinate system (e.g. --crs=EPSG:32632)");
@@ -465,8 +470,12 @@ int DeclareFiles(const char* command, const ParsedFlags& parsed, BundleRun* run,
       return BadInput(command, "--out_colmap=" + FLAGS_bundle_out_colmap + " holds a binary COLMAP model (cameras.bin, images.bin, points3D.bin), which COLMAP and photopose read instead of the text model written here: remove it, or give --out_colmap_format=binary");
     std::vector<std::string> names;
     for (const char* name : ColmapFileNames(run->colmap_out_format)) names.push_back(name);
-    // A georeferenced model is written in the local frame, with that frame beside it.
-    if (run->georeference) names.push_back(kGeoreferenceJsonName);
+    // A georeferenced model is written in the local frame, with that frame beside it; a relative
+    // adjustment keeps the frame of a model georeferenced before, and its georeference.json.
+    std::error_code error;
+    run->carries_frame_json = !run->georeference && !FLAGS_bundle_colmap_model.empty() &&
+                              std::filesystem::is_regular_file(FLAGS_bundle_colmap_model + "/" + kGeoreferenceJsonName, error);
+    if (run->georeference || run->carries_frame_json) names.push_back(kGeoreferenceJsonName);
     for (const std::string& name : names) {
       const std::string path = FLAGS_bundle_out_colmap + "/" + name;
       const Status declared = outputs->AddOutput("--out_colmap", path);
@@ -1037,7 +1046,16 @@ Status WriteBundleOutputs(const BundleRun& run, bool usable) {
       stage(FLAGS_bundle_out_colmap + "/" + names[0], model.model.cameras);
       stage(FLAGS_bundle_out_colmap + "/" + names[1], model.model.images);
       stage(FLAGS_bundle_out_colmap + "/" + names[2], model.model.points3D);
-      if (run.georeference) stage(FLAGS_bundle_out_colmap + "/" + kGeoreferenceJsonName, model.georeference_json);
+      if (run.georeference) {
+        stage(FLAGS_bundle_out_colmap + "/" + kGeoreferenceJsonName, model.georeference_json);
+      } else if (run.carries_frame_json) {
+        // A relative adjustment keeps the model's frame (its gauge moves it by the noise, issue
+        // 21): the georeference.json of a model georeferenced before goes with it, or the written
+        // model would lose what ties its coordinates to the Earth.
+        std::string text;
+        if (status.ok()) status = ReadTextFile(FLAGS_bundle_colmap_model + "/" + kGeoreferenceJsonName, &text);
+        stage(FLAGS_bundle_out_colmap + "/" + kGeoreferenceJsonName, text);
+      }
     }
   }
   if (status.ok()) status = CommitUnlessCancelled(&final_outputs);

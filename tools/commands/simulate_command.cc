@@ -7,10 +7,13 @@
 
 #include "core/io/block_tables.h"
 #include "core/io/colmap.h"
+#include "core/io/csv.h"
+#include "core/io/opensfm.h"
 #include "core/io/output_files.h"
 #include "core/simulation/synthetic_block.h"
 #include "core/simulation/synthetic_scene.h"
 #include "core/io/tables.h"
+#include "solvers/georeference/synthetic_georeference.h"
 #include "tools/commands/cli_common.h"
 #include "tools/commands/commands.h"
 
@@ -22,7 +25,7 @@ DEFINE_int32(control_points, 20, "Control points generated per image footprint (
 DEFINE_int32(check_points, 5, "Check points generated per image footprint (Role check: not used to resect, reported as check residuals); with --scenario=block the block's total (default there 6).");
 DEFINE_double(initial_position_error, 5.0, "Error of the approximate frames: uniform in plus or minus this many metres per axis (single-image scenarios); with --scenario=block a Gaussian sigma per axis (default there 2 m).");
 DEFINE_double(initial_angle_error, 2.0, "Error of the approximate frames: uniform in plus or minus this many degrees per angle (single-image scenarios); with --scenario=block a Gaussian sigma per angle (default there 1 degree).");
-DEFINE_string(out_dir, "", "Folder to write the dataset into (created when missing): cameras.csv, points.csv, marks.csv, frames_approx.csv, and truth/frames.csv with truth/outliers.csv (--scenario=block: frames.csv with the start and the GNSS positions, truth/frames.csv, truth/points.csv, truth/blunders.csv, and colmap/ with --colmap). The folder is replaced as a whole, all or nothing: other files in it are carried over, subfolders other than truth are refused.");
+DEFINE_string(out_dir, "", "Folder to write the dataset into (created when missing): cameras.csv, points.csv, marks.csv, frames_approx.csv, and truth/frames.csv with truth/outliers.csv (--scenario=block: frames.csv with the start and the GNSS positions, truth/frames.csv, truth/points.csv, truth/blunders.csv, colmap/ with --colmap, and with --georeferenced colmap/, colmap_bin/, opensfm/, geo.txt, gcp_list.txt, gcp_points.csv, gcp_marks.csv). The folder is replaced as a whole, all or nothing: other files in it are carried over, subfolders other than truth are refused.");
 DEFINE_int32(lines, 4, "block: flight lines.");
 DEFINE_int32(images_per_line, 10, "block: exposures per flight line.");
 DEFINE_double(forward_overlap, 0.8, "block: forward overlap of neighbouring images along a line, from 0 up to (not including) 1.");
@@ -37,6 +40,8 @@ DEFINE_int32(control_blunders, 0, "block: control points whose surveyed position
 DEFINE_int32(gnss_blunders, 0, "block: camera positions 5 m off (needs --gnss).");
 DEFINE_bool(benchmark_block, false, "block: the scaling benchmark's block instead (25 lines x 40 images 13 m apart on lines 30 m apart, 120 000 tie points, about 1.7 million marks; docs/performance.md). --lines and --images_per_line resize it (120 tie points per image unless --tie_points is given); the other block flags are ignored.");
 DEFINE_bool(colmap, false, "block: also write the block as a COLMAP text model (colmap/cameras.txt, images.txt, points3D.txt) at the perturbed start, tie points included.");
+DEFINE_bool(georeferenced, false, "block: issue 21's scene, an SfM reconstruction to georeference: the block as a model in an arbitrary similarity frame (scale 0.05, rotated, shifted), bent by --dome, written as colmap/ (text), colmap_bin/ (binary) and opensfm/ (reconstruction.json, tracks.csv), without control; its GNSS centres in geo.txt (EPSG:4326: longitude, latitude, ellipsoidal height) and its control and check points in UTM zone 32N (EPSG:32632) as gcp_list.txt and as gcp_points.csv + gcp_marks.csv; the block's frame (truth/ and the block's tables) is the local East-North-Up frame at 11.2 E, 47.8 N, 500 m on the WGS84 ellipsoid, shifted horizontally by the mean of the true camera centres. Needs --gnss.");
+DEFINE_double(dome, 1.0, "block: with --georeferenced, the height in metres the model loses at the block's edge (the point farthest from the centre; the model's heights lowered by dome * (r / r_max)^2 before the similarity), as a wrong radial distortion bends parallel nadir lines; 0: no bending.");
 DEFINE_string(sim_rotation, "rxryrz", "Angle convention of the frames tables written: rxryrz (alias seed), opk or pok.");
 
 namespace photopose::cli {
@@ -47,7 +52,8 @@ constexpr char kUsage[] =
     "Usage: photopose simulate --scenario=nadir|oblique|uav_block --seed=N --noise_px=S\n"
     "                          --outlier_fraction=F --out_dir=D\n"
     "   or: photopose simulate --scenario=block --lines=4 --images_per_line=10 [--tie_points=N]\n"
-    "                          [--gnss_sigma=M] [--tie_blunders=N] [--colmap] --out_dir=D\n\n"
+    "                          [--gnss_sigma=M] [--tie_blunders=N] [--colmap]\n"
+    "                          [--georeferenced [--dome=M]] --out_dir=D\n\n"
     "Writes D/cameras.csv, D/points.csv, D/marks.csv, D/frames_approx.csv (approximate exterior\n"
     "orientations) and D/truth/frames.csv (true poses), D/truth/outliers.csv (which marks carry a\n"
     "gross error). Resect it with: photopose resect --cameras=D/cameras.csv --points=D/points.csv\n"
@@ -57,7 +63,11 @@ constexpr char kUsage[] =
     "accuracy, start angles), D/truth/frames.csv, D/truth/points.csv (every point's true position),\n"
     "D/truth/blunders.csv and, with --colmap, D/colmap/. Adjust it with: photopose bundle\n"
     "--cameras=D/cameras.csv --points=D/points.csv --marks=D/marks.csv --frames=D/frames.csv\n"
-    "--out=frames.csv\n";
+    "--out=frames.csv\n\n"
+    "With --georeferenced, the SfM scene of issue 21 besides (colmap/, colmap_bin/, opensfm/, geo.txt,\n"
+    "gcp_list.txt, gcp_points.csv, gcp_marks.csv). Georeference it with: photopose bundle\n"
+    "--colmap_model=D/colmap --geo=D/geo.txt --gcp_list=D/gcp_list.txt --check_points=<the ids the\n"
+    "closing line names> --out=frames.csv --out_points=points.csv\n";
 
 const CommandFlags& SimulateFlags() {
   static const CommandFlags* const kFlags =
@@ -83,7 +93,8 @@ const CommandFlags& SimulateFlags() {
                         {"control_sigma", 0.0, 1000.0, false, false, "m"},
                         {"tie_blunders", 0.0, 1e6},
                         {"control_blunders", 0.0, 1e4},
-                        {"gnss_blunders", 0.0, 1e6}}};
+                        {"gnss_blunders", 0.0, 1e6},
+                        {"dome", -1000.0, 1000.0, false, false, "m"}}};
   return *kFlags;
 }
 
@@ -178,6 +189,14 @@ bool BlockOptionsFromFlags(SyntheticBlockOptions* options, std::string* why) {
     *why = "--gnss_blunders needs --gnss";
     return false;
   }
+  if (!IsDefault("dome") && !FLAGS_georeferenced) {
+    *why = "--dome bends the model of --georeferenced; without it no model is bent";
+    return false;
+  }
+  if (FLAGS_georeferenced && !options->gnss) {
+    *why = "--georeferenced needs --gnss (geo.txt holds the measured camera centres)";
+    return false;
+  }
   const Status valid = options->IsValid();
   if (!valid.ok()) *why = valid.message();
   return valid.ok();
@@ -188,8 +207,14 @@ Status SimulatedBlockFiles(const ParsedFlags& parsed, std::vector<FolderFile>* f
   *files = {{"cameras.csv", ""},      {"points.csv", ""},       {"marks.csv", ""},
             {"frames.csv", ""},       {"truth/frames.csv", ""}, {"truth/points.csv", ""},
             {"truth/blunders.csv", ""}};
-  if (FLAGS_colmap) {
+  if (FLAGS_colmap || FLAGS_georeferenced) {
     for (const char* name : {"colmap/cameras.txt", "colmap/images.txt", "colmap/points3D.txt"})
+      files->push_back({name, ""});
+  }
+  if (FLAGS_georeferenced) {
+    for (const char* name : {"colmap_bin/cameras.bin", "colmap_bin/images.bin", "colmap_bin/points3D.bin",
+                             "opensfm/reconstruction.json", "opensfm/tracks.csv", "geo.txt", "gcp_list.txt",
+                             "gcp_points.csv", "gcp_marks.csv"})
       files->push_back({name, ""});
   }
   return CheckDatasetFolder(parsed, *files);
@@ -215,13 +240,64 @@ Status FormatSimulatedBlock(const Block& block, const SyntheticBlockTruth& truth
   f[4].contents = std::move(truth_text.frames);
   f[5].contents = std::move(truth_text.points);
   f[6].contents = std::move(truth_text.blunders);
-  if (FLAGS_colmap) {
+  if (FLAGS_colmap && !FLAGS_georeferenced) {
     ColmapModelFiles model;
     PHOTOPOSE_RETURN_IF_ERROR(FormatColmapModel(block, nullptr, ColmapWriteOptions(), &model));
     f[7].contents = std::move(model.cameras);
     f[8].contents = std::move(model.images);
     f[9].contents = std::move(model.points3D);
   }
+  return Status::Ok();
+}
+
+// --georeferenced: the scene's model and measurements as the contents of files[7..] (in
+// SimulatedBlockFiles' order); *check_points: the check point ids, comma-separated.
+Status FormatGeoreferenceScene(const SyntheticGeoreference& scene, std::vector<FolderFile>* files,
+                               std::string* check_points) {
+  std::vector<FolderFile>& f = *files;
+  const GeoreferenceInputs& inputs = scene.inputs;
+  for (const ColmapFormat format : {ColmapFormat::kText, ColmapFormat::kBinary}) {
+    ColmapWriteOptions options;
+    options.format = format;
+    ColmapModelFiles model;
+    PHOTOPOSE_RETURN_IF_ERROR(FormatColmapModel(scene.model, nullptr, options, &model));
+    const size_t first = format == ColmapFormat::kText ? 7 : 10;
+    f[first].contents = std::move(model.cameras);
+    f[first + 1].contents = std::move(model.images);
+    f[first + 2].contents = std::move(model.points3D);
+  }
+  // OpenSfM holds cameras in pixels: the model as COLMAP holds it (its pinhole frame camera a
+  // SIMPLE_PINHOLE or PINHOLE), as a user converts one.
+  Block colmap_model;
+  const ColmapModelFiles colmap_text{ColmapFormat::kText, f[7].contents, f[8].contents, f[9].contents};
+  PHOTOPOSE_RETURN_IF_ERROR(ParseColmapModel(colmap_text, "colmap", &colmap_model));
+  OpenSfmText opensfm;
+  PHOTOPOSE_RETURN_IF_ERROR(FormatOpenSfmReconstruction(colmap_model, nullptr, &opensfm));
+  f[13].contents = std::move(opensfm.reconstruction_json);
+  f[14].contents = std::move(opensfm.tracks_csv);
+  GeoTxt geo;
+  geo.crs = inputs.positions_crs;
+  for (const CameraPositionMeasurement& m : inputs.positions) {
+    GeoTxtRecord record;
+    record.image = m.image;
+    record.position = m.position;
+    if (m.accuracy_m) {
+      record.horizontal_accuracy_m = m.accuracy_m->x();
+      record.vertical_accuracy_m = m.accuracy_m->z();
+    }
+    geo.records.push_back(record);
+  }
+  PHOTOPOSE_RETURN_IF_ERROR(FormatGeoTxt(geo, f[15].relative_path, &f[15].contents));
+  GcpList gcp;
+  gcp.crs = inputs.control_crs;
+  gcp.points = inputs.control_points;
+  gcp.marks = inputs.control_marks;
+  PHOTOPOSE_RETURN_IF_ERROR(FormatGcpList(gcp, f[16].relative_path, &f[16].contents));
+  PHOTOPOSE_RETURN_IF_ERROR(FormatGroundPoints(inputs.control_points, f[17].relative_path, &f[17].contents));
+  PHOTOPOSE_RETURN_IF_ERROR(FormatImageMarks(inputs.control_marks, f[18].relative_path, &f[18].contents));
+  check_points->clear();
+  for (const GroundPoint& point : inputs.control_points)
+    if (point.role == PointRole::kCheck) *check_points += (check_points->empty() ? "" : ",") + point.point_id;
   return Status::Ok();
 }
 
@@ -245,6 +321,22 @@ int RunSimulateBlock(const ParsedFlags& parsed, RotationConvention rotation) {
   SyntheticBlockTruth truth;
   status = MakeSyntheticBlock(options, &block, &truth);
   if (status.ok()) status = FormatSimulatedBlock(block, truth, options, rotation, &files);
+  std::string georeferenced;  // the closing line's words on the scene
+  if (status.ok() && FLAGS_georeferenced) {
+    SyntheticGeoreferenceOptions scene_options;
+    scene_options.dome_m = FLAGS_dome;
+    // The ENU origin at the block's centre (the mean of the true camera centres, horizontally).
+    for (const ExteriorOrientation& eo : truth.eo) scene_options.block_origin_m.head<2>() += eo.center_in_ground().head<2>();
+    scene_options.block_origin_m /= static_cast<double>(truth.eo.size());
+    scene_options.block_origin_m.z() = 0.0;
+    SyntheticGeoreference scene;
+    std::string check_points;
+    status = MakeSyntheticGeoreference(block, truth, scene_options, &scene);
+    if (status.ok()) status = FormatGeoreferenceScene(scene, &files, &check_points);
+    georeferenced = "; georeferenced: model domed by " + FormatNumber(FLAGS_dome) + " m, GNSS in " +
+                    scene.inputs.positions_crs + ", control in " + scene.inputs.control_crs + ", check points " +
+                    (check_points.empty() ? "none" : check_points);
+  }
   if (status.ok()) status = WriteFolderAtomically("--out_dir", FLAGS_out_dir, files);
   if (!status.ok()) return BadInput("simulate", status.message());
   int controls = 0, checks = 0, ties = 0;
@@ -257,8 +349,8 @@ int RunSimulateBlock(const ParsedFlags& parsed, RotationConvention rotation) {
                          truth.blunder_gnss_images.size();
   std::cout << "simulate: block, seed " << FLAGS_sim_seed << ": " << block.images.size()
             << " images, " << ties << " tie points, " << controls << " control and " << checks
-            << " check points, " << block.marks.size() << " marks, " << blunders << " blunders; "
-            << FilesWritten(files) << "\n";
+            << " check points, " << block.marks.size() << " marks, " << blunders << " blunders"
+            << georeferenced << "; " << FilesWritten(files) << "\n";
   return kExitSuccess;
 }
 

@@ -214,8 +214,12 @@ std::vector<std::pair<std::string, std::string>> OverviewFacts(const Block& bloc
   };
 }
 
+// The unmatched names the overview lists before "...".
+constexpr size_t kMaxUnmatchedNamesListed = 5;
+
 // A georeferenced block's facts: the output CRS and the local frame the block was adjusted in,
-// camera positions without height, inputs read and not used.
+// what matched the model's images by name, camera positions without height, inputs read and not
+// used.
 void GeoreferenceFacts(const GeoreferenceResult& g,
                        std::vector<std::pair<std::string, std::string>>* facts) {
   const CrsInfo& crs = g.out_crs_info;
@@ -229,6 +233,24 @@ void GeoreferenceFacts(const GeoreferenceResult& g,
                                        ReportFixed(origin.x(), 6) + " E, " +
                                        ReportFixed(origin.y(), 6) + " N, ellipsoidal height " +
                                        FormatCoordinate(origin.z()) + " m (WGS 84)"});
+  // Names that match no image are counted and listed here as in the JSON and on stderr (issue
+  // 21: never dropped silently, also with --quiet).
+  const auto names = [](const std::vector<std::string>& unmatched) {
+    std::string listed;
+    for (size_t k = 0; k < unmatched.size() && k < kMaxUnmatchedNamesListed; ++k)
+      listed += (k ? ", " : "") + unmatched[k];
+    if (unmatched.size() > kMaxUnmatchedNamesListed) listed += ", ...";
+    return listed;
+  };
+  std::string matched = FormatCount(g.positions_matched, "camera position") + " matched";
+  if (!g.positions_unmatched.empty())
+    matched += ", " + std::to_string(g.positions_unmatched.size()) + " naming no image of the model (" +
+               names(g.positions_unmatched) + ")";
+  matched += "; " + FormatCount(g.control_marks_matched, "control mark") + " matched";
+  if (!g.control_marks_unmatched.empty())
+    matched += ", " + std::to_string(g.control_marks_unmatched.size()) + " on images the model does not have (" +
+               names(g.control_marks_unmatched) + ")";
+  facts->push_back({"Matched to the model's images by name", matched});
   if (g.positions_without_height > 0)
     facts->push_back(
         {"Camera positions without height",

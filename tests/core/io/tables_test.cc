@@ -1311,6 +1311,98 @@ TEST_F(TablesTest, GeoTxtWithMissingOrBrokenFieldsIsRefusedAtItsLine) {
   }
 }
 
+// What FormatGcpList and FormatGeoTxt write reads back as the same points, marks and positions
+// (FormatNumber's shortest exact text: equal doubles), and what cannot be read back is refused.
+TEST_F(TablesTest, GcpListAndGeoTxtWrittenReadBackAsTheyWere) {
+  GcpList gcp;
+  gcp.crs = "EPSG:32632";
+  GroundPoint a, b;
+  a.point_id = "GCP_1";
+  a.position = Eigen::Vector3d(667123.123456789, 5296000.0000001, 512.3);
+  b.point_id = "GCP_2";
+  b.position = Eigen::Vector3d(667200.5, 5296100.25, 498.0625);
+  gcp.points = {a, b};
+  ImageMark m1, m2, m3;
+  m1.raster = "IMG_1.JPG", m1.point_id = "GCP_1", m1.column_row = Eigen::Vector2d(1024.123456789, 77.5);
+  m2.raster = "IMG_2.JPG", m2.point_id = "GCP_1", m2.column_row = Eigen::Vector2d(12.0, 3999.875);
+  m3.raster = "IMG_2.JPG", m3.point_id = "GCP_2", m3.column_row = Eigen::Vector2d(0.1, 0.2);
+  gcp.marks = {m1, m2, m3};
+  std::string text;
+  ASSERT_TRUE(FormatGcpList(gcp, "gcp_list.txt", &text).ok());
+  GcpList read;
+  ASSERT_TRUE(ReadGcpList(Write("gcp_list.txt", text), &read).ok()) << text;
+  EXPECT_EQ(read.crs, gcp.crs);
+  ASSERT_EQ(read.points.size(), 2u);
+  for (size_t i = 0; i < 2; ++i) {
+    EXPECT_EQ(read.points[i].point_id, gcp.points[i].point_id);
+    EXPECT_EQ(read.points[i].position, gcp.points[i].position);
+  }
+  ASSERT_EQ(read.marks.size(), 3u);
+  for (size_t i = 0; i < 3; ++i) {
+    EXPECT_EQ(read.marks[i].raster, gcp.marks[i].raster);
+    EXPECT_EQ(read.marks[i].point_id, gcp.marks[i].point_id);
+    EXPECT_EQ(*read.marks[i].column_row, *gcp.marks[i].column_row);
+  }
+
+  GeoTxt geo;
+  geo.crs = "EPSG:4326";
+  GeoTxtRecord full, plain, flat, no_height;
+  full.image = "IMG_1.JPG", full.position = Eigen::Vector3d(11.200000012345, 47.8000000098765, 612.25);
+  full.yaw_pitch_roll_deg = Eigen::Vector3d(92.5, -1.5, 0.25);
+  full.horizontal_accuracy_m = 0.03, full.vertical_accuracy_m = 0.06;
+  plain.image = "IMG_2.JPG", plain.position = Eigen::Vector3d(11.21, 47.81, 600.0);
+  flat.image = "IMG_3.JPG", flat.position = Eigen::Vector3d(11.22, 47.82, 601.0);
+  flat.horizontal_accuracy_m = 0.5, flat.vertical_accuracy_m = 1.0;  // written after ODM's "0 0 0"
+  no_height.image = "IMG_4.JPG", no_height.position = Eigen::Vector3d(11.23, 47.83, std::nan(""));
+  no_height.has_height = false;
+  geo.records = {full, plain, flat, no_height};
+  ASSERT_TRUE(FormatGeoTxt(geo, "geo.txt", &text).ok());
+  GeoTxt geo_read;
+  ASSERT_TRUE(ReadGeoTxt(Write("geo.txt", text), &geo_read).ok()) << text;
+  EXPECT_EQ(geo_read.crs, geo.crs);
+  ASSERT_EQ(geo_read.records.size(), 4u);
+  for (size_t i = 0; i < 4; ++i) {
+    const GeoTxtRecord& r = geo_read.records[i];
+    const GeoTxtRecord& w = geo.records[i];
+    EXPECT_EQ(r.image, w.image);
+    EXPECT_EQ(r.has_height, w.has_height) << w.image;
+    EXPECT_EQ(r.position.head<2>(), w.position.head<2>()) << w.image;
+    if (w.has_height) EXPECT_EQ(r.position.z(), w.position.z()) << w.image;
+    EXPECT_EQ(r.horizontal_accuracy_m, w.horizontal_accuracy_m) << w.image;
+    EXPECT_EQ(r.vertical_accuracy_m, w.vertical_accuracy_m) << w.image;
+  }
+  EXPECT_EQ(*geo_read.records[0].yaw_pitch_roll_deg, *full.yaw_pitch_roll_deg);
+  EXPECT_EQ(*geo_read.records[2].yaw_pitch_roll_deg, Eigen::Vector3d::Zero());  // ODM's "not available"
+  EXPECT_FALSE(geo_read.records[1].yaw_pitch_roll_deg.has_value());
+
+  // What would not read back is refused, naming the file and the record.
+  GcpList bad = gcp;
+  bad.marks[0].point_id = "GCP 1";
+  EXPECT_EQ(FormatGcpList(bad, "g.txt", &text).message(),
+            "g.txt: mark of point 'GCP 1' in image 'IMG_1.JPG': names must be one word (the fields of a line are "
+            "separated by white space)");
+  bad = gcp;
+  bad.marks[2].point_id = "GCP_9";
+  EXPECT_EQ(FormatGcpList(bad, "g.txt", &text).message(),
+            "g.txt: mark of point 'GCP_9' in image 'IMG_2.JPG': the point is not in the list");
+  bad = gcp;
+  bad.crs = "UTM 32";
+  EXPECT_NE(FormatGcpList(bad, "g.txt", &text).message().find("g.txt: CRS: 'UTM 32' cannot be written"), std::string::npos);
+  GeoTxt bad_geo = geo;
+  bad_geo.records[3].horizontal_accuracy_m = 1.0;
+  bad_geo.records[3].vertical_accuracy_m = 1.0;
+  EXPECT_EQ(FormatGeoTxt(bad_geo, "geo.txt", &text).message(),
+            "geo.txt: image 'IMG_4.JPG': a line without height cannot give attitudes or accuracies (the fields are "
+            "positional)");
+  bad_geo = geo;
+  bad_geo.records[1].vertical_accuracy_m = 0.1;
+  EXPECT_EQ(FormatGeoTxt(bad_geo, "geo.txt", &text).message(),
+            "geo.txt: image 'IMG_2.JPG': the accuracies come as two (horizontal vertical)");
+  bad_geo = geo;
+  bad_geo.records[1].position.x() = std::numeric_limits<double>::infinity();
+  EXPECT_EQ(FormatGeoTxt(bad_geo, "geo.txt", &text).message(), "geo.txt: image 'IMG_2.JPG': a coordinate is not a finite number");
+}
+
 // ------------------------------------------------------------------ physical ranges
 
 TEST_F(TablesTest, CameraTableValuesOutsideTheirPhysicalRangeAreRefusedAtTheirLine) {

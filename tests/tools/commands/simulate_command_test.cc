@@ -6,6 +6,8 @@
 #include <string>
 #include <vector>
 
+#include "core/io/colmap.h"
+#include "core/io/opensfm.h"
 #include "core/io/tables.h"
 #include "core/rotation.h"
 #include "core/simulation/synthetic_scene.h"
@@ -152,6 +154,68 @@ TEST(SimulateCommand, BlockScenarioWritesTheBlockItsTruthAndColmap) {
     EXPECT_TRUE(std::filesystem::exists(dir + "/b/colmap/" + file)) << file;
 }
 
+// --georeferenced: every file of the scene, named in the closing line with the check points; the
+// three models are one model, and the measurements are in the CRSs their files name.
+TEST(SimulateCommand, GeoreferencedBlockWritesTheModelThreeWaysAndItsMeasurementsInTheirCrs) {
+  const std::string dir = ScratchDir();
+  const CliRun run = RunCli("simulate --scenario=block --lines=2 --images_per_line=3 --georeferenced --dome=1.5 --out_dir=" +
+                                dir + "/b",
+                            dir);
+  ASSERT_EQ(run.exit_code, 0) << run.err;
+  EXPECT_NE(run.out.find("; georeferenced: model domed by 1.5 m, GNSS in EPSG:4326, control in EPSG:32632, check points GCP_"),
+            std::string::npos)
+      << run.out;
+  EXPECT_NE(run.out.find("colmap/cameras.txt, colmap/images.txt, colmap/points3D.txt, colmap_bin/cameras.bin, "
+                         "colmap_bin/images.bin, colmap_bin/points3D.bin, opensfm/reconstruction.json, opensfm/tracks.csv, "
+                         "geo.txt, gcp_list.txt, gcp_points.csv, gcp_marks.csv\n"),
+            std::string::npos)
+      << run.out;
+  Block text, binary, opensfm;
+  ASSERT_TRUE(ReadColmapModel(dir + "/b/colmap", &text).ok());
+  ASSERT_TRUE(ReadColmapModel(dir + "/b/colmap_bin", &binary).ok());
+  const Status read = ReadOpenSfmReconstruction(dir + "/b/opensfm/reconstruction.json", &opensfm);
+  ASSERT_TRUE(read.ok()) << read.message();
+  ASSERT_EQ(text.images.size(), 6u);
+  ASSERT_EQ(binary.images.size(), 6u);
+  ASSERT_EQ(opensfm.images.size(), 6u);
+  ASSERT_EQ(binary.points.size(), text.points.size());
+  ASSERT_EQ(opensfm.points.size(), text.points.size());
+  std::map<std::string, Eigen::Vector3d> opensfm_centres;
+  for (const BlockImage& image : opensfm.images) opensfm_centres[image.name] = image.eo->center_in_ground();
+  for (size_t i = 0; i < text.images.size(); ++i) {
+    EXPECT_EQ(binary.images[i].eo->center_in_ground(), text.images[i].eo->center_in_ground());
+    ASSERT_EQ(opensfm_centres.count(text.images[i].name), 1u) << text.images[i].name;
+    EXPECT_NEAR((opensfm_centres[text.images[i].name] - text.images[i].eo->center_in_ground()).norm(), 0.0,
+                kWrittenTolerance);
+  }
+  // Not the block's frame: the model is scaled by 0.05 (the images are ~20 m apart in the block).
+  const auto truth = ReadFrames(dir + "/b/truth/frames.csv");
+  const double model_m = (text.images[0].eo->center_in_ground() - text.images[1].eo->center_in_ground()).norm();
+  const double true_m = (truth.at(text.images[0].name).eo.center_in_ground() - truth.at(text.images[1].name).eo.center_in_ground()).norm();
+  EXPECT_NEAR(model_m / true_m, 0.05, 0.002);
+  GeoTxt geo;
+  ASSERT_TRUE(ReadGeoTxt(dir + "/b/geo.txt", &geo).ok());
+  EXPECT_EQ(geo.crs, "EPSG:4326");
+  ASSERT_EQ(geo.records.size(), 6u);
+  EXPECT_NEAR(geo.records[0].position.x(), 11.2, 0.01);  // longitude first
+  EXPECT_NEAR(geo.records[0].position.y(), 47.8, 0.01);
+  EXPECT_TRUE(geo.records[0].horizontal_accuracy_m.has_value());
+  GcpList gcp;
+  ASSERT_TRUE(ReadGcpList(dir + "/b/gcp_list.txt", &gcp).ok());
+  EXPECT_EQ(gcp.crs, "EPSG:32632");
+  std::vector<GroundPoint> points;
+  ASSERT_TRUE(ReadGroundPoints(dir + "/b/gcp_points.csv", &points).ok());
+  ASSERT_EQ(points.size(), gcp.points.size());
+  std::vector<ImageMark> marks;
+  ASSERT_TRUE(ReadImageMarks(dir + "/b/gcp_marks.csv", &marks).ok());
+  EXPECT_EQ(marks.size(), gcp.marks.size());
+  for (size_t k = 0; k < points.size(); ++k) {
+    EXPECT_EQ(points[k].point_id, gcp.points[k].point_id);
+    EXPECT_EQ(points[k].position, gcp.points[k].position);
+    EXPECT_GT(points[k].position.x(), 600000.0);  // UTM 32N easting at 11.2 E
+  }
+}
+
 TEST(SimulateCommand, BadUsageIsRefusedWithItsReason) {
   const std::string dir = ScratchDir();
   struct Refusal {
@@ -171,6 +235,12 @@ TEST(SimulateCommand, BadUsageIsRefusedWithItsReason) {
             "--forward_overlap does not apply to --benchmark_block"},
            {"--scenario=block --benchmark_block --tie_blunders=3 --out_dir=" + dir + "/x",
             "--tie_blunders does not apply to --benchmark_block"},
+           {"--scenario=block --dome=2 --out_dir=" + dir + "/x",
+            "--dome bends the model of --georeferenced; without it no model is bent"},
+           {"--scenario=block --georeferenced --nognss --out_dir=" + dir + "/x",
+            "--georeferenced needs --gnss (geo.txt holds the measured camera centres)"},
+           {"--scenario=nadir --georeferenced --out_dir=" + dir + "/x",
+            "--georeferenced is for --scenario=block, not nadir"},
        }) {
     const CliRun run = RunCli("simulate " + refusal.flags, dir);
     EXPECT_EQ(run.exit_code, 2) << refusal.flags;

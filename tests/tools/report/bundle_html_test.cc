@@ -287,6 +287,21 @@ TEST_F(BundleHtmlTest, TheOverviewNamesTheCrs) {
   EXPECT_NE(overview.find("<td>Adjusted in</td><td>the local East-North-Up frame (m), origin "
                           "11.200000 E, 47.800000 N, ellipsoidal height 500.000 m (WGS 84)</td>"),
             std::string::npos);
+  EXPECT_NE(overview.find("<td>Matched to the model&#39;s images by name</td><td>0 camera positions matched; "
+                          "0 control marks matched</td>"),
+            std::string::npos)
+      << overview;
+  // Names matching no image are counted and listed (the first five), never dropped silently.
+  georeference.positions_matched = 40;
+  georeference.positions_unmatched = {"a.jpg", "b.jpg", "c.jpg", "d.jpg", "e.jpg", "f.jpg"};
+  georeference.control_marks_matched = 12;
+  georeference.control_marks_unmatched = {"NOPE.JPG (line 126)"};
+  overview = BundleReportHtml(block_, result_, context_);
+  EXPECT_NE(overview.find("<td>40 camera positions matched, 6 naming no image of the model (a.jpg, b.jpg, c.jpg, "
+                          "d.jpg, e.jpg, ...); 12 control marks matched, 1 on images the model does not have "
+                          "(NOPE.JPG (line 126))</td>"),
+            std::string::npos)
+      << overview;
   context_.georeference = nullptr;
 }
 
