@@ -8,7 +8,7 @@
 #include <limits>
 
 namespace photopose {
-namespace {
+namespace PHOTOPOSE_UNITY_ID {
 
 // Two images, two points, three marks (one image sees both points, the other one).
 Block TwoImageBlock() {
@@ -153,5 +153,5 @@ TEST(Block, AccuracyZeroOnEveryAxisHoldsAControlPointFixed) {
       << status.message();
 }
 
-}  // namespace
+}  // namespace PHOTOPOSE_UNITY_ID
 }  // namespace photopose

@@ -9,7 +9,7 @@
 #include "tests/support/ordered_draws.h"
 
 namespace photopose {
-namespace {
+namespace PHOTOPOSE_UNITY_ID {
 
 // The inversions iterate to 1e-12 (normalised) and 1e-7 um (film); a round trip through both
 // directions stays within a few times that.
@@ -260,5 +260,5 @@ TEST(CameraModels, CalibrationTakesColmapsOwnParameterNames) {
             "the SIMPLE_PINHOLE camera model has no parameter 'fx'");
 }
 
-}  // namespace
+}  // namespace PHOTOPOSE_UNITY_ID
 }  // namespace photopose

@@ -6,7 +6,7 @@
 #include <random>
 
 namespace photopose {
-namespace {
+namespace PHOTOPOSE_UNITY_ID {
 
 // pixel -> film -> pixel must round-trip to 1e-9 um (the requirement); the arithmetic is a
 // few multiplications, so rounding is ~1e-11 um at 50 mm from the centre.
@@ -191,5 +191,5 @@ TEST(Camera, IsValidNamesTheProblem) {
   EXPECT_FALSE(camera.IsValid().ok());
 }
 
-}  // namespace
+}  // namespace PHOTOPOSE_UNITY_ID
 }  // namespace photopose

@@ -6,7 +6,7 @@
 #include <random>
 
 namespace photopose {
-namespace {
+namespace PHOTOPOSE_UNITY_ID {
 
 FrameCamera UavCamera() {
   FrameCamera camera;
@@ -179,5 +179,5 @@ TEST(Collinearity, RayAwayFromThePlaneFails) {
   EXPECT_FALSE(IntersectRayWithPlane(camera, eo, {100.0, 100.0}, PixelOrigin::kCorner, 200.0, &ground).ok());
 }
 
-}  // namespace
+}  // namespace PHOTOPOSE_UNITY_ID
 }  // namespace photopose

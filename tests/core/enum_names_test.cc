@@ -23,7 +23,7 @@
 #include "tools/compare/comparison.h"
 
 namespace photopose {
-namespace {
+namespace PHOTOPOSE_UNITY_ID {
 
 // ------------------------------------------------------------------ the mechanism, on a table of
 // its own
@@ -198,5 +198,5 @@ TEST(EnumNames, PrintedNamesAndAliasesAreThoseOfTheFormats) {
   EXPECT_STREQ(LengthUnitName(LengthUnit::kCentimetre), "cm");
 }
 
-}  // namespace
+}  // namespace PHOTOPOSE_UNITY_ID
 }  // namespace photopose

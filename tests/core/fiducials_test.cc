@@ -5,7 +5,7 @@
 #include <cmath>
 
 namespace photopose {
-namespace {
+namespace PHOTOPOSE_UNITY_ID {
 
 // A Wild RC-30 style film camera: 153 mm lens, four corner and four mid-side fiducials with
 // calibrated film coordinates (um, the numbers of the camera-table example of docs/formats.md).
@@ -102,5 +102,5 @@ TEST(Fiducials, BadInputIsNamed) {
             std::string::npos);
 }
 
-}  // namespace
+}  // namespace PHOTOPOSE_UNITY_ID
 }  // namespace photopose

@@ -3,7 +3,7 @@
 #include <gtest/gtest.h>
 
 namespace photopose {
-namespace {
+namespace PHOTOPOSE_UNITY_ID {
 
 // Every branch is a product of two or three decimal numbers: exact to a few ulps.
 constexpr double kTolerance = 1e-12;
@@ -140,5 +140,5 @@ TEST(TakesPixelDefault, ExactlyWhenMarkSigmaDependsOnThePixelDefault) {
   }
 }
 
-}  // namespace
+}  // namespace PHOTOPOSE_UNITY_ID
 }  // namespace photopose

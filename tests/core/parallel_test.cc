@@ -13,7 +13,7 @@
 #include <vector>
 
 namespace photopose {
-namespace {
+namespace PHOTOPOSE_UNITY_ID {
 
 TEST(ResolveThreadCount, PositiveIsKeptZeroOrLessIsEveryCore) {
   EXPECT_EQ(ResolveThreadCount(1), 1);
@@ -116,5 +116,5 @@ TEST(ParallelForChunks, OneChunkRunsOnTheCaller) {
   EXPECT_FALSE(elsewhere.load());
 }
 
-}  // namespace
+}  // namespace PHOTOPOSE_UNITY_ID
 }  // namespace photopose

@@ -3,7 +3,7 @@
 #include <gtest/gtest.h>
 
 namespace photopose {
-namespace {
+namespace PHOTOPOSE_UNITY_ID {
 
 // A few multiplications of numbers below 1e5: rounding stays below 1e-10 um.
 constexpr double kFilmUm = 1e-9;
@@ -108,5 +108,5 @@ TEST(PixelRows, AffineWithoutNRowsCannotBeTurned) {
   EXPECT_TRUE(AffineWithRowsFlipped(&camera).ok());
 }
 
-}  // namespace
+}  // namespace PHOTOPOSE_UNITY_ID
 }  // namespace photopose

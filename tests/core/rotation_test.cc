@@ -9,7 +9,7 @@
 #include "tests/support/ordered_draws.h"
 
 namespace photopose {
-namespace {
+namespace PHOTOPOSE_UNITY_ID {
 
 // Elementwise formulas and products are evaluated in double; they agree to a few ulps.
 constexpr double kElementTolerance = 1e-14;
@@ -244,5 +244,5 @@ TEST(Rotation, WrapAngleStaysInHalfOpenInterval) {
   EXPECT_NEAR(WrapAngle(0.5 + 4 * kPi), 0.5, 1e-12);
 }
 
-}  // namespace
+}  // namespace PHOTOPOSE_UNITY_ID
 }  // namespace photopose

@@ -5,7 +5,7 @@
 #include <cmath>
 
 namespace photopose {
-namespace {
+namespace PHOTOPOSE_UNITY_ID {
 
 // Chi-square quantiles are tabulated to 4-5 significant digits.
 constexpr double kTableTolerance = 2e-3;
@@ -53,5 +53,5 @@ TEST(Statistics, ChiSquaredQuantileOfThreeDegreesInvertsTheClosedForm) {
   EXPECT_NEAR(ChiSquaredQuantile(0.999, 3.0), 16.266, kTableTolerance);
 }
 
-}  // namespace
+}  // namespace PHOTOPOSE_UNITY_ID
 }  // namespace photopose

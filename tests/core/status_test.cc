@@ -5,7 +5,7 @@
 #include <string>
 
 namespace photopose {
-namespace {
+namespace PHOTOPOSE_UNITY_ID {
 
 TEST(Status, OkAndErrorCarryTheirOutcomeAndMessage) {
   EXPECT_TRUE(Status().ok());
@@ -70,5 +70,5 @@ TEST(Status, ValidateTurnsIsValidIntoAStatusWithItsReason) {
             "invalid options: the scale must be positive");
 }
 
-}  // namespace
+}  // namespace PHOTOPOSE_UNITY_ID
 }  // namespace photopose

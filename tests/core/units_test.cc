@@ -7,7 +7,7 @@
 #include <vector>
 
 namespace photopose {
-namespace {
+namespace PHOTOPOSE_UNITY_ID {
 
 TEST(Units, FixedDecimalsSayNaWhenNotFinite) {
   EXPECT_EQ(ReportFixed(1.23456, 2), "1.23");
@@ -191,5 +191,5 @@ TEST(Units, SmallCoefficientsTakeANamedPowerOfTen) {
   EXPECT_EQ(CameraParamUnit(CameraModelType::kSimpleRadial, "k"), "unitless");
 }
 
-}  // namespace
+}  // namespace PHOTOPOSE_UNITY_ID
 }  // namespace photopose

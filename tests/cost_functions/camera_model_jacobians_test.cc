@@ -8,7 +8,7 @@
 #include <vector>
 
 namespace photopose {
-namespace {
+namespace PHOTOPOSE_UNITY_ID {
 
 // Central differences of the double-only residual with steps relative to each value (1e-6), at
 // least 1e-7 (the small unitless affinity and skew, ~1e-4, would otherwise get steps so small
@@ -159,5 +159,5 @@ TEST(CameraModelJacobians, WithoutParameterDerivativesTheRestIsTheSame) {
   }
 }
 
-}  // namespace
+}  // namespace PHOTOPOSE_UNITY_ID
 }  // namespace photopose

@@ -10,7 +10,7 @@
 #include "tests/support/ordered_draws.h"
 
 namespace photopose {
-namespace {
+namespace PHOTOPOSE_UNITY_ID {
 
 // Analytic and autodiff evaluate the same model in double precision; they may differ only by
 // rounding. 1e-9 relative to the Jacobian's largest element (the requirement).
@@ -483,5 +483,5 @@ TEST(PoseCost, PointBehindCameraFailsInBothPaths) {
   }
 }
 
-}  // namespace
+}  // namespace PHOTOPOSE_UNITY_ID
 }  // namespace photopose

@@ -6,7 +6,7 @@
 #include <array>
 
 namespace photopose {
-namespace {
+namespace PHOTOPOSE_UNITY_ID {
 
 // Ceres' own manifold checks (Plus/Minus round trips, Jacobians against Ridders' numerical
 // differentiation). The angles are read back through AnglesFromRotation, good to ~1e-15 rad away
@@ -129,5 +129,5 @@ TEST(ExteriorOrientationManifold, FixedComponentsLeaveTheTangentSpace) {
   EXPECT_EQ(jacobian[2 * 4 + 1], 1.0);
 }
 
-}  // namespace
+}  // namespace PHOTOPOSE_UNITY_ID
 }  // namespace photopose

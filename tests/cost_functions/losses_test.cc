@@ -9,7 +9,7 @@
 #include "core/types.h"
 
 namespace photopose {
-namespace {
+namespace PHOTOPOSE_UNITY_ID {
 
 constexpr LossType kRobustLosses[] = {LossType::kHuber, LossType::kSoftL1, LossType::kCauchy,
                                       LossType::kArctan, LossType::kTukey};
@@ -89,5 +89,5 @@ TEST(Losses, NamesRoundTrip) {
   EXPECT_FALSE(ParseEnum<LossType>("").has_value());
 }
 
-}  // namespace
+}  // namespace PHOTOPOSE_UNITY_ID
 }  // namespace photopose

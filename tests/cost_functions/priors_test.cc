@@ -5,7 +5,7 @@
 #include <memory>
 
 namespace photopose {
-namespace {
+namespace PHOTOPOSE_UNITY_ID {
 
 // Numerical-differentiation step and the agreement it allows: the lever-arm prior is smooth, and
 // central differences at 1e-6 are good to ~1e-9 relative at these magnitudes.
@@ -100,5 +100,5 @@ TEST(Priors, LeverArmIsTurnedIntoTheGroundFrame) {
   }
 }
 
-}  // namespace
+}  // namespace PHOTOPOSE_UNITY_ID
 }  // namespace photopose

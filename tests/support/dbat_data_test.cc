@@ -18,7 +18,7 @@
 #include "tests/support/ordered_draws.h"
 
 namespace photopose::testing {
-namespace {
+namespace PHOTOPOSE_UNITY_ID {
 
 // Closed forms in double precision (film coordinates of O(1e4) um).
 constexpr double kExactUm = 1e-8;
@@ -322,5 +322,5 @@ TEST(DbatData, PublishedAdjustmentReproducedWithoutAdjusting) {
   EXPECT_EQ(per_photo[10].second, 100);
 }
 
-}  // namespace
+}  // namespace PHOTOPOSE_UNITY_ID
 }  // namespace photopose::testing

@@ -32,7 +32,7 @@
 #endif
 
 namespace photopose {
-namespace {
+namespace PHOTOPOSE_UNITY_ID {
 
 namespace fs = std::filesystem;
 using testing::CliOptions;
@@ -681,5 +681,5 @@ TEST_F(BadInputCatalogue, RunningOutOfMemoryIsOneLineNotAnAbort) {
 #endif
 }
 
-}  // namespace
+}  // namespace PHOTOPOSE_UNITY_ID
 }  // namespace photopose

@@ -5,7 +5,7 @@
 #include <cmath>
 
 namespace photopose {
-namespace {
+namespace PHOTOPOSE_UNITY_ID {
 
 constexpr double kPi = 3.14159265358979323846;
 
@@ -134,5 +134,5 @@ TEST_F(LocalFrameTest, UnknownCrsOrPointsOutsideItsAreaAreErrors) {
   EXPECT_FALSE(frame_.ToLocal("EPSG:4326", &points).ok());
 }
 
-}  // namespace
+}  // namespace PHOTOPOSE_UNITY_ID
 }  // namespace photopose

@@ -21,7 +21,7 @@
 #include "tests/test_data.h"
 
 namespace photopose {
-namespace {
+namespace PHOTOPOSE_UNITY_ID {
 
 using testing::ScopedTempDir;
 
@@ -303,5 +303,5 @@ INSTANTIATE_TEST_SUITE_P(
                 "2: x: '1e300' is outside [-100000000, 100000000] px"}),
     [](const ::testing::TestParamInfo<BadFile>& info) { return std::string(info.param.name); });
 
-}  // namespace
+}  // namespace PHOTOPOSE_UNITY_ID
 }  // namespace photopose

@@ -16,7 +16,7 @@
 #include "tests/test_data.h"
 
 namespace photopose {
-namespace {
+namespace PHOTOPOSE_UNITY_ID {
 
 using testing::ScopedTempDir;
 
@@ -502,5 +502,5 @@ TEST(BlockAssembly, ScannedFilmWithRowsCountedUp) {
             "has none)");
 }
 
-}  // namespace
+}  // namespace PHOTOPOSE_UNITY_ID
 }  // namespace photopose

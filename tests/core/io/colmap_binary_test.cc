@@ -21,7 +21,7 @@
 #include "tests/test_data.h"
 
 namespace photopose {
-namespace {
+namespace PHOTOPOSE_UNITY_ID {
 
 using testing::ScopedTempDir;
 
@@ -425,5 +425,5 @@ TEST(ColmapBinary, ColmapsBinaryOfTheSharedModelReadsAsItsText) {
   ExpectSameModel(binary, binary_extras, text, text_extras, kColmapsReadingUlps);
 }
 
-}  // namespace
+}  // namespace PHOTOPOSE_UNITY_ID
 }  // namespace photopose

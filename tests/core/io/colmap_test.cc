@@ -20,7 +20,7 @@
 #include "tests/support/ordered_draws.h"
 
 namespace photopose {
-namespace {
+namespace PHOTOPOSE_UNITY_ID {
 
 using testing::ScopedTempDir;
 
@@ -522,5 +522,5 @@ TEST(ColmapIo, MissingFileIsAnError) {
                                   "missing");
 }
 
-}  // namespace
+}  // namespace PHOTOPOSE_UNITY_ID
 }  // namespace photopose

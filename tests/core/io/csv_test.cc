@@ -14,7 +14,7 @@
 #include <vector>
 
 namespace photopose {
-namespace {
+namespace PHOTOPOSE_UNITY_ID {
 
 constexpr CsvOptions kStrict{/*tolerant_header=*/false};
 constexpr CsvOptions kTolerant{/*tolerant_header=*/true};
@@ -453,5 +453,5 @@ TEST(MessagePlaceTest, QuotesANameEscapedAndWholeAndNamesFileLineColumn) {
   EXPECT_EQ(WhereInFile("cameras.csv", -1), "cameras.csv: ");
 }
 
-}  // namespace
+}  // namespace PHOTOPOSE_UNITY_ID
 }  // namespace photopose

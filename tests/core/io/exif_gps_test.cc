@@ -18,7 +18,7 @@
 #include "tests/support/temp_dir.h"
 
 namespace photopose {
-namespace {
+namespace PHOTOPOSE_UNITY_ID {
 
 using testing::GeotagOptions;
 using testing::ScopedTempDir;
@@ -319,5 +319,5 @@ TEST(ExifGps, ATiffThatShrinksWhileReadIsNeverACrash) {
   EXPECT_GT(positions + errors, 0);
 }
 
-}  // namespace
+}  // namespace PHOTOPOSE_UNITY_ID
 }  // namespace photopose

@@ -8,7 +8,7 @@
 #include "tests/support/temp_dir.h"
 
 namespace photopose {
-namespace {
+namespace PHOTOPOSE_UNITY_ID {
 
 constexpr char kHeader[] = "Raster,FiducialID,Column,Row\n";
 
@@ -65,5 +65,5 @@ TEST(FiducialsTable, BadRowsAreRefusedAtTheirLineAndColumn) {
             std::string::npos);
 }
 
-}  // namespace
+}  // namespace PHOTOPOSE_UNITY_ID
 }  // namespace photopose

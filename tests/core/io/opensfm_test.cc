@@ -15,7 +15,7 @@
 #include "tests/support/temp_dir.h"
 
 namespace photopose {
-namespace {
+namespace PHOTOPOSE_UNITY_ID {
 
 using testing::ScopedTempDir;
 
@@ -623,5 +623,5 @@ TEST(OpenSfmIo, TheWriterRefusesWhatOpenSfmCannotHold) {
   EXPECT_FALSE(std::filesystem::exists(dir.Path("tracks.csv")));
 }
 
-}  // namespace
+}  // namespace PHOTOPOSE_UNITY_ID
 }  // namespace photopose

@@ -19,7 +19,7 @@
 #include "tests/test_devices.h"
 
 namespace photopose {
-namespace {
+namespace PHOTOPOSE_UNITY_ID {
 
 namespace fs = std::filesystem;
 
@@ -388,5 +388,5 @@ TEST_F(OutputFilesTest, StaleFoldersOfKilledRunsAreRemoved) {
             (std::set<std::string>{"data", "data/a.csv", "data/truth", "data/truth/b.csv"}));
 }
 
-}  // namespace
+}  // namespace PHOTOPOSE_UNITY_ID
 }  // namespace photopose

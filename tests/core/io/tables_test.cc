@@ -22,7 +22,7 @@
 #include "tests/support/ordered_draws.h"
 
 namespace photopose {
-namespace {
+namespace PHOTOPOSE_UNITY_ID {
 
 namespace fs = std::filesystem;
 
@@ -1612,5 +1612,5 @@ TEST_F(TablesTest, FailedTableWriteLeavesNoFile) {
   EXPECT_TRUE(FilesInDir().empty());
 }
 
-}  // namespace
+}  // namespace PHOTOPOSE_UNITY_ID
 }  // namespace photopose

@@ -11,7 +11,7 @@
 #include "tests/support/temp_dir.h"
 
 namespace photopose {
-namespace {
+namespace PHOTOPOSE_UNITY_ID {
 
 // Every line of a text with its number.
 std::vector<std::pair<int, std::string>> AllLines(std::string_view text) {
@@ -207,5 +207,5 @@ TEST(TokenScannerTest, NumbersBeyondTheirBoundAreRefusedAndLongTokensCut) {
             "f.txt:3: c: '" + std::string(40, '7') + "\u2026(1048577 bytes)' is not a number");
 }
 
-}  // namespace
+}  // namespace PHOTOPOSE_UNITY_ID
 }  // namespace photopose

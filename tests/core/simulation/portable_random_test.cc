@@ -7,7 +7,7 @@
 #include <vector>
 
 namespace photopose {
-namespace {
+namespace PHOTOPOSE_UNITY_ID {
 
 // Sample size of the moment checks and their tolerances: for N = 200000 draws the standard error
 // of a mean is sigma / sqrt(N) = sigma * 0.00224, of a variance about sigma^2 * sqrt(2 / N) =
@@ -88,5 +88,5 @@ TEST(PortableRandom, MomentsOfTheDistributions) {
   EXPECT_NEAR(sum_g4 / n, 3.0, 0.11);
 }
 
-}  // namespace
+}  // namespace PHOTOPOSE_UNITY_ID
 }  // namespace photopose

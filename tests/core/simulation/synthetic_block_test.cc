@@ -19,7 +19,7 @@
 #include "tests/support/temp_dir.h"
 
 namespace photopose {
-namespace {
+namespace PHOTOPOSE_UNITY_ID {
 
 using testing::ScopedTempDir;
 
@@ -625,5 +625,5 @@ TEST(SyntheticBlock, WritesItsTruth) {
   EXPECT_EQ(blunders.rows().size(), 3u);
 }
 
-}  // namespace
+}  // namespace PHOTOPOSE_UNITY_ID
 }  // namespace photopose

@@ -8,7 +8,7 @@
 #include "core/collinearity.h"
 
 namespace photopose {
-namespace {
+namespace PHOTOPOSE_UNITY_ID {
 
 SyntheticScene Make(const SyntheticSceneOptions& options) {
   SyntheticScene scene;
@@ -133,5 +133,5 @@ TEST(SyntheticScene, HugePointCountsAreRefusedWithoutOverflow) {
   EXPECT_TRUE(options.IsValid().ok());
 }
 
-}  // namespace
+}  // namespace PHOTOPOSE_UNITY_ID
 }  // namespace photopose

@@ -6,7 +6,7 @@
 #include "solvers/bundle/bundle_adjustment.h"
 
 namespace photopose {
-namespace {
+namespace PHOTOPOSE_UNITY_ID {
 
 SyntheticBlockOptions SmallBlock() {
   SyntheticBlockOptions o;
@@ -100,5 +100,5 @@ TEST(BlockInitialization, RefusesInvalidOptions) {
   EXPECT_FALSE(InitializeBlock(options, &block, &summary).ok());
 }
 
-}  // namespace
+}  // namespace PHOTOPOSE_UNITY_ID
 }  // namespace photopose

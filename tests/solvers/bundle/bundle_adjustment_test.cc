@@ -26,7 +26,7 @@
 #include "tests/support/ordered_draws.h"
 
 namespace photopose {
-namespace {
+namespace PHOTOPOSE_UNITY_ID {
 
 // A small nadir block built in memory: rows x cols images of a 24 mm / 4 um / 6000 x 4000 frame
 // camera at 100 m, tie points on a jittered grid, control and check points, GNSS centres.
@@ -1747,5 +1747,5 @@ TEST(BundleAdjustSingular, ANearlySingularImageIsListedAsWeaklyDetermined) {
   EXPECT_TRUE(listed == named + "omega" || listed == named + "Y") << listed;
 }
 
-}  // namespace
+}  // namespace PHOTOPOSE_UNITY_ID
 }  // namespace photopose

@@ -15,7 +15,7 @@
 #include "solvers/bundle/bundle_adjustment.h"
 
 namespace photopose::internal {
-namespace {
+namespace PHOTOPOSE_UNITY_ID {
 
 // Sigmas are products of two stated numbers: equal to rounding.
 constexpr double kSigmaTolerance = 1e-12;
@@ -300,5 +300,5 @@ TEST(BundlePlan, ARecheckRefusesABlockThatLostItsDatum) {
   EXPECT_EQ(RecheckBundlePlan(config, block, &plan).message(), "the block lost its datum");
 }
 
-}  // namespace
+}  // namespace PHOTOPOSE_UNITY_ID
 }  // namespace photopose::internal

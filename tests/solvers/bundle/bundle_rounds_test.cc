@@ -23,7 +23,7 @@
 #include "solvers/bundle/taylor_bundle.h"
 
 namespace photopose::internal {
-namespace {
+namespace PHOTOPOSE_UNITY_ID {
 
 // The cofactors of the candidates (selected inversion plus solves through the factor) against the
 // dense projector I - J (J^T J)^-1 J^T: rounding only (measured 1.4e-13).
@@ -628,5 +628,5 @@ TEST(RejectionRounds, AThreeRayPointsBlunderIsRemovedOrThePointIsUnresolved) {
   }
 }
 
-}  // namespace
+}  // namespace PHOTOPOSE_UNITY_ID
 }  // namespace photopose::internal

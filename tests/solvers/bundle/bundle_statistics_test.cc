@@ -12,7 +12,7 @@
 #include "solvers/bundle/taylor_bundle.h"
 
 namespace photopose {
-namespace {
+namespace PHOTOPOSE_UNITY_ID {
 
 // Selected and dense inverses agree to rounding; every figure derived from them to this,
 // relative (the bound; measured on these blocks: covariances within 5e-11, redundancy
@@ -230,5 +230,5 @@ TEST(BundleStatistics, TaylorCovariancesEqualTheDenseOracle) {
   EXPECT_GT(compared, static_cast<int>(block.images.size()));
 }
 
-}  // namespace
+}  // namespace PHOTOPOSE_UNITY_ID
 }  // namespace photopose

@@ -8,7 +8,7 @@
 #include "tests/support/exact_block.h"
 
 namespace photopose {
-namespace {
+namespace PHOTOPOSE_UNITY_ID {
 
 using testing::ExactBlock;
 using testing::MakeExactBlock;
@@ -221,5 +221,5 @@ TEST(CheckPoints, TheErrorCovarianceAddsTheSurveyedAccuracy) {
   EXPECT_EQ(SurveyedPointErrorCovariance(point, estimate, 0.005), estimate);
 }
 
-}  // namespace
+}  // namespace PHOTOPOSE_UNITY_ID
 }  // namespace photopose

@@ -16,7 +16,7 @@
 #include <vector>
 
 namespace photopose::internal {
-namespace {
+namespace PHOTOPOSE_UNITY_ID {
 
 using SparseMatrix = CholmodFactor::SparseMatrix;
 
@@ -279,5 +279,5 @@ TEST(CholmodFactor, EmptyMatrix) {
   EXPECT_EQ(factor.Solve(Eigen::VectorXd()).size(), 0);
 }
 
-}  // namespace
+}  // namespace PHOTOPOSE_UNITY_ID
 }  // namespace photopose::internal

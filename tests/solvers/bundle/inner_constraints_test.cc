@@ -23,7 +23,7 @@
 #include "solvers/bundle/triangulation.h"
 
 namespace photopose {
-namespace {
+namespace PHOTOPOSE_UNITY_ID {
 
 // A relative block small enough for a dense oracle (about 1000 unknowns).
 SyntheticBlockOptions RelativeBlockOptions() {
@@ -295,5 +295,5 @@ TEST(InnerConstraints, OrientationRowsAreTheManifoldsTangentOfASimilarity) {
   }
 }
 
-}  // namespace
+}  // namespace PHOTOPOSE_UNITY_ID
 }  // namespace photopose

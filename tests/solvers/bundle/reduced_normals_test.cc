@@ -15,7 +15,7 @@
 #include "solvers/bundle/internal/bundle_problem.h"
 
 namespace photopose::internal {
-namespace {
+namespace PHOTOPOSE_UNITY_ID {
 
 // A round of a simulated block with every kind of e block: exterior orientations, a calibrated
 // camera and an estimated lever arm; free gauge or GNSS.
@@ -306,5 +306,5 @@ TEST(ReducedNormals, PointsAreOrderedByTheirFirstImage) {
   }
 }
 
-}  // namespace
+}  // namespace PHOTOPOSE_UNITY_ID
 }  // namespace photopose::internal

@@ -7,7 +7,7 @@
 #include <vector>
 
 namespace photopose::internal {
-namespace {
+namespace PHOTOPOSE_UNITY_ID {
 
 // Selected and dense inverses agree to this, relative to sqrt(C_ii C_jj) (the correlation
 // scale): both are exact up to rounding of a well-conditioned matrix.
@@ -221,5 +221,5 @@ TEST(SelectedInversion, ASingularMatrixNamesAColumnOfItsDefect) {
   EXPECT_TRUE(C.Solve(Eigen::MatrixXd::Ones(2, 1)).hasNaN());
 }
 
-}  // namespace
+}  // namespace PHOTOPOSE_UNITY_ID
 }  // namespace photopose::internal

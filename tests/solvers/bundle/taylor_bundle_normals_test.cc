@@ -14,7 +14,7 @@
 #include "tests/support/exact_block.h"
 
 namespace photopose::internal::taylor {
-namespace {
+namespace PHOTOPOSE_UNITY_ID {
 
 TEST(IndexLists, HoldWhatAVectorPerListHolds) {
   std::mt19937 rng(23);
@@ -179,5 +179,5 @@ TEST(BuildLayout, ImageOrderAndMarkListsAsMadeThePlainWay) {
   }
 }
 
-}  // namespace
+}  // namespace PHOTOPOSE_UNITY_ID
 }  // namespace photopose::internal::taylor

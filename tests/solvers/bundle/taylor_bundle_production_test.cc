@@ -14,7 +14,7 @@
 #include "solvers/bundle/taylor_bundle.h"
 
 namespace photopose {
-namespace {
+namespace PHOTOPOSE_UNITY_ID {
 
 // ------------------------------------------------------------------ tolerances
 // The two factorisations of the same Jacobi-scaled reduced system (condition ~1e8 on these
@@ -336,5 +336,5 @@ TEST(TaylorBundleDamping, OptionsAreChecked) {
   EXPECT_EQ(damping, TaylorDamping::kNone);
 }
 
-}  // namespace
+}  // namespace PHOTOPOSE_UNITY_ID
 }  // namespace photopose

@@ -16,7 +16,7 @@
 #include "tools/report/bundle_report.h"
 
 namespace photopose {
-namespace {
+namespace PHOTOPOSE_UNITY_ID {
 
 // Issue 23's bound: the same statistic from the two solvers at the same minimum, relative to the
 // quantity's own size or its natural yardstick (a residual: its sigma; w: 1). Both solvers run to
@@ -458,5 +458,5 @@ TEST(TaylorBundleRounds, EstimatedAccuraciesAreCeres) {
   EXPECT_GE(estimated, 2);
 }
 
-}  // namespace
+}  // namespace PHOTOPOSE_UNITY_ID
 }  // namespace photopose

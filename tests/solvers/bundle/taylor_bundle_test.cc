@@ -16,7 +16,7 @@
 #include "tests/support/ordered_draws.h"
 
 namespace photopose {
-namespace {
+namespace PHOTOPOSE_UNITY_ID {
 
 // The blocks (core/simulation/synthetic_block.h, TaylorBlockOptions below) with their truth.
 struct TestBlock {
@@ -1217,11 +1217,11 @@ TEST(TaylorBundle, BundleAdjustWithSolverDispatches) {
   EXPECT_TRUE(result.summary.IsSolutionUsable()) << result.summary.BriefReport();
 }
 
-}  // namespace
+}  // namespace PHOTOPOSE_UNITY_ID
 }  // namespace photopose
 
 namespace photopose {
-namespace {
+namespace PHOTOPOSE_UNITY_ID {
 
 // The camera table's earth-curvature correction (ApplyECC) in the Taylor linearisation: on the
 // block simulated with the drop (EarthCurvatureBlockOptions: 800 m high, 10 cm at an image corner)
@@ -1263,11 +1263,11 @@ TEST(TaylorBundle, HonoursTheEarthCurvatureCorrectionAsBundleAdjustDoes) {
   }
 }
 
-}  // namespace
+}  // namespace PHOTOPOSE_UNITY_ID
 }  // namespace photopose
 
 namespace photopose {
-namespace {
+namespace PHOTOPOSE_UNITY_ID {
 
 // ------------------------------------------------------------------ self-calibration, lever arm
 
@@ -1660,5 +1660,5 @@ TEST(TaylorBundleVsCeres, AnUndeterminedCalibrationIsNamedAlikeByBoth) {
   EXPECT_NE(ceres.summary.message.find(name), std::string::npos) << ceres.summary.message;
 }
 
-}  // namespace
+}  // namespace PHOTOPOSE_UNITY_ID
 }  // namespace photopose

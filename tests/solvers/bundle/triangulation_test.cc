@@ -9,7 +9,7 @@
 #include "tests/support/exact_block.h"
 
 namespace photopose {
-namespace {
+namespace PHOTOPOSE_UNITY_ID {
 
 using testing::ExactBlock;
 using testing::MakeExactBlock;
@@ -105,5 +105,5 @@ TEST(Triangulation, FailsCleanlyWithTooFewOrParallelRays) {
       << status.message();
 }
 
-}  // namespace
+}  // namespace PHOTOPOSE_UNITY_ID
 }  // namespace photopose

@@ -9,7 +9,7 @@
 #include "tests/support/temp_dir.h"
 
 namespace photopose {
-namespace {
+namespace PHOTOPOSE_UNITY_ID {
 
 using testing::GeoreferenceScene;
 using testing::MakeGeoreferenceScene;
@@ -135,5 +135,5 @@ TEST(AdjustedColmapModel, GeoreferenceOfAnotherBlockIsRefused) {
   EXPECT_FALSE(CheckAdjustedColmapModelWritable(scene.model, &other, nullptr).ok());
 }
 
-}  // namespace
+}  // namespace PHOTOPOSE_UNITY_ID
 }  // namespace photopose

@@ -9,7 +9,7 @@
 #include "tests/support/georeference_scene.h"
 
 namespace photopose {
-namespace {
+namespace PHOTOPOSE_UNITY_ID {
 
 using testing::GeoreferenceScene;
 using testing::MakeGeoreferenceScene;
@@ -438,5 +438,5 @@ TEST(Georeference, EarthCurvatureCorrectionIsRefusedInTheLocalFrame) {
   EXPECT_EQ(block.points.size(), before.points.size());
 }
 
-}  // namespace
+}  // namespace PHOTOPOSE_UNITY_ID
 }  // namespace photopose

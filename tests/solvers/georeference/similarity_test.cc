@@ -8,7 +8,7 @@
 #include "tests/support/ordered_draws.h"
 
 namespace photopose {
-namespace {
+namespace PHOTOPOSE_UNITY_ID {
 
 Similarity3 Truth() {
   Similarity3 s;
@@ -75,5 +75,5 @@ TEST(Similarity, TooFewOrCollinearPairsAreRefused) {
   EXPECT_FALSE(RobustSimilarity(RobustSimilarityOptions(), pairs, &fitted, &summary).ok());
 }
 
-}  // namespace
+}  // namespace PHOTOPOSE_UNITY_ID
 }  // namespace photopose

@@ -10,7 +10,7 @@
 #include "tests/support/exact_block.h"
 
 namespace photopose {
-namespace {
+namespace PHOTOPOSE_UNITY_ID {
 
 // The similarity and the dome are evaluated in doubles on the block's UTM-like coordinates (~4e6
 // m), scaled by 0.05 and back: ~1e-16 relative gives ~1e-9 m (measured up to 1.5e-9); 1e-8 m is
@@ -120,5 +120,5 @@ TEST(SyntheticGeoreference, BadOptionsAndAForeignTruthAreRefused) {
   EXPECT_FALSE(MakeSyntheticGeoreference(b.block, b.truth, options, &scene).ok());
 }
 
-}  // namespace
+}  // namespace PHOTOPOSE_UNITY_ID
 }  // namespace photopose

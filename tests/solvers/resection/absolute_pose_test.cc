@@ -22,7 +22,7 @@
 #include "tests/support/ordered_draws.h"
 
 namespace photopose {
-namespace {
+namespace PHOTOPOSE_UNITY_ID {
 
 // ------------------------------------------------------------------ tolerances
 // The pose from noisy data is checked against the truth per parameter in units of its predicted
@@ -475,5 +475,5 @@ TEST(AbsolutePoseRansacTest, FailsCleanly) {
                  "confidence");
 }
 
-}  // namespace
+}  // namespace PHOTOPOSE_UNITY_ID
 }  // namespace photopose

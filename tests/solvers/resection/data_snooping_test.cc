@@ -8,7 +8,7 @@
 #include "tests/solvers/resection/scene_input.h"
 
 namespace photopose {
-namespace {
+namespace PHOTOPOSE_UNITY_ID {
 
 // A clean synthetic image with n marks of 1 px noise (Accuracy 1 px), as the resection input, and
 // the least-squares pose of all its marks.
@@ -137,5 +137,5 @@ TEST(DataSnooping, RefusesTooFewMarksAndMarksBehindTheCamera) {
                    .ok());
 }
 
-}  // namespace
+}  // namespace PHOTOPOSE_UNITY_ID
 }  // namespace photopose

@@ -13,7 +13,7 @@
 #include "tests/support/ordered_draws.h"
 
 namespace photopose {
-namespace {
+namespace PHOTOPOSE_UNITY_ID {
 
 // ------------------------------------------------------------------ tolerances
 // The brief's accuracy for noise-free data: rotation (Frobenius norm of the difference) and centre
@@ -85,7 +85,7 @@ TEST(DltTest, RandomNoiseFreePoses) {
       PoseCandidate pose;
       const Status status = SolveDlt(s.bearings, s.points, &pose);
       ASSERT_TRUE(status.ok()) << "n = " << n << " case " << k << ": " << status.message();
-      SCOPED_TRACE(testing::Message() << "n = " << n << " case " << k);
+      SCOPED_TRACE(::testing::Message() << "n = " << n << " case " << k);
       ExpectPose(s, pose, kRotationTolerance);
     }
   }
@@ -188,5 +188,5 @@ TEST(DltTest, PointsBehindTheCameraAreAnError) {
   EXPECT_FALSE(SolveDlt(s.bearings, s.points, &pose).ok());
 }
 
-}  // namespace
+}  // namespace PHOTOPOSE_UNITY_ID
 }  // namespace photopose

@@ -14,7 +14,7 @@
 #include "core/types.h"
 
 namespace photopose {
-namespace {
+namespace PHOTOPOSE_UNITY_ID {
 
 // ------------------------------------------------------------------ tolerances
 // The brief's accuracy for noise-free data: rotation (Frobenius norm of the difference) and centre
@@ -221,5 +221,5 @@ TEST(P3PTest, IdenticalBearingsReturnZero) {
   EXPECT_TRUE(solutions.empty());
 }
 
-}  // namespace
+}  // namespace PHOTOPOSE_UNITY_ID
 }  // namespace photopose

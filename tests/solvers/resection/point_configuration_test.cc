@@ -5,7 +5,7 @@
 #include <cmath>
 
 namespace photopose {
-namespace {
+namespace PHOTOPOSE_UNITY_ID {
 
 TEST(PointConfiguration, ExtentsOfAHandComputedCloud) {
   // Four points on a 200 x 100 m rectangle at large map coordinates: RMS extents 100 and 50 m
@@ -41,5 +41,5 @@ TEST(PointConfiguration, CollinearCoincidentFewAndNonFiniteAreRefusedWithTheReas
             std::string::npos);
 }
 
-}  // namespace
+}  // namespace PHOTOPOSE_UNITY_ID
 }  // namespace photopose

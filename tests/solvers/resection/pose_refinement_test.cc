@@ -5,7 +5,7 @@
 #include "tests/solvers/resection/scene_input.h"
 
 namespace photopose {
-namespace {
+namespace PHOTOPOSE_UNITY_ID {
 
 using Problem = testing::SceneInput;
 
@@ -101,5 +101,5 @@ TEST(PoseRefinement, OptionsAreChecked) {
   EXPECT_FALSE(options.IsValid(&why));
 }
 
-}  // namespace
+}  // namespace PHOTOPOSE_UNITY_ID
 }  // namespace photopose

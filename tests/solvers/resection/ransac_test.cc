@@ -11,7 +11,7 @@
 #include <vector>
 
 namespace photopose {
-namespace {
+namespace PHOTOPOSE_UNITY_ID {
 
 // ------------------------------------------------------------------ a toy estimator
 // Lines y = a x + b in the plane from two points: the smallest estimator that exercises every part
@@ -381,5 +381,5 @@ TEST(RansacTest, FailsCleanly) {
   EXPECT_NE(summary.BriefReport().find("failed"), std::string::npos);
 }
 
-}  // namespace
+}  // namespace PHOTOPOSE_UNITY_ID
 }  // namespace photopose

@@ -27,7 +27,7 @@
 #include "tests/support/ordered_draws.h"
 
 namespace photopose {
-namespace {
+namespace PHOTOPOSE_UNITY_ID {
 
 // ------------------------------------------------------------------ tolerances
 // Two least-squares solutions of the same marks from different solvers (each stopping within
@@ -1708,5 +1708,5 @@ TEST_F(ResectionRealData, DewittResectSampleWithFivePoints) {
   EXPECT_NEAR(r.sigma0, 2.8 / 5.0, 0.01);  // the published 2.8 um against the 5 um default
 }
 
-}  // namespace
+}  // namespace PHOTOPOSE_UNITY_ID
 }  // namespace photopose

@@ -20,7 +20,7 @@
 #include "tests/support/ordered_draws.h"
 
 namespace photopose {
-namespace {
+namespace PHOTOPOSE_UNITY_ID {
 
 // ------------------------------------------------------------------ tolerances
 // Central differences with the steps below have truncation ~ (h / D)^2 ~ 1e-8 relative and rounding
@@ -1095,5 +1095,5 @@ TEST_F(TaylorResectionFailureTest, SingularNormalMatrixOnDangerCylinder) {
 // Not a benchmark; prints the time of a clean 50-point resection (docs quote it) and guards only
 // against a gross regression in optimised builds.
 
-}  // namespace
+}  // namespace PHOTOPOSE_UNITY_ID
 }  // namespace photopose

@@ -24,7 +24,7 @@
 #include "tests/tools/cli_test_util.h"
 
 namespace photopose {
-namespace {
+namespace PHOTOPOSE_UNITY_ID {
 
 using testing::CliRun;
 using testing::ReadFile;
@@ -1325,5 +1325,5 @@ TEST(BundleCommand, ASingularNormalMatrixIsAFailureNamingWhatIsNotDetermined) {
   }
 }
 
-}  // namespace
+}  // namespace PHOTOPOSE_UNITY_ID
 }  // namespace photopose

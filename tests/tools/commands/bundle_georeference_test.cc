@@ -21,7 +21,7 @@
 #include "tests/tools/cli_test_util.h"
 
 namespace photopose {
-namespace {
+namespace PHOTOPOSE_UNITY_ID {
 
 using testing::CliRun;
 using testing::ReadFile;
@@ -646,5 +646,5 @@ TEST(BundleGeoreference, OpenSfmReconstructionWithItsOwnGpsAndAGcpList) {
   EXPECT_NE(bare.err.find("has no reference_lla"), std::string::npos) << bare.err;
 }
 
-}  // namespace
+}  // namespace PHOTOPOSE_UNITY_ID
 }  // namespace photopose

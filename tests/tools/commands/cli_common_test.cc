@@ -21,7 +21,7 @@
 DEFINE_int32(clitest_count, 1, "A count for the tests of StartCommand.");
 
 namespace photopose::cli {
-namespace {
+namespace PHOTOPOSE_UNITY_ID {
 
 using testing::CliRun;
 using testing::RunCli;
@@ -255,5 +255,5 @@ TEST(CliCommonTest, LoggingFlagsOfTheLibrariesAreNotTheCommandsFlags) {
   }
 }
 
-}  // namespace
+}  // namespace PHOTOPOSE_UNITY_ID
 }  // namespace photopose::cli

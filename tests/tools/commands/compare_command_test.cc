@@ -14,7 +14,7 @@
 #include "tools/report/comparison_tables.h"
 
 namespace photopose {
-namespace {
+namespace PHOTOPOSE_UNITY_ID {
 
 using testing::CliRun;
 using testing::CountLines;
@@ -358,5 +358,5 @@ TEST(CompareCommand, BlockDatasetModeComparesTheSolversOnOneBlock) {
   EXPECT_FALSE(std::filesystem::exists(dir + "/none.csv"));
 }
 
-}  // namespace
+}  // namespace PHOTOPOSE_UNITY_ID
 }  // namespace photopose

@@ -18,7 +18,7 @@
 #include "tests/tools/cli_test_util.h"
 
 namespace photopose {
-namespace {
+namespace PHOTOPOSE_UNITY_ID {
 
 using testing::CliRun;
 using testing::CountLines;
@@ -869,5 +869,5 @@ TEST(ResectCommand, AcceptsAFlagfile) {
   EXPECT_TRUE(std::filesystem::exists(dir + "/o.csv"));
 }
 
-}  // namespace
+}  // namespace PHOTOPOSE_UNITY_ID
 }  // namespace photopose

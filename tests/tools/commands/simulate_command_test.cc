@@ -14,7 +14,7 @@
 #include "tests/tools/cli_test_util.h"
 
 namespace photopose {
-namespace {
+namespace PHOTOPOSE_UNITY_ID {
 
 using testing::CliRun;
 using testing::CountLines;
@@ -249,5 +249,5 @@ TEST(SimulateCommand, BadUsageIsRefusedWithItsReason) {
   }
 }
 
-}  // namespace
+}  // namespace PHOTOPOSE_UNITY_ID
 }  // namespace photopose

@@ -9,7 +9,7 @@
 #include "core/simulation/synthetic_block.h"
 
 namespace photopose::cli {
-namespace {
+namespace PHOTOPOSE_UNITY_ID {
 
 TEST(BlockComparison, ParsesSolversAndLossesAndNamesWhatItRefuses) {
   std::vector<BlockSolverVariant> variants;
@@ -195,5 +195,5 @@ TEST(BlockComparison, RefusesInvalidOptionsWithTheReason) {
   EXPECT_EQ(status.message(), "tie points must be in [10, 1000000]");
 }
 
-}  // namespace
+}  // namespace PHOTOPOSE_UNITY_ID
 }  // namespace photopose::cli

@@ -21,7 +21,7 @@
 #include "tools/report/comparison_tables.h"
 
 namespace photopose::cli {
-namespace {
+namespace PHOTOPOSE_UNITY_ID {
 
 // Chi-square quantiles are tabulated to 4-5 significant digits.
 constexpr double kTableTolerance = 2e-3;
@@ -479,5 +479,5 @@ TEST(ComparisonRendering, SvgPlotsAndTheReportAreSelfContained) {
   EXPECT_EQ(testing::CountLines(MonteCarloCsv(result)), 1 + 3 * 2);
 }
 
-}  // namespace
+}  // namespace PHOTOPOSE_UNITY_ID
 }  // namespace photopose::cli

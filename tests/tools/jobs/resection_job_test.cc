@@ -10,7 +10,7 @@
 #include "core/simulation/synthetic_scene.h"
 
 namespace photopose::cli {
-namespace {
+namespace PHOTOPOSE_UNITY_ID {
 
 // Noise-free marks reproject to ~1e-9 px (the projection in double precision); a shift of 2 px
 // must show as 2 px.
@@ -124,5 +124,5 @@ TEST(ResectionJob, AngleSigmasAndSigma0Unit) {
   EXPECT_EQ(Sigma0Unit(job, 0, result), "px");
 }
 
-}  // namespace
+}  // namespace PHOTOPOSE_UNITY_ID
 }  // namespace photopose::cli

@@ -15,7 +15,7 @@
 #include "tools/report/html_kit.h"
 
 namespace photopose::cli {
-namespace {
+namespace PHOTOPOSE_UNITY_ID {
 
 using testing::TableWithCaption;
 
@@ -519,5 +519,5 @@ TEST(BundleHtml, TheGlossaryExplainsTheReportsTerms) {
     EXPECT_NE(glossary.find(HtmlEscape(term)), std::string::npos) << term;
 }
 
-}  // namespace
+}  // namespace PHOTOPOSE_UNITY_ID
 }  // namespace photopose::cli

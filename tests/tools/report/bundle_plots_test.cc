@@ -12,7 +12,7 @@
 #include "tools/report/bundle_plots.h"
 
 namespace photopose::cli {
-namespace {
+namespace PHOTOPOSE_UNITY_ID {
 
 size_t Count(const std::string& text, const std::string& what) {
   size_t n = 0;
@@ -108,5 +108,5 @@ TEST_F(BundlePlotsTest, ImageResidualVectorsAccountForEveryMarkOfTheCamera) {
   EXPECT_EQ(marks, expected);
 }
 
-}  // namespace
+}  // namespace PHOTOPOSE_UNITY_ID
 }  // namespace photopose::cli

@@ -14,7 +14,7 @@
 #include "tests/support/bundle_groups.h"
 
 namespace photopose::cli {
-namespace {
+namespace PHOTOPOSE_UNITY_ID {
 
 // A digit or point followed by an exponent: "6.97e-05", "1e+04", "5.7E7".
 const std::regex kScientific("[0-9.][eE][+-]?[0-9]");
@@ -351,5 +351,5 @@ TEST(BundleReport, RmseIsNullWithoutAPoint) {
   EXPECT_TRUE(some["control_rmse_m"]["total"].is_null());
 }
 
-}  // namespace
+}  // namespace PHOTOPOSE_UNITY_ID
 }  // namespace photopose::cli

@@ -12,7 +12,7 @@
 #include "tools/report/comparison_tables.h"
 
 namespace photopose::cli {
-namespace {
+namespace PHOTOPOSE_UNITY_ID {
 
 size_t Count(const std::string& text, const std::string& what) {
   return testing::CountOccurrences(text, what);
@@ -153,5 +153,5 @@ TEST(ComparisonHtml, TheBlockVerdictRecommendsTheFastestOfTheTiedSolvers) {
   EXPECT_EQ(none.find("<b>Use "), std::string::npos);
 }
 
-}  // namespace
+}  // namespace PHOTOPOSE_UNITY_ID
 }  // namespace photopose::cli

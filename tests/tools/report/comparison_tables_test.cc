@@ -15,7 +15,7 @@
 #include "tools/compare/comparison.h"
 
 namespace photopose::cli {
-namespace {
+namespace PHOTOPOSE_UNITY_ID {
 
 double kNaN() { return std::numeric_limits<double>::quiet_NaN(); }
 
@@ -217,5 +217,5 @@ TEST(ComparisonTables, BlockAndDatasetColumnsTakeTheUnitOfTheirQuantity) {
   ExpectReadable(RenderText(summary));
 }
 
-}  // namespace
+}  // namespace PHOTOPOSE_UNITY_ID
 }  // namespace photopose::cli

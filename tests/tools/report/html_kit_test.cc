@@ -10,7 +10,7 @@
 #include "tests/support/text_count.h"
 
 namespace photopose::cli {
-namespace {
+namespace PHOTOPOSE_UNITY_ID {
 
 size_t Count(const std::string& text, const std::string& what) {
   return testing::CountOccurrences(text, what);
@@ -269,5 +269,5 @@ TEST(HtmlKit, SectionedTableHasOneHeaderAndAHeadingRowPerSection) {
   EXPECT_NE(table.find("<li>a note</li>"), std::string::npos);
 }
 
-}  // namespace
+}  // namespace PHOTOPOSE_UNITY_ID
 }  // namespace photopose::cli

@@ -12,7 +12,7 @@
 #include "tests/support/temp_dir.h"
 
 namespace photopose::cli {
-namespace {
+namespace PHOTOPOSE_UNITY_ID {
 
 struct Fixture {
   SyntheticScene scene;
@@ -67,5 +67,5 @@ TEST(ResectionReport, TheFramesTableHasTheSolvedImagesOnly) {
   }
 }
 
-}  // namespace
+}  // namespace PHOTOPOSE_UNITY_ID
 }  // namespace photopose::cli
