@@ -41,6 +41,8 @@ using internal::taylor::Frame;
 using internal::taylor::IsFixed;
 using internal::taylor::Layout;
 using internal::taylor::Linearize;
+using internal::taylor::MakeFrame;
+using internal::taylor::MakePlan;
 using internal::taylor::Normal;
 using internal::taylor::Plan;
 using internal::taylor::PointPartialsFromCentrePartials;
@@ -78,6 +80,13 @@ Status CheckSupported(const BundleAdjustmentConfig& config, const Block& block) 
   return Status::Ok();
 }
 
+}  // namespace
+
+// ------------------------------------------------------------------ set-up shared by both entries
+// (declared in internal/taylor_normals.h for its tests)
+
+namespace internal::taylor {
+
 // The plan: BundleAdjust's (a weak datum is not refused: it shows as a singular reduced normal
 // matrix in the round), then the unknowns held (config, relative gauge) and each mark's ideal
 // image-plane point: the frame model's correction of the measured film point, constant with a
@@ -113,8 +122,6 @@ Status MakePlan(const TaylorBundleOptions& options, const BundleAdjustmentConfig
   }
   return Status::Ok();
 }
-
-// ------------------------------------------------------------------ set-up shared by both entries
 
 Frame MakeFrame(const BundleAdjustmentConfig& config, const Block& block, const Plan& plan,
                 State* state) {
@@ -167,6 +174,10 @@ Frame MakeFrame(const BundleAdjustmentConfig& config, const Block& block, const 
   state->lever = config.lever_arm_m.value_or(Eigen::Vector3d::Zero());
   return frame;
 }
+
+}  // namespace internal::taylor
+
+namespace {
 
 Status Prepare(const TaylorBundleOptions& options, const BundleAdjustmentConfig& config,
                const Block& block, Plan* plan) {

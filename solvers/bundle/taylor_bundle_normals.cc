@@ -3,11 +3,12 @@
 // the one stage of the Taylor solver that touches every mark, each step a named function over the
 // same layout (internal/taylor_normals.h), so that its memory per mark is visible in one place.
 #include <ceres/jet.h>
+#include <glog/logging.h>
 
 #include <Eigen/Dense>
 #include <algorithm>
-#include <limits>
 #include <cmath>
+#include <limits>
 #include <unordered_map>
 
 #include "core/camera_models.h"
@@ -174,6 +175,10 @@ void ListMarks(const Block& block, const Plan& plan, Layout* layout) {
   layout->image_marks.Finish();
   layout->point_all_marks.Finish();
   layout->point_marks.Finish();
+  layout->point_mark_inputs.reserve(layout->marks.size());
+  for (size_t q = 0; q < layout->point_all_marks.size(); ++q)
+    for (const int k : layout->point_all_marks[q])
+      layout->point_mark_inputs.push_back(MarkInputOf(block, plan, layout->marks[k]));
 }
 
 // Chunks of the free points of about equal elimination work (a point's is about n^2 for its n
@@ -337,17 +342,17 @@ void ModelEquationRows(const BlockCamera& camera, const double* params,
 //   the same Jet. For kFrame, r = ideal(observation; k) - c (a, b): F = c (a, b) - ideal, whose
 //   rows are the lecture's at c, and dF/dc = a, dF/dk = -d ideal/dk for the film correction's k.
 bool MarkEquation(const TaylorPoseLinearization& pose, const Block& block, const Plan& plan,
-                  const Frame& frame, const State& state, int m, double* row_u, double* row_v,
-                  double* fu, double* fv, double* w_m, double* calib_u = nullptr,
-                  double* calib_v = nullptr) {
-  const BlockMark& mark = block.marks[m];
-  const double* point = state.points[mark.point].data();
-  const bool in_front =
-      row_u != nullptr ? pose.Linearize(point, plan.ideal_um[m].data(), row_u, row_v, fu, fv, w_m)
-                       : pose.Residual(point, plan.ideal_um[m].data(), fu, fv, w_m);
-  const BlockCamera* camera = frame.model_camera[mark.image];
+                  const Frame& frame, const State& state, const MarkInput& input, int point_index,
+                  double* row_u, double* row_v, double* fu, double* fv, double* w_m,
+                  double* calib_u = nullptr, double* calib_v = nullptr) {
+  const double* point = state.points[point_index].data();
+  const bool in_front = row_u != nullptr
+                            ? pose.Linearize(point, input.ideal_um, row_u, row_v, fu, fv, w_m)
+                            : pose.Residual(point, input.ideal_um, fu, fv, w_m);
+  const BlockCamera* camera = frame.model_camera[input.image];
   if (!in_front || camera == nullptr) return in_front;
-  const int c = frame.camera_index[mark.image];
+  const BlockMark& mark = block.marks[input.m];
+  const int c = frame.camera_index[input.image];
   const double* params = state.cameras[c].data();
   if (row_u == nullptr) {
     const double ab[2] = {*fu, *fv};
@@ -386,17 +391,15 @@ struct ImageMarkSums {
 };
 
 // Image i's marks (eqs. 7-8 with eqs. 17-28 for the camera, dF/dX = -dF/dX0 for the point, the
-// model's calibration rows: MarkEquation): its camera sums U, g_e and their coupling with the
-// calibration into `normal`, each mark's rows and calibration W, and the rest into `sums`. One
-// kernel on purpose: the body of the marks' loop is the Taylor bundle's hottest code.
-void LinearizeImageMarks(TaylorPartials partials, const Block& block, const Plan& plan,
-                         const Layout& layout, const Frame& frame, const State& state, size_t i,
-                         Normal* normal, ImageMarkSums* sums) {
-  const TaylorPoseLinearization pose(partials, state.eo[i].data(), frame.focal_um[i],
-                                     frame.earth_radius_m[i]);
+// model's calibration rows: MarkRowsAt at normal->at): its camera sums U, g_e and their coupling
+// with the calibration into `normal`, the rest into `sums`. The marks' rows are not kept: the
+// points' sums, the elimination and the back-substitution make them again.
+void LinearizeImageMarks(const Layout& layout, size_t i, Normal* normal, ImageMarkSums* sums) {
+  const LinearizationPoint& at = normal->at;
   const int b = layout.image_block[i];
-  const int global = layout.camera_global[frame.camera_index[i]];
-  const int K = global >= 0 ? static_cast<int>(plan.calibrated[frame.camera_index[i]].size()) : 0;
+  const int camera = at.frame->camera_index[i];
+  const int global = layout.camera_global[camera];
+  const int K = global >= 0 ? static_cast<int>(at.plan->calibrated[camera].size()) : 0;
   Matrix6d U = Matrix6d::Zero();
   Vector6d ge = Vector6d::Zero();
   Eigen::Matrix<double, 6, Eigen::Dynamic> Ueg =
@@ -405,44 +408,26 @@ void LinearizeImageMarks(TaylorPartials partials, const Block& block, const Plan
   Eigen::VectorXd gg = Eigen::VectorXd::Zero(K);
   Eigen::Matrix<double, 2, Eigen::Dynamic> A_g(2, K);
   double ssr = 0.0, weight_rows = 0.0;
+  MarkRows rows;
   for (const int k : layout.image_marks[i]) {
     const int m = layout.marks[k];
-    double row_u[6], row_v[6], fu, fv, w;
-    double calib_u[kMaxCameraModelParams], calib_v[kMaxCameraModelParams];
-    if (!MarkEquation(pose, block, plan, frame, state, m, row_u, row_v, &fu, &fv, &w,
-                      K > 0 ? calib_u : nullptr, calib_v)) {
+    if (!MarkRowsAt(at, MarkInputOf(*at.block, *at.plan, m), at.block->marks[m].point, &rows)) {
       sums->behind = m;
-      sums->behind_w = w;
+      sums->behind_w = rows.w_m;
       return;
     }
-    const Eigen::Vector2d F(fu, fv);
-    double weight = 1.0 / (plan.mark_sigma[m] * plan.mark_sigma[m]);
-    double factor = 1.0;
-    ssr += MarkCost(plan, m, weight * F.squaredNorm(), &factor);
-    weight *= factor;
-    Matrix26 A_e;
-    for (int c = 0; c < 6; ++c) {
-      A_e(0, c) = row_u[c];
-      A_e(1, c) = row_v[c];
-    }
-    Matrix23 A_p;
-    PointPartialsFromCentrePartials(row_u, row_v, &A_p);
-    const Eigen::Matrix<double, 6, 2> weighted_Ae_T = weight * A_e.transpose();
+    ssr += rows.cost;
+    const Eigen::Matrix<double, 6, 2> weighted_Ae_T = rows.weight * rows.A_e.transpose();
     if (b >= 0) {
-      U.noalias() += weighted_Ae_T * A_e;
-      ge.noalias() += weighted_Ae_T * F;
+      U.noalias() += weighted_Ae_T * rows.A_e;
+      ge.noalias() += weighted_Ae_T * rows.f;
     }
-    normal->marks[k] = MarkRows{A_e, F, weight};
     if (K > 0) {
-      for (int j = 0; j < K; ++j) {
-        A_g(0, j) = calib_u[j];
-        A_g(1, j) = calib_v[j];
-      }
+      MarkCalibrationRows(rows, &A_g);
       if (b >= 0) Ueg.noalias() += weighted_Ae_T * A_g;
-      Ugg.noalias() += weight * A_g.transpose() * A_g;
-      gg.noalias() += weight * A_g.transpose() * F;
-      normal->Wg[k].noalias() = weight * A_g.transpose() * A_p;
-      weight_rows += 2.0 * weight;
+      Ugg.noalias() += rows.weight * A_g.transpose() * A_g;
+      gg.noalias() += rows.weight * A_g.transpose() * rows.f;
+      weight_rows += 2.0 * rows.weight;
     }
   }
   if (b >= 0) {
@@ -481,8 +466,16 @@ void AddCalibrationSums(const Block& block, const Layout& layout, const Frame& f
   }
 }
 
-// The point sums (V, g_p, the calibration's coupling) point by point over its marks in mark order.
-// V_p = sum w A_p^T A_p: A_e's first three columns are -A_p, so it is minus the top of W.
+// Mark m's rows made again at the point where Linearize succeeded (so MarkRowsAt cannot fail:
+// the same function of the same copy of the state).
+void RowsAgain(const LinearizationPoint& at, const MarkInput& input, int point, MarkRows* rows) {
+  CHECK(MarkRowsAt(at, input, point, rows))
+      << "mark " << input.m << " failed where its linearisation succeeded";
+}
+
+// The point sums (V, g_p, the calibration's coupling) point by point over its marks in mark order,
+// each mark's rows made again (MarkRowsAt). V_p = sum w A_p^T A_p: A_e's first three columns are
+// -A_p, so it is minus the top of W.
 void SumPointNormals(const Block& block, const Layout& layout, const Frame& frame, int num_threads,
                      Normal* normal) {
   const int G = layout.num_global;
@@ -490,11 +483,17 @@ void SumPointNormals(const Block& block, const Layout& layout, const Frame& fram
     Eigen::Matrix3d V = Eigen::Matrix3d::Zero();
     Eigen::Vector3d gp = Eigen::Vector3d::Zero();
     if (G > 0) normal->Wg_point[q].setZero(G, 3);
+    MarkRows rows;
+    Eigen::Matrix<double, 2, Eigen::Dynamic> A_g;
+    const MarkInput* input = layout.point_mark_inputs.data() + layout.point_all_marks.Offset(q);
+    const int point = layout.free_points[q];
     for (const int k : layout.point_all_marks[q]) {
-      V -= MarkW(normal->marks[k]).topRows<3>();
-      gp += MarkGp(normal->marks[k]);
+      RowsAgain(normal->at, *input++, point, &rows);
+      V -= MarkW(rows).topRows<3>();
+      gp += MarkGp(rows);
       const int global = G > 0 ? MarkGlobal(block, layout, frame, k) : -1;
-      if (global >= 0) normal->Wg_point[q].middleRows(global, normal->Wg[k].rows()) += normal->Wg[k];
+      if (global >= 0)
+        normal->Wg_point[q].middleRows(global, rows.num_calibration) += MarkWg(rows, &A_g);
     }
     normal->V[q] = V;
     normal->gp[q] = gp;
@@ -504,14 +503,12 @@ void SumPointNormals(const Block& block, const Layout& layout, const Frame& fram
 // Marks: image by image on num_threads threads (LinearizeImageMarks: each image's camera sums and
 // its marks' rows are its own), its calibration sums added in image order, then the point sums.
 // False when a point is not in front of its camera (normal->behind_mark: the first such mark).
-bool LinearizeMarks(TaylorPartials partials, const Block& block, const Plan& plan,
-                    const Layout& layout, const Frame& frame, const State& state, int num_threads,
-                    Normal* normal) {
+bool LinearizeMarks(const Block& block, const Layout& layout, const Frame& frame,
+                    const State& state, int num_threads, Normal* normal) {
   const size_t num_images = block.images.size();
   std::vector<ImageMarkSums> sums(num_images);
-  ParallelFor(num_images, num_threads, [&](size_t i) {
-    LinearizeImageMarks(partials, block, plan, layout, frame, state, i, normal, &sums[i]);
-  });
+  ParallelFor(num_images, num_threads,
+              [&](size_t i) { LinearizeImageMarks(layout, i, normal, &sums[i]); });
   for (size_t i = 0; i < num_images; ++i) {
     if (sums[i].behind >= 0 && (normal->behind_mark < 0 || sums[i].behind < normal->behind_mark)) {
       normal->behind_mark = sums[i].behind;
@@ -525,30 +522,24 @@ bool LinearizeMarks(TaylorPartials partials, const Block& block, const Plan& pla
   return true;
 }
 
-// The dense rows of the marks, in mark order (LinearizeTaylorBundle only: small blocks).
-void DenseMarkRows(TaylorPartials partials, const Block& block, const Plan& plan,
-                   const Layout& layout, const Frame& frame, const State& state, DenseRows* dense) {
+// The dense rows of the marks, in mark order (LinearizeTaylorBundle only: small blocks), from
+// each mark's rows made again (MarkRowsAt), whitened by 1 / sigma.
+void DenseMarkRows(const Block& block, const Plan& plan, const Layout& layout, const Frame& frame,
+                   const LinearizationPoint& at, DenseRows* dense) {
+  MarkRows rows;
   for (size_t k = 0; k < layout.marks.size(); ++k) {
     const int m = layout.marks[k];
     const BlockMark& mark = block.marks[m];
-    const TaylorPoseLinearization pose(partials, state.eo[mark.image].data(),
-                                       frame.focal_um[mark.image],
-                                       frame.earth_radius_m[mark.image]);
-    double row_u[6], row_v[6], fu, fv, w;
-    double calib_u[kMaxCameraModelParams], calib_v[kMaxCameraModelParams];
-    const int global = MarkGlobal(block, layout, frame, static_cast<int>(k));
-    if (!MarkEquation(pose, block, plan, frame, state, m, row_u, row_v, &fu, &fv, &w,
-                      global >= 0 ? calib_u : nullptr, calib_v))
-      continue;  // not reached: LinearizeMarks succeeded at the same values
-    Matrix23 A_p;
-    PointPartialsFromCentrePartials(row_u, row_v, &A_p);
+    RowsAgain(at, MarkInputOf(block, plan, m), mark.point, &rows);
+    const Matrix23 A_p = MarkPointRows(rows);
     const double s = 1.0 / plan.mark_sigma[m];
-    const double point_u[3] = {A_p(0, 0), A_p(0, 1), A_p(0, 2)};
-    const double point_v[3] = {A_p(1, 0), A_p(1, 1), A_p(1, 2)};
-    const int K =
-        global >= 0 ? static_cast<int>(plan.calibrated[frame.camera_index[mark.image]].size()) : 0;
-    dense->Add(mark.image, row_u, mark.point, point_u, s, fu, global, calib_u, K);
-    dense->Add(mark.image, row_v, mark.point, point_v, s, fv, global, calib_v, K);
+    const Vector6d eo_u = rows.A_e.row(0).transpose(), eo_v = rows.A_e.row(1).transpose();
+    const Eigen::Vector3d point_u = A_p.row(0).transpose(), point_v = A_p.row(1).transpose();
+    const int global = MarkGlobal(block, layout, frame, static_cast<int>(k));
+    dense->Add(mark.image, eo_u.data(), mark.point, point_u.data(), s, rows.f[0], global,
+               rows.calib_u.data(), rows.num_calibration);
+    dense->Add(mark.image, eo_v.data(), mark.point, point_v.data(), s, rows.f[1], global,
+               rows.calib_v.data(), rows.num_calibration);
   }
 }
 
@@ -646,6 +637,62 @@ void LinearizeImagePriors(const Block& block, const Plan& plan, const Layout& la
 
 }  // namespace
 
+MarkInput MarkInputOf(const Block& block, const Plan& plan, int m) {
+  MarkInput input;
+  input.m = m;
+  input.image = block.marks[m].image;
+  input.ideal_um[0] = plan.ideal_um[m][0];
+  input.ideal_um[1] = plan.ideal_um[m][1];
+  input.sigma = plan.mark_sigma[m];
+  return input;
+}
+
+bool MarkRowsAt(const LinearizationPoint& at, const MarkInput& input, int point, MarkRows* rows) {
+  const Plan& plan = *at.plan;
+  const int m = input.m;
+  const int image = input.image;
+  const int camera = at.frame->camera_index[image];
+  // A self-calibrated camera's marks always through the Jet with the calibration's derivatives,
+  // whoever asks: one path per mark, so that its rows have the same bits at every use.
+  rows->num_calibration = static_cast<int>(plan.calibrated[camera].size());
+  double row_u[6], row_v[6], fu, fv;
+  if (!MarkEquation(at.poses[image], *at.block, plan, *at.frame, at.state, input, point, row_u,
+                    row_v, &fu, &fv, &rows->w_m,
+                    rows->num_calibration > 0 ? rows->calib_u.data() : nullptr,
+                    rows->calib_v.data()))
+    return false;
+  rows->f = Eigen::Vector2d(fu, fv);
+  const double weight = 1.0 / (input.sigma * input.sigma);
+  double factor = 1.0;
+  rows->cost = MarkCost(plan, m, weight * rows->f.squaredNorm(), &factor);
+  rows->weight = weight * factor;
+  for (int c = 0; c < 6; ++c) {
+    rows->A_e(0, c) = row_u[c];
+    rows->A_e(1, c) = row_v[c];
+  }
+  return true;
+}
+
+namespace {
+
+// The linearisation point kept with the normal equations: the state copied (assigned into the
+// previous copy's storage) and every image's pose linearisation at it.
+void MakeLinearizationPoint(TaylorPartials partials, const Block& block, const Plan& plan,
+                            const Frame& frame, const State& state, LinearizationPoint* at) {
+  at->partials = partials;
+  at->block = &block;
+  at->plan = &plan;
+  at->frame = &frame;
+  at->state = state;
+  at->poses.clear();
+  at->poses.reserve(block.images.size());
+  for (size_t i = 0; i < block.images.size(); ++i)
+    at->poses.emplace_back(partials, state.eo[i].data(), frame.focal_um[i],
+                           frame.earth_radius_m[i]);
+}
+
+}  // namespace
+
 bool Linearize(TaylorPartials partials, const Block& block, const Plan& plan, const Layout& layout,
                const Frame& frame, const State& state, int num_threads, Normal* normal,
                DenseRows* dense) {
@@ -655,19 +702,17 @@ bool Linearize(TaylorPartials partials, const Block& block, const Plan& plan, co
   normal->ge.assign(num_blocks, Vector6d::Zero());
   normal->V.assign(num_points, Eigen::Matrix3d::Zero());
   normal->gp.assign(num_points, Eigen::Vector3d::Zero());
-  normal->marks.resize(layout.marks.size());
+  MakeLinearizationPoint(partials, block, plan, frame, state, &normal->at);
   const int G = layout.num_global;
   normal->Ueg.assign(G > 0 ? num_blocks : 0, Eigen::MatrixXd::Zero(6, G));
   normal->Ugg.setZero(G, G);
   normal->gg.setZero(G);
-  normal->Wg.resize(G > 0 ? layout.marks.size() : 0);
   normal->Wg_point.resize(G > 0 ? num_points : 0);
   normal->global_angle_per_unit.assign(G, 0.0);
   normal->weighted_ssr = 0.0;
   normal->behind_mark = -1;
-  if (!LinearizeMarks(partials, block, plan, layout, frame, state, num_threads, normal))
-    return false;
-  if (dense != nullptr) DenseMarkRows(partials, block, plan, layout, frame, state, dense);
+  if (!LinearizeMarks(block, layout, frame, state, num_threads, normal)) return false;
+  if (dense != nullptr) DenseMarkRows(block, plan, layout, frame, normal->at, dense);
   LinearizeControlPoints(plan, layout, frame, state, false, normal, dense);
   LinearizeImagePriors(block, plan, layout, frame, state, false, normal, dense);
   return std::isfinite(normal->weighted_ssr);
@@ -686,7 +731,8 @@ bool EvaluateCost(TaylorPartials partials, const Block& block, const Plan& plan,
     for (const int k : layout.image_marks[i]) {
       const int m = layout.marks[k];
       double fu, fv, w;
-      if (!MarkEquation(pose, block, plan, frame, state, m, nullptr, nullptr, &fu, &fv, &w)) {
+      if (!MarkEquation(pose, block, plan, frame, state, MarkInputOf(block, plan, m),
+                        block.marks[m].point, nullptr, nullptr, &fu, &fv, &w)) {
         image_behind[i] = m;
         return;
       }
@@ -730,6 +776,7 @@ int ReduceChunk(const Normal& normal, const Layout& layout, int first, int last,
                 std::vector<Eigen::Matrix3d>* V_inverses) {
   const int G = layout.num_global;
   const int cameras_size = 6 * static_cast<int>(layout.free_images.size());
+  MarkRows rows;
   for (int q = first; q < last; ++q) {
     const Eigen::LDLT<Eigen::Matrix3d> ldlt(Damped(normal.V[q], lambda));
     const Eigen::Vector3d d = ldlt.vectorD();
@@ -742,10 +789,18 @@ int ReduceChunk(const Normal& normal, const Layout& layout, int first, int last,
     const int n = static_cast<int>(marks.size());
     W->resize(n);
     Y->resize(n);
-    for (int a = 0; a < n; ++a) {
-      (*W)[a] = MarkW(normal.marks[marks[a]]);
+    // The point's marks in free images: its inputs in order, those of held images skipped (the
+    // same marks in the same order as point_marks).
+    const MarkInput* input = layout.point_mark_inputs.data() + layout.point_all_marks.Offset(q);
+    const int point = layout.free_points[q];
+    for (int a = 0; a < n; ++input) {
+      const int b = layout.image_block[input->image];
+      if (b < 0) continue;
+      RowsAgain(normal.at, *input, point, &rows);
+      (*W)[a] = MarkW(rows);
       (*Y)[a].noalias() = (*W)[a] * V_inverse;
-      r->segment<6>(6 * layout.mark_block[marks[a]]).noalias() -= (*Y)[a] * normal.gp[q];
+      r->segment<6>(6 * b).noalias() -= (*Y)[a] * normal.gp[q];
+      ++a;
     }
     for (int a = 0; a < n; ++a) {
       const int ka = marks[a];
@@ -977,8 +1032,16 @@ void SolveCorrections(const Plan& plan, const Layout& layout, const Normal& norm
   d_p->resize(layout.free_points.size());
   ParallelFor(layout.free_points.size(), reduction.num_threads, [&](size_t q) {
     Eigen::Vector3d t = normal.gp[q];
-    for (const int k : layout.point_marks[q])
-      t.noalias() -= MarkW(normal.marks[k]).transpose() * d_e->segment<6>(6 * layout.mark_block[k]);
+    MarkRows rows;
+    const MarkInput* input = layout.point_mark_inputs.data() + layout.point_all_marks.Offset(q);
+    const MarkInput* end = input + layout.point_all_marks[q].size();
+    const int point = layout.free_points[q];
+    for (; input != end; ++input) {
+      const int b = layout.image_block[input->image];
+      if (b < 0) continue;
+      RowsAgain(normal.at, *input, point, &rows);
+      t.noalias() -= MarkW(rows).transpose() * d_e->segment<6>(6 * b);
+    }
     if (G > 0) t.noalias() -= normal.Wg_point[q].transpose() * d_e->segment(cameras_size, G);
     (*d_p)[q] = reduction.V_inverse[q] * t;
   });

@@ -16,10 +16,12 @@
 #include <vector>
 
 #include "core/block.h"
+#include "core/camera_models.h"
 #include "core/status.h"
 #include "solvers/bundle/internal/bundle_problem.h"
 #include "solvers/bundle/internal/cholmod_factor.h"
 #include "solvers/bundle/taylor_bundle.h"
+#include "solvers/resection/taylor_resection.h"
 
 namespace photopose::internal::taylor {
 
@@ -99,6 +101,8 @@ class IndexLists {
   int* Entries(size_t i) { return items_.data() + start_[i]; }
 
   size_t size() const { return start_.empty() ? 0 : start_.size() - 1; }
+  // The position of list i's first entry among all entries, end to end.
+  size_t Offset(size_t i) const { return static_cast<size_t>(start_[i]); }
   List operator[](size_t i) const {
     return {items_.data() + start_[i], items_.data() + start_[i + 1]};
   }
@@ -108,6 +112,19 @@ class IndexLists {
   std::vector<int> items_;
   std::vector<int> fill_;
 };
+
+// What a mark's equation reads of the block and the plan besides the state: its index, image, ideal
+// film point (Plan::ideal_um) and sigma (Plan::mark_sigma). Gathered per mark in the order of the
+// points' mark lists (Layout::point_mark_inputs) so that the passes over the points read them in
+// sequence: read from the block's and the plan's arrays in a point's order, a cache miss each,
+// they took a third of the rounds' time once the rows were no longer kept.
+struct MarkInput {
+  int m = -1;  // index into Block::marks
+  int image = -1;
+  double ideal_um[2] = {0.0, 0.0};
+  double sigma = 0.0;
+};
+MarkInput MarkInputOf(const Block& block, const Plan& plan, int m);
 
 // The unknowns and the sparsity of the reduced normal matrix of one round. Camera block b is
 // image free_images[b], columns 6 b .. 6 b + 5. The global unknowns (each self-calibrated camera's
@@ -129,6 +146,9 @@ struct Layout {
   IndexLists point_marks;      // per free point: positions in `marks` of its marks in free images
   IndexLists point_pairs;      // per free point: pair of each (a <= c) of those
   IndexLists point_all_marks;  // per free point: positions of all its marks
+  // Per entry of point_all_marks, in its order (entry j of point q at Offset(q) + j): the mark's
+  // input (32 bytes a mark).
+  std::vector<MarkInput> point_mark_inputs;
   IndexLists image_marks;      // per image: positions in `marks` of its marks
   std::vector<int> chunk_start;    // kReductionChunks + 1 boundaries in the free points
   std::vector<int> diagonal_pair;  // per camera block
@@ -177,19 +197,45 @@ struct Frame {
   bool use_lever = false;  // the camera-position priors apply State::lever
 };
 
+// Where a linearisation was made: the block's fixed data, a copy of the state (24 bytes a point:
+// 3 MB at 1000 images), so that no step tried or taken since moves the point a mark's rows are
+// made again at, and every image's pose linearisation at that state. Filled by Linearize; the
+// block, plan and frame must outlive it.
+struct LinearizationPoint {
+  TaylorPartials partials = TaylorPartials::kCorrected;
+  const Block* block = nullptr;
+  const Plan* plan = nullptr;
+  const Frame* frame = nullptr;
+  State state;
+  std::vector<TaylorPoseLinearization> poses;  // per image, at state.eo
+};
+
 // One mark's linearised observation equation: its rows dF/d(X0, Y0, Z0, omega, phi, kappa)
 // (the point's rows are minus the first three: PointPartialsFromCentrePartials), F (the
 // observation unit) and its weight w (1 / sigma^2 times the tie loss's rho' at the linearisation
-// point; 1 / observation unit^2).
+// point; 1 / observation unit^2); for a self-calibrated camera's mark, its rows dF/d(the camera's
+// estimated parameters, plan.calibrated order). Made by MarkRowsAt wherever a mark's rows are
+// needed, never kept per mark (120 bytes a mark, 205 MB at 1.7 million marks).
 struct MarkRows {
   Matrix26 A_e;
   Eigen::Vector2d f;
   double weight = 0.0;
+  double cost = 0.0;        // the mark's share of F^T P F (MarkCost: rho(s) under the tie loss)
+  double w_m = 0.0;         // the point's w (m; the depth coordinate, negative in front)
+  int num_calibration = 0;  // the camera's estimated parameters (0: none)
+  std::array<double, kMaxCameraModelParams> calib_u, calib_v;
 };
 
-// The mark's share of the camera-point block of N, w A_e^T A_p (6 x 3), and of the point's
-// right-hand side, w A_p^T F: the same arithmetic wherever they are needed, so every use sees the
-// same bits.
+// A mark's rows (its input, MarkInputOf; `point` its point) at the linearisation point `at`: the
+// one function the linearisation's sums, the points' sums, the elimination, the back-substitution
+// and the dense rows all call, so that every use sees the same bits (the same arithmetic in the
+// same order, from the same copy of the state). False when the point is not in front of the camera
+// (rows->w_m) or F is not finite; never at a point where Linearize succeeded.
+bool MarkRowsAt(const LinearizationPoint& at, const MarkInput& input, int point, MarkRows* rows);
+
+// The mark's share of the camera-point block of N, w A_e^T A_p (6 x 3), of the point's
+// right-hand side, w A_p^T F, and of a self-calibrated camera's coupling with the point,
+// w A_g^T A_p: the same arithmetic wherever they are needed, so every use sees the same bits.
 inline Matrix23 MarkPointRows(const MarkRows& rows) {
   return -rows.A_e.leftCols<3>();  // dF/dX = -dF/dX0 (PointPartialsFromCentrePartials)
 }
@@ -204,25 +250,39 @@ inline Eigen::Vector3d MarkGp(const MarkRows& rows) {
   gp.noalias() = rows.weight * MarkPointRows(rows).transpose() * rows.f;
   return gp;
 }
+// A_g (2 x the camera's estimated parameters) into *A_g, resized (kept storage: no allocation per
+// mark of a camera).
+inline void MarkCalibrationRows(const MarkRows& rows,
+                                Eigen::Matrix<double, 2, Eigen::Dynamic>* A_g) {
+  A_g->resize(2, rows.num_calibration);
+  for (int j = 0; j < rows.num_calibration; ++j) {
+    (*A_g)(0, j) = rows.calib_u[j];
+    (*A_g)(1, j) = rows.calib_v[j];
+  }
+}
+inline Eigen::MatrixX3d MarkWg(const MarkRows& rows,
+                               Eigen::Matrix<double, 2, Eigen::Dynamic>* A_g) {
+  MarkCalibrationRows(rows, A_g);
+  Eigen::MatrixX3d Wg;
+  Wg.noalias() = rows.weight * A_g->transpose() * MarkPointRows(rows);
+  return Wg;
+}
 
 // The normal equations of one linearisation (seed sign: N d = A^T P F, p = p0 - d).
 struct Normal {
+  // Where they were made: every mark's rows are made again from it (MarkRowsAt) where they are
+  // needed rather than kept per mark.
+  LinearizationPoint at;
   std::vector<Matrix6d> U;  // per camera block
   std::vector<Vector6d> ge;
   std::vector<Eigen::Matrix3d> V;  // per free point
   std::vector<Eigen::Vector3d> gp;
-  // Per mark of the round: its rows and weight (MarkRows), 120 bytes; the mark's W = w A_e^T A_p
-  // and g_p part w A_p^T F are made from them when needed (MarkW, MarkGp) rather than kept
-  // (184 bytes a mark with F: 110 MB at 1.7 million marks).
-  std::vector<MarkRows> marks;
   // The global columns (Layout::num_global, G; all empty when G = 0): per camera block its
-  // 6 x G coupling w A_e^T A_g; their own G x G block and right-hand side; per mark of a
-  // self-calibrated camera w A_g^T A_p (its camera's estimated parameters x 3; empty otherwise);
-  // per free point the sum of its marks' ones at their columns (G x 3).
+  // 6 x G coupling w A_e^T A_g; their own G x G block and right-hand side; per free point the sum
+  // of its marks' w A_g^T A_p at their columns (G x 3).
   std::vector<Eigen::MatrixXd> Ueg;
   Eigen::MatrixXd Ugg;
   Eigen::VectorXd gg;
-  std::vector<Eigen::MatrixX3d> Wg;
   std::vector<Eigen::MatrixX3d> Wg_point;
   // Per global column: the correction's size measure (MeasureCorrections). A calibration
   // parameter: the RMS image shift of a unit correction over the camera's marks (sqrt of its
@@ -293,12 +353,22 @@ inline bool IsFixed(const Plan& plan, const Layout& layout, int b, int component
   return plan.image_fixed[layout.free_images[b]][component];
 }
 
+// The Taylor adjustment's set-up (taylor_bundle.cc), declared here for the tests of the normal
+// equations: its plan (internal::MakeBundlePlan, then the unknowns held, the tie loss and each
+// mark's ideal film point; the options and config already checked), and the block's centred frame
+// with the start state.
+Status MakePlan(const TaylorBundleOptions& options, const BundleAdjustmentConfig& config,
+                const Block& block, Plan* plan);
+Frame MakeFrame(const BundleAdjustmentConfig& config, const Block& block, const Plan& plan,
+                State* state);
+
 // The layout of a round from the plan: free images (in a fill-reducing order) and points, the
 // marks of the round, the block pairs of S and its sparse pattern, the observation count.
 void BuildLayout(const Block& block, const Plan& plan, Layout* layout);
 
 // Linearises every observation equation at `state` and accumulates the normal equations (and,
-// when `dense` is not null, the whitened rows). False when a point is not in front of its camera
+// when `dense` is not null, the whitened rows); normal->at keeps the linearisation point (a copy
+// of `state`; pointers to block, plan and frame). False when a point is not in front of its camera
 // (normal->behind_mark says which) or the residuals are not finite.
 // On num_threads threads (the sums in a fixed order, the result the same for every count).
 bool Linearize(TaylorPartials partials, const Block& block, const Plan& plan, const Layout& layout,

@@ -1,9 +1,8 @@
 // The Taylor bundle's per-mark and per-point storage (solvers/bundle/internal/taylor_normals.h):
 // IndexLists against a vector of vectors built from the same entries, a mark's W and g_p part
-// made from its stored rows (MarkW, MarkGp) against the products written out by hand, and
+// made from its rows (MarkW, MarkGp) against the products written out by hand, the rows made
+// again (MarkRowsAt) against those of the first linearisation after the state has moved, and
 // BuildLayout's image order and mark lists against the same things made the plain way.
-#include "solvers/bundle/internal/taylor_normals.h"
-
 #include <gtest/gtest.h>
 
 #include <Eigen/OrderingMethods>
@@ -11,6 +10,8 @@
 #include <vector>
 
 #include "core/simulation/synthetic_block.h"
+#include "solvers/bundle/bundle_adjustment.h"
+#include "solvers/bundle/internal/taylor_normals.h"
 #include "tests/support/exact_block.h"
 
 namespace photopose::internal::taylor {
@@ -89,12 +90,139 @@ TEST(MarkRows, WAndGradientPartAreTheHandWrittenProducts) {
   EXPECT_GT(V.diagonal().minCoeff(), 0.0);
 }
 
+// A block linearised as the Taylor adjustment's first round linearises it (its plan, frame,
+// layout and normal equations at the generator's perturbed start), on two threads. Made in place:
+// the normal equations point into the block, plan and frame.
+struct Linearised {
+  Block block;
+  Plan plan;
+  Frame frame;
+  State state;
+  Layout layout;
+  Normal normal;
+};
+
+void Linearise(const TaylorBundleOptions& options, const std::vector<std::string>& calibrate,
+               Linearised* out) {
+  SyntheticBlockTruth truth;
+  ASSERT_TRUE(MakeSyntheticBlock(SolverBenchmarkBlockOptions(3, 6, 250), &out->block, &truth).ok());
+  out->block.BuildIndex();
+  BundleAdjustmentConfig config;
+  if (!calibrate.empty())
+    ASSERT_TRUE(BundleAdjustmentConfig::FromCalibrationNames(out->block, calibrate, &config).ok());
+  ASSERT_TRUE(MakePlan(options, config, out->block, &out->plan).ok());
+  out->frame = MakeFrame(config, out->block, out->plan, &out->state);
+  BuildLayout(out->block, out->plan, &out->layout);
+  ASSERT_TRUE(Linearize(options.partials, out->block, out->plan, out->layout, out->frame,
+                        out->state, /*num_threads=*/2, &out->normal, nullptr));
+}
+
+// The points eliminated and the reduced system solved, undamped: (d_e, d_p).
+void SolveOnce(const Plan& plan, Layout* layout, const Normal& normal, Eigen::VectorXd* d_e,
+               std::vector<Eigen::Vector3d>* d_p) {
+  Reduction reduction;
+  reduction.num_threads = 2;
+  ASSERT_EQ(Reduce(normal, *layout, &reduction), -1);
+  ASSERT_EQ(WriteScaled(plan, layout, &reduction), -1);
+  ASSERT_TRUE(Factorize(1e-14, *layout, &reduction));
+  SolveCorrections(plan, *layout, normal, reduction, d_e, d_p);
+}
+
+void ExpectSameRows(const MarkRows& a, const MarkRows& b, int m) {
+  EXPECT_EQ(a.A_e, b.A_e) << "mark " << m;
+  EXPECT_EQ(a.f, b.f) << "mark " << m;
+  EXPECT_EQ(a.weight, b.weight) << "mark " << m;
+  EXPECT_EQ(a.cost, b.cost) << "mark " << m;
+  ASSERT_EQ(a.num_calibration, b.num_calibration) << "mark " << m;
+  for (int j = 0; j < a.num_calibration; ++j) {
+    EXPECT_EQ(a.calib_u[j], b.calib_u[j]) << "mark " << m << ", parameter " << j;
+    EXPECT_EQ(a.calib_v[j], b.calib_v[j]) << "mark " << m << ", parameter " << j;
+  }
+}
+
+// The rows are not kept per mark but made again where they are needed (MarkRowsAt). Made again
+// after the caller's state has moved (a step taken or tried, as the rounds do), they are the
+// rows of the first linearisation bit for bit, and so are the elimination and the
+// back-substitution that read them; the points' sums Linearize made are sums of those same rows.
+// With a robust tie loss (the weight depends on F) and with self-calibration (the Jet with the
+// calibration's derivatives, whose rows enter the global columns).
+TEST(MarkRowsAt, MadeAgainEqualTheFirstLinearisationBitForBit) {
+  struct Case {
+    const char* name;
+    LossType tie_loss;
+    std::vector<std::string> calibrate;
+  };
+  for (const Case& c : {Case{"Cauchy tie loss", LossType::kCauchy, {}},
+                        Case{"self-calibrated c, K1", LossType::kNone, {"FocalLength", "K1"}}}) {
+    SCOPED_TRACE(c.name);
+    TaylorBundleOptions options;
+    options.tie_loss = c.tie_loss;
+    Linearised data;
+    Linearise(options, c.calibrate, &data);
+    ASSERT_FALSE(::testing::Test::HasFatalFailure());
+    const Layout& layout = data.layout;
+    const Normal& normal = data.normal;
+    ASSERT_EQ(layout.num_global > 0, !c.calibrate.empty());
+
+    std::vector<MarkRows> first(layout.marks.size());
+    for (size_t k = 0; k < layout.marks.size(); ++k)
+      ASSERT_TRUE(MarkRowsAt(normal.at, MarkInputOf(data.block, data.plan, layout.marks[k]),
+                             data.block.marks[layout.marks[k]].point, &first[k]));
+    int weighted_down = 0;  // tie marks whose loss lowered their weight
+    for (size_t k = 0; k < layout.marks.size(); ++k) {
+      const int m = layout.marks[k];
+      weighted_down += first[k].weight < 1.0 / (data.plan.mark_sigma[m] * data.plan.mark_sigma[m]);
+    }
+    EXPECT_EQ(weighted_down > 0, c.tie_loss != LossType::kNone);
+    // The points' sums of the linearisation (points without a prior: a control point's prior is
+    // added after its marks).
+    int checked = 0;
+    for (size_t q = 0; q < layout.free_points.size(); ++q) {
+      if (data.plan.point_prior[layout.free_points[q]]) continue;
+      Eigen::Matrix3d V = Eigen::Matrix3d::Zero();
+      Eigen::Vector3d gp = Eigen::Vector3d::Zero();
+      for (const int k : layout.point_all_marks[q]) {
+        V -= MarkW(first[k]).topRows<3>();
+        gp += MarkGp(first[k]);
+      }
+      EXPECT_EQ(normal.V[q], V) << "point " << q;
+      EXPECT_EQ(normal.gp[q], gp) << "point " << q;
+      ++checked;
+    }
+    EXPECT_GT(checked, 200);
+    Eigen::VectorXd d_e;
+    std::vector<Eigen::Vector3d> d_p;
+    SolveOnce(data.plan, &data.layout, normal, &d_e, &d_p);
+    ASSERT_FALSE(::testing::Test::HasFatalFailure());
+
+    // The caller's state moved: the step applied, and the calibration changed.
+    for (size_t b = 0; b < layout.free_images.size(); ++b)
+      data.state.eo[layout.free_images[b]] -= d_e.segment<6>(6 * b);
+    for (size_t q = 0; q < layout.free_points.size(); ++q)
+      data.state.points[layout.free_points[q]] -= d_p[q];
+    for (std::vector<double>& camera : data.state.cameras) camera[0] *= 1.01;
+    for (size_t k = 0; k < layout.marks.size(); ++k) {
+      MarkRows again;
+      ASSERT_TRUE(MarkRowsAt(normal.at, MarkInputOf(data.block, data.plan, layout.marks[k]),
+                             data.block.marks[layout.marks[k]].point, &again));
+      ExpectSameRows(again, first[k], layout.marks[k]);
+    }
+    Eigen::VectorXd d_e_again;
+    std::vector<Eigen::Vector3d> d_p_again;
+    SolveOnce(data.plan, &data.layout, normal, &d_e_again, &d_p_again);
+    EXPECT_EQ(d_e_again, d_e);
+    EXPECT_EQ(d_p_again, d_p);
+  }
+}
+
 // A plan for BuildLayout alone: every mark used but every fifth, the first image and the control
 // points held constant, no priors, no calibration.
 Plan LayoutPlan(const Block& block) {
   Plan plan;
   plan.mark_used.assign(block.marks.size(), 1);
   for (size_t m = 0; m < block.marks.size(); m += 5) plan.mark_used[m] = 0;
+  plan.mark_sigma.assign(block.marks.size(), 1.0);
+  plan.ideal_um.assign(block.marks.size(), Eigen::Vector2d::Zero());
   plan.point_in_problem.assign(block.points.size(), 1);
   plan.point_constant.assign(block.points.size(), 0);
   for (size_t p = 0; p < block.points.size(); ++p)
@@ -174,6 +302,13 @@ TEST(BuildLayout, ImageOrderAndMarkListsAsMadeThePlainWay) {
   for (size_t q = 0; q < layout.free_points.size(); ++q) {
     EXPECT_EQ(as_vector(layout.point_marks[q]), point_marks[q]) << "point " << q;
     EXPECT_EQ(as_vector(layout.point_all_marks[q]), point_all_marks[q]) << "point " << q;
+    // Each of its marks' inputs beside its entry, in the list's order.
+    for (size_t j = 0; j < point_all_marks[q].size(); ++j) {
+      const MarkInput& input = layout.point_mark_inputs[layout.point_all_marks.Offset(q) + j];
+      const int m = layout.marks[point_all_marks[q][j]];
+      EXPECT_EQ(input.m, m) << "point " << q;
+      EXPECT_EQ(input.image, block.marks[m].image) << "point " << q;
+    }
     const size_t n = point_marks[q].size();
     EXPECT_EQ(layout.point_pairs[q].size(), n * (n + 1) / 2) << "point " << q;
   }
