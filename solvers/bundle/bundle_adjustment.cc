@@ -1,6 +1,7 @@
-// BundleAdjust and CrossValidateControlPoints (bundle_adjustment.h): options and reports, the
-// rounds (solve, snooping or rejection, variance components) as named steps, the cross-validation.
-// The plan and the Ceres problem are in bundle_problem.cc, the statistics in bundle_statistics.cc.
+// BundleAdjust (bundle_adjustment.h): options and reports, the rounds (solve, snooping or
+// rejection, variance components) as named steps. The plan and the Ceres problem are in
+// bundle_problem.cc, the statistics in bundle_statistics.cc, the cross-validation in
+// cross_validation.cc.
 // It also holds the public types' methods (IsValid, BriefReport, FullReport).
 #include "solvers/bundle/bundle_adjustment.h"
 
@@ -14,11 +15,8 @@
 #include <memory>
 #include <sstream>
 
-#include "core/parallel.h"
 #include "core/rotation.h"
-#include "core/statistics.h"
 #include "core/units.h"
-#include "solvers/bundle/check_points.h"
 #include "solvers/bundle/internal/bundle_problem.h"
 #include "solvers/bundle/internal/bundle_rounds.h"
 #include "solvers/bundle/internal/bundle_statistics.h"
@@ -568,127 +566,6 @@ Status BundleAdjust(const BundleAdjustmentOptions& options,
   if (options.statistics.estimate_accuracies) internal::ReportEstimatedAccuracies(a.changes);
   WriteBack(a.plan, a.state, block);
   summary.time_seconds = SecondsSince(a.start);
-  return Status::Ok();
-}
-
-namespace {
-
-// The block every left-out adjustment of the cross-validation starts from: what the full
-// adjustment removed stays out. The marks it rejected (in *rejected) except those of the point left
-// out, whose marks are what checks it (a wrong control coordinate makes the full adjustment reject
-// them); a control point whose coordinates were rejected is a tie point here, a rejected camera
-// position or attitude no prior.
-Block CrossValidationBase(const Block& adjusted, const BundleAdjustmentResult& full,
-                          std::vector<char>* rejected) {
-  *rejected = full.RemovedMarks(adjusted.marks.size());
-  Block base = adjusted;
-  for (const BundleSnoopingStep& s : full.snooping) {
-    if (s.item < 0) continue;
-    if (s.group == kControlPoints && s.item < static_cast<int>(base.points.size())) {
-      base.points[s.item].role = PointRole::kTie;
-      base.points[s.item].surveyed_m.reset();
-    } else if (s.group == kCameraPositions && s.item < static_cast<int>(base.images.size())) {
-      base.images[s.item].measured_center_m.reset();
-    } else if (s.group == kAttitudes && s.item < static_cast<int>(base.images.size())) {
-      base.images[s.item].measured_angles_rad.reset();
-    }
-  }
-  base.BuildIndex();
-  return base;
-}
-
-// Control point p left out (a check point) of an adjustment of `base`: its error against the
-// survey and that error normalized by its covariance plus the survey's.
-BundleCrossValidationPoint LeaveOneOut(const BundleAdjustmentOptions& one,
-                                       const BundleAdjustmentConfig& config, const Block& base,
-                                       const std::vector<char>& rejected, const Block& adjusted,
-                                       double marker_m, double threshold, int p) {
-  BundleCrossValidationPoint out;
-  out.point = p;
-  Block block = base;
-  std::vector<BlockMark> kept;
-  for (size_t m = 0; m < base.marks.size(); ++m)
-    if (!rejected[m] || base.marks[m].point == p) kept.push_back(base.marks[m]);
-  block.marks = std::move(kept);
-  block.BuildIndex();
-  block.points[p].role = PointRole::kCheck;
-  block.points[p].position_m.reset();
-  BundleAdjustmentResult left_out;
-  const Status status = BundleAdjust(one, config, &block, &left_out);
-  if (!status.ok()) {
-    out.message = status.message();
-    return out;
-  }
-  if (!left_out.summary.IsSolutionUsable()) {
-    out.message = left_out.summary.message;
-    return out;
-  }
-  const BundlePointResult& point = left_out.points[p];
-  if (!point.error_m) {
-    out.message = point.message;
-    return out;
-  }
-  out.ok = true;
-  out.error_m = *point.error_m;
-  out.num_images = point.num_observations;
-  const Eigen::Matrix3d C =
-      SurveyedPointErrorCovariance(adjusted.points[p], point.covariance, marker_m);
-  out.normalized = out.error_m.dot(C.ldlt().solve(out.error_m));
-  out.stands_out = out.normalized > threshold;
-  return out;
-}
-
-}  // namespace
-
-Status CrossValidateControlPoints(const BundleAdjustmentOptions& options,
-                                  const BundleAdjustmentConfig& config, const Block& adjusted,
-                                  const BundleAdjustmentResult& full, int num_threads,
-                                  BundleCrossValidationResult* result) {
-  const Clock::time_point start = Clock::now();
-  *result = BundleCrossValidationResult();
-  PHOTOPOSE_RETURN_IF_ERROR(Validate(options, "invalid options: "));
-  if (options.statistics.covariances == BundleCovarianceMethod::kNone)
-    return Status::Error(
-        "invalid options: cross-validation needs the statistics: a left-out control point's "
-        "normalized error weighs its error by the intersection's covariance, which takes the "
-        "images' own from the covariances, and statistics.covariances is none");
-  if (config.lever_arm_m && !config.lever_arm_m->allFinite())
-    return Status::Error("invalid options: the lever arm must be finite");
-  std::vector<char> rejected;
-  const Block base = CrossValidationBase(adjusted, full, &rejected);
-  std::vector<int> controls;
-  for (size_t p = 0; p < base.points.size(); ++p)
-    if (base.points[p].role == PointRole::kControl && !base.marks_of_point[p].empty())
-      controls.push_back(static_cast<int>(p));
-  result->points.assign(controls.size(), BundleCrossValidationPoint());
-  // The normalized error of a point is chi-square with 3 degrees of freedom.
-  result->threshold = ChiSquaredQuantile(1.0 - options.statistics.snooping_alpha, 3.0);
-
-  // One adjustment per left-out point, single-threaded (the points run in parallel), without
-  // blunder removal (the full adjustment's removals are applied above) or diagnostics.
-  BundleAdjustmentOptions one = options;
-  one.solver.num_threads = 1;
-  one.solver.progress = nullptr;
-  one.robustness.snoop = false;
-  one.statistics.estimate_accuracies = false;
-  one.robustness.rejection_threshold = 0.0;
-  one.statistics.observation_diagnostics = false;
-  ParallelFor(controls.size(), num_threads, [&](size_t k) {
-    result->points[k] = LeaveOneOut(one, config, base, rejected, adjusted,
-                                    options.accuracies.marker_m, result->threshold, controls[k]);
-  });
-
-  Eigen::Vector3d ssq = Eigen::Vector3d::Zero();
-  for (const BundleCrossValidationPoint& point : result->points) {
-    if (!point.ok) continue;
-    ++result->count;
-    ssq += point.error_m.cwiseAbs2();
-  }
-  if (result->count > 0) {
-    result->rmse_m = (ssq / result->count).cwiseSqrt();
-    result->rmse_total_m = std::sqrt(ssq.sum() / result->count);
-  }
-  result->time_seconds = SecondsSince(start);
   return Status::Ok();
 }
 

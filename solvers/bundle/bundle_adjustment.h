@@ -176,6 +176,25 @@ constexpr EnumNameTable<BundleCovarianceMethod> EnumNames(BundleCovarianceMethod
   return EnumNameTable<BundleCovarianceMethod>(kBundleCovarianceMethodNames);
 }
 
+// How CrossValidateControlPoints finds each control point's left-out solution.
+enum class BundleCrossValidationMethod {
+  // From the full adjustment's reduced camera system S and its selected inverse C = S^-1: the
+  // point's share of S (M, on the reduced blocks its rows touch) and of the reduced gradient taken
+  // out by a low-rank (Woodbury) update, one Gauss-Newton step of the left-out problem from the
+  // full solution. One factorisation for all points (as the statistics' own), then per point a
+  // few small dense matrices.
+  kUpdate,
+  // One adjustment per point (warm-started, until convergence): the oracle of kUpdate, and what
+  // it replaces. Ceres' adjustments whatever solver adjusted the block.
+  kRefit,
+};
+inline constexpr EnumNameEntry<BundleCrossValidationMethod> kBundleCrossValidationMethodNames[] = {
+    {BundleCrossValidationMethod::kUpdate, "update"},
+    {BundleCrossValidationMethod::kRefit, "refit"}};
+constexpr EnumNameTable<BundleCrossValidationMethod> EnumNames(BundleCrossValidationMethod) {
+  return EnumNameTable<BundleCrossValidationMethod>(kBundleCrossValidationMethodNames);
+}
+
 // The datum the covariances of a relative block refer to (no control points, no camera positions:
 // the seven similarity parameters are free and any covariance is one gauge's). Residuals,
 // redundancy numbers, w-tests, the smallest detectable errors and the calibration's covariance are
@@ -262,6 +281,11 @@ struct BundleStatisticsOptions {
   int max_variance_iterations = 20;     // count
   double variance_tolerance = 0.01;     // |s_g^2 - 1| (unitless)
   double min_variance_redundancy = 5.0; // summed redundancy numbers (unitless)
+
+  // How CrossValidateControlPoints leaves each control point out (the adjustment itself does not
+  // read it): a low-rank update of the full adjustment's reduced system (kUpdate, one
+  // factorisation in all) or one adjustment per point (kRefit).
+  BundleCrossValidationMethod cross_validation = BundleCrossValidationMethod::kUpdate;
 
   bool IsValid(std::string* why) const;
 };
@@ -678,6 +702,7 @@ struct BundleCrossValidationPoint {
 };
 
 struct BundleCrossValidationResult {
+  BundleCrossValidationMethod method = BundleCrossValidationMethod::kUpdate;  // how it was found
   std::vector<BundleCrossValidationPoint> points;
   int count = 0;  // points cross-validated
   Eigen::Vector3d rmse_m = Eigen::Vector3d::Zero();  // per axis over those (m)
@@ -686,11 +711,20 @@ struct BundleCrossValidationResult {
   double time_seconds = 0.0;
 };
 
-// Each control point of the adjusted block in turn becomes a check point; the block is adjusted
-// again without it (warm-started from `adjusted`, the marks rejected by `full` left out) and its
-// error recorded. Runs num_threads adjustments in parallel (0: all cores). A point whose removal
-// leaves no datum is reported as not cross-validated. Needs the covariances (an error with
+// Each control point of the adjusted block in turn becomes a check point: its prior and its marks
+// leave the adjustment (what `full` removed stays out: its rejected marks, except the point's own,
+// and the priors data snooping removed), and it is intersected from the images of the adjustment
+// without it, its error recorded. options.statistics.cross_validation says how that adjustment is
+// found: by a low-rank update of `full`'s reduced system, one linearised step from the full
+// solution (kUpdate; the statistics' code, so for a block adjusted by either solver), or adjusted
+// again from `adjusted` (kRefit: num_threads Ceres adjustments in parallel, 0: all cores). A point
+// whose removal leaves no datum (or an image with too few marks) is reported as not
+// cross-validated, with the plan's reason, by both; kUpdate also when the removal leaves S
+// singular (BundleCrossValidationPoint::message says so). Needs the covariances (an error with
 // statistics.covariances kNone: the normalized error would take the images as error-free).
+// `adjusted` and `full` are the block and the result of the full adjustment with `options` and
+// `config` (the update assumes its solution is that adjustment's minimum within its tolerances;
+// with estimated accuracies the left-out problem's gradient there is taken into the step).
 Status CrossValidateControlPoints(const BundleAdjustmentOptions& options,
                                   const BundleAdjustmentConfig& config, const Block& adjusted,
                                   const BundleAdjustmentResult& full, int num_threads,

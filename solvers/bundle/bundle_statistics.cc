@@ -749,8 +749,7 @@ void GroupStatistics(const BundleAdjustmentOptions& options, const GroupSums* su
 }
 
 // The covariance of a check point with the images' and cameras' own uncertainty carried in. The
-// point minimises sum_j |r_j(X, e)|^2, so dX/de = -N^-1 B with N = sum_j J_X,j^T J_X,j and
-// B = sum_j J_X,j^T J_e,j (whitened, e in the tangent spaces of the reduced system), and
+// point minimises sum_j |r_j(X, e)|^2, so dX/de = -N^-1 B (CheckPointSensitivity) and
 // C_X = N^-1 + (N^-1 B) C (N^-1 B)^T (unscaled).
 Eigen::Matrix3d PropagatedCheckPointCovariance(const Block& block, const BundleState& state,
                                                const BundleRound& round,
@@ -758,42 +757,9 @@ Eigen::Matrix3d PropagatedCheckPointCovariance(const Block& block, const BundleS
                                                const std::vector<RayObservation>& rays,
                                                const std::vector<int>& marks,
                                                const TriangulationResult& intersection) {
-  Eigen::Matrix3d N = Eigen::Matrix3d::Zero();
-  Eigen::MatrixXd B = Eigen::MatrixXd::Zero(3, reduced.size);
-  for (size_t j = 0; j < rays.size(); ++j) {
-    const int image = block.marks[marks[j]].image;
-    const int camera = block.images[image].camera;
-    const std::unique_ptr<ceres::CostFunction> cost(CreateRayCost(rays[j]));
-    const int n = static_cast<int>(state.cameras[camera].size());
-    Eigen::Matrix<double, 2, 6, Eigen::RowMajor> J_eo;
-    Eigen::Matrix<double, 2, 3, Eigen::RowMajor> J_X;
-    Eigen::Matrix<double, 2, Eigen::Dynamic, Eigen::RowMajor> J_cam(2, n);
-    const double* parameters[] = {state.eo[image].data(), intersection.point_m.data(),
-                                  state.cameras[camera].data()};
-    double residual[2];
-    double* jacobians[] = {J_eo.data(), J_X.data(), J_cam.data()};
-    if (!cost->Evaluate(parameters, residual, jacobians)) continue;
-    N += J_X.transpose() * J_X;
-    auto add = [&](const double* block_ptr, const Eigen::MatrixXd& J_ambient) {
-      const auto found = reduced.e_index.find(block_ptr);
-      if (found == reduced.e_index.end()) return;
-      const int offset = reduced.e_offset[found->second];
-      const int tangent = round.e_sizes[found->second];
-      const ceres::Manifold* manifold = round.e_manifolds[found->second];
-      Eigen::MatrixXd P = Eigen::MatrixXd::Identity(J_ambient.cols(), tangent);
-      if (manifold != nullptr) {
-        Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor> Pr(
-            J_ambient.cols(), tangent);
-        manifold->PlusJacobian(block_ptr, Pr.data());
-        P = Pr;
-      }
-      B.block(0, offset, 3, tangent) += J_X.transpose() * (J_ambient * P);
-    };
-    add(state.eo[image].data(), J_eo);
-    add(state.cameras[camera].data(), J_cam);
-  }
-  const Eigen::Matrix3d N_inverse = N.ldlt().solve(Eigen::Matrix3d::Identity());
-  const Eigen::MatrixXd A = N_inverse * B;
+  Eigen::Matrix3d N_inverse;
+  Eigen::MatrixXd A;
+  CheckPointSensitivity(block, state, round, reduced, rays, marks, intersection, &N_inverse, &A);
   // Its images need not share a tie point (check marks are not in the adjustment): C A^T
   // through the factor, three solves.
   return N_inverse + A * reduced.C.Solve(A.transpose());
@@ -879,6 +845,51 @@ void ControlAndCheckPoints(const BundleAdjustmentOptions& options, const Block& 
 }
 
 }  // namespace
+
+void CheckPointSensitivity(const Block& block, const BundleState& state, const BundleRound& round,
+                           const ReducedNormals& reduced, const std::vector<RayObservation>& rays,
+                           const std::vector<int>& marks, const TriangulationResult& intersection,
+                           Eigen::Matrix3d* N_inverse, Eigen::MatrixXd* A) {
+  Eigen::Matrix3d N = Eigen::Matrix3d::Zero();
+  Eigen::MatrixXd B = Eigen::MatrixXd::Zero(3, reduced.size);
+  for (size_t j = 0; j < rays.size(); ++j) {
+    const int image = block.marks[marks[j]].image;
+    const int camera = block.images[image].camera;
+    const std::unique_ptr<ceres::CostFunction> cost(CreateRayCost(rays[j]));
+    const int n = static_cast<int>(rays[j].camera->params.size());
+    Eigen::Matrix<double, 2, 6, Eigen::RowMajor> J_eo;
+    Eigen::Matrix<double, 2, 3, Eigen::RowMajor> J_X;
+    Eigen::Matrix<double, 2, Eigen::Dynamic, Eigen::RowMajor> J_cam(2, n);
+    const double* eo = rays[j].eo.parameters.data();
+    const double* params = rays[j].camera->params.data();
+    const double* parameters[] = {eo, intersection.point_m.data(), params};
+    double residual[2];
+    double* jacobians[] = {J_eo.data(), J_X.data(), J_cam.data()};
+    if (!cost->Evaluate(parameters, residual, jacobians)) continue;
+    N += J_X.transpose() * J_X;
+    // The e block's columns of `key` (the state's parameter block), its manifold's Jacobian at
+    // `at` (the ray's value of it).
+    auto add = [&](const double* key, const double* at, const Eigen::MatrixXd& J_ambient) {
+      const auto found = reduced.e_index.find(key);
+      if (found == reduced.e_index.end()) return;
+      const int offset = reduced.e_offset[found->second];
+      const int tangent = round.e_sizes[found->second];
+      const ceres::Manifold* manifold = round.e_manifolds[found->second];
+      Eigen::MatrixXd P = Eigen::MatrixXd::Identity(J_ambient.cols(), tangent);
+      if (manifold != nullptr) {
+        Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor> Pr(J_ambient.cols(),
+                                                                                  tangent);
+        manifold->PlusJacobian(at, Pr.data());
+        P = Pr;
+      }
+      B.block(0, offset, 3, tangent) += J_X.transpose() * (J_ambient * P);
+    };
+    add(state.eo[image].data(), eo, J_eo);
+    add(state.cameras[camera].data(), params, J_cam);
+  }
+  *N_inverse = N.ldlt().solve(Eigen::Matrix3d::Identity());
+  *A = *N_inverse * B;
+}
 
 Status ComputeBundleStatistics(const BundleAdjustmentOptions& options, const Block& block,
                                const BundlePlan& plan, const BundleState& state,

@@ -81,6 +81,8 @@ double ControlMarkScale(const Block& block, const std::vector<BlockCamera>& came
   return std::isfinite(scale) && scale > 0.0 ? scale : 1.0;
 }
 
+}  // namespace
+
 // The check point's row of the table: its intersection against its surveyed coordinates, after
 // the w-test of its marks (their sigmas `sigma_scale` times the rule's). While the largest
 // |w| = |v| / (s sigma sqrt(r)) of a mark's coordinate (s = max(1, sqrt(variance_factor)), the
@@ -147,8 +149,6 @@ bool TabulateCheckPoint(const Block& block, int p, const std::vector<const Vecto
   table->covariance_complete = static_cast<bool>(covariance);
   return true;
 }
-
-}  // namespace
 
 void TabulateControlAndCheckPoints(const Block& block, const std::vector<const Vector6d*>& eo,
                                    const std::vector<BlockCamera>& cameras,

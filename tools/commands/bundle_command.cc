@@ -81,6 +81,7 @@ DEFINE_bool(bundle_snoop, false, "Data snooping: remove the most significant rej
 DEFINE_bool(bundle_snooping_batch, true, "With --snoop: remove in one round every observation that one-at-a-time snooping would remove next as far as the round's statistics can tell (the largest w-test conditioned on those already taken, weakly correlated with them); false removes one per round, each after a fresh adjustment and statistics.");
 DEFINE_double(bundle_alpha, 0.001, "Significance level of the w-test per observation (two-sided).");
 DEFINE_bool(bundle_cross_validate, false, "Leave each control point out in turn and report its error as a check point.");
+DEFINE_string(bundle_cross_validation_method, "update", "With --cross_validate: how the adjustment without each control point is found: update (one linearised step from the full adjustment by a low-rank update of its reduced normal matrix, one factorisation for all points; with either solver) or refit (one adjustment per point, Ceres', the update's oracle; not with --solver=taylor or taylor_as_printed).");
 DEFINE_string(bundle_statistics, "full", "Posterior covariances, redundancy numbers, reliability and the verdicts that need them: full (at every block size, by selected inversion of the reduced camera system's sparse factor), none (group RMS and check points only), or dense (the dense inverse, for comparison; n^2 memory in the reduced parameters).");
 DEFINE_string(bundle_relative_covariance, "points", "The datum of a relative block's orientation and point covariances (residuals, redundancy numbers and w-tests are the same in every datum): points (inner constraints on the adjusted points: the smallest trace of their covariance, every image with a covariance), centres (inner constraints on the camera centres), or first_image (the adjustment's own gauge: the first image's covariance zero). Blocks with control points or camera positions have their own datum; this flag is refused for them.");
 DEFINE_string(bundle_relative_gauge, "free", "Relative blocks (no control points, no camera positions): free solves without a gauge and then moves the result into COLMAP's gauge (the first image as given, one coordinate of the second), the same minimum in far fewer iterations; fixed holds COLMAP's gauge from the start.");
@@ -101,7 +102,8 @@ constexpr char kUsage[] =
     "                        [--tie_accuracy=PX] [--marker_accuracy=M] [--marker_projection_accuracy=PX]\n"
     "                        [--camera_accuracy=M or X,Y,Z] [--attitude_accuracy=DEG]\n"
     "                        [--lever_arm=X,Y,Z] [--calibrate=LIST] [--estimate_accuracies]\n"
-    "                        [--snoop] [--cross_validate] [--threads=N] [--quiet]\n"
+    "                        [--snoop] [--cross_validate] [--cross_validation_method=update|refit]\n"
+    "                        [--threads=N] [--quiet]\n"
     "   or: photopose bundle --colmap_model=DIR [--out_colmap=DIR] [--out_colmap_format=text|binary]\n"
     "                        [--calibrate=LIST] ...\n"
     "   or: photopose bundle --colmap_model=DIR | --opensfm=DIR [--geo=geo.txt | --frames=F.csv [--crs=EPSG:N]\n"
@@ -341,10 +343,11 @@ int BlockSolverFromFlags(const char* command, BundleRun* run) {
                             " builds and solves its own normal equations with the seed's partials");
     }
   }
-  if (run->solver != PoseSolver::kCeres && FLAGS_bundle_cross_validate)
+  if (run->solver != PoseSolver::kCeres && FLAGS_bundle_cross_validate &&
+      run->options.statistics.cross_validation == BundleCrossValidationMethod::kRefit)
     return BadInput(command, "--solver=" + FLAGS_bundle_solver +
-                                 " does not cross-validate (the left-out adjustments are Ceres'); "
-                                 "use --solver=ceres for --cross_validate");
+                                 " does not refit (the left-out adjustments are Ceres'); use "
+                                 "--cross_validation_method=update or --solver=ceres");
   if (!FLAGS_bundle_taylor_damping.empty()) {
     TaylorDamping damping;
     if (!ParseEnum(FLAGS_bundle_taylor_damping, &damping))
@@ -389,6 +392,11 @@ int OptionsFromFlags(const char* command, BundleRun* run) {
   options.statistics.snooping_alpha = FLAGS_bundle_alpha;
   if (!ParseEnum(FLAGS_bundle_statistics, &options.statistics.covariances))
     return BadInput(command, EnumFlagError<BundleCovarianceMethod>("--statistics", FLAGS_bundle_statistics));
+  if (!ParseEnum(FLAGS_bundle_cross_validation_method, &options.statistics.cross_validation))
+    return BadInput(command, EnumFlagError<BundleCrossValidationMethod>(
+                                 "--cross_validation_method", FLAGS_bundle_cross_validation_method));
+  if (FlagGiven("bundle_cross_validation_method") && !FLAGS_bundle_cross_validate)
+    return BadInput(command, "--cross_validation_method is for --cross_validate, which is not given");
   if (!ParseEnum(FLAGS_bundle_relative_covariance, &options.statistics.relative_covariance))
     return BadInput(command, EnumFlagError<BundleRelativeCovariance>("--relative_covariance",
                                                                      FLAGS_bundle_relative_covariance));

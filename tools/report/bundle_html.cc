@@ -1130,7 +1130,11 @@ std::string CrossValidationHtml(const Block& block, const BundleCrossValidationR
                        p.stands_out ? "STANDS OUT" : (p.ok ? "fits" : p.message)});
   }
   return HtmlTable(
-      "Leave-one-out control points: each adjusted as a check point; RMSE X " +
+      "Leave-one-out control points: each adjusted as a check point (" +
+          std::string(cv.method == BundleCrossValidationMethod::kUpdate
+                          ? "by a low-rank update of the full adjustment"
+                          : "by one adjustment per point") +
+          ", " + FormatSignificant(cv.time_seconds, 3) + " s); RMSE X " +
           FormatLength(cv.rmse_m.x(), unit) + ", Y " + FormatLength(cv.rmse_m.y(), unit) + ", Z " +
           FormatLength(cv.rmse_m.z(), unit) + " " + u,
       {"point", "error X (" + u + ")", "error Y (" + u + ")", "error Z (" + u + ")", "e^T C^-1 e",

@@ -469,7 +469,8 @@ void CrossValidationJson(const Block& block, const BundleAdjustmentResult& resul
                         {"normalized", Number(p.normalized)},
                         {"stands_out", p.stands_out}});
     }
-    (*report)["cross_validation"] = {{"points", points},
+    (*report)["cross_validation"] = {{"method", EnumName(cv.method)},
+                                     {"points", points},
                                      {"count", cv.count},
                                      {"rmse_m",
                                       {{"x", Number(cv.rmse_m.x())},
@@ -908,9 +909,11 @@ void ConsoleRemovedLines(const Block& block, const BundleAdjustmentResult& resul
 void ConsoleCrossValidationLines(const Block& block, const BundleCrossValidationResult& cv,
                                  std::vector<std::string>* lines) {
   const LengthUnit unit = LengthUnitFor(cv.rmse_m.maxCoeff());
-  lines->push_back("leave-one-out control points: " + std::to_string(cv.count) + ", RMSE X " +
-                   FormatLength(cv.rmse_m.x(), unit) + " Y " + FormatLength(cv.rmse_m.y(), unit) +
-                   " Z " + FormatLength(cv.rmse_m.z(), unit) + " " + LengthUnitName(unit));
+  lines->push_back("leave-one-out control points (" + std::string(EnumName(cv.method)) + ", " +
+                   FormatSignificant(cv.time_seconds, 3) + " s): " + std::to_string(cv.count) +
+                   ", RMSE X " + FormatLength(cv.rmse_m.x(), unit) + " Y " +
+                   FormatLength(cv.rmse_m.y(), unit) + " Z " + FormatLength(cv.rmse_m.z(), unit) +
+                   " " + LengthUnitName(unit));
   for (const BundleCrossValidationPoint& p : cv.points) {
     if (p.stands_out)
       lines->push_back(

@@ -114,6 +114,30 @@ using CheckPointCovariance = std::function<Eigen::Matrix3d(
     const std::vector<RayObservation>& rays, const std::vector<int>& marks,
     const TriangulationResult& intersection)>;
 
+// How a point intersected from `rays` (from the marks `marks`, indices into Block::marks) moves
+// with the reduced system's parameters: N = sum_j J_X,j^T J_X,j over the rays (whitened) and
+// A = N^-1 B, B = sum_j J_X,j^T J_e,j in the reduced system's columns (3 x reduced.size; the
+// rays' images and cameras that are e blocks), the derivatives taken at the rays' own values. The
+// point's covariance with the images' own uncertainty is N^-1 + A C A^T (unscaled; C the
+// reduced system's inverse, or a left-out one).
+void CheckPointSensitivity(const Block& block, const BundleState& state, const BundleRound& round,
+                           const ReducedNormals& reduced, const std::vector<RayObservation>& rays,
+                           const std::vector<int>& marks, const TriangulationResult& intersection,
+                           Eigen::Matrix3d* N_inverse, Eigen::MatrixXd* A);
+
+// One check point's row of the table (TabulateControlAndCheckPoints' rule, solvers/bundle/
+// check_points.h): point p intersected from its marks whose image has an eo (eo[i] null: not
+// oriented), their sigmas `sigma_scale` times core/mark_weight.h's under `defaults`, its marks
+// tested by the w-test against `critical` and the worst rejected (appended to *rejected) until
+// none is; error_m, covariance (variance_factor times `covariance`'s, or the intersection's
+// a-priori one without it) and num_observations into *table. False, the reason in
+// table->message, when it cannot be intersected.
+bool TabulateCheckPoint(const Block& block, int p, const std::vector<const Vector6d*>& eo,
+                        const std::vector<BlockCamera>& cameras, const MarkSigmaDefaults& defaults,
+                        double sigma_scale, double variance_factor, double critical,
+                        const CheckPointCovariance& covariance, BundlePointResult* table,
+                        std::vector<BundleRejectedCheckMark>* rejected);
+
 // The control- and check-point table of an adjusted block (the one rule of both solvers; see
 // solvers/bundle/check_points.h). The adjusted values: eo[i] the seed exterior orientation of
 // image i (null: not oriented, its marks are left out), cameras the adjusted cameras of the block.

@@ -340,12 +340,33 @@ TEST(BundleCommand, TaylorSolverSnoopsAndEstimatesAsCeres) {
   EXPECT_GT(one_at_a_time["summary"]["snooping_rounds"].get<int>(),
             taylor["summary"]["snooping_rounds"].get<int>());
 
-  const CliRun refused = RunCli("bundle " + TableArgs(block) + " --quiet --solver=taylor " +
-                                    "--cross_validate --report=" + dir + "/cv.json",
-                                dir);
+  // The cross-validation by the update serves the Taylor path (the shared statistics' code); the
+  // refit's adjustments are Ceres' and are refused there, as is the method without
+  // --cross_validate.
+  const std::string cv_report = dir + "/cv.json";
+  const CliRun cross_validated =
+      RunCli("bundle " + TableArgs(block) +
+                 " --quiet --solver=taylor --cross_validate --report=" + cv_report,
+             dir);
+  ASSERT_EQ(cross_validated.exit_code, 0) << cross_validated.err;
+  const nlohmann::json cv = nlohmann::json::parse(ReadFile(cv_report))["cross_validation"];
+  EXPECT_EQ(cv["method"], "update");
+  EXPECT_GT(cv["count"].get<int>(), 0);
+  EXPECT_GE(cv["time_seconds"].get<double>(), 0.0);
+  const CliRun refused = RunCli(
+      "bundle " + TableArgs(block) + " --quiet --solver=taylor " +
+          "--cross_validate --cross_validation_method=refit --report=" + dir + "/cv_refit.json",
+      dir);
   EXPECT_EQ(refused.exit_code, 2);
-  EXPECT_NE(refused.err.find("--solver=taylor does not cross-validate"), std::string::npos)
-      << refused.err;
+  EXPECT_NE(refused.err.find("--solver=taylor does not refit"), std::string::npos) << refused.err;
+  const CliRun without =
+      RunCli("bundle " + TableArgs(block) +
+                 " --quiet --cross_validation_method=refit --report=" + dir + "/cv_without.json",
+             dir);
+  EXPECT_EQ(without.exit_code, 2);
+  EXPECT_NE(without.err.find("--cross_validation_method is for --cross_validate"),
+            std::string::npos)
+      << without.err;
 }
 
 // --snooping_batch (on by default) removes the blunders in fewer rounds; =false one per round; the
