@@ -550,6 +550,7 @@ class BundleStatisticsOptions:
     max_variance_iterations: int
     variance_tolerance: float
     min_variance_redundancy: float
+    cross_validation: str  # 'update' (one linearised step per left-out point from the full adjustment) or 'refit' (one adjustment per point)
     def validate(self) -> None: ...
 
 class BundleSolverOptions:
@@ -926,6 +927,8 @@ class BundleCrossValidationResult:
     def threshold(self) -> float: ...
     @property
     def time_seconds(self) -> float: ...
+    @property
+    def method(self) -> str: ...  # 'update' or 'refit': how the left-out adjustments were found
 
 def cross_validate_control_points(adjusted: Block, full: BundleAdjustmentResult, options: Optional[BundleAdjustmentOptions] = None, config: Optional[BundleAdjustmentConfig] = None, num_threads: int = 0) -> BundleCrossValidationResult: ...
 

@@ -76,9 +76,12 @@ default). A per-row accuracy of the tables overrides its row's default.)doc");
 
   auto stats = BindStruct<BundleStatisticsOptions>(m, "BundleStatisticsOptions",
                                                    "Covariances, verdicts, diagnostics, variance components.");
-  stats.def_readwrite("covariances", &BundleStatisticsOptions::covariances, "'full' (selected inversion), 'dense' (the test oracle) or 'none'")
-      .def_readwrite("weak_sigma_inflation", &BundleStatisticsOptions::weak_sigma_inflation,
-                     "unitless: sigma inflation above which a parameter is listed as weakly determined")
+  stats
+      .def_readwrite("covariances", &BundleStatisticsOptions::covariances,
+                     "'full' (selected inversion), 'dense' (the test oracle) or 'none'")
+      .def_readwrite(
+          "weak_sigma_inflation", &BundleStatisticsOptions::weak_sigma_inflation,
+          "unitless: sigma inflation above which a parameter is listed as weakly determined")
       .def_readwrite("relative_covariance", &BundleStatisticsOptions::relative_covariance,
                      "a relative block's covariance datum: 'points', 'centres' or 'first_image'")
       .def_readwrite("overfit_ratio", &BundleStatisticsOptions::overfit_ratio)
@@ -94,7 +97,10 @@ default). A per-row accuracy of the tables overrides its row's default.)doc");
       .def_readwrite("estimate_accuracies", &BundleStatisticsOptions::estimate_accuracies)
       .def_readwrite("max_variance_iterations", &BundleStatisticsOptions::max_variance_iterations)
       .def_readwrite("variance_tolerance", &BundleStatisticsOptions::variance_tolerance)
-      .def_readwrite("min_variance_redundancy", &BundleStatisticsOptions::min_variance_redundancy);
+      .def_readwrite("min_variance_redundancy", &BundleStatisticsOptions::min_variance_redundancy)
+      .def_readwrite("cross_validation", &BundleStatisticsOptions::cross_validation,
+                     "'update' (one linearised step per left-out point from the full adjustment) "
+                     "or 'refit' (one adjustment per point)");
   DefValidate(stats, "BundleStatisticsOptions");
 
   auto solver = BindStruct<BundleSolverOptions>(m, "BundleSolverOptions", R"doc(
@@ -440,6 +446,7 @@ void BindCrossValidation(py::module_& m) {
       .def_readonly("rmse_total_m", &BundleCrossValidationResult::rmse_total_m)
       .def_readonly("threshold", &BundleCrossValidationResult::threshold)
       .def_readonly("time_seconds", &BundleCrossValidationResult::time_seconds)
+      .def_readonly("method", &BundleCrossValidationResult::method)
       .def("__repr__", [](const py::object& self) { return PropertiesRepr(self); });
   m.def("cross_validate_control_points",
         [](const PythonBlock& adjusted, const BundleAdjustmentResult& full,

@@ -293,6 +293,7 @@ PHOTOPOSE_PYTHON_ENUM(photopose::BundleGroup)
 PHOTOPOSE_PYTHON_ENUM(photopose::ColmapFormat)
 PHOTOPOSE_PYTHON_ENUM(photopose::BundleCovarianceMethod)
 PHOTOPOSE_PYTHON_ENUM(photopose::BundleRelativeCovariance)
+PHOTOPOSE_PYTHON_ENUM(photopose::BundleCrossValidationMethod)
 
 #undef PHOTOPOSE_PYTHON_ENUM
 

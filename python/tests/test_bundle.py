@@ -130,6 +130,26 @@ def test_no_check_point_no_rmse():
     assert result.num_control_points > 0 and np.isfinite(result.control_rmse_total_m)
 
 
+def test_cross_validation_update_agrees_with_refit():
+    # The default update (one linearised step per left-out control point) against the refit (one
+    # adjustment per point), through the module: the same points, errors within a small share.
+    block, _ = pp.simulate_block(seed=3, num_lines=3, images_per_line=6)
+    result = pp.bundle_adjust(block)
+    update = pp.cross_validate_control_points(block, result)
+    options = pp.BundleAdjustmentOptions()
+    options.statistics.cross_validation = "refit"
+    refit = pp.cross_validate_control_points(block, result, options)
+    assert update.method == "update" and refit.method == "refit"
+    assert update.count == refit.count > 0
+    for u, r in zip(update.points, refit.points):
+        assert u.point == r.point and u.ok == r.ok
+        if u.ok:
+            np.testing.assert_allclose(u.error_m, r.error_m, rtol=0.0,
+                                       atol=1e-2 * np.linalg.norm(r.error_m) + 1e-6)
+    with pytest.raises(ValueError):
+        options.statistics.cross_validation = "leave_one_out"
+
+
 def test_options_config_and_errors():
     block, _ = pp.simulate_block(seed=3, num_lines=2, images_per_line=5)
     options = pp.BundleAdjustmentOptions(

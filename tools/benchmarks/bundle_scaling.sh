@@ -8,6 +8,8 @@
 #                                                 # --statistics=full and none: their time and memory
 #   tools/benchmarks/bundle_scaling.sh all
 #
+# SOLVER=taylor runs `--solver=taylor` instead of the default (Ceres); its labels end in _taylor.
+#
 # Every run is a whole `photopose bundle --colmap_model` process on a block written by
 # `photopose simulate --scenario=block --benchmark_block --colmap` (its perturbed start, a relative
 # block as COLMAP adjusts it, every observation kept), timed by /usr/bin/time (wall, peak resident
@@ -30,9 +32,13 @@ block() {  # block NAME LINES IMAGES_PER_LINE
   fi
 }
 
+SOLVER=${SOLVER:-}
+SUFFIX=${SOLVER:+_$SOLVER}
+
 run() {  # run LABEL BLOCK [flags...]: one whole process
-  local label=$1 name=$2
+  local label=$1$SUFFIX name=$2
   shift 2
+  [ -z "$SOLVER" ] || set -- "$@" --solver="$SOLVER"
   echo "bundle_scaling: $label on $name" >&2
   rm -rf "$WORK/out_$label" && mkdir -p "$WORK/out_$label"
   set +e
@@ -68,7 +74,7 @@ if [ "$MODE" = statistics ]; then
     run "stats_full$n" "b$n" --statistics=full
     run "stats_none$n" "b$n" --statistics=none
   done
-  python3 - "$WORK" <<'EOF2'
+  SUFFIX=$SUFFIX python3 - "$WORK" <<'EOF2'
 import json, os, re, sys
 work = sys.argv[1]
 def peak(label):
@@ -78,13 +84,14 @@ print("| images | marks | adjustment (s) | statistics (s) | of which factorisati
       "| inverse entries | peak with / without statistics (MiB) | ratio |")
 print("|" + "---|" * 8)
 for n in os.environ.get("SIZES", "100 300 1000").split():
-    if not os.path.exists(os.path.join(work, f"stats_full{n}.json")):
+    suffix = os.environ.get("SUFFIX", "")
+    if not os.path.exists(os.path.join(work, f"stats_full{n}{suffix}.json")):
         continue
-    full = json.load(open(os.path.join(work, f"stats_full{n}.json")))["summary"]
-    none = json.load(open(os.path.join(work, f"stats_none{n}.json")))["summary"]
+    full = json.load(open(os.path.join(work, f"stats_full{n}{suffix}.json")))["summary"]
+    none = json.load(open(os.path.join(work, f"stats_none{n}{suffix}.json")))["summary"]
     st = full["statistics"]
     adjustment = none["time_seconds"] - none["statistics_seconds"]
-    with_stats, without = peak(f"stats_full{n}"), peak(f"stats_none{n}")
+    with_stats, without = peak(f"stats_full{n}{suffix}"), peak(f"stats_none{n}{suffix}")
     print(f"| {n} | {full['num_marks']} | {adjustment:.3g} | {full['statistics_seconds']:.3g} "
           f"| {st['factorization_seconds']:.3g} / {st['inversion_seconds']:.3g} | {st['inverse_entries']} "
           f"| {with_stats:.0f} / {without:.0f} | {with_stats / without:.2f} |")
