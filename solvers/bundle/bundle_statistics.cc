@@ -543,12 +543,7 @@ bool CandidateCofactors(const BundleRound& round, const ReducedNormals& reduced,
     const int p = br.point;
     if (!EvaluatePointW(round, reduced, p, &scratch, &W)) return false;
     const Eigen::VectorXd WVq = W * (reduced.V_inverse[p] * br.J_p.row(row).transpose());
-    int at = 0;
-    for (const int b : reduced.W_blocks[p]) {
-      const int size = reduced.C.block_size(b);
-      G.block(reduced.e_offset[b], a, size, 1) -= WVq.segment(at, size);
-      at += size;
-    }
+    SubtractAtPointBlocks(reduced, p, WVq, G.col(a));
   }
   *H = Eigen::MatrixXd::Zero(n, n);
   if (reduced.size > 0 && n > 0) {

@@ -181,12 +181,7 @@ bool AddPointGradient(const BundleRound& round, const ReducedNormals& reduced, i
     for (size_t c = 0; c < rows.e_columns.size(); ++c) (*g)[rows.e_columns[c]] += g_e[c];
   }
   const Eigen::VectorXd eliminated = W * (reduced.V_inverse[q] * g_p);
-  int at = 0;
-  for (const int b : reduced.W_blocks[q]) {
-    const int size = reduced.C.block_size(b);
-    g->segment(reduced.e_offset[b], size) -= eliminated.segment(at, size);
-    at += size;
-  }
+  internal::SubtractAtPointBlocks(reduced, q, eliminated, *g);
   return true;
 }
 

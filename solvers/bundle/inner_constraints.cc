@@ -81,12 +81,7 @@ bool InnerConstraintTransform::RightHandSide(bool on_points, const BundlePlan& p
       const Eigen::Matrix<double, 3, 7> G = PointRows(k);
       *GtWG += G.transpose() * G;
       const Eigen::MatrixXd WV_b = W * (reduced.V_inverse[k] * G);
-      int row = 0;
-      for (const int b : reduced.W_blocks[k]) {
-        const int size = reduced.C.block_size(b);
-        rhs->middleRows(reduced.e_offset[b], size) -= WV_b.middleRows(row, size);
-        row += size;
-      }
+      SubtractAtPointBlocks(reduced, k, WV_b, *rhs);
     });
   }
   for (size_t i = 0; i < image_block.size(); ++i) {

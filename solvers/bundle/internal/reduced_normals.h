@@ -106,6 +106,18 @@ void PointW(const BundleRound& round, const ReducedNormals& reduced, int p, cons
 // allocations). False when a residual block cannot be evaluated.
 bool EvaluatePointW(const BundleRound& round, const ReducedNormals& reduced, int p,
                     std::vector<BlockRows>* scratch, Eigen::MatrixXd* W);
+// target -= stacked where stacked's rows follow point p's W_blocks (rows of a product W X) and
+// target's are the reduced system's (e_offset): how a point's eliminated share reaches the e rows.
+inline void SubtractAtPointBlocks(const ReducedNormals& reduced, int p,
+                                  const Eigen::Ref<const Eigen::MatrixXd>& stacked,
+                                  Eigen::Ref<Eigen::MatrixXd> target) {
+  int at = 0;
+  for (const int b : reduced.W_blocks[p]) {
+    const int size = reduced.C.block_size(b);
+    target.middleRows(reduced.e_offset[b], size) -= stacked.middleRows(at, size);
+    at += size;
+  }
+}
 // Every point's W (EvaluatePointW), made on num_threads threads (0: every core) a wave of chunks
 // at a time and handed to `use` one point after another in point index order, on the calling
 // thread (a sum over the points in `use` is the same on any number of threads). False when a
