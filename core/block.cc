@@ -44,6 +44,15 @@ double BlockCamera::earth_curvature_radius_m() const {
 void Block::BuildIndex() {
   marks_of_image.assign(images.size(), {});
   marks_of_point.assign(points.size(), {});
+  // Counted first, so that each list holds exactly its marks (growing by doubling left up to half
+  // of the 8 bytes a mark unused: 10 MB at a thousand images).
+  std::vector<int> image_count(images.size(), 0), point_count(points.size(), 0);
+  for (const BlockMark& mark : marks) {
+    if (mark.image >= 0 && mark.image < static_cast<int>(images.size())) ++image_count[mark.image];
+    if (mark.point >= 0 && mark.point < static_cast<int>(points.size())) ++point_count[mark.point];
+  }
+  for (size_t i = 0; i < images.size(); ++i) marks_of_image[i].reserve(image_count[i]);
+  for (size_t p = 0; p < points.size(); ++p) marks_of_point[p].reserve(point_count[p]);
   for (size_t m = 0; m < marks.size(); ++m) {
     const BlockMark& mark = marks[m];
     if (mark.image >= 0 && mark.image < static_cast<int>(images.size()))

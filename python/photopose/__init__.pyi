@@ -847,7 +847,7 @@ class BundleAdjustmentResult:
     @property
     def variance_iterations(self) -> int: ...
     @property
-    def observations(self) -> dict: ...  # Per-observation diagnostics as columns (dict of equal-length arrays): group (0 tie marks, 1 control marks, 2 control points, 3 camera positions, 4 attitudes), item, axis, residual, sigma, redundancy, normalized, mdb, external_m, rejected. Empty arrays when not computed.
+    def observations(self) -> dict: ...  # Per-observation diagnostics as columns (dict of equal-length arrays): group (0 tie marks, 1 control marks, 2 control points, 3 camera positions, 4 attitudes), item, axis, residual, sigma, redundancy, normalized, mdb, external_m, rejected. residual, sigma, mdb and external_m are float32 (stored in single precision), redundancy and normalized float64. Empty arrays when not computed.
     @property
     def critical_value(self) -> float: ...
     @property

@@ -15,7 +15,9 @@ namespace {
 py::dict ObservationColumns(const BundleAdjustmentResult& r) {
   const size_t n = r.observations.size();
   std::vector<int> group(n), item(n), axis(n);
-  std::vector<double> residual(n), sigma(n), redundancy(n), normalized(n), mdb(n), external(n);
+  // The reported values are single precision in the result (BundleObservationDiagnostics): float32.
+  std::vector<double> redundancy(n), normalized(n);
+  std::vector<float> residual(n), sigma(n), mdb(n), external(n);
   py::array_t<bool> rejected(static_cast<py::ssize_t>(n));
   for (size_t i = 0; i < n; ++i) {
     const BundleObservationDiagnostics& o = r.observations[i];

@@ -88,6 +88,7 @@ std::vector<std::string> Strings(const py::handle& value, const char* name);
 py::array_t<double> ToArray(const std::vector<Eigen::Vector2d>& rows);
 py::array_t<double> ToArray(const std::vector<Eigen::Vector3d>& rows);
 py::array_t<double> ToArray(const std::vector<double>& values);
+py::array_t<float> ToArray(const std::vector<float>& values);
 py::array_t<int> ToArray(const std::vector<int>& values);
 py::array_t<bool> ToBoolArray(const std::vector<char>& flags);
 inline double NaN() { return std::numeric_limits<double>::quiet_NaN(); }

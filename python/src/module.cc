@@ -155,6 +155,12 @@ py::array_t<bool> ToBoolArray(const std::vector<char>& flags) {
   return out;
 }
 
+py::array_t<float> ToArray(const std::vector<float>& values) {
+  py::array_t<float> out(static_cast<py::ssize_t>(values.size()));
+  std::copy(values.begin(), values.end(), out.mutable_data());
+  return out;
+}
+
 py::array_t<double> ToArray(const std::vector<double>& values) {
   py::array_t<double> out(static_cast<py::ssize_t>(values.size()));
   std::copy(values.begin(), values.end(), out.mutable_data());

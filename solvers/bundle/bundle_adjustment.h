@@ -373,7 +373,7 @@ constexpr EnumNameTable<BundleDatum> EnumNames(BundleDatum) {
 }
 
 // The groups of observations in the objective, in report order; an index into per-group arrays.
-enum BundleGroup : int {
+enum BundleGroup : std::uint8_t {
   kTieMarks = 0,     // image marks of tie points
   kControlMarks,     // image marks of control points
   kControlPoints,    // surveyed coordinates of control points (priors)
@@ -455,23 +455,25 @@ struct BundleGroupFigures {
 };
 BundleGroupFigures FormatGroupFigures(const BundleGroupStatistics& g);
 
-// The diagnostics of one scalar observation (observation_diagnostics).
+// The diagnostics of one scalar observation (observation_diagnostics). A 1000-image block has
+// 3.4 million: 40 bytes each. The redundancy number and the normalized residual, which the
+// decisions (rejected, uncontrolled, data snooping) read, are double; the four values only
+// reported are single precision (7 significant digits), each rounded once from its double.
 struct BundleObservationDiagnostics {
-  BundleGroup group = kTieMarks;
-  int item = -1;           // mark (marks), point (control_points) or image (priors) index
-  int axis = 0;            // marks: 0 x, 1 y; priors: 0..2 (X, Y, Z or omega, phi, kappa)
-  // |w_i| > k(alpha). Here, not last: 64 bytes instead of 72 (a 1000-image block has 3.4 million).
-  bool rejected = false;
-  double residual = 0.0;   // observed - computed (marks: px or um; points, cameras: m; deg)
-  double sigma = 0.0;      // its accuracy, same unit
-  double redundancy = 0.0; // r_i in [0, 1]
-  double normalized = 0.0; // w_i (unitless); NaN when r_i is below 1e-6
-  double mdb = 0.0;        // smallest detectable error, same unit as residual; inf when r_i ~ 0
+  double redundancy = 0.0;  // r_i in [0, 1]
+  double normalized = 0.0;  // w_i (unitless); NaN when r_i is below 1e-6
+  float residual = 0.0f;    // observed - computed (marks: px or um; points, cameras: m; deg)
+  float sigma = 0.0f;       // its accuracy, same unit
+  float mdb = 0.0f;         // smallest detectable error, same unit as residual; inf when r_i ~ 0
   // Largest shift of the centre of an image it bears on (its point's images; a prior's own image)
   // caused by an error of size mdb (m).
-  double external_m = 0.0;
+  float external_m = 0.0f;
+  int item = -1;  // mark (marks), point (control_points) or image (priors) index
+  BundleGroup group = kTieMarks;
+  std::int8_t axis = 0;   // marks: 0 x, 1 y; priors: 0..2 (X, Y, Z or omega, phi, kappa)
+  bool rejected = false;  // |w_i| > k(alpha)
 };
-static_assert(sizeof(BundleObservationDiagnostics) <= 64,
+static_assert(sizeof(BundleObservationDiagnostics) <= 40,
               "one per scalar observation: keep it small");
 
 // One step of data snooping.

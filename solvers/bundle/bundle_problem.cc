@@ -612,7 +612,7 @@ void NewResidualBlock(JacobianType jacobian, const Block& block, const BundlePla
       return;
     }
     default:
-      LOG(FATAL) << "no residual block of group " << info.group;
+      LOG(FATAL) << "no residual block of group " << static_cast<int>(info.group);
   }
 }
 
@@ -652,7 +652,7 @@ void AddMarkResiduals(const BundleAdjustmentOptions& options, const Block& block
     const ceres::LossFunction* loss =
         plan.mark_group[m] == kTieMarks ? round->tie_loss.get() : nullptr;
     AddResidual(options, block, plan, state,
-                {plan.mark_group[m], static_cast<int>(m), 2, 0, nullptr}, loss, round);
+                MakeResidualInfo(plan.mark_group[m], static_cast<int>(m), 2, 0), loss, round);
   }
 }
 
@@ -661,21 +661,22 @@ void AddPriorResiduals(const BundleAdjustmentOptions& options, const Block& bloc
                        const BundlePlan& plan, BundleState* state, BundleRound* round) {
   for (size_t p = 0; p < block.points.size(); ++p) {
     if (!plan.point_in_problem[p] || !plan.point_prior[p]) continue;
-    AddResidual(options, block, plan, state, {kControlPoints, static_cast<int>(p), 2, 0, nullptr},
-                nullptr, round);
-    AddResidual(options, block, plan, state, {kControlPoints, static_cast<int>(p), 1, 2, nullptr},
-                nullptr, round);
+    AddResidual(options, block, plan, state,
+                MakeResidualInfo(kControlPoints, static_cast<int>(p), 2, 0), nullptr, round);
+    AddResidual(options, block, plan, state,
+                MakeResidualInfo(kControlPoints, static_cast<int>(p), 1, 2), nullptr, round);
   }
   for (size_t i = 0; i < block.images.size(); ++i) {
     // Without height the Z row has a zero weight (its sigma is infinite) and is not counted.
     if (plan.image_prior[i]) {
-      AddResidual(options, block, plan, state,
-                  {kCameraPositions, static_cast<int>(i), ImagePriorRows(plan, i), 0, nullptr},
-                  nullptr, round);
+      AddResidual(
+          options, block, plan, state,
+          MakeResidualInfo(kCameraPositions, static_cast<int>(i), ImagePriorRows(plan, i), 0),
+          nullptr, round);
     }
     if (plan.image_attitude[i]) {
-      AddResidual(options, block, plan, state, {kAttitudes, static_cast<int>(i), 3, 0, nullptr},
-                  nullptr, round);
+      AddResidual(options, block, plan, state,
+                  MakeResidualInfo(kAttitudes, static_cast<int>(i), 3, 0), nullptr, round);
     }
   }
 }
@@ -702,6 +703,15 @@ void FillBundleRound(const BundleAdjustmentOptions& options, const BundleAdjustm
 }
 
 }  // namespace
+
+ResidualInfo MakeResidualInfo(BundleGroup group, int item, int rows, int first_axis) {
+  ResidualInfo info;
+  info.item = item;
+  info.group = group;
+  info.rows = static_cast<std::int8_t>(rows);
+  info.first_axis = static_cast<std::int8_t>(first_axis);
+  return info;
+}
 
 BundleState StartState(const BundleAdjustmentConfig& config, const Block& block) {
   BundleState state;

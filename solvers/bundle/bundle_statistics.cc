@@ -248,23 +248,35 @@ BundleObservationDiagnostics RowDiagnostics(const BundleAdjustmentResult& result
   BundleObservationDiagnostics d;
   d.group = static_cast<BundleGroup>(info.group);
   d.item = info.item;
-  d.axis = info.first_axis + row;
-  d.residual = whitened * scale;
-  d.sigma = scale;
+  d.axis = static_cast<std::int8_t>(info.first_axis + row);
+  d.residual = static_cast<float>(whitened * scale);
+  d.sigma = static_cast<float>(scale);
   d.redundancy = std::clamp(1.0 - leverage, 0.0, 1.0);
   if (d.redundancy > kZeroRedundancy) {
     d.normalized = whitened / (s0 * std::sqrt(d.redundancy));
-    d.mdb = result.delta0 * scale / std::sqrt(d.redundancy);
+    d.mdb = static_cast<float>(result.delta0 * scale / std::sqrt(d.redundancy));
     // The largest camera-centre shift from a whitened error mdb / sigma in this row.
-    d.external_m = shift * result.delta0 / std::sqrt(d.redundancy);
+    d.external_m = static_cast<float>(shift * result.delta0 / std::sqrt(d.redundancy));
     d.rejected = std::abs(d.normalized) > result.critical_value;
   } else {
     d.normalized = kNaN;
-    d.mdb = kInfinity;
-    d.external_m = kInfinity;
+    d.mdb = std::numeric_limits<float>::infinity();
+    d.external_m = std::numeric_limits<float>::infinity();
   }
   return d;
 }
+
+// What the parallel pass keeps of a row until the rows are listed in the round's order, in the
+// row's own entry: its leverage and whitened residual (double, unrounded) and its largest
+// camera-centre shift per unit whitened error (rounded to float, as the external_m made of it).
+void Stash(double leverage, double whitened, double shift, BundleObservationDiagnostics* d) {
+  d->redundancy = leverage;
+  d->normalized = whitened;
+  d->external_m = static_cast<float>(shift);
+}
+double StashedLeverage(const BundleObservationDiagnostics& d) { return d.redundancy; }
+double StashedWhitened(const BundleObservationDiagnostics& d) { return d.normalized; }
+double StashedShift(const BundleObservationDiagnostics& d) { return d.external_m; }
 
 // What ObservationDiagnostics' groups share: the round and its reduced normals, and the per-row
 // arrays each group writes its own rows of.
@@ -280,10 +292,11 @@ struct DiagnosticsPass {
   std::vector<int> centres;  // CentreComponents
   // Per residual block of the round: its first wanted row (every row with the diagnostics, else
   // all but the tie marks'), one past the last at the end; whether it was evaluated.
-  std::vector<int64_t> first_row;
+  std::vector<int> first_row;  // int: at most round.num_observations, an int (4 bytes a block)
   std::vector<char> evaluated;
-  std::vector<double> leverage;  // per wanted row
-  // Per wanted row, with the diagnostics: its entry, made where its leverage is computed.
+  std::vector<double> leverage;  // per wanted row, without the diagnostics
+  // Per wanted row, with the diagnostics: its entry, holding until it is listed what the entry is
+  // made of (Stash), so that no per-row array is held beside the entries.
   BundleObservationDiagnostics* observations = nullptr;
   BundleAdjustmentResult* result;
 
@@ -293,8 +306,8 @@ struct DiagnosticsPass {
                     const SupportCovariance& support);
 };
 
-std::vector<int64_t> FirstWantedRows(const BundleRound& round, bool diagnostics) {
-  std::vector<int64_t> first_row(round.residuals.size() + 1, 0);
+std::vector<int> FirstWantedRows(const BundleRound& round, bool diagnostics) {
+  std::vector<int> first_row(round.residuals.size() + 1, 0);
   for (size_t r = 0; r < round.residuals.size(); ++r) {
     const ResidualInfo& info = round.residuals[r];
     const bool wanted = diagnostics || info.group != kTieMarks;
@@ -374,13 +387,11 @@ void DiagnosticsPass::DiagnoseRows(int begin, int end, const std::vector<BlockRo
     // zero row beside it).
     const ResidualInfo& info = round.residuals[r];
     for (int row = 0; row < info.rows; ++row) {
-      const int64_t at = first_row[r] + row;
-      leverage[at] = h[row];
-      if (diagnostics) {
-        observations[at] =
-            RowDiagnostics(*result, info, row, rows[k - begin].residuals[row],
-                           RowScale(block, plan, info, row), h[row], s0, largest[row]);
-      }
+      const int at = first_row[r] + row;
+      if (diagnostics)
+        Stash(h[row], rows[k - begin].residuals[row], largest[row], &observations[at]);
+      else
+        leverage[at] = h[row];
     }
   }
 }
@@ -417,10 +428,10 @@ void ObservationDiagnostics(const BundleAdjustmentOptions& options, const Block&
                        nullptr,
                        result};
   const size_t num_residuals = round.residuals.size();
-  pass.leverage.assign(pass.first_row.back(), kNaN);
+  if (!diagnostics) pass.leverage.assign(pass.first_row.back(), kNaN);
   // With the diagnostics the rows of residual blocks that could not be evaluated are dropped
-  // afterwards. (Per-row arrays of the whitened residual and the centre shift, listed afterwards,
-  // held 16 bytes more per row at the statistics' peak: 55 MB at 1000 images.)
+  // afterwards. (Per-row arrays of the leverage, the whitened residual and the centre shift held
+  // 24 bytes more per row at the statistics' peak: 82 MB at 1000 images; the entries hold them.)
   const size_t first_observation = result->observations.size();
   if (diagnostics)
     result->observations.resize(first_observation + static_cast<size_t>(pass.first_row.back()));
@@ -438,10 +449,17 @@ void ObservationDiagnostics(const BundleAdjustmentOptions& options, const Block&
     const ResidualInfo& info = round.residuals[r];
     if (pass.first_row[r + 1] == pass.first_row[r] || !pass.evaluated[r]) continue;
     for (int row = 0; row < info.rows; ++row) {
-      const int64_t at = pass.first_row[r] + row;
-      sums[info.group].leverage += pass.leverage[at];
-      if (!diagnostics) continue;
-      const BundleObservationDiagnostics& d = pass.observations[at];
+      const int at = pass.first_row[r] + row;
+      if (!diagnostics) {
+        sums[info.group].leverage += pass.leverage[at];
+        continue;
+      }
+      // Read whole before it is written over: `listed` is at or before `at`.
+      const BundleObservationDiagnostics stash = pass.observations[at];
+      sums[info.group].leverage += StashedLeverage(stash);
+      const BundleObservationDiagnostics d = RowDiagnostics(
+          *result, info, row, StashedWhitened(stash), RowScale(block, plan, info, row),
+          StashedLeverage(stash), pass.s0, StashedShift(stash));
       if (d.redundancy < options.statistics.uncontrolled_redundancy) ++result->num_uncontrolled;
       result->observations[listed++] = d;
     }
@@ -584,7 +602,7 @@ void FindSnoopingCandidates(const BundleRound& round, const ReducedNormals& redu
     const BundleObservationDiagnostics& d = result.observations[k];
     const auto found = candidate_of.find(ObservationKey(d.group, d.item));
     if (found != candidate_of.end())
-      diagnostics_of[found->second][std::clamp(d.axis, 0, 2)] = static_cast<int>(k);
+      diagnostics_of[found->second][std::clamp<int>(d.axis, 0, 2)] = static_cast<int>(k);
     else if (std::isfinite(d.normalized))
       out->outside = std::max(out->outside, std::abs(d.normalized));
   }

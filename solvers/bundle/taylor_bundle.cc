@@ -110,6 +110,11 @@ Status MakePlan(const TaylorBundleOptions& options, const BundleAdjustmentConfig
     plan->image_fixed[plan->relative_scale_image][plan->relative_scale_axis] = true;
   }
   plan->tie_loss.reset(MakeLoss(options.tie_loss, options.tie_loss_scale_sigmas));
+  FillIdealPoints(block, plan);
+  return Status::Ok();
+}
+
+void FillIdealPoints(const Block& block, Plan* plan) {
   plan->ideal_um.assign(block.marks.size(), Eigen::Vector2d::Zero());
   for (size_t m = 0; m < block.marks.size(); ++m) {
     if (!plan->mark_used[m]) continue;
@@ -120,7 +125,6 @@ Status MakePlan(const TaylorBundleOptions& options, const BundleAdjustmentConfig
     FrameCorrectFilmPoint(camera.params.data(), mark.observation.data(), camera.data(),
                           plan->ideal_um[m].data());
   }
-  return Status::Ok();
 }
 
 Frame MakeFrame(const BundleAdjustmentConfig& config, const Block& block, const Plan& plan,
@@ -1053,6 +1057,19 @@ struct Rounds {
   std::unique_ptr<Reduction> reduction;
 };
 
+// The round's structures, freed before the statistics, whose own peak comes after them: the
+// layout (its S by a swap: Eigen's SparseMatrix assigned an empty one keeps its buffer, 16 MB at
+// a thousand images), the normal equations, the reduction, and the marks' ideal points (27 MB;
+// the statistics evaluate the marks by their cost functions; the next round makes them again).
+void FreeRoundStructures(Rounds* rounds) {
+  internal::taylor::SparseMatrix no_S;
+  rounds->layout.S.swap(no_S);
+  rounds->layout = Layout();
+  rounds->normal = Normal();
+  rounds->reduction.reset();
+  std::vector<Eigen::Vector2d>().swap(rounds->plan->ideal_um);
+}
+
 // One round's adjustment (a relative block's first in a free gauge first, when asked), its time
 // in the summary. kConverged, or how the adjustment ends with *message its words ("round N: ...",
 // what is undetermined named as BundleAdjust names it).
@@ -1063,6 +1080,8 @@ SolverTermination AdjustRound(const Context& context, int round, Rounds* rounds,
   const Clock::time_point round_start = Clock::now();
   SolverTermination free_ended = SolverTermination::kConverged;
   std::string free_message;
+  // Released for the statistics (FreeRoundStructures); made again for the marks now used.
+  if (rounds->plan->ideal_um.empty()) FillIdealPoints(context.block, rounds->plan);
   if (round == 1 && rounds->plan->datum == BundleDatum::kRelative &&
       options.free_gauge_for_relative_blocks &&
       options.damping == TaylorDamping::kLevenbergMarquardt)
@@ -1210,10 +1229,7 @@ Status TaylorBundleAdjust(const TaylorBundleOptions& options,
         rounds.reduction->pivot_ratio;  // undamped: RunRound converges on no other
     summary.sigma0 =
         summary.redundancy > 0 ? std::sqrt(rounds.normal.weighted_ssr / summary.redundancy) : kNaN;
-    // The round's structures are freed first: the statistics' own peak comes after them.
-    rounds.layout = Layout();
-    rounds.normal = Normal();
-    rounds.reduction.reset();
+    FreeRoundStructures(&rounds);
     const Status determined = statistics.Compute(state, frame, &summary, &out, &variance);
     if (!determined.ok()) {
       summary.sigma0 = kNaN;

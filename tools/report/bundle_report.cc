@@ -7,8 +7,10 @@
 
 #include <Eigen/Cholesky>
 #include <algorithm>
+#include <charconv>
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
 #include <limits>
 #include <sstream>
 
@@ -27,6 +29,14 @@ constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
 
 // A JSON number, or null when not finite.
 json Number(double value) { return std::isfinite(value) ? json(value) : json(nullptr); }
+// A single-precision value (the observation diagnostics' reported ones) by its shortest decimal
+// (0.1f as 0.1, not as the double 0.10000000149011612 it converts to).
+json Number(float value) {
+  if (!std::isfinite(value)) return json(nullptr);
+  char text[32];
+  const std::to_chars_result end = std::to_chars(text, text + sizeof(text), value);
+  return json(std::strtod(std::string(text, end.ptr).c_str(), nullptr));
+}
 
 json Vector3(const Eigen::Vector3d& v) { return json::array({Number(v.x()), Number(v.y()), Number(v.z())}); }
 
@@ -380,9 +390,10 @@ void DiagnosticsJson(const Block& block, const BundleAdjustmentResult& result,
   const BundleAdjustmentOptions& o = context.options;
   if (!result.observations.empty()) {
     json flagged = json::array(), uncontrolled = json::array();
-    std::vector<double> image_mdb(block.images.size(), 0.0);
-    std::vector<double> image_external(block.images.size(), 0.0);
-    std::vector<Eigen::Vector3d> control_mdb(block.points.size(), Eigen::Vector3d::Constant(kNaN));
+    std::vector<float> image_mdb(block.images.size(), 0.0f);
+    std::vector<float> image_external(block.images.size(), 0.0f);
+    std::vector<Eigen::Vector3f> control_mdb(block.points.size(),
+                                             Eigen::Vector3f::Constant(std::nanf("")));
     for (const BundleObservationDiagnostics& d : result.observations) {
       const bool is_uncontrolled = d.redundancy < o.statistics.uncontrolled_redundancy;
       // A row only for the few listed (millions of observations at a thousand images).
@@ -415,7 +426,10 @@ void DiagnosticsJson(const Block& block, const BundleAdjustmentResult& result,
     json per_control = json::array();
     for (size_t p = 0; p < block.points.size(); ++p) {
       if (block.points[p].role != PointRole::kControl) continue;
-      per_control.push_back({{"point_id", block.points[p].id}, {"mdb_m", Vector3(control_mdb[p])}});
+      per_control.push_back(
+          {{"point_id", block.points[p].id},
+           {"mdb_m", json::array({Number(control_mdb[p].x()), Number(control_mdb[p].y()),
+                                  Number(control_mdb[p].z())})}});
     }
     (*report)["diagnostics"] = {{"critical_value", result.critical_value},
                                 {"delta0", result.delta0},

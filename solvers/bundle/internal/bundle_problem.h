@@ -7,6 +7,7 @@
 #include <ceres/ceres.h>
 
 #include <Eigen/Core>
+#include <cstdint>
 #include <map>
 #include <memory>
 #include <string>
@@ -44,13 +45,17 @@ MarkSigmaDefaults GroupMarkDefaults(const BundleAccuracies& accuracies, BundleGr
 // first row (priors: 0 for X / omega, 2 for Z). 24 bytes: a 1000-image block has 1.7 million of
 // them; their parameter blocks come from Ceres when needed
 // (Problem::GetParameterBlocksForResidualBlock).
+// One per residual block of a round (a mark's, or a prior's two or three rows): 16 bytes, 1.7
+// million at a thousand images.
 struct ResidualInfo {
-  BundleGroup group;
-  int item;
-  int rows;
-  int first_axis;
-  ceres::ResidualBlockId id;
+  ceres::ResidualBlockId id = nullptr;  // in the round's problem; null in a round of rows alone
+  int item = -1;                        // mark, point or image index, by group
+  BundleGroup group = kTieMarks;
+  std::int8_t rows = 0;        // its rows: 2 for a mark, 1..3 for a prior
+  std::int8_t first_axis = 0;  // the axis of its first row (a control point's Z block: 2)
 };
+static_assert(sizeof(ResidualInfo) <= 16, "one per residual block: keep it small");
+ResidualInfo MakeResidualInfo(BundleGroup group, int item, int rows, int first_axis);
 
 // The values being adjusted, copied from the block so that a failure leaves it untouched.
 struct BundleState {

@@ -66,6 +66,9 @@ struct Plan : BundlePlan {
   std::shared_ptr<const ceres::LossFunction> tie_loss;
 };
 
+// Plan::ideal_um of the marks now used (plan.mark_used), zero for the others.
+void FillIdealPoints(const Block& block, Plan* plan);
+
 // Lists of indices, one per item (a free point, an image), stored end to end: list i is
 // items[start[i]] .. items[start[i + 1] - 1]. One allocation of exactly the entries, where a vector
 // per item costs its 24-byte header, an allocation and the slack of its growth.

@@ -351,5 +351,48 @@ TEST(BundleReport, RmseIsNullWithoutAPoint) {
   EXPECT_TRUE(some["control_rmse_m"]["total"].is_null());
 }
 
+// The diagnostics' single-precision values (BundleObservationDiagnostics) print as their shortest
+// decimal, 0.1 and not the double 0.10000000149011612 that 0.1f converts to; the double ones in
+// full.
+TEST(BundleReport, SinglePrecisionDiagnosticsPrintTheirShortestDecimal) {
+  Block block;
+  block.cameras.resize(1);
+  block.cameras[0].camera_id = "c1";
+  block.images.resize(1);
+  block.images[0].name = "IMG_1";
+  block.images[0].camera = 0;
+  block.points.resize(1);
+  block.points[0].id = "T1";
+  block.marks.resize(1);
+  block.marks[0].image = 0;
+  block.marks[0].point = 0;
+  BundleAdjustmentResult result;
+  result.images.resize(1);
+  result.points.resize(1);
+  result.mark_residuals.assign(1, Eigen::Vector2d(0.05, 0.1));
+  BundleObservationDiagnostics d;
+  d.group = kTieMarks;
+  d.item = 0;
+  d.axis = 1;
+  d.residual = 0.1f;
+  d.sigma = 0.3f;
+  d.mdb = 1.1f;
+  d.external_m = 0.07f;
+  d.redundancy = 0.1;
+  d.normalized = 1.0 / 3.0;
+  d.rejected = true;
+  result.observations.push_back(d);
+  const nlohmann::json report = BundleReportJson(block, result, BundleReportContext());
+  const nlohmann::json& row = report["diagnostics"]["rejected"].at(0);
+  EXPECT_EQ(row["axis"], "y");
+  EXPECT_EQ(row["residual"].dump(), "0.1");
+  EXPECT_EQ(row["sigma"].dump(), "0.3");
+  EXPECT_EQ(row["mdb"].dump(), "1.1");
+  EXPECT_EQ(row["external_m"].dump(), "0.07");
+  EXPECT_EQ(row["normalized_residual"].get<double>(), 1.0 / 3.0);
+  EXPECT_EQ(report["diagnostics"]["images"].at(0)["largest_mdb"].dump(), "1.1");
+  EXPECT_EQ(report["diagnostics"]["images"].at(0)["largest_external_m"].dump(), "0.07");
+}
+
 }  // namespace PHOTOPOSE_UNITY_ID
 }  // namespace photopose::cli
