@@ -164,6 +164,9 @@ Status CheckRotationMatrix(const Eigen::Matrix3d& R, double tolerance) {
 }
 
 double WrapAngle(double a) {
+  // Already in (-pi, pi]: remainder would return it unchanged (it is exact, and at pi the quotient
+  // 1/2 rounds to the even 0); the comparison pair costs far less than the call.
+  if (a > -kPi && a <= kPi) return a;
   a = std::remainder(a, 2.0 * kPi);  // [-pi, pi]
   if (a <= -kPi) a += 2.0 * kPi;
   return a;

@@ -67,24 +67,33 @@ struct PoseCostFunctor {
   double inverse_sigma_um;  // 1 / (pixel_size_um * sigma_px)
 };
 
+// The analytic pose residual of one observation at the pose eo (6), and its Jacobian d_eo (2 x 6,
+// row-major; may be null): PoseCostAnalytic::Evaluate, callable on the data itself by loops that
+// keep the observations by value (the resection's refinement, without one heap CostFunction per
+// mark). False when the point is on or behind the camera plane.
+inline bool EvaluatePoseCostAnalytic(const PoseCostFunctor& data, const double* eo,
+                                     double* residuals, double* d_eo) {
+  double xy[2];
+  if (!ProjectWithJacobians(eo, data.point_in_ground.data(), data.focal_um, xy, d_eo, nullptr,
+                            nullptr)) {
+    return false;
+  }
+  residuals[0] = (data.observed_um[0] - xy[0]) * data.inverse_sigma_um;
+  residuals[1] = (data.observed_um[1] - xy[1]) * data.inverse_sigma_um;
+  if (d_eo != nullptr) {
+    for (int k = 0; k < 2 * kExteriorOrientationSize; ++k) d_eo[k] *= -data.inverse_sigma_um;
+  }
+  return true;
+}
+
 class PoseCostAnalytic final : public ceres::SizedCostFunction<kResidualSize, kExteriorOrientationSize> {
  public:
   explicit PoseCostAnalytic(const PoseCostFunctor& data) : data_(data) {}
 
   bool Evaluate(double const* const* parameters, double* residuals,
                 double** jacobians) const override {
-    double xy[2];
-    double* d_eo = (jacobians != nullptr) ? jacobians[0] : nullptr;
-    if (!ProjectWithJacobians(parameters[0], data_.point_in_ground.data(), data_.focal_um, xy, d_eo,
-                              nullptr, nullptr)) {
-      return false;
-    }
-    residuals[0] = (data_.observed_um[0] - xy[0]) * data_.inverse_sigma_um;
-    residuals[1] = (data_.observed_um[1] - xy[1]) * data_.inverse_sigma_um;
-    if (d_eo != nullptr) {
-      for (int k = 0; k < 2 * kExteriorOrientationSize; ++k) d_eo[k] *= -data_.inverse_sigma_um;
-    }
-    return true;
+    return EvaluatePoseCostAnalytic(data_, parameters[0], residuals,
+                                    jacobians != nullptr ? jacobians[0] : nullptr);
   }
 
  private:

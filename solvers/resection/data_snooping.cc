@@ -145,20 +145,56 @@ double SigmaUpperFactor(double confidence, int redundancy) {
   return std::sqrt(redundancy / GlobalTestCriticalValue(1.0 - confidence, redundancy));
 }
 
+namespace {
+
+// A used mark's reliability for delta0 = 1 (PoseAdjustmentStatistics): the minimal detectable
+// blunder 1 / sqrt(q_min) and the largest pose shift it causes, from its cofactor block Qvv and
+// its whitened Jacobian rows J_i. Infinite both when the others do not check the mark.
+void MarkReliability(const Eigen::Matrix2d& Qvv,
+                     const Eigen::Matrix<double, 2, 6, Eigen::RowMajor>& J,
+                     const Matrix6d& cofactor, double* detectable_blunder, double* pose_shift) {
+  const double q_min =
+      Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d>(Qvv, Eigen::EigenvaluesOnly).eigenvalues()[0];
+  if (!(q_min > kMinCofactorEigenvalue)) {
+    *detectable_blunder = std::numeric_limits<double>::infinity();
+    *pose_shift = std::numeric_limits<double>::infinity();
+    return;
+  }
+  *detectable_blunder = 1.0 / std::sqrt(q_min);
+  const Eigen::Matrix2d Qvv_inverse = Qvv.inverse();
+  const Eigen::Matrix<double, 2, 6> G = J * cofactor;  // column k: A_i Q e_k
+  for (int k = 0; k < 6; ++k) {
+    const Eigen::Vector2d g = G.col(k);
+    *pose_shift = std::max(*pose_shift, std::sqrt(g.dot(Qvv_inverse * g) / cofactor(k, k)));
+  }
+}
+
+}  // namespace
+
 Status ComputePoseAdjustmentStatistics(const std::vector<Eigen::Vector2d>& image_plane,
                                        const std::vector<Eigen::Vector3d>& points_in_ground,
                                        const std::vector<double>& sigmas, double focal,
                                        const ExteriorOrientation& eo, const std::vector<char>& used,
-                                       PoseAdjustmentStatistics* statistics) {
+                                       PoseAdjustmentStatistics* statistics,
+                                       StatisticsScope scope) {
   const size_t n = image_plane.size();
-  PoseAdjustmentStatistics s;
+  // Written in place: the resection asks for the statistics of a few sets per image, and fresh
+  // vectors each time were a tenth of the batch's allocations.
+  PoseAdjustmentStatistics& s = *statistics;
+  s.num_used = 0;
+  s.redundancy = 0;
+  s.omega = 0.0;
+  s.normal.setZero();
+  s.cofactor.setZero();
+  s.determined = false;
   s.whitened_residuals.assign(n, Eigen::Vector2d::Zero());
   s.redundancy_numbers.assign(n, 0.0);
   s.test_statistics.assign(n, 0.0);
   s.in_front.assign(n, 0);
   s.detectable_blunder_per_delta.assign(n, 0.0);
   s.pose_shift_per_delta.assign(n, 0.0);
-  std::vector<Eigen::Matrix<double, 2, 6, Eigen::RowMajor>> jacobians(n);
+  thread_local std::vector<Eigen::Matrix<double, 2, 6, Eigen::RowMajor>> jacobians;
+  jacobians.resize(n);
   const SeedProjector projector(eo.data(), focal);
   for (size_t i = 0; i < n; ++i) {
     double xy[2];
@@ -180,37 +216,23 @@ Status ComputePoseAdjustmentStatistics(const std::vector<Eigen::Vector2d>& image
   s.redundancy = 2 * s.num_used - 6;
   const Eigen::LDLT<Matrix6d> ldlt(s.normal);
   s.determined = ldlt.info() == Eigen::Success && ldlt.vectorD().minCoeff() > 0.0;
-  if (s.determined) {
-    s.cofactor = ldlt.solve(Matrix6d::Identity());
-    for (size_t i = 0; i < n; ++i) {
-      if (!s.in_front[i]) continue;
-      const Eigen::Matrix2d H = jacobians[i] * s.cofactor * jacobians[i].transpose();
-      if (used[i]) {
-        const Eigen::Matrix2d Qvv = Eigen::Matrix2d::Identity() - H;
-        s.redundancy_numbers[i] = 0.5 * Qvv.trace();
-        s.test_statistics[i] = PseudoInverseQuadraticForm(Qvv, s.whitened_residuals[i]);
-        const double q_min = Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d>(
-                                 Qvv, Eigen::EigenvaluesOnly).eigenvalues()[0];
-        if (!(q_min > kMinCofactorEigenvalue)) {
-          s.detectable_blunder_per_delta[i] = std::numeric_limits<double>::infinity();
-          s.pose_shift_per_delta[i] = std::numeric_limits<double>::infinity();
-          continue;
-        }
-        s.detectable_blunder_per_delta[i] = 1.0 / std::sqrt(q_min);
-        const Eigen::Matrix2d Qvv_inverse = Qvv.inverse();
-        const Eigen::Matrix<double, 2, 6> G = jacobians[i] * s.cofactor;  // column k: A_i Q e_k
-        for (int k = 0; k < 6; ++k) {
-          const Eigen::Vector2d g = G.col(k);
-          s.pose_shift_per_delta[i] = std::max(
-              s.pose_shift_per_delta[i], std::sqrt(g.dot(Qvv_inverse * g) / s.cofactor(k, k)));
-        }
-      } else {
-        s.test_statistics[i] = PseudoInverseQuadraticForm(Eigen::Matrix2d::Identity() + H,
-                                                          s.whitened_residuals[i]);
-      }
+  if (!s.determined) return Status::Ok();
+  s.cofactor = ldlt.solve(Matrix6d::Identity());
+  for (size_t i = 0; i < n; ++i) {
+    if (!s.in_front[i]) continue;
+    const Eigen::Matrix2d H = jacobians[i] * s.cofactor * jacobians[i].transpose();
+    if (!used[i]) {
+      s.test_statistics[i] =
+          PseudoInverseQuadraticForm(Eigen::Matrix2d::Identity() + H, s.whitened_residuals[i]);
+      continue;
     }
+    const Eigen::Matrix2d Qvv = Eigen::Matrix2d::Identity() - H;
+    s.redundancy_numbers[i] = 0.5 * Qvv.trace();
+    s.test_statistics[i] = PseudoInverseQuadraticForm(Qvv, s.whitened_residuals[i]);
+    if (scope == StatisticsScope::kTestsAndReliability)
+      MarkReliability(Qvv, jacobians[i], s.cofactor, &s.detectable_blunder_per_delta[i],
+                      &s.pose_shift_per_delta[i]);
   }
-  *statistics = std::move(s);
   return Status::Ok();
 }
 

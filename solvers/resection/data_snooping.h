@@ -111,14 +111,24 @@ struct PoseAdjustmentStatistics {
   std::vector<double> pose_shift_per_delta;
 };
 
+// What ComputePoseAdjustmentStatistics computes beyond the tests. A caller that only asks whether
+// a set of marks fits (the global test, the snooping) needs no reliability: its 2 x 2
+// eigenvalue and inverse per mark are a third of the statistics' time.
+enum class StatisticsScope {
+  kTestsAndReliability,  // every field
+  kTests,                // detectable_blunder_per_delta and pose_shift_per_delta left at zero
+};
+
 // The statistics of the pose `eo` for observations image_plane[i] of points_in_ground[i] with
 // standard deviations sigmas[i] (unit of image_plane and focal), the marks with used[i] != 0
-// forming the adjustment. Errors: fewer than three used marks, a used mark behind the camera.
-// A singular N leaves determined = false and the test statistics at zero.
-Status ComputePoseAdjustmentStatistics(const std::vector<Eigen::Vector2d>& image_plane,
-                                       const std::vector<Eigen::Vector3d>& points_in_ground,
-                                       const std::vector<double>& sigmas, double focal,
-                                       const ExteriorOrientation& eo, const std::vector<char>& used,
-                                       PoseAdjustmentStatistics* statistics);
+// forming the adjustment. Errors: fewer than three used marks, a used mark behind the camera
+// (*statistics is then partly written). A singular N leaves determined = false and the test
+// statistics at zero. *statistics' vectors are reused (no allocation when it held as many marks).
+Status ComputePoseAdjustmentStatistics(
+    const std::vector<Eigen::Vector2d>& image_plane,
+    const std::vector<Eigen::Vector3d>& points_in_ground, const std::vector<double>& sigmas,
+    double focal, const ExteriorOrientation& eo, const std::vector<char>& used,
+    PoseAdjustmentStatistics* statistics,
+    StatisticsScope scope = StatisticsScope::kTestsAndReliability);
 
 }  // namespace photopose

@@ -18,25 +18,49 @@ namespace {
 constexpr double kInfinity = std::numeric_limits<double>::infinity();
 
 // One image's observations in a frame centred on their ground points: large projected coordinates
-// would otherwise cost digits and make relative step tolerances meaningless.
+// would otherwise cost digits and make relative step tolerances meaningless. The observations are
+// kept by value and evaluated through EvaluatePoseCostAnalytic (the analytic cost's own body);
+// Ceres cost objects are made only for the autodiff path and for ceres::Problem (MakeCosts): one
+// heap object per mark per refinement was a tenth of a batch resection's time.
 struct CentredProblem {
   Eigen::Vector3d origin = Eigen::Vector3d::Zero();
-  std::vector<std::unique_ptr<ceres::CostFunction>> costs;  // one per observation, whitened
+  JacobianType jacobian = JacobianType::kAnalytic;
+  std::vector<PoseCostFunctor> data;                        // one per observation, whitened
+  std::vector<std::unique_ptr<ceres::CostFunction>> costs;  // the same, when made (MakeCosts)
+
+  size_t size() const { return data.size(); }
+  // Residual i (2) at eo (centred) and, when jacobian is not null, its 2 x 6 row-major Jacobian.
+  bool Evaluate(size_t i, const double* eo, double* residual, double* jacobian_row_major) const {
+    if (jacobian == JacobianType::kAnalytic)
+      return EvaluatePoseCostAnalytic(data[i], eo, residual, jacobian_row_major);
+    const double* parameters[] = {eo};
+    double* jacobians[] = {jacobian_row_major};
+    return costs[i]->Evaluate(parameters, residual,
+                              jacobian_row_major != nullptr ? jacobians : nullptr);
+  }
+  // The Ceres cost objects of the observations (once).
+  void MakeCosts() {
+    if (costs.size() == data.size()) return;
+    costs.clear();
+    for (const PoseCostFunctor& observation : data)
+      costs.emplace_back(CreatePoseCost(jacobian, observation));
+  }
 };
 
-CentredProblem MakeCentredProblem(JacobianType jacobian,
-                                  const std::vector<Eigen::Vector2d>& image_plane,
-                                  const std::vector<Eigen::Vector3d>& points,
-                                  const std::vector<double>& sigmas, double focal,
-                                  const std::vector<int>& indices) {
-  CentredProblem problem;
-  for (const int i : indices) problem.origin += points[i];
-  problem.origin /= std::max<size_t>(1, indices.size());
-  for (const int i : indices) {
-    const PoseCostFunctor data(image_plane[i], points[i] - problem.origin, focal, 1.0 / sigmas[i]);
-    problem.costs.emplace_back(CreatePoseCost(jacobian, data));
-  }
-  return problem;
+// Fills *problem (its storage reused) with the listed observations.
+void MakeCentredProblem(JacobianType jacobian, const std::vector<Eigen::Vector2d>& image_plane,
+                        const std::vector<Eigen::Vector3d>& points,
+                        const std::vector<double>& sigmas, double focal,
+                        const std::vector<int>& indices, CentredProblem* problem) {
+  problem->origin.setZero();
+  problem->jacobian = jacobian;
+  problem->data.clear();
+  problem->costs.clear();
+  for (const int i : indices) problem->origin += points[i];
+  problem->origin /= std::max<size_t>(1, indices.size());
+  for (const int i : indices)
+    problem->data.emplace_back(image_plane[i], points[i] - problem->origin, focal, 1.0 / sigmas[i]);
+  if (jacobian == JacobianType::kAutodiff) problem->MakeCosts();
 }
 
 // Weight of a squared whitened residual under the loss: rho'(s) (1 without a loss).
@@ -56,12 +80,10 @@ double RemainingStepSigmas(const CentredProblem& problem, const Vector6d& eo,
                            const ceres::LossFunction* loss, Vector6d* step = nullptr) {
   Matrix6d normal = Matrix6d::Zero();
   Vector6d gradient = Vector6d::Zero();
-  const double* parameters[] = {eo.data()};
   Eigen::Matrix<double, 2, 6, Eigen::RowMajor> J;
-  double* jacobians[] = {J.data()};
-  for (const auto& cost : problem.costs) {
+  for (size_t i = 0; i < problem.size(); ++i) {
     Eigen::Vector2d r;
-    if (!cost->Evaluate(parameters, r.data(), jacobians)) return kInfinity;
+    if (!problem.Evaluate(i, eo.data(), r.data(), J.data())) return kInfinity;
     const double w = LossWeight(loss, r.squaredNorm());
     normal.noalias() += w * J.transpose() * J;
     gradient.noalias() += w * J.transpose() * r;
@@ -103,16 +125,13 @@ class StackedPoseFunction {
   StackedPoseFunction(const CentredProblem& problem, const std::vector<double>& sqrt_weights)
       : problem_(problem), sqrt_weights_(sqrt_weights) {}
 
-  int NumResiduals() const { return 2 * static_cast<int>(problem_.costs.size()); }
+  int NumResiduals() const { return 2 * static_cast<int>(problem_.size()); }
 
   bool operator()(const double* eo, double* residuals, double* jacobian) const {
-    const double* parameters[] = {eo};
     double block[2 * kExteriorOrientationSize];
-    double* jacobians[] = {block};
     const int rows = NumResiduals();
-    for (size_t i = 0; i < problem_.costs.size(); ++i) {
-      if (!problem_.costs[i]->Evaluate(parameters, residuals + 2 * i,
-                                       jacobian ? jacobians : nullptr)) {
+    for (size_t i = 0; i < problem_.size(); ++i) {
+      if (!problem_.Evaluate(i, eo, residuals + 2 * i, jacobian != nullptr ? block : nullptr)) {
         // Behind the camera: a huge residual makes TinySolver reject the step that led here.
         residuals[2 * i] = residuals[2 * i + 1] = 1e10;
         if (jacobian != nullptr) return false;
@@ -138,11 +157,10 @@ class StackedPoseFunction {
 
 // Squared whitened residual norms of every cost at eo (centred); false if a point is behind.
 bool SquaredNorms(const CentredProblem& problem, const double* eo, std::vector<double>* s) {
-  const double* parameters[] = {eo};
-  s->resize(problem.costs.size());
-  for (size_t i = 0; i < problem.costs.size(); ++i) {
+  s->resize(problem.size());
+  for (size_t i = 0; i < problem.size(); ++i) {
     double r[2];
-    if (!problem.costs[i]->Evaluate(parameters, r, nullptr)) return false;
+    if (!problem.Evaluate(i, eo, r, nullptr)) return false;
     (*s)[i] = r[0] * r[0] + r[1] * r[1];
   }
   return true;
@@ -167,13 +185,16 @@ SolverTermination RefineWithTinySolver(const PoseRefinementOptions& options,
                                                Vector6d* eo_centred,
                                                PoseRefinementSummary* summary) {
   const CeresPoseOptions& ceres_options = options.ceres;
-  std::vector<double> s;
+  // Per thread, reused: a batch refines tens of sets per image.
+  thread_local std::vector<double> s;
+  thread_local std::vector<double> sqrt_weights;
+  thread_local ceres::TinySolver<StackedPoseFunction> solver;
   if (!SquaredNorms(problem, eo_centred->data(), &s)) {
     summary->message = "Ceres: a control point is behind the camera at the initial pose";
     return SolverTermination::kFailure;
   }
   summary->initial_cost = RobustCost(loss, s);
-  std::vector<double> sqrt_weights(problem.costs.size(), 1.0);
+  sqrt_weights.assign(problem.size(), 1.0);
   const int rounds = loss == nullptr ? 1 : ceres_options.max_reweighting_rounds;
   for (int round = 0; round < rounds; ++round) {
     for (size_t i = 0; i < s.size(); ++i) sqrt_weights[i] = std::sqrt(LossWeight(loss, s[i]));
@@ -185,7 +206,9 @@ SolverTermination RefineWithTinySolver(const PoseRefinementOptions& options,
       return SolverTermination::kFailure;
     }
     StackedPoseFunction function(problem, sqrt_weights);
-    ceres::TinySolver<StackedPoseFunction> solver;
+    // Solve starts from its options and the function alone (its buffers are only resized), so
+    // one solver per thread gives the same steps as a fresh one.
+    solver.options = ceres::TinySolver<StackedPoseFunction>::Options();
     solver.options.max_num_iterations = ceres_options.max_iterations;
     solver.options.parameter_tolerance = ceres_options.parameter_tolerance;
     solver.options.gradient_tolerance = 1e-14;
@@ -260,6 +283,7 @@ SolverTermination RefineWithCeresProblem(const PoseRefinementOptions& options,
   problem_options.cost_function_ownership = ceres::DO_NOT_TAKE_OWNERSHIP;
   problem_options.loss_function_ownership = ceres::DO_NOT_TAKE_OWNERSHIP;
   ceres::Problem problem(problem_options);
+  problem_data->MakeCosts();
   // One loss object shared by every residual: the residuals are whitened, so one scale fits all.
   const std::unique_ptr<ceres::LossFunction> loss(MakeLoss(options.loss, options.loss_scale));
   for (auto& cost : problem_data->costs)
@@ -300,8 +324,8 @@ bool RefineWithCeres(const PoseRefinementOptions& options,
                      const std::vector<Eigen::Vector3d>& points, const std::vector<double>& sigmas,
                      double focal, const std::vector<int>& indices, ExteriorOrientation* eo,
                      PoseRefinementSummary* summary) {
-  CentredProblem problem =
-      MakeCentredProblem(options.jacobian, image_plane, points, sigmas, focal, indices);
+  thread_local CentredProblem problem;
+  MakeCentredProblem(options.jacobian, image_plane, points, sigmas, focal, indices, &problem);
   Vector6d eo_centred = eo->parameters;
   eo_centred.head<3>() -= problem.origin;
   SolverTermination termination;

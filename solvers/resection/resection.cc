@@ -81,12 +81,12 @@ Marks MarksOf(const ResectionInput& input) {
 }
 
 // Ground points as the camera at `center` sees them: with ECC, lowered by D^2 / (2 R).
-std::vector<Eigen::Vector3d> CameraPoints(const ResectionInput& input,
-                                          const Eigen::Vector3d& center) {
-  if (!(input.earth_radius_m > 0.0)) return input.points_in_ground;
-  std::vector<Eigen::Vector3d> points = input.points_in_ground;
-  for (Eigen::Vector3d& p : points) p.z() -= EarthCurvatureDrop(center, p, input.earth_radius_m);
-  return points;
+// Written into *points, whose storage is reused.
+void CameraPoints(const ResectionInput& input, const Eigen::Vector3d& center,
+                  std::vector<Eigen::Vector3d>* points) {
+  *points = input.points_in_ground;
+  if (!(input.earth_radius_m > 0.0)) return;
+  for (Eigen::Vector3d& p : *points) p.z() -= EarthCurvatureDrop(center, p, input.earth_radius_m);
 }
 
 // Least squares over the marks in `indices`, with the earth-curvature correction iterated with the
@@ -96,7 +96,7 @@ bool Adjust(const ResectionOptions& options, const ResectionInput& input,
             ExteriorOrientation* eo, std::vector<Eigen::Vector3d>* points,
             ResectionSummary* summary) {
   for (int pass = 0; pass < kMaxEccPasses; ++pass) {
-    *points = CameraPoints(input, eo->center_in_ground());
+    CameraPoints(input, eo->center_in_ground(), points);
     const Eigen::Vector3d center = eo->center_in_ground();
     PoseRefinementSummary refinement;
     const bool ok = RefinePose(options.refinement, input.image_plane, *points, sigmas,
@@ -115,35 +115,36 @@ bool Adjust(const ResectionOptions& options, const ResectionInput& input,
         (eo->center_in_ground() - center).norm() < kEccCenterTolerance)
       break;
   }
-  *points = CameraPoints(input, eo->center_in_ground());
+  CameraPoints(input, eo->center_in_ground(), points);
   ++summary->adjustments;
   return true;
 }
 
-// The poses P3P gives for the marks of `triple` (up to four).
-std::vector<ExteriorOrientation> P3PPoses(const ResectionInput& input,
-                                          const std::array<int, 3>& triple) {
+// The poses P3P gives for the marks of `triple` (up to four), written into *poses.
+void P3PPoses(const ResectionInput& input, const std::array<int, 3>& triple,
+              std::vector<ExteriorOrientation>* poses) {
   std::array<Eigen::Vector3d, 3> bearings, points;
   for (int t = 0; t < 3; ++t) {
     const Eigen::Vector2d& xy = input.image_plane[triple[t]];
     bearings[t] = Eigen::Vector3d(xy.x(), xy.y(), -input.focal_length);
     points[t] = input.points_in_ground[triple[t]];
   }
-  std::vector<PoseCandidate> solutions;
+  thread_local std::vector<PoseCandidate> solutions;
+  solutions.clear();
   SolveP3P(bearings, points, &solutions);
-  std::vector<ExteriorOrientation> poses(solutions.size());
+  poses->resize(solutions.size());
   for (size_t k = 0; k < solutions.size(); ++k) {
-    poses[k].set_center_in_ground(solutions[k].center_in_ground);
-    poses[k].set_angles_seed_rad(
+    (*poses)[k] = ExteriorOrientation();
+    (*poses)[k].set_center_in_ground(solutions[k].center_in_ground);
+    (*poses)[k].set_angles_seed_rad(
         AnglesFromRotation(RotationConvention::kSeed, solutions[k].R_camera_from_ground));
   }
-  return poses;
 }
 
 // Number of distinct poses P3P finds for three marks.
 int CountP3PPoses(const ResectionInput& input, const std::vector<int>& indices) {
-  const std::vector<ExteriorOrientation> poses =
-      P3PPoses(input, {indices[0], indices[1], indices[2]});
+  std::vector<ExteriorOrientation> poses;
+  P3PPoses(input, {indices[0], indices[1], indices[2]}, &poses);
   std::vector<Eigen::Vector3d> distinct;
   for (const ExteriorOrientation& pose : poses) {
     const Eigen::Vector3d center = pose.center_in_ground();
@@ -156,10 +157,17 @@ int CountP3PPoses(const ResectionInput& input, const std::vector<int>& indices) 
   return static_cast<int>(distinct.size());
 }
 
+// The indices of the set marks, written into *indices (storage reused).
+void Indices(const std::vector<char>& mask, std::vector<int>* indices) {
+  indices->clear();
+  for (size_t i = 0; i < mask.size(); ++i)
+    if (mask[i]) indices->push_back(static_cast<int>(i));
+}
+
 std::vector<int> Indices(const std::vector<char>& mask) {
   std::vector<int> indices;
-  for (size_t i = 0; i < mask.size(); ++i)
-    if (mask[i]) indices.push_back(static_cast<int>(i));
+  indices.reserve(mask.size());
+  Indices(mask, &indices);
   return indices;
 }
 
@@ -176,19 +184,28 @@ double PoseDistanceSigmas(const ExteriorOrientation& a, const ExteriorOrientatio
   return largest;
 }
 
-// Whether the marks in `set` (stated accuracy) fit one pose: their least squares from *eo (written
-// back) passes the global test and, with five or more and `snoop`, no mark's test statistic
-// exceeds the snooping value.
-bool SetFitsItsAccuracy(const ResectionOptions& options, const ResectionInput& input,
-                        const std::vector<double>& weights, const std::vector<char>& set,
-                        bool snoop, ExteriorOrientation* eo) {
-  const double confidence = options.test.confidence;
+// The least squares of the marks in `set` from *eo (written back); false when it fails. *points
+// receives the ground points as corrected at the adjusted centre. The index list is kept per
+// thread: the ambiguity search adjusts many sets per image.
+bool AdjustSet(const ResectionOptions& options, const ResectionInput& input,
+               const std::vector<double>& weights, const std::vector<char>& set,
+               ExteriorOrientation* eo, std::vector<Eigen::Vector3d>* points) {
+  thread_local std::vector<int> indices;
+  Indices(set, &indices);
   ResectionSummary ignored;
-  std::vector<Eigen::Vector3d> points;
-  PoseAdjustmentStatistics stats;
-  if (!Adjust(options, input, weights, Indices(set), eo, &points, &ignored) ||
-      !ComputePoseAdjustmentStatistics(input.image_plane, points, weights, input.focal_length,
-                                       *eo, set, &stats)
+  return Adjust(options, input, weights, indices, eo, points, &ignored);
+}
+
+// Whether the marks in `set` (stated accuracy), adjusted at `eo` with the ground points `points`
+// (AdjustSet), pass the global test and, with five or more and `snoop`, no mark's test statistic
+// exceeds the snooping value. Only the tests are computed, not the reliability.
+bool SetPassesTests(const ResectionOptions& options, const ResectionInput& input,
+                    const std::vector<double>& weights, const std::vector<char>& set, bool snoop,
+                    const ExteriorOrientation& eo, const std::vector<Eigen::Vector3d>& points) {
+  const double confidence = options.test.confidence;
+  thread_local PoseAdjustmentStatistics stats;
+  if (!ComputePoseAdjustmentStatistics(input.image_plane, points, weights, input.focal_length, eo,
+                                       set, &stats, StatisticsScope::kTests)
            .ok() ||
       !stats.determined || FailsGlobalTest(stats.omega, confidence, stats.redundancy))
     return false;
@@ -196,6 +213,16 @@ bool SetFitsItsAccuracy(const ResectionOptions& options, const ResectionInput& i
   for (size_t i = 0; i < set.size(); ++i)
     if (set[i] && stats.test_statistics[i] > SnoopingCriticalValue(confidence)) return false;
   return true;
+}
+
+// Whether the marks in `set` (stated accuracy) fit one pose: their least squares from *eo (written
+// back, AdjustSet) passes the tests (SetPassesTests).
+bool SetFitsItsAccuracy(const ResectionOptions& options, const ResectionInput& input,
+                        const std::vector<double>& weights, const std::vector<char>& set,
+                        bool snoop, ExteriorOrientation* eo) {
+  thread_local std::vector<Eigen::Vector3d> points;
+  return AdjustSet(options, input, weights, set, eo, &points) &&
+         SetPassesTests(options, input, weights, set, snoop, *eo, points);
 }
 
 // A pose supported by a competing consensus set: its marks and the least squares over them.
@@ -274,9 +301,8 @@ bool SettleConsensus(const ResectionOptions& options, const ResectionInput& inpu
   bool settled = false;
   for (int pass = 0; pass < kMaxSettlingPasses && !settled; ++pass) {
     if (!large || !tried->insert(*set).second) break;
-    ResectionSummary ignored;
-    std::vector<Eigen::Vector3d> adjusted_points;
-    if (!Adjust(options, input, weights, Indices(*set), hypothesis, &adjusted_points, &ignored)) break;
+    thread_local std::vector<Eigen::Vector3d> adjusted_points;
+    if (!AdjustSet(options, input, weights, *set, hypothesis, &adjusted_points)) break;
     large = ConsensusAt(input, weights, *hypothesis, threshold, size, next);
     settled = large && *next == *set;
     if (!settled) set->swap(*next);
@@ -315,6 +341,7 @@ bool FindCompetingPose(const ResectionOptions& options, const ResectionInput& in
   std::vector<PoseCandidate> solutions;
   solutions.reserve(4);
   std::vector<char> set, next;
+  std::vector<Eigen::Vector3d> adjusted_points;
   for (const std::array<int, 3>& triple : triples) {
     if (!has_bearing[triple[0]] || !has_bearing[triple[1]] || !has_bearing[triple[2]]) continue;
     const std::array<Eigen::Vector3d, 3> bearings = {
@@ -329,11 +356,17 @@ bool FindCompetingPose(const ResectionOptions& options, const ResectionInput& in
       hypothesis.set_center_in_ground(solution.center_in_ground);
       hypothesis.set_angles_seed_rad(
           AnglesFromRotation(RotationConvention::kSeed, solution.R_camera_from_ground));
-      if (!SettleConsensus(options, input, weights, threshold, size, &hypothesis, &tried, &set, &next) ||
-          !SetFitsItsAccuracy(options, input, weights, set, /*snoop=*/true, &hypothesis))
+      // The distance is checked before the tests: a pose that went back near `eo` is no
+      // competitor whatever they say, and they cost a third of an adjustment.
+      if (!SettleConsensus(options, input, weights, threshold, size, &hypothesis, &tried, &set,
+                           &next) ||
+          !AdjustSet(options, input, weights, set, &hypothesis, &adjusted_points))
         continue;
       const double distance = PoseDistanceSigmas(hypothesis, eo, sigmas);
-      if (!(distance > options.ambiguous_pose_sigmas)) continue;
+      if (!(distance > options.ambiguous_pose_sigmas) ||
+          !SetPassesTests(options, input, weights, set, /*snoop=*/true, hypothesis,
+                          adjusted_points))
+        continue;
       // Both sets together passing the global test: the competition is a mark at the margin of
       // the snooping (a false alarm), not two poses; a blunder absorbed by one of the sets makes
       // the union fail.
@@ -369,6 +402,7 @@ bool FindOtherMinimum(const ResectionOptions& options, const ResectionInput& inp
   const long long all = static_cast<long long>(m) * (m - 1) * (m - 2) / 6;
   const int limit = options.consensus.ransac.max_exhaustive_samples;
   if (all <= limit) {
+    triples.reserve(static_cast<size_t>(all));
     for (int i = 0; i < m; ++i)
       for (int j = i + 1; j < m; ++j)
         for (int k = j + 1; k < m; ++k) triples.push_back({set[i], set[j], set[k]});
@@ -405,8 +439,11 @@ bool FindOtherMinimum(const ResectionOptions& options, const ResectionInput& inp
   const int n = static_cast<int>(accepted.size());
   const double threshold = MarkThresholdSigmas(options.test.confidence);
   std::vector<char> fits;
+  std::vector<Eigen::Vector3d> points;
+  std::vector<ExteriorOrientation> starts;
   for (const std::array<int, 3>& triple : triples) {
-    for (ExteriorOrientation hypothesis : P3PPoses(input, triple)) {
+    P3PPoses(input, triple, &starts);
+    for (ExteriorOrientation hypothesis : starts) {
       // A start near the accepted pose goes back to it.
       if (!(PoseDistanceSigmas(hypothesis, eo, sigmas) > options.ambiguous_pose_sigmas)) continue;
       // Only a start that the accepted marks fit within twice the threshold is adjusted (a
@@ -416,10 +453,12 @@ bool FindOtherMinimum(const ResectionOptions& options, const ResectionInput& inp
       bool all_accepted = true;
       for (const int i : set) all_accepted = all_accepted && fits[i];
       if (!all_accepted) continue;
-      if (!SetFitsItsAccuracy(options, input, weights, accepted, /*snoop=*/true, &hypothesis))
-        continue;
+      // Most starts go back to `eo`: the distance first, then the tests (as in FindCompetingPose).
+      if (!AdjustSet(options, input, weights, accepted, &hypothesis, &points)) continue;
       const double distance = PoseDistanceSigmas(hypothesis, eo, sigmas);
-      if (!(distance > options.ambiguous_pose_sigmas)) continue;
+      if (!(distance > options.ambiguous_pose_sigmas) ||
+          !SetPassesTests(options, input, weights, accepted, /*snoop=*/true, hypothesis, points))
+        continue;
       std::vector<char> in_front;  // every mark in front of the camera
       if (!ConsensusAt(input, weights, hypothesis, std::numeric_limits<double>::infinity(), n,
                        &in_front))
@@ -558,7 +597,8 @@ bool ImageResection::InitialValues() {
     eo_ = *input_.approximate;
     summary.used_approximate = true;
     if (!eo_.parameters.allFinite()) return Fail("the approximate pose is not finite");
-    const std::vector<Eigen::Vector3d> points = CameraPoints(input_, eo_.center_in_ground());
+    std::vector<Eigen::Vector3d> points;
+    CameraPoints(input_, eo_.center_in_ground(), &points);
     const SeedProjector projector(eo_.data(), input_.focal_length);
     for (size_t i = 0; i < n; ++i) {
       double xy[2];

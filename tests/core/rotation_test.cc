@@ -244,5 +244,29 @@ TEST(Rotation, WrapAngleStaysInHalfOpenInterval) {
   EXPECT_NEAR(WrapAngle(0.5 + 4 * kPi), 0.5, 1e-12);
 }
 
+// WrapAngle returns an angle already in (-pi, pi] without the remainder call: bit for bit what the
+// remainder gives, also at the ends (-pi goes to pi, pi stays) and just inside and outside them.
+TEST(Rotation, WrapAngleShortcutIsTheRemainderBitForBit) {
+  const auto by_remainder = [](double a) {
+    a = std::remainder(a, 2.0 * kPi);
+    return a <= -kPi ? a + 2.0 * kPi : a;
+  };
+  std::vector<double> angles = {0.0, -0.0, 1e-300, -1e-300, 0.5, -2.0, 3.0, -3.0};
+  for (const double end : {kPi, -kPi, 2.0 * kPi, -2.0 * kPi, 3.0 * kPi}) {
+    angles.push_back(end);
+    angles.push_back(std::nextafter(end, 0.0));
+    angles.push_back(std::nextafter(end, 2.0 * end));
+  }
+  for (int k = -400; k <= 400; ++k) angles.push_back(k * 0.0123456789);
+  for (const double a : angles) {
+    const double wrapped = WrapAngle(a);
+    const double expected = by_remainder(a);
+    EXPECT_EQ(std::signbit(wrapped), std::signbit(expected)) << a;
+    EXPECT_EQ(wrapped, expected) << a;
+  }
+  EXPECT_EQ(WrapAngle(-kPi), kPi);
+  EXPECT_TRUE(std::isnan(WrapAngle(std::nan(""))));
+}
+
 }  // namespace PHOTOPOSE_UNITY_ID
 }  // namespace photopose

@@ -122,6 +122,58 @@ TEST(DataSnooping, FalseRejectionRatesAreAlpha) {
   EXPECT_NEAR(static_cast<double>(global) / kImages, 0.1, 0.05);
 }
 
+// Field by field, bit for bit (the reuse of a statistics struct must leave nothing of the last).
+void ExpectSameStatistics(const PoseAdjustmentStatistics& a, const PoseAdjustmentStatistics& b) {
+  EXPECT_EQ(a.num_used, b.num_used);
+  EXPECT_EQ(a.redundancy, b.redundancy);
+  EXPECT_EQ(a.omega, b.omega);
+  EXPECT_EQ(a.normal, b.normal);
+  EXPECT_EQ(a.cofactor, b.cofactor);
+  EXPECT_EQ(a.determined, b.determined);
+  EXPECT_EQ(a.whitened_residuals, b.whitened_residuals);
+  EXPECT_EQ(a.redundancy_numbers, b.redundancy_numbers);
+  EXPECT_EQ(a.test_statistics, b.test_statistics);
+  EXPECT_EQ(a.in_front, b.in_front);
+  EXPECT_EQ(a.detectable_blunder_per_delta, b.detectable_blunder_per_delta);
+  EXPECT_EQ(a.pose_shift_per_delta, b.pose_shift_per_delta);
+}
+
+// The resection's set tests ask for StatisticsScope::kTests into one reused struct: the tests must
+// be those of the full statistics into a fresh one, the reliability left at zero, and a struct
+// that held another image's larger set must come out as a fresh one.
+TEST(DataSnooping, TheTestsAloneAndAReusedStructGiveTheFullStatisticsTests) {
+  const Adjusted a = Adjust(8, 21);
+  std::vector<char> used(8, 1);
+  used[3] = 0;  // one mark left out: its predicted-residual statistic too
+  PoseAdjustmentStatistics full;
+  ASSERT_TRUE(ComputePoseAdjustmentStatistics(a.input.image_plane, a.input.points_in_ground,
+                                              a.sigmas, a.input.focal_length, a.eo, used, &full)
+                  .ok());
+  for (int i = 0; i < 8; ++i)
+    if (used[i]) EXPECT_GT(full.detectable_blunder_per_delta[i], 1.0) << i;
+
+  PoseAdjustmentStatistics reused;
+  const Adjusted other = Adjust(12, 22);
+  ASSERT_TRUE(ComputePoseAdjustmentStatistics(other.input.image_plane, other.input.points_in_ground,
+                                              other.sigmas, other.input.focal_length, other.eo,
+                                              std::vector<char>(12, 1), &reused)
+                  .ok());
+  ASSERT_TRUE(ComputePoseAdjustmentStatistics(a.input.image_plane, a.input.points_in_ground,
+                                              a.sigmas, a.input.focal_length, a.eo, used, &reused)
+                  .ok());
+  ExpectSameStatistics(reused, full);
+
+  PoseAdjustmentStatistics tests_only = full;
+  ASSERT_TRUE(ComputePoseAdjustmentStatistics(a.input.image_plane, a.input.points_in_ground,
+                                              a.sigmas, a.input.focal_length, a.eo, used,
+                                              &tests_only, StatisticsScope::kTests)
+                  .ok());
+  PoseAdjustmentStatistics expected = full;
+  expected.detectable_blunder_per_delta.assign(8, 0.0);
+  expected.pose_shift_per_delta.assign(8, 0.0);
+  ExpectSameStatistics(tests_only, expected);
+}
+
 TEST(DataSnooping, RefusesTooFewMarksAndMarksBehindTheCamera) {
   const Adjusted a = Adjust(5, 9);
   PoseAdjustmentStatistics s;

@@ -2,6 +2,8 @@
 
 #include <gtest/gtest.h>
 
+#include <thread>
+
 #include "tests/solvers/resection/scene_input.h"
 
 namespace photopose {
@@ -84,6 +86,52 @@ TEST(PoseRefinement, IterationLimitIsNoConvergenceAndLeavesThePose) {
     EXPECT_EQ(summary.termination, SolverTermination::kNoConvergence) << summary.message;
     EXPECT_FALSE(summary.message.empty());
     EXPECT_EQ(eo.parameters, start.parameters);
+  }
+}
+
+// RefinePose keeps its problem, weights and TinySolver per thread. A thread that refined other
+// images before (more marks, a robust loss, the autodiff path) must give the same pose, bit for
+// bit, as a fresh thread.
+TEST(PoseRefinement, AThreadThatRefinedOtherImagesGivesTheFreshThreadsPose) {
+  const Problem small = MakeProblem(Scenario::kOblique, 1.0, 0.0, 31);
+  SyntheticSceneOptions large_options;
+  large_options.seed = 32;
+  large_options.noise_px = 0.5;
+  large_options.outlier_fraction = 0.2;
+  large_options.num_control_points = 40;
+  large_options.num_check_points = 0;
+  const Problem large = testing::MakeSceneInput(large_options);
+  ASSERT_LT(small.all.size(), large.all.size());
+  std::vector<JacobianType> jacobians = {JacobianType::kAnalytic, JacobianType::kAutodiff};
+  for (const JacobianType jacobian : jacobians) {
+    PoseRefinementOptions options;
+    options.jacobian = jacobian;
+    const auto refine_small = [&](ExteriorOrientation* eo) {
+      *eo = *small.input.approximate;
+      PoseRefinementSummary summary;
+      return Refine(options, small, eo, &summary);
+    };
+    ExteriorOrientation fresh;
+    bool fresh_ok = false;
+    std::thread([&] { fresh_ok = refine_small(&fresh); }).join();
+    ASSERT_TRUE(fresh_ok);
+
+    ExteriorOrientation reused;
+    bool reused_ok = false;
+    std::thread([&] {
+      for (const LossType loss : {LossType::kCauchy, LossType::kNone}) {
+        PoseRefinementOptions before;
+        before.loss = loss;
+        before.jacobian =
+            jacobian == JacobianType::kAnalytic ? JacobianType::kAutodiff : JacobianType::kAnalytic;
+        ExteriorOrientation eo = *large.input.approximate;
+        PoseRefinementSummary summary;
+        Refine(before, large, &eo, &summary);
+      }
+      reused_ok = refine_small(&reused);
+    }).join();
+    ASSERT_TRUE(reused_ok);
+    EXPECT_EQ(reused.parameters, fresh.parameters) << EnumName(jacobian);
   }
 }
 
