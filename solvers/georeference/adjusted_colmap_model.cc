@@ -29,26 +29,44 @@ Status ModelPartOfBlock(const Block& block, const GeoreferenceResult* georeferen
   return Status::Ok();
 }
 
+namespace {
+
+// The model's part of `block` (ModelPartOfBlock): the block itself when nothing was added to it,
+// else the part copied into *copy. No copy of a block of millions of marks (200 MB at a thousand
+// images) just to write it.
+Status ModelView(const Block& block, const GeoreferenceResult* georeference, Block* copy,
+                 const Block** model) {
+  *model = &block;
+  if (georeference == nullptr) return Status::Ok();
+  PHOTOPOSE_RETURN_IF_ERROR(ModelPartOfBlock(block, georeference, copy));
+  *model = copy;
+  return Status::Ok();
+}
+
+}  // namespace
+
 Status CheckAdjustedColmapModelWritable(const Block& block, const GeoreferenceResult* georeference,
                                         const ColmapModelExtras* extras) {
-  Block model;
-  PHOTOPOSE_RETURN_IF_ERROR(ModelPartOfBlock(block, georeference, &model));
-  return CheckColmapModelWritable(model, extras);
+  Block copy;
+  const Block* model = nullptr;
+  PHOTOPOSE_RETURN_IF_ERROR(ModelView(block, georeference, &copy, &model));
+  return CheckColmapModelWritable(*model, extras);
 }
 
 Status FormatAdjustedColmapModel(const Block& block, const BundleAdjustmentResult& adjustment,
                                  const GeoreferenceResult* georeference,
                                  const ColmapModelExtras* extras, ColmapFormat format,
                                  AdjustedColmapModelFiles* files) {
-  Block model;
-  PHOTOPOSE_RETURN_IF_ERROR(ModelPartOfBlock(block, georeference, &model));
+  Block copy;
+  const Block* model = nullptr;
+  PHOTOPOSE_RETURN_IF_ERROR(ModelView(block, georeference, &copy, &model));
   ColmapWriteOptions options;
   options.format = format;
   // The model's own marks come first: the removed ones among them are the first entries.
   options.marks_left_out = adjustment.RemovedMarks(block.marks.size());
-  options.marks_left_out.resize(model.marks.size());
+  options.marks_left_out.resize(model->marks.size());
   AdjustedColmapModelFiles out;
-  PHOTOPOSE_RETURN_IF_ERROR(FormatColmapModel(model, extras, options, &out.model));
+  PHOTOPOSE_RETURN_IF_ERROR(FormatColmapModel(*model, extras, options, &out.model));
   if (georeference != nullptr) {
     const LocalFrame& frame = georeference->frame;
     const nlohmann::json json = {
