@@ -15,6 +15,7 @@
 #include <pybind11/stl.h>
 
 #include <Eigen/Core>
+#include <algorithm>
 #include <functional>
 #include <memory>
 #include <optional>
@@ -87,9 +88,13 @@ std::vector<std::string> Strings(const py::handle& value, const char* name);
 
 py::array_t<double> ToArray(const std::vector<Eigen::Vector2d>& rows);
 py::array_t<double> ToArray(const std::vector<Eigen::Vector3d>& rows);
-py::array_t<double> ToArray(const std::vector<double>& values);
-py::array_t<float> ToArray(const std::vector<float>& values);
-py::array_t<int> ToArray(const std::vector<int>& values);
+// A column of numbers as a numpy array of the same element type (float64, float32, int32).
+template <typename T>
+py::array_t<T> ToArray(const std::vector<T>& values) {
+  py::array_t<T> out(static_cast<py::ssize_t>(values.size()));
+  std::copy(values.begin(), values.end(), out.mutable_data());
+  return out;
+}
 py::array_t<bool> ToBoolArray(const std::vector<char>& flags);
 inline double NaN() { return std::numeric_limits<double>::quiet_NaN(); }
 // One field of every row, in order: Column(block.marks, &BlockMark::image).

@@ -143,27 +143,9 @@ py::array_t<double> ToArray(const std::vector<Eigen::Vector3d>& rows) {
   return out;
 }
 
-py::array_t<int> ToArray(const std::vector<int>& values) {
-  py::array_t<int> out(static_cast<py::ssize_t>(values.size()));
-  std::copy(values.begin(), values.end(), out.mutable_data());
-  return out;
-}
-
 py::array_t<bool> ToBoolArray(const std::vector<char>& flags) {
   py::array_t<bool> out(static_cast<py::ssize_t>(flags.size()));
   for (size_t i = 0; i < flags.size(); ++i) out.mutable_data()[i] = flags[i] != 0;
-  return out;
-}
-
-py::array_t<float> ToArray(const std::vector<float>& values) {
-  py::array_t<float> out(static_cast<py::ssize_t>(values.size()));
-  std::copy(values.begin(), values.end(), out.mutable_data());
-  return out;
-}
-
-py::array_t<double> ToArray(const std::vector<double>& values) {
-  py::array_t<double> out(static_cast<py::ssize_t>(values.size()));
-  std::copy(values.begin(), values.end(), out.mutable_data());
   return out;
 }
 

@@ -39,7 +39,9 @@ json Number(float value) {
 }
 
 json Vector3(const Eigen::Vector3d& v) { return json::array({Number(v.x()), Number(v.y()), Number(v.z())}); }
-
+json Vector3Single(const Eigen::Vector3f& v) {
+  return json::array({Number(v.x()), Number(v.y()), Number(v.z())});
+}
 
 const char* RoleName(PointRole role) {
   switch (role) {
@@ -427,9 +429,7 @@ void DiagnosticsJson(const Block& block, const BundleAdjustmentResult& result,
     for (size_t p = 0; p < block.points.size(); ++p) {
       if (block.points[p].role != PointRole::kControl) continue;
       per_control.push_back(
-          {{"point_id", block.points[p].id},
-           {"mdb_m", json::array({Number(control_mdb[p].x()), Number(control_mdb[p].y()),
-                                  Number(control_mdb[p].z())})}});
+          {{"point_id", block.points[p].id}, {"mdb_m", Vector3Single(control_mdb[p])}});
     }
     (*report)["diagnostics"] = {{"critical_value", result.critical_value},
                                 {"delta0", result.delta0},
