@@ -16,6 +16,20 @@
 #include "tools/commands/cli_common.h"
 #include "tools/commands/commands.h"
 
+#ifdef PHOTOPOSE_JEMALLOC_CONF
+// jemalloc's options, read at its start (MALLOC_CONF in the environment still overrides them).
+// A freed page goes back to the system after 1 s instead of jemalloc's 10: the steps of a large
+// adjustment free hundreds of MB (the rounds' structures, the statistics' factor) just before the
+// next allocates as much, and pages kept dirty for 10 s add to the next step's peak (the Taylor
+// path on the 1000-image COLMAP model: 612 -> 593 MiB, the same CPU time; docs/performance.md).
+// 0 would purge on every free: 574 MiB, but twice the time, the statistics' scratch being
+// faulted in again and again.
+extern "C" {
+extern const char* malloc_conf;
+const char* malloc_conf = "dirty_decay_ms:1000";
+}
+#endif
+
 namespace {
 
 constexpr char kUsage[] =

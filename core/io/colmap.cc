@@ -9,6 +9,7 @@
 #include <climits>
 #include <cmath>
 #include <filesystem>
+#include <functional>
 #include <limits>
 #include <string_view>
 #include <unordered_map>
@@ -906,23 +907,67 @@ Status CheckColmapModelWritable(const Block& block, const ColmapModelExtras* ext
   return Status::Ok();
 }
 
-Status FormatColmapModel(const Block& block, const ColmapModelExtras* extras,
-                         const ColmapWriteOptions& options, ColmapModelFiles* files) {
+namespace {
+
+// The model's records, each of its files formatted into format_file(file, format_one), which
+// calls format_one(out) with the TextPieces the file goes to.
+using FileFormatter = std::function<Status(TextPieces* out)>;
+Status FormatModelFiles(const Block& block, const ColmapModelExtras* extras,
+                        const ColmapWriteOptions& options,
+                        const std::function<Status(colmap_io::ModelFile file,
+                                                   const FileFormatter& format_one)>& format_file) {
   PHOTOPOSE_RETURN_IF_ERROR(CheckColmapModelWritable(block, extras));
   colmap_io::Records records;
   PHOTOPOSE_RETURN_IF_ERROR(RecordsFromBlock(block, extras, options, &records));
-  if (options.format == ColmapFormat::kBinary) {
-    colmap_io::FormatBinary(records, files);
-  } else {
-    colmap_io::FormatText(records, files);
+  for (const colmap_io::ModelFile file :
+       {colmap_io::ModelFile::kCameras, colmap_io::ModelFile::kImages,
+        colmap_io::ModelFile::kPoints3D}) {
+    PHOTOPOSE_RETURN_IF_ERROR(format_file(file, [&](TextPieces* out) {
+      return options.format == ColmapFormat::kBinary
+                 ? colmap_io::FormatBinaryFile(file, records, out)
+                 : colmap_io::FormatTextFile(file, records, out);
+    }));
   }
   return Status::Ok();
 }
 
+}  // namespace
+
+Status FormatColmapModel(const Block& block, const ColmapModelExtras* extras,
+                         const ColmapWriteOptions& options, ColmapModelFiles* files) {
+  ColmapModelFiles out;
+  out.format = options.format;
+  PHOTOPOSE_RETURN_IF_ERROR(FormatModelFiles(
+      block, extras, options, [&](colmap_io::ModelFile file, const FileFormatter& format_one) {
+        TextPieces whole;
+        PHOTOPOSE_RETURN_IF_ERROR(format_one(&whole));
+        std::string& text = file == colmap_io::ModelFile::kCameras  ? out.cameras
+                            : file == colmap_io::ModelFile::kImages ? out.images
+                                                                    : out.points3D;
+        text = std::move(whole.text());
+        return Status::Ok();
+      }));
+  *files = std::move(out);
+  return Status::Ok();
+}
+
+Status StageColmapModel(const Block& block, const ColmapModelExtras* extras,
+                        const ColmapWriteOptions& options, const std::string& directory,
+                        OutputFiles* outputs) {
+  const colmap_io::ModelPaths paths = PathsOf(directory, options.format);
+  return FormatModelFiles(
+      block, extras, options, [&](colmap_io::ModelFile file, const FileFormatter& format_one) {
+        const std::string& path = file == colmap_io::ModelFile::kCameras  ? paths.cameras
+                                  : file == colmap_io::ModelFile::kImages ? paths.images
+                                                                          : paths.points3D;
+        return outputs->StageInPieces(path, format_one);
+      });
+}
+
 Status WriteColmapModel(const std::string& directory, const Block& block,
                         const ColmapModelExtras* extras, const ColmapWriteOptions& options) {
-  ColmapModelFiles files;
-  PHOTOPOSE_RETURN_IF_ERROR(FormatColmapModel(block, extras, options, &files));
+  // Refused before the folder is made (as the writing refuses them).
+  PHOTOPOSE_RETURN_IF_ERROR(CheckColmapModelWritable(block, extras));
   std::error_code error;
   std::filesystem::create_directories(directory, error);
   if (error) return Status::Error(directory + ": cannot create the folder: " + error.message());
@@ -930,9 +975,7 @@ Status WriteColmapModel(const std::string& directory, const Block& block,
   OutputFiles outputs;
   for (const std::string* path : {&paths.cameras, &paths.images, &paths.points3D})
     PHOTOPOSE_RETURN_IF_ERROR(outputs.AddOutput("", *path));
-  PHOTOPOSE_RETURN_IF_ERROR(outputs.Stage(paths.cameras, files.cameras));
-  PHOTOPOSE_RETURN_IF_ERROR(outputs.Stage(paths.images, files.images));
-  PHOTOPOSE_RETURN_IF_ERROR(outputs.Stage(paths.points3D, files.points3D));
+  PHOTOPOSE_RETURN_IF_ERROR(StageColmapModel(block, extras, options, directory, &outputs));
   return outputs.Commit();
 }
 

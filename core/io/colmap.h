@@ -63,6 +63,8 @@
 
 namespace photopose {
 
+class OutputFiles;  // core/io/output_files.h
+
 // A POINTS2D entry without a 3D point (POINT3D_ID -1).
 struct ColmapKeypoint {
   int image = -1;                                // index into Block::images
@@ -148,6 +150,13 @@ struct ColmapModelFiles {
 // one transaction, core/io/output_files.h).
 Status FormatColmapModel(const Block& block, const ColmapModelExtras* extras,
                          const ColmapWriteOptions& options, ColmapModelFiles* files);
+// FormatColmapModel's files staged in `outputs` as directory/cameras.txt ... (or .bin; added to
+// `outputs` when not there yet), each written to its temporary file in pieces
+// (core/io/output_files.h TextPieces): the model is never held whole as text (84 MB at a
+// thousand images). For callers that write the model with other outputs as one transaction.
+Status StageColmapModel(const Block& block, const ColmapModelExtras* extras,
+                        const ColmapWriteOptions& options, const std::string& directory,
+                        OutputFiles* outputs);
 // Whether FormatColmapModel can write the block's cameras and images (the errors it would give
 // for them, at the cost of a look at each camera and image): to refuse an output before the work
 // that would fill it.

@@ -13,6 +13,7 @@
 
 #include "core/io/csv.h"
 #include "core/io/internal/colmap_records.h"
+#include "core/io/output_files.h"
 
 namespace photopose::colmap_io {
 namespace {
@@ -253,11 +254,15 @@ Status ParseBinaryFile(ModelFile file, std::string_view bytes, const ModelPaths&
   return Status::Error("unknown COLMAP file");
 }
 
-// Ids are in range here: the block side numbers cameras within uint32 for this format, image ids
-// come from a model (uint32) or are 1..n, point ids are >= 0.
-void FormatBinary(const Records& records, ColmapModelFiles* files) {
-  std::string& cameras = files->cameras;
-  cameras.clear();
+namespace {
+
+// A piece's room: kPieceBytes and the largest record that may pass it.
+size_t PieceRoom(const TextPieces& out, size_t whole) {
+  return out.writes_file() ? TextPieces::kPieceBytes + (TextPieces::kPieceBytes >> 2) : whole;
+}
+
+Status FormatCamerasBinary(const Records& records, TextPieces* out) {
+  std::string& cameras = out->text();
   PutUnsigned(records.cameras.size(), 8, &cameras);
   for (const CameraRecord& camera : records.cameras) {
     PutUnsigned(static_cast<uint64_t>(camera.id), 4, &cameras);
@@ -266,11 +271,13 @@ void FormatBinary(const Records& records, ColmapModelFiles* files) {
     PutUnsigned(static_cast<uint64_t>(camera.height), 8, &cameras);
     for (const double value : camera.params) PutDouble(value, &cameras);
   }
+  return Status::Ok();
+}
 
-  std::string& images = files->images;
-  images.clear();
-  images.reserve(records.images.size() * (kImageBytes + 32) +
-                 records.points2D.size() * kPoint2DBytes);
+Status FormatImagesBinary(const Records& records, TextPieces* out) {
+  std::string& images = out->text();
+  images.reserve(PieceRoom(
+      *out, records.images.size() * (kImageBytes + 32) + records.points2D.size() * kPoint2DBytes));
   PutUnsigned(records.images.size(), 8, &images);
   for (const ImageRecord& image : records.images) {
     PutUnsigned(static_cast<uint64_t>(image.id), 4, &images);
@@ -287,11 +294,15 @@ void FormatBinary(const Records& records, ColmapModelFiles* files) {
       PutUnsigned(entry.point3D_id < 0 ? kNoPoint3D : static_cast<uint64_t>(entry.point3D_id), 8,
                   &images);
     }
+    PHOTOPOSE_RETURN_IF_ERROR(out->Piece());
   }
+  return Status::Ok();
+}
 
-  std::string& points = files->points3D;
-  points.clear();
-  points.reserve(records.points.size() * kPointBytes + records.tracks.size() * kTrackBytes);
+Status FormatPointsBinary(const Records& records, TextPieces* out) {
+  std::string& points = out->text();
+  points.reserve(
+      PieceRoom(*out, records.points.size() * kPointBytes + records.tracks.size() * kTrackBytes));
   PutUnsigned(records.points.size(), 8, &points);
   for (const PointRecord& point : records.points) {
     PutUnsigned(static_cast<uint64_t>(point.id), 8, &points);
@@ -304,8 +315,25 @@ void FormatBinary(const Records& records, ColmapModelFiles* files) {
       PutUnsigned(entry.image_id, 4, &points);
       PutUnsigned(entry.point2D_idx, 4, &points);
     }
+    PHOTOPOSE_RETURN_IF_ERROR(out->Piece());
   }
-  files->format = ColmapFormat::kBinary;
+  return Status::Ok();
+}
+
+}  // namespace
+
+// Ids are in range here: the block side numbers cameras within uint32 for this format, image ids
+// come from a model (uint32) or are 1..n, point ids are >= 0.
+Status FormatBinaryFile(ModelFile file, const Records& records, TextPieces* out) {
+  switch (file) {
+    case ModelFile::kCameras:
+      return FormatCamerasBinary(records, out);
+    case ModelFile::kImages:
+      return FormatImagesBinary(records, out);
+    case ModelFile::kPoints3D:
+      return FormatPointsBinary(records, out);
+  }
+  return Status::Error("unknown COLMAP file");
 }
 
 }  // namespace photopose::colmap_io

@@ -8,6 +8,7 @@
 
 #include "core/io/csv.h"
 #include "core/io/internal/colmap_records.h"
+#include "core/io/output_files.h"
 #include "core/io/text_scanner.h"
 
 namespace photopose::colmap_io {
@@ -120,9 +121,9 @@ void AppendSpaceNumber(double value, std::string* text) {
 }
 
 // cameras.txt.
-void FormatCamerasText(const Records& records, std::string* text) {
-  std::string& cameras = *text;
-  cameras =
+Status FormatCamerasText(const Records& records, TextPieces* out) {
+  std::string& cameras = out->text();
+  cameras +=
       "# Camera list with one line of data per camera:\n"
       "#   CAMERA_ID, MODEL, WIDTH, HEIGHT, PARAMS[]\n"
       "# Number of cameras: " +
@@ -138,17 +139,18 @@ void FormatCamerasText(const Records& records, std::string* text) {
     for (const double value : camera.params) AppendSpaceNumber(value, &cameras);
     cameras += '\n';
   }
+  return Status::Ok();
 }
 
 // images.txt: two lines per image, the second its POINTS2D.
-void FormatImagesText(const Records& records, std::string* text) {
-  std::string& images = *text;
+Status FormatImagesText(const Records& records, TextPieces* out) {
+  std::string& images = out->text();
   size_t num_observations = 0;
   for (const Point2DRecord& entry : records.points2D)
     if (entry.point3D_id >= 0) ++num_observations;
   const size_t num_images = records.images.size();
-  images.clear();
-  images.reserve(200 * num_images + 40 * records.points2D.size());
+  images.reserve(out->writes_file() ? TextPieces::kPieceBytes + (TextPieces::kPieceBytes >> 2)
+                                    : 200 * num_images + 40 * records.points2D.size());
   images +=
       "# Image list with two lines of data per image:\n"
       "#   IMAGE_ID, QW, QX, QY, QZ, TX, TY, TZ, CAMERA_ID, NAME\n"
@@ -175,15 +177,17 @@ void FormatImagesText(const Records& records, std::string* text) {
       AppendInteger(entry.point3D_id, &images);
     }
     images += '\n';
+    PHOTOPOSE_RETURN_IF_ERROR(out->Piece());
   }
+  return Status::Ok();
 }
 
 // points3D.txt: a line per point with its track.
-void FormatPointsText(const Records& records, std::string* text) {
-  std::string& points = *text;
+Status FormatPointsText(const Records& records, TextPieces* out) {
+  std::string& points = out->text();
   const size_t num_points = records.points.size();
-  points.clear();
-  points.reserve(100 * num_points + 16 * records.tracks.size());
+  points.reserve(out->writes_file() ? TextPieces::kPieceBytes + (TextPieces::kPieceBytes >> 2)
+                                    : 100 * num_points + 16 * records.tracks.size());
   points +=
       "# 3D point list with one line of data per point:\n"
       "#   POINT3D_ID, X, Y, Z, R, G, B, ERROR, TRACK[] as (IMAGE_ID, POINT2D_IDX)\n"
@@ -207,7 +211,9 @@ void FormatPointsText(const Records& records, std::string* text) {
       AppendInteger(entry.point2D_idx, &points);
     }
     points += '\n';
+    PHOTOPOSE_RETURN_IF_ERROR(out->Piece());
   }
+  return Status::Ok();
 }
 
 }  // namespace
@@ -225,11 +231,16 @@ Status ParseTextFile(ModelFile file, std::string_view text, const ModelPaths& pa
   return Status::Error("unknown COLMAP file");
 }
 
-void FormatText(const Records& records, ColmapModelFiles* files) {
-  FormatCamerasText(records, &files->cameras);
-  FormatImagesText(records, &files->images);
-  FormatPointsText(records, &files->points3D);
-  files->format = ColmapFormat::kText;
+Status FormatTextFile(ModelFile file, const Records& records, TextPieces* out) {
+  switch (file) {
+    case ModelFile::kCameras:
+      return FormatCamerasText(records, out);
+    case ModelFile::kImages:
+      return FormatImagesText(records, out);
+    case ModelFile::kPoints3D:
+      return FormatPointsText(records, out);
+  }
+  return Status::Error("unknown COLMAP file");
 }
 
 }  // namespace photopose::colmap_io

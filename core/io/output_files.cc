@@ -288,12 +288,41 @@ Status OutputFiles::StageFailed(Status status) {
   return status;
 }
 
+Status TextPieces::Flush() {
+  if (fd_ < 0 || text_.empty()) return Status::Ok();
+  int error_number = 0;
+  if (!WriteAll(fd_, text_, &error_number))
+    return Status::Error(name_ + ": cannot write: " + SystemError(error_number));
+  text_.clear();
+  return Status::Ok();
+}
+
+Status TextPieces::Write(std::string_view contents) {
+  if (fd_ < 0) {
+    text_.append(contents);
+    return Status::Ok();
+  }
+  PHOTOPOSE_RETURN_IF_ERROR(Flush());
+  int error_number = 0;
+  if (!WriteAll(fd_, contents, &error_number))
+    return Status::Error(name_ + ": cannot write: " + SystemError(error_number));
+  return Status::Ok();
+}
+
 Status OutputFiles::Stage(const std::string& path, std::string_view contents) {
+  return StageInPieces(path, [&](TextPieces* out) { return out->Write(contents); });
+}
+
+Status OutputFiles::StageInPieces(const std::string& path,
+                                  const std::function<Status(TextPieces* out)>& format) {
   if (Find(path) == nullptr) PHOTOPOSE_RETURN_IF_ERROR(AddOutput("", path));
   Output* output = Find(path);
   const std::string name = Named(output->label, output->path);
+  TextPieces pieces;
   if (output->kind != Kind::kReplace) {
-    output->contents = std::string(contents);
+    const Status formatted = format(&pieces);
+    if (!formatted.ok()) return StageFailed(formatted);
+    output->contents = std::move(pieces.text_);
     output->staged = true;
     return Status::Ok();
   }
@@ -304,24 +333,20 @@ Status OutputFiles::Stage(const std::string& path, std::string_view contents) {
         Status::Error(name + ": cannot create a temporary file: " + SystemError(errno)));
   }
   output->temporary = temporary;
-  int error_number = 0;
-  const char* failed = nullptr;
+  Status written = Status::Ok();
   if (fchmod(fd, ModeFor(output->target, 0666)) != 0) {
-    failed = "cannot set permissions";
-    error_number = errno;
-  } else if (!WriteAll(fd, contents, &error_number)) {
-    failed = "cannot write";
-  } else if (fsync(fd) != 0) {
-    failed = "cannot write";
-    error_number = errno;
+    written = Status::Error(name + ": cannot set permissions: " + SystemError(errno));
+  } else {
+    pieces.fd_ = fd;
+    pieces.name_ = name;
+    written = format(&pieces);
+    if (written.ok()) written = pieces.Flush();
+    if (written.ok() && fsync(fd) != 0)
+      written = Status::Error(name + ": cannot write: " + SystemError(errno));
   }
-  if (close(fd) != 0 && failed == nullptr) {
-    failed = "cannot write";
-    error_number = errno;
-  }
-  if (failed != nullptr) {
-    return StageFailed(Status::Error(name + ": " + failed + ": " + SystemError(error_number)));
-  }
+  if (close(fd) != 0 && written.ok())
+    written = Status::Error(name + ": cannot write: " + SystemError(errno));
+  if (!written.ok()) return StageFailed(written);
   output->staged = true;
   return Status::Ok();
 }

@@ -34,6 +34,43 @@
 
 namespace photopose {
 
+// The text of one output as it is formatted: collected whole, or, for an output OutputFiles
+// stages in pieces, written to its temporary file a piece at a time, so that a file of hundreds
+// of MB is never held whole.
+//
+//   TextPieces* out;  // from OutputFiles::StageInPieces, or a TextPieces of one's own
+//   for (...) {
+//     out->text() += ...;
+//     PHOTOPOSE_RETURN_IF_ERROR(out->Piece());
+//   }
+class TextPieces {
+ public:
+  // Collects the text whole (text() holds it all at the end).
+  TextPieces() = default;
+  TextPieces(const TextPieces&) = delete;
+  TextPieces& operator=(const TextPieces&) = delete;
+
+  // The text not yet written.
+  std::string& text() { return text_; }
+  // Writing a file: writes text() and empties it when it holds kPieceBytes or more. Collecting:
+  // nothing.
+  Status Piece() { return text_.size() >= kPieceBytes ? Flush() : Status::Ok(); }
+  // Writing a file: writes text() and empties it. Collecting: nothing.
+  Status Flush();
+  // Appends `contents` after text() (writing a file: writes both at once).
+  Status Write(std::string_view contents);
+  // Whether the text goes to a file (then text() never holds much more than kPieceBytes).
+  bool writes_file() const { return fd_ >= 0; }
+
+  static constexpr size_t kPieceBytes = size_t{4} << 20;  // bytes
+
+ private:
+  friend class OutputFiles;
+  int fd_ = -1;       // the temporary file written, or -1
+  std::string name_;  // the output, in messages
+  std::string text_;
+};
+
 class OutputFiles {
  public:
   OutputFiles() = default;
@@ -49,6 +86,11 @@ class OutputFiles {
 
   // Stages the complete contents of the output added as `path`.
   Status Stage(const std::string& path, std::string_view contents);
+  // Stages the output added as `path` from format(out): what it appends to out->text() is
+  // written to the temporary file at each out->Piece() that finds a piece full, and at the end
+  // (in place and descriptor outputs are collected whole, as Stage's).
+  Status StageInPieces(const std::string& path,
+                       const std::function<Status(TextPieces* out)>& format);
   // Stages the output added as `path` by calling write(temporary_path), for writers that take a
   // path; messages that name the temporary file are rewritten to name `path`.
   Status StageWith(const std::string& path,

@@ -347,7 +347,7 @@ void DiagnosticsPass::Group(size_t order) {
     PointW(round, reduced, point, rows.data(), &W);
     if (!MakeSupportCovariance(reduced, point, &W, {}, &support)) return;
     Eigen::Matrix3d covariance = PointCovariance(reduced, support, point);
-    if (inner != nullptr) covariance = inner->Point(point, covariance);
+    if (inner != nullptr) covariance = inner->Point(point, covariance, W);
     BundlePointResult& point_result = result->points[round.point_of_block[point]];
     point_result.covariance = variance_factor * covariance;
     point_result.has_covariance = true;

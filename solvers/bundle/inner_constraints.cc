@@ -98,47 +98,45 @@ bool InnerConstraintTransform::RightHandSide(bool on_points, const BundlePlan& p
   return true;
 }
 
-bool InnerConstraintTransform::BackSubstitutePoints(bool on_points, const BundleRound& round,
-                                                    const ReducedNormals& reduced,
-                                                    const Eigen::MatrixXd& y_e, int num_threads) {
-  std::vector<Eigen::Matrix<double, 3, 7>>& y_p = point_M_;
-  y_p.resize(reduced.V_inverse.size());
+Eigen::Matrix<double, 3, 7> InnerConstraintTransform::PointY(int p,
+                                                             const Eigen::MatrixXd& W) const {
+  const ReducedNormals& reduced = *reduced_;
+  Eigen::Matrix<double, 3, 7> b = on_points_ ? PointRows(p) : Eigen::Matrix<double, 3, 7>::Zero();
+  int row = 0;
+  for (const int block_index : reduced.W_blocks[p]) {
+    const int size = reduced.C.block_size(block_index);
+    b -= W.middleRows(row, size).transpose() * y_e_.middleRows(reduced.e_offset[block_index], size);
+    row += size;
+  }
+  return reduced.V_inverse[p] * b;
+}
+
+bool InnerConstraintTransform::BackSubstitutePoints(const BundleRound& round,
+                                                    const ReducedNormals& reduced, int num_threads,
+                                                    Eigen::Matrix<double, 7, 7>* GtWY) const {
+  *GtWY = Eigen::Matrix<double, 7, 7>::Zero();
+  if (!on_points_) return true;
+  // In point order, whatever the threads that make the points' W.
   return ForEachPointW(round, reduced, num_threads, [&](int k, const Eigen::MatrixXd& W) {
-    Eigen::Matrix<double, 3, 7> b = on_points ? PointRows(k) : Eigen::Matrix<double, 3, 7>::Zero();
-    int row = 0;
-    for (const int block_index : reduced.W_blocks[k]) {
-      const int size = reduced.C.block_size(block_index);
-      b -=
-          W.middleRows(row, size).transpose() * y_e.middleRows(reduced.e_offset[block_index], size);
-      row += size;
-    }
-    y_p[k] = reduced.V_inverse[k] * b;
+    const Eigen::Matrix<double, 3, 7> y_p = PointY(k, W);
+    *GtWY += PointRows(k).transpose() * y_p;
   });
 }
 
-void InnerConstraintTransform::MakeTransform(bool on_points, const BundlePlan& plan,
-                                             const BundleRound& round,
+void InnerConstraintTransform::MakeTransform(const BundlePlan& plan, const BundleRound& round,
                                              const ReducedNormals& reduced,
                                              const std::vector<int>& image_block,
-                                             const Eigen::MatrixXd& y_e,
-                                             const Eigen::Matrix<double, 7, 7>& A) {
-  const std::vector<Eigen::Matrix<double, 3, 7>>& y_p = point_M_;
-  Eigen::Matrix<double, 7, 7> GtWY = Eigen::Matrix<double, 7, 7>::Zero();
-  if (on_points) {
-    for (size_t k = 0; k < y_p.size(); ++k)
-      GtWY += PointRows(static_cast<int>(k)).transpose() * y_p[k];
-  }
+                                             Eigen::Matrix<double, 7, 7> GtWY) {
   for (size_t i = 0; i < image_block.size(); ++i) {
     const int b = image_block[i];
     if (b < 0) continue;
     Eigen::Matrix<double, 6, 7> Y = Eigen::Matrix<double, 6, 7>::Zero();
     for (int c = 0; c < round.e_sizes[b]; ++c)
-      Y.row(OrientationComponent(plan, static_cast<int>(i), c)) = y_e.row(reduced.e_offset[b] + c);
-    if (!on_points) GtWY += image_G_[i].topRows<3>().transpose() * Y.topRows<3>();
-    image_M_[i] = Y * A;
+      Y.row(OrientationComponent(plan, static_cast<int>(i), c)) = y_e_.row(reduced.e_offset[b] + c);
+    if (!on_points_) GtWY += image_G_[i].topRows<3>().transpose() * Y.topRows<3>();
+    image_M_[i] = Y * A_;
   }
-  for (size_t k = 0; k < point_M_.size(); ++k) point_M_[k] = (point_M_[k] * A).eval();
-  Q_ = A * GtWY * A;
+  Q_ = A_ * GtWY * A_;
   Q_ = 0.5 * (Q_ + Q_.transpose()).eval();
 }
 
@@ -165,6 +163,8 @@ Status InnerConstraintTransform::Compute(BundleRelativeCovariance datum, const B
   centroid_ = centroid;
   extent_ = extent;
   point_blocks_ = &round.point_blocks;
+  reduced_ = &reduced;
+  on_points_ = on_points;
 
   // Y = C_g W G: the right-hand side W G on the round's parameters, the points eliminated
   // (r_e = b_e - sum_p W_p V_p^-1 b_p), the reduced system solved, the points back-substituted
@@ -182,14 +182,15 @@ Status InnerConstraintTransform::Compute(BundleRelativeCovariance datum, const B
   const Eigen::Matrix<double, 7, 7> A = eigen.eigenvectors() *
                                         eigen.eigenvalues().cwiseInverse().asDiagonal() *
                                         eigen.eigenvectors().transpose();
-  const Eigen::MatrixXd y_e = reduced.C.Solve(rhs);
-  if (!y_e.allFinite())
+  y_e_ = reduced.C.Solve(rhs);
+  if (!y_e_.allFinite())
     return Status::Error("the reduced system could not be solved for the datum");
-  // y_p, in point_M_ until A is known.
-  if (!BackSubstitutePoints(on_points, round, reduced, y_e, num_threads))
+  A_ = A;
+  // G^T W Y (the points' y_p made and summed, not kept), then Q = A G^T W Y A and M = Y A.
+  Eigen::Matrix<double, 7, 7> GtWY;
+  if (!BackSubstitutePoints(round, reduced, num_threads, &GtWY))
     return Status::Error("a residual could not be evaluated at the solution");
-  // G^T W Y, then Q = A G^T W Y A and M = Y A.
-  MakeTransform(on_points, plan, round, reduced, image_block, y_e, A);
+  MakeTransform(plan, round, reduced, image_block, GtWY);
 
   std::ostringstream words;
   words << "inner constraints on the " << positions.size() << " " << what
@@ -210,9 +211,11 @@ Eigen::Matrix<double, 3, 7> InnerConstraintTransform::PointRows(int p) const {
   return SimilarityRows(Eigen::Vector3d(X[0], X[1], X[2]), centroid_, extent_);
 }
 
-Eigen::Matrix3d InnerConstraintTransform::Point(int p, const Eigen::Matrix3d& gauge) const {
+Eigen::Matrix3d InnerConstraintTransform::Point(int p, const Eigen::Matrix3d& gauge,
+                                                const Eigen::MatrixXd& W) const {
   const Eigen::Matrix<double, 3, 7> G = PointRows(p);
-  const Eigen::Matrix<double, 3, 7>& M = point_M_[p];
+  const Eigen::Matrix<double, 3, 7> y_p = PointY(p, W);
+  const Eigen::Matrix<double, 3, 7> M = y_p * A_;
   const Eigen::Matrix3d C = gauge - G * M.transpose() - M * G.transpose() + G * Q_ * G.transpose();
   return 0.5 * (C + C.transpose());
 }

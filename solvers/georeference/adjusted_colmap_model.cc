@@ -53,6 +53,38 @@ Status CheckAdjustedColmapModelWritable(const Block& block, const GeoreferenceRe
   return CheckColmapModelWritable(*model, extras);
 }
 
+namespace {
+
+// The write options of the model part: the removed marks among the model's own marks (they come
+// first) left out of the tracks.
+ColmapWriteOptions AdjustedWriteOptions(const Block& block, const Block& model,
+                                        const BundleAdjustmentResult& adjustment,
+                                        ColmapFormat format) {
+  ColmapWriteOptions options;
+  options.format = format;
+  options.marks_left_out = adjustment.RemovedMarks(block.marks.size());
+  options.marks_left_out.resize(model.marks.size());
+  return options;
+}
+
+// georeference.json: the local frame the model's coordinates are in.
+std::string GeoreferenceJson(const GeoreferenceResult& georeference) {
+  const LocalFrame& frame = georeference.frame;
+  const nlohmann::json json = {
+      {"frame", "local East-North-Up (m) of this model's coordinates"},
+      {"local_to_epsg4979_proj_pipeline_inverse", frame.definition()},
+      {"origin_lon_lat_h",
+       {frame.origin_lon_lat_h().x(), frame.origin_lon_lat_h().y(), frame.origin_lon_lat_h().z()}},
+      {"note",
+       "the PROJ pipeline maps EPSG:4979 (longitude, latitude in degrees, ellipsoidal height in "
+       "m) to this frame; run it inverted (e.g. cs2cs/cct -I) to get geographic coordinates, "
+       "then to any CRS"},
+      {"out_crs", georeference.out_crs}};
+  return json.dump(2) + "\n";
+}
+
+}  // namespace
+
 Status FormatAdjustedColmapModel(const Block& block, const BundleAdjustmentResult& adjustment,
                                  const GeoreferenceResult* georeference,
                                  const ColmapModelExtras* extras, ColmapFormat format,
@@ -60,28 +92,28 @@ Status FormatAdjustedColmapModel(const Block& block, const BundleAdjustmentResul
   Block copy;
   const Block* model = nullptr;
   PHOTOPOSE_RETURN_IF_ERROR(ModelView(block, georeference, &copy, &model));
-  ColmapWriteOptions options;
-  options.format = format;
-  // The model's own marks come first: the removed ones among them are the first entries.
-  options.marks_left_out = adjustment.RemovedMarks(block.marks.size());
-  options.marks_left_out.resize(model->marks.size());
   AdjustedColmapModelFiles out;
-  PHOTOPOSE_RETURN_IF_ERROR(FormatColmapModel(*model, extras, options, &out.model));
-  if (georeference != nullptr) {
-    const LocalFrame& frame = georeference->frame;
-    const nlohmann::json json = {
-        {"frame", "local East-North-Up (m) of this model's coordinates"},
-        {"local_to_epsg4979_proj_pipeline_inverse", frame.definition()},
-        {"origin_lon_lat_h",
-         {frame.origin_lon_lat_h().x(), frame.origin_lon_lat_h().y(), frame.origin_lon_lat_h().z()}},
-        {"note",
-         "the PROJ pipeline maps EPSG:4979 (longitude, latitude in degrees, ellipsoidal height in "
-         "m) to this frame; run it inverted (e.g. cs2cs/cct -I) to get geographic coordinates, "
-         "then to any CRS"},
-        {"out_crs", georeference->out_crs}};
-    out.georeference_json = json.dump(2) + "\n";
-  }
+  PHOTOPOSE_RETURN_IF_ERROR(FormatColmapModel(
+      *model, extras, AdjustedWriteOptions(block, *model, adjustment, format), &out.model));
+  if (georeference != nullptr) out.georeference_json = GeoreferenceJson(*georeference);
   *files = std::move(out);
+  return Status::Ok();
+}
+
+Status StageAdjustedColmapModel(const std::string& directory, const Block& block,
+                                const BundleAdjustmentResult& adjustment,
+                                const GeoreferenceResult* georeference,
+                                const ColmapModelExtras* extras, ColmapFormat format,
+                                OutputFiles* outputs) {
+  Block copy;
+  const Block* model = nullptr;
+  PHOTOPOSE_RETURN_IF_ERROR(ModelView(block, georeference, &copy, &model));
+  PHOTOPOSE_RETURN_IF_ERROR(StageColmapModel(
+      *model, extras, AdjustedWriteOptions(block, *model, adjustment, format), directory, outputs));
+  if (georeference != nullptr) {
+    PHOTOPOSE_RETURN_IF_ERROR(
+        outputs->Stage(directory + "/" + kGeoreferenceJsonName, GeoreferenceJson(*georeference)));
+  }
   return Status::Ok();
 }
 
@@ -89,25 +121,18 @@ Status WriteAdjustedColmapModel(const std::string& directory, const Block& block
                                 const BundleAdjustmentResult& adjustment,
                                 const GeoreferenceResult* georeference,
                                 const ColmapModelExtras* extras, ColmapFormat format) {
-  AdjustedColmapModelFiles files;
-  PHOTOPOSE_RETURN_IF_ERROR(
-      FormatAdjustedColmapModel(block, adjustment, georeference, extras, format, &files));
+  // Refused before the folder is made (as the writing refuses them).
+  PHOTOPOSE_RETURN_IF_ERROR(CheckAdjustedColmapModelWritable(block, georeference, extras));
   std::error_code error;
   std::filesystem::create_directories(directory, error);
   if (error) return Status::Error(directory + ": cannot create the folder: " + error.message());
-  const std::array<const char*, 3> names = ColmapFileNames(format);
-  const std::string* contents[] = {&files.model.cameras, &files.model.images, &files.model.points3D};
   OutputFiles outputs;
-  for (const char* name : names)
+  for (const char* name : ColmapFileNames(format))
     PHOTOPOSE_RETURN_IF_ERROR(outputs.AddOutput("", directory + "/" + name));
   if (georeference != nullptr)
     PHOTOPOSE_RETURN_IF_ERROR(outputs.AddOutput("", directory + "/" + kGeoreferenceJsonName));
-  for (size_t k = 0; k < names.size(); ++k)
-    PHOTOPOSE_RETURN_IF_ERROR(outputs.Stage(directory + "/" + names[k], *contents[k]));
-  if (georeference != nullptr) {
-    PHOTOPOSE_RETURN_IF_ERROR(
-        outputs.Stage(directory + "/" + kGeoreferenceJsonName, files.georeference_json));
-  }
+  PHOTOPOSE_RETURN_IF_ERROR(StageAdjustedColmapModel(directory, block, adjustment, georeference,
+                                                     extras, format, &outputs));
   return outputs.Commit();
 }
 

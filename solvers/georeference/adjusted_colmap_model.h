@@ -55,6 +55,15 @@ Status FormatAdjustedColmapModel(const Block& block, const BundleAdjustmentResul
                                  const ColmapModelExtras* extras, ColmapFormat format,
                                  AdjustedColmapModelFiles* files);
 
+// FormatAdjustedColmapModel's files staged in `outputs` as directory/<name> (added when not
+// there yet): the model's three files written in pieces as they are formatted (StageColmapModel:
+// never held whole), georeference.json when georeferenced. The folder must exist.
+Status StageAdjustedColmapModel(const std::string& directory, const Block& block,
+                                const BundleAdjustmentResult& adjustment,
+                                const GeoreferenceResult* georeference,
+                                const ColmapModelExtras* extras, ColmapFormat format,
+                                OutputFiles* outputs);
+
 // FormatAdjustedColmapModel written into `directory` (created when missing): the three files of
 // `format` and, when georeferenced, georeference.json, all or none (core/io/output_files.h).
 Status WriteAdjustedColmapModel(const std::string& directory, const Block& block,

@@ -1046,17 +1046,13 @@ Status WriteBundleOutputs(const BundleRun& run, bool usable) {
     if (status.ok() && !FLAGS_bundle_out_colmap.empty()) {
       // The library's one writer (solvers/georeference/adjusted_colmap_model.h): rejected marks
       // out of the tracks; a georeferenced model without its control, georeference.json beside it.
-      AdjustedColmapModelFiles model;
-      status = FormatAdjustedColmapModel(block, result, run.georeference ? &run.georeferenced : nullptr,
-                                         FLAGS_bundle_colmap_model.empty() ? nullptr : &run.colmap_extras,
-                                         run.colmap_out_format, &model);
-      const std::array<const char*, 3> names = ColmapFileNames(run.colmap_out_format);
-      stage(FLAGS_bundle_out_colmap + "/" + names[0], model.model.cameras);
-      stage(FLAGS_bundle_out_colmap + "/" + names[1], model.model.images);
-      stage(FLAGS_bundle_out_colmap + "/" + names[2], model.model.points3D);
-      if (run.georeference) {
-        stage(FLAGS_bundle_out_colmap + "/" + kGeoreferenceJsonName, model.georeference_json);
-      } else if (run.carries_frame_json) {
+      // The model's files go to their temporaries in pieces as they are formatted (84 MB of text
+      // at a thousand images never held whole).
+      status = StageAdjustedColmapModel(
+          FLAGS_bundle_out_colmap, block, result, run.georeference ? &run.georeferenced : nullptr,
+          FLAGS_bundle_colmap_model.empty() ? nullptr : &run.colmap_extras, run.colmap_out_format,
+          &final_outputs);
+      if (!run.georeference && run.carries_frame_json) {
         // A relative adjustment keeps the model's frame (its gauge moves it by the noise, issue
         // 21): the georeference.json of a model georeferenced before goes with it, or the written
         // model would lose what ties its coordinates to the Earth.

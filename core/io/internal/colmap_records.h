@@ -14,6 +14,10 @@
 #include "core/io/colmap.h"
 #include "core/status.h"
 
+namespace photopose {
+class TextPieces;
+}  // namespace photopose
+
 namespace photopose::colmap_io {
 
 // Where a record is, for messages: its line (text) or the byte offset of its first byte (binary).
@@ -100,13 +104,14 @@ std::string SupportedModels();
 
 // The per-format layers: parse one file (named in messages by `paths`) into its part of *records,
 // any file in any order (references between them are checked when the block is built); format
-// the records as the three files.
+// one file of the records into `out` (collected whole, or written in pieces: an error only when
+// writing fails).
 enum class ModelFile { kCameras, kImages, kPoints3D };
 Status ParseTextFile(ModelFile file, std::string_view text, const ModelPaths& paths,
                      Records* records);
 Status ParseBinaryFile(ModelFile file, std::string_view bytes, const ModelPaths& paths,
                        Records* records);
-void FormatText(const Records& records, ColmapModelFiles* files);
-void FormatBinary(const Records& records, ColmapModelFiles* files);
+Status FormatTextFile(ModelFile file, const Records& records, TextPieces* out);
+Status FormatBinaryFile(ModelFile file, const Records& records, TextPieces* out);
 
 }  // namespace photopose::colmap_io

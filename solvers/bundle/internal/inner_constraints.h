@@ -56,9 +56,11 @@ class InnerConstraintTransform {
   // rotation), given its covariance in the adjustment's gauge in the same space (zero rows and
   // columns where the gauge holds it).
   Matrix6d Image(int image, const Matrix6d& gauge) const;
-  // A point's (index into the round's point data), given its covariance in the adjustment's gauge.
-  // The round must outlive the transform (its points' G is formed when needed, not stored).
-  Eigen::Matrix3d Point(int p, const Eigen::Matrix3d& gauge) const;
+  // A point's (index into the round's point data), given its covariance in the adjustment's gauge
+  // and its W (J_e^T J_p on reduced.W_blocks[p], PointW). The round and the reduced normals must
+  // outlive the transform: a point's G and M are formed when needed, not stored (168 bytes a
+  // point each, 20 MB at 120 000 points).
+  Eigen::Matrix3d Point(int p, const Eigen::Matrix3d& gauge, const Eigen::MatrixXd& W) const;
 
   // What the covariances refer to, in words, for the summary.
   const std::string& description() const { return description_; }
@@ -67,23 +69,30 @@ class InnerConstraintTransform {
   Eigen::Matrix<double, 3, 7> PointRows(int p) const;  // G of point p
   // Compute's steps once G is known (image_G_, PointRows): the right-hand side W G on the round's
   // parameters with the points eliminated, and G^T W G; the points' y_p = V_p^-1 (b_p - W_p^T y_e)
-  // into point_M_; then M = Y A and Q = A G^T W Y A. image_block: per image its e block or -1.
+  // summed into G^T W Y (PointY makes a point's again for Point); then M = Y A of the images and
+  // Q = A G^T W Y A. image_block: per image its e block or -1.
   // The points' W_p made again from their rows (ForEachPointW, on num_threads threads); false
   // when a row cannot be evaluated.
   bool RightHandSide(bool on_points, const BundlePlan& plan, const BundleRound& round,
                      const ReducedNormals& reduced, const std::vector<int>& image_block,
                      int num_threads, Eigen::MatrixXd* rhs,
                      Eigen::Matrix<double, 7, 7>* GtWG) const;
-  bool BackSubstitutePoints(bool on_points, const BundleRound& round, const ReducedNormals& reduced,
-                            const Eigen::MatrixXd& y_e, int num_threads);
-  void MakeTransform(bool on_points, const BundlePlan& plan, const BundleRound& round,
+  // The points' share of G^T W Y (on the points' datum; zero otherwise), point after point.
+  bool BackSubstitutePoints(const BundleRound& round, const ReducedNormals& reduced,
+                            int num_threads, Eigen::Matrix<double, 7, 7>* GtWY) const;
+  // y_p = V_p^-1 (b_p - W_p^T y_e) of point p from its W.
+  Eigen::Matrix<double, 3, 7> PointY(int p, const Eigen::MatrixXd& W) const;
+  void MakeTransform(const BundlePlan& plan, const BundleRound& round,
                      const ReducedNormals& reduced, const std::vector<int>& image_block,
-                     const Eigen::MatrixXd& y_e, const Eigen::Matrix<double, 7, 7>& A);
+                     Eigen::Matrix<double, 7, 7> GtWY);
 
+  bool on_points_ = false;  // the datum is the points' (kInnerPoints), else the centres'
   Eigen::Matrix<double, 7, 7> Q_ = Eigen::Matrix<double, 7, 7>::Zero();
-  std::vector<Eigen::Matrix<double, 6, 7>> image_G_, image_M_;  // per image of the block
-  std::vector<Eigen::Matrix<double, 3, 7>> point_M_;            // per point of the round
+  Eigen::Matrix<double, 7, 7> A_ = Eigen::Matrix<double, 7, 7>::Zero();  // (G^T W G)^-1
+  Eigen::MatrixXd y_e_;                                                  // C_g W G on the e columns
+  std::vector<Eigen::Matrix<double, 6, 7>> image_G_, image_M_;           // per image of the block
   const std::vector<double*>* point_blocks_ = nullptr;          // the round's points
+  const ReducedNormals* reduced_ = nullptr;
   Eigen::Vector3d centroid_ = Eigen::Vector3d::Zero();          // of the datum's positions (m)
   double extent_ = 1.0;                                         // their RMS spread (m)
   std::string description_;

@@ -1,10 +1,10 @@
 #include "core/io/colmap.h"
 
+#include <gtest/gtest.h>
 #include <sys/stat.h>
 
-#include <gtest/gtest.h>
-
 #include <Eigen/Geometry>
+#include <array>
 #include <cmath>
 #include <filesystem>
 #include <random>
@@ -13,11 +13,12 @@
 
 #include "core/collinearity.h"
 #include "core/io/csv.h"
+#include "core/io/output_files.h"
 #include "core/rotation.h"
 #include "tests/support/block_expect.h"
+#include "tests/support/ordered_draws.h"
 #include "tests/support/temp_dir.h"
 #include "tests/test_data.h"
-#include "tests/support/ordered_draws.h"
 
 namespace photopose {
 namespace PHOTOPOSE_UNITY_ID {
@@ -307,6 +308,46 @@ TEST(ColmapIo, FramePinholeCameraBecomesSimplePinhole) {
   for (size_t m = 0; m < before.size(); ++m) {
     EXPECT_NEAR(before[m], std::hypot(0.3, 0.2) / 4.0, 1e-6);
     EXPECT_NEAR(after[m], before[m], 1e-6);
+  }
+}
+
+// A model of 600 000 marks (ar7's images 60 times over), whose images file is
+// several pieces long (core/io/output_files.h TextPieces) in either format: written in pieces, the
+// files are the bytes FormatColmapModel formats whole.
+TEST(ColmapIo, ALargeModelIsWrittenInPiecesAsItIsFormattedWhole) {
+  Block ar7;
+  ASSERT_TRUE(ReadColmapModel(Ar7(), &ar7).ok());
+  Block block = ar7;
+  const int num_images = static_cast<int>(ar7.images.size());
+  for (int copy = 1; copy < 60; ++copy) {
+    for (const BlockImage& image : ar7.images) {
+      block.images.push_back(image);
+      block.images.back().name = std::to_string(copy) + "_" + image.name;
+    }
+    for (BlockMark mark : ar7.marks) {
+      mark.image += copy * num_images;
+      block.marks.push_back(mark);
+    }
+  }
+  block.BuildIndex();
+  for (const ColmapFormat format : {ColmapFormat::kText, ColmapFormat::kBinary}) {
+    ColmapWriteOptions options;
+    options.format = format;
+    ColmapModelFiles whole;
+    ASSERT_TRUE(FormatColmapModel(block, nullptr, options, &whole).ok());
+    EXPECT_GT(whole.images.size(), 2 * TextPieces::kPieceBytes);
+    ScopedTempDir dir;
+    ASSERT_TRUE(dir.ok());
+    const Status written = WriteColmapModel(dir.path(), block, nullptr, options);
+    ASSERT_TRUE(written.ok()) << written.message();
+    const std::array<const char*, 3> names = ColmapFileNames(format);
+    const std::string* expected[] = {&whole.cameras, &whole.images, &whole.points3D};
+    for (int k = 0; k < 3; ++k) {
+      std::string bytes;
+      ASSERT_TRUE(ReadTextFile(dir.Path(names[k]), &bytes).ok());
+      EXPECT_TRUE(bytes == *expected[k]) << names[k] << ": " << bytes.size() << " bytes written, "
+                                         << expected[k]->size() << " formatted";
+    }
   }
 }
 

@@ -8,6 +8,7 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <filesystem>
 #include <fstream>
 #include <set>
@@ -290,6 +291,64 @@ TEST_F(OutputFilesTest, StageWithHandsOutATemporaryAndNamesTheTargetInMessages) 
   ASSERT_TRUE(outputs.Commit().ok());
   EXPECT_EQ(Read(path), "new\n");
   EXPECT_EQ(Entries(), std::set<std::string>{"frames.csv"});
+}
+
+// A file of three pieces and a half: written as it is formatted, never held whole, the same bytes.
+TEST_F(OutputFilesTest, StageInPiecesWritesTheTextAPieceAtATime) {
+  const std::string path = Path("images.txt");
+  OutputFiles outputs;
+  ASSERT_TRUE(outputs.AddOutput("--out_colmap", path).ok());
+  std::string expected;
+  size_t largest_held = 0, pieces_written = 0;
+  const Status staged = outputs.StageInPieces(path, [&](TextPieces* out) {
+    EXPECT_TRUE(out->writes_file());
+    for (int line = 0; expected.size() < 7 * TextPieces::kPieceBytes / 2; ++line) {
+      const std::string text =
+          "line " + std::to_string(line) + " " + std::string(line % 97, 'x') + "\n";
+      out->text() += text;
+      expected += text;
+      largest_held = std::max(largest_held, out->text().size());
+      const size_t before = out->text().size();
+      PHOTOPOSE_RETURN_IF_ERROR(out->Piece());
+      if (out->text().size() < before) ++pieces_written;
+    }
+    return out->Write("the end\n");
+  });
+  expected += "the end\n";
+  ASSERT_TRUE(staged.ok()) << staged.message();
+  EXPECT_EQ(pieces_written, 3u);
+  EXPECT_LT(largest_held, TextPieces::kPieceBytes + 200);
+  EXPECT_FALSE(fs::exists(path));  // not before Commit
+  ASSERT_TRUE(outputs.Commit().ok());
+  EXPECT_EQ(Read(path), expected);
+  EXPECT_EQ(Entries(), std::set<std::string>{"images.txt"});
+}
+
+// A format that fails after pieces were written: the old file kept, no temporary left.
+TEST_F(OutputFilesTest, StageInPiecesThatFailsLeavesTheOldFileAndNoTemporary) {
+  const std::string path = Write("points3D.txt", "old\n");
+  OutputFiles outputs;
+  ASSERT_TRUE(outputs.AddOutput("--out_colmap", path).ok());
+  const Status staged = outputs.StageInPieces(path, [&](TextPieces* out) {
+    out->text() = std::string(TextPieces::kPieceBytes + 1, 'a');
+    PHOTOPOSE_RETURN_IF_ERROR(out->Piece());
+    EXPECT_TRUE(out->text().empty());
+    return Status::Error(path + ": point 7: X: value is not finite");
+  });
+  EXPECT_EQ(staged.message(), path + ": point 7: X: value is not finite");
+  EXPECT_EQ(Read(path), "old\n");
+  EXPECT_EQ(Entries(), std::set<std::string>{"points3D.txt"});
+}
+
+// Collected whole by a TextPieces of one's own (the in-memory formats).
+TEST(TextPiecesTest, CollectsTheWholeTextWhenItWritesNoFile) {
+  TextPieces whole;
+  EXPECT_FALSE(whole.writes_file());
+  whole.text() = std::string(TextPieces::kPieceBytes + 5, 'b');
+  ASSERT_TRUE(whole.Piece().ok());
+  ASSERT_TRUE(whole.Write("c").ok());
+  EXPECT_EQ(whole.text().size(), TextPieces::kPieceBytes + 6);
+  EXPECT_EQ(whole.text().back(), 'c');
 }
 
 TEST_F(OutputFilesTest, TemporariesOfKilledRunsAreRemovedLiveOnesKept) {
