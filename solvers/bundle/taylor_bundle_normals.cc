@@ -473,12 +473,24 @@ void RowsAgain(const LinearizationPoint& at, const MarkInput& input, int point, 
       << "mark " << input.m << " failed where its linearisation succeeded";
 }
 
+// The W of the mark whose input is `input`, an entry of layout.point_mark_inputs (`point` its
+// point): kept by Linearize (LinearizationPoint::kept_W), or made again from its rows (*rows: the
+// caller's storage).
+Matrix63 PointMarkW(const LinearizationPoint& at, const Layout& layout, const MarkInput* input,
+                    int point, MarkRows* rows) {
+  if (!at.kept_W.empty()) return at.kept_W[input - layout.point_mark_inputs.data()];
+  RowsAgain(at, *input, point, rows);
+  return MarkW(*rows);
+}
+
 // The point sums (V, g_p, the calibration's coupling) point by point over its marks in mark order,
 // each mark's rows made again (MarkRowsAt). V_p = sum w A_p^T A_p: A_e's first three columns are
-// -A_p, so it is minus the top of W.
+// -A_p, so it is minus the top of W. A small block's marks' W kept on the way (KeepsMarkW).
 void SumPointNormals(const Block& block, const Layout& layout, const Frame& frame, int num_threads,
                      Normal* normal) {
   const int G = layout.num_global;
+  std::vector<Matrix63>& kept_W = normal->at.kept_W;
+  kept_W.resize(KeepsMarkW(layout.point_mark_inputs.size()) ? layout.point_mark_inputs.size() : 0);
   ParallelFor(layout.free_points.size(), num_threads, [&](size_t q) {
     Eigen::Matrix3d V = Eigen::Matrix3d::Zero();
     Eigen::Vector3d gp = Eigen::Vector3d::Zero();
@@ -488,8 +500,11 @@ void SumPointNormals(const Block& block, const Layout& layout, const Frame& fram
     const MarkInput* input = layout.point_mark_inputs.data() + layout.point_all_marks.Offset(q);
     const int point = layout.free_points[q];
     for (const int k : layout.point_all_marks[q]) {
+      const size_t position = static_cast<size_t>(input - layout.point_mark_inputs.data());
       RowsAgain(normal->at, *input++, point, &rows);
-      V -= MarkW(rows).topRows<3>();
+      const Matrix63 W = MarkW(rows);
+      if (!kept_W.empty()) kept_W[position] = W;
+      V -= W.topRows<3>();
       gp += MarkGp(rows);
       const int global = G > 0 ? MarkGlobal(block, layout, frame, k) : -1;
       if (global >= 0)
@@ -684,6 +699,7 @@ void MakeLinearizationPoint(TaylorPartials partials, const Block& block, const P
   at->plan = &plan;
   at->frame = &frame;
   at->state = state;
+  at->kept_W.clear();  // until the points' sums keep them again (SumPointNormals)
   at->poses.clear();
   at->poses.reserve(block.images.size());
   for (size_t i = 0; i < block.images.size(); ++i)
@@ -796,8 +812,7 @@ int ReduceChunk(const Normal& normal, const Layout& layout, int first, int last,
     for (int a = 0; a < n; ++input) {
       const int b = layout.image_block[input->image];
       if (b < 0) continue;
-      RowsAgain(normal.at, *input, point, &rows);
-      (*W)[a] = MarkW(rows);
+      (*W)[a] = PointMarkW(normal.at, layout, input, point, &rows);
       (*Y)[a].noalias() = (*W)[a] * V_inverse;
       r->segment<6>(6 * b).noalias() -= (*Y)[a] * normal.gp[q];
       ++a;
@@ -1039,8 +1054,8 @@ void SolveCorrections(const Plan& plan, const Layout& layout, const Normal& norm
     for (; input != end; ++input) {
       const int b = layout.image_block[input->image];
       if (b < 0) continue;
-      RowsAgain(normal.at, *input, point, &rows);
-      t.noalias() -= MarkW(rows).transpose() * d_e->segment<6>(6 * b);
+      t.noalias() -=
+          PointMarkW(normal.at, layout, input, point, &rows).transpose() * d_e->segment<6>(6 * b);
     }
     if (G > 0) t.noalias() -= normal.Wg_point[q].transpose() * d_e->segment(cameras_size, G);
     (*d_p)[q] = reduction.V_inverse[q] * t;

@@ -211,14 +211,32 @@ struct LinearizationPoint {
   const Frame* frame = nullptr;
   State state;
   std::vector<TaylorPoseLinearization> poses;  // per image, at state.eo
+  // Each mark's W (MarkW, 144 bytes), per entry of Layout::point_mark_inputs (the points' order),
+  // kept by Linearize when the block is small enough (KeepsMarkW), empty otherwise. The
+  // elimination and the back-substitution read it there, in the order they go through the points,
+  // instead of making the rows again: the same function of the same rows, so the same bits.
+  std::vector<Matrix63> kept_W;
 };
+
+// Whether Linearize keeps every mark's W (LinearizationPoint::kept_W) for a layout with
+// `point_marks` entries in Layout::point_mark_inputs: while they take at most kKeptWBudgetBytes,
+// about what stays in a core's cache beside the rest of an iteration. The rows made again cost the
+// 12- and 60-image benchmark blocks up to a third of their iteration; the kept W takes 11-23 % off
+// it (docs/performance.md, "Nothing slower elsewhere"). The 150-image block's 5.2 MB of W gained
+// nothing (0-8 % slower in three rounds), and a large block has not the memory to spare (1.7
+// million marks, 247 MB, at 1000 images).
+constexpr size_t kKeptWBudgetBytes = size_t{2} << 20;
+inline bool KeepsMarkW(size_t point_marks) {
+  return point_marks <= kKeptWBudgetBytes / sizeof(Matrix63);
+}
 
 // One mark's linearised observation equation: its rows dF/d(X0, Y0, Z0, omega, phi, kappa)
 // (the point's rows are minus the first three: PointPartialsFromCentrePartials), F (the
 // observation unit) and its weight w (1 / sigma^2 times the tie loss's rho' at the linearisation
 // point; 1 / observation unit^2); for a self-calibrated camera's mark, its rows dF/d(the camera's
 // estimated parameters, plan.calibrated order). Made by MarkRowsAt wherever a mark's rows are
-// needed, never kept per mark (120 bytes a mark, 205 MB at 1.7 million marks).
+// needed, never kept per mark (120 bytes a mark, 205 MB at 1.7 million marks); a small block keeps
+// their W (LinearizationPoint::kept_W).
 struct MarkRows {
   Matrix26 A_e;
   Eigen::Vector2d f;

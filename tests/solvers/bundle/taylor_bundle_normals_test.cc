@@ -1,8 +1,9 @@
 // The Taylor bundle's per-mark and per-point storage (solvers/bundle/internal/taylor_normals.h):
 // IndexLists against a vector of vectors built from the same entries, a mark's W and g_p part
 // made from its rows (MarkW, MarkGp) against the products written out by hand, the rows made
-// again (MarkRowsAt) against those of the first linearisation after the state has moved, and
-// BuildLayout's image order and mark lists against the same things made the plain way.
+// again (MarkRowsAt) against those of the first linearisation after the state has moved, a small
+// block's kept W (LinearizationPoint::kept_W) against W made again, and BuildLayout's image order
+// and mark lists against the same things made the plain way.
 #include <gtest/gtest.h>
 
 #include <Eigen/OrderingMethods>
@@ -213,6 +214,65 @@ TEST(MarkRowsAt, MadeAgainEqualTheFirstLinearisationBitForBit) {
     EXPECT_EQ(d_e_again, d_e);
     EXPECT_EQ(d_p_again, d_p);
   }
+}
+
+// A small block's marks' W kept by Linearize (LinearizationPoint::kept_W), read by the
+// elimination and the back-substitution instead of rows made again: after a step and a second
+// linearisation into the same normal equations, each kept W is the W of that mark's rows made
+// again at the second linearisation point bit for bit (none of the first's left), and the step
+// solved from the kept W is the step solved from the rows made again, bit for bit.
+TEST(KeptW, IsEachMarksWOfTheLatestLinearisationBitForBit) {
+  const TaylorBundleOptions options;
+  Linearised data;
+  Linearise(options, {}, &data);
+  ASSERT_FALSE(::testing::Test::HasFatalFailure());
+  Layout& layout = data.layout;
+  ASSERT_TRUE(KeepsMarkW(layout.point_mark_inputs.size()));
+  ASSERT_EQ(data.normal.at.kept_W.size(), layout.point_mark_inputs.size());
+  Eigen::VectorXd d_e;
+  std::vector<Eigen::Vector3d> d_p;
+  SolveOnce(data.plan, &layout, data.normal, &d_e, &d_p);
+  ASSERT_FALSE(::testing::Test::HasFatalFailure());
+  for (size_t b = 0; b < layout.free_images.size(); ++b)
+    data.state.eo[layout.free_images[b]] -= d_e.segment<6>(6 * b);
+  for (size_t q = 0; q < layout.free_points.size(); ++q)
+    data.state.points[layout.free_points[q]] -= d_p[q];
+  ASSERT_TRUE(Linearize(options.partials, data.block, data.plan, layout, data.frame, data.state,
+                        /*num_threads=*/2, &data.normal, nullptr));
+  const Normal& normal = data.normal;
+  ASSERT_EQ(normal.at.kept_W.size(), layout.point_mark_inputs.size());
+  size_t checked = 0;
+  for (size_t q = 0; q < layout.free_points.size(); ++q) {
+    for (size_t j = 0; j < layout.point_all_marks[q].size(); ++j) {
+      const size_t position = layout.point_all_marks.Offset(q) + j;
+      MarkRows rows;
+      ASSERT_TRUE(
+          MarkRowsAt(normal.at, layout.point_mark_inputs[position], layout.free_points[q], &rows));
+      EXPECT_EQ(normal.at.kept_W[position], MarkW(rows)) << "point " << q << ", mark " << j;
+      ++checked;
+    }
+  }
+  EXPECT_EQ(checked, layout.point_mark_inputs.size());
+  Normal made_again = normal;
+  made_again.at.kept_W.clear();
+  Eigen::VectorXd d_e_kept, d_e_again;
+  std::vector<Eigen::Vector3d> d_p_kept, d_p_again;
+  SolveOnce(data.plan, &layout, normal, &d_e_kept, &d_p_kept);
+  SolveOnce(data.plan, &layout, made_again, &d_e_again, &d_p_again);
+  ASSERT_FALSE(::testing::Test::HasFatalFailure());
+  EXPECT_EQ(d_e_kept, d_e_again);
+  EXPECT_EQ(d_p_kept, d_p_again);
+}
+
+// The budget: the 60-image benchmark block (10 444 marks) keeps its W, the 150-image block
+// (37 564) and the 1000-image block (1 713 495) do not; the limit itself is kept.
+TEST(KeptW, KeptUpToTheBudget) {
+  const size_t limit = kKeptWBudgetBytes / sizeof(Matrix63);
+  EXPECT_TRUE(KeepsMarkW(10444));
+  EXPECT_TRUE(KeepsMarkW(limit));
+  EXPECT_FALSE(KeepsMarkW(limit + 1));
+  EXPECT_FALSE(KeepsMarkW(37564));
+  EXPECT_FALSE(KeepsMarkW(1713495));
 }
 
 // A plan for BuildLayout alone: every mark used but every fifth, the first image and the control
