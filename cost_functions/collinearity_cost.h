@@ -67,23 +67,28 @@ struct PoseCostFunctor {
   double inverse_sigma_um;  // 1 / (pixel_size_um * sigma_px)
 };
 
-// The analytic pose residual of one observation at the pose eo (6), and its Jacobian d_eo (2 x 6,
-// row-major; may be null): PoseCostAnalytic::Evaluate, callable on the data itself by loops that
-// keep the observations by value (the resection's refinement, without one heap CostFunction per
-// mark). False when the point is on or behind the camera plane.
-inline bool EvaluatePoseCostAnalytic(const PoseCostFunctor& data, const double* eo,
+// The analytic pose residual of one observation through `projector`, the pose eo (6) made ready
+// for projecting (SeedProjector(eo, data.focal_um), core/collinearity.h), and its Jacobian d_eo
+// (2 x 6, row-major; may be null): PoseCostAnalytic::Evaluate, callable on the data itself by loops
+// that keep the observations by value (the resection's refinement, without one heap CostFunction
+// per mark) and make one projector for all marks of a pose. False when the point is on or behind
+// the camera plane.
+inline bool EvaluatePoseCostAnalytic(const PoseCostFunctor& data, const SeedProjector& projector,
                                      double* residuals, double* d_eo) {
   double xy[2];
-  if (!ProjectWithJacobians(eo, data.point_in_ground.data(), data.focal_um, xy, d_eo, nullptr,
-                            nullptr)) {
-    return false;
-  }
+  if (!projector.Project(data.point_in_ground.data(), xy, d_eo, nullptr, nullptr)) return false;
   residuals[0] = (data.observed_um[0] - xy[0]) * data.inverse_sigma_um;
   residuals[1] = (data.observed_um[1] - xy[1]) * data.inverse_sigma_um;
   if (d_eo != nullptr) {
     for (int k = 0; k < 2 * kExteriorOrientationSize; ++k) d_eo[k] *= -data.inverse_sigma_um;
   }
   return true;
+}
+
+// The same at the pose eo (6), its projector made for this observation alone.
+inline bool EvaluatePoseCostAnalytic(const PoseCostFunctor& data, const double* eo,
+                                     double* residuals, double* d_eo) {
+  return EvaluatePoseCostAnalytic(data, SeedProjector(eo, data.focal_um), residuals, d_eo);
 }
 
 class PoseCostAnalytic final : public ceres::SizedCostFunction<kResidualSize, kExteriorOrientationSize> {

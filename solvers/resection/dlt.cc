@@ -46,6 +46,18 @@ Status CheckSpread(const std::vector<Eigen::Vector3d>& points_in_ground) {
   return Status::Ok();
 }
 
+// (*AtA)(j, i) += row[i] * row[j] for j >= i: the lower triangle of row row^T added, term for term
+// what Eigen's AtA.selfadjointView<Lower>().rankUpdate(row) adds (column i's tail plus
+// (1 * row[i]) * row's tail, a multiplication then an addition per entry), without its
+// dynamic-size blocks (a sixth of the DLT's time).
+inline void AddToLowerTriangle(const Eigen::Matrix<double, 12, 1>& row,
+                               Eigen::Matrix<double, 12, 12>* AtA) {
+  for (int i = 0; i < 12; ++i) {
+    const double row_i = row[i];
+    for (int j = i; j < 12; ++j) (*AtA)(j, i) += row_i * row[j];
+  }
+}
+
 // The projection P = [M | m] from the null vector of the design matrix, M acting on X - centroid
 // (~ R up to scale) and m ~ t + R centroid, with the sign that puts most points in front.
 Status LinearProjection(const std::vector<Eigen::Vector3d>& unit_bearings,
@@ -75,8 +87,8 @@ Status LinearProjection(const std::vector<Eigen::Vector3d>& unit_bearings,
       row1.segment<4>(4 * r) = e1[r] * X;
       row2.segment<4>(4 * r) = e2[r] * X;
     }
-    AtA.selfadjointView<Eigen::Lower>().rankUpdate(row1);
-    AtA.selfadjointView<Eigen::Lower>().rankUpdate(row2);
+    AddToLowerTriangle(row1, &AtA);
+    AddToLowerTriangle(row2, &AtA);
   }
   const Eigen::SelfAdjointEigenSolver<Eigen::Matrix<double, 12, 12>> eigen(
       AtA.selfadjointView<Eigen::Lower>());

@@ -25,14 +25,20 @@ constexpr double kInfinity = std::numeric_limits<double>::infinity();
 struct CentredProblem {
   Eigen::Vector3d origin = Eigen::Vector3d::Zero();
   JacobianType jacobian = JacobianType::kAnalytic;
+  double focal = 0.0;                                       // c of every observation (their unit)
   std::vector<PoseCostFunctor> data;                        // one per observation, whitened
   std::vector<std::unique_ptr<ceres::CostFunction>> costs;  // the same, when made (MakeCosts)
 
   size_t size() const { return data.size(); }
-  // Residual i (2) at eo (centred) and, when jacobian is not null, its 2 x 6 row-major Jacobian.
-  bool Evaluate(size_t i, const double* eo, double* residual, double* jacobian_row_major) const {
+  // The pose eo (centred) made ready for the analytic path's projections: one per pose, for all
+  // observations (the same bits as one per observation).
+  SeedProjector ProjectorAt(const double* eo) const { return SeedProjector(eo, focal); }
+  // Residual i (2) at eo (centred), `projector` = ProjectorAt(eo), and, when jacobian is not null,
+  // its 2 x 6 row-major Jacobian.
+  bool Evaluate(size_t i, const double* eo, const SeedProjector& projector, double* residual,
+                double* jacobian_row_major) const {
     if (jacobian == JacobianType::kAnalytic)
-      return EvaluatePoseCostAnalytic(data[i], eo, residual, jacobian_row_major);
+      return EvaluatePoseCostAnalytic(data[i], projector, residual, jacobian_row_major);
     const double* parameters[] = {eo};
     double* jacobians[] = {jacobian_row_major};
     return costs[i]->Evaluate(parameters, residual,
@@ -54,6 +60,7 @@ void MakeCentredProblem(JacobianType jacobian, const std::vector<Eigen::Vector2d
                         const std::vector<int>& indices, CentredProblem* problem) {
   problem->origin.setZero();
   problem->jacobian = jacobian;
+  problem->focal = focal;
   problem->data.clear();
   problem->costs.clear();
   for (const int i : indices) problem->origin += points[i];
@@ -81,9 +88,10 @@ double RemainingStepSigmas(const CentredProblem& problem, const Vector6d& eo,
   Matrix6d normal = Matrix6d::Zero();
   Vector6d gradient = Vector6d::Zero();
   Eigen::Matrix<double, 2, 6, Eigen::RowMajor> J;
+  const SeedProjector projector = problem.ProjectorAt(eo.data());
   for (size_t i = 0; i < problem.size(); ++i) {
     Eigen::Vector2d r;
-    if (!problem.Evaluate(i, eo.data(), r.data(), J.data())) return kInfinity;
+    if (!problem.Evaluate(i, eo.data(), projector, r.data(), J.data())) return kInfinity;
     const double w = LossWeight(loss, r.squaredNorm());
     normal.noalias() += w * J.transpose() * J;
     gradient.noalias() += w * J.transpose() * r;
@@ -130,8 +138,10 @@ class StackedPoseFunction {
   bool operator()(const double* eo, double* residuals, double* jacobian) const {
     double block[2 * kExteriorOrientationSize];
     const int rows = NumResiduals();
+    const SeedProjector projector = problem_.ProjectorAt(eo);
     for (size_t i = 0; i < problem_.size(); ++i) {
-      if (!problem_.Evaluate(i, eo, residuals + 2 * i, jacobian != nullptr ? block : nullptr)) {
+      if (!problem_.Evaluate(i, eo, projector, residuals + 2 * i,
+                             jacobian != nullptr ? block : nullptr)) {
         // Behind the camera: a huge residual makes TinySolver reject the step that led here.
         residuals[2 * i] = residuals[2 * i + 1] = 1e10;
         if (jacobian != nullptr) return false;
@@ -158,9 +168,10 @@ class StackedPoseFunction {
 // Squared whitened residual norms of every cost at eo (centred); false if a point is behind.
 bool SquaredNorms(const CentredProblem& problem, const double* eo, std::vector<double>* s) {
   s->resize(problem.size());
+  const SeedProjector projector = problem.ProjectorAt(eo);
   for (size_t i = 0; i < problem.size(); ++i) {
     double r[2];
-    if (!problem.Evaluate(i, eo, r, nullptr)) return false;
+    if (!problem.Evaluate(i, eo, projector, r, nullptr)) return false;
     (*s)[i] = r[0] * r[0] + r[1] * r[1];
   }
   return true;
