@@ -256,11 +256,6 @@ Status ParseBinaryFile(ModelFile file, std::string_view bytes, const ModelPaths&
 
 namespace {
 
-// A piece's room: kPieceBytes and the largest record that may pass it.
-size_t PieceRoom(const TextPieces& out, size_t whole) {
-  return out.writes_file() ? TextPieces::kPieceBytes + (TextPieces::kPieceBytes >> 2) : whole;
-}
-
 Status FormatCamerasBinary(const Records& records, TextPieces* out) {
   std::string& cameras = out->text();
   PutUnsigned(records.cameras.size(), 8, &cameras);
@@ -276,8 +271,8 @@ Status FormatCamerasBinary(const Records& records, TextPieces* out) {
 
 Status FormatImagesBinary(const Records& records, TextPieces* out) {
   std::string& images = out->text();
-  images.reserve(PieceRoom(
-      *out, records.images.size() * (kImageBytes + 32) + records.points2D.size() * kPoint2DBytes));
+  out->Reserve(records.images.size() * (kImageBytes + 32) +
+               records.points2D.size() * kPoint2DBytes);
   PutUnsigned(records.images.size(), 8, &images);
   for (const ImageRecord& image : records.images) {
     PutUnsigned(static_cast<uint64_t>(image.id), 4, &images);
@@ -301,8 +296,7 @@ Status FormatImagesBinary(const Records& records, TextPieces* out) {
 
 Status FormatPointsBinary(const Records& records, TextPieces* out) {
   std::string& points = out->text();
-  points.reserve(
-      PieceRoom(*out, records.points.size() * kPointBytes + records.tracks.size() * kTrackBytes));
+  out->Reserve(records.points.size() * kPointBytes + records.tracks.size() * kTrackBytes);
   PutUnsigned(records.points.size(), 8, &points);
   for (const PointRecord& point : records.points) {
     PutUnsigned(static_cast<uint64_t>(point.id), 8, &points);

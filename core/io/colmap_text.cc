@@ -149,8 +149,7 @@ Status FormatImagesText(const Records& records, TextPieces* out) {
   for (const Point2DRecord& entry : records.points2D)
     if (entry.point3D_id >= 0) ++num_observations;
   const size_t num_images = records.images.size();
-  images.reserve(out->writes_file() ? TextPieces::kPieceBytes + (TextPieces::kPieceBytes >> 2)
-                                    : 200 * num_images + 40 * records.points2D.size());
+  out->Reserve(200 * num_images + 40 * records.points2D.size());
   images +=
       "# Image list with two lines of data per image:\n"
       "#   IMAGE_ID, QW, QX, QY, QZ, TX, TY, TZ, CAMERA_ID, NAME\n"
@@ -186,8 +185,7 @@ Status FormatImagesText(const Records& records, TextPieces* out) {
 Status FormatPointsText(const Records& records, TextPieces* out) {
   std::string& points = out->text();
   const size_t num_points = records.points.size();
-  points.reserve(out->writes_file() ? TextPieces::kPieceBytes + (TextPieces::kPieceBytes >> 2)
-                                    : 100 * num_points + 16 * records.tracks.size());
+  out->Reserve(100 * num_points + 16 * records.tracks.size());
   points +=
       "# 3D point list with one line of data per point:\n"
       "#   POINT3D_ID, X, Y, Z, R, G, B, ERROR, TRACK[] as (IMAGE_ID, POINT2D_IDX)\n"

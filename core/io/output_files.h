@@ -61,6 +61,11 @@ class TextPieces {
   Status Write(std::string_view contents);
   // Whether the text goes to a file (then text() never holds much more than kPieceBytes).
   bool writes_file() const { return fd_ >= 0; }
+  // Room for the text: `whole_bytes` (the whole file's estimate) when collecting; writing a file,
+  // a piece and the record that may pass it.
+  void Reserve(size_t whole_bytes) {
+    text_.reserve(writes_file() ? kPieceBytes + (kPieceBytes >> 2) : whole_bytes);
+  }
 
   static constexpr size_t kPieceBytes = size_t{4} << 20;  // bytes
 
