@@ -179,6 +179,12 @@ void ListMarks(const Block& block, const Plan& plan, Layout* layout) {
   for (size_t q = 0; q < layout->point_all_marks.size(); ++q)
     for (const int k : layout->point_all_marks[q])
       layout->point_mark_inputs.push_back(MarkInputOf(block, plan, layout->marks[k]));
+  if (!KeepsMarkW(layout->point_mark_inputs.size())) return;
+  layout->point_position.assign(layout->marks.size(), -1);
+  for (size_t q = 0; q < layout->point_all_marks.size(); ++q) {
+    int position = static_cast<int>(layout->point_all_marks.Offset(q));
+    for (const int k : layout->point_all_marks[q]) layout->point_position[k] = position++;
+  }
 }
 
 // Chunks of the free points of about equal elimination work (a point's is about n^2 for its n
@@ -208,8 +214,9 @@ void ListBlockPairs(Layout* layout) {
   const long long num_blocks = static_cast<long long>(layout->free_images.size());
   auto pair_of = [&](int b1, int b2) {
     if (b1 > b2) std::swap(b1, b2);
+    // try_emplace: no node made for a pair already listed (most of the sum of n^2 over points).
     const auto [it, inserted] =
-        pair_index.emplace(b1 * num_blocks + b2, static_cast<int>(layout->pairs.size()));
+        pair_index.try_emplace(b1 * num_blocks + b2, static_cast<int>(layout->pairs.size()));
     if (inserted) layout->pairs.emplace_back(b1, b2);
     return it->second;
   };
@@ -393,9 +400,12 @@ struct ImageMarkSums {
 // Image i's marks (eqs. 7-8 with eqs. 17-28 for the camera, dF/dX = -dF/dX0 for the point, the
 // model's calibration rows: MarkRowsAt at normal->at): its camera sums U, g_e and their coupling
 // with the calibration into `normal`, the rest into `sums`. The marks' rows are not kept: the
-// points' sums, the elimination and the back-substitution make them again.
+// points' sums, the elimination and the back-substitution make them again, or, in a small block
+// without global unknowns, read the W and g_p share this pass keeps (LinearizationPoint::kept_W,
+// kept_gp: each mark's own entry, so images on other threads write elsewhere).
 void LinearizeImageMarks(const Layout& layout, size_t i, Normal* normal, ImageMarkSums* sums) {
   const LinearizationPoint& at = normal->at;
+  const bool keep = !at.kept_gp.empty();
   const int b = layout.image_block[i];
   const int camera = at.frame->camera_index[i];
   const int global = layout.camera_global[camera];
@@ -417,6 +427,10 @@ void LinearizeImageMarks(const Layout& layout, size_t i, Normal* normal, ImageMa
       return;
     }
     ssr += rows.cost;
+    if (keep && layout.point_position[k] >= 0) {
+      normal->at.kept_W[layout.point_position[k]] = MarkW(rows);
+      normal->at.kept_gp[layout.point_position[k]] = MarkGp(rows);
+    }
     const Eigen::Matrix<double, 6, 2> weighted_Ae_T = rows.weight * rows.A_e.transpose();
     if (b >= 0) {
       U.noalias() += weighted_Ae_T * rows.A_e;
@@ -484,16 +498,29 @@ Matrix63 PointMarkW(const LinearizationPoint& at, const Layout& layout, const Ma
 }
 
 // The point sums (V, g_p, the calibration's coupling) point by point over its marks in mark order,
-// each mark's rows made again (MarkRowsAt). V_p = sum w A_p^T A_p: A_e's first three columns are
-// -A_p, so it is minus the top of W. A small block's marks' W kept on the way (KeepsMarkW).
+// each mark's rows made again (MarkRowsAt), or its W and g_p share read where the image pass kept
+// them (a small block without global unknowns). V_p = sum w A_p^T A_p: A_e's first three columns
+// are -A_p, so it is minus the top of W. A small block with global unknowns keeps its marks' W on
+// the way (KeepsMarkW).
 void SumPointNormals(const Block& block, const Layout& layout, const Frame& frame, int num_threads,
                      Normal* normal) {
   const int G = layout.num_global;
   std::vector<Matrix63>& kept_W = normal->at.kept_W;
-  kept_W.resize(KeepsMarkW(layout.point_mark_inputs.size()) ? layout.point_mark_inputs.size() : 0);
+  const std::vector<Eigen::Vector3d>& kept_gp = normal->at.kept_gp;
   ParallelFor(layout.free_points.size(), num_threads, [&](size_t q) {
     Eigen::Matrix3d V = Eigen::Matrix3d::Zero();
     Eigen::Vector3d gp = Eigen::Vector3d::Zero();
+    if (!kept_gp.empty()) {
+      const size_t first = layout.point_all_marks.Offset(q);
+      const size_t last = first + layout.point_all_marks[q].size();
+      for (size_t position = first; position < last; ++position) {
+        V -= kept_W[position].topRows<3>();
+        gp += kept_gp[position];
+      }
+      normal->V[q] = V;
+      normal->gp[q] = gp;
+      return;
+    }
     if (G > 0) normal->Wg_point[q].setZero(G, 3);
     MarkRows rows;
     Eigen::Matrix<double, 2, Eigen::Dynamic> A_g;
@@ -530,7 +557,11 @@ bool LinearizeMarks(const Block& block, const Layout& layout, const Frame& frame
       normal->behind_w = sums[i].behind_w;
     }
   }
-  if (normal->behind_mark >= 0) return false;
+  if (normal->behind_mark >= 0) {
+    normal->at.kept_W.clear();  // some marks' W never made: none kept
+    normal->at.kept_gp.clear();
+    return false;
+  }
   for (size_t i = 0; i < num_images; ++i) normal->weighted_ssr += sums[i].ssr;
   if (layout.num_global > 0) AddCalibrationSums(block, layout, frame, state, sums, normal);
   SumPointNormals(block, layout, frame, num_threads, normal);
@@ -693,13 +724,19 @@ namespace {
 // The linearisation point kept with the normal equations: the state copied (assigned into the
 // previous copy's storage) and every image's pose linearisation at it.
 void MakeLinearizationPoint(TaylorPartials partials, const Block& block, const Plan& plan,
-                            const Frame& frame, const State& state, LinearizationPoint* at) {
+                            const Layout& layout, const Frame& frame, const State& state,
+                            LinearizationPoint* at) {
   at->partials = partials;
   at->block = &block;
   at->plan = &plan;
   at->frame = &frame;
   at->state = state;
-  at->kept_W.clear();  // until the points' sums keep them again (SumPointNormals)
+  // Sized for the image pass (without global unknowns) or the points' sums to keep them again.
+  const size_t kept = layout.point_position.empty() ? 0 : layout.point_mark_inputs.size();
+  at->kept_W.clear();
+  at->kept_W.resize(kept);
+  at->kept_gp.clear();
+  at->kept_gp.resize(layout.num_global == 0 ? kept : 0);
   at->poses.clear();
   at->poses.reserve(block.images.size());
   for (size_t i = 0; i < block.images.size(); ++i)
@@ -718,7 +755,7 @@ bool Linearize(TaylorPartials partials, const Block& block, const Plan& plan, co
   normal->ge.assign(num_blocks, Vector6d::Zero());
   normal->V.assign(num_points, Eigen::Matrix3d::Zero());
   normal->gp.assign(num_points, Eigen::Vector3d::Zero());
-  MakeLinearizationPoint(partials, block, plan, frame, state, &normal->at);
+  MakeLinearizationPoint(partials, block, plan, layout, frame, state, &normal->at);
   const int G = layout.num_global;
   normal->Ueg.assign(G > 0 ? num_blocks : 0, Eigen::MatrixXd::Zero(6, G));
   normal->Ugg.setZero(G, G);

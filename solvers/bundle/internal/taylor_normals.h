@@ -153,6 +153,9 @@ struct Layout {
   // input (32 bytes a mark).
   std::vector<MarkInput> point_mark_inputs;
   IndexLists image_marks;      // per image: positions in `marks` of its marks
+  // Per entry of `marks`: its entry in point_mark_inputs (-1: a mark of a fixed point). Only for a
+  // block that keeps its marks' W (KeepsMarkW; empty otherwise): where the image pass puts them.
+  std::vector<int> point_position;
   std::vector<int> chunk_start;    // kReductionChunks + 1 boundaries in the free points
   std::vector<int> diagonal_pair;  // per camera block
   std::vector<std::pair<int, int>> pairs;
@@ -211,23 +214,29 @@ struct LinearizationPoint {
   const Frame* frame = nullptr;
   State state;
   std::vector<TaylorPoseLinearization> poses;  // per image, at state.eo
-  // Each mark's W (MarkW, 144 bytes), per entry of Layout::point_mark_inputs (the points' order),
-  // kept by Linearize when the block is small enough (KeepsMarkW), empty otherwise. The
-  // elimination and the back-substitution read it there, in the order they go through the points,
-  // instead of making the rows again: the same function of the same rows, so the same bits.
+  // Each mark's W (MarkW, 144 bytes) and its share of the point's right-hand side (MarkGp, 24
+  // bytes), per entry of Layout::point_mark_inputs (the points' order), kept by Linearize when the
+  // block is small enough (KeepsMarkW), empty otherwise. The image pass makes them from the rows it
+  // makes anyway (kept_gp: only without global unknowns, whose couplings make the points' sums
+  // make the rows again; then the points' sums keep W); the points' sums, the elimination and the
+  // back-substitution read them there instead of making the rows again: the same function of the
+  // same rows, so the same bits.
   std::vector<Matrix63> kept_W;
+  std::vector<Eigen::Vector3d> kept_gp;
 };
 
-// Whether Linearize keeps every mark's W (LinearizationPoint::kept_W) for a layout with
-// `point_marks` entries in Layout::point_mark_inputs: while they take at most kKeptWBudgetBytes,
-// about what stays in a core's cache beside the rest of an iteration. The rows made again cost the
-// 12- and 60-image benchmark blocks up to a third of their iteration; the kept W takes 11-23 % off
-// it (docs/performance.md, "Nothing slower elsewhere"). The 150-image block's 5.2 MB of W gained
-// nothing (0-8 % slower in three rounds), and a large block has not the memory to spare (1.7
-// million marks, 247 MB, at 1000 images).
-constexpr size_t kKeptWBudgetBytes = size_t{2} << 20;
+// Whether Linearize keeps every mark's W and g_p share (LinearizationPoint::kept_W, kept_gp) for a
+// layout with `point_marks` entries in Layout::point_mark_inputs: while they take at most
+// kKeptWBudgetBytes (49 932 marks). Made again, the rows cost the 12- and 60-image benchmark
+// blocks up to a third of their iteration; the W kept from the points' sums took 11-23 % off it,
+// and the image pass keeping W and g_p (the rows made once per linearisation) 8-11 % of the
+// instructions more at 12 and 60 images and 10-17 % of the 150-image block's iteration, whose 5.2
+// MB of W alone had gained nothing (docs/performance.md, "Nothing slower elsewhere"). A large block
+// has not the memory to spare (1.7 million marks, 288 MB, at 1000 images).
+constexpr size_t kKeptWBudgetBytes = size_t{8} << 20;
+constexpr size_t kKeptBytesPerMark = sizeof(Matrix63) + sizeof(Eigen::Vector3d);
 inline bool KeepsMarkW(size_t point_marks) {
-  return point_marks <= kKeptWBudgetBytes / sizeof(Matrix63);
+  return point_marks <= kKeptWBudgetBytes / kKeptBytesPerMark;
 }
 
 // One mark's linearised observation equation: its rows dF/d(X0, Y0, Z0, omega, phi, kappa)

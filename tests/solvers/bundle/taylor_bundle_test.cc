@@ -1153,6 +1153,7 @@ TEST(TaylorBundleAsPrinted, OneObliqueImagePropagatesThroughTiePoints) {
     const int p = data.block.marks[mt].point;
     for (const int other : data.block.marks_of_point[p]) ++shared[data.block.marks[other].image];
   }
+  ASSERT_EQ(m.printed_usable, m.realisations);  // per_image_shift_rms_m is filled from them
   std::printf(
       "  centre moved RMS (mm) / tie points shared with the tilted image, by line and image:\n");
   for (int s = 0; s < o.num_lines; ++s) {
@@ -1163,7 +1164,6 @@ TEST(TaylorBundleAsPrinted, OneObliqueImagePropagatesThroughTiePoints) {
     }
     std::printf("\n");
   }
-  ASSERT_EQ(m.printed_usable, m.realisations);
   // The tilted image moves most; images sharing no tie point with it move far less.
   double unshared_max = 0.0;
   for (size_t i = 0; i < shared.size(); ++i) {
