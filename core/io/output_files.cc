@@ -288,11 +288,16 @@ Status OutputFiles::StageFailed(Status status) {
   return status;
 }
 
+Status TextPieces::WriteToFile(std::string_view bytes) const {
+  int error_number = 0;
+  if (!WriteAll(fd_, bytes, &error_number))
+    return Status::Error(name_ + ": cannot write: " + SystemError(error_number));
+  return Status::Ok();
+}
+
 Status TextPieces::Flush() {
   if (fd_ < 0 || text_.empty()) return Status::Ok();
-  int error_number = 0;
-  if (!WriteAll(fd_, text_, &error_number))
-    return Status::Error(name_ + ": cannot write: " + SystemError(error_number));
+  PHOTOPOSE_RETURN_IF_ERROR(WriteToFile(text_));
   text_.clear();
   return Status::Ok();
 }
@@ -303,10 +308,7 @@ Status TextPieces::Write(std::string_view contents) {
     return Status::Ok();
   }
   PHOTOPOSE_RETURN_IF_ERROR(Flush());
-  int error_number = 0;
-  if (!WriteAll(fd_, contents, &error_number))
-    return Status::Error(name_ + ": cannot write: " + SystemError(error_number));
-  return Status::Ok();
+  return WriteToFile(contents);
 }
 
 Status OutputFiles::Stage(const std::string& path, std::string_view contents) {

@@ -71,6 +71,7 @@ class TextPieces {
 
  private:
   friend class OutputFiles;
+  Status WriteToFile(std::string_view bytes) const;  // all of `bytes`, or the error naming name_
   int fd_ = -1;       // the temporary file written, or -1
   std::string name_;  // the output, in messages
   std::string text_;

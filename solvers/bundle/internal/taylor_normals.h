@@ -229,9 +229,9 @@ struct LinearizationPoint {
 // layout with `point_marks` entries in Layout::point_mark_inputs: while they take at most
 // kKeptWBudgetBytes (49 932 marks). Made again, the rows cost the 12- and 60-image benchmark
 // blocks up to a third of their iteration; the W kept from the points' sums took 11-23 % off it,
-// and the image pass keeping W and g_p (the rows made once per linearisation) 8-11 % of the
-// instructions more at 12 and 60 images and 10-17 % of the 150-image block's iteration, whose 5.2
-// MB of W alone had gained nothing (docs/performance.md, "Nothing slower elsewhere"). A large block
+// and the image pass keeping W and g_p (the rows made once per linearisation) another 8 % of the
+// 12-image call's instructions and 9-18 % of the 150-image block's iteration, whose 5.2 MB of W
+// alone had gained nothing (docs/performance.md, "Nothing slower elsewhere"). A large block
 // has not the memory to spare (1.7 million marks, 288 MB, at 1000 images).
 constexpr size_t kKeptWBudgetBytes = size_t{8} << 20;
 constexpr size_t kKeptBytesPerMark = sizeof(Matrix63) + sizeof(Eigen::Vector3d);
